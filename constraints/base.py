@@ -1,0 +1,83 @@
+"""A design rule: named expression(s) with bounds, and its value/limit/margin record.
+
+The same Rule serves both uses: built on floats (``check``) it is evaluated into a
+:class:`RuleRecord`; built on CasADi symbols (``solve``) its rows become NLP constraints.  A
+vector expression is a semi-infinite rule sampled on a grid; its record reports the worst sample.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Rule:
+    """``lower <= expr <= upper`` (either bound may be None), ``expr`` scalar or 1-D."""
+
+    name: str
+    expr: Any
+    lower: float | None
+    upper: float | None
+    unit: str
+    scale: float                 # typical size of a margin, for normalised margins
+    where: str = ""              # where it is evaluated ("at P4", "over P3-P4", "over a turn")
+    #: smooth rows for the optimiser when ``expr`` itself is not smooth: [(expr, lb, ub), ...]
+    nlp_rows: tuple = field(default=(), compare=False)
+    #: why the rule could not be evaluated (numeric designs only)
+    missing: str | None = None
+
+    def rows(self) -> tuple:
+        return self.nlp_rows or ((self.expr, self.lower, self.upper),)
+
+    def record(self) -> "RuleRecord":
+        """Evaluate a numeric rule: the worst sample, its margin (>= 0 means satisfied)."""
+        limit = [self.lower, self.upper]
+        if self.missing is not None:
+            return RuleRecord(self.name, None, limit, self.unit, False, None, None, self.where, self.missing)
+        values = np.atleast_1d(np.asarray(self.expr, dtype=float)).ravel()
+        lo = np.full_like(values, np.inf) if self.lower is None else values - self.lower
+        hi = np.full_like(values, np.inf) if self.upper is None else self.upper - values
+        margins = np.minimum(lo, hi)
+        worst = int(np.argmin(margins))
+        margin = float(margins[worst])
+        return RuleRecord(self.name, float(values[worst]), limit, self.unit, margin >= 0.0,
+                          margin, margin / self.scale, self.where, None)
+
+
+@dataclass(frozen=True)
+class RuleRecord:
+    """One row of the rule table and of result.json ``rules``."""
+
+    name: str
+    value: float | None
+    limit: list                  # [lower, upper], None for an open side
+    unit: str
+    satisfied: bool
+    margin: float | None         # distance to the nearer limit, in ``unit``; < 0 = violation
+    normalised_margin: float | None
+    where: str = ""
+    note: str | None = None
+
+    @property
+    def limit_text(self) -> str:
+        lo, hi = self.limit
+        if lo is not None and hi is not None:
+            return f"[{lo:g}, {hi:g}]"
+        if lo is None and hi is None:
+            return "-"
+        return f">= {lo:g}" if lo is not None else f"<= {hi:g}"
+
+    def to_json(self) -> dict:
+        return {
+            "name": self.name, "value": self.value, "limit": self.limit, "unit": self.unit,
+            "satisfied": self.satisfied, "margin": self.margin,
+            "normalised_margin": self.normalised_margin, "where": self.where, "note": self.note,
+        }
+
+
+def not_evaluated(name: str, lower, upper, unit: str, where: str, why: str) -> Rule:
+    """A rule whose inputs do not exist for this design (e.g. the claw never reaches the soil)."""
+    return Rule(name, None, lower, upper, unit, 1.0, where, missing=why)

@@ -1,0 +1,19 @@
+"""Grashof crank-rocker rule: the crank l2 turns fully and the rocker swings.
+
+Value: the smallest slack of  l2+l1 <= l3+l4,  l2+l3 <= l1+l4,  l2+l4 <= l1+l3  (mm).  These three
+are equivalent to "l2 shortest and s + l <= p + q"; being linear they are smooth NLP rows.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from constraints.base import Rule
+from synthesis.kinematics.fourbar import crank_rotation_slacks
+
+
+def grashof_rule(l1, l2, l3, l4) -> Rule:
+    slacks = crank_rotation_slacks(l1, l2, l3, l4)
+    rows = tuple((s, 0.0, None) for s in slacks.values())
+    worst = ca.fmin(ca.fmin(slacks["frame"], slacks["coupler"]), slacks["rocker"])
+    return Rule("grashof_crank_rocker", worst, 0.0, None, "mm", 10.0, "link lengths", nlp_rows=rows)

@@ -1,0 +1,21 @@
+"""One exception class per failure domain; the CLI maps each to an exit code (DESIGN.md)."""
+
+
+class AgrisynthError(Exception):
+    """Base of every error agrisynth reports to a user as one clear line."""
+
+    exit_code = 2
+
+
+class SpecError(AgrisynthError, ValueError):
+    """The spec file is unreadable, not TOML, or a field is missing, unknown or out of range."""
+
+
+class AssemblyError(AgrisynthError, ValueError):
+    """The linkage cannot be assembled: a loop-closure triangle inequality fails."""
+
+
+class SolverError(AgrisynthError, RuntimeError):
+    """IPOPT failed or the rule set is infeasible; the message names the rules and IPOPT's status."""
+
+    exit_code = 3

@@ -1,0 +1,27 @@
+"""What each problem kind provides to the CLI, imported only when a spec of that kind is run."""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+from typing import Callable
+
+from synthesis.result import Result
+
+#: kind -> (module with run_check, module and function writing its figures)
+_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
+_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
+
+
+def _resolve(target: str) -> Callable:
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def checker(kind: str) -> Callable:
+    return _resolve(_CHECKERS[kind])
+
+
+def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:
+    """filename -> writer(path) for the kind's figures."""
+    return {fn: (lambda path, f=_resolve(t): f(result, path)) for fn, t in _FIGURES.get(result.kind, {}).items()}

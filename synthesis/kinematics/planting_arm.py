@@ -1,0 +1,143 @@
+"""Claw tip of the four-bar planting arm (seed 000, Fig. 2) and its derivatives by CasADi AD.
+
+The coupler AB is rigidly extended to the claw tip C: |AC| = l5 and the direction AC is the
+direction AB turned clockwise by the fixed angle phi.  With the frame angle zeta and the crank
+angle theta of :mod:`synthesis.kinematics.fourbar`::
+
+    C(theta) = A + l5 * R(-phi) (B - A) / l3
+
+Machine frame: X forward (direction of travel), Y up, origin at the crank pivot O; the crank turns
+counter-clockwise (theta increasing) at the constant speed omega.  Ground frame: X_g = X + v t.
+The reading of the garbled OCR formulas behind these choices is in
+``problems/planting_arm/GEOMETRY.md``.
+
+Velocities and accelerations are exact: d/dtheta by AD, times omega (and omega^2) because omega is
+constant.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from synthesis.kinematics import fourbar
+
+#: order of the parameter vector p of :func:`claw_tip` (mm, mm, mm, mm, mm, rad, rad)
+PARAMETERS = ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")
+
+
+def claw_tip(theta, p, branch: int) -> fourbar.Point:
+    """C(theta) for the parameter vector p = (l1, l2, l3, l4, l5, zeta, phi) (mm, rad)."""
+    l1, l2, l3, l4, l5, zeta, phi = (p[i] for i in range(7))
+    (ax, ay), (bx, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
+    ux, uy = fourbar.rotate(((bx - ax) / l3, (by - ay) / l3), -phi)
+    return (ax + l5 * ux, ay + l5 * uy)
+
+
+@lru_cache(maxsize=4)
+def tip_derivatives(branch: int) -> ca.Function:
+    """CasADi Function (theta, p) -> (C, dC/dtheta, d2C/dtheta2), each 2x1, in mm, mm/rad, mm/rad^2.
+
+    Built once per assembly branch and reused: calling it on floats evaluates numerically, calling
+    it on symbols embeds it in an NLP, and ``.map(N)`` vectorises it over crank angles.
+    """
+    theta = ca.SX.sym("theta")
+    p = ca.SX.sym("p", len(PARAMETERS))
+    c = ca.vertcat(*claw_tip(theta, p, branch))
+    dc = ca.jacobian(c, theta)
+    ddc = ca.jacobian(dc, theta)
+    return ca.Function(
+        f"claw_tip_branch{'p' if branch > 0 else 'm'}",
+        [theta, p],
+        [c, dc, ddc],
+        ["theta", "p"],
+        ["pos", "dpos", "ddpos"],
+    )
+
+
+@dataclass(frozen=True)
+class ArmDesign:
+    """Geometry of one planting arm in spec units: lengths mm, angles deg."""
+
+    l1: float
+    l2: float
+    l3: float
+    l4: float
+    l5: float
+    zeta: float
+    phi: float
+    branch: int = -1
+
+    def parameters(self) -> np.ndarray:
+        """p for :func:`claw_tip`: lengths in mm, angles in rad."""
+        return np.array([self.l1, self.l2, self.l3, self.l4, self.l5,
+                         np.radians(self.zeta), np.radians(self.phi)])
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Operating condition: crank speed omega (rad/s) and forward speed v (mm/s)."""
+
+    omega: float
+    forward: float
+
+    @property
+    def period(self) -> float:
+        return 2.0 * np.pi / self.omega
+
+
+@dataclass(frozen=True)
+class TipState:
+    """Claw tip at one or several crank angles; machine-frame vectors, shape (2,) or (2, N)."""
+
+    theta: np.ndarray   # rad
+    pos: np.ndarray     # mm
+    vel: np.ndarray     # mm/s
+    acc: np.ndarray     # mm/s^2
+
+    def time(self, motion: Motion) -> np.ndarray:
+        """t = theta / omega: time zero when the crank lies on the frame line OO'."""
+        return np.asarray(self.theta) / motion.omega
+
+    def ground_pos(self, motion: Motion) -> np.ndarray:
+        pos = np.array(self.pos, dtype=float)
+        pos[0] = pos[0] + motion.forward * self.time(motion)
+        return pos
+
+    def ground_vel(self, motion: Motion) -> np.ndarray:
+        vel = np.array(self.vel, dtype=float)
+        vel[0] = vel[0] + motion.forward
+        return vel
+
+
+def tip_state(design: ArmDesign, motion: Motion, theta) -> TipState:
+    """Exact position, velocity and acceleration of C at crank angle(s) theta (rad)."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    f = tip_derivatives(design.branch)
+    if theta.size > 1:
+        f = f.map(theta.size)
+    pos, dpos, ddpos = f(theta.reshape(1, -1), design.parameters())
+    pos, dpos, ddpos = (np.asarray(v).reshape(2, -1) for v in (pos, dpos, ddpos))
+    return TipState(theta, pos, dpos * motion.omega, ddpos * motion.omega**2)
+
+
+@lru_cache(maxsize=4)
+def link_function(branch: int) -> ca.Function:
+    """CasADi Function (theta, p) -> (mu, h2): transmission angle (rad) and assembly height^2 (mm^2)."""
+    theta = ca.SX.sym("theta")
+    p = ca.SX.sym("p", len(PARAMETERS))
+    l1, l2, l3, l4, _, zeta, _ = (p[i] for i in range(7))
+    mu = fourbar.transmission_angle(theta, l1, l2, l3, l4, zeta, branch)
+    h2 = fourbar.assembly_height_sq(theta, l1, l2, l3, l4)
+    return ca.Function("links", [theta, p], [mu, h2], ["theta", "p"], ["mu", "h2"])
+
+
+def link_angles(design: ArmDesign, theta) -> dict[str, np.ndarray]:
+    """Transmission angle mu (rad) and assembly margin h2 (mm^2) at crank angles theta (rad)."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    f = link_function(design.branch).map(theta.size)
+    mu, h2 = f(theta.reshape(1, -1), design.parameters())
+    return {"mu": np.asarray(mu).ravel(), "h2": np.asarray(h2).ravel()}

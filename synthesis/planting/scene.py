@@ -1,0 +1,261 @@
+"""Numeric scene of a planting-arm design: precision points P1-P6 and the rule inputs.
+
+This is the ``check`` side: every precision point is found by root finding (scipy ``brentq``) on
+the exact AD kinematics, and the semi-infinite rules are sampled on fine grids.  The ``solve`` side
+builds the same rule set from decision variables instead (see :mod:`synthesis.planting.nlp`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from constraints import Rule
+from constraints.acceleration import acceleration_sign_rule
+from constraints.angles import entry_angle_rule
+from constraints.depth import depth_rule
+from constraints.grashof import grashof_rule
+from constraints.precision_points import p4p6_rule, seedbed_rules
+from constraints.speed import p2_speed_rule
+from constraints.transmission import transmission_rules
+from synthesis.errors import AssemblyError
+from synthesis.kinematics.planting_arm import ArmDesign, Motion, link_angles, tip_derivatives, tip_state
+from synthesis.spec.planting import PlantingFourbarSpec
+
+TWO_PI = 2.0 * math.pi
+POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
+
+
+@dataclass(frozen=True)
+class Seedbed:
+    """Seedbed-bottom line through ``point`` at ``tilt`` (rad); seedlings on the side of ``normal``."""
+
+    point: tuple[float, float]
+    tilt: float
+    thickness: float
+    seedling_height: float
+
+    @property
+    def normal(self) -> tuple[float, float]:
+        return (-math.sin(self.tilt), math.cos(self.tilt))
+
+    def height(self, pos) -> np.ndarray:
+        """Signed distance of pos (2, N) above the seedbed bottom, mm."""
+        n = self.normal
+        return n[0] * (pos[0] - self.point[0]) + n[1] * (pos[1] - self.point[1])
+
+
+@dataclass(frozen=True)
+class PlantingScene:
+    design: ArmDesign
+    motion: Motion
+    seedbed: Seedbed
+    soil_level: float | None       # Y of the soil surface, machine frame; None = analysis convention
+    analysis_depth: float | None   # soil this far above the lowest point
+
+    @classmethod
+    def from_spec(cls, spec: PlantingFourbarSpec, values: dict[str, float] | None = None) -> "PlantingScene":
+        """The scene at the spec's given values, or at ``values`` (design-variable name -> value)."""
+        v = spec.design_values() if values is None else values
+        arm = ArmDesign(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"], v["phi"], spec.arm.branch)
+        motion = Motion(omega=spec.operation.crank_speed * TWO_PI / 60.0,
+                        forward=spec.operation.forward_speed * 1000.0)
+        bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
+                      spec.seedbed.thickness, spec.seedbed.seedling_height)
+        soil = v.get("soil_level") if spec.soil.level is not None else None
+        return cls(arm, motion, bed, soil, spec.soil.analysis_depth)
+
+
+@dataclass
+class PrecisionPoints:
+    """Crank angles (rad, increasing through one cycle from P5) of P1-P6; None where not found."""
+
+    theta: dict[str, float | None]
+    soil_level: float | None
+    problems: dict[str, str] = field(default_factory=dict)
+
+    def missing(self, *names: str) -> str | None:
+        """Why any of ``names`` is absent (the first reason), or None when all exist."""
+        for n in names:
+            if self.theta.get(n) is None:
+                return self.problems.get(n, f"{n} not found")
+        return None
+
+
+# ----------------------------------------------------------------------------- assembly
+
+def assembly_status(d: ArmDesign) -> str | None:
+    """None if the loop closes over the whole turn; else why the crank cannot complete a turn.
+
+    Raises AssemblyError if it closes at no crank angle at all.  With the diagonal
+    d(theta) = |O'A| in [|l1 - l2|, l1 + l2], triangle O'AB closes iff |l3 - l4| <= d <= l3 + l4.
+    """
+    reach, gap = d.l3 + d.l4, abs(d.l3 - d.l4)
+    dmin, dmax = abs(d.l1 - d.l2), d.l1 + d.l2
+    if dmin > reach:
+        raise AssemblyError(
+            f"linkage cannot assemble at any crank angle: at crank angle 0 deg |O'A| = l1 - l2 = {dmin:g} mm "
+            f"> l3 + l4 = {reach:g} mm (triangle O'AB cannot close)")
+    if dmax < gap:
+        raise AssemblyError(
+            f"linkage cannot assemble at any crank angle: at crank angle 180 deg |O'A| = l1 + l2 = {dmax:g} mm "
+            f"< |l3 - l4| = {gap:g} mm (triangle O'AB cannot close)")
+    if dmax > reach:
+        bad = math.degrees(math.acos(max(-1.0, min(1.0, (d.l1**2 + d.l2**2 - reach**2) / (2 * d.l1 * d.l2)))))
+        return (f"crank cannot complete a turn: between crank angles {bad:.1f} and {360 - bad:.1f} deg "
+                f"|O'A| > l3 + l4 = {reach:g} mm (triangle O'AB cannot close)")
+    if dmin < gap:
+        bad = math.degrees(math.acos(max(-1.0, min(1.0, (d.l1**2 + d.l2**2 - gap**2) / (2 * d.l1 * d.l2)))))
+        return (f"crank cannot complete a turn: between crank angles -{bad:.1f} and {bad:.1f} deg "
+                f"|O'A| < |l3 - l4| = {gap:g} mm (triangle O'AB cannot close)")
+    return None
+
+
+# ----------------------------------------------------------------------------- precision points
+
+def _refine(fun, a: float, b: float) -> float:
+    """Root of fun in [a, b] (a sign change is known to lie there)."""
+    fa, fb = fun(a), fun(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    return brentq(fun, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps, maxiter=200)
+
+
+def _crossings(values: np.ndarray, level: float, downward: bool) -> np.ndarray:
+    """Indices k with values[k] and values[k+1] on opposite sides of level, in the given direction."""
+    above = values >= level
+    if downward:
+        return np.flatnonzero(above[:-1] & ~above[1:])
+    return np.flatnonzero(~above[:-1] & above[1:])
+
+
+def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPoints:
+    """P5 = lowest point (vy = 0), P4/P6 = soil crossings around it, P3/P2/P1 = seedbed crossings.
+
+    One cycle is scanned from P5: P5 < P6 < P1 < P2 < P3 < P4 < P5 + 360 deg.  P3 is the last
+    downward crossing of the seedbed bottom before P4, P2 the last of the seedbed top before P3,
+    P1 the last of the seedling-top line before P2.
+    """
+    d, m, bed = scene.design, scene.motion, scene.seedbed
+    f = tip_derivatives(d.branch)
+    p = d.parameters()
+
+    def y(th):
+        return float(f(th, p)[0][1])
+
+    def vy(th):
+        return float(f(th, p)[1][1])
+
+    coarse = np.linspace(0.0, TWO_PI, grid, endpoint=False)
+    ys = tip_state(d, m, coarse).pos[1]
+    k = int(np.argmin(ys))
+    h = coarse[1]
+    # the lowest point: vy changes sign from - to + around the grid minimum
+    th5 = _refine(vy, coarse[k] - h, coarse[k] + h) if vy(coarse[k] - h) < 0 < vy(coarse[k] + h) else coarse[k]
+    theta: dict[str, float | None] = {n: None for n in POINTS}
+    theta["P5"] = th5
+    problems: dict[str, str] = {}
+    y5 = y(th5)
+    soil = scene.soil_level if scene.soil_level is not None else y5 + scene.analysis_depth
+
+    cycle = th5 + np.linspace(0.0, TWO_PI, grid + 1)
+    state = tip_state(d, m, cycle)
+    ycyc = state.pos[1]
+    if soil <= y5:
+        why = f"the claw never reaches the soil: lowest point Y = {y5:.1f} mm is above the soil surface Y = {soil:.1f} mm"
+        problems.update({"P4": why, "P6": why})
+    elif soil >= ycyc.max():
+        why = f"the whole claw path (top Y = {ycyc.max():.1f} mm) lies below the soil surface Y = {soil:.1f} mm"
+        problems.update({"P4": why, "P6": why})
+    else:
+        up = _crossings(ycyc, soil, downward=False)
+        dn = _crossings(ycyc, soil, downward=True)
+        theta["P6"] = _refine(lambda t: y(t) - soil, cycle[up[0]], cycle[up[0] + 1])
+        theta["P4"] = _refine(lambda t: y(t) - soil, cycle[dn[-1]], cycle[dn[-1] + 1])
+
+    if theta["P4"] is not None:
+        s = bed.height(state.pos)
+        end = theta["P4"]
+        for name, level in (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height)):
+            idx = [i for i in _crossings(s, level, downward=True)
+                   if theta["P6"] < cycle[i] and cycle[i + 1] <= end]
+            if not idx:
+                problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
+                                  f"seedbed bottom on its way down between soil exit and entry")
+                break
+            i = idx[-1]
+            theta[name] = _refine(lambda t, lv=level: float(bed.height(f(t, p)[0])) - lv, cycle[i], cycle[i + 1])
+            end = theta[name]
+    else:
+        for name in ("P1", "P2", "P3"):
+            problems[name] = problems["P4"]
+    return PrecisionPoints(theta, soil, problems)
+
+
+# ----------------------------------------------------------------------------- rules
+
+def phase_grid(a: float, b: float, n: int) -> np.ndarray:
+    """n crank angles evenly from a to b inclusive (b may exceed a by up to a turn)."""
+    return np.linspace(a, b, n)
+
+
+def planting_rules(scene: PlantingScene, pts: PrecisionPoints, limits, phase_samples: int = 400,
+                   turn_samples: int = 3600, turn_missing: str | None = None) -> list[Rule]:
+    """Every rule of a planting_fourbar spec, evaluated on floats.
+
+    ``turn_missing`` says why the crank cannot complete a turn (then the turn rules are unevaluated).
+    """
+    d, m = scene.design, scene.motion
+    th = pts.theta
+    at = {n: tip_state(d, m, th[n]) for n in POINTS if th[n] is not None}
+
+    def pos(n):
+        return tuple(at[n].pos[:, 0]) if n in at else None
+
+    def ground(n):
+        return tuple(at[n].ground_pos(m)[:, 0]) if n in at else None
+
+    rules: list[Rule] = []
+    rules += seedbed_rules(pos("P1"), pos("P2"), pos("P3"), limits.p1p3, limits.p2p3, limits.collinearity,
+                           pts.missing("P1", "P2", "P3"))
+    miss4 = pts.missing("P4")
+    vel4 = at["P4"].ground_vel(m)[:, 0] if "P4" in at else (None, None)
+    rules.append(entry_angle_rule(vel4[0], vel4[1], limits.entry_angle_min, miss4))
+    rules.append(depth_rule(pos("P4")[1] if "P4" in at else None, pos("P5")[1] if "P5" in at else None,
+                            limits.depth, miss4))
+    # the cycle is scanned from P5, so the planting stroke's P4 lies one turn earlier than theta['P4']
+    if "P4" in at and "P6" in at:
+        t4 = th["P4"] - TWO_PI
+        p4g = (at["P4"].pos[0, 0] + m.forward * t4 / m.omega, at["P4"].pos[1, 0])
+        rules.append(p4p6_rule(p4g, ground("P6"), limits.p4p6_min))
+    else:
+        rules.append(p4p6_rule(None, None, limits.p4p6_min, pts.missing("P4", "P6")))
+    v2 = at["P2"].vel[:, 0] if "P2" in at else (None, None)
+    rules.append(p2_speed_rule(v2[0], v2[1], limits.p2_speed_min, pts.missing("P2")))
+
+    acc_scale = m.omega**2 * d.l2
+    signs = limits.acceleration
+    for phase, a, b, sign in (("hold", "P3", "P4", signs.hold), ("throw", "P4", "P5", signs.throw),
+                              ("release", "P5", "P6", signs.release)):
+        missing = pts.missing(a, b)
+        ay = None
+        if missing is None:
+            ta, tb = th[a], th[b]
+            if b == "P5":
+                tb += TWO_PI
+            ay = tip_state(d, m, phase_grid(ta, tb, phase_samples)).acc[1]
+        rules.append(acceleration_sign_rule(phase, ay, sign, acc_scale, missing))
+
+    rules.append(grashof_rule(d.l1, d.l2, d.l3, d.l4))
+    mu = None if turn_missing else transmission_angles_deg(d, turn_samples)
+    rules += transmission_rules(mu, limits.transmission_angle, turn_missing)
+    return rules
+
+
+def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:
+    return np.degrees(link_angles(d, np.linspace(0.0, TWO_PI, samples, endpoint=False))["mu"])

@@ -1,0 +1,138 @@
+"""Shared pieces of every spec model: strict base model, design variables, TOML reading, errors.
+
+Errors name the TOML path, the bad value and what was expected, e.g.
+``planting_fourbar.design.l2: expected > 0, got -3``, and suggest the fix where one is obvious.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any, Union
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from synthesis.errors import SpecError
+
+
+class StrictModel(BaseModel):
+    """Frozen, unknown keys forbidden: a typo in a spec is an error, never silently ignored."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class FreeVariable(StrictModel):
+    """A design variable left to the optimiser: start value and bounds (spec units)."""
+
+    init: float = Field(description="start value (and the value `check` evaluates)")
+    bounds: tuple[float, float] = Field(description="[lo, hi] the optimiser keeps it within")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "FreeVariable":
+        lo, hi = self.bounds
+        if lo > hi:
+            raise ValueError(f"bounds [{lo:g}, {hi:g}] have lo > hi; write them as [{hi:g}, {lo:g}]")
+        if not lo <= self.init <= hi:
+            raise ValueError(f"init {self.init:g} lies outside its bounds [{lo:g}, {hi:g}]")
+        return self
+
+
+#: a number fixes the variable, a table ``{init = .., bounds = [lo, hi]}`` frees it
+Variable = Union[float, FreeVariable]
+
+
+def value_of(v: Variable) -> float:
+    """The value `check` evaluates: the number itself, or the start value of a free variable."""
+    return v.init if isinstance(v, FreeVariable) else float(v)
+
+
+def bounds_of(v: Variable) -> tuple[float, float]:
+    """[lo, hi] for the optimiser; a fixed variable has lo = hi."""
+    return v.bounds if isinstance(v, FreeVariable) else (float(v), float(v))
+
+
+def is_free(v: Variable) -> bool:
+    return isinstance(v, FreeVariable)
+
+
+Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
+
+
+def read_toml(path: Path) -> tuple[dict[str, Any], str]:
+    """Parse a spec file; returns (data, sha256 of the bytes). Errors carry line and column."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise SpecError(f"{path}: no such spec file") from None
+    except OSError as exc:
+        raise SpecError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise SpecError(f"{path}: not a UTF-8 text file (byte {exc.start})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"{path}: not valid TOML: {exc}") from None
+    return data, hashlib.sha256(raw).hexdigest()
+
+
+def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
+    """Names of the fields allowed at ``loc`` inside ``model`` (for did-you-mean)."""
+    current: Any = model
+    for part in loc:
+        fields = getattr(current, "model_fields", None)
+        if fields is None or part not in fields:
+            return []
+        current = fields[part].annotation
+        for arg in getattr(current, "__args__", ()) or ():
+            if isinstance(arg, type) and issubclass(arg, BaseModel):
+                current = arg
+    fields = getattr(current, "model_fields", None)
+    return list(fields) if fields else []
+
+
+def _describe(err: dict, model: type[BaseModel]) -> str:
+    kind, ctx, got = err["type"], err.get("ctx", {}), err.get("input")
+    # pydantic reports union branches as extra path parts ("float", "FreeVariable"): drop them
+    loc = tuple(p for p in err["loc"] if p not in ("float", "FreeVariable", "function-after[_ordered(), FreeVariable]"))
+    if kind == "missing":
+        return f"{'.'.join(map(str, loc))}: missing required field"
+    if kind == "extra_forbidden":
+        allowed = _fields_at(model, loc[:-1])
+        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.5)
+        hint = f"; did you mean '{close[0]}'?" if close else (f"; allowed: {', '.join(allowed)}" if allowed else "")
+        return f"{'.'.join(map(str, loc))}: unknown field{hint}"
+    path = ".".join(map(str, loc))
+    if kind == "greater_than":
+        return f"{path}: expected > {ctx['gt']}, got {got}"
+    if kind == "greater_than_equal":
+        return f"{path}: expected >= {ctx['ge']}, got {got}"
+    if kind == "less_than":
+        return f"{path}: expected < {ctx['lt']}, got {got}"
+    if kind == "less_than_equal":
+        return f"{path}: expected <= {ctx['le']}, got {got}"
+    if kind == "value_error":
+        return f"{path}: {str(ctx.get('error', err['msg']))}"
+    if kind == "literal_error":
+        return f"{path}: expected {ctx.get('expected')}, got {got!r}"
+    return f"{path}: {err['msg'].lower()}, got {got!r}"
+
+
+def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseModel:
+    """Validate ``data`` into ``model``; on failure raise SpecError listing every bad field."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        seen: list[str] = []
+        for err in exc.errors():
+            line = f"{prefix}.{_describe(err, model)}"
+            if line not in seen:
+                seen.append(line)
+        # a union of "number | table" yields one error per branch: keep the most specific ones
+        raise SpecError("\n".join(_prune_union_noise(seen))) from None
+
+
+def _prune_union_noise(lines: list[str]) -> list[str]:
+    specific = [ln for ln in lines if "input should be a valid" not in ln and "dictionary" not in ln]
+    return specific or lines

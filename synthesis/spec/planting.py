@@ -1,0 +1,133 @@
+"""Spec model of kind ``planting_fourbar``: the four-bar planting arm of seed 000.
+
+Units: lengths mm, angles deg, forward speed m/s, crank speed r/min (DESIGN.md).
+
+Operating condition: we take the **crank speed** (r/min) as the input and derive the plant
+spacing (= forward speed x crank period).  Seed 000 varies the forward speed at a fixed crank speed
+in its sensitivity study (Table 2 lists RPM and V_m as separate factors) and finds that P4P6
+changes with forward speed; at a fixed plant spacing the ground-frame path would be the same
+curve at every speed, so that finding needs the crank speed held fixed.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import FreeVariable, Interval, StrictModel, Variable, value_of
+
+KIND = "planting_fourbar"
+
+
+def _positive(name: str, v: Variable) -> None:
+    lo = v.bounds[0] if isinstance(v, FreeVariable) else v
+    if lo <= 0:
+        raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
+
+
+class ArmSection(StrictModel):
+    """Linkage (seed 000 Table 1 symbols). A number fixes a variable, {init, bounds} frees it."""
+
+    l1: Variable = Field(description="frame O'O, mm")
+    l2: Variable = Field(description="crank OA, mm")
+    l3: Variable = Field(description="coupler AB, mm")
+    l4: Variable = Field(description="rocker O'B, mm")
+    l5: Variable = Field(description="claw arm AC (A to claw tip C), mm")
+    zeta: Variable = Field(description="frame angle: direction of O -> O' from the +X axis, deg")
+    phi: Variable = Field(description="claw angle: AC is AB turned clockwise by phi, deg")
+    branch: Literal[-1, 1] = Field(-1, description="assembly: B right (-1) or left (+1) of the line A -> O'")
+    tray_tilt: Literal["backward", "forward"] | None = Field(
+        None, description="seedling-tray tilt of the machine (seed 000 Table 1, informational)")
+
+    @model_validator(mode="after")
+    def _lengths_positive(self) -> "ArmSection":
+        for name in ("l1", "l2", "l3", "l4", "l5"):
+            _positive(name, getattr(self, name))
+        return self
+
+
+class SeedbedSection(StrictModel):
+    """Seedling mat on the tray: a straight seedbed-bottom line fixed in the machine frame."""
+
+    x: Variable = Field(description="X of a point on the seedbed bottom (tray surface), mm from the crank pivot O")
+    y: Variable = Field(description="Y of that point, mm")
+    tilt: Variable = Field(description="direction of the tray surface from the +X axis, deg; "
+                                       "the seedlings stand on its upper side")
+    thickness: float = Field(22.0, gt=0, description="seedbed (mat) thickness P2-P3 level, mm (seed 000: 22)")
+    seedling_height: float = Field(110.0, gt=0, description="seedling top above the seedbed bottom, mm (seed 000: 110)")
+
+
+class OperationSection(StrictModel):
+    forward_speed: float = Field(ge=0, le=2.0, description="machine forward speed, m/s (seed 000 analyses 0.50-0.75)")
+    crank_speed: float = Field(gt=0, le=2000, description="crank (driving shaft) speed, r/min")
+
+
+class SoilSection(StrictModel):
+    """Either the soil surface Y in the machine frame, or the paper's analysis convention."""
+
+    level: Variable | None = Field(None, description="Y of the soil surface in the machine frame, mm")
+    analysis_depth: float | None = Field(
+        None, gt=0, description="soil surface this far above the lowest claw point, mm (seed 000 uses 25)")
+
+    @model_validator(mode="after")
+    def _one_of(self) -> "SoilSection":
+        if (self.level is None) == (self.analysis_depth is None):
+            raise ValueError("give exactly one of soil.level (mm) or soil.analysis_depth (mm)")
+        return self
+
+
+class AccelerationSigns(StrictModel):
+    """Sign of the claw's Y acceleration required on each phase (+1 up, -1 down).
+
+    Printed rules (seed 000 §6.2 (4)-(6)): hold +, throw -, release +.  The printed throw sign is
+    unattainable by any smooth path (see GEOMETRY.md); the default is the physical reading, +.
+    """
+
+    hold: Literal[-1, 1] = Field(1, description="P3 (seedling taken) -> P4 (soil entry)")
+    throw: Literal[-1, 1] = Field(1, description="P4 (soil entry) -> P5 (lowest point)")
+    release: Literal[-1, 1] = Field(1, description="P5 (lowest point) -> P6 (soil exit)")
+
+
+class RulesSection(StrictModel):
+    """Limits of the design rules (seed 000 §6.2); defaults are the paper's values."""
+
+    p1p3: Interval = Field((105.0, 115.0), description="distance P1-P3, mm")
+    p2p3: Interval = Field((21.0, 23.0), description="distance P2-P3 (about the 22 mm seedbed), mm")
+    collinearity: float = Field(5.0, gt=0, le=90, description="max turn of the claw path at P2 between "
+                                                             "P1->P2 and P2->P3, deg (0 = collinear)")
+    entry_angle_min: float = Field(80.0, gt=0, le=90, description="min angle of the ground-frame velocity "
+                                                                  "at P4 to the horizontal, deg")
+    depth: Interval = Field((20.0, 30.0), description="planting depth Y(P4) - Y(P5), mm")
+    p4p6_min: float = Field(20.0, ge=0, description="min ground-frame distance P4-P6, mm")
+    p2_speed_min: float = Field(1.0, ge=0, description="min claw speed at P2 relative to the seedbed, m/s")
+    transmission_angle: Interval = Field((40.0, 140.0), description="transmission angle range over a turn, deg")
+    acceleration: AccelerationSigns = Field(default_factory=AccelerationSigns)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "RulesSection":
+        for name in ("p1p3", "p2p3", "depth", "transmission_angle"):
+            lo, hi = getattr(self, name)
+            if lo > hi:
+                raise ValueError(f"{name}: [{lo:g}, {hi:g}] has lo > hi")
+        return self
+
+
+class PlantingFourbarSpec(StrictModel):
+    kind: Literal["planting_fourbar"]
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
+    source: str = Field("", description="where the numbers come from (paper, table)")
+    arm: ArmSection
+    seedbed: SeedbedSection
+    operation: OperationSection
+    soil: SoilSection
+    rules: RulesSection = Field(default_factory=RulesSection)
+
+    def design_values(self) -> dict[str, float]:
+        """Every design variable at its given (or start) value, spec units."""
+        names = ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")
+        values = {n: value_of(getattr(self.arm, n)) for n in names}
+        values.update({f"seedbed_{n}": value_of(getattr(self.seedbed, n)) for n in ("x", "y", "tilt")})
+        if self.soil.level is not None:
+            values["soil_level"] = value_of(self.soil.level)
+        return values
