@@ -1,0 +1,35 @@
+"""Shared factories: the four published arms of seed 000 Table 1 and their spec files."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from synthesis.kinematics.planting_arm import ArmDesign, Motion
+
+ROOT = Path(__file__).resolve().parent.parent
+LIBRARY = ROOT / "problems"
+PLANTING = LIBRARY / "planting_arm"
+
+#: seed 000 Table 1: L1..L5 (mm), zeta, phi (deg)
+TABLE1 = {
+    1: (75, 35, 75, 80, 191, -90, 31),
+    2: (130, 40, 90, 88, 200, 41, 35),
+    3: (74, 35, 70, 75, 177, -74, 49),
+    4: (76, 37, 67, 65, 195, -71, 52),
+}
+
+
+def arm(example: int) -> ArmDesign:
+    return ArmDesign(*TABLE1[example])
+
+
+def motion(forward_m_s: float = 0.6, rpm: float = 250.0) -> Motion:
+    return Motion(omega=rpm * 2 * math.pi / 60, forward=forward_m_s * 1000)
+
+
+@pytest.fixture(params=sorted(TABLE1), ids=lambda k: f"example{k}")
+def example(request) -> int:
+    return request.param

@@ -1,0 +1,116 @@
+"""`agrisynth check` end to end: rule table, result.json contract, plot, exit codes, bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import PLANTING
+
+BASE = (PLANTING / "taiwan_example1.toml").read_text()
+
+
+def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=120)
+
+
+def spec_with(tmp_path: Path, old: str, new: str, name: str = "bad.toml") -> Path:
+    assert old in BASE, old
+    path = tmp_path / name
+    path.write_text(BASE.replace(old, new, 1))
+    return path
+
+
+def test_check_writes_result_json_report_and_plot(tmp_path):
+    proc = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr        # example 1 violates some rules (see the closing note)
+    assert "entry_angle" in proc.stdout and "FAIL" in proc.stdout
+    folder = tmp_path / "taiwan_example1"
+    data = json.loads((folder / "result.json").read_text())
+    for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "trajectory", "versions"):
+        assert key in data
+    assert data["status"] == "evaluated" and "objective" not in data
+    assert set(data["design"]) >= {"l1", "l2", "l3", "l4", "l5", "zeta", "phi"}
+    for rule in data["rules"]:
+        assert set(rule) >= {"name", "value", "limit", "unit", "satisfied", "margin"}
+    assert len(data["rules"]) == 13
+    tr = data["trajectory"]
+    assert tr["frame"] == "ground"
+    assert {len(tr[k]) for k in ("t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay")} == {361}
+    assert (folder / "trajectory.png").stat().st_size > 10_000
+    assert "<table>" in (folder / "report.html").read_text()
+    # a second run replaces the folder and says so
+    again = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
+    assert "replaced the previous run" in again.stdout
+    assert [p.name for p in tmp_path.iterdir()] == ["taiwan_example1"]
+
+
+def test_missing_field(tmp_path):
+    proc = run("check", str(spec_with(tmp_path, "l3 = 75 ", "")), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "planting_fourbar.arm.l3: missing required field" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_unknown_field_suggests_the_right_name(tmp_path):
+    proc = run("check", str(spec_with(tmp_path, "l3 = 75 ", "l33 = 75 ")), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "planting_fourbar.arm.l33: unknown field; did you mean 'l3'?" in proc.stderr
+
+
+@pytest.mark.parametrize("value", ["-3", "0"])
+def test_non_positive_length(tmp_path, value):
+    proc = run("check", str(spec_with(tmp_path, "l2 = 35 ", f"l2 = {value} ")), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert f"planting_fourbar.arm: l2: expected > 0, got {value}" in proc.stderr
+
+
+def test_linkage_that_cannot_assemble_names_angle_and_triangle(tmp_path):
+    path = spec_with(tmp_path, "l3 = 75 ", "l3 = 10 ")
+    path.write_text(path.read_text().replace("l4 = 80 ", "l4 = 12 "))
+    proc = run("check", str(path), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert ("linkage cannot assemble at any crank angle: at crank angle 0 deg |O'A| = l1 - l2 = 40 mm "
+            "> l3 + l4 = 22 mm (triangle O'AB cannot close)") in proc.stderr.replace("\n", " ")
+    assert not (tmp_path / "results").exists()
+
+
+def test_non_grashof_design_is_a_violated_rule(tmp_path):
+    path = spec_with(tmp_path, "l3 = 75 ", "l3 = 40 ")
+    path.write_text(path.read_text().replace("l4 = 80 ", "l4 = 45 "))
+    proc = run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    data = json.loads((tmp_path / "out" / "taiwan_example1" / "result.json").read_text())
+    rules = {r["name"]: r for r in data["rules"]}
+    assert rules["grashof_crank_rocker"]["satisfied"] is False
+    assert rules["grashof_crank_rocker"]["value"] == pytest.approx(-25.0)   # l3 + l4 - l2 - l1
+    assert "crank cannot complete a turn" in rules["entry_angle"]["note"]
+    assert "grashof_crank_rocker" in proc.stdout
+
+
+def test_spec_that_is_not_toml_reports_line_and_column(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text('kind = "planting_fourbar"\nname = \n')
+    proc = run("check", str(path), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "not valid TOML" in proc.stderr and "line 2, column 8" in proc.stderr
+
+
+def test_missing_file_and_unknown_kind(tmp_path):
+    assert run("check", str(tmp_path / "nope.toml"), cwd=tmp_path).returncode == 2
+    path = tmp_path / "k.toml"
+    path.write_text('kind = "planting_forbar"\nname = "x"\n')
+    proc = run("check", str(path), cwd=tmp_path)
+    assert proc.returncode == 2 and "did you mean 'planting_fourbar'?" in proc.stderr
+
+
+def test_problems_lists_the_library(tmp_path):
+    proc = run("problems", cwd=tmp_path)
+    assert proc.returncode == 0
+    for k in (1, 2, 3, 4):
+        assert f"taiwan_example{k}" in proc.stdout
