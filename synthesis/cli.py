@@ -100,6 +100,103 @@ def check(spec: Path, out: Path) -> None:
     console.print("[green]every rule satisfied[/]")
 
 
+def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
+    table = Table(title=title, title_justify="left")
+    for col, just in (("rule", "left"), ("limit", "right"), ("baseline", "right"), ("", "left"),
+                      ("solution", "right"), ("", "left"), ("unit", "left")):
+        table.add_column(col, justify=just, no_wrap=True)
+    base = {r["name"]: r for r in baseline or []}
+
+    def cell(r):
+        if r is None:
+            return "", ""
+        value = "-" if r["value"] is None else f"{r['value']:.4g}"
+        return value, ("[green]pass[/]" if r["satisfied"] else "[bold red]FAIL[/]")
+
+    for r in best:
+        lo, hi = r["limit"]
+        limit = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None else
+                 f">= {lo:g}" if lo is not None else f"<= {hi:g}")
+        table.add_row(r["name"], limit, *cell(base.get(r["name"])), *cell(r), r["unit"])
+    return table
+
+
+@cli.command()
+@click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+              help="output folder; the run writes OUT/<spec name>/")
+@click.option("--starts", type=click.IntRange(min=1), default=None,
+              help="multistart starts (default: the spec's [solver] starts); start 0 is the spec's design")
+@click.option("--seed", type=click.IntRange(min=0), default=None,
+              help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="parallel worker processes (default: all cores)")
+@click.option("--scheduler", default=None, help="dask scheduler address (not supported yet; exits 2)")
+@click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
+def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: int | None,
+          scheduler: str | None, verbose: bool) -> None:
+    """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
+
+    \b
+    Every rule is a constraint; the objective comes from the spec's [objective] name:
+      nearest  smallest change from the given design (the default)
+      robust   maximise the smallest normalised rule margin
+      smooth   minimise the peak claw acceleration over a turn
+    Starts are a fixed-seed Latin hypercube (start 0 = the given design). The best start is
+    re-checked on a 10x finer grid, independently of the solver. Writes OUT/<name>/result.json,
+    report.html, ipopt.log and plots. Exit 0 all rules hold, 3 no start satisfies them (the
+    message names the conflicting rules), 2 bad input.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from synthesis import kinds
+    from synthesis.multistart import default_workers
+    from synthesis.report import write_report
+    from synthesis.result import atomic_write_text, write_run
+    from synthesis.spec import load_spec
+
+    if scheduler is not None:
+        raise click.BadParameter("a dask scheduler is not supported yet; run without --scheduler", param_hint="--scheduler")
+    loaded = load_spec(spec)
+    solver_module = kinds.solver(loaded.kind)
+    workers = workers or default_workers()
+    n = starts or loaded.model.solver.starts
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
+                  transient=not sys.stdout.isatty()) as progress:
+        task = progress.add_task(f"solving {loaded.name}", total=n, best="")
+
+        def on_start(report, best) -> None:
+            tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
+            progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
+                                                  f"objective {best.outcome.objective:.6g} ({tag})")
+
+        result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start)
+    if verbose:
+        console.print(log, markup=False)
+    figures = kinds.figure_writers(result)
+    artifacts = dict(figures)
+    artifacts["report.html"] = lambda path: write_report(result, path, list(figures))
+    artifacts["ipopt.log"] = lambda path: atomic_write_text(path, log)
+    folder, replaced = write_run(out, result, artifacts)
+    baseline = solver_module.baseline_rules(loaded)
+    console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
+    s = result.solver
+    console.print(f"objective {result.objective['name']} = {result.objective['value']:.6g}; IPOPT "
+                  f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
+                  f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on {workers} worker(s)")
+    if replaced:
+        console.print(f"replaced the previous run in {folder}/")
+    console.print(f"wrote {folder}/result.json, report.html, ipopt.log, {', '.join(figures)}")
+    if result.status == "infeasible":
+        raise solver_module.diagnose_infeasible(loaded, result, reports)
+    bad = result.violated()
+    if bad:
+        console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
+        sys.exit(1)
+    console.print("[green]every rule satisfied on the fine grid[/]")
+
+
 def main() -> None:
     try:
         cli.main(standalone_mode=False)

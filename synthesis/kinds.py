@@ -10,6 +10,7 @@ from synthesis.result import Result
 
 #: kind -> (module with run_check, module and function writing its figures)
 _CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
+_SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
 _FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
 
 
@@ -20,6 +21,11 @@ def _resolve(target: str) -> Callable:
 
 def checker(kind: str) -> Callable:
     return _resolve(_CHECKERS[kind])
+
+
+def solver(kind: str):
+    """The kind's solve module (run_solve, baseline_rules, diagnose_infeasible)."""
+    return importlib.import_module(_SOLVERS[kind])
 
 
 def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:

@@ -13,14 +13,15 @@ from synthesis.kinematics.planting_arm import tip_state
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
-def evaluate(scene: PlantingScene, limits) -> tuple[list[Rule], PrecisionPoints | None]:
+def evaluate(scene: PlantingScene, limits, phase_samples: int = 400,
+             turn_samples: int = 3600) -> tuple[list[Rule], PrecisionPoints | None]:
     """All rules of the scene; a crank that cannot complete a turn leaves the path rules unevaluated."""
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:
         pts = find_precision_points(scene)
-        return planting_rules(scene, pts, limits), pts
+        return planting_rules(scene, pts, limits, phase_samples, turn_samples), pts
     nowhere = PrecisionPoints({n: None for n in POINTS}, None, {n: why for n in POINTS})
-    return planting_rules(scene, nowhere, limits, turn_missing=why), None
+    return planting_rules(scene, nowhere, limits, phase_samples, turn_samples, turn_missing=why), None
 
 
 def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:

@@ -113,6 +113,22 @@ class RulesSection(StrictModel):
         return self
 
 
+class ObjectiveSection(StrictModel):
+    name: Literal["nearest", "robust", "smooth"] = Field(
+        "nearest", description="nearest: smallest change from the given design (default); robust: maximise the "
+                               "smallest normalised rule margin; smooth: minimise the peak claw acceleration")
+
+
+class SolverSection(StrictModel):
+    starts: int = Field(16, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    samples_per_phase: int = Field(16, ge=3, le=500, description="samples of each acceleration phase")
+    samples_per_turn: int = Field(72, ge=12, le=3600, description="samples of a crank turn (transmission, lowest)")
+    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+    backoff: float = Field(0.02, ge=0, le=1, description="the NLP tightens every rule limit by backoff x the "
+                                                         "rule's scale, so rules hold between the samples too")
+
+
 class PlantingFourbarSpec(StrictModel):
     kind: Literal["planting_fourbar"]
     name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
@@ -122,12 +138,17 @@ class PlantingFourbarSpec(StrictModel):
     operation: OperationSection
     soil: SoilSection
     rules: RulesSection = Field(default_factory=RulesSection)
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
+    solver: SolverSection = Field(default_factory=SolverSection)
+
+    def variables(self) -> dict[str, Variable]:
+        """Every design variable (spec units) by its result.json name."""
+        out = {n: getattr(self.arm, n) for n in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
+        out.update({f"seedbed_{n}": getattr(self.seedbed, n) for n in ("x", "y", "tilt")})
+        if self.soil.level is not None:
+            out["soil_level"] = self.soil.level
+        return out
 
     def design_values(self) -> dict[str, float]:
         """Every design variable at its given (or start) value, spec units."""
-        names = ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")
-        values = {n: value_of(getattr(self.arm, n)) for n in names}
-        values.update({f"seedbed_{n}": value_of(getattr(self.seedbed, n)) for n in ("x", "y", "tilt")})
-        if self.soil.level is not None:
-            values["soil_level"] = value_of(self.soil.level)
-        return values
+        return {n: value_of(v) for n, v in self.variables().items()}
