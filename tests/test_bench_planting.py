@@ -1,0 +1,27 @@
+"""Benchmarks (not run by default; `pytest -m benchmark`): one local solve and a 32-start multistart."""
+
+from __future__ import annotations
+
+import pytest
+
+from conftest import PLANTING
+from synthesis.planting.nlp import PlantingNLP
+from synthesis.planting.solve import run_solve
+from synthesis.spec import load_spec
+
+pytestmark = pytest.mark.benchmark
+
+
+def test_bench_one_local_solve(benchmark):
+    spec = load_spec(PLANTING / "redesign_from_example1.toml").model
+    nlp = PlantingNLP(spec)
+    out = benchmark(nlp.solve, 0, nlp.init)
+    benchmark.extra_info["iterations"] = out.iterations
+    assert out.success
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_bench_32_start_multistart(benchmark, workers):
+    loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+    result, _, _ = benchmark.pedantic(run_solve, args=(loaded, 32, 0, workers), rounds=3, iterations=1)
+    assert result.status == "optimal"
