@@ -28,7 +28,7 @@ from constraints.grashof import grashof_rule
 from constraints.precision_points import p4p6_rule, seedbed_rules
 from constraints.speed import p2_speed_rule
 from constraints.transmission import transmission_rules
-from synthesis.kinematics.planting_arm import ArmDesign, link_function, tip_derivatives
+from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.scene import POINTS, TWO_PI, PlantingScene, find_precision_points
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.planting import PlantingFourbarSpec
