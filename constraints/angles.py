@@ -2,8 +2,8 @@
 
 Value: the angle of (vx_g, vy) to the horizontal, atan2(|vy|, |vx_g|) in [0, 90] deg; >= 80 deg
 means the claw enters within 10 deg of vertical.  That is not smooth where vx_g = 0 (exactly the
-ideal), so the optimiser gets the equivalent smooth pair  |vx_g| <= -vy / tan(min)  as two rows
-(vy < 0 at entry, which the soil-entry definition of P4 guarantees).
+ideal), so the optimiser gets the equivalent smooth row  min <= atan2(-vy, vx_g) <= 180 - min
+(the direction measured from +X; vy < 0 at entry), in degrees like the rule itself.
 """
 
 from __future__ import annotations
@@ -19,6 +19,5 @@ def entry_angle_rule(vx_ground, vy, minimum_deg: float, missing: str | None = No
     if missing:
         return not_evaluated("entry_angle", minimum_deg, None, "deg", "at P4, ground frame", missing)
     angle = ca.atan2(ca.fabs(vy), ca.fabs(vx_ground)) * (180.0 / math.pi)
-    cot = 1.0 / math.tan(math.radians(minimum_deg))
-    rows = ((-vy * cot - vx_ground, 0.0, None), (-vy * cot + vx_ground, 0.0, None))
+    rows = ((ca.atan2(-vy, vx_ground) * (180.0 / math.pi), minimum_deg, 180.0 - minimum_deg),)
     return Rule("entry_angle", angle, minimum_deg, None, "deg", 10.0, "at P4, ground frame", nlp_rows=rows)

@@ -111,3 +111,31 @@ def test_bad_solve_options(tmp_path, option, value):
     proc = cli("solve", str(PLANTING / "redesign_from_example1.toml"), option, value, cwd=tmp_path)
     assert proc.returncode == 2
     assert option in proc.stderr
+
+
+def _with_objective(name: str):
+    loaded = load_spec(PLANTING / "redesign_from_example4.toml")
+    spec = loaded.model.model_copy(update={"objective": loaded.model.objective.model_copy(update={"name": name})})
+    return type(loaded)(spec, loaded.path, loaded.sha256)
+
+
+def _peak_acc(result) -> float:
+    tr = result.trajectory
+    return max(float(np.hypot(ax, ay)) for ax, ay in zip(tr["ax"], tr["ay"]))
+
+
+def test_robust_objective_is_the_smallest_normalised_margin():
+    result, _, _ = run_solve(_with_objective("robust"), starts=2, seed=0, workers=1)
+    assert result.status == "optimal" and result.objective["value"] > 0.1
+    smallest = min(r["normalised_margin"] for r in result.rules)
+    # the NLP's margin is measured at its samples and after the backoff: the fine grid can only
+    # differ by what lies between samples, a few hundredths here
+    assert smallest == pytest.approx(result.objective["value"] + 0.02, abs=0.05)
+
+
+def test_smooth_objective_lowers_the_peak_acceleration():
+    smooth, _, _ = run_solve(_with_objective("smooth"), starts=2, seed=0, workers=1)
+    nearest, _, _ = run_solve(_with_objective("nearest"), starts=2, seed=0, workers=1)
+    assert smooth.status == "optimal"
+    assert smooth.objective["value"] == pytest.approx(_peak_acc(smooth), rel=0.02)
+    assert _peak_acc(smooth) < 0.95 * _peak_acc(nearest)
