@@ -63,12 +63,7 @@ class RuleRecord:
 
     @property
     def limit_text(self) -> str:
-        lo, hi = self.limit
-        if lo is not None and hi is not None:
-            return f"[{lo:g}, {hi:g}]"
-        if lo is None and hi is None:
-            return "-"
-        return f">= {lo:g}" if lo is not None else f"<= {hi:g}"
+        return limit_text(self.limit)
 
     def to_json(self) -> dict:
         return {
@@ -76,6 +71,16 @@ class RuleRecord:
             "satisfied": self.satisfied, "margin": self.margin,
             "normalised_margin": self.normalised_margin, "where": self.where, "note": self.note,
         }
+
+
+def limit_text(limit, ge: str = ">=", le: str = "<=", none: str = "-") -> str:
+    """[lo, hi] as "[lo, hi]", ">= lo", "<= hi" or ``none`` (symbols replaceable, e.g. for HTML)."""
+    lo, hi = limit
+    if lo is not None and hi is not None:
+        return f"[{lo:g}, {hi:g}]"
+    if lo is None and hi is None:
+        return none
+    return f"{ge} {lo:g}" if lo is not None else f"{le} {hi:g}"
 
 
 def not_evaluated(name: str, lower, upper, unit: str, where: str, why: str) -> Rule:

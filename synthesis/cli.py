@@ -13,6 +13,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
+from constraints.base import limit_text
 from synthesis.errors import AgrisynthError
 
 LIBRARY = Path(__file__).resolve().parent.parent / "problems"
@@ -26,9 +27,7 @@ def rule_table(rules: list[dict], title: str) -> Table:
                       ("margin", "right"), ("", "left"), ("where / why", "left")):
         table.add_column(col, justify=just, no_wrap=col != "where / why")
     for r in rules:
-        lo, hi = r["limit"]
-        limit = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None else
-                 "-" if lo is None and hi is None else f">= {lo:g}" if lo is not None else f"<= {hi:g}")
+        limit = limit_text(r["limit"])
         value = "-" if r["value"] is None else f"{r['value']:.4g}"
         margin = "-" if r["margin"] is None else f"{r['margin']:.4g}"
         verdict = "[green]pass[/]" if r["satisfied"] else "[bold red]FAIL[/]"
@@ -114,10 +113,7 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) 
         return value, ("[green]pass[/]" if r["satisfied"] else "[bold red]FAIL[/]")
 
     for r in best:
-        lo, hi = r["limit"]
-        limit = (f"[{lo:g}, {hi:g}]" if lo is not None and hi is not None else
-                 f">= {lo:g}" if lo is not None else f"<= {hi:g}")
-        table.add_row(r["name"], limit, *cell(base.get(r["name"])), *cell(r), r["unit"])
+        table.add_row(r["name"], limit_text(r["limit"]), *cell(base.get(r["name"])), *cell(r), r["unit"])
     return table
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from constraints.base import limit_text
 from synthesis.result import Result
 
 
@@ -17,12 +18,7 @@ def _fmt(v) -> str:
 
 
 def _limit(limit) -> str:
-    lo, hi = limit
-    if lo is not None and hi is not None:
-        return f"[{lo:g}, {hi:g}]"
-    if lo is None and hi is None:
-        return "&ndash;"
-    return f"&ge; {lo:g}" if lo is not None else f"&le; {hi:g}"
+    return limit_text(limit, ge="&ge;", le="&le;", none="&ndash;")
 
 
 def render(result: Result, figures: list[str]) -> str:

@@ -68,6 +68,21 @@ def precision_point_table(scene: PlantingScene, pts: PrecisionPoints | None) -> 
     return table
 
 
+def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict:
+    """The kind-specific part of result.json: operation, precision points, soil and seedbed."""
+    seedbed = scene.seedbed
+    return {
+        "source": spec.source,
+        "operation": {"forward_speed_m_s": spec.operation.forward_speed,
+                      "crank_speed_rpm": spec.operation.crank_speed,
+                      "plant_spacing_mm": scene.motion.forward * scene.motion.period},
+        "precision_points": precision_point_table(scene, pts),
+        "soil_level_mm": None if pts is None else pts.soil_level,
+        "seedbed": {"x": seedbed.point[0], "y": seedbed.point[1], "tilt_deg": math.degrees(seedbed.tilt),
+                    "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
+    }
+
+
 def run_check(loaded: LoadedSpec) -> Result:
     spec = loaded.model
     scene = PlantingScene.from_spec(spec)
@@ -75,18 +90,8 @@ def run_check(loaded: LoadedSpec) -> Result:
     records = [r.record().to_json() for r in rules]
     design = dict(spec.design_values())
     design["branch"] = spec.arm.branch
-    seedbed = scene.seedbed
     return Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
         design=design, rules=records, trajectory=trajectory(scene, pts),
-        extra={
-            "source": spec.source,
-            "operation": {"forward_speed_m_s": spec.operation.forward_speed,
-                          "crank_speed_rpm": spec.operation.crank_speed,
-                          "plant_spacing_mm": scene.motion.forward * scene.motion.period},
-            "precision_points": precision_point_table(scene, pts),
-            "soil_level_mm": None if pts is None else pts.soil_level,
-            "seedbed": {"x": seedbed.point[0], "y": seedbed.point[1], "tilt_deg": math.degrees(seedbed.tilt),
-                        "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
-        },
+        extra=scene_facts(spec, scene, pts),
     )

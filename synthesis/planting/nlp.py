@@ -69,6 +69,14 @@ def _captured_stdout():
             text.append(tmp.read().decode(errors="replace"))
 
 
+def _append_rows(rows: list, lbg: list, ubg: list, expr, lb, ub) -> None:
+    """Append each element of a scalar or vector expression as one constraint row with [lb, ub]."""
+    expr = ca.vec(ca.SX(expr))
+    rows += [expr[i] for i in range(expr.numel())]
+    lbg += [lb] * expr.numel()
+    ubg += [ub] * expr.numel()
+
+
 class PlantingNLP:
     """Built once per spec; :meth:`solve` runs one IPOPT solve from a start point."""
 
@@ -81,15 +89,13 @@ class PlantingNLP:
         x = ca.SX.sym("x", len(self.names))
         th = ca.SX.sym("theta", 6)
         v = {n: x[i] for i, n in enumerate(self.names)}
-        self.rules = self._rules(v, dict(zip(POINTS, (th[i] for i in range(6)))))
-        structural = self._structural(v, dict(zip(POINTS, (th[i] for i in range(6)))))
+        angles = dict(zip(POINTS, (th[i] for i in range(6))))
+        geometry = self._geometry(v, angles)          # the P1-P6 states, shared by both builders
+        self.rules = self._rules(v, angles, geometry)
 
         rows, lbg, ubg, scales, owners = [], [], [], [], []
-        for expr, lb, ub in structural:
-            expr = ca.vec(ca.SX(expr))
-            rows += [expr[i] for i in range(expr.numel())]
-            lbg += [lb] * expr.numel()
-            ubg += [ub] * expr.numel()
+        for expr, lb, ub in self._structural(angles, geometry):
+            _append_rows(rows, lbg, ubg, expr, lb, ub)
         n_struct = len(rows)
         for k, rule in enumerate(self.rules):
             # tighten by backoff x scale: sampled rules must still hold between the samples
@@ -124,10 +130,7 @@ class PlantingNLP:
             objective = ca.sum1(s)
             extra_rows = []
         for expr, lb, ub in extra_rows:
-            expr = ca.vec(ca.SX(expr))
-            rows += [expr[i] for i in range(expr.numel())]
-            lbg += [lb] * expr.numel()
-            ubg += [ub] * expr.numel()
+            _append_rows(rows, lbg, ubg, expr, lb, ub)
         self.n_extra = extra_x.numel()
         self._lbx = np.concatenate([self.bounds[:, 0], np.full(6, -4 * math.pi), np.array(extra_lb, dtype=float)])
         self._ubx = np.concatenate([self.bounds[:, 1], np.full(6, 6 * math.pi), np.array(extra_ub, dtype=float)])
@@ -167,10 +170,10 @@ class PlantingNLP:
         soil = v["soil_level"] if spec.soil.level is not None else st["P5"][0][1] + spec.soil.analysis_depth
         return p, st, normal, height, soil
 
-    def _structural(self, v, th):
+    def _structural(self, th, geometry):
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound."""
         spec = self.spec
-        p, st, normal, height, soil = self._geometry(v, th)
+        p, st, normal, height, soil = geometry
         rows = [
             (st["P4"][0][1] - soil, 0.0, 0.0), (st["P6"][0][1] - soil, 0.0, 0.0),    # on the soil line
             (st["P5"][1][1], 0.0, 0.0),                                                # lowest: vy = 0
@@ -192,9 +195,9 @@ class PlantingNLP:
         rows.append((ca.vec(ys) - st["P5"][0][1], 0.0, ca.inf))
         return rows
 
-    def _rules(self, v, th) -> list[Rule]:
+    def _rules(self, v, th, geometry) -> list[Rule]:
         spec, lim = self.spec, self.spec.rules
-        p, st, normal, height, soil = self._geometry(v, th)
+        p, st, _, _, _ = geometry
         omega = spec.operation.crank_speed * TWO_PI / 60.0
         fwd = spec.operation.forward_speed * 1000.0
         pos = {n: (st[n][0][0], st[n][0][1]) for n in POINTS}

@@ -11,7 +11,7 @@ import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.multistart import latin_hypercube_starts, run_starts
-from synthesis.planting.check import evaluate, precision_point_table, trajectory
+from synthesis.planting.check import evaluate, scene_facts, trajectory
 from synthesis.planting.nlp import PlantingNLP, StartOutcome
 from synthesis.planting.scene import PlantingScene
 from synthesis.result import Result
@@ -30,7 +30,9 @@ class StartReport:
     outcome: StartOutcome
     satisfied: bool                 # every rule on the fine grid
     worst_violation: float          # largest normalised violation on the fine grid (0 when satisfied)
-    records: list = field(default_factory=list)
+    records: list = field(default_factory=list)     # RuleRecord per rule, fine grid
+    scene: PlantingScene | None = None               # None when the design does not assemble
+    points: object = None
 
 
 def fine_check(spec, design: dict[str, float]) -> tuple[list, object, PlantingScene]:
@@ -43,13 +45,13 @@ def fine_check(spec, design: dict[str, float]) -> tuple[list, object, PlantingSc
 
 def _report(spec, outcome: StartOutcome) -> StartReport:
     try:
-        rules, _, _ = fine_check(spec, outcome.design)
+        rules, pts, scene = fine_check(spec, outcome.design)
     except AgrisynthError:
         return StartReport(outcome, False, float("inf"))
     records = [r.record() for r in rules]
     worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None else -1e9)
                          for r in records if not r.satisfied])
-    return StartReport(outcome, all(r.satisfied for r in records), worst, records)
+    return StartReport(outcome, all(r.satisfied for r in records), worst, records, scene, pts)
 
 
 def _better(spec, a: StartReport, b: StartReport) -> bool:
@@ -102,8 +104,10 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     wall = time.perf_counter() - t0
     ordered = [reports[i] for i in range(starts)]
     chosen = best[0]
-    rules, pts, scene = fine_check(spec, chosen.outcome.design)
-    records = [r.record().to_json() for r in rules]
+    if chosen.scene is None:    # no start assembles: re-evaluate to raise the AssemblyError (exit 2)
+        fine_check(spec, chosen.outcome.design)
+    pts, scene = chosen.points, chosen.scene
+    records = [r.to_json() for r in chosen.records]
     feasible = chosen.satisfied
     status = ("optimal" if chosen.outcome.success else "feasible") if feasible else "infeasible"
     objective_value = nlp_shape.objective_value(chosen.outcome.design, chosen.outcome.objective)
@@ -121,16 +125,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
                 "samples_per_phase": spec.solver.samples_per_phase,
                 "samples_per_turn": spec.solver.samples_per_turn, "fine_grid_factor": FINE},
         extra={
-            "source": spec.source,
+            **scene_facts(spec, scene, pts),
             "baseline_design": spec.design_values(),
-            "operation": {"forward_speed_m_s": spec.operation.forward_speed,
-                          "crank_speed_rpm": spec.operation.crank_speed,
-                          "plant_spacing_mm": scene.motion.forward * scene.motion.period},
-            "precision_points": precision_point_table(scene, pts),
-            "soil_level_mm": None if pts is None else pts.soil_level,
-            "seedbed": {"x": scene.seedbed.point[0], "y": scene.seedbed.point[1],
-                        "tilt_deg": float(np.degrees(scene.seedbed.tilt)), "thickness": scene.seedbed.thickness,
-                        "seedling_height": scene.seedbed.seedling_height},
             "fine_grid_worst_violation": chosen.worst_violation,
             "starts": [{"start": r.outcome.start, "return_status": r.outcome.return_status,
                         "iterations": r.outcome.iterations, "wall_s": r.outcome.wall_s,

@@ -92,6 +92,11 @@ def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
     return list(fields) if fields else []
 
 
+#: pydantic error type -> (context key of the limit, symbol)
+_COMPARISONS = {"greater_than": ("gt", ">"), "greater_than_equal": ("ge", ">="),
+                "less_than": ("lt", "<"), "less_than_equal": ("le", "<=")}
+
+
 def _describe(err: dict, model: type[BaseModel]) -> str:
     kind, ctx, got = err["type"], err.get("ctx", {}), err.get("input")
     # pydantic reports union branches as extra path parts ("float", "FreeVariable"): drop them
@@ -104,14 +109,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
         hint = f"; did you mean '{close[0]}'?" if close else (f"; allowed: {', '.join(allowed)}" if allowed else "")
         return f"{'.'.join(map(str, loc))}: unknown field{hint}"
     path = ".".join(map(str, loc))
-    if kind == "greater_than":
-        return f"{path}: expected > {ctx['gt']}, got {got}"
-    if kind == "greater_than_equal":
-        return f"{path}: expected >= {ctx['ge']}, got {got}"
-    if kind == "less_than":
-        return f"{path}: expected < {ctx['lt']}, got {got}"
-    if kind == "less_than_equal":
-        return f"{path}: expected <= {ctx['le']}, got {got}"
+    if kind in _COMPARISONS:
+        key, symbol = _COMPARISONS[kind]
+        return f"{path}: expected {symbol} {ctx[key]}, got {got}"
     if kind == "value_error":
         return f"{path}: {str(ctx.get('error', err['msg']))}"
     if kind == "literal_error":
