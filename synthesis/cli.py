@@ -156,7 +156,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     loaded = load_spec(spec)
     solver_module = kinds.solver(loaded.kind)
     workers = workers or default_workers()
-    n = starts or loaded.model.solver.starts
+    n = starts or getattr(getattr(loaded.model, "solver", None), "starts", 1)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                   TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
                   transient=not sys.stdout.isatty()) as progress:
