@@ -12,6 +12,9 @@ from synthesis.result import Result
 _CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
 _SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
 _FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
+#: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
+#: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
+_COMPARE_FIGURES: dict[str, str] = {}
 
 
 def _resolve(target: str) -> Callable:
@@ -31,3 +34,9 @@ def solver(kind: str):
 def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:
     """filename -> writer(path) for the kind's figures."""
     return {fn: (lambda path, f=_resolve(t): f(result, path)) for fn, t in _FIGURES.get(result.kind, {}).items()}
+
+
+def compare_figures(kind: str) -> Callable | None:
+    """The kind's overlay-figure writer for ``agrisynth compare``, or None if it has none."""
+    target = _COMPARE_FIGURES.get(kind)
+    return None if target is None else _resolve(target)
