@@ -43,6 +43,8 @@ def cli() -> None:
     \b
     Write a spec file (TOML; see problems/ for examples), then:
       agrisynth check SPEC    evaluate the spec's design against every rule
+      agrisynth solve SPEC    optimise the free variables so every rule holds
+      agrisynth compare RUN.. compare result folders side by side in one HTML page
       agrisynth problems      list the problem library
     Results go to results/<spec name>/ (result.json, report.html, plots).
     Exit codes: 0 all rules satisfied, 1 a rule violated, 2 bad input,
@@ -191,6 +193,39 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
         console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied on the fine grid[/]")
+
+
+@cli.command()
+@click.argument("results", nargs=-1, required=True, type=click.Path(exists=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/compare"),
+              show_default=True, help="folder for compare.html and its figures")
+def compare(results: tuple[Path, ...], out: Path) -> None:
+    """Compare RESULT... (run folders or result.json files of one kind) side by side.
+
+    \b
+    The first RESULT is the baseline.  Writes OUT/compare.html, one self-contained page that
+    works offline, with its figures beside it:
+      rules    value, limit and margin per candidate; violated rules in red; the tightest
+               rule of each candidate on the first line
+      design   every variable, one column per candidate, differences from the baseline marked
+      figures  the kind's overlays (paths, speeds and accelerations, linkage, animation)
+      run      solver status, iterations, wall time, starts, seed, versions, spec hash
+    Nothing is re-solved: the page is built from the result files alone.
+    \b
+    Example:
+      agrisynth check problems/planting_arm/taiwan_example1.toml
+      agrisynth solve problems/planting_arm/redesign_from_example1.toml
+      agrisynth compare results/taiwan_example1 results/redesign_from_example1
+    """
+    from synthesis.compare import load_candidates, write_comparison
+
+    cands = load_candidates(list(results))
+    page = write_comparison(cands, out)
+    for c in cands:
+        bad = c.result.violated()
+        verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"
+        console.print(f"{c.label}: {c.result.status}, {verdict}")
+    console.print(f"wrote {page}")
 
 
 def main() -> None:

@@ -11,6 +11,10 @@ class SpecError(AgrisynthError, ValueError):
     """The spec file is unreadable, not TOML, or a field is missing, unknown or out of range."""
 
 
+class ResultError(AgrisynthError, ValueError):
+    """A result.json that cannot be read: missing, truncated, not ours, or from a newer schema."""
+
+
 class AssemblyError(AgrisynthError, ValueError):
     """The linkage cannot be assembled: a loop-closure triangle inequality fails."""
 

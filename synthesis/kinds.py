@@ -14,7 +14,7 @@ _SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
 _FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
 #: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
 #: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
-_COMPARE_FIGURES: dict[str, str] = {}
+_COMPARE_FIGURES: dict[str, str] = {"planting_fourbar": "synthesis.planting.compare_plots:overlay_figures"}
 
 
 def _resolve(target: str) -> Callable:

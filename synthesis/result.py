@@ -11,7 +11,11 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from synthesis.errors import ResultError
+
 STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated")
+#: version of the result.json layout; readers refuse a newer one rather than misread it
+SCHEMA_VERSION = 1
 
 
 def versions() -> dict[str, str]:
@@ -57,6 +61,7 @@ class Result:
             del data["trajectory"]
         extra = data.pop("extra")
         data.update(extra)
+        data["schema_version"] = SCHEMA_VERSION
         return data
 
     @classmethod
@@ -64,15 +69,46 @@ class Result:
         known = {"kind", "name", "spec_sha256", "status", "design", "rules", "objective", "trajectory",
                  "solver", "versions"}
         args = {k: data[k] for k in known if k in data}
-        args["extra"] = {k: v for k, v in data.items() if k not in known}
+        args["extra"] = {k: v for k, v in data.items() if k not in known and k != "schema_version"}
         return cls(**args)
 
 
+REQUIRED_KEYS = ("kind", "name", "spec_sha256", "status", "design", "rules")
+
+
 def load_result(path: str | Path) -> Result:
+    """Read a run folder's result.json (or the file itself); ResultError (exit 2) says what is wrong."""
     path = Path(path)
     if path.is_dir():
         path = path / "result.json"
-    return Result.from_json(json.loads(path.read_text()))
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ResultError(f"{path}: no such result file (give a run folder or its result.json)") from None
+    except OSError as exc:
+        raise ResultError(f"{path}: cannot read: {exc.strerror}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        # a cut-off write leaves an object that never closes; anything else is plain bad JSON
+        what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
+        raise ResultError(f"{path}: {what} ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
+                          f"re-run the check or solve that wrote it") from None
+    if not isinstance(data, dict):
+        raise ResultError(f"{path}: expected a JSON object, got {type(data).__name__}")
+    version = data.get("schema_version", 1)     # results written before the key existed are version 1
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise ResultError(f"{path}: schema_version {version!r} is not a positive integer")
+    if version > SCHEMA_VERSION:
+        raise ResultError(f"{path}: schema_version {version} is newer than this agrisynth reads "
+                          f"({SCHEMA_VERSION}); upgrade agrisynth to read it")
+    missing = [k for k in REQUIRED_KEYS if k not in data]
+    if missing:
+        raise ResultError(f"{path}: missing required key(s) {', '.join(missing)}; not an agrisynth result.json")
+    try:
+        return Result.from_json(data)
+    except (TypeError, ValueError) as exc:
+        raise ResultError(f"{path}: {exc}") from None
 
 
 def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:
@@ -81,16 +117,27 @@ def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Pat
     Everything is written into a temporary sibling folder first and swapped in with renames, so an
     interrupted run never leaves a half-written folder.  Returns (folder, replaced_previous_run).
     """
+    def result_json(path: Path) -> None:
+        path.write_text(json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n")
+
+    return write_folder(out_root / result.name, {"result.json": result_json, **artifacts})
+
+
+def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:
+    """Write the folder ``final`` atomically, one file per artifact writer (called in order).
+
+    Returns (final, replaced_previous_folder).
+    """
+    out_root = final.parent
     out_root.mkdir(parents=True, exist_ok=True)
-    final = out_root / result.name
-    staging = Path(tempfile.mkdtemp(prefix=f".{result.name}.", dir=out_root))
+    staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=out_root))
+    os.chmod(staging, 0o777 & ~_umask())     # mkdtemp makes it private; a run folder is an ordinary folder
     try:
-        (staging / "result.json").write_text(json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n")
         for filename, writer in artifacts.items():
             writer(staging / filename)
         replaced = final.exists()
         if replaced:
-            old = Path(tempfile.mkdtemp(prefix=f".{result.name}.old.", dir=out_root))
+            old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old.", dir=out_root))
             os.replace(final, old / "run")
             os.replace(staging, final)
             shutil.rmtree(old, ignore_errors=True)
@@ -107,4 +154,11 @@ def atomic_write_text(path: Path, text: str) -> None:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     with os.fdopen(fd, "w") as fh:
         fh.write(text)
+    os.chmod(tmp, 0o666 & ~_umask())         # mkstemp makes it private; give it the usual mode
     os.replace(tmp, path)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

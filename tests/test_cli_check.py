@@ -43,7 +43,7 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     assert tr["frame"] == "ground"
     assert {len(tr[k]) for k in ("t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay")} == {361}
     assert (folder / "trajectory.png").stat().st_size > 10_000
-    assert "<table>" in (folder / "report.html").read_text()
+    assert "<table class='rules'>" in (folder / "report.html").read_text()
     # a second run replaces the folder and says so
     again = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
     assert "replaced the previous run" in again.stdout

@@ -141,3 +141,19 @@ def link_angles(design: ArmDesign, theta) -> dict[str, np.ndarray]:
     f = link_function(design.branch).map(theta.size)
     mu, h2 = f(theta.reshape(1, -1), design.parameters())
     return {"mu": np.asarray(mu).ravel(), "h2": np.asarray(h2).ravel()}
+
+
+def joint_positions(design: ArmDesign, theta) -> dict[str, np.ndarray]:
+    """Ground pivots O, O' and moving joints A, B, C at crank angles theta (rad): name -> (2, N) mm.
+
+    For drawing the linkage; the same closed form as :func:`claw_tip`, evaluated on arrays.
+    """
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    l1, l2, l3, l4, l5, zeta, phi = design.parameters()
+    (ax, ay), (bx, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, design.branch)
+    a = np.vstack([np.asarray(ax, float).ravel(), np.asarray(ay, float).ravel()])
+    b = np.vstack([np.asarray(bx, float).ravel(), np.asarray(by, float).ravel()])
+    c = np.array([tuple(np.asarray(v, float).ravel()) for v in claw_tip(theta, design.parameters(), design.branch)])
+    pivot = np.array(fourbar.rocker_pivot(l1, zeta), float).reshape(2, 1)
+    n = theta.size
+    return {"O": np.zeros((2, n)), "O'": np.repeat(pivot, n, axis=1), "A": a, "B": b, "C": c.reshape(2, n)}

@@ -1,0 +1,201 @@
+"""planting_fourbar candidates overlaid: paths, speeds and accelerations, the linkage at P1-P6, an animation.
+
+Drawn from result.json data alone: the trajectory samples, the precision points and the design
+(the linkage is placed from the design's lengths and angles; nothing is re-solved).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+
+from synthesis.kinematics.planting_arm import ArmDesign, joint_positions  # noqa: E402
+from synthesis.planting.plots import COLOURS as POINT_COLOURS  # noqa: E402
+from synthesis.result import Result  # noqa: E402
+
+POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
+#: acceleration-sign phases (constraints.acceleration) shaded on the time plots
+PHASES = (("hold", "P3", "P4", "#cfe8ff"), ("throw", "P4", "P5", "#ffe0c2"), ("release", "P5", "P6", "#e3d7f5"))
+ANIMATION_FRAMES = 36
+
+
+def _colour(i: int) -> str:
+    return f"C{i % 10}"
+
+
+def _label(result: Result, i: int) -> str:
+    return f"{result.name}{' (baseline)' if i == 0 else ''}"
+
+
+def _design(result: Result) -> ArmDesign:
+    d = result.design
+    return ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
+
+
+def paths_figure(results: list[Result], path: Path) -> None:
+    """Claw-tip paths in the machine and ground frames, P1-P6 marked, soil lines dashed."""
+    fig, (ax_m, ax_g) = plt.subplots(1, 2, figsize=(12, 5.4))
+    for i, r in enumerate(results):
+        tr, col = r.trajectory, _colour(i)
+        if tr is None:
+            continue
+        ax_m.plot(tr["machine"]["x"], tr["machine"]["y"], color=col, lw=1.4, label=_label(r, i))
+        ax_g.plot(tr["x"], tr["y"], color=col, lw=1.4, label=_label(r, i))
+        soil = r.extra.get("soil_level_mm")
+        for ax in (ax_m, ax_g):
+            if soil is not None:
+                ax.axhline(soil, color=col, lw=0.8, ls="--")
+        for name, p in r.extra.get("precision_points", {}).items():
+            if p.get("found"):
+                ax_m.plot(p["x"], p["y"], "o", color=POINT_COLOURS[name], mec=col, ms=6)
+                ax_g.plot(p["x_ground"], p["y"], "o", color=POINT_COLOURS[name], mec=col, ms=6)
+                if i == 0:
+                    ax_m.annotate(name, (p["x"], p["y"]), textcoords="offset points", xytext=(5, 4), fontsize=8)
+        if i == 0 and "seedbed" in r.extra:
+            sb = r.extra["seedbed"]
+            t = math.radians(sb["tilt_deg"])
+            span = 0.3 * (max(tr["machine"]["x"]) - min(tr["machine"]["x"])) + 40
+            ax_m.plot([sb["x"] - span * math.cos(t), sb["x"] + span * math.cos(t)],
+                      [sb["y"] - span * math.sin(t), sb["y"] + span * math.sin(t)], color="0.35", lw=1,
+                      label="seedbed bottom (baseline)")
+    ax_m.set_title("machine frame (dashed: soil surface)")
+    ax_g.set_title("ground frame")
+    for ax in (ax_m, ax_g):
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("X, mm")
+        ax.set_ylabel("Y, mm")
+        ax.grid(alpha=0.3)
+    ax_m.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def kinematics_figure(results: list[Result], path: Path) -> None:
+    """Ground-frame speeds and the vertical acceleration against time, acceleration-rule phases shaded."""
+    fig, axes = plt.subplots(3, 1, figsize=(11, 8), sharex=True)
+    for i, r in enumerate(results):
+        tr, col = r.trajectory, _colour(i)
+        if tr is None:
+            continue
+        t = np.asarray(tr["t"])
+        axes[0].plot(t, tr["vx"], color=col, label=_label(r, i))
+        axes[1].plot(t, tr["vy"], color=col)
+        axes[2].plot(t, np.asarray(tr["ay"]) / 1000.0, color=col)
+        pts = r.extra.get("precision_points", {})
+        if i == 0:
+            for phase, a, b, shade in PHASES:
+                if pts.get(a, {}).get("found") and pts.get(b, {}).get("found"):
+                    ta, tb = pts[a]["t"], pts[b]["t"]
+                    for ax in axes:
+                        ax.axvspan(ta, tb, color=shade, alpha=0.7, lw=0)
+                    axes[2].text(0.5 * (ta + tb), 0.98, phase, transform=axes[2].get_xaxis_transform(),
+                                 ha="center", va="top", fontsize=8)
+        for name, p in pts.items():
+            if p.get("found"):
+                axes[2].axvline(p["t"], color=col, lw=0.5, ls=":")
+    axes[0].set_ylabel("v_x ground, mm/s")
+    axes[1].set_ylabel("v_y, mm/s")
+    axes[2].set_ylabel("a_y, m/s²")
+    axes[2].axhline(0.0, color="k", lw=0.6)
+    axes[2].set_xlabel("time from soil exit P6, s (shaded: the baseline's hold / throw / release phases)")
+    axes[0].legend(fontsize=7)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def _draw_linkage(ax, joints: dict[str, np.ndarray], k: int, colour: str, alpha: float = 1.0):
+    """Frame O-O', crank O-A, coupler triangle A-B-C, rocker O'-B at sample k; returns the artists."""
+    o, op, a, b, c = (joints[n][:, k] for n in ("O", "O'", "A", "B", "C"))
+    lines = []
+    for p, q, style in ((o, op, ":"), (o, a, "-"), (a, b, "-"), (op, b, "-"), (a, c, "-"), (b, c, "-")):
+        lines += ax.plot([p[0], q[0]], [p[1], q[1]], style, color=colour, lw=1.6, alpha=alpha)
+    lines += ax.plot([o[0], op[0]], [o[1], op[1]], "^", color="k", ms=6)
+    lines += ax.plot([a[0], b[0]], [a[1], b[1]], "o", color=colour, ms=3.5, alpha=alpha)
+    return lines
+
+
+def linkage_figure(results: list[Result], path: Path) -> None:
+    """The linkage of every candidate at each of its precision points P1-P6 (machine frame)."""
+    fig, axes = plt.subplots(2, 3, figsize=(12, 7.6), sharex=True, sharey=True)
+    for i, r in enumerate(results):
+        design, col = _design(r), _colour(i)
+        tr = r.trajectory
+        for ax, name in zip(axes.ravel(), POINTS):
+            p = r.extra.get("precision_points", {}).get(name, {})
+            if tr is not None:
+                ax.plot(tr["machine"]["x"], tr["machine"]["y"], color=col, lw=0.6, alpha=0.5)
+            if not p.get("found"):
+                continue
+            joints = joint_positions(design, math.radians(p["crank_deg"]))
+            _draw_linkage(ax, joints, 0, col)
+            ax.plot(p["x"], p["y"], "o", color=POINT_COLOURS[name], mec=col, ms=7)
+    for ax, name in zip(axes.ravel(), POINTS):
+        ax.set_title(name, fontsize=10)
+        ax.set_aspect("equal", adjustable="box")
+        ax.grid(alpha=0.3)
+    handles = [plt.Line2D([], [], color=_colour(i), label=_label(r, i)) for i, r in enumerate(results)]
+    fig.legend(handles=handles, loc="lower center", ncol=min(4, len(results)), fontsize=8)
+    fig.suptitle("linkage at the precision points (machine frame, mm)", fontsize=11)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.97))
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_FRAMES) -> None:
+    """Every candidate's linkage over one crank turn (machine frame), as a small looping GIF."""
+    fig, ax = plt.subplots(figsize=(5.6, 4.6))
+    theta = np.linspace(0.0, 2 * np.pi, frames, endpoint=False)
+    all_joints = [joint_positions(_design(r), theta) for r in results]
+    for i, (r, joints) in enumerate(zip(results, all_joints)):
+        if r.trajectory is not None:
+            ax.plot(r.trajectory["machine"]["x"], r.trajectory["machine"]["y"], color=_colour(i), lw=0.7,
+                    alpha=0.6, label=_label(r, i))
+        soil = r.extra.get("soil_level_mm")
+        if soil is not None:
+            ax.axhline(soil, color=_colour(i), lw=0.6, ls="--")
+    xy = np.hstack([j[n] for j in all_joints for n in j])
+    pad = 15.0
+    ax.set_xlim(xy[0].min() - pad, xy[0].max() + pad)
+    ax.set_ylim(xy[1].min() - pad, xy[1].max() + pad)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6, loc="upper right")
+    ax.set_title("one crank turn (machine frame, mm)", fontsize=9)
+    drawn: list = []
+
+    def frame(k: int):
+        for artist in drawn:
+            artist.remove()
+        drawn.clear()
+        for i, joints in enumerate(all_joints):
+            drawn.extend(_draw_linkage(ax, joints, k, _colour(i)))
+        return drawn
+
+    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=12), dpi=70)
+    plt.close(fig)
+
+
+def overlay_figures(results: list[Result], folder: Path) -> list[tuple[str, str]]:
+    """All comparison figures of planting_fourbar candidates: [(file name, caption)]."""
+    figures = [
+        ("paths.png", "claw-tip paths overlaid, machine and ground frames, P1-P6 marked, soil surface dashed",
+         paths_figure),
+        ("kinematics.png", "ground-frame speeds and vertical acceleration over one cycle, rule phases shaded",
+         kinematics_figure),
+        ("linkage.png", "the linkage at the six precision points", linkage_figure),
+        ("animation.gif", "the linkage over one crank turn", animation_figure),
+    ]
+    for name, _, draw in figures:
+        draw(results, folder / name)
+    return [(name, caption) for name, caption, _ in figures]

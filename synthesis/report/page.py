@@ -1,0 +1,146 @@
+"""The HTML page of one run (report.html) or of several candidates (compare.html).
+
+One self-contained file: inline CSS, no script, no network fetch; figures are files beside it.
+Built from the tables of :mod:`synthesis.report.tables` alone.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+
+from constraints.base import limit_text
+from synthesis.report.tables import Candidate, design_rows, rule_rows, run_facts, worst_margins
+
+CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto; max-width: 1200px;
+       padding: 0 1em; color: #1d1d1f; line-height: 1.4; }
+h1 { margin-bottom: .2em; } h2 { margin-top: 1.6em; border-bottom: 2px solid #e4e4e4; }
+.lede { color: #555; margin-top: 0; }
+.verdicts { display: flex; flex-wrap: wrap; gap: .6em; margin: 1em 0; }
+.verdict { border-radius: 6px; padding: .5em .8em; background: #eaf6ea; border: 1px solid #b9dcb9; }
+.verdict.bad { background: #fdecec; border-color: #f0b4b4; }
+.verdict b { display: block; }
+table { border-collapse: collapse; margin: .8em 0; font-size: 14px; }
+th, td { border-bottom: 1px solid #e4e4e4; padding: 4px 10px; text-align: left; vertical-align: top; }
+th { background: #f5f5f7; position: sticky; top: 0; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.num .note { display: block; white-space: nowrap; }
+td.limit { white-space: nowrap; }
+.scroll { overflow-x: auto; }
+td.diff { background: #fff4cc; font-weight: 600; }
+td.fail { background: #fde2e2; color: #a40000; font-weight: 600; }
+td.pass { color: #1a7f37; }
+tr.summary td { border-bottom: 2px solid #bbb; font-style: italic; }
+.note { color: #666; font-size: 12px; }
+figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
+figcaption { color: #555; font-size: 13px; }
+.missing { background: #fff8e1; border-left: 4px solid #f0b400; padding: .4em .8em; }
+@media print { body { max-width: none; margin: 0; } th { position: static; } figure { break-inside: avoid; } }
+"""
+
+
+def _num(v, digits: int = 4) -> str:
+    if v is None:
+        return "&ndash;"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return "&ndash;" if not math.isfinite(v) else f"{v:.{digits}g}"
+    return html.escape(str(v))
+
+
+def _limit(limit) -> str:
+    return limit_text(limit, ge="&ge;", le="&le;", none="&ndash;")
+
+
+def _header(cands: list[Candidate]) -> str:
+    return "".join(f"<th>{html.escape(c.label)}{' (baseline)' if i == 0 and len(cands) > 1 else ''}</th>"
+                   for i, c in enumerate(cands))
+
+
+def design_table(cands: list[Candidate]) -> str:
+    rows = []
+    for row in design_rows(cands):
+        cells = "".join(f"<td class='num{' diff' if d else ''}'>{_num(v, 6)}</td>" for v, d in zip(row.values, row.differs))
+        rows.append(f"<tr><td>{html.escape(row.name)}</td>{cells}</tr>")
+    return f"<table class='design'><tr><th>variable</th>{_header(cands)}</tr>\n" + "\n".join(rows) + "</table>"
+
+
+def rule_table(cands: list[Candidate]) -> str:
+    summary = []
+    for w in worst_margins(cands):
+        if w.rule is None:
+            summary.append("<td>&ndash;</td>")
+        else:
+            margin = "not evaluated" if w.normalised_margin is None else f"normalised margin {w.normalised_margin:.3g}"
+            tally = f"{w.violated} violated" if w.violated else "all pass"
+            summary.append(f"<td class='{'fail' if w.violated else 'pass'}'>{html.escape(w.rule)}: {margin}; {tally}</td>")
+    rows = [f"<tr class='summary'><td>worst margin</td><td></td><td></td>{''.join(summary)}</tr>"]
+    for row in rule_rows(cands):
+        cells = []
+        for cell in row.cells:
+            if cell is None:
+                cells.append("<td class='note'>no such rule</td>")
+                continue
+            own_limit = "" if cell.limit == row.limit else f" (limit {_limit(cell.limit)})"
+            if cell.satisfied:
+                cells.append(f"<td class='num pass' title='{html.escape(cell.note)}'>{_num(cell.value)} "
+                             f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
+            elif cell.value is None:
+                cells.append(f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}</span></td>")
+            else:
+                cells.append(f"<td class='num fail' title='{html.escape(cell.note)}'>{_num(cell.value)} FAIL"
+                             f"<span class='note'>worst on the fine grid, margin {_num(cell.margin, 3)}"
+                             f"{own_limit}</span></td>")
+        rows.append(f"<tr><td>{html.escape(row.name)}</td><td class='limit'>{_limit(row.limit)}</td>"
+                    f"<td>{html.escape(row.unit)}</td>{''.join(cells)}</tr>")
+    return (f"<table class='rules'><tr><th>rule</th><th>limit</th><th>unit</th>{_header(cands)}</tr>\n"
+            + "\n".join(rows) + "</table>")
+
+
+def facts_table(cands: list[Candidate]) -> str:
+    rows = "\n".join(f"<tr><td>{html.escape(name)}</td>{''.join(f'<td>{_num(v, 6)}</td>' for v in values)}</tr>"
+                     for name, values in run_facts(cands))
+    return f"<table class='facts'><tr><th></th>{_header(cands)}</tr>\n{rows}</table>"
+
+
+def _verdicts(cands: list[Candidate]) -> str:
+    out = []
+    for c in cands:
+        bad = [r["name"] for r in c.result.violated()]
+        text = "every rule satisfied" if not bad else f"{len(bad)} rule(s) violated: {', '.join(bad)}"
+        out.append(f"<div class='verdict{' bad' if bad else ''}'><b>{html.escape(c.label)}</b>"
+                   f"{html.escape(c.result.status)}: {html.escape(text)}</div>")
+    return f"<div class='verdicts'>{''.join(out)}</div>"
+
+
+def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[str], title: str) -> str:
+    """``figures`` = [(file name, caption)], ``notes`` = figures that could not be drawn, and why."""
+    kind = cands[0].result.kind
+    source = cands[0].result.extra.get("source") or ""
+    figs = "\n".join(f"<figure><img src='{html.escape(f)}' alt='{html.escape(cap)}'>"
+                     f"<figcaption>{html.escape(cap)}</figcaption></figure>" for f, cap in figures)
+    missing = "\n".join(f"<p class='missing'>{html.escape(n)}</p>" for n in notes)
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{html.escape(title)} &mdash; agrisynth</title>
+<style>{CSS}</style></head><body>
+<h1>{html.escape(title)}</h1>
+<p class="lede">kind <code>{html.escape(kind)}</code>{(' &middot; ' + html.escape(source)) if source else ''}</p>
+{_verdicts(cands)}
+<h2>Rules</h2>
+<p class="note">Value at the worst sample of each rule, its limit and margin (negative = violated);
+sampled rules are evaluated on the fine check grid.</p>
+<div class="scroll">{rule_table(cands)}</div>
+<h2>Design</h2>
+{'<p class="note">Highlighted: differs from the baseline (first column).</p>' if len(cands) > 1 else ''}
+<div class="scroll">{design_table(cands)}</div>
+<h2>Figures</h2>
+{figs}
+{missing}
+<h2>Run facts</h2>
+<div class="scroll">{facts_table(cands)}</div>
+</body></html>
+"""

@@ -1,0 +1,157 @@
+"""The data a report page shows, computed from Results alone: design, rule and run-fact tables.
+
+Kept apart from the HTML so that what the page says (which cells are red, which values differ from
+the baseline) is tested as data.  The first candidate is the baseline.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from synthesis.result import Result
+
+#: a design value differs from the baseline's when it moves by more than this (relative, or absolute near 0)
+DIFFERENCE_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class Candidate:
+    label: str          # unique column heading
+    result: Result
+    source: Path | None = None
+
+
+def candidates(results: list[Result], sources: list[Path | None] | None = None) -> list[Candidate]:
+    """Label each result by its name; repeated names get the source folder (or a number) added."""
+    sources = sources or [None] * len(results)
+    names = [r.name for r in results]
+    labels = []
+    for i, (r, src) in enumerate(zip(results, sources)):
+        label = r.name
+        if names.count(r.name) > 1:
+            label = f"{r.name} ({src.parent.name if src is not None and src.name == 'result.json' else src or i + 1})"
+        while label in labels:
+            label = f"{label} #{i + 1}"
+        labels.append(label)
+    return [Candidate(lbl, r, s) for lbl, r, s in zip(labels, results, sources)]
+
+
+@dataclass(frozen=True)
+class DesignRow:
+    name: str
+    values: list            # one per candidate; None where a candidate has no such variable
+    differs: list[bool]     # per candidate: differs from the baseline (always False for the baseline)
+
+
+def _differs(a, b) -> bool:
+    if a is None or b is None:
+        return a is not b
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return abs(a - b) > DIFFERENCE_TOLERANCE * max(1.0, abs(a), abs(b))
+    return a != b
+
+
+def design_rows(cands: list[Candidate]) -> list[DesignRow]:
+    """Every design variable (baseline's order, then any others), one value per candidate."""
+    names: list[str] = []
+    for c in cands:
+        names += [n for n in c.result.design if n not in names]
+    rows = []
+    for n in names:
+        values = [c.result.design.get(n) for c in cands]
+        rows.append(DesignRow(n, values, [i > 0 and _differs(values[0], v) for i, v in enumerate(values)]))
+    return rows
+
+
+@dataclass(frozen=True)
+class RuleCell:
+    value: float | None
+    limit: list
+    margin: float | None
+    normalised_margin: float | None
+    satisfied: bool
+    note: str               # where it was evaluated, or why it could not be
+
+
+@dataclass(frozen=True)
+class RuleRow:
+    name: str
+    unit: str
+    limit: list                        # the baseline's limit (cells carry their own when they differ)
+    cells: list[RuleCell | None]       # None: the candidate has no such rule
+
+    @property
+    def violated(self) -> list[bool]:
+        return [c is not None and not c.satisfied for c in self.cells]
+
+
+def _cell(r: dict) -> RuleCell:
+    note = r.get("note") or r.get("where") or ""
+    return RuleCell(r.get("value"), r.get("limit", [None, None]), r.get("margin"), r.get("normalised_margin"),
+                    bool(r.get("satisfied")), note)
+
+
+def rule_rows(cands: list[Candidate]) -> list[RuleRow]:
+    """One row per rule (the baseline's order, then any others), one cell per candidate."""
+    by_candidate = [{r["name"]: r for r in c.result.rules} for c in cands]
+    names: list[str] = []
+    for c in cands:
+        names += [r["name"] for r in c.result.rules if r["name"] not in names]
+    rows = []
+    for n in names:
+        first = next(b[n] for b in by_candidate if n in b)
+        rows.append(RuleRow(n, first.get("unit", ""), first.get("limit", [None, None]),
+                            [_cell(b[n]) if n in b else None for b in by_candidate]))
+    return rows
+
+
+@dataclass(frozen=True)
+class WorstMargin:
+    rule: str | None                 # None when the candidate has no evaluated rule
+    normalised_margin: float | None
+    violated: int                    # how many rules it violates
+
+
+def worst_margins(cands: list[Candidate]) -> list[WorstMargin]:
+    """Per candidate, its tightest (smallest normalised margin) rule: the first line of the rule table."""
+    out = []
+    for c in cands:
+        bad = sum(1 for r in c.result.rules if not r.get("satisfied"))
+        scored = [(r["normalised_margin"], r["name"]) for r in c.result.rules
+                  if r.get("normalised_margin") is not None and math.isfinite(r["normalised_margin"])]
+        unevaluated = [r["name"] for r in c.result.rules if r.get("value") is None]
+        if unevaluated:
+            out.append(WorstMargin(unevaluated[0], None, bad))
+        elif scored:
+            m, name = min(scored)
+            out.append(WorstMargin(name, m, bad))
+        else:
+            out.append(WorstMargin(None, None, bad))
+    return out
+
+
+def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
+    """What a reader needs to reproduce each candidate: status, solver, starts, seed, versions, spec hash."""
+    def solver(c: Candidate, key: str):
+        return (c.result.solver or {}).get(key)
+
+    facts = [
+        ("status", [c.result.status for c in cands]),
+        ("objective", [None if not c.result.objective else
+                       f"{c.result.objective['name']} = {c.result.objective['value']:.6g}" for c in cands]),
+        ("solver status", [solver(c, "return_status") for c in cands]),
+        ("iterations", [solver(c, "iterations") for c in cands]),
+        ("wall time, s", [solver(c, "wall_s") for c in cands]),
+        ("starts", [solver(c, "starts") for c in cands]),
+        ("seed", [solver(c, "seed") for c in cands]),
+        ("best start", [solver(c, "best_start") for c in cands]),
+        ("fine-grid worst violation", [c.result.extra.get("fine_grid_worst_violation") for c in cands]),
+        ("spec sha256", [c.result.spec_sha256 for c in cands]),
+        ("source", [c.result.extra.get("source") for c in cands]),
+        ("result file", [None if c.source is None else str(c.source) for c in cands]),
+    ]
+    versions = sorted({k for c in cands for k in c.result.versions})
+    facts += [(f"{k} version", [c.result.versions.get(k) for c in cands]) for k in versions]
+    return [(name, values) for name, values in facts if any(v is not None for v in values)]

@@ -1,0 +1,126 @@
+"""Reports and `agrisynth compare`: the tables the pages are built from, and bad result files."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import pytest
+
+from conftest import PLANTING
+from report_fixtures import checked_run
+from synthesis.compare import load_candidates, write_comparison
+from synthesis.errors import ResultError
+from synthesis.report.tables import candidates, design_rows, rule_rows, worst_margins
+from synthesis.result import SCHEMA_VERSION, load_result
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    out = tmp_path_factory.mktemp("runs")
+    return [checked_run(PLANTING / f"taiwan_example{k}.toml", out) for k in (1, 3)]
+
+
+def test_rule_table_marks_exactly_the_violated_rules(runs):
+    cands = candidates([r for _, r in runs])
+    rows = rule_rows(cands)
+    red = {(row.name, cands[i].label) for row in rows for i, bad in enumerate(row.violated) if bad}
+    # seed 000 example 1 as we read it: collinearity at P2, entry angle and transmission angle fail
+    assert {n for n, c in red if c == "taiwan_example1"} == {"p1p2p3_collinearity", "entry_angle",
+                                                             "transmission_angle_min"}
+    expected = {(r["name"], c.label) for c in cands for r in c.result.rules if not r["satisfied"]}
+    assert red == expected
+    # one row per rule, in the baseline's order
+    assert [row.name for row in rows] == [r["name"] for r in cands[0].result.rules]
+
+
+def test_worst_margin_is_the_smallest_normalised_margin(runs):
+    cands = candidates([r for _, r in runs])
+    for c, w in zip(cands, worst_margins(cands)):
+        margins = {r["name"]: r["normalised_margin"] for r in c.result.rules if r["normalised_margin"] is not None}
+        assert w.rule == min(margins, key=margins.get)
+        assert w.normalised_margin == pytest.approx(min(margins.values()))
+        assert w.violated == len(c.result.violated())
+
+
+def test_design_table_highlights_what_differs_from_the_baseline(runs):
+    cands = candidates([r for _, r in runs])
+    rows = {row.name: row for row in design_rows(cands)}
+    # Table 1: examples 1 and 3 share nothing but the branch
+    assert rows["l1"].values == [75, 74] and rows["l1"].differs == [False, True]
+    assert rows["branch"].differs == [False, False]
+    same = candidates([runs[0][1], runs[0][1]])
+    assert not any(any(row.differs) for row in design_rows(same))
+    assert [c.label for c in same] == ["taiwan_example1 (1)", "taiwan_example1 (2)"]
+
+
+def test_compare_page_has_one_red_cell_per_violation_and_every_figure(runs, tmp_path):
+    cands = load_candidates([runs[0][0], runs[1][0] / "result.json"])
+    page = write_comparison(cands, tmp_path / "cmp")
+    text = page.read_text()
+    n_red_rules = sum(len(c.result.violated()) for c in cands)
+    n_red_summary = sum(1 for c in cands if c.result.violated())
+    assert len(re.findall(r"<td class='(?:num )?fail'", text)) == n_red_rules + n_red_summary
+    images = re.findall(r"<img src='([^']+)'", text)
+    assert images == ["paths.png", "kinematics.png", "linkage.png", "animation.gif"]
+    assert all((page.parent / f).stat().st_size > 1000 for f in images)
+    assert "http" not in text.replace("http-equiv", "")        # nothing fetched from a network
+    assert not list(page.parent.glob(".compare.*"))             # no staging folder left behind
+
+
+def test_single_run_report_shows_the_overlay_figures_too(runs):
+    folder, _ = runs[0]
+    text = (folder / "report.html").read_text()
+    for f in ("trajectory.png", "paths.png", "kinematics.png", "linkage.png", "animation.gif"):
+        assert f"src='{f}'" in text and (folder / f).exists()
+
+
+def test_figure_that_cannot_be_drawn_is_a_note_not_a_crash(runs, tmp_path):
+    data = json.loads((runs[0][0] / "result.json").read_text())
+    del data["design"]["l5"]               # a hand-edited or partial result
+    (tmp_path / "partial.json").write_text(json.dumps(data))
+    page = write_comparison(load_candidates([tmp_path / "partial.json"]), tmp_path / "cmp")
+    text = page.read_text()
+    assert "class='missing'" in text and "comparison figures not drawn" in text and "l5" in text
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_bad_result_files_are_named_with_what_is_wrong(runs, tmp_path):
+    good = (runs[0][0] / "result.json").read_text()
+    with pytest.raises(ResultError, match=r"cut\.json: truncated"):
+        load_result(_write(tmp_path / "cut.json", good[: len(good) // 2]))
+    future = json.loads(good)
+    future["schema_version"] = SCHEMA_VERSION + 1
+    with pytest.raises(ResultError, match=rf"future\.json: schema_version {SCHEMA_VERSION + 1} is newer"):
+        load_result(_write(tmp_path / "future.json", json.dumps(future)))
+    with pytest.raises(ResultError, match=r"other\.json: missing required key\(s\) kind, spec_sha256"):
+        load_result(_write(tmp_path / "other.json", json.dumps({"name": "x", "status": "optimal",
+                                                                "design": {}, "rules": []})))
+    with pytest.raises(ResultError, match="no such result file"):
+        load_result(tmp_path / "nowhere")
+
+
+def test_compare_cli_exit_codes(runs, tmp_path):
+    good = json.loads((runs[0][0] / "result.json").read_text())
+    other = dict(good, kind="clamp_cam", name="a-cam")
+    mixed = _write(tmp_path / "cam.json", json.dumps(other))
+    cut = _write(tmp_path / "cut.json", json.dumps(good)[:500])
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", *map(str, args),
+                               "--out", str(tmp_path / "out")], capture_output=True, text=True)
+
+    p = run(runs[0][0], mixed)
+    assert p.returncode == 2 and "one kind" in p.stderr and "clamp_cam" in p.stderr and "Traceback" not in p.stderr
+    p = run(runs[0][0], cut)
+    assert p.returncode == 2 and "cut.json: truncated" in p.stderr
+    p = run(runs[0][0], runs[1][0])
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "out" / "compare.html").exists()
+    assert "taiwan_example1: evaluated, 3 rule(s) violated" in p.stdout
