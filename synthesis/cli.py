@@ -129,7 +129,9 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) 
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="parallel worker processes (default: all cores)")
-@click.option("--scheduler", default=None, help="dask scheduler address (not supported yet; exits 2)")
+@click.option("--scheduler", default=None, metavar="ADDR",
+              help="run the starts on a dask.distributed cluster (scheduler address, e.g. tcp://host:8786; "
+                   "the workers need agrisynth installed) instead of local worker processes")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
 def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: int | None,
           scheduler: str | None, verbose: bool) -> None:
@@ -153,10 +155,16 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     from synthesis.result import atomic_write_text, write_run
     from synthesis.spec import load_spec
 
-    if scheduler is not None:
-        raise click.BadParameter("a dask scheduler is not supported yet; run without --scheduler", param_hint="--scheduler")
     loaded = load_spec(spec)
     solver_module = kinds.solver(loaded.kind)
+    cluster = {}
+    if scheduler is not None:
+        import inspect
+
+        if "scheduler" not in inspect.signature(solver_module.run_solve).parameters:
+            raise click.BadParameter(f"kind {loaded.kind} solves in one process; run without --scheduler",
+                                     param_hint="--scheduler")
+        cluster = {"scheduler": scheduler}
     workers = workers or default_workers()
     n = starts or getattr(getattr(loaded.model, "solver", None), "starts", 1)
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
@@ -169,7 +177,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
             progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
                                                   f"objective {best.outcome.objective:.6g} ({tag})")
 
-        result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start)
+        result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start, **cluster)
     if verbose:
         console.print(log, markup=False)
     figures = kinds.figure_writers(result)
@@ -182,7 +190,8 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     s = result.solver
     console.print(f"objective {result.objective['name']} = {result.objective['value']:.6g}; IPOPT "
                   f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
-                  f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on {workers} worker(s)")
+                  f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
+                  f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}")
     if replaced:
         console.print(f"replaced the previous run in {folder}/")
     console.print(f"wrote {folder}/result.json, report.html, ipopt.log, {', '.join(figures)}")

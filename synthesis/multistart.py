@@ -15,6 +15,8 @@ from typing import Any, Callable
 import numpy as np
 from scipy.stats import qmc
 
+from synthesis.errors import AgrisynthError
+
 _worker_solver: Any = None   # the solver built by this worker process's initializer
 
 
@@ -57,12 +59,19 @@ def default_workers() -> int:
 
 
 def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
-               on_done: Callable[[Any], None] = lambda outcome: None) -> list:
+               on_done: Callable[[Any], None] = lambda outcome: None, scheduler: str | None = None) -> list:
     """Solve every start; returns the outcomes in start order. ``on_done`` sees each as it finishes.
 
-    KeyboardInterrupt propagates after cancelling pending starts; outcomes already passed to
-    ``on_done`` are the caller's to keep.
+    ``scheduler`` (a dask.distributed address) sends the starts to that cluster instead of a local
+    process pool of ``workers``.  KeyboardInterrupt propagates after cancelling pending starts;
+    outcomes already passed to ``on_done`` are the caller's to keep.
     """
+    if scheduler is not None:
+        try:
+            from synthesis.cluster import run_starts_on_cluster
+        except ImportError:
+            raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
+        return run_starts_on_cluster(factory, starts, scheduler, on_done)
     outcomes: dict[int, Any] = {}
     if workers <= 1:
         executor: Executor = _InProcess(factory)

@@ -77,10 +77,12 @@ def conflicting_rules(spec, design: dict[str, float]) -> tuple[list[str], str]:
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
-    """Multistart solve; returns (result, every start's report, IPOPT log). Raises SolverError (exit 3)
-    after building the result when no start satisfies every rule: the caller writes it first."""
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
+    """Multistart solve; returns (result, every start's report, IPOPT log).
+
+    ``scheduler``: a dask.distributed scheduler address to run the starts on instead of local workers.
+    """
     spec = loaded.model
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
@@ -98,9 +100,9 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
 
     t0 = time.perf_counter()
     factory = functools.partial(build_nlp, spec)
-    if workers <= 1:
+    if workers <= 1 and scheduler is None:
         factory = lambda: nlp_shape  # noqa: E731 - reuse the solver already built
-    run_starts(factory, x_starts, workers, done)
+    run_starts(factory, x_starts, workers, done, scheduler=scheduler)
     wall = time.perf_counter() - t0
     ordered = [reports[i] for i in range(starts)]
     chosen = best[0]
@@ -121,7 +123,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         trajectory=trajectory(scene, pts),
         solver={"name": "ipopt", "return_status": chosen.outcome.return_status,
                 "iterations": chosen.outcome.iterations, "wall_s": wall, "starts": starts, "seed": seed,
-                "best_start": chosen.outcome.start, "workers": workers,
+                "best_start": chosen.outcome.start, "workers": workers if scheduler is None else None,
+                "scheduler": scheduler,
                 "samples_per_phase": spec.solver.samples_per_phase,
                 "samples_per_turn": spec.solver.samples_per_turn, "fine_grid_factor": FINE},
         extra={

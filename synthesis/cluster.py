@@ -1,0 +1,62 @@
+"""Multistart starts on a dask.distributed cluster: the ``--scheduler`` path of :mod:`synthesis.multistart`.
+
+Imported only when a scheduler is given, so that local runs never import dask.
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Any, Callable
+
+import numpy as np
+from distributed import Client, WorkerPlugin, get_worker
+from distributed import as_completed as dask_completed
+
+from synthesis.errors import AgrisynthError
+
+CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving up
+
+
+class _SolverPlugin(WorkerPlugin):
+    """Builds the problem's solver once on each dask worker (``worker.plugins[name].solver``)."""
+
+    def __init__(self, factory: Callable[[], Any], name: str):
+        self.factory, self.name, self.solver = factory, name, None
+
+    def setup(self, worker) -> None:
+        self.solver = self.factory()
+
+
+def _solve_on_dask_worker(plugin_name: str, index: int, x0: np.ndarray):
+    return get_worker().plugins[plugin_name].solver.solve(index, x0)
+
+
+def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
+                          on_done: Callable[[Any], None] = lambda outcome: None) -> list:
+    """``run_starts`` on a dask.distributed cluster: each worker builds the solver once (a plugin).
+
+    ``scheduler`` is the scheduler's address (``tcp://host:8786``).  The workers need agrisynth
+    installed.  Outcomes come back in start order, so the result does not depend on the cluster.
+    """
+    outcomes: dict[int, Any] = {}
+    try:
+        client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
+    except (OSError, ValueError, TimeoutError) as exc:
+        raise AgrisynthError(f"--scheduler {scheduler}: cannot reach a dask scheduler there ({exc})") from None
+    with client:
+        name = f"agrisynth-solver-{uuid.uuid4().hex}"
+        plugin = _SolverPlugin(factory, name)
+        client.register_plugin(plugin, name=name)
+        try:
+            futures = [client.submit(_solve_on_dask_worker, name, i, x0, pure=False) for i, x0 in enumerate(starts)]
+            try:
+                for fut in dask_completed(futures):
+                    out = fut.result()
+                    outcomes[out.start] = out
+                    on_done(out)
+            except BaseException:
+                client.cancel(futures)
+                raise
+        finally:
+            client.unregister_worker_plugin(name)
+    return [outcomes[i] for i in range(len(starts))]
