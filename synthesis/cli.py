@@ -80,20 +80,18 @@ def check(spec: Path, out: Path) -> None:
     report.html and the trajectory plot. Exit 0 when every rule holds, 1 when one is violated.
     """
     from synthesis import kinds
-    from synthesis.report import write_report
+    from synthesis.report import run_artifacts
     from synthesis.result import write_run
     from synthesis.spec import load_spec
 
     loaded = load_spec(spec)
     result = kinds.checker(loaded.kind)(loaded)
-    figures = kinds.figure_writers(result)
-    artifacts = dict(figures)
-    artifacts["report.html"] = lambda path: write_report(result, path, list(figures))
+    artifacts = run_artifacts(result)
     folder, replaced = write_run(out, result, artifacts)
     console.print(rule_table(result.rules, f"{result.name} ({result.kind}): {loaded.path}"))
     if replaced:
         console.print(f"replaced the previous run in {folder}/")
-    console.print(f"wrote {folder}/result.json, report.html, {', '.join(figures)}")
+    console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
     bad = result.violated()
     if bad:
         console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
@@ -151,7 +149,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
 
     from synthesis import kinds
     from synthesis.multistart import default_workers
-    from synthesis.report import write_report
+    from synthesis.report import run_artifacts
     from synthesis.result import atomic_write_text, write_run
     from synthesis.spec import load_spec
 
@@ -180,9 +178,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
         result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start, **cluster)
     if verbose:
         console.print(log, markup=False)
-    figures = kinds.figure_writers(result)
-    artifacts = dict(figures)
-    artifacts["report.html"] = lambda path: write_report(result, path, list(figures))
+    artifacts = run_artifacts(result)
     artifacts["ipopt.log"] = lambda path: atomic_write_text(path, log)
     folder, replaced = write_run(out, result, artifacts)
     baseline = solver_module.baseline_rules(loaded)
@@ -194,7 +190,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
                   f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}")
     if replaced:
         console.print(f"replaced the previous run in {folder}/")
-    console.print(f"wrote {folder}/result.json, report.html, ipopt.log, {', '.join(figures)}")
+    console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
     if result.status == "infeasible":
         raise solver_module.diagnose_infeasible(loaded, result, reports)
     bad = result.violated()

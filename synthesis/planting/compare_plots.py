@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from synthesis.kinematics.planting_arm import ArmDesign, joint_positions  # noqa: E402
-from synthesis.planting.plots import COLOURS as POINT_COLOURS  # noqa: E402
+from synthesis.planting.plots import COLOURS as POINT_COLOURS, style_plane  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
@@ -68,10 +68,7 @@ def paths_figure(results: list[Result], path: Path) -> None:
     ax_m.set_title("machine frame (dashed: soil surface)")
     ax_g.set_title("ground frame")
     for ax in (ax_m, ax_g):
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("X, mm")
-        ax.set_ylabel("Y, mm")
-        ax.grid(alpha=0.3)
+        style_plane(ax)
     ax_m.legend(fontsize=7, loc="best")
     fig.tight_layout()
     fig.savefig(path, dpi=100)

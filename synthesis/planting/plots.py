@@ -16,6 +16,14 @@ COLOURS = {"P1": "tab:green", "P2": "tab:olive", "P3": "tab:brown",
            "P4": "tab:red", "P5": "tab:purple", "P6": "tab:orange"}
 
 
+def style_plane(ax) -> None:
+    """Equal scales, X and Y in mm, light grid: every drawing of a plane mechanism."""
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("X, mm")
+    ax.set_ylabel("Y, mm")
+    ax.grid(alpha=0.3)
+
+
 def _seedbed_lines(ax, seedbed: dict, span: float) -> None:
     t = math.radians(seedbed["tilt_deg"])
     ux, uy = math.cos(t), math.sin(t)
@@ -51,10 +59,7 @@ def trajectory_figure(result: Result, path: Path) -> None:
     ax_m.set_title("machine frame (forward = +X)")
     ax_g.set_title(f"ground frame, {result.extra.get('operation', {}).get('forward_speed_m_s', '?')} m/s")
     for ax in (ax_m, ax_g):
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("X, mm")
-        ax.set_ylabel("Y, mm")
-        ax.grid(alpha=0.3)
+        style_plane(ax)
     ax_m.legend(fontsize=7, loc="best")
     fig.suptitle(f"{result.name}: claw-tip trajectory", fontsize=11)
     fig.tight_layout()

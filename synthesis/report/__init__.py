@@ -35,6 +35,14 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
 
 
+def run_artifacts(result: Result) -> dict:
+    """What a check or solve writes beside result.json: the kind's figures, then report.html."""
+    from synthesis import kinds
+
+    figures = kinds.figure_writers(result)
+    return {**figures, "report.html": lambda path: write_report(result, path, list(figures))}
+
+
 def write_report(result: Result, path: Path, figures: list[str]) -> None:
     """report.html of one run, beside its own figures (``figures``) and the kind's overlay figures."""
     cands = candidates([result])
