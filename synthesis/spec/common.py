@@ -113,7 +113,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
         key, symbol = _COMPARISONS[kind]
         return f"{path}: expected {symbol} {ctx[key]}, got {got}"
     if kind == "value_error":
-        return f"{path}: {str(ctx.get('error', err['msg']))}"
+        message = str(ctx.get("error", err["msg"]))
+        # a whole-model validator (empty path) names the fields itself
+        return f"{path}: {message}" if path else message
     if kind == "literal_error":
         return f"{path}: expected {ctx.get('expected')}, got {got!r}"
     return f"{path}: {err['msg'].lower()}, got {got!r}"
