@@ -29,10 +29,14 @@ def _spread(times: Sequence):
     return hi - lo
 
 
-def landing_time_spread_rule(times: Sequence, limit: float, spacing: float) -> Rule:
-    """Latest minus earliest landing time of the tubes (s) <= limit.  The optimiser is asked for
-    exactly equal times (t_k - t_0 = 0), the paper's design condition."""
-    rows = tuple((t - times[0], 0.0, 0.0) for t in times[1:])
+def landing_time_spread_rule(times: Sequence, limit: float, spacing: float, equalise: bool = True) -> Rule:
+    """Latest minus earliest landing time of the tubes (s) <= limit.  With ``equalise`` the optimiser
+    is asked for exactly equal times (t_k - t_0 = 0), the paper's design condition; without, for
+    pairwise differences within the limit."""
+    if equalise:
+        rows = tuple((t - times[0], 0.0, 0.0) for t in times[1:])
+    else:
+        rows = tuple((times[i] - times[j], -limit, limit) for i in range(len(times)) for j in range(i + 1, len(times)))
     return Rule("landing_time_spread", _spread(times), None, limit, "s", limit,
                 f"at row spacing {spacing:g} mm", nlp_rows=rows)
 

@@ -30,13 +30,18 @@ def drops(scene: GuideTubeScene, angles: dict[str, float], spacing: float,
     return [landing(angles[t.name], scene.tube(i, spacing), physics) for i, t in enumerate(scene.tubes)]
 
 
-def rules_of(scene: GuideTubeScene, angles: dict[str, float], samples: int, limits) -> list[Rule]:
-    """Every rule of the given angles; the row-spacing rules on ``samples`` spacings."""
-    design = drops(scene, angles, scene.rows.design_spacing)
-    grid = scene.spacing_grid(samples)
-    swept = [drops(scene, angles, w) for w in grid]
+def rules_of(scene: GuideTubeScene, angles: dict, grid: list[float], limits, drop=landing,
+             equalise: bool = True) -> list[Rule]:
+    """Every rule of the wall ``angles`` (deg); the row-spacing rules on the spacings ``grid`` (mm).
+    ``drop(delta_deg, tube, physics)`` is ``landing`` (floats, check) or ``symbolic_drop`` (solve);
+    ``equalise`` asks the optimiser for exactly equal landing times at the design row spacing."""
+    def at(spacing: float) -> list[DropPhases]:
+        return [drop(angles[t.name], scene.tube(i, spacing), scene.physics) for i, t in enumerate(scene.tubes)]
+
+    design = at(scene.rows.design_spacing)
+    swept = [at(w) for w in grid]
     rules = [landing_time_spread_rule([d.landing_time for d in design], limits.max_time_spread,
-                                      scene.rows.design_spacing)]
+                                      scene.rows.design_spacing, equalise)]
     if limits.max_spacing_error is not None:
         rules.append(spacing_error_rule([[d.landing_time for d in ds] for ds in swept], grid,
                                         scene.forward_mm_per_s, limits.max_spacing_error))
@@ -134,7 +139,7 @@ def run_check(loaded: LoadedSpec) -> Result:
     scene = GuideTubeScene.from_spec(spec)
     angles = spec.given_angles()
     samples = FINE * spec.solver.samples
-    rules = rules_of(scene, angles, samples, spec.rules)
+    rules = rules_of(scene, angles, scene.spacing_grid(samples), spec.rules)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=design_of(angles), rules=[r.record().to_json() for r in rules],
                   extra=scene_facts(spec, scene, angles, samples))

@@ -12,6 +12,12 @@ from synthesis.guide_tube.drop import Physics, Tube
 from synthesis.spec.guide_tube import GuideTubeSpec, RowsSection, TubeSection
 
 MM = 1e-3
+#: the row-spacing range is evaluated up to this close below the tray pitch.  At the tray pitch
+#: itself no tube is shifted and the seedlings miss the walls (a free fall, zero spread); just
+#: below it they still hit the wall's lower end and lose its normal velocity there (plastic
+#: impact, eq 15), so the spread jumps at the tray pitch.  Sampling the left limit keeps the worst
+#: case of the range at a sample instead of between the last sample and the jump.
+CONTACT_MARGIN_MM = 1e-6
 
 
 @dataclass(frozen=True)
@@ -43,8 +49,11 @@ class GuideTubeScene:
         return Tube(t.name, t.l3 * self.rows.l3_scale(spacing) * MM, t.h5 * MM, t.h6 * MM)
 
     def spacing_grid(self, samples: int) -> list[float]:
-        """``samples`` row spacings (mm) spread evenly over rows.spacings (one if the range is a point)."""
+        """``samples`` row spacings (mm) spread evenly over rows.spacings (one if the range is a point),
+        the tray pitch taken as its left limit (CONTACT_MARGIN_MM)."""
         lo, hi = self.rows.spacings
+        hi = min(hi, self.rows.tray_pitch - CONTACT_MARGIN_MM)
+        lo = min(lo, hi)
         return [float(lo)] if lo == hi else np.linspace(lo, hi, samples).tolist()
 
     @property

@@ -115,7 +115,8 @@ class RulesSection(StrictModel):
 class ObjectiveSection(StrictModel):
     name: Literal["nearest", "fastest", "uniform"] = Field(
         "nearest", description="nearest: smallest change of the free angles (default); fastest: shortest common "
-                               "landing time; uniform: smallest worst plant-position error over rows.spacings")
+                               "landing time; uniform: smallest worst plant-position error over rows.spacings "
+                               "(landing times at the design row spacing within rules.max_time_spread instead of equal)")
 
 
 class SolverSection(StrictModel):
