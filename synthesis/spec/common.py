@@ -81,6 +81,8 @@ def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
     """Names of the fields allowed at ``loc`` inside ``model`` (for did-you-mean)."""
     current: Any = model
     for part in loc:
+        if isinstance(part, int):        # an item of a list of tables: its fields are the item model's
+            continue
         fields = getattr(current, "model_fields", None)
         if fields is None or part not in fields:
             return []
