@@ -189,14 +189,24 @@ def test_uniform_solution_holds_its_rules_and_its_worst_error_is_the_fine_grid_w
     assert sweep < max(paper.extra["row_spacing_sweep"]["spacing_error_mm"])
 
 
-def test_landing_speed_rises_with_row_spacing_as_table2_inversion_rates_suggest(calibrated):
-    """Seed 001 Table 2 / §3.2: more inverted seedlings at 230 mm than at 300 mm, which the paper puts
-    down to the longer slide lowering the landing speed.  The model's landing speed agrees in trend."""
+def test_landing_speed_ranks_the_row_spacings_as_table2_inversion_rates_do(calibrated):
+    """Seed 001 Table 2 / §3.2: inverted seedlings 4.18 % at 230 mm, 3.37 % at 265 mm, 2.8 % at 300 mm,
+    put down to the longer slide lowering the landing speed.  The model ranks the landing speeds the
+    same way, but only 300 mm (no wall contact: a free fall) differs much (GUIDE_TUBE.md)."""
     angles = {"I": 45.0, "II": 41.0}
     for i, name in enumerate(("I", "II")):
-        speeds = [landing(angles[name], calibrated.tube(i, w), calibrated.physics).v_land
-                  for w in calibrated.spacing_grid(15)]
-        assert np.all(np.diff(speeds) > 0), name
+        speeds = [landing(angles[name], calibrated.tube(i, w), calibrated.physics).v_land for w in (230, 265, 300)]
+        assert speeds[0] < speeds[1] < speeds[2], name
+        assert speeds[2] - speeds[0] > 0.8                     # m/s: contact-free fall at 300 mm
+        assert speeds[1] - speeds[0] < 0.02                    # m/s: 230 and 265 mm barely differ
+
+
+def test_no_reading_of_the_text_tried_gives_41_deg():
+    from synthesis.guide_tube.readings import readings
+
+    for reading in readings():
+        assert reading.delta2, reading.name
+        assert all(abs(d - PUBLISHED_DELTA2) > 2.0 for d in reading.delta2), reading
 
 
 # --- calibration corner cases -----------------------------------------------------------------------------
