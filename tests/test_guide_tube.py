@@ -167,14 +167,21 @@ def _spec_with(tmp_path: Path, source: Path, replacements: list[tuple[str, str]]
     return path
 
 
-def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times(tmp_path):
+def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times():
     """t_z falls as a wall steepens, so the shortest common time has tube I at its upper bound."""
-    path = _spec_with(tmp_path, TUBES / "uniform_spacing.toml", [('name = "uniform"', 'name = "fastest"')])
-    result, _, _ = run_solve(load_spec(path), starts=2, workers=1)
+    loaded = load_spec(TUBES / "fastest_equal_time.toml")
+    result, _, _ = run_solve(loaded, starts=2, workers=1)
     assert result.status == "optimal"
-    assert result.design["delta_I"] == pytest.approx(70.0, abs=1e-6)
+    assert result.design["delta_I"] == pytest.approx(loaded.model.tubes[0].angle.bounds[1], abs=1e-6)
     times = [t["ode"]["t_z"] for t in result.extra["tubes"]]
     assert abs(times[0] - times[1]) < 1e-9
+    assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)       # ms
+
+
+@pytest.mark.parametrize("path", sorted(TUBES.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_library_spec_validates_and_cites_seed_001(path):
+    spec = load_spec(path).model
+    assert spec.kind == "guide_tube" and "seed 001" in spec.source
 
 
 def test_uniform_solution_holds_its_rules_and_its_worst_error_is_the_fine_grid_worst():
