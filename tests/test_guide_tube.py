@@ -327,3 +327,10 @@ def test_rules_on_floats_and_symbols_have_the_same_names(calibrated):
 
     symbols = rules_of(calibrated, {"I": 45.0, "II": d}, grid, spec.rules, drop=symbolic_drop)
     assert [r.name for r in floats] == [r.name for r in symbols]
+
+
+def test_same_spec_and_seed_give_the_same_angles():
+    loaded = load_spec(TUBES / "uniform_spacing.toml")
+    a, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
+    b, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
+    assert a.design == b.design and a.solver["seed"] == 5

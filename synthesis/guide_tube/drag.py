@@ -84,7 +84,7 @@ def traverse(v0, a, kappa, s):
     and the speed there.  Valid while the motion does not stop (exit_speed_sq > 0); SI units."""
     E = ca.exp(-2 * kappa * s)
     W = relaxation_length(kappa, s)
-    v = ca.sqrt(ca.fmax(v0 * v0 * E + a * W, 0.0))
+    v = ca.sqrt(ca.fmax(v0 * v0 * E + a * W, _TINY * _TINY))   # > 0: no infinite slope when it stops
     D = ca.fmax(v + v0 * E, _TINY)
     q = a * kappa * W * W / (D * D)
     short = W / D * atanh_ratio(ca.fmin(q, Q_LONG))

@@ -16,6 +16,19 @@ PHASES = (("t_fall", "free fall (eq 14)", "tab:blue"), ("t_slide", "slide on the
           ("t_after", "wall end to paddy (eq 19-21)", "tab:green"))
 
 
+def _unavailable(result: Result, path: Path) -> bool:
+    """A run whose design could not be evaluated (e.g. every start sticks) has no drop facts: say so."""
+    if "tubes" in result.extra:
+        return False
+    fig, ax = plt.subplots(figsize=(8, 2.5))
+    ax.axis("off")
+    ax.text(0.5, 0.5, f"{result.name}: no design the drop model could evaluate ({result.status})",
+            ha="center", va="center", fontsize=10)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
 def _label(tube: dict) -> str:
     return tube["name"] + (f"/{tube['mirror']}" if tube.get("mirror") else "")
 
@@ -32,6 +45,8 @@ def _spacing_axis(ax, result: Result, label: str | None = None, colour: str = "t
 
 def drop_times_figure(result: Result, path: Path) -> None:
     """Phase breakdown of each tube's drop time, and the plant-position error over the row spacings."""
+    if _unavailable(result, path):
+        return
     ex = result.extra
     tubes = ex["tubes"]
     rows = ex["rows"]
@@ -75,6 +90,8 @@ def drop_times_figure(result: Result, path: Path) -> None:
 
 def drop_profile_figure(result: Result, path: Path) -> None:
     """Height above the paddy against time (ODE), with the closed form's phase ends marked."""
+    if _unavailable(result, path):
+        return
     ex = result.extra
     fig, ax = plt.subplots(figsize=(8, 5))
     for tube, colour in zip(ex["tubes"], plt.rcParams["axes.prop_cycle"].by_key()["color"]):
@@ -101,6 +118,8 @@ def drop_profile_figure(result: Result, path: Path) -> None:
 
 def sensitivity_figure(result: Result, path: Path) -> None:
     """Plant-position error when mu or v_L is 20 % off the value the design used."""
+    if _unavailable(result, path):
+        return
     ex = result.extra
     sens = ex["sensitivity"]
     change = [100 * (f - 1) for f in sens["factors"]]

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import functools
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable
 
+from constraints import not_evaluated
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.guide_tube.check import FINE, design_of, rules_of, scene_facts
 from synthesis.guide_tube.drop import SeedlingSticks
@@ -87,7 +89,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     chosen = best[0]
     if chosen.why is not None:
         # no start gives an evaluable design: report the given design's facts, status infeasible
-        design, records, facts = design_of(spec.given_angles()), [], {"source": spec.source}
+        design, facts = design_of(spec.given_angles()), {"source": spec.source}
+        records = [r.record().to_json() for r in unevaluated_rules(spec, chosen.why)]
     else:
         design = chosen.outcome.design
         records = [r.to_json() for r in chosen.records]
@@ -104,14 +107,32 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
                 "fine_grid_factor": FINE},
         extra={**facts,
                "baseline_design": design_of(spec.given_angles()),
-               "fine_grid_worst_violation": chosen.worst_violation,
+               "fine_grid_worst_violation": _finite(chosen.worst_violation),
                "starts": [{"start": r.outcome.start, "return_status": r.outcome.return_status,
                            "iterations": r.outcome.iterations, "wall_s": r.outcome.wall_s,
                            "objective": r.outcome.objective, "satisfied_on_fine_grid": r.satisfied,
-                           "worst_violation": r.worst_violation, "why": r.why, "design": r.outcome.design}
+                           "worst_violation": _finite(r.worst_violation), "why": r.why, "design": r.outcome.design}
                           for r in ordered]},
     )
     return result, ordered, log
+
+
+def unevaluated_rules(spec, why: str) -> list:
+    """The rule table of a design the drop model cannot evaluate: every rule, with the reason."""
+    r = spec.rules
+    where = "row spacings"
+    rules = [not_evaluated("landing_time_spread", None, r.max_time_spread, "s", where, why)]
+    if r.max_spacing_error is not None:
+        rules.append(not_evaluated("spacing_error", None, r.max_spacing_error, "mm", where, why))
+    for t in spec.tubes:
+        rules.append(not_evaluated(f"wall_exit_speed_{t.name}", r.min_exit_speed, None, "m/s", where, why))
+        rules.append(not_evaluated(f"free_fall_height_{t.name}", r.min_free_fall, None, "mm", where, why))
+    return rules
+
+
+def _finite(x: float) -> float | None:
+    """JSON has no infinity: a design that could not be evaluated has no violation figure."""
+    return x if math.isfinite(x) else None
 
 
 def conflicting_rules(spec, design: dict[str, float]) -> tuple[list[str], str]:

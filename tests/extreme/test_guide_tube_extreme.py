@@ -192,3 +192,19 @@ def test_relaxation_length_series_meets_the_closed_form():
     above = float(drag.relaxation_length(x_star * (1 + 1e-9), 1.0))
     assert above == pytest.approx(below, rel=1e-12)
     assert float(drag.relaxation_length(0.0, 0.25)) == 0.5
+
+
+def test_solve_whose_angle_range_only_sticks_exits_3_naming_tube_angle_and_mu(tmp_path):
+    source = (ROOT / "problems" / "guide_tube" / "cai2020_delta2.toml").read_text()
+    i, j = source.index("[friction.calibrate]"), source.index("[rows]")
+    text = source[:i] + "[friction]\nmu = 1.5\n\n" + source[j:]
+    text = text.replace("angle = { init = 41, bounds = [25, 70] }", "angle = { init = 12, bounds = [10, 15] }")
+    path = tmp_path / "sticks.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path),
+                           "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    message = " ".join(proc.stderr.split())
+    assert "the seedling sticks on the wall of tube II: at wall angle" in message
+    assert "with friction coefficient mu = 1.5" in message
+    assert "Traceback" not in proc.stderr
