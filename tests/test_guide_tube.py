@@ -334,3 +334,30 @@ def test_same_spec_and_seed_give_the_same_angles():
     a, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
     b, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
     assert a.design == b.design and a.solver["seed"] == 5
+
+
+def _both_free_with_spacing_limit(tmp_path: Path, limit_mm: float) -> Path:
+    return _spec_with(tmp_path, TUBES / "uniform_spacing.toml", [
+        ('name = "uniform"', 'name = "nearest"'),
+        ("min_free_fall = 0 ", f"max_spacing_error = {limit_mm}\nmin_free_fall = 0 ")])
+
+
+def test_a_spacing_error_limit_over_the_row_spacings_is_met_on_the_fine_grid(tmp_path):
+    loaded = load_spec(_both_free_with_spacing_limit(tmp_path, 10.0))
+    result, _, _ = run_solve(loaded, workers=1)
+    assert result.status == "optimal"
+    rule = next(r for r in result.rules if r["name"] == "spacing_error")
+    assert rule["satisfied"] and rule["value"] <= 10.0                     # 10x finer than the NLP's samples
+    assert rule["value"] == pytest.approx(max(result.extra["row_spacing_sweep"]["spacing_error_mm"]), rel=1e-12)
+    assert result.extra["landing_time_spread_s"] < 1e-9                   # and equal at 230 mm
+
+
+def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path):
+    from synthesis.guide_tube.solve import diagnose_infeasible
+
+    loaded = load_spec(_both_free_with_spacing_limit(tmp_path, 5.0))
+    result, reports, _ = run_solve(loaded, workers=1)
+    assert result.status == "infeasible"
+    error = diagnose_infeasible(loaded, result, reports)
+    assert error.exit_code == 3
+    assert "Rules that conflict" in str(error) and "spacing_error" in str(error)
