@@ -106,9 +106,8 @@ class GuideTubeNLP:
         self.n_delta, self.n_tau, self.n_slack = n, tau.numel(), slacks.numel()
         self.slack_names = [name for name, _, _ in slack_of_rule]
         bounds = [bounds_of(t.angle) for t in free]
-        tau_hi = math.inf
         self.lbx = np.array([b[0] for b in bounds] + [0.0] * self.n_tau + [0.0] * self.n_slack)
-        self.ubx = np.array([b[1] for b in bounds] + [tau_hi] * self.n_tau + [math.inf] * self.n_slack)
+        self.ubx = np.array([b[1] for b in bounds] + [math.inf] * self.n_tau + [math.inf] * self.n_slack)
         self.bounds = np.array(bounds, dtype=float)
         self.init = init
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
