@@ -9,12 +9,20 @@ from typing import Callable
 from synthesis.result import Result
 
 #: kind -> (module with run_check, module and function writing its figures)
-_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
-_SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
-_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
+_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check",
+             "guide_tube": "synthesis.guide_tube.check:run_check"}
+_SOLVERS = {"planting_fourbar": "synthesis.planting.solve",
+            "guide_tube": "synthesis.guide_tube.solve"}
+_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"},
+            "guide_tube": {"drop_times.png": "synthesis.guide_tube.plots:drop_times_figure",
+                           "drop_profiles.png": "synthesis.guide_tube.plots:drop_profile_figure",
+                           "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"}}
 #: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
 #: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
-_COMPARE_FIGURES: dict[str, str] = {"planting_fourbar": "synthesis.planting.compare_plots:overlay_figures"}
+_COMPARE_FIGURES: dict[str, str] = {
+    "planting_fourbar": "synthesis.planting.compare_plots:overlay_figures",
+    "guide_tube": "synthesis.guide_tube.plots:compare_figures",
+}
 
 
 def _resolve(target: str) -> Callable:

@@ -81,6 +81,8 @@ def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
     """Names of the fields allowed at ``loc`` inside ``model`` (for did-you-mean)."""
     current: Any = model
     for part in loc:
+        if isinstance(part, int):        # an item of a list of tables: its fields are the item model's
+            continue
         fields = getattr(current, "model_fields", None)
         if fields is None or part not in fields:
             return []
@@ -113,7 +115,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
         key, symbol = _COMPARISONS[kind]
         return f"{path}: expected {symbol} {ctx[key]}, got {got}"
     if kind == "value_error":
-        return f"{path}: {str(ctx.get('error', err['msg']))}"
+        message = str(ctx.get("error", err["msg"]))
+        # a whole-model validator (empty path) names the fields itself
+        return f"{path}: {message}" if path else message
     if kind == "literal_error":
         return f"{path}: expected {ctx.get('expected')}, got {got!r}"
     return f"{path}: {err['msg'].lower()}, got {got!r}"

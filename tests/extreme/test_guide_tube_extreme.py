@@ -1,0 +1,210 @@
+"""guide_tube at the edges of its physics: near-sticking walls (A -> 0), decelerating slides,
+sticking, steep drag (v_L down to 0.5 m/s), very long falls, and the drag-free limit."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from synthesis.guide_tube import drag
+from synthesis.guide_tube.drag import Q_LONG, Q_SERIES, stopping_distance, traverse
+from synthesis.guide_tube.drop import Physics, SeedlingSticks, Tube, drop_phases, landing
+from synthesis.guide_tube.ode import simulate
+from synthesis.guide_tube.slope import landing_time_slope
+
+ROOT = Path(__file__).resolve().parents[2]
+BASELINE = ROOT / "problems" / "guide_tube" / "cai2020_tubes.toml"
+TUBE_I = Tube("I", 0.105, 0.040, 0.210)
+TUBE_II = Tube("II", 0.035, 0.040, 0.210)
+G = 9.8
+
+
+@pytest.fixture(autouse=True)
+def no_floating_point_warnings():
+    """No overflow, invalid operation or division by zero anywhere (numpy raises; warnings are errors)."""
+    with np.errstate(over="raise", invalid="raise", divide="raise"), warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yield
+
+
+def physics_with_a_sq(delta_deg: float, a_sq: float, terminal_speed: float = 17.5) -> Physics:
+    """The friction coefficient that leaves sin d - mu cos d = a_sq."""
+    d = math.radians(delta_deg)
+    return Physics(0.6, G, terminal_speed, (math.sin(d) - a_sq) / math.cos(d))
+
+
+# --- near sticking: tan d -> mu+, A = sqrt(sin d - mu cos d) -> 0 -------------------------------------------
+
+@pytest.mark.parametrize("A", [1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8])
+@pytest.mark.parametrize("tube", [TUBE_I, TUBE_II], ids=["I", "II"])
+def test_near_sticking_closed_form_matches_the_ode(tube, A):
+    physics = physics_with_a_sq(40.0, A * A)
+    closed = landing(40.0, tube, physics)
+    ode = simulate(40.0, tube, physics)
+    assert math.isfinite(closed.landing_time)
+    assert abs(closed.landing_time - ode.landing_time) < 1e-6
+    assert abs(closed.t_slide - ode.t_slide) < 1e-9          # what we measure (DOP853 at 1e-12)
+
+
+def test_slide_time_is_continuous_through_a_zero_driving_acceleration():
+    """a = g A^2 crosses zero: the slide time is one smooth function of a (no 1/A)."""
+    kappa, v0, s = G / 17.5 ** 2, 1.5, 0.15
+    times = [traverse(v0, a, kappa, s)[0] for a in (-1e-12, -1e-15, 0.0, 1e-15, 1e-12)]
+    assert max(times) - min(times) < 1e-12
+    # a = 0 exactly is pure drag: v = v0 / (1 + kappa v0 t), so t = (exp(kappa s) - 1) / (kappa v0)
+    assert times[2] == pytest.approx(math.expm1(kappa * s) / (kappa * v0), rel=1e-14)
+    # and its slope in a is finite and the same from both sides (CasADi AD through the series)
+    a = ca.SX.sym("a")
+    slope = ca.Function("slope", [a], [ca.jacobian(traverse(v0, a, kappa, s)[0], a)])
+    left, right = float(slope(-1e-12)), float(slope(1e-12))
+    assert math.isfinite(left) and left == pytest.approx(right, rel=1e-9)
+
+
+@pytest.mark.parametrize("threshold", [Q_SERIES, -Q_SERIES, Q_LONG])
+def test_branch_switches_of_the_closed_form_are_seamless(threshold):
+    """The series / atanh / atan / long-distance forms meet without a jump in value or slope."""
+    kappa, v0, s = G / 2.0 ** 2, 0.8, 0.3
+
+    def q_of(a):
+        E = math.exp(-2 * kappa * s)
+        W = (1 - E) / kappa
+        v = math.sqrt(v0 * v0 * E + a * W)
+        return a * kappa * W * W / (v + v0 * E) ** 2
+
+    E = math.exp(-2 * kappa * s)
+    a_stops = -v0 * v0 * E * kappa / (1 - E)       # below it the motion stops before s
+    a_star = brentq(lambda a: q_of(a) - threshold, a_stops * (1 - 1e-9), 1e6, xtol=1e-15)
+    a = ca.SX.sym("a")
+    t = traverse(v0, a, kappa, s)[0]
+    f = ca.Function("f", [a], [t, ca.jacobian(t, a)])
+    below, above = f(a_star * (1 - 1e-9)), f(a_star * (1 + 1e-9))
+    assert float(above[0]) == pytest.approx(float(below[0]), rel=1e-9)
+    assert float(above[1]) == pytest.approx(float(below[1]), rel=1e-6)
+
+
+# --- decelerating slide: tan d < mu ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("delta, mu", [(30.0, 0.8), (20.0, 0.6), (35.0, 1.2)])
+def test_decelerating_slide_is_real_and_matches_the_ode(delta, mu):
+    physics = Physics(0.6, G, 17.5, mu)
+    assert math.tan(math.radians(delta)) < mu
+    closed = landing(delta, TUBE_II, physics)
+    ode = simulate(delta, TUBE_II, physics)
+    assert closed.slide_accel < 0 and closed.v_exit < closed.v_wall        # it slows down ...
+    assert abs(closed.landing_time - ode.landing_time) < 1e-9              # ... as the ODE says
+    d = ca.SX.sym("d")
+    t_z = drop_phases(d, TUBE_II, physics).landing_time
+    value, slope = ca.Function("f", [d], [t_z, ca.jacobian(t_z, d)])(math.radians(delta))
+    assert float(value) == pytest.approx(closed.landing_time, abs=1e-14)    # no NaN, no complex
+    assert float(slope) == pytest.approx(landing_time_slope(delta, TUBE_II, physics), rel=1e-9)
+
+
+def test_sticking_is_found_by_both_implementations_at_the_same_distance():
+    physics = Physics(0.6, G, 17.5, 1.5)
+    with pytest.raises(SeedlingSticks) as closed:
+        landing(15.0, TUBE_I, physics)
+    with pytest.raises(SeedlingSticks) as ode:
+        simulate(15.0, TUBE_I, physics)
+    assert closed.value.stops_after_mm == pytest.approx(ode.value.stops_after_mm, abs=1e-6)
+    assert closed.value.stops_after_mm < closed.value.wall_mm
+    # drag-free check of the stopping distance: v0^2 / (2 |a|)
+    assert stopping_distance(2.0, -3.0, 0.0) == pytest.approx(4.0 / 6.0, rel=1e-15)
+
+
+def test_check_of_a_sticking_wall_exits_3_naming_tube_angle_and_mu(tmp_path):
+    text = BASELINE.read_text()
+    i = text.index("[friction.calibrate]")
+    j = text.index("[rows]")
+    text = text[:i] + "[friction]\nmu = 1.5\n\n" + text[j:]
+    text = text.replace("\nangle = 45\n", "\nangle = 15\n", 1)
+    path = tmp_path / "sticks.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    message = " ".join(proc.stderr.split())
+    assert "sticks on the wall of tube I: at wall angle 15 deg with friction coefficient mu = 1.5" in message
+    assert "Traceback" not in proc.stderr
+
+
+# --- steep drag and long falls -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("terminal_speed", [0.5, 1.0, 2.0, 5.0])
+@pytest.mark.parametrize("tube, delta", [(TUBE_I, 45.0), (TUBE_II, 30.0)], ids=["I", "II"])
+def test_steep_drag_closed_form_matches_the_ode(tube, delta, terminal_speed):
+    physics = Physics(0.6, G, terminal_speed, 0.3)
+    closed = landing(delta, tube, physics)
+    ode = simulate(delta, tube, physics)
+    assert abs(closed.landing_time - ode.landing_time) < 1e-6
+    assert abs(closed.landing_time - ode.landing_time) < 1e-9             # what DOP853 at 1e-12 gives
+
+
+@pytest.mark.parametrize("height", [0.6, 10.0, 1e3, 1e5])
+def test_long_fall_at_terminal_speed_has_no_overflow(height):
+    """From rest, h = (v_L^2/g) ln cosh(g t / v_L): t = (v_L/g) [g h / v_L^2 + ln(1 + sqrt(1 - exp(-2 g h / v_L^2)))],
+    written without exp(+...); at v_L = 0.5 m/s the exponent 2 g h / v_L^2 reaches 7.8e6."""
+    vl = 0.5
+    kappa = G / vl ** 2
+    t, v = traverse(0.0, G, kappa, height)
+    x = G * height / vl ** 2
+    expected = vl / G * (x + math.log1p(math.sqrt(-math.expm1(-2 * x))))
+    assert t == pytest.approx(expected, rel=1e-13)
+    assert v == pytest.approx(vl * math.sqrt(-math.expm1(-2 * x)), rel=1e-15)
+
+
+# --- zero drag: v_L -> infinity -------------------------------------------------------------------------------
+
+def textbook(delta_deg: float, tube: Tube, mu: float, height: float = 0.6) -> float:
+    """Drag-free kinematics: s = v0 t + a t^2 / 2 for each phase."""
+    d = math.radians(delta_deg)
+    h1 = height - tube.below_wall - tube.l3 * math.tan(d)
+    t1 = math.sqrt(2 * h1 / G)
+    v2 = G * t1 * math.sin(d)
+    a = G * (math.sin(d) - mu * math.cos(d))
+    s1 = tube.l3 / math.cos(d)
+    t2 = (math.sqrt(v2 * v2 + 2 * a * s1) - v2) / a
+    u = (v2 + a * t2) * math.sin(d)
+    t3 = (math.sqrt(u * u + 2 * G * tube.below_wall) - u) / G
+    return t1 + t2 + t3
+
+
+@pytest.mark.parametrize("tube, delta, mu", [(TUBE_I, 45.0, 0.6), (TUBE_II, 41.0, 0.6), (TUBE_II, 25.0, 0.6)])
+def test_zero_drag_limit_is_the_textbook_kinematics(tube, delta, mu):
+    exact = textbook(delta, tube, mu)
+    assert landing(delta, tube, Physics(0.6, G, math.inf, mu)).landing_time == pytest.approx(exact, abs=1e-13)
+    assert simulate(delta, tube, Physics(0.6, G, math.inf, mu)).landing_time == pytest.approx(exact, abs=1e-10)
+    # approaching the limit continuously (drag effect ~ 1 / v_L^2)
+    gaps = [abs(landing(delta, tube, Physics(0.6, G, vl, mu)).landing_time - exact) for vl in (1e2, 1e3, 1e4)]
+    assert gaps[1] == pytest.approx(gaps[0] / 100, rel=0.02) and gaps[2] == pytest.approx(gaps[1] / 100, rel=0.02)
+
+
+def test_relaxation_length_series_meets_the_closed_form():
+    x_star = drag.X_SERIES / 2       # kappa s at the switch
+    below = float(drag.relaxation_length(x_star * (1 - 1e-9), 1.0))
+    above = float(drag.relaxation_length(x_star * (1 + 1e-9), 1.0))
+    assert above == pytest.approx(below, rel=1e-12)
+    assert float(drag.relaxation_length(0.0, 0.25)) == 0.5
+
+
+def test_solve_whose_angle_range_only_sticks_exits_3_naming_tube_angle_and_mu(tmp_path):
+    source = (ROOT / "problems" / "guide_tube" / "cai2020_delta2.toml").read_text()
+    i, j = source.index("[friction.calibrate]"), source.index("[rows]")
+    text = source[:i] + "[friction]\nmu = 1.5\n\n" + source[j:]
+    text = text.replace("angle = { init = 41, bounds = [25, 70] }", "angle = { init = 12, bounds = [10, 15] }")
+    path = tmp_path / "sticks.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path),
+                           "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    message = " ".join(proc.stderr.split())
+    assert "the seedling sticks on the wall of tube II: at wall angle" in message
+    assert "with friction coefficient mu = 1.5" in message
+    assert "Traceback" not in proc.stderr
