@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import subprocess
 import sys
 
 import pytest
@@ -69,8 +70,20 @@ def test_table1_values_are_in_the_library(example):
     assert "Table 1" in spec.source
 
 
-def test_planting_check_imports_no_other_mechanism():
-    from synthesis.planting.check import run_check
-
-    run_check(load_spec(PLANTING / "taiwan_example1.toml"))
-    assert not [m for m in sys.modules if m.startswith(("synthesis.cam", "synthesis.guide_tube", "cvxpy"))]
+def test_planting_check_imports_no_other_mechanism(tmp_path):
+    """The whole `agrisynth check` of a planting spec (rules, figures, report) in a fresh interpreter."""
+    script = (
+        "import sys\n"
+        "from synthesis.cli import cli\n"
+        "try:\n"
+        f"    cli.main(['check', {str(PLANTING / 'taiwan_example1.toml')!r}, '--out', {str(tmp_path)!r}],"
+        " standalone_mode=False)\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "print('\\n'.join(sorted(sys.modules)))\n")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    modules = proc.stdout.split()
+    assert "synthesis.planting.check" in modules
+    foreign = ("synthesis.clamp_cam", "synthesis.guide_tube", "synthesis.picker", "synthesis.fourbar_path",
+               "cvxpy", "ezdxf", "distributed")
+    assert not [m for m in modules if m.startswith(foreign)]
