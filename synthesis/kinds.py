@@ -10,11 +10,18 @@ from synthesis.result import Result
 
 #: kind -> (module with run_check, module and function writing its figures)
 _CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
+_CHECKERS["clamp_cam"] = "synthesis.clamp_cam.check:run_check"
 _SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
+_SOLVERS["clamp_cam"] = "synthesis.clamp_cam.solve"
 _FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
+_FIGURES["clamp_cam"] = {"motion.png": "synthesis.clamp_cam.plots:motion_figure",
+                         "profile.png": "synthesis.clamp_cam.plots:profile_figure",
+                         "profile.csv": "synthesis.clamp_cam.export:write_csv",
+                         "profile.dxf": "synthesis.clamp_cam.export:write_dxf"}
 #: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
 #: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
 _COMPARE_FIGURES: dict[str, str] = {}
+_COMPARE_FIGURES["clamp_cam"] = "synthesis.clamp_cam.plots:compare_figure"
 
 
 def _resolve(target: str) -> Callable:

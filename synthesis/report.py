@@ -9,6 +9,9 @@ from constraints.base import limit_text
 from synthesis.result import Result
 
 
+IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
+
+
 def _fmt(v) -> str:
     if v is None:
         return "&ndash;"
@@ -34,7 +37,11 @@ def render(result: Result, figures: list[str]) -> str:
     if result.solver:
         facts.update({f"solver {k}": v for k, v in result.solver.items()})
     fact_rows = "\n".join(f"<tr><td>{html.escape(k)}</td><td>{_fmt(v)}</td></tr>" for k, v in facts.items())
-    imgs = "\n".join(f"<figure><img src='{html.escape(f)}' alt='{html.escape(f)}'></figure>" for f in figures)
+    images = [f for f in figures if f.lower().endswith(IMAGE_SUFFIXES)]
+    files = [f for f in figures if f not in images]       # exports (CSV, DXF ...): linked, not shown
+    imgs = "\n".join(f"<figure><img src='{html.escape(f)}' alt='{html.escape(f)}'></figure>" for f in images)
+    if files:
+        imgs += "\n<p>Files: " + ", ".join(f"<a href='{html.escape(f)}'>{html.escape(f)}</a>" for f in files) + "</p>"
     n_bad = len(result.violated())
     verdict = "every rule satisfied" if n_bad == 0 else f"{n_bad} rule(s) violated"
     return f"""<!doctype html>

@@ -19,6 +19,7 @@ from synthesis.spec.common import read_toml, validate
 #: kind -> "module:ModelClass"
 KINDS: dict[str, str] = {
     "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
+    "clamp_cam": "synthesis.spec.clamp_cam:ClampCamSpec",
 }
 
 
