@@ -222,6 +222,22 @@ class ClampCamSpec(StrictModel):
                 raise ValueError(f"motion.stroke: expected < 90 deg of arm swing, got {self.motion.stroke:g}")
         return self
 
+    @model_validator(mode="after")
+    def _windows_apart(self) -> "ClampCamSpec":
+        turn = 360.0 if self.timing.clock == "deg" else 60.0 / self.operation.crank_speed
+        unit = "deg" if self.timing.clock == "deg" else "s"
+        windows = {k: getattr(self.timing, k) for k in ("hold_near", "hold_far")}
+        for kind, ws in windows.items():
+            for i, (lo, hi) in enumerate(ws):
+                if hi - lo > turn:
+                    raise ValueError(f"timing.{kind}[{i}]: [{lo:g}, {hi:g}] is longer than one turn ({turn:g} {unit})")
+        for i, (a0, a1) in enumerate(windows["hold_near"]):
+            for j, (b0, b1) in enumerate(windows["hold_far"]):
+                if any(max(a0, b0 + k * turn) < min(a1, b1 + k * turn) for k in (-2, -1, 0, 1, 2)):
+                    raise ValueError(f"timing: hold_near[{i}] [{a0:g}, {a1:g}] overlaps hold_far[{j}] [{b0:g}, {b1:g}] "
+                                     f"{unit}: the follower cannot rest and stay at full stroke at once")
+        return self
+
     def variables(self) -> dict[str, Variable]:
         """Every design variable (spec units) by its result.json name."""
         out: dict[str, Variable] = {"base_radius": self.cam.base_radius, "roller_radius": self.cam.roller_radius}
