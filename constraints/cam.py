@@ -40,7 +40,7 @@ def undercut_rule(kappa, roller_radius, min_working_radius: float, flank: str = 
     need = roller_radius + min_working_radius
     if _symbolic(kappa) or _symbolic(roller_radius):
         # (r + m) kappa <= 1  <=>  rho >= r + m where the flank bends round the roller; always true elsewhere
-        return Rule(name, sign * kappa * need - 1.0, None, 0.0, "1", 0.1, where)
+        return Rule(name, sign * kappa * need - 1.0, None, 0.0, "1", 1.0, where)
     k = sign * np.asarray(kappa, dtype=float)
     radius = 1.0 / k[k > 0] if np.any(k > 0) else np.array([np.inf])
     note = None

@@ -182,7 +182,7 @@ class ObjectiveSection(StrictModel):
 class SolverSection(StrictModel):
     starts: int = Field(4, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
     seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
-    samples_per_segment: int = Field(40, ge=5, le=2000, description="samples of the rise and of the return in the "
+    samples_per_segment: int = Field(100, ge=5, le=2000, description="samples of the rise and of the return in the "
                                                                     "NLP (the re-check uses 10x more)")
     max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
     backoff: float = Field(0.01, ge=0, le=1, description="the NLP tightens every sampled rule by backoff x its "
