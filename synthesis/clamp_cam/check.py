@@ -23,13 +23,13 @@ MOTION_STEP_DEG = 0.25          # follower motion samples in result.json
 
 
 def _segment_value(scene: CamScene, name: str, quantity: str):
-    """f(u) on one motion segment: |pressure angle| (deg), convex or concave pitch curvature (1/mm)."""
-    def f(u: float) -> float:
-        smp = scene.motion.segment(name, np.array([u]))
+    """f(u) on one motion segment, vectorised: |pressure angle| (deg), convex or concave pitch curvature (1/mm)."""
+    def f(u):
+        smp = scene.motion.segment(name, np.atleast_1d(np.asarray(u, dtype=float)))
         c = cf.roller_centre(scene.follower, smp.s, smp.ds, smp.dds)
         if quantity == "alpha":
-            return float(np.degrees(np.abs(cf.pressure_angle(c)))[0])
-        k = float(cf.pitch_curvature(c)[0])
+            return np.degrees(np.abs(cf.pressure_angle(c)))
+        k = cf.pitch_curvature(c)
         return k if quantity == "convex" else -k
     return f
 
@@ -37,13 +37,12 @@ def _segment_value(scene: CamScene, name: str, quantity: str):
 def _refined_max(f, n: int = 2001) -> tuple[float, float]:
     """(u, max f) on [0, 1]: the best of n samples, polished by a bounded scalar search around it."""
     u = np.linspace(0.0, 1.0, n)
-    values = np.array([f(x) for x in u])
+    values = f(u)
     i = int(np.argmax(values))
     lo, hi = u[max(i - 1, 0)], u[min(i + 1, n - 1)]
-    if hi > lo:
-        res = minimize_scalar(lambda x: -f(x), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
-        if -res.fun > values[i]:
-            return float(res.x), float(-res.fun)
+    res = minimize_scalar(lambda x: -float(f(x)[0]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
+    if -res.fun > values[i]:
+        return float(res.x), float(-res.fun)
     return float(u[i]), float(values[i])
 
 
