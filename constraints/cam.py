@@ -13,7 +13,8 @@ import numpy as np
 
 from constraints.base import Rule
 
-WHERE = {"rise": "over the rise", "return": "over the return"}
+#: the dwells count with the rise: an offset follower leans on its guide there too (tan a = -e / s0)
+WHERE = {"rise": "over the rise and the dwells", "return": "over the return"}
 
 
 def _symbolic(x) -> bool:

@@ -79,14 +79,16 @@ def cam_facts(scene: CamScene) -> dict:
     seg = {name: segment_facts(scene, name) for name in ("rise", "return")}
     rr = scene.roller_radius
     convex = [s["min_pitch_radius_convex_mm"] for s in seg.values() if s["min_pitch_radius_convex_mm"] is not None]
-    dwell_radii = []
-    for name in ("far_dwell", "near_dwell"):          # dwell arcs: circles about the cam centre when e = 0
+    dwell_radii, dwell_alpha = [], {}
+    for name in ("far_dwell", "near_dwell"):          # dwell arcs: circles about the cam centre
         smp = scene.motion.segment(name, np.array([0.5]))
         c = cf.roller_centre(scene.follower, smp.s, smp.ds, smp.dds)
         dwell_radii.append(1.0 / float(cf.pitch_curvature(c)[0]))
+        dwell_alpha[name] = float(np.degrees(cf.pressure_angle(c))[0])
     min_convex = min(convex + dwell_radii)
     facts = {
         "segments": seg,
+        "dwell_pressure_angle_deg": dwell_alpha,
         "min_pitch_radius_convex_mm": min_convex,
         "min_working_radius_mm": min_convex - rr,
         "roller_radius_mm": rr,

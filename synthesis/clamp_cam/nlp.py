@@ -133,6 +133,9 @@ class CamNLP:
             alpha[name] = cf.degrees(cf.pressure_angle(c))
             kappa.append(cf.pitch_curvature(c))
             acc.append(dds)
+        # the dwells (at rest and at full stroke) count with the rise: constant angle -atan(e / s0) there
+        rest = cf.roller_centre(follower, ca.DM([0.0, h]), ca.DM.zeros(2), ca.DM.zeros(2))
+        alpha["rise"] = ca.vertcat(alpha["rise"], cf.degrees(cf.pressure_angle(rest)))
         return alpha, ca.vertcat(*kappa), ca.vertcat(*acc)
 
     def _structural(self, v) -> tuple[list, list, list]:

@@ -155,7 +155,8 @@ def segment_grid(scene: CamScene, per_motion_segment: int, per_dwell: int = 8) -
 def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
     """Every rule of the spec, evaluated on the samples of ``g``."""
     spec, lim = scene.spec, scene.spec.rules
-    rules = [pressure_angle_rule("rise", g.alpha_deg[g.where("rise")], lim.pressure_angle_rise),
+    driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
+    rules = [pressure_angle_rule("rise", g.alpha_deg[driven], lim.pressure_angle_rise),
              pressure_angle_rule("return", g.alpha_deg[g.where("return")], lim.pressure_angle_return),
              undercut_rule(g.kappa, scene.roller_radius, lim.min_working_radius)]
     if lim.groove:

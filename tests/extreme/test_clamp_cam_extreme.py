@@ -16,7 +16,6 @@ from synthesis.clamp_cam.check import cam_facts, profile, run_check
 from synthesis.clamp_cam.scene import CamScene, evaluate
 from synthesis.clamp_cam.solve import run_solve
 from synthesis.spec import LoadedSpec, load_spec
-from synthesis.spec.common import FreeVariable
 
 CAMS = Path(__file__).resolve().parents[2] / "problems" / "clamp_cam"
 OPENING = (CAMS / "opening_cam.toml").read_text()
