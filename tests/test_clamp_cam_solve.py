@@ -195,3 +195,23 @@ def test_compare_figure_overlays_cams(tmp_path, solved):
     files = kinds.compare_figures("clamp_cam")([baseline, solved["opening_cam_redesign"][1]], tmp_path)
     assert files == ["cam_motion_compare.png", "cam_profile_compare.png"]
     assert all((tmp_path / f).stat().st_size > 20_000 for f in files)
+
+
+@pytest.mark.parametrize("path", sorted(CAMS.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_library_cam_checks_and_its_free_variables_solve(path):
+    from synthesis.clamp_cam.check import run_check
+
+    loaded = load_spec(path)
+    assert loaded.model.source.startswith(("seed 001", "redesign of seed 001"))
+    checked = run_check(loaded)
+    assert checked.status == "evaluated" and checked.rules
+    if loaded.model.free_names():
+        result, _, _ = run_solve(loaded, workers=1)
+        assert result.status == "optimal" and result.violated() == []
+
+
+def test_modified_sine_gives_the_smallest_opening_cam():
+    result, _, _ = run_solve(load_spec(CAMS / "opening_cam_redesign_modified_sine.toml"), workers=1)
+    d = result.design
+    assert (d["base_radius"], d["offset"]) == pytest.approx((57.873, -10.335), abs=2e-3)
+    assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 15.0
