@@ -124,6 +124,11 @@ def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optim
      "clamp_cam.follower: arm_length: only for type = \"oscillating\""),
     ((("law = \"cycloidal\"", "law = \"cycloid\""),), "clamp_cam.motion.law: expected 'cycloidal'"),
     ((("return = 14.0", "retrun = 14.0"),), "clamp_cam.motion.retrun: unknown field; did you mean 'return'?"),
+    ((("law = \"cycloidal\"", "law = \"optimised\""), ("rise = 40.0", "rise = { init = 40.0, bounds = [30, 50] }")),
+     "clamp_cam.motion: rise: the optimised law is fitted once for fixed segments"),
+    ((("type = \"translating\"", "type = \"oscillating\"\npivot_distance = 90"), ("offset = 0.0", "")),
+     "clamp_cam.follower: arm_length: missing required field for type = \"oscillating\""),
+    ((("rise_start = 146.0", "rise_start = 146.0\nstroke = 5"),), "not valid TOML: Cannot overwrite a value (at line 20, column 11)"),
 ])
 def test_bad_specs_name_the_field(tmp_path, edits, message):
     with pytest.raises(SpecError) as err:
