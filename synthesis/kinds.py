@@ -3,25 +3,43 @@
 from __future__ import annotations
 
 import importlib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 from synthesis.result import Result
 
-#: kind -> (module with run_check, module and function writing its figures)
-_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check",
-             "guide_tube": "synthesis.guide_tube.check:run_check"}
-_SOLVERS = {"planting_fourbar": "synthesis.planting.solve",
-            "guide_tube": "synthesis.guide_tube.solve"}
-_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"},
-            "guide_tube": {"drop_times.png": "synthesis.guide_tube.plots:drop_times_figure",
-                           "drop_profiles.png": "synthesis.guide_tube.plots:drop_profile_figure",
-                           "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"}}
-#: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
-#: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
-_COMPARE_FIGURES: dict[str, str] = {
-    "planting_fourbar": "synthesis.planting.compare_plots:overlay_figures",
-    "guide_tube": "synthesis.guide_tube.plots:compare_figures",
+@dataclass(frozen=True)
+class KindEntry:
+    """Where a kind's code lives, as "module:function" strings, so nothing is imported until it runs."""
+
+    checker: str                      # run_check(loaded) -> Result
+    solver: str                       # module with run_solve, baseline_rules, diagnose_infeasible
+    figures: dict[str, str]           # file name -> writer(result, path): figures and exports of one run
+    compare: str | None = None        # (results, folder) -> [file names]: candidates overlaid, baseline first
+
+
+_KINDS = {
+    "planting_fourbar": KindEntry(
+        checker="synthesis.planting.check:run_check",
+        solver="synthesis.planting.solve",
+        figures={"trajectory.png": "synthesis.planting.plots:trajectory_figure"},
+        compare="synthesis.planting.compare_plots:overlay_figures"),
+    "guide_tube": KindEntry(
+        checker="synthesis.guide_tube.check:run_check",
+        solver="synthesis.guide_tube.solve",
+        figures={"drop_times.png": "synthesis.guide_tube.plots:drop_times_figure",
+                 "drop_profiles.png": "synthesis.guide_tube.plots:drop_profile_figure",
+                 "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"},
+        compare="synthesis.guide_tube.plots:compare_figures"),
+    "clamp_cam": KindEntry(
+        checker="synthesis.clamp_cam.check:run_check",
+        solver="synthesis.clamp_cam.solve",
+        figures={"motion.png": "synthesis.clamp_cam.plots:motion_figure",
+                 "profile.png": "synthesis.clamp_cam.plots:profile_figure",
+                 "profile.csv": "synthesis.clamp_cam.export:write_csv",
+                 "profile.dxf": "synthesis.clamp_cam.export:write_dxf"},
+        compare="synthesis.clamp_cam.plots:compare_figure"),
 }
 
 
@@ -31,20 +49,20 @@ def _resolve(target: str) -> Callable:
 
 
 def checker(kind: str) -> Callable:
-    return _resolve(_CHECKERS[kind])
+    return _resolve(_KINDS[kind].checker)
 
 
 def solver(kind: str):
     """The kind's solve module (run_solve, baseline_rules, diagnose_infeasible)."""
-    return importlib.import_module(_SOLVERS[kind])
+    return importlib.import_module(_KINDS[kind].solver)
 
 
 def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:
     """filename -> writer(path) for the kind's figures."""
-    return {fn: (lambda path, f=_resolve(t): f(result, path)) for fn, t in _FIGURES.get(result.kind, {}).items()}
+    return {fn: (lambda path, f=_resolve(t): f(result, path)) for fn, t in _KINDS[result.kind].figures.items()}
 
 
 def compare_figures(kind: str) -> Callable | None:
     """The kind's overlay-figure writer for ``agrisynth compare``, or None if it has none."""
-    target = _COMPARE_FIGURES.get(kind)
+    target = _KINDS[kind].compare
     return None if target is None else _resolve(target)

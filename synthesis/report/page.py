@@ -12,6 +12,8 @@ import math
 from constraints.base import limit_text
 from synthesis.report.tables import Candidate, design_rows, rule_rows, run_facts, worst_margins
 
+IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
+
 CSS = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto; max-width: 1200px;
        padding: 0 1em; color: #1d1d1f; line-height: 1.4; }
@@ -119,8 +121,12 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
     """``figures`` = [(file name, caption)], ``notes`` = figures that could not be drawn, and why."""
     kind = cands[0].result.kind
     source = cands[0].result.extra.get("source") or ""
+    images = [(f, cap) for f, cap in figures if f.lower().endswith(IMAGE_SUFFIXES)]
+    exports = [f for f, _ in figures if not f.lower().endswith(IMAGE_SUFFIXES)]   # CSV, DXF ...: linked
     figs = "\n".join(f"<figure><img src='{html.escape(f)}' alt='{html.escape(cap)}'>"
-                     f"<figcaption>{html.escape(cap)}</figcaption></figure>" for f, cap in figures)
+                     f"<figcaption>{html.escape(cap)}</figcaption></figure>" for f, cap in images)
+    if exports:
+        figs += "\n<p>Files: " + ", ".join(f"<a href='{html.escape(f)}'>{html.escape(f)}</a>" for f in exports) + "</p>"
     missing = "\n".join(f"<p class='missing'>{html.escape(n)}</p>" for n in notes)
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">

@@ -20,6 +20,7 @@ from synthesis.spec.common import read_toml, validate
 KINDS: dict[str, str] = {
     "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
     "guide_tube": "synthesis.spec.guide_tube:GuideTubeSpec",
+    "clamp_cam": "synthesis.spec.clamp_cam:ClampCamSpec",
 }
 
 

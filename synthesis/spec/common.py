@@ -91,7 +91,8 @@ def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
             if isinstance(arg, type) and issubclass(arg, BaseModel):
                 current = arg
     fields = getattr(current, "model_fields", None)
-    return list(fields) if fields else []
+    # a field spelled differently in TOML (``return`` is a Python keyword) is offered by its alias
+    return [f.alias or n for n, f in fields.items()] if fields else []
 
 
 #: pydantic error type -> (context key of the limit, symbol)
@@ -113,7 +114,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
     path = ".".join(map(str, loc))
     if kind in _COMPARISONS:
         key, symbol = _COMPARISONS[kind]
-        return f"{path}: expected {symbol} {ctx[key]}, got {got}"
+        limit = ctx[key]
+        return f"{path}: expected {symbol} {limit:g}, got {got}" if isinstance(limit, (int, float)) else \
+            f"{path}: expected {symbol} {limit}, got {got}"
     if kind == "value_error":
         message = str(ctx.get("error", err["msg"]))
         # a whole-model validator (empty path) names the fields itself
@@ -130,7 +133,9 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
     except ValidationError as exc:
         seen: list[str] = []
         for err in exc.errors():
-            line = f"{prefix}.{_describe(err, model)}"
+            described = _describe(err, model)
+            # an error of the whole model (no field path) reads "kind: ...", not "kind.: ..."
+            line = f"{prefix}{'' if described.startswith(':') else '.'}{described}"
             if line not in seen:
                 seen.append(line)
         # a union of "number | table" yields one error per branch: keep the most specific ones

@@ -1,0 +1,74 @@
+"""Design rules of a disc cam with a roller follower: pressure angle, undercut, timing, acceleration.
+
+Each builder takes samples over a segment or the turn.  On floats it gives the record a user
+reads (degrees, millimetres); on CasADi symbols it gives smooth NLP rows (``nlp_rows``): the
+pressure angle as its signed value within [-limit, limit], the undercut as a bound on curvature
+(smooth through inflection points, where a radius of curvature is infinite).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from constraints.base import Rule
+
+#: the dwells count with the rise: an offset follower leans on its guide there too (tan a = -e / s0)
+WHERE = {"rise": "over the rise and the dwells", "return": "over the return"}
+
+
+def _symbolic(x) -> bool:
+    return isinstance(x, (ca.SX, ca.MX))
+
+
+def pressure_angle_rule(segment: str, alpha_deg, limit_deg: float) -> Rule:
+    """|pressure angle| <= limit at every sample of the segment (signed angle, deg)."""
+    name = f"pressure_angle_{segment}"
+    if _symbolic(alpha_deg):
+        return Rule(name, alpha_deg, -limit_deg, limit_deg, "deg", 5.0, WHERE[segment])
+    return Rule(name, np.abs(alpha_deg), None, limit_deg, "deg", 5.0, WHERE[segment])
+
+
+def undercut_rule(kappa, roller_radius, min_working_radius: float, flank: str = "inner") -> Rule:
+    """No cusp on the roller envelope: radius of curvature of the pitch curve >= roller + margin.
+
+    inner flank (the working profile of a spring-loaded disc cam): where the pitch curve is convex
+    (kappa > 0); outer flank (groove): where it is concave.  kappa = signed pitch curvature, 1/mm.
+    """
+    name = "no_undercut" if flank == "inner" else "no_undercut_outer"
+    sign = 1.0 if flank == "inner" else -1.0
+    where = ("convex pitch curve over the turn" if flank == "inner" else "concave pitch curve over the turn")
+    need = roller_radius + min_working_radius
+    if _symbolic(kappa) or _symbolic(roller_radius):
+        # (r + m) kappa <= 1  <=>  rho >= r + m where the flank bends round the roller; always true elsewhere
+        return Rule(name, sign * kappa * need - 1.0, None, 0.0, "1", 1.0, where)
+    k = sign * np.asarray(kappa, dtype=float)
+    radius = 1.0 / k[k > 0] if np.any(k > 0) else np.array([np.inf])
+    note = None
+    if np.any(radius < roller_radius):
+        note = (f"undercut: the pitch curve bends tighter ({radius.min():.4g} mm) than the roller "
+                f"({float(roller_radius):g} mm); the envelope has a cusp and the cam cannot reproduce the motion")
+    rule = Rule(name, radius, float(need), None, "mm", 1.0, where)
+    return rule if note is None else Rule(name, radius, float(need), None, "mm", 1.0, f"{where}; {note}")
+
+
+def timing_rule(kind: str, index: int, window_deg: tuple[float, float], dwell_start, dwell_end) -> Rule:
+    """The dwell covers the window: both margins (window start - dwell start, dwell end - window end) >= 0.
+
+    ``window_deg`` is already unwrapped to the turn the dwell is measured on.
+    """
+    a, b = window_deg
+    name = f"timing_{kind}[{index}]"
+    level = "rest (near dwell)" if kind == "hold_near" else "full stroke (far dwell)"
+    where = f"follower at {level} through {a % 360:g}-{b % 360 if b % 360 else 360:g} deg"
+    margins = (a - dwell_start, dwell_end - b)
+    if _symbolic(dwell_start) or _symbolic(dwell_end):
+        return Rule(name, ca.vertcat(*margins), 0.0, None, "deg", 1.0, where)
+    return Rule(name, np.array(margins, dtype=float), 0.0, None, "deg", 1.0, where)
+
+
+def acceleration_rule(acc_samples, limit: float, unit: str) -> Rule:
+    """|follower acceleration| <= limit at every sample of the rise and the return."""
+    if _symbolic(acc_samples):
+        return Rule("max_acceleration", acc_samples, -limit, limit, unit, limit / 10.0, "over the rise and return")
+    return Rule("max_acceleration", np.abs(acc_samples), None, limit, unit, limit / 10.0, "over the rise and return")

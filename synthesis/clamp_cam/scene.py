@@ -1,0 +1,174 @@
+"""A clamp_cam spec made concrete: follower, motion over a turn, timing windows, and its rules.
+
+``CamScene`` holds numbers (a design); ``evaluate`` samples it and builds every rule on floats.
+The NLP (synthesis.clamp_cam.nlp) builds the same rules on CasADi symbols from the same pieces.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from constraints.base import Rule
+from constraints.cam import acceleration_rule, pressure_angle_rule, timing_rule, undercut_rule
+from synthesis.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing
+from synthesis.kinematics import cam_follower as cf
+from synthesis.kinematics.motion_laws import law as closed_form_law
+from synthesis.spec.clamp_cam import ClampCamSpec
+
+TWO_PI = 2.0 * math.pi
+
+
+def omega_of(spec: ClampCamSpec) -> float:
+    """Cam speed, rad/s."""
+    return spec.operation.crank_speed * TWO_PI / 60.0
+
+
+def stroke_of(spec: ClampCamSpec) -> float:
+    """Stroke in model units: mm (translating) or rad (oscillating)."""
+    h = spec.motion.stroke
+    return h if spec.follower.type == "translating" else math.radians(h)
+
+
+def stroke_unit(spec: ClampCamSpec) -> str:
+    return "mm" if spec.follower.type == "translating" else "deg"
+
+
+def to_report_units(spec: ClampCamSpec, x):
+    """Model displacement units (mm or rad) -> report units (mm or deg)."""
+    return x if spec.follower.type == "translating" else np.degrees(x)
+
+
+def fit_law(spec: ClampCamSpec):
+    """The optimised B-spline law of the spec's segments (imports cvxpy), or None for a closed-form law."""
+    if spec.motion.law != "optimised":
+        return None
+    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+
+    seg = spec.design_values()
+    cap = spec.rules.max_acceleration
+    if cap is not None and spec.follower.type == "oscillating":
+        cap = math.radians(cap)
+    b = spec.bspline
+    return fit_optimised_law(stroke_of(spec), {"rise": seg["rise"], "return": seg["return"]}, omega_of(spec),
+                             b.minimise, b.spans, b.degree, b.samples_per_span, cap)
+
+
+def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
+    """The follower of design values ``v`` (floats or CasADi symbols), model units."""
+    if spec.follower.type == "translating":
+        return cf.Translating(v["base_radius"], v["offset"])
+    return cf.Oscillating(v["base_radius"], v["pivot_distance"], v["arm_length"], spec.follower.side)
+
+
+def window_degrees(spec: ClampCamSpec) -> dict[str, list[tuple[float, float]]]:
+    """Timing windows in crank degrees (a clock in seconds is converted at the crank speed)."""
+    factor = 1.0 if spec.timing.clock == "deg" else 360.0 * spec.operation.crank_speed / 60.0
+    return {kind: [(lo * factor, hi * factor) for lo, hi in getattr(spec.timing, kind)]
+            for kind in ("hold_near", "hold_far")}
+
+
+def unwrap_window(window: tuple[float, float], dwell: tuple[float, float]) -> tuple[float, float]:
+    """Shift the window by whole turns so that its middle is nearest the dwell's middle."""
+    mid_w, mid_d = 0.5 * (window[0] + window[1]), 0.5 * (dwell[0] + dwell[1])
+    k = round((mid_d - mid_w) / 360.0)
+    return window[0] + 360.0 * k, window[1] + 360.0 * k
+
+
+def timing_rules(spec: ClampCamSpec, timing: Timing, reference: Timing | None = None) -> list[Rule]:
+    """One rule per window: the near (far) dwell must cover each hold_near (hold_far) window.
+
+    ``reference`` (numbers) decides the unwrapping, so that symbolic timings unwrap like their start.
+    """
+    ref = reference or timing
+    rules = []
+    for kind, dwell in (("hold_near", "near_dwell"), ("hold_far", "far_dwell")):
+        lo, hi = timing.span(dwell)
+        ref_span = tuple(float(x) for x in ref.span(dwell))
+        for i, w in enumerate(window_degrees(spec)[kind]):
+            rules.append(timing_rule(kind, i, unwrap_window(w, ref_span), lo, hi))
+    return rules
+
+
+@dataclass(frozen=True)
+class CamScene:
+    """One design of a spec: numbers only."""
+
+    spec: ClampCamSpec
+    design: dict[str, float]
+    follower: cf.Follower
+    motion: CamMotion
+    optimised: Any = None           # OptimisedLaw when motion.law = "optimised"
+
+    @classmethod
+    def from_spec(cls, spec: ClampCamSpec, design: dict[str, float] | None = None, optimised=None) -> "CamScene":
+        values = dict(spec.design_values())
+        if design:
+            values.update({k: float(v) for k, v in design.items() if k in values})
+        if spec.motion.law == "optimised":
+            optimised = optimised or fit_law(spec)
+            rise_law, return_law = optimised.rise, optimised.return_
+        else:
+            rise_law = return_law = closed_form_law(spec.motion.law)
+        motion = CamMotion(stroke_of(spec), Timing.from_design(values), rise_law, return_law)
+        return cls(spec, values, follower_of(spec, values), motion, optimised)
+
+    @property
+    def roller_radius(self) -> float:
+        return self.design["roller_radius"]
+
+    @property
+    def omega(self) -> float:
+        return omega_of(self.spec)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Samples of the follower motion and the cam geometry at the same cam angles."""
+
+    samples: Samples
+    centre: cf.RollerCentre
+    alpha_deg: np.ndarray
+    kappa: np.ndarray
+
+    def where(self, segment: str) -> np.ndarray:
+        return self.samples.segment == SEGMENT_NAMES.index(segment)
+
+
+def geometry(scene: CamScene, samples: Samples) -> Geometry:
+    c = cf.roller_centre(scene.follower, samples.s, samples.ds, samples.dds)
+    return Geometry(samples, c, np.degrees(cf.pressure_angle(c)), cf.pitch_curvature(c))
+
+
+def segment_grid(scene: CamScene, per_motion_segment: int, per_dwell: int = 8) -> Samples:
+    """Samples over the turn: ``per_motion_segment`` on the rise and on the return, fewer on the dwells."""
+    parts = [scene.motion.segment(name, np.linspace(0.0, 1.0, per_motion_segment if name in ("rise", "return")
+                                                    else per_dwell))
+             for name in SEGMENT_NAMES]
+    return Samples(*(np.concatenate([getattr(p, k) for p in parts])
+                     for k in ("phi_deg", "s", "ds", "dds", "ddds", "segment")))
+
+
+def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
+    """Every rule of the spec, evaluated on the samples of ``g``."""
+    spec, lim = scene.spec, scene.spec.rules
+    driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
+    rules = [pressure_angle_rule("rise", g.alpha_deg[driven], lim.pressure_angle_rise),
+             pressure_angle_rule("return", g.alpha_deg[g.where("return")], lim.pressure_angle_return),
+             undercut_rule(g.kappa, scene.roller_radius, lim.min_working_radius)]
+    if lim.groove:
+        rules.append(undercut_rule(g.kappa, scene.roller_radius, lim.min_working_radius, flank="outer"))
+    rules += timing_rules(spec, scene.motion.timing)
+    if lim.max_acceleration is not None:
+        moving = g.where("rise") | g.where("return")
+        acc = to_report_units(spec, g.samples.dds[moving]) * scene.omega**2
+        rules.append(acceleration_rule(acc, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
+    return rules
+
+
+def evaluate(scene: CamScene, per_motion_segment: int) -> tuple[list[Rule], Geometry]:
+    g = geometry(scene, segment_grid(scene, per_motion_segment))
+    return cam_rules(scene, g), g

@@ -1,0 +1,258 @@
+"""Spec model of kind ``clamp_cam``: a disc cam with a roller follower (seed 001 §2.2, Table 1).
+
+A cam spec builds no linkage and no drop model: the timing comes in as numbers (crank angles on
+the picker's clock, or times at the crank speed), copied from a picker result or typed.
+
+Units: lengths mm, angles deg, crank speed r/min.  The stroke is in mm for a translating
+follower and in degrees (arm swing) for an oscillating one.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, ValidationInfo, field_validator, model_validator
+
+from synthesis.spec.common import FreeVariable, Interval, StrictModel, Variable, bounds_of, is_free, value_of
+
+KIND = "clamp_cam"
+SEGMENTS = ("rise", "far_dwell", "return", "near_dwell")
+#: closed-form motion law families, plus the B-spline law fitted by cvxpy
+LAWS = ("cycloidal", "poly345", "modified_trapezoid", "modified_sine", "optimised")
+
+
+def _lo(v: Variable) -> float:
+    return bounds_of(v)[0]
+
+
+def _hi(v: Variable) -> float:
+    return bounds_of(v)[1]
+
+
+def _fmt(v: Variable) -> str:
+    return f"{v.init:g} (free in [{v.bounds[0]:g}, {v.bounds[1]:g}])" if is_free(v) else f"{float(v):g}"
+
+
+class CamSection(StrictModel):
+    """The cam disc and the roller."""
+
+    base_radius: Variable = Field(description="pitch base circle: smallest distance of the roller centre "
+                                              "from the cam centre, mm (seed 001 Table 1: 50)")
+    roller_radius: Variable = Field(description="roller radius, mm (seed 001 Table 1: 3.5)")
+    rotation: Literal["counter-clockwise", "clockwise"] = Field(
+        "counter-clockwise", description="turning sense of the cam seen from the side the profile is drawn on; "
+                                         "clockwise mirrors the exported profile (seed 001 eq 12 is counter-clockwise)")
+
+    @field_validator("roller_radius")
+    @classmethod
+    def _roller_inside_base(cls, roller: Variable, info: ValidationInfo) -> Variable:
+        if _lo(roller) <= 0:
+            raise ValueError(f"expected > 0, got {_fmt(roller)}")
+        base = info.data.get("base_radius")
+        if base is not None and _hi(roller) >= _lo(base):
+            raise ValueError(f"expected < base_radius ({_fmt(base)} mm), got {_fmt(roller)} mm: the roller "
+                             "must be smaller than the base circle")
+        return roller
+
+
+class FollowerSection(StrictModel):
+    """Roller follower: translating (offset allowed) or oscillating (arm on a pivot)."""
+
+    type: Literal["translating", "oscillating"] = Field("translating")
+    offset: Variable | None = Field(None, description="translating: offset of the follower line, mm; > 0 on the "
+                                                      "side that lowers the rise pressure angle (Table 1: 0)")
+    pivot_distance: Variable | None = Field(None, description="oscillating: cam centre to arm pivot, mm")
+    arm_length: Variable | None = Field(None, description="oscillating: arm pivot to roller centre, mm")
+    side: Literal[1, -1] = Field(1, description="oscillating: +1 roller on the +Y side of the line cam centre -> "
+                                                "pivot (follower along +X as in seed 001 eq 12), -1 the other")
+
+    @model_validator(mode="after")
+    def _fields_of_type(self) -> "FollowerSection":
+        if self.type == "translating":
+            for name in ("pivot_distance", "arm_length"):
+                if getattr(self, name) is not None:
+                    raise ValueError(f"{name}: only for type = \"oscillating\" (this follower translates)")
+        else:
+            if self.offset is not None:
+                raise ValueError("offset: only for type = \"translating\" (an oscillating follower has "
+                                 "pivot_distance and arm_length)")
+            for name in ("pivot_distance", "arm_length"):
+                v = getattr(self, name)
+                if v is None:
+                    raise ValueError(f"{name}: missing required field for type = \"oscillating\"")
+                if _lo(v) <= 0:
+                    raise ValueError(f"{name}: expected > 0, got {_lo(v):g}")
+        return self
+
+
+class MotionSection(StrictModel):
+    """Motion law and timing of one turn: rise, far dwell, return, near dwell (seed 001 Table 1)."""
+
+    law: Literal[LAWS] = Field("cycloidal", description="motion law of the rise and the return: " + ", ".join(LAWS))
+    stroke: float = Field(gt=0, description="follower stroke: mm (translating) or deg of arm swing (oscillating)")
+    rise_start: Variable = Field(0.0, description="crank angle at which the rise begins, deg on the picker's "
+                                                  "clock (0 = the pick)")
+    rise: Variable = Field(description="rise angle, deg")
+    far_dwell: Variable = Field(description="far dwell angle, deg (follower held at the full stroke)")
+    return_: Variable = Field(alias="return", description="return angle, deg")
+    near_dwell: Variable = Field(description="near dwell angle, deg (follower held at rest)")
+
+    def segments(self) -> dict[str, Variable]:
+        return {"rise": self.rise, "far_dwell": self.far_dwell, "return": self.return_,
+                "near_dwell": self.near_dwell}
+
+    @model_validator(mode="after")
+    def _segments(self) -> "MotionSection":
+        seg = self.segments()
+        for name in ("rise", "return"):
+            if _lo(seg[name]) <= 0:
+                raise ValueError(f"{name}: expected > 0, got {_lo(seg[name]):g}")
+        for name in ("far_dwell", "near_dwell"):
+            if _lo(seg[name]) < 0:
+                raise ValueError(f"{name}: expected >= 0, got {_lo(seg[name]):g}")
+        total = sum(value_of(v) for v in seg.values())
+        if abs(total - 360.0) > 1e-6:
+            terms = " + ".join(f"{value_of(v):g}" for v in seg.values())
+            raise ValueError(f"rise + far_dwell + return + near_dwell = {terms} = {total:g} deg, expected 360 "
+                             "(one turn of the cam)")
+        if sum(_lo(v) for v in seg.values()) > 360.0 or sum(_hi(v) for v in seg.values()) < 360.0:
+            raise ValueError("the segment bounds cannot sum to 360 deg: widen them")
+        if self.law == "optimised" and any(is_free(v) for v in seg.values()):
+            free = [n for n, v in seg.items() if is_free(v)]
+            raise ValueError(f"{free[0]}: the optimised law is fitted once for fixed segments, before the geometry "
+                             "NLP; give a number (or pick a closed-form law to optimise the timing)")
+        return self
+
+
+class BSplineSection(StrictModel):
+    """The optimised law (motion.law = "optimised"): B-spline displacement fitted by one convex problem."""
+
+    minimise: Literal["acceleration", "jerk"] = Field("acceleration", description="peak follower acceleration "
+                                                                                  "or peak jerk")
+    spans: int = Field(32, ge=4, le=400, description="uniform knot spans in each of the rise and the return")
+    degree: int = Field(5, ge=3, le=7, description="spline degree (>= 3: continuity to the acceleration, C2)")
+    samples_per_span: int = Field(8, ge=2, le=50, description="points per span where the peak is bounded")
+
+
+class TimingSection(StrictModel):
+    """Windows the follower must dwell through, on the picker's clock (0 = the pick)."""
+
+    clock: Literal["deg", "s"] = Field("deg", description="windows in crank degrees or in seconds at the crank speed")
+    hold_near: list[Interval] = Field(default_factory=list,
+                                      description="windows where the follower must rest at the near dwell "
+                                                  "(opening cam: clamp closed)")
+    hold_far: list[Interval] = Field(default_factory=list,
+                                     description="windows where the follower must stay at full stroke "
+                                                 "(opening cam: clamp open)")
+
+    @model_validator(mode="after")
+    def _windows(self) -> "TimingSection":
+        for name in ("hold_near", "hold_far"):
+            for i, (lo, hi) in enumerate(getattr(self, name)):
+                if lo > hi:
+                    raise ValueError(f"{name}[{i}]: [{lo:g}, {hi:g}] has lo > hi")
+        return self
+
+
+class OperationSection(StrictModel):
+    crank_speed: float = Field(gt=0, le=2000, description="cam speed, r/min: the cams turn once per picker crank "
+                                                          "turn (seed 001: 60)")
+
+
+class RulesSection(StrictModel):
+    """Limits of the design rules."""
+
+    pressure_angle_rise: float = Field(30.0, gt=0, lt=90, description="max |pressure angle| on the rise, deg")
+    pressure_angle_return: float = Field(45.0, gt=0, lt=90, description="max |pressure angle| on the return, deg")
+    min_working_radius: float = Field(0.0, ge=0, description="smallest radius of curvature of the convex working "
+                                                             "profile, mm (0: only forbid the undercut cusp)")
+    groove: bool = Field(False, description="the roller runs in a groove: also forbid the undercut of the outer "
+                                            "flank (concave pitch radius < roller radius)")
+    max_acceleration: float | None = Field(None, gt=0, description="max |follower acceleration| at the crank speed: "
+                                                                   "mm/s^2 (translating) or deg/s^2 (oscillating)")
+
+
+class ObjectiveSection(StrictModel):
+    name: Literal["base_radius", "pressure_angle", "nearest"] = Field(
+        "base_radius", description="base_radius: smallest pitch base circle (compact cam); pressure_angle: "
+                                   "smallest peak |pressure angle| on rise and return; nearest: smallest change "
+                                   "of the free variables from the given design")
+
+
+class SolverSection(StrictModel):
+    starts: int = Field(4, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    samples_per_segment: int = Field(100, ge=5, le=2000, description="samples of the rise and of the return in the "
+                                                                    "NLP (the re-check uses 10x more)")
+    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+    backoff: float = Field(0.01, ge=0, le=1, description="the NLP tightens every sampled rule by backoff x its "
+                                                         "scale, so it holds between the samples too")
+
+
+class ClampCamSpec(StrictModel):
+    kind: Literal["clamp_cam"]
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
+    source: str = Field("", description="where the numbers come from (paper, table)")
+    cam: CamSection
+    follower: FollowerSection = Field(default_factory=FollowerSection)
+    motion: MotionSection
+    bspline: BSplineSection = Field(default_factory=BSplineSection)
+    timing: TimingSection = Field(default_factory=TimingSection)
+    operation: OperationSection
+    rules: RulesSection = Field(default_factory=RulesSection)
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
+    solver: SolverSection = Field(default_factory=SolverSection)
+
+    @model_validator(mode="after")
+    def _geometry(self) -> "ClampCamSpec":
+        r0 = value_of(self.cam.base_radius)
+        f = self.follower
+        if f.type == "translating":
+            e = 0.0 if f.offset is None else value_of(f.offset)
+            if abs(e) >= 0.9 * r0:
+                raise ValueError(f"follower.offset: expected |offset| < 0.9 x base_radius ({0.9 * r0:g} mm), "
+                                 f"got {e:g}")
+        else:
+            a, l = value_of(f.pivot_distance), value_of(f.arm_length)
+            if not abs(a - l) < r0 < a + l:
+                raise ValueError(f"follower: the arm cannot reach the base circle: need |pivot_distance - "
+                                 f"arm_length| < base_radius < pivot_distance + arm_length, got |{a:g} - {l:g}| "
+                                 f"and {r0:g} mm")
+            if self.motion.stroke >= 90.0:
+                raise ValueError(f"motion.stroke: expected < 90 deg of arm swing, got {self.motion.stroke:g}")
+        return self
+
+    @model_validator(mode="after")
+    def _windows_apart(self) -> "ClampCamSpec":
+        turn = 360.0 if self.timing.clock == "deg" else 60.0 / self.operation.crank_speed
+        unit = "deg" if self.timing.clock == "deg" else "s"
+        windows = {k: getattr(self.timing, k) for k in ("hold_near", "hold_far")}
+        for kind, ws in windows.items():
+            for i, (lo, hi) in enumerate(ws):
+                if hi - lo > turn:
+                    raise ValueError(f"timing.{kind}[{i}]: [{lo:g}, {hi:g}] is longer than one turn ({turn:g} {unit})")
+        for i, (a0, a1) in enumerate(windows["hold_near"]):
+            for j, (b0, b1) in enumerate(windows["hold_far"]):
+                if any(max(a0, b0 + k * turn) < min(a1, b1 + k * turn) for k in (-2, -1, 0, 1, 2)):
+                    raise ValueError(f"timing: hold_near[{i}] [{a0:g}, {a1:g}] overlaps hold_far[{j}] [{b0:g}, {b1:g}] "
+                                     f"{unit}: the follower cannot rest and stay at full stroke at once")
+        return self
+
+    def variables(self) -> dict[str, Variable]:
+        """Every design variable (spec units) by its result.json name."""
+        out: dict[str, Variable] = {"base_radius": self.cam.base_radius, "roller_radius": self.cam.roller_radius}
+        f = self.follower
+        if f.type == "translating":
+            out["offset"] = 0.0 if f.offset is None else f.offset
+        else:
+            out["pivot_distance"] = f.pivot_distance
+            out["arm_length"] = f.arm_length
+        out["rise_start"] = self.motion.rise_start
+        out.update(self.motion.segments())
+        return out
+
+    def design_values(self) -> dict[str, float]:
+        return {n: value_of(v) for n, v in self.variables().items()}
+
+    def free_names(self) -> list[str]:
+        return [n for n, v in self.variables().items() if isinstance(v, FreeVariable)]

@@ -1,0 +1,217 @@
+"""`agrisynth solve` for clamp_cam: the redesign specs hold every rule when re-checked without the
+solver, their optima agree with independent scalar root finding, AD Jacobian, determinism,
+infeasible rule sets, the peak-pressure-angle objective, the optimised law in the NLP."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+from conftest import LIBRARY
+from synthesis.clamp_cam.nlp import CamNLP
+from synthesis.clamp_cam.scene import CamScene, evaluate
+from synthesis.clamp_cam.solve import diagnose_infeasible, run_solve
+from synthesis.spec import LoadedSpec, load_spec
+
+CAMS = LIBRARY / "clamp_cam"
+TIGHTEN = 0.01 * 5.0          # backoff x scale of the pressure-angle rules: the NLP's limits are 0.05 deg tighter
+
+
+def _cycloid(u):
+    return u - np.sin(2 * np.pi * u) / (2 * np.pi), 1 - np.cos(2 * np.pi * u)
+
+
+def peak_alpha(r0: float, e: float, h: float, beta_deg: float, rise: bool) -> float:
+    """max |pressure angle| (deg) of a cycloidal segment, translating follower: tan a = (s' - e)/(s0 + s)."""
+    beta, s0 = math.radians(beta_deg), math.sqrt(r0**2 - e**2)
+
+    def alpha(u):
+        s, v = _cycloid(u)
+        s, ds = (h * s, h * v / beta) if rise else (h * (1 - s), -h * v / beta)
+        return abs(math.degrees(math.atan((ds - e) / (s0 + s))))
+    return max(-minimize_scalar(lambda u: -alpha(u), bounds=b, method="bounded", options={"xatol": 1e-12}).fun
+               for b in ((0.0, 0.5), (0.5, 1.0)))
+
+
+def smallest_base_radius(e: float, h: float, rise: float, ret: float, limits=(30.0, 45.0),
+                         tighten: float = TIGHTEN) -> float:
+    """Smallest r0 at which both segments meet their limits (less ``tighten``), by root finding in r0."""
+    def excess(r0):
+        return max(peak_alpha(r0, e, h, rise, True) - (limits[0] - tighten),
+                   peak_alpha(r0, e, h, ret, False) - (limits[1] - tighten))
+    return brentq(excess, abs(e) + 1.0, 400.0, xtol=1e-12)
+
+
+def independent_recheck(loaded: LoadedSpec, design: dict) -> list:
+    scene = CamScene.from_spec(loaded.model, {k: v for k, v in design.items()})
+    rules, _ = evaluate(scene, 4000)                        # 100x the NLP's samples
+    return [r.record() for r in rules]
+
+
+@pytest.fixture(scope="module")
+def solved():
+    out = {}
+    for name in ("opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"):
+        loaded = load_spec(CAMS / f"{name}.toml")
+        out[name] = (loaded, *run_solve(loaded, workers=1)[:2])
+    return out
+
+
+@pytest.mark.parametrize("name", ["opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"])
+def test_redesigns_hold_every_rule_rechecked_independently(solved, name):
+    loaded, result, _ = solved[name]
+    assert result.status == "optimal"
+    assert [r.name for r in independent_recheck(loaded, result.design) if not r.satisfied] == []
+    base = independent_recheck(loaded, loaded.model.design_values())
+    assert "pressure_angle_return" in [r.name for r in base if not r.satisfied] or \
+        "pressure_angle_rise" in [r.name for r in base if not r.satisfied]
+
+
+@pytest.mark.parametrize("name, stroke, rise, ret", [("opening_cam_redesign", 10.0, 40.0, 14.0),
+                                                     ("rotating_cam_redesign", 25.0, 60.0, 60.0)])
+def test_smallest_cam_agrees_with_root_finding(solved, name, stroke, rise, ret):
+    """The NLP samples each segment 100 times and tightens the limits by 0.05 deg; the true peaks lie
+    between the samples, so the smallest radius lies between the root-found radii for the exact
+    limits and for the tightened ones."""
+    _, result, _ = solved[name]
+    r0, e = result.design["base_radius"], result.design["offset"]
+    exact = smallest_base_radius(e, stroke, rise, ret, tighten=0.0)
+    assert exact - 1e-6 <= r0 <= smallest_base_radius(e, stroke, rise, ret) + 1e-6
+    # moving the offset either way needs a bigger cam: the offset is optimal too
+    for de in (-0.5, 0.5):
+        assert smallest_base_radius(e + de, stroke, rise, ret, tighten=0.0) > r0
+    # without the offset the cam would be bigger still
+    assert smallest_base_radius(0.0, stroke, rise, ret, tighten=0.0) > r0 + 1.0
+
+
+def test_pinned_redesign_values(solved):
+    """What the optimiser proposes (closing note of issue 7)."""
+    d = solved["opening_cam_redesign"][1].design
+    assert (d["base_radius"], d["offset"]) == pytest.approx((66.378, -11.763), abs=2e-3)
+    d = solved["rotating_cam_redesign"][1].design
+    assert (d["base_radius"], d["offset"]) == pytest.approx((50.837, 12.593), abs=2e-3)
+    d = solved["opening_cam_redesign_return"][1].design
+    assert (d["return"], d["far_dwell"]) == pytest.approx((20.939, 153.061), abs=2e-3)
+    # for comparison: a radial follower (no offset) needs r0 = 76.975 mm at exactly 45 deg
+    assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) == pytest.approx(76.975, abs=0.001)
+
+
+def test_longer_return_agrees_with_root_finding(solved):
+    _, result, _ = solved["opening_cam_redesign_return"]
+
+    def needed(limit):
+        return brentq(lambda b: peak_alpha(50.0, 0.0, 10.0, b, False) - limit, 14.0, 60.0, xtol=1e-12)
+    assert needed(45.0) - 1e-6 <= result.design["return"] <= needed(45.0 - TIGHTEN) + 1e-6
+    assert result.design["return"] + result.design["far_dwell"] == pytest.approx(174.0, abs=1e-8)
+
+
+def test_constraint_jacobian_matches_central_differences():
+    spec = load_spec(CAMS / "opening_cam_redesign_return.toml").model
+    nlp = CamNLP(spec)
+    x = nlp.init + np.array([3.0, 0.0, 1.0, 0.0, 0.0, -5.0, 5.0, 0.0])
+    J = np.asarray(ca.Function("J", [nlp.decision], [ca.jacobian(nlp.g, nlp.decision)])(x))
+    g = lambda z: np.asarray(nlp.g_function(z)).ravel()  # noqa: E731
+    fd = np.zeros_like(J)
+    for j in range(x.size):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        step = np.zeros_like(x)
+        step[j] = h
+        fd[:, j] = (g(x + step) - g(x - step)) / (2 * h)
+    assert np.max(np.abs(J - fd) / np.maximum(np.abs(J), 1.0)) < 1e-6
+
+
+def test_same_seed_gives_the_same_design_on_one_or_two_workers():
+    loaded = load_spec(CAMS / "rotating_cam_redesign.toml")
+    a, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
+    b, _, _ = run_solve(loaded, starts=3, seed=5, workers=2)
+    assert a.solver["best_start"] == b.solver["best_start"]
+    for k, v in a.design.items():
+        assert b.design[k] == pytest.approx(v, abs=1e-9)
+
+
+def _with(loaded: LoadedSpec, **sections) -> LoadedSpec:
+    spec = loaded.model
+    updates = {k: getattr(spec, k).model_copy(update=v) for k, v in sections.items()}
+    return LoadedSpec(spec.model_copy(update=updates), loaded.path, loaded.sha256)
+
+
+def test_infeasible_rule_set_names_the_conflicting_rule():
+    from synthesis.spec.common import FreeVariable
+
+    loaded = load_spec(CAMS / "opening_cam_redesign.toml")
+    small = _with(loaded, cam={"base_radius": FreeVariable(init=50.0, bounds=(20.0, 55.0))},
+                  follower={"offset": 0.0})
+    result, reports, _ = run_solve(small, starts=2, workers=1)
+    assert result.status == "infeasible"
+    err = diagnose_infeasible(small, result, reports)
+    assert err.exit_code == 3
+    assert "Rules that conflict" in str(err) and "pressure_angle_return" in str(err)
+
+
+def test_peak_pressure_angle_objective_balances_rise_and_return():
+    """A cam of fixed size with a free offset: the least peak angle is reached where rise and return tie."""
+    from synthesis.spec.common import FreeVariable
+
+    loaded = load_spec(CAMS / "opening_cam_redesign.toml")
+    minimax = _with(loaded, cam={"base_radius": 70.0}, follower={"offset": FreeVariable(init=0.0, bounds=(-40, 40))},
+                    objective={"name": "pressure_angle"},
+                    rules={"pressure_angle_rise": 89.0, "pressure_angle_return": 89.0})
+    result, _, _ = run_solve(minimax, starts=1, workers=1)
+    assert result.status == "optimal"
+    e = result.design["offset"]
+    rise, ret = peak_alpha(70.0, e, 10.0, 40.0, True), peak_alpha(70.0, e, 10.0, 14.0, False)
+    assert rise == pytest.approx(ret, abs=0.02)                  # equal up to the NLP's sampling
+    assert result.objective["value"] == pytest.approx(max(rise, ret), abs=1e-3)
+    # no other offset does better (scalar search over e, no CasADi)
+    best = minimize_scalar(lambda x: max(peak_alpha(70.0, x, 10.0, 40.0, True),
+                                         peak_alpha(70.0, x, 10.0, 14.0, False)),
+                           bounds=(-40.0, 0.0), method="bounded", options={"xatol": 1e-9})
+    assert result.objective["value"] == pytest.approx(best.fun, abs=0.02)
+    assert e == pytest.approx(best.x, abs=0.05)
+
+
+def test_optimised_law_in_the_geometry_nlp():
+    """The B-spline law (fitted once with cvxpy) with a free base circle: smaller cam than eq (11) needs."""
+    from synthesis.spec.common import FreeVariable
+
+    loaded = load_spec(CAMS / "opening_cam_optimised_law.toml")
+    free = _with(loaded, cam={"base_radius": FreeVariable(init=50.0, bounds=(20.0, 150.0))})
+    result, _, _ = run_solve(free, starts=1, workers=1)
+    assert result.status == "optimal"
+    assert result.design["base_radius"] < smallest_base_radius(0.0, 10.0, 40.0, 14.0)
+    assert [r["name"] for r in result.rules if not r["satisfied"]] == []
+    assert result.extra["cam"]["optimised_law"]["ratio_to_cycloidal"]["return"] == pytest.approx(0.659, abs=1e-3)
+
+
+def test_compare_figure_overlays_cams(tmp_path, solved):
+    from synthesis import kinds
+    from synthesis.clamp_cam.check import run_check
+
+    baseline = run_check(load_spec(CAMS / "opening_cam.toml"))
+    files = kinds.compare_figures("clamp_cam")([baseline, solved["opening_cam_redesign"][1]], tmp_path)
+    assert files == ["cam_motion_compare.png", "cam_profile_compare.png"]
+    assert all((tmp_path / f).stat().st_size > 20_000 for f in files)
+
+
+@pytest.mark.parametrize("path", sorted(CAMS.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_library_cam_checks_and_its_free_variables_solve(path):
+    from synthesis.clamp_cam.check import run_check
+
+    loaded = load_spec(path)
+    assert loaded.model.source.startswith(("seed 001", "redesign of seed 001"))
+    checked = run_check(loaded)
+    assert checked.status == "evaluated" and checked.rules
+    if loaded.model.free_names():
+        result, _, _ = run_solve(loaded, workers=1)
+        assert result.status == "optimal" and result.violated() == []
+
+
+def test_modified_sine_gives_the_smallest_opening_cam():
+    result, _, _ = run_solve(load_spec(CAMS / "opening_cam_redesign_modified_sine.toml"), workers=1)
+    d = result.design
+    assert (d["base_radius"], d["offset"]) == pytest.approx((57.873, -10.335), abs=2e-3)
+    assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 15.0
