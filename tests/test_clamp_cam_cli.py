@@ -119,7 +119,7 @@ def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optim
      "clamp_cam.cam.roller_radius: expected < base_radius (50 mm), got 60 mm"),
     ((("return = 14.0", "return = 0.0"),), "clamp_cam.motion: return: expected > 0, got 0"),
     ((("hold_far = [[186.0, 346.0]]", "hold_far = [[140.0, 346.0]]"),),
-     "clamp_cam: timing: hold_near[0] [0, 146] overlaps hold_far[0] [140, 346] deg"),
+     "clamp_cam.timing: hold_near[0] [0, 146] overlaps hold_far[0] [140, 346] deg"),
     ((("offset = 0.0", "offset = 0.0\narm_length = 60"),),
      "clamp_cam.follower: arm_length: only for type = \"oscillating\""),
     ((("law = \"cycloidal\"", "law = \"cycloid\""),), "clamp_cam.motion.law: expected 'cycloidal'"),

@@ -286,7 +286,7 @@ print("LOADED", sorted(other))
 
 
 @pytest.mark.parametrize("old, new, message", [
-    ("\nl3 = 35\n", "\nl3 = -35\n", "guide_tube.tubes.1.l3: expected > 0.0, got -35"),
+    ("\nl3 = 35\n", "\nl3 = -35\n", "guide_tube.tubes.1.l3: expected > 0, got -35"),
     ("\nangle = 41\n", "\nangle = 95\n", "guide_tube.tubes.1: angle: expected 0 < angle < 90 deg, got value 95"),
     ("\nangle = 45\n", "\nangle = 80\n", "guide_tube.tubes.0.angle: value 80 deg puts the wall top"),
     ("forward_speed = 0.5 ", "", "guide_tube.rows.forward_speed: missing required field"),
@@ -294,7 +294,7 @@ print("LOADED", sorted(other))
     ('tube = "I"', 'tube = "V"', "guide_tube.friction.calibrate.tube: no tube named 'V'"),
     ("landing_time = 0.445", "landing_time = 0.2",
      "friction.calibrate.landing_time: no mu in [0, 1.5] makes tube I (wall angle 45 deg) land after 0.2 s"),
-    ("terminal_speed = 17.5", "terminal_speed = -1", "guide_tube.drop.terminal_speed: expected > 0.0, got -1"),
+    ("terminal_speed = 17.5", "terminal_speed = -1", "guide_tube.drop.terminal_speed: expected > 0, got -1"),
     ("spacings = [230, 300]", "spacings = [230, 320]", "guide_tube.rows: spacings: expected 0 < lo <= hi <= "
                                                        "tray_pitch = 300, got [230, 320]"),
 ])

@@ -133,9 +133,7 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
     except ValidationError as exc:
         seen: list[str] = []
         for err in exc.errors():
-            described = _describe(err, model)
-            # an error of the whole model (no field path) reads "kind: ...", not "kind.: ..."
-            line = f"{prefix}{'' if described.startswith(':') else '.'}{described}"
+            line = f"{prefix}.{_describe(err, model)}"
             if line not in seen:
                 seen.append(line)
         # a union of "number | table" yields one error per branch: keep the most specific ones
