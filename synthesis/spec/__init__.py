@@ -19,6 +19,9 @@ from synthesis.spec.common import read_toml, validate
 #: kind -> "module:ModelClass"
 KINDS: dict[str, str] = {
     "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
+    "crank_rocker": "synthesis.spec.crank_rocker:CrankRockerSpec",
+    "picker_double_crank": "synthesis.spec.picker:PickerDoubleCrankSpec",
+    "picker": "synthesis.spec.picker:PickerSpec",
 }
 
 
