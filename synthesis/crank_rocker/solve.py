@@ -38,7 +38,9 @@ def closed_form(spec) -> dict | None:
     req = spec.requirements
     designs = solve_paper_equations(req.time_ratio, req.rocker_swing, req.min_transmission_angle,
                                     spec.design_values()["l10"], spec.branch)
+    # a root of the equations is a design only if the simulated mechanism does what they assume
     valid = [d for d in designs if d.min_transmission_deg is not None
+             and abs(d.time_ratio - req.time_ratio) < 1e-6 and abs(d.swing_deg - req.rocker_swing) < 1e-6
              and d.min_transmission_deg >= req.min_transmission_angle - 1e-6]
     return {"equations": "seed 001 eq (8)-(10), gamma_min = requirement, l10 given",
             "roots": [d.to_json() for d in designs],

@@ -65,8 +65,14 @@ def arc_error(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
     angles = target_angles(spec)
     m = clamp_states(dc, angles)["M"]
     d = np.hypot(m[0] - targets[:, 0], m[1] - targets[:, 1])
+    t = spec.target
+    centre, radius, _, _ = arc_through(t.m1, t.m2, t.tangent_from_vertical)
+    path = clamp_states(dc, swing_angles(spec, 501))["M"]
+    off_arc = np.abs(np.hypot(path[0] - centre[0], path[1] - centre[1]) - radius)
     return {"eq4_sum_mm": float(d.sum()), "rms_mm": float(np.sqrt(np.mean(d * d))), "max_mm": float(d.max()),
             "sum_of_squares_mm2": float(np.sum(d * d)),
+            # the shape alone: how far the path over the swing strays from the arc's circle, ignoring timing
+            "path_off_circle_max_mm": float(off_arc.max()),
             "points": [{"crank_deg": float(a), "x": float(mx), "y": float(my), "target_x": float(tx),
                         "target_y": float(ty), "distance": float(di)}
                        for a, mx, my, (tx, ty), di in zip(angles, m[0], m[1], targets, d)]}

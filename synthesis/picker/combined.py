@@ -33,7 +33,7 @@ from synthesis.spec import LoadedSpec, load_spec
 
 TWO_PI = 2.0 * math.pi
 TRAJECTORY_SAMPLES = 361
-ANIMATION_FRAMES = 72
+ANIMATION_FRAMES = 40
 
 
 @dataclass(frozen=True)
@@ -99,15 +99,15 @@ def states(drive: Drive, t) -> dict[str, np.ndarray]:
             "phi7": phi7.ravel()}
 
 
-def machine_joints(drive: Drive, t: float) -> dict[str, list[float]]:
-    """Every joint in the machine frame: A, B, C, D, M of the double crank and G, F, E of the drive.
+def machine_joints(drive: Drive, phi1: float, phi7: float) -> dict[str, list[float]]:
+    """Every joint in the machine frame at crank angles phi1 (AB) and phi7 (GF), rad: A, B, C, D, M of
+    the double crank and G, F, E of the drive.
 
     The crank-rocker's own frame (G origin, A on +x) is mirrored when ``mount`` = -1 and turned so that
     A -> G points along theta2, then A is put on the double crank's pivot.
     """
-    s = states(drive, [t])
-    joints = joint_positions(drive.dc, math.degrees(float(s["phi1"][0])))
-    cr = crank_rocker_check.joints(drive.cr, float(s["phi7"][0]))
+    joints = joint_positions(drive.dc, math.degrees(phi1))
+    cr = crank_rocker_check.joints(drive.cr, phi7)
     a_int = np.array(cr["A"])
     rot = drive.theta2 - math.pi
     c, sn = math.cos(rot), math.sin(rot)
@@ -180,6 +180,7 @@ def run_check(loaded: LoadedSpec) -> Result:
     speeds = np.hypot(*s["V"]) / 1000.0
     ab = np.degrees(s["phi1"])
     frames_t = np.linspace(0.0, period, ANIMATION_FRAMES, endpoint=False)
+    frames = states(drive, frames_t)
     ae_pick = math.degrees(drive.theta2) + math.degrees(drive.mount * (drive.beta_pick - math.pi))
     design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
     design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
@@ -211,6 +212,7 @@ def run_check(loaded: LoadedSpec) -> Result:
                              "joint_angle_ab_minus_ae_deg": math.remainder(
                                  dc_spec.drive.start - dc_spec.design_values()["phi3"] - ae_pick, 360.0)},
             "target_arc": double_crank_check.facts(dc_spec, dc)["target_arc"],
-            "frames": [{"t": float(ft), "joints": machine_joints(drive, float(ft))} for ft in frames_t],
+            "frames": [{"t": float(ft), "joints": machine_joints(drive, float(a), float(c))}
+                       for ft, a, c in zip(frames_t, frames["phi1"], frames["phi7"])],
         },
     )
