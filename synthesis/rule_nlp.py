@@ -10,10 +10,11 @@ and reused for every start; IPOPT's log goes to a per-instance file, so workers 
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
+import weakref
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable, Sequence
 
 import casadi as ca
@@ -49,15 +50,31 @@ class NLPOutcome:
     lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))   # constraint multipliers at return
 
 
-def _flatten(rows: Sequence[Row]) -> tuple[list, list, list]:
-    exprs, lbg, ubg = [], [], []
-    for expr, lb, ub in rows:
-        v = ca.vec(ca.SX(expr))
-        for i in range(v.numel()):
-            exprs.append(v[i])
-            lbg.append(-np.inf if lb is None else lb)
-            ubg.append(np.inf if ub is None else ub)
-    return exprs, lbg, ubg
+def _remove(path: str) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+class _Rows:
+    """Constraint rows g with their bounds, and which rule (index, or None) each row belongs to."""
+
+    def __init__(self) -> None:
+        self.exprs: list = []
+        self.lbg: list[float] = []
+        self.ubg: list[float] = []
+        self.owner: list[int | None] = []
+
+    def add(self, rows: Sequence[Row], owner: int | None = None) -> None:
+        """Append every element of each (expr, lb, ub); a vector expr gives one row per element."""
+        for expr, lb, ub in rows:
+            v = ca.vec(ca.SX(expr))
+            for i in range(v.numel()):
+                self.exprs.append(v[i])
+                self.lbg.append(-np.inf if lb is None else lb)
+                self.ubg.append(np.inf if ub is None else ub)
+                self.owner.append(owner)
 
 
 def _tightened(rule: Rule, backoff: float) -> list[Row]:
@@ -91,50 +108,45 @@ class RuleNLP:
         self.rules = list(rules)
         self.n_x = x.numel()
         self.elastic = elastic
-        exprs, lbg, ubg = _flatten(structural)
-        self._owner: list[int | None] = [None] * len(exprs)        # rule index of every row
+        g = _Rows()
+        g.add(structural)
         if elastic:
             slack = ca.SX.sym("slack", len(self.rules))
             for k, rule in enumerate(self.rules):
                 if rule.name in hard_in_elastic:
-                    e, l_, u_ = _flatten(rule.rows())
-                    exprs += e; lbg += l_; ubg += u_
-                    self._owner += [k] * len(e)
+                    g.add(rule.rows(), k)
                     continue
+                relax = rule.scale * slack[k]     # lb - scale*s <= expr <= ub + scale*s, one slack per rule
                 for expr, lb, ub in rule.rows():
-                    # lb - scale*s <= expr <= ub + scale*s, one slack per rule on all its rows
-                    relax = rule.scale * slack[k]
                     if lb is not None:
-                        e, l_, u_ = _flatten([(expr + relax, lb, None)])
-                        exprs += e; lbg += l_; ubg += u_
-                        self._owner += [k] * len(e)
+                        g.add([(expr + relax, lb, None)], k)
                     if ub is not None:
-                        e, l_, u_ = _flatten([(expr - relax, None, ub)])
-                        exprs += e; lbg += l_; ubg += u_
-                        self._owner += [k] * len(e)
+                        g.add([(expr - relax, None, ub)], k)
             extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [np.inf] * len(self.rules)
             self._extra_init = np.zeros(len(self.rules))
             f = ca.sum1(slack)
         else:
             for k, rule in enumerate(self.rules):
-                e, l_, u_ = _flatten(_tightened(rule, backoff))
-                exprs += e; lbg += l_; ubg += u_
-                self._owner += [k] * len(e)
-            e, l_, u_ = _flatten(objective.rows)
-            exprs += e; lbg += l_; ubg += u_
+                g.add(_tightened(rule, backoff), k)
+            g.add(objective.rows)
             extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
             self._extra_init = np.array(objective.extra_init, dtype=float)
             f = objective.f
+        self._owner = g.owner
         self.decision = ca.vertcat(x, extra)
-        self.g = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
+        self.g = ca.vertcat(*g.exprs) if g.exprs else ca.SX(0, 1)
         self.f = f
         self._lbx = np.concatenate([np.asarray(lbx, float), np.asarray(extra_lb, float)])
         self._ubx = np.concatenate([np.asarray(ubx, float), np.asarray(extra_ub, float)])
-        self._lbg, self._ubg = np.array(lbg, float), np.array(ubg, float)
-        self._logdir = tempfile.TemporaryDirectory(prefix="agrisynth-ipopt-")
-        self._log = Path(self._logdir.name) / "ipopt.log"
+        self._lbg, self._ubg = np.array(g.lbg, float), np.array(g.ubg, float)
+        # IPOPT writes its log to a file it keeps open for the solver's lifetime.  We hold our own read
+        # handle and unlink the path after the first solve (or when this object goes), so no file is
+        # left behind even in pool workers that exit without running finalisers.
+        fd, self._log_path = tempfile.mkstemp(prefix="agrisynth-ipopt-", suffix=".log")
+        self._log = os.fdopen(fd, "rb")
+        self._unlink = weakref.finalize(self, _remove, self._log_path)
         opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                "ipopt.output_file": str(self._log), "ipopt.file_print_level": 5,
+                "ipopt.output_file": self._log_path, "ipopt.file_print_level": 5,
                 "ipopt.max_iter": max_iter, "ipopt.tol": tol, "ipopt.acceptable_tol": 1e-7,
                 "ipopt.constr_viol_tol": 1e-8,
                 "ipopt.mu_strategy": "adaptive",
@@ -146,17 +158,13 @@ class RuleNLP:
     def solve(self, start: int, x0: np.ndarray, extra0: np.ndarray | None = None) -> NLPOutcome:
         """One IPOPT run from x0 (design part) and extra0 (extra variables; default the objective's)."""
         extra0 = self._extra_init if extra0 is None else np.asarray(extra0, float)
-        offset = self._log.stat().st_size if self._log.exists() else 0
         t0 = time.perf_counter()
         sol = self.solver(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self._lbx, ubx=self._ubx,
                           lbg=self._lbg, ubg=self._ubg)
         wall = time.perf_counter() - t0
         stats = self.solver.stats()
-        log = ""
-        if self._log.exists():
-            with open(self._log, "rb") as fh:
-                fh.seek(offset)
-                log = fh.read().decode(errors="replace")
+        self._unlink()                                     # IPOPT has opened it: the path can go
+        log = self._log.read().decode(errors="replace")    # what this solve appended
         return NLPOutcome(start, np.asarray(sol["x"]).ravel(), float(sol["f"]), stats["return_status"],
                           bool(stats["success"]), int(stats["iter_count"]), wall, log,
                           np.asarray(sol["lam_g"]).ravel())

@@ -78,3 +78,19 @@ def test_installation_angles(result):
     assert math.hypot(frame0["G"][0] - frame0["A"][0], frame0["G"][1] - frame0["A"][1]) == pytest.approx(140.0)
     assert math.hypot(frame0["E"][0] - frame0["A"][0], frame0["E"][1] - frame0["A"][1]) == pytest.approx(133.5)
     assert math.hypot(frame0["E"][0] - frame0["F"][0], frame0["E"][1] - frame0["F"][1]) == pytest.approx(107.6)
+
+
+def test_instants_do_not_depend_on_which_extreme_is_picking(tmp_path):
+    for part in ("cai2020_crank_rocker.toml", "cai2020_double_crank.toml"):
+        (tmp_path / part).write_text((PICKER / part).read_text())
+    text = (PICKER / "cai2020_picker.toml").read_text()
+    text = text.replace('picking_extreme = "folded"', 'picking_extreme = "extended"').replace(
+        "theta1 = 22.0 ", "theta1 = 72.4 ")          # G-A-E at the extended extreme: theta1 + psi of eq (9)
+    (tmp_path / "extended.toml").write_text(text)
+    other = run_check(load_spec(tmp_path / "extended.toml"))
+    inst = other.extra["instants"]
+    assert [inst[k]["t"] for k in ("picking", "dropping", "picking_again")] == pytest.approx([0.0, 160 / 360, 1.0],
+                                                                                            abs=1e-4)
+    assert max(inst[k]["speed_m_s"] for k in inst) < 1e-9
+    assert other.extra["installation"]["theta1_computed_deg"] == pytest.approx(72.39, abs=0.01)
+    assert other.all_satisfied

@@ -11,7 +11,7 @@ import numpy as np
 
 from synthesis.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.crank_rocker.closed_form import solve_paper_equations
-from synthesis.crank_rocker.nlp import NAMES, CrankRockerNLP
+from synthesis.crank_rocker.nlp import CrankRockerNLP
 from synthesis.errors import SolverError
 from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import Result

@@ -24,7 +24,7 @@ import numpy as np
 
 from constraints.base import Rule
 from synthesis.crank_rocker import check as crank_rocker_check
-from synthesis.errors import SpecError
+from synthesis.errors import AssemblyError, SpecError
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_point, joint_positions
 from synthesis.picker import check as double_crank_check
@@ -148,8 +148,8 @@ def run_check(loaded: LoadedSpec) -> Result:
     rules = _prefixed("crank_rocker", crank_rocker_check.evaluate(cr_spec, cr)[0])
     rules += _prefixed("double_crank", double_crank_check.evaluate(dc_spec, dc))
     if not cr.crank_turns():
-        raise SpecError(f"picker.crank_rocker: {cr_loaded.path}: the crank cannot make a full turn, "
-                        f"so the picker has no cycle (Grashof slacks {cr.grashof_slacks()})")
+        raise AssemblyError(f"picker.crank_rocker: {cr_loaded.path}: the crank cannot make a full turn, so the "
+                            f"picker has no cycle (Grashof slacks {cr.grashof_slacks()} mm)")
     drive = make_drive(spec, cr, dc, dc_spec.drive.start)
     inst = spec.installation
     theta1 = math.degrees(abs(math.remainder(math.pi - drive.beta_pick, TWO_PI)))

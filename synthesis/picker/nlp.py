@@ -100,9 +100,8 @@ class PickerNLP:
             logs.append(out.log)
             x = out.x[:9]
             design = {n: float(v) for n, v in zip(NAMES, x)}
-            try:
-                objective = self.exact_objective(design)
-            except Exception:        # the loop breaks: no objective, the re-check rejects it
+            objective = self.exact_objective(design)
+            if not math.isfinite(objective):     # the loop breaks somewhere: the re-check rejects it
                 objective = math.inf
             candidates.append((objective, len(candidates), design, out))
         objective, _, design, out = min(candidates, key=lambda c: (c[0], -c[1]))

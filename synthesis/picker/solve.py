@@ -6,7 +6,6 @@ import functools
 import time
 from typing import Callable
 
-import numpy as np
 
 from synthesis.errors import SolverError
 from synthesis.multistart import latin_hypercube_starts

@@ -11,15 +11,9 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, StrictModel, Variable, value_of
+from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
 
 KIND = "crank_rocker"
-
-
-def _positive(name: str, v: Variable) -> None:
-    lo = v.bounds[0] if isinstance(v, FreeVariable) else v
-    if lo <= 0:
-        raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
 
 
 class Requirements(StrictModel):
@@ -48,7 +42,7 @@ class LinkSection(StrictModel):
     @model_validator(mode="after")
     def _lengths_positive(self) -> "LinkSection":
         for name in ("l7", "l8", "l9", "l10"):
-            _positive(name, getattr(self, name))
+            require_positive(name, getattr(self, name))
         return self
 
 

@@ -12,15 +12,9 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, StrictModel, Variable, value_of
+from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
 
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
-
-
-def _positive(name: str, v: Variable) -> None:
-    lo = v.bounds[0] if isinstance(v, FreeVariable) else v
-    if lo <= 0:
-        raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
 
 
 class TargetArc(StrictModel):
@@ -63,7 +57,7 @@ class LinkageSection(StrictModel):
     @model_validator(mode="after")
     def _lengths_positive(self) -> "LinkageSection":
         for name in ("l1", "l2", "l3", "l4", "l5"):
-            _positive(name, getattr(self, name))
+            require_positive(name, getattr(self, name))
         return self
 
 
