@@ -17,3 +17,16 @@ def grashof_rule(l1, l2, l3, l4) -> Rule:
     rows = tuple((s, 0.0, None) for s in slacks.values())
     worst = ca.fmin(ca.fmin(slacks["frame"], slacks["coupler"]), slacks["rocker"])
     return Rule("grashof_crank_rocker", worst, 0.0, None, "mm", 10.0, "link lengths", nlp_rows=rows)
+
+
+def grashof_double_crank_rule(frame, crank, coupler, follower) -> Rule:
+    """Grashof double crank: the frame is the shortest link and s + l <= p + q (seed 001 eq 6).
+
+    Value: the smallest slack of  frame + x <= (sum of the other two)  for x = crank, coupler,
+    follower (mm); the same three linear rows as the crank-rocker rule with the frame in the
+    shortest link's place, so both cranks turn fully.
+    """
+    slacks = crank_rotation_slacks(crank, frame, coupler, follower)
+    rows = tuple((s, 0.0, None) for s in slacks.values())
+    worst = ca.fmin(ca.fmin(slacks["frame"], slacks["coupler"]), slacks["rocker"])
+    return Rule("grashof_double_crank", worst, 0.0, None, "mm", 10.0, "link lengths, frame shortest", nlp_rows=rows)

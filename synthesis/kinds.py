@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from synthesis.errors import SpecError
 from synthesis.result import Result
 
 @dataclass(frozen=True)
@@ -14,7 +15,7 @@ class KindEntry:
     """Where a kind's code lives, as "module:function" strings, so nothing is imported until it runs."""
 
     checker: str                      # run_check(loaded) -> Result
-    solver: str                       # module with run_solve, baseline_rules, diagnose_infeasible
+    solver: str | None                # module with run_solve, baseline_rules, diagnose_infeasible; None: check only
     figures: dict[str, str]           # file name -> writer(result, path): figures and exports of one run
     compare: str | None = None        # (results, folder) -> [file names]: candidates overlaid, baseline first
 
@@ -40,6 +41,21 @@ _KINDS = {
                  "profile.csv": "synthesis.clamp_cam.export:write_csv",
                  "profile.dxf": "synthesis.clamp_cam.export:write_dxf"},
         compare="synthesis.clamp_cam.plots:compare_figure"),
+    "crank_rocker": KindEntry(
+        checker="synthesis.crank_rocker.check:run_check",
+        solver="synthesis.crank_rocker.solve",
+        figures={"extremes.png": "synthesis.crank_rocker.plots:extremes_figure"},
+        compare="synthesis.crank_rocker.plots:compare_figure"),
+    "picker_double_crank": KindEntry(
+        checker="synthesis.picker.check:run_check",
+        solver="synthesis.picker.solve",
+        figures={"path.png": "synthesis.picker.plots:path_figure"},
+        compare="synthesis.picker.plots:compare_figure"),
+    "picker": KindEntry(       # evaluated only: the combined mechanism of two solved designs
+        checker="synthesis.picker.combined:run_check",
+        solver=None,
+        figures={"trajectory.png": "synthesis.picker.plots:picker_figure",
+                 "animation.gif": "synthesis.picker.plots:picker_animation"}),
 }
 
 
@@ -54,6 +70,10 @@ def checker(kind: str) -> Callable:
 
 def solver(kind: str):
     """The kind's solve module (run_solve, baseline_rules, diagnose_infeasible)."""
+    if _KINDS[kind].solver is None:
+        solvable = [k for k, entry in _KINDS.items() if entry.solver is not None]
+        raise SpecError(f"kind {kind!r} has nothing to optimise (`agrisynth check` evaluates it); "
+                        f"kinds that solve: {', '.join(solvable)}")
     return importlib.import_module(_KINDS[kind].solver)
 
 

@@ -98,3 +98,14 @@ def crank_rotation_slacks(l1, l2, l3, l4) -> dict[str, object]:
         "coupler": l1 + l4 - l2 - l3,
         "rocker": l1 + l3 - l2 - l4,
     }
+
+
+def link_direction(p: Point, q: Point):
+    """Angle of the vector p -> q from the +x axis (rad, atan2): the direction of a link."""
+    return ca.atan2(q[1] - p[1], q[0] - p[0])
+
+
+def rocker_angle(theta, l1, l2, l3, l4, zeta, branch: int):
+    """Direction of the rocker O' -> B from the +x axis (rad) at crank angle theta (see coupler_joint)."""
+    _, b = coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
+    return link_direction(rocker_pivot(l1, zeta), b)

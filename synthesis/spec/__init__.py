@@ -21,6 +21,9 @@ KINDS: dict[str, str] = {
     "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
     "guide_tube": "synthesis.spec.guide_tube:GuideTubeSpec",
     "clamp_cam": "synthesis.spec.clamp_cam:ClampCamSpec",
+    "crank_rocker": "synthesis.spec.crank_rocker:CrankRockerSpec",
+    "picker_double_crank": "synthesis.spec.picker:PickerDoubleCrankSpec",
+    "picker": "synthesis.spec.picker:PickerSpec",
 }
 
 

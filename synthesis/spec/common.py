@@ -57,6 +57,13 @@ def is_free(v: Variable) -> bool:
     return isinstance(v, FreeVariable)
 
 
+def require_positive(name: str, v: Variable) -> None:
+    """ValueError naming ``name`` unless the value (or a free variable's lower bound) is > 0."""
+    lo = v.bounds[0] if isinstance(v, FreeVariable) else v
+    if lo <= 0:
+        raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
+
+
 Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
 
 

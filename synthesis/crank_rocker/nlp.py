@@ -1,0 +1,120 @@
+"""The crank-rocker NLP: K, swing and transmission angle as constraints on the simulated mechanism.
+
+Decision variables: the four lengths (fixed ones get lo = hi) and the crank angles phi_a, phi_b of
+the rocker's two extreme positions.  Structural rows make them extremes (d beta / d phi = 0, exact
+AD); the time-ratio row puts the quick stroke between them (phi_b - phi_a = 2 pi / (1 + K)), the
+swing row fixes the angle between the rocker positions, and the transmission angle is sampled over a
+turn on a grid that contains the crank along and against the frame, where its extremes are.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from constraints import Rule
+from constraints.grashof import grashof_rule
+from constraints.quick_return import rocker_swing_rule, time_ratio_rule
+from constraints.transmission import acute_transmission_rule
+from synthesis.kinematics import fourbar
+from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
+from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
+from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.crank_rocker import CrankRockerSpec
+
+TWO_PI = 2.0 * math.pi
+NAMES = ("l7", "l8", "l9", "l10")
+#: starts are moved this far (mm) inside the Grashof crank-rocker region, so the crank turns at the start
+START_MARGIN = 1.0
+
+
+@dataclass
+class StartOutcome:
+    start: int
+    design: dict[str, float]
+    extremes: tuple[float, float]       # phi_a, phi_b (rad)
+    objective: float                    # report units: mm (total length) or deg (min transmission angle)
+    return_status: str
+    success: bool
+    iterations: int
+    wall_s: float
+    log: str
+
+
+def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
+    """The three crank-rocker slacks of (l7, l8, l9, l10): affine in the lengths."""
+    l7, l8, l9, l10 = lengths
+    return np.array(list(fourbar.crank_rotation_slacks(l10, l7, l8, l9).values()), dtype=float)
+
+
+class CrankRockerNLP:
+    """Built once per spec; :meth:`solve` runs IPOPT from one start (lengths only; extremes are guessed)."""
+
+    def __init__(self, spec: CrankRockerSpec, elastic: bool = False):
+        self.spec = spec
+        variables = spec.variables()
+        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
+        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        req = spec.requirements
+        x = ca.SX.sym("x", 6)
+        p, phi_a, phi_b = x[:4], x[4], x[5]
+        f = rocker_function(spec.branch)
+        _, dbeta_a, _, _, tip_a = f(phi_a, p)
+        _, dbeta_b, _, _, tip_b = f(phi_b, p)
+        structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0)]
+        n = spec.solver.samples_per_turn
+        mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
+        a = ca.vertcat(p[3], 0.0)
+        rules: list[Rule] = [
+            grashof_rule(p[3], p[0], p[1], p[2]),
+            # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
+            time_ratio_rule(phi_b - phi_a, req.time_ratio, spec.tolerances.time_ratio),
+            rocker_swing_rule(tip_a - a, tip_b - a, p[2], req.rocker_swing, spec.tolerances.rocker_swing),
+            acute_transmission_rule(mu, req.min_transmission_angle, "over a turn"),
+        ]
+        objective = self._objective(p, mu)
+        lbx = np.concatenate([self.bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
+        ubx = np.concatenate([self.bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
+        # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
+        self.nlp = RuleNLP("crank_rocker", x, lbx, ubx, structural, rules, objective, elastic=elastic,
+                           max_iter=spec.solver.max_iter, hard_in_elastic=("grashof_crank_rocker",))
+
+    def _objective(self, p, mu) -> ObjectiveParts:
+        if self.spec.objective.name == "min_total_length":
+            return ObjectiveParts(f=ca.sum1(p) / 100.0)
+        t = ca.SX.sym("gamma_min")
+        # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
+        rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
+        return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
+                              extra_init=[self.spec.requirements.min_transmission_angle], rows=rows)
+
+    def report_objective(self, f: float) -> float:
+        return f * 100.0 if self.spec.objective.name == "min_total_length" else -f * 10.0
+
+    def extremes_guess(self, lengths: np.ndarray) -> np.ndarray:
+        """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
+        cr = CrankRocker(*lengths, branch=self.spec.branch)
+        if cr.crank_turns():
+            try:
+                q = quick_return(cr)
+            except ValueError:
+                q = None
+            if q is not None:
+                ex = q.extremes
+                if q.stroke_fold_to_ext <= q.stroke_ext_to_fold:
+                    return np.array([ex.phi_folded, ex.phi_folded + q.stroke_fold_to_ext])
+                return np.array([ex.phi_extended, ex.phi_extended + q.stroke_ext_to_fold])
+        return np.array([0.0, TWO_PI / (1.0 + self.spec.requirements.time_ratio)])
+
+    def prepared_start(self, lengths: np.ndarray) -> np.ndarray:
+        return pull_inside(np.asarray(lengths, float), self.init, grashof_slacks, START_MARGIN)
+
+    def solve(self, start: int, lengths: np.ndarray) -> StartOutcome:
+        lengths = self.prepared_start(lengths)
+        out = self.nlp.solve(start, np.concatenate([lengths, self.extremes_guess(lengths)]))
+        design = {n: float(v) for n, v in zip(NAMES, out.x[:4])}
+        return StartOutcome(start, design, (float(out.x[4]), float(out.x[5])), self.report_objective(out.objective),
+                            out.return_status, out.success, out.iterations, out.wall_s, out.log)

@@ -1,0 +1,100 @@
+"""``agrisynth solve`` for kind crank_rocker: multistart IPOPT, independent re-check, closed form beside it."""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from typing import Callable
+
+import numpy as np
+
+from synthesis.crank_rocker.check import evaluate, facts, mechanism
+from synthesis.crank_rocker.closed_form import solve_paper_equations
+from synthesis.crank_rocker.nlp import CrankRockerNLP
+from synthesis.errors import SolverError
+from synthesis.multistart import latin_hypercube_starts
+from synthesis.result import Result
+from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.spec import LoadedSpec
+from synthesis.spec.common import is_free
+
+
+def build_nlp(spec, elastic: bool = False) -> CrankRockerNLP:
+    return CrankRockerNLP(spec, elastic=elastic)
+
+
+def recheck(spec, design: dict[str, float]):
+    """Rules of a returned design on a grid 10x finer than the solver's, extremes root-found anew."""
+    cr = mechanism(spec, design)
+    rules, q = evaluate(spec, cr, samples=FINE * spec.solver.samples_per_turn)
+    return rules, (cr, q)
+
+
+def closed_form(spec) -> dict | None:
+    """Eq (8)-(10) solved directly, when the frame l10 is given (the paper's setting)."""
+    if is_free(spec.links.l10):
+        return None
+    req = spec.requirements
+    designs = solve_paper_equations(req.time_ratio, req.rocker_swing, req.min_transmission_angle,
+                                    spec.design_values()["l10"], spec.branch)
+    # a root of the equations is a design only if the simulated mechanism does what they assume
+    valid = [d for d in designs if d.min_transmission_deg is not None
+             and abs(d.time_ratio - req.time_ratio) < 1e-6 and abs(d.swing_deg - req.rocker_swing) < 1e-6
+             and d.min_transmission_deg >= req.min_transmission_angle - 1e-6]
+    return {"equations": "seed 001 eq (8)-(10), gamma_min = requirement, l10 given",
+            "roots": [d.to_json() for d in designs],
+            "shortest_valid": valid[0].to_json() if valid else None}
+
+
+def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
+              ) -> tuple[Result, list[StartReport], str]:
+    spec = loaded.model
+    starts = spec.solver.starts if starts is None else starts
+    seed = spec.solver.seed if seed is None else seed
+    shape = build_nlp(spec)
+    x_starts = latin_hypercube_starts(shape.bounds, shape.init, starts, seed)
+    factory = functools.partial(build_nlp, spec) if workers > 1 else (lambda: shape)
+    maximise = spec.objective.name == "max_transmission_angle"
+    t0 = time.perf_counter()
+    reports, best = multistart(factory, x_starts, workers, functools.partial(recheck, spec), maximise, on_start)
+    wall = time.perf_counter() - t0
+    if best.context is None:
+        cr, q = mechanism(spec, best.outcome.design), None
+    else:
+        cr, q = best.context
+    status = ("optimal" if best.outcome.success else "feasible") if best.satisfied else "infeasible"
+    unit = "deg" if maximise else "mm"
+    result = Result(
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status,
+        design=dict(best.outcome.design), rules=[r.to_json() for r in best.records],
+        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit},
+        solver={"name": "ipopt", "return_status": best.outcome.return_status,
+                "iterations": best.outcome.iterations, "wall_s": wall, "starts": starts, "seed": seed,
+                "best_start": best.outcome.start, "workers": workers,
+                "samples_per_turn": spec.solver.samples_per_turn, "fine_grid_factor": FINE},
+        extra={**facts(spec, cr, q),
+               "baseline_design": spec.design_values(),
+               "solver_extremes_crank_deg": [math.degrees(v) for v in best.outcome.extremes],
+               "fine_grid_worst_violation": best.worst_violation,
+               "closed_form": closed_form(spec),
+               "starts": starts_table(reports)},
+    )
+    return result, reports, ipopt_log(reports)
+
+
+def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
+    spec = loaded.model
+    elastic = build_nlp(spec, elastic=True)
+    lengths = elastic.prepared_start(elastic.init)      # the given design: it assembles, the best start may not
+    out = elastic.nlp.solve(0, np.concatenate([lengths, elastic.extremes_guess(lengths)]))
+    units = {r.name: r.unit for r in elastic.nlp.rules}
+    return infeasible_error(elastic.nlp.slack_values(out.x), units, elastic.nlp.active_rules(out),
+                            out.return_status, reports, [r["name"] for r in result.rules if not r["satisfied"]])
+
+
+def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:
+    spec = loaded.model
+    rules, _ = evaluate(spec, mechanism(spec))
+    return [r.record().to_json() for r in rules]

@@ -1,0 +1,80 @@
+"""``agrisynth solve`` for kind picker_double_crank: multistart, independent fine-grid re-check, diagnosis."""
+
+from __future__ import annotations
+
+import functools
+import time
+from typing import Callable
+
+
+from synthesis.errors import SolverError
+from synthesis.multistart import latin_hypercube_starts
+from synthesis.picker.check import evaluate, facts, linkage
+from synthesis.picker.nlp import PickerNLP
+from synthesis.result import Result
+from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.spec import LoadedSpec
+
+
+def build_nlp(spec, elastic: bool = False) -> PickerNLP:
+    return PickerNLP(spec, elastic=elastic)
+
+
+def recheck(spec, design: dict[str, float]):
+    """Rules of a returned design from the float kinematics on a grid 10x finer than the solver's."""
+    dc = linkage(spec, design)
+    return evaluate(spec, dc, samples=FINE * spec.solver.samples), dc
+
+
+def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
+              ) -> tuple[Result, list[StartReport], str]:
+    spec = loaded.model
+    starts = spec.solver.starts if starts is None else starts
+    seed = spec.solver.seed if seed is None else seed
+    shape = build_nlp(spec)
+    x_starts = latin_hypercube_starts(shape.bounds, shape.init, starts, seed)
+    factory = functools.partial(build_nlp, spec) if workers > 1 else (lambda: shape)
+    t0 = time.perf_counter()
+    reports, best = multistart(factory, x_starts, workers, functools.partial(recheck, spec), False, on_start)
+    wall = time.perf_counter() - t0
+    status = ("optimal" if best.outcome.success else "feasible") if best.satisfied else "infeasible"
+    dc = linkage(spec, best.outcome.design)
+    design = dict(best.outcome.design)
+    design["branch"] = spec.linkage.branch
+    unit = "mm" if spec.objective.name == "sum_of_distances" else "mm^2"
+    try:
+        extra = facts(spec, dc)
+    except Exception as exc:   # noqa: BLE001 - a broken best design still gets a result (status infeasible)
+        extra = {"source": spec.source, "facts_error": str(exc)}
+    result = Result(
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=design,
+        rules=[r.to_json() for r in best.records],
+        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit,
+                   "epsilon_mm": spec.objective.epsilon if spec.objective.name == "sum_of_distances" else None},
+        solver={"name": "ipopt", "return_status": best.outcome.return_status, "iterations": best.outcome.iterations,
+                "wall_s": wall, "starts": starts, "seed": seed, "best_start": best.outcome.start, "workers": workers,
+                "samples": spec.solver.samples, "fine_grid_factor": FINE},
+        extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": best.worst_violation,
+               "starts": starts_table(reports)},
+    )
+    return result, reports, ipopt_log(reports)
+
+
+def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
+    spec = loaded.model
+    elastic = build_nlp(spec, elastic=True)
+    stage = elastic.stages[0]
+    out = stage.solve(0, elastic.prepared_start(elastic.init))
+    units = {r.name: r.unit for r in stage.rules}
+    return infeasible_error(stage.slack_values(out.x), units, stage.active_rules(out), out.return_status, reports,
+                            [r["name"] for r in result.rules if not r["satisfied"]])
+
+
+def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:
+    spec = loaded.model
+    try:
+        rules = evaluate(spec, linkage(spec))
+    except Exception:   # noqa: BLE001 - a given design that does not assemble has no rule table
+        return None
+    return [r.record().to_json() for r in rules]

@@ -1,0 +1,200 @@
+"""An IPOPT problem assembled from named rules, shared by the crank_rocker and picker kinds.
+
+The decision vector, its bounds, the *structural* rows (definitions that must hold exactly, e.g. "phi_a
+is a stationary point of the rocker") and the objective are given by the kind; every
+:class:`constraints.base.Rule` contributes its smooth rows.  In *elastic* mode every rule gets one
+slack on all its rows and the objective becomes the sum of the slacks: the rules whose slack stays
+positive are the ones that conflict (the exit-3 diagnosis).  The solver is built once (``nlpsol``)
+and reused for every start; IPOPT's log goes to a per-instance file, so workers never share output.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+import weakref
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import casadi as ca
+import numpy as np
+
+from constraints.base import Rule
+
+Row = tuple  # (expr, lb | None, ub | None)
+
+
+@dataclass
+class ObjectiveParts:
+    """f(x, extra) plus the extra decision variables and rows it needs (e.g. an epigraph variable)."""
+
+    f: ca.SX
+    extra: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
+    extra_lb: Sequence[float] = ()
+    extra_ub: Sequence[float] = ()
+    extra_init: Sequence[float] = ()
+    rows: Sequence[Row] = ()
+
+
+@dataclass
+class NLPOutcome:
+    start: int
+    x: np.ndarray               # the full decision vector at IPOPT's return
+    objective: float            # f at return, solver units
+    return_status: str
+    success: bool
+    iterations: int
+    wall_s: float
+    log: str
+    lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))   # constraint multipliers at return
+
+
+def _remove(path: str) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+class _Rows:
+    """Constraint rows g with their bounds, and which rule (index, or None) each row belongs to."""
+
+    def __init__(self) -> None:
+        self.exprs: list = []
+        self.lbg: list[float] = []
+        self.ubg: list[float] = []
+        self.owner: list[int | None] = []
+
+    def add(self, rows: Sequence[Row], owner: int | None = None) -> None:
+        """Append every element of each (expr, lb, ub); a vector expr gives one row per element."""
+        for expr, lb, ub in rows:
+            v = ca.vec(ca.SX(expr))
+            for i in range(v.numel()):
+                self.exprs.append(v[i])
+                self.lbg.append(-np.inf if lb is None else lb)
+                self.ubg.append(np.inf if ub is None else ub)
+                self.owner.append(owner)
+
+
+def _tightened(rule: Rule, backoff: float) -> list[Row]:
+    """The rule's rows with each inequality limit moved inwards by backoff x scale (equalities kept).
+
+    IPOPT meets a constraint only to within its tolerance; the tiny backoff makes a returned design
+    satisfy the exact limit when re-checked, instead of missing it by 1e-12.
+    """
+    shift = backoff * rule.scale
+    rows = []
+    for expr, lb, ub in rule.rows():
+        if lb is not None and ub is not None and lb == ub:
+            rows.append((expr, lb, ub))
+        else:
+            rows.append((expr, None if lb is None else lb + shift, None if ub is None else ub - shift))
+    return rows
+
+
+class RuleNLP:
+    """min f  s.t.  structural rows, every rule's rows, lbx <= x <= ubx (or the elastic version).
+
+    ``backoff`` tightens every rule inequality by backoff x the rule's scale (see :func:`_tightened`).
+    Elastic mode relaxes each rule's rows by scale x its slack, so rows must be in the rule's unit;
+    rules named in ``hard_in_elastic`` stay hard there (e.g. the rule without which the kinematics
+    is undefined) and get a zero slack.
+    """
+
+    def __init__(self, name: str, x: ca.SX, lbx, ubx, structural: Sequence[Row], rules: Sequence[Rule],
+                 objective: ObjectiveParts, elastic: bool = False, max_iter: int = 500, tol: float = 1e-9,
+                 backoff: float = 1e-7, hard_in_elastic: Sequence[str] = ()):
+        self.rules = list(rules)
+        self.n_x = x.numel()
+        self.elastic = elastic
+        g = _Rows()
+        g.add(structural)
+        if elastic:
+            slack = ca.SX.sym("slack", len(self.rules))
+            for k, rule in enumerate(self.rules):
+                if rule.name in hard_in_elastic:
+                    g.add(rule.rows(), k)
+                    continue
+                relax = rule.scale * slack[k]     # lb - scale*s <= expr <= ub + scale*s, one slack per rule
+                for expr, lb, ub in rule.rows():
+                    if lb is not None:
+                        g.add([(expr + relax, lb, None)], k)
+                    if ub is not None:
+                        g.add([(expr - relax, None, ub)], k)
+            extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [np.inf] * len(self.rules)
+            self._extra_init = np.zeros(len(self.rules))
+            f = ca.sum1(slack)
+        else:
+            for k, rule in enumerate(self.rules):
+                g.add(_tightened(rule, backoff), k)
+            g.add(objective.rows)
+            extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
+            self._extra_init = np.array(objective.extra_init, dtype=float)
+            f = objective.f
+        self._owner = g.owner
+        self.decision = ca.vertcat(x, extra)
+        self.g = ca.vertcat(*g.exprs) if g.exprs else ca.SX(0, 1)
+        self.f = f
+        self._lbx = np.concatenate([np.asarray(lbx, float), np.asarray(extra_lb, float)])
+        self._ubx = np.concatenate([np.asarray(ubx, float), np.asarray(extra_ub, float)])
+        self._lbg, self._ubg = np.array(g.lbg, float), np.array(g.ubg, float)
+        # IPOPT writes its log to a file it keeps open for the solver's lifetime.  We hold our own read
+        # handle and unlink the path after the first solve (or when this object goes), so no file is
+        # left behind even in pool workers that exit without running finalisers.
+        fd, self._log_path = tempfile.mkstemp(prefix="agrisynth-ipopt-", suffix=".log")
+        self._log = os.fdopen(fd, "rb")
+        self._unlink = weakref.finalize(self, _remove, self._log_path)
+        opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+                "ipopt.output_file": self._log_path, "ipopt.file_print_level": 5,
+                "ipopt.max_iter": max_iter, "ipopt.tol": tol, "ipopt.acceptable_tol": 1e-7,
+                "ipopt.constr_viol_tol": 1e-8,
+                "ipopt.mu_strategy": "adaptive",
+                # no relaxation of inequality limits: a returned design meets them, not 1e-8 short
+                "ipopt.bound_relax_factor": 0.0}
+        self.solver = ca.nlpsol(name, "ipopt", {"x": self.decision, "f": f, "g": self.g}, opts)
+        self.g_function = ca.Function("g", [self.decision], [self.g])
+
+    def solve(self, start: int, x0: np.ndarray, extra0: np.ndarray | None = None) -> NLPOutcome:
+        """One IPOPT run from x0 (design part) and extra0 (extra variables; default the objective's)."""
+        extra0 = self._extra_init if extra0 is None else np.asarray(extra0, float)
+        t0 = time.perf_counter()
+        sol = self.solver(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self._lbx, ubx=self._ubx,
+                          lbg=self._lbg, ubg=self._ubg)
+        wall = time.perf_counter() - t0
+        stats = self.solver.stats()
+        self._unlink()                                     # IPOPT has opened it: the path can go
+        log = self._log.read().decode(errors="replace")    # what this solve appended
+        return NLPOutcome(start, np.asarray(sol["x"]).ravel(), float(sol["f"]), stats["return_status"],
+                          bool(stats["success"]), int(stats["iter_count"]), wall, log,
+                          np.asarray(sol["lam_g"]).ravel())
+
+    def slack_values(self, x: np.ndarray) -> dict[str, float]:
+        """Elastic mode: each rule's slack at a returned decision vector, in the rule's unit."""
+        return {r.name: float(v) * r.scale for r, v in zip(self.rules, x[self.n_x:])}
+
+    def active_rules(self, outcome: NLPOutcome, tol: float = 1e-6) -> list[str]:
+        """Rules with a row whose multiplier is non-zero at the outcome: the ones that bind."""
+        names = []
+        for k, lam in zip(self._owner, outcome.lam_g):
+            if k is not None and abs(lam) > tol and self.rules[k].name not in names:
+                names.append(self.rules[k].name)
+        return names
+
+
+def pull_inside(start: np.ndarray, anchor: np.ndarray, slacks: Callable[[np.ndarray], np.ndarray],
+                margin: float) -> np.ndarray:
+    """The point nearest ``start`` on the segment anchor -> start where every slack >= margin.
+
+    ``slacks`` must be affine in the point (e.g. Grashof inequalities in the link lengths) and the
+    anchor inside; then each slack is linear along the segment and the cut-off is exact.  Used to
+    move random starts into the region where the linkage assembles, so IPOPT never starts on NaNs.
+    """
+    g0, g1 = slacks(anchor) - margin, slacks(start) - margin
+    if np.any(g0 < 0.0):
+        return start          # no feasible anchor: leave the start as drawn
+    t = 1.0
+    for a, b in zip(g0, g1):
+        if b < 0.0:
+            t = min(t, a / (a - b))
+    return anchor + t * (start - anchor)

@@ -1,0 +1,82 @@
+"""Spec model of kind ``crank_rocker``: a crank-rocker from its time ratio K, rocker swing and minimum
+transmission angle (seed 001 §2.1.3, eq 8-10).
+
+Links (seed 001 symbols): crank GF = l7, coupler FE = l8, rocker AE = l9, frame AG = l10, in mm.
+``check`` evaluates the given lengths; ``solve`` frees those written as ``{init, bounds}``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
+
+KIND = "crank_rocker"
+
+
+class Requirements(StrictModel):
+    """What the rocker must do (seed 001: K = 1.25, psi = 50 deg, gamma_min = 40 deg)."""
+
+    time_ratio: float = Field(ge=1.0, le=3.0, description="time ratio K = slow stroke / quick stroke (1 = no quick return)")
+    rocker_swing: float = Field(gt=0.0, lt=180.0, description="rocker swing psi between its extreme positions, deg")
+    min_transmission_angle: float = Field(gt=0.0, lt=90.0, description="smallest transmission angle over a turn, deg")
+
+
+class Tolerances(StrictModel):
+    """How far a *given* design may miss K and psi in ``check`` (solve imposes them exactly)."""
+
+    time_ratio: float = Field(0.005, ge=0.0, description="|K - K_required| allowed")
+    rocker_swing: float = Field(0.1, ge=0.0, description="|psi - psi_required| allowed, deg")
+
+
+class LinkSection(StrictModel):
+    """Link lengths, mm. A number fixes a length, ``{init, bounds}`` frees it."""
+
+    l7: Variable = Field(description="crank GF, mm")
+    l8: Variable = Field(description="coupler FE, mm")
+    l9: Variable = Field(description="rocker AE, mm")
+    l10: Variable = Field(description="frame AG (crank pivot G to rocker pivot A), mm")
+
+    @model_validator(mode="after")
+    def _lengths_positive(self) -> "LinkSection":
+        for name in ("l7", "l8", "l9", "l10"):
+            require_positive(name, getattr(self, name))
+        return self
+
+
+class ObjectiveSection(StrictModel):
+    name: Literal["min_total_length", "max_transmission_angle"] = Field(
+        "min_total_length",
+        description="min_total_length: shortest l7 + l8 + l9 + l10 meeting every requirement (the published "
+                    "design at l10 = 140 mm); max_transmission_angle: largest minimum transmission angle for "
+                    "the given K and psi")
+
+
+class SolverSection(StrictModel):
+    starts: int = Field(8, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    samples_per_turn: int = Field(72, ge=8, le=3600, multiple_of=2,
+                                  description="crank angles sampled for the transmission angle (even: includes "
+                                              "the crank along and against the frame, where its extremes lie)")
+    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+
+
+class CrankRockerSpec(StrictModel):
+    kind: Literal["crank_rocker"]
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
+    source: str = Field("", description="where the numbers come from (paper, section)")
+    requirements: Requirements
+    tolerances: Tolerances = Field(default_factory=Tolerances)
+    links: LinkSection
+    branch: Literal[-1, 1] = Field(1, description="assembly: E left (+1) or right (-1) of the line F -> A "
+                                                  "(mirror images: same K, swing and transmission angles)")
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
+    solver: SolverSection = Field(default_factory=SolverSection)
+
+    def variables(self) -> dict[str, Variable]:
+        return {n: getattr(self.links, n) for n in ("l7", "l8", "l9", "l10")}
+
+    def design_values(self) -> dict[str, float]:
+        return {n: value_of(v) for n, v in self.variables().items()}

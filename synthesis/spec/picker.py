@@ -1,0 +1,141 @@
+"""Spec models of the seed-001 picker: ``picker_double_crank`` (§2.1.2) and ``picker`` (the combined drive).
+
+Units: mm, deg, r/min.  Our reading of the paper's symbols is in problems/picker/PICKER.md; in short:
+l1 = crank AB, l2 = coupler BC, l3 = follower CD, l4 = frame AD (the shortest link, eq 5-6), l5 = CM,
+phi3 = frame AD below the +x axis, phi4 = CM turned counter-clockwise from BC.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
+
+NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+
+
+class TargetArc(StrictModel):
+    """The picking arc M1 -> M2 with its tangent at M1 (seed 001 §2.1.1, Fig. 3)."""
+
+    m1: tuple[float, float] = Field(description="picking point M1 (x, y), mm from the power-output bar, y up")
+    m2: tuple[float, float] = Field(description="drop point M2 (x, y), mm")
+    tangent_from_vertical: float = Field(gt=0.0, lt=90.0, description="theta5: tangent at M1 to the vertical, deg")
+    points: int = Field(10, ge=2, le=1000, description="target points evenly by arc length, M1 and M2 included")
+
+    @model_validator(mode="after")
+    def _distinct(self) -> "TargetArc":
+        if self.m1 == self.m2:
+            raise ValueError(f"m1 and m2 are the same point {self.m1}")
+        return self
+
+
+class DriveSection(StrictModel):
+    """Crank AB's working swing: it starts at phi10 and turns by psi, the target points at evenly
+    spaced crank angles (seed 001: 50 and 50 deg)."""
+
+    start: float = Field(ge=-360.0, le=360.0, description="phi10: crank angle AB from AD at M1, deg")
+    swing: float = Field(gt=0.0, lt=360.0, description="psi: crank swing from M1 to M2, deg")
+
+
+class LinkageSection(StrictModel):
+    """The double crank and clamp point. A number fixes a variable, ``{init, bounds}`` frees it."""
+
+    x_a: Variable = Field(description="x of the crank pivot A, mm")
+    y_a: Variable = Field(description="y of the crank pivot A, mm")
+    l1: Variable = Field(description="crank AB, mm")
+    l2: Variable = Field(description="coupler BC, mm")
+    l3: Variable = Field(description="follower CD, mm (printed as l4 = 186.7 in the paper's result list)")
+    l4: Variable = Field(description="frame AD, the shortest link, mm (printed as l3 = 45.9)")
+    l5: Variable = Field(description="clamp arm CM, mm")
+    phi3: Variable = Field(description="frame AD direction below the +x axis, deg")
+    phi4: Variable = Field(description="CM turned counter-clockwise from BC, deg")
+    branch: Literal[-1, 1] = Field(1, description="assembly: C left (+1) or right (-1) of the line B -> D")
+
+    @model_validator(mode="after")
+    def _lengths_positive(self) -> "LinkageSection":
+        for name in ("l1", "l2", "l3", "l4", "l5"):
+            require_positive(name, getattr(self, name))
+        return self
+
+
+class PickerRules(StrictModel):
+    min_transmission_angle: float = Field(40.0, gt=0.0, lt=90.0,
+                                          description="smallest transmission angle at C over the working swing, deg")
+    x_a_min: float = Field(0.0, description="eq (7): the pivot A lies between the frame and the tray, x_A > x_a_min, mm")
+
+
+class PickerObjective(StrictModel):
+    name: Literal["sum_of_distances", "sum_of_squares"] = Field(
+        "sum_of_distances", description="sum_of_distances: seed 001 eq (4), sum of |M_i - target_i| (mm); "
+                                        "sum_of_squares: sum of |M_i - target_i|^2 (mm^2)")
+    epsilon: float = Field(0.01, gt=0.0, le=1.0,
+                           description="eq (4) is solved as sum sqrt(d^2 + epsilon^2) (smooth at d = 0), mm; "
+                                       "the reported value is the exact eq (4)")
+
+
+class PickerSolver(StrictModel):
+    starts: int = Field(8, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    samples: int = Field(26, ge=2, le=2000, description="crank angles over the working swing for the transmission angle")
+    max_iter: int = Field(3000, ge=1, description="IPOPT iteration limit per start and stage")
+    backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission limit by "
+                                                             "backoff x 10 deg, so it holds between samples too")
+
+
+class PickerDoubleCrankSpec(StrictModel):
+    kind: Literal["picker_double_crank"]
+    name: str = Field(pattern=NAME_PATTERN, description="result folder name")
+    source: str = Field("", description="where the numbers come from")
+    target: TargetArc
+    drive: DriveSection
+    linkage: LinkageSection
+    rules: PickerRules = Field(default_factory=PickerRules)
+    objective: PickerObjective = Field(default_factory=PickerObjective)
+    solver: PickerSolver = Field(default_factory=PickerSolver)
+
+    def variables(self) -> dict[str, Variable]:
+        return {n: getattr(self.linkage, n) for n in ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")}
+
+    def design_values(self) -> dict[str, float]:
+        return {n: value_of(v) for n, v in self.variables().items()}
+
+
+class Installation(StrictModel):
+    """How the crank-rocker AEFG drives crank AB (seed 001 §2.1.3; our reading in PICKER.md)."""
+
+    theta1: float = Field(gt=0.0, lt=180.0, description="published angle G-A-E between the frame AG and the rocker AE "
+                                                       "at the picking extreme, deg (checked against the mechanism's)")
+    theta1_tolerance: float = Field(0.5, ge=0.0, description="|theta1 - computed| allowed, deg (printed to 1 deg)")
+    theta2: float = Field(ge=-180.0, le=180.0, description="direction of the frame A -> G above the +x axis, deg")
+    picking_extreme: Literal["folded", "extended"] = Field(
+        "folded", description="rocker extreme at which the clamp is at M1 (folded: crank and coupler overlap)")
+    holding_stroke: Literal["quick", "slow"] = Field(
+        "quick", description="the stroke M1 -> M2 that holds the seedling: the quick one shortens the holding time")
+    swing_tolerance: float = Field(0.1, ge=0.0, description="|rocker swing - crank AB swing| allowed, deg")
+
+
+class Operation(StrictModel):
+    crank_speed: float = Field(gt=0.0, le=2000.0, description="crank GF speed, r/min (seed 001: 60)")
+
+
+class Published(StrictModel):
+    """Numbers the paper reports for the combined picker, shown beside ours."""
+
+    instants: tuple[float, float, float] | None = Field(None, description="picking, dropping, picking again, s")
+
+
+class PickerSpec(StrictModel):
+    kind: Literal["picker"]
+    name: str = Field(pattern=NAME_PATTERN, description="result folder name")
+    source: str = Field("", description="where the numbers come from")
+    crank_rocker: str = Field(description="crank_rocker spec file of the drive, relative to this file")
+    double_crank: str = Field(description="picker_double_crank spec file of the linkage, relative to this file")
+    installation: Installation
+    operation: Operation
+    published: Published = Field(default_factory=Published)
+
+    def part_path(self, spec_path: Path, field: str) -> Path:
+        return (spec_path.parent / getattr(self, field)).resolve()

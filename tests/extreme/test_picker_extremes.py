@@ -1,0 +1,95 @@
+"""Degenerate and impossible crank-rocker requests: no quick return (K = 1), a vanishing swing, and
+transmission angles no crank-rocker with the given K and swing can have."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from synthesis.crank_rocker.check import mechanism
+from synthesis.crank_rocker.solve import recheck, run_solve
+from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
+from synthesis.spec import load_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+SYNTHESIS = ROOT / "problems" / "picker" / "cai2020_crank_rocker_synthesis.toml"
+
+
+def spec_file(tmp_path: Path, time_ratio: str, swing: str, gamma: str, lower: str = "5.0") -> Path:
+    text = SYNTHESIS.read_text()
+    for old, new in (("time_ratio = 1.25", f"time_ratio = {time_ratio}"), ("rocker_swing = 50.0", f"rocker_swing = {swing}"),
+                     ("min_transmission_angle = 40.0", f"min_transmission_angle = {gamma}"),
+                     ("bounds = [5.0,", f"bounds = [{lower},")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "extreme.toml"
+    path.write_text(text)
+    return path
+
+
+def cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+
+
+def simulated(loaded, design):
+    cr = mechanism(loaded.model, design)
+    q = quick_return(cr)
+    return q, float(acute(transmission_angles_deg(cr, 3600)).min())
+
+
+@pytest.mark.parametrize("time_ratio", ["1.0", "1.0001"])
+def test_no_quick_return(tmp_path, time_ratio):
+    loaded = load_spec(spec_file(tmp_path, time_ratio, "50.0", "40.0"))
+    result, _, _ = run_solve(loaded, starts=2, workers=1)
+    assert result.status == "optimal"
+    q, gmin = simulated(loaded, result.design)
+    assert q.time_ratio == pytest.approx(float(time_ratio), abs=1e-6)
+    assert math.degrees(q.swing) == pytest.approx(50.0, abs=1e-6)
+    assert gmin >= 40.0
+    if time_ratio == "1.0":   # no quick return: the two extremes lie exactly half a crank turn apart
+        assert math.degrees(q.stroke_fold_to_ext) == pytest.approx(180.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("swing", ["0.5", "0.05"])
+def test_vanishing_swing(tmp_path, swing):
+    loaded = load_spec(spec_file(tmp_path, "1.25", swing, "40.0", lower="0.01"))
+    result, _, _ = run_solve(loaded, starts=2, workers=1)
+    assert result.status == "optimal"
+    q, gmin = simulated(loaded, result.design)
+    assert math.degrees(q.swing) == pytest.approx(float(swing), rel=1e-6)
+    assert q.time_ratio == pytest.approx(1.25, abs=1e-6)
+    assert gmin >= 40.0
+    assert result.design["l7"] < 0.02 * float(swing) * 140.0          # the crank shrinks with the swing
+    rules, _ = recheck(loaded.model, result.design)
+    assert all(r.record().satisfied for r in rules)
+
+
+def test_zero_swing_is_bad_input(tmp_path):
+    proc = cli("solve", str(spec_file(tmp_path, "1.25", "0.0", "40.0")), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "crank_rocker.requirements.rocker_swing: expected > 0.0, got 0.0" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_time_ratio_below_one_is_bad_input(tmp_path):
+    proc = cli("check", str(spec_file(tmp_path, "0.8", "50.0", "40.0")), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "crank_rocker.requirements.time_ratio: expected >= 1.0, got 0.8" in proc.stderr
+
+
+@pytest.mark.parametrize("time_ratio, swing, gamma", [("1.25", "50.0", "45.0"), ("1.25", "50.0", "60.0"),
+                                                      ("2.0", "120.0", "40.0")])
+def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_ratio, swing, gamma):
+    path = spec_file(tmp_path, time_ratio, swing, gamma)
+    proc = cli("solve", str(path), "--out", str(tmp_path / "out"), "--starts", "3", "--workers", "1", cwd=tmp_path)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    err = " ".join(proc.stderr.split())
+    assert "min_transmission_angle (misses its limit by" in err
+    assert "time_ratio" in err and "rocker_swing" in err
+    assert "IPOPT said" in err and "Traceback" not in proc.stderr
+    assert (tmp_path / "out" / "cai2020_crank_rocker_synthesis" / "result.json").exists()   # written first

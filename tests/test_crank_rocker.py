@@ -1,0 +1,132 @@
+"""crank_rocker (seed 001 §2.1.3): the published lengths, the closed form of eq 8-10, the NLP on the
+simulated mechanism, and the kinematics they rest on."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import LIBRARY
+from synthesis.crank_rocker.check import evaluate, mechanism, run_check
+from synthesis.crank_rocker.closed_form import residuals, solve_paper_equations
+from synthesis.crank_rocker.solve import recheck, run_solve
+from synthesis.kinematics.crank_rocker import (CrankRocker, acute, extreme_positions, quick_return, rocker_curve,
+                                              transmission_angles_deg)
+from synthesis.spec import load_spec
+
+PICKER = LIBRARY / "picker"
+#: seed 001 §2.1.3: K = 1.25, psi = 50 deg, gamma_min = 40 deg, l10 = 140 mm -> l7, l8, l9 (mm)
+PUBLISHED = {"l7": 54.0, "l8": 107.6, "l9": 133.5}
+#: l8 and l9 are printed to 0.1 mm, l7 to 1 mm: a length printed as 54 lies within 0.5 mm of its value
+LENGTH_TOLERANCE = 0.5
+
+
+def simulated(cr: CrankRocker) -> tuple[float, float, float]:
+    """K, swing (deg) and minimum transmission angle (deg, 0.1 deg grid) of the simulated mechanism."""
+    q = quick_return(cr)
+    return q.time_ratio, math.degrees(q.swing), float(acute(transmission_angles_deg(cr, 3600)).min())
+
+
+def test_published_lengths_simulate_to_the_published_requirements():
+    k, psi, gmin = simulated(CrankRocker(54.0, 107.6, 133.5, 140.0))
+    assert k == pytest.approx(1.25, abs=0.005)
+    assert psi == pytest.approx(50.0, abs=0.1)
+    assert gmin >= 40.0 - 0.1
+    # what the printed (rounded) lengths do, pinned: K 1.25006, psi 49.951 deg, gamma_min 40.012 deg
+    assert (k, psi, gmin) == pytest.approx((1.250055, 49.9506, 40.0119), abs=2e-4)
+
+
+def test_extremes_are_stationary_and_bound_the_rocker_angle():
+    cr = CrankRocker(54.0, 107.6, 133.5, 140.0)
+    ex = extreme_positions(cr)
+    at = rocker_curve(cr, np.array([ex.phi_folded, ex.phi_extended]))
+    assert np.abs(at["dbeta"]).max() < 1e-12
+    dense = rocker_curve(cr, np.linspace(0, 2 * np.pi, 20001))["beta"]
+    assert dense.max() <= max(ex.beta_folded, ex.beta_extended) + 1e-12
+    assert dense.min() >= min(ex.beta_folded, ex.beta_extended) - 1e-12
+    # folded: |GE| = l8 - l7, extended: |GE| = l8 + l7 (textbook dead centres, used here only as a check)
+    g_e = np.hypot(*at["tip"])
+    assert g_e == pytest.approx([107.6 - 54.0, 107.6 + 54.0], abs=1e-9)
+
+
+def test_rocker_derivative_by_ad_matches_central_differences():
+    cr = CrankRocker(54.0, 107.6, 133.5, 140.0)
+    phi = np.linspace(0.1, 6.2, 25)
+    h = 1e-6
+    fd = (rocker_curve(cr, phi + h)["beta"] - rocker_curve(cr, phi - h)["beta"]) / (2 * h)
+    assert rocker_curve(cr, phi)["dbeta"] == pytest.approx(fd, abs=1e-7)
+
+
+def test_closed_form_reproduces_the_published_lengths():
+    designs = solve_paper_equations(1.25, 50.0, 40.0, 140.0)
+    valid = [d for d in designs if d.min_transmission_deg is not None and d.min_transmission_deg >= 40.0 - 1e-6]
+    shortest = valid[0]
+    for name, value in PUBLISHED.items():
+        assert getattr(shortest, name) == pytest.approx(value, abs=LENGTH_TOLERANCE)
+    # the paper's eq (8)-(10) hold at the root, and the simulated mechanism agrees with them
+    z = (shortest.l7, shortest.l8, shortest.l9, math.radians(shortest.theta1_deg))
+    assert np.abs(residuals(z, 1.25, math.radians(50), math.radians(40), 140.0)).max() < 1e-10
+    assert shortest.time_ratio == pytest.approx(1.25, abs=1e-9)
+    assert shortest.swing_deg == pytest.approx(50.0, abs=1e-9)
+    assert shortest.theta1_deg == pytest.approx(22.44, abs=0.01)       # printed as theta1 = 22 deg
+    # the other root with gamma_min = 40 deg is longer; a third root meets eq (10) only, its true minimum
+    # transmission angle (crank against the frame) is far below 40 deg
+    assert len(valid) == 2 and valid[1].total_length > shortest.total_length + 5
+    assert any(d.min_transmission_deg is not None and d.min_transmission_deg < 30 for d in designs)
+
+
+def test_nlp_reproduces_the_published_lengths_and_the_closed_form():
+    loaded = load_spec(PICKER / "cai2020_crank_rocker_synthesis.toml")
+    result, _, _ = run_solve(loaded, starts=4, workers=1)
+    assert result.status == "optimal"
+    d = result.design
+    for name, value in PUBLISHED.items():
+        assert d[name] == pytest.approx(value, abs=LENGTH_TOLERANCE)
+    closed = result.extra["closed_form"]["shortest_valid"]
+    for name in PUBLISHED:
+        assert d[name] == pytest.approx(closed[name], abs=1e-3)
+    # verified by simulating the returned lengths, independently of the solver
+    k, psi, gmin = simulated(mechanism(loaded.model, d))
+    assert k == pytest.approx(1.25, abs=0.005)
+    assert psi == pytest.approx(50.0, abs=0.1)
+    assert gmin >= 40.0 - 0.1
+    rules, _ = recheck(loaded.model, d)
+    assert all(r.record().satisfied for r in rules)
+
+
+def test_largest_minimum_transmission_angle_is_where_the_eq10_roots_merge():
+    loaded = load_spec(PICKER / "crank_rocker_max_transmission.toml")
+    result, _, _ = run_solve(loaded, starts=3, workers=1)
+    assert result.status == "optimal"
+    best = result.objective["value"]
+    k, psi, gmin = simulated(mechanism(loaded.model, result.design))
+    assert gmin == pytest.approx(best, abs=1e-3)
+    assert (k, psi) == pytest.approx((1.25, 50.0), abs=1e-6)
+    assert best > 40.0
+    # independent of the NLP: eq (8)-(10) have valid roots just below the optimum and none just above
+    def valid_roots(g):
+        return [x for x in solve_paper_equations(1.25, 50.0, g, 140.0)
+                if x.min_transmission_deg is not None and x.min_transmission_deg >= g - 1e-6]
+    assert len(valid_roots(best - 0.01)) == 2
+    assert valid_roots(best + 0.01) == []
+
+
+def test_check_of_a_crank_that_cannot_turn_reports_the_rules_unevaluated():
+    loaded = load_spec(PICKER / "cai2020_crank_rocker.toml")
+    cr = CrankRocker(150.0, 107.6, 133.5, 140.0)          # crank longer than the frame: no full turn
+    rules, q = evaluate(loaded.model, cr)
+    records = {r.name: r.record() for r in rules}
+    assert q is None
+    assert not records["grashof_crank_rocker"].satisfied
+    assert records["time_ratio"].value is None and "cannot make a full turn" in records["time_ratio"].note
+
+
+def test_check_result_facts():
+    result = run_check(load_spec(PICKER / "cai2020_crank_rocker.toml"))
+    m = result.extra["motion"]
+    assert result.all_satisfied
+    assert m["strokes_deg"]["folded_to_extended"] == pytest.approx(160.0, abs=0.01)     # 180 - theta, eq (8)
+    assert m["extreme_crank_angle_deg"] == pytest.approx(20.0, abs=0.01)
+    assert m["min_transmission_at_crank_deg"] == pytest.approx(0.0, abs=1e-9)         # eq (10): crank along AG
