@@ -191,7 +191,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     if replaced:
         console.print(f"replaced the previous run in {folder}/")
     console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
-    if result.status == "infeasible":
+    if result.status in ("infeasible", "failed"):
         raise solver_module.diagnose_infeasible(loaded, result, reports)
     bad = result.violated()
     if bad:
