@@ -76,6 +76,20 @@ def test_infeasible_rule_set_exits_3_naming_the_conflict(tmp_path):
     assert data["status"] == "infeasible"          # the run's result is kept, not lost
 
 
+def test_no_start_converging_is_a_failed_run_not_a_conflict(tmp_path):
+    text = (PLANTING / "redesign_from_example1.toml").read_text()
+    assert "max_iter" not in text
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text.replace("[solver]", "[solver]\nmax_iter = 2"))
+    proc = cli("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "IPOPT converged from none of the 2 starts" in proc.stderr and "Maximum_Iterations_Exceeded" in proc.stderr
+    assert "Rules that conflict" not in proc.stderr
+    assert "a larger [solver] max_iter" in proc.stderr       # brackets in messages are text, not markup
+    data = json.loads((tmp_path / "redesign_from_example1" / "result.json").read_text())
+    assert data["status"] == "failed"
+
+
 def test_solve_cli_writes_the_contract(tmp_path):
     proc = cli("solve", str(PLANTING / "redesign_from_example4.toml"), "--starts", "2", "--seed", "0",
                "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)

@@ -111,7 +111,12 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     pts, scene = chosen.points, chosen.scene
     records = [r.to_json() for r in chosen.records]
     feasible = chosen.satisfied
-    status = ("optimal" if chosen.outcome.success else "feasible") if feasible else "infeasible"
+    if feasible:
+        status = "optimal" if chosen.outcome.success else "feasible"
+    else:   # IPOPT neither converged nor proved infeasibility from any start: a failure, not a conflict
+        evidence = any(r.outcome.success or r.outcome.return_status == "Infeasible_Problem_Detected"
+                       for r in reports.values())
+        status = "infeasible" if evidence else "failed"
     objective_value = nlp_shape.objective_value(chosen.outcome.design, chosen.outcome.objective)
     design = dict(chosen.outcome.design)
     design["branch"] = spec.arm.branch
@@ -144,8 +149,14 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
 def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
     """The exit-3 error for a run where no start satisfied every rule."""
     spec = loaded.model
-    names, status = conflicting_rules(spec, result.design)
     statuses = sorted({r.outcome.return_status for r in reports})
+    if result.status == "failed":
+        return SolverError(
+            f"IPOPT converged from none of the {len(reports)} starts (it said: {', '.join(statuses)}); the best "
+            f"design found still violates {', '.join(r['name'] for r in result.violated())}. Try more --starts, "
+            f"a larger [solver] max_iter, or a start design ([arm] init values) closer to a feasible one; "
+            f"the per-start log is in ipopt.log.")
+    names, _ = conflicting_rules(spec, result.design)
     worst = [r["name"] for r in result.violated()]
     if not names:
         return SolverError(
