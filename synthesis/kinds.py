@@ -9,12 +9,16 @@ from typing import Callable
 from synthesis.result import Result
 
 #: kind -> (module with run_check, module and function writing its figures)
-_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check"}
-_SOLVERS = {"planting_fourbar": "synthesis.planting.solve"}
-_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"}}
+_CHECKERS = {"planting_fourbar": "synthesis.planting.check:run_check",
+             "fourbar_path": "synthesis.fourbar_path.check:run_check"}
+_SOLVERS = {"planting_fourbar": "synthesis.planting.solve",
+            "fourbar_path": "synthesis.fourbar_path.solve"}
+_FIGURES = {"planting_fourbar": {"trajectory.png": "synthesis.planting.plots:trajectory_figure"},
+            "fourbar_path": {"coupler_curve.png": "synthesis.fourbar_path.plots:coupler_curve_figure",
+                             "linkage.gif": "synthesis.fourbar_path.plots:linkage_animation"}}
 #: kind -> "module:function(results: list[Result], folder: Path) -> list[str]" drawing several
 #: candidates of that kind overlaid (baseline first) into ``folder``; returns the file names written
-_COMPARE_FIGURES: dict[str, str] = {}
+_COMPARE_FIGURES: dict[str, str] = {"fourbar_path": "synthesis.fourbar_path.plots:compare_coupler_curves"}
 
 
 def _resolve(target: str) -> Callable:

@@ -19,6 +19,7 @@ from synthesis.spec.common import read_toml, validate
 #: kind -> "module:ModelClass"
 KINDS: dict[str, str] = {
     "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
+    "fourbar_path": "synthesis.spec.fourbar_path:FourbarPathSpec",
 }
 
 
