@@ -52,7 +52,8 @@ def joint_positions(design: dict, theta, branch: int) -> dict[str, np.ndarray]:
         gamma = np.arccos((r4 * r4 + d * d - r3 * r3) / (2.0 * r4 * d))
     b = r1 + r4 * np.exp(1j * (np.angle(oa) - branch * gamma))
     p = a + (design["rcx"] + 1j * design["rcy"]) * (b - a) / r3
-    turn, shift = np.exp(1j * math.radians(design["theta0"])), design["x0"] + 1j * design["y0"]
+    turn = np.exp(1j * np.radians(design["theta0"]))      # design values may be arrays (broadcast)
+    shift = design["x0"] + 1j * np.asarray(design["y0"])
     place = lambda z: shift + turn * z   # noqa: E731
     return {"O": place(np.zeros_like(a)), "A": place(a), "B": place(b), "O'": place(r1 + 0 * a), "P": place(p)}
 
@@ -113,7 +114,8 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
     if spec.timed:
         crank_deg, timing = list(spec.targets.crank_deg), "prescribed"
     elif crank_deg is None:
-        crank_deg, timing = list(np.degrees(nearest_crank_angles(design, targets, branch))), "nearest"
+        nearest = np.degrees(nearest_crank_angles(design, targets, branch))
+        crank_deg, timing = unwrapped(nearest, spec.rules.direction), "nearest"
     thetas = np.radians(np.array(crank_deg, dtype=float))
     at_targets = joint_positions(design, thetas, branch)
     errors = np.abs(at_targets["P"] - (targets[:, 0] + 1j * targets[:, 1]))
@@ -134,6 +136,19 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
         sign, direction = _direction(lim.direction, list(crank_deg))
         rules.append(sequence_rule(list(crank_deg), sign, direction))
     return Evaluation(rules, [float(a) for a in crank_deg], errors, timing)
+
+
+def unwrapped(angles_deg: np.ndarray, direction: str) -> list[float]:
+    """Angles in [0, 360) made to follow each other in the crank direction, each step less than a turn
+    (direction "either": whichever way spans less)."""
+    if not np.all(np.isfinite(angles_deg)):
+        return [float(a) for a in angles_deg]
+    options = []
+    for sign in {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}[direction]:
+        steps = sign * ((sign * np.diff(angles_deg)) % 360.0)
+        out = angles_deg[0] + np.concatenate([[0.0], np.cumsum(steps)])
+        options.append((abs(out[-1] - out[0]), -sign, out))
+    return [float(a) for a in min(options, key=lambda o: (o[0], o[1]))[2]]
 
 
 def _direction(direction: str, crank_deg: list[float]) -> tuple[float, str]:

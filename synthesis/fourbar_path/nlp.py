@@ -160,6 +160,7 @@ class PathNLP:
                 "ipopt.bound_relax_factor": 0.0}
         self.solver = ca.nlpsol("fourbar_path", "ipopt",
                                 {"x": self.decision, "p": sign, "f": f, "g": self.g}, opts)
+        self.direction = sign
         self.functions = ca.Function("fg", [self.decision, sign], [f, self.g])
         self.starts = StartMaker(spec, seed)
 
