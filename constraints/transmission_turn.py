@@ -27,7 +27,7 @@ def transmission_turn_rules(r1, r2, r3, r4, bounds: tuple) -> list[Rule]:
                  nlp_rows=((c_max, math.cos(math.radians(hi)), None),))]
 
 
-def transmission_sampled_rows(thetas: list, r1, r2, r3, r4, bounds: tuple) -> list[Rule]:
+def transmission_sampled_rules(thetas: list, r1, r2, r3, r4, bounds: tuple) -> list[Rule]:
     """The same two rules when the crank does not turn fully: cos mu at every sampled crank angle."""
     lo, hi = bounds
     cs = [cos_transmission(th, r1, r2, r3, r4) for th in thetas]

@@ -136,10 +136,13 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
 
     \b
-    Every rule is a constraint; the objective comes from the spec's [objective] name:
-      nearest  smallest change from the given design (the default)
-      robust   maximise the smallest normalised rule margin
-      smooth   minimise the peak claw acceleration over a turn
+    Every rule is a constraint; the objective depends on the kind:
+      planting_fourbar  the spec's [objective] name: nearest (smallest change from the
+                        given design, default), robust (largest smallest normalised rule
+                        margin), smooth (smallest peak claw acceleration over a turn)
+      fourbar_path      sum of squared distances of the coupler point to the targets, mm^2;
+                        [solver] stop_at_objective ends the multistart at the first start
+                        (in start order) that reaches it
     Starts are a fixed-seed Latin hypercube (start 0 = the given design). The best start is
     re-checked on a 10x finer grid, independently of the solver. Writes OUT/<name>/result.json,
     report.html, ipopt.log and plots. Exit 0 all rules hold, 3 no start satisfies them (the

@@ -34,7 +34,7 @@ from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_e
 from synthesis.bench import BenchCase, MethodRun
 from synthesis.fourbar_path.check import evaluate, joint_positions
 from synthesis.fourbar_path.solve import run_solve
-from synthesis.fourbar_path.starts import _CLASS_ROWS
+from synthesis.fourbar_path.starts import CLASS_ROWS
 from synthesis.fourbar_path.synthetic import truth_spec
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
 from synthesis.spec import LoadedSpec, load_spec
@@ -76,9 +76,8 @@ def ipopt_multistart(loaded: LoadedSpec):
 
         result, _, _ = run_solve(staged, workers=1, on_start=on_start)
         s = result.solver
-        objective = result.objective["value"]
-        return MethodRun(objective if objective is not None else math.inf,
-                         result.extra["fine_grid_worst_violation"] or (0.0 if result.status != "infeasible" else math.inf),
+        objective, violation = result.objective["value"], result.extra["fine_grid_worst_violation"]
+        return MethodRun(math.inf if objective is None else objective, math.inf if violation is None else violation,
                          trace, {"starts": s["starts"], "starts_run": s["starts_run"],
                                  "starts_needed": s["starts_needed"], "best_start": s["best_start"],
                                  "status": result.status})
@@ -136,7 +135,7 @@ class DEProblem:
         out = []
         if lim.grashof != "any":
             a = np.zeros((3, d))
-            a[:, :4] = _CLASS_ROWS[lim.grashof]
+            a[:, :4] = CLASS_ROWS[lim.grashof]
             out.append(LinearConstraint(a, 0.0, np.inf))
         if lim.transmission_angle is not None:
             lo, hi = (math.radians(v) for v in lim.transmission_angle)
@@ -152,11 +151,13 @@ class DEProblem:
         return np.array([(base + 2 * r1 * r2) / (2 * r3 * r4), (base - 2 * r1 * r2) / (2 * r3 * r4)])
 
     def _sequence_violation(self, x: np.ndarray) -> np.ndarray:
+        """How far the gaps are from all having one allowed direction's sign within one turn, deg;
+        (1,) for one candidate x (D,), (1, S) for S candidates (D, S)."""
         gaps = np.asarray(x)[10:]
         signs = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}[self.spec.rules.direction]
         v = [np.sum(np.maximum(0.0, -s * gaps), axis=0) + np.maximum(0.0, s * np.sum(gaps, axis=0) - 360.0)
              for s in signs]
-        return np.atleast_1d(np.min(v, axis=0))[None, ...] if np.ndim(gaps) > 1 else np.atleast_1d(np.min(v, axis=0))
+        return np.reshape(np.min(v, axis=0), (1, -1) if gaps.ndim > 1 else (1,))
 
     def decode(self, x: np.ndarray) -> tuple[dict, list[float]]:
         x = np.asarray(x, dtype=float)

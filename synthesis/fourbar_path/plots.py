@@ -21,7 +21,7 @@ from synthesis.fourbar_path.check import joint_positions  # noqa: E402
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
-GIF_FRAMES = 48
+GIF_FRAMES = 36
 LINK = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
 
 
@@ -104,35 +104,42 @@ def coupler_curve_figure(result: Result, path: Path) -> None:
 
 
 def linkage_animation(result: Result, path: Path) -> None:
-    """The linkage over one cycle of the trajectory (GIF)."""
+    """The linkage over one cycle of the trajectory (GIF, GIF_FRAMES frames)."""
     design, branch = _design(result)
     tr = result.trajectory
-    fig, ax = plt.subplots(figsize=(5.5, 5.0))
+    fig, ax = plt.subplots(figsize=(4.6, 4.2))
     if not tr:     # nothing moves: a one-frame GIF that says why
         ax.text(0.5, 0.5, "the linkage does not assemble", ha="center", transform=ax.transAxes)
-        FuncAnimation(fig, lambda k: [], frames=[0]).save(str(path), writer=PillowWriter(fps=1), dpi=70)
+        FuncAnimation(fig, lambda k: [], frames=[0]).save(str(path), writer=PillowWriter(fps=1), dpi=64)
         plt.close(fig)
         return
     crank = np.radians(np.asarray(tr["crank_deg"], dtype=float))
     frames = np.linspace(0, len(crank) - 1, GIF_FRAMES, endpoint=False).astype(int)
-    joints = joint_positions(design, crank, branch)
+    joints = joint_positions(design, crank[frames], branch)
     targets = _targets(result)
-    x, y = np.asarray(tr["x"]), np.asarray(tr["y"])
-    ax.plot(x, y, color="tab:blue", lw=1.0, alpha=0.7)
+    ax.plot(tr["x"], tr["y"], color="tab:blue", lw=1.0, alpha=0.7)
     if targets.size:
         ax.plot(targets[:, 0], targets[:, 1], "x", color="tab:red", ms=6, mew=1.4)
     _frame_axes(ax, result, list(joints.values()))
-    ax.set_title(f"{result.name}: one cycle", fontsize=10)
-    drawn: list = []
+    ax.set_title(f"{result.name}: one cycle", fontsize=9)
+    z = {n: np.asarray(v) for n, v in joints.items()}
+    ax.plot([z["O"][0].real, z["O'"][0].real], [z["O"][0].imag, z["O'"][0].imag], "^", color="k", ms=8, zorder=5)
+    chain, = ax.plot([], [], **LINK)                                    # O - A - B - O'
+    triangle, = ax.plot([], [], color="0.25", lw=1.0, ls="--", zorder=4)  # A - P - B
+    pins, = ax.plot([], [], "o", color="w", mec="k", ms=5, zorder=6)
+    point, = ax.plot([], [], "o", color="tab:red", ms=6, zorder=7)
+    fig.tight_layout()
 
     def draw(k: int):
-        for artist in drawn:
-            artist.remove()
-        drawn[:] = _linkage_lines(ax, joints, int(k))
-        return drawn
+        o, a, b, o2, p = (z[n][k] for n in ("O", "A", "B", "O'", "P"))
+        chain.set_data([o.real, a.real, b.real, o2.real], [o.imag, a.imag, b.imag, o2.imag])
+        triangle.set_data([a.real, p.real, b.real], [a.imag, p.imag, b.imag])
+        pins.set_data([a.real, b.real], [a.imag, b.imag])
+        point.set_data([p.real], [p.imag])
+        return chain, triangle, pins, point
 
-    anim = FuncAnimation(fig, draw, frames=frames, blit=False)
-    anim.save(str(path), writer=PillowWriter(fps=16), dpi=70)
+    FuncAnimation(fig, draw, frames=range(GIF_FRAMES), blit=True).save(
+        str(path), writer=PillowWriter(fps=12), dpi=64)
     plt.close(fig)
 
 

@@ -48,7 +48,7 @@ ICP_ROUNDS = 5         # nearest-point refinements of the alignment
 SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 
 #: the Grashof class as rows  A @ (r1, r2, r3, r4) >= 0  (constraints.grashof_class)
-_CLASS_ROWS = {
+CLASS_ROWS = {
     "crank-rocker": np.array([[-1, -1, 1, 1], [1, -1, -1, 1], [1, -1, 1, -1]], dtype=float),
     "double-crank": np.array([[-1, -1, 1, 1], [-1, 1, -1, 1], [-1, 1, 1, -1]], dtype=float),
 }
@@ -65,9 +65,9 @@ class StartPoint:
 
 def grashof_anchor(bounds: np.ndarray, grashof: str) -> tuple[np.ndarray, float] | None:
     """(lengths r1..r4 maximising the smallest class slack within the bounds, that slack); None for "any"."""
-    if grashof not in _CLASS_ROWS:
+    if grashof not in CLASS_ROWS:
         return None
-    a = _CLASS_ROWS[grashof]
+    a = CLASS_ROWS[grashof]
     # maximise t  s.t.  a @ r >= t, i.e.  -a @ r + t <= 0
     res = linprog(c=[0, 0, 0, 0, -1], A_ub=np.hstack([-a, np.ones((3, 1))]), b_ub=np.zeros(3),
                   bounds=[tuple(b) for b in bounds[:4]] + [(None, None)], method="highs")
@@ -76,7 +76,7 @@ def grashof_anchor(bounds: np.ndarray, grashof: str) -> tuple[np.ndarray, float]
 
 def pull_into_class(lengths: np.ndarray, anchor: np.ndarray, keep: float, grashof: str) -> np.ndarray:
     """The point of the segment anchor -> lengths nearest to ``lengths`` whose class slacks are >= keep."""
-    a = _CLASS_ROWS[grashof]
+    a = CLASS_ROWS[grashof]
     s_start, s_anchor = a @ lengths, a @ anchor
     lam = 1.0
     for s1, s0 in zip(s_start, s_anchor):
