@@ -87,7 +87,8 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
             out.wall_s = time.perf_counter() - t0
             runs[method].append(out)
             tick(None)
-    feasible = [r.objective for rs in runs.values() for r in rs if r.worst_violation == 0 and math.isfinite(r.objective)]
+    feasible = [r.objective for rs in runs.values() for r in rs
+                if r.worst_violation == 0 and math.isfinite(r.objective)]
     best = min([best] + feasible)
     rows = []
     for method, rs in runs.items():
@@ -161,7 +162,8 @@ def plot_error_vs_time(results: list[dict], path: Path) -> None:
             gaps = [max(o - res["best_known"], FLOOR) if o is not None and math.isfinite(o) else math.nan
                     for o in row["objectives"]]
             ax_gap.plot(row["wall_s"], gaps, m, color=colour, ms=6, mfc="none" if m != "o" else colour, alpha=0.8)
-            trace = [(t, max(f - res["best_known"], FLOOR)) for t, f in row["trace"] if f is not None and math.isfinite(f)]
+            trace = [(t, max(f - res["best_known"], FLOOR)) for t, f in row["trace"]
+                     if f is not None and math.isfinite(f)]
             if trace:
                 ax_gap.plot(*zip(*trace), "-" if methods.index(row["method"]) == 0 else "--", color=colour,
                             lw=0.9, alpha=0.6)

@@ -114,8 +114,10 @@ def _with(tmp_path, edit) -> str:
      "fourbar_path.targets.points.1: y: expected a finite number, got inf"),
     (lambda d: d["bounds"].update(r3=[60, 5]), "fourbar_path.bounds.r3: [60, 5] has lo > hi; write it as [5, 60]"),
     (lambda d: d["bounds"].update(rc_x=[5, 60]), "fourbar_path.bounds.rc_x: unknown field; did you mean 'rcx'?"),
-    (lambda d: d["bounds"].update(theta_0=[0, 360]), "fourbar_path.bounds.theta_0: unknown field; did you mean 'theta0'?"),
-    (lambda d: d["bounds"].update(r2=[-1, 60]), "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
+    (lambda d: d["bounds"].update(theta_0=[0, 360]),
+     "fourbar_path.bounds.theta_0: unknown field; did you mean 'theta0'?"),
+    (lambda d: d["bounds"].update(r2=[-1, 60]),
+     "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
     (lambda d: d["rules"].update(grashof="crank_rocker"), "fourbar_path.rules.grashof: expected 'crank-rocker'"),
 ])
 def test_bad_input_names_the_field_and_value(tmp_path, edit, message):

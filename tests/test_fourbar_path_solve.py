@@ -130,6 +130,16 @@ def test_clockwise_direction_and_order_off():
     assert "sequence" not in {r["name"] for r in unordered.rules}
 
 
+def test_numbers_in_bounds_fix_variables():
+    truth, _ = random_crank_rocker(7)
+    data = truth_data(7, 10, timed=False, solver={"stop_at_objective": RECOVERED})
+    fixed = {k: truth[k] for k in ("r1", "x0", "theta0")}
+    data["bounds"].update(fixed)
+    result, _, _ = run_solve(truth_spec_from(data), workers=1)
+    assert result.objective["value"] < RECOVERED
+    assert {k: result.design[k] for k in fixed} == fixed       # exactly, not approximately
+
+
 def test_same_seed_same_result_for_any_number_of_workers():
     loaded = truth_spec(0, 18, timed=False, solver={"stop_at_objective": RECOVERED, "starts": 24})
     a, _, _ = run_solve(loaded, workers=1)

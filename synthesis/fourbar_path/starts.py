@@ -228,15 +228,16 @@ def moved_design(design: np.ndarray, bounds: np.ndarray, sim: tuple, mean_src: n
     s, a, _ = sim
     lo_s, hi_s = _scale_limits(design[:6], bounds[:6])
     s = min(max(s, lo_s), hi_s)
-    rot = _rotation(a)
-    t = mean_dst - s * rot @ mean_src           # refit the translation for the (possibly clipped) scale
-    out = design.copy()
-    out[:6] *= s
-    out[6:8] = s * rot @ design[6:8] + t
     theta0 = design[8] + math.degrees(a)
     lo, hi = bounds[8]
     if hi - lo >= 360.0:                        # a full circle of frame angles: wrap into it
         theta0 = lo + (theta0 - lo) % 360.0
+    theta0 = min(max(theta0, lo), hi)
+    rot = _rotation(math.radians(theta0 - design[8]))    # the turn that is left after the bounds
+    t = mean_dst - s * rot @ mean_src           # refit the translation for that scale and turn
+    out = design.copy()
+    out[:6] *= s
+    out[6:8] = s * rot @ design[6:8] + t
     out[8] = theta0
     return np.clip(out, bounds[:, 0], bounds[:, 1])
 
