@@ -44,8 +44,9 @@ def cli() -> None:
     \b
     Write a spec file (TOML; see problems/ for examples), then:
       agrisynth check SPEC    evaluate the spec's design against every rule
-      agrisynth solve SPEC    optimise the free variables so every rule holds
+      agrisynth solve SPEC    optimise the spec's free variables (multistart IPOPT)
       agrisynth compare RUN.. compare result folders side by side in one HTML page
+      agrisynth bench KIND    compare methods: objective reached against wall time
       agrisynth problems      list the problem library
     Results go to results/<spec name>/ (result.json, report.html, plots).
     Exit codes: 0 all rules satisfied, 1 a rule violated, 2 bad input,
@@ -137,10 +138,13 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
 
     \b
-    Every rule is a constraint; the objective comes from the spec's [objective] name:
-      nearest  smallest change from the given design (the default)
-      robust   maximise the smallest normalised rule margin
-      smooth   minimise the peak claw acceleration over a turn
+    Every rule is a constraint; the objective depends on the kind:
+      planting_fourbar  the spec's [objective] name: nearest (smallest change from the
+                        given design, default), robust (largest smallest normalised rule
+                        margin), smooth (smallest peak claw acceleration over a turn)
+      fourbar_path      sum of squared distances of the coupler point to the targets, mm^2;
+                        [solver] stop_at_objective ends the multistart at the first start
+                        (in start order) that reaches it
     Starts are a fixed-seed Latin hypercube (start 0 = the given design). The best start is
     re-checked on a 10x finer grid, independently of the solver. Writes OUT/<name>/result.json,
     report.html, ipopt.log and plots. Exit 0 all rules hold, 3 no start satisfies them (the
@@ -232,6 +236,84 @@ def compare(results: tuple[Path, ...], out: Path) -> None:
         verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"
         console.print(f"{c.label}: {c.result.status}, {verdict}")
     console.print(f"wrote {page}")
+
+
+@cli.command()
+@click.argument("problems", nargs=-1, metavar="[PROBLEM]...")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+              help="output folder; the bench writes OUT/bench/bench.json and OUT/bench/error_vs_time.png")
+@click.option("--repeats", type=click.IntRange(min=1), default=5, show_default=True,
+              help="runs of each method on each problem; the table shows the median wall time")
+def bench(problems: tuple[str, ...], out: Path, repeats: int) -> None:
+    """Compare methods on the same problems: objective reached and median wall time, side by side.
+
+    \b
+    PROBLEM is a kind name (its default bench set) or a spec file; none = every kind's default set.
+    Kinds with a bench: fourbar_path (IPOPT multistart vs scipy differential_evolution).
+    Both methods stop at the same target objective (best known + tolerance). Every result is
+    re-checked on the fine grid (worst rule violation). Writes OUT/bench/bench.json and
+    OUT/bench/error_vs_time.png (log-log: objective gap and violation against wall time).
+    \b
+    Examples:
+      agrisynth bench fourbar_path
+      agrisynth bench problems/fourbar_path/picking_arc.toml --repeats 3 --out /tmp/b
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from synthesis import bench as benchmod
+    from synthesis.spec import KINDS, load_spec
+
+    known = benchmod.kinds_with_bench()
+    by_kind: dict[str, list | None] = {}
+    for item in problems or tuple(known):
+        if item in known:
+            by_kind[item] = None
+        elif item in KINDS:
+            raise click.BadParameter(f"kind {item!r} has no bench cases (kinds with a bench: {', '.join(known)})",
+                                     param_hint="PROBLEM")
+        elif item.endswith(".toml") or Path(item).exists():
+            loaded = load_spec(item)
+            if loaded.kind not in known:
+                raise click.BadParameter(f"{item}: kind {loaded.kind!r} has no bench cases "
+                                         f"(kinds with a bench: {', '.join(known)})", param_hint="PROBLEM")
+            if by_kind.get(loaded.kind, []) is not None:
+                by_kind.setdefault(loaded.kind, []).append(loaded)
+        else:
+            raise click.BadParameter(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
+                                     param_hint="PROBLEM")
+    cases = [case for kind, specs in by_kind.items() for case in benchmod.cases_for(kind, specs, 0)]
+    total = sum(len(c.methods) * repeats + (1 if callable(c.best_known) else 0) for c in cases)
+    results = []
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console, transient=not sys.stdout.isatty()) as progress:
+        task = progress.add_task("bench", total=total)
+        for case in cases:
+            def tick(what: str | None) -> None:
+                if what is None:
+                    progress.advance(task)
+                else:
+                    progress.update(task, description=what)
+
+            results.append(benchmod.run_case(case, repeats, tick))
+    settings = {"repeats": repeats, "problems": [c.problem for c in cases]}
+    folder = benchmod.write_bench(out, results, settings)
+    console.print(bench_table(results, repeats))
+    console.print(f"wrote {folder}/bench.json, error_vs_time.png")
+
+
+def bench_table(results: list[dict], repeats: int) -> Table:
+    table = Table(title=f"bench: objective reached and median wall time of {repeats} runs", title_justify="left")
+    for col, just in (("problem", "left"), ("method", "left"), ("objective", "right"), ("gap to best", "right"),
+                      ("worst violation", "right"), ("median s", "right"), ("time ratio", "right")):
+        table.add_column(col, justify=just, no_wrap=True)
+    for res in results:
+        ratios = {r["method"]: r["time_ratio"] for r in res["ratios"]}
+        for row in res["rows"]:
+            ratio = ratios.get(row["method"])
+            table.add_row(row["problem"], row["method"], f"{row['objective']:.4g}", f"{row['objective_gap']:.3g}",
+                          f"{row['worst_violation']:.3g}", f"{row['median_s']:.3f}",
+                          "1 (reference)" if ratio is None else f"{ratio:.1f}x")
+    return table
 
 
 def main() -> None:

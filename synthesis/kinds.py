@@ -56,6 +56,12 @@ _KINDS = {
         solver=None,
         figures={"trajectory.png": "synthesis.picker.plots:picker_figure",
                  "animation.gif": "synthesis.picker.plots:picker_animation"}),
+    "fourbar_path": KindEntry(
+        checker="synthesis.fourbar_path.check:run_check",
+        solver="synthesis.fourbar_path.solve",
+        figures={"coupler_curve.png": "synthesis.fourbar_path.plots:coupler_curve_figure",
+                 "linkage.gif": "synthesis.fourbar_path.plots:linkage_animation"},
+        compare="synthesis.fourbar_path.plots:compare_coupler_curves"),
 }
 
 

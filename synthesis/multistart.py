@@ -59,27 +59,46 @@ def default_workers() -> int:
 
 
 def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
-               on_done: Callable[[Any], None] = lambda outcome: None, scheduler: str | None = None) -> list:
+               on_done: Callable[[Any], None] = lambda outcome: None,
+               stop_when: Callable[[Any], bool] | None = None, scheduler: str | None = None) -> list:
     """Solve every start; returns the outcomes in start order. ``on_done`` sees each as it finishes.
 
+    ``stop_when(outcome)`` ends the multistart early: when the start with the smallest index k for
+    which it holds has finished, together with every start before it, the remaining starts are
+    cancelled and the outcomes of starts 0..k are returned (in order; outcomes of later starts that
+    happened to finish are dropped).  The result is therefore the same for any number of workers.
+
     ``scheduler`` (a dask.distributed address) sends the starts to that cluster instead of a local
-    process pool of ``workers``.  KeyboardInterrupt propagates after cancelling pending starts;
-    outcomes already passed to ``on_done`` are the caller's to keep.
+    process pool of ``workers``; there every start runs, and ``stop_when`` only trims the outcomes
+    the same way, so the answer does not depend on where it ran.
+
+    KeyboardInterrupt propagates after cancelling pending starts; outcomes already passed to
+    ``on_done`` are the caller's to keep.
     """
     if scheduler is not None:
         try:
             from synthesis.cluster import run_starts_on_cluster
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
-        return run_starts_on_cluster(factory, starts, scheduler, on_done)
+        everything = run_starts_on_cluster(factory, starts, scheduler, on_done)
+        first = next((i for i, out in enumerate(everything) if stop_when is not None and stop_when(out)), None)
+        return everything if first is None else everything[:first + 1]
     outcomes: dict[int, Any] = {}
+    stop_at = len(starts) - 1                  # the last start index that counts
+
+    def settled() -> bool:
+        return all(i in outcomes for i in range(stop_at + 1))
+
     if workers <= 1:
         executor: Executor = _InProcess(factory)
         for i, x0 in enumerate(starts):
             out = executor.submit(None, i, x0).result()
             outcomes[i] = out
             on_done(out)
-        return [outcomes[i] for i in range(len(starts))]
+            if stop_when is not None and stop_when(out):
+                stop_at = i
+                break
+        return [outcomes[i] for i in range(stop_at + 1)]
     with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(factory,)) as pool:
         futures = [pool.submit(_solve_in_worker, i, x0) for i, x0 in enumerate(starts)]
         try:
@@ -87,9 +106,16 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
                 out = fut.result()
                 outcomes[out.start] = out
                 on_done(out)
+                if stop_when is not None and out.start < stop_at and stop_when(out):
+                    stop_at = out.start
+                    for later in futures[stop_at + 1:]:
+                        later.cancel()
+                if settled():
+                    break
         except BaseException:
             for fut in futures:
                 fut.cancel()
             raise
-    return [outcomes[i] for i in range(len(starts))]
-
+        for fut in futures[stop_at + 1:]:
+            fut.cancel()
+    return [outcomes[i] for i in range(stop_at + 1)]

@@ -10,11 +10,7 @@ so IPOPT sees smooth constraints instead of min/max over samples.  The lowest po
 from __future__ import annotations
 
 import math
-import os
-import sys
-import tempfile
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import casadi as ca
@@ -28,6 +24,7 @@ from constraints.grashof import grashof_rule
 from constraints.precision_points import p4p6_rule, seedbed_rules
 from constraints.speed import p2_speed_rule
 from constraints.transmission import transmission_rules
+from synthesis.capture import captured_stdout as _captured_stdout
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.scene import POINTS, TWO_PI, PlantingScene, find_precision_points
 from synthesis.spec.common import bounds_of, value_of
@@ -49,24 +46,6 @@ class StartOutcome:
     wall_s: float
     log: str
     x: np.ndarray
-
-
-@contextmanager
-def _captured_stdout():
-    """Send fd 1 (where IPOPT prints) to a temporary file; yields a callable returning the text."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    with tempfile.TemporaryFile(mode="w+b") as tmp:
-        os.dup2(tmp.fileno(), 1)
-        text: list[str] = []
-        try:
-            yield lambda: "".join(text)
-        finally:
-            sys.stdout.flush()
-            os.dup2(saved, 1)
-            os.close(saved)
-            tmp.seek(0)
-            text.append(tmp.read().decode(errors="replace"))
 
 
 def _append_rows(rows: list, lbg: list, ubg: list, expr, lb, ub) -> None:

@@ -24,6 +24,7 @@ KINDS: dict[str, str] = {
     "crank_rocker": "synthesis.spec.crank_rocker:CrankRockerSpec",
     "picker_double_crank": "synthesis.spec.picker:PickerDoubleCrankSpec",
     "picker": "synthesis.spec.picker:PickerSpec",
+    "fourbar_path": "synthesis.spec.fourbar_path:FourbarPathSpec",
 }
 
 

@@ -1,0 +1,225 @@
+"""Bench cases of kind fourbar_path: IPOPT multistart against scipy's differential_evolution.
+
+Both methods get the same problem and stop at the same target objective (best known + tolerance):
+
+ipopt_multistart        ``run_solve`` exactly as ``agrisynth solve`` runs it (one worker), with the
+                        spec's starts and seed and [solver] stop_at_objective = the target
+differential_evolution  scipy.optimize.differential_evolution with its default settings (best1bin,
+                        popsize 15, maxiter 1000, tol 0.01, Latin-hypercube init, polish), evaluated
+                        vectorised (updating "deferred", which vectorisation needs), the rules as
+                        scipy constraints, stopped by its callback at the target; seed = the spec's
+
+DE encoding of free timing: theta_1 in [0, 360) deg and the N - 1 gaps theta_{i+1} - theta_i in
+[-360, 360]; the sequence rule is "the gaps all have the direction's sign and add up to at most a
+turn" (for direction "either": whichever direction violates it less), a scalar constraint.  DE sees
+the Grashof rows as a LinearConstraint and the transmission angle as its exact extremes (cos mu at
+theta2 = 0 and 180 deg).  Both results are re-checked by check.evaluate on the fine grid.
+
+Problems: the library specs given, or by default the picking arc and six synthetic-truth problems
+(mechanism 1 with 6, 10, 18 points, timing free and prescribed).  Best known: 0 for the synthetic
+problems (zero error by construction, tolerance 1e-8 mm^2); for a library spec the objective of
+the full IPOPT multistart (all starts, no early stop, untimed), tolerance 1e-6 relative.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_evolution
+
+from synthesis.bench import BenchCase, MethodRun
+from synthesis.fourbar_path.check import evaluate, joint_positions
+from synthesis.fourbar_path.solve import run_solve
+from synthesis.fourbar_path.starts import CLASS_ROWS
+from synthesis.fourbar_path.synthetic import truth_spec
+from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
+from synthesis.spec import LoadedSpec, load_spec
+from synthesis.spec.fourbar_path import FourbarPathSpec
+
+LIBRARY = Path(__file__).resolve().parents[2] / "problems" / "fourbar_path"
+DEFAULT_SYNTHETIC = [(1, n, timed) for n in (6, 10, 18) for timed in (False, True)]
+SYNTHETIC_TOLERANCE = 1e-8          # mm^2: the "recovered" threshold of the tests
+LIBRARY_RELATIVE_TOLERANCE = 1e-6
+BIG = 1e30                          # objective where the loop does not close (DE needs a number)
+
+
+def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float]) -> float:
+    """Largest normalised rule violation on the re-check grid (0 when every rule holds)."""
+    ev = evaluate(spec, design, crank_deg, timing="solved")
+    if not np.all(np.isfinite(ev.errors_mm)):
+        return math.inf
+    worst = 0.0
+    for rule in ev.rules:
+        rec = rule.record()
+        if not rec.satisfied:
+            worst = max(worst, math.inf if rec.normalised_margin is None else -rec.normalised_margin)
+    return worst
+
+
+# ---------------------------------------------------------------------------- IPOPT multistart
+
+def ipopt_multistart(loaded: LoadedSpec):
+    def run(target: float) -> MethodRun:
+        spec = loaded.model
+        solver = spec.solver.model_copy(update={"stop_at_objective": target})
+        staged = dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver}))
+        trace: list[tuple[float, float]] = []
+        t0 = time.perf_counter()
+
+        def on_start(report, best) -> None:
+            if best.satisfied:
+                trace.append((time.perf_counter() - t0, best.outcome.objective))
+
+        result, _, _ = run_solve(staged, workers=1, on_start=on_start)
+        s = result.solver
+        objective, violation = result.objective["value"], result.extra["fine_grid_worst_violation"]
+        return MethodRun(math.inf if objective is None else objective, math.inf if violation is None else violation,
+                         trace, {"starts": s["starts"], "starts_run": s["starts_run"],
+                                 "starts_needed": s["starts_needed"], "best_start": s["best_start"],
+                                 "status": result.status})
+    return run
+
+
+def reference_objective(loaded: LoadedSpec) -> float:
+    """The full multistart (every start, no early stop): the best known objective of a library spec."""
+    spec = loaded.model
+    solver = spec.solver.model_copy(update={"stop_at_objective": None})
+    result, _, _ = run_solve(dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver})), workers=1)
+    return result.objective["value"]
+
+
+# ---------------------------------------------------------------------------- differential evolution
+
+@dataclasses.dataclass(frozen=True)
+class DEProblem:
+    """The spec in differential_evolution's terms: vectorised objective, bounds, constraints, decoding."""
+
+    spec: FourbarPathSpec
+
+    @property
+    def n(self) -> int:
+        return len(self.spec.targets.points)
+
+    @property
+    def free_timing(self) -> bool:
+        return not self.spec.timed
+
+    def bounds(self) -> list[tuple[float, float]]:
+        b = [tuple(x) for x in self.spec.bounds_array()]
+        if self.free_timing:
+            b += [(0.0, 360.0)] + [(-360.0, 360.0)] * (self.n - 1)
+        return b
+
+    def crank_deg(self, x: np.ndarray) -> np.ndarray:
+        """(N, S) crank angles (deg) of columns x (D, S)."""
+        if not self.free_timing:
+            return np.tile(np.array(self.spec.targets.crank_deg)[:, None], (1, x.shape[1]))
+        return x[9] + np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x[10:], axis=0)])
+
+    def objective(self, x: np.ndarray) -> np.ndarray:
+        """Sum of squared distances (mm^2) for each column of x (D, S); BIG where the loop is open."""
+        x = np.asarray(x, dtype=float).reshape(len(self.bounds()), -1)
+        design = {name: x[i] for i, name in enumerate(VARIABLES)}
+        p = joint_positions(design, np.radians(self.crank_deg(x)), BRANCHES[self.spec.branch])["P"]
+        t = np.array(self.spec.targets.points)
+        f = np.sum(np.abs(p - (t[:, :1] + 1j * t[:, 1:])) ** 2, axis=0)
+        return np.where(np.isfinite(f), f, BIG)
+
+    def constraints(self) -> list:
+        d = len(self.bounds())
+        lim = self.spec.rules
+        out = []
+        if lim.grashof != "any":
+            a = np.zeros((3, d))
+            a[:, :4] = CLASS_ROWS[lim.grashof]
+            out.append(LinearConstraint(a, 0.0, np.inf))
+        if lim.transmission_angle is not None:
+            lo, hi = (math.radians(v) for v in lim.transmission_angle)
+            out.append(NonlinearConstraint(self._cos_extremes, [-np.inf, math.cos(hi)], [math.cos(lo), np.inf]))
+        if self.free_timing and lim.order:
+            out.append(NonlinearConstraint(self._sequence_violation, -np.inf, 0.0))
+        return out
+
+    @staticmethod
+    def _cos_extremes(x: np.ndarray) -> np.ndarray:
+        r1, r2, r3, r4 = (np.asarray(x)[i] for i in range(4))
+        base = r3 * r3 + r4 * r4 - r1 * r1 - r2 * r2
+        return np.array([(base + 2 * r1 * r2) / (2 * r3 * r4), (base - 2 * r1 * r2) / (2 * r3 * r4)])
+
+    def _sequence_violation(self, x: np.ndarray) -> np.ndarray:
+        """How far the gaps are from all having one allowed direction's sign within one turn, deg;
+        (1,) for one candidate x (D,), (1, S) for S candidates (D, S)."""
+        gaps = np.asarray(x)[10:]
+        signs = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}[self.spec.rules.direction]
+        v = [np.sum(np.maximum(0.0, -s * gaps), axis=0) + np.maximum(0.0, s * np.sum(gaps, axis=0) - 360.0)
+             for s in signs]
+        return np.reshape(np.min(v, axis=0), (1, -1) if gaps.ndim > 1 else (1,))
+
+    def decode(self, x: np.ndarray) -> tuple[dict, list[float]]:
+        x = np.asarray(x, dtype=float)
+        design = {name: float(x[i]) for i, name in enumerate(VARIABLES)}
+        return design, [float(a) for a in self.crank_deg(x[:, None])[:, 0]]
+
+
+def differential_evolution_method(loaded: LoadedSpec):
+    spec = loaded.model
+    problem = DEProblem(spec)
+
+    def run(target: float) -> MethodRun:
+        trace: list[tuple[float, float]] = []
+        t0 = time.perf_counter()
+
+        def callback(intermediate_result) -> bool:
+            trace.append((time.perf_counter() - t0, float(intermediate_result.fun)))
+            return bool(intermediate_result.fun <= target and _feasible(intermediate_result.x))
+
+        def _feasible(x) -> bool:
+            for c in problem.constraints():
+                if isinstance(c, LinearConstraint):
+                    v = c.A @ x
+                else:
+                    v = np.ravel(c.fun(x))
+                if np.any(v < np.asarray(c.lb) - 1e-12) or np.any(v > np.asarray(c.ub) + 1e-12):
+                    return False
+            return True
+
+        res = differential_evolution(problem.objective, problem.bounds(), constraints=problem.constraints(),
+                                     vectorized=True, updating="deferred", rng=spec.solver.seed,
+                                     callback=callback)
+        design, crank = problem.decode(res.x)
+        fun = float(problem.objective(res.x[:, None])[0])
+        trace.append((time.perf_counter() - t0, fun))
+        return MethodRun(fun, worst_violation(spec, design, crank), trace,
+                         {"generations": int(res.nit), "evaluations": int(res.nfev), "message": str(res.message),
+                          "design": design, "crank_deg": crank})
+    return run
+
+
+# ---------------------------------------------------------------------------- the cases
+
+def case_for(loaded: LoadedSpec, best_known=None, tolerance=None, note: str = "") -> BenchCase:
+    if best_known is None:
+        best_known = lambda: reference_objective(loaded)  # noqa: E731 - untimed, once per case
+    if tolerance is None:
+        tolerance = lambda best: max(SYNTHETIC_TOLERANCE, LIBRARY_RELATIVE_TOLERANCE * abs(best))  # noqa: E731
+    return BenchCase(problem=loaded.name, kind="fourbar_path",
+                     methods={"ipopt_multistart": ipopt_multistart(loaded),
+                              "differential_evolution": differential_evolution_method(loaded)},
+                     best_known=best_known, tolerance=tolerance, note=note)
+
+
+def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase]:
+    """The given specs, or the default set: the library's fourbar_path specs and six synthetic problems."""
+    if specs is None:
+        specs = [load_spec(p) for p in sorted(LIBRARY.glob("*.toml"))]
+        synthetic = [truth_spec(s, n, timed, {"seed": seed}) for s, n, timed in DEFAULT_SYNTHETIC]
+    else:
+        synthetic = []
+    cases = [case_for(s) for s in specs]
+    cases += [case_for(s, best_known=0.0, tolerance=lambda best: SYNTHETIC_TOLERANCE,
+                       note="synthetic truth: zero error exists") for s in synthetic]
+    return cases

@@ -1,0 +1,44 @@
+"""fourbar_path on degenerate inputs: a change-point linkage, collinear targets, repeated targets."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from fourbar_path_support import cli, write_spec
+from synthesis.fourbar_path.synthetic import truth_data
+
+
+def test_change_point_linkage_is_diagnosed_not_crashed(tmp_path):
+    """r1 = r2 fixed: the only crank-rockers are change-point linkages (r3 = r4), where O'A shrinks to
+    zero at theta2 = 0 and the transmission angle to 0 deg, so [30, 150] cannot hold: exit 3 naming it."""
+    data = truth_data(0, 6, timed=False, solver={"starts": 8})
+    data["bounds"].update(r1=30.0, r2=30.0)
+    proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "transmission_angle_min" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_collinear_targets_are_approximated_within_the_rules(tmp_path):
+    """Seven points on a 60 mm straight line: a four-bar coupler curve is algebraic of degree 6, so it
+    meets a line in at most 6 points (Bezout) and no coupler curve passes all 7; the fit obeys every rule."""
+    data = truth_data(0, 7, timed=False, solver={"starts": 16})
+    data["targets"]["points"] = [[10.0 * i, 5.0] for i in range(7)]
+    proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = json.loads((tmp_path / data["name"] / "result.json").read_text())
+    assert all(r["satisfied"] for r in out["rules"])
+    assert out["objective"]["value"] > 1e-12
+    assert out["path_error"]["max_mm"] < 1.0                               # a usable straight-line mechanism
+
+
+def test_repeated_targets_share_one_crank_angle(tmp_path):
+    data = truth_data(0, 6, timed=False, solver={"starts": 8})
+    pts = data["targets"]["points"]
+    pts[1] = pts[2] = pts[0]
+    proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = json.loads((tmp_path / data["name"] / "result.json").read_text())
+    crank = out["design"]["crank_deg"]
+    assert np.ptp(crank[:3]) < 1e-3 and out["objective"]["value"] < 1e-8

@@ -1,0 +1,80 @@
+"""`agrisynth bench` on fourbar_path, and the slow studies (`pytest -m benchmark`)."""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+
+import numpy as np
+import pytest
+
+from fourbar_path_support import cli, write_spec
+from synthesis.fourbar_path.solve import run_solve
+from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, truth_data, truth_spec
+
+
+def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
+    spec = write_spec(tmp_path, truth_data(3, 6, timed=True))
+    proc = cli("bench", str(spec), "--repeats", "2", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "differential_evolution" in proc.stdout and "ipopt_multistart" in proc.stdout
+    data = json.loads((tmp_path / "bench" / "bench.json").read_text())
+    rows = {r["method"]: r for r in data["rows"]}
+    assert set(rows) == {"ipopt_multistart", "differential_evolution"}
+    for r in rows.values():
+        assert len(r["wall_s"]) == 2 and r["median_s"] == pytest.approx(statistics.median(r["wall_s"]))
+        # a spec file: best known = the full multistart's objective (zero error here), target 1e-8 above it
+        assert r["best_known"] < 1e-20 and r["target"] == pytest.approx(1e-8, rel=1e-9)
+        assert set(r) >= {"problem", "objective", "worst_violation", "wall_s", "median_s"}
+    ipopt = rows["ipopt_multistart"]
+    assert ipopt["reached_target"] and ipopt["worst_violation"] == 0.0
+    (ratio,) = data["problems"][0]["ratios"]
+    assert ratio["time_ratio"] == pytest.approx(rows["differential_evolution"]["median_s"] / ipopt["median_s"])
+    assert (tmp_path / "bench" / "error_vs_time.png").stat().st_size > 10_000
+
+
+def test_bench_help_teaches_and_bad_problem_exits_2(tmp_path):
+    help_text = cli("bench", "--help", cwd=tmp_path).stdout
+    for phrase in ("PROBLEM is a kind name", "differential_evolution", "error_vs_time.png", "Examples", "--repeats"):
+        assert phrase in help_text
+    proc = cli("bench", "fourbar_paht", cwd=tmp_path)
+    assert proc.returncode == 2 and "neither a kind with a bench" in proc.stderr
+
+
+# ---------------------------------------------------------------------------- slow studies
+
+@pytest.mark.benchmark
+@pytest.mark.parametrize("timed", [True, False], ids=["timed", "free"])
+@pytest.mark.parametrize("n", POINT_COUNTS)
+def test_full_multistart_recovers_every_truth_without_early_stop(n, timed):
+    """All 64 starts of the default multistart, no early stop: the best start recovers the truth and
+    the number of starts that reach it is reported (the hit rate of one start)."""
+    hits = []
+    for seed in SEEDS:
+        result, reports, _ = run_solve(truth_spec(seed, n, timed), workers=1)
+        assert result.objective["value"] < 1e-8 and result.status == "optimal"
+        hits.append(sum(r.satisfied and r.outcome.objective < 1e-8 for r in reports))
+    print(f"n={n} {'timed' if timed else 'free'}: starts (of 64) reaching < 1e-8 mm^2 per mechanism: {hits}")
+
+
+@pytest.mark.benchmark
+def test_solve_time_per_problem_median_of_5():
+    """Wall time of the default multistart ended at 1e-8 mm^2, median of 5 runs, and starts needed."""
+    lines = []
+    for timed in (True, False):
+        for n in POINT_COUNTS:
+            times, needed = [], []
+            for seed in SEEDS:
+                loaded = truth_spec(seed, n, timed, {"stop_at_objective": 1e-8})
+                walls = []
+                for _ in range(5):
+                    t0 = time.perf_counter()
+                    result, _, _ = run_solve(loaded, workers=1)
+                    walls.append(time.perf_counter() - t0)
+                times.append(statistics.median(walls))
+                needed.append(result.solver["starts_needed"])
+            lines.append(f"n={n:2d} {'timed' if timed else 'free '}: median s per mechanism "
+                         f"{[round(t, 3) for t in times]}, starts needed {needed}, "
+                         f"median over mechanisms {np.median(times):.3f} s")
+    print("\n".join(lines))

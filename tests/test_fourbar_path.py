@@ -1,0 +1,142 @@
+"""fourbar_path: kinematics identities, exact transmission extremes, AD derivatives, spec errors,
+the picking-arc baseline's points."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from fourbar_path_support import PATH_LIBRARY, cli, toml_text
+from synthesis.errors import SpecError
+from synthesis.fourbar_path.check import joint_positions, transmission_deg
+from synthesis.fourbar_path.nlp import PathNLP
+from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
+from synthesis.kinematics.arc import picking_arc
+from synthesis.kinematics.coupler_point import (coupler_function, cos_transmission, design_parameters,
+                                                joints as symbolic_joints)
+from synthesis.spec import load_spec
+
+THETA = np.linspace(0.0, 2 * math.pi, 37)
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("branch", [1, -1])
+def test_closed_form_coupler_point_equals_the_complex_number_construction(seed, branch):
+    design, _ = random_crank_rocker(seed)
+    p = np.array(design_parameters(design), dtype=float)
+    closed = np.asarray(coupler_function(branch)(THETA.reshape(1, -1), p)[0])
+    z = joint_positions(design, THETA, branch)
+    assert np.max(np.abs(closed[0] - z["P"].real)) < 1e-10
+    assert np.max(np.abs(closed[1] - z["P"].imag)) < 1e-10
+    # loop closure of the construction itself: |AB| = r3, |O'B| = r4, |OA| = r2, |OO'| = r1
+    for (a, b), length in ((("A", "B"), "r3"), (("O'", "B"), "r4"), (("O", "A"), "r2"), (("O", "O'"), "r1")):
+        assert np.max(np.abs(np.abs(z[a] - z[b]) - design[length])) < 1e-10
+
+
+def test_open_branch_keeps_the_links_uncrossed_at_90_degrees():
+    design, _ = random_crank_rocker(3)
+    j = symbolic_joints(math.pi / 2, design_parameters(design), 1)
+    a, b, o, o2 = (np.array(j[k], dtype=float) for k in ("A", "B", "O", "O'"))
+
+    def side(p):
+        u, w = o2 - a, p - a
+        return np.sign(u[0] * w[1] - u[1] * w[0])
+
+    assert side(b) == -side(o) != 0          # B and O on opposite sides of the diagonal A O'
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_transmission_extremes_over_a_turn_are_at_0_and_180_degrees(seed):
+    design, _ = random_crank_rocker(seed)
+    r = [design[k] for k in ("r1", "r2", "r3", "r4")]
+    grid = np.linspace(0.0, 2 * math.pi, 7200, endpoint=False)
+    mu = transmission_deg(joint_positions(design, grid, 1))
+    assert mu.min() == pytest.approx(math.degrees(math.acos(cos_transmission(0.0, *r))), abs=1e-9)
+    assert mu.max() == pytest.approx(math.degrees(math.acos(cos_transmission(math.pi, *r))), abs=1e-9)
+    assert np.argmin(mu) == 0 and grid[np.argmax(mu)] == pytest.approx(math.pi)
+
+
+@pytest.mark.parametrize("timed", [True, False])
+def test_nlp_derivatives_match_central_differences(timed):
+    nlp = PathNLP(truth_spec(2, 6, timed).model)
+    rng = np.random.default_rng(0)
+    lo, hi = nlp.bounds[:, 0], nlp.bounds[:, 1]
+    design = lo + (0.3 + 0.4 * rng.random(9)) * (hi - lo)
+    design[:4] = [40.0, 12.0, 45.0, 35.0]        # a crank-rocker: every row is defined
+    x = np.concatenate([design, np.sort(rng.uniform(0, 6, nlp.n_theta))])
+    sign = 1.0
+    grad = ca.Function("J", [nlp.decision, nlp.direction],
+                       [ca.jacobian(ca.vertcat(nlp.objective, nlp.g), nlp.decision)])
+    J = np.asarray(grad(x, sign))
+
+    def fg(z):
+        f, g = nlp.functions(z, sign)
+        return np.concatenate([np.ravel(np.asarray(f)), np.ravel(np.asarray(g))])
+
+    fd = np.zeros_like(J)
+    for k in range(x.size):
+        h = 1e-6 * max(1.0, abs(x[k]))
+        e = np.zeros_like(x)
+        e[k] = h
+        fd[:, k] = (fg(x + e) - fg(x - e)) / (2 * h)
+    assert np.max(np.abs(J - fd) / np.maximum(np.abs(J), 1.0)) < 1e-6
+
+
+def test_picking_arc_spec_holds_the_ten_arc_points():
+    spec = load_spec(PATH_LIBRARY / "picking_arc.toml").model
+    assert np.array(spec.targets.points) == pytest.approx(picking_arc(10), abs=1e-12)
+    assert spec.targets.crank_deg is None and spec.rules.order
+
+
+# ---------------------------------------------------------------------------- bad input
+
+def _with(tmp_path, edit) -> str:
+    data = truth_data(0, 6, timed=True)
+    edit(data)
+    path = tmp_path / "bad.toml"
+    path.write_text(toml_text(data))
+    with pytest.raises(SpecError) as err:
+        load_spec(path)
+    return str(err.value)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda d: d["targets"].update(points=d["targets"]["points"][:2], crank_deg=[0.0, 60.0]),
+     "fourbar_path.targets.points: expected 3 to 100 points, got 2"),
+    (lambda d: d["targets"].update(crank_deg=d["targets"]["crank_deg"][:5]),
+     "fourbar_path.targets.crank_deg: expected one angle per point (6), got 5"),
+    (lambda d: d["targets"]["points"].__setitem__(3, [float("nan"), 1.0]),
+     "fourbar_path.targets.points.3: x: expected a finite number, got nan"),
+    (lambda d: d["targets"]["points"].__setitem__(1, [2.0, float("inf")]),
+     "fourbar_path.targets.points.1: y: expected a finite number, got inf"),
+    (lambda d: d["bounds"].update(r3=[60, 5]), "fourbar_path.bounds.r3: [60, 5] has lo > hi; write it as [5, 60]"),
+    (lambda d: d["bounds"].update(rc_x=[5, 60]), "fourbar_path.bounds.rc_x: unknown field; did you mean 'rcx'?"),
+    (lambda d: d["bounds"].update(theta_0=[0, 360]),
+     "fourbar_path.bounds.theta_0: unknown field; did you mean 'theta0'?"),
+    (lambda d: d["bounds"].update(r2=[-1, 60]),
+     "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
+    (lambda d: d["rules"].update(grashof="crank_rocker"), "fourbar_path.rules.grashof: expected 'crank-rocker'"),
+])
+def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
+    assert message in _with(tmp_path, edit)
+
+
+def test_too_many_points(tmp_path):
+    def edit(d):
+        d["targets"] = {"points": [[float(i), float(i * i % 7)] for i in range(101)]}
+    assert "fourbar_path.targets.points: expected 3 to 100 points, got 101" in _with(tmp_path, edit)
+
+
+def test_bad_input_exits_2_without_a_traceback(tmp_path):
+    data = truth_data(0, 6, timed=False)
+    data["targets"]["points"][2] = [float("nan"), 0.0]
+    path = tmp_path / "nan.toml"
+    path.write_text(toml_text(data))
+    for command in ("check", "solve"):
+        proc = cli(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
+        assert proc.returncode == 2, proc.stdout + proc.stderr
+        assert "targets.points.2: x: expected a finite number, got nan" in proc.stderr.replace("\n", " ")
+        assert "Traceback" not in proc.stderr
