@@ -165,7 +165,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
         import inspect
 
         if "scheduler" not in inspect.signature(solver_module.run_solve).parameters:
-            raise click.BadParameter(f"kind {loaded.kind} solves in one process; run without --scheduler",
+            raise click.BadParameter(f"kind {loaded.kind} does not run its starts on a cluster; run without --scheduler",
                                      param_hint="--scheduler")
         cluster = {"scheduler": scheduler}
     workers = workers or default_workers()

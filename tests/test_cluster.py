@@ -31,6 +31,15 @@ def test_cluster_run_gives_the_local_result(cluster):
     assert remote.solver["scheduler"] == cluster.scheduler_address and remote.solver["best_start"] == local.solver["best_start"]
 
 
+def test_fourbar_path_on_the_cluster_gives_the_local_result(cluster):
+    from synthesis.fourbar_path.solve import run_solve as run_path_solve
+
+    loaded = load_spec(PLANTING.parent / "fourbar_path" / "picking_arc.toml")
+    local, _, _ = run_path_solve(loaded, starts=3, seed=1, workers=1)
+    remote, _, _ = run_path_solve(loaded, starts=3, seed=1, workers=1, scheduler=cluster.scheduler_address)
+    assert remote.design == local.design and remote.objective == local.objective
+
+
 def test_unreachable_scheduler_is_bad_input(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(PLANTING / "redesign_from_example1.toml"),
                            "--out", str(tmp_path), "--scheduler", "nonsense://nowhere"], capture_output=True, text=True)

@@ -71,9 +71,12 @@ def reaches(best: float, objective: float) -> bool:
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
-    """Multistart solve; returns (result, the report of every start run, IPOPT log)."""
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
+    """Multistart solve; returns (result, the report of every start run, IPOPT log).
+
+    ``scheduler``: a dask.distributed scheduler address to run the starts on instead of local workers.
+    """
     spec: FourbarPathSpec = loaded.model
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
@@ -95,8 +98,10 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         return rep.satisfied and outcome.objective <= target
 
     t0 = time.perf_counter()
-    factory = functools.partial(build_nlp, spec, seed) if workers > 1 else (lambda: nlp)
-    outcomes = run_starts(factory, x_starts, workers, done, stop_when=None if target is None else good_enough)
+    local = workers <= 1 and scheduler is None
+    factory = (lambda: nlp) if local else functools.partial(build_nlp, spec, seed)
+    outcomes = run_starts(factory, x_starts, workers, done, stop_when=None if target is None else good_enough,
+                          scheduler=scheduler)
     wall = time.perf_counter() - t0
     ordered = [reports[o.start] for o in outcomes]
     chosen = ordered[0]
@@ -118,7 +123,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         objective={"name": OBJECTIVE, "value": _finite(out.objective), "unit": "mm^2"},
         trajectory=trajectory(spec, out.design, out.crank_deg, -1.0 if out.direction == "cw" else 1.0),
         solver={"name": "ipopt", "return_status": out.return_status, "iterations": out.iterations,
-                "wall_s": wall, "starts": starts, "seed": seed, "best_start": out.start, "workers": workers,
+                "wall_s": wall, "starts": starts, "seed": seed, "best_start": out.start,
+                "workers": workers if scheduler is None else None, "scheduler": scheduler,
                 "starts_run": len(ordered), "starts_needed": needed, "starts_reaching_best": at_best,
                 "stop_at_objective": target, "stopped_early": len(ordered) < starts},
         extra={
