@@ -220,17 +220,20 @@ def compare(results: tuple[Path, ...], out: Path) -> None:
       design   every variable, one column per candidate, differences from the baseline marked
       figures  the kind's overlays (paths, speeds and accelerations, linkage, animation)
       run      solver status, iterations, wall time, starts, seed, versions, spec hash
-    Nothing is re-solved: the page is built from the result files alone.
+    A RESULT that is an `agrisynth bench` output (OUT/bench or its bench.json) adds the
+    error-against-run-time plot and table.  Nothing is re-solved: the page is built from
+    the result files alone.
     \b
     Example:
       agrisynth check problems/planting_arm/taiwan_example1.toml
       agrisynth solve problems/planting_arm/redesign_from_example1.toml
       agrisynth compare results/taiwan_example1 results/redesign_from_example1
     """
-    from synthesis.compare import load_candidates, write_comparison
+    from synthesis.compare import is_bench, load_bench, load_candidates, write_comparison
 
-    cands = load_candidates(list(results))
-    page = write_comparison(cands, out)
+    bench = [res for p in results if is_bench(p) for res in load_bench(p)]
+    cands = load_candidates([p for p in results if not is_bench(p)])
+    page = write_comparison(cands, out, bench)
     for c in cands:
         bad = c.result.violated()
         verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"

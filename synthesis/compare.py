@@ -1,7 +1,13 @@
-"""``agrisynth compare``: several results of one kind side by side in one page, from result.json alone."""
+"""``agrisynth compare``: several results of one kind side by side in one page, from result.json alone.
+
+Among the inputs may be the output of ``agrisynth bench`` (a folder with bench.json, or the file):
+its error-against-run-time plot and table are added to the page.
+"""
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import shutil
 import tempfile
@@ -12,6 +18,29 @@ from synthesis.report import comparison_figures
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
 from synthesis.result import load_result
+
+
+def is_bench(path: Path) -> bool:
+    return path.name == "bench.json" or (path.is_dir() and (path / "bench.json").exists()
+                                          and not (path / "result.json").exists())
+
+
+def load_bench(path: Path) -> list[dict]:
+    """The per-problem results of a bench.json, shaped as ``synthesis.bench.run_case`` returns them."""
+    path = path if path.name == "bench.json" else path / "bench.json"
+    try:
+        data = json.loads(path.read_text())
+        rows = data["rows"]
+        problems = data["problems"]
+    except (OSError, json.JSONDecodeError, KeyError, TypeError) as exc:
+        raise ResultError(f"{path}: not a readable agrisynth bench.json ({exc})") from None
+
+    def number(v):      # bench.json writes an unmeasurable value as null
+        return math.nan if v is None else v
+
+    for row in rows:
+        row["worst_violation"] = number(row.get("worst_violation"))
+    return [dict(p, rows=[r for r in rows if r["problem"] == p["problem"]]) for p in problems]
 
 
 def load_candidates(paths: list[Path]) -> list[Candidate]:
@@ -27,14 +56,20 @@ def load_candidates(paths: list[Path]) -> list[Candidate]:
     return candidates(results, files)
 
 
-def write_comparison(cands: list[Candidate], out: Path) -> Path:
+def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None = None) -> Path:
     """Write ``out/compare.html`` and its figures; every file lands by rename, the page last."""
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=".compare.", dir=out))
     try:
         figures, notes = comparison_figures(cands, staging)
+        if bench:
+            from synthesis.bench import plot_error_vs_time
+
+            plot_error_vs_time(bench, staging / "error_vs_time.png")
+            figures.append(("error_vs_time.png", "error against run time (agrisynth bench): objective gap and "
+                                                 "worst fine-grid violation against wall time"))
         title = "compare: " + " vs ".join(c.label for c in cands)
-        (staging / "compare.html").write_text(render(cands, figures, notes, title))
+        (staging / "compare.html").write_text(render(cands, figures, notes, title, bench))
         for f, _ in figures:
             os.replace(staging / f, out / f)
         os.replace(staging / "compare.html", out / "compare.html")

@@ -32,6 +32,15 @@ def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
     (ratio,) = data["problems"][0]["ratios"]
     assert ratio["time_ratio"] == pytest.approx(rows["differential_evolution"]["median_s"] / ipopt["median_s"])
     assert (tmp_path / "bench" / "error_vs_time.png").stat().st_size > 10_000
+    # the comparison page carries the bench when it is given among the results
+    assert cli("solve", str(spec), "--starts", "4", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path).returncode == 0
+    run = next(p for p in tmp_path.iterdir() if (p / "result.json").exists())
+    proc = cli("compare", str(run), str(tmp_path / "bench"), "--out", str(tmp_path / "cmp"), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    page = (tmp_path / "cmp" / "compare.html").read_text()
+    assert "<h2>Error against run time</h2>" in page and "src='error_vs_time.png'" in page
+    assert page.count("<td>differential_evolution</td>") == 1 and page.count("<td>ipopt_multistart</td>") == 1
+    assert (tmp_path / "cmp" / "error_vs_time.png").stat().st_size > 10_000
 
 
 def test_bench_help_teaches_and_bad_problem_exits_2(tmp_path):

@@ -117,8 +117,27 @@ def _verdicts(cands: list[Candidate]) -> str:
     return f"<div class='verdicts'>{''.join(out)}</div>"
 
 
-def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[str], title: str) -> str:
-    """``figures`` = [(file name, caption)], ``notes`` = figures that could not be drawn, and why."""
+def bench_table(bench: list[dict]) -> str:
+    """Objective reached and median wall time of each method per problem, with the time ratio."""
+    rows = []
+    for res in bench:
+        ratios = {r["method"]: r.get("time_ratio") for r in res.get("ratios", [])}
+        for row in res["rows"]:
+            ratio = ratios.get(row["method"])
+            rows.append(f"<tr><td>{html.escape(row['problem'])}</td><td>{html.escape(row['method'])}</td>"
+                        f"<td class='num'>{_num(row.get('objective'))}</td>"
+                        f"<td class='num'>{_num(row.get('objective_gap'), 3)}</td>"
+                        f"<td class='num'>{_num(row.get('worst_violation'), 3)}</td>"
+                        f"<td class='num'>{_num(row.get('median_s'), 3)}</td>"
+                        f"<td class='num'>{'reference' if ratio is None else f'{ratio:.1f}&times;'}</td></tr>")
+    return ("<table class='bench'><tr><th>problem</th><th>method</th><th>objective</th><th>gap to best</th>"
+            "<th>worst violation</th><th>median s</th><th>time ratio</th></tr>\n" + "\n".join(rows) + "</table>")
+
+
+def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[str], title: str,
+           bench: list[dict] | None = None) -> str:
+    """``figures`` = [(file name, caption)], ``notes`` = figures that could not be drawn, and why;
+    ``bench`` = the per-problem results of an ``agrisynth bench`` run, shown as a table."""
     kind = cands[0].result.kind
     source = cands[0].result.extra.get("source") or ""
     images = [(f, cap) for f, cap in figures if f.lower().endswith(IMAGE_SUFFIXES)]
@@ -146,6 +165,7 @@ sampled rules are evaluated on the fine check grid.</p>
 <h2>Figures</h2>
 {figs}
 {missing}
+{'<h2>Error against run time</h2>' + bench_table(bench) if bench else ''}
 <h2>Run facts</h2>
 <div class="scroll">{facts_table(cands)}</div>
 </body></html>
