@@ -24,7 +24,8 @@ FINE = 10
 class StartReport:
     outcome: Any                     # the kind's StartOutcome (start, design, objective, return_status, ...)
     satisfied: bool                  # every rule holds on the fine grid
-    worst_violation: float           # largest normalised violation on the fine grid (0 when satisfied)
+    worst_violation: float           # largest normalised violation on the fine grid (0 when satisfied;
+                                     # math.inf when a rule cannot be evaluated: see :func:`measured`)
     records: list = field(default_factory=list)     # RuleRecord per rule
     context: Any = None              # whatever the kind's recheck wants to keep (scene, motion facts)
 
@@ -72,10 +73,17 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
     return [reports[i] for i in range(len(x_starts))], best[0]
 
 
+def measured(x: float) -> float | None:
+    """A figure for result.json: JSON has no infinity, and a violation (or objective) that could not be
+    measured, because the design cannot be evaluated, is written as null rather than as a number."""
+    return x if math.isfinite(x) else None
+
+
 def starts_table(reports: list[StartReport]) -> list[dict]:
     return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "iterations": r.outcome.iterations,
-             "wall_s": r.outcome.wall_s, "objective": r.outcome.objective, "satisfied_on_fine_grid": r.satisfied,
-             "worst_violation": r.worst_violation, "design": r.outcome.design} for r in reports]
+             "wall_s": r.outcome.wall_s, "objective": measured(r.outcome.objective),
+             "satisfied_on_fine_grid": r.satisfied, "worst_violation": measured(r.worst_violation),
+             "design": r.outcome.design} for r in reports]
 
 
 def ipopt_log(reports: list[StartReport]) -> str:

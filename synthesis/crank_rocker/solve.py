@@ -15,7 +15,8 @@ from synthesis.crank_rocker.nlp import CrankRockerNLP
 from synthesis.errors import SolverError
 from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import Result
-from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.rule_solve import (FINE, StartReport, infeasible_error, ipopt_log, measured, multistart,
+                                  starts_table)
 from synthesis.spec import LoadedSpec
 from synthesis.spec.common import is_free
 
@@ -77,7 +78,7 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         extra={**facts(spec, cr, q),
                "baseline_design": spec.design_values(),
                "solver_extremes_crank_deg": [math.degrees(v) for v in best.outcome.extremes],
-               "fine_grid_worst_violation": best.worst_violation,
+               "fine_grid_worst_violation": measured(best.worst_violation),
                "closed_form": closed_form(spec),
                "starts": starts_table(reports)},
     )

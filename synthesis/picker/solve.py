@@ -12,7 +12,8 @@ from synthesis.multistart import latin_hypercube_starts
 from synthesis.picker.check import evaluate, facts, linkage
 from synthesis.picker.nlp import PickerNLP
 from synthesis.result import Result
-from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.rule_solve import (FINE, StartReport, infeasible_error, ipopt_log, measured, multistart,
+                                  starts_table)
 from synthesis.spec import LoadedSpec
 
 
@@ -50,12 +51,12 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     result = Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=design,
         rules=[r.to_json() for r in best.records],
-        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit,
+        objective={"name": spec.objective.name, "value": measured(best.outcome.objective), "unit": unit,
                    "epsilon_mm": spec.objective.epsilon if spec.objective.name == "sum_of_distances" else None},
         solver={"name": "ipopt", "return_status": best.outcome.return_status, "iterations": best.outcome.iterations,
                 "wall_s": wall, "starts": starts, "seed": seed, "best_start": best.outcome.start, "workers": workers,
                 "samples": spec.solver.samples, "fine_grid_factor": FINE},
-        extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": best.worst_violation,
+        extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": measured(best.worst_violation),
                "starts": starts_table(reports)},
     )
     return result, reports, ipopt_log(reports)
