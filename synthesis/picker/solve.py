@@ -51,13 +51,13 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     result = Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=design,
         rules=[r.to_json() for r in best.records],
-        objective={"name": spec.objective.name, "value": measured(best.outcome.objective), "unit": unit,
-                   "epsilon_mm": spec.objective.epsilon if spec.objective.name == "sum_of_distances" else None},
-        solver={"name": "ipopt", "return_status": best.outcome.return_status, "iterations": best.outcome.iterations,
+        objective={"name": spec.objective.name, "value": measured(best.outcome.objective), "unit": unit},
+        solver={"name": "ipopt", "return_status": best.outcome.return_status, "stages": best.outcome.stages,
+                "iterations": best.outcome.iterations,
                 "wall_s": wall, "starts": starts, "seed": seed, "best_start": best.outcome.start, "workers": workers,
                 "samples": spec.solver.samples, "fine_grid_factor": FINE},
         extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": measured(best.worst_violation),
-               "starts": starts_table(reports)},
+               "starts": [{**row, "stages": r.outcome.stages} for row, r in zip(starts_table(reports), reports)]},
     )
     return result, reports, ipopt_log(reports)
 
