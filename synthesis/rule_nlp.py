@@ -108,12 +108,13 @@ class RuleNLP:
         self.rules = list(rules)
         self.n_x = x.numel()
         self.elastic = elastic
+        self._hard = [elastic and rule.name in hard_in_elastic for rule in self.rules]
         g = _Rows()
         g.add(structural)
         if elastic:
             slack = ca.SX.sym("slack", len(self.rules))
             for k, rule in enumerate(self.rules):
-                if rule.name in hard_in_elastic:
+                if self._hard[k]:
                     g.add(rule.rows(), k)
                     continue
                 relax = rule.scale * slack[k]     # lb - scale*s <= expr <= ub + scale*s, one slack per rule
@@ -122,7 +123,8 @@ class RuleNLP:
                         g.add([(expr + relax, lb, None)], k)
                     if ub is not None:
                         g.add([(expr - relax, None, ub)], k)
-            extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [np.inf] * len(self.rules)
+            # a hard rule's slack is fixed at 0: it appears in no row
+            extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [0.0 if h else np.inf for h in self._hard]
             self._extra_init = np.zeros(len(self.rules))
             f = ca.sum1(slack)
         else:
@@ -170,8 +172,8 @@ class RuleNLP:
                           np.asarray(sol["lam_g"]).ravel())
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
-        """Elastic mode: each rule's slack at a returned decision vector, in the rule's unit."""
-        return {r.name: float(v) * r.scale for r, v in zip(self.rules, x[self.n_x:])}
+        """Elastic mode: each relaxable rule's slack at a returned decision vector, in the rule's unit."""
+        return {r.name: float(v) * r.scale for r, v, hard in zip(self.rules, x[self.n_x:], self._hard) if not hard}
 
     def active_rules(self, outcome: NLPOutcome, tol: float = 1e-6) -> list[str]:
         """Rules with a row whose multiplier is non-zero at the outcome: the ones that bind."""

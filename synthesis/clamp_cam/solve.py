@@ -15,6 +15,7 @@ from synthesis.clamp_cam.scene import CamScene, evaluate, fit_law
 from synthesis.errors import SolverError
 from synthesis.multistart import latin_hypercube_starts, run_starts
 from synthesis.result import Result
+from synthesis.rule_solve import ElasticDiagnosis, status_of, unsatisfied_error
 from synthesis.spec import LoadedSpec
 
 
@@ -88,7 +89,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     wall = time.perf_counter() - t0
     ordered = [reports[i] for i in range(starts)]
     chosen = best[0]
-    status = ("optimal" if chosen.outcome.success else "feasible") if chosen.satisfied else "infeasible"
+    elastic = None if chosen.satisfied else elastic_diagnosis(spec, optimised, chosen.outcome.design)
+    status = status_of(chosen, ordered, elastic)
     scene = CamScene.from_spec(spec, chosen.outcome.design, optimised)
     extra, trajectory = describe(scene)
     log = "\n".join(f"===== start {r.outcome.start}: {r.outcome.return_status}, {r.outcome.iterations} iterations\n"
@@ -112,36 +114,28 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
                         "objective": objective_value(nlp, r),
                         "satisfied_on_fine_grid": r.satisfied, "worst_violation": r.worst_violation,
                         "design": r.outcome.design} for r in ordered],
+            "elastic": None if elastic is None else elastic.to_json(),
         },
     )
     return result, ordered, log
 
 
-def conflicting_rules(spec, design: dict[str, float]) -> tuple[list[str], str]:
-    """Re-solve with one elastic slack per rule; the rules whose slack stays > 0 conflict."""
-    nlp = build_nlp(spec, fit_law(spec), elastic=True)
-    x0 = np.array([design[n] for n in nlp.names])
-    out = nlp.solve(0, x0)
-    slacks = nlp.slack_values(out.x)
-    names = [n for n, s in sorted(slacks.items(), key=lambda kv: -kv[1]) if s > 1e-5]
-    return names, out.return_status
+def elastic_diagnosis(spec, optimised, design: dict[str, float]) -> ElasticDiagnosis:
+    """Re-solve from ``design`` with one elastic slack per rule: the rules whose slack stays > 0 conflict."""
+    nlp = build_nlp(spec, optimised, elastic=True)
+    out = nlp.solve(0, np.array([design[n] for n in nlp.names]))
+    scales = {r.name: r.scale for r in nlp.rules}
+    return ElasticDiagnosis(out.return_status, out.success,
+                            {n: s * scales[n] for n, s in nlp.slack_values(out.x).items()},
+                            {r.name: r.unit for r in nlp.rules}, scales)
 
 
 def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    """The exit-3 error for a run where no start satisfied every rule."""
-    spec = loaded.model
-    names, _ = conflicting_rules(spec, result.design)
-    statuses = sorted({r.outcome.return_status for r in reports})
-    worst = [r["name"] for r in result.violated()]
-    if not names:
-        return SolverError(
-            f"no start satisfies every rule on the 10x finer check grid ({len(reports)} starts; IPOPT said: "
-            f"{', '.join(statuses)}), though the rules hold at the solver's samples. Violated between samples: "
-            f"{', '.join(worst)}. Raise [solver] samples_per_segment or [solver] backoff.")
-    return SolverError(
-        f"no start satisfies every rule ({len(reports)} starts; IPOPT said: {', '.join(statuses)}). "
-        f"Rules that conflict (non-zero elastic slack, largest first): {', '.join(names)}. "
-        f"Try wider bounds on the design variables, looser limits on those rules, or another motion law.")
+    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
+    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
+                             samples_hint="[solver] samples_per_segment or [solver] backoff",
+                             relax_hint="Try wider bounds on the design variables, looser limits on those rules, "
+                                        "or another motion law.")
 
 
 def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:

@@ -15,8 +15,8 @@ from synthesis.crank_rocker.nlp import CrankRockerNLP
 from synthesis.errors import SolverError
 from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import Result
-from synthesis.rule_solve import (FINE, StartReport, infeasible_error, ipopt_log, measured, multistart,
-                                  starts_table)
+from synthesis.rule_solve import (FINE, ElasticDiagnosis, StartReport, diagnosis_of, ipopt_log, measured,
+                                  multistart, starts_table, status_of, unsatisfied_error)
 from synthesis.spec import LoadedSpec
 from synthesis.spec.common import is_free
 
@@ -65,10 +65,10 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         cr, q = mechanism(spec, best.outcome.design), None
     else:
         cr, q = best.context
-    status = ("optimal" if best.outcome.success else "feasible") if best.satisfied else "infeasible"
+    elastic = None if best.satisfied else elastic_diagnosis(spec)
     unit = "deg" if maximise else "mm"
     result = Result(
-        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status,
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status_of(best, reports, elastic),
         design=dict(best.outcome.design), rules=[r.to_json() for r in best.records],
         objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit},
         solver={"name": "ipopt", "return_status": best.outcome.return_status,
@@ -80,19 +80,23 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
                "solver_extremes_crank_deg": [math.degrees(v) for v in best.outcome.extremes],
                "fine_grid_worst_violation": measured(best.worst_violation),
                "closed_form": closed_form(spec),
-               "starts": starts_table(reports)},
+               "starts": starts_table(reports),
+               "elastic": None if elastic is None else elastic.to_json()},
     )
     return result, reports, ipopt_log(reports)
 
 
-def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    spec = loaded.model
+def elastic_diagnosis(spec) -> ElasticDiagnosis:
+    """One slack per rule, from the given design (it assembles; the best start may not)."""
     elastic = build_nlp(spec, elastic=True)
-    lengths = elastic.prepared_start(elastic.init)      # the given design: it assembles, the best start may not
-    out = elastic.nlp.solve(0, np.concatenate([lengths, elastic.extremes_guess(lengths)]))
-    units = {r.name: r.unit for r in elastic.nlp.rules}
-    return infeasible_error(elastic.nlp.slack_values(out.x), units, elastic.nlp.active_rules(out),
-                            out.return_status, reports, [r["name"] for r in result.rules if not r["satisfied"]])
+    lengths = elastic.prepared_start(elastic.init)
+    return diagnosis_of(elastic.nlp, elastic.nlp.solve(0, np.concatenate([lengths, elastic.extremes_guess(lengths)])))
+
+
+def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
+    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
+    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
+                             samples_hint="[solver] samples_per_turn")
 
 
 def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:

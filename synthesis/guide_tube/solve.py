@@ -16,6 +16,7 @@ from synthesis.guide_tube.nlp import GuideTubeNLP, StartOutcome
 from synthesis.guide_tube.scene import GuideTubeScene
 from synthesis.multistart import latin_hypercube_starts, run_starts
 from synthesis.result import Result
+from synthesis.rule_solve import ElasticDiagnosis, status_of, unsatisfied_error
 from synthesis.spec import LoadedSpec
 
 
@@ -95,7 +96,11 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         design = chosen.outcome.design
         records = [r.to_json() for r in chosen.records]
         facts = scene_facts(spec, scene, angles_of(design), FINE * spec.solver.samples)
-    status = ("optimal" if chosen.outcome.success else "feasible") if chosen.satisfied else "infeasible"
+    if chosen.why is not None:      # no start gives a design the drop model can evaluate: the angles conflict
+        elastic, status = None, "infeasible"
+    else:
+        elastic = None if chosen.satisfied else elastic_diagnosis(spec, design)
+        status = status_of(chosen, ordered, elastic)
     log = "\n".join(f"===== start {r.outcome.start}: {r.outcome.return_status}, {r.outcome.iterations} iterations\n"
                     f"{r.outcome.log}" for r in ordered)
     result = Result(
@@ -112,7 +117,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
                            "iterations": r.outcome.iterations, "wall_s": r.outcome.wall_s,
                            "objective": r.outcome.objective, "satisfied_on_fine_grid": r.satisfied,
                            "worst_violation": _finite(r.worst_violation), "why": r.why, "design": r.outcome.design}
-                          for r in ordered]},
+                          for r in ordered],
+               "elastic": None if elastic is None else elastic.to_json()},
     )
     return result, ordered, log
 
@@ -135,35 +141,30 @@ def _finite(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def conflicting_rules(spec, design: dict[str, float]) -> tuple[list[str], str]:
-    """Re-solve with one elastic slack per rule; the rules whose slack stays > 0 conflict."""
+def elastic_diagnosis(spec, design: dict[str, float]) -> ElasticDiagnosis:
+    """Re-solve from ``design`` with one elastic slack per rule: the rules whose slack stays > 0 conflict."""
     nlp = build_nlp(spec, elastic=True)
     angles = angles_of(design)
     out = nlp.solve(0, [angles[n] for n in nlp.names])
-    names = [n for n, s in sorted(nlp.slack_values(out.x).items(), key=lambda kv: -kv[1]) if s > 1e-6]
-    return names, out.return_status
+    scales = {r.name: r.scale for r in nlp.rules}
+    return ElasticDiagnosis(out.return_status, out.success,
+                            {n: s * scales[n] for n, s in nlp.slack_values(out.x).items()},
+                            {r.name: r.unit for r in nlp.rules}, scales)
 
 
 def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    """The exit-3 error of a run where no start satisfied every rule."""
-    spec = loaded.model
-    statuses = sorted({r.outcome.return_status for r in reports})
-    best = min(reports, key=lambda r: r.worst_violation)
-    if best.why is not None:
+    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
+    if result.extra.get("elastic") is None:
+        # no start gives a design the drop model can evaluate: say why (sticking first)
+        best = min(reports, key=lambda r: r.worst_violation)
         sticking = next((r.why for r in reports if r.why and "sticks" in r.why), best.why)
+        statuses = sorted({r.outcome.return_status for r in reports})
         return SolverError(f"no start gives a design the drop model can evaluate ({len(reports)} starts; IPOPT "
                            f"said: {', '.join(statuses)}): {sticking}")
-    names, _ = conflicting_rules(spec, result.design)
-    worst = [r["name"] for r in result.violated()]
-    if not names:
-        return SolverError(
-            f"no start satisfies every rule on the 10x finer row-spacing grid ({len(reports)} starts; IPOPT said: "
-            f"{', '.join(statuses)}), though the elastic re-solve needs no slack. Violated between samples: "
-            f"{', '.join(worst)}. Raise [solver] samples or [solver] backoff.")
-    return SolverError(
-        f"no start satisfies every rule ({len(reports)} starts; IPOPT said: {', '.join(statuses)}). Rules that "
-        f"conflict (non-zero elastic slack, largest first): {', '.join(names)}. Try wider bounds on the wall "
-        f"angles, looser limits on those rules, or more --starts.")
+    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
+                             samples_hint="[solver] samples or [solver] backoff",
+                             relax_hint="Try wider bounds on the wall angles, looser limits on those rules, "
+                                        "or more --starts.")
 
 
 def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:
