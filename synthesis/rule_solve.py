@@ -1,4 +1,5 @@
-"""Multistart driver shared by the crank_rocker and picker kinds: every start re-checked independently.
+"""Multistart driver shared by the crank_rocker, picker, clamp_cam and guide_tube kinds: every start
+re-checked independently, one verdict (status) and one exit-3 diagnosis.
 
 Each start's design is re-evaluated by the kind's own ``recheck`` (float kinematics, root-found
 extremes, a grid 10x finer than the solver's samples), never by the NLP's constraint values; the
@@ -11,10 +12,13 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+import functools
+import time
+
 import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
-from synthesis.multistart import run_starts
+from synthesis.multistart import latin_hypercube_starts, run_starts
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
 FINE = 10
@@ -28,14 +32,16 @@ class StartReport:
                                      # math.inf when a rule cannot be evaluated: see :func:`measured`)
     records: list = field(default_factory=list)     # RuleRecord per rule
     context: Any = None              # whatever the kind's recheck wants to keep (scene, motion facts)
+    why: str | None = None           # why the design could not be evaluated at all
 
 
 def report_of(outcome, recheck: Callable[[dict], tuple[list, Any]]) -> StartReport:
-    """Re-evaluate ``outcome.design`` with ``recheck(design) -> (rules, context)``."""
+    """Re-evaluate ``outcome.design`` with ``recheck(design) -> (rules, context)``; a design it cannot
+    evaluate (AgrisynthError, ValueError) gets an infinite violation and the reason."""
     try:
         rules, context = recheck(outcome.design)
-    except (AgrisynthError, ValueError):
-        return StartReport(outcome, False, math.inf)
+    except (AgrisynthError, ValueError) as exc:
+        return StartReport(outcome, False, math.inf, why=str(exc))
     records = [r.record() for r in rules]
     worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None else -math.inf)
                          for r in records if not r.satisfied])
@@ -73,17 +79,56 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
     return [reports[i] for i in range(len(x_starts))], best[0]
 
 
+@dataclass
+class Run:
+    """A finished multistart: the problem as built in this process, every start's report, the best one."""
+
+    nlp: Any                         # the kind's NLP (bounds, init, ...) built once here
+    reports: list[StartReport]
+    best: StartReport
+    starts: int
+    seed: int
+    workers: int
+    wall_s: float
+
+    def solver_record(self, **more) -> dict:
+        """result.json ``solver`` (DESIGN.md keys) plus the kind's own settings."""
+        o = self.best.outcome
+        return {"name": "ipopt", "return_status": o.return_status, "iterations": o.iterations,
+                "wall_s": self.wall_s, "starts": self.starts, "seed": self.seed, "best_start": o.start,
+                "workers": self.workers, **more, "fine_grid_factor": FINE}
+
+
+def run_multistart(build: Callable[..., Any], spec, recheck: Callable[[dict], tuple[list, Any]], *,
+                   starts: int | None, seed: int | None, workers: int, maximise: bool = False,
+                   on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+                   build_args: tuple = ()) -> Run:
+    """Solve from ``starts`` Latin-hypercube starts (start 0 = the spec's design; default counts from
+    ``spec.solver``).  ``build(spec, *build_args)`` builds the NLP (with ``bounds`` and ``init``); it is
+    built once here and, with several workers, once in each worker (it must be picklable)."""
+    starts = spec.solver.starts if starts is None else starts
+    seed = spec.solver.seed if seed is None else seed
+    nlp = build(spec, *build_args)
+    x_starts = latin_hypercube_starts(nlp.bounds, nlp.init, starts, seed)
+    factory = functools.partial(build, spec, *build_args) if workers > 1 else (lambda: nlp)
+    t0 = time.perf_counter()
+    reports, best = multistart(factory, x_starts, workers, recheck, maximise, on_start)
+    return Run(nlp, reports, best, starts, seed, workers, time.perf_counter() - t0)
+
+
 def measured(x: float) -> float | None:
     """A figure for result.json: JSON has no infinity, and a violation (or objective) that could not be
     measured, because the design cannot be evaluated, is written as null rather than as a number."""
     return x if math.isfinite(x) else None
 
 
-def starts_table(reports: list[StartReport]) -> list[dict]:
+def starts_table(reports: list[StartReport], objective: Callable[[StartReport], float] | None = None) -> list[dict]:
+    """result.json ``starts``: one row per start; ``objective(report)`` in report units (default the outcome's)."""
+    value = objective or (lambda r: r.outcome.objective)
     return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "iterations": r.outcome.iterations,
-             "wall_s": r.outcome.wall_s, "objective": measured(r.outcome.objective),
+             "wall_s": r.outcome.wall_s, "objective": measured(value(r)),
              "satisfied_on_fine_grid": r.satisfied, "worst_violation": measured(r.worst_violation),
-             "design": r.outcome.design} for r in reports]
+             "why": r.why, "design": r.outcome.design} for r in reports]
 
 
 def ipopt_log(reports: list[StartReport]) -> str:

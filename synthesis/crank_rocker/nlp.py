@@ -21,6 +21,7 @@ from constraints.quick_return import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
 from synthesis.kinematics import fourbar
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
+from synthesis import rule_nlp
 from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.crank_rocker import CrankRockerSpec
@@ -32,16 +33,10 @@ START_MARGIN = 1.0
 
 
 @dataclass
-class StartOutcome:
-    start: int
-    design: dict[str, float]
-    extremes: tuple[float, float]       # phi_a, phi_b (rad)
-    objective: float                    # report units: mm (total length) or deg (min transmission angle)
-    return_status: str
-    success: bool
-    iterations: int
-    wall_s: float
-    log: str
+class StartOutcome(rule_nlp.StartOutcome):
+    """objective in report units: mm (total length) or deg (min transmission angle)."""
+
+    extremes: tuple[float, float] = (math.nan, math.nan)   # phi_a, phi_b (rad)
 
 
 def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
@@ -116,5 +111,5 @@ class CrankRockerNLP:
         lengths = self.prepared_start(lengths)
         out = self.nlp.solve(start, np.concatenate([lengths, self.extremes_guess(lengths)]))
         design = {n: float(v) for n, v in zip(NAMES, out.x[:4])}
-        return StartOutcome(start, design, (float(out.x[4]), float(out.x[5])), self.report_objective(out.objective),
-                            out.return_status, out.success, out.iterations, out.wall_s, out.log)
+        return StartOutcome.of(out, design, self.report_objective(out.objective),
+                               extremes=(float(out.x[4]), float(out.x[5])))

@@ -25,6 +25,7 @@ from constraints.placement import frame_point_rule
 from constraints.transmission import acute_transmission_rule
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_function
 from synthesis.picker.check import arc_error, linkage, swing_angles, target_angles, target_points
+from synthesis import rule_nlp
 from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.picker import PickerDoubleCrankSpec
@@ -36,15 +37,11 @@ START_MARGIN = 1.0
 
 
 @dataclass
-class StartOutcome:
-    start: int
-    design: dict[str, float]
-    objective: float            # exact eq (4) in mm, or the sum of squares in mm^2
-    return_status: str          # of the stage that solves the spec's objective (the last one)
-    success: bool               # that stage converged and its design is the one kept
-    iterations: int             # both stages
-    wall_s: float
-    log: str
+class StartOutcome(rule_nlp.StartOutcome):
+    """objective: exact eq (4) in mm, or the sum of squares in mm^2; return_status: of the stage that
+    solves the spec's objective (the last one); success: that stage converged and its design is kept;
+    iterations, wall_s: both stages."""
+
     stages: list[dict] = field(default_factory=list)   # per stage: name, return_status, iterations, objective
 
 
