@@ -361,3 +361,18 @@ def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path
     error = diagnose_infeasible(loaded, result, reports)
     assert error.exit_code == 3
     assert "Rules that conflict" in str(error) and "spacing_error" in str(error)
+
+
+def test_a_solve_on_two_workers_leaves_no_ipopt_log_in_the_temp_dir(tmp_path):
+    """IPOPT's output is captured per solve from file descriptor 1 into anonymous temporary files; pool
+    workers exit without running finalisers, so a named log file per solver would stay behind."""
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "TMPDIR": str(temp), "MPLBACKEND": "Agg"}
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(DELTA2), "--out", str(tmp_path / "out"),
+                           "--workers", "2", "--starts", "3"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    log = (tmp_path / "out" / "cai2020_delta2" / "ipopt.log").read_text()
+    assert log.count("This is Ipopt version") == 3 and "EXIT: Optimal Solution Found." in log
+    assert [p.name for p in temp.rglob("*ipopt*")] == []
