@@ -46,6 +46,16 @@ def test_solve_of_the_combined_picker_is_bad_input(tmp_path):
     assert "kind 'picker' has nothing to optimise" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.parametrize("spec, message", [
+    ("cai2020_crank_rocker", "crank_rocker.links: solve needs at least one free length"),
+    ("cai2020_double_crank", "picker_double_crank.linkage: solve needs at least one free variable"),
+])
+def test_solve_with_nothing_free_is_bad_input(tmp_path, spec, message):
+    proc = run("solve", str(PICKER / f"{spec}.toml"), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert message in proc.stderr and "agrisynth check" in proc.stderr and "Traceback" not in proc.stderr
+
+
 def _variant(tmp_path: Path, source: str, old: str, new: str, name: str = "bad.toml") -> Path:
     text = (PICKER / source).read_text()
     assert old in text, old

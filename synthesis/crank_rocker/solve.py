@@ -6,8 +6,6 @@ import functools
 import math
 from typing import Callable
 
-import numpy as np
-
 from synthesis.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.crank_rocker.closed_form import solve_paper_equations
 from synthesis.crank_rocker.nlp import CrankRockerNLP
@@ -78,8 +76,7 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
 def elastic_diagnosis(spec) -> ElasticDiagnosis:
     """One slack per rule, from the given design (it assembles; the best start may not)."""
     elastic = build_nlp(spec, elastic=True)
-    lengths = elastic.prepared_start(elastic.init)
-    return diagnosis_of(elastic.nlp, elastic.nlp.solve(0, np.concatenate([lengths, elastic.extremes_guess(lengths)])))
+    return diagnosis_of(elastic.nlp, elastic.solve_design(0, elastic.prepared_start(elastic.init)))
 
 
 def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:

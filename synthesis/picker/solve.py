@@ -55,7 +55,7 @@ def elastic_diagnosis(spec) -> ElasticDiagnosis:
     """One slack per rule (least-squares stage), from the given design pulled into the Grashof region."""
     elastic = build_nlp(spec, elastic=True)
     stage = elastic.stages[0]
-    return diagnosis_of(stage, stage.solve(0, elastic.prepared_start(elastic.init)))
+    return diagnosis_of(stage, stage.solve(0, elastic.start_coordinates(elastic.init)))
 
 
 def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
