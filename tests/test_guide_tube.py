@@ -225,10 +225,10 @@ def test_roots_in_finds_every_root_and_skips_undefined_gaps():
 
 def test_calibration_failures_name_the_field_and_the_candidates():
     several = MuCalibration(0.445, "I", 45.0, (0.0, 1.5), [0.3, 0.8], (0.4, 0.5), None)
-    assert calibration_failure(several).startswith("friction.calibrate: several friction coefficients")
+    assert calibration_failure(several).startswith("guide_tube.friction.calibrate: several friction coefficients")
     assert "mu = 0.3, 0.8" in calibration_failure(several)
     none = MuCalibration(0.2, "I", 45.0, (0.0, 1.5), [], (0.4262, 0.4917), None)
-    assert calibration_failure(none).startswith("friction.calibrate.landing_time: no mu in [0, 1.5]")
+    assert calibration_failure(none).startswith("guide_tube.friction.calibrate.landing_time: no mu in [0, 1.5]")
 
 
 # --- CLI, result contract, imports -------------------------------------------------------------------------
@@ -293,7 +293,8 @@ print("LOADED", sorted(other))
     ("\nh6 = 210\n", "\nh66 = 210\n", "guide_tube.tubes.0.h66: unknown field; did you mean 'h6'?"),
     ('tube = "I"', 'tube = "V"', "guide_tube.friction.calibrate.tube: no tube named 'V'"),
     ("landing_time = 0.445", "landing_time = 0.2",
-     "friction.calibrate.landing_time: no mu in [0, 1.5] makes tube I (wall angle 45 deg) land after 0.2 s"),
+     "guide_tube.friction.calibrate.landing_time: no mu in [0, 1.5] makes tube I (wall angle 45 deg) land "
+     "after 0.2 s"),
     ("terminal_speed = 17.5", "terminal_speed = -1", "guide_tube.drop.terminal_speed: expected > 0, got -1"),
     ("spacings = [230, 300]", "spacings = [230, 320]", "guide_tube.rows: spacings: expected 0 < lo <= hi <= "
                                                        "tray_pitch = 300, got [230, 320]"),
