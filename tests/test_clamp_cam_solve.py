@@ -62,6 +62,24 @@ def solved():
 
 
 @pytest.mark.parametrize("name", ["opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"])
+def test_objective_value_is_the_designs_in_its_unit(solved, name):
+    """base_radius: the pitch base circle, mm; nearest: sum of squared changes of the free variables,
+    each relative to its bounds' width (dimensionless)."""
+    from synthesis.spec.common import bounds_of, is_free, value_of
+
+    loaded, result, _ = solved[name]
+    objective = result.objective
+    if objective["name"] == "base_radius":
+        assert objective["unit"] == "mm" and objective["value"] == result.design["base_radius"]
+    else:
+        assert objective["name"] == "nearest" and objective["unit"] == "-"
+        free = {n: v for n, v in loaded.model.variables().items() if is_free(v)}
+        expected = sum(((result.design[n] - value_of(v)) / (bounds_of(v)[1] - bounds_of(v)[0])) ** 2
+                       for n, v in free.items())
+        assert expected > 0 and objective["value"] == pytest.approx(expected, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", ["opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"])
 def test_redesigns_hold_every_rule_rechecked_independently(solved, name):
     loaded, result, _ = solved[name]
     assert result.status == "optimal"

@@ -116,6 +116,9 @@ def test_solved_delta2_equalises_the_ode_times_and_is_not_the_published_41_deg(c
     # every rule holds when re-checked on floats on a finer grid
     assert all(r["satisfied"] for r in result.rules)
     assert result.extra["landing_time_spread_s"] < 1e-9
+    # objective "nearest": the squared change of the free angle from the given 41 deg
+    assert result.objective["unit"] == "deg^2"
+    assert result.objective["value"] == pytest.approx((delta2 - PUBLISHED_DELTA2) ** 2, rel=1e-9)
 
 
 def test_the_printed_superposition_reading_does_not_give_41_deg_either(calibrated):
@@ -175,7 +178,8 @@ def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times():
     assert result.design["delta_I"] == pytest.approx(loaded.model.tubes[0].angle.bounds[1], abs=1e-6)
     times = [t["ode"]["t_z"] for t in result.extra["tubes"]]
     assert abs(times[0] - times[1]) < 1e-9
-    assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)       # ms
+    assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)
+    assert result.objective["unit"] == "ms"
 
 
 @pytest.mark.parametrize("path", sorted(TUBES.glob("*.toml")), ids=lambda p: p.stem)
@@ -191,6 +195,7 @@ def test_uniform_solution_holds_its_rules_and_its_worst_error_is_the_fine_grid_w
     assert all(r["satisfied"] for r in result.rules)
     sweep = max(result.extra["row_spacing_sweep"]["spacing_error_mm"])     # 10x finer than the NLP
     assert result.objective["value"] == pytest.approx(sweep, rel=1e-6)
+    assert result.objective["unit"] == "mm"
     # and it is no worse over the row spacings than the paper's procedure (equal times at 230 mm)
     paper, _, _ = run_solve(load_spec(DELTA2), workers=1)
     assert sweep < max(paper.extra["row_spacing_sweep"]["spacing_error_mm"])

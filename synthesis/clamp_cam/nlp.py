@@ -32,6 +32,8 @@ DEG = math.pi / 180.0
 SAMPLED = ("pressure_angle_rise", "pressure_angle_return", "no_undercut", "no_undercut_outer", "max_acceleration")
 #: IPOPT settings of this kind (its published numbers were computed with them)
 IPOPT = {"ipopt.tol": 1e-9, "ipopt.acceptable_tol": 1e-7}
+#: unit of each objective's value in the result; nearest: the squared changes, each relative to its bounds' width
+OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
 
 
 class CamNLP:

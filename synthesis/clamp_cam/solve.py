@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 
 from synthesis.clamp_cam.check import FINE, describe
-from synthesis.clamp_cam.nlp import CamNLP
+from synthesis.clamp_cam.nlp import OBJECTIVE_UNITS, CamNLP
 from synthesis.clamp_cam.scene import CamScene, evaluate, fit_law
 from synthesis.errors import SolverError
 from synthesis.result import Result
@@ -54,7 +54,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     result = Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status_of(chosen, ordered, elastic),
         design=dict(scene.design), rules=[r.to_json() for r in chosen.records],
-        objective={"name": spec.objective.name, "value": objective_value(spec, chosen)},
+        objective={"name": spec.objective.name, "value": objective_value(spec, chosen),
+                   "unit": OBJECTIVE_UNITS[spec.objective.name]},
         trajectory=trajectory,
         solver=run.solver_record(samples_per_segment=spec.solver.samples_per_segment),
         extra={

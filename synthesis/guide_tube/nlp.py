@@ -28,6 +28,8 @@ from synthesis.spec.guide_tube import GuideTubeSpec
 
 #: IPOPT settings of this kind (its published numbers were computed with them)
 IPOPT = {"ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8}
+#: unit of each objective's value: squared change of the free angles, tube 1's landing time, position error
+OBJECTIVE_UNITS = {"nearest": "deg^2", "fastest": "ms", "uniform": "mm"}
 
 
 def symbolic_drop(delta_deg, tube: Tube, physics: Physics) -> DropPhases:

@@ -9,7 +9,7 @@ from constraints import not_evaluated
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.guide_tube.check import FINE, design_of, rules_of, scene_facts
 from synthesis.guide_tube.drop import SeedlingSticks
-from synthesis.guide_tube.nlp import GuideTubeNLP
+from synthesis.guide_tube.nlp import OBJECTIVE_UNITS, GuideTubeNLP
 from synthesis.guide_tube.scene import GuideTubeScene
 from synthesis.result import Result
 from synthesis.rule_solve import (ElasticDiagnosis, StartReport, diagnosis_of, ipopt_log, measured, run_multistart,
@@ -58,7 +58,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
         status = status_of(chosen, ordered, elastic)
     result = Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=design, rules=records,
-        objective={"name": spec.objective.name, "value": chosen.outcome.objective},
+        objective={"name": spec.objective.name, "value": chosen.outcome.objective,
+                   "unit": OBJECTIVE_UNITS[spec.objective.name]},
         solver=run.solver_record(samples=spec.solver.samples),
         extra={**facts,
                "baseline_design": design_of(spec.given_angles()),
