@@ -233,3 +233,22 @@ def test_modified_sine_gives_the_smallest_opening_cam():
     d = result.design
     assert (d["base_radius"], d["offset"]) == pytest.approx((57.873, -10.335), abs=2e-3)
     assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 15.0
+
+
+def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
+    """solve, its starts, the elastic diagnosis and the baseline rule table share one cvxpy fit."""
+    from synthesis.clamp_cam import bspline_law, scene
+    from synthesis.clamp_cam.solve import baseline_rules
+    from synthesis.spec.common import FreeVariable
+
+    fits = []
+    fit = bspline_law.fit_optimised_law
+    monkeypatch.setattr(bspline_law, "fit_optimised_law", lambda *args: fits.append(args) or fit(*args))
+    scene._fitted_law.cache_clear()
+    loaded = load_spec(CAMS / "opening_cam_optimised_law.toml")
+    free = _with(loaded, cam={"base_radius": FreeVariable(init=25.0, bounds=(20.0, 30.0))})   # too small
+    result, reports, _ = run_solve(free, starts=2, workers=1)
+    assert result.status == "infeasible" and result.extra["elastic"]["relaxed"]
+    diagnose_infeasible(free, result, reports)
+    assert baseline_rules(free)
+    assert len(fits) == 1

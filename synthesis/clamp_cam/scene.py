@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -46,15 +47,24 @@ def fit_law(spec: ClampCamSpec):
     """The optimised B-spline law of the spec's segments (imports cvxpy), or None for a closed-form law."""
     if spec.motion.law != "optimised":
         return None
-    from synthesis.clamp_cam.bspline_law import fit_optimised_law
-
     seg = spec.design_values()
     cap = spec.rules.max_acceleration
     if cap is not None and spec.follower.type == "oscillating":
         cap = math.radians(cap)
     b = spec.bspline
-    return fit_optimised_law(stroke_of(spec), {"rise": seg["rise"], "return": seg["return"]}, omega_of(spec),
-                             b.minimise, b.spans, b.degree, b.samples_per_span, cap)
+    return _fitted_law(stroke_of(spec), seg["rise"], seg["return"], omega_of(spec), b.minimise, b.spans, b.degree,
+                       b.samples_per_span, cap)
+
+
+@lru_cache(maxsize=8)
+def _fitted_law(stroke: float, rise_deg: float, return_deg: float, omega: float, minimise: str, spans: int,
+                degree: int, samples_per_span: int, cap: float | None):
+    """One convex fit per set of inputs and process: a check or a solve, its diagnosis and its baseline
+    rule table all use the same law, fitted once (the law is immutable)."""
+    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+
+    return fit_optimised_law(stroke, {"rise": rise_deg, "return": return_deg}, omega, minimise, spans, degree,
+                             samples_per_span, cap)
 
 
 def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
