@@ -252,3 +252,28 @@ def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
     diagnose_infeasible(free, result, reports)
     assert baseline_rules(free)
     assert len(fits) == 1
+
+
+def test_an_inaccurately_solved_law_is_flagged_in_the_result_and_the_rules():
+    """cvxpy's OPTIMAL_INACCURATE is accepted but said: the law-dependent rules carry a note, the result a
+    warning and cam.optimised_law.accurate = false; an accurate fit has neither."""
+    import dataclasses
+
+    from synthesis.clamp_cam.check import describe
+    from synthesis.clamp_cam.scene import CamScene, evaluate, fit_law
+
+    spec = load_spec(CAMS / "opening_cam_optimised_law.toml").model
+    law = fit_law(spec)
+    assert law.status == "optimal" and law.warning is None
+    for optimised, flagged in ((law, False), (dataclasses.replace(law, status="optimal_inaccurate"), True)):
+        scene = CamScene.from_spec(spec, optimised=optimised)
+        records = {r.name: r.record() for r in evaluate(scene, 100)[0]}
+        extra, _ = describe(scene)
+        assert extra["cam"]["optimised_law"]["accurate"] is not flagged
+        assert ("warnings" in extra) is flagged
+        for name, record in records.items():
+            expected = flagged and not name.startswith("timing_")
+            assert (record.note is not None and "optimal_inaccurate" in record.note) is expected, name
+        if flagged:
+            assert "optimal_inaccurate" in extra["warnings"][0]
+            assert "pressure_angle_return" in records

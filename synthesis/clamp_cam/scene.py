@@ -6,6 +6,7 @@ The NLP (synthesis.clamp_cam.nlp) builds the same rules on CasADi symbols from t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -162,8 +163,22 @@ def segment_grid(scene: CamScene, per_motion_segment: int, per_dwell: int = 8) -
                      for k in ("phi_deg", "s", "ds", "dds", "ddds", "segment")))
 
 
+def law_warning(scene: CamScene) -> str | None:
+    """The caveat of an optimised law that cvxpy solved only inaccurately, else None."""
+    return None if scene.optimised is None else scene.optimised.warning
+
+
 def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
-    """Every rule of the spec, evaluated on the samples of ``g``."""
+    """Every rule of the spec, evaluated on the samples of ``g``; the rules that follow the motion law carry
+    its caveat as a note when the optimised law was solved inaccurately."""
+    rules = _cam_rules(scene, g)
+    note = law_warning(scene)
+    if note is None:
+        return rules
+    return [r if r.name.startswith("timing_") else dataclasses.replace(r, note=note) for r in rules]
+
+
+def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
     spec, lim = scene.spec, scene.spec.rules
     driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
     rules = [pressure_angle_rule("rise", g.alpha_deg[driven], lim.pressure_angle_rise),
