@@ -167,6 +167,7 @@ class RuleNLP:
                 "ipopt.max_iter": max_iter, **(TIGHT_IPOPT if ipopt is None else ipopt)}
         self.solver = ca.nlpsol(name, "ipopt", {"x": self.decision, "f": f, "g": self.g}, opts)
         self.g_function = ca.Function("g", [self.decision], [self.g])
+        self.f_function = ca.Function("f", [self.decision], [f])
 
     def solve(self, start: int, x0: np.ndarray, extra0: np.ndarray | None = None) -> NLPOutcome:
         """One IPOPT run from x0 (design part) and extra0 (extra variables; default the objective's)."""
@@ -177,7 +178,9 @@ class RuleNLP:
                               lbg=self._lbg, ubg=self._ubg)
         wall = time.perf_counter() - t0
         stats = self.solver.stats()
-        return NLPOutcome(start, np.asarray(sol["x"]).ravel(), float(sol["f"]), stats["return_status"],
+        x = np.asarray(sol["x"]).ravel()
+        # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another point
+        return NLPOutcome(start, x, float(self.f_function(x)), stats["return_status"],
                           bool(stats["success"]), int(stats["iter_count"]), wall, log(),
                           np.asarray(sol["lam_g"]).ravel())
 
