@@ -28,6 +28,8 @@ class Rule:
     nlp_rows: tuple = field(default=(), compare=False)
     #: why the rule could not be evaluated (numeric designs only)
     missing: str | None = None
+    #: a caveat on an evaluated value (e.g. it rests on a fit solved only inaccurately); shown in the table
+    note: str | None = field(default=None, compare=False)
 
     def rows(self) -> tuple:
         return self.nlp_rows or ((self.expr, self.lower, self.upper),)
@@ -44,7 +46,7 @@ class Rule:
         worst = int(np.argmin(margins))
         margin = float(margins[worst])
         return RuleRecord(self.name, float(values[worst]), limit, self.unit, margin >= 0.0,
-                          margin, margin / self.scale, self.where, None)
+                          margin, margin / self.scale, self.where, self.note)
 
 
 @dataclass(frozen=True)

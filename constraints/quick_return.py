@@ -32,7 +32,10 @@ def rocker_swing_rule(u, w, rocker_length, required_deg: float, tolerance_deg: f
                       missing: str | None = None) -> Rule:
     """Swing = angle between the rocker vectors u, w (A -> E) at the two extremes, deg.
 
-    NLP row: acos(u.w / l9^2) = psi in degrees, smooth for swings inside (0, 180) deg (|u| = |w| = l9).
+    NLP row: 2 atan2(|u - w|, |u + w|) = psi in degrees (|u| = |w| = l9: the half-angle's sine and
+    cosine, times 2 l9).  Smooth for swings inside (0, 180) deg and defined at every iterate, unlike
+    acos(u.w / l9^2), whose argument leaves [-1, 1] by rounding near 180 deg (NaN) and whose
+    derivative is infinite there.
     """
     limit = (required_deg - tolerance_deg, required_deg + tolerance_deg)
     if missing:
@@ -40,5 +43,7 @@ def rocker_swing_rule(u, w, rocker_length, required_deg: float, tolerance_deg: f
     dot = u[0] * w[0] + u[1] * w[1]
     cross = u[0] * w[1] - u[1] * w[0]
     value = ca.atan2(ca.fabs(cross), dot) * (180.0 / math.pi)
-    row = (ca.acos(dot / (rocker_length * rocker_length)) * (180.0 / math.pi), required_deg, required_deg)
+    chord = ca.sqrt((u[0] - w[0]) ** 2 + (u[1] - w[1]) ** 2)          # 2 l9 sin(psi / 2)
+    span = ca.sqrt((u[0] + w[0]) ** 2 + (u[1] + w[1]) ** 2)           # 2 l9 cos(psi / 2)
+    row = (2.0 * ca.atan2(chord, span) * (180.0 / math.pi), required_deg, required_deg)
     return Rule("rocker_swing", value, *limit, "deg", 5.0, "between the rocker extremes", nlp_rows=(row,))

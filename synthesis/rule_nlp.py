@@ -1,19 +1,18 @@
-"""An IPOPT problem assembled from named rules, shared by the crank_rocker and picker kinds.
+"""An IPOPT problem assembled from named rules, shared by the crank_rocker, picker, clamp_cam and
+guide_tube kinds.
 
 The decision vector, its bounds, the *structural* rows (definitions that must hold exactly, e.g. "phi_a
 is a stationary point of the rocker") and the objective are given by the kind; every
 :class:`constraints.base.Rule` contributes its smooth rows.  In *elastic* mode every rule gets one
 slack on all its rows and the objective becomes the sum of the slacks: the rules whose slack stays
 positive are the ones that conflict (the exit-3 diagnosis).  The solver is built once (``nlpsol``)
-and reused for every start; IPOPT's log goes to a per-instance file, so workers never share output.
+and reused for every start; IPOPT's output of each solve is captured from file descriptor 1
+(:mod:`synthesis.ipopt_log`), so no log file is ever left behind, in workers or not.
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
 import time
-import weakref
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
@@ -21,8 +20,15 @@ import casadi as ca
 import numpy as np
 
 from constraints.base import Rule
+from synthesis.ipopt_log import captured_stdout
 
 Row = tuple  # (expr, lb | None, ub | None)
+
+#: IPOPT settings of the crank_rocker and picker kinds; a kind may pass its own (``ipopt=``)
+TIGHT_IPOPT = {"ipopt.tol": 1e-9, "ipopt.acceptable_tol": 1e-7, "ipopt.constr_viol_tol": 1e-8,
+               "ipopt.mu_strategy": "adaptive",
+               # no relaxation of inequality limits: a returned design meets them, not 1e-8 short
+               "ipopt.bound_relax_factor": 0.0}
 
 
 @dataclass
@@ -50,11 +56,23 @@ class NLPOutcome:
     lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))   # constraint multipliers at return
 
 
-def _remove(path: str) -> None:
-    try:
-        os.unlink(path)
-    except FileNotFoundError:
-        pass
+@dataclass
+class StartOutcome:
+    """One start of a multistart solve, as the kinds report it: the design and objective in spec units."""
+
+    start: int
+    design: dict[str, float]
+    objective: float
+    return_status: str
+    success: bool
+    iterations: int
+    wall_s: float
+    log: str
+
+    @classmethod
+    def of(cls, out: "NLPOutcome", design: dict[str, float], objective: float, **more) -> "StartOutcome":
+        return cls(out.start, design, objective, out.return_status, out.success, out.iterations, out.wall_s,
+                   out.log, **more)
 
 
 class _Rows:
@@ -96,24 +114,29 @@ def _tightened(rule: Rule, backoff: float) -> list[Row]:
 class RuleNLP:
     """min f  s.t.  structural rows, every rule's rows, lbx <= x <= ubx (or the elastic version).
 
-    ``backoff`` tightens every rule inequality by backoff x the rule's scale (see :func:`_tightened`).
+    ``backoff`` tightens every rule inequality by backoff x the rule's scale (see :func:`_tightened`);
+    a callable ``backoff(rule)`` gives each rule its own (e.g. 0 for rules that are not sampled).
     Elastic mode relaxes each rule's rows by scale x its slack, so rows must be in the rule's unit;
     rules named in ``hard_in_elastic`` stay hard there (e.g. the rule without which the kinematics
-    is undefined) and get a zero slack.
+    is undefined) and their slack is fixed at zero.  ``ipopt``: IPOPT options (default
+    :data:`TIGHT_IPOPT`); printing and the iteration limit are set here.
     """
 
     def __init__(self, name: str, x: ca.SX, lbx, ubx, structural: Sequence[Row], rules: Sequence[Rule],
-                 objective: ObjectiveParts, elastic: bool = False, max_iter: int = 500, tol: float = 1e-9,
-                 backoff: float = 1e-7, hard_in_elastic: Sequence[str] = ()):
+                 objective: ObjectiveParts, elastic: bool = False, max_iter: int = 500,
+                 backoff: float | Callable[[Rule], float] = 1e-7, hard_in_elastic: Sequence[str] = (),
+                 ipopt: dict | None = None):
         self.rules = list(rules)
         self.n_x = x.numel()
         self.elastic = elastic
+        self._hard = [elastic and rule.name in hard_in_elastic for rule in self.rules]
+        backoff_of = backoff if callable(backoff) else (lambda rule: backoff)
         g = _Rows()
         g.add(structural)
         if elastic:
             slack = ca.SX.sym("slack", len(self.rules))
             for k, rule in enumerate(self.rules):
-                if rule.name in hard_in_elastic:
+                if self._hard[k]:
                     g.add(rule.rows(), k)
                     continue
                 relax = rule.scale * slack[k]     # lb - scale*s <= expr <= ub + scale*s, one slack per rule
@@ -122,12 +145,13 @@ class RuleNLP:
                         g.add([(expr + relax, lb, None)], k)
                     if ub is not None:
                         g.add([(expr - relax, None, ub)], k)
-            extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [np.inf] * len(self.rules)
+            # a hard rule's slack is fixed at 0: it appears in no row
+            extra, extra_lb, extra_ub = slack, [0.0] * len(self.rules), [0.0 if h else np.inf for h in self._hard]
             self._extra_init = np.zeros(len(self.rules))
             f = ca.sum1(slack)
         else:
             for k, rule in enumerate(self.rules):
-                g.add(_tightened(rule, backoff), k)
+                g.add(_tightened(rule, backoff_of(rule)), k)
             g.add(objective.rows)
             extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
             self._extra_init = np.array(objective.extra_init, dtype=float)
@@ -139,39 +163,30 @@ class RuleNLP:
         self._lbx = np.concatenate([np.asarray(lbx, float), np.asarray(extra_lb, float)])
         self._ubx = np.concatenate([np.asarray(ubx, float), np.asarray(extra_ub, float)])
         self._lbg, self._ubg = np.array(g.lbg, float), np.array(g.ubg, float)
-        # IPOPT writes its log to a file it keeps open for the solver's lifetime.  We hold our own read
-        # handle and unlink the path after the first solve (or when this object goes), so no file is
-        # left behind even in pool workers that exit without running finalisers.
-        fd, self._log_path = tempfile.mkstemp(prefix="agrisynth-ipopt-", suffix=".log")
-        self._log = os.fdopen(fd, "rb")
-        self._unlink = weakref.finalize(self, _remove, self._log_path)
-        opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-                "ipopt.output_file": self._log_path, "ipopt.file_print_level": 5,
-                "ipopt.max_iter": max_iter, "ipopt.tol": tol, "ipopt.acceptable_tol": 1e-7,
-                "ipopt.constr_viol_tol": 1e-8,
-                "ipopt.mu_strategy": "adaptive",
-                # no relaxation of inequality limits: a returned design meets them, not 1e-8 short
-                "ipopt.bound_relax_factor": 0.0}
+        opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 5, "ipopt.sb": "yes",
+                "ipopt.max_iter": max_iter, **(TIGHT_IPOPT if ipopt is None else ipopt)}
         self.solver = ca.nlpsol(name, "ipopt", {"x": self.decision, "f": f, "g": self.g}, opts)
         self.g_function = ca.Function("g", [self.decision], [self.g])
+        self.f_function = ca.Function("f", [self.decision], [f])
 
     def solve(self, start: int, x0: np.ndarray, extra0: np.ndarray | None = None) -> NLPOutcome:
         """One IPOPT run from x0 (design part) and extra0 (extra variables; default the objective's)."""
         extra0 = self._extra_init if extra0 is None else np.asarray(extra0, float)
         t0 = time.perf_counter()
-        sol = self.solver(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self._lbx, ubx=self._ubx,
-                          lbg=self._lbg, ubg=self._ubg)
+        with captured_stdout() as log:
+            sol = self.solver(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self._lbx, ubx=self._ubx,
+                              lbg=self._lbg, ubg=self._ubg)
         wall = time.perf_counter() - t0
         stats = self.solver.stats()
-        self._unlink()                                     # IPOPT has opened it: the path can go
-        log = self._log.read().decode(errors="replace")    # what this solve appended
-        return NLPOutcome(start, np.asarray(sol["x"]).ravel(), float(sol["f"]), stats["return_status"],
-                          bool(stats["success"]), int(stats["iter_count"]), wall, log,
+        x = np.asarray(sol["x"]).ravel()
+        # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another point
+        return NLPOutcome(start, x, float(self.f_function(x)), stats["return_status"],
+                          bool(stats["success"]), int(stats["iter_count"]), wall, log(),
                           np.asarray(sol["lam_g"]).ravel())
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
-        """Elastic mode: each rule's slack at a returned decision vector, in the rule's unit."""
-        return {r.name: float(v) * r.scale for r, v in zip(self.rules, x[self.n_x:])}
+        """Elastic mode: each relaxable rule's slack at a returned decision vector, in the rule's unit."""
+        return {r.name: float(v) * r.scale for r, v, hard in zip(self.rules, x[self.n_x:], self._hard) if not hard}
 
     def active_rules(self, outcome: NLPOutcome, tol: float = 1e-6) -> list[str]:
         """Rules with a row whose multiplier is non-zero at the outcome: the ones that bind."""

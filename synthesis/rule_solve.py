@@ -1,4 +1,5 @@
-"""Multistart driver shared by the crank_rocker and picker kinds: every start re-checked independently.
+"""Multistart driver shared by the crank_rocker, picker, clamp_cam and guide_tube kinds: every start
+re-checked independently, one verdict (status) and one exit-3 diagnosis.
 
 Each start's design is re-evaluated by the kind's own ``recheck`` (float kinematics, root-found
 extremes, a grid 10x finer than the solver's samples), never by the NLP's constraint values; the
@@ -11,10 +12,13 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+import functools
+import time
+
 import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
-from synthesis.multistart import run_starts
+from synthesis.multistart import latin_hypercube_starts, run_starts
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
 FINE = 10
@@ -24,17 +28,20 @@ FINE = 10
 class StartReport:
     outcome: Any                     # the kind's StartOutcome (start, design, objective, return_status, ...)
     satisfied: bool                  # every rule holds on the fine grid
-    worst_violation: float           # largest normalised violation on the fine grid (0 when satisfied)
+    worst_violation: float           # largest normalised violation on the fine grid (0 when satisfied;
+                                     # math.inf when a rule cannot be evaluated: see :func:`measured`)
     records: list = field(default_factory=list)     # RuleRecord per rule
     context: Any = None              # whatever the kind's recheck wants to keep (scene, motion facts)
+    why: str | None = None           # why the design could not be evaluated at all
 
 
 def report_of(outcome, recheck: Callable[[dict], tuple[list, Any]]) -> StartReport:
-    """Re-evaluate ``outcome.design`` with ``recheck(design) -> (rules, context)``."""
+    """Re-evaluate ``outcome.design`` with ``recheck(design) -> (rules, context)``; a design it cannot
+    evaluate (AgrisynthError, ValueError) gets an infinite violation and the reason."""
     try:
         rules, context = recheck(outcome.design)
-    except (AgrisynthError, ValueError):
-        return StartReport(outcome, False, math.inf)
+    except (AgrisynthError, ValueError) as exc:
+        return StartReport(outcome, False, math.inf, why=str(exc))
     records = [r.record() for r in rules]
     worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None else -math.inf)
                          for r in records if not r.satisfied])
@@ -72,10 +79,56 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
     return [reports[i] for i in range(len(x_starts))], best[0]
 
 
-def starts_table(reports: list[StartReport]) -> list[dict]:
+@dataclass
+class Run:
+    """A finished multistart: the problem as built in this process, every start's report, the best one."""
+
+    nlp: Any                         # the kind's NLP (bounds, init, ...) built once here
+    reports: list[StartReport]
+    best: StartReport
+    starts: int
+    seed: int
+    workers: int
+    wall_s: float
+
+    def solver_record(self, **more) -> dict:
+        """result.json ``solver`` (DESIGN.md keys) plus the kind's own settings."""
+        o = self.best.outcome
+        return {"name": "ipopt", "return_status": o.return_status, "iterations": o.iterations,
+                "wall_s": self.wall_s, "starts": self.starts, "seed": self.seed, "best_start": o.start,
+                "workers": self.workers, **more, "fine_grid_factor": FINE}
+
+
+def run_multistart(build: Callable[..., Any], spec, recheck: Callable[[dict], tuple[list, Any]], *,
+                   starts: int | None, seed: int | None, workers: int, maximise: bool = False,
+                   on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+                   build_args: tuple = ()) -> Run:
+    """Solve from ``starts`` Latin-hypercube starts (start 0 = the spec's design; default counts from
+    ``spec.solver``).  ``build(spec, *build_args)`` builds the NLP (with ``bounds`` and ``init``); it is
+    built once here and, with several workers, once in each worker (it must be picklable)."""
+    starts = spec.solver.starts if starts is None else starts
+    seed = spec.solver.seed if seed is None else seed
+    nlp = build(spec, *build_args)
+    x_starts = latin_hypercube_starts(nlp.bounds, nlp.init, starts, seed)
+    factory = functools.partial(build, spec, *build_args) if workers > 1 else (lambda: nlp)
+    t0 = time.perf_counter()
+    reports, best = multistart(factory, x_starts, workers, recheck, maximise, on_start)
+    return Run(nlp, reports, best, starts, seed, workers, time.perf_counter() - t0)
+
+
+def measured(x: float) -> float | None:
+    """A figure for result.json: JSON has no infinity, and a violation (or objective) that could not be
+    measured, because the design cannot be evaluated, is written as null rather than as a number."""
+    return x if math.isfinite(x) else None
+
+
+def starts_table(reports: list[StartReport], objective: Callable[[StartReport], float] | None = None) -> list[dict]:
+    """result.json ``starts``: one row per start; ``objective(report)`` in report units (default the outcome's)."""
+    value = objective or (lambda r: r.outcome.objective)
     return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "iterations": r.outcome.iterations,
-             "wall_s": r.outcome.wall_s, "objective": r.outcome.objective, "satisfied_on_fine_grid": r.satisfied,
-             "worst_violation": r.worst_violation, "design": r.outcome.design} for r in reports]
+             "wall_s": r.outcome.wall_s, "objective": measured(value(r)),
+             "satisfied_on_fine_grid": r.satisfied, "worst_violation": measured(r.worst_violation),
+             "why": r.why, "design": r.outcome.design} for r in reports]
 
 
 def ipopt_log(reports: list[StartReport]) -> str:
@@ -83,21 +136,99 @@ def ipopt_log(reports: list[StartReport]) -> str:
                      f"{r.outcome.log}" for r in reports)
 
 
-def infeasible_error(slacks: dict[str, float], units: dict[str, str], binding: list[str], elastic_status: str,
-                     reports: list[StartReport], violated: list[str]) -> SolverError:
-    """The exit-3 message: the rules an elastic re-solve must relax (by how much, largest first), the
-    rules holding them back (non-zero multipliers there) and IPOPT's words."""
-    statuses = ", ".join(sorted({r.outcome.return_status for r in reports}))
-    short = [n for n, s in sorted(slacks.items(), key=lambda kv: -kv[1]) if s > 1e-6]
-    if not short:
+@dataclass
+class ElasticDiagnosis:
+    """What an elastic re-solve (one slack per rule, minimise their sum) says about a rule set."""
+
+    return_status: str
+    converged: bool
+    slacks: dict[str, float]        # rule -> how far it must be relaxed, in the rule's unit
+    units: dict[str, str]
+    scales: dict[str, float]        # rule -> its typical margin (a slack counts above tol x scale)
+    binding: list[str] = field(default_factory=list)   # rules with a non-zero multiplier there
+    tol: float = 1e-6
+
+    @property
+    def relaxed(self) -> list[str]:
+        """The rules the relaxation gives up on, largest slack first (none unless it converged)."""
+        if not self.converged:
+            return []
+        return [n for n, s in sorted(self.slacks.items(), key=lambda kv: -kv[1] / self.scales[kv[0]])
+                if s > self.tol * self.scales[n]]
+
+    def to_json(self) -> dict:
+        return {"return_status": self.return_status, "converged": self.converged,
+                "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
+                "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "ElasticDiagnosis":
+        slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
+        return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
+                   data.get("binding", []))
+
+
+def diagnosis_of(nlp, out) -> ElasticDiagnosis:
+    """The diagnosis of an elastic :class:`synthesis.rule_nlp.RuleNLP` solved to ``out``."""
+    return ElasticDiagnosis(out.return_status, out.success, nlp.slack_values(out.x),
+                            {r.name: r.unit for r in nlp.rules}, {r.name: r.scale for r in nlp.rules},
+                            nlp.active_rules(out))
+
+
+def status_of(best: StartReport, reports: list[StartReport], elastic: ElasticDiagnosis | None) -> str:
+    """DESIGN.md status of a multistart run.
+
+    optimal/feasible: the best start satisfies every rule (and IPOPT converged there, or not);
+    infeasible: no start does, and the elastic re-solve must relax a rule, or some start converged
+    to a design that misses the fine grid between the solver's samples;
+    failed: no start converged and the elastic re-solve needs no slack (or did not converge either):
+    nothing says the rules conflict, IPOPT just found no solution.
+    """
+    if best.satisfied:
+        return "optimal" if best.outcome.success else "feasible"
+    if elastic is not None and elastic.relaxed:
+        return "infeasible"
+    return "infeasible" if any(r.outcome.success for r in reports) else "failed"
+
+
+def said(reports: list[StartReport]) -> str:
+    """IPOPT's return statuses over the starts, most frequent first: "Maximum_Iterations_Exceeded x5, ..."."""
+    counts: dict[str, int] = {}
+    for r in reports:
+        counts[r.outcome.return_status] = counts.get(r.outcome.return_status, 0) + 1
+    return ", ".join(f"{s} x{n}" if n > 1 else s for s, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
+
+
+def unsatisfied_error(result, reports: list[StartReport], elastic: ElasticDiagnosis, *, samples_hint: str,
+                      relax_hint: str = "Loosen those requirements or widen the bounds of the design variables.",
+                      max_iter_hint: str = "[solver] max_iter") -> SolverError:
+    """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed).
+
+    Names the rules an elastic re-solve must relax (by how much, largest first) and those holding them
+    back (binding there), or says that nothing conflicts: IPOPT's words and what to try either way.
+    """
+    n = len(reports)
+    violated = ", ".join(r["name"] for r in result.rules if not r["satisfied"]) or "none evaluated"
+    relaxed = elastic.relaxed
+    if relaxed:
+        gives_up = ", ".join(f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]})"
+                             for name in relaxed)
+        holding = [name for name in elastic.binding if name not in relaxed]
+        against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
         return SolverError(
-            f"no start satisfies every rule on the 10x finer check grid ({len(reports)} starts; IPOPT said: "
-            f"{statuses}), though an elastic re-solve needs no slack. Violated: {', '.join(violated)}. "
-            f"Try more --starts or more [solver] samples.")
-    relaxed = ", ".join(f"{n} (misses its limit by {slacks[n]:.3g} {units[n]})" for n in short)
-    holding = [n for n in binding if n not in short]
-    against = f"; it conflicts with {', '.join(holding)} (binding there)" if holding else ""
+            f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). Rules that conflict "
+            f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
+            f"first): {gives_up}{against}. {relax_hint}")
+    if result.status == "failed":
+        why = ("and an elastic re-solve needs no slack, so the rules do not conflict" if elastic.converged else
+               f"and an elastic re-solve did not converge either ({elastic.return_status}), so nothing is known "
+               f"about conflicts")
+        return SolverError(
+            f"IPOPT found no solution: it converged from none of the {n} starts (IPOPT said: {said(reports)}), "
+            f"{why}. Violated at the best start: {violated}. This is a solver failure, not an infeasible rule "
+            f"set: try more --starts, a higher {max_iter_hint}, or a given design (start 0) nearer one that "
+            f"meets the rules.")
     return SolverError(
-        f"no start satisfies every rule ({len(reports)} starts; IPOPT said: {statuses}). "
-        f"The smallest relaxation (elastic re-solve, {elastic_status}) gives up on: {relaxed}{against}. "
-        f"Loosen those requirements or widen the bounds of the design variables.")
+        f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
+        f"though an elastic re-solve needs no slack: the rules hold at the solver's samples. Violated between "
+        f"samples: {violated}. Raise {samples_hint}, or try more --starts.")

@@ -149,8 +149,11 @@ def test_eq12_as_printed_is_not_the_envelope():
     rising = ~dwell & (np.degrees(phi) < 180.0)
     assert depth(rising) == pytest.approx(0.420, abs=3e-3)
     assert depth(~dwell & ~rising) == pytest.approx(1.579, abs=3e-3)
-    # with s of eq (11) as printed (s = r0 + h(...)) the near-dwell radius would be 2 r0 - rT = 96.5 mm
-    assert (R0 + 0.0) + R0 - ROLLER == 96.5
+    # on the near dwell the working profile is the base circle less the roller, r0 - rT = 46.5 mm; eq (12)
+    # fed with s of eq (11) as printed (s = r0 + h(...)) would put it at 2 r0 - rT = 96.5 mm, twice too big
+    near = dwell & (smp.s == 0.0)
+    assert near.sum() > 100
+    assert np.hypot(*w[near].T) == pytest.approx(np.full(near.sum(), R0 - ROLLER), abs=1e-6)
 
 
 def test_check_exit_state_of_the_published_cams():

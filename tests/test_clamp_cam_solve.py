@@ -62,6 +62,24 @@ def solved():
 
 
 @pytest.mark.parametrize("name", ["opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"])
+def test_objective_value_is_the_designs_in_its_unit(solved, name):
+    """base_radius: the pitch base circle, mm; nearest: sum of squared changes of the free variables,
+    each relative to its bounds' width (dimensionless)."""
+    from synthesis.spec.common import bounds_of, is_free, value_of
+
+    loaded, result, _ = solved[name]
+    objective = result.objective
+    if objective["name"] == "base_radius":
+        assert objective["unit"] == "mm" and objective["value"] == result.design["base_radius"]
+    else:
+        assert objective["name"] == "nearest" and objective["unit"] == "-"
+        free = {n: v for n, v in loaded.model.variables().items() if is_free(v)}
+        expected = sum(((result.design[n] - value_of(v)) / (bounds_of(v)[1] - bounds_of(v)[0])) ** 2
+                       for n, v in free.items())
+        assert expected > 0 and objective["value"] == pytest.approx(expected, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", ["opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"])
 def test_redesigns_hold_every_rule_rechecked_independently(solved, name):
     loaded, result, _ = solved[name]
     assert result.status == "optimal"
@@ -215,3 +233,47 @@ def test_modified_sine_gives_the_smallest_opening_cam():
     d = result.design
     assert (d["base_radius"], d["offset"]) == pytest.approx((57.873, -10.335), abs=2e-3)
     assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 15.0
+
+
+def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
+    """solve, its starts, the elastic diagnosis and the baseline rule table share one cvxpy fit."""
+    from synthesis.clamp_cam import bspline_law, scene
+    from synthesis.clamp_cam.solve import baseline_rules
+    from synthesis.spec.common import FreeVariable
+
+    fits = []
+    fit = bspline_law.fit_optimised_law
+    monkeypatch.setattr(bspline_law, "fit_optimised_law", lambda *args: fits.append(args) or fit(*args))
+    scene._fitted_law.cache_clear()
+    loaded = load_spec(CAMS / "opening_cam_optimised_law.toml")
+    free = _with(loaded, cam={"base_radius": FreeVariable(init=25.0, bounds=(20.0, 30.0))})   # too small
+    result, reports, _ = run_solve(free, starts=2, workers=1)
+    assert result.status == "infeasible" and result.extra["elastic"]["relaxed"]
+    diagnose_infeasible(free, result, reports)
+    assert baseline_rules(free)
+    assert len(fits) == 1
+
+
+def test_an_inaccurately_solved_law_is_flagged_in_the_result_and_the_rules():
+    """cvxpy's OPTIMAL_INACCURATE is accepted but said: the law-dependent rules carry a note, the result a
+    warning and cam.optimised_law.accurate = false; an accurate fit has neither."""
+    import dataclasses
+
+    from synthesis.clamp_cam.check import describe
+    from synthesis.clamp_cam.scene import CamScene, evaluate, fit_law
+
+    spec = load_spec(CAMS / "opening_cam_optimised_law.toml").model
+    law = fit_law(spec)
+    assert law.status == "optimal" and law.warning is None
+    for optimised, flagged in ((law, False), (dataclasses.replace(law, status="optimal_inaccurate"), True)):
+        scene = CamScene.from_spec(spec, optimised=optimised)
+        records = {r.name: r.record() for r in evaluate(scene, 100)[0]}
+        extra, _ = describe(scene)
+        assert extra["cam"]["optimised_law"]["accurate"] is not flagged
+        assert ("warnings" in extra) is flagged
+        for name, record in records.items():
+            expected = flagged and not name.startswith("timing_")
+            assert (record.note is not None and "optimal_inaccurate" in record.note) is expected, name
+        if flagged:
+            assert "optimal_inaccurate" in extra["warnings"][0]
+            assert "pressure_angle_return" in records

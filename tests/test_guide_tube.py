@@ -116,6 +116,9 @@ def test_solved_delta2_equalises_the_ode_times_and_is_not_the_published_41_deg(c
     # every rule holds when re-checked on floats on a finer grid
     assert all(r["satisfied"] for r in result.rules)
     assert result.extra["landing_time_spread_s"] < 1e-9
+    # objective "nearest": the squared change of the free angle from the given 41 deg
+    assert result.objective["unit"] == "deg^2"
+    assert result.objective["value"] == pytest.approx((delta2 - PUBLISHED_DELTA2) ** 2, rel=1e-9)
 
 
 def test_the_printed_superposition_reading_does_not_give_41_deg_either(calibrated):
@@ -175,7 +178,8 @@ def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times():
     assert result.design["delta_I"] == pytest.approx(loaded.model.tubes[0].angle.bounds[1], abs=1e-6)
     times = [t["ode"]["t_z"] for t in result.extra["tubes"]]
     assert abs(times[0] - times[1]) < 1e-9
-    assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)       # ms
+    assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)
+    assert result.objective["unit"] == "ms"
 
 
 @pytest.mark.parametrize("path", sorted(TUBES.glob("*.toml")), ids=lambda p: p.stem)
@@ -191,6 +195,7 @@ def test_uniform_solution_holds_its_rules_and_its_worst_error_is_the_fine_grid_w
     assert all(r["satisfied"] for r in result.rules)
     sweep = max(result.extra["row_spacing_sweep"]["spacing_error_mm"])     # 10x finer than the NLP
     assert result.objective["value"] == pytest.approx(sweep, rel=1e-6)
+    assert result.objective["unit"] == "mm"
     # and it is no worse over the row spacings than the paper's procedure (equal times at 230 mm)
     paper, _, _ = run_solve(load_spec(DELTA2), workers=1)
     assert sweep < max(paper.extra["row_spacing_sweep"]["spacing_error_mm"])
@@ -225,10 +230,10 @@ def test_roots_in_finds_every_root_and_skips_undefined_gaps():
 
 def test_calibration_failures_name_the_field_and_the_candidates():
     several = MuCalibration(0.445, "I", 45.0, (0.0, 1.5), [0.3, 0.8], (0.4, 0.5), None)
-    assert calibration_failure(several).startswith("friction.calibrate: several friction coefficients")
+    assert calibration_failure(several).startswith("guide_tube.friction.calibrate: several friction coefficients")
     assert "mu = 0.3, 0.8" in calibration_failure(several)
     none = MuCalibration(0.2, "I", 45.0, (0.0, 1.5), [], (0.4262, 0.4917), None)
-    assert calibration_failure(none).startswith("friction.calibrate.landing_time: no mu in [0, 1.5]")
+    assert calibration_failure(none).startswith("guide_tube.friction.calibrate.landing_time: no mu in [0, 1.5]")
 
 
 # --- CLI, result contract, imports -------------------------------------------------------------------------
@@ -293,7 +298,8 @@ print("LOADED", sorted(other))
     ("\nh6 = 210\n", "\nh66 = 210\n", "guide_tube.tubes.0.h66: unknown field; did you mean 'h6'?"),
     ('tube = "I"', 'tube = "V"', "guide_tube.friction.calibrate.tube: no tube named 'V'"),
     ("landing_time = 0.445", "landing_time = 0.2",
-     "friction.calibrate.landing_time: no mu in [0, 1.5] makes tube I (wall angle 45 deg) land after 0.2 s"),
+     "guide_tube.friction.calibrate.landing_time: no mu in [0, 1.5] makes tube I (wall angle 45 deg) land "
+     "after 0.2 s"),
     ("terminal_speed = 17.5", "terminal_speed = -1", "guide_tube.drop.terminal_speed: expected > 0, got -1"),
     ("spacings = [230, 300]", "spacings = [230, 320]", "guide_tube.rows: spacings: expected 0 < lo <= hi <= "
                                                        "tray_pitch = 300, got [230, 320]"),
@@ -361,3 +367,18 @@ def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path
     error = diagnose_infeasible(loaded, result, reports)
     assert error.exit_code == 3
     assert "Rules that conflict" in str(error) and "spacing_error" in str(error)
+
+
+def test_a_solve_on_two_workers_leaves_no_ipopt_log_in_the_temp_dir(tmp_path):
+    """IPOPT's output is captured per solve from file descriptor 1 into anonymous temporary files; pool
+    workers exit without running finalisers, so a named log file per solver would stay behind."""
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    env = {"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "TMPDIR": str(temp), "MPLBACKEND": "Agg"}
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(DELTA2), "--out", str(tmp_path / "out"),
+                           "--workers", "2", "--starts", "3"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    log = (tmp_path / "out" / "cai2020_delta2" / "ipopt.log").read_text()
+    assert log.count("This is Ipopt version") == 3 and "EXIT: Optimal Solution Found." in log
+    assert [p.name for p in temp.rglob("*ipopt*")] == []

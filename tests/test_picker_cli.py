@@ -46,6 +46,16 @@ def test_solve_of_the_combined_picker_is_bad_input(tmp_path):
     assert "kind 'picker' has nothing to optimise" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.parametrize("spec, message", [
+    ("cai2020_crank_rocker", "crank_rocker.links: solve needs at least one free length"),
+    ("cai2020_double_crank", "picker_double_crank.linkage: solve needs at least one free variable"),
+])
+def test_solve_with_nothing_free_is_bad_input(tmp_path, spec, message):
+    proc = run("solve", str(PICKER / f"{spec}.toml"), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert message in proc.stderr and "agrisynth check" in proc.stderr and "Traceback" not in proc.stderr
+
+
 def _variant(tmp_path: Path, source: str, old: str, new: str, name: str = "bad.toml") -> Path:
     text = (PICKER / source).read_text()
     assert old in text, old
@@ -84,7 +94,10 @@ def test_picker_parts_must_exist_and_have_the_right_kind(tmp_path):
 def test_double_crank_that_cannot_assemble_exits_2(tmp_path):
     bad = _variant(tmp_path, "cai2020_double_crank.toml", "l2 = 78.5 ", "l2 = 8.5 ")
     proc = run("check", str(bad), "--out", str(tmp_path / "out"), cwd=tmp_path)
-    assert proc.returncode == 2 and "cannot assemble" in proc.stderr
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    message = " ".join(proc.stderr.split())
+    assert f"{bad}: picker_double_crank.linkage: the double crank cannot assemble" in message
+    assert "l2 = 8.5" in message
 
 
 FORBIDDEN_PROBE = """
@@ -133,3 +146,13 @@ def test_compare_figures_overlay_baseline_and_solution(tmp_path):
     assert written == ["compare_crank_rocker.png", "compare_picker_double_crank.png"]
     for name in written:
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_combined_picker_names_the_part_that_cannot_assemble(tmp_path):
+    for part in ("cai2020_crank_rocker.toml", "cai2020_picker.toml"):
+        (tmp_path / part).write_text((PICKER / part).read_text())
+    broken = _variant(tmp_path, "cai2020_double_crank.toml", "l2 = 78.5 ", "l2 = 8.5 ", "cai2020_double_crank.toml")
+    proc = run("check", str(tmp_path / "cai2020_picker.toml"), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    message = " ".join(proc.stderr.split())
+    assert f"picker.double_crank: {broken}: picker_double_crank.linkage: the double crank cannot assemble" in message

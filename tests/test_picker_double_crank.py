@@ -4,6 +4,7 @@ written out, the published design's arc error under our reading, and the redesig
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -14,7 +15,9 @@ from conftest import LIBRARY
 from synthesis.kinematics.arc import arc_through, picking_arc
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_states, joints
 from synthesis.picker.check import arc_error, evaluate, linkage, run_check, swing_angles, target_angles
-from synthesis.picker.solve import run_solve
+from synthesis.picker.nlp import PickerNLP
+from synthesis.picker.solve import recheck, run_solve
+from synthesis.rule_solve import report_of, status_of
 from synthesis.spec import load_spec
 
 PICKER = LIBRARY / "picker"
@@ -111,7 +114,9 @@ def test_printed_labels_cannot_drive_the_swing():
 def test_redesign_beats_the_published_objective_with_every_rule_on_a_fine_grid():
     loaded = load_spec(PICKER / "picker_double_crank_redesign.toml")
     result, _, _ = run_solve(loaded, starts=4, workers=1)
-    assert result.status in ("optimal", "feasible")
+    assert result.status == "optimal"
+    assert [(s["name"], s["return_status"]) for s in result.solver["stages"]] == [
+        ("least_squares", "Solve_Succeeded"), ("sum_of_distances", "Solve_Succeeded")]
     spec = loaded.model
     design = {k: v for k, v in result.design.items() if k != "branch"}
     dc = linkage(spec, design)
@@ -127,3 +132,55 @@ def test_redesign_beats_the_published_objective_with_every_rule_on_a_fine_grid()
     assert np.minimum(mu, 180 - mu).min() >= 40.0
     assert design["x_a"] > 0
     assert np.all(target_angles(spec) == pytest.approx(np.linspace(50, 100, 10)))
+
+
+def test_eq4_is_solved_exactly_down_to_its_kinks():
+    """The eq (4) stage minimises the sum of distances itself (no smoothing): it converges, improves on
+    the least-squares fit it starts from, and its optimum sits on kinks of eq (4): some target points are
+    hit exactly, where a smoothed sum would leave residuals of the size of its smoothing."""
+    loaded = load_spec(PICKER / "picker_double_crank_retrofit.toml")
+    result, reports, _ = run_solve(loaded, starts=2, workers=1)
+    assert result.status == "optimal"
+    lsq, eq4 = result.solver["stages"]
+    assert (lsq["name"], eq4["name"]) == ("least_squares", "sum_of_distances")
+    assert eq4["return_status"] == "Solve_Succeeded"
+    assert result.objective["value"] == pytest.approx(eq4["objective"], rel=1e-12)
+    assert eq4["objective"] < lsq["objective"] - 0.01
+    distances = sorted(p["distance"] for p in result.extra["arc_error"]["points"])
+    assert distances[0] < 1e-8 and distances[1] < 1e-8
+    assert distances[-1] > 0.01
+
+
+def test_a_start_whose_eq4_stage_stops_early_is_only_feasible():
+    """Status "optimal" needs the eq (4) stage to converge: with that stage capped at 5 IPOPT iterations
+    (the least-squares stage is not), the start is not converged and the run would be "feasible"."""
+    spec = load_spec(PICKER / "picker_double_crank_retrofit.toml").model
+    nlp = PickerNLP(spec)
+    capped = PickerNLP(spec.model_copy(update={"solver": spec.solver.model_copy(update={"max_iter": 5})}))
+    nlp.stages[1] = capped.stages[1]
+    outcome = nlp.solve(0, nlp.init)
+    lsq, eq4 = outcome.stages
+    assert lsq["return_status"] == "Solve_Succeeded" and eq4["return_status"] == "Maximum_Iterations_Exceeded"
+    assert outcome.return_status == "Maximum_Iterations_Exceeded" and not outcome.success
+    report = report_of(outcome, functools.partial(recheck, spec))
+    assert report.satisfied
+    assert status_of(report, [report], None) == "feasible"
+
+
+def test_a_given_double_crank_outside_the_grashof_region_still_solves(tmp_path):
+    """Frame AD = 200 mm is not the shortest link: the given design's loop breaks inside the working swing
+    (the float check raises AssemblyError).  The NLP works in Grashof coordinates, so every start
+    converges (no Invalid_Number_Detected, which 2 of 3 starts gave before) to a design meeting every rule."""
+    from synthesis.errors import AssemblyError
+
+    text = (PICKER / "picker_double_crank_redesign.toml").read_text()
+    assert "l4 = { init = 45.9," in text
+    path = tmp_path / "outside.toml"
+    path.write_text(text.replace("l4 = { init = 45.9,", "l4 = { init = 200.0,"))
+    loaded = load_spec(path)
+    with pytest.raises(AssemblyError, match="cannot assemble"):
+        evaluate(loaded.model, linkage(loaded.model))
+    result, reports, _ = run_solve(loaded, starts=3, workers=1)
+    assert [r.outcome.return_status for r in reports] == ["Solve_Succeeded"] * 3
+    assert result.status == "optimal" and result.all_satisfied
+    assert result.objective["value"] < 1.0

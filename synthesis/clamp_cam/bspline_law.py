@@ -86,9 +86,17 @@ class OptimisedLaw:
     #: peak of the minimised derivative divided by the cycloidal law's, per segment
     ratio_to_cycloidal: dict[str, float] = field(default_factory=dict)
 
+    @property
+    def warning(self) -> str | None:
+        """Why the law is not to be trusted to full accuracy (cvxpy accepted an inaccurate solution), or None."""
+        if self.status == cp.OPTIMAL:
+            return None
+        return (f"the optimised motion law comes from a convex fit that cvxpy/{self.solver} solved only to reduced "
+                f"accuracy ({self.status}): its end conditions and bounds hold to that accuracy only")
+
     def to_json(self) -> dict:
         return {"minimise": self.minimise, "status": self.status, "solver": self.solver,
-                "ratio_to_cycloidal": self.ratio_to_cycloidal,
+                "accurate": self.warning is None, "ratio_to_cycloidal": self.ratio_to_cycloidal,
                 "rise": self.rise.to_json(), "return": self.return_.to_json()}
 
 
@@ -146,6 +154,7 @@ def fit_optimised_law(stroke: float, segments_deg: dict[str, float], omega: floa
         coefficient_vars[name], peaks[name] = c, peak
     problem = cp.Problem(cp.Minimize(cp.sum(cp.hstack(problem_parts))), constraints)
     problem.solve(solver=cp.CLARABEL)
+    # OPTIMAL_INACCURATE is accepted but not hidden: OptimisedLaw.warning puts it in the result and the rules
     if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
         if max_acceleration is not None and problem.status in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
             free_fit = fit_optimised_law(stroke, segments_deg, omega, "acceleration", spans, degree, samples_per_span)

@@ -11,7 +11,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from synthesis.clamp_cam.motion import SEGMENT_NAMES
-from synthesis.clamp_cam.scene import (CamScene, evaluate, stroke_unit, to_report_units, window_degrees)
+from synthesis.clamp_cam.scene import (CamScene, evaluate, law_warning, stroke_unit, to_report_units,
+                                       window_degrees)
 from synthesis.kinematics import cam_follower as cf
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -157,8 +158,9 @@ def profile(scene: CamScene) -> dict:
 def describe(scene: CamScene) -> dict:
     """The kind-specific part of result.json."""
     trajectory, follower = follower_motion(scene)
-    return {"source": scene.spec.source, "cam": cam_facts(scene), "follower": follower,
-            "profile": profile(scene)}, trajectory
+    warning = law_warning(scene)
+    return {"source": scene.spec.source, "cam": cam_facts(scene), "follower": follower, "profile": profile(scene),
+            **({"warnings": [warning]} if warning else {})}, trajectory
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -6,8 +6,10 @@ The NLP (synthesis.clamp_cam.nlp) builds the same rules on CasADi symbols from t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -46,15 +48,24 @@ def fit_law(spec: ClampCamSpec):
     """The optimised B-spline law of the spec's segments (imports cvxpy), or None for a closed-form law."""
     if spec.motion.law != "optimised":
         return None
-    from synthesis.clamp_cam.bspline_law import fit_optimised_law
-
     seg = spec.design_values()
     cap = spec.rules.max_acceleration
     if cap is not None and spec.follower.type == "oscillating":
         cap = math.radians(cap)
     b = spec.bspline
-    return fit_optimised_law(stroke_of(spec), {"rise": seg["rise"], "return": seg["return"]}, omega_of(spec),
-                             b.minimise, b.spans, b.degree, b.samples_per_span, cap)
+    return _fitted_law(stroke_of(spec), seg["rise"], seg["return"], omega_of(spec), b.minimise, b.spans, b.degree,
+                       b.samples_per_span, cap)
+
+
+@lru_cache(maxsize=8)
+def _fitted_law(stroke: float, rise_deg: float, return_deg: float, omega: float, minimise: str, spans: int,
+                degree: int, samples_per_span: int, cap: float | None):
+    """One convex fit per set of inputs and process: a check or a solve, its diagnosis and its baseline
+    rule table all use the same law, fitted once (the law is immutable)."""
+    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+
+    return fit_optimised_law(stroke, {"rise": rise_deg, "return": return_deg}, omega, minimise, spans, degree,
+                             samples_per_span, cap)
 
 
 def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
@@ -152,8 +163,22 @@ def segment_grid(scene: CamScene, per_motion_segment: int, per_dwell: int = 8) -
                      for k in ("phi_deg", "s", "ds", "dds", "ddds", "segment")))
 
 
+def law_warning(scene: CamScene) -> str | None:
+    """The caveat of an optimised law that cvxpy solved only inaccurately, else None."""
+    return None if scene.optimised is None else scene.optimised.warning
+
+
 def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
-    """Every rule of the spec, evaluated on the samples of ``g``."""
+    """Every rule of the spec, evaluated on the samples of ``g``; the rules that follow the motion law carry
+    its caveat as a note when the optimised law was solved inaccurately."""
+    rules = _cam_rules(scene, g)
+    note = law_warning(scene)
+    if note is None:
+        return rules
+    return [r if r.name.startswith("timing_") else dataclasses.replace(r, note=note) for r in rules]
+
+
+def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
     spec, lim = scene.spec, scene.spec.rules
     driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
     rules = [pressure_angle_rule("rise", g.alpha_deg[driven], lim.pressure_angle_rise),

@@ -1,7 +1,9 @@
 """The crank-rocker NLP: K, swing and transmission angle as constraints on the simulated mechanism.
 
 Decision variables: the four lengths (fixed ones get lo = hi) and the crank angles phi_a, phi_b of
-the rocker's two extreme positions.  Structural rows make them extremes (d beta / d phi = 0, exact
+the rocker's two extreme positions; IPOPT sees the lengths in Grashof coordinates (the crank and the
+three Grashof slacks, bounded below by zero), so the crank turns and the kinematics are defined at
+every iterate, however far a start lies from a crank-rocker.  Structural rows make them extremes (d beta / d phi = 0, exact
 AD); the time-ratio row puts the quick stroke between them (phi_b - phi_a = 2 pi / (1 + K)), the
 swing row fixes the angle between the rocker positions, and the transmission angle is sampled over a
 turn on a grid that contains the crank along and against the frame, where its extremes are.
@@ -16,13 +18,15 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule
-from constraints.grashof import grashof_rule
+from constraints.grashof import GrashofCoordinates, grashof_rule
 from constraints.quick_return import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
+from synthesis import rule_nlp
+from synthesis.errors import SpecError
 from synthesis.kinematics import fourbar
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
 from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.crank_rocker import CrankRockerSpec
 
 TWO_PI = 2.0 * math.pi
@@ -32,16 +36,14 @@ START_MARGIN = 1.0
 
 
 @dataclass
-class StartOutcome:
-    start: int
-    design: dict[str, float]
-    extremes: tuple[float, float]       # phi_a, phi_b (rad)
-    objective: float                    # report units: mm (total length) or deg (min transmission angle)
-    return_status: str
-    success: bool
-    iterations: int
-    wall_s: float
-    log: str
+class StartOutcome(rule_nlp.StartOutcome):
+    """objective in report units: mm (total length) or deg (min transmission angle)."""
+
+    extremes: tuple[float, float] = (math.nan, math.nan)   # phi_a, phi_b (rad)
+
+
+#: design (l7, l8, l9, l10, phi_a, phi_b) <-> coordinates (l7, three Grashof slacks, phi_a, phi_b)
+COORDINATES = GrashofCoordinates(l1=3, l2=0, l3=1, l4=2)
 
 
 def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
@@ -56,15 +58,23 @@ class CrankRockerNLP:
     def __init__(self, spec: CrankRockerSpec, elastic: bool = False):
         self.spec = spec
         variables = spec.variables()
+        if not any(is_free(v) for v in variables.values()):
+            raise SpecError("crank_rocker.links: solve needs at least one free length (l7 = {init, bounds}); "
+                            "every length is fixed, so use `agrisynth check`")
         self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
         self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
         req = spec.requirements
-        x = ca.SX.sym("x", 6)
+        # decision coordinates z: l7, the three Grashof slacks (>= 0: the crank always turns, so the
+        # kinematics are defined at every iterate), phi_a, phi_b; x: the lengths and angles they give
+        z = ca.SX.sym("z", 6)
+        x = COORDINATES.design(z)
         p, phi_a, phi_b = x[:4], x[4], x[5]
         f = rocker_function(spec.branch)
         _, dbeta_a, _, _, tip_a = f(phi_a, p)
         _, dbeta_b, _, _, tip_b = f(phi_b, p)
-        structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0)]
+        lbx = np.concatenate([self.bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
+        ubx = np.concatenate([self.bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
+        structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0), *COORDINATES.length_rows(x, lbx, ubx)]
         n = spec.solver.samples_per_turn
         mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
         a = ca.vertcat(p[3], 0.0)
@@ -76,11 +86,9 @@ class CrankRockerNLP:
             acute_transmission_rule(mu, req.min_transmission_angle, "over a turn"),
         ]
         objective = self._objective(p, mu)
-        lbx = np.concatenate([self.bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
-        ubx = np.concatenate([self.bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
         # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
-        self.nlp = RuleNLP("crank_rocker", x, lbx, ubx, structural, rules, objective, elastic=elastic,
-                           max_iter=spec.solver.max_iter, hard_in_elastic=("grashof_crank_rocker",))
+        self.nlp = RuleNLP("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
+                           elastic=elastic, max_iter=spec.solver.max_iter, hard_in_elastic=("grashof_crank_rocker",))
 
     def _objective(self, p, mu) -> ObjectiveParts:
         if self.spec.objective.name == "min_total_length":
@@ -91,8 +99,10 @@ class CrankRockerNLP:
         return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
                               extra_init=[self.spec.requirements.min_transmission_angle], rows=rows)
 
-    def report_objective(self, f: float) -> float:
-        return f * 100.0 if self.spec.objective.name == "min_total_length" else -f * 10.0
+    def report_objective(self, design: dict[str, float], f: float) -> float:
+        """Total length (mm) of the design itself, or the smallest transmission angle (deg) the epigraph
+        variable reached."""
+        return sum(design.values()) if self.spec.objective.name == "min_total_length" else -f * 10.0
 
     def extremes_guess(self, lengths: np.ndarray) -> np.ndarray:
         """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
@@ -113,8 +123,12 @@ class CrankRockerNLP:
         return pull_inside(np.asarray(lengths, float), self.init, grashof_slacks, START_MARGIN)
 
     def solve(self, start: int, lengths: np.ndarray) -> StartOutcome:
-        lengths = self.prepared_start(lengths)
-        out = self.nlp.solve(start, np.concatenate([lengths, self.extremes_guess(lengths)]))
-        design = {n: float(v) for n, v in zip(NAMES, out.x[:4])}
-        return StartOutcome(start, design, (float(out.x[4]), float(out.x[5])), self.report_objective(out.objective),
-                            out.return_status, out.success, out.iterations, out.wall_s, out.log)
+        out = self.solve_design(start, self.prepared_start(lengths))
+        x = COORDINATES.design(out.x[:6])
+        design = {n: float(v) for n, v in zip(NAMES, x[:4])}
+        return StartOutcome.of(out, design, self.report_objective(design, out.objective),
+                               extremes=(float(x[4]), float(x[5])))
+
+    def solve_design(self, start: int, lengths: np.ndarray):
+        """One IPOPT run from the lengths, the extremes guessed from their simulation."""
+        return self.nlp.solve(start, COORDINATES.coordinates(np.concatenate([lengths, self.extremes_guess(lengths)])))

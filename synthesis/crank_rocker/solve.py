@@ -4,18 +4,15 @@ from __future__ import annotations
 
 import functools
 import math
-import time
 from typing import Callable
-
-import numpy as np
 
 from synthesis.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.crank_rocker.closed_form import solve_paper_equations
 from synthesis.crank_rocker.nlp import CrankRockerNLP
 from synthesis.errors import SolverError
-from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import Result
-from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.rule_solve import (FINE, ElasticDiagnosis, StartReport, diagnosis_of, ipopt_log, measured,
+                                  run_multistart, starts_table, status_of, unsatisfied_error)
 from synthesis.spec import LoadedSpec
 from synthesis.spec.common import is_free
 
@@ -51,47 +48,41 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
               ) -> tuple[Result, list[StartReport], str]:
     spec = loaded.model
-    starts = spec.solver.starts if starts is None else starts
-    seed = spec.solver.seed if seed is None else seed
-    shape = build_nlp(spec)
-    x_starts = latin_hypercube_starts(shape.bounds, shape.init, starts, seed)
-    factory = functools.partial(build_nlp, spec) if workers > 1 else (lambda: shape)
     maximise = spec.objective.name == "max_transmission_angle"
-    t0 = time.perf_counter()
-    reports, best = multistart(factory, x_starts, workers, functools.partial(recheck, spec), maximise, on_start)
-    wall = time.perf_counter() - t0
+    run = run_multistart(build_nlp, spec, functools.partial(recheck, spec), starts=starts, seed=seed,
+                         workers=workers, maximise=maximise, on_start=on_start)
+    best, reports = run.best, run.reports
     if best.context is None:
         cr, q = mechanism(spec, best.outcome.design), None
     else:
         cr, q = best.context
-    status = ("optimal" if best.outcome.success else "feasible") if best.satisfied else "infeasible"
-    unit = "deg" if maximise else "mm"
+    elastic = None if best.satisfied else elastic_diagnosis(spec)
     result = Result(
-        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status,
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status_of(best, reports, elastic),
         design=dict(best.outcome.design), rules=[r.to_json() for r in best.records],
-        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit},
-        solver={"name": "ipopt", "return_status": best.outcome.return_status,
-                "iterations": best.outcome.iterations, "wall_s": wall, "starts": starts, "seed": seed,
-                "best_start": best.outcome.start, "workers": workers,
-                "samples_per_turn": spec.solver.samples_per_turn, "fine_grid_factor": FINE},
+        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": "deg" if maximise else "mm"},
+        solver=run.solver_record(samples_per_turn=spec.solver.samples_per_turn),
         extra={**facts(spec, cr, q),
                "baseline_design": spec.design_values(),
                "solver_extremes_crank_deg": [math.degrees(v) for v in best.outcome.extremes],
-               "fine_grid_worst_violation": best.worst_violation,
+               "fine_grid_worst_violation": measured(best.worst_violation),
                "closed_form": closed_form(spec),
-               "starts": starts_table(reports)},
+               "starts": starts_table(reports),
+               "elastic": None if elastic is None else elastic.to_json()},
     )
     return result, reports, ipopt_log(reports)
 
 
-def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    spec = loaded.model
+def elastic_diagnosis(spec) -> ElasticDiagnosis:
+    """One slack per rule, from the given design (it assembles; the best start may not)."""
     elastic = build_nlp(spec, elastic=True)
-    lengths = elastic.prepared_start(elastic.init)      # the given design: it assembles, the best start may not
-    out = elastic.nlp.solve(0, np.concatenate([lengths, elastic.extremes_guess(lengths)]))
-    units = {r.name: r.unit for r in elastic.nlp.rules}
-    return infeasible_error(elastic.nlp.slack_values(out.x), units, elastic.nlp.active_rules(out),
-                            out.return_status, reports, [r["name"] for r in result.rules if not r["satisfied"]])
+    return diagnosis_of(elastic.nlp, elastic.solve_design(0, elastic.prepared_start(elastic.init)))
+
+
+def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
+    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
+    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
+                             samples_hint="[solver] samples_per_turn")
 
 
 def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:

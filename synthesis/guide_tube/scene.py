@@ -65,12 +65,12 @@ def calibration_failure(c: MuCalibration) -> str:
     """The spec error of a calibration that found no mu, or several."""
     lo, hi = c.mu_range
     if c.roots:
-        return (f"friction.calibrate: several friction coefficients make tube {c.tube} (wall angle "
+        return (f"guide_tube.friction.calibrate: several friction coefficients make tube {c.tube} (wall angle "
                 f"{c.delta_deg:g} deg) land after {c.target:g} s: mu = {', '.join(f'{m:.6g}' for m in c.roots)}; "
-                f"give friction.mu, or narrow friction.calibrate.mu_range to one of them")
+                f"give friction.mu, or narrow guide_tube.friction.calibrate.mu_range to one of them")
     span = ("the seedling sticks on the wall for every mu there" if c.landing_time_range is None else
             f"its landing time spans {c.landing_time_range[0]:.4f}-{c.landing_time_range[1]:.4f} s there")
     sticks = "" if c.sticks_above is None or c.landing_time_range is None else \
         f", and the seedling sticks on the wall from mu = {c.sticks_above:.4g}"
-    return (f"friction.calibrate.landing_time: no mu in [{lo:g}, {hi:g}] makes tube {c.tube} (wall angle "
+    return (f"guide_tube.friction.calibrate.landing_time: no mu in [{lo:g}, {hi:g}] makes tube {c.tube} (wall angle "
             f"{c.delta_deg:g} deg) land after {c.target:g} s: {span}{sticks}")

@@ -136,15 +136,6 @@ def pressure_angle(c: RollerCentre):
     return _ops(c.x).atan2(dx * ny - dy * nx, dx * nx + dy * ny)
 
 
-def pressure_ratio(c: RollerCentre) -> tuple:
-    """(d x N, d . N) / |N|: sin and cos of the pressure angle, smooth for the NLP rows."""
-    tx, ty = tangent(c)
-    nx, ny = -ty, tx
-    dx, dy = c.d
-    norm = _ops(c.x).sqrt(tx**2 + ty**2)
-    return (dx * ny - dy * nx) / norm, (dx * nx + dy * ny) / norm
-
-
 def pitch_curvature(c: RollerCentre):
     """Signed curvature of the pitch curve, 1/mm, > 0 where convex (seen from outside the cam)."""
     tx, ty = tangent(c)
@@ -171,11 +162,6 @@ def envelope(c: RollerCentre, phi, roller_radius, side: int = -1) -> tuple:
     norm = _ops(c.x).sqrt(tx**2 + ty**2)
     nx, ny = -ty / norm, tx / norm                    # outward unit normal, ground frame
     return to_cam_frame(c.x + side * roller_radius * nx, c.y + side * roller_radius * ny, phi)
-
-
-def follower_velocity(c: RollerCentre, omega: float) -> tuple:
-    """Roller-centre velocity in the ground frame, mm/s, at cam speed omega (rad/s)."""
-    return c.dx * omega, c.dy * omega
 
 
 def degrees(x):

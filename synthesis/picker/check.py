@@ -55,8 +55,9 @@ def require_assembly(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> None:
     if not assembles(dc, angles):
         bad = [a for a in angles if fourbar.assembly_height_sq(math.radians(a), dc.l4, dc.l1, dc.l2, dc.l3) <= 0]
         raise AssemblyError(
-            f"the double crank cannot assemble between crank angles {min(bad):.1f} and {max(bad):.1f} deg of its "
-            f"working swing (triangle BCD does not close with l2 = {dc.l2:g}, l3 = {dc.l3:g} mm)")
+            f"picker_double_crank.linkage: the double crank cannot assemble between crank angles {min(bad):.1f} "
+            f"and {max(bad):.1f} deg of its working swing (triangle BCD does not close with l1 = {dc.l1:g}, "
+            f"l2 = {dc.l2:g}, l3 = {dc.l3:g}, l4 = {dc.l4:g} mm)")
 
 
 def arc_error(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
@@ -118,7 +119,10 @@ def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
 def run_check(loaded: LoadedSpec) -> Result:
     spec = loaded.model
     dc = linkage(spec)
-    rules = evaluate(spec, dc)
+    try:
+        rules = evaluate(spec, dc)
+    except AssemblyError as exc:
+        raise AssemblyError(f"{loaded.path}: {exc}") from None
     design = dict(spec.design_values())
     design["branch"] = spec.linkage.branch
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,

@@ -146,7 +146,10 @@ def run_check(loaded: LoadedSpec) -> Result:
     cr = crank_rocker_check.mechanism(cr_spec)
     dc = double_crank_check.linkage(dc_spec)
     rules = _prefixed("crank_rocker", crank_rocker_check.evaluate(cr_spec, cr)[0])
-    rules += _prefixed("double_crank", double_crank_check.evaluate(dc_spec, dc))
+    try:
+        rules += _prefixed("double_crank", double_crank_check.evaluate(dc_spec, dc))
+    except AssemblyError as exc:
+        raise AssemblyError(f"picker.double_crank: {dc_loaded.path}: {exc}") from None
     if not cr.crank_turns():
         raise AssemblyError(f"picker.crank_rocker: {cr_loaded.path}: the crank cannot make a full turn, so the "
                             f"picker has no cycle (Grashof slacks {cr.grashof_slacks()} mm)")

@@ -1,29 +1,36 @@
 """The picker double-crank NLP: fit the clamp point to the picking arc under the rules of eq 5-7.
 
-Decision variables: the nine linkage variables in spec units (fixed ones get lo = hi).  The crank
+Decision variables: the nine linkage variables in spec units (fixed ones get lo = hi), seen by IPOPT
+in Grashof coordinates (l1, l2, l3 replaced by the slacks of eq 6, bounded below by zero), so the loop
+closes and the kinematics are defined at every iterate, however far a start lies.  The crank
 angles of the target points are prescribed (evenly over the working swing), so the objective is an
-explicit function of the design.  Eq (4), the sum of distances, has a kink wherever a distance is
-zero; it is solved as sum sqrt(d^2 + eps^2) (eps from the spec, default 0.01 mm: the smoothed value
-exceeds eq 4 by at most n * eps), warm-started from the least-squares fit, which IPOPT solves fast
-and reliably; each start keeps whichever of the two designs has the lower exact eq (4).  Reported
-objectives are always the exact eq (4) (or sum of squares) of the design.
+explicit function of the design.  Eq (4), the sum of distances sum |r_i| (r_i = M(phi_i) - P_i), has
+a kink wherever a distance is zero, and at its optimum some distances *are* zero.  It is solved
+exactly, as the epigraph  min sum t_i  s.t.  r_i = t_i u_i, |u_i|^2 <= 1, t_i >= 0  (the pairs (t_i,
+r_i) allowed are exactly t_i >= |r_i|; the polar factor u_i keeps the rows' gradients regular at
+r_i = 0, where the plain cone t_i^2 >= |r_i|^2 has none and IPOPT stalls).  That stage is
+warm-started from the least-squares fit, which IPOPT solves fast and reliably.  A start is
+"converged" only if the stage of the spec's objective converged; both stages' statuses are kept.
+Reported objectives are always the exact eq (4) (or sum of squares) of the design.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
-from constraints.grashof import grashof_double_crank_rule
+from constraints.grashof import GrashofCoordinates, grashof_double_crank_rule
 from constraints.placement import frame_point_rule
 from constraints.transmission import acute_transmission_rule
+from synthesis import rule_nlp
+from synthesis.errors import SpecError
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_function
 from synthesis.picker.check import arc_error, linkage, swing_angles, target_angles, target_points
 from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.picker import PickerDoubleCrankSpec
 
 NAMES = ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")
@@ -33,15 +40,17 @@ START_MARGIN = 1.0
 
 
 @dataclass
-class StartOutcome:
-    start: int
-    design: dict[str, float]
-    objective: float            # exact eq (4) in mm, or the sum of squares in mm^2
-    return_status: str          # of the last stage
-    success: bool
-    iterations: int             # both stages
-    wall_s: float
-    log: str
+class StartOutcome(rule_nlp.StartOutcome):
+    """objective: exact eq (4) in mm, or the sum of squares in mm^2; return_status: of the stage that
+    solves the spec's objective (the last one); success: that stage converged and its design is kept;
+    iterations, wall_s: both stages."""
+
+    stages: list[dict] = field(default_factory=list)   # per stage: name, return_status, iterations, objective
+
+
+#: design (x_a, y_a, l1, l2, l3, l4, ...) <-> coordinates with l1, l2, l3 replaced by the slacks of
+#: eq (6) (frame AD = l4 turns fully relative to the others)
+COORDINATES = GrashofCoordinates(l1=2, l2=5, l3=3, l4=4)
 
 
 def grashof_slacks(x: np.ndarray) -> np.ndarray:
@@ -50,60 +59,95 @@ def grashof_slacks(x: np.ndarray) -> np.ndarray:
 
 
 class PickerNLP:
-    """Built once per spec (least-squares stage and, for eq 4, the smoothed stage); reused for every start."""
+    """Built once per spec (least-squares stage and, for eq 4, the exact epigraph stage); reused for every start."""
 
     def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False):
         self.spec = spec
         variables = spec.variables()
+        if not any(is_free(v) for v in variables.values()):
+            raise SpecError("picker_double_crank.linkage: solve needs at least one free variable (l1 = {init, "
+                            "bounds}); every one is fixed, so use `agrisynth check`")
         self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
         self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
-        x = ca.SX.sym("x", 9)
+        # decision coordinates z: the design with l1, l2, l3 replaced by the three Grashof slacks (>= 0:
+        # the loop closes at every crank angle and iterate); x: the design they give
+        z = ca.SX.sym("z", 9)
+        x = COORDINATES.design(z)
         p = ca.vertcat(x[:7], x[7] * DEG, x[8] * DEG)
         f = clamp_function(spec.linkage.branch)
         targets = target_points(spec)
         angles = target_angles(spec) * DEG
         m = f.map(len(angles))(angles.reshape(1, -1), p)[0]              # 2 x n clamp points
-        d2 = ca.sum1((m - ca.DM(targets.T)) ** 2)                        # 1 x n squared distances
+        r = m - ca.DM(targets.T)                                         # 2 x n residuals, mm
+        self.residuals = ca.Function("residuals", [z], [r])
         samples = swing_angles(spec, spec.solver.samples) * DEG
         mu = ca.vec(f.map(len(samples))(samples.reshape(1, -1), p)[3]) / DEG
         rules = [grashof_double_crank_rule(x[5], x[2], x[3], x[4]),
                  frame_point_rule(x[0], spec.rules.x_a_min),
                  acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
+        lb, ub = self.bounds[:, 0], self.bounds[:, 1]
         common = dict(elastic=elastic, max_iter=spec.solver.max_iter, backoff=spec.solver.backoff,
                       hard_in_elastic=("grashof_double_crank",))
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
-        self.stages = [RuleNLP("picker_lsq", x, self.bounds[:, 0], self.bounds[:, 1], [], rules,
-                               ObjectiveParts(f=ca.sum2(d2) / 100.0), **common)]
+        shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
+        self.stages = [RuleNLP("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), **common)]
+        self.stage_names = ["least_squares"]
         if spec.objective.name == "sum_of_distances" and not elastic:
-            eps = spec.objective.epsilon
-            self.stages.append(RuleNLP("picker_eq4", x, self.bounds[:, 0], self.bounds[:, 1], [], rules,
-                                       ObjectiveParts(f=ca.sum2(ca.sqrt(d2 + eps * eps)) / 10.0), **common))
+            self.stages.append(RuleNLP("picker_eq4", *shape, _sum_of_distances(r), **common))
+            self.stage_names.append("sum_of_distances")
 
     def exact_objective(self, design: dict[str, float]) -> float:
         err = arc_error(self.spec, linkage(self.spec, design))
         return err["eq4_sum_mm"] if self.spec.objective.name == "sum_of_distances" else err["sum_of_squares_mm2"]
 
-    def prepared_start(self, x0: np.ndarray) -> np.ndarray:
-        return pull_inside(np.asarray(x0, float), self.init, grashof_slacks, START_MARGIN)
+    def start_coordinates(self, x0: np.ndarray) -> np.ndarray:
+        """The coordinates z of a start design, moved into the Grashof region along the way to the given
+        design when that one is inside (IPOPT moves any start inside its bounds anyway)."""
+        return COORDINATES.coordinates(pull_inside(np.asarray(x0, float), self.init, grashof_slacks, START_MARGIN))
+
+    def epigraph_start(self, z: np.ndarray) -> np.ndarray:
+        """(t, u) of the eq (4) stage at coordinates z: t_i a little above |r_i|, u_i = r_i / t_i (inside)."""
+        r = np.asarray(self.residuals(z), dtype=float)
+        t = 1.01 * np.hypot(r[0], r[1]) + 1e-3
+        return np.concatenate([t, (r / t).T.ravel()])
 
     def solve(self, start: int, x0: np.ndarray) -> StartOutcome:
-        """Least squares, then (eq 4) the smoothed sum of distances from there; the start's answer is
-        the stage design with the lower exact objective: the smoothed stage may wander to a worse
-        neighbour on this flat landscape, and a least-squares fit is a fine eq (4) design too."""
-        x = self.prepared_start(x0)
-        iterations, wall, logs = 0, 0.0, []
-        candidates = []
-        for stage in self.stages:
-            out = stage.solve(start, x)
-            iterations += out.iterations
-            wall += out.wall_s
-            logs.append(out.log)
-            x = out.x[:9]
-            design = {n: float(v) for n, v in zip(NAMES, x)}
+        """Least squares, then (eq 4) the exact sum of distances from there.  The start's design is the
+        last stage's unless the least-squares design has the lower exact objective (the last stage may
+        stop early on this flat landscape); the start counts as converged only if the last stage did
+        and its design is the one kept."""
+        z = self.start_coordinates(x0)
+        stages, logs, candidates = [], [], []
+        for k, (name, stage) in enumerate(zip(self.stage_names, self.stages)):
+            out = stage.solve(start, z, self.epigraph_start(z) if name == "sum_of_distances" else None)
+            logs.append(f"----- stage {name}\n{out.log}")
+            z = out.x[:9]
+            design = {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))}
             objective = self.exact_objective(design)
             if not math.isfinite(objective):     # the loop breaks somewhere: the re-check rejects it
                 objective = math.inf
-            candidates.append((objective, len(candidates), design, out))
-        objective, _, design, out = min(candidates, key=lambda c: (c[0], -c[1]))
-        return StartOutcome(start, design, objective, out.return_status, out.success, iterations, wall,
-                            "\n".join(logs))
+            stages.append({"name": name, "return_status": out.return_status, "iterations": out.iterations,
+                           "wall_s": out.wall_s, "objective": objective if math.isfinite(objective) else None})
+            candidates.append((objective, -k, design, out.success and k == len(self.stages) - 1))
+        # the last stage's design unless an earlier one is better by more than rounding
+        objective, _, design, success = min(candidates, key=lambda c: (_rounded(c[0]), c[1]))
+        last = stages[-1]
+        return StartOutcome(start, design, objective, last["return_status"], success,
+                            sum(s["iterations"] for s in stages), sum(s["wall_s"] for s in stages), "\n".join(logs),
+                            stages)
+
+
+def _rounded(objective: float) -> float:
+    """The objective to 1e-9 relative: stage designs closer than that count as ties."""
+    return float(f"{objective:.9e}") if math.isfinite(objective) else objective
+
+
+def _sum_of_distances(r) -> ObjectiveParts:
+    """Eq (4) exactly: min sum t_i with r_i = t_i u_i, |u_i|^2 <= 1, t_i >= 0 (r: 2 x n residuals)."""
+    n = r.shape[1]
+    t = ca.SX.sym("t", n)
+    u = ca.SX.sym("u", 2, n)
+    rows = [(r - u * ca.repmat(t.T, 2, 1), 0.0, 0.0), (ca.sum1(u * u).T, None, 1.0)]
+    return ObjectiveParts(f=ca.sum1(t) / 10.0, extra=ca.vertcat(t, ca.vec(u)),
+                          extra_lb=[0.0] * n + [-1.0] * (2 * n), extra_ub=[np.inf] * n + [1.0] * (2 * n),
+                          extra_init=[1.0] * n + [0.0] * (2 * n), rows=rows)

@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import functools
-import time
 from typing import Callable
 
-
 from synthesis.errors import SolverError
-from synthesis.multistart import latin_hypercube_starts
 from synthesis.picker.check import evaluate, facts, linkage
 from synthesis.picker.nlp import PickerNLP
 from synthesis.result import Result
-from synthesis.rule_solve import FINE, StartReport, infeasible_error, ipopt_log, multistart, starts_table
+from synthesis.rule_solve import (FINE, ElasticDiagnosis, StartReport, diagnosis_of, ipopt_log, measured,
+                                  run_multistart, starts_table, status_of, unsatisfied_error)
 from synthesis.spec import LoadedSpec
 
 
@@ -30,45 +28,40 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
               ) -> tuple[Result, list[StartReport], str]:
     spec = loaded.model
-    starts = spec.solver.starts if starts is None else starts
-    seed = spec.solver.seed if seed is None else seed
-    shape = build_nlp(spec)
-    x_starts = latin_hypercube_starts(shape.bounds, shape.init, starts, seed)
-    factory = functools.partial(build_nlp, spec) if workers > 1 else (lambda: shape)
-    t0 = time.perf_counter()
-    reports, best = multistart(factory, x_starts, workers, functools.partial(recheck, spec), False, on_start)
-    wall = time.perf_counter() - t0
-    status = ("optimal" if best.outcome.success else "feasible") if best.satisfied else "infeasible"
-    dc = linkage(spec, best.outcome.design)
+    run = run_multistart(build_nlp, spec, functools.partial(recheck, spec), starts=starts, seed=seed,
+                         workers=workers, on_start=on_start)
+    best, reports = run.best, run.reports
+    elastic = None if best.satisfied else elastic_diagnosis(spec)
     design = dict(best.outcome.design)
     design["branch"] = spec.linkage.branch
-    unit = "mm" if spec.objective.name == "sum_of_distances" else "mm^2"
     try:
-        extra = facts(spec, dc)
+        extra = facts(spec, linkage(spec, best.outcome.design))
     except Exception as exc:   # noqa: BLE001 - a broken best design still gets a result (status infeasible)
         extra = {"source": spec.source, "facts_error": str(exc)}
     result = Result(
-        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=design,
-        rules=[r.to_json() for r in best.records],
-        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": unit,
-                   "epsilon_mm": spec.objective.epsilon if spec.objective.name == "sum_of_distances" else None},
-        solver={"name": "ipopt", "return_status": best.outcome.return_status, "iterations": best.outcome.iterations,
-                "wall_s": wall, "starts": starts, "seed": seed, "best_start": best.outcome.start, "workers": workers,
-                "samples": spec.solver.samples, "fine_grid_factor": FINE},
-        extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": best.worst_violation,
-               "starts": starts_table(reports)},
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status_of(best, reports, elastic),
+        design=design, rules=[r.to_json() for r in best.records],
+        objective={"name": spec.objective.name, "value": measured(best.outcome.objective),
+                   "unit": "mm" if spec.objective.name == "sum_of_distances" else "mm^2"},
+        solver=run.solver_record(stages=best.outcome.stages, samples=spec.solver.samples),
+        extra={**extra, "baseline_design": spec.design_values(), "fine_grid_worst_violation": measured(best.worst_violation),
+               "starts": [{**row, "stages": r.outcome.stages} for row, r in zip(starts_table(reports), reports)],
+               "elastic": None if elastic is None else elastic.to_json()},
     )
     return result, reports, ipopt_log(reports)
 
 
-def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    spec = loaded.model
+def elastic_diagnosis(spec) -> ElasticDiagnosis:
+    """One slack per rule (least-squares stage), from the given design pulled into the Grashof region."""
     elastic = build_nlp(spec, elastic=True)
     stage = elastic.stages[0]
-    out = stage.solve(0, elastic.prepared_start(elastic.init))
-    units = {r.name: r.unit for r in stage.rules}
-    return infeasible_error(stage.slack_values(out.x), units, stage.active_rules(out), out.return_status, reports,
-                            [r["name"] for r in result.rules if not r["satisfied"]])
+    return diagnosis_of(stage, stage.solve(0, elastic.start_coordinates(elastic.init)))
+
+
+def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
+    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
+    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
+                             samples_hint="[solver] samples")
 
 
 def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:

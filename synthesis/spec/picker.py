@@ -71,9 +71,6 @@ class PickerObjective(StrictModel):
     name: Literal["sum_of_distances", "sum_of_squares"] = Field(
         "sum_of_distances", description="sum_of_distances: seed 001 eq (4), sum of |M_i - target_i| (mm); "
                                         "sum_of_squares: sum of |M_i - target_i|^2 (mm^2)")
-    epsilon: float = Field(0.01, gt=0.0, le=1.0,
-                           description="eq (4) is solved as sum sqrt(d^2 + epsilon^2) (smooth at d = 0), mm; "
-                                       "the reported value is the exact eq (4)")
 
 
 class PickerSolver(StrictModel):

@@ -3,16 +3,19 @@ transmission angles no crank-rocker with the given K and swing can have."""
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from synthesis.crank_rocker.check import mechanism
 from synthesis.crank_rocker.solve import recheck, run_solve
 from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
+from synthesis.rule_solve import measured, report_of, starts_table
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -93,3 +96,55 @@ def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_r
     assert "time_ratio" in err and "rocker_swing" in err
     assert "IPOPT said" in err and "Traceback" not in proc.stderr
     assert (tmp_path / "out" / "cai2020_crank_rocker_synthesis" / "result.json").exists()   # written first
+
+
+def test_swing_near_180_deg_exits_3_with_a_result_file(tmp_path):
+    """psi = 179 deg: no crank-rocker swings that far with gamma_min = 40 deg, and some starts end on designs
+    the re-check cannot evaluate.  Their violation cannot be measured: result.json says null, not inf."""
+    path = spec_file(tmp_path, "1.25", "179.0", "40.0")
+    proc = cli("solve", str(path), "--out", str(tmp_path / "out"), "--starts", "3", "--workers", "1", cwd=tmp_path)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr and "IPOPT said" in proc.stderr
+    data = json.loads((tmp_path / "out" / "cai2020_crank_rocker_synthesis" / "result.json").read_text())
+    # the elastic re-solve converges (no NaN near psi = 180 deg): the transmission angle gives way
+    assert data["status"] == "infeasible" and data["elastic"]["converged"]
+    assert data["elastic"]["relaxed"] == ["min_transmission_angle"]
+    assert "min_transmission_angle (misses its limit by" in " ".join(proc.stderr.split())
+    assert not all(r["satisfied"] for r in data["rules"])
+    for start in data["starts"]:
+        assert start["worst_violation"] is None or start["worst_violation"] >= 0.0
+        assert start["return_status"] != "Invalid_Number_Detected"
+
+
+def test_a_start_that_cannot_be_evaluated_is_written_as_null():
+    """The shared multistart table: an unmeasurable violation is null in JSON (allow_nan=False passes)."""
+    outcome = SimpleNamespace(start=0, return_status="Invalid_Number_Detected", iterations=3, wall_s=0.1,
+                              objective=math.inf, design={"l7": 1.0})
+
+    def cannot_evaluate(design):
+        raise ValueError("the crank does not turn")
+
+    report = report_of(outcome, cannot_evaluate)
+    assert not report.satisfied and report.worst_violation == math.inf
+    row = json.loads(json.dumps(starts_table([report]), allow_nan=False))[0]
+    assert row["worst_violation"] is None and row["objective"] is None
+    assert measured(2.5) == 2.5
+
+
+def test_a_given_design_that_is_no_crank_rocker_still_solves(tmp_path):
+    """Crank 150 mm > frame 140 mm and rocker 30 mm: the given design does not assemble over a turn.  The
+    float check says so (Grashof violated, the rest not evaluated); the NLP's Grashof coordinates keep
+    every iterate a crank-rocker, so no start meets NaN kinematics and the published lengths come out."""
+    text = spec_file(tmp_path, "1.25", "50.0", "40.0").read_text()
+    text = text.replace("l7 = { init = 50.0", "l7 = { init = 150.0").replace("l9 = { init = 120.0", "l9 = { init = 30.0")
+    path = tmp_path / "outside.toml"
+    path.write_text(text)
+    loaded = load_spec(path)
+    from synthesis.crank_rocker.check import run_check
+    checked = {r["name"]: r for r in run_check(loaded).rules}
+    assert checked["grashof_crank_rocker"]["value"] < 0 and checked["time_ratio"]["value"] is None
+    result, reports, _ = run_solve(loaded, starts=3, workers=1)
+    assert [r.outcome.return_status for r in reports].count("Invalid_Number_Detected") == 0
+    assert result.status == "optimal"
+    for name, value in {"l7": 54.0, "l8": 107.6, "l9": 133.5}.items():
+        assert result.design[name] == pytest.approx(value, abs=0.1)
