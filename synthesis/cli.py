@@ -155,6 +155,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     from synthesis import kinds
     from synthesis.multistart import default_workers
     from synthesis.report import run_artifacts
+    from synthesis.report.tables import objective_text
     from synthesis.result import atomic_write_text, write_run
     from synthesis.spec import load_spec
 
@@ -189,7 +190,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     baseline = solver_module.baseline_rules(loaded)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
     s = result.solver
-    console.print(f"objective {result.objective['name']} = {result.objective['value']:.6g}; IPOPT "
+    console.print(f"objective {objective_text(result.objective)}; IPOPT "
                   f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
                   f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}")

@@ -124,3 +124,11 @@ def test_compare_cli_exit_codes(runs, tmp_path):
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "out" / "compare.html").exists()
     assert "taiwan_example1: evaluated, 3 rule(s) violated" in p.stdout
+
+
+def test_objective_text_says_when_a_value_could_not_be_measured():
+    from synthesis.report.tables import objective_text
+
+    assert objective_text({"name": "sum_of_distances", "value": 0.0978123, "unit": "mm"}) == "sum_of_distances = 0.0978123 mm"
+    assert objective_text({"name": "sum_of_distances", "value": None, "unit": "mm"}) == "sum_of_distances = not measured"
+    assert objective_text(None) is None

@@ -24,7 +24,7 @@ from constraints.assembly import assembly_rule
 from constraints.grashof_class import grashof_class_rule
 from constraints.sequence import sequence_rule
 from constraints.transmission_turn import transmission_sampled_rules, transmission_turn_rules
-from synthesis.capture import captured_stdout
+from synthesis.ipopt_log import captured_stdout
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_point, design_parameters
 from synthesis.spec.fourbar_path import FourbarPathSpec

@@ -24,7 +24,7 @@ from constraints.grashof import grashof_rule
 from constraints.precision_points import p4p6_rule, seedbed_rules
 from constraints.speed import p2_speed_rule
 from constraints.transmission import transmission_rules
-from synthesis.capture import captured_stdout as _captured_stdout
+from synthesis.ipopt_log import captured_stdout
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.scene import POINTS, TWO_PI, PlantingScene, find_precision_points
 from synthesis.spec.common import bounds_of, value_of
@@ -264,7 +264,7 @@ class PlantingNLP:
         extra0 = np.zeros(self.n_extra)
         x0 = np.concatenate([x_design, theta0, extra0])
         t0 = time.perf_counter()
-        with _captured_stdout() as log:
+        with captured_stdout() as log:
             sol = self.solver(x0=x0, lbx=self._lbx, ubx=self._ubx, lbg=self._lbg, ubg=self._ubg)
         wall = time.perf_counter() - t0
         stats = self.solver.stats()

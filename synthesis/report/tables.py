@@ -132,6 +132,16 @@ def worst_margins(cands: list[Candidate]) -> list[WorstMargin]:
     return out
 
 
+def objective_text(objective: dict | None) -> str | None:
+    """"name = value unit"; a value that could not be measured (null in result.json) reads "not measured"."""
+    if not objective:
+        return None
+    value = objective.get("value")
+    shown = "not measured" if value is None else f"{value:.6g}"
+    unit = objective.get("unit")
+    return f"{objective['name']} = {shown}{f' {unit}' if unit and value is not None else ''}"
+
+
 def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
     """What a reader needs to reproduce each candidate: status, solver, starts, seed, versions, spec hash."""
     def solver(c: Candidate, key: str):
@@ -139,8 +149,7 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
 
     facts = [
         ("status", [c.result.status for c in cands]),
-        ("objective", [None if not c.result.objective else
-                       f"{c.result.objective['name']} = {c.result.objective['value']:.6g}" for c in cands]),
+        ("objective", [objective_text(c.result.objective) for c in cands]),
         ("solver status", [solver(c, "return_status") for c in cands]),
         ("iterations", [solver(c, "iterations") for c in cands]),
         ("wall time, s", [solver(c, "wall_s") for c in cands]),
