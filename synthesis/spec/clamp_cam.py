@@ -13,7 +13,10 @@ from typing import Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import FreeVariable, Interval, StrictModel, Variable, bounds_of, is_free, value_of
+from synthesis.spec.common import (
+    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
+    is_free, max_iter_field, starts_field, value_of,
+)
 
 KIND = "clamp_cam"
 SEGMENTS = ("rise", "far_dwell", "return", "near_dwell")
@@ -179,20 +182,17 @@ class ObjectiveSection(StrictModel):
                                    "of the free variables from the given design")
 
 
-class SolverSection(StrictModel):
-    starts: int = Field(4, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(4)
     samples_per_segment: int = Field(100, ge=5, le=2000, description="samples of the rise and of the return in the "
                                                                     "NLP (the re-check uses 10x more)")
-    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+    max_iter: int = max_iter_field(500)
     backoff: float = Field(0.01, ge=0, le=1, description="the NLP tightens every sampled rule by backoff x its "
                                                          "scale, so it holds between the samples too")
 
 
-class ClampCamSpec(StrictModel):
+class ClampCamSpec(ProblemSpec):
     kind: Literal["clamp_cam"]
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
-    source: str = Field("", description="where the numbers come from (paper, table)")
     cam: CamSection
     follower: FollowerSection = Field(default_factory=FollowerSection)
     motion: MotionSection

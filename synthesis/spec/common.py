@@ -66,6 +66,32 @@ def require_positive(name: str, v: Variable) -> None:
 
 Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
 
+#: a spec's name is its result folder's name: letters, digits and _ . - only
+RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+
+
+class ProblemSpec(StrictModel):
+    """What every spec file has besides its ``kind`` and its own sections."""
+
+    name: str = Field(pattern=RUN_NAME_PATTERN, description="result folder name")
+    source: str = Field("", description="where the numbers come from (paper, section, table)")
+
+
+def starts_field(default: int):
+    return Field(default, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+
+
+def max_iter_field(default: int):
+    return Field(default, ge=1, description="IPOPT iteration limit per start")
+
+
+class MultistartSettings(StrictModel):
+    """The [solver] settings of every kind that optimises; kinds add their sampling settings."""
+
+    starts: int = starts_field(16)
+    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    max_iter: int = max_iter_field(500)
+
 
 def read_toml(path: Path) -> tuple[dict[str, Any], str]:
     """Parse a spec file; returns (data, sha256 of the bytes). Errors carry line and column."""

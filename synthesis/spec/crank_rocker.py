@@ -11,7 +11,10 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
+from synthesis.spec.common import (
+    MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
+    starts_field, value_of,
+)
 
 KIND = "crank_rocker"
 
@@ -54,19 +57,16 @@ class ObjectiveSection(StrictModel):
                     "the given K and psi")
 
 
-class SolverSection(StrictModel):
-    starts: int = Field(8, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(8)
     samples_per_turn: int = Field(72, ge=8, le=3600, multiple_of=2,
                                   description="crank angles sampled for the transmission angle (even: includes "
                                               "the crank along and against the frame, where its extremes lie)")
-    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+    max_iter: int = max_iter_field(500)
 
 
-class CrankRockerSpec(StrictModel):
+class CrankRockerSpec(ProblemSpec):
     kind: Literal["crank_rocker"]
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
-    source: str = Field("", description="where the numbers come from (paper, section)")
     requirements: Requirements
     tolerances: Tolerances = Field(default_factory=Tolerances)
     links: LinkSection

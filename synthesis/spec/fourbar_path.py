@@ -27,7 +27,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
 
 from synthesis.kinematics.coupler_point import VARIABLES
-from synthesis.spec.common import StrictModel
+from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel, max_iter_field, starts_field
 
 KIND = "fourbar_path"
 LENGTHS = ("r1", "r2", "r3", "r4")
@@ -156,22 +156,19 @@ class RulesSection(StrictModel):
         return v
 
 
-class SolverSection(StrictModel):
-    starts: int = Field(64, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(64)
     stop_at_objective: float | None = Field(
         None, ge=0, description="end the multistart at the first start (in start order) whose objective "
                                 "is at most this many mm^2 and that satisfies every rule; reported as "
                                 "starts needed")
-    max_iter: int = Field(1000, ge=1, description="IPOPT iteration limit per start")
+    max_iter: int = max_iter_field(1000)
     samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion for sampled rules "
                                                          "(grashof = \"any\"); the re-check is 10x finer")
 
 
-class FourbarPathSpec(StrictModel):
+class FourbarPathSpec(ProblemSpec):
     kind: Literal["fourbar_path"]
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
-    source: str = Field("", description="where the targets come from")
     branch: Literal["open", "crossed"] = Field("open", description="assembly branch (kinematics.coupler_point)")
     crank_speed: float = Field(60.0, gt=0, le=10000, description="r/min; only the time scale of the trajectory")
     targets: TargetsSection

@@ -16,7 +16,10 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, Interval, StrictModel, Variable, bounds_of, is_free, value_of
+from synthesis.spec.common import (
+    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
+    is_free, max_iter_field, starts_field, value_of,
+)
 
 KIND = "guide_tube"
 _NAME = r"^[A-Za-z0-9]+$"
@@ -119,20 +122,17 @@ class ObjectiveSection(StrictModel):
                                "(landing times at the design row spacing within rules.max_time_spread instead of equal)")
 
 
-class SolverSection(StrictModel):
-    starts: int = Field(4, ge=1, le=1000, description="multistart starts (start 0 = the given angles)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(4)
     samples: int = Field(8, ge=2, le=200, description="row spacings sampled over rows.spacings in the NLP "
                                                       "(the check uses 10x as many)")
-    max_iter: int = Field(200, ge=1, description="IPOPT iteration limit per start")
+    max_iter: int = max_iter_field(200)
     backoff: float = Field(0.02, ge=0, le=1, description="inequality limits tightened by backoff x the rule's "
                                                          "scale, so rules hold between the sampled row spacings")
 
 
-class GuideTubeSpec(StrictModel):
+class GuideTubeSpec(ProblemSpec):
     kind: Literal["guide_tube"]
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
-    source: str = Field("", description="where the numbers come from (paper, table)")
     drop: DropSection = Field(default_factory=DropSection)
     friction: FrictionSection
     rows: RowsSection

@@ -12,9 +12,9 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import StrictModel, Variable, require_positive, value_of
-
-NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+from synthesis.spec.common import (
+    MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of,
+)
 
 
 class TargetArc(StrictModel):
@@ -73,19 +73,16 @@ class PickerObjective(StrictModel):
                                         "sum_of_squares: sum of |M_i - target_i|^2 (mm^2)")
 
 
-class PickerSolver(StrictModel):
-    starts: int = Field(8, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class PickerSolver(MultistartSettings):
+    starts: int = starts_field(8)
     samples: int = Field(26, ge=2, le=2000, description="crank angles over the working swing for the transmission angle")
     max_iter: int = Field(3000, ge=1, description="IPOPT iteration limit per start and stage")
     backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission limit by "
                                                              "backoff x 10 deg, so it holds between samples too")
 
 
-class PickerDoubleCrankSpec(StrictModel):
+class PickerDoubleCrankSpec(ProblemSpec):
     kind: Literal["picker_double_crank"]
-    name: str = Field(pattern=NAME_PATTERN, description="result folder name")
-    source: str = Field("", description="where the numbers come from")
     target: TargetArc
     drive: DriveSection
     linkage: LinkageSection
@@ -124,10 +121,8 @@ class Published(StrictModel):
     instants: tuple[float, float, float] | None = Field(None, description="picking, dropping, picking again, s")
 
 
-class PickerSpec(StrictModel):
+class PickerSpec(ProblemSpec):
     kind: Literal["picker"]
-    name: str = Field(pattern=NAME_PATTERN, description="result folder name")
-    source: str = Field("", description="where the numbers come from")
     crank_rocker: str = Field(description="crank_rocker spec file of the drive, relative to this file")
     double_crank: str = Field(description="picker_double_crank spec file of the linkage, relative to this file")
     installation: Installation

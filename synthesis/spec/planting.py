@@ -15,7 +15,10 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, Interval, StrictModel, Variable, value_of
+from synthesis.spec.common import (
+    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
+    starts_field, value_of,
+)
 
 KIND = "planting_fourbar"
 
@@ -119,20 +122,17 @@ class ObjectiveSection(StrictModel):
                                "smallest normalised rule margin; smooth: minimise the peak claw acceleration")
 
 
-class SolverSection(StrictModel):
-    starts: int = Field(16, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(16)
     samples_per_phase: int = Field(16, ge=3, le=500, description="samples of each acceleration phase")
     samples_per_turn: int = Field(72, ge=12, le=3600, description="samples of a crank turn (transmission, lowest)")
-    max_iter: int = Field(500, ge=1, description="IPOPT iteration limit per start")
+    max_iter: int = max_iter_field(500)
     backoff: float = Field(0.02, ge=0, le=1, description="the NLP tightens every rule limit by backoff x the "
                                                          "rule's scale, so rules hold between the samples too")
 
 
-class PlantingFourbarSpec(StrictModel):
+class PlantingFourbarSpec(ProblemSpec):
     kind: Literal["planting_fourbar"]
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="result folder name")
-    source: str = Field("", description="where the numbers come from (paper, table)")
     arm: ArmSection
     seedbed: SeedbedSection
     operation: OperationSection
