@@ -63,7 +63,8 @@ def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
 
 def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
                recheck: Callable[[dict], tuple[list, Any]], maximise: bool,
-               on_start: Callable[[StartReport, StartReport], None]) -> tuple[list[StartReport], StartReport]:
+               on_start: Callable[[StartReport, StartReport], None],
+               scheduler: str | None = None) -> tuple[list[StartReport], StartReport]:
     """Run every start (solver built once per worker by ``factory``); returns (reports in order, best)."""
     reports: dict[int, StartReport] = {}
     best: list[StartReport] = []
@@ -75,7 +76,7 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
             best[:] = [rep]
         on_start(rep, best[0])
 
-    run_starts(factory, x_starts, workers, done)
+    run_starts(factory, x_starts, workers, done, scheduler=scheduler)
     return [reports[i] for i in range(len(x_starts))], best[0]
 
 
@@ -90,30 +91,34 @@ class Run:
     seed: int
     workers: int
     wall_s: float
+    scheduler: str | None = None     # the dask scheduler the starts ran on, if not local workers
 
     def solver_record(self, **more) -> dict:
         """result.json ``solver`` (DESIGN.md keys) plus the kind's own settings."""
         o = self.best.outcome
         return {"name": "ipopt", "return_status": o.return_status, "iterations": o.iterations,
                 "wall_s": self.wall_s, "starts": self.starts, "seed": self.seed, "best_start": o.start,
-                "workers": self.workers, **more, "fine_grid_factor": FINE}
+                "workers": None if self.scheduler else self.workers, "scheduler": self.scheduler,
+                **more, "fine_grid_factor": FINE}
 
 
 def run_multistart(build: Callable[..., Any], spec, recheck: Callable[[dict], tuple[list, Any]], *,
                    starts: int | None, seed: int | None, workers: int, maximise: bool = False,
                    on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
-                   build_args: tuple = ()) -> Run:
+                   build_args: tuple = (), scheduler: str | None = None) -> Run:
     """Solve from ``starts`` Latin-hypercube starts (start 0 = the spec's design; default counts from
     ``spec.solver``).  ``build(spec, *build_args)`` builds the NLP (with ``bounds`` and ``init``); it is
-    built once here and, with several workers, once in each worker (it must be picklable)."""
+    built once here and, with several workers, once in each worker (it must be picklable).
+    ``scheduler``: a dask.distributed address to run the starts on instead of local workers."""
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
     nlp = build(spec, *build_args)
     x_starts = latin_hypercube_starts(nlp.bounds, nlp.init, starts, seed)
-    factory = functools.partial(build, spec, *build_args) if workers > 1 else (lambda: nlp)
+    local = workers <= 1 and scheduler is None
+    factory = (lambda: nlp) if local else functools.partial(build, spec, *build_args)
     t0 = time.perf_counter()
-    reports, best = multistart(factory, x_starts, workers, recheck, maximise, on_start)
-    return Run(nlp, reports, best, starts, seed, workers, time.perf_counter() - t0)
+    reports, best = multistart(factory, x_starts, workers, recheck, maximise, on_start, scheduler)
+    return Run(nlp, reports, best, starts, seed, workers, time.perf_counter() - t0, scheduler)
 
 
 def measured(x: float) -> float | None:

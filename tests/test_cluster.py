@@ -40,6 +40,19 @@ def test_fourbar_path_on_the_cluster_gives_the_local_result(cluster):
     assert remote.design == local.design and remote.objective == local.objective
 
 
+@pytest.mark.parametrize("spec", ["guide_tube/cai2020_delta2.toml", "clamp_cam/opening_cam_redesign.toml",
+                                  "picker/cai2020_crank_rocker_synthesis.toml"])
+def test_rule_kinds_on_the_cluster_give_the_local_result(cluster, spec):
+    from synthesis import kinds
+
+    loaded = load_spec(PLANTING.parent / spec)
+    run_solve_of_kind = kinds.solver(loaded.kind).run_solve
+    local, _, _ = run_solve_of_kind(loaded, starts=2, seed=0, workers=1)
+    remote, _, _ = run_solve_of_kind(loaded, starts=2, seed=0, workers=1, scheduler=cluster.scheduler_address)
+    assert remote.design == local.design and remote.status == local.status
+    assert remote.solver["scheduler"] == cluster.scheduler_address
+
+
 def test_unreachable_scheduler_is_bad_input(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(PLANTING / "redesign_from_example1.toml"),
                            "--out", str(tmp_path), "--scheduler", "nonsense://nowhere"], capture_output=True, text=True)

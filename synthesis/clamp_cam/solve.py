@@ -40,13 +40,13 @@ def objective_value(spec, report: StartReport) -> float:
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve; returns (result, every start's report, IPOPT log)."""
     spec = loaded.model
     optimised = fit_law(spec)             # the B-spline law is fitted once (cvxpy), then held fixed
     run = run_multistart(build_nlp, spec, functools.partial(recheck, spec, optimised), starts=starts, seed=seed,
-                         workers=workers, on_start=on_start, build_args=(optimised,))
+                         workers=workers, on_start=on_start, build_args=(optimised,), scheduler=scheduler)
     chosen, ordered = run.best, run.reports
     elastic = None if chosen.satisfied else elastic_diagnosis(spec, optimised, chosen.outcome.design)
     scene = CamScene.from_spec(spec, chosen.outcome.design, optimised)

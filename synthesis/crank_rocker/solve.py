@@ -45,12 +45,12 @@ def closed_form(spec) -> dict | None:
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
     spec = loaded.model
     maximise = spec.objective.name == "max_transmission_angle"
     run = run_multistart(build_nlp, spec, functools.partial(recheck, spec), starts=starts, seed=seed,
-                         workers=workers, maximise=maximise, on_start=on_start)
+                         workers=workers, maximise=maximise, on_start=on_start, scheduler=scheduler)
     best, reports = run.best, run.reports
     if best.context is None:
         cr, q = mechanism(spec, best.outcome.design), None

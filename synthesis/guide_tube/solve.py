@@ -36,13 +36,13 @@ def recheck(spec, scene: GuideTubeScene, design: dict[str, float]):
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve; returns (result, every start's report, IPOPT log)."""
     spec = loaded.model
     scene = GuideTubeScene.from_spec(spec)
     run = run_multistart(build_nlp, spec, functools.partial(recheck, spec, scene), starts=starts, seed=seed,
-                         workers=workers, on_start=on_start)
+                         workers=workers, on_start=on_start, scheduler=scheduler)
     chosen, ordered = run.best, run.reports
     if chosen.why is not None:
         # no start gives a design the drop model can evaluate (a seedling sticks at every start's angles):

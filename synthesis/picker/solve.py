@@ -25,11 +25,11 @@ def recheck(spec, design: dict[str, float]):
 
 
 def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None
-              ) -> tuple[Result, list[StartReport], str]:
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
     spec = loaded.model
     run = run_multistart(build_nlp, spec, functools.partial(recheck, spec), starts=starts, seed=seed,
-                         workers=workers, on_start=on_start)
+                         workers=workers, on_start=on_start, scheduler=scheduler)
     best, reports = run.best, run.reports
     elastic = None if best.satisfied else elastic_diagnosis(spec)
     design = dict(best.outcome.design)
