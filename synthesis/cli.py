@@ -145,10 +145,14 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
       fourbar_path      sum of squared distances of the coupler point to the targets, mm^2;
                         [solver] stop_at_objective ends the multistart at the first start
                         (in start order) that reaches it
+      crank_rocker      min_total_length (default) or max_transmission_angle
+      picker_double_crank  sum_of_distances (seed 001 eq 4, default) or sum_of_squares
+      clamp_cam         base_radius (default), pressure_angle or nearest
+      guide_tube        nearest (default), fastest or uniform
     Starts are a fixed-seed Latin hypercube (start 0 = the given design). The best start is
-    re-checked on a 10x finer grid, independently of the solver. Writes OUT/<name>/result.json,
-    report.html, ipopt.log and plots. Exit 0 all rules hold, 3 no start satisfies them (the
-    message names the conflicting rules), 2 bad input.
+    re-checked on a finer grid, independently of the solver. Writes OUT/<name>/result.json,
+    report.html, ipopt.log and plots. Exit 0 all rules hold; 3 with status infeasible (the
+    message names the conflicting rules) or failed (IPOPT converged from no start); 2 bad input.
     """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
