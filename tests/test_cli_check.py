@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -114,3 +115,18 @@ def test_problems_lists_the_library(tmp_path):
     assert proc.returncode == 0
     for k in (1, 2, 3, 4):
         assert f"taiwan_example{k}" in proc.stdout
+
+
+def test_help_teaches_every_command_and_every_kind_that_solves(tmp_path):
+    from synthesis.kinds import _KINDS
+
+    top = run("--help", cwd=tmp_path).stdout
+    for command in ("check", "solve", "compare", "bench", "problems", "Exit codes"):
+        assert command in top
+    solve_help = run("solve", "--help", cwd=tmp_path).stdout
+    for kind, entry in _KINDS.items():
+        listed = re.search(rf"^\s+{kind}\s", solve_help, re.MULTILINE) is not None
+        assert listed == (entry.solver is not None), kind
+    compare_help = run("compare", "--help", cwd=tmp_path).stdout
+    for phrase in ("first RESULT is the baseline", "offline", "bench", "Example"):
+        assert phrase in compare_help
