@@ -9,7 +9,7 @@ variables' bounds, so the same seed gives the same starts on any machine.
 from __future__ import annotations
 
 import os
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any, Callable
 
 import numpy as np
@@ -37,21 +37,6 @@ def _init_worker(factory: Callable[[], Any]) -> None:
 
 def _solve_in_worker(index: int, x0: np.ndarray):
     return _worker_solver.solve(index, x0)
-
-
-class _InProcess(Executor):
-    """One worker, in this process: the same interface without a process pool's start-up cost."""
-
-    def __init__(self, factory: Callable[[], Any]):
-        self._solver = factory()
-
-    def submit(self, fn, *args, **kwargs) -> Future:
-        fut: Future = Future()
-        try:
-            fut.set_result(self._solver.solve(*args))
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller through the future
-            fut.set_exception(exc)
-        return fut
 
 
 def default_workers() -> int:
@@ -89,10 +74,10 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     def settled() -> bool:
         return all(i in outcomes for i in range(stop_at + 1))
 
-    if workers <= 1:
-        executor: Executor = _InProcess(factory)
+    if workers <= 1:      # in this process: no pool start-up cost, the solver built once
+        solver = factory()
         for i, x0 in enumerate(starts):
-            out = executor.submit(None, i, x0).result()
+            out = solver.solve(i, x0)
             outcomes[i] = out
             on_done(out)
             if stop_when is not None and stop_when(out):
@@ -103,6 +88,8 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
         futures = [pool.submit(_solve_in_worker, i, x0) for i, x0 in enumerate(starts)]
         try:
             for fut in as_completed(futures):
+                if fut.cancelled():      # a start after the early stop, cancelled before it ran
+                    continue
                 out = fut.result()
                 outcomes[out.start] = out
                 on_done(out)

@@ -1,0 +1,44 @@
+"""The shared multistart driver: start order, early stop, worker counts."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from synthesis.multistart import latin_hypercube_starts, run_starts
+
+
+@dataclass
+class Outcome:
+    start: int
+    good: bool
+
+
+class SlowFirstSolver:
+    """Start 0 is slow, start 2 is the first good one: later starts finish before start 0 does."""
+
+    def solve(self, index: int, x0) -> Outcome:
+        time.sleep(0.8 if index == 0 else 0.02)
+        return Outcome(index, index == 2)
+
+
+def make_solver() -> SlowFirstSolver:
+    return SlowFirstSolver()
+
+
+def test_early_stop_returns_the_same_starts_for_any_worker_count():
+    starts = np.zeros((12, 1))
+    seen: list[int] = []
+    for workers in (1, 2):
+        out = run_starts(make_solver, starts, workers, lambda o: seen.append(o.start), stop_when=lambda o: o.good)
+        assert [o.start for o in out] == [0, 1, 2], workers
+
+
+def test_latin_hypercube_keeps_the_given_design_first_and_is_seeded():
+    bounds = np.array([[0.0, 1.0], [10.0, 20.0]])
+    a = latin_hypercube_starts(bounds, np.array([0.5, 15.0]), 5, seed=3)
+    b = latin_hypercube_starts(bounds, np.array([0.5, 15.0]), 5, seed=3)
+    assert np.array_equal(a, b) and a[0].tolist() == [0.5, 15.0]
+    assert ((a >= bounds[:, 0]) & (a <= bounds[:, 1])).all()
