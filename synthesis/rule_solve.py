@@ -77,7 +77,18 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
         on_start(rep, best[0])
 
     run_starts(factory, x_starts, workers, done, scheduler=scheduler)
-    return [reports[i] for i in range(len(x_starts))], best[0]
+    ordered = [reports[i] for i in range(len(x_starts))]
+    return ordered, best_in_start_order(ordered, maximise)
+
+
+def best_in_start_order(reports: list[StartReport], maximise: bool) -> StartReport:
+    """The best start, judged in start order: ties keep the earlier start, whatever order starts finished in
+    (the running best shown during the run can differ when several workers finish out of order)."""
+    chosen = reports[0]
+    for rep in reports[1:]:
+        if better(rep, chosen, maximise):
+            chosen = rep
+    return chosen
 
 
 @dataclass

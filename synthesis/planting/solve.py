@@ -105,7 +105,10 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     run_starts(factory, x_starts, workers, done, scheduler=scheduler)
     wall = time.perf_counter() - t0
     ordered = [reports[i] for i in range(starts)]
-    chosen = best[0]
+    chosen = ordered[0]      # judged in start order, so the choice does not depend on the worker count
+    for rep in ordered[1:]:
+        if _better(spec, rep, chosen):
+            chosen = rep
     if chosen.scene is None:    # no start assembles: re-evaluate to raise the AssemblyError (exit 2)
         fine_check(spec, chosen.outcome.design)
     pts, scene = chosen.points, chosen.scene
