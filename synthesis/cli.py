@@ -166,6 +166,9 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     loaded = load_spec(spec)
     solver_module = kinds.solver(loaded.kind)
     cluster = {}
+    if scheduler is not None and workers is not None:
+        raise click.BadParameter("give either --workers (local processes) or --scheduler (a dask cluster), "
+                                 "not both", param_hint="--workers/--scheduler")
     if scheduler is not None:
         import inspect
 

@@ -5,6 +5,8 @@ Imported only when a scheduler is given, so that local runs never import dask.
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import uuid
 from typing import Any, Callable
 
@@ -18,17 +20,33 @@ CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving 
 
 
 class _SolverPlugin(WorkerPlugin):
-    """Builds the problem's solver once on each dask worker (``worker.plugins[name].solver``)."""
+    """Builds the problem's solver once on each dask worker (``worker.plugins[name].solver``).
+
+    A worker may run several tasks at once in threads; one CasADi/IPOPT solver object is not
+    thread-safe and the IPOPT log capture redirects the process's stdout, so the worker's solves
+    take turns (start workers with ``--nthreads 1`` to give each core its own process).
+    """
 
     def __init__(self, factory: Callable[[], Any], name: str):
         self.factory, self.name, self.solver = factory, name, None
+        self.lock: threading.Lock | None = None
 
     def setup(self, worker) -> None:
         self.solver = self.factory()
+        self.lock = threading.Lock()
+
+    def solve(self, index: int, x0: np.ndarray):
+        with self.lock:
+            return self.solver.solve(index, x0)
 
 
 def _solve_on_dask_worker(plugin_name: str, index: int, x0: np.ndarray):
-    return get_worker().plugins[plugin_name].solver.solve(index, x0)
+    return get_worker().plugins[plugin_name].solve(index, x0)
+
+
+def _worker_failed(scheduler: str, exc: Exception) -> AgrisynthError:
+    return AgrisynthError(f"--scheduler {scheduler}: a dask worker failed: {type(exc).__name__}: {exc} "
+                          f"(do the workers run the same agrisynth and its dependencies?)")
 
 
 def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
@@ -45,18 +63,24 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
         raise AgrisynthError(f"--scheduler {scheduler}: cannot reach a dask scheduler there ({exc})") from None
     with client:
         name = f"agrisynth-solver-{uuid.uuid4().hex}"
-        plugin = _SolverPlugin(factory, name)
-        client.register_plugin(plugin, name=name)
+        try:
+            client.register_plugin(_SolverPlugin(factory, name), name=name)
+        except Exception as exc:     # the worker could not build the solver: its environment, not our input
+            raise _worker_failed(scheduler, exc) from None
         try:
             futures = [client.submit(_solve_on_dask_worker, name, i, x0, pure=False) for i, x0 in enumerate(starts)]
             try:
                 for fut in dask_completed(futures):
-                    out = fut.result()
+                    try:
+                        out = fut.result()
+                    except Exception as exc:
+                        raise _worker_failed(scheduler, exc) from None
                     outcomes[out.start] = out
                     on_done(out)
             except BaseException:
                 client.cancel(futures)
                 raise
         finally:
-            client.unregister_worker_plugin(name)
+            with contextlib.suppress(Exception):     # never hide the error that got us here
+                client.unregister_worker_plugin(name)
     return [outcomes[i] for i in range(len(starts))]

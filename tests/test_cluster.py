@@ -59,3 +59,20 @@ def test_unreachable_scheduler_is_bad_input(tmp_path):
     assert proc.returncode == 2
     assert "--scheduler nonsense://nowhere: cannot reach a dask scheduler" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+class _BrokenFactory:
+    """A solver factory that fails on the worker, as a missing dependency there would."""
+
+    def __call__(self):
+        raise ModuleNotFoundError("No module named 'casadi' (on the worker)")
+
+
+def test_a_failing_worker_is_reported_not_a_traceback(cluster):
+    import numpy as np
+
+    from synthesis.errors import AgrisynthError
+    from synthesis.multistart import run_starts
+
+    with pytest.raises(AgrisynthError, match="a dask worker failed: .*No module named 'casadi'"):
+        run_starts(_BrokenFactory(), np.zeros((2, 1)), 1, scheduler=cluster.scheduler_address)
