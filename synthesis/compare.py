@@ -30,25 +30,39 @@ def load_bench(path: Path) -> list[dict]:
     path = path if path.name == "bench.json" else path / "bench.json"
     try:
         data = json.loads(path.read_text())
-        rows = data["rows"]
-        problems = data["problems"]
-    except (OSError, json.JSONDecodeError, KeyError, TypeError) as exc:
-        raise ResultError(f"{path}: not a readable agrisynth bench.json ({exc})") from None
+        rows, problems = data["rows"], data["problems"]
+        for row in rows:
+            missing = [key for key in BENCH_ROW_KEYS if key not in row]
+            if missing:
+                raise KeyError(f"a row lacks {', '.join(missing)}")
+            row["worst_violation"] = _number(row["worst_violation"])
+        return [dict(p, rows=[r for r in rows if r["problem"] == p["problem"]], best_known=_number(p["best_known"]))
+                for p in problems]
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, AttributeError) as exc:
+        raise ResultError(f"{path}: not a readable agrisynth bench.json ({type(exc).__name__}: {exc})") from None
 
-    def number(v):      # bench.json writes an unmeasurable value as null
-        return math.nan if v is None else v
 
-    for row in rows:
-        row["worst_violation"] = number(row.get("worst_violation"))
-    return [dict(p, rows=[r for r in rows if r["problem"] == p["problem"]]) for p in problems]
+#: what the error-against-run-time plot and table read from each bench row
+BENCH_ROW_KEYS = ("problem", "method", "objective", "objectives", "objective_gap", "worst_violation",
+                  "wall_s", "median_s", "trace")
+
+
+def _number(v) -> float:
+    """bench.json writes a value that could not be measured as null."""
+    return math.nan if v is None else float(v)
 
 
 def load_candidates(paths: list[Path]) -> list[Candidate]:
     """Read every result (run folder or result.json); one kind only, the first is the baseline."""
     if not paths:
         raise ResultError("compare needs at least one RESULT (a run folder or its result.json)")
+    from synthesis.spec import KINDS
+
     results = [load_result(p) for p in paths]
     files = [p / "result.json" if p.is_dir() else p for p in paths]
+    for f, r in zip(files, results):
+        if r.kind not in KINDS:
+            raise ResultError(f"{f}: kind {r.kind!r} is not one this agrisynth knows ({', '.join(KINDS)})")
     kinds = {r.kind for r in results}
     if len(kinds) > 1:
         listing = "; ".join(f"{f}: {r.kind}" for f, r in zip(files, results))

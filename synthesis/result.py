@@ -105,10 +105,39 @@ def load_result(path: str | Path) -> Result:
     missing = [k for k in REQUIRED_KEYS if k not in data]
     if missing:
         raise ResultError(f"{path}: missing required key(s) {', '.join(missing)}; not an agrisynth result.json")
+    problem = _shape_problem(data)
+    if problem:
+        raise ResultError(f"{path}: {problem}; not a result.json agrisynth wrote (or edited by hand)")
     try:
         return Result.from_json(data)
     except (TypeError, ValueError) as exc:
         raise ResultError(f"{path}: {exc}") from None
+
+
+def _shape_problem(data: dict) -> str | None:
+    """What is wrong with the types of a parsed result.json, or None: readers rely on these."""
+    for key in ("kind", "name", "spec_sha256", "status"):
+        if not isinstance(data[key], str):
+            return f"{key} must be a string, got {type(data[key]).__name__}"
+    if data["status"] not in STATUSES:
+        return f"status {data['status']!r} is not one of {', '.join(STATUSES)}"
+    for key in ("design", "versions", "objective", "solver", "trajectory"):
+        if key in data and data[key] is not None and not isinstance(data[key], dict):
+            return f"{key} must be an object, got {type(data[key]).__name__}"
+    if "versions" in data and data["versions"] is None:
+        return "versions must be an object, got null"
+    if not isinstance(data["rules"], list):
+        return f"rules must be a list, got {type(data['rules']).__name__}"
+    for i, rule in enumerate(data["rules"]):
+        if not isinstance(rule, dict):
+            return f"rules[{i}] must be an object"
+        if not isinstance(rule.get("name"), str) or not isinstance(rule.get("satisfied"), bool):
+            return f"rules[{i}] needs a string name and a true/false satisfied"
+        limit = rule.get("limit")
+        if not (isinstance(limit, list) and len(limit) == 2
+                and all(v is None or isinstance(v, (int, float)) for v in limit)):
+            return f"rules[{i}] ({rule['name']}): limit must be [lower, upper] with numbers or null"
+    return None
 
 
 def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:

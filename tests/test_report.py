@@ -132,3 +132,43 @@ def test_objective_text_says_when_a_value_could_not_be_measured():
     assert objective_text({"name": "sum_of_distances", "value": 0.0978123, "unit": "mm"}) == "sum_of_distances = 0.0978123 mm"
     assert objective_text({"name": "sum_of_distances", "value": None, "unit": "mm"}) == "sum_of_distances = not measured"
     assert objective_text(None) is None
+
+
+@pytest.mark.parametrize("edit, complaint", [
+    (lambda d: d.update(name=None), "name must be a string"),
+    (lambda d: d.update(versions=None), "versions must be an object"),
+    (lambda d: d.update(rules=None), "rules must be a list"),
+    (lambda d: d["rules"][0].pop("satisfied"), r"rules\[0\] needs a string name and a true/false satisfied"),
+    (lambda d: d["rules"][0].update(limit=None), r"rules\[0\] \(p1p3_distance\): limit must be"),
+    (lambda d: d.update(status="great"), "status 'great' is not one of"),
+])
+def test_result_json_with_wrong_types_is_refused_naming_the_file(runs, tmp_path, edit, complaint):
+    data = json.loads((runs[0][0] / "result.json").read_text())
+    edit(data)
+    with pytest.raises(ResultError, match=rf"edited\.json: {complaint}"):
+        load_result(_write(tmp_path / "edited.json", json.dumps(data)))
+
+
+def test_unknown_kind_and_broken_bench_are_refused(runs, tmp_path):
+    data = json.loads((runs[0][0] / "result.json").read_text())
+    with pytest.raises(ResultError, match="kind 'steam_engine' is not one this agrisynth knows"):
+        load_candidates([_write(tmp_path / "odd.json", json.dumps(dict(data, kind="steam_engine")))])
+    from synthesis.compare import load_bench
+
+    bench = _write(tmp_path / "bench.json", json.dumps({"problems": [{"problem": "p", "best_known": 0}],
+                                                        "rows": [{"problem": "p", "method": "m"}]}))
+    with pytest.raises(ResultError, match=r"bench\.json: not a readable agrisynth bench.json \(KeyError: .*objective"):
+        load_bench(bench)
+
+
+def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
+    from synthesis.planting import plots
+
+    def broken(result, path):
+        raise RuntimeError("out of ink")
+
+    monkeypatch.setattr(plots, "trajectory_figure", broken)
+    folder, _ = checked_run(PLANTING / "taiwan_example1.toml", tmp_path)
+    page = (folder / "report.html").read_text()
+    assert (folder / "result.json").exists() and not (folder / "trajectory.png").exists()
+    assert "trajectory.png not drawn: RuntimeError: out of ink" in page and "src='trajectory.png'" not in page

@@ -13,8 +13,6 @@ from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
 from synthesis.result import Result, atomic_write_text
 
-#: what a figure writer may raise when the result lacks the data it draws (an older or partial result)
-MISSING_DATA = (KeyError, IndexError, TypeError, ValueError)
 
 
 def _caption(name: str) -> str:
@@ -30,22 +28,40 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
         return [], []
     try:
         written = writer([c.result for c in cands], folder)
-    except MISSING_DATA as exc:
-        return [], [f"comparison figures not drawn: the results lack {exc!r}"]
+    except Exception as exc:    # noqa: BLE001 - a figure is never worth losing the page: say why instead
+        return [], [f"comparison figures not drawn: {type(exc).__name__}: {exc} (the results lack data "
+                    f"the figures need, e.g. a result from an older agrisynth or edited by hand)"]
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
 
 
 def run_artifacts(result: Result) -> dict:
-    """What a check or solve writes beside result.json: the kind's figures, then report.html."""
+    """What a check or solve writes beside result.json: the kind's figures, then report.html.
+
+    A figure that fails is left out and named on the page: it must never cost the run its result.
+    """
     from synthesis import kinds
 
-    figures = kinds.figure_writers(result)
-    return {**figures, "report.html": lambda path: write_report(result, path, list(figures))}
+    written: list[str] = []
+    failed: list[str] = []
+
+    def guarded(name: str, writer):
+        def write(path: Path) -> None:
+            try:
+                writer(path)
+                written.append(name)
+            except Exception as exc:    # noqa: BLE001 - reported on the page, the run's result is kept
+                path.unlink(missing_ok=True)
+                failed.append(f"{name} not drawn: {type(exc).__name__}: {exc}")
+        return write
+
+    artifacts = {name: guarded(name, w) for name, w in kinds.figure_writers(result).items()}
+    artifacts["report.html"] = lambda path: write_report(result, path, written, failed)
+    return artifacts
 
 
-def write_report(result: Result, path: Path, figures: list[str]) -> None:
+def write_report(result: Result, path: Path, figures: list[str], notes: list[str] = ()) -> None:
     """report.html of one run, beside its own figures (``figures``) and the kind's overlay figures."""
     cands = candidates([result])
-    extra, notes = comparison_figures(cands, path.parent)
+    extra, overlay_notes = comparison_figures(cands, path.parent)
     shown = [(f, _caption(f)) for f in figures] + [f for f in extra if f[0] not in figures]
-    atomic_write_text(path, render(cands, shown, notes, result.name))
+    atomic_write_text(path, render(cands, shown, list(notes) + overlay_notes, result.name))
