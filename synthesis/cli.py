@@ -23,7 +23,7 @@ err_console = Console(stderr=True, highlight=False)
 
 
 def rule_table(rules: list[dict], title: str) -> Table:
-    table = Table(title=title, title_justify="left")
+    table = Table(title=escape(title), title_justify="left")
     for col, just in (("rule", "left"), ("value", "right"), ("limit", "right"), ("unit", "left"),
                       ("margin", "right"), ("", "left"), ("where / why", "left")):
         table.add_column(col, justify=just, no_wrap=col != "where / why")
@@ -32,7 +32,8 @@ def rule_table(rules: list[dict], title: str) -> Table:
         value = "-" if r["value"] is None else f"{r['value']:.4g}"
         margin = "-" if r["margin"] is None else f"{r['margin']:.4g}"
         verdict = "[green]pass[/]" if r["satisfied"] else "[bold red]FAIL[/]"
-        table.add_row(r["name"], value, limit, r["unit"], margin, verdict, r.get("note") or r.get("where", ""))
+        table.add_row(escape(r["name"]), value, limit, escape(r["unit"]), margin, verdict,
+                      escape(r.get("note") or r.get("where", "")))
     return table
 
 
@@ -102,7 +103,7 @@ def check(spec: Path, out: Path) -> None:
 
 
 def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
-    table = Table(title=title, title_justify="left")
+    table = Table(title=escape(title), title_justify="left")
     for col, just in (("rule", "left"), ("limit", "right"), ("baseline", "right"), ("", "left"),
                       ("solution", "right"), ("", "left"), ("unit", "left")):
         table.add_column(col, justify=just, no_wrap=True)
@@ -115,7 +116,7 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) 
         return value, ("[green]pass[/]" if r["satisfied"] else "[bold red]FAIL[/]")
 
     for r in best:
-        table.add_row(r["name"], limit_text(r["limit"]), *cell(base.get(r["name"])), *cell(r), r["unit"])
+        table.add_row(escape(r["name"]), limit_text(r["limit"]), *cell(base.get(r["name"])), *cell(r), escape(r["unit"]))
     return table
 
 
@@ -245,7 +246,7 @@ def compare(results: tuple[Path, ...], out: Path) -> None:
     for c in cands:
         bad = c.result.violated()
         verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"
-        console.print(f"{c.label}: {c.result.status}, {verdict}")
+        console.print(f"{escape(c.label)}: {c.result.status}, {verdict}")
     console.print(f"wrote {page}")
 
 

@@ -38,13 +38,17 @@ tr.summary td { border-bottom: 2px solid #bbb; font-style: italic; }
 figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
 figcaption { color: #555; font-size: 13px; }
 .missing { background: #fff8e1; border-left: 4px solid #f0b400; padding: .4em .8em; }
-@media print { body { max-width: none; margin: 0; } th { position: static; } figure { break-inside: avoid; } }
+td, .verdict { print-color-adjust: exact; -webkit-print-color-adjust: exact; }
+@media print { body { max-width: none; margin: 0; } th { position: static; } figure { break-inside: avoid; }
+               .scroll { overflow: visible; } }
 """
 
 
 def _num(v, digits: int = 4) -> str:
     if v is None:
         return "&ndash;"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_num(x, digits) for x in v) + "]"
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, float):
@@ -93,7 +97,7 @@ def rule_table(cands: list[Candidate]) -> str:
                 cells.append(f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}</span></td>")
             else:
                 cells.append(f"<td class='num fail' title='{html.escape(cell.note)}'>{_num(cell.value)} FAIL"
-                             f"<span class='note'>worst on the fine grid, margin {_num(cell.margin, 3)}"
+                             f"<span class='note'>margin {_num(cell.margin, 3)}"
                              f"{own_limit}</span></td>")
         rows.append(f"<tr><td>{html.escape(row.name)}</td><td class='limit'>{_limit(row.limit)}</td>"
                     f"<td>{html.escape(row.unit)}</td>{''.join(cells)}</tr>")

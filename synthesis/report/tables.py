@@ -48,6 +48,8 @@ class DesignRow:
 def _differs(a, b) -> bool:
     if a is None or b is None:
         return a is not b
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) != len(b) or any(_differs(x, y) for x, y in zip(a, b))
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
         return abs(a - b) > DIFFERENCE_TOLERANCE * max(1.0, abs(a), abs(b))
     return a != b
