@@ -192,8 +192,7 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
         result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start, **cluster)
     if verbose:
         console.print(log, markup=False)
-    artifacts = run_artifacts(result)
-    artifacts["ipopt.log"] = lambda path: atomic_write_text(path, log)
+    artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)})
     folder, replaced = write_run(out, result, artifacts)
     baseline = solver_module.baseline_rules(loaded)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))

@@ -160,7 +160,7 @@ def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]]) -> t
     out_root = final.parent
     out_root.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=out_root))
-    os.chmod(staging, 0o777 & ~_umask())     # mkdtemp makes it private; a run folder is an ordinary folder
+    os.chmod(staging, 0o777 & ~_UMASK)     # mkdtemp makes it private; a run folder is an ordinary folder
     try:
         for filename, writer in artifacts.items():
             writer(staging / filename)
@@ -181,13 +181,20 @@ def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]]) -> t
 def atomic_write_text(path: Path, text: str) -> None:
     """Write a file via a temporary file and rename."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.chmod(tmp, 0o666 & ~_umask())         # mkstemp makes it private; give it the usual mode
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.chmod(tmp, 0o666 & ~_UMASK)       # mkstemp makes it private; give it the usual mode
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
-def _umask() -> int:
-    mask = os.umask(0)
+def _read_umask() -> int:
+    mask = os.umask(0)      # the only portable way to read it; done once, at import, before any threads
     os.umask(mask)
     return mask
+
+
+_UMASK = _read_umask()

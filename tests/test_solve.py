@@ -98,6 +98,7 @@ def test_solve_cli_writes_the_contract(tmp_path):
     assert set(data["solver"]) >= {"name", "return_status", "iterations", "wall_s", "starts", "seed", "best_start"}
     assert data["objective"]["name"] == "nearest" and data["solver"]["starts"] == 2
     assert "EXIT: Optimal Solution Found" in (tmp_path / "redesign_from_example4" / "ipopt.log").read_text()
+    assert "<a href='ipopt.log'>ipopt.log</a>" in (tmp_path / "redesign_from_example4" / "report.html").read_text()
     assert "baseline" in proc.stdout and "solution" in proc.stdout
 
 

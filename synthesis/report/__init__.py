@@ -34,8 +34,9 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
 
 
-def run_artifacts(result: Result) -> dict:
-    """What a check or solve writes beside result.json: the kind's figures, then report.html.
+def run_artifacts(result: Result, files: dict | None = None) -> dict:
+    """What a check or solve writes beside result.json: ``files`` (e.g. ipopt.log), the kind's figures,
+    then report.html, which shows the figures and links the other files.
 
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
@@ -54,7 +55,8 @@ def run_artifacts(result: Result) -> dict:
                 failed.append(f"{name} not drawn: {type(exc).__name__}: {exc}")
         return write
 
-    artifacts = {name: guarded(name, w) for name, w in kinds.figure_writers(result).items()}
+    writers = {**(files or {}), **kinds.figure_writers(result)}
+    artifacts = {name: guarded(name, w) for name, w in writers.items()}
     artifacts["report.html"] = lambda path: write_report(result, path, written, failed)
     return artifacts
 

@@ -16,17 +16,11 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
-    starts_field, value_of,
+    Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
+    value_of,
 )
 
 KIND = "planting_fourbar"
-
-
-def _positive(name: str, v: Variable) -> None:
-    lo = v.bounds[0] if isinstance(v, FreeVariable) else v
-    if lo <= 0:
-        raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
 
 
 class ArmSection(StrictModel):
@@ -46,7 +40,7 @@ class ArmSection(StrictModel):
     @model_validator(mode="after")
     def _lengths_positive(self) -> "ArmSection":
         for name in ("l1", "l2", "l3", "l4", "l5"):
-            _positive(name, getattr(self, name))
+            require_positive(name, getattr(self, name))
         return self
 
 
