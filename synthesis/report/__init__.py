@@ -7,6 +7,7 @@ becomes a note on the page instead of a failed run.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from synthesis.report.page import render
@@ -27,7 +28,8 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     if writer is None:
         return [], []
     try:
-        written = writer([c.result for c in cands], folder)
+        # figures name each candidate by its column label, which is unique even when spec names repeat
+        written = writer([dataclasses.replace(c.result, name=c.label) for c in cands], folder)
     except Exception as exc:    # noqa: BLE001 - a figure is never worth losing the page: say why instead
         return [], [f"comparison figures not drawn: {type(exc).__name__}: {exc} (the results lack data "
                     f"the figures need, e.g. a result from an older agrisynth or edited by hand)"]
