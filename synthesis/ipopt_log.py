@@ -1,4 +1,5 @@
-"""IPOPT prints to file descriptor 1 from C++; capture it per solve so the run folder keeps the log."""
+"""IPOPT's output: its log (printed to file descriptor 1 from C++, captured per solve so the run folder
+keeps it) and what its return statuses mean for a result's status."""
 
 from __future__ import annotations
 
@@ -24,3 +25,9 @@ def captured_stdout():
             os.close(saved)
             tmp.seek(0)
             text.append(tmp.read().decode(errors="replace"))
+
+
+def reached_optimum(return_status: str) -> bool:
+    """Did IPOPT stop at a point meeting its full tolerances?  CasADi's ``success`` also counts
+    Solved_To_Acceptable_Level (looser tolerances), which a result may call feasible but not optimal."""
+    return return_status == "Solve_Succeeded"

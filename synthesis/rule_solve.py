@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
+from synthesis.ipopt_log import reached_optimum
 from synthesis.multistart import latin_hypercube_starts, run_starts
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
@@ -194,14 +195,14 @@ def diagnosis_of(nlp, out) -> ElasticDiagnosis:
 def status_of(best: StartReport, reports: list[StartReport], elastic: ElasticDiagnosis | None) -> str:
     """DESIGN.md status of a multistart run.
 
-    optimal/feasible: the best start satisfies every rule (and IPOPT converged there, or not);
+    optimal/feasible: the best start satisfies every rule (and IPOPT met its full tolerances there, or not);
     infeasible: no start does, and the elastic re-solve must relax a rule, or some start converged
     to a design that misses the fine grid between the solver's samples;
     failed: no start converged and the elastic re-solve needs no slack (or did not converge either):
     nothing says the rules conflict, IPOPT just found no solution.
     """
     if best.satisfied:
-        return "optimal" if best.outcome.success else "feasible"
+        return "optimal" if reached_optimum(best.outcome.return_status) else "feasible"
     if elastic is not None and elastic.relaxed:
         return "infeasible"
     return "infeasible" if any(r.outcome.success for r in reports) else "failed"

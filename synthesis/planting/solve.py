@@ -10,6 +10,7 @@ from typing import Callable
 import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
+from synthesis.ipopt_log import reached_optimum
 from synthesis.multistart import latin_hypercube_starts, run_starts
 from synthesis.planting.check import evaluate, scene_facts, trajectory
 from synthesis.planting.nlp import PlantingNLP, StartOutcome
@@ -115,7 +116,7 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     records = [r.to_json() for r in chosen.records]
     feasible = chosen.satisfied
     if feasible:
-        status = "optimal" if chosen.outcome.success else "feasible"
+        status = "optimal" if reached_optimum(chosen.outcome.return_status) else "feasible"
     else:   # IPOPT neither converged nor proved infeasibility from any start: a failure, not a conflict
         evidence = any(r.outcome.success or r.outcome.return_status == "Infeasible_Problem_Detected"
                        for r in reports.values())

@@ -62,7 +62,10 @@ def test_no_quick_return(tmp_path, time_ratio):
 def test_vanishing_swing(tmp_path, swing):
     loaded = load_spec(spec_file(tmp_path, "1.25", swing, "40.0", lower="0.01"))
     result, _, _ = run_solve(loaded, starts=2, workers=1)
-    assert result.status == "optimal"
+    # a crank of a few hundredths of a mm: IPOPT may stop at its acceptable (looser) tolerances, which
+    # the result must then call feasible, not optimal; the requirements are re-checked below either way
+    expected = {"Solve_Succeeded": "optimal", "Solved_To_Acceptable_Level": "feasible"}
+    assert result.status == expected[result.solver["return_status"]]
     q, gmin = simulated(loaded, result.design)
     assert math.degrees(q.swing) == pytest.approx(float(swing), rel=1e-6)
     assert q.time_ratio == pytest.approx(1.25, abs=1e-6)
