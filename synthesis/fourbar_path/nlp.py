@@ -186,7 +186,9 @@ class PathNLP:
             shift = 360.0 * math.floor(crank[0] / 360.0)       # first angle in [0, 360), the rest follow it
             crank = [a - shift for a in crank]
             direction = "ccw" if sp.sign > 0 else "cw"
-        objective = float(sol["f"])
+        # f at the returned x, not sol["f"]: after a failure (Invalid_Number_Detected...) IPOPT can
+        # return a last objective (even 0.0) that belongs to no x it returns
+        objective = float(self.functions(xs, sp.sign)[0])
         if not math.isfinite(objective):
             objective = math.inf
         return StartOutcome(index, design, crank, direction, objective, stats["return_status"],
