@@ -119,6 +119,8 @@ def _with(tmp_path, edit) -> str:
     (lambda d: d["bounds"].update(r2=[-1, 60]),
      "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
     (lambda d: d["rules"].update(grashof="crank_rocker"), "fourbar_path.rules.grashof: expected 'crank-rocker'"),
+    (lambda d: d["solver"].update(mu_strategy="fast"),
+     "fourbar_path.solver.mu_strategy: expected 'monotone' or 'adaptive', got 'fast'"),
     # magnitudes whose squares overflow a float: named, not a traceback from the kinematics
     (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
      "fourbar_path.targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+300"),

@@ -168,6 +168,10 @@ class SolverSection(MultistartSettings):
                                 "is at most this many mm^2 and that satisfies every rule; reported as "
                                 "starts needed")
     max_iter: int = max_iter_field(1000)
+    mu_strategy: Literal["monotone", "adaptive"] = Field(
+        "monotone", description="IPOPT's barrier update: monotone (default: more starts reach the optimum "
+                                "when the targets go round the whole coupler curve) or adaptive (with "
+                                "max_iter = 3000, recovers targets on a 120 deg arc that monotone misses)")
     samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion for sampled rules "
                                                          "(grashof = \"any\"); the re-check is 10x finer")
 
