@@ -6,7 +6,11 @@ times, takes the median wall time, and writes ``OUT/bench/bench.json`` and ``err
 (accuracy -- objective gap to the best known, worst fine-grid rule violation -- against wall time).
 
 Equal objective tolerance: each case has a target objective (best known + tolerance) and every
-method stops as soon as it reaches it, or at its own convergence / budget otherwise.
+method stops as soon as it reaches it, or at its own convergence / budget otherwise.  A run reaches
+the target when its objective is at most the target *and* every rule holds on the fine re-check
+grid.  The time ratio (method's median wall time / the reference method's) compares times to the
+same target, so it exists only when every run of both methods reached it; otherwise ``time_ratio``
+is null and ``time_ratio_note`` says "n/a (target not reached)" and by which methods.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ from typing import Callable
 _CASES: dict[str, str] = {"fourbar_path": "synthesis.fourbar_path.bench:bench_cases"}
 
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
+NOT_REACHED = "n/a (target not reached)"
 
 
 @dataclass
@@ -65,6 +70,24 @@ def _median(values: list[float]) -> float:
     return float(statistics.median(values))
 
 
+def reached(run: MethodRun, target: float) -> bool:
+    """The run ended at or below the target with every rule holding."""
+    return run.worst_violation == 0 and math.isfinite(run.objective) and run.objective <= target
+
+
+def time_ratio(row: dict, reference: dict) -> dict:
+    """The ratio entry of a method's row against the reference row: a number only when both reached
+    the target in every run."""
+    missed = [r["method"] for r in (reference, row) if not all(r["reached_target_runs"])]
+    entry = {"problem": row["problem"], "method": row["method"], "reference": reference["method"],
+             "objective": row["objective"], "reference_objective": reference["objective"]}
+    if missed:
+        return entry | {"time_ratio": None, "time_ratio_note": f"{NOT_REACHED} by {', '.join(missed)}"}
+    if reference["median_s"] <= 0:
+        return entry | {"time_ratio": None, "time_ratio_note": "n/a (reference time is 0)"}
+    return entry | {"time_ratio": row["median_s"] / reference["median_s"], "time_ratio_note": None}
+
+
 def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] = lambda what: None) -> dict:
     """Every method of the case, ``repeats`` times each; the case's rows and ratios.
 
@@ -99,15 +122,16 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
             "problem": case.problem, "kind": case.kind, "method": method,
             "objective": typical.objective, "objectives": [r.objective for r in rs],
             "objective_gap": typical.objective - best, "best_known": best, "target": target,
-            "reached_target": typical.objective <= target,
+            "reached_target": reached(typical, target), "reached_target_runs": [reached(r, target) for r in rs],
             "worst_violation": typical.worst_violation,
             "wall_s": walls, "median_s": median, "trace": typical.trace, "details": typical.details,
         })
-    reference = rows[0]
-    ratios = [{"problem": case.problem, "method": r["method"], "reference": reference["method"],
-               "time_ratio": r["median_s"] / reference["median_s"] if reference["median_s"] > 0 else None,
-               "objective": r["objective"], "reference_objective": reference["objective"]}
-              for r in rows[1:]]
+    ratios = [time_ratio(r, rows[0]) for r in rows[1:]]
+    # what a table prints in its "time ratio" column
+    rows[0]["time_ratio_text"] = "1 (reference)"
+    for row, ratio in zip(rows[1:], ratios):
+        row["time_ratio_text"] = (f"{ratio['time_ratio']:.1f}x" if ratio["time_ratio"] is not None
+                                  else ratio["time_ratio_note"])
     return {"problem": case.problem, "kind": case.kind, "note": case.note, "best_known": best,
             "target": target, "rows": rows, "ratios": ratios}
 

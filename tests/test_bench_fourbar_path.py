@@ -27,10 +27,21 @@ def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
         # a spec file: best known = the full multistart's objective (zero error here), target 1e-8 above it
         assert r["best_known"] < 1e-20 and r["target"] == pytest.approx(1e-8, rel=1e-9)
         assert set(r) >= {"problem", "objective", "worst_violation", "wall_s", "median_s"}
-    ipopt = rows["ipopt_multistart"]
-    assert ipopt["reached_target"] and ipopt["worst_violation"] == 0.0
+    ipopt, de = rows["ipopt_multistart"], rows["differential_evolution"]
+    # IPOPT reaches the zero-error target in every run, every rule holding on the fine grid
+    assert ipopt["reached_target_runs"] == [True, True] and ipopt["worst_violation"] == 0.0
+    assert max(ipopt["objectives"]) <= 1e-8
+    # DE's flags say what its objectives and fine-grid re-check say
+    for objective, flag in zip(de["objectives"], de["reached_target_runs"]):
+        assert not flag or (objective is not None and objective <= de["target"])
+    assert de["reached_target"] == (de["objective"] is not None and de["objective"] <= de["target"]
+                                     and de["worst_violation"] == 0.0)
     (ratio,) = data["problems"][0]["ratios"]
-    assert ratio["time_ratio"] == pytest.approx(rows["differential_evolution"]["median_s"] / ipopt["median_s"])
+    if all(de["reached_target_runs"]):
+        assert ratio["time_ratio"] > 0 and ratio["time_ratio_note"] is None
+    else:      # a method that misses the target has no time to compare
+        assert ratio["time_ratio"] is None and ratio["time_ratio_note"].startswith("n/a (target not reached)")
+        assert de["time_ratio_text"] == ratio["time_ratio_note"]
     assert (tmp_path / "bench" / "error_vs_time.png").stat().st_size > 10_000
     # the comparison page carries the bench when it is given among the results
     assert cli("solve", str(spec), "--starts", "4", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path).returncode == 0
@@ -86,4 +97,29 @@ def test_solve_time_per_problem_median_of_5():
             lines.append(f"n={n:2d} {'timed' if timed else 'free '}: median s per mechanism "
                          f"{[round(t, 3) for t in times]}, starts needed {needed}, "
                          f"median over mechanisms {np.median(times):.3f} s")
+    print("\n".join(lines))
+
+
+@pytest.mark.benchmark
+def test_partial_arc_free_timing_study():
+    """10 targets on 120 deg of crank (free timing), the ten mechanisms, 64 starts, no early stop.
+
+    Measured (this machine, 2026-11): default settings (monotone barrier, max_iter 1000) recover 9 of
+    10 -- mechanism 0 ends at 2.5e-7 mm^2 (no start below 1e-8; 30 of 64 starts hit the iteration
+    limit); mu_strategy = "adaptive" alone: 10 of 10 but mechanism 0 only by 1 start (1.4e-9);
+    adaptive with max_iter = 3000: 10 of 10, worst best 9.5e-13 mm^2, at least 3 starts of 64 each.
+    Other options tried on mechanisms 0-2 (obj_scaling_factor 1e3; nlp_scaling_method none;
+    max_iter 5000 with the monotone barrier) recovered 0 at 4e-8, 6e-9 and 3e-9 with 0-1 hits: a short
+    arc leaves a long, flat valley, and what helps is the adaptive barrier with room to iterate.
+    The assertion is on the adaptive setting; the default's numbers are printed, not asserted."""
+    lines = []
+    for label, solver in (("default", {}), ("adaptive, max_iter 3000", {"mu_strategy": "adaptive", "max_iter": 3000})):
+        bests, hits = [], []
+        for seed in SEEDS:
+            result, reports, _ = run_solve(truth_spec(seed, 10, False, solver, span_deg=120.0), workers=1)
+            bests.append(result.objective["value"])
+            hits.append(sum(r.satisfied and r.outcome.objective < 1e-8 for r in reports))
+        lines.append(f"{label}: best per mechanism {[f'{b:.2g}' for b in bests]}, starts < 1e-8: {hits}")
+        if solver:
+            assert max(bests) < 1e-8 and min(hits) >= 1
     print("\n".join(lines))

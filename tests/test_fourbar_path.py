@@ -119,6 +119,13 @@ def _with(tmp_path, edit) -> str:
     (lambda d: d["bounds"].update(r2=[-1, 60]),
      "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
     (lambda d: d["rules"].update(grashof="crank_rocker"), "fourbar_path.rules.grashof: expected 'crank-rocker'"),
+    (lambda d: d["solver"].update(mu_strategy="fast"),
+     "fourbar_path.solver.mu_strategy: expected 'monotone' or 'adaptive', got 'fast'"),
+    # magnitudes whose squares overflow a float: named, not a traceback from the kinematics
+    (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
+     "fourbar_path.targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+300"),
+    (lambda d: d["bounds"].update(r3=[5, 1e200]),
+     "fourbar_path.bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+200"),
 ])
 def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
     assert message in _with(tmp_path, edit)
@@ -130,13 +137,21 @@ def test_too_many_points(tmp_path):
     assert "fourbar_path.targets.points: expected 3 to 100 points, got 101" in _with(tmp_path, edit)
 
 
-def test_bad_input_exits_2_without_a_traceback(tmp_path):
+@pytest.mark.parametrize("edit, message", [
+    (lambda d: d["targets"]["points"].__setitem__(2, [float("nan"), 0.0]),
+     "targets.points.2: x: expected a finite number, got nan"),
+    (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
+     "targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+300"),
+    (lambda d: d["bounds"].update(r3=[5, 1e200]),
+     "bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+200"),
+], ids=["nan", "huge-point", "huge-bound"])
+def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
     data = truth_data(0, 6, timed=False)
-    data["targets"]["points"][2] = [float("nan"), 0.0]
-    path = tmp_path / "nan.toml"
+    edit(data)
+    path = tmp_path / "bad.toml"
     path.write_text(toml_text(data))
     for command in ("check", "solve"):
         proc = cli(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
         assert proc.returncode == 2, proc.stdout + proc.stderr
-        assert "targets.points.2: x: expected a finite number, got nan" in proc.stderr.replace("\n", " ")
+        assert message in " ".join(proc.stderr.split())
         assert "Traceback" not in proc.stderr

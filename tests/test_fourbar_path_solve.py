@@ -14,10 +14,12 @@ import pytest
 
 from fourbar_path_support import PATH_LIBRARY, cli, write_spec
 from synthesis.fourbar_path.check import evaluate, joint_positions
+from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.plots import compare_coupler_curves
 from synthesis.fourbar_path.solve import run_solve
 from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.coupler_point import VARIABLES
+from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import load_result
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
@@ -138,6 +140,26 @@ def test_numbers_in_bounds_fix_variables():
     result, _, _ = run_solve(truth_spec_from(data), workers=1)
     assert result.objective["value"] < RECOVERED
     assert {k: result.design[k] for k in fixed} == fixed       # exactly, not approximately
+
+
+def test_a_failed_start_reports_the_objective_of_the_design_it_returns():
+    """r1 = 5 and r2 = 60 fixed: no crank-rocker exists, starts end infeasible or on an invalid number.
+    Each start's objective is the error of its returned design (inf where that is not a number),
+    never IPOPT's last f (0.0 after Invalid_Number_Detected)."""
+    data = truth_data(0, 6, timed=False)
+    data["bounds"].update(r1=5, r2=60)
+    nlp = PathNLP(truth_spec_from(data).model, seed=0)
+    starts = latin_hypercube_starts(nlp.bounds, nlp.init, 8, 0)
+    statuses = set()
+    for i, x0 in enumerate(starts):
+        out = nlp.solve(i, x0)
+        statuses.add(out.return_status)
+        error = evaluate(nlp.spec, out.design, out.crank_deg, timing="solved").sum_sq
+        if math.isfinite(error):
+            assert out.objective == pytest.approx(error, rel=1e-9)
+        else:
+            assert out.objective == math.inf
+    assert "Invalid_Number_Detected" in statuses       # the case this test is about does occur
 
 
 def test_same_seed_same_result_for_any_number_of_workers():

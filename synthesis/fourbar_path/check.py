@@ -1,9 +1,14 @@
 """``agrisynth check`` for kind fourbar_path, and the independent re-check of every solve.
 
-The evaluation here shares no formula with the NLP: joint positions come from complex numbers and
-an inverse cosine (the textbook construction, not fourbar.coupler_joint), the transmission angle is
-measured between the joint positions on a 0.1 deg grid over the turn (the NLP uses the closed-form
-extremes), and loop closure is the triangle inequality on |O'A|.
+What is independent of the NLP and what is not: joint positions come from complex numbers and an
+inverse cosine (the textbook construction, not fourbar.coupler_joint); loop closure is read off
+those float positions, |r3 - r4| <= |O'A| <= r3 + r4, on a 0.1 deg grid over the whole turn (the NLP
+has polynomial rows at the targets only) and every joint must be a finite number there; the
+Grashof class is the textbook statement on the sorted lengths (s + l <= p + q and the crank -- r2,
+or the frame r1 for a double-crank -- is the shortest; the NLP has three linear rows); the
+transmission angle is measured between the joint positions on the same grid (the NLP uses its
+closed-form extremes); the order of the angles is written out here again.  Shared with the NLP:
+nothing but the record format (constraints.base.Rule) and the spec.
 
 Which design ``check`` evaluates: each variable's [design] value, else its fixed number in [bounds],
 else the midpoint of its [lo, hi] (the result notes which).  The crank angle of each target: the
@@ -20,10 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from constraints import Rule
-from constraints.assembly import assembly_rule
-from constraints.grashof_class import grashof_class_rule
-from constraints.sequence import sequence_rule
+from constraints import Rule, not_evaluated
+from constraints.grashof_class import CLASSES
 from constraints.transmission import transmission_rules
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_function, design_parameters
 from synthesis.result import Result
@@ -117,25 +120,62 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
         nearest = np.degrees(nearest_crank_angles(design, targets, branch))
         crank_deg, timing = unwrapped(nearest, spec.rules.direction), "nearest"
     thetas = np.radians(np.array(crank_deg, dtype=float))
+    located = bool(np.all(np.isfinite(thetas)))     # False: no coupler curve to find the targets on
     at_targets = joint_positions(design, thetas, branch)
     errors = np.abs(at_targets["P"] - (targets[:, 0] + 1j * targets[:, 1]))
-    r = [design[k] for k in ("r1", "r2", "r3", "r4")]
     lim = spec.rules
     rules: list[Rule] = []
     if lim.grashof != "any":
-        rules.append(grashof_class_rule(lim.grashof, *r))
-        rules.append(assembly_rule(list(thetas), *r, where="at every target"))
-    motion = crank_motion(spec, thetas)
-    if lim.grashof == "any":
-        rules.append(assembly_rule(list(motion), *r, where="at the targets and between them"))
+        rules.append(grashof_by_sorted_lengths(lim.grashof, design))
+    motion = crank_motion(spec, thetas) if located else np.linspace(0.0, TWO_PI, TURN_SAMPLES, endpoint=False)
+    where = ("over the turn (0.1 deg grid) and at every target" if lim.grashof != "any"
+             else "at the targets and between them")
+    closure_angles = np.concatenate([motion, thetas[np.isfinite(thetas)]])
+    rules.append(closure_rule(design, closure_angles, branch, where))
     if lim.transmission_angle is not None:
         mu = transmission_deg(joint_positions(design, motion, branch))
         missing = None if np.all(np.isfinite(mu)) else "the loop does not close everywhere on the crank's motion"
         rules += transmission_rules(mu, lim.transmission_angle, missing=missing)
     if not spec.timed and lim.order:
         sign, direction = _direction(lim.direction, list(crank_deg))
-        rules.append(sequence_rule(list(crank_deg), sign, direction))
+        what = f"targets met in order within one turn, crank {direction}"
+        rules.append(order_rule(np.array(crank_deg, dtype=float), sign, what) if located else
+                     not_evaluated("sequence", 0.0, None, "deg", what,
+                                   "no crank angle of the targets: the loop closes at no crank angle"))
     return Evaluation(rules, [float(a) for a in crank_deg], errors, timing)
+
+
+def grashof_by_sorted_lengths(grashof: str, design: dict) -> Rule:
+    """The Grashof class as the textbook states it: s + l <= p + q (s, p, q, l the sorted lengths) and
+    the link that must turn fully (the crank r2; the frame r1 for a double-crank) is the shortest.
+    Values (mm): p + q - s - l and (shortest of the other three) - that link; both >= 0."""
+    lengths = {k: float(design[k]) for k in ("r1", "r2", "r3", "r4")}
+    s, p, q, l = sorted(lengths.values())
+    turning = "r2" if grashof == "crank-rocker" else "r1"
+    others = min(v for k, v in lengths.items() if k != turning)
+    return Rule("grashof", np.array([p + q - s - l, others - lengths[turning]]), 0.0, None, "mm", 10.0,
+                f"{grashof}: {CLASSES[grashof]}")
+
+
+def closure_rule(design: dict, thetas: np.ndarray, branch: int, where: str) -> Rule:
+    """Loop closure from the float joint positions: |r3 - r4| <= |O'A| <= r3 + r4 at every angle, and
+    every joint a finite number there.  Value: the smaller closure margin at the worst angle (mm)."""
+    r3, r4 = float(design["r3"]), float(design["r4"])
+    joints = joint_positions(design, thetas, branch)
+    d = np.abs(joints["A"] - joints["O'"])
+    margin = np.minimum(d - abs(r3 - r4), r3 + r4 - d)
+    finite = np.all([np.isfinite(z) for z in joints.values()], axis=0)
+    # a closing margin where the construction still gave no number counts as open (by a hair)
+    margin = np.where((margin >= 0.0) & ~finite, -np.finfo(float).tiny, margin)
+    return Rule("assembly", margin, 0.0, None, "mm", 1.0, where)
+
+
+def order_rule(crank_deg: np.ndarray, sign: float, what: str) -> Rule:
+    """Each step sign * (theta_{i+1} - theta_i) >= 0 and the whole span sign * (theta_N - theta_1) <= 360
+    deg; values (deg): the steps and 360 minus the span."""
+    steps = sign * np.diff(crank_deg)
+    return Rule("sequence", np.concatenate([steps, [360.0 - sign * (crank_deg[-1] - crank_deg[0])]]),
+                0.0, None, "deg", 10.0, what)
 
 
 def unwrapped(angles_deg: np.ndarray, direction: str) -> list[float]:
@@ -204,7 +244,7 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
 
 def result_design(design: dict, crank_deg: list[float], spec: FourbarPathSpec) -> dict:
     out = {n: float(design[n]) for n in VARIABLES}
-    out["crank_deg"] = [float(a) for a in crank_deg]
+    out["crank_deg"] = [float(a) if math.isfinite(a) else None for a in crank_deg]     # None: not found
     out["branch"] = spec.branch
     return out
 

@@ -51,33 +51,40 @@ def random_crank_rocker(seed: int) -> tuple[dict[str, float], float]:
     return dict(zip(VARIABLES, (float(v) for v in np.concatenate([r, rest])))), phase
 
 
-def sample_targets(design: dict, phase_deg: float, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 2) coupler points and their crank angles (deg), evenly over one counter-clockwise turn."""
-    crank = phase_deg + 360.0 * np.arange(n) / n
+def sample_targets(design: dict, phase_deg: float, n: int, span_deg: float = 360.0) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) coupler points and their crank angles (deg), evenly over one counter-clockwise turn, or
+    (span_deg < 360) evenly from the phase to phase + span_deg, both ends included."""
+    if span_deg >= 360.0:
+        crank = phase_deg + 360.0 * np.arange(n) / n
+    else:
+        crank = phase_deg + span_deg * np.arange(n) / (n - 1)
     p = joint_positions(design, np.radians(crank), branch=1)["P"]
     return np.column_stack([p.real, p.imag]), crank
 
 
-def truth_name(seed: int, n: int, timed: bool) -> str:
-    return f"truth{seed}_n{n}_{'timed' if timed else 'free'}"
+def truth_name(seed: int, n: int, timed: bool, span_deg: float = 360.0) -> str:
+    arc = "" if span_deg >= 360.0 else f"_arc{span_deg:g}"
+    return f"truth{seed}_n{n}{arc}_{'timed' if timed else 'free'}"
 
 
-def truth_data(seed: int, n: int, timed: bool, solver: dict | None = None) -> dict:
-    """The spec (as TOML-like data) of the seed's problem with n targets, timing prescribed or free."""
+def truth_data(seed: int, n: int, timed: bool, solver: dict | None = None, span_deg: float = 360.0) -> dict:
+    """The spec (as TOML-like data) of the seed's problem with n targets, timing prescribed or free,
+    over the whole turn or a crank span of span_deg."""
     design, phase = random_crank_rocker(seed)
-    points, crank = sample_targets(design, phase, n)
+    points, crank = sample_targets(design, phase, n, span_deg)
     targets: dict = {"points": points.tolist()}
     if timed:
         targets["crank_deg"] = crank.tolist()
-    return {"kind": "fourbar_path", "name": truth_name(seed, n, timed),
-            "source": f"synthetic: {n} coupler points of random crank-rocker {seed} "
+    over = "" if span_deg >= 360.0 else f" over {span_deg:g} deg of crank"
+    return {"kind": "fourbar_path", "name": truth_name(seed, n, timed, span_deg),
+            "source": f"synthetic: {n} coupler points{over} of random crank-rocker {seed} "
                       f"(synthesis.fourbar_path.synthetic)",
             "targets": targets, "bounds": dict(BOUNDS), "rules": dict(RULES), "solver": dict(solver or {})}
 
 
-def truth_spec(seed: int, n: int, timed: bool, solver: dict | None = None) -> LoadedSpec:
+def truth_spec(seed: int, n: int, timed: bool, solver: dict | None = None, span_deg: float = 360.0) -> LoadedSpec:
     """The problem as a loaded spec (what ``agrisynth solve`` would see)."""
-    data = truth_data(seed, n, timed, solver)
+    data = truth_data(seed, n, timed, solver, span_deg)
     model = validate(FourbarPathSpec, data, prefix="fourbar_path")
     sha = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
     return LoadedSpec(model, Path(f"<{data['name']}>"), sha)

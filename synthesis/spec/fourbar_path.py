@@ -32,6 +32,9 @@ from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel, 
 KIND = "fourbar_path"
 LENGTHS = ("r1", "r2", "r3", "r4")
 MAX_POINTS = 100
+#: largest |coordinate|, |bound|, |design value| (mm or deg): beyond it the squared errors and closure
+#: polynomials overflow a float (1e300^2), and no machine of the field is a kilometre long
+MAX_MAGNITUDE = 1e6
 
 
 def _number(v: Any, what: str) -> float:
@@ -39,6 +42,8 @@ def _number(v: Any, what: str) -> float:
         raise ValueError(f"{what}: expected a number, got {v!r}")
     if not math.isfinite(v):
         raise ValueError(f"{what}: expected a finite number, got {v}")
+    if abs(v) > MAX_MAGNITUDE:
+        raise ValueError(f"{what}: expected a magnitude of at most {MAX_MAGNITUDE:g} (mm or deg), got {v:g}")
     return float(v)
 
 
@@ -163,6 +168,10 @@ class SolverSection(MultistartSettings):
                                 "is at most this many mm^2 and that satisfies every rule; reported as "
                                 "starts needed")
     max_iter: int = max_iter_field(1000)
+    mu_strategy: Literal["monotone", "adaptive"] = Field(
+        "monotone", description="IPOPT's barrier update: monotone (default: more starts reach the optimum "
+                                "when the targets go round the whole coupler curve) or adaptive (with "
+                                "max_iter = 3000, recovers targets on a 120 deg arc that monotone misses)")
     samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion for sampled rules "
                                                          "(grashof = \"any\"); the re-check is 10x finer")
 

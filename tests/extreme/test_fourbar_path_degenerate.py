@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from fourbar_path_support import cli, write_spec
 from synthesis.fourbar_path.synthetic import truth_data
@@ -42,3 +43,21 @@ def test_repeated_targets_share_one_crank_angle(tmp_path):
     out = json.loads((tmp_path / data["name"] / "result.json").read_text())
     crank = out["design"]["crank_deg"]
     assert np.ptp(crank[:3]) < 1e-3 and out["objective"]["value"] < 1e-8
+
+
+def test_check_of_a_linkage_that_never_closes_reports_it_without_nan(tmp_path):
+    """r3 = 500 mm against links of about 30 mm: the loop closes at no crank angle, so there is no
+    coupler curve and no crank angle to give the targets.  check exits 1 with every such rule failed
+    and says why; result.json holds no NaN (crank angles not found are null)."""
+    data = truth_data(0, 6, timed=False)
+    data["bounds"]["r3"] = 500.0
+    proc = cli("check", str(write_spec(tmp_path, data)), "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr
+    out = json.loads((tmp_path / data["name"] / "result.json").read_text(),
+                     parse_constant=lambda c: pytest.fail(f"result.json holds {c}"))
+    rules = {r["name"]: r for r in out["rules"]}
+    assert rules["assembly"]["value"] < -400 and not rules["assembly"]["satisfied"]
+    assert not rules["grashof"]["satisfied"]                  # r3 is far longer than the other three together
+    assert rules["sequence"]["value"] is None and "closes at no crank angle" in rules["sequence"]["note"]
+    assert out["design"]["crank_deg"] == [None] * 6
