@@ -318,12 +318,10 @@ def bench_table(results: list[dict], repeats: int) -> Table:
                       ("worst violation", "right"), ("median s", "right"), ("time ratio", "right")):
         table.add_column(col, justify=just, no_wrap=True)
     for res in results:
-        ratios = {r["method"]: r["time_ratio"] for r in res["ratios"]}
         for row in res["rows"]:
-            ratio = ratios.get(row["method"])
-            table.add_row(row["problem"], row["method"], f"{row['objective']:.4g}", f"{row['objective_gap']:.3g}",
-                          f"{row['worst_violation']:.3g}", f"{row['median_s']:.3f}",
-                          "1 (reference)" if ratio is None else f"{ratio:.1f}x")
+            table.add_row(escape(row["problem"]), escape(row["method"]), f"{row['objective']:.4g}",
+                          f"{row['objective_gap']:.3g}", f"{row['worst_violation']:.3g}", f"{row['median_s']:.3f}",
+                          escape(row["time_ratio_text"]))
     return table
 
 

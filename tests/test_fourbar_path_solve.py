@@ -54,6 +54,14 @@ def _transmission_ratio(design, theta):
     return (z["A"] - z["B"]) / (z["O'"] - z["B"])
 
 
+def assert_solved(result) -> None:
+    """Every rule holds, and the status says how IPOPT stopped: optimal at its full tolerances,
+    feasible at its acceptable ones (an early-stopped start can stop there once the target is met)."""
+    expected = {"Solve_Succeeded": "optimal", "Solved_To_Acceptable_Level": "feasible"}
+    assert result.status == expected.get(result.solver["return_status"], "feasible"), result.solver
+    assert all(r["satisfied"] for r in result.rules)
+
+
 @pytest.mark.parametrize("timed", [True, False], ids=["timed", "free"])
 @pytest.mark.parametrize("n", POINT_COUNTS)
 def test_synthetic_truth_is_recovered_for_ten_mechanisms(n, timed):
@@ -63,7 +71,7 @@ def test_synthetic_truth_is_recovered_for_ten_mechanisms(n, timed):
     for seed in SEEDS:
         loaded = truth_spec(seed, n, timed, {"stop_at_objective": RECOVERED})
         result, reports, _ = run_solve(loaded, workers=1)
-        assert result.status == "optimal"
+        assert_solved(result)
         assert result.objective["value"] < RECOVERED, (seed, result.objective)
         assert result.solver["starts"] == 64 and result.solver["stopped_early"] == (len(reports) < 64)
         assert result.solver["starts_needed"] == len(reports) == result.solver["starts_run"]
@@ -94,7 +102,7 @@ def test_other_grashof_classes_and_their_rules(grashof):
     data["rules"]["grashof"] = grashof
     loaded = truth_spec_from(data)
     result, _, _ = run_solve(loaded, workers=1)
-    assert result.status == "optimal"
+    assert_solved(result)
     independently_rechecked_generic(loaded, result)
     d = result.design
     r1, r2, r3, r4 = (d[k] for k in ("r1", "r2", "r3", "r4"))
@@ -174,7 +182,7 @@ def test_same_seed_same_result_for_any_number_of_workers():
 def test_picking_arc_baseline_solves_within_the_rules():
     loaded = load_spec(PATH_LIBRARY / "picking_arc.toml")
     result, _, _ = run_solve(loaded, starts=4, workers=1)
-    assert result.status == "optimal"
+    assert_solved(result)
     independently_rechecked_generic(loaded, result)
     # a seedling clamp needs the arc to a fraction of a millimetre: every point within 0.05 mm
     assert result.extra["path_error"]["max_mm"] < 0.05

@@ -21,6 +21,7 @@ from synthesis.errors import SolverError
 from synthesis.fourbar_path.check import Evaluation, evaluate, path_facts, result_design, trajectory
 from synthesis.fourbar_path.nlp import PathNLP, StartOutcome
 from synthesis.fourbar_path.starts import grashof_anchor
+from synthesis.ipopt_log import reached_optimum
 from synthesis.multistart import latin_hypercube_starts, run_starts
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -110,7 +111,7 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
             chosen = rep
     out = chosen.outcome
     feasible = chosen.satisfied
-    status = ("optimal" if out.success else "feasible") if feasible else "infeasible"
+    status = ("optimal" if reached_optimum(out.return_status) else "feasible") if feasible else "infeasible"
     needed = next((r.outcome.start + 1 for r in ordered
                    if r.satisfied and reaches(out.objective, r.outcome.objective)), None) if feasible else None
     at_best = sum(1 for r in ordered if r.satisfied and reaches(out.objective, r.outcome.objective)) if feasible else 0

@@ -125,15 +125,14 @@ def bench_table(bench: list[dict]) -> str:
     """Objective reached and median wall time of each method per problem, with the time ratio."""
     rows = []
     for res in bench:
-        ratios = {r["method"]: r.get("time_ratio") for r in res.get("ratios", [])}
         for row in res["rows"]:
-            ratio = ratios.get(row["method"])
+            ratio = row.get("time_ratio_text") or "&ndash;"
             rows.append(f"<tr><td>{html.escape(row['problem'])}</td><td>{html.escape(row['method'])}</td>"
                         f"<td class='num'>{_num(row.get('objective'))}</td>"
                         f"<td class='num'>{_num(row.get('objective_gap'), 3)}</td>"
                         f"<td class='num'>{_num(row.get('worst_violation'), 3)}</td>"
                         f"<td class='num'>{_num(row.get('median_s'), 3)}</td>"
-                        f"<td class='num'>{'reference' if ratio is None else f'{ratio:.1f}&times;'}</td></tr>")
+                        f"<td class='num'>{html.escape(ratio)}</td></tr>")
     return ("<table class='bench'><tr><th>problem</th><th>method</th><th>objective</th><th>gap to best</th>"
             "<th>worst violation</th><th>median s</th><th>time ratio</th></tr>\n" + "\n".join(rows) + "</table>")
 
