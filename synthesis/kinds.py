@@ -55,7 +55,8 @@ _KINDS = {
         checker="synthesis.picker.combined:run_check",
         solver=None,
         figures={"trajectory.png": "synthesis.picker.plots:picker_figure",
-                 "animation.gif": "synthesis.picker.plots:picker_animation"}),
+                 "animation.gif": "synthesis.picker.plots:picker_animation"},
+        compare="synthesis.report.trajectory_overlay:trajectory_overlay"),
     "fourbar_path": KindEntry(
         checker="synthesis.fourbar_path.check:run_check",
         solver="synthesis.fourbar_path.solve",

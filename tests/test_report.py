@@ -172,3 +172,12 @@ def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
     page = (folder / "report.html").read_text()
     assert (folder / "result.json").exists() and not (folder / "trajectory.png").exists()
     assert "trajectory.png not drawn: RuntimeError: out of ink" in page and "src='trajectory.png'" not in page
+
+
+def test_picker_comparison_overlays_the_clamp_trajectories(tmp_path):
+    folder, result = checked_run(PLANTING.parent / "picker" / "cai2020_picker.toml", tmp_path / "runs")
+    page = write_comparison(load_candidates([folder, folder / "result.json"]), tmp_path / "cmp")
+    assert "src='trajectories.png'" in page.read_text()
+    assert (page.parent / "trajectories.png").stat().st_size > 10_000
+    # the figure is drawn from the trajectory the result carries: one cycle at 60 r/min
+    assert result.trajectory["t"][-1] == pytest.approx(1.0)
