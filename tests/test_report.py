@@ -171,7 +171,7 @@ def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
     folder, _ = checked_run(PLANTING / "taiwan_example1.toml", tmp_path)
     page = (folder / "report.html").read_text()
     assert (folder / "result.json").exists() and not (folder / "trajectory.png").exists()
-    assert "trajectory.png not drawn: RuntimeError: out of ink" in page and "src='trajectory.png'" not in page
+    assert "trajectory.png not written: RuntimeError: out of ink" in page and "src='trajectory.png'" not in page
 
 
 def test_picker_comparison_overlays_the_clamp_trajectories(tmp_path):

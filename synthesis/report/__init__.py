@@ -15,7 +15,6 @@ from synthesis.report.tables import Candidate, candidates
 from synthesis.result import Result, atomic_write_text
 
 
-
 def _caption(name: str) -> str:
     return Path(name).stem.replace("_", " ")
 
@@ -54,7 +53,7 @@ def run_artifacts(result: Result, files: dict | None = None) -> dict:
                 written.append(name)
             except Exception as exc:    # noqa: BLE001 - reported on the page, the run's result is kept
                 path.unlink(missing_ok=True)
-                failed.append(f"{name} not drawn: {type(exc).__name__}: {exc}")
+                failed.append(f"{name} not written: {type(exc).__name__}: {exc}")
         return write
 
     writers = {**(files or {}), **kinds.figure_writers(result)}
