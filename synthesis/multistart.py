@@ -39,6 +39,17 @@ def _solve_in_worker(index: int, x0: np.ndarray):
     return _worker_solver.solve(index, x0)
 
 
+def best_in_start_order(reports: list, better: Callable[[Any, Any], bool]) -> Any:
+    """The best of the starts' reports, judged in start order: ties keep the earlier start whatever
+    order the starts finished in, so the choice does not depend on the worker count (the running
+    best shown during a run can differ when several workers finish out of order)."""
+    chosen = reports[0]
+    for rep in reports[1:]:
+        if better(rep, chosen):
+            chosen = rep
+    return chosen
+
+
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.ipopt_log import reached_optimum
-from synthesis.multistart import latin_hypercube_starts, run_starts
+from synthesis.multistart import best_in_start_order, latin_hypercube_starts, run_starts
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
 FINE = 10
@@ -79,17 +79,7 @@ def multistart(factory: Callable[[], Any], x_starts: np.ndarray, workers: int,
 
     run_starts(factory, x_starts, workers, done, scheduler=scheduler)
     ordered = [reports[i] for i in range(len(x_starts))]
-    return ordered, best_in_start_order(ordered, maximise)
-
-
-def best_in_start_order(reports: list[StartReport], maximise: bool) -> StartReport:
-    """The best start, judged in start order: ties keep the earlier start, whatever order starts finished in
-    (the running best shown during the run can differ when several workers finish out of order)."""
-    chosen = reports[0]
-    for rep in reports[1:]:
-        if better(rep, chosen, maximise):
-            chosen = rep
-    return chosen
+    return ordered, best_in_start_order(ordered, lambda a, b: better(a, b, maximise))
 
 
 @dataclass

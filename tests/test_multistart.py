@@ -42,3 +42,10 @@ def test_latin_hypercube_keeps_the_given_design_first_and_is_seeded():
     b = latin_hypercube_starts(bounds, np.array([0.5, 15.0]), 5, seed=3)
     assert np.array_equal(a, b) and a[0].tolist() == [0.5, 15.0]
     assert ((a >= bounds[:, 0]) & (a <= bounds[:, 1])).all()
+
+
+def test_best_in_start_order_keeps_the_earlier_of_equals():
+    from synthesis.multistart import best_in_start_order
+
+    reports = [Outcome(0, False), Outcome(1, True), Outcome(2, True)]
+    assert best_in_start_order(reports, lambda a, b: a.good and not b.good).start == 1

@@ -22,7 +22,7 @@ from synthesis.fourbar_path.check import Evaluation, evaluate, path_facts, resul
 from synthesis.fourbar_path.nlp import PathNLP, StartOutcome
 from synthesis.fourbar_path.starts import grashof_anchor
 from synthesis.ipopt_log import reached_optimum
-from synthesis.multistart import latin_hypercube_starts, run_starts
+from synthesis.multistart import best_in_start_order, latin_hypercube_starts, run_starts
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.spec.fourbar_path import FourbarPathSpec
@@ -104,11 +104,8 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     outcomes = run_starts(factory, x_starts, workers, done, stop_when=None if target is None else good_enough,
                           scheduler=scheduler)
     wall = time.perf_counter() - t0
-    ordered = [reports[o.start] for o in outcomes]
-    chosen = ordered[0]
-    for rep in ordered[1:]:             # the best among the starts that count (early stop: 0..k)
-        if better(rep, chosen):
-            chosen = rep
+    ordered = [reports[o.start] for o in outcomes]     # the starts that count (early stop: 0..k)
+    chosen = best_in_start_order(ordered, better)
     out = chosen.outcome
     feasible = chosen.satisfied
     status = ("optimal" if reached_optimum(out.return_status) else "feasible") if feasible else "infeasible"

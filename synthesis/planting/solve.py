@@ -11,7 +11,7 @@ import numpy as np
 
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.ipopt_log import reached_optimum
-from synthesis.multistart import latin_hypercube_starts, run_starts
+from synthesis.multistart import best_in_start_order, latin_hypercube_starts, run_starts
 from synthesis.planting.check import evaluate, scene_facts, trajectory
 from synthesis.planting.nlp import PlantingNLP, StartOutcome
 from synthesis.planting.scene import PlantingScene
@@ -106,10 +106,7 @@ def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = 
     run_starts(factory, x_starts, workers, done, scheduler=scheduler)
     wall = time.perf_counter() - t0
     ordered = [reports[i] for i in range(starts)]
-    chosen = ordered[0]      # judged in start order, so the choice does not depend on the worker count
-    for rep in ordered[1:]:
-        if _better(spec, rep, chosen):
-            chosen = rep
+    chosen = best_in_start_order(ordered, functools.partial(_better, spec))
     if chosen.scene is None:    # no start assembles: re-evaluate to raise the AssemblyError (exit 2)
         fine_check(spec, chosen.outcome.design)
     pts, scene = chosen.points, chosen.scene
