@@ -1,7 +1,7 @@
 """``agrisynth bench``: objective reached and wall time of several methods on the same problems.
 
-Generic over problem kinds.  A kind registers a function that turns problems into
-:class:`BenchCase` objects (``_CASES``); this module runs every method of every case ``repeats``
+Generic over problem kinds.  A kind declares a function that turns problems into
+:class:`BenchCase` objects (its ``Kind.bench``, see :mod:`synthesis.kinds`); this module runs every method of every case ``repeats``
 times, takes the median wall time, and writes ``OUT/bench/bench.json`` and ``error_vs_time.png``
 (accuracy -- objective gap to the best known, worst fine-grid rule violation -- against wall time).
 
@@ -15,7 +15,6 @@ is null and ``time_ratio_note`` says "n/a (target not reached)" and by which met
 
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import os
@@ -25,10 +24,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
-
-#: kind -> "module:function(specs: list[LoadedSpec] | None, seed: int) -> list[BenchCase]";
-#: ``specs`` None asks for the kind's default problem set
-_CASES: dict[str, str] = {"fourbar_path": "synthesis.fourbar_path.bench:bench_cases"}
 
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
 NOT_REACHED = "n/a (target not reached)"
@@ -58,12 +53,17 @@ class BenchCase:
 
 
 def kinds_with_bench() -> list[str]:
-    return list(_CASES)
+    from synthesis import kinds
+
+    return [k.name for k in kinds.all_kinds() if k.bench is not None]
 
 
 def cases_for(kind: str, specs, seed: int) -> list[BenchCase]:
-    module, name = _CASES[kind].split(":")
-    return getattr(importlib.import_module(module), name)(specs, seed)
+    """The kind's bench cases: ``Kind.bench(specs: list[LoadedSpec] | None, seed)``; None = its default set."""
+    from synthesis import kinds
+    from synthesis.core.kind import resolve
+
+    return resolve(kinds.get(kind).bench)(specs, seed)
 
 
 def _median(values: list[float]) -> float:

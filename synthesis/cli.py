@@ -59,9 +59,18 @@ def cli() -> None:
 @click.option("--dir", "library", type=click.Path(file_okay=False, path_type=Path), default=LIBRARY,
               show_default=True, help="problem library folder")
 def problems(library: Path) -> None:
-    """List the problem library: kind, name, source of every spec file."""
+    """List the problem kinds (what each designs, whether it solves) and the problem library:
+    kind, name, source of every spec file."""
+    from synthesis import kinds
     from synthesis.spec.common import read_toml
 
+    kinds_table = Table(title="kinds", title_justify="left")
+    for col in ("kind", "mechanism", "commands", "try"):
+        kinds_table.add_column(col)
+    for kind in kinds.all_kinds():
+        kinds_table.add_row(kind.name, escape(kind.summary), "check, solve" if kind.solves else "check",
+                            f"problems/{kind.example}" if kind.example else "")
+    console.print(kinds_table)
     table = Table(title=f"problem library: {library}", title_justify="left")
     for col in ("kind", "name", "file", "source"):
         table.add_column(col)
@@ -139,46 +148,35 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
 
     \b
-    Every rule is a constraint; the objective depends on the kind:
-      planting_fourbar  the spec's [objective] name: nearest (smallest change from the
-                        given design, default), robust (largest smallest normalised rule
-                        margin), smooth (smallest peak claw acceleration over a turn)
-      fourbar_path      sum of squared distances of the coupler point to the targets, mm^2;
-                        [solver] stop_at_objective ends the multistart at the first start
-                        (in start order) that reaches it
-      crank_rocker      min_total_length (default) or max_transmission_angle
-      picker_double_crank  sum_of_distances (seed 001 eq 4, default) or sum_of_squares
-      clamp_cam         base_radius (default), pressure_angle or nearest
-      guide_tube        nearest (default), fastest or uniform
-    Starts are a fixed-seed Latin hypercube (start 0 = the given design). The best start is
-    re-checked on a finer grid, independently of the solver. Writes OUT/<name>/result.json,
-    report.html, ipopt.log and plots. Exit 0 all rules hold; 3 with status infeasible (the
-    message names the conflicting rules) or failed (IPOPT converged from no start); 2 bad input.
+    Every rule is a constraint; the objective is the spec's [objective] name, by kind
+    (the first is the default):
+    {objectives}
+    Starts are a fixed-seed Latin hypercube (start 0 = the given design). Every start is
+    re-checked on a 10x finer grid, independently of the solver; the best is the feasible one
+    with the best objective (ties: the lower start). Status: optimal (every rule holds and
+    IPOPT met its tolerances), feasible (every rule holds; IPOPT stopped otherwise: a note
+    says how), infeasible (an elastic re-solve converged and names the rules that conflict),
+    failed (anything else: the message says what to try). Writes OUT/<name>/result.json,
+    report.html, ipopt.log and plots. Exit 0 all rules hold; 3 infeasible or failed; 2 bad
+    input (also: nothing free to optimise, or a check-only kind).
     """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from synthesis import kinds
-    from synthesis.multistart import default_workers
+    from synthesis.core import solve as core
+    from synthesis.core.executor import default_workers
     from synthesis.report import run_artifacts
     from synthesis.report.tables import objective_text
     from synthesis.result import atomic_write_text, write_run
     from synthesis.spec import load_spec
 
-    loaded = load_spec(spec)
-    solver_module = kinds.solver(loaded.kind)
-    cluster = {}
     if scheduler is not None and workers is not None:
         raise click.BadParameter("give either --workers (local processes) or --scheduler (a dask cluster), "
                                  "not both", param_hint="--workers/--scheduler")
-    if scheduler is not None:
-        import inspect
-
-        if "scheduler" not in inspect.signature(solver_module.run_solve).parameters:
-            raise click.BadParameter(f"kind {loaded.kind} does not run its starts on a cluster; run without --scheduler",
-                                     param_hint="--scheduler")
-        cluster = {"scheduler": scheduler}
+    loaded = load_spec(spec)
+    kind = kinds.solving_kind(loaded.kind)
     workers = workers or default_workers()
-    n = starts or getattr(getattr(loaded.model, "solver", None), "starts", 1)
+    n = starts or loaded.model.solver.starts
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                   TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
                   transient=not sys.stdout.isatty()) as progress:
@@ -189,28 +187,45 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
             progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
                                                   f"objective {best.outcome.objective:.6g} ({tag})")
 
-        result, reports, log = solver_module.run_solve(loaded, starts, seed, workers, on_start, **cluster)
+        result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler)
     if verbose:
         console.print(log, markup=False)
     artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)})
     folder, replaced = write_run(out, result, artifacts)
-    baseline = solver_module.baseline_rules(loaded)
+    baseline = core.baseline_rules(kind, loaded)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
     s = result.solver
     console.print(f"objective {objective_text(result.objective)}; IPOPT "
                   f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
-                  f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}")
+                  f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}; status {result.status}")
     if replaced:
         console.print(f"replaced the previous run in {folder}/")
     console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
+    if s["status_note"]:
+        console.print(f"[yellow]note:[/] {escape(s['status_note'])}")
     if result.status in ("infeasible", "failed"):
-        raise solver_module.diagnose_infeasible(loaded, result, reports)
+        raise core.exit_error(kind, result, reports)
     bad = result.violated()
     if bad:
         console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied on the fine grid[/]")
+
+
+def _objectives_help() -> str:
+    """The objectives of every kind that solves, from the registry (one line each, wrapped by hand)."""
+    from synthesis import kinds
+
+    lines = []
+    for kind in kinds.all_kinds():
+        if kind.solves:
+            lines.append(f"  {kind.name}:")
+            lines += [f"    {name}  {meaning}" for name, meaning in kind.objectives.items()]
+    return "\n    ".join(lines)
+
+
+solve.help = solve.help.replace("{objectives}", _objectives_help())
 
 
 @cli.command()

@@ -15,7 +15,11 @@ from synthesis.errors import ResultError
 
 STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated")
 #: version of the result.json layout; readers refuse a newer one rather than misread it
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
+#: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
+#: top level, mixed with the kind's facts); version 1 files are still read
+RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
 
 def versions() -> dict[str, str]:
@@ -38,7 +42,11 @@ class Result:
     trajectory: dict[str, Any] | None = None
     solver: dict[str, Any] | None = None
     versions: dict[str, str] = field(default_factory=versions)
-    extra: dict[str, Any] = field(default_factory=dict)   # kind-specific (precision points, ...)
+    starts: list[dict[str, Any]] | None = None           # solve: one row per start (core.solve.starts_table)
+    elastic: dict[str, Any] | None = None                # solve: the elastic diagnosis when no start satisfied every rule
+    baseline_design: dict[str, Any] | None = None        # solve: the spec's given design
+    fine_grid_worst_violation: float | None = None       # solve: of the returned design
+    extra: dict[str, Any] = field(default_factory=dict)   # the kind's facts (precision points, ...): "facts"
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -59,8 +67,10 @@ class Result:
             del data["solver"]
         if data["trajectory"] is None:
             del data["trajectory"]
-        extra = data.pop("extra")
-        data.update(extra)
+        for key in RUN_KEYS:
+            if data[key] is None and self.solver is None:      # a check has no run tail
+                del data[key]
+        data["facts"] = data.pop("extra")
         data["schema_version"] = SCHEMA_VERSION
         return data
 
@@ -68,8 +78,12 @@ class Result:
     def from_json(cls, data: dict[str, Any]) -> "Result":
         known = {"kind", "name", "spec_sha256", "status", "design", "rules", "objective", "trajectory",
                  "solver", "versions"}
-        args = {k: data[k] for k in known if k in data}
-        args["extra"] = {k: v for k, v in data.items() if k not in known and k != "schema_version"}
+        args = {k: data[k] for k in (*known, *RUN_KEYS) if k in data}
+        if data.get("schema_version", 1) >= 2:
+            args["extra"] = dict(data.get("facts") or {})
+        else:       # version 1: the kind's facts and the run's tail side by side at the top level
+            args["extra"] = {k: v for k, v in data.items()
+                             if k not in known and k not in RUN_KEYS and k != "schema_version"}
         return cls(**args)
 
 
@@ -121,11 +135,13 @@ def _shape_problem(data: dict) -> str | None:
             return f"{key} must be a string, got {type(data[key]).__name__}"
     if data["status"] not in STATUSES:
         return f"status {data['status']!r} is not one of {', '.join(STATUSES)}"
-    for key in ("design", "versions", "objective", "solver", "trajectory"):
+    for key in ("design", "versions", "objective", "solver", "trajectory", "facts", "elastic", "baseline_design"):
         if key in data and data[key] is not None and not isinstance(data[key], dict):
             return f"{key} must be an object, got {type(data[key]).__name__}"
     if "versions" in data and data["versions"] is None:
         return "versions must be an object, got null"
+    if "starts" in data and not isinstance(data["starts"], (list, type(None))):
+        return f"starts must be a list, got {type(data['starts']).__name__}"
     if not isinstance(data["rules"], list):
         return f"rules must be a list, got {type(data['rules']).__name__}"
     for i, rule in enumerate(data["rules"]):

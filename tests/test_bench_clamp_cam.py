@@ -9,7 +9,7 @@ import pytest
 
 from conftest import LIBRARY
 from synthesis.clamp_cam.nlp import CamNLP
-from synthesis.clamp_cam.solve import run_solve
+from solving import run_solve
 from synthesis.spec import load_spec
 
 pytestmark = pytest.mark.benchmark

@@ -14,7 +14,7 @@ from scipy.optimize import brentq, minimize_scalar
 from conftest import LIBRARY
 from synthesis.clamp_cam.nlp import CamNLP
 from synthesis.clamp_cam.scene import CamScene, evaluate
-from synthesis.clamp_cam.solve import diagnose_infeasible, run_solve
+from solving import diagnose_infeasible, run_solve
 from synthesis.spec import LoadedSpec, load_spec
 
 CAMS = LIBRARY / "clamp_cam"
@@ -238,7 +238,7 @@ def test_modified_sine_gives_the_smallest_opening_cam():
 def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
     """solve, its starts, the elastic diagnosis and the baseline rule table share one cvxpy fit."""
     from synthesis.clamp_cam import bspline_law, scene
-    from synthesis.clamp_cam.solve import baseline_rules
+    from solving import baseline_rules
     from synthesis.spec.common import FreeVariable
 
     fits = []
@@ -248,7 +248,7 @@ def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
     loaded = load_spec(CAMS / "opening_cam_optimised_law.toml")
     free = _with(loaded, cam={"base_radius": FreeVariable(init=25.0, bounds=(20.0, 30.0))})   # too small
     result, reports, _ = run_solve(free, starts=2, workers=1)
-    assert result.status == "infeasible" and result.extra["elastic"]["relaxed"]
+    assert result.status == "infeasible" and result.elastic["relaxed"]
     diagnose_infeasible(free, result, reports)
     assert baseline_rules(free)
     assert len(fits) == 1

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from conftest import PLANTING
-from synthesis.planting.solve import run_solve
+from solving import run_solve
 from synthesis.spec import load_spec
 
 distributed = pytest.importorskip("distributed")
@@ -32,21 +32,17 @@ def test_cluster_run_gives_the_local_result(cluster):
 
 
 def test_fourbar_path_on_the_cluster_gives_the_local_result(cluster):
-    from synthesis.fourbar_path.solve import run_solve as run_path_solve
-
     loaded = load_spec(PLANTING.parent / "fourbar_path" / "picking_arc.toml")
-    local, _, _ = run_path_solve(loaded, starts=3, seed=1, workers=1)
-    remote, _, _ = run_path_solve(loaded, starts=3, seed=1, workers=1, scheduler=cluster.scheduler_address)
+    local, _, _ = run_solve(loaded, starts=3, seed=1, workers=1)
+    remote, _, _ = run_solve(loaded, starts=3, seed=1, workers=1, scheduler=cluster.scheduler_address)
     assert remote.design == local.design and remote.objective == local.objective
 
 
 @pytest.mark.parametrize("spec", ["guide_tube/cai2020_delta2.toml", "clamp_cam/opening_cam_redesign.toml",
                                   "picker/cai2020_crank_rocker_synthesis.toml"])
 def test_rule_kinds_on_the_cluster_give_the_local_result(cluster, spec):
-    from synthesis import kinds
-
     loaded = load_spec(PLANTING.parent / spec)
-    run_solve_of_kind = kinds.solver(loaded.kind).run_solve
+    run_solve_of_kind = run_solve
     local, _, _ = run_solve_of_kind(loaded, starts=2, seed=0, workers=1)
     remote, _, _ = run_solve_of_kind(loaded, starts=2, seed=0, workers=1, scheduler=cluster.scheduler_address)
     assert remote.design == local.design and remote.status == local.status
@@ -72,7 +68,7 @@ def test_a_failing_worker_is_reported_not_a_traceback(cluster):
     import numpy as np
 
     from synthesis.errors import AgrisynthError
-    from synthesis.multistart import run_starts
+    from synthesis.core.executor import run_starts
 
     with pytest.raises(AgrisynthError, match="a dask worker failed: .*No module named 'casadi'"):
         run_starts(_BrokenFactory(), np.zeros((2, 1)), 1, scheduler=cluster.scheduler_address)

@@ -25,7 +25,7 @@ from synthesis.guide_tube.plots import compare_figures
 from synthesis.guide_tube.printed import printed_landing_time, printed_phase
 from synthesis.guide_tube.scene import GuideTubeScene, calibration_failure
 from synthesis.guide_tube.slope import landing_time_slope
-from synthesis.guide_tube.solve import run_solve
+from solving import run_solve
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -359,7 +359,7 @@ def test_a_spacing_error_limit_over_the_row_spacings_is_met_on_the_fine_grid(tmp
 
 
 def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path):
-    from synthesis.guide_tube.solve import diagnose_infeasible
+    from solving import diagnose_infeasible
 
     loaded = load_spec(_both_free_with_spacing_limit(tmp_path, 5.0))
     result, reports, _ = run_solve(loaded, workers=1)

@@ -1,4 +1,4 @@
-"""The shared multistart driver: start order, early stop, worker counts."""
+"""The multistart executor and the best-start rule: start order, early stop, worker counts, ties."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from synthesis.multistart import latin_hypercube_starts, run_starts
+from synthesis.core.executor import latin_hypercube_starts, run_starts
 
 
 @dataclass
@@ -45,7 +45,19 @@ def test_latin_hypercube_keeps_the_given_design_first_and_is_seeded():
 
 
 def test_best_in_start_order_keeps_the_earlier_of_equals():
-    from synthesis.multistart import best_in_start_order
+    """One tie rule for every kind: feasible first, objectives within 1e-9 relative tie and the earlier
+    start wins, whatever order the starts finished in; infeasible starts by their worst violation."""
+    from types import SimpleNamespace
 
-    reports = [Outcome(0, False), Outcome(1, True), Outcome(2, True)]
-    assert best_in_start_order(reports, lambda a, b: a.good and not b.good).start == 1
+    from synthesis.core.verdict import StartReport, best_in_start_order
+
+    def rep(start, satisfied, objective, violation=0.0):
+        return StartReport(SimpleNamespace(start=start, objective=objective), satisfied, violation)
+
+    reports = [rep(0, False, 1.0, 0.5), rep(1, True, 10.0), rep(2, True, 10.0 * (1 - 5e-10)), rep(3, True, 10.5)]
+    assert best_in_start_order(reports, maximise=False).outcome.start == 1       # 5e-10 relative: a tie
+    reports[2] = rep(2, True, 10.0 * (1 - 2e-9))
+    assert best_in_start_order(reports, maximise=False).outcome.start == 2       # 2e-9 relative: better
+    assert best_in_start_order(reports, maximise=True).outcome.start == 3
+    infeasible = [rep(0, False, 1.0, 0.5), rep(1, False, 0.0, 0.2), rep(2, False, 0.0, 0.2)]
+    assert best_in_start_order(infeasible, maximise=False).outcome.start == 1

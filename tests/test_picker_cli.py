@@ -128,9 +128,8 @@ def test_runs_import_no_other_mechanism(tmp_path):
 def test_compare_figures_overlay_baseline_and_solution(tmp_path):
     from synthesis import kinds
     from synthesis.crank_rocker.check import run_check as check_crank_rocker
-    from synthesis.crank_rocker.solve import run_solve as solve_crank_rocker
     from synthesis.picker.check import run_check as check_double_crank
-    from synthesis.picker.solve import run_solve as solve_double_crank
+    from synthesis.core.solve import solve_spec
     from synthesis.result import Result
     from synthesis.spec import load_spec
 
@@ -138,10 +137,10 @@ def test_compare_figures_overlay_baseline_and_solution(tmp_path):
         return Result.from_json(json.loads(json.dumps(result.to_json())))
 
     base = roundtrip(check_crank_rocker(load_spec(PICKER / "cai2020_crank_rocker.toml")))
-    best = roundtrip(solve_crank_rocker(load_spec(PICKER / "crank_rocker_max_transmission.toml"), starts=1)[0])
+    best = roundtrip(solve_spec(load_spec(PICKER / "crank_rocker_max_transmission.toml"), starts=1)[0])
     written = kinds.compare_figures("crank_rocker")([base, best], tmp_path)
     base = roundtrip(check_double_crank(load_spec(PICKER / "cai2020_double_crank.toml")))
-    best = roundtrip(solve_double_crank(load_spec(PICKER / "picker_double_crank_retrofit.toml"), starts=1)[0])
+    best = roundtrip(solve_spec(load_spec(PICKER / "picker_double_crank_retrofit.toml"), starts=1)[0])
     written += kinds.compare_figures("picker_double_crank")([base, best], tmp_path)
     assert written == ["compare_crank_rocker.png", "compare_picker_double_crank.png"]
     for name in written:

@@ -1,0 +1,20 @@
+"""Kind clamp_cam: the clamp cams of seed 001 §2.2 (motion law, roller-follower profile, pressure angle)."""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="clamp_cam",
+    summary="clamp cams: motion law, roller-follower profile, pressure angle, undercut (seed 001 §2.2)",
+    spec_model="synthesis.spec.clamp_cam:ClampCamSpec",
+    check="synthesis.clamp_cam.check:run_check",
+    figures={"motion.png": "synthesis.clamp_cam.plots:motion_figure",
+             "profile.png": "synthesis.clamp_cam.plots:profile_figure",
+             "profile.csv": "synthesis.clamp_cam.export:write_csv",
+             "profile.dxf": "synthesis.clamp_cam.export:write_dxf"},
+    compare="synthesis.clamp_cam.plots:compare_figure",
+    solving="synthesis.clamp_cam.solve:SOLVING",
+    objectives={"base_radius": "smallest base-circle radius, mm",
+                "pressure_angle": "smallest peak pressure angle (measured on the fine grid), deg",
+                "nearest": "smallest change from the given cam"},
+    example="clamp_cam/opening_cam_redesign_modified_sine.toml",
+)

@@ -6,8 +6,8 @@ segment angles; plus tau, the peak |pressure angle|, for that objective.  The ri
 are sampled at fixed fractions u of their length, so the normalised law values are numbers and
 the segment angles enter smoothly (ds/dphi = h v(u)/beta, d2s/dphi2 = h a(u)/beta^2).  Pressure
 angle and curvature are semi-infinite rules sampled here; solve re-checks them on a 10x finer grid
-without CasADi.  The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the shared
-:class:`synthesis.rule_nlp.RuleNLP`; this module declares the kind's variables, rows and objective.
+without CasADi.  The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the core's
+:class:`synthesis.core.problem.Problem`, transcribed by the core; this module declares the kind's variables, rows and objective.
 """
 
 from __future__ import annotations
@@ -23,15 +23,15 @@ from synthesis.clamp_cam.motion import Timing
 from synthesis.clamp_cam.scene import follower_of, omega_of, stroke_of, timing_rules
 from synthesis.kinematics import cam_follower as cf
 from synthesis.kinematics.motion_laws import law as closed_form_law
-from synthesis.rule_nlp import ObjectiveParts, Row, RuleNLP, StartOutcome
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backoff
 from synthesis.spec.clamp_cam import ClampCamSpec
 from synthesis.spec.common import bounds_of, value_of
 
 DEG = math.pi / 180.0
 #: sampled rules: tightened by the backoff so they hold between the samples too (timing rows are exact)
 SAMPLED = ("pressure_angle_rise", "pressure_angle_return", "no_undercut", "no_undercut_outer", "max_acceleration")
-#: IPOPT settings of this kind (its published numbers were computed with them)
-IPOPT = {"ipopt.tol": 1e-9, "ipopt.acceptable_tol": 1e-7}
 #: unit of each objective's value in the result; nearest: the squared changes, each relative to its bounds' width
 OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
 
@@ -55,11 +55,11 @@ class CamNLP:
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
         rules = self._rules(v, alpha, kappa, acc)
         backoff = spec.solver.backoff
-        self.nlp = RuleNLP("clamp_cam", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(v), rules,
-                           self._objective(x, v, alpha), elastic=elastic, max_iter=spec.solver.max_iter,
-                           backoff=lambda rule: backoff if rule.name in SAMPLED else 0.0, ipopt=IPOPT)
-        self.rules = self.nlp.rules
-        self.decision, self.g, self.g_function = self.nlp.decision, self.nlp.g, self.nlp.g_function
+        self.problem = Problem("clamp_cam", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(v), rules,
+                               self._objective(x, v, alpha), max_iter=spec.solver.max_iter, ipopt="moderate",
+                               backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0))
+        self.compiled = CompiledNLP(self.problem, elastic)
+        self.rules = self.problem.rules
 
     # ------------------------------------------------------------------ model pieces
 
@@ -150,6 +150,6 @@ class CamNLP:
 
     def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
         x_design = np.asarray(x_design, dtype=float)
-        out = self.nlp.solve(start, x_design, self.tau_start(x_design))
+        out = self.compiled.solve(start, x_design, self.tau_start(x_design))
         design = dict(zip(self.names, (float(v) for v in out.x[: len(self.names)])))
         return StartOutcome.of(out, design, self.objective_value(design, out.objective))

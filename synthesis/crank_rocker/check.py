@@ -29,12 +29,24 @@ def mechanism(spec: CrankRockerSpec, values: dict[str, float] | None = None) -> 
     return CrankRocker(v["l7"], v["l8"], v["l9"], v["l10"], spec.branch)
 
 
+def rules_of(spec: CrankRockerSpec, lengths, stroke, u, w, mu) -> list[Rule]:
+    """Every rule of the spec on a trace of floats or CasADi symbols: the lengths (l7, l8, l9, l10), the
+    quick stroke's crank angle, the rocker tip's positions u, w at the two extremes relative to its
+    pivot, and the transmission angles (deg) over a turn.  Used by check, the NLP and the re-check."""
+    req, tol = spec.requirements, spec.tolerances
+    l7, l8, l9, l10 = lengths
+    return [grashof_rule(l10, l7, l8, l9),
+            time_ratio_rule(stroke, req.time_ratio, tol.time_ratio),
+            rocker_swing_rule(u, w, l9, req.rocker_swing, tol.rocker_swing),
+            acute_transmission_rule(mu, req.min_transmission_angle, "over a turn")]
+
+
 def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLES
              ) -> tuple[list[Rule], QuickReturn | None]:
     """Every rule of the spec for the mechanism ``cr``; K, swing and transmission need a turning crank."""
     req, tol = spec.requirements, spec.tolerances
-    rules = [grashof_rule(cr.l10, cr.l7, cr.l8, cr.l9)]
     if not cr.crank_turns():
+        rules = [grashof_rule(cr.l10, cr.l7, cr.l8, cr.l9)]
         why = ("the crank cannot make a full turn (Grashof crank-rocker slacks "
                + ", ".join(f"{k} {v:.3g} mm" for k, v in cr.grashof_slacks().items()) + ")")
         rules += [time_ratio_rule(None, req.time_ratio, tol.time_ratio, why),
@@ -46,11 +58,8 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
     tips = rocker_curve(cr, np.array([ex.phi_folded, ex.phi_extended]))["tip"]
     a = np.array([cr.l10, 0.0])
     u, w = tips[:, 0] - a, tips[:, 1] - a
-    rules.append(time_ratio_rule(min(q.stroke_fold_to_ext, q.stroke_ext_to_fold), req.time_ratio, tol.time_ratio))
-    rules.append(rocker_swing_rule(u, w, cr.l9, req.rocker_swing, tol.rocker_swing))
-    rules.append(acute_transmission_rule(transmission_angles_deg(cr, samples), req.min_transmission_angle,
-                                         "over a turn"))
-    return rules, q
+    return rules_of(spec, (cr.l7, cr.l8, cr.l9, cr.l10), min(q.stroke_fold_to_ext, q.stroke_ext_to_fold), u, w,
+                    transmission_angles_deg(cr, samples)), q
 
 
 def joints(cr: CrankRocker, phi: float) -> dict[str, list[float]]:

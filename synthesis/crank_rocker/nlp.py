@@ -12,34 +12,24 @@ turn on a grid that contains the crank along and against the frame, where its ex
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
-from constraints import Rule
-from constraints.grashof import GrashofCoordinates, grashof_rule
-from constraints.quick_return import rocker_swing_rule, time_ratio_rule
-from constraints.transmission import acute_transmission_rule
-from synthesis import rule_nlp
-from synthesis.errors import SpecError
+from constraints.grashof import GrashofCoordinates
+from synthesis.crank_rocker.check import rules_of
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.core.starts import pull_inside
 from synthesis.kinematics import fourbar
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
-from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
-from synthesis.spec.common import bounds_of, is_free, value_of
+from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.crank_rocker import CrankRockerSpec
 
 TWO_PI = 2.0 * math.pi
 NAMES = ("l7", "l8", "l9", "l10")
 #: starts are moved this far (mm) inside the Grashof crank-rocker region, so the crank turns at the start
 START_MARGIN = 1.0
-
-
-@dataclass
-class StartOutcome(rule_nlp.StartOutcome):
-    """objective in report units: mm (total length) or deg (min transmission angle)."""
-
-    extremes: tuple[float, float] = (math.nan, math.nan)   # phi_a, phi_b (rad)
 
 
 #: design (l7, l8, l9, l10, phi_a, phi_b) <-> coordinates (l7, three Grashof slacks, phi_a, phi_b)
@@ -58,9 +48,7 @@ class CrankRockerNLP:
     def __init__(self, spec: CrankRockerSpec, elastic: bool = False):
         self.spec = spec
         variables = spec.variables()
-        if not any(is_free(v) for v in variables.values()):
-            raise SpecError("crank_rocker.links: solve needs at least one free length (l7 = {init, bounds}); "
-                            "every length is fixed, so use `agrisynth check`")
+        self.names = list(NAMES)
         self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
         self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
         req = spec.requirements
@@ -78,17 +66,14 @@ class CrankRockerNLP:
         n = spec.solver.samples_per_turn
         mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
         a = ca.vertcat(p[3], 0.0)
-        rules: list[Rule] = [
-            grashof_rule(p[3], p[0], p[1], p[2]),
-            # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
-            time_ratio_rule(phi_b - phi_a, req.time_ratio, spec.tolerances.time_ratio),
-            rocker_swing_rule(tip_a - a, tip_b - a, p[2], req.rocker_swing, spec.tolerances.rocker_swing),
-            acute_transmission_rule(mu, req.min_transmission_angle, "over a turn"),
-        ]
+        # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
+        rules = rules_of(spec, [p[i] for i in range(4)], phi_b - phi_a, tip_a - a, tip_b - a, mu)
         objective = self._objective(p, mu)
         # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
-        self.nlp = RuleNLP("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
-                           elastic=elastic, max_iter=spec.solver.max_iter, hard_in_elastic=("grashof_crank_rocker",))
+        self.problem = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
+                               hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
+                               max_iter=spec.solver.max_iter)
+        self.compiled = CompiledNLP(self.problem, elastic)
 
     def _objective(self, p, mu) -> ObjectiveParts:
         if self.spec.objective.name == "min_total_length":
@@ -123,12 +108,12 @@ class CrankRockerNLP:
         return pull_inside(np.asarray(lengths, float), self.init, grashof_slacks, START_MARGIN)
 
     def solve(self, start: int, lengths: np.ndarray) -> StartOutcome:
-        out = self.solve_design(start, self.prepared_start(lengths))
+        """One IPOPT run from the lengths (moved inside the crank-rocker region), the extremes guessed
+        from their simulation; extremes (phi_a, phi_b, deg) in the start's details."""
+        lengths = self.prepared_start(lengths)
+        out = self.compiled.solve(start, COORDINATES.coordinates(np.concatenate([lengths,
+                                                                                 self.extremes_guess(lengths)])))
         x = COORDINATES.design(out.x[:6])
         design = {n: float(v) for n, v in zip(NAMES, x[:4])}
         return StartOutcome.of(out, design, self.report_objective(design, out.objective),
-                               extremes=(float(x[4]), float(x[5])))
-
-    def solve_design(self, start: int, lengths: np.ndarray):
-        """One IPOPT run from the lengths, the extremes guessed from their simulation."""
-        return self.nlp.solve(start, COORDINATES.coordinates(np.concatenate([lengths, self.extremes_guess(lengths)])))
+                               extremes_crank_deg=[math.degrees(float(x[4])), math.degrees(float(x[5]))])

@@ -1,31 +1,28 @@
-"""``agrisynth solve`` for kind crank_rocker: multistart IPOPT, independent re-check, closed form beside it."""
+"""The solve side of kind crank_rocker (:data:`SOLVING`): its NLP, independent re-check and result facts;
+the closed form of eq (8)-(10) beside the optimum."""
 
 from __future__ import annotations
 
-import functools
-import math
-from typing import Callable
-
+from synthesis.core.kind import Finished, Setting, Solving
+from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.crank_rocker.closed_form import solve_paper_equations
 from synthesis.crank_rocker.nlp import CrankRockerNLP
-from synthesis.errors import SolverError
-from synthesis.result import Result
-from synthesis.rule_solve import (FINE, ElasticDiagnosis, StartReport, diagnosis_of, ipopt_log, measured,
-                                  run_multistart, starts_table, status_of, unsatisfied_error)
-from synthesis.spec import LoadedSpec
 from synthesis.spec.common import is_free
 
-
-def build_nlp(spec, elastic: bool = False) -> CrankRockerNLP:
-    return CrankRockerNLP(spec, elastic=elastic)
+OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg"}
 
 
-def recheck(spec, design: dict[str, float]):
+def build(setting: Setting, elastic: bool = False) -> CrankRockerNLP:
+    return CrankRockerNLP(setting.spec, elastic=elastic)
+
+
+def recheck(setting: Setting, outcome) -> Recheck:
     """Rules of a returned design on a grid 10x finer than the solver's, extremes root-found anew."""
-    cr = mechanism(spec, design)
+    spec = setting.spec
+    cr = mechanism(spec, outcome.design)
     rules, q = evaluate(spec, cr, samples=FINE * spec.solver.samples_per_turn)
-    return rules, (cr, q)
+    return Recheck(rules, (cr, q))
 
 
 def closed_form(spec) -> dict | None:
@@ -44,48 +41,31 @@ def closed_form(spec) -> dict | None:
             "shortest_valid": valid[0].to_json() if valid else None}
 
 
-def run_solve(loaded: LoadedSpec, starts: int | None = None, seed: int | None = None, workers: int = 1,
-              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
-              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
-    spec = loaded.model
-    maximise = spec.objective.name == "max_transmission_angle"
-    run = run_multistart(build_nlp, spec, functools.partial(recheck, spec), starts=starts, seed=seed,
-                         workers=workers, maximise=maximise, on_start=on_start, scheduler=scheduler)
-    best, reports = run.best, run.reports
+def finish(setting: Setting, best: StartReport) -> Finished:
+    spec = setting.spec
     if best.context is None:
         cr, q = mechanism(spec, best.outcome.design), None
     else:
         cr, q = best.context
-    elastic = None if best.satisfied else elastic_diagnosis(spec)
-    result = Result(
-        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status_of(best, reports, elastic),
-        design=dict(best.outcome.design), rules=[r.to_json() for r in best.records],
-        objective={"name": spec.objective.name, "value": best.outcome.objective, "unit": "deg" if maximise else "mm"},
-        solver=run.solver_record(samples_per_turn=spec.solver.samples_per_turn),
-        extra={**facts(spec, cr, q),
-               "baseline_design": spec.design_values(),
-               "solver_extremes_crank_deg": [math.degrees(v) for v in best.outcome.extremes],
-               "fine_grid_worst_violation": measured(best.worst_violation),
-               "closed_form": closed_form(spec),
-               "starts": starts_table(reports),
-               "elastic": None if elastic is None else elastic.to_json()},
-    )
-    return result, reports, ipopt_log(reports)
+    return Finished(
+        design=dict(best.outcome.design),
+        objective={"name": spec.objective.name, "value": best.outcome.objective,
+                   "unit": OBJECTIVE_UNITS[spec.objective.name]},
+        facts={**facts(spec, cr, q), "solver_extremes_crank_deg": best.outcome.details.get("extremes_crank_deg"),
+               "closed_form": closed_form(spec)},
+        solver_settings={"samples_per_turn": spec.solver.samples_per_turn})
 
 
-def elastic_diagnosis(spec) -> ElasticDiagnosis:
-    """One slack per rule, from the given design (it assembles; the best start may not)."""
-    elastic = build_nlp(spec, elastic=True)
-    return diagnosis_of(elastic.nlp, elastic.solve_design(0, elastic.prepared_start(elastic.init)))
-
-
-def diagnose_infeasible(loaded: LoadedSpec, result: Result, reports: list[StartReport]) -> SolverError:
-    """The exit-3 error of a run where no start satisfied every rule (status infeasible or failed)."""
-    return unsatisfied_error(result, reports, ElasticDiagnosis.from_json(result.extra["elastic"]),
-                             samples_hint="[solver] samples_per_turn")
-
-
-def baseline_rules(loaded: LoadedSpec) -> list[dict] | None:
-    spec = loaded.model
+def baseline_rules(setting: Setting) -> list[dict] | None:
+    spec = setting.spec
     rules, _ = evaluate(spec, mechanism(spec))
     return [r.record().to_json() for r in rules]
+
+
+def maximise(setting: Setting) -> bool:
+    return setting.spec.objective.name == "max_transmission_angle"
+
+
+SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+                  # the given design assembles; the least-violating start may not
+                  elastic_from="given", samples_hint="[solver] samples_per_turn")

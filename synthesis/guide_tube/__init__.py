@@ -8,3 +8,21 @@ printed.py eq 17/19/21 exactly as printed (superposition reading), for the readi
 calibrate.py friction coefficient from a measured landing time
 scene.py, check.py, nlp.py, solve.py, plots.py: the guide_tube kind of the CLI
 """
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="guide_tube",
+    summary="guide-tube wall angles for equal landing times (seed 001 §2.4)",
+    spec_model="synthesis.spec.guide_tube:GuideTubeSpec",
+    check="synthesis.guide_tube.check:run_check",
+    figures={"drop_times.png": "synthesis.guide_tube.plots:drop_times_figure",
+             "drop_profiles.png": "synthesis.guide_tube.plots:drop_profile_figure",
+             "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"},
+    compare="synthesis.guide_tube.plots:compare_figures",
+    solving="synthesis.guide_tube.solve:SOLVING",
+    objectives={"nearest": "smallest change of the free wall angles, deg^2",
+                "fastest": "earliest landing of tube 1, ms",
+                "uniform": "smallest worst plant-position error over the row spacings, mm"},
+    example="guide_tube/cai2020_delta2.toml",
+)

@@ -7,8 +7,8 @@ one smooth expression of the angle through near-sticking and decelerating slides
 exact derivatives by AD.  Rows are the rules of check.rules_of built on symbols: exactly equal
 landing times at the design row spacing, plant-position error over the sampled row spacings,
 the seedling's speed squared at every wall end (it must slide off), free fall before the wall.
-The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the shared
-:class:`synthesis.rule_nlp.RuleNLP`; this module only declares the kind's variables and objective.
+The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the core's
+:class:`synthesis.core.problem.Problem`, transcribed by the core; this module only declares the kind's variables and objective.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from synthesis.errors import SpecError
 from synthesis.guide_tube.check import rules_of
 from synthesis.guide_tube.drop import DropPhases, Physics, Tube, drop_phases
 from synthesis.guide_tube.scene import GuideTubeScene
-from synthesis.rule_nlp import ObjectiveParts, RuleNLP, StartOutcome
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.guide_tube import GuideTubeSpec
 
-#: IPOPT settings of this kind (its published numbers were computed with them)
-IPOPT = {"ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8}
 #: unit of each objective's value: squared change of the free angles, tube 1's landing time, position error
 OBJECTIVE_UNITS = {"nearest": "deg^2", "fastest": "ms", "uniform": "mm"}
 
@@ -44,6 +44,8 @@ class GuideTubeNLP:
         if not free:
             raise SpecError("guide_tube.tubes: solve needs at least one free wall angle (angle = {init, bounds}); "
                             "every angle is fixed, so use `agrisynth check`")
+        # (every kind's nothing-free error is the core's; this one comes first because a guide-tube NLP
+        # has no variables at all when every angle is fixed)
         self.spec, self.scene, self.elastic = spec, scene, elastic
         self.names = [t.name for t in free]
         self.tube_names = [t.name for t in spec.tubes]
@@ -58,10 +60,11 @@ class GuideTubeNLP:
         self._times = ca.Function("design_times", [delta], [ca.vertcat(*design_times)])
         self.bounds = np.array([bounds_of(t.angle) for t in free], dtype=float)
         self.init = np.array([value_of(t.angle) for t in free])
-        self.nlp = RuleNLP("guide_tube", delta, self.bounds[:, 0], self.bounds[:, 1], [], rules,
-                           self._objective(delta, angles, design_times, uniform), elastic=elastic,
-                           max_iter=spec.solver.max_iter, backoff=spec.solver.backoff, ipopt=IPOPT)
-        self.rules = self.nlp.rules
+        self.problem = Problem("guide_tube", delta, self.bounds[:, 0], self.bounds[:, 1], [], rules,
+                               self._objective(delta, angles, design_times, uniform), max_iter=spec.solver.max_iter,
+                               backoff=scaled_backoff(spec.solver.backoff), ipopt="precise")
+        self.compiled = CompiledNLP(self.problem, elastic)
+        self.rules = self.problem.rules
 
     def _objective(self, delta, angles: dict, design_times: list, uniform: bool) -> ObjectiveParts:
         """nearest: squared change of the free angles (deg^2); fastest: tube 1's landing time (ms);
@@ -95,7 +98,11 @@ class GuideTubeNLP:
         return {f"delta_{name}": values.get(name, value_of(t.angle))
                 for name, t in zip(self.tube_names, self.spec.tubes)}
 
+    def x_of(self, design: dict[str, float]) -> np.ndarray:
+        """The free angles of a result design (keys delta_<tube>)."""
+        return np.array([design[f"delta_{name}"] for name in self.names], dtype=float)
+
     def solve(self, index: int, delta0: np.ndarray) -> StartOutcome:
         delta0 = np.asarray(delta0, dtype=float)
-        out = self.nlp.solve(index, delta0, self._tau_start(delta0))
+        out = self.compiled.solve(index, delta0, self._tau_start(delta0))
         return StartOutcome.of(out, self.design(out.x[:len(self.names)]), out.objective)

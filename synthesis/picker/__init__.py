@@ -1,1 +1,27 @@
 """Kinds picker_double_crank and picker: the seed-001 seedling picker (double crank + crank-rocker)."""
+
+from synthesis.core.kind import Kind
+
+DOUBLE_CRANK = Kind(
+    name="picker_double_crank",
+    summary="double crank whose clamp point follows the picking arc (seed 001 §2.1.2)",
+    spec_model="synthesis.spec.picker:PickerDoubleCrankSpec",
+    check="synthesis.picker.check:run_check",
+    figures={"path.png": "synthesis.picker.plots:path_figure"},
+    compare="synthesis.picker.plots:compare_figure",
+    solving="synthesis.picker.solve:SOLVING",
+    objectives={"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
+                "sum_of_squares": "sum of squared distances, mm^2"},
+    example="picker/picker_double_crank_redesign.toml",
+)
+
+PICKER = Kind(        # evaluated only: the combined mechanism of two solved designs
+    name="picker",
+    summary="double crank and crank-rocker together at 60 r/min: clamp trajectory, pick/drop instants",
+    spec_model="synthesis.spec.picker:PickerSpec",
+    check="synthesis.picker.combined:run_check",
+    figures={"trajectory.png": "synthesis.picker.plots:picker_figure",
+             "animation.gif": "synthesis.picker.plots:picker_animation"},
+    compare="synthesis.report.trajectory_overlay:trajectory_overlay",
+    example="picker/cai2020_picker.toml",
+)

@@ -83,8 +83,15 @@ def evaluate(spec: PickerDoubleCrankSpec, dc: DoubleCrank, samples: int = CHECK_
     """Every rule of the spec; raises AssemblyError when the loop breaks inside the working swing."""
     require_assembly(spec, dc)
     mu = clamp_states(dc, swing_angles(spec, samples))["mu"]
-    return [grashof_double_crank_rule(dc.l4, dc.l1, dc.l2, dc.l3),
-            frame_point_rule(dc.x_a, spec.rules.x_a_min),
+    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu)
+
+
+def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu) -> list[Rule]:
+    """Every rule of the spec on a trace of floats or CasADi symbols: pivot A's x, the links l1..l4 (l4 the
+    frame AD) and the transmission angles at C (deg) over the working swing.  Used by check, the NLP
+    and the re-check."""
+    return [grashof_double_crank_rule(l4, l1, l2, l3),
+            frame_point_rule(x_a, spec.rules.x_a_min),
             acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
 
 

@@ -17,35 +17,23 @@ Reported objectives are always the exact eq (4) (or sum of squares) of the desig
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-
 import casadi as ca
 import numpy as np
 
-from constraints.grashof import GrashofCoordinates, grashof_double_crank_rule
-from constraints.placement import frame_point_rule
-from constraints.transmission import acute_transmission_rule
-from synthesis import rule_nlp
-from synthesis.errors import SpecError
+from constraints.grashof import GrashofCoordinates
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
+from synthesis.core.starts import pull_inside
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_function
-from synthesis.picker.check import arc_error, linkage, swing_angles, target_angles, target_points
-from synthesis.rule_nlp import ObjectiveParts, RuleNLP, pull_inside
-from synthesis.spec.common import bounds_of, is_free, value_of
+from synthesis.picker.check import arc_error, linkage, rules_of, swing_angles, target_angles, target_points
+from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.picker import PickerDoubleCrankSpec
 
 NAMES = ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")
 DEG = math.pi / 180.0
 #: starts are moved this far (mm) inside the Grashof double-crank region, so the loop closes at the start
 START_MARGIN = 1.0
-
-
-@dataclass
-class StartOutcome(rule_nlp.StartOutcome):
-    """objective: exact eq (4) in mm, or the sum of squares in mm^2; return_status: of the stage that
-    solves the spec's objective (the last one); success: that stage converged and its design is kept;
-    iterations, wall_s: both stages."""
-
-    stages: list[dict] = field(default_factory=list)   # per stage: name, return_status, iterations, objective
 
 
 #: design (x_a, y_a, l1, l2, l3, l4, ...) <-> coordinates with l1, l2, l3 replaced by the slacks of
@@ -64,9 +52,7 @@ class PickerNLP:
     def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False):
         self.spec = spec
         variables = spec.variables()
-        if not any(is_free(v) for v in variables.values()):
-            raise SpecError("picker_double_crank.linkage: solve needs at least one free variable (l1 = {init, "
-                            "bounds}); every one is fixed, so use `agrisynth check`")
+        self.names = list(NAMES)
         self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
         self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
         # decision coordinates z: the design with l1, l2, l3 replaced by the three Grashof slacks (>= 0:
@@ -82,19 +68,20 @@ class PickerNLP:
         self.residuals = ca.Function("residuals", [z], [r])
         samples = swing_angles(spec, spec.solver.samples) * DEG
         mu = ca.vec(f.map(len(samples))(samples.reshape(1, -1), p)[3]) / DEG
-        rules = [grashof_double_crank_rule(x[5], x[2], x[3], x[4]),
-                 frame_point_rule(x[0], spec.rules.x_a_min),
-                 acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
+        rules = rules_of(spec, *(x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4")), mu)
         lb, ub = self.bounds[:, 0], self.bounds[:, 1]
-        common = dict(elastic=elastic, max_iter=spec.solver.max_iter, backoff=spec.solver.backoff,
+        common = dict(max_iter=spec.solver.max_iter, backoff=scaled_backoff(spec.solver.backoff), ipopt="tight",
                       hard_in_elastic=("grashof_double_crank",))
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
         shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
-        self.stages = [RuleNLP("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), **common)]
+        self.stages = [CompiledNLP(Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), **common),
+                                   elastic)]
         self.stage_names = ["least_squares"]
         if spec.objective.name == "sum_of_distances" and not elastic:
-            self.stages.append(RuleNLP("picker_eq4", *shape, _sum_of_distances(r), **common))
+            self.stages.append(CompiledNLP(Problem("picker_eq4", *shape, _sum_of_distances(r), **common)))
             self.stage_names.append("sum_of_distances")
+        # the elastic diagnosis reads the least-squares stage (the only one in elastic mode)
+        self.compiled = self.stages[0]
 
     def exact_objective(self, design: dict[str, float]) -> float:
         err = arc_error(self.spec, linkage(self.spec, design))
@@ -117,7 +104,7 @@ class PickerNLP:
         stop early on this flat landscape); the start counts as converged only if the last stage did
         and its design is the one kept."""
         z = self.start_coordinates(x0)
-        stages, logs, candidates = [], [], []
+        stages, logs, candidates, raws = [], [], [], []
         for k, (name, stage) in enumerate(zip(self.stage_names, self.stages)):
             out = stage.solve(start, z, self.epigraph_start(z) if name == "sum_of_distances" else None)
             logs.append(f"----- stage {name}\n{out.log}")
@@ -129,12 +116,13 @@ class PickerNLP:
             stages.append({"name": name, "return_status": out.return_status, "iterations": out.iterations,
                            "wall_s": out.wall_s, "objective": objective if math.isfinite(objective) else None})
             candidates.append((objective, -k, design, out.success and k == len(self.stages) - 1))
+            raws.append(out)
         # the last stage's design unless an earlier one is better by more than rounding
         objective, _, design, success = min(candidates, key=lambda c: (_rounded(c[0]), c[1]))
         last = stages[-1]
         return StartOutcome(start, design, objective, last["return_status"], success,
                             sum(s["iterations"] for s in stages), sum(s["wall_s"] for s in stages), "\n".join(logs),
-                            stages)
+                            raws[-1], {"stages": stages})
 
 
 def _rounded(objective: float) -> float:

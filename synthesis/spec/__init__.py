@@ -7,7 +7,6 @@ so a run never imports the code of mechanisms its scene does not use.
 from __future__ import annotations
 
 import difflib
-import importlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,16 +15,21 @@ from pydantic import BaseModel
 from synthesis.errors import SpecError
 from synthesis.spec.common import read_toml, validate
 
-#: kind -> "module:ModelClass"
-KINDS: dict[str, str] = {
-    "planting_fourbar": "synthesis.spec.planting:PlantingFourbarSpec",
-    "guide_tube": "synthesis.spec.guide_tube:GuideTubeSpec",
-    "clamp_cam": "synthesis.spec.clamp_cam:ClampCamSpec",
-    "crank_rocker": "synthesis.spec.crank_rocker:CrankRockerSpec",
-    "picker_double_crank": "synthesis.spec.picker:PickerDoubleCrankSpec",
-    "picker": "synthesis.spec.picker:PickerSpec",
-    "fourbar_path": "synthesis.spec.fourbar_path:FourbarPathSpec",
-}
+class _Kinds:
+    """The kind names of the registry (:mod:`synthesis.kinds`), read when used (so runtime kinds count)."""
+
+    def __contains__(self, name) -> bool:
+        from synthesis import kinds
+
+        return name in kinds.names()
+
+    def __iter__(self):
+        from synthesis import kinds
+
+        return iter(kinds.names())
+
+
+KINDS = _Kinds()
 
 
 @dataclass(frozen=True)
@@ -44,8 +48,9 @@ class LoadedSpec:
 
 
 def model_class(kind: str) -> type[BaseModel]:
-    module, cls = KINDS[kind].split(":")
-    return getattr(importlib.import_module(module), cls)
+    from synthesis import kinds
+
+    return kinds.get(kind).model_class()
 
 
 def load_spec(path: str | Path) -> LoadedSpec:

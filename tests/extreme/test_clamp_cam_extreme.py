@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 from cam_reference import sampled_roller_envelope, translating_pitch
 from synthesis.clamp_cam.check import cam_facts, profile, run_check
 from synthesis.clamp_cam.scene import CamScene, evaluate
-from synthesis.clamp_cam.solve import run_solve
+from solving import run_solve
 from synthesis.spec import LoadedSpec, load_spec
 
 CAMS = Path(__file__).resolve().parents[2] / "problems" / "clamp_cam"

@@ -13,9 +13,10 @@ from types import SimpleNamespace
 import pytest
 
 from synthesis.crank_rocker.check import mechanism
-from synthesis.crank_rocker.solve import recheck, run_solve
+from solving import recheck_rules, run_solve
 from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
-from synthesis.rule_solve import measured, report_of, starts_table
+from synthesis.core.solve import starts_table
+from synthesis.core.verdict import measured, report_of
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -71,7 +72,7 @@ def test_vanishing_swing(tmp_path, swing):
     assert q.time_ratio == pytest.approx(1.25, abs=1e-6)
     assert gmin >= 40.0
     assert result.design["l7"] < 0.02 * float(swing) * 140.0          # the crank shrinks with the swing
-    rules, _ = recheck(loaded.model, result.design)
+    rules = recheck_rules(loaded.model, result.design)
     assert all(r.record().satisfied for r in rules)
 
 
@@ -121,10 +122,10 @@ def test_swing_near_180_deg_exits_3_with_a_result_file(tmp_path):
 
 def test_a_start_that_cannot_be_evaluated_is_written_as_null():
     """The shared multistart table: an unmeasurable violation is null in JSON (allow_nan=False passes)."""
-    outcome = SimpleNamespace(start=0, return_status="Invalid_Number_Detected", iterations=3, wall_s=0.1,
-                              objective=math.inf, design={"l7": 1.0})
+    outcome = SimpleNamespace(start=0, return_status="Invalid_Number_Detected", success=False, iterations=3,
+                              wall_s=0.1, objective=math.inf, design={"l7": 1.0}, details={})
 
-    def cannot_evaluate(design):
+    def cannot_evaluate(outcome):
         raise ValueError("the crank does not turn")
 
     report = report_of(outcome, cannot_evaluate)

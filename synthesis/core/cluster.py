@@ -1,4 +1,4 @@
-"""Multistart starts on a dask.distributed cluster: the ``--scheduler`` path of :mod:`synthesis.multistart`.
+"""Multistart starts on a dask.distributed cluster: the ``--scheduler`` path of :mod:`synthesis.core.executor`.
 
 Imported only when a scheduler is given, so that local runs never import dask.
 """

@@ -1,4 +1,4 @@
-"""Fixed-seed multistart through a ``concurrent.futures`` executor, shared by every problem kind.
+"""Fixed-seed starts through a ``concurrent.futures`` process pool or a dask cluster, for every kind.
 
 A problem provides a picklable *factory* that builds its solver once; each worker process calls it
 once (in the pool initializer) and reuses the built solver for every start it is given.  Start 0
@@ -39,17 +39,6 @@ def _solve_in_worker(index: int, x0: np.ndarray):
     return _worker_solver.solve(index, x0)
 
 
-def best_in_start_order(reports: list, better: Callable[[Any, Any], bool]) -> Any:
-    """The best of the starts' reports, judged in start order: ties keep the earlier start whatever
-    order the starts finished in, so the choice does not depend on the worker count (the running
-    best shown during a run can differ when several workers finish out of order)."""
-    chosen = reports[0]
-    for rep in reports[1:]:
-        if better(rep, chosen):
-            chosen = rep
-    return chosen
-
-
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 
@@ -73,7 +62,7 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     """
     if scheduler is not None:
         try:
-            from synthesis.cluster import run_starts_on_cluster
+            from synthesis.core.cluster import run_starts_on_cluster
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
         everything = run_starts_on_cluster(factory, starts, scheduler, on_done)

@@ -1,0 +1,116 @@
+"""The kind contract: what a kind package exports, and what its solve side declares.
+
+A kind is one package exporting one :class:`Kind` (``KIND``).  Everything in it is a
+``"module:attribute"`` string resolved on use, so reading the registry (``agrisynth problems``,
+``solve --help``, the bench) imports no kind's code, and a run imports only its own kind.
+The registry of kinds is :mod:`synthesis.kinds`.
+
+A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one multistart driver
+(:mod:`synthesis.core.solve`) needs, none of which names a solver:
+
+    prepare(spec)              anything worked out once per run (a fitted law, a scene), picklable
+    build(setting, elastic)    the kind's NLP: ``names``, ``bounds`` (n x 2), ``init``, ``compiled``
+                               (the :class:`~synthesis.core.ipopt.CompiledNLP` an elastic diagnosis reads)
+                               and ``solve(start, x_design) -> StartOutcome``; built once per process;
+                               optionally ``x_of(design) -> x_design`` when the result's design keys are
+                               not ``names``
+    recheck(setting, outcome)  the rules of a returned design on floats, 10x finer (a :class:`Recheck`)
+    finish(setting, best)      the result's design, objective, trajectory and kind facts (:class:`Finished`)
+    baseline_rules(setting)    the rule table of the spec's given design (or None if it cannot be evaluated)
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+
+def resolve(target: str) -> Any:
+    """``"package.module:attribute"`` -> the attribute (imports the module)."""
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+@dataclass(frozen=True)
+class Kind:
+    """Everything agrisynth knows about one problem kind."""
+
+    name: str
+    summary: str                          # one line: the mechanism and its seed paper
+    spec_model: str                       # "module:Class" of the pydantic spec model
+    check: str                            # "module:function"(loaded spec) -> Result (status "evaluated")
+    figures: dict[str, str] = field(default_factory=dict)   # file name -> "module:writer"(result, path)
+    compare: str | None = None            # "module:function"(results, folder) -> [file names]: overlays
+    solving: str | None = None            # "module:object" of a Solving; None: the kind is check-only
+    objectives: dict[str, str] = field(default_factory=dict)  # objective -> one-line meaning (first = default)
+    bench: str | None = None              # "module:function"(specs | None, seed) -> bench cases
+    example: str | None = None            # a library spec to try, relative to problems/
+
+    @property
+    def solves(self) -> bool:
+        return self.solving is not None
+
+    def model_class(self):
+        return resolve(self.spec_model)
+
+    def checker(self) -> Callable:
+        return resolve(self.check)
+
+    def solver_side(self) -> "Solving":
+        return resolve(self.solving)
+
+
+@dataclass(frozen=True)
+class Setting:
+    """What a kind's solve pieces receive: the validated spec, the run's seed and what ``prepare`` made."""
+
+    spec: Any
+    seed: int = 0
+    data: Any = None
+
+
+@dataclass(frozen=True)
+class Finished:
+    """The kind's part of a solve's result, from the chosen start."""
+
+    design: dict[str, Any]               # result.json design (spec units; may add fixed choices, e.g. branch)
+    objective: dict[str, Any]            # {name, value, unit}
+    facts: dict[str, Any] = field(default_factory=dict)      # kind facts, result.json "facts"
+    trajectory: dict[str, Any] | None = None
+    solver_settings: dict[str, Any] = field(default_factory=dict)   # sample counts etc., into "solver"
+    #: the spec's given design in the result's terms (default: the spec's ``design_values()``)
+    baseline_design: dict[str, Any] | None = None
+    #: the rule table when the chosen start could not be evaluated (each rule "not evaluated", with why)
+    rules: list[dict] | None = None
+
+
+def _nothing(spec) -> None:
+    return None
+
+
+def _minimise(setting) -> bool:
+    return False
+
+
+def _no_early_stop(setting):
+    return None
+
+
+@dataclass(frozen=True)
+class Solving:
+    """The solve side of a kind (see the module docstring)."""
+
+    build: Callable[[Setting, bool], Any]
+    recheck: Callable[[Setting, Any], Any]
+    finish: Callable[[Setting, Any], Finished]
+    baseline_rules: Callable[[Setting], list | None]
+    prepare: Callable[[Any], Any] = _nothing
+    maximise: Callable[[Setting], bool] = _minimise
+    #: where the elastic diagnosis starts: "best" (the least-violating start's design) or "given"
+    elastic_from: str = "best"
+    #: (setting) -> predicate on a StartReport that ends the multistart at the first start (in start
+    #: order) meeting it, or None
+    stop_when: Callable[[Setting], Callable[[Any], bool] | None] = _no_early_stop
+    samples_hint: str = "[solver] samples"
+    relax_hint: str = "Loosen those requirements or widen the bounds of the design variables."

@@ -1,0 +1,178 @@
+"""``agrisynth solve`` for every kind: fixed-seed multistart, fine-grid re-check, one verdict, one Result.
+
+The kind declares its pieces (:class:`synthesis.core.kind.Solving`); this module runs them the same
+way for all: the NLP is built once here (and once in each worker), start 0 is the spec's design and
+the others a scrambled Latin hypercube over the free variables' bounds, every start is re-checked
+independently of the solver, the best is chosen in start order, and when no start satisfies every
+rule an elastic re-solve says whether the rules conflict.  The diagnosis is stored in the result
+before it is written, so ``result.json`` says what the exit-3 message says.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from synthesis.core.executor import latin_hypercube_starts, run_starts
+from synthesis.core.kind import Kind, Setting, Solving
+from synthesis.core.verdict import (FINE, ElasticDiagnosis, StartReport, best_in_start_order, better, diagnosis_of,
+                                    measured, report_of, status_note, status_of, unsatisfied_error)
+from synthesis.errors import SolverError, SpecError
+from synthesis.result import Result
+
+
+@dataclass
+class Run:
+    """A finished multistart: every start's report (in start order) and the best one."""
+
+    reports: list[StartReport]
+    best: StartReport
+    starts: int
+    seed: int
+    workers: int | None
+    scheduler: str | None
+    wall_s: float
+
+
+def _recheck(solving: Solving, setting: Setting, outcome):
+    return solving.recheck(setting, outcome)
+
+
+def free_variables(nlp) -> list[str]:
+    """Names of the design variables whose bounds leave room to move."""
+    return [n for n, (lo, hi) in zip(nlp.names, nlp.bounds) if hi > lo]
+
+
+def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
+                   on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None) -> Run:
+    solving = kind.solver_side()
+    nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
+    if not free_variables(nlp):
+        raise SpecError(f"{kind.name}: solve needs at least one free design variable (give one bounds, e.g. "
+                        f"{nlp.names[0]} = {{init = ..., bounds = [lo, hi]}}); every one is fixed, so use "
+                        f"`agrisynth check`")
+    x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
+                                      setting.seed)
+    maximise = solving.maximise(setting)
+    recheck = functools.partial(_recheck, solving, setting)
+    stop = solving.stop_when(setting)
+    reports: dict[int, StartReport] = {}
+    best: list[StartReport] = []
+
+    def done(outcome) -> None:
+        rep = report_of(outcome, recheck)
+        reports[outcome.start] = rep
+        if not best or better(rep, best[0], maximise):
+            best[:] = [rep]
+        on_start(rep, best[0])
+
+    local = workers <= 1 and scheduler is None
+    factory = (lambda: nlp) if local else functools.partial(solving.build, setting, False)
+    t0 = time.perf_counter()
+    outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler,
+                          stop_when=None if stop is None else (lambda out: stop(reports[out.start])))
+    wall = time.perf_counter() - t0
+    ordered = [reports[o.start] for o in outcomes]       # the starts that count (an early stop: 0..k)
+    return Run(ordered, best_in_start_order(ordered, maximise), starts, setting.seed,
+               None if scheduler else workers, scheduler, wall)
+
+
+def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosis:
+    """Re-solve with one slack per rule (minimise their sum), from the best start's design or the given one."""
+    solving = kind.solver_side()
+    nlp = solving.build(setting, True)
+    if solving.elastic_from == "best" and run.best.why is None:
+        design = run.best.outcome.design
+        x0 = (nlp.x_of(design) if hasattr(nlp, "x_of") else np.array([design[n] for n in nlp.names], dtype=float))
+    else:
+        x0 = np.asarray(nlp.init, float)
+    outcome = nlp.solve(0, x0)
+    return diagnosis_of(nlp.compiled, outcome.raw)
+
+
+def starts_table(reports: list[StartReport]) -> list[dict]:
+    """result.json ``starts``: one row per start, the same shape for every kind."""
+    return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "success": r.outcome.success,
+             "iterations": r.outcome.iterations, "wall_s": r.outcome.wall_s,
+             "objective": measured(r.outcome.objective), "satisfied_on_fine_grid": r.satisfied,
+             "worst_violation": measured(r.worst_violation), "why": r.why,
+             "design": {k: measured(v) if isinstance(v, float) else v for k, v in r.outcome.design.items()},
+             "details": r.outcome.details} for r in reports]
+
+
+def ipopt_log(reports: list[StartReport]) -> str:
+    return "\n".join(f"===== start {r.outcome.start}: {r.outcome.return_status}, {r.outcome.iterations} iterations\n"
+                     f"{r.outcome.log}" for r in reports)
+
+
+def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
+              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
+    """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
+
+    ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
+    to run the starts on instead of ``workers`` local processes."""
+    spec = loaded.model
+    solving = kind.solver_side()
+    starts = spec.solver.starts if starts is None else starts
+    seed = spec.solver.seed if seed is None else seed
+    setting = Setting(spec, seed, solving.prepare(spec))
+    run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler, on_start=on_start)
+    best = run.best
+    elastic = None if best.satisfied else elastic_diagnosis(kind, setting, run)
+    status = status_of(best, elastic)
+    finished = solving.finish(setting, best)
+    result = Result(
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=finished.design,
+        rules=[r.to_json() for r in best.records] if finished.rules is None else finished.rules,
+        objective={**finished.objective, "value": measured(finished.objective.get("value"))},
+        trajectory=finished.trajectory,
+        solver={"name": "ipopt", "return_status": best.outcome.return_status,
+                "iterations": best.outcome.iterations, "wall_s": run.wall_s, "starts": run.starts,
+                "starts_run": len(run.reports), "stopped_early": len(run.reports) < run.starts,
+                "seed": run.seed, "best_start": best.outcome.start, "workers": run.workers,
+                "scheduler": run.scheduler, "fine_grid_factor": FINE, "status_note": status_note(best),
+                **finished.solver_settings},
+        starts=starts_table(run.reports),
+        elastic=None if elastic is None else elastic.to_json(),
+        baseline_design=(spec.design_values() if finished.baseline_design is None else finished.baseline_design),
+        fine_grid_worst_violation=measured(best.worst_violation),
+        extra=finished.facts,
+    )
+    return result, run.reports, ipopt_log(run.reports)
+
+
+def solve_spec(loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
+               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+               scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
+    """:func:`run_solve` of the loaded spec's own kind (SpecError, exit 2, for a check-only kind)."""
+    from synthesis import kinds
+
+    return run_solve(kinds.solving_kind(loaded.kind), loaded, starts, seed, workers, on_start, scheduler)
+
+
+def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> SolverError:
+    """The exit-3 error of a run with status infeasible or failed, from what the result says."""
+    solving = kind.solver_side()
+    elastic = None if result.elastic is None else ElasticDiagnosis.from_json(result.elastic)
+    return unsatisfied_error(result.status, [r["name"] for r in result.violated()], reports, elastic,
+                             samples_hint=solving.samples_hint, relax_hint=solving.relax_hint)
+
+
+def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
+    """The rule table of the spec's given design, for the side-by-side table (None: it cannot be evaluated)."""
+    solving = kind.solver_side()
+    spec = loaded.model
+    setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
+    try:
+        return solving.baseline_rules(setting)
+    except (ValueError, ArithmeticError):
+        return None
+
+
+__all__ = ["Run", "run_solve", "solve_spec", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
+           "starts_table", "ipopt_log"]

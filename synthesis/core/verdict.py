@@ -1,0 +1,220 @@
+"""One verdict for every kind: a start's fine-grid re-check, the best start, the run's status, the
+elastic diagnosis and the exit-3 message.
+
+A start's design is re-evaluated by the kind's own re-check (float kinematics, root-found extremes,
+a grid 10x finer than the solver's samples), never by the NLP's constraint values.  The status is a
+promise about the returned design:
+
+    optimal     every rule holds on the fine grid and IPOPT met its full tolerances there (Solve_Succeeded)
+    feasible    every rule holds on the fine grid; IPOPT stopped otherwise (acceptable level, iteration
+                limit, even infeasibility reported against its backed-off rows): the status says so
+    infeasible  no start satisfies every rule, and an elastic re-solve (one slack per rule) *converged*
+                with slacks that name the rules giving way
+    failed      anything else: nothing shows a conflict, IPOPT found no design (the message says what to try)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from synthesis.errors import AgrisynthError, SolverError
+from synthesis.ipopt_log import reached_optimum
+
+#: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
+FINE = 10
+#: objectives within this relative distance (of max(1, |f|)) are a tie; the lower start index wins
+TIE = 1e-9
+#: an elastic slack counts (the rule gives way) above this fraction of the rule's scale
+SLACK_TOL = 1e-6
+
+
+@dataclass
+class StartReport:
+    """A start's outcome with its independent re-check."""
+
+    outcome: Any                     # core.outcome.StartOutcome
+    satisfied: bool                  # every rule holds on the fine grid
+    worst_violation: float           # largest normalised violation on the fine grid (0 when satisfied;
+                                     # math.inf when the design cannot be evaluated: see :func:`measured`)
+    records: list = field(default_factory=list)     # RuleRecord per rule
+    context: Any = None              # whatever the kind's re-check keeps (scene, motion facts)
+    why: str | None = None           # why the design could not be evaluated at all
+
+    @property
+    def smallest_normalised_margin(self) -> float:
+        """The fine-grid smallest normalised margin of the design (-inf when it cannot be evaluated)."""
+        margins = [r.normalised_margin for r in self.records]
+        if not margins or any(m is None for m in margins):
+            return -math.inf
+        return min(margins)
+
+
+@dataclass(frozen=True)
+class Recheck:
+    """What a kind's re-check returns: the rules on floats, what to keep, and optionally the objective
+    measured on the fine grid (it then replaces the solver's, e.g. a max-min-margin objective)."""
+
+    rules: list
+    context: Any = None
+    objective: Callable[["StartReport"], float] | None = None
+
+
+def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
+    """Re-evaluate ``outcome``; a design the re-check cannot evaluate (AgrisynthError, ValueError)
+    gets an infinite violation and the reason.  A non-finite objective is never feasible."""
+    try:
+        rc = recheck(outcome)
+    except (AgrisynthError, ValueError, ArithmeticError) as exc:
+        return StartReport(outcome, False, math.inf, why=str(exc))
+    records = [r.record() for r in rc.rules]
+    worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None else -math.inf)
+                         for r in records if not r.satisfied])
+    report = StartReport(outcome, all(r.satisfied for r in records), worst, records, rc.context)
+    if rc.objective is not None:
+        outcome.objective = rc.objective(report)
+    if not math.isfinite(outcome.objective):
+        report.satisfied = False
+        report.why = report.why or "the objective cannot be evaluated at this design"
+    return report
+
+
+def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
+    """Feasible first; among feasible ones the objective (ties within TIE: the lower start index);
+    among infeasible ones the smaller worst violation (ties: the lower start index)."""
+    if a.satisfied != b.satisfied:
+        return a.satisfied
+    if not a.satisfied:
+        return (a.worst_violation, a.outcome.start) < (b.worst_violation, b.outcome.start)
+    fa, fb = a.outcome.objective, b.outcome.objective
+    if maximise:
+        fa, fb = -fa, -fb
+    tie = TIE * max(1.0, abs(fb))
+    return fa < fb - tie or (abs(fa - fb) <= tie and a.outcome.start < b.outcome.start)
+
+
+def best_in_start_order(reports: list[StartReport], maximise: bool) -> StartReport:
+    """The best report, judged in start order, so the choice does not depend on the worker count."""
+    chosen = reports[0]
+    for rep in reports[1:]:
+        if better(rep, chosen, maximise):
+            chosen = rep
+    return chosen
+
+
+def measured(x: float | None) -> float | None:
+    """A figure for result.json: JSON has no infinity or NaN, and a figure that could not be measured
+    (the design cannot be evaluated) is written as null rather than as a number."""
+    return x if x is not None and math.isfinite(x) else None
+
+
+@dataclass
+class ElasticDiagnosis:
+    """What an elastic re-solve (one slack per rule, minimise their sum) says about a rule set."""
+
+    return_status: str
+    converged: bool
+    slacks: dict[str, float]        # rule -> how far it must be relaxed, in the rule's unit
+    units: dict[str, str]
+    scales: dict[str, float]        # rule -> its typical margin (a slack counts above SLACK_TOL x scale)
+    binding: list[str] = field(default_factory=list)   # rules with a non-zero multiplier there
+    tol: float = SLACK_TOL
+
+    @property
+    def relaxed(self) -> list[str]:
+        """The rules the relaxation gives up on, largest normalised slack first (none unless it converged)."""
+        if not self.converged:
+            return []
+        return [n for n, s in sorted(self.slacks.items(), key=lambda kv: -kv[1] / self.scales[kv[0]])
+                if s > self.tol * self.scales[n]]
+
+    @property
+    def conflicting(self) -> list[str]:
+        """The rules in conflict: those given up on, then those holding against them (binding there)."""
+        relaxed = self.relaxed
+        return relaxed + [n for n in self.binding if n not in relaxed] if relaxed else []
+
+    def to_json(self) -> dict:
+        return {"return_status": self.return_status, "converged": self.converged,
+                "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
+                "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
+                "conflicting": self.conflicting}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "ElasticDiagnosis":
+        slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
+        return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
+                   data.get("binding", []))
+
+
+def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
+    """The diagnosis of an elastic :class:`synthesis.core.ipopt.CompiledNLP` solved to ``raw``."""
+    rules = [r for r, hard in zip(compiled.rules, compiled.t.hard) if not hard]
+    return ElasticDiagnosis(raw.return_status, raw.success, compiled.slack_values(raw.x),
+                            {r.name: r.unit for r in rules}, {r.name: r.scale for r in rules},
+                            compiled.active_rules(raw))
+
+
+def status_of(best: StartReport, elastic: ElasticDiagnosis | None) -> str:
+    """The DESIGN.md status of a multistart run (see the module docstring)."""
+    if best.satisfied:
+        return "optimal" if reached_optimum(best.outcome.return_status) else "feasible"
+    if elastic is not None and elastic.relaxed:
+        return "infeasible"
+    return "failed"
+
+
+def said(reports: list[StartReport]) -> str:
+    """IPOPT's return statuses over the starts, most frequent first: "Maximum_Iterations_Exceeded x5, ..."."""
+    counts: dict[str, int] = {}
+    for r in reports:
+        counts[r.outcome.return_status] = counts.get(r.outcome.return_status, 0) + 1
+    return ", ".join(f"{s} x{n}" if n > 1 else s for s, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
+
+
+def status_note(best: StartReport) -> str | None:
+    """What a user must know about a feasible (not optimal) status: how IPOPT stopped at the best start."""
+    if best.satisfied and not reached_optimum(best.outcome.return_status):
+        return (f"every rule holds on the fine grid, but IPOPT stopped at {best.outcome.return_status} at the "
+                f"best start (start {best.outcome.start}): a feasible design, not a proven local optimum")
+    return None
+
+
+def unsatisfied_error(status: str, violated: list[str], reports: list[StartReport],
+                      elastic: ElasticDiagnosis | None, *, samples_hint: str,
+                      relax_hint: str = "Loosen those requirements or widen the bounds of the design variables.",
+                      max_iter_hint: str = "[solver] max_iter") -> SolverError:
+    """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed)."""
+    n = len(reports)
+    bad = ", ".join(violated) or "none evaluated"
+    if status == "infeasible":
+        relaxed = elastic.relaxed
+        gives_up = ", ".join(f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]})"
+                             for name in relaxed)
+        holding = [name for name in elastic.conflicting if name not in relaxed]
+        against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
+        return SolverError(
+            f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). Rules that conflict "
+            f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
+            f"first): {gives_up}{against}. {relax_hint}")
+    if elastic is None:
+        why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
+    elif not elastic.converged:
+        why = (f"and an elastic re-solve did not converge either ({elastic.return_status}), so nothing is known "
+               f"about conflicts")
+    else:
+        why = "and an elastic re-solve needs no slack, so the rules do not conflict"
+    unevaluable = next((r.why for r in reports if r.why), None)
+    cannot = f" A start's design could not be evaluated: {unevaluable}." if unevaluable else ""
+    converged = [r for r in reports if r.outcome.success]
+    if converged and elastic is not None and elastic.converged:
+        return SolverError(
+            f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
+            f"{why}: the rules hold at the solver's samples. Violated between samples: {bad}. Raise "
+            f"{samples_hint}, or try more --starts.{cannot}")
+    return SolverError(
+        f"IPOPT found no design that satisfies every rule: {len(converged)} of the {n} starts converged "
+        f"(IPOPT said: {said(reports)}), {why}. Violated at the best start: {bad}. This is a solver failure, not "
+        f"an infeasible rule set: try more --starts, a higher {max_iter_hint}, or a given design (start 0) nearer "
+        f"one that meets the rules.{cannot}")

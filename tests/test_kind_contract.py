@@ -1,0 +1,104 @@
+"""The kind contract (issue 13): a kind registered through the public contract alone checks and solves
+with the same driver, verdict and result tail as the built-in ones; the registry is the only list."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import typing
+
+import pytest
+
+from conftest import LIBRARY, ROOT
+from synthesis import kinds
+from synthesis.core.solve import exit_error, run_solve
+from synthesis.result import Result
+from synthesis.spec import load_spec
+
+TOY = """kind = "toy_disc"
+name = "toy"
+[point]
+x = {{ init = 0.0, bounds = [-20.0, 20.0] }}
+y = {{ init = 1.0, bounds = [-20.0, 20.0] }}
+[rules]
+radius = {radius}
+y_min = {y_min}
+[objective]
+target = [30.0, 40.0]
+[solver]
+starts = 3
+"""
+
+
+@pytest.fixture
+def toy():
+    import toy_kind
+
+    kinds.register(toy_kind.KIND)
+    yield toy_kind.KIND
+    kinds.unregister("toy_disc")
+
+
+def test_a_toy_kind_checks_and_solves_to_its_known_optimum(tmp_path, toy):
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(radius=10.0, y_min=-5.0))
+    loaded = load_spec(path)
+    checked = toy.checker()(loaded)
+    assert checked.all_satisfied and checked.status == "evaluated"
+    result, reports, log = run_solve(toy, loaded, workers=1)
+    # the target (30, 40) lies outside the disc of radius 10: the nearest point is 10 x (0.6, 0.8)
+    assert result.status == "optimal"
+    assert result.design["x"] == pytest.approx(6.0, abs=1e-6) and result.design["y"] == pytest.approx(8.0, abs=1e-6)
+    assert result.objective["value"] == pytest.approx(40.0**2, rel=1e-7)
+    assert result.extra["distance_to_target_mm"] == pytest.approx(40.0, abs=1e-6)
+    data = json.loads(json.dumps(result.to_json(), allow_nan=False))
+    assert data["schema_version"] == 2 and data["facts"] == {"distance_to_target_mm": result.extra["distance_to_target_mm"]}
+    assert [row["start"] for row in data["starts"]] == [0, 1, 2] and data["elastic"] is None
+    assert Result.from_json(data).extra == result.extra
+
+
+def test_a_toy_kind_with_conflicting_rules_is_infeasible_and_names_them(tmp_path, toy):
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(radius=10.0, y_min=12.0))          # above y = 12 but inside r = 10: impossible
+    loaded = load_spec(path)
+    result, reports, _ = run_solve(toy, loaded, workers=1)
+    assert result.status == "infeasible"
+    assert set(result.elastic["conflicting"]) == {"inside_disc", "above_line"}
+    assert "Rules that conflict" in str(exit_error(toy, result, reports))
+
+
+def test_the_registry_is_the_only_list_of_kinds():
+    """Every kind resolves to a Kind whose spec model's Literal kind is its name, whose objectives are
+    exactly the spec's objective names, and whose figures/check/solving targets exist."""
+    from synthesis.core.kind import resolve
+
+    for kind in kinds.all_kinds():
+        model = kind.model_class()
+        assert typing.get_args(model.model_fields["kind"].annotation) == (kind.name,)
+        resolve(kind.check)
+        for target in kind.figures.values():
+            resolve(target)
+        if kind.solves:
+            resolve(kind.solving)
+            objective = model.model_fields["objective"].annotation
+            names = typing.get_args(objective.model_fields["name"].annotation)
+            assert set(names) == set(kind.objectives), kind.name
+        if kind.example:
+            assert (LIBRARY / kind.example).exists()
+
+
+def test_listing_kinds_imports_no_kind_code():
+    """`agrisynth problems` and `solve --help` read the registry without importing any kind's modules."""
+    code = ("import sys, synthesis.cli as c; c._objectives_help(); from synthesis import kinds; kinds.all_kinds(); "
+            "bad = [m for m in sys.modules if m.split('.')[:2] in (['synthesis', 'kinematics'],) or "
+            "m.endswith(('.nlp', '.solve', '.check', '.scene')) and m.startswith('synthesis.')]; print(bad)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[]"
+
+
+def test_solve_of_a_check_only_kind_is_bad_input(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(LIBRARY / "picker" / "cai2020_picker.toml"),
+                           "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert proc.returncode == 2 and "has nothing to optimise" in proc.stderr and "Traceback" not in proc.stderr

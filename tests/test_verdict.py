@@ -1,0 +1,173 @@
+"""One verdict for every kind that solves (issue 13): the same status semantics and exit-3 messages.
+
+For each solving kind: a feasible rule set capped at one IPOPT iteration (no start converges, no
+returned design meets the rules) is ``failed``, never ``infeasible``; an unreachable rule set is
+``infeasible`` and the elastic re-solve names the rule that was made unreachable; a spec with nothing
+free is bad input (exit 2).  result.json carries the elastic diagnosis the message is made from.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from conftest import LIBRARY, ROOT
+from solving import diagnose_infeasible, run_solve
+from synthesis import kinds
+from synthesis.core.verdict import ElasticDiagnosis, StartReport, status_of, unsatisfied_error
+from synthesis.errors import SpecError
+from synthesis.spec import load_spec
+
+#: spec, text replacements, starts: feasible rule sets whose given design misses a rule, capped at one
+#: IPOPT iteration, so that no start converges and no returned design meets the rules
+CAPPED = {
+    "crank_rocker": ("picker/cai2020_crank_rocker_synthesis.toml",
+                     [("l7 = { init = 50.0", "l7 = { init = 150.0"), ("l9 = { init = 120.0", "l9 = { init = 30.0"),
+                      ("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "picker_double_crank": ("picker/picker_double_crank_redesign.toml",
+                            [("min_transmission_angle = 40.0", "min_transmission_angle = 80.0"),
+                             ("max_iter = 1500", "max_iter = 1")], 2),
+    "clamp_cam": ("clamp_cam/opening_cam_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "guide_tube": ("guide_tube/cai2020_delta2.toml",
+                   [("angle = { init = 41,", "angle = { init = 65,"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 3),
+}
+
+#: spec, replacements making one rule unreachable, the rule the diagnosis must name, starts
+UNREACHABLE = {
+    "crank_rocker": ("picker/cai2020_crank_rocker_synthesis.toml",
+                     [("min_transmission_angle = 40.0", "min_transmission_angle = 89.0")],
+                     "min_transmission_angle", 2),
+    "picker_double_crank": ("picker/picker_double_crank_retrofit.toml", [("x_a_min = 0.0", "x_a_min = 400.0")],
+                            "frame_point_x_a", 2),
+    "clamp_cam": ("clamp_cam/opening_cam_redesign.toml",
+                  [("base_radius = { init = 50.0, bounds = [20.0, 150.0] }",
+                    "base_radius = { init = 25.0, bounds = [20.0, 30.0] }")], "pressure_angle", 2),
+    "guide_tube": ("guide_tube/cai2020_delta2.toml", [("min_free_fall = 0 ", "min_free_fall = 900 ")],
+                   "free_fall_height", 2),
+}
+
+#: spec whose every design variable is fixed (a published design), per solving kind
+NOTHING_FREE = {
+    "crank_rocker": "picker/cai2020_crank_rocker.toml",
+    "picker_double_crank": "picker/cai2020_double_crank.toml",
+    "clamp_cam": "clamp_cam/opening_cam.toml",
+    "guide_tube": "guide_tube/cai2020_tubes.toml",
+}
+
+
+def edited_spec(tmp_path: Path, source: str, replacements: list[tuple[str, str]]) -> Path:
+    text = (LIBRARY / source).read_text()
+    for old, new in replacements:
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    if any("max_iter = 1\n" in new for _, new in replacements) and "max_iter = 1\n" not in text:
+        text = re.sub(r"max_iter = \d+\n", "max_iter = 1\n", text)
+    path = tmp_path / Path(source).name
+    path.write_text(text)
+    return path
+
+
+def test_every_solving_kind_is_covered():
+    solving = {k.name for k in kinds.all_kinds() if k.solves}
+    assert set(NOTHING_FREE) | {"planting_fourbar", "fourbar_path"} == solving
+
+
+@pytest.mark.parametrize("kind", sorted(CAPPED))
+def test_no_start_converged_is_failed_not_infeasible(tmp_path, kind):
+    source, replacements, starts = CAPPED[kind]
+    loaded = load_spec(edited_spec(tmp_path, source, replacements))
+    assert loaded.kind == kind
+    result, reports, _ = run_solve(loaded, starts=starts, workers=1)
+    assert not any(r.outcome.success for r in reports)
+    assert not any(r.satisfied for r in reports)
+    assert result.status == "failed"
+    assert result.elastic is not None and result.elastic["relaxed"] == []
+    message = str(diagnose_infeasible(loaded, result, reports))
+    assert message.startswith(f"IPOPT found no design that satisfies every rule: 0 of the {starts} starts converged")
+    assert re.search(r"IPOPT said: (Maximum_Iterations_Exceeded|Invalid_Number_Detected)", message)
+    assert "not an infeasible rule set" in message and "[solver] max_iter" in message
+    assert "Rules that conflict" not in message
+
+
+@pytest.mark.parametrize("kind", sorted(UNREACHABLE))
+def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
+    source, replacements, rule, starts = UNREACHABLE[kind]
+    loaded = load_spec(edited_spec(tmp_path, source, replacements))
+    result, reports, _ = run_solve(loaded, starts=starts, workers=1)
+    assert result.status == "infeasible"
+    assert result.elastic["converged"] and result.elastic["relaxed"]
+    assert any(name.startswith(rule) for name in result.elastic["conflicting"]), result.elastic
+    message = str(diagnose_infeasible(loaded, result, reports))
+    assert "Rules that conflict" in message and rule in message
+
+
+@pytest.mark.parametrize("kind", sorted(NOTHING_FREE))
+def test_nothing_free_is_bad_input(kind):
+    loaded = load_spec(LIBRARY / NOTHING_FREE[kind])
+    with pytest.raises(SpecError, match="solve needs at least one free"):
+        run_solve(loaded, starts=1, workers=1)
+
+
+def test_failed_run_exits_3_with_result_and_message(tmp_path):
+    source, replacements, starts = CAPPED["guide_tube"]
+    path = edited_spec(tmp_path, source, replacements)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path / "out"),
+                           "--starts", str(starts), "--workers", "1"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr
+    err = " ".join(proc.stderr.split())
+    assert "IPOPT found no design" in err and "Maximum_Iterations_Exceeded" in err
+    data = json.loads((tmp_path / "out" / "cai2020_delta2" / "result.json").read_text())
+    assert data["schema_version"] == 2
+    assert data["status"] == "failed" and data["elastic"]["relaxed"] == []
+
+
+def _report(start: int, status: str, success: bool) -> StartReport:
+    return StartReport(SimpleNamespace(start=start, return_status=status, success=success), False, 0.3)
+
+
+def test_status_and_message_follow_the_elastic_verdict():
+    """The verdicts on one set of unsatisfied starts: the elastic re-solve relaxes a rule (infeasible),
+    converges without slack (failed: the rules are compatible), or does not converge (failed, even if it
+    left slacks: an unconverged relaxation proves nothing)."""
+    reports = [_report(0, "Maximum_Iterations_Exceeded", False), _report(1, "Invalid_Number_Detected", False),
+               _report(2, "Maximum_Iterations_Exceeded", False)]
+    units, scales = {"gap": "mm", "angle": "deg"}, {"gap": 1.0, "angle": 10.0}
+    conflict = ElasticDiagnosis("Solve_Succeeded", True, {"gap": 2.5, "angle": 1e-9}, units, scales, ["angle"])
+    compatible = ElasticDiagnosis("Solve_Succeeded", True, {"gap": 1e-9, "angle": 1e-8}, units, scales)
+    stuck = ElasticDiagnosis("Maximum_Iterations_Exceeded", False, {"gap": 7.0, "angle": 3.0}, units, scales)
+    assert status_of(reports[0], conflict) == "infeasible"
+    assert conflict.conflicting == ["gap", "angle"]
+    assert status_of(reports[0], compatible) == "failed"
+    assert status_of(reports[0], stuck) == "failed" and stuck.relaxed == [] and stuck.conflicting == []
+    assert status_of(reports[0], None) == "failed"
+    converged_once = reports[:2] + [_report(2, "Solve_Succeeded", True)]     # a converged design between samples
+
+    def message(elastic, status, reps=reports):
+        return str(unsatisfied_error(status, ["gap"], reps, elastic, samples_hint="[solver] samples"))
+
+    m = message(conflict, "infeasible")
+    assert "Rules that conflict" in m and "gap (misses its limit by 2.5 mm)" in m
+    assert "they conflict with angle (binding there)" in m
+    assert "IPOPT said: Maximum_Iterations_Exceeded x2, Invalid_Number_Detected" in m
+    m = message(compatible, "failed")
+    assert m.startswith("IPOPT found no design") and "an elastic re-solve needs no slack" in m
+    assert "not an infeasible rule set" in m and "Violated at the best start: gap" in m
+    m = message(stuck, "failed")
+    assert "did not converge either (Maximum_Iterations_Exceeded)" in m and "Rules that conflict" not in m
+    m = message(compatible, "failed", converged_once)
+    assert "Violated between samples: gap" in m and "Raise [solver] samples" in m
+
+
+def test_a_satisfied_best_start_is_optimal_only_at_solve_succeeded():
+    for status, expected in (("Solve_Succeeded", "optimal"), ("Solved_To_Acceptable_Level", "feasible"),
+                             ("Infeasible_Problem_Detected", "feasible"), ("Maximum_Iterations_Exceeded", "feasible")):
+        best = StartReport(SimpleNamespace(start=0, return_status=status, success=False), True, 0.0)
+        assert status_of(best, None) == expected
