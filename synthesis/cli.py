@@ -129,7 +129,29 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) 
     return table
 
 
-@cli.command()
+def _objectives_help() -> str:
+    """The objectives of every kind that solves, from the registry (one line each, wrapped by hand)."""
+    from synthesis import kinds
+
+    lines = []
+    for kind in kinds.all_kinds():
+        if kind.solves:
+            lines.append(f"  {kind.name}:")
+            lines += [f"    {name}  {meaning}" for name, meaning in kind.objectives.items()]
+    return "\n    ".join(lines)
+
+
+class _SolveCommand(click.Command):
+    """`solve --help` lists every kind's objectives from the registry, read only when help is asked for
+    (so an ordinary run imports no other kind's package)."""
+
+    def format_help(self, ctx, formatter):
+        self.help = self.help.replace("{objectives}", _objectives_help())
+        super().format_help(ctx, formatter)
+
+
+
+@cli.command(cls=_SolveCommand)
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="output folder; the run writes OUT/<spec name>/")
@@ -211,21 +233,6 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
         console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied on the fine grid[/]")
-
-
-def _objectives_help() -> str:
-    """The objectives of every kind that solves, from the registry (one line each, wrapped by hand)."""
-    from synthesis import kinds
-
-    lines = []
-    for kind in kinds.all_kinds():
-        if kind.solves:
-            lines.append(f"  {kind.name}:")
-            lines += [f"    {name}  {meaning}" for name, meaning in kind.objectives.items()]
-    return "\n    ".join(lines)
-
-
-solve.help = solve.help.replace("{objectives}", _objectives_help())
 
 
 @cli.command()

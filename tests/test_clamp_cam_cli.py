@@ -42,9 +42,9 @@ def test_check_writes_result_plots_and_workshop_files(tmp_path):
     assert "pressure_angle_return" in proc.stdout and "FAIL" in proc.stdout
     folder = tmp_path / "opening_cam"
     data = json.loads((folder / "result.json").read_text())
-    for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "trajectory", "versions", "cam",
-                "follower", "profile"):
+    for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "trajectory", "versions", "facts"):
         assert key in data
+    assert {"cam", "follower", "profile"} <= set(data["facts"])
     assert data["kind"] == "clamp_cam" and data["status"] == "evaluated"
     assert {r["name"] for r in data["rules"]} == {"pressure_angle_rise", "pressure_angle_return", "no_undercut",
                                                   "timing_hold_near[0]", "timing_hold_far[0]"}
@@ -58,8 +58,8 @@ def test_check_writes_result_plots_and_workshop_files(tmp_path):
     # CSV: header, closed (last row = first), the working profile of result.json
     rows = np.loadtxt(folder / "profile.csv", delimiter=",", skiprows=1)
     assert rows.shape == (3601, 2) and np.array_equal(rows[0], rows[-1])
-    assert rows[:-1] == pytest.approx(np.column_stack([data["profile"]["working"]["x"],
-                                                       data["profile"]["working"]["y"]]), abs=1e-6)
+    assert rows[:-1] == pytest.approx(np.column_stack([data["facts"]["profile"]["working"]["x"],
+                                                       data["facts"]["profile"]["working"]["y"]]), abs=1e-6)
     # DXF: a closed polyline in mm with the same points
     doc = ezdxf.readfile(folder / "profile.dxf")
     assert doc.header["$INSUNITS"] == 4

@@ -249,18 +249,19 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
     assert "landing_time_spread" in proc.stdout and "FAIL" in proc.stdout
     folder = tmp_path / "cai2020_tubes"
     data = json.loads((folder / "result.json").read_text())
-    for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "versions", "tubes",
-                "row_spacing_sweep", "sensitivity", "closed_form_vs_ode_max_s"):
+    for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "versions", "facts"):
         assert key in data
+    for key in ("tubes", "row_spacing_sweep", "sensitivity", "closed_form_vs_ode_max_s"):
+        assert key in data["facts"]
     assert data["design"] == {"delta_I": 45.0, "delta_II": 41.0}
-    assert data["physics"]["mu_source"] == "calibrated"
-    assert data["closed_form_vs_ode_max_s"] < 1e-9
+    assert data["facts"]["physics"]["mu_source"] == "calibrated"
+    assert data["facts"]["closed_form_vs_ode_max_s"] < 1e-9
     for name in ("drop_times.png", "drop_profiles.png", "sensitivity.png"):
         assert (folder / name).stat().st_size > 10_000
     # sensitivity: plant-position error for mu and v_L within +-20 %, all sliding
-    sens = data["sensitivity"]
+    sens = data["facts"]["sensitivity"]
     assert len(sens["factors"]) == 9 and sens["factors"][4] == 1.0
-    assert sens["mu"]["design_spacing_mm"][4] == pytest.approx(data["spacing_error_mm"], rel=1e-12)
+    assert sens["mu"]["design_spacing_mm"][4] == pytest.approx(data["facts"]["spacing_error_mm"], rel=1e-12)
     # compare overlay drawn from the results alone
     from synthesis.result import load_result
 

@@ -37,7 +37,7 @@ def test_published_designs_check_clean(tmp_path, spec, files):
         assert (folder / name).stat().st_size > 10_000
     if spec == "cai2020_picker":
         assert data["trajectory"]["frame"] == "machine"
-        assert data["instants"]["dropping"]["published_t"] == 0.44
+        assert data["facts"]["instants"]["dropping"]["published_t"] == 0.44
 
 
 def test_solve_of_the_combined_picker_is_bad_input(tmp_path):
@@ -47,8 +47,8 @@ def test_solve_of_the_combined_picker_is_bad_input(tmp_path):
 
 
 @pytest.mark.parametrize("spec, message", [
-    ("cai2020_crank_rocker", "crank_rocker.links: solve needs at least one free length"),
-    ("cai2020_double_crank", "picker_double_crank.linkage: solve needs at least one free variable"),
+    ("cai2020_crank_rocker", "crank_rocker: solve needs at least one free design variable"),
+    ("cai2020_double_crank", "picker_double_crank: solve needs at least one free design variable"),
 ])
 def test_solve_with_nothing_free_is_bad_input(tmp_path, spec, message):
     proc = run("solve", str(PICKER / f"{spec}.toml"), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path)

@@ -188,6 +188,8 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed)."""
     n = len(reports)
     bad = ", ".join(violated) or "none evaluated"
+    unevaluable = next((r.why for r in reports if r.why), None)
+    cannot = f" A start's design could not be evaluated: {unevaluable}." if unevaluable else ""
     if status == "infeasible":
         relaxed = elastic.relaxed
         gives_up = ", ".join(f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]})"
@@ -197,7 +199,7 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         return SolverError(
             f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). Rules that conflict "
             f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
-            f"first): {gives_up}{against}. {relax_hint}")
+            f"first): {gives_up}{against}. {relax_hint}{cannot}")
     if elastic is None:
         why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
     elif not elastic.converged:
@@ -205,8 +207,6 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
                f"about conflicts")
     else:
         why = "and an elastic re-solve needs no slack, so the rules do not conflict"
-    unevaluable = next((r.why for r in reports if r.why), None)
-    cannot = f" A start's design could not be evaluated: {unevaluable}." if unevaluable else ""
     converged = [r for r in reports if r.outcome.success]
     if converged and elastic is not None and elastic.converged:
         return SolverError(
