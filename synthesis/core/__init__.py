@@ -7,4 +7,7 @@
     verdict.py     the fine-grid re-check of a start, the best start, the status and the exit-3 message
     solve.py       the multistart run of any kind, from its declared pieces to a Result
     kind.py        the kind contract: what a kind package exports
+    coordinates.py reparametrisations (Grashof coordinates) that keep the kinematics defined at every iterate
+    starts.py      moving drawn starts into the region where the kinematics is defined
+    cluster.py     the dask.distributed path of the executor (imported only with --scheduler)
 """

@@ -20,7 +20,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints.grashof import GrashofCoordinates
+from synthesis.core.coordinates import GrashofCoordinates
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff

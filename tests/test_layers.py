@@ -1,0 +1,20 @@
+"""Layers go one way (issue 13), enforced by import-linter's contracts in pyproject.toml: design rules
+import only casadi and numpy, kinematics imports no rules and no solver code, the core knows no kind,
+only the CLI uses the terminal libraries."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+from conftest import ROOT
+
+
+def test_import_contracts_hold():
+    exe = shutil.which("lint-imports")
+    cmd = [exe] if exe else [sys.executable, "-m", "importlinter.cli"]
+    proc = subprocess.run([*cmd, "--config", str(ROOT / "pyproject.toml")], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "broken" not in proc.stdout.lower().replace("0 broken", "")
