@@ -5,8 +5,9 @@ from __future__ import annotations
 import pytest
 
 from conftest import PLANTING
+from synthesis import kinds
+from synthesis.core.solve import run_solve
 from synthesis.planting.nlp import PlantingNLP
-from synthesis.planting.solve import run_solve
 from synthesis.spec import load_spec
 
 pytestmark = pytest.mark.benchmark
@@ -23,5 +24,6 @@ def test_bench_one_local_solve(benchmark):
 @pytest.mark.parametrize("workers", [1, 2])
 def test_bench_32_start_multistart(benchmark, workers):
     loaded = load_spec(PLANTING / "redesign_from_example1.toml")
-    result, _, _ = benchmark.pedantic(run_solve, args=(loaded, 32, 0, workers), rounds=3, iterations=1)
+    result, _, _ = benchmark.pedantic(run_solve, args=(kinds.get("planting_fourbar"), loaded, 32, 0, workers),
+                                      rounds=3, iterations=1)
     assert result.status == "optimal"

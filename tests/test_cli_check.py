@@ -118,15 +118,17 @@ def test_problems_lists_the_library(tmp_path):
 
 
 def test_help_teaches_every_command_and_every_kind_that_solves(tmp_path):
-    from synthesis.kinds import _KINDS
+    from synthesis import kinds
 
     top = run("--help", cwd=tmp_path).stdout
     for command in ("check", "solve", "compare", "bench", "problems", "Exit codes"):
         assert command in top
     solve_help = run("solve", "--help", cwd=tmp_path).stdout
-    for kind, entry in _KINDS.items():
-        listed = re.search(rf"^\s+{kind}\s", solve_help, re.MULTILINE) is not None
-        assert listed == (entry.solver is not None), kind
+    for kind in kinds.all_kinds():
+        listed = re.search(rf"^\s+{kind.name}:", solve_help, re.MULTILINE) is not None
+        assert listed == kind.solves, kind.name
+        for objective in kind.objectives:          # every objective of a solving kind, with its meaning
+            assert re.search(rf"^\s+{objective}\s+\S", solve_help, re.MULTILINE), (kind.name, objective)
     compare_help = run("compare", "--help", cwd=tmp_path).stdout
     for phrase in ("first RESULT is the baseline", "offline", "bench", "Example"):
         assert phrase in compare_help

@@ -36,6 +36,9 @@ CAPPED = {
     "clamp_cam": ("clamp_cam/opening_cam_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "guide_tube": ("guide_tube/cai2020_delta2.toml",
                    [("angle = { init = 41,", "angle = { init = 65,"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 3),
+    "planting_fourbar": ("planting_arm/redesign_from_example1.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    # issue 13: this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
+    "fourbar_path": ("fourbar_path/picking_arc.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
 }
 
 #: spec, replacements making one rule unreachable, the rule the diagnosis must name, starts
@@ -50,6 +53,11 @@ UNREACHABLE = {
                     "base_radius = { init = 25.0, bounds = [20.0, 30.0] }")], "pressure_angle", 2),
     "guide_tube": ("guide_tube/cai2020_delta2.toml", [("min_free_fall = 0 ", "min_free_fall = 900 ")],
                    "free_fall_height", 2),
+    # issue 13: an unreachable P1-P3 distance must be named among the conflicting rules
+    "planting_fourbar": ("planting_arm/redesign_from_example1.toml",
+                         [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
+    "fourbar_path": ("fourbar_path/picking_arc.toml",
+                     [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
 }
 
 #: spec whose every design variable is fixed (a published design), per solving kind
@@ -58,6 +66,7 @@ NOTHING_FREE = {
     "picker_double_crank": "picker/cai2020_double_crank.toml",
     "clamp_cam": "clamp_cam/opening_cam.toml",
     "guide_tube": "guide_tube/cai2020_tubes.toml",
+    "planting_fourbar": "planting_arm/taiwan_example1.toml",
 }
 
 

@@ -7,11 +7,13 @@ import math
 import numpy as np
 
 from constraints import Rule
-from synthesis.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
-                                      find_precision_points, planting_rules)
 from synthesis.kinematics.planting_arm import tip_state
+from synthesis.planting.rules import planting_rules
+from synthesis.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
+                                      find_precision_points, float_trace)
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
+
 
 def evaluate(scene: PlantingScene, limits, phase_samples: int = 400,
              turn_samples: int = 3600) -> tuple[list[Rule], PrecisionPoints | None]:
@@ -19,9 +21,14 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = 400,
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:
         pts = find_precision_points(scene)
-        return planting_rules(scene, pts, limits, phase_samples, turn_samples), pts
+        return planting_rules(float_trace(scene, pts, phase_samples, turn_samples), limits), pts
+    return unevaluated(scene, limits, why), None
+
+
+def unevaluated(scene: PlantingScene, limits, why: str) -> list[Rule]:
+    """The rules of a design whose crank cannot turn: only those of the link lengths evaluated."""
     nowhere = PrecisionPoints({n: None for n in POINTS}, None, {n: why for n in POINTS})
-    return planting_rules(scene, nowhere, limits, phase_samples, turn_samples, turn_missing=why), None
+    return planting_rules(float_trace(scene, nowhere, turn_missing=why), limits)
 
 
 def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:

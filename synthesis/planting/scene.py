@@ -1,8 +1,9 @@
 """Numeric scene of a planting-arm design: precision points P1-P6 and the rule inputs.
 
 This is the ``check`` side: every precision point is found by root finding (scipy ``brentq``) on
-the exact AD kinematics, and the semi-infinite rules are sampled on fine grids.  The ``solve`` side
-builds the same rule set from decision variables instead (see :mod:`synthesis.planting.nlp`).
+the exact AD kinematics, and the semi-infinite rules are sampled on fine grids (:func:`float_trace`).
+The ``solve`` side traces the same points from decision variables instead
+(:mod:`synthesis.planting.nlp`); both hand their trace to :func:`synthesis.planting.rules.planting_rules`.
 """
 
 from __future__ import annotations
@@ -13,20 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints import Rule
-from constraints.acceleration import acceleration_sign_rule
-from constraints.angles import entry_angle_rule
-from constraints.depth import depth_rule
-from constraints.grashof import grashof_rule
-from constraints.precision_points import p4p6_rule, seedbed_rules
-from constraints.speed import p2_speed_rule
-from constraints.transmission import transmission_rules
 from synthesis.errors import AssemblyError
 from synthesis.kinematics.planting_arm import ArmDesign, Motion, link_angles, tip_derivatives, tip_state
+from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds
+from synthesis.spec.common import value_of
 from synthesis.spec.planting import PlantingFourbarSpec
-
-TWO_PI = 2.0 * math.pi
-POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
 
 
 @dataclass(frozen=True)
@@ -55,6 +47,13 @@ class PlantingScene:
     seedbed: Seedbed
     soil_level: float | None       # Y of the soil surface, machine frame; None = analysis convention
     analysis_depth: float | None   # soil this far above the lowest point
+    #: typical |a_y| normalising the acceleration margins (mm/s^2): omega^2 x the spec's *given* crank
+    #: length, the same number the NLP uses; None: omega^2 x this design's crank length
+    reference_acc: float | None = None
+
+    @property
+    def acc_scale(self) -> float:
+        return self.reference_acc if self.reference_acc is not None else self.motion.omega**2 * self.design.l2
 
     @classmethod
     def from_spec(cls, spec: PlantingFourbarSpec, values: dict[str, float] | None = None) -> "PlantingScene":
@@ -66,7 +65,7 @@ class PlantingScene:
         bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
                       spec.seedbed.thickness, spec.seedbed.seedling_height)
         soil = v.get("soil_level") if spec.soil.level is not None else None
-        return cls(arm, motion, bed, soil, spec.soil.analysis_depth)
+        return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2))
 
 
 @dataclass
@@ -204,57 +203,25 @@ def phase_grid(a: float, b: float, n: int) -> np.ndarray:
     return np.linspace(a, b, n)
 
 
-def planting_rules(scene: PlantingScene, pts: PrecisionPoints, limits, phase_samples: int = 400,
-                   turn_samples: int = 3600, turn_missing: str | None = None) -> list[Rule]:
-    """Every rule of a planting_fourbar spec, evaluated on floats.
+def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int = 400, turn_samples: int = 3600,
+                turn_missing: str | None = None) -> Trace:
+    """The rules' trace of a numeric design: the found precision points, phases and a turn sampled.
 
     ``turn_missing`` says why the crank cannot complete a turn (then the turn rules are unevaluated).
     """
     d, m = scene.design, scene.motion
-    th = pts.theta
-    at = {n: tip_state(d, m, th[n]) for n in POINTS if th[n] is not None}
-
-    def pos(n):
-        return tuple(at[n].pos[:, 0]) if n in at else None
-
-    def ground(n):
-        return tuple(at[n].ground_pos(m)[:, 0]) if n in at else None
-
-    rules: list[Rule] = []
-    rules += seedbed_rules(pos("P1"), pos("P2"), pos("P3"), limits.p1p3, limits.p2p3, limits.collinearity,
-                           pts.missing("P1", "P2", "P3"))
-    miss4 = pts.missing("P4")
-    vel4 = at["P4"].ground_vel(m)[:, 0] if "P4" in at else (None, None)
-    rules.append(entry_angle_rule(vel4[0], vel4[1], limits.entry_angle_min, miss4))
-    rules.append(depth_rule(pos("P4")[1] if "P4" in at else None, pos("P5")[1] if "P5" in at else None,
-                            limits.depth, miss4))
-    # the cycle is scanned from P5, so the planting stroke's P4 lies one turn earlier than theta['P4']
-    if "P4" in at and "P6" in at:
-        t4 = th["P4"] - TWO_PI
-        p4g = (at["P4"].pos[0, 0] + m.forward * t4 / m.omega, at["P4"].pos[1, 0])
-        rules.append(p4p6_rule(p4g, ground("P6"), limits.p4p6_min))
-    else:
-        rules.append(p4p6_rule(None, None, limits.p4p6_min, pts.missing("P4", "P6")))
-    v2 = at["P2"].vel[:, 0] if "P2" in at else (None, None)
-    rules.append(p2_speed_rule(v2[0], v2[1], limits.p2_speed_min, pts.missing("P2")))
-
-    acc_scale = m.omega**2 * d.l2
-    signs = limits.acceleration
-    for phase, a, b, sign in (("hold", "P3", "P4", signs.hold), ("throw", "P4", "P5", signs.throw),
-                              ("release", "P5", "P6", signs.release)):
-        missing = pts.missing(a, b)
-        ay = None
-        if missing is None:
-            ta, tb = th[a], th[b]
-            if b == "P5":
-                tb += TWO_PI
-            ay = tip_state(d, m, phase_grid(ta, tb, phase_samples)).acc[1]
-        rules.append(acceleration_sign_rule(phase, ay, sign, acc_scale, missing))
-
-    rules.append(grashof_rule(d.l1, d.l2, d.l3, d.l4))
-    mu = None if turn_missing else transmission_angles_deg(d, turn_samples)
-    rules += transmission_rules(mu, limits.transmission_angle, turn_missing)
-    return rules
+    found = [n for n in POINTS if pts.theta[n] is not None]
+    theta = {n: pts.theta[n] for n in found}
+    at = {n: tip_state(d, m, theta[n]) for n in found}
+    accel = {}
+    for phase, (a, b) in PHASES.items():
+        if a in theta and b in theta:
+            accel[phase] = tip_state(d, m, phase_grid(*phase_bounds(theta, phase), phase_samples)).acc[1]
+    return Trace(theta=theta, pos={n: tuple(at[n].pos[:, 0]) for n in found},
+                 vel={n: tuple(at[n].vel[:, 0]) for n in found}, accel_y=accel, links=(d.l1, d.l2, d.l3, d.l4),
+                 mu_deg=None if turn_missing else transmission_angles_deg(d, turn_samples), omega=m.omega,
+                 forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
+                 turn_missing=turn_missing)
 
 
 def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:
