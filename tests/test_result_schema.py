@@ -1,0 +1,58 @@
+"""result.json schema 2 (issue 13): the kind's facts under "facts", one run tail for every kind; version-1
+files (facts and tail flattened at the top level) are still read, and compare shows them."""
+
+from __future__ import annotations
+
+import json
+
+from synthesis.result import SCHEMA_VERSION, Result, load_result
+
+V1 = {
+    "kind": "crank_rocker", "name": "old_run", "spec_sha256": "0" * 64, "status": "optimal",
+    "design": {"l7": 54.04, "l8": 107.63, "l9": 133.47, "l10": 140.0},
+    "rules": [{"name": "grashof_crank_rocker", "value": 45.2, "limit": [0.0, None], "unit": "mm", "satisfied": True,
+               "margin": 45.2}],
+    "objective": {"name": "min_total_length", "value": 435.134, "unit": "mm"},
+    "solver": {"name": "ipopt", "return_status": "Solve_Succeeded", "iterations": 8, "wall_s": 0.4, "starts": 8,
+               "seed": 0, "best_start": 0},
+    "versions": {"agrisynth": "0.1.0", "casadi": "3.6", "python": "3.11"},
+    # version 1: the kind's facts and the run tail side by side at the top level
+    "source": "seed 001", "motion": {"crank_turns": True}, "closed_form": None,
+    "starts": [{"start": 0, "return_status": "Solve_Succeeded", "objective": 435.134}],
+    "elastic": None, "baseline_design": {"l7": 50.0}, "fine_grid_worst_violation": 0.0,
+}
+
+
+def test_a_version_1_file_is_read_into_the_version_2_shape(tmp_path):
+    path = tmp_path / "result.json"
+    path.write_text(json.dumps(V1))
+    r = load_result(path)
+    assert r.extra == {"source": "seed 001", "motion": {"crank_turns": True}, "closed_form": None}
+    assert r.starts == V1["starts"] and r.elastic is None and r.baseline_design == {"l7": 50.0}
+    assert r.fine_grid_worst_violation == 0.0
+    again = r.to_json()
+    assert again["schema_version"] == SCHEMA_VERSION == 2
+    assert again["facts"] == r.extra and "motion" not in again
+    assert Result.from_json(json.loads(json.dumps(again))) == r
+
+
+def test_compare_reads_a_version_1_file_beside_a_version_2_one(tmp_path):
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "result.json").write_text(json.dumps(V1))
+    new = Result.from_json({**{k: v for k, v in V1.items() if k in ("kind", "spec_sha256", "status", "design", "rules",
+                                                                    "objective", "solver", "versions")},
+                            "name": "new_run", "schema_version": 2, "facts": {"source": "seed 001"}, "starts": [],
+                            "elastic": None, "baseline_design": {}, "fine_grid_worst_violation": 0.0})
+    (tmp_path / "new").mkdir()
+    (tmp_path / "new" / "result.json").write_text(json.dumps(new.to_json()))
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(old), str(tmp_path / "new"),
+                           "--out", str(tmp_path / "cmp")], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    page = (tmp_path / "cmp" / "compare.html").read_text()
+    assert "old_run" in page and "new_run" in page
