@@ -12,7 +12,6 @@ from __future__ import annotations
 import casadi as ca
 
 from constraints.base import Rule
-from synthesis.kinematics.fourbar import crank_rotation_slacks
 
 CLASSES = {"crank-rocker": "r2 shortest, s + l <= p + q", "double-crank": "r1 shortest, s + l <= p + q"}
 
@@ -20,12 +19,12 @@ CLASSES = {"crank-rocker": "r2 shortest, s + l <= p + q", "double-crank": "r1 sh
 def grashof_slacks(grashof: str, r1, r2, r3, r4) -> list:
     """The three slacks (mm) of the class; all >= 0 iff the linkage is of that Grashof class."""
     if grashof == "crank-rocker":
-        slacks = crank_rotation_slacks(r1, r2, r3, r4)
+        frame, crank = r1, r2
     elif grashof == "double-crank":
-        slacks = crank_rotation_slacks(r2, r1, r3, r4)     # the frame takes the crank's place
+        frame, crank = r2, r1          # the frame takes the crank's place
     else:
         raise ValueError(f"no Grashof rows for class {grashof!r}")
-    return list(slacks.values())
+    return [r3 + r4 - crank - frame, frame + r4 - crank - r3, frame + r3 - crank - r4]
 
 
 def grashof_class_rule(grashof: str, r1, r2, r3, r4) -> Rule:

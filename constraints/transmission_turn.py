@@ -1,9 +1,13 @@
-"""Transmission angle over a full crank turn, exactly: its extremes are at theta2 = 0 and pi.
+"""Transmission angle from cos mu, over a full crank turn (exactly) or at sampled crank angles.
 
 cos mu = (r3^2 + r4^2 - d^2) / (2 r3 r4) falls as d^2 = r1^2 + r2^2 - 2 r1 r2 cos theta2 grows, so a
-crank that turns fully sees mu_min at theta2 = 0 and mu_max at theta2 = pi.  The optimiser gets the
-two polynomial rows  cos mu(0) <= cos(lo)  and  cos mu(pi) >= cos(hi); nothing is sampled, so no
-backoff is needed.  Records report mu in degrees (``check`` re-samples the whole turn on its own).
+crank that turns fully sees mu_min at theta2 = 0 and mu_max at theta2 = pi: the trace of the full-turn
+rules is cos mu at those two angles, nothing is sampled.  Records report mu in degrees.  The
+optimiser gets polynomial rows, cos mu <= cos(lo) and cos mu >= cos(hi), written in degrees to first
+order at the limit:  (cos(lo) - cos mu) / sin(lo) * 180/pi >= 0  (mu - lo near lo), and
+(cos mu - cos(hi)) / sin(hi) * 180/pi >= 0  (hi - mu near hi).  So a row's margin, its back-off and an
+elastic relaxation are in the rule's unit and scale, as the records are.  On floats, a cos mu outside
+[-1, 1] means the loop does not close there: the rule is not evaluated, and says so.
 """
 
 from __future__ import annotations
@@ -12,28 +16,55 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule
-from synthesis.kinematics.coupler_point import cos_transmission
+from constraints.base import Rule, not_evaluated
+
+DEG = 180.0 / math.pi
+ROUNDING = 1e-12       # |cos mu| this far above 1 is the last digit of a closing loop, not an open one
 
 
-def transmission_turn_rules(r1, r2, r3, r4, bounds: tuple) -> list[Rule]:
+def _mu_deg(cs: list):
+    """mu (deg) at each cos mu; None (floats only) when the loop does not close at one of them."""
+    if not any(isinstance(c, (ca.SX, ca.MX)) for c in cs):
+        if any(not abs(float(c)) <= 1.0 + ROUNDING for c in cs):
+            return None
+        cs = [min(1.0, max(-1.0, float(c))) for c in cs]
+    return ca.vertcat(*[ca.acos(c) * DEG for c in cs])
+
+
+def _per_degree(limit_deg: float) -> float:
+    """d(cos mu)/d(mu) in magnitude at the limit, per degree: rows in cos mu / this are in degrees there
+    (1 at 0 and 180 deg, where cos mu is stationary and the rule is a bound on cos mu alone)."""
+    slope = math.sin(math.radians(limit_deg)) / DEG
+    return slope if slope > 1e-12 else 1.0
+
+
+def _min_rule(cs: list, lo: float, where: str, open_at: str) -> Rule:
+    mu = _mu_deg(cs)
+    if mu is None:
+        return not_evaluated("transmission_angle_min", lo, None, "deg", where, f"the loop does not close {open_at}")
+    c_lo, k = math.cos(math.radians(lo)), _per_degree(lo)
+    return Rule("transmission_angle_min", mu, lo, None, "deg", 10.0, where,
+                nlp_rows=tuple(((c_lo - c) / k, 0.0, None) for c in cs))
+
+
+def _max_rule(cs: list, hi: float, where: str, open_at: str) -> Rule:
+    mu = _mu_deg(cs)
+    if mu is None:
+        return not_evaluated("transmission_angle_max", None, hi, "deg", where, f"the loop does not close {open_at}")
+    c_hi, k = math.cos(math.radians(hi)), _per_degree(hi)
+    return Rule("transmission_angle_max", mu, None, hi, "deg", 10.0, where,
+                nlp_rows=tuple(((c - c_hi) / k, 0.0, None) for c in cs))
+
+
+def transmission_turn_rules(cos_at_0, cos_at_pi, bounds: tuple) -> list[Rule]:
+    """Over a full turn: ``cos_at_0`` = cos mu at theta2 = 0 (mu_min), ``cos_at_pi`` at theta2 = pi (mu_max)."""
     lo, hi = bounds
-    c_min = cos_transmission(0.0, r1, r2, r3, r4)          # at mu_min
-    c_max = cos_transmission(math.pi, r1, r2, r3, r4)      # at mu_max
-    deg = 180.0 / math.pi
-    return [Rule("transmission_angle_min", ca.acos(c_min) * deg, lo, None, "deg", 10.0, "over a turn (at theta2 = 0)",
-                 nlp_rows=((c_min, None, math.cos(math.radians(lo))),)),
-            Rule("transmission_angle_max", ca.acos(c_max) * deg, None, hi, "deg", 10.0, "over a turn (at theta2 = 180)",
-                 nlp_rows=((c_max, math.cos(math.radians(hi)), None),))]
+    return [_min_rule([cos_at_0], lo, "over a turn (at theta2 = 0)", "at theta2 = 0"),
+            _max_rule([cos_at_pi], hi, "over a turn (at theta2 = 180)", "at theta2 = 180 deg")]
 
 
-def transmission_sampled_rules(thetas: list, r1, r2, r3, r4, bounds: tuple) -> list[Rule]:
-    """The same two rules when the crank does not turn fully: cos mu at every sampled crank angle."""
+def transmission_sampled_rules(cos_mu: list, bounds: tuple) -> list[Rule]:
+    """When the crank does not turn fully: cos mu at every sampled crank angle of its motion."""
     lo, hi = bounds
-    cs = [cos_transmission(th, r1, r2, r3, r4) for th in thetas]
-    deg = 180.0 / math.pi
-    mu = ca.vertcat(*[ca.acos(c) * deg for c in cs])
-    return [Rule("transmission_angle_min", mu, lo, None, "deg", 10.0, "over the crank's motion",
-                 nlp_rows=tuple((c, None, math.cos(math.radians(lo))) for c in cs)),
-            Rule("transmission_angle_max", mu, None, hi, "deg", 10.0, "over the crank's motion",
-                 nlp_rows=tuple((c, math.cos(math.radians(hi)), None) for c in cs))]
+    where, open_at = "over the crank's motion", "everywhere on the crank's motion"
+    return [_min_rule(list(cos_mu), lo, where, open_at), _max_rule(list(cos_mu), hi, where, open_at)]

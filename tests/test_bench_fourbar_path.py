@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fourbar_path_support import cli, write_spec
-from synthesis.fourbar_path.solve import run_solve
+from solving import run_solve
 from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, truth_data, truth_spec
 
 

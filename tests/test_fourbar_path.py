@@ -1,5 +1,5 @@
-"""fourbar_path: kinematics identities, exact transmission extremes, AD derivatives, spec errors,
-the picking-arc baseline's points."""
+"""fourbar_path: kinematics identities, exact transmission extremes, the rules against the independent
+oracle, AD derivatives, spec errors, the picking-arc baseline's points."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from fourbar_path_support import PATH_LIBRARY, cli, toml_text
+from fourbar_path_support import PATH_LIBRARY, cli, independent_check, toml_text
 from synthesis.errors import SpecError
-from synthesis.fourbar_path.check import joint_positions, transmission_deg
+from synthesis.fourbar_path.check import evaluate
+from synthesis.fourbar_path.construction import joint_positions, transmission_deg
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.arc import picking_arc
@@ -59,22 +60,56 @@ def test_transmission_extremes_over_a_turn_are_at_0_and_180_degrees(seed):
     assert np.argmin(mu) == 0 and grid[np.argmax(mu)] == pytest.approx(math.pi)
 
 
+@pytest.mark.parametrize("seed", range(12))
+def test_the_rules_on_floats_agree_with_the_independent_oracle(seed):
+    """check and the re-check evaluate rules.path_rules (closed forms) on floats; the oracle measures the
+    same things on the textbook construction.  Even seeds: the synthetic crank-rockers at their own crank
+    angles; odd seeds: random lengths (often no crank-rocker, the loop open somewhere)."""
+    spec = truth_spec(seed, 6, timed=False).model
+    design, phase = random_crank_rocker(seed)
+    if seed % 2:
+        rng = np.random.default_rng(seed)
+        design.update(zip(("r1", "r2", "r3", "r4"), (float(r) for r in rng.uniform(5.0, 60.0, 4))))
+    crank = list(phase + 60.0 * np.arange(6))
+    rules = {r.name: r.record() for r in evaluate(spec, design, crank, timing="solved").rules}
+    oracle = independent_check(spec, design, crank)
+    assert rules["grashof"].satisfied == (oracle["textbook_grashof"] >= 0.0)
+    assert rules["sequence"].value == pytest.approx(oracle["written_out_order"], abs=1e-9) == 60.0
+    error = evaluate(spec, design, crank, timing="solved").sum_sq
+    if math.isfinite(oracle["path_error_mm2"]):
+        assert error == pytest.approx(oracle["path_error_mm2"], rel=1e-9, abs=1e-12)
+    else:
+        assert not rules["assembly"].satisfied
+    if rules["grashof"].satisfied:
+        # a crank-rocker: closure everywhere, the exact extremes are the measured extremes (0 and 180 on the grid)
+        assert rules["assembly"].satisfied and oracle["measured_closure"] >= 0.0
+        assert rules["transmission_angle_min"].value == pytest.approx(30.0 + oracle["measured_transmission_min"],
+                                                                      abs=1e-9)
+        assert rules["transmission_angle_max"].value == pytest.approx(150.0 - oracle["measured_transmission_max"],
+                                                                      abs=1e-9)
+    else:
+        assert oracle["measured_closure"] < 0.0         # a crank that cannot turn: the loop opens somewhere
+    if seed % 2 == 0:
+        assert error < 1e-20 and all(r.satisfied for r in rules.values())
+
+
 @pytest.mark.parametrize("timed", [True, False])
 def test_nlp_derivatives_match_central_differences(timed):
     nlp = PathNLP(truth_spec(2, 6, timed).model)
+    t = nlp.compiled.t                    # the transcribed NLP IPOPT sees: w = (design, crank angles)
+    sign = nlp.problem.parameters
     rng = np.random.default_rng(0)
     lo, hi = nlp.bounds[:, 0], nlp.bounds[:, 1]
     design = lo + (0.3 + 0.4 * rng.random(9)) * (hi - lo)
     design[:4] = [40.0, 12.0, 45.0, 35.0]        # a crank-rocker: every row is defined
     x = np.concatenate([design, np.sort(rng.uniform(0, 6, nlp.n_theta))])
-    sign = 1.0
-    grad = ca.Function("J", [nlp.decision, nlp.direction],
-                       [ca.jacobian(ca.vertcat(nlp.objective, nlp.g), nlp.decision)])
-    J = np.asarray(grad(x, sign))
+    assert t.w.numel() == x.size == 9 + (0 if timed else 6)
+    grad = ca.Function("J", [t.w, sign], [ca.jacobian(ca.vertcat(t.f, t.g), t.w)])
+    J = np.asarray(grad(x, 1.0))
+    fg_function = ca.Function("fg", [t.w, sign], [ca.vertcat(t.f, t.g)])
 
     def fg(z):
-        f, g = nlp.functions(z, sign)
-        return np.concatenate([np.ravel(np.asarray(f)), np.ravel(np.asarray(g))])
+        return np.ravel(np.asarray(fg_function(z, 1.0)))
 
     fd = np.zeros_like(J)
     for k in range(x.size):
@@ -83,6 +118,21 @@ def test_nlp_derivatives_match_central_differences(timed):
         e[k] = h
         fd[:, k] = (fg(x + e) - fg(x - e)) / (2 * h)
     assert np.max(np.abs(J - fd) / np.maximum(np.abs(J), 1.0)) < 1e-6
+
+
+def test_transmission_rows_are_degrees_at_the_limit():
+    """The NLP rows of the transmission rules are cos mu scaled to degrees at the limit, so a row's margin,
+    its back-off and an elastic slack are in the rule's unit: one degree inside the limit is a row of 1
+    (to first order: 1.0103 at 40 deg)."""
+    from constraints.transmission_turn import transmission_turn_rules
+
+    lo, hi = 40.0, 140.0
+    rmin, rmax = transmission_turn_rules(math.cos(math.radians(41.0)), math.cos(math.radians(139.0)), (lo, hi))
+    (row_min, lb_min, _), = rmin.rows()
+    (row_max, lb_max, _), = rmax.rows()
+    assert lb_min == lb_max == 0.0
+    assert row_min == pytest.approx(1.0103, abs=1e-4) and row_max == pytest.approx(1.0103, abs=1e-4)
+    assert rmin.record().value == pytest.approx(41.0) and rmax.record().margin == pytest.approx(1.0)
 
 
 def test_picking_arc_spec_holds_the_ten_arc_points():

@@ -1,5 +1,6 @@
 """fourbar_path solve: global optimum on synthetic truth, independent re-check of every returned
-design, the picking arc, the CLI contract, infeasible rules, determinism, what a run imports."""
+design, the picking arc, the CLI contract, the verdict (capped, infeasible, nothing free),
+determinism, what a run imports."""
 
 from __future__ import annotations
 
@@ -12,14 +13,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fourbar_path_support import PATH_LIBRARY, cli, write_spec
-from synthesis.fourbar_path.check import evaluate, joint_positions
+from fourbar_path_support import PATH_LIBRARY, cli, independent_check, independent_failures, toml_text, write_spec
+from solving import diagnose_infeasible, recheck_rules, run_solve
+from synthesis.core.executor import latin_hypercube_starts
+from synthesis.errors import SpecError
+from synthesis.fourbar_path.check import evaluate
+from synthesis.fourbar_path.construction import joint_positions
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.plots import compare_coupler_curves
-from synthesis.fourbar_path.solve import run_solve
 from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.coupler_point import VARIABLES
-from synthesis.multistart import latin_hypercube_starts
 from synthesis.result import load_result
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
@@ -29,19 +32,17 @@ RECOVERED = 1e-8        # mm^2, the issue's threshold for "zero error recovered"
 
 
 def independently_rechecked(loaded, result) -> None:
-    """The returned design from scratch: error at the targets, assembly, Grashof, transmission, order."""
+    """The returned design from scratch (the oracle: error at the targets, closure, Grashof, transmission,
+    order measured on the textbook construction) and by the re-check every start gets."""
     spec = loaded.model
     design = {n: result.design[n] for n in VARIABLES}
     crank = result.design["crank_deg"]
-    targets = np.array(spec.targets.points)
-    p = joint_positions(design, np.radians(crank), branch=1)["P"]
-    error = np.sum(np.abs(p - (targets[:, 0] + 1j * targets[:, 1])) ** 2)
-    assert error == pytest.approx(result.objective["value"], rel=1e-6, abs=1e-12)
-    ev = evaluate(spec, design, crank, timing="solved")
-    failed = [(r.name, r.record().value) for r in ev.rules if not r.record().satisfied]
-    assert failed == []
-    names = {r.name for r in ev.rules}
-    assert {"grashof", "assembly", "transmission_angle_min", "transmission_angle_max"} <= names
+    oracle = independent_check(spec, design, crank)
+    assert oracle["path_error_mm2"] == pytest.approx(result.objective["value"], rel=1e-6, abs=1e-12)
+    assert independent_failures(spec, design, crank) == []
+    rules = recheck_rules(spec, result.design)
+    assert [(r.name, r.record().value) for r in rules if not r.record().satisfied] == []
+    assert {"grashof", "assembly", "transmission_angle_min", "transmission_angle_max"} <= {r.name for r in rules}
     # Grashof crank-rocker and transmission angle once more, by the textbook definitions
     r = sorted(design[k] for k in ("r1", "r2", "r3", "r4"))
     assert r[0] + r[3] <= r[1] + r[2] and design["r2"] == r[0]
@@ -86,7 +87,9 @@ def test_without_early_stop_the_best_start_is_reported_with_the_starts_needed():
     loaded = truth_spec(4, 10, timed=False, solver={"starts": 16})
     result, reports, log = run_solve(loaded, workers=1)
     s = result.solver
-    assert s["starts_run"] == 16 and not s["stopped_early"] and len(result.extra["starts"]) == 16
+    assert s["starts_run"] == 16 and not s["stopped_early"] and len(result.starts) == 16
+    assert [row["objective"] for row in result.starts] == [r.outcome.objective for r in reports]
+    assert {row["details"]["direction"] for row in result.starts} <= {"ccw", "cw"}
     objectives = [r.outcome.objective for r in reports]
     assert result.objective["value"] == min(objectives) < RECOVERED
     assert s["best_start"] == int(np.argmin(objectives))
@@ -162,7 +165,7 @@ def test_a_failed_start_reports_the_objective_of_the_design_it_returns():
     for i, x0 in enumerate(starts):
         out = nlp.solve(i, x0)
         statuses.add(out.return_status)
-        error = evaluate(nlp.spec, out.design, out.crank_deg, timing="solved").sum_sq
+        error = evaluate(nlp.spec, out.design, out.details["crank_deg"], timing="solved").sum_sq
         if math.isfinite(error):
             assert out.objective == pytest.approx(error, rel=1e-9)
         else:
@@ -185,14 +188,19 @@ def test_picking_arc_baseline_solves_within_the_rules():
     assert_solved(result)
     independently_rechecked_generic(loaded, result)
     # a seedling clamp needs the arc to a fraction of a millimetre: every point within 0.05 mm
-    assert result.extra["path_error"]["max_mm"] < 0.05
+    assert result.extra["path_error"]["max_mm"] == pytest.approx(0.0044, abs=1e-4)
+    assert result.objective["value"] == pytest.approx(1.02934e-4, rel=1e-5)     # before issue 13: 1.0293448e-4
     assert result.objective["value"] == pytest.approx(result.extra["path_error"]["sum_squared_mm2"], rel=1e-6)
+    # both transmission limits are active (40 and 140 deg), held from inside
+    rules = {r["name"]: r for r in result.rules}
+    assert 0.0 <= rules["transmission_angle_min"]["margin"] < 1e-5 and 0.0 <= rules["transmission_angle_max"]["margin"] < 1e-5
 
 
 def independently_rechecked_generic(loaded, result) -> None:
     design = {n: result.design[n] for n in VARIABLES}
+    assert independent_failures(loaded.model, design, result.design["crank_deg"]) == []
+    assert all(r.record().satisfied for r in recheck_rules(loaded.model, result.design))
     ev = evaluate(loaded.model, design, result.design["crank_deg"], timing="solved")
-    assert all(r.record().satisfied for r in ev.rules)
     assert ev.sum_sq == pytest.approx(result.objective["value"], rel=1e-6, abs=1e-12)
 
 
@@ -208,7 +216,11 @@ def test_solve_cli_writes_the_contract_and_figures(tmp_path):
     assert len(data["design"]["crank_deg"]) == 10 and data["design"]["branch"] == "open"
     assert data["objective"]["name"] == "sum_squared_distance" and data["objective"]["value"] >= 0
     assert set(data["solver"]) >= {"name", "return_status", "iterations", "wall_s", "starts", "seed", "best_start",
-                                   "starts_run", "starts_needed"}
+                                   "starts_run", "starts_needed", "starts_reaching_best", "stop_at_objective"}
+    assert data["schema_version"] == 2 and data["status"] == "feasible" and data["elastic"] is None
+    assert data["facts"]["path_error"]["max_mm"] < 0.05 and data["facts"]["crank_direction"] == "ccw"
+    assert [row["start"] for row in data["starts"]] == [0, 1] and len(data["starts"][0]["details"]["crank_deg"]) == 10
+    assert data["fine_grid_worst_violation"] == 0.0 and list(data["baseline_design"])[:9] == list(VARIABLES)
     assert {len(data["trajectory"][k]) for k in ("t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay")} == {361}
     assert (folder / "coupler_curve.png").stat().st_size > 10_000
     assert (folder / "linkage.gif").stat().st_size > 10_000
@@ -226,7 +238,7 @@ def test_check_cli_evaluates_a_given_design(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     out = json.loads((tmp_path / data["name"] / "result.json").read_text())
     assert out["status"] == "evaluated" and "objective" not in out
-    assert out["timing"] == "nearest" and out["path_error"]["max_mm"] < 1e-6
+    assert out["facts"]["timing"] == "nearest" and out["facts"]["path_error"]["max_mm"] < 1e-6
     assert all(r["satisfied"] for r in out["rules"])
     # nearest points of the true curve are the sampled crank angles, evenly over the turn
     gaps = np.diff(out["design"]["crank_deg"]) % 360.0
@@ -238,8 +250,80 @@ def test_infeasible_transmission_window_exits_3_naming_the_rule(tmp_path):
     data["rules"]["transmission_angle"] = [89.9, 90.1]   # needs 4 r1 r2 / (2 r3 r4) < 0.0035: r2 >= 5, r3, r4 <= 60
     proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 3, proc.stdout + proc.stderr
-    assert "Rules that conflict" in proc.stderr and "transmission_angle" in proc.stderr
-    assert json.loads((tmp_path / data["name"] / "result.json").read_text())["status"] == "infeasible"
+    out = json.loads((tmp_path / data["name"] / "result.json").read_text())
+    assert out["status"] == "infeasible" and out["elastic"]["converged"]
+    assert out["elastic"]["relaxed"] == ["transmission_angle_min"]
+    # the slack is in degrees (the rows are cos mu scaled to degrees at the limit): cos mu_min must rise
+    # from cos 89.9 deg to about 0.28, i.e. mu_min falls to about 73.6 deg, 16.1 deg to first order
+    miss = out["elastic"]["slacks"]["transmission_angle_min"]
+    assert miss == pytest.approx(16.1, abs=0.5)
+    err = " ".join(proc.stderr.split())
+    assert "Rules that conflict" in err and f"transmission_angle_min (misses its limit by {miss:.3g} deg)" in err
+
+
+def capped_picking_arc(tmp_path: Path) -> Path:
+    """The picking arc with [solver] max_iter = 1: a feasible rule set no start can solve in one iteration."""
+    text = (PATH_LIBRARY / "picking_arc.toml").read_text().replace("[solver]\n", "[solver]\nmax_iter = 1\n", 1)
+    assert "max_iter = 1\n" in text
+    path = tmp_path / "picking_arc.toml"
+    path.write_text(text)
+    return path
+
+
+def test_capped_iterations_are_failed_not_infeasible(tmp_path):
+    """Issue 13: with max_iter = 1 and 2 starts the run used to say "infeasible", naming all five rules on
+    the strength of an elastic re-solve that itself stopped at the iteration limit."""
+    loaded = load_spec(capped_picking_arc(tmp_path))
+    result, reports, _ = run_solve(loaded, starts=2, workers=1)
+    assert [r.outcome.return_status for r in reports] == ["Maximum_Iterations_Exceeded"] * 2
+    assert not any(r.satisfied for r in reports)
+    assert result.status == "failed" and result.solver["starts_needed"] is None
+    assert result.elastic == {**result.elastic, "return_status": "Maximum_Iterations_Exceeded", "converged": False,
+                              "relaxed": [], "conflicting": []}
+    assert set(result.elastic["slacks"]) == {"grashof", "assembly", "transmission_angle_min",
+                                              "transmission_angle_max", "sequence"}
+    message = str(diagnose_infeasible(loaded, result, reports))
+    assert message.startswith("IPOPT found no design that satisfies every rule: 0 of the 2 starts converged "
+                              "(IPOPT said: Maximum_Iterations_Exceeded x2)")
+    assert "did not converge either (Maximum_Iterations_Exceeded)" in message and "[solver] max_iter" in message
+    assert "Rules that conflict" not in message
+    # the CLI: exit 3, and result.json says what the message says
+    proc = cli("solve", str(tmp_path / "picking_arc.toml"), "--starts", "2", "--workers", "1",
+               "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert "IPOPT found no design" in " ".join(proc.stderr.split()) and "Traceback" not in proc.stderr
+    data = json.loads((tmp_path / "out" / "picking_arc" / "result.json").read_text())
+    assert data["status"] == "failed" and data["elastic"]["converged"] is False and data["elastic"]["relaxed"] == []
+    assert data["objective"]["value"] == pytest.approx(result.objective["value"], rel=1e-12)
+
+
+def test_no_crank_rocker_in_the_bounds_is_infeasible_and_says_why():
+    """r2 in [50, 60] against r1, r3, r4 in [5, 20]: no crank-rocker exists in the bounds (the best smallest
+    Grashof slack is -30 mm: r2 = 50, r1 = r3 = r4 = 20).  The elastic re-solve names grashof, the facts
+    say by how much the class misses."""
+    data = truth_data(0, 6, timed=False, solver={"starts": 4})
+    data["bounds"].update(r2=[50, 60], r1=[5, 20], r3=[5, 20], r4=[5, 20])
+    loaded = truth_spec_from(data)
+    result, reports, _ = run_solve(loaded, workers=1)
+    assert result.status == "infeasible" and "grashof" in result.elastic["relaxed"]
+    room = result.extra["grashof_in_bounds"]
+    assert room["best_smallest_slack_mm"] == pytest.approx(-30.0, abs=1e-9)
+    assert room["lengths_mm"] == pytest.approx([20.0, 50.0, 20.0, 20.0], abs=1e-9)
+    assert "no crank-rocker fits in the bounds of r1..r4" in room["note"]
+    assert "grashof (misses its limit by" in str(diagnose_infeasible(loaded, result, reports))
+
+
+def test_nothing_free_is_bad_input(tmp_path):
+    data = truth_data(3, 6, timed=False)
+    truth, _ = random_crank_rocker(3)
+    data["bounds"] = dict(truth)               # every variable a fixed number: the timing alone is free
+    loaded = truth_spec_from(data)
+    with pytest.raises(SpecError, match="fourbar_path: solve needs at least one free design variable"):
+        run_solve(loaded, starts=2, workers=1)
+    path = tmp_path / "fixed.toml"
+    path.write_text(toml_text(data))
+    proc = cli("solve", str(path), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 2 and "agrisynth check" in proc.stderr
 
 
 FORBIDDEN = ("synthesis.planting", "synthesis.kinematics.planting_arm", "synthesis.cam", "synthesis.clamp_cam",
@@ -263,3 +347,28 @@ def test_a_fourbar_path_run_imports_no_other_kind(tmp_path):
     modules = json.loads((tmp_path / "modules.json").read_text())
     assert "synthesis.fourbar_path.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
+
+
+def test_a_design_that_is_not_a_number_is_reported_not_evaluated():
+    """The re-check refuses a design holding NaN (ValueError -> the start's ``why``); had such a start been
+    the best, the result names every rule "not evaluated" and holds no NaN."""
+    from types import SimpleNamespace
+
+    from synthesis.core.kind import Setting
+    from synthesis.core.verdict import report_of
+    from synthesis.fourbar_path.solve import SOLVING
+
+    loaded = load_spec(PATH_LIBRARY / "picking_arc.toml")
+    setting = Setting(loaded.model, 0)
+    design = {**loaded.model.design_values(), "r3": math.nan}
+    outcome = SimpleNamespace(start=0, design=design, objective=math.inf, return_status="Invalid_Number_Detected",
+                              details={"crank_deg": [0.0] * 10, "direction": "ccw"})
+    report = report_of(outcome, lambda out: SOLVING.recheck(setting, out))
+    assert not report.satisfied and report.worst_violation == math.inf
+    assert report.why == "the design is not a number at r3"
+    finished = SOLVING.finish(setting, report)
+    assert [r["name"] for r in finished.rules] == ["grashof", "assembly", "transmission_angle_min",
+                                                   "transmission_angle_max", "sequence"]
+    assert all(r["value"] is None and r["note"] == report.why for r in finished.rules)
+    assert finished.design["r3"] is None and finished.trajectory is None
+    json.dumps(finished.design, allow_nan=False)

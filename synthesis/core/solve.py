@@ -19,8 +19,8 @@ import numpy as np
 
 from synthesis.core.executor import latin_hypercube_starts, run_starts
 from synthesis.core.kind import Kind, Setting, Solving
-from synthesis.core.verdict import (FINE, ElasticDiagnosis, StartReport, best_in_start_order, better, diagnosis_of,
-                                    measured, report_of, status_note, status_of, unsatisfied_error)
+from synthesis.core.verdict import (FINE, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
+                                    diagnosis_of, measured, report_of, status_note, status_of, unsatisfied_error)
 from synthesis.errors import SolverError, SpecError
 from synthesis.result import Result
 
@@ -94,6 +94,20 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     return diagnosis_of(nlp.compiled, outcome.raw)
 
 
+def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool) -> dict:
+    """result.json ``solver`` entries: how many starts reach the best objective (every rule satisfied,
+    objective tied with the best's by the verdict's tie rule) and how many starts, in start order, it
+    took to reach it the first time -- a multistart's hit rate (bench, tests).  None / 0 when no start
+    satisfies every rule."""
+    if not best.satisfied:
+        return {"starts_needed": None, "starts_reaching_best": 0}
+    sign = -1.0 if maximise else 1.0
+    fb = sign * best.outcome.objective
+    hits = [r.outcome.start for r in reports
+            if r.satisfied and sign * r.outcome.objective <= fb + TIE * max(1.0, abs(fb))]
+    return {"starts_needed": min(hits) + 1, "starts_reaching_best": len(hits)}
+
+
 def starts_table(reports: list[StartReport]) -> list[dict]:
     """result.json ``starts``: one row per start, the same shape for every kind."""
     return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "success": r.outcome.success,
@@ -136,7 +150,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
                 "starts_run": len(run.reports), "stopped_early": len(run.reports) < run.starts,
                 "seed": run.seed, "best_start": best.outcome.start, "workers": run.workers,
                 "scheduler": run.scheduler, "fine_grid_factor": FINE, "status_note": status_note(best),
-                **finished.solver_settings},
+                **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),
         baseline_design=(spec.design_values() if finished.baseline_design is None else finished.baseline_design),
@@ -175,4 +189,4 @@ def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
 
 
 __all__ = ["Run", "run_solve", "solve_spec", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
-           "starts_table", "ipopt_log"]
+           "starts_table", "reaching_best", "ipopt_log"]

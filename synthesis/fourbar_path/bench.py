@@ -16,8 +16,9 @@ on an infeasible order): theta_1 in [0, 360) deg, N gap weights w_i in [0, 1] an
 steps theta_{i+1} - theta_i (times the direction's sign), the last is the rest of the turn, so the
 targets are met in order within at most one turn.  With [rules] order = false the N angles are
 independent, each in [0, 360).  DE sees the Grashof rows as a LinearConstraint and the transmission
-angle as its exact extremes (cos mu at theta2 = 0 and 180 deg).  Both results are re-checked by
-check.evaluate on the fine grid.
+angle as its exact extremes (cos mu at theta2 = 0 and 180 deg), and evaluates its population with
+the complex-number construction (construction.joint_positions, vectorised).  Both results are
+re-checked as every solver start is (check.evaluate: the kind's rules on floats).
 
 Problems: the library specs given, or by default the picking arc and six synthetic-truth problems
 (mechanism 1 with 6, 10, 18 points, timing free and prescribed).  Best known: 0 for the synthetic
@@ -38,8 +39,10 @@ import numpy as np
 from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_evolution
 
 from synthesis.bench import BenchCase, MethodRun
-from synthesis.fourbar_path.check import evaluate, joint_positions
-from synthesis.fourbar_path.solve import run_solve
+from synthesis import kinds
+from synthesis.core.solve import run_solve
+from synthesis.fourbar_path.check import evaluate
+from synthesis.fourbar_path.construction import joint_positions
 from synthesis.fourbar_path.starts import CLASS_ROWS
 from synthesis.fourbar_path.synthetic import truth_spec
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
@@ -57,7 +60,8 @@ SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 
 
 def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float]) -> float:
-    """Largest normalised rule violation on the re-check grid (0 when every rule holds)."""
+    """Largest normalised rule violation as the re-check of a solver start measures it (0 when every
+    rule holds; inf where the loop does not close at a target)."""
     ev = evaluate(spec, design, crank_deg, timing="solved")
     if not np.all(np.isfinite(ev.errors_mm)):
         return math.inf
@@ -83,9 +87,9 @@ def ipopt_multistart(loaded: LoadedSpec):
             if best.satisfied:
                 trace.append((time.perf_counter() - t0, best.outcome.objective))
 
-        result, _, _ = run_solve(staged, workers=1, on_start=on_start)
+        result, _, _ = run_solve(kinds.get("fourbar_path"), staged, workers=1, on_start=on_start)
         s = result.solver
-        objective, violation = result.objective["value"], result.extra["fine_grid_worst_violation"]
+        objective, violation = result.objective["value"], result.fine_grid_worst_violation
         return MethodRun(math.inf if objective is None else objective, math.inf if violation is None else violation,
                          trace, {"starts": s["starts"], "starts_run": s["starts_run"],
                                  "starts_needed": s["starts_needed"], "best_start": s["best_start"],
@@ -99,7 +103,8 @@ def reference_objective(loaded: LoadedSpec) -> float:
     spec = loaded.model
     solver = spec.solver.model_copy(update={"stop_at_objective": None,
                                             "seed": spec.solver.seed + REFERENCE_SEED_OFFSET})
-    result, _, _ = run_solve(dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver})), workers=1)
+    result, _, _ = run_solve(kinds.get("fourbar_path"),
+                             dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver})), workers=1)
     return result.objective["value"]
 
 

@@ -1,14 +1,12 @@
-"""``agrisynth check`` for kind fourbar_path, and the independent re-check of every solve.
+"""``agrisynth check`` for kind fourbar_path, and the re-check of every solver start.
 
-What is independent of the NLP and what is not: joint positions come from complex numbers and an
-inverse cosine (the textbook construction, not fourbar.coupler_joint); loop closure is read off
-those float positions, |r3 - r4| <= |O'A| <= r3 + r4, on a 0.1 deg grid over the whole turn (the NLP
-has polynomial rows at the targets only) and every joint must be a finite number there; the
-Grashof class is the textbook statement on the sorted lengths (s + l <= p + q and the crank -- r2,
-or the frame r1 for a double-crank -- is the shortest; the NLP has three linear rows); the
-transmission angle is measured between the joint positions on the same grid (the NLP uses its
-closed-form extremes); the order of the angles is written out here again.  Shared with the NLP:
-nothing but the record format (constraints.base.Rule) and the spec.
+Both evaluate the spec's rules with :func:`synthesis.fourbar_path.rules.path_rules`, the function the
+NLP builds its constraints from, here on floats: the Grashof class (exact, linear), closure at the
+targets, the transmission angle at its exact extremes over a full turn, the order of the crank angles;
+for grashof = "any" closure and transmission along the crank's motion from target to target, 10x
+more finely sampled than the NLP.  The coupler point is the closed form of
+``kinematics.coupler_point``.  The textbook complex-number construction
+(:mod:`synthesis.fourbar_path.construction`) is the tests' independent oracle of both.
 
 Which design ``check`` evaluates: each variable's [design] value, else its fixed number in [bounds],
 else the midpoint of its [lo, hi] (the result notes which).  The crank angle of each target: the
@@ -25,65 +23,47 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from constraints import Rule, not_evaluated
-from constraints.grashof_class import CLASSES
-from constraints.transmission import transmission_rules
+from constraints import Rule
+from synthesis.core.verdict import FINE
+from synthesis.fourbar_path.rules import path_rules
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_function, design_parameters
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.spec.fourbar_path import FourbarPathSpec
 
 TWO_PI = 2.0 * math.pi
-TURN_SAMPLES = 3600          # the re-check grid over a full turn (0.1 deg)
-FINE = 10                    # "any": this many times the solver's samples between targets
+TURN_SAMPLES = 3600          # the grid of the nearest-point search over a full turn (0.1 deg)
 TRAJECTORY_SAMPLES = 361
 
 
-def joint_positions(design: dict, theta, branch: int) -> dict[str, np.ndarray]:
-    """Complex positions of O, A, B, O', P at crank angles ``theta`` (rad); NaN where the loop is open.
-
-    Local frame O = 0, O' = r1: A = r2 e^{i theta}; B = O' + r4 e^{i(delta - branch gamma)} with delta the
-    direction O' -> A and gamma the angle at O' of the triangle O'AB (law of cosines).  The global frame
-    is the local one turned by theta0 and shifted to (x0, y0).
-    """
-    th = np.asarray(theta, dtype=float)
-    r1, r2, r3, r4 = (design[k] for k in ("r1", "r2", "r3", "r4"))
-    a = r2 * np.exp(1j * th)
-    oa = a - r1
-    d = np.abs(oa)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        gamma = np.arccos((r4 * r4 + d * d - r3 * r3) / (2.0 * r4 * d))
-    b = r1 + r4 * np.exp(1j * (np.angle(oa) - branch * gamma))
-    p = a + (design["rcx"] + 1j * design["rcy"]) * (b - a) / r3
-    turn = np.exp(1j * np.radians(design["theta0"]))      # design values may be arrays (broadcast)
-    shift = design["x0"] + 1j * np.asarray(design["y0"])
-    place = lambda z: shift + turn * z   # noqa: E731
-    return {"O": place(np.zeros_like(a)), "A": place(a), "B": place(b), "O'": place(r1 + 0 * a), "P": place(p)}
-
-
-def transmission_deg(joints: dict) -> np.ndarray:
-    """Angle at B between B -> A and B -> O' (deg, in [0, 180])."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.degrees(np.abs(np.angle((joints["A"] - joints["B"]) / (joints["O'"] - joints["B"]))))
-
-
 def nearest_crank_angles(design: dict, targets: np.ndarray, branch: int) -> np.ndarray:
-    """Crank angle (rad) of the point of the coupler curve nearest to each target."""
+    """Crank angle (rad) of the point of the coupler curve nearest to each target (NaN: no curve)."""
+    p = np.array(design_parameters(design), dtype=float)
+    f = coupler_function(branch)
     grid = np.linspace(0.0, TWO_PI, TURN_SAMPLES, endpoint=False)
-    pts = joint_positions(design, grid, branch)["P"]
+    pts = np.asarray(f(grid.reshape(1, -1), p)[0])
     out = []
     for tx, ty in targets:
-        dist = np.abs(pts - (tx + 1j * ty))
+        dist = np.hypot(pts[0] - tx, pts[1] - ty)
         if not np.any(np.isfinite(dist)):
             out.append(float("nan"))
             continue
         k = int(np.nanargmin(dist))
         h = TWO_PI / TURN_SAMPLES
-        f = lambda t: abs(joint_positions(design, np.array([t]), branch)["P"][0] - (tx + 1j * ty))  # noqa: E731
-        res = minimize_scalar(lambda t: np.nan_to_num(f(t), nan=1e30), bounds=(grid[k] - h, grid[k] + h),
-                              method="bounded", options={"xatol": 1e-12})
+
+        def gap(t: float, tx=tx, ty=ty) -> float:
+            x, y = (float(c) for c in np.asarray(f(t, p)[0]).ravel())
+            return float(np.nan_to_num(math.hypot(x - tx, y - ty), nan=1e30))
+
+        res = minimize_scalar(gap, bounds=(grid[k] - h, grid[k] + h), method="bounded", options={"xatol": 1e-12})
         out.append(float(res.x) if res.fun <= dist[k] else float(grid[k]))
     return np.array(out)
+
+
+def coupler_points(design: dict, thetas: np.ndarray, branch: int) -> np.ndarray:
+    """(n, 2) coupler points at the crank angles ``thetas`` (rad), NaN where the loop is open."""
+    p = np.array(design_parameters(design), dtype=float)
+    return np.asarray(coupler_function(branch)(np.reshape(thetas, (1, -1)), p)[0]).T
 
 
 @dataclass
@@ -92,26 +72,21 @@ class Evaluation:
     crank_deg: list[float]
     errors_mm: np.ndarray            # distance target -> coupler point, NaN where the loop is open
     timing: str                      # "prescribed" / "given" / "solved" / "nearest"
+    direction: str                   # crank direction of the sequence: "ccw" / "cw" ("given": prescribed timing)
 
     @property
     def sum_sq(self) -> float:
         return float(np.sum(self.errors_mm ** 2))
 
 
-def crank_motion(spec: FourbarPathSpec, thetas: np.ndarray) -> np.ndarray:
-    """The crank angles the rules are checked over: a full turn, or target to target for grashof "any"."""
-    if spec.rules.grashof != "any":
-        return np.linspace(0.0, TWO_PI, TURN_SAMPLES, endpoint=False)
-    per = FINE * spec.solver.samples
-    if len(thetas) == 1:
-        return thetas
-    steps = [a + (b - a) * np.arange(per) / per for a, b in zip(thetas, thetas[1:])]
-    return np.concatenate(steps + [thetas[-1:]])
-
-
 def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None = None,
-             timing: str = "given") -> Evaluation:
-    """Every rule of the spec for a design, independently of the solver."""
+             timing: str = "given", direction: str | None = None) -> Evaluation:
+    """Every rule of the spec for a design (floats), the crank angle of each target (deg; None: the
+    nearest points of the coupler curve) and the crank direction ("ccw" / "cw"; None: from the angles).
+    ValueError for a design that is not a set of numbers."""
+    bad = [n for n in VARIABLES if not math.isfinite(float(design[n]))]
+    if bad:
+        raise ValueError(f"the design is not a number at {', '.join(bad)}")
     branch = BRANCHES[spec.branch]
     targets = np.array(spec.targets.points, dtype=float)
     if spec.timed:
@@ -121,61 +96,16 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
         crank_deg, timing = unwrapped(nearest, spec.rules.direction), "nearest"
     thetas = np.radians(np.array(crank_deg, dtype=float))
     located = bool(np.all(np.isfinite(thetas)))     # False: no coupler curve to find the targets on
-    at_targets = joint_positions(design, thetas, branch)
-    errors = np.abs(at_targets["P"] - (targets[:, 0] + 1j * targets[:, 1]))
-    lim = spec.rules
-    rules: list[Rule] = []
-    if lim.grashof != "any":
-        rules.append(grashof_by_sorted_lengths(lim.grashof, design))
-    motion = crank_motion(spec, thetas) if located else np.linspace(0.0, TWO_PI, TURN_SAMPLES, endpoint=False)
-    where = ("over the turn (0.1 deg grid) and at every target" if lim.grashof != "any"
-             else "at the targets and between them")
-    closure_angles = np.concatenate([motion, thetas[np.isfinite(thetas)]])
-    rules.append(closure_rule(design, closure_angles, branch, where))
-    if lim.transmission_angle is not None:
-        mu = transmission_deg(joint_positions(design, motion, branch))
-        missing = None if np.all(np.isfinite(mu)) else "the loop does not close everywhere on the crank's motion"
-        rules += transmission_rules(mu, lim.transmission_angle, missing=missing)
-    if not spec.timed and lim.order:
-        sign, direction = _direction(lim.direction, list(crank_deg))
-        what = f"targets met in order within one turn, crank {direction}"
-        rules.append(order_rule(np.array(crank_deg, dtype=float), sign, what) if located else
-                     not_evaluated("sequence", 0.0, None, "deg", what,
-                                   "no crank angle of the targets: the loop closes at no crank angle"))
-    return Evaluation(rules, [float(a) for a in crank_deg], errors, timing)
-
-
-def grashof_by_sorted_lengths(grashof: str, design: dict) -> Rule:
-    """The Grashof class as the textbook states it: s + l <= p + q (s, p, q, l the sorted lengths) and
-    the link that must turn fully (the crank r2; the frame r1 for a double-crank) is the shortest.
-    Values (mm): p + q - s - l and (shortest of the other three) - that link; both >= 0."""
-    lengths = {k: float(design[k]) for k in ("r1", "r2", "r3", "r4")}
-    s, p, q, l = sorted(lengths.values())
-    turning = "r2" if grashof == "crank-rocker" else "r1"
-    others = min(v for k, v in lengths.items() if k != turning)
-    return Rule("grashof", np.array([p + q - s - l, others - lengths[turning]]), 0.0, None, "mm", 10.0,
-                f"{grashof}: {CLASSES[grashof]}")
-
-
-def closure_rule(design: dict, thetas: np.ndarray, branch: int, where: str) -> Rule:
-    """Loop closure from the float joint positions: |r3 - r4| <= |O'A| <= r3 + r4 at every angle, and
-    every joint a finite number there.  Value: the smaller closure margin at the worst angle (mm)."""
-    r3, r4 = float(design["r3"]), float(design["r4"])
-    joints = joint_positions(design, thetas, branch)
-    d = np.abs(joints["A"] - joints["O'"])
-    margin = np.minimum(d - abs(r3 - r4), r3 + r4 - d)
-    finite = np.all([np.isfinite(z) for z in joints.values()], axis=0)
-    # a closing margin where the construction still gave no number counts as open (by a hair)
-    margin = np.where((margin >= 0.0) & ~finite, -np.finfo(float).tiny, margin)
-    return Rule("assembly", margin, 0.0, None, "mm", 1.0, where)
-
-
-def order_rule(crank_deg: np.ndarray, sign: float, what: str) -> Rule:
-    """Each step sign * (theta_{i+1} - theta_i) >= 0 and the whole span sign * (theta_N - theta_1) <= 360
-    deg; values (deg): the steps and 360 minus the span."""
-    steps = sign * np.diff(crank_deg)
-    return Rule("sequence", np.concatenate([steps, [360.0 - sign * (crank_deg[-1] - crank_deg[0])]]),
-                0.0, None, "deg", 10.0, what)
+    errors = np.hypot(*(coupler_points(design, thetas, branch) - targets).T)
+    if spec.timed:
+        direction, sign = "given", 1.0
+    else:
+        if direction is None:
+            direction = _direction(spec.rules.direction, list(crank_deg))[1]
+        sign = 1.0 if direction == "ccw" else -1.0
+    rules = path_rules(spec, {n: float(design[n]) for n in VARIABLES}, list(thetas) if located else None, sign,
+                       FINE * spec.solver.samples)
+    return Evaluation(rules, [float(a) for a in crank_deg], errors, timing, direction)
 
 
 def unwrapped(angles_deg: np.ndarray, direction: str) -> list[float]:
@@ -243,7 +173,7 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
 
 
 def result_design(design: dict, crank_deg: list[float], spec: FourbarPathSpec) -> dict:
-    out = {n: float(design[n]) for n in VARIABLES}
+    out = {n: float(design[n]) if math.isfinite(design[n]) else None for n in VARIABLES}   # JSON has no NaN
     out["crank_deg"] = [float(a) if math.isfinite(a) else None for a in crank_deg]     # None: not found
     out["branch"] = spec.branch
     return out

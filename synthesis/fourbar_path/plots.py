@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
-from synthesis.fourbar_path.check import joint_positions  # noqa: E402
+from synthesis.fourbar_path.construction import joint_positions  # noqa: E402
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis.fourbar_path.check import joint_positions
+from synthesis.fourbar_path.construction import joint_positions
 from synthesis.kinematics.coupler_point import VARIABLES, cos_transmission
 from synthesis.kinematics.fourbar import crank_rotation_slacks
 from synthesis.spec import LoadedSpec

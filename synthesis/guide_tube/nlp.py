@@ -37,7 +37,7 @@ def symbolic_drop(delta_deg, tube: Tube, physics: Physics) -> DropPhases:
 
 
 class GuideTubeNLP:
-    """Built once (CasADi functions and nlpsol), solved from many starts."""
+    """Built once (CasADi functions and the compiled NLP), solved from many starts."""
 
     def __init__(self, spec: GuideTubeSpec, scene: GuideTubeScene, elastic: bool = False):
         free = [t for t in spec.tubes if is_free(t.angle)]

@@ -31,7 +31,7 @@ def test_collinear_targets_are_approximated_within_the_rules(tmp_path):
     out = json.loads((tmp_path / data["name"] / "result.json").read_text())
     assert all(r["satisfied"] for r in out["rules"])
     assert out["objective"]["value"] > 1e-12
-    assert out["path_error"]["max_mm"] < 1.0                               # a usable straight-line mechanism
+    assert out["facts"]["path_error"]["max_mm"] < 1.0                               # a usable straight-line mechanism
 
 
 def test_repeated_targets_share_one_crank_angle(tmp_path):

@@ -1,0 +1,90 @@
+"""The rules of a fourbar_path spec, wired once: :func:`path_rules` maps a trace (a design, the crank
+angle of each target, the crank direction; floats or CasADi symbols) to every rule of the spec.
+
+The NLP builds them on symbols (their rows are its constraints), ``check`` and the re-check of every
+solver start build them on floats (their records are the rule table), so the three cannot drift apart.
+What each rule reads:
+
+    grashof                   the class's three linear slacks in r1..r4 (crank-rocker / double-crank)
+    assembly                  |r3 - r4| <= |O'A| <= r3 + r4 at every target (a full turn: the Grashof class
+                              then closes the loop everywhere), or along the crank's motion from target
+                              to target (grashof = "any", sampled)
+    transmission_angle_min/max  cos mu at theta2 = 0 and 180 deg, its exact extremes over a full turn;
+                              or at every sample of the motion (grashof = "any")
+    sequence                  the targets met in order within one turn (free timing, [rules] order)
+
+The only sampled rules are those of grashof = "any": the NLP samples ``[solver] samples`` angles
+per gap between targets, the re-check 10x more.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from constraints import Rule, not_evaluated
+from constraints.assembly import assembly_rule
+from constraints.grashof_class import grashof_class_rule
+from constraints.sequence import sequence_rule
+from constraints.transmission_turn import transmission_sampled_rules, transmission_turn_rules
+from synthesis.kinematics.coupler_point import cos_transmission
+from synthesis.kinematics.fourbar import diagonal_sq
+from synthesis.spec.fourbar_path import FourbarPathSpec
+
+DEG = 180.0 / math.pi
+TURN_SAMPLES = 360        # floats only: where the loop is sought when the targets have no crank angle
+
+
+def segment_angles(thetas: list, per_segment: int) -> list:
+    """The crank's motion from target to target, sampled: per_segment angles in each gap, ends included."""
+    out = [thetas[0]]
+    for a, b in zip(thetas, thetas[1:]):
+        out += [a + (b - a) * k / per_segment for k in range(1, per_segment + 1)]
+    return out
+
+
+def _direction_text(sign, direction: str) -> str:
+    if isinstance(sign, (int, float, np.floating)):
+        return "ccw" if sign > 0 else "cw"
+    return direction
+
+
+def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, samples: int) -> list[Rule]:
+    """Every rule of the spec on the design ``v`` (r1..theta0), the crank angle (rad) of each target and
+    the crank direction ``sign`` (+1 counter-clockwise, -1 clockwise); ``samples`` per gap between
+    targets for the sampled rules of grashof = "any".
+
+    ``thetas`` None (floats only): the targets have no crank angle, the loop closing at none; closure
+    and transmission are then evaluated over a turn and the sequence is not evaluated."""
+    r1, r2, r3, r4 = (v[n] for n in ("r1", "r2", "r3", "r4"))
+    lim = spec.rules
+    rules: list[Rule] = []
+    if thetas is None:
+        motion = list(np.linspace(0.0, 2.0 * math.pi, TURN_SAMPLES, endpoint=False))
+    elif lim.grashof == "any" and len(thetas) > 1:
+        motion = segment_angles(thetas, samples)
+    else:
+        motion = thetas
+    if lim.grashof != "any":
+        rules.append(grashof_class_rule(lim.grashof, r1, r2, r3, r4))
+        rules.append(assembly_rule([diagonal_sq(th, r1, r2) for th in motion], r3, r4,
+                                   where="at every target" if thetas is not None else "over a turn"))
+        if lim.transmission_angle is not None:
+            rules += transmission_turn_rules(cos_transmission(0.0, r1, r2, r3, r4),
+                                             cos_transmission(math.pi, r1, r2, r3, r4), lim.transmission_angle)
+    else:
+        rules.append(assembly_rule([diagonal_sq(th, r1, r2) for th in motion], r3, r4,
+                                   where="at the targets and between them" if thetas is not None else "over a turn"))
+        if lim.transmission_angle is not None:
+            rules += transmission_sampled_rules([cos_transmission(th, r1, r2, r3, r4) for th in motion],
+                                                lim.transmission_angle)
+    if not spec.timed and lim.order:
+        direction = _direction_text(sign, lim.direction)
+        what = f"targets met in order within one turn, crank {direction}"
+        if thetas is None:
+            rules.append(not_evaluated("sequence", 0.0, None, "deg", what,
+                                       "no crank angle of the targets: the loop closes at no crank angle"))
+        else:
+            rules.append(sequence_rule([t * DEG for t in thetas], sign, direction))
+    return rules
