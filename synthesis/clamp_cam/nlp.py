@@ -18,14 +18,13 @@ import casadi as ca
 import numpy as np
 
 from constraints.base import Rule
-from constraints.cam import acceleration_rule, pressure_angle_rule, undercut_rule
 from synthesis.clamp_cam.motion import Timing
-from synthesis.clamp_cam.scene import follower_of, omega_of, stroke_of, timing_rules
-from synthesis.kinematics import cam_follower as cf
-from synthesis.kinematics.motion_laws import law as closed_form_law
+from synthesis.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backoff
+from synthesis.kinematics import cam_follower as cf
+from synthesis.kinematics.motion_laws import law as closed_form_law
 from synthesis.spec.clamp_cam import ClampCamSpec
 from synthesis.spec.common import bounds_of, value_of
 
@@ -100,21 +99,11 @@ class CamNLP:
         return rows
 
     def _rules(self, v, alpha, kappa, acc) -> list[Rule]:
-        spec, lim = self.spec, self.spec.rules
-        rules = [pressure_angle_rule("rise", alpha["rise"], lim.pressure_angle_rise),
-                 pressure_angle_rule("return", alpha["return"], lim.pressure_angle_return),
-                 undercut_rule(kappa, v["roller_radius"], lim.min_working_radius)]
-        if lim.groove:
-            rules.append(undercut_rule(kappa, v["roller_radius"], lim.min_working_radius, flank="outer"))
-        timing = Timing.from_design(v)
+        spec = self.spec
+        scale = 1.0 if spec.follower.type == "translating" else 180.0 / math.pi     # model -> report units
         reference = Timing.from_design(dict(zip(self.names, self.init)))
-        rules += timing_rules(spec, timing, reference)
-        if lim.max_acceleration is not None:
-            w2 = omega_of(spec) ** 2
-            scale = 1.0 if spec.follower.type == "translating" else 180.0 / math.pi
-            rules.append(acceleration_rule(acc * (scale * w2), lim.max_acceleration,
-                                           "mm/s^2" if scale == 1.0 else "deg/s^2"))
-        return rules
+        return rules_of(spec, alpha["rise"], alpha["return"], kappa, v["roller_radius"], Timing.from_design(v),
+                        acc * (scale * omega_of(spec) ** 2), reference)
 
     def _objective(self, x, v, alpha) -> ObjectiveParts:
         """base_radius (relative to the given one), nearest (scaled squared change) or pressure_angle:

@@ -178,20 +178,31 @@ def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
     return [r if r.name.startswith("timing_") else dataclasses.replace(r, note=note) for r in rules]
 
 
-def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
-    spec, lim = scene.spec, scene.spec.rules
-    driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
-    rules = [pressure_angle_rule("rise", g.alpha_deg[driven], lim.pressure_angle_rise),
-             pressure_angle_rule("return", g.alpha_deg[g.where("return")], lim.pressure_angle_return),
-             undercut_rule(g.kappa, scene.roller_radius, lim.min_working_radius)]
+def rules_of(spec: ClampCamSpec, alpha_driven, alpha_return, kappa, roller_radius, timing: Timing, acceleration,
+             reference: Timing | None = None) -> list[Rule]:
+    """Every rule of the spec on a trace of floats or CasADi symbols: the pressure angles (deg) while the
+    cam drives (rise and dwells) and on the return, the pitch curvature, the roller radius, the timing,
+    and the follower acceleration while it moves (report units per s^2).  Used by check, the NLP and
+    the fine-grid re-check; ``reference`` (numbers) unwraps symbolic timing windows like their start."""
+    lim = spec.rules
+    rules = [pressure_angle_rule("rise", alpha_driven, lim.pressure_angle_rise),
+             pressure_angle_rule("return", alpha_return, lim.pressure_angle_return),
+             undercut_rule(kappa, roller_radius, lim.min_working_radius)]
     if lim.groove:
-        rules.append(undercut_rule(g.kappa, scene.roller_radius, lim.min_working_radius, flank="outer"))
-    rules += timing_rules(spec, scene.motion.timing)
+        rules.append(undercut_rule(kappa, roller_radius, lim.min_working_radius, flank="outer"))
+    rules += timing_rules(spec, timing, reference)
     if lim.max_acceleration is not None:
-        moving = g.where("rise") | g.where("return")
-        acc = to_report_units(spec, g.samples.dds[moving]) * scene.omega**2
-        rules.append(acceleration_rule(acc, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
+        rules.append(acceleration_rule(acceleration, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
     return rules
+
+
+def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
+    spec = scene.spec
+    driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
+    moving = g.where("rise") | g.where("return")
+    acc = to_report_units(spec, g.samples.dds[moving]) * scene.omega**2
+    return rules_of(spec, g.alpha_deg[driven], g.alpha_deg[g.where("return")], g.kappa, scene.roller_radius,
+                    scene.motion.timing, acc)
 
 
 def evaluate(scene: CamScene, per_motion_segment: int) -> tuple[list[Rule], Geometry]:
