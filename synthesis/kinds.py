@@ -25,6 +25,7 @@ _REGISTRY: dict[str, str] = {
     "picker": "synthesis.picker:PICKER",
     "clamp_cam": "synthesis.clamp_cam:KIND",
     "guide_tube": "synthesis.guide_tube:KIND",
+    "guide_way": "synthesis.guide_way:KIND",
 }
 _RUNTIME: dict[str, Kind] = {}
 

@@ -41,6 +41,8 @@ EXPECTED: dict[str, dict] = {
     "guide_tube/cai2020_tubes.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_tube/fastest_equal_time.toml": {"check": 1, "solve": ("optimal", 402.3011966799367)},
     "guide_tube/uniform_spacing.toml": {"check": 1, "solve": ("optimal", 8.758766813306126)},
+    "guide_way/liang_2z.toml": {"check": 1, "solve": ("exit", 2)},
+    "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.9872647563039696)},
     "fourbar_path/picking_arc.toml": {"check": 1, "solve": ("feasible", 1.0293447294002422e-4)},
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("infeasible", 1.116522628182273)},
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},

@@ -39,6 +39,7 @@ CAPPED = {
     "planting_fourbar": ("planting_arm/redesign_from_example1.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     # issue 13: this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
     "fourbar_path": ("fourbar_path/picking_arc.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "guide_way": ("guide_way/smooth_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
 }
 
 #: spec, replacements making one rule unreachable, the rule the diagnosis must name, starts
@@ -58,6 +59,8 @@ UNREACHABLE = {
                          [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
     "fourbar_path": ("fourbar_path/picking_arc.toml",
                      [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
+    "guide_way": ("guide_way/smooth_redesign.toml", [("roller_margin = 2.0", "roller_margin = 300.0")],
+                  "no_undercut", 2),
 }
 
 #: spec whose every design variable is fixed (a published design), per solving kind
@@ -67,6 +70,7 @@ NOTHING_FREE = {
     "clamp_cam": "clamp_cam/opening_cam.toml",
     "guide_tube": "guide_tube/cai2020_tubes.toml",
     "planting_fourbar": "planting_arm/taiwan_example1.toml",
+    "guide_way": "guide_way/liang_2z.toml",
 }
 
 

@@ -21,7 +21,7 @@ from synthesis.core.executor import latin_hypercube_starts, run_starts
 from synthesis.core.kind import Kind, Setting, Solving
 from synthesis.core.verdict import (FINE, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
                                     diagnosis_of, measured, report_of, status_note, status_of, unsatisfied_error)
-from synthesis.errors import SolverError, SpecError
+from synthesis.errors import AgrisynthError, SolverError, SpecError
 from synthesis.result import Result
 
 
@@ -90,7 +90,11 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
         x0 = (nlp.x_of(design) if hasattr(nlp, "x_of") else np.array([design[n] for n in nlp.names], dtype=float))
     else:
         x0 = np.asarray(nlp.init, float)
-    outcome = nlp.solve(0, x0)
+    try:
+        outcome = nlp.solve(0, x0)
+    except (AgrisynthError, ValueError, ArithmeticError, RuntimeError) as exc:
+        # a diagnosis that could not run proves nothing: the run is "failed", and says why
+        return ElasticDiagnosis(f"not run: {exc}", False, {}, {}, {})
     return diagnosis_of(nlp.compiled, outcome.raw)
 
 

@@ -1,0 +1,21 @@
+"""Kind guide_way: the rotary-arm slide guide way of seed 003 (Liang et al.): claw path -> roller-centre line ->
+the two walls of the groove, reproduced from the paper's conics and redesigned as a smooth spline."""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="guide_way",
+    summary="rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)",
+    spec_model="synthesis.spec.guide_way:GuideWaySpec",
+    check="synthesis.guide_way.check:run_check",
+    figures={"guide_way.png": "synthesis.guide_way.plots:guide_figure",
+             "cycle.png": "synthesis.guide_way.plots:cycle_figure",
+             "animation.gif": "synthesis.guide_way.plots:animation",
+             "centre_line.csv": "synthesis.guide_way.export:write_centre_csv",
+             "walls.csv": "synthesis.guide_way.export:write_walls_csv",
+             "guide_way.dxf": "synthesis.guide_way.export:write_dxf"},
+    compare="synthesis.guide_way.plots:compare_figures",
+    solving="synthesis.guide_way.solve:SOLVING",
+    objectives={"smoothness": "the claw path's squared third derivative, relative to the convex fit's"},
+    example="guide_way/smooth_redesign.toml",
+)

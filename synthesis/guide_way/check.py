@@ -1,0 +1,210 @@
+"""``agrisynth check`` for kind guide_way: evaluate the given claw path against every rule and describe it.
+
+The result carries the rule table and, under ``facts``: every joint (theta, roller centre, tangent and
+curvature from both sides, the jumps), the fold conditions, the arm angle at every key point, the
+uncontrolled stretch, every undercut stretch (where, how long, smallest radius), the pressure angle
+over the cycle, and the curves the figures and the CSV/DXF exports are drawn from (claw tip, roller
+centre line, both walls of the groove).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from synthesis.guide_way import conics as cn
+from synthesis.guide_way import scene as sc
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec
+
+#: the check (and solve's re-check) samples every stretch this many times finer than the NLP
+FINE = 10
+
+
+def scene_for(spec, control=None, samples: int | None = None) -> sc.Scene:
+    """The scene at the check's resolution; a spline path needs its control points (the fit or a solve's)."""
+    n = samples or FINE * spec.solver.samples_per_segment
+    if spec.conic is not None:
+        return sc.conic_scene(spec, n)
+    return sc.spline_scene(spec, n, control)
+
+
+def _r(a) -> list:
+    return [round(float(v), 6) for v in np.asarray(a, float)]
+
+
+def _theta_deg(arm) -> np.ndarray:
+    return np.degrees(np.unwrap(np.asarray(arm.theta, float))) % 360.0
+
+
+def curves(scene: sc.Scene) -> list[dict]:
+    """Per stretch: arm angle, claw tip, roller centre, both walls (left/right of the direction of motion),
+    curvature and pressure angle, in time order."""
+    rr = scene.spec.arm.roller_radius
+    out = []
+    for a in scene.arms:
+        nx, ny = np.asarray(a.n[0]), np.asarray(a.n[1])
+        sp = np.asarray(a.speed)
+        tx, ty = np.asarray(a.n1[0]) / sp, np.asarray(a.n1[1]) / sp
+        out.append({"name": a.name, "theta_deg": _r(np.degrees(np.unwrap(np.asarray(a.theta, float)))),
+                    "claw_x": _r(a.m[0]), "claw_y": _r(a.m[1]), "pivot_x": _r(a.p[0]), "pivot_y": _r(a.p[1]),
+                    "centre_x": _r(nx), "centre_y": _r(ny),
+                    "left_x": _r(nx - rr * ty), "left_y": _r(ny + rr * tx),
+                    "right_x": _r(nx + rr * ty), "right_y": _r(ny - rr * tx),
+                    "curvature_per_mm": [float(f"{v:.9g}") for v in np.asarray(a.kappa, float)],
+                    "pressure_angle_deg": _r(a.pressure_angle_deg)})
+    return out
+
+
+def undercut_stretches(scene: sc.Scene) -> list[dict]:
+    """Every run of samples where the centre line bends tighter than the roller: the wall on the concave side
+    (left or right of the direction of motion) has a cusp there and cannot be cut."""
+    rr = scene.spec.arm.roller_radius
+    found = []
+    for a in scene.arms:
+        k = np.asarray(a.kappa, float)
+        bad = np.abs(k) * rr > 1.0
+        th = _theta_deg(a)
+        nx, ny = np.asarray(a.n[0]), np.asarray(a.n[1])
+        i = 0
+        while i < k.size:
+            if not bad[i]:
+                i += 1
+                continue
+            j = i
+            while j + 1 < k.size and bad[j + 1] and np.sign(k[j + 1]) == np.sign(k[i]):
+                j += 1
+            run = slice(i, j + 1)
+            worst = i + int(np.argmax(np.abs(k[run])))
+            length = float(np.sum(np.hypot(np.diff(nx[run]), np.diff(ny[run]))))
+            found.append({"stretch": a.name, "wall": "left" if k[i] > 0 else "right",
+                          "theta_from_deg": float(th[i]), "theta_to_deg": float(th[j]),
+                          "claw_tip_from": [float(a.m[0][i]), float(a.m[1][i])],
+                          "claw_tip_to": [float(a.m[0][j]), float(a.m[1][j])],
+                          "centre_line_length_mm": length, "smallest_radius_mm": float(1.0 / abs(k[worst])),
+                          "smallest_at_theta_deg": float(th[worst]),
+                          "smallest_at_centre": [float(nx[worst]), float(ny[worst])],
+                          "samples": int(j - i + 1)})
+            i = j + 1
+    return found
+
+
+def _extreme(scene: sc.Scene, values, pick) -> dict:
+    best = None
+    for a, v in zip(scene.arms, values):
+        v = np.asarray(v, float)
+        if v.size == 0:
+            continue
+        i = int(pick(v))
+        if best is None or (pick is np.argmax and v[i] > best[0]) or (pick is np.argmin and v[i] < best[0]):
+            best = (float(v[i]), a, i)
+    if best is None:
+        return {}
+    value, a, i = best
+    return {"value": value, "stretch": a.name, "theta_deg": float(_theta_deg(a)[i]),
+            "claw_tip": [float(a.m[0][i]), float(a.m[1][i])]}
+
+
+def key_angles(scene: sc.Scene) -> dict:
+    """Arm angle theta (deg, 0..360) at every key point of the controlled path, from each stretch that has it."""
+    keys = sc.controlled_keys(scene.spec)
+    out = {}
+    for k, a in enumerate(scene.arms):
+        th = _theta_deg(a)
+        out.setdefault(keys[k], {})["leaving"] = float(th[0])
+        out.setdefault(keys[k + 1], {})["arriving"] = float(th[-1])
+    return out
+
+
+def conic_facts(scene: sc.Scene) -> list[dict]:
+    out = []
+    for piece, seg in zip(scene.pieces, scene.spec.conic):
+        a = seg.coefficients
+        entry = {"name": seg.name, "from": seg.start, "to": seg.end, "coefficients": list(a),
+                 "type": "hyperbola" if piece.conic.hyperbola else "ellipse", "ik_branch": seg.branch,
+                 "key_point_gap_mm": piece.gaps,
+                 "slope_at": {p: cn.slope(a, *scene.spec.points[p]) for p in (seg.start, seg.end)}}
+        if seg.form is not None:
+            st = piece.stretch(2001)
+            x, y = st.m[:, 0], st.m[:, 1]
+            if seg.form.startswith("y"):
+                dev = np.abs(cn.explicit(a, seg.form, x) - y)
+            else:
+                dev = np.abs(cn.explicit(a, seg.form, y) - x)
+            entry["paper_form"] = seg.form
+            entry["paper_form_max_deviation_mm"] = float(np.nanmax(dev)) if np.all(np.isfinite(dev)) else None
+        out.append(entry)
+    return out
+
+
+def describe(scene: sc.Scene) -> dict:
+    spec = scene.spec
+    keys = sc.controlled_keys(spec)
+    angles = key_angles(scene)
+    first, last = keys[0], keys[-1]
+    theta_last, theta_first = angles[last]["arriving"], angles[first]["leaving"]
+    masks = sc.pressure_masks(spec, scene.arms)
+    pa = [a.pressure_angle_deg for a in scene.arms]
+    facts = {
+        "source": spec.source,
+        "path": "conics" if spec.conic is not None else "spline",
+        "controlled_keys": keys,
+        "arm": spec.arm.model_dump(),
+        "key_theta_deg": angles,
+        "uncontrolled": {"from": last, "to": first, "theta_from_deg": theta_last, "theta_to_deg": theta_first,
+                         "arm_angle_deg": (theta_first - theta_last) % 360.0},
+        "joints": {j.name: j.to_json() for j in scene.joints},
+        "fold": scene.fold,
+        "undercut": undercut_stretches(scene),
+        "smallest_radius": _extreme(scene, [1.0 / np.maximum(np.abs(np.asarray(a.kappa, float)), 1e-12)
+                                            for a in scene.arms], np.argmin),
+        "pressure_angle_max": _extreme(scene, pa, np.argmax),
+        "pressure_angle_max_outside_fold_window": _extreme(scene, [np.where(m, p, -1.0) for p, m in zip(pa, masks)],
+                                                           np.argmax),
+        "fold_window_deg": spec.rules.fold_window,
+        "curves": curves(scene),
+    }
+    if scene.pieces is not None:
+        facts["conics"] = conic_facts(scene)
+    if scene.spline is not None:
+        facts["spline"] = spline_facts(scene)
+    return facts
+
+
+def spline_facts(scene: sc.Scene) -> dict:
+    from synthesis.guide_way import spline as sp
+
+    path = scene.spline
+    c = np.asarray(path.control, float)
+    keys = path.keys
+    met = {}
+    for name, u, p in zip(keys.names, keys.u, keys.points):
+        m = (sp.basis(path.n, u) @ c)[0]
+        entry = {"u": u, "target": list(p), "point": [float(m[0]), float(m[1])], "miss_mm": math.dist(m, p)}
+        if name in keys.tangents:
+            t = (sp.basis(path.n, u, 1) @ c)[0]
+            want = keys.tangents[name]
+            got = math.degrees(math.atan2(t[1], t[0]))
+            entry.update(tangent_target_deg=math.degrees(math.atan2(want[1], want[0])), tangent_deg=got,
+                         tangent_miss_deg=abs(sc._wrap(got - math.degrees(math.atan2(want[1], want[0])))))
+        met[name] = entry
+    h = sp.energy_matrix(path.n)
+    return {"control_points": [[float(x), float(y)] for x, y in c], "keys": met,
+            "energy": float(c[:, 0] @ h @ c[:, 0] + c[:, 1] @ h @ c[:, 1]),
+            "uncontrolled_claw": {"x": _r(scene.closing[:, 0]), "y": _r(scene.closing[:, 1])}}
+
+
+def result_of(spec, sha: str, scene: sc.Scene, status: str = "evaluated") -> Result:
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=sha, status=status, design=dict(spec.design_values()),
+                  rules=[r.record().to_json() for r in scene.rules], extra=describe(scene))
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    control = None
+    if spec.spline is not None:
+        from synthesis.guide_way.fit import fit_path
+
+        control = fit_path(spec).control
+    return result_of(spec, loaded.sha256, scene_for(spec, control))

@@ -1,0 +1,91 @@
+"""The convex stage of the redesign: the smoothest periodic claw path through the key points and tangents.
+
+One quadratic program (cvxpy, Clarabel) in the control points P of the periodic cubic B-spline
+(:mod:`synthesis.guide_way.spline`) and one speed lambda_k per key tangent:
+
+    minimise    sum_j |M'''_j|^2 / n                          (curvature variation of the claw path)
+    subject to  M(u_k)  = K_k                                  every key point (the fold moved onto R - d)
+                M'(u_k) = lambda_k t_k,  lambda_k >= v_min     every key tangent (t_k a unit direction)
+                D . M''(u_D) >= -v_min^2 / 2                   |OM| has a minimum at the fold: the path stays
+                                                               outside the circle R - d near D, since
+                                                               (|M|^2)'' = 2 (|M'|^2 + M . M'') > 0 there
+The equalities are then met exactly (to 1e-12 mm) by a least-norm correction of the solver's answer.
+The rules that depend on the arm (undercut, pressure angle, reach, arm direction) are not convex in P:
+the IPOPT stage (:mod:`synthesis.guide_way.nlp`) holds the path to them, starting here.
+cvxpy is imported here only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cvxpy as cp
+import numpy as np
+
+from synthesis.errors import SolverError
+from synthesis.guide_way import spline as sp
+from synthesis.guide_way.scene import spline_path
+
+
+@dataclass(frozen=True)
+class Fit:
+    control: np.ndarray            # (n, 2) control points, mm
+    energy: float                  # sum_j |M'''_j|^2 / n at the fit
+    speeds: dict                   # key -> lambda_k, mm per unit u
+    status: str
+
+
+def fit_path(spec) -> Fit:
+    s = spec.spline
+    n = s.control_points
+    keys = spline_path(spec, None).keys
+    v_min = s.min_speed * keys.length
+    px, py = cp.Variable(n), cp.Variable(n)
+    d3 = sp.third_differences(n)
+    cons = []
+    lam = {}
+    for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
+        b0 = sp.basis(n, u)[0]
+        cons += [b0 @ px == kx, b0 @ py == ky]
+        if name in keys.tangents:
+            tx, ty = keys.tangents[name]
+            b1 = sp.basis(n, u, 1)[0]
+            lam[name] = cp.Variable()
+            cons += [b1 @ px == lam[name] * tx, b1 @ py == lam[name] * ty, lam[name] >= v_min]
+    fold_u = keys.u[keys.index(keys.fold)]
+    fx, fy = keys.points[keys.index(keys.fold)]
+    b2 = sp.basis(n, fold_u, 2)[0]
+    cons.append(fx * (b2 @ px) + fy * (b2 @ py) >= -0.5 * v_min**2)
+    # the energy n^5 sum |third differences|^2, divided by n^5 L^2 for the solver (same minimiser)
+    problem = cp.Problem(cp.Minimize((cp.sum_squares(d3 @ px) + cp.sum_squares(d3 @ py)) / keys.length**2), cons)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as exc:
+        raise SolverError(f"spline fit: the convex solver failed ({exc})") from None
+    if problem.status not in ("optimal", "optimal_inaccurate") or px.value is None:
+        raise SolverError(f"spline fit: the key points and tangents admit no spline ({problem.status}); "
+                          f"check [spline] keys and tangents, or raise control_points")
+    speeds = {k: float(v.value) for k, v in lam.items()}
+    control = _exact(keys, n, np.column_stack([px.value, py.value]), speeds)
+    h = sp.energy_matrix(n)
+    energy = float(control[:, 0] @ h @ control[:, 0] + control[:, 1] @ h @ control[:, 1])
+    return Fit(control, energy, speeds, problem.status)
+
+
+def _exact(keys: sp.Keys, n: int, control: np.ndarray, speeds: dict) -> np.ndarray:
+    """The least change of the control points meeting every key point and tangent exactly (given the speeds)."""
+    rows, rhs = [], []
+    z = np.zeros(n)
+    for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
+        b0 = sp.basis(n, u)[0]
+        rows += [np.concatenate([b0, z]), np.concatenate([z, b0])]
+        rhs += [kx, ky]
+        if name in speeds:
+            b1 = sp.basis(n, u, 1)[0]
+            tx, ty = keys.tangents[name]
+            rows += [np.concatenate([b1, z]), np.concatenate([z, b1])]
+            rhs += [speeds[name] * tx, speeds[name] * ty]
+    a, b = np.array(rows), np.array(rhs)
+    x = np.concatenate([control[:, 0], control[:, 1]])
+    x = x - np.linalg.lstsq(a, a @ x - b, rcond=None)[0]
+    return np.column_stack([x[:n], x[n:]])

@@ -1,0 +1,93 @@
+"""The IPOPT stage of the redesign: the spline's control points held to every rule of the guide way.
+
+Decision variables: the control points P (n x 2), each within ``[spline] move`` mm of the convex fit
+(start 0 is the fit itself).  Structural rows (exact, no back-off): every key point, every key
+tangent's direction (M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min) and |OM| having its minimum at the
+fold (|M'|^2 + M . M'' >= v_min^2 / 2 there).  Rules: the same sampled rules as the check
+(:func:`synthesis.guide_way.scene.rules_of` on the control points as CasADi symbols; the pressure-angle
+samples are those outside the fold window at the fit).  Objective: the smoothness energy relative to
+the fit's, so 1 when the fit already meets every rule.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
+from synthesis.guide_way import scene as sc
+from synthesis.guide_way import spline as sp
+
+#: back-off of each sampled rule, x its scale, so the rules hold between the samples too (reach: none,
+#: it is met with equality at the fold by construction)
+BACKOFF = {"reach": 0.0, "arm_turns_forward": 0.01, "no_undercut": 0.01, "pressure_angle": 0.02}
+
+
+def names_of(n: int) -> list[str]:
+    return [f"P{j}_{c}" for c in ("x", "y") for j in range(n)]
+
+
+def control_of(x, n: int):
+    """(n, 2) control points from the decision vector (x coordinates first)."""
+    if isinstance(x, (ca.SX, ca.MX)):
+        return ca.horzcat(x[:n], x[n:])
+    x = np.asarray(x, float)
+    return np.column_stack([x[:n], x[n:]])
+
+
+class FixedGuide:
+    """A conic (published) guide way: nothing to optimise; the driver refuses it as bad input (exit 2)."""
+
+    def __init__(self, spec):
+        values = spec.design_values()
+        self.names = list(values)
+        self.init = np.array(list(values.values()), float)
+        self.bounds = np.column_stack([self.init, self.init])
+
+
+class GuideNLP:
+    def __init__(self, spec, fit, elastic: bool = False):
+        s = spec.spline
+        n = s.control_points
+        self.spec, self.n, self.fit = spec, n, fit
+        self.names = names_of(n)
+        self.init = np.concatenate([fit.control[:, 0], fit.control[:, 1]])
+        self.bounds = np.column_stack([self.init - s.move, self.init + s.move])
+        x = ca.SX.sym("P", 2 * n)
+        control = control_of(x, n)
+        samples = spec.solver.samples_per_segment
+        fit_arms = sc.spline_scene(spec, samples, fit.control).arms
+        masks = sc.pressure_masks(spec, fit_arms)
+        rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks)
+        h = sp.energy_matrix(n)
+        energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
+        self.problem = Problem("guide_way", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(control),
+                               rules, ObjectiveParts(f=energy / fit.energy), hard_in_elastic=("reach",),
+                               backoff=per_rule_backoff(lambda rule: BACKOFF.get(rule.name, 0.0)),
+                               ipopt="standard", max_iter=spec.solver.max_iter)
+        self.compiled = CompiledNLP(self.problem, elastic)
+
+    def _structural(self, control) -> list:
+        keys = sc.spline_path(self.spec, None).keys
+        v_min = self.spec.spline.min_speed * keys.length
+        rows = []
+        for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
+            m = ca.mtimes(ca.DM(sp.basis(self.n, u)), control)
+            rows += [(m[0] - kx, 0.0, 0.0), (m[1] - ky, 0.0, 0.0)]
+            if name in keys.tangents:
+                tx, ty = keys.tangents[name]
+                m1 = ca.mtimes(ca.DM(sp.basis(self.n, u, 1)), control)
+                rows += [((m1[0] * ty - m1[1] * tx) / keys.length, 0.0, 0.0), (m1[0] * tx + m1[1] * ty, v_min, None)]
+        fold_u = keys.u[keys.index(keys.fold)]
+        m = ca.mtimes(ca.DM(sp.basis(self.n, fold_u)), control)
+        m1 = ca.mtimes(ca.DM(sp.basis(self.n, fold_u, 1)), control)
+        m2 = ca.mtimes(ca.DM(sp.basis(self.n, fold_u, 2)), control)
+        rows.append(((ca.sumsqr(m1) + ca.dot(m, m2)) / v_min**2, 0.5, None))
+        return rows
+
+    def solve(self, start: int, x0) -> StartOutcome:
+        out = self.compiled.solve(start, np.asarray(x0, float))
+        design = dict(zip(self.names, (float(v) for v in out.x[: 2 * self.n])))
+        return StartOutcome.of(out, design, out.objective)

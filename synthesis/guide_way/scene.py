@@ -1,0 +1,236 @@
+"""A guide way evaluated: the claw path sampled, the arm solved at every sample, joints, fold and rules.
+
+``scene_of(spec, samples, control)`` works on numbers (check, re-check); ``symbolic_rules`` builds the
+same sampled rules on the spline's control points as CasADi symbols (the NLP).  ``rules_of`` is the
+one rules function: a trace (the arms of every stretch) in, rules out, floats or symbols.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from constraints import guide_way as gw
+from synthesis.errors import SpecError
+from synthesis.guide_way import path as pth
+from synthesis.guide_way import spline as sp
+from synthesis.guide_way.trace import Arm, arm_vector, evaluate
+
+
+def arm_of(spec) -> list[float]:
+    a = spec.arm
+    return arm_vector(a.radius, a.claw, a.crank, a.beta)
+
+
+def _cat(parts):
+    if isinstance(parts[0], (ca.SX, ca.MX)):
+        return ca.vertcat(*parts)
+    return np.concatenate([np.asarray(p, float) for p in parts])
+
+
+def controlled_keys(spec) -> list[str]:
+    """The key points of the controlled path in time order."""
+    if spec.conic is not None:
+        return [spec.conic[0].start] + [s.end for s in spec.conic]
+    return list(spec.spline.keys)
+
+
+def fold_stretches(spec) -> tuple[int, int]:
+    """Indices of the stretches ending and starting at the fold (-1, -1 when there is no fold)."""
+    keys = controlled_keys(spec)
+    fold = spec.fold if spec.conic is not None else spec.spline.fold
+    if fold is None:
+        return -1, -1
+    k = keys.index(fold)
+    return k - 1, k
+
+
+def pressure_masks(spec, arms: list[Arm]) -> list[np.ndarray]:
+    """Per stretch (numeric arms): the samples the pressure-angle rule holds at, i.e. all but those within
+    ``rules.fold_window`` deg of arm angle of the fold (the dead point, where it is 90 deg by geometry)."""
+    w = spec.rules.fold_window
+    masks = [np.ones(np.asarray(a.theta).size, bool) for a in arms]
+    before, after = fold_stretches(spec)
+    if w > 0 and before >= 0:
+        for k, i in ((before, -1), (after, 0)):
+            th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
+            masks[k] = np.abs(th - th[i]) >= w
+    return masks
+
+
+def rules_of(spec, arms: list[Arm], masks: list[np.ndarray] | None = None) -> list:
+    """The sampled rules over the controlled path (floats or symbols): reach, arm direction, undercut, pressure
+    angle (at the samples ``masks`` keep, default :func:`pressure_masks` of numeric arms)."""
+    a, lim = spec.arm, spec.rules
+    where = "controlled path " + "-".join(controlled_keys(spec))
+    masks = pressure_masks(spec, arms) if masks is None else masks
+    along = []
+    for s, keep in zip(arms, masks):
+        idx = [int(i) for i in np.flatnonzero(keep)]
+        along.append(s.along_crank[idx] if isinstance(s.along_crank, (ca.SX, ca.MX)) else
+                     np.asarray(s.along_crank, float)[idx])
+    pa_where = where + (f", outside {lim.fold_window:g} deg of arm angle about the fold" if lim.fold_window else "")
+    return [gw.reach_rule(_cat([s.rho for s in arms]), a.radius, a.claw, where),
+            gw.turning_rule(_cat([s.turning for s in arms]), where),
+            gw.undercut_rule(_cat([s.kappa for s in arms]), a.roller_radius, lim.roller_margin, where),
+            gw.pressure_angle_rule(_cat(along), lim.max_pressure_angle, pa_where)]
+
+
+@dataclass
+class End:
+    """The roller-centre line at one end of a stretch (a one-sided limit at a joint)."""
+
+    theta_deg: float
+    n: tuple[float, float]
+    tangent_deg: float
+    kappa: float
+    m: tuple[float, float]
+    m_tangent_deg: float
+
+    def to_json(self) -> dict:
+        return {"theta_deg": self.theta_deg % 360.0, "roller_centre": list(self.n), "tangent_deg": self.tangent_deg,
+                "curvature_per_mm": self.kappa, "claw_tip": list(self.m), "claw_tangent_deg": self.m_tangent_deg}
+
+
+def _end(arm: Arm, i: int) -> End:
+    return End(math.degrees(float(arm.theta[i])), (float(arm.n[0][i]), float(arm.n[1][i])),
+               math.degrees(math.atan2(arm.n1[1][i], arm.n1[0][i])), float(arm.kappa[i]),
+               (float(arm.m[0][i]), float(arm.m[1][i])), math.degrees(math.atan2(arm.m1[1][i], arm.m1[0][i])))
+
+
+def _extrapolated(arm: Arm) -> End:
+    """The one-sided limit at the fold of a spline path from samples at delta and 2 delta (linear extrapolation)."""
+    e1, e2 = _end(arm, 0), _end(arm, 1)
+    lin = lambda a, b: 2 * a - b  # noqa: E731
+    return End(lin(e1.theta_deg, e2.theta_deg), (lin(e1.n[0], e2.n[0]), lin(e1.n[1], e2.n[1])),
+               lin(e1.tangent_deg, e2.tangent_deg), lin(e1.kappa, e2.kappa), (lin(e1.m[0], e2.m[0]), lin(e1.m[1], e2.m[1])),
+               lin(e1.m_tangent_deg, e2.m_tangent_deg))
+
+
+def _wrap(deg: float) -> float:
+    return (deg + 180.0) % 360.0 - 180.0
+
+
+@dataclass
+class Joint:
+    name: str
+    before: End
+    after: End
+
+    @property
+    def position_jump(self) -> float:
+        return math.dist(self.before.n, self.after.n)
+
+    @property
+    def tangent_jump(self) -> float:
+        return abs(_wrap(self.after.tangent_deg - self.before.tangent_deg))
+
+    @property
+    def curvature_jump(self) -> float:
+        return abs(self.after.kappa - self.before.kappa)
+
+    def to_json(self) -> dict:
+        return {"before": self.before.to_json(), "after": self.after.to_json(),
+                "theta_jump_deg": _wrap(self.after.theta_deg - self.before.theta_deg),
+                "position_jump_mm": self.position_jump, "tangent_jump_deg": self.tangent_jump,
+                "curvature_jump_per_mm": self.curvature_jump,
+                "claw_tip_gap_mm": math.dist(self.before.m, self.after.m)}
+
+
+@dataclass
+class Scene:
+    spec: object
+    arms: list[Arm]
+    joints: list[Joint]
+    fold: dict | None                    # {point, excess_mm, tangent_error_deg, ...}
+    pieces: list | None = None           # conic path: ConicPiece per segment
+    spline: pth.SplinePath | None = None
+    closing: np.ndarray | None = None    # spline path: the uncontrolled stretch's claw-tip points
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def rules(self) -> list:
+        lim = self.spec.rules
+        rules = rules_of(self.spec, self.arms)
+        for j in self.joints:
+            rules += [gw.jump_rule(j.name, "position", j.position_jump, lim.joint_position),
+                      gw.jump_rule(j.name, "tangent", j.tangent_jump, lim.joint_tangent),
+                      gw.jump_rule(j.name, "curvature", j.curvature_jump, lim.joint_curvature)]
+        if self.fold is not None:
+            rules += [gw.fold_distance_rule(self.fold["point"], self.fold["excess_mm"], lim.fold_distance),
+                      gw.fold_angle_rule(self.fold["point"], self.fold["tangent_error_deg"], lim.fold_angle)]
+        return rules
+
+
+def _unreachable(spec, stretch_name: str, arm: Arm) -> None:
+    """SpecError naming the stretch and the first claw-tip point the arm cannot reach."""
+    c = np.asarray(arm.cos_phi, float)
+    bad = np.flatnonzero(~(np.abs(c) <= 1.0))
+    if bad.size:
+        i = int(bad[0])
+        a = spec.arm
+        x, y = float(arm.m[0][i]), float(arm.m[1][i])
+        raise SpecError(f"segment {stretch_name}: the arm cannot reach the claw tip at ({x:.4g}, {y:.4g}) mm: "
+                        f"|OM| = {math.hypot(x, y):.4g} mm lies outside [R - d, R + d] = "
+                        f"[{a.radius - a.claw:.4g}, {a.radius + a.claw:.4g}] mm")
+
+
+def _fold_of(point: str, m: tuple[float, float], tangents_deg: list[float], R: float, d: float) -> dict:
+    radial = math.degrees(math.atan2(m[1], m[0]))
+    errors = [_wrap(t - radial) for t in tangents_deg]
+    errors = [abs(e) - 90.0 for e in errors]
+    worst = max(errors, key=abs)
+    return {"point": point, "claw_tip": list(m), "distance_mm": math.hypot(*m), "fold_radius_mm": R - d,
+            "excess_mm": math.hypot(*m) - (R - d), "tangent_deg": tangents_deg, "tangent_error_deg": worst}
+
+
+def conic_scene(spec, samples: int) -> Scene:
+    pieces = pth.conic_pieces(spec)
+    arm = arm_of(spec)
+    arms = []
+    for piece in pieces:
+        a = evaluate(piece.stretch(samples), arm)
+        _unreachable(spec, piece.name, a)
+        arms.append(a)
+    joints = [Joint(p.end, _end(a, -1), _end(b, 0)) for p, a, b in zip(pieces, arms, arms[1:])]
+    fold = None
+    if spec.fold is not None:
+        k = [p.end for p in pieces].index(spec.fold)
+        m = spec.points[spec.fold]
+        tangents = [_end(arms[k], -1).m_tangent_deg, _end(arms[k + 1], 0).m_tangent_deg]
+        fold = _fold_of(spec.fold, (float(m[0]), float(m[1])), tangents, spec.arm.radius, spec.arm.claw)
+    return Scene(spec, arms, joints, fold, pieces=pieces)
+
+
+def spline_path(spec, control) -> pth.SplinePath:
+    s = spec.spline
+    keys = sp.keys_of(s.keys, spec.points, s.tangents, s.fold, spec.arm.radius, spec.arm.claw)
+    pth.key_parameters_ok(keys)
+    return pth.SplinePath(keys, control, s.control_points)
+
+
+def spline_scene(spec, samples: int, control: np.ndarray) -> Scene:
+    path = spline_path(spec, np.asarray(control, float))
+    arm = arm_of(spec)
+    arms = []
+    for st in path.stretches(samples):
+        a = evaluate(st, arm)
+        _unreachable(spec, st.name, a)
+        arms.append(a)
+    keys = path.keys
+    fold_u = keys.u[keys.index(keys.fold)]
+    m = tuple(float(v) for v in (sp.basis(path.n, fold_u) @ path.control)[0])
+    t = (sp.basis(path.n, fold_u, 1) @ path.control)[0]
+    fold = _fold_of(keys.fold, m, [math.degrees(math.atan2(t[1], t[0]))], spec.arm.radius, spec.arm.claw)
+    before = evaluate(path.near_fold(-1, pth.FOLD_OFFSET), arm)
+    after = evaluate(path.near_fold(+1, pth.FOLD_OFFSET), arm)
+    joints = [Joint(keys.fold, _extrapolated(before), _extrapolated(after))]
+    return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2))
+
+
+def symbolic_arms(spec, control: ca.SX, samples: int) -> list[Arm]:
+    path = spline_path(spec, control)
+    return [evaluate(st, arm_of(spec)) for st in path.stretches(samples)]

@@ -1,0 +1,145 @@
+"""Spec model of kind ``guide_way``: the rotary-arm slide guide way of seed 003 (Liang et al.).
+
+The arm OP turns uniformly; the claw PM and the crank arm PN are one rigid body pivoting at P; the
+roller at N runs in a fixed guide way.  A spec gives the arm geometry, the claw-tip path relative
+to the frame (in time order, from where the guide takes the claw over to where it lets go) and
+the rule limits.  The path is either the paper's conic segments (``[[conic]]``, check only) or a
+periodic cubic B-spline through key points with tangents (``[spline]``), fitted once by cvxpy and
+then held to the rules by IPOPT (``solve``).
+
+Units: mm and deg.  Frame and angles of the paper's eq (5)-(7) (problems/guide_way/GUIDE_WAY.md).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel
+
+KIND = "guide_way"
+Point = tuple[float, float]
+
+
+class ArmSection(StrictModel):
+    """The rotary arm, the claw and the roller (seed 003 §3(1))."""
+
+    radius: float = Field(gt=0, description="arm OP, R, mm (seed 003: 140, the 280 mm planting wheel)")
+    claw: float = Field(gt=0, description="claw PM, d, mm (seed 003: 119.6829)")
+    crank: float = Field(gt=0, description="crank arm PN, r, mm (seed 003: 70)")
+    beta: float = Field(gt=0, lt=360, description="angle NPM, deg (seed 003: 179.6)")
+    roller_radius: float = Field(gt=0, description="roller radius, mm (seed 003: 15)")
+
+    @model_validator(mode="after")
+    def _claw_shorter(self) -> "ArmSection":
+        if self.claw >= self.radius:
+            raise ValueError(f"claw: expected < radius ({self.radius:g} mm), got {self.claw:g} mm: the claw must "
+                             "fold onto the arm inside the wheel")
+        return self
+
+
+class ConicSegment(StrictModel):
+    """One conic x^2 + a1 xy + a2 y^2 + a3 x + a4 y + a5 = 0 (eq 1) between two key points, in time order."""
+
+    name: str = Field(description="segment name, e.g. 'CD'")
+    start: str = Field(alias="from", description="key point where the claw enters the segment")
+    end: str = Field(alias="to", description="key point where it leaves it")
+    coefficients: tuple[float, float, float, float, float] = Field(description="a1..a5 as printed")
+    branch: Literal["minus", "plus"] = Field(description="inverse kinematics: theta = gamma - phi (eq 7) or + phi")
+    form: Literal["y+", "y-", "x+", "x-"] | None = Field(
+        None, description="the paper's explicit form (§3(2)): y(x) or x(y) with the + or - root; checked")
+    via: Point | None = Field(None, description="a point of the segment choosing the arc of an ellipse "
+                                                "(default: the shorter arc)")
+
+
+class SplineSection(StrictModel):
+    """A periodic uniform cubic B-spline claw path through key points with tangents (the redesign)."""
+
+    control_points: int = Field(24, ge=8, le=200, description="control points of the closed curve")
+    keys: list[str] = Field(min_length=3, description="key points in time order, first = the guide takes the claw "
+                                                      "over, last = it lets go (the rest of the loop is uncontrolled)")
+    tangents: dict[str, float] = Field(default_factory=dict,
+                                       description="direction of motion at a key point, deg from +x, counter-clockwise")
+    fold: str = Field(description="the key point where the claw folds onto the arm: moved along OM onto "
+                                  "|OM| = R - d, tangent perpendicular to OM, and the inverse kinematics "
+                                  "changes branch there (minus before it in the paper's eq 7 ... see GUIDE_WAY.md)")
+    min_speed: float = Field(0.2, gt=0, description="|dM/du| at a key tangent, at least this x the loop length")
+    move: float = Field(40.0, gt=0, description="IPOPT stage: each control point stays within this of the "
+                                                "convex fit, mm")
+
+
+class RulesSection(StrictModel):
+    roller_margin: float = Field(0.0, ge=0, description="smallest centre-line radius of curvature = roller radius + "
+                                                        "this, mm (0: just no undercut)")
+    max_pressure_angle: float = Field(45.0, gt=0, lt=90, description="max pressure angle, deg")
+    fold_window: float = Field(0.0, ge=0, lt=90, description="the pressure-angle rule is not held within this many "
+                                                             "deg of arm angle either side of the fold, where it "
+                                                             "is 90 deg by geometry (the dead point, GUIDE_WAY.md)")
+    joint_position: float = Field(0.01, gt=0, description="largest roller-centre position jump at a joint, mm")
+    joint_tangent: float = Field(0.01, gt=0, description="largest tangent-direction jump at a joint, deg")
+    joint_curvature: float = Field(1e-4, gt=0, description="largest curvature jump at a joint, 1/mm")
+    fold_distance: float = Field(0.01, gt=0, description="| |OD| - (R - d) | at the fold point, at most, mm")
+    fold_angle: float = Field(0.01, gt=0, description="| angle(OD, tangent) - 90 | at the fold point, at most, deg")
+    joint_gap: float = Field(0.05, gt=0, description="bad input: a key point farther than this from its conic, mm")
+
+
+class ObjectiveSection(StrictModel):
+    name: Literal["smoothness"] = Field("smoothness", description="smoothness: the claw path's squared third "
+                                                                   "derivative, relative to the convex fit's")
+
+
+class SolverSection(MultistartSettings):
+    samples_per_segment: int = Field(60, ge=5, le=5000, description="samples per conic segment or per key-to-key "
+                                                                    "stretch of the spline (check: 10x)")
+    starts: int = Field(2, ge=1, le=10000, description="multistart starts (start 0 = the convex fit)")
+
+
+class GuideWaySpec(ProblemSpec):
+    kind: Literal["guide_way"]
+    arm: ArmSection
+    points: dict[str, Point] = Field(description="key points of the claw-tip path, mm")
+    fold: str | None = Field(None, description="conic path: the key point where the claw folds onto the arm (D)")
+    conic: list[ConicSegment] | None = Field(None, description="the paper's conic segments, in time order")
+    spline: SplineSection | None = None
+    rules: RulesSection = Field(default_factory=RulesSection)
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
+    solver: SolverSection = Field(default_factory=SolverSection)
+
+    @model_validator(mode="after")
+    def _path(self) -> "GuideWaySpec":
+        if (self.conic is None) == (self.spline is None):
+            raise ValueError("give the claw path either as [[conic]] segments or as a [spline], exactly one")
+        names = set(self.points)
+        if self.conic is not None:
+            if not self.conic:
+                raise ValueError("conic: expected at least one segment")
+            for k, seg in enumerate(self.conic):
+                for end in (seg.start, seg.end):
+                    if end not in names:
+                        raise ValueError(f"conic[{k}] ({seg.name}): point {end!r} is not in [points] "
+                                         f"({', '.join(sorted(names))})")
+                if k and seg.start != self.conic[k - 1].end:
+                    raise ValueError(f"conic[{k}] ({seg.name}) starts at {seg.start!r} but the segment before "
+                                     f"ends at {self.conic[k - 1].end!r}: list the segments in time order")
+            if self.fold is not None and self.fold not in [s.end for s in self.conic[:-1]]:
+                raise ValueError(f"fold: {self.fold!r} is not a joint between two segments")
+        else:
+            sp = self.spline
+            for key in [*sp.keys, *sp.tangents, sp.fold]:
+                if key not in names:
+                    raise ValueError(f"spline: point {key!r} is not in [points] ({', '.join(sorted(names))})")
+            if len(set(sp.keys)) != len(sp.keys):
+                raise ValueError("spline.keys: a key point is listed twice")
+            if sp.fold not in sp.keys[1:-1]:
+                raise ValueError(f"spline.fold: {sp.fold!r} must be a key point strictly inside the controlled stretch")
+        for name, (x, y) in self.points.items():
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise ValueError(f"points.{name}: expected finite coordinates, got [{x}, {y}]")
+        return self
+
+    def design_values(self) -> dict[str, float]:
+        """The published (or given) path's numbers: the arm geometry (the conics are in ``facts``)."""
+        a = self.arm
+        return {"R": a.radius, "d": a.claw, "r": a.crank, "beta": a.beta, "roller_radius": a.roller_radius}

@@ -1,0 +1,204 @@
+"""Kind guide_way (seed 003, Liang et al.): the printed numbers reproduced with stated tolerances, the
+inverse kinematics checked independently, the published guide way's findings, bad input, the redesign.
+Our reading and the evidence behind every tolerance: problems/guide_way/GUIDE_WAY.md."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import LIBRARY, ROOT
+from synthesis.guide_way import conics as cn
+from synthesis.kinematics import rotary_arm as ra
+from synthesis.spec import load_spec
+
+AB = (-2.2758, 2.19137, -685.798, 1108.906, 145488.69)
+BC = (-1.60586, -3.56106, -1308.2454, 89.41237, 215274.7426)
+CD = (-2.927224558, 9.396543478, -101.3868471, -142.0407034, -2210.354917)
+DE = (-0.7136, -0.4315, 182.7136, -141.2117, 4426.116)
+B, C, D = (103.0, -171.0), (179.0, 39.0), (-14.49569, 14.49569)
+R, d, r, BETA = 140.0, 119.6829, 70.0, 179.6
+
+
+def _bc(y3: float) -> np.ndarray:
+    """eq (10): C, the two table points, B, and the tangent at B taken from the printed AB (eq 9)."""
+    yb = cn.slope(AB, *B)
+    return cn.solve_rows([cn.point_row(C), cn.point_row((187.5, 18.5)), cn.point_row((184.0, y3)), cn.point_row(B),
+                          cn.tangent_row(B, yb)])
+
+
+def test_b_lies_on_the_printed_ab_conic():
+    # 6e-3 mm: the printed AB coefficients carry 5-6 significant digits (a1 = -2.2758 alone moves the
+    # curve by ~|x y| 5e-5 / |grad F| ~ 0.02 mm at B)
+    assert cn.distance(AB, *B) == pytest.approx(0.0059, abs=5e-4)
+
+
+def test_bc_reproduces_the_printed_coefficients_with_the_third_point_at_minus_85_5():
+    printed = np.array(BC)
+    # as printed (184, -85.4): 1-2 % off in every coefficient, far beyond rounding
+    off = np.abs(_bc(-85.4) / printed - 1)
+    assert off.min() > 9e-3
+    # the printed BC conic passes through (184, -85.50) not (184, -85.4): F there is 40 (0.27 mm away)
+    assert cn.value(BC, 184.0, -85.4) == pytest.approx(40.23, abs=0.01)
+    ys = np.roots([BC[1], BC[0] * 184 + BC[3], 184**2 + BC[2] * 184 + BC[4]])
+    assert min(abs(ys + 85.5)) < 1e-4
+    # with -85.5 every coefficient agrees to 1.4e-5 relative: the rounding of the printed AB tangent input
+    assert np.max(np.abs(_bc(-85.5) / printed - 1)) < 2e-5
+
+
+def test_slope_at_c_from_bc_is_the_printed_value():
+    assert cn.slope(BC, *C) == pytest.approx(-2.12878423, abs=1e-8)
+
+
+def test_cd_reproduces_the_printed_coefficients():
+    """eq (13): C, y'_C, the table point (47.5, 42), D and y'_D = -x_D / y_D = 1."""
+    yc = -2.12878423
+    yd = -D[0] / D[1]
+    assert yd == 1.0
+    fitted = cn.solve_rows([cn.point_row(C), cn.tangent_row(C, yc), cn.point_row((47.5, 42.0)), cn.point_row(D),
+                            cn.tangent_row(D, yd)])
+    assert np.max(np.abs(fitted / np.array(CD) - 1)) < 1e-5      # 5.3e-6 worst (a4)
+
+
+def test_de_passes_d_with_the_fold_tangent():
+    assert cn.distance(DE, *D) < 2e-5
+    assert cn.slope(DE, *D) == pytest.approx(1.0, abs=1e-5)
+    assert cn.slope(CD, *D) == pytest.approx(1.0, abs=2e-6)
+
+
+def test_the_printed_d_and_d_disagree_and_how():
+    """|OD| = 20.5 = 140 - 119.5 to 1.4e-6 mm, while R - d = 20.3171; d itself is sqrt(118^2 + 20^2)."""
+    assert math.hypot(*D) == pytest.approx(20.5, abs=2e-6)
+    assert R - d == pytest.approx(20.3171, abs=1e-9)
+    assert math.hypot(118.0, 20.0) == pytest.approx(d, abs=1e-4)
+    # tangent at D perpendicular to OD (eq 11): slope 1 against OD's slope -1
+    assert (-D[0] / D[1]) * (D[1] / D[0]) == -1.0
+
+
+def test_inverse_kinematics_round_trip_and_the_papers_rates():
+    """M -> (theta, alpha) -> M again; AD rates against the paper's hand-derived dtheta/dx, dalpha/dx."""
+    from synthesis.guide_way.trace import arm_function, arm_vector
+
+    st = cn.CentralConic.of(BC)
+    st = st.with_branch(st.branch_of(*C))
+    t = np.linspace(st.parameter(*C)[0], st.parameter(*B)[0], 7)
+    x, y = st.at(t)
+    dx, dy = st.at(t, 1)
+    f = arm_function(-1.0)
+    for i in range(t.size):
+        out = f(np.array([x[i], y[i]]), np.array([dx[i], dy[i]]), np.zeros(2), arm_vector(R, d, r, BETA))
+        theta, alpha, theta1 = float(out[0]), float(out[1]), float(out[10])
+        mx, my = ra.claw_tip(R, d, theta, alpha)
+        assert math.hypot(mx - x[i], my - y[i]) < 1e-9
+        nx, ny = float(out[4]), float(out[5])
+        px, py = ra.pivot(R, theta)
+        assert math.hypot(nx - px, ny - py) == pytest.approx(r, abs=1e-9)
+        # angle NPM = beta
+        a = math.degrees(math.atan2(my - py, mx - px) - math.atan2(ny - py, nx - px)) % 360.0
+        assert min(a, 360 - a) == pytest.approx(360 - BETA if BETA > 180 else BETA, abs=1e-9)
+        dtheta_dx, _ = ra.inverse_rates(R, d, theta, alpha, dy[i] / dx[i])
+        assert theta1 / dx[i] == pytest.approx(dtheta_dx, rel=1e-9)
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    from synthesis import kinds
+
+    loaded = load_spec(LIBRARY / "guide_way" / "liang_2z.toml")
+    return kinds.checker("guide_way")(loaded)
+
+
+def test_published_guide_way_findings(baseline):
+    f = baseline.extra
+    rules = {r["name"]: r for r in baseline.rules}
+    assert {r["name"] for r in baseline.violated()} == {"no_undercut", "pressure_angle", "joint_D_position",
+                                                        "joint_D_tangent", "joint_C_curvature",
+                                                        "joint_B_curvature", "fold_distance"}
+    # D: the printed d does not fold the claw at D: the arm angle jumps by 2 phi and the roller centre by 55 mm
+    assert f["joints"]["D"]["theta_jump_deg"] == pytest.approx(-14.157, abs=2e-3)
+    assert f["joints"]["D"]["position_jump_mm"] == pytest.approx(54.68, abs=0.01)
+    assert rules["fold_distance"]["value"] == pytest.approx(0.1829, abs=1e-4)
+    # B and C: position and tangent continuous (within the printed digits), curvature jumps
+    assert f["joints"]["C"]["position_jump_mm"] < 1e-4 and f["joints"]["C"]["tangent_jump_deg"] < 1e-3
+    assert f["joints"]["C"]["curvature_jump_per_mm"] == pytest.approx(0.0802, abs=2e-4)
+    assert f["joints"]["B"]["curvature_jump_per_mm"] == pytest.approx(0.00796, abs=1e-4)
+    # the one undercut: the CD end of the centre line at C bends tighter than the 15 mm roller
+    (u,) = f["undercut"]
+    assert u["stretch"] == "CD" and u["smallest_radius_mm"] == pytest.approx(13.86, abs=0.01)
+    # every paper form (2) and §3(2) branch holds on our samples
+    assert all(c["paper_form_max_deviation_mm"] < 1e-6 for c in f["conics"])
+    assert f["key_theta_deg"]["C"]["arriving"] == pytest.approx(216.921, abs=1e-3)
+    json.dumps(baseline.to_json(), allow_nan=False)
+
+
+def test_centre_line_invariants_on_a_finer_grid(baseline):
+    """|PN| = r and |PM| = d at every exported sample (independent of the AD)."""
+    for c in baseline.extra["curves"]:
+        px, py = np.array(c["pivot_x"]), np.array(c["pivot_y"])
+        assert np.allclose(np.hypot(np.array(c["centre_x"]) - px, np.array(c["centre_y"]) - py), r, atol=1e-5)
+        assert np.allclose(np.hypot(np.array(c["claw_x"]) - px, np.array(c["claw_y"]) - py), d, atol=1e-5)
+        assert np.allclose(np.hypot(np.array(c["left_x"]) - np.array(c["right_x"]),
+                                    np.array(c["left_y"]) - np.array(c["right_y"])), 30.0, atol=1e-5)
+
+
+def _run(args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=300)
+
+
+def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
+    proc = _run(["check", str(LIBRARY / "guide_way" / "liang_2z.toml"), "--out", str(tmp_path)])
+    assert proc.returncode == 1, proc.stderr
+    folder = tmp_path / "liang_2z"
+    for name in ("result.json", "guide_way.png", "cycle.png", "animation.gif", "centre_line.csv", "walls.csv",
+                 "guide_way.dxf"):
+        assert (folder / name).exists(), name
+    import ezdxf
+
+    doc = ezdxf.readfile(folder / "guide_way.dxf")
+    assert doc.header["$INSUNITS"] == 4
+    assert len(doc.modelspace().query('LWPOLYLINE[layer=="GROOVE"]')) == 4
+    code = ("import sys; from synthesis.spec import load_spec; from synthesis import kinds; "
+            f"kinds.checker('guide_way')(load_spec(r'{LIBRARY / 'guide_way' / 'liang_2z.toml'}')); "
+            "print([m for m in sys.modules if m.startswith(('synthesis.planting', 'synthesis.fourbar_path', "
+            "'synthesis.clamp_cam', 'synthesis.guide_tube', 'synthesis.crank_rocker', 'synthesis.picker', "
+            "'synthesis.kinematics.fourbar', 'synthesis.kinematics.motion_laws', 'synthesis.kinematics.cam_follower'))])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("claw = 119.6829", "claw = 60.0"), "segment DE: the arm cannot reach the claw tip"),
+    (("C = [179.0, 39.0]", "C = [179.0, 41.0]"), "the conics do not meet at C"),
+])
+def test_bad_input_is_one_line_exit_2(tmp_path, edit, message):
+    text = (LIBRARY / "guide_way" / "liang_2z.toml").read_text().replace(*edit)
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    proc = _run(["check", str(path), "--out", str(tmp_path)])
+    assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_redesign_solves_smooth_without_undercut(baseline):
+    from synthesis.core.solve import solve_spec
+
+    loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
+    result, _, _ = solve_spec(loaded, workers=1)
+    assert result.status == "optimal" and result.all_satisfied
+    f = result.extra
+    for key in f["spline"]["keys"].values():
+        assert key["miss_mm"] < 1e-6
+        assert key.get("tangent_miss_deg", 0.0) < 1e-6
+    assert f["undercut"] == [] and f["smallest_radius"]["value"] >= 17.0 - 1e-9
+    published = baseline.extra["pressure_angle_max_outside_fold_window"]["value"]
+    assert f["pressure_angle_max_outside_fold_window"]["value"] <= published
+    # the fold is exact, so the centre line is continuous through D (one-sided limits, extrapolated)
+    j = f["joints"]["D"]
+    assert j["position_jump_mm"] < 1e-3 and j["tangent_jump_deg"] < 1e-2 and j["curvature_jump_per_mm"] < 1e-4
+    assert f["fold"]["excess_mm"] == pytest.approx(0.0, abs=1e-9)
