@@ -26,6 +26,8 @@ _REGISTRY: dict[str, str] = {
     "clamp_cam": "synthesis.clamp_cam:KIND",
     "guide_tube": "synthesis.guide_tube:KIND",
     "guide_way": "synthesis.guide_way:KIND",
+    "steering_linkage": "synthesis.steering_linkage:KIND",
+    "tillage_linkage": "synthesis.tillage_linkage:KIND",
 }
 _RUNTIME: dict[str, Kind] = {}
 

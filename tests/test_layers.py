@@ -18,3 +18,16 @@ def test_import_contracts_hold():
                           text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "broken" not in proc.stdout.lower().replace("0 broken", "")
+
+
+def test_the_core_contract_names_every_kind_package():
+    """The "core knows no kind" contract lists kind packages by name: every registered kind's package
+    must be on it (a new kind adds itself there)."""
+    import tomllib
+
+    from synthesis.kinds import _REGISTRY
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    contract = next(c for c in config["tool"]["importlinter"]["contracts"] if c["name"] == "the solve core knows no kind")
+    packages = {target.split(":")[0] for target in _REGISTRY.values()}
+    assert packages <= set(contract["forbidden_modules"]), packages - set(contract["forbidden_modules"])

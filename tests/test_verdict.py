@@ -36,6 +36,11 @@ CAPPED = {
     "clamp_cam": ("clamp_cam/opening_cam_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "guide_tube": ("guide_tube/cai2020_delta2.toml",
                    [("angle = { init = 41,", "angle = { init = 65,"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 3),
+    "steering_linkage": ("steering/steering_redesign_40.toml",
+                         [("min_transmission_angle = 25.0", "min_transmission_angle = 30.0"),
+                          ("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "tillage_linkage": ("tillage/tillage_redesign.toml",
+                        [("c = { init = 500.0", "c = { init = 300.0"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "planting_fourbar": ("planting_arm/redesign_from_example1.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     # issue 13: this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
     "fourbar_path": ("fourbar_path/picking_arc.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
@@ -54,6 +59,11 @@ UNREACHABLE = {
                     "base_radius = { init = 25.0, bounds = [20.0, 30.0] }")], "pressure_angle", 2),
     "guide_tube": ("guide_tube/cai2020_delta2.toml", [("min_free_fall = 0 ", "min_free_fall = 900 ")],
                    "free_fall_height", 2),
+    "steering_linkage": ("steering/steering_redesign_40.toml",
+                         [("min_transmission_angle = 25.0", "min_transmission_angle = 80.0")],
+                         "tie_rod_transmission_angle", 2),
+    "tillage_linkage": ("tillage/tillage_redesign.toml", [("min_rearward_speed = 0.05", "min_rearward_speed = 3.0")],
+                        "rearward_in_soil", 2),
     # issue 13: an unreachable P1-P3 distance must be named among the conflicting rules
     "planting_fourbar": ("planting_arm/redesign_from_example1.toml",
                          [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
@@ -69,6 +79,8 @@ NOTHING_FREE = {
     "picker_double_crank": "picker/cai2020_double_crank.toml",
     "clamp_cam": "clamp_cam/opening_cam.toml",
     "guide_tube": "guide_tube/cai2020_tubes.toml",
+    "steering_linkage": "steering/hwang_model3_steering.toml",
+    "tillage_linkage": "tillage/hwang_tillage_baseline.toml",
     "planting_fourbar": "planting_arm/taiwan_example1.toml",
     "guide_way": "guide_way/liang_2z.toml",
 }

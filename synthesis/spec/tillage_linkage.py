@@ -1,0 +1,104 @@
+"""Spec model of kind ``tillage_linkage``: the distorted rotary tillage linkage of seed 002 (Hwang, §四.2,
+eq 3-11, Figs. 18-20).
+
+Linkage (mm, deg): crank radius a = AB, b = AC (flywheel centre A to roller pair C), bar length c = BD,
+depression angle theta of C seen from A, and the height of C above the ground.  Operation: flywheel
+speed (r/min, counter-clockwise) and forward speed (m/s).  ``check`` evaluates the given linkage over a
+crank turn; ``solve`` frees the variables written as ``{init, bounds}``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import (
+    FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
+    starts_field, value_of,
+)
+
+KIND = "tillage_linkage"
+NAMES = ("a", "b", "c", "theta", "height_c")
+
+
+def _range(v: Variable) -> tuple[float, float]:
+    return tuple(v.bounds) if isinstance(v, FreeVariable) else (float(v), float(v))
+
+
+class Linkage(StrictModel):
+    a: Variable = Field(description="crank radius AB on the flywheel, mm")
+    b: Variable = Field(description="distance AC from the flywheel centre A to the roller pair C, mm")
+    c: Variable = Field(description="tillage bar length BD, mm")
+    theta: Variable = Field(description="depression angle of C seen from A, deg (A lies up and ahead of C)")
+    height_c: Variable = Field(description="height of the roller pair C above the ground, mm")
+
+    @model_validator(mode="after")
+    def _ranges(self) -> "Linkage":
+        for name in ("a", "b", "c", "height_c"):
+            require_positive(name, getattr(self, name))
+        lo, hi = _range(self.theta)
+        if not (-30.0 <= lo and hi <= 89.0):
+            raise ValueError(f"theta: expected -30 <= theta <= 89 deg, got {lo:g}" + ("" if lo == hi else f" .. {hi:g}"))
+        a_hi, b_lo = _range(self.a)[1], _range(self.b)[0]
+        if a_hi >= b_lo:
+            raise ValueError(f"a = {a_hi:g} mm >= b = {b_lo:g} mm (largest a, smallest b): the crank circle reaches "
+                             f"the roller C, where |CB| = 0 and D cannot be placed (W = c / |CB| of eq 7 is "
+                             f"undefined); keep a below b")
+        return self
+
+
+class Operation(StrictModel):
+    crank_speed: float = Field(gt=0.0, le=2000.0, description="flywheel speed, r/min (counter-clockwise)")
+    forward_speed: float = Field(ge=0.0, le=5.0, description="machine travel speed towards +x, m/s")
+
+
+class Requirements(StrictModel):
+    depth: tuple[float, float] = Field(description="[lo, hi] depth of the tool tip's lowest point below the "
+                                                   "ground, mm (text: pods 5-8 cm deep; slip grows past 12 cm)")
+    lift: float = Field(ge=0.0, description="least height of the tool tip's highest point above the ground, mm")
+    min_rearward_speed: float = Field(0.0, ge=0.0, description="least speed (m/s) at which the tip moves "
+                                                               "backwards relative to the soil while in it")
+    max_slot_angle: float = Field(gt=0.0, lt=90.0, description="largest angle of the bar to the roller slot "
+                                                               "(aligned with AC), deg")
+    min_engagement: float = Field(ge=0.0, description="least length of bar beyond the rollers when B is "
+                                                      "farthest from C: c - (a + b) >= this, mm")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Requirements":
+        lo, hi = self.depth
+        if not 0.0 < lo <= hi:
+            raise ValueError(f"depth: expected 0 < lo <= hi, got [{lo:g}, {hi:g}]")
+        return self
+
+
+class ObjectiveSection(StrictModel):
+    name: Literal["min_bar_length", "max_margin"] = Field(
+        "min_bar_length", description="min_bar_length: the shortest bar c meeting every rule (a compact, light "
+                                      "tool); max_margin: the largest smallest normalised rule margin")
+
+
+class SolverSection(MultistartSettings):
+    starts: int = starts_field(8)
+    samples: int = Field(72, ge=12, le=3600, description="crank angles over a turn on which the lowest and "
+                                                        "highest points are checked global (re-check: 10x)")
+    soil_samples: int = Field(24, ge=3, le=2000, description="crank angles sampled over the in-soil phase for "
+                                                            "the rearward-motion rule (re-check: 10x)")
+    backoff: float = Field(0.02, ge=0.0, le=1.0, description="the NLP tightens the sampled rearward-motion limit "
+                                                            "by backoff x 0.1 m/s, so it holds between samples")
+    max_iter: int = max_iter_field(1000)
+
+
+class TillageSpec(ProblemSpec):
+    kind: Literal["tillage_linkage"]
+    linkage: Linkage
+    operation: Operation
+    requirements: Requirements
+    objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
+    solver: SolverSection = Field(default_factory=SolverSection)
+
+    def variables(self) -> dict[str, Variable]:
+        return {n: getattr(self.linkage, n) for n in NAMES}
+
+    def design_values(self) -> dict[str, float]:
+        return {n: value_of(v) for n, v in self.variables().items()}

@@ -1,0 +1,21 @@
+"""Kind steering_linkage: the Ackermann steering trapezoid of seed 002 (Hwang, Model-3 peanut combine, Table 12).
+
+table12.py  the published table explained: kingpin spacing, the inconsistent row, the trapezoid fit, radius
+check.py    rules on floats or symbols (one function), the given trapezoid over 0 .. the maximum lock
+nlp.py      minimax steering error as a smooth epigraph, outer locks as variables closing the loop
+solve.py    the solve side (SOLVING); plots.py the figures (from result data only)
+"""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="steering_linkage",
+    summary="Ackermann steering trapezoid: Table 12 explained, minimax steering error (seed 002 Table 12)",
+    spec_model="synthesis.spec.steering_linkage:SteeringSpec",
+    check="synthesis.steering_linkage.check:run_check",
+    figures={"steering.png": "synthesis.steering_linkage.plots:steering_figure"},
+    compare="synthesis.steering_linkage.plots:compare_figure",
+    solving="synthesis.steering_linkage.solve:SOLVING",
+    objectives={"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"},
+    example="steering/steering_redesign_40.toml",
+)

@@ -1,0 +1,22 @@
+"""Kind tillage_linkage: the distorted rotary tillage linkage of seed 002 (Hwang, §四.2, eq 3-11, Figs. 18-20).
+
+printed.py  eq 3-11 as printed (our reading of the OCR), held against the geometry and against AD
+check.py    rules on floats or symbols (one function), the given linkage over a crank turn
+nlp.py      extremes and soil entry/exit as NLP variables with exact structural rows
+solve.py    the solve side (SOLVING); plots.py the figures (from result data only)
+"""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="tillage_linkage",
+    summary="distorted rotary tillage linkage: crank, bar through a roller pair, tool path (seed 002 eq 3-11)",
+    spec_model="synthesis.spec.tillage_linkage:TillageSpec",
+    check="synthesis.tillage_linkage.check:run_check",
+    figures={"tillage.png": "synthesis.tillage_linkage.plots:tillage_figure"},
+    compare="synthesis.tillage_linkage.plots:compare_figure",
+    solving="synthesis.tillage_linkage.solve:SOLVING",
+    objectives={"min_bar_length": "shortest tillage bar c meeting every rule, mm",
+                "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"},
+    example="tillage/tillage_redesign.toml",
+)
