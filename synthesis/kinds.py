@@ -25,6 +25,8 @@ _REGISTRY: dict[str, str] = {
     "picker": "synthesis.picker:PICKER",
     "clamp_cam": "synthesis.clamp_cam:KIND",
     "guide_tube": "synthesis.guide_tube:KIND",
+    "combing_chain": "synthesis.combing_chain:KIND",
+    "comb_finger": "synthesis.comb_finger:KIND",
     "guide_way": "synthesis.guide_way:KIND",
     "steering_linkage": "synthesis.steering_linkage:KIND",
     "tillage_linkage": "synthesis.tillage_linkage:KIND",

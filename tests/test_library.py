@@ -59,6 +59,15 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/taiwan_example2_zeta_minus41.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example3.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example4.toml": {"check": 1, "solve": ("exit", 2)},
+    "combing_chain/hinomoto_ub550.toml": {"check": 0, "solve": ("exit", 2)},
+    "combing_chain/iseki_hd650r.toml": {"check": 0, "solve": ("exit", 2)},
+    "combing_chain/kubota_hc500.toml": {"check": 0, "solve": ("exit", 2)},
+    "combing_chain/one_gear_too_wide.toml": {"check": 1, "solve": ("infeasible", -1.45134461941295)},
+    "combing_chain/redesign_two_speed.toml": {"check": 0, "solve": ("optimal", 1.8261361474214368)},
+    "combing_chain/redesign_window_80_100.toml": {"check": 1, "solve": ("optimal", 0.39935765897716635)},
+    "comb_finger/peanut_baseline.toml": {"check": 0, "solve": ("exit", 2)},
+    "comb_finger/redesign_max_combing.toml": {"check": 0, "solve": ("optimal", 56.90966723057299)},
+    "comb_finger/redesign_tip_speed.toml": {"check": 0, "solve": ("optimal", 61.10042140664076)},
 }
 
 SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))

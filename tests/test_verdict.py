@@ -45,6 +45,9 @@ CAPPED = {
     # issue 13: this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
     "fourbar_path": ("fourbar_path/picking_arc.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "guide_way": ("guide_way/smooth_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "combing_chain": ("combing_chain/redesign_window_80_100.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
+    "comb_finger": ("comb_finger/redesign_max_combing.toml",
+                    [("root_clearance = 30.0", "root_clearance = 45.0"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
 }
 
 #: spec, replacements making one rule unreachable, the rule the diagnosis must name, starts
@@ -71,6 +74,10 @@ UNREACHABLE = {
                      [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
     "guide_way": ("guide_way/smooth_redesign.toml", [("roller_margin = 2.0", "roller_margin = 300.0")],
                   "no_undercut", 2),
+    "combing_chain": ("combing_chain/redesign_window_80_100.toml",
+                      [("machine_speed = [0.4, 0.55]", "machine_speed = [0.4, 0.62]")], "window_top_at_beta110_Vs0.62", 2),
+    "comb_finger": ("comb_finger/redesign_max_combing.toml", [("root_clearance = 30.0", "root_clearance = 300.0")],
+                    "root_clearance", 2),
 }
 
 #: spec whose every design variable is fixed (a published design), per solving kind
@@ -83,6 +90,8 @@ NOTHING_FREE = {
     "tillage_linkage": "tillage/hwang_tillage_baseline.toml",
     "planting_fourbar": "planting_arm/taiwan_example1.toml",
     "guide_way": "guide_way/liang_2z.toml",
+    "combing_chain": "combing_chain/kubota_hc500.toml",
+    "comb_finger": "comb_finger/peanut_baseline.toml",
 }
 
 

@@ -1,0 +1,19 @@
+"""Kind comb_finger: the eccentric rotating comb fingers of seed 002 §四.3 (eq 14-22, Fig. 26-28).
+
+geometry.py  the front view of Fig. 28b reconstructed, eq 17-22 derived and as printed (floats, CasADi)
+check.py, nlp.py, solve.py, plots.py: the kind of the CLI
+"""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="comb_finger",
+    summary="eccentric rotating comb fingers: largest combing angle with root-zone and unit clearances "
+            "(seed 002 §四.3 eq 17-22)",
+    spec_model="synthesis.spec.comb_finger:CombFingerSpec",
+    check="synthesis.comb_finger.check:run_check",
+    figures={"comb_finger.png": "synthesis.comb_finger.plots:finger_figure"},
+    solving="synthesis.comb_finger.solve:SOLVING",
+    objectives={"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"},
+    example="comb_finger/redesign_max_combing.toml",
+)

@@ -1,0 +1,46 @@
+"""The comb-finger NLP: r, e, alpha, omega, b, rho maximising the combing angle theta (eq 21) subject to the
+rules of :func:`synthesis.comb_finger.check.rules_of` on CasADi symbols (exact AD); the clearance to the
+other unit is sampled over the finger's turn."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from synthesis.comb_finger.check import rules_of, trace
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.spec.comb_finger import NAMES, CombFingerSpec
+from synthesis.spec.common import bounds_of, value_of
+
+#: the objective is -theta / THETA_SCALE (deg): unit-sized gradients
+THETA_SCALE = 10.0
+
+
+class CombFingerNLP:
+    """Built once per spec; :meth:`solve` runs IPOPT from one start."""
+
+    def __init__(self, spec: CombFingerSpec, elastic: bool = False):
+        self.spec = spec
+        variables = spec.variables()
+        self.names = list(NAMES)
+        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
+        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        x = ca.SX.sym("x", len(NAMES))
+        tr = trace(spec, {n: x[i] for i, n in enumerate(NAMES)}, spec.solver.turn_samples)
+        theta_deg = tr.theta * (180.0 / math.pi)
+        self.theta = ca.Function("theta", [x], [theta_deg])
+        self.problem = Problem("comb_finger", x, self.bounds[:, 0], self.bounds[:, 1], [], rules_of(spec, tr),
+                               ObjectiveParts(f=-theta_deg / THETA_SCALE), ipopt="tight", max_iter=spec.solver.max_iter)
+        self.compiled = CompiledNLP(self.problem, elastic)
+
+    def solve(self, start: int, x0) -> StartOutcome:
+        out = self.compiled.solve(start, x0)
+        xs = out.x[:len(NAMES)]
+        design = {n: float(v) for n, v in zip(NAMES, xs)}
+        binding = [] if self.compiled.elastic else self.compiled.active_rules(out)
+        at_bound = [n for n, v, (a, b) in zip(NAMES, xs, self.bounds) if b > a and min(v - a, b - v) <= 1e-6 * max(1.0, abs(v))]
+        return StartOutcome.of(out, design, float(self.theta(xs)), binding_rules=binding, variables_at_bounds=at_bound)

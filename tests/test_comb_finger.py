@@ -1,0 +1,238 @@
+"""Kind comb_finger (issue 16): seed 002 §四.3 eq 17-22 against the reconstructed geometry of Fig. 28, and the
+combing-angle design question.
+
+Independent truths: the printed relations (written out here), their derivatives by hand, the geometry's
+incidences (E, F on the centre line and on the tip circle, S R E collinear, the circle on the ground line),
+the stationary point of eq 21 + 22 in alpha, and an independent optimiser (scipy SLSQP on constraints written
+out here) for the design question.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize
+
+from conftest import LIBRARY
+from solving import run_solve
+from synthesis.comb_finger import geometry as g
+from synthesis.spec import load_spec
+
+FINGER = LIBRARY / "comb_finger"
+BASELINE, REDESIGN, TIP_SPEED = (FINGER / "peanut_baseline.toml", FINGER / "redesign_max_combing.toml",
+                                 FINGER / "redesign_tip_speed.toml")
+DESIGNS = [(r, e, a) for r in (80.0, 120.0, 200.0) for e in (10.0, 40.0, 90.0) for a in (5.0, 30.0, 60.0, 85.0)]
+
+
+@pytest.mark.parametrize("r, e, alpha_deg", DESIGNS)
+def test_reconstructed_geometry_has_the_incidences_of_fig28(r, e, alpha_deg):
+    a = math.radians(alpha_deg)
+    b = g.tangent_drum_height(r, e, a)
+    (sx, sy), (rx, ry) = g.drum_axis(r, e, a, b), g.hub(r, e, a, b)
+    pe, pf = g.centre_line_points(r, e, a, b)
+    assert math.hypot(rx - sx, ry - sy) == pytest.approx(e, rel=1e-12)                       # |SR| = e
+    assert math.atan2(sy - ry, rx - sx) == pytest.approx(a, abs=1e-12)                        # depression alpha
+    for p in (pe, pf):
+        assert p[0] == 0.0 and math.hypot(p[0] - rx, p[1] - ry) == pytest.approx(r, rel=1e-12)   # on both circles
+    assert (rx - sx) * (pe[1] - sy) - (ry - sy) * (pe[0] - sx) == pytest.approx(0.0, abs=1e-9)  # S, R, E collinear
+    assert g.lowest_tip(r, e, a, b) == pytest.approx(0.0, abs=1e-12)                           # touches MN
+    assert g.combing_turn(r, e, a, b) == pytest.approx(a + math.pi / 2, abs=1e-12)             # eq 20
+    assert g.combing_lift(r, e, a, b) == pytest.approx(r * (1 + math.sin(a)), rel=1e-12)       # eq 16 / 21
+    assert g.cone_distance(r, e, a) == pytest.approx(-2 * sx, rel=1e-12)
+
+
+def _symbols():
+    r, e, a, w = (ca.SX.sym(n) for n in ("r", "e", "alpha", "omega"))
+    return r, e, a, w, ca.vertcat(r, e, a, w)
+
+
+def test_eq17_19_21_22_ad_values_and_derivatives_match_the_printed_forms():
+    """CasADi values and exact gradients of the reconstructed geometry against the printed forms and their
+    derivatives (by hand), to 1e-9, in the tangent construction (b = r + e sin alpha)."""
+    r, e, a, w, x = _symbols()
+    b = g.tangent_drum_height(r, e, a)
+    vs = 400.0
+    phi = ca.SX.sym("phi")
+    pd, beta = g.root_clearance(r, e, a, b), g.root_angle(r, e, a, b)
+    rise = g.rise(r, e, a, b, phi)
+    tan_theta = ca.tan(g.combing_angle(r, e, a, b, w, vs))
+    t = g.combing_time(r, e, a, b, w)
+    f = ca.Function("f", [x, phi], [pd, ca.gradient(pd, x), beta, rise, ca.gradient(rise, phi), tan_theta,
+                                     ca.gradient(tan_theta, x), t, ca.gradient(t, x)])
+    for rv, ev, av in DESIGNS[::2]:
+        for wv in (3.0, 6.3, 12.0):
+            av_r = math.radians(av)
+            xv = [rv, ev, av_r, wv]
+            out = [np.asarray(v, float).ravel() for v in f(xv, 1.1)]
+            pd_v, dpd, beta_v, rise_v, drise, tt, dtt, t_v, dt = out
+            # eq 17: PD = r (csc beta - 1), beta = atan(sec alpha) in the tangent construction
+            bp = math.atan(1.0 / math.cos(av_r))
+            assert beta_v[0] == pytest.approx(bp, abs=1e-12)
+            assert pd_v[0] == pytest.approx(rv * (1 / math.sin(bp) - 1), rel=1e-9, abs=1e-9)
+            c2 = math.cos(av_r) ** 2
+            dpd_dr = math.sqrt(1 + c2) - 1
+            dpd_da = rv * (-math.cos(av_r) * math.sin(av_r)) / math.sqrt(1 + c2)
+            assert dpd == pytest.approx([dpd_dr, 0.0, dpd_da, 0.0], rel=1e-9, abs=1e-9)
+            # eq 18/19: rise r (1 - cos phi), d/dphi r sin phi
+            assert rise_v[0] == pytest.approx(rv * (1 - math.cos(1.1)), rel=1e-9)
+            assert drise[0] == pytest.approx(rv * math.sin(1.1), rel=1e-9)
+            # eq 22 and eq 21 with it
+            tp = (av_r + math.pi / 2) / wv
+            assert t_v[0] == pytest.approx(tp, rel=1e-12)
+            assert dt == pytest.approx([0.0, 0.0, 1 / wv, -tp / wv], rel=1e-9, abs=1e-12)
+            q = rv * (1 + math.sin(av_r)) / (vs * tp)
+            assert tt[0] == pytest.approx(q, rel=1e-9)
+            assert tt[0] == pytest.approx(g.tan_theta_eq19(rv, av_r + math.pi / 2, vs, tp), rel=1e-9)
+            u = av_r + math.pi / 2
+            dq = [q / rv, 0.0, wv * rv * (math.cos(av_r) * u - (1 + math.sin(av_r))) / (vs * u * u), q / wv]
+            assert dtt == pytest.approx(dq, rel=1e-9, abs=1e-12)
+
+
+def test_theta_does_not_grow_with_alpha_beyond_43_56_deg_at_fixed_omega():
+    """The printed claim (theta needs a larger alpha) holds for eq 21 at fixed t only: with eq 22, at fixed r and
+    omega, d tan(theta)/d alpha vanishes at u = alpha + pi/2 = tan(u/2) and is negative beyond."""
+    u = brentq(lambda u: u - math.tan(u / 2), 2.0, 2.6, xtol=1e-15)
+    star = u - math.pi / 2
+    assert math.degrees(star) == pytest.approx(43.5635, abs=1e-4)
+    assert g.best_alpha_at_fixed_omega() == pytest.approx(star, abs=1e-12)
+    r, e, a, w, x = _symbols()
+    tt = ca.tan(g.combing_angle(r, e, a, g.tangent_drum_height(r, e, a), w, 400.0))
+    d = ca.Function("d", [x], [ca.jacobian(tt, a)])
+    assert float(d([120, 40, star, 6.0])) == pytest.approx(0.0, abs=1e-12)
+    assert float(d([120, 40, star + 0.2, 6.0])) < 0 < float(d([120, 40, star - 0.2, 6.0]))
+
+
+def test_baseline_check_reports_the_printed_relations(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(BASELINE), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    folder = tmp_path / "peanut_baseline"
+    data = json.loads((folder / "result.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+    f = data["facts"]
+    for row in f["printed_relations"]:
+        assert abs(row["difference"]) <= 1e-9 * max(1.0, abs(row["printed"])), row
+    assert f["root_clearance_PD_mm"] == pytest.approx(120 * (math.sqrt(1 + math.cos(math.radians(30)) ** 2) - 1))
+    assert f["combing_angle_theta_deg"] == pytest.approx(math.degrees(math.atan(180 / (400 / 3))), abs=1e-9)
+    assert f["points_mm"]["F"] == pytest.approx([0.0, 180.0]) and f["points_mm"]["E"] == pytest.approx([0.0, 60.0])
+    assert (folder / "comb_finger.png").stat().st_size > 10_000
+
+
+def _independent_optimum(spec, omega_rpm: float) -> float:
+    """theta (deg) maximised by scipy SLSQP over r, e, alpha, b, rho at the given omega, the rules written out here."""
+    q, op = spec.requirements, spec.operation
+    half, vs, w = op.row_spacing / 2, 1000 * op.machine_speed, omega_rpm * 2 * math.pi / 60
+    bounds = [tuple(spec.finger.r.bounds), tuple(spec.finger.e.bounds), tuple(math.radians(v) for v in spec.finger.alpha.bounds),
+              tuple(spec.finger.b.bounds), tuple(spec.finger.rho.bounds)]
+
+    def cons(z):
+        r, e, a, b, rho = z
+        yr = b - e * math.sin(a)
+        cl = math.hypot((2 * r + e) * math.cos(a), e * math.sin(a)) - r - rho
+        return np.array([math.hypot(r * math.cos(a), yr) - r - q.root_clearance,
+                         2 * ((r + e) * math.cos(a) - rho) - q.units_gap, cl - q.finger_clearance,
+                         half - r * (1 + math.cos(a)), half - (r + e) * math.cos(a) - rho,
+                         rho - (r - e), rho - e - q.hub_inset, r + e - rho - q.protrusion,
+                         yr - r, q.ground_reach - (yr - r)])
+
+    best = -math.inf
+    for z0 in ([120, 40, 0.5, 140, 80], [100, 50, 0.7, 150, 75], [150, 60, 0.9, 200, 90]):
+        res = minimize(lambda z: -math.atan(z[0] * (1 + math.sin(z[2])) * w / (vs * (z[2] + math.pi / 2))), z0,
+                       method="SLSQP", bounds=bounds, constraints=[{"type": "ineq", "fun": cons}],
+                       options={"ftol": 1e-14, "maxiter": 500})
+        if res.success and cons(res.x).min() > -1e-7:
+            best = max(best, -res.fun)
+    return math.degrees(best)
+
+
+def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits():
+    loaded = load_spec(REDESIGN)
+    spec = loaded.model
+    result, reports, _ = run_solve(loaded, workers=1)
+    assert result.status == "optimal"
+    assert result.design["omega"] == pytest.approx(60.0, abs=1e-6)
+    assert result.objective["value"] == pytest.approx(_independent_optimum(spec, 60.0), abs=1e-6)
+    assert set(result.extra["binding_rules"]) == {"finger_clear_of_other_unit", "unit_within_row", "finger_hides_in_drum"}
+    assert result.extra["variables_at_bounds"] == ["omega"]
+    # re-check over the turn, independently and 20x finer than the solver: the tip keeps its clearance
+    d = result.design
+    a = math.radians(d["alpha"])
+    hub = np.array([-d["r"] * math.cos(a), d["b"] - d["e"] * math.sin(a)])
+    other = np.array([(d["r"] + d["e"]) * math.cos(a), d["b"]])
+    phi = np.linspace(0, 2 * math.pi, 20 * spec.solver.turn_samples, endpoint=False)
+    tips = hub[:, None] + d["r"] * np.vstack([np.sin(phi), -np.cos(phi)])
+    clearance = np.hypot(*(tips - other[:, None])) - d["rho"]
+    assert clearance.min() >= spec.requirements.finger_clearance - 1e-9
+    # ... and the sampled minimum lies above the exact one (the optimiser's row) by at most the sampling error:
+    # the tip half a step off the line R -> S' is sqrt(D^2 + r^2 - 2 D r cos(pi/N)) from S', D = |R S'|
+    dist = float(np.hypot(*(hub - other)))
+    step = math.sqrt(dist**2 + d["r"] ** 2 - 2 * dist * d["r"] * math.cos(math.pi / len(phi))) - (dist - d["r"])
+    assert dist - d["r"] - d["rho"] == pytest.approx(spec.requirements.finger_clearance, abs=1e-5)
+    assert clearance.min() <= dist - d["r"] - d["rho"] + step + 1e-12
+
+
+def test_with_a_tip_speed_limit_alpha_goes_to_its_stationary_point():
+    loaded = load_spec(TIP_SPEED)
+    spec = loaded.model
+    result, _, _ = run_solve(loaded, workers=1)
+    assert result.status == "optimal"
+    star = g.best_alpha_at_fixed_omega()
+    assert result.design["alpha"] == pytest.approx(math.degrees(star), abs=1e-4)
+    tan_theta = 1000.0 * (1 + math.sin(star)) / (400.0 * (star + math.pi / 2))
+    assert result.objective["value"] == pytest.approx(math.degrees(math.atan(tan_theta)), abs=1e-6)
+    assert result.extra["binding_rules"] == ["tip_speed"]
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("alpha = 30.0 ", "alpha = 90.0 ", "comb_finger.finger: alpha: expected 0 < alpha < 90 deg"),
+    ("alpha = 30.0 ", "alpha = 0.0 ", "comb_finger.finger: alpha: expected 0 < alpha < 90 deg"),
+    ("r = 120.0 ", "r = -5.0 ", "comb_finger.finger: r: expected > 0, got -5"),
+    ("machine_speed = 0.4 ", "machine_speed = 0.0 ", "comb_finger.operation.machine_speed: expected > 0, got 0.0"),
+    ("protrusion = 40.0 ", "protrusion = 0.0 ", "comb_finger.requirements.protrusion: expected > 0, got 0.0"),
+])
+def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
+    text = BASELINE.read_text()
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, new, 1))
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert message in " ".join(proc.stderr.split()), proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_a_finger_that_misses_the_ground_fails_its_rule(tmp_path):
+    path = tmp_path / "high.toml"
+    path.write_text(BASELINE.read_text().replace("b = 140.0 ", "b = 170.0 ", 1))
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1 and "tip_reaches_ground" in proc.stdout
+
+
+FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.clamp_cam", "synthesis.fourbar_path",
+             "synthesis.crank_rocker", "synthesis.guide_tube", "synthesis.kinematics", "synthesis.combing_chain",
+             "synthesis.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
+
+
+def test_a_comb_finger_run_imports_no_other_kind(tmp_path):
+    code = f"""
+import sys
+from synthesis.cli import cli
+for args in (["check", {str(BASELINE)!r}], ["solve", {str(REDESIGN)!r}, "--workers", "1"]):
+    try:
+        cli.main(args + ["--out", {str(tmp_path)!r}], standalone_mode=False)
+    except SystemExit:
+        pass
+other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
+         or (m.startswith("constraints.") and m not in ("constraints.base", "constraints.comb_finger"))]
+print("LOADED", sorted(other))
+"""
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert "LOADED []" in proc.stdout, proc.stdout + proc.stderr
+    assert (tmp_path / "redesign_max_combing" / "result.json").exists()
