@@ -21,9 +21,11 @@ import os
 import statistics
 import tempfile
 import time
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
 NOT_REACHED = "n/a (target not reached)"
@@ -46,10 +48,43 @@ class BenchCase:
     kind: str
     #: method name -> run(target objective) -> MethodRun; the first is the reference of the ratios
     methods: dict[str, Callable[[float], MethodRun]]
-    #: objective of the best known design, or a callable computing it (untimed) when not known
-    best_known: float | Callable[[], float]
+    #: objective of the best known design, or a callable computing it (untimed) when not known, or
+    #: None: the best any run of the case reached (the methods then run to their own convergence)
+    best_known: float | Callable[[], float] | None
     tolerance: Callable[[float], float]  # best known -> allowed gap of the target
     note: str = ""
+    loaded: Any = None                   # the LoadedSpec of a generic case (synthesis.bench_generic)
+    single_runs: set = field(default_factory=set)   # methods run once whatever ``repeats`` says
+    #: the sample-count study of the case: sweep(tick) -> its table, and how many runs it ticks
+    sweep: Callable[[Callable], dict] | None = None
+    sweep_runs: int = 0
+    #: further rows of the case: name -> () -> list of dicts (bench.md prints each as a table)
+    studies: dict[str, Callable[[], list[dict]]] = field(default_factory=dict)
+    warmup: Callable[[], Any] | None = None   # untimed, before the first timed run (imports, first solve)
+
+    def runs(self, repeats: int) -> int:
+        """Progress-bar steps of the case."""
+        return (sum(1 if m in self.single_runs else repeats for m in self.methods) + (1 if callable(self.best_known) else 0)
+                + self.sweep_runs + len(self.studies))
+
+
+_quick: ContextVar[bool] = ContextVar("agrisynth_bench_quick", default=False)
+
+
+@contextmanager
+def quick_mode(on: bool):
+    """Bench cases made inside use the ``--quick`` study settings (:data:`synthesis.bench_generic.QUICK`)."""
+    token = _quick.set(on)
+    try:
+        yield
+    finally:
+        _quick.reset(token)
+
+
+def current_settings():
+    from synthesis.bench_generic import FULL, QUICK
+
+    return QUICK if _quick.get() else FULL
 
 
 def kinds_with_bench() -> list[str]:
@@ -63,7 +98,20 @@ def cases_for(kind: str, specs, seed: int) -> list[BenchCase]:
     from synthesis import kinds
     from synthesis.core.kind import resolve
 
-    return resolve(kinds.get(kind).bench)(specs, seed)
+    cases = resolve(kinds.get(kind).bench)(specs, seed)
+    if _quick.get():
+        cases = cases[:1]
+    if specs is None and kinds.get(kind).solves and not any(c.loaded is not None for c in cases):
+        # a kind with its own bench methods: the generic studies too, on its library example
+        from synthesis.bench_generic import LIBRARY, case_for
+        from synthesis.spec import load_spec
+
+        example = kinds.get(kind).example
+        if example:
+            case = case_for(load_spec(LIBRARY / example), current_settings(), seed)
+            case.problem = f"{case.problem} (generic studies)"
+            cases.append(case)
+    return cases
 
 
 def _median(values: list[float]) -> float:
@@ -98,13 +146,19 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
         best = case.best_known()
         tick(None)
     else:
-        best = case.best_known
-    target = best + case.tolerance(best)
-    runs: dict[str, list[MethodRun]] = {}
-    for method, run in case.methods.items():
-        runs[method] = []
-        for k in range(repeats):
-            tick(f"{case.problem}: {method} {k + 1}/{repeats}")
+        best = math.inf if case.best_known is None else case.best_known
+    target = best + case.tolerance(best) if math.isfinite(best) else math.inf
+    if case.warmup is not None:
+        case.warmup()
+    runs: dict[str, list[MethodRun]] = {method: [] for method in case.methods}
+    # round robin (method 1, method 2, ..., method 1, ...): a slow spell of a shared machine spreads
+    # over every method instead of landing on one
+    for k in range(repeats):
+        for method, run in case.methods.items():
+            n = 1 if method in case.single_runs else repeats
+            if k >= n:
+                continue
+            tick(f"{case.problem}: {method} {k + 1}/{n}")
             t0 = time.perf_counter()
             out = run(target)
             out.wall_s = time.perf_counter() - t0
@@ -113,6 +167,8 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
     feasible = [r.objective for rs in runs.values() for r in rs
                 if r.worst_violation == 0 and math.isfinite(r.objective)]
     best = min([best] + feasible)
+    if not math.isfinite(target) and math.isfinite(best):     # no best known before: the best any run reached
+        target = best + case.tolerance(best)
     rows = []
     for method, rs in runs.items():
         walls = [r.wall_s for r in rs]
@@ -130,31 +186,214 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
     # what a table prints in its "time ratio" column
     rows[0]["time_ratio_text"] = "1 (reference)"
     for row, ratio in zip(rows[1:], ratios):
+        status = str(row["details"].get("return_status", "")) if isinstance(row["details"], dict) else ""
         row["time_ratio_text"] = (f"{ratio['time_ratio']:.1f}x" if ratio["time_ratio"] is not None
-                                  else ratio["time_ratio_note"])
-    return {"problem": case.problem, "kind": case.kind, "note": case.note, "best_known": best,
-            "target": target, "rows": rows, "ratios": ratios}
+                                  else status if status.startswith("not run") else ratio["time_ratio_note"])
+    out = {"problem": case.problem, "kind": case.kind, "note": case.note, "best_known": best,
+           "target": target, "rows": rows, "ratios": ratios}
+    if case.sweep is not None:
+        out["sweep"] = case.sweep(tick)
+    if case.studies:
+        out["studies"] = {}
+        for name, study in case.studies.items():
+            tick(f"{case.problem}: {name}")
+            out["studies"][name] = study()
+            tick(None)
+    return out
 
 
-def write_bench(out: Path, results: list[dict], settings: dict) -> Path:
-    """OUT/bench/bench.json and error_vs_time.png, each written to a temporary file and renamed."""
+def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[dict] | None = None) -> Path:
+    """OUT/bench/: bench.json, bench.md, error_vs_time.png and one samples_<problem>.png per swept problem,
+    each written to a temporary file and renamed (bench.json last)."""
     from synthesis.result import atomic_write_text, versions
 
     folder = out / "bench"
     folder.mkdir(parents=True, exist_ok=True)
     rows = [row for res in results for row in res["rows"]]
-    data = {"settings": settings, "versions": versions(), "problems": [
-        {k: v for k, v in res.items() if k != "rows"} for res in results], "rows": rows}
-    fd, tmp = tempfile.mkstemp(prefix=".error_vs_time.", suffix=".png", dir=folder)
-    os.close(fd)
-    try:
-        plot_error_vs_time(results, Path(tmp))
-        os.replace(tmp, folder / "error_vs_time.png")
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-    atomic_write_text(folder / "bench.json", json.dumps(_json_safe(data), indent=1) + "\n")
+    data = {"settings": settings, "versions": versions(), "machine": machine(), "problems": [
+        {k: v for k, v in res.items() if k != "rows"} for res in results], "rows": rows,
+        "summary": summary(results), "extreme": extreme}
+    plots = {"error_vs_time.png": lambda path: plot_error_vs_time(results, path)}
+    for res in results:
+        if res.get("sweep") and res["sweep"]["rows"]:
+            plots[f"samples_{res['problem']}.png"] = lambda path, sweep=res["sweep"]: plot_sample_sweep(sweep, path)
+    for name, draw in plots.items():
+        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".png", dir=folder)
+        os.close(fd)
+        try:
+            draw(Path(tmp))
+            os.replace(tmp, folder / name)
+        finally:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+    data["plots"] = list(plots)
+    data = _json_safe(data)
+    atomic_write_text(folder / "bench.md", markdown(data))
+    atomic_write_text(folder / "bench.json", json.dumps(data, indent=1) + "\n")
     return folder
+
+
+def machine() -> dict:
+    """What the figures were measured on."""
+    import platform
+
+    model = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except AttributeError:
+        usable = os.cpu_count()
+    return {"cpu": model or platform.processor(), "cores_usable": usable, "system": platform.platform(),
+            "python": platform.python_version()}
+
+
+def _row(res: dict, method: str) -> dict | None:
+    return next((r for r in res["rows"] if r["method"] == method), None)
+
+
+def summary(results: list[dict]) -> list[dict]:
+    """One line per problem: the figures issue 18 asks for (sample count reaching the violation target
+    and its time, exact against finite-difference derivatives, the peers' ratios, build against solve)."""
+    out = []
+    for res in results:
+        ad = _row(res, "ipopt_multistart")
+        if ad is None or "build_s" not in (ad.get("details") or {}):
+            continue
+        line = {"problem": res["problem"], "kind": res["kind"], "ad_median_s": ad["median_s"],
+                "ad_median_iterations": ad["details"]["median_iterations"],
+                "ad_successes": f"{ad['details']['successes']}/{ad['details']['starts']}",
+                "build_s": ad["details"]["build_s"], "ipopt_s": ad["details"]["ipopt_s"],
+                "recheck_s": ad["details"]["recheck_s"]}
+        fd = _row(res, "ipopt_finite_differences")
+        if fd is not None:
+            line |= {"fd_median_s": fd["median_s"], "fd_median_iterations": fd["details"]["median_iterations"],
+                     "fd_successes": f"{fd['details']['successes']}/{fd['details']['starts']}",
+                     "fd_objective_gap": fd["objective_gap"], "fd_ratio": fd["time_ratio_text"]}
+        for peer in ("slsqp", "differential_evolution"):
+            row = _row(res, peer)
+            if row is not None:
+                line[f"{peer}_ratio"] = row["time_ratio_text"]
+        sweep = res.get("sweep")
+        if sweep:
+            line["samples_reaching"] = sweep["reaching"]
+        out.append(line)
+    return out
+
+
+def _fmt(v, spec: str = ".3g") -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        return format(v, spec) if math.isfinite(v) else str(v)
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
+    if isinstance(v, list):
+        return " ".join(_fmt(x) for x in v)
+    return str(v).replace("|", "\\|").replace("\n", " ")
+
+
+def _table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+    head = "| " + " | ".join(title for _, title in columns) + " |"
+    rule = "|" + "---|" * len(columns)
+    body = ["| " + " | ".join(_fmt(r.get(key)) for key, _ in columns) + " |" for r in rows]
+    return "\n".join([head, rule, *body])
+
+
+def markdown(data: dict) -> str:
+    """bench.md: the machine, the per-problem summary, the method table, the sample sweeps, the kind's
+    own studies and the extreme-case matrix."""
+    m, st = data["machine"], data["settings"]
+    parts = [f"# agrisynth bench\n\nMachine: {m['cpu']}, {m['cores_usable']} usable cores, {m['system']}, "
+             f"Python {m['python']}.  Settings: {_fmt(st)}.\n\n"
+             "Times are medians of the repeats (wall clock, one worker; the machine may be shared, so read "
+             "ratios within one run).  A time ratio exists only where both methods reached the same target "
+             "(best known objective + tolerance, every rule on the fine grid); objectives are minimised "
+             "(a maximising kind's is negated)."]
+    summ = []
+    for line in data["summary"]:
+        reach = line.get("samples_reaching") or {}
+        summ.append(line | {"reach": _fmt(reach.get("samples")) if reach else "not reached",
+                            "reach_s": reach.get("median_s") if reach else None})
+    parts.append("## Summary per problem\n\n" + _table(summ, [
+        ("kind", "kind"), ("problem", "problem"), ("reach", "samples at violation <= 1e-6"), ("reach_s", "its median s"),
+        ("ad_median_s", "AD median s"), ("ad_median_iterations", "AD iterations"), ("ad_successes", "AD success"),
+        ("fd_median_s", "FD median s"), ("fd_median_iterations", "FD iterations"), ("fd_successes", "FD success"),
+        ("fd_ratio", "FD / AD time"), ("slsqp_ratio", "SLSQP / AD time"),
+        ("differential_evolution_ratio", "DE / AD time"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
+        ("recheck_s", "re-check s")]))
+    rows = [r | {"iters": (r.get("details") or {}).get("median_iterations"),
+                 "success": (f"{r['details']['successes']}/{r['details']['starts']}"
+                             if isinstance(r.get("details"), dict) and "successes" in r["details"] else None)}
+            for r in data["rows"]]
+    parts.append("## Methods\n\n" + _table(rows, [
+        ("problem", "problem"), ("method", "method"), ("objective", "objective"), ("objective_gap", "gap to best"),
+        ("worst_violation", "worst violation"), ("median_s", "median s"), ("iters", "median iterations"),
+        ("success", "solver success"), ("time_ratio_text", "time ratio")]))
+    for p in data["problems"]:
+        if p.get("note"):
+            parts.append(f"- {p['problem']}: {p['note']}")
+    sweeps = [p for p in data["problems"] if p.get("sweep")]
+    if sweeps:
+        parts.append("## Accuracy against time: sample counts\n\nEvery `[solver]` sample setting scaled "
+                     "together; worst violation on the 10x finer re-check grid (normalised by each rule's "
+                     "scale); gap = |objective - objective at the finest count|.")
+        for p in sweeps:
+            sw = p["sweep"]
+            parts.append(f"### {p['problem']} ({p['kind']}; {sw['starts']} starts, {sw['repeats']} run(s) each)\n\n"
+                         + _table(sw["rows"], [("samples", "samples"), ("median_s", "median s"),
+                                               ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
+                                               ("median_iterations", "median iterations"),
+                                               ("worst_violation", "worst violation"), ("objective", "objective"),
+                                               ("objective_gap", "gap to finest")])
+                         + f"\n\n![samples](samples_{p['problem']}.png)")
+    for p in data["problems"]:
+        for name, rows_ in (p.get("studies") or {}).items():
+            if rows_:
+                parts.append(f"## {name.replace('_', ' ')} ({p['kind']})\n\n"
+                             + _table(rows_, [(k, k.replace("_", " ")) for k in rows_[0]]))
+    if data.get("extreme"):
+        ext = data["extreme"]
+        passed = sum(r["outcome"] == "passed" for r in ext)
+        parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed)\n\n"
+                     + _table(ext, [("case", "case"), ("tried", "what was tried"), ("outcome", "outcome"),
+                                    ("figure", "figure / what the tool did"), ("seconds", "s")]))
+    parts.append("![error against run time](error_vs_time.png)")
+    return "\n\n".join(parts) + "\n"
+
+
+def plot_sample_sweep(sweep: dict, path: Path) -> None:
+    """Log-log: fine-grid worst violation and objective gap to the finest count against median wall time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = sweep["rows"]
+    t = [r["median_s"] for r in rows]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for key, label, marker in (("worst_violation", "worst violation (fine grid, normalised)", "o"),
+                               ("objective_gap", "objective gap to the finest count", "s")):
+        ys = [max(r[key], FLOOR) if r[key] is not None and math.isfinite(r[key]) else math.nan for r in rows]
+        ax.plot(t, ys, marker + "-", label=label)
+    for r, x in zip(rows, t):
+        ax.annotate(" ".join(str(v) for v in r["samples"].values()), (x, FLOOR), fontsize=7, rotation=60)
+    ax.axhline(sweep["violation_target"], color="0.5", lw=0.8, ls=":")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("median wall time, s")
+    ax.set_ylabel(f"error (0 drawn at {FLOOR:g})")
+    ax.set_title(f"{sweep['problem']}: sample counts ({', '.join(rows[0]['samples'])})", fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def _json_safe(x):

@@ -6,6 +6,7 @@ failure or infeasible rule set; 130 interrupted.
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -16,9 +17,11 @@ from rich.table import Table
 
 from constraints.base import limit_text
 from synthesis.errors import AgrisynthError
+from synthesis.terminal import PIPED_WIDTH
 
 LIBRARY = Path(__file__).resolve().parent.parent / "problems"
-console = Console(highlight=False, width=None if sys.stdout.isatty() else 132)
+#: as wide as the terminal; piped, wide enough that no table cell is ever cut (synthesis.terminal)
+console = Console(highlight=False, width=None if sys.stdout.isatty() else PIPED_WIDTH)
 err_console = Console(stderr=True, highlight=False)
 
 
@@ -26,7 +29,7 @@ def rule_table(rules: list[dict], title: str) -> Table:
     table = Table(title=escape(title), title_justify="left")
     for col, just in (("rule", "left"), ("value", "right"), ("limit", "right"), ("unit", "left"),
                       ("margin", "right"), ("", "left"), ("where / why", "left")):
-        table.add_column(col, justify=just, no_wrap=col != "where / why")
+        table.add_column(col, justify=just, no_wrap=col != "where / why", overflow="fold")
     for r in rules:
         limit = limit_text(r["limit"])
         value = "-" if r["value"] is None else f"{r['value']:.4g}"
@@ -49,6 +52,7 @@ def cli() -> None:
       agrisynth compare RUN.. compare result folders side by side in one HTML page
       agrisynth bench KIND    compare methods: objective reached against wall time
       agrisynth problems      list the problem library
+      agrisynth spec KIND     the spec reference of a kind (--template: a file to start from)
     Results go to results/<spec name>/ (result.json, report.html, plots).
     Exit codes: 0 all rules satisfied, 1 a rule violated, 2 bad input,
     3 solver failure / infeasible, 130 interrupted.
@@ -66,14 +70,14 @@ def problems(library: Path) -> None:
 
     kinds_table = Table(title="kinds", title_justify="left")
     for col in ("kind", "mechanism", "commands", "try"):
-        kinds_table.add_column(col)
+        kinds_table.add_column(col, overflow="fold")
     for kind in kinds.all_kinds():
         kinds_table.add_row(kind.name, escape(kind.summary), "check, solve" if kind.solves else "check",
                             f"problems/{kind.example}" if kind.example else "")
     console.print(kinds_table)
     table = Table(title=f"problem library: {library}", title_justify="left")
     for col in ("kind", "name", "file", "source"):
-        table.add_column(col)
+        table.add_column(col, overflow="fold")
     for path in sorted(library.rglob("*.toml")):
         data, _ = read_toml(path)
         table.add_row(str(data.get("kind", "?")), str(data.get("name", "?")),
@@ -81,41 +85,142 @@ def problems(library: Path) -> None:
     console.print(table)
 
 
+@cli.command("spec")
+@click.argument("kind")
+@click.option("--template", is_flag=True, help="write a commented starting spec of KIND (the library example's "
+                                               "values, every field described) instead of the reference")
+@click.option("--out", "target", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="with --template: write it to this new file (default: print it)")
+def spec_command(kind: str, template: bool, target: Path | None) -> None:
+    """The spec reference of KIND: every field with its TOML path, type, unit, default (or
+    "required"), allowed range and meaning.  The same for every kind: docs/specs.md.
+
+    \b
+    Examples:
+      agrisynth spec planting_fourbar
+      agrisynth spec clamp_cam --template --out my_cam.toml && agrisynth check my_cam.toml
+    """
+    from synthesis import kinds, specref, terminal
+
+    description = kinds.get(kind)           # SpecError (exit 2) naming the known kinds
+    if target is not None and not template:
+        raise click.BadParameter("--out writes a template: give --template too", param_hint="--out")
+    if not template:
+        terminal.console_for().print(terminal.reference_table(kind, description.summary, specref.kind_entries(kind)))
+        return
+    if target is None:
+        click.echo(specref.template(kind), nl=False)
+        return
+    from synthesis.errors import OutputError
+    from synthesis.result import atomic_write_text
+
+    if target.exists():
+        raise OutputError(f"{target}: already exists; give a new file name (a template never replaces a file)")
+    if not target.parent.is_dir():
+        raise OutputError(f"{target}: no folder {target.parent} to write it in")
+    atomic_write_text(target, specref.template(kind, target.parent))
+    console.print(f"wrote {escape(str(target))}: a {kind} spec to edit; check it with  agrisynth check {escape(str(target))}",
+                  soft_wrap=True)
+
+
+FORCE_HELP = ("replace OUT/<name>/ when it holds an earlier agrisynth run (without --force such a run is kept and "
+              "the command exits 2 before doing anything; a file or folder agrisynth did not write is never "
+              "replaced, with or without --force)")
+
+
 @cli.command()
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
               show_default=True, help="output folder; the run writes OUT/<spec name>/")
-def check(spec: Path, out: Path) -> None:
+@click.option("--force", is_flag=True, help=FORCE_HELP)
+def check(spec: Path, out: Path, force: bool) -> None:
     """Evaluate SPEC's given design against its rules (no optimisation).
 
     Prints the rule table (value, limit, margin, pass/fail) and writes OUT/<name>/result.json,
     report.html and the trajectory plot. Exit 0 when every rule holds, 1 when one is violated.
+    OUT/<name>/ must not exist yet, or hold an earlier agrisynth run and --force be given.
     """
     from synthesis import kinds
+    from synthesis.core import interrupt
     from synthesis.report import run_artifacts
-    from synthesis.result import write_run
+    from synthesis.result import open_run_folder, write_run
     from synthesis.spec import load_spec
 
+    interrupt.install()
     loaded = load_spec(spec)
-    result = kinds.checker(loaded.kind)(loaded)
-    artifacts = run_artifacts(result)
-    folder, replaced = write_run(out, result, artifacts)
+    run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
+    try:
+        result = _described(_in_file(loaded, kinds.checker(loaded.kind)), loaded)
+        folder, replaced = write_run(out, result, run_artifacts(result), folder=run_folder)
+    except BaseException as exc:
+        from synthesis.errors import OutputError
+
+        if not isinstance(exc, OutputError):
+            run_folder.discard()
+        raise
     console.print(rule_table(result.rules, f"{result.name} ({result.kind}): {loaded.path}"))
     if replaced:
-        console.print(f"replaced the previous run in {folder}/")
-    console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
+        console.print(f"replaced the previous run in {escape(str(folder))}/")
+    console.print(f"wrote {escape(str(folder))}/: {escape(', '.join(sorted(f.name for f in folder.iterdir())))}")
     bad = result.violated()
     if bad:
-        console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
+        console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(escape(r['name']) for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied[/]")
+
+
+def _start_line(report, best, done: int, total: int) -> None:
+    """One line for a finished start (piped runs): its outcome and the best so far."""
+    o = report.outcome
+    own = "feasible" if report.satisfied else f"worst violation {report.worst_violation:.3g}"
+    console.print(f"start {o.start} finished ({done}/{total}): objective {o.objective:.6g}, {own}, IPOPT "
+                  f"{o.return_status} in {o.iterations} iterations, {o.wall_s:.2f} s; best so far: start "
+                  f"{best.outcome.start}", markup=False, highlight=False)
+    console.file.flush()
+
+
+def _print_design(result) -> None:
+    """The solved design beside the given one: value, unit, bounds, at-bound marks."""
+    from synthesis import terminal
+    from synthesis.report.tables import candidates, design_rows
+
+    rows = design_rows(candidates([result]))
+    if rows:
+        console.print(terminal.design_table(rows, "design: given (start 0) vs solution"))
+
+
+def _solved_spec(loaded, result) -> dict:
+    """solved.toml: the solved design as a spec with everything fixed (``agrisynth check`` reproduces it)."""
+    from synthesis.result import atomic_write_text
+    from synthesis.solved_spec import FILENAME, solved_toml
+
+    return {FILENAME: lambda path: atomic_write_text(path, solved_toml(loaded, result))}
+
+
+def _described(result, loaded):
+    """The result, told what the spec says of each design variable (unit, bounds, free): reports show it."""
+    from synthesis import design_info
+
+    return design_info.attach(result, loaded.model)
+
+
+def _in_file(loaded, evaluate):
+    """``evaluate(loaded)``; a design that cannot be evaluated (AssemblyError) is named with its spec file."""
+    from synthesis.errors import AssemblyError
+
+    try:
+        return evaluate(loaded)
+    except AssemblyError as exc:
+        if str(exc).startswith(str(loaded.path)):
+            raise
+        raise AssemblyError(f"{loaded.path}: {loaded.kind}: {exc}") from None
 
 
 def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
     table = Table(title=escape(title), title_justify="left")
     for col, just in (("rule", "left"), ("limit", "right"), ("baseline", "right"), ("", "left"),
                       ("solution", "right"), ("", "left"), ("unit", "left")):
-        table.add_column(col, justify=just, no_wrap=True)
+        table.add_column(col, justify=just, no_wrap=True, overflow="fold")
     base = {r["name"]: r for r in baseline or []}
 
     def cell(r):
@@ -151,22 +256,44 @@ class _SolveCommand(click.Command):
 
 
 
+#: a scheduler address agrisynth accepts: tcp://host:port (dask's default protocol) or host:port
+SCHEDULER = re.compile(r"^(tcp://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):[0-9]{1,5}$")
+MAX_STARTS = 10000
+MAX_WORKERS = 256
+
+
+def _scheduler(ctx, param, value: str | None) -> str | None:
+    if value is None:
+        return None
+    if len(value) > 300 or not SCHEDULER.match(value) or not 0 < int(value.rsplit(":", 1)[1]) < 65536:
+        raise click.BadParameter(f"{value[:80]!r} is not a scheduler address: give tcp://host:port "
+                                 f"(e.g. tcp://10.0.0.5:8786)")
+    return value if value.startswith("tcp://") else f"tcp://{value}"
+
+
 @cli.command(cls=_SolveCommand)
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
-              help="output folder; the run writes OUT/<spec name>/")
-@click.option("--starts", type=click.IntRange(min=1), default=None,
-              help="multistart starts (default: the spec's [solver] starts); start 0 is the spec's design")
-@click.option("--seed", type=click.IntRange(min=0), default=None,
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="output folder; the run writes OUT/<spec name>/  [default: results]")
+@click.option("--force", is_flag=True, help=FORCE_HELP)
+@click.option("--resume", "resume", type=click.Path(file_okay=False, path_type=Path), default=None, metavar="RUN_DIR",
+              help="finish an interrupted run: the starts in RUN_DIR/starts.jsonl are not solved again and the "
+                   "result is exactly the uninterrupted one; SPEC must be the same file and --starts/--seed (default: "
+                   "that run's) the same settings (checked by sha256); the result replaces RUN_DIR")
+@click.option("--starts", type=click.IntRange(min=1, max=MAX_STARTS), default=None,
+              help=f"multistart starts, at most {MAX_STARTS} (default: the spec's [solver] starts); "
+                   f"start 0 is the spec's design")
+@click.option("--seed", type=click.IntRange(min=0, max=2**63 - 1), default=None,
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="parallel worker processes (default: all cores)")
-@click.option("--scheduler", default=None, metavar="ADDR",
-              help="run the starts on a dask.distributed cluster (scheduler address, e.g. tcp://host:8786; "
-                   "the workers need agrisynth installed) instead of local worker processes")
+@click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
+              help=f"parallel worker processes, at most {MAX_WORKERS} (default: all cores)")
+@click.option("--scheduler", default=None, metavar="ADDR", callback=_scheduler,
+              help="run the starts on a dask.distributed cluster at tcp://host:port (the workers need agrisynth "
+                   "installed) instead of local worker processes.  A scheduler runs the code it is sent: "
+                   "trust it as you trust this machine")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
-def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: int | None,
-          scheduler: str | None, verbose: bool) -> None:
+def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts: int | None, seed: int | None,
+          workers: int | None, scheduler: str | None, verbose: bool) -> None:
     """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
 
     \b
@@ -178,61 +305,136 @@ def solve(spec: Path, out: Path, starts: int | None, seed: int | None, workers: 
     with the best objective (ties: the lower start). Status: optimal (every rule holds and
     IPOPT met its tolerances), feasible (every rule holds; IPOPT stopped otherwise: a note
     says how), infeasible (an elastic re-solve converged and names the rules that conflict),
-    failed (anything else: the message says what to try). Writes OUT/<name>/result.json,
-    report.html, ipopt.log and plots. Exit 0 all rules hold; 3 infeasible or failed; 2 bad
-    input (also: nothing free to optimise, or a check-only kind).
+    failed (anything else: the message says what to try), interrupted (Ctrl-C or SIGTERM:
+    the best of the finished starts). Writes OUT/<name>/result.json, report.html, ipopt.log,
+    starts.jsonl (every finished start, appended as it finishes) and plots. OUT/<name>/ must
+    not exist yet, or hold an earlier agrisynth run and --force be given (checked before
+    solving). Exit 0 all rules hold; 1 a rule violated; 3 infeasible or failed; 2 bad input
+    (also: nothing free to optimise, or a check-only kind); 130 interrupted by Ctrl-C
+    (SIGINT), 143 by SIGTERM: the finished starts are kept, --resume RUN_DIR finishes the run.
     """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from synthesis import kinds
+    from synthesis.core import interrupt, startlog
     from synthesis.core import solve as core
     from synthesis.core.executor import default_workers
+    from synthesis.errors import OutputError
     from synthesis.report import run_artifacts
     from synthesis.report.tables import objective_text
-    from synthesis.result import atomic_write_text, write_run
+    from synthesis.result import atomic_write_text, is_run_folder, open_run_folder, write_run
     from synthesis.spec import load_spec
 
     if scheduler is not None and workers is not None:
         raise click.BadParameter("give either --workers (local processes) or --scheduler (a dask cluster), "
                                  "not both", param_hint="--workers/--scheduler")
+    if resume is not None and out is not None:
+        raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
+    interrupt.install()
     loaded = load_spec(spec)
     kind = kinds.solving_kind(loaded.kind)
-    workers = workers or default_workers()
+    workers = min(workers or default_workers(), MAX_WORKERS)
+    if resume is not None:
+        if not is_run_folder(resume):
+            raise OutputError(f"--resume {resume}: not an agrisynth run folder")
+        earlier = startlog.settings_of(resume)      # --starts and --seed default to the interrupted run's
+        starts = earlier.get("starts") if starts is None and isinstance(earlier.get("starts"), int) else starts
+        seed = earlier.get("seed") if seed is None and isinstance(earlier.get("seed"), int) else seed
     n = starts or loaded.model.solver.starts
-    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
-                  transient=not sys.stdout.isatty()) as progress:
-        task = progress.add_task(f"solving {loaded.name}", total=n, best="")
+    the_seed = loaded.model.solver.seed if seed is None else seed
+    settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed)
+    finished = None
+    replaceable = None
+    if resume is not None:
+        finished = startlog.read(resume, fingerprint)
+        out = resume.parent
+        replaceable = resume if resume.name == loaded.name else None
+    out = Path("results") if out is None else out
+    run_folder = open_run_folder(out, loaded.name, force=force, spec=spec, replaceable=replaceable)
+    committed = False
+    try:
+        log_file = startlog.StartLog(run_folder.staging / startlog.FILENAME, settings, fingerprint)
+        with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                      TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
+                      transient=not sys.stdout.isatty()) as progress:
+            task = progress.add_task(f"solving {loaded.name}", total=n, best="")
 
-        def on_start(report, best) -> None:
-            tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
-            progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
-                                                  f"objective {best.outcome.objective:.6g} ({tag})")
+            def on_start(report, best) -> None:
+                tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
+                progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
+                                                      f"objective {best.outcome.objective:.6g} ({tag})")
+                if not sys.stdout.isatty():         # piped: no live bar, so a line per finished start
+                    _start_line(report, best, progress.tasks[task].completed, n)
 
-        result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler)
-    if verbose:
-        console.print(log, markup=False)
-    artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)})
-    folder, replaced = write_run(out, result, artifacts)
+            try:
+                result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
+                                                      record=log_file.append, finished=finished)
+                _described(result, loaded)
+            except core.Interrupted as exc:
+                log_file.close()
+                if exc.partial is not None:
+                    _described(exc.partial[0], loaded)
+                committed = _keep_interrupted(exc, run_folder, spec, n)
+                sys.exit(exc.exit_code)
+        log_file.close()
+        if verbose:
+            console.print(log, markup=False)
+        with interrupt.deferred():
+            artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log),
+                                               **_solved_spec(loaded, result)})
+            folder, replaced = write_run(out, result, artifacts, folder=run_folder)
+            committed = True
+    except BaseException as exc:
+        if not committed and not isinstance(exc, OutputError):
+            run_folder.discard()
+        raise
     baseline = core.baseline_rules(kind, loaded)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
+    _print_design(result)
     s = result.solver
     console.print(f"objective {objective_text(result.objective)}; IPOPT "
                   f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
-                  f"{f'the cluster at {scheduler}' if scheduler else f'{workers} worker(s)'}; status {result.status}")
+                  f"{f'the cluster at {escape(scheduler)}' if scheduler else f'{workers} worker(s)'}; "
+                  f"status {result.status}")
+    if finished:
+        console.print(f"resumed: {len(finished)} finished start(s) read from {escape(str(resume))}/starts.jsonl")
     if replaced:
-        console.print(f"replaced the previous run in {folder}/")
-    console.print(f"wrote {folder}/: {', '.join(sorted(f.name for f in folder.iterdir()))}")
+        console.print(f"replaced the previous run in {escape(str(folder))}/")
+    console.print(f"wrote {escape(str(folder))}/: {escape(', '.join(sorted(f.name for f in folder.iterdir())))}")
     if s["status_note"]:
         console.print(f"[yellow]note:[/] {escape(s['status_note'])}")
     if result.status in ("infeasible", "failed"):
         raise core.exit_error(kind, result, reports)
     bad = result.violated()
     if bad:
-        console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(r['name'] for r in bad)}")
+        console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(escape(r['name']) for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied on the fine grid[/]")
+
+
+def _keep_interrupted(exc, run_folder, spec: Path, n: int) -> bool:
+    """Write an interrupted run's best-so-far result (status interrupted), its report and starts.jsonl,
+    and say how to finish it; nothing is written (and nothing replaced) when no start had finished."""
+    import signal as _signal
+
+    from synthesis.core import interrupt
+    from synthesis.report import run_artifacts
+    from synthesis.result import atomic_write_text, write_run
+
+    name = _signal.Signals(exc.signum).name
+    if exc.partial is None:
+        run_folder.discard()
+        err_console.print(f"interrupted by {name} before any start finished; nothing written")
+        return False
+    result, reports, log = exc.partial
+    with interrupt.deferred(reraise=False):
+        artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)})
+        folder, _ = write_run(run_folder.final.parent, result, artifacts, folder=run_folder)
+    err_console.print(f"interrupted by {name} after {len(reports)} of {n} starts: kept them and their best "
+                      f"(status interrupted) in {escape(str(folder))}/; finish the run with\n"
+                      f"  agrisynth solve {escape(str(spec))} --resume {escape(str(folder))}", soft_wrap=True)
+    return True
 
 
 @cli.command()
@@ -272,33 +474,46 @@ def compare(results: tuple[Path, ...], out: Path) -> None:
 
 
 @cli.command()
-@click.argument("problems", nargs=-1, metavar="[PROBLEM]...")
+@click.argument("problems", nargs=-1, metavar="[KIND | SPEC]...")
+@click.option("--problems", "spec_files", multiple=True, type=click.Path(dir_okay=False, path_type=Path),
+              metavar="SPEC", help="a spec file to bench (repeatable; instead of its kind's default set)")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
-              help="output folder; the bench writes OUT/bench/bench.json and OUT/bench/error_vs_time.png")
-@click.option("--repeats", type=click.IntRange(min=1), default=5, show_default=True,
-              help="runs of each method on each problem; the table shows the median wall time")
-def bench(problems: tuple[str, ...], out: Path, repeats: int) -> None:
-    """Compare methods on the same problems: objective reached and median wall time, side by side.
+              help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
+@click.option("--repeats", type=click.IntRange(min=1), default=None,
+              help="runs of each IPOPT method per problem (median wall time) [default: 3; --quick: 1]")
+@click.option("--quick", is_flag=True, help="fewer starts, sample counts and peers, the first problem of each kind")
+@click.option("--no-extreme", is_flag=True, help="leave out the extreme-case matrix (tests/extreme/)")
+def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, repeats: int | None, quick: bool,
+          no_extreme: bool) -> None:
+    """Error against run time for every kind that solves, side by side in one run.
 
     \b
-    PROBLEM is a kind name (its default bench set) or a spec file; none = every kind's default set.
-    Kinds with a bench: fourbar_path (IPOPT multistart vs scipy differential_evolution).
-    Both methods stop at the same target objective (best known + tolerance). Every result is
-    re-checked on the fine grid (worst rule violation). Writes OUT/bench/bench.json and
-    OUT/bench/error_vs_time.png (log-log: objective gap and violation against wall time).
+    KIND: that kind's default bench set (library redesigns); SPEC: a spec file; none: every kind.
+    Per problem: IPOPT multistart with exact (CasADi) derivatives against the same NLP with
+    finite differences and a limited-memory Hessian, scipy SLSQP and differential_evolution
+    (time ratio only where both reach the same target: best known + tolerance, every rule on the
+    fine grid); the sample-count sweep (time, iterations, fine-grid violation, objective gap);
+    build against solve time; kind studies (planting: seed 000's difference scheme); and the
+    extreme-case matrix of tests/extreme/.  Writes OUT/bench/bench.json, bench.md and plots
+    (`agrisynth compare ... OUT/bench` shows them).
     \b
     Examples:
-      agrisynth bench fourbar_path
-      agrisynth bench problems/fourbar_path/picking_arc.toml --repeats 3 --out /tmp/b
+      agrisynth bench --quick
+      agrisynth bench clamp_cam guide_tube
+      agrisynth bench --problems problems/planting_arm/redesign_from_example1.toml
     """
+    import time
+
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from synthesis import bench as benchmod
     from synthesis.spec import KINDS, load_spec
 
+    repeats = repeats if repeats is not None else (1 if quick else 3)
     known = benchmod.kinds_with_bench()
     by_kind: dict[str, list | None] = {}
-    for item in problems or tuple(known):
+    items = [*problems, *(str(f) for f in spec_files)]
+    for item in items or tuple(known):
         if item in known:
             by_kind[item] = None
         elif item in KINDS:
@@ -314,36 +529,60 @@ def bench(problems: tuple[str, ...], out: Path, repeats: int) -> None:
         else:
             raise click.BadParameter(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
                                      param_hint="PROBLEM")
-    cases = [case for kind, specs in by_kind.items() for case in benchmod.cases_for(kind, specs, 0)]
-    total = sum(len(c.methods) * repeats + (1 if callable(c.best_known) else 0) for c in cases)
+    cases = []
+    with benchmod.quick_mode(quick):
+        for kind, specs in by_kind.items():
+            try:
+                cases += benchmod.cases_for(kind, specs, 0)
+            except Exception as exc:      # noqa: BLE001 - one kind's broken bench set must not stop the others
+                if items:
+                    raise
+                err_console.print(f"[yellow]bench: kind {kind} left out: its bench cases could not be made "
+                                  f"({type(exc).__name__}: {escape(str(exc))})[/]")
+    extreme_on = not no_extreme and not items
+    total = sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)
     results = []
+    extreme = None
+    t0 = time.perf_counter()
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console, transient=not sys.stdout.isatty()) as progress:
         task = progress.add_task("bench", total=total)
-        for case in cases:
-            def tick(what: str | None) -> None:
-                if what is None:
-                    progress.advance(task)
-                else:
-                    progress.update(task, description=what)
 
+        def tick(what: str | None) -> None:
+            if what is None:
+                progress.advance(task)
+            else:
+                progress.update(task, description=escape(what))
+
+        for case in cases:
             results.append(benchmod.run_case(case, repeats, tick))
-    settings = {"repeats": repeats, "problems": [c.problem for c in cases]}
-    folder = benchmod.write_bench(out, results, settings)
+        if extreme_on:
+            from synthesis.bench_extreme import extreme_matrix
+
+            tick("extreme-case matrix (tests/extreme/)")
+            extreme = extreme_matrix()
+            tick(None)
+    settings = {"repeats": repeats, "quick": quick, "problems": [c.problem for c in cases],
+                "wall_s": round(time.perf_counter() - t0, 1)}
+    folder = benchmod.write_bench(out, results, settings, extreme)
     console.print(bench_table(results, repeats))
-    console.print(f"wrote {folder}/bench.json, error_vs_time.png")
+    console.print(f"wrote {folder}/bench.json, bench.md and plots ({settings['wall_s']:.0f} s)")
 
 
 def bench_table(results: list[dict], repeats: int) -> Table:
-    table = Table(title=f"bench: objective reached and median wall time of {repeats} runs", title_justify="left")
+    table = Table(title=f"bench: objective reached and median wall time (IPOPT methods: {repeats} runs)",
+                  title_justify="left")
     for col, just in (("problem", "left"), ("method", "left"), ("objective", "right"), ("gap to best", "right"),
-                      ("worst violation", "right"), ("median s", "right"), ("time ratio", "right")):
+                      ("worst violation", "right"), ("median s", "right"), ("iterations", "right"),
+                      ("time ratio", "right")):
         table.add_column(col, justify=just, no_wrap=True)
     for res in results:
         for row in res["rows"]:
+            details = row.get("details") if isinstance(row.get("details"), dict) else {}
+            iters = details.get("median_iterations")
             table.add_row(escape(row["problem"]), escape(row["method"]), f"{row['objective']:.4g}",
                           f"{row['objective_gap']:.3g}", f"{row['worst_violation']:.3g}", f"{row['median_s']:.3f}",
-                          escape(row["time_ratio_text"]))
+                          "" if iters is None else f"{iters:g}", escape(row["time_ratio_text"]))
     return table
 
 
@@ -355,12 +594,11 @@ def main() -> None:
     except click.ClickException as exc:
         exc.show()
         sys.exit(2)
-    except click.exceptions.Abort:
+    except (click.exceptions.Abort, KeyboardInterrupt) as exc:
+        from synthesis.core import interrupt
+
         err_console.print("interrupted")
-        sys.exit(130)
-    except KeyboardInterrupt:
-        err_console.print("interrupted")
-        sys.exit(130)
+        sys.exit(128 + interrupt.signal_of(exc))
     except AgrisynthError as exc:
         err_console.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True, soft_wrap=True)
         sys.exit(exc.exit_code)

@@ -23,3 +23,7 @@ class SolverError(AgrisynthError, RuntimeError):
     """IPOPT failed or the rule set is infeasible; the message names the rules and IPOPT's status."""
 
     exit_code = 3
+
+
+class OutputError(AgrisynthError):
+    """The output folder cannot be written, or holds something agrisynth will not replace."""

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import math
 import os
+import re
 import platform
 import shutil
 import tempfile
@@ -11,9 +14,9 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from synthesis.errors import ResultError
+from synthesis.errors import OutputError, ResultError
 
-STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated")
+STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated", "interrupted")
 #: version of the result.json layout; readers refuse a newer one rather than misread it
 SCHEMA_VERSION = 2
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
@@ -47,6 +50,9 @@ class Result:
     baseline_design: dict[str, Any] | None = None        # solve: the spec's given design
     fine_grid_worst_violation: float | None = None       # solve: of the returned design
     extra: dict[str, Any] = field(default_factory=dict)   # the kind's facts (precision points, ...): "facts"
+    #: design name -> {path (TOML), unit, bounds [lo, hi] or null, free}: what the spec said of each variable
+    #: (synthesis.design_info); reports show units, bounds, free/fixed and at-bound marks from it
+    design_variables: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -67,6 +73,8 @@ class Result:
             del data["solver"]
         if data["trajectory"] is None:
             del data["trajectory"]
+        if data["design_variables"] is None:
+            del data["design_variables"]
         for key in RUN_KEYS:
             if data[key] is None and self.solver is None:      # a check has no run tail
                 del data[key]
@@ -77,7 +85,7 @@ class Result:
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "Result":
         known = {"kind", "name", "spec_sha256", "status", "design", "rules", "objective", "trajectory",
-                 "solver", "versions"}
+                 "solver", "versions", "design_variables"}
         args = {k: data[k] for k in (*known, *RUN_KEYS) if k in data}
         if data.get("schema_version", 1) >= 2:
             args["extra"] = dict(data.get("facts") or {})
@@ -88,26 +96,37 @@ class Result:
 
 
 REQUIRED_KEYS = ("kind", "name", "spec_sha256", "status", "design", "rules")
+#: a result.json larger than this is refused rather than read
+MAX_RESULT_BYTES = 512 * 1024**2
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number (JSON has no NaN or infinity)")
 
 
 def load_result(path: str | Path) -> Result:
     """Read a run folder's result.json (or the file itself); ResultError (exit 2) says what is wrong."""
+    from synthesis.files import read_regular
+
     path = Path(path)
     if path.is_dir():
         path = path / "result.json"
+    raw = read_regular(path, MAX_RESULT_BYTES, "result file (give a run folder or its result.json)", ResultError)
     try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ResultError(f"{path}: no such result file (give a run folder or its result.json)") from None
-    except OSError as exc:
-        raise ResultError(f"{path}: cannot read: {exc.strerror}") from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ResultError(f"{path}: not a UTF-8 text file (byte {exc.start}); not a result.json agrisynth wrote") from None
     try:
-        data = json.loads(text)
+        data = json.loads(text, parse_constant=_no_constant)
     except json.JSONDecodeError as exc:
         # a cut-off write leaves an object that never closes; anything else is plain bad JSON
         what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
         raise ResultError(f"{path}: {what} ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
                           f"re-run the check or solve that wrote it") from None
+    except RecursionError:
+        raise ResultError(f"{path}: nested too deeply; not a result.json agrisynth wrote") from None
+    except ValueError as exc:       # NaN / Infinity, or an integer of thousands of digits
+        raise ResultError(f"{path}: {str(exc)[:120]}; not a result.json agrisynth wrote") from None
     if not isinstance(data, dict):
         raise ResultError(f"{path}: expected a JSON object, got {type(data).__name__}")
     version = data.get("schema_version", 1)     # results written before the key existed are version 1
@@ -135,7 +154,8 @@ def _shape_problem(data: dict) -> str | None:
             return f"{key} must be a string, got {type(data[key]).__name__}"
     if data["status"] not in STATUSES:
         return f"status {data['status']!r} is not one of {', '.join(STATUSES)}"
-    for key in ("design", "versions", "objective", "solver", "trajectory", "facts", "elastic", "baseline_design"):
+    for key in ("design", "versions", "objective", "solver", "trajectory", "facts", "elastic", "baseline_design",
+                "design_variables"):
         if key in data and data[key] is not None and not isinstance(data[key], dict):
             return f"{key} must be an object, got {type(data[key]).__name__}"
     if "versions" in data and data["versions"] is None:
@@ -149,6 +169,10 @@ def _shape_problem(data: dict) -> str | None:
             return f"rules[{i}] must be an object"
         if not isinstance(rule.get("name"), str) or not isinstance(rule.get("satisfied"), bool):
             return f"rules[{i}] needs a string name and a true/false satisfied"
+        for key in ("value", "margin"):
+            v = rule.get(key)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                return f"rules[{i}] ({rule['name'][:60]}): {key} must be a number or null"
         limit = rule.get("limit")
         if not (isinstance(limit, list) and len(limit) == 2
                 and all(v is None or isinstance(v, (int, float)) for v in limit)):
@@ -156,41 +180,231 @@ def _shape_problem(data: dict) -> str | None:
     return None
 
 
-def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:
-    """Write ``out_root/<name>/`` atomically: result.json plus each artifact writer's file.
-
-    Everything is written into a temporary sibling folder first and swapped in with renames, so an
-    interrupted run never leaves a half-written folder.  Returns (folder, replaced_previous_run).
-    """
-    def result_json(path: Path) -> None:
-        path.write_text(json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n")
-
-    return write_folder(out_root / result.name, {"result.json": result_json, **artifacts})
+#: the file that proves a folder is an agrisynth run (written first, into every run folder)
+RUN_MARKER = ".agrisynth-run"
+#: a run folder's name: the spec's ``name``, a file-name-safe slug
+RUN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 
 
-def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:
-    """Write the folder ``final`` atomically, one file per artifact writer (called in order).
-
-    Returns (final, replaced_previous_folder).
-    """
-    out_root = final.parent
-    out_root.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=out_root))
-    os.chmod(staging, 0o777 & ~_UMASK)     # mkdtemp makes it private; a run folder is an ordinary folder
+def is_run_folder(path: Path) -> bool:
+    """Is ``path`` a folder agrisynth wrote (a real directory, not a link, holding a valid marker)?"""
     try:
+        if path.is_symlink() or not path.is_dir():
+            return False
+        marker = path / RUN_MARKER
+        if marker.is_symlink() or not marker.is_file() or marker.stat().st_size > 4096:
+            return False
+        data = json.loads(marker.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return False
+    return isinstance(data, dict) and data.get("agrisynth_run") == 1
+
+
+def _refusal(final: Path, spec: Path | None) -> str:
+    """Why ``final`` (which exists and is not an agrisynth run) is not replaced."""
+    what = "a file" if final.is_file() else ("a link" if final.is_symlink() else
+                                              "a folder agrisynth did not write" if final.is_dir() else "something")
+    try:
+        if spec is not None and final.resolve() == Path(spec).resolve():
+            what = "the spec file itself"
+    except OSError:
+        pass
+    return (f"{final} is {what} (no {RUN_MARKER} marker): agrisynth never replaces or deletes it; "
+            f"use another --out folder or rename it")
+
+
+@dataclass
+class RunFolder:
+    """A run folder being written: ``staging`` (``OUT/.<name>.run-XXXX/``, with the marker from the start)
+    while the run lasts, moved to ``final`` (``OUT/<name>/``) by :meth:`commit`.
+
+    ``final`` is replaced only when it is an agrisynth run folder (marker) and either ``force`` was
+    given or it is ``replaceable`` (the folder a ``--resume`` continues); anything else there is an
+    :class:`OutputError` (exit 2), checked when the folder is opened (before any solving) and again,
+    under a lock on ``OUT``, when it is moved into place.
+    """
+
+    final: Path
+    staging: Path
+    force: bool = False
+    replaceable: Path | None = None
+    spec: Path | None = None
+    created: list[Path] = field(default_factory=list)     # folders of OUT this run made (deepest first)
+
+    def permitted(self) -> bool:
+        """May ``final`` be written now?  Raises OutputError when something there must be kept."""
+        if not os.path.lexists(self.final):
+            return False
+        if not is_run_folder(self.final):
+            raise OutputError(_refusal(self.final, self.spec))
+        if self.force or (self.replaceable is not None and _same(self.final, self.replaceable)):
+            return True
+        raise OutputError(f"{self.final} holds an earlier agrisynth run; give --force to replace it, "
+                          f"or --out another folder")
+
+    def write(self, artifacts: dict[str, Callable[[Path], None]]) -> None:
         for filename, writer in artifacts.items():
-            writer(staging / filename)
-        replaced = final.exists()
-        if replaced:
-            old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old.", dir=out_root))
-            os.replace(final, old / "run")
-            os.replace(staging, final)
+            writer(self.staging / filename)
+
+    def commit(self) -> bool:
+        """Move the staging folder to ``final``; returns whether an earlier run was replaced.
+
+        Under an exclusive lock on the output folder and with SIGINT/SIGTERM deferred, so two runs racing
+        into one folder take turns (the folder is always one run's, whole) and no half-moved folder or
+        ``.old`` leftover remains."""
+        from synthesis.core import interrupt
+
+        with _locked(self.final.parent), interrupt.deferred():
+            try:
+                replace = self.permitted()
+            except OutputError as exc:
+                raise OutputError(f"{exc} (this run is kept in {self.staging})") from None
+            if not replace:
+                os.rename(self.staging, self.final)
+                return False
+            old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-", dir=self.final.parent))
+            os.rename(self.final, old / "run")
+            os.rename(self.staging, self.final)
             shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, final)
-        return final, replaced
+            return True
+
+    def discard(self) -> None:
+        """Remove the staging folder (only ever one this process made), and the output folders this run
+        created when they are empty again."""
+        if self.staging != Path():
+            shutil.rmtree(self.staging, ignore_errors=True)
+        for folder in self.created:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    """An exclusive flock on ``folder`` (a directory file descriptor); no lock where flock is unsupported."""
+    try:
+        import fcntl
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            pass
+        yield
+    finally:
+        os.close(fd)
+
+
+def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Path | None = None,
+                    replaceable: Path | None = None) -> RunFolder:
+    """Check that ``out_root/name`` may be written and make the run's staging folder (with its marker).
+
+    OutputError (exit 2), before any work is done, when ``name`` is not a slug, ``out_root`` cannot be
+    created or written, or ``out_root/name`` holds something that must be kept."""
+    if not isinstance(name, str) or not RUN_NAME.match(name):
+        raise OutputError(f"name {str(name)[:60]!r} is not a folder name (letters, digits and _ . - only, "
+                          f"at most 100 characters, starting with a letter or digit)")
+    out_root = Path(out_root)
+    created = []
+    missing = out_root
+    while not os.path.lexists(missing) and missing != missing.parent:
+        created.append(missing)
+        missing = missing.parent
+    try:
+        out_root.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"--out {out_root}: not a folder") from None
+    except OSError as exc:
+        raise OutputError(f"--out {out_root}: cannot create the output folder ({exc.strerror})") from None
+    if not out_root.is_dir():
+        raise OutputError(f"--out {out_root}: not a folder")
+    folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created)
+    try:
+        folder.permitted()
+    except OutputError:
+        folder.discard()
+        raise
+    try:
+        folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
+    except OSError as exc:
+        raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
+    try:
+        os.chmod(folder.staging, 0o777 & ~_UMASK)    # mkdtemp makes it private; a run folder is an ordinary one
+        atomic_write_text(folder.staging / RUN_MARKER, json.dumps(
+            {"agrisynth_run": 1, "name": name, "pid": os.getpid(), "written_by": "agrisynth"}) + "\n")
+    except OSError as exc:
+        folder.discard()
+        raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
+    return folder
+
+
+def finite_only(data: Any, path: str = "", found: list[str] | None = None) -> Any:
+    """``data`` with every non-finite float replaced by None; ``found`` collects where (JSON paths)."""
+    if isinstance(data, float):
+        if math.isfinite(data):
+            return data
+        if found is not None:
+            found.append(path or "$")
+        return None
+    if isinstance(data, dict):
+        return {k: finite_only(v, f"{path}.{k}" if path else str(k), found) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [finite_only(v, f"{path}[{i}]", found) for i, v in enumerate(data)]
+    return data
+
+
+def result_text(result: Result) -> str:
+    """result.json's text: never NaN or infinity (JSON has neither); a figure that is not a number is
+    written as null and listed under ``not_finite`` (its JSON path)."""
+    found: list[str] = []
+    data = finite_only(result.to_json(), "", found)
+    if found:
+        data["not_finite"] = found
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"
+
+
+def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Path], None]], *,
+              force: bool = False, folder: RunFolder | None = None) -> tuple[Path, bool]:
+    """Write ``out_root/<name>/``: result.json plus each artifact writer's file, into the run's staging
+    folder (``folder``, or one opened here), then moved into place (:meth:`RunFolder.commit`).
+
+    Returns (folder, replaced_previous_run)."""
+    def result_json(path: Path) -> None:
+        atomic_write_text(path, result_text(result))
+
+    if folder is None:
+        return write_folder(Path(out_root) / result.name, {"result.json": result_json, **artifacts}, force=force)
+    try:
+        folder.write({"result.json": result_json, **artifacts})
+        return folder.final, folder.commit()
+    except OutputError:
+        raise
     except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        folder.discard()
+        raise
+
+
+def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]], *, force: bool = False,
+                 spec: Path | None = None) -> tuple[Path, bool]:
+    """Write the run folder ``final`` (one file per artifact writer, called in order) through a staging
+    folder; replaces an earlier agrisynth run there only with ``force``.  Returns (final, replaced)."""
+    folder = open_run_folder(final.parent, final.name, force=force, spec=spec)
+    try:
+        folder.write(artifacts)
+        return final, folder.commit()
+    except OutputError:
+        raise
+    except BaseException:
+        folder.discard()
         raise
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from synthesis import kinds
+from synthesis import design_info, kinds
 from synthesis.report import run_artifacts
 from synthesis.result import Result, write_run
 from synthesis.spec import load_spec
@@ -12,6 +12,6 @@ from synthesis.spec import load_spec
 
 def checked_run(spec: Path, out: Path) -> tuple[Path, Result]:
     loaded = load_spec(spec)
-    result = kinds.checker(loaded.kind)(loaded)
+    result = design_info.attach(kinds.checker(loaded.kind)(loaded), loaded.model)     # as `agrisynth check` does
     folder, _ = write_run(out, result, run_artifacts(result))
     return folder, result

@@ -45,9 +45,11 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     assert {len(tr[k]) for k in ("t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay")} == {361}
     assert (folder / "trajectory.png").stat().st_size > 10_000
     assert "<table class='rules'>" in (folder / "report.html").read_text()
-    # a second run replaces the folder and says so
+    # a second run keeps the first (exit 2 before any work) unless --force, which replaces it and says so
     again = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
-    assert "replaced the previous run" in again.stdout
+    assert again.returncode == 2 and "holds an earlier agrisynth run; give --force" in again.stderr
+    forced = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), "--force", cwd=tmp_path)
+    assert forced.returncode == 1 and "replaced the previous run" in forced.stdout
     assert [p.name for p in tmp_path.iterdir()] == ["taiwan_example1"]
 
 

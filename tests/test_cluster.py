@@ -53,7 +53,8 @@ def test_unreachable_scheduler_is_bad_input(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(PLANTING / "redesign_from_example1.toml"),
                            "--out", str(tmp_path), "--scheduler", "nonsense://nowhere"], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert "--scheduler nonsense://nowhere: cannot reach a dask scheduler" in proc.stderr
+    # a scheme other than tcp:// is refused before anything starts (issue 22: tls/ucx gave a TypeError)
+    assert "'nonsense://nowhere' is not a scheduler address: give tcp://host:port" in proc.stderr
     assert "Traceback" not in proc.stderr
 
 

@@ -74,6 +74,7 @@ UNREACHABLE = {
                      [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
     "guide_way": ("guide_way/smooth_redesign.toml", [("roller_margin = 2.0", "roller_margin = 300.0")],
                   "no_undercut", 2),
+    # one chain speed cannot serve 0.4-0.62 m/s: the corner (beta 110, V_s 0.62) conflicts with (beta 70, V_s 0.4)
     "combing_chain": ("combing_chain/redesign_window_80_100.toml",
                       [("machine_speed = [0.4, 0.55]", "machine_speed = [0.4, 0.62]")], "window_top_at_beta110_Vs0.62", 2),
     "comb_finger": ("comb_finger/redesign_max_combing.toml", [("root_clearance = 30.0", "root_clearance = 300.0")],

@@ -13,8 +13,20 @@ KIND = Kind(
              "profile.dxf": "synthesis.clamp_cam.export:write_dxf"},
     compare="synthesis.clamp_cam.plots:compare_figure",
     solving="synthesis.clamp_cam.solve:SOLVING",
+    bench="synthesis.clamp_cam:bench_cases",
     objectives={"base_radius": "smallest base-circle radius, mm",
                 "pressure_angle": "smallest peak pressure angle (measured on the fine grid), deg",
                 "nearest": "smallest change from the given cam"},
     example="clamp_cam/opening_cam_redesign_modified_sine.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "clamp_cam/opening_cam_redesign.toml",
+            "clamp_cam/rotating_cam_redesign.toml",
+    ])

@@ -14,6 +14,18 @@ KIND = Kind(
     check="synthesis.comb_finger.check:run_check",
     figures={"comb_finger.png": "synthesis.comb_finger.plots:finger_figure"},
     solving="synthesis.comb_finger.solve:SOLVING",
+    bench="synthesis.comb_finger:bench_cases",
     objectives={"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"},
     example="comb_finger/redesign_max_combing.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "comb_finger/redesign_max_combing.toml",
+            "comb_finger/redesign_tip_speed.toml",
+    ])

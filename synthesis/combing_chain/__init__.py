@@ -15,7 +15,19 @@ KIND = Kind(
     figures={"delta_over_beta.png": "synthesis.combing_chain.plots:delta_figure"},
     compare="synthesis.combing_chain.plots:compare_figure",
     solving="synthesis.combing_chain.solve:SOLVING",
+    bench="synthesis.combing_chain:bench_cases",
     objectives={"max_window_margin": "largest smallest margin of the plant angle before the cut to the window, deg",
                 "min_chain_speed": "slowest chain(s) keeping every plant in the window: sum of gear speeds, m/s"},
     example="combing_chain/redesign_window_80_100.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "combing_chain/redesign_window_80_100.toml",
+            "combing_chain/redesign_two_speed.toml",
+    ])

@@ -50,12 +50,18 @@ def _worker_failed(scheduler: str, exc: Exception) -> AgrisynthError:
 
 
 def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
-                          on_done: Callable[[Any], None] = lambda outcome: None) -> list:
+                          on_done: Callable[[Any], None] = lambda outcome: None,
+                          indices: list[int] | None = None,
+                          failure: Callable[[int, str, str], Any] | None = None) -> list:
     """``run_starts`` on a dask.distributed cluster: each worker builds the solver once (a plugin).
 
     ``scheduler`` is the scheduler's address (``tcp://host:8786``).  The workers need agrisynth
     installed.  Outcomes come back in start order, so the result does not depend on the cluster.
+    ``indices``: the start index of each row of ``starts`` (default 0, 1, ...; a resumed run's unfinished ones).
+    ``failure(index, return_status, reason)``: the outcome of a start that raised or whose worker died
+    (:func:`synthesis.core.executor.run_starts`); None: such a start ends the run (AgrisynthError).
     """
+    indices = list(range(len(starts))) if indices is None else list(indices)
     outcomes: dict[int, Any] = {}
     try:
         client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
@@ -68,13 +74,21 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
         except Exception as exc:     # the worker could not build the solver: its environment, not our input
             raise _worker_failed(scheduler, exc) from None
         try:
-            futures = [client.submit(_solve_on_dask_worker, name, i, x0, pure=False) for i, x0 in enumerate(starts)]
+            futures = [client.submit(_solve_on_dask_worker, name, i, x0, pure=False) for i, x0 in zip(indices, starts)]
+            index_of = {fut.key: i for fut, i in zip(futures, indices)}
             try:
                 for fut in dask_completed(futures):
                     try:
                         out = fut.result()
                     except Exception as exc:
-                        raise _worker_failed(scheduler, exc) from None
+                        if failure is None:
+                            raise _worker_failed(scheduler, exc) from None
+                        from synthesis.core.executor import WORKER_CRASHED, _raised
+
+                        if type(exc).__name__ == "KilledWorker":
+                            out = failure(index_of[fut.key], WORKER_CRASHED, f"the dask worker died: {exc}")
+                        else:
+                            out = failure(index_of[fut.key], *_raised(exc))
                     outcomes[out.start] = out
                     on_done(out)
             except BaseException:
@@ -83,4 +97,4 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
         finally:
             with contextlib.suppress(Exception):     # never hide the error that got us here
                 client.unregister_worker_plugin(name)
-    return [outcomes[i] for i in range(len(starts))]
+    return [outcomes[i] for i in indices]

@@ -8,16 +8,47 @@ variables' bounds, so the same seed gives the same starts on any machine.
 
 from __future__ import annotations
 
+import contextlib
+import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+import signal
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable
 
 import numpy as np
 from scipy.stats import qmc
 
+from synthesis.core import interrupt
 from synthesis.errors import AgrisynthError
 
 _worker_solver: Any = None   # the solver built by this worker process's initializer
+_worker_began: Any = None    # this worker's end of the pool's "start i began" queue
+
+#: a start that raised: ``return_status`` is this prefix and the exception's type
+START_RAISED = "Start_Raised"
+#: a start whose worker process died (killed by the OS, out of memory, a crash in native code)
+WORKER_CRASHED = "Worker_Crashed"
+
+
+def failed_start(index: int, status: str, reason: str):
+    """The outcome of a start that could not be solved (the default ``failure`` of :func:`run_starts`):
+    not converged, objective inf, no design, and ``details["failure"]`` the reason (the verdict never
+    re-checks it and ranks it below every start that ran)."""
+    import math
+
+    from synthesis.core.outcome import StartOutcome
+
+    return StartOutcome(index, {}, math.inf, status, False, 0, 0.0, f"{status}: {reason}\n",
+                        details={"failure": reason})
+
+
+def _raised(exc: BaseException) -> tuple[str, str]:
+    text = " ".join(str(exc).split())
+    text = text if len(text) <= 300 else text[:297] + "..."
+    return f"{START_RAISED}: {type(exc).__name__}", f"the start raised {type(exc).__name__}: {text or '(no message)'}"
 
 
 def latin_hypercube_starts(bounds: np.ndarray, init: np.ndarray, n: int, seed: int) -> np.ndarray:
@@ -30,22 +61,89 @@ def latin_hypercube_starts(bounds: np.ndarray, init: np.ndarray, n: int, seed: i
     return starts
 
 
-def _init_worker(factory: Callable[[], Any]) -> None:
-    global _worker_solver
+def _init_worker(factory: Callable[[], Any], main_pid: int, began: Any = None) -> None:
+    """A pool worker: leaves SIGINT/SIGTERM to the main process (which stops the run and ends the workers),
+    dies with the main process (even a SIGKILL of it) and builds the solver once.  ``began``: a queue on
+    which the worker says which start it begins (so a worker that dies names the start it was solving)."""
+    global _worker_solver, _worker_began
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _die_with(main_pid)
+    _worker_began = began
     _worker_solver = factory()
 
 
+def _die_with(main_pid: int) -> None:
+    """End this process when ``main_pid`` ends: PR_SET_PDEATHSIG where Linux has it, and a watchdog thread."""
+    parent = os.getppid()
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError, TypeError):
+        pass
+
+    def alive(pid: int) -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return True
+
+    def watch() -> None:
+        while os.getppid() == parent and alive(main_pid):
+            time.sleep(1.0)
+        os._exit(1)
+
+    if os.getppid() != parent or not alive(main_pid):
+        os._exit(1)
+    threading.Thread(target=watch, daemon=True, name="agrisynth-watchdog").start()
+
+
 def _solve_in_worker(index: int, x0: np.ndarray):
+    if _worker_began is not None:
+        _worker_began.put(index)        # a SimpleQueue: written before the solve starts, not by a thread
     return _worker_solver.solve(index, x0)
+
+
+def _drain(queue: Any, into: set[int]) -> None:
+    with contextlib.suppress(OSError, EOFError, ValueError):
+        while not queue.empty():
+            into.add(queue.get())
+
+
+def _exit_text(code: int | None) -> str:
+    if code is None:
+        return "its worker process died"
+    if code < 0:
+        with contextlib.suppress(ValueError):
+            return f"its worker process was killed by {signal.Signals(-code).name}"
+        return f"its worker process was killed by signal {-code}"
+    return f"its worker process ended with exit code {code}"
 
 
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 
 
+def _end_workers(pool: ProcessPoolExecutor) -> None:
+    """Kill the pool's worker processes (an interrupted run: their starts are not waited for)."""
+    kill = getattr(pool, "kill_workers", None)          # Python >= 3.14
+    if kill is not None:
+        kill()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            proc.kill()
+
+
 def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
                on_done: Callable[[Any], None] = lambda outcome: None,
-               stop_when: Callable[[Any], bool] | None = None, scheduler: str | None = None) -> list:
+               stop_when: Callable[[Any], bool] | None = None, scheduler: str | None = None,
+               finished: dict[int, Any] | None = None,
+               failure: Callable[[int, str, str], Any] = failed_start) -> list:
     """Solve every start; returns the outcomes in start order. ``on_done`` sees each as it finishes.
 
     ``stop_when(outcome)`` ends the multistart early: when the start with the smallest index k for
@@ -53,56 +151,157 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     cancelled and the outcomes of starts 0..k are returned (in order; outcomes of later starts that
     happened to finish are dropped).  The result is therefore the same for any number of workers.
 
+    ``finished`` (start index -> outcome): starts already solved (a resumed run); they are passed to
+    ``on_done`` first, in start order, and not solved again, so the answer is the uninterrupted one.
+
     ``scheduler`` (a dask.distributed address) sends the starts to that cluster instead of a local
     process pool of ``workers``; there every start runs, and ``stop_when`` only trims the outcomes
     the same way, so the answer does not depend on where it ran.
 
-    KeyboardInterrupt propagates after cancelling pending starts; outcomes already passed to
-    ``on_done`` are the caller's to keep.
+    A start that raises, or whose worker process dies (killed by the OS, a crash in native code), is that
+    start's failure and the run goes on: ``failure(index, return_status, reason)`` makes its outcome
+    (return_status ``Start_Raised: <Error>`` or ``Worker_Crashed``).  After a worker dies the starts that
+    were running are solved again one by one in a fresh worker, so the start that kills its worker is the
+    one named, whatever the number of workers.
+
+    Interrupts (:mod:`synthesis.core.interrupt`): KeyboardInterrupt propagates after the pending starts
+    are cancelled and the pool's workers killed; a start that was running in this process when the
+    signal came is discarded (IPOPT returns it as if finished).  Outcomes already passed to ``on_done``
+    are the caller's to keep.
     """
+    outcomes: dict[int, Any] = {}
+    stop_at = len(starts) - 1                  # the last start index that counts
+    for i in sorted(finished or {}):
+        if i > stop_at:
+            break
+        out = finished[i]
+        outcomes[i] = out
+        on_done(out)
+        if stop_when is not None and stop_when(out):
+            stop_at = i
+            break
+    todo = [i for i in range(stop_at + 1) if i not in outcomes]
     if scheduler is not None:
         try:
             from synthesis.core.cluster import run_starts_on_cluster
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
-        everything = run_starts_on_cluster(factory, starts, scheduler, on_done)
+        solved = (run_starts_on_cluster(factory, starts[todo], scheduler, on_done, indices=todo, failure=failure)
+                  if todo else [])
+        outcomes.update({out.start: out for out in solved})
+        everything = [outcomes[i] for i in range(stop_at + 1)]
         first = next((i for i, out in enumerate(everything) if stop_when is not None and stop_when(out)), None)
         return everything if first is None else everything[:first + 1]
-    outcomes: dict[int, Any] = {}
-    stop_at = len(starts) - 1                  # the last start index that counts
 
     def settled() -> bool:
         return all(i in outcomes for i in range(stop_at + 1))
 
+    if not todo:
+        return [outcomes[i] for i in range(stop_at + 1)]
+
+    def accept(out) -> None:
+        nonlocal stop_at
+        if out.start > stop_at or out.start in outcomes:
+            return
+        outcomes[out.start] = out
+        on_done(out)
+        if stop_when is not None and out.start < stop_at and stop_when(out):
+            stop_at = out.start
+
     if workers <= 1:      # in this process: no pool start-up cost, the solver built once
         solver = factory()
-        for i, x0 in enumerate(starts):
-            out = solver.solve(i, x0)
-            outcomes[i] = out
-            on_done(out)
-            if stop_when is not None and stop_when(out):
-                stop_at = i
+        interrupt.check()
+        for i in todo:
+            if i > stop_at:
                 break
+            try:
+                out = solver.solve(i, starts[i])
+            except Exception as exc:          # this start's failure; the run goes on
+                if interrupt.pending() is not None:
+                    raise KeyboardInterrupt from None
+                out = failure(i, *_raised(exc))
+            if interrupt.pending() is not None:      # IPOPT was stopped inside this start: not a finished one
+                raise KeyboardInterrupt
+            accept(out)
         return [outcomes[i] for i in range(stop_at + 1)]
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, initargs=(factory,)) as pool:
-        futures = [pool.submit(_solve_in_worker, i, x0) for i, x0 in enumerate(starts)]
+
+    def pool_round(indices: list[int], n_workers: int) -> tuple[list[int], str | None]:
+        """Solve ``indices`` in one process pool.  Returns the starts that began but did not finish and,
+        when a worker died (the pool is then broken), what happened to it (None: every start finished)."""
+        ctx = multiprocessing.get_context()
+        began_q = ctx.SimpleQueue()
+        pool = ProcessPoolExecutor(max_workers=min(n_workers, len(indices)), mp_context=ctx,
+                                   initializer=_init_worker, initargs=(factory, os.getpid(), began_q))
+        began: set[int] = set()
+        futures: dict = {}
+        procs: list = []
+        broken: str | None = None
         try:
-            for fut in as_completed(futures):
-                if fut.cancelled():      # a start after the early stop, cancelled before it ran
-                    continue
-                out = fut.result()
-                outcomes[out.start] = out
-                on_done(out)
-                if stop_when is not None and out.start < stop_at and stop_when(out):
-                    stop_at = out.start
-                    for later in futures[stop_at + 1:]:
-                        later.cancel()
-                if settled():
+            futures = {pool.submit(_solve_in_worker, i, starts[i]): i for i in indices}
+            procs = list((getattr(pool, "_processes", None) or {}).values())
+            by_start = {i: fut for fut, i in futures.items()}
+            waiting = set(futures)
+            cancelled_after = len(starts)
+            while waiting and not settled():
+                done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
+                _drain(began_q, began)
+                interrupt.check()
+                for fut in sorted(done, key=futures.get):
+                    if fut.cancelled():      # a start after the early stop, cancelled before it ran
+                        continue
+                    try:
+                        out = fut.result()
+                    except BrokenProcessPool:
+                        broken = "its worker process died"
+                        continue
+                    except Exception as exc:        # raised inside the start: its failure, the run goes on
+                        out = failure(futures[fut], *_raised(exc))
+                    accept(out)
+                if stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
+                    for later in range(stop_at + 1, cancelled_after):
+                        if later in by_start:
+                            by_start[later].cancel()
+                    cancelled_after = stop_at + 1
+                if broken is not None:
+                    codes = [p.exitcode for p in procs if p.exitcode not in (None, 0, -signal.SIGTERM)]
+                    broken = _exit_text(codes[0]) if len(codes) == 1 else broken
                     break
         except BaseException:
             for fut in futures:
                 fut.cancel()
+            _end_workers(pool)
+            pool.shutdown(wait=True, cancel_futures=True)
             raise
-        for fut in futures[stop_at + 1:]:
-            fut.cancel()
+        if broken is not None:
+            _end_workers(pool)
+        pool.shutdown(wait=True, cancel_futures=True)
+        _drain(began_q, began)
+        if broken is not None:
+            for fut in sorted(futures, key=futures.get):     # starts that finished as the pool broke
+                if fut.done() and not fut.cancelled() and fut.exception() is None:
+                    accept(fut.result())
+        return sorted(i for i in began if i not in outcomes and i <= stop_at), broken
+
+    def remaining() -> list[int]:
+        return [i for i in todo if i <= stop_at and i not in outcomes]
+
+    idle_breaks = 0
+    while remaining():
+        suspects, broken = pool_round(remaining(), workers)
+        if broken is None:
+            break
+        if not suspects:        # a worker died outside any start (building the solver?): try once more
+            idle_breaks += 1
+            if idle_breaks >= 2:
+                for i in remaining():
+                    accept(failure(i, WORKER_CRASHED, f"{broken} before solving it (every worker process dies "
+                                                      f"before solving any start: building the solver?)"))
+            continue
+        idle_breaks = 0
+        for i in suspects:      # each alone in a pool of one: the start that brings its worker down is named
+            if i > stop_at or i in outcomes:
+                continue
+            _, alone = pool_round([i], 1)
+            if i not in outcomes:
+                accept(failure(i, WORKER_CRASHED, f"{alone or broken} while solving this start"))
     return [outcomes[i] for i in range(stop_at + 1)]

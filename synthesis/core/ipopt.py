@@ -4,13 +4,26 @@ A :class:`CompiledNLP` is built once per problem and process (the expression gra
 setup are the expensive part) and solves from as many starts as it is given.  IPOPT's output of
 each solve is captured from file descriptor 1 (:mod:`synthesis.ipopt_log`), so no log file is left
 behind, in workers or not.
+
+Two hooks serve the bench (:mod:`synthesis.bench_generic`) and nothing else; both are context-local,
+so a solve outside them is untouched:
+
+* :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
+  only -- IPOPT differences f and g itself (``gradient_approximation`` / ``jacobian_approximation =
+  finite-difference-values``) and keeps a limited-memory Hessian -- instead of CasADi's exact derivatives
+  (the exact-against-approximate study; DESIGN.md: never in a solve);
+* :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
+  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts).
 """
 
 from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
+from typing import Callable, Iterator
 
 import casadi as ca
 import numpy as np
@@ -37,6 +50,38 @@ PRESETS: dict[str, dict] = {
                   "ipopt.bound_relax_factor": 0.0},
 }
 
+#: what :func:`derivatives` ``("finite_difference")`` adds to a preset: IPOPT's own forward differences of
+#: f and g (it never calls CasADi's gradient or Jacobian) and a limited-memory (L-BFGS) Hessian
+FINITE_DIFFERENCE = {"ipopt.hessian_approximation": "limited-memory",
+                     "ipopt.gradient_approximation": "finite-difference-values",
+                     "ipopt.jacobian_approximation": "finite-difference-values"}
+DERIVATIVES = ("exact", "finite_difference")
+
+_derivatives: ContextVar[str] = ContextVar("agrisynth_ipopt_derivatives", default="exact")
+_solve_with: ContextVar[Callable | None] = ContextVar("agrisynth_solve_with", default=None)
+
+
+@contextmanager
+def derivatives(mode: str) -> Iterator[None]:
+    """CompiledNLPs built inside get ``mode`` derivatives ("exact" or "finite_difference")."""
+    if mode not in DERIVATIVES:
+        raise ValueError(f"derivatives: {mode!r} is not one of {', '.join(DERIVATIVES)}")
+    token = _derivatives.set(mode)
+    try:
+        yield
+    finally:
+        _derivatives.reset(token)
+
+
+@contextmanager
+def solved_with(runner: Callable | None) -> Iterator[None]:
+    """``CompiledNLP.solve`` inside calls ``runner(compiled, start, w0, p) -> NLPOutcome`` instead of IPOPT."""
+    token = _solve_with.set(runner)
+    try:
+        yield
+    finally:
+        _solve_with.reset(token)
+
 
 @dataclass
 class NLPOutcome:
@@ -56,18 +101,22 @@ class NLPOutcome:
 class CompiledNLP:
     """A transcribed problem with its IPOPT solver, built once and reused for every start."""
 
-    def __init__(self, problem: Problem, elastic: bool = False):
+    def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None):
+        t0 = time.perf_counter()
         self.problem = problem
         self.elastic = elastic
+        self.derivatives = _derivatives.get() if derivatives is None else derivatives
         self.t: Transcription = transcribe(problem, elastic)
         opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 5, "ipopt.sb": "yes",
-                **PRESETS[problem.ipopt], **problem.ipopt_options, "ipopt.max_iter": problem.max_iter}
+                **PRESETS[problem.ipopt], **problem.ipopt_options, "ipopt.max_iter": problem.max_iter,
+                **(FINITE_DIFFERENCE if self.derivatives == "finite_difference" else {})}
         nlp = {"x": self.t.w, "f": self.t.f, "g": self.t.g}
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
         self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts)
         self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
         self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])
+        self.build_s = time.perf_counter() - t0     # transcription and IPOPT's setup (the bench reports it)
 
     @property
     def rules(self) -> list:
@@ -83,6 +132,9 @@ class CompiledNLP:
         p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
         args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self.t.lbw, ubx=self.t.ubw,
                     lbg=self.t.lbg, ubg=self.t.ubg)
+        runner = _solve_with.get()
+        if runner is not None:
+            return runner(self, start, args["x0"], p)
         if p.size:
             args["p"] = p
         t0 = time.perf_counter()

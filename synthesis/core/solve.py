@@ -17,7 +17,9 @@ from typing import Any, Callable
 
 import numpy as np
 
+from synthesis.core import interrupt
 from synthesis.core.executor import latin_hypercube_starts, run_starts
+from synthesis.core.interrupt import Interrupted
 from synthesis.core.kind import Kind, Setting, Solving
 from synthesis.core.verdict import (FINE, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
                                     diagnosis_of, measured, report_of, status_note, status_of, unsatisfied_error)
@@ -48,7 +50,13 @@ def free_variables(nlp) -> list[str]:
 
 
 def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
-                   on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None) -> Run:
+                   on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+                   record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None) -> Run:
+    """The multistart of every kind.  ``record(outcome)`` sees each finished start first (the run's
+    ``starts.jsonl``); ``finished``: starts already solved by an interrupted run (not solved again).
+
+    A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
+    the :class:`Run` of the starts finished so far (None when none has)."""
     solving = kind.solver_side()
     nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
     if not free_variables(nlp):
@@ -64,17 +72,27 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     best: list[StartReport] = []
 
     def done(outcome) -> None:
-        rep = report_of(outcome, recheck)
-        reports[outcome.start] = rep
-        if not best or better(rep, best[0], maximise):
-            best[:] = [rep]
-        on_start(rep, best[0])
+        with interrupt.deferred():       # a start is kept whole or not at all
+            if record is not None:
+                record(outcome)
+            rep = report_of(outcome, recheck)
+            reports[outcome.start] = rep
+            if not best or better(rep, best[0], maximise):
+                best[:] = [rep]
+            on_start(rep, best[0])
 
     local = workers <= 1 and scheduler is None
     factory = (lambda: nlp) if local else functools.partial(solving.build, setting, False)
     t0 = time.perf_counter()
-    outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler,
-                          stop_when=None if stop is None else (lambda out: stop(reports[out.start])))
+    try:
+        outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler, finished=finished,
+                              stop_when=None if stop is None else (lambda out: stop(reports[out.start])))
+    except KeyboardInterrupt as exc:
+        wall = time.perf_counter() - t0
+        kept = [reports[i] for i in sorted(reports)]
+        partial = (Run(kept, best_in_start_order(kept, maximise), starts, setting.seed,
+                       None if scheduler else workers, scheduler, wall) if kept else None)
+        raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
     ordered = [reports[o.start] for o in outcomes]       # the starts that count (an early stop: 0..k)
     return Run(ordered, best_in_start_order(ordered, maximise), starts, setting.seed,
@@ -129,31 +147,54 @@ def ipopt_log(reports: list[StartReport]) -> str:
 
 def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
-              scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
+              scheduler: str | None = None, record: Callable[[Any], None] | None = None,
+              finished: dict[int, Any] | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 
     ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
-    to run the starts on instead of ``workers`` local processes."""
+    to run the starts on instead of ``workers`` local processes; ``record``/``finished``: see
+    :func:`run_multistart`.  Interrupted (SIGINT/SIGTERM): raises :class:`Interrupted` whose ``partial`` is
+    (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
+    no start had finished."""
     spec = loaded.model
     solving = kind.solver_side()
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
     setting = Setting(spec, seed, solving.prepare(spec))
-    run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler, on_start=on_start)
+    try:
+        run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler,
+                             on_start=on_start, record=record, finished=finished)
+    except Interrupted as exc:
+        if exc.partial is None:
+            raise
+        with interrupt.deferred(reraise=False):
+            kept = _result(kind, loaded, setting, exc.partial, "interrupted", None)
+        raise Interrupted(exc.signum, (kept, exc.partial.reports, ipopt_log(exc.partial.reports))) from None
     best = run.best
     elastic = None if best.satisfied else elastic_diagnosis(kind, setting, run)
-    status = status_of(best, elastic)
+    if interrupt.pending() is not None:       # stopped inside the elastic re-solve: every start is kept
+        with interrupt.deferred(reraise=False):
+            kept = _result(kind, loaded, setting, run, "interrupted", None)
+        raise Interrupted(interrupt.pending(), (kept, run.reports, ipopt_log(run.reports)))
+    result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
+    return result, run.reports, ipopt_log(run.reports)
+
+
+def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic: ElasticDiagnosis | None) -> Result:
+    spec = loaded.model
+    solving = kind.solver_side()
+    best = run.best
     finished = solving.finish(setting, best)
-    result = Result(
+    return Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status=status, design=finished.design,
         rules=[r.to_json() for r in best.records] if finished.rules is None else finished.rules,
         objective={**finished.objective, "value": measured(finished.objective.get("value"))},
         trajectory=finished.trajectory,
         solver={"name": "ipopt", "return_status": best.outcome.return_status,
                 "iterations": best.outcome.iterations, "wall_s": run.wall_s, "starts": run.starts,
-                "starts_run": len(run.reports), "stopped_early": len(run.reports) < run.starts,
+                "starts_run": len(run.reports), "stopped_early": status != "interrupted" and len(run.reports) < run.starts,
                 "seed": run.seed, "best_start": best.outcome.start, "workers": run.workers,
-                "scheduler": run.scheduler, "fine_grid_factor": FINE, "status_note": status_note(best),
+                "scheduler": run.scheduler, "fine_grid_factor": FINE, "status_note": _note(status, best, run),
                 **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),
@@ -161,7 +202,13 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         fine_grid_worst_violation=measured(best.worst_violation),
         extra=finished.facts,
     )
-    return result, run.reports, ipopt_log(run.reports)
+
+
+def _note(status: str, best: StartReport, run: Run) -> str | None:
+    if status == "interrupted":
+        return (f"interrupted after {len(run.reports)} of {run.starts} starts: the best of those "
+                f"(`agrisynth solve SPEC --resume RUN_DIR` finishes the run)")
+    return status_note(best)
 
 
 def solve_spec(loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,

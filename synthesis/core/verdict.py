@@ -63,7 +63,11 @@ class Recheck:
 
 def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
     """Re-evaluate ``outcome``; a design the re-check cannot evaluate (AgrisynthError, ValueError)
-    gets an infinite violation and the reason.  A non-finite objective is never feasible."""
+    gets an infinite violation and the reason.  A non-finite objective is never feasible.  A start that
+    could not be solved (it raised, its worker died: ``details["failure"]``) is not re-checked."""
+    failure = failure_of(outcome)
+    if failure is not None:
+        return StartReport(outcome, False, math.inf, why=f"{outcome.return_status}: {failure}")
     try:
         rc = recheck(outcome)
     except (AgrisynthError, ValueError, ArithmeticError) as exc:
@@ -80,13 +84,21 @@ def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
     return report
 
 
+def failure_of(outcome) -> str | None:
+    """Why a start could not be solved at all (it raised, its worker process died), else None."""
+    details = getattr(outcome, "details", None)
+    return details.get("failure") if isinstance(details, dict) else None
+
+
 def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
     """Feasible first; among feasible ones the objective (ties within TIE: the lower start index);
-    among infeasible ones the smaller worst violation (ties: the lower start index)."""
+    among infeasible ones the smaller worst violation (ties: the lower start index), a start that
+    could not be solved at all last."""
     if a.satisfied != b.satisfied:
         return a.satisfied
     if not a.satisfied:
-        return (a.worst_violation, a.outcome.start) < (b.worst_violation, b.outcome.start)
+        return ((failure_of(a.outcome) is not None, a.worst_violation, a.outcome.start)
+                < (failure_of(b.outcome) is not None, b.worst_violation, b.outcome.start))
     fa, fb = a.outcome.objective, b.outcome.objective
     if maximise:
         fa, fb = -fa, -fb

@@ -10,7 +10,19 @@ KIND = Kind(
     figures={"extremes.png": "synthesis.crank_rocker.plots:extremes_figure"},
     compare="synthesis.crank_rocker.plots:compare_figure",
     solving="synthesis.crank_rocker.solve:SOLVING",
+    bench="synthesis.crank_rocker:bench_cases",
     objectives={"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
                 "max_transmission_angle": "largest smallest transmission angle over a turn, deg"},
     example="picker/cai2020_crank_rocker_synthesis.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "picker/cai2020_crank_rocker_synthesis.toml",
+            "picker/crank_rocker_max_transmission.toml",
+    ])

@@ -21,8 +21,20 @@ KIND = Kind(
              "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"},
     compare="synthesis.guide_tube.plots:compare_figures",
     solving="synthesis.guide_tube.solve:SOLVING",
+    bench="synthesis.guide_tube:bench_cases",
     objectives={"nearest": "smallest change of the free wall angles, deg^2",
                 "fastest": "earliest landing of tube 1, ms",
                 "uniform": "smallest worst plant-position error over the row spacings, mm"},
     example="guide_tube/cai2020_delta2.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "guide_tube/cai2020_delta2.toml",
+            "guide_tube/fastest_equal_time.toml",
+    ])

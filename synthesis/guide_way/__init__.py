@@ -16,6 +16,17 @@ KIND = Kind(
              "guide_way.dxf": "synthesis.guide_way.export:write_dxf"},
     compare="synthesis.guide_way.plots:compare_figures",
     solving="synthesis.guide_way.solve:SOLVING",
+    bench="synthesis.guide_way:bench_cases",
     objectives={"smoothness": "the claw path's squared third derivative, relative to the convex fit's"},
     example="guide_way/smooth_redesign.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "guide_way/smooth_redesign.toml",
+    ])

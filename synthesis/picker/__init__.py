@@ -10,6 +10,7 @@ DOUBLE_CRANK = Kind(
     figures={"path.png": "synthesis.picker.plots:path_figure"},
     compare="synthesis.picker.plots:compare_figure",
     solving="synthesis.picker.solve:SOLVING",
+    bench="synthesis.picker:double_crank_bench_cases",
     objectives={"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
                 "sum_of_squares": "sum of squared distances, mm^2"},
     example="picker/picker_double_crank_redesign.toml",
@@ -25,3 +26,14 @@ PICKER = Kind(        # evaluated only: the combined mechanism of two solved des
     compare="synthesis.report.trajectory_overlay:trajectory_overlay",
     example="picker/cai2020_picker.toml",
 )
+
+
+def double_crank_bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "picker/picker_double_crank_redesign.toml",
+            "picker/picker_double_crank_retrofit.toml",
+    ])

@@ -10,7 +10,7 @@ import html
 import math
 
 from constraints.base import limit_text
-from synthesis.report.tables import Candidate, design_rows, rule_rows, run_facts, worst_margins
+from synthesis.report.tables import Candidate, design_rows, rule_rows, run_facts, shows_given, worst_margins
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
 
@@ -29,18 +29,25 @@ th { background: #f5f5f7; position: sticky; top: 0; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 td.num .note { display: block; white-space: nowrap; }
 td.limit { white-space: nowrap; }
-.scroll { overflow-x: auto; }
+table.facts td, .note { overflow-wrap: anywhere; }
+.scroll { overflow-x: auto; max-width: 100%; }
+.bound { display: block; font-size: 12px; color: #8a5a00; background: #fff1cc; border-radius: 3px; padding: 0 4px;
+         white-space: nowrap; }
+dl.columns { font-size: 13px; color: #444; margin: .4em 0 .8em; }
+dl.columns dt { font-weight: 600; float: left; clear: left; margin-right: .5em; }
+dl.columns dd { margin: 0 0 .2em 0; }
 td.diff { background: #fff4cc; font-weight: 600; }
 td.fail { background: #fde2e2; color: #a40000; font-weight: 600; }
 td.pass { color: #1a7f37; }
 tr.summary td { border-bottom: 2px solid #bbb; font-style: italic; }
 .note { color: #666; font-size: 12px; }
-figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
+figure { margin: 1em 0; } figure img { max-width: 100%; height: auto; box-sizing: border-box; border: 1px solid #eee; }
 figcaption { color: #555; font-size: 13px; }
 .missing { background: #fff8e1; border-left: 4px solid #f0b400; padding: .4em .8em; }
 td, .verdict { print-color-adjust: exact; -webkit-print-color-adjust: exact; }
-@media print { body { max-width: none; margin: 0; } th { position: static; } figure { break-inside: avoid; }
-               .scroll { overflow: visible; } }
+@media print { body { max-width: none; margin: 0; padding: 0; } th { position: static; }
+               figure { break-inside: avoid; } .scroll { overflow: visible; }
+               table { font-size: 11px; } th, td { padding: 3px 5px; } td.num .note { white-space: normal; } }
 """
 
 
@@ -65,12 +72,60 @@ def _header(cands: list[Candidate]) -> str:
                    for i, c in enumerate(cands))
 
 
+def _bounds_cell(row) -> str:
+    if row.free is None:
+        return "<td class='note'>&ndash;</td>"
+    if not row.free:
+        return "<td class='note'>fixed</td>"
+    return f"<td class='limit'>{_num(row.bounds)}</td>" if row.bounds else "<td class='note'>free</td>"
+
+
+_AT_BOUND = {"lower": "at lower bound", "upper": "at upper bound"}
+
+
 def design_table(cands: list[Candidate]) -> str:
+    given = shows_given(cands)
     rows = []
     for row in design_rows(cands):
-        cells = "".join(f"<td class='num{' diff' if d else ''}'>{_num(v, 6)}</td>" for v, d in zip(row.values, row.differs))
-        rows.append(f"<tr><td>{html.escape(row.name)}</td>{cells}</tr>")
-    return f"<table class='design'><tr><th>variable</th>{_header(cands)}</tr>\n" + "\n".join(rows) + "</table>"
+        cells = []
+        for i, (v, d) in enumerate(zip(row.values, row.differs)):
+            mark = row.at_bound[i] if i < len(row.at_bound) else ""
+            flag = f"<span class='bound'>{_AT_BOUND[mark]}</span>" if mark else ""
+            cells.append(f"<td class='num{' diff' if d else ''}'>{_num(v, 6)}{flag}</td>")
+        start = f"<td class='num'>{_num(row.given, 6)}</td>" if given else ""
+        rows.append(f"<tr><td>{html.escape(row.name)}</td><td>{html.escape(row.unit)}</td>{_bounds_cell(row)}"
+                    f"{start}{''.join(cells)}</tr>")
+    head = "<th>given (start 0)</th>" if given else ""
+    return (f"<table class='design'><tr><th>variable</th><th>unit</th><th>bounds</th>{head}{_header(cands)}</tr>\n"
+            + "\n".join(rows) + "</table>")
+
+
+def design_columns(cands: list[Candidate]) -> str:
+    """What each column of the design table means, said once."""
+    items = [("unit", "as written in the spec (mm, deg, m/s, r/min)."),
+             ("bounds", "[lo, hi] within which <code>solve</code> may move a free variable; <i>fixed</i>: the spec "
+                        "gives a number, kept as it is; &ndash;: the result does not say.")]
+    if shows_given(cands):
+        items.append(("given (start 0)", "the design written in the spec: the question; the next column is the answer."))
+    items.append(("at lower / upper bound", "the value sits on that bound: the optimiser was held there, and "
+                                           "widening the bound (if the machine allows) may improve the objective."))
+    if len(cands) > 1:
+        items.append(("highlighted", "differs from the baseline (first candidate)."))
+    return "<dl class='columns'>" + "".join(f"<dt>{k}</dt><dd>{v}</dd>" for k, v in items) + "</dl>"
+
+
+RULE_COLUMNS = (
+    ("limit", "the allowed range of the rule's value (&ge; lo, &le; hi, or [lo, hi])."),
+    ("value", "the rule's value at its worst sample; sampled rules (over a crank turn, a phase, a range) are "
+              "evaluated on the fine check grid, 10x the solver's samples."),
+    ("margin", "distance from the value to the nearest limit, in the rule's unit; negative = violated (red)."),
+    ("normalised margin", "the margin divided by the rule's scale, so that rules of different units compare; "
+                          "the first row names each candidate's smallest: its tightest rule."),
+)
+
+
+def rule_columns() -> str:
+    return "<dl class='columns'>" + "".join(f"<dt>{k}</dt><dd>{v}</dd>" for k, v in RULE_COLUMNS) + "</dl>"
 
 
 def rule_table(cands: list[Candidate]) -> str:
@@ -106,7 +161,7 @@ def rule_table(cands: list[Candidate]) -> str:
 
 
 def facts_table(cands: list[Candidate]) -> str:
-    rows = "\n".join(f"<tr><td>{html.escape(name)}</td>{''.join(f'<td>{_num(v, 6)}</td>' for v in values)}</tr>"
+    rows = "\n".join(f"<tr><td>{html.escape(name)}</td>{''.join(f'<td>{_num(v, 3)}</td>' for v in values)}</tr>"
                      for name, values in run_facts(cands))
     return f"<table class='facts'><tr><th></th>{_header(cands)}</tr>\n{rows}</table>"
 
@@ -159,11 +214,10 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
 <p class="lede">kind <code>{html.escape(kind)}</code>{(' &middot; ' + html.escape(source)) if source else ''}</p>
 {_verdicts(cands)}
 <h2>Rules</h2>
-<p class="note">Value at the worst sample of each rule, its limit and margin (negative = violated);
-sampled rules are evaluated on the fine check grid.</p>
+{rule_columns()}
 <div class="scroll">{rule_table(cands)}</div>
 <h2>Design</h2>
-{'<p class="note">Highlighted: differs from the baseline (first column).</p>' if len(cands) > 1 else ''}
+{design_columns(cands)}
 <div class="scroll">{design_table(cands)}</div>
 <h2>Figures</h2>
 {figs}

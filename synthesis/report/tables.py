@@ -7,7 +7,7 @@ the baseline) is tested as data.  The first candidate is the baseline.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from synthesis.result import Result
@@ -43,6 +43,11 @@ class DesignRow:
     name: str
     values: list            # one per candidate; None where a candidate has no such variable
     differs: list[bool]     # per candidate: differs from the baseline (always False for the baseline)
+    unit: str = ""          # from the spec's field description ("" when the result does not say)
+    bounds: list | None = None      # [lo, hi] of a free variable (the first candidate that says)
+    free: bool | None = None        # None: the result does not say (check-only kinds, older results)
+    at_bound: list[str] = field(default_factory=list)   # per candidate: "lower", "upper" or ""
+    given: object = None    # the spec's given design (start 0), for a single solve's report
 
 
 def _differs(a, b) -> bool:
@@ -56,15 +61,28 @@ def _differs(a, b) -> bool:
 
 
 def design_rows(cands: list[Candidate]) -> list[DesignRow]:
-    """Every design variable (baseline's order, then any others), one value per candidate."""
+    """Every design variable (baseline's order, then any others), one value per candidate, with what the
+    spec says of it (unit, bounds, free or fixed) and whether each candidate's value sits on a bound."""
+    from synthesis.design_info import at_bound
+
     names: list[str] = []
     for c in cands:
         names += [n for n in c.result.design if n not in names]
     rows = []
     for n in names:
         values = [c.result.design.get(n) for c in cands]
-        rows.append(DesignRow(n, values, [i > 0 and _differs(values[0], v) for i, v in enumerate(values)]))
+        infos = [(c.result.design_variables or {}).get(n) for c in cands]
+        info = next((i for i in infos if i), None) or {}
+        given = (cands[0].result.baseline_design or {}).get(n) if len(cands) == 1 else None
+        rows.append(DesignRow(n, values, [i > 0 and _differs(values[0], v) for i, v in enumerate(values)],
+                              info.get("unit", ""), info.get("bounds"), info.get("free"),
+                              [at_bound(v, i) for v, i in zip(values, infos)], given))
     return rows
+
+
+def shows_given(cands: list[Candidate]) -> bool:
+    """A single solve's report shows the given design (start 0) beside the solution."""
+    return len(cands) == 1 and cands[0].result.solver is not None and bool(cands[0].result.baseline_design)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from pathlib import Path
 from pydantic import BaseModel
 
 from synthesis.errors import SpecError
-from synthesis.spec.common import read_toml, validate
+from synthesis.spec.common import read_toml, shown, validate
 
 class _Kinds:
     """The kind names of the registry (:mod:`synthesis.kinds`), read when used (so runtime kinds count)."""
@@ -60,10 +60,15 @@ def load_spec(path: str | Path) -> LoadedSpec:
     kind = data.get("kind")
     if kind is None:
         raise SpecError(f"{path}: missing required field 'kind' (one of: {', '.join(KINDS)})")
+    if not isinstance(kind, str):
+        raise SpecError(f"{path}: kind: expected a string (one of: {', '.join(KINDS)}), got {type(kind).__name__}")
+    name = data.get("name")
+    if name is not None and not isinstance(name, str):
+        raise SpecError(f"{path}: name: expected a string (the result folder's name), got {type(name).__name__}")
     if kind not in KINDS:
-        close = difflib.get_close_matches(str(kind), list(KINDS), n=1)
+        close = difflib.get_close_matches(kind[:100], list(KINDS), n=1)
         hint = f"; did you mean '{close[0]}'?" if close else f" (known kinds: {', '.join(KINDS)})"
-        raise SpecError(f"{path}: kind: unknown kind {kind!r}{hint}")
+        raise SpecError(f"{path}: kind: unknown kind {shown(kind)}{hint}")
     try:
         model = validate(model_class(kind), data, prefix=kind)
     except SpecError as exc:

@@ -61,7 +61,9 @@ class CamSection(StrictModel):
 class FollowerSection(StrictModel):
     """Roller follower: translating (offset allowed) or oscillating (arm on a pivot)."""
 
-    type: Literal["translating", "oscillating"] = Field("translating")
+    type: Literal["translating", "oscillating"] = Field(
+        "translating", description="translating: the roller centre moves on a line (offset); oscillating: it swings "
+                                   "on an arm about a pivot (pivot_distance, arm_length)")
     offset: Variable | None = Field(None, description="translating: offset of the follower line, mm; > 0 on the "
                                                       "side that lowers the rise pressure angle (Table 1: 0)")
     pivot_distance: Variable | None = Field(None, description="oscillating: cam centre to arm pivot, mm")
@@ -143,10 +145,10 @@ class TimingSection(StrictModel):
     clock: Literal["deg", "s"] = Field("deg", description="windows in crank degrees or in seconds at the crank speed")
     hold_near: list[Interval] = Field(default_factory=list,
                                       description="windows where the follower must rest at the near dwell "
-                                                  "(opening cam: clamp closed)")
+                                                  "(opening cam: clamp closed), [lo, hi] deg or s (timing.clock)")
     hold_far: list[Interval] = Field(default_factory=list,
                                      description="windows where the follower must stay at full stroke "
-                                                 "(opening cam: clamp open)")
+                                                 "(opening cam: clamp open), [lo, hi] deg or s (timing.clock)")
 
     @model_validator(mode="after")
     def _windows(self) -> "TimingSection":
@@ -158,6 +160,8 @@ class TimingSection(StrictModel):
 
 
 class OperationSection(StrictModel):
+    """Operating condition: the cam speed (turns the timing in seconds into crank degrees)."""
+
     crank_speed: float = Field(gt=0, le=2000, description="cam speed, r/min: the cams turn once per picker crank "
                                                           "turn (seed 001: 60)")
 
@@ -176,6 +180,8 @@ class RulesSection(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the cams that satisfy every rule."""
+
     name: Literal["base_radius", "pressure_angle", "nearest"] = Field(
         "base_radius", description="base_radius: smallest pitch base circle (compact cam); pressure_angle: "
                                    "smallest peak |pressure angle| on rise and return; nearest: smallest change "
@@ -188,11 +194,11 @@ class SolverSection(MultistartSettings):
                                                                     "NLP (the re-check uses 10x more)")
     max_iter: int = max_iter_field(500)
     backoff: float = Field(0.01, ge=0, le=1, description="the NLP tightens every sampled rule by backoff x its "
-                                                         "scale, so it holds between the samples too")
+                                                         "scale, so it holds between the samples too (dimensionless)")
 
 
 class ClampCamSpec(ProblemSpec):
-    kind: Literal["clamp_cam"]
+    kind: Literal["clamp_cam"] = Field(description="the problem kind (clamp_cam)")
     cam: CamSection
     follower: FollowerSection = Field(default_factory=FollowerSection)
     motion: MotionSection

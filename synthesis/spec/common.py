@@ -8,6 +8,10 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import json
+import math
+import os
+import stat
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Union
@@ -15,6 +19,7 @@ from typing import Annotated, Any, Union
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from synthesis.errors import SpecError
+from synthesis.files import read_regular, shown
 
 
 class StrictModel(BaseModel):
@@ -73,7 +78,7 @@ RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 class ProblemSpec(StrictModel):
     """What every spec file has besides its ``kind`` and its own sections."""
 
-    name: str = Field(pattern=RUN_NAME_PATTERN, description="result folder name")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100, description="result folder name (at most 100 characters)")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
 
 
@@ -82,32 +87,86 @@ def starts_field(default: int):
 
 
 def max_iter_field(default: int):
-    return Field(default, ge=1, description="IPOPT iteration limit per start")
+    return Field(default, ge=1, le=1_000_000, description="IPOPT iteration limit per start")
 
 
 class MultistartSettings(StrictModel):
     """The [solver] settings of every kind that optimises; kinds add their sampling settings."""
 
     starts: int = starts_field(16)
-    seed: int = Field(0, ge=0, description="seed of the Latin-hypercube starts")
+    seed: int = Field(0, ge=0, le=2**53, description="seed of the Latin-hypercube starts")
     max_iter: int = max_iter_field(500)
 
 
+#: what a spec file may hold: a file of at most MAX_SPEC_BYTES, tables nested at most MAX_DEPTH deep,
+#: strings of at most MAX_STRING characters, arrays of at most MAX_ITEMS items, numbers finite and of
+#: magnitude at most MAX_MAGNITUDE (floats) or MAX_INT (integers)
+MAX_SPEC_BYTES = 1_000_000
+MAX_DEPTH = 16
+MAX_STRING = 10_000
+MAX_ITEMS = 100_000
+MAX_MAGNITUDE = 1e12
+MAX_INT = 2**53
+
+
 def read_toml(path: Path) -> tuple[dict[str, Any], str]:
-    """Parse a spec file; returns (data, sha256 of the bytes). Errors carry line and column."""
+    """Parse a spec file; returns (data, sha256 of the bytes). Errors carry line and column.
+
+    Refused with one line (SpecError, exit 2): anything but a regular file of at most MAX_SPEC_BYTES,
+    an empty file, bytes that are not UTF-8, invalid TOML (duplicate keys included), and values
+    :func:`check_values` refuses."""
+    path = Path(path)
+    raw = read_regular(path, MAX_SPEC_BYTES, "spec file", SpecError)
     try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise SpecError(f"{path}: no such spec file") from None
-    except OSError as exc:
-        raise SpecError(f"{path}: cannot read ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise SpecError(f"{path}: not a UTF-8 text file (byte {exc.start})") from None
+    if not text.strip():
+        raise SpecError(f"{path}: empty file (a spec needs at least kind and name)")
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SpecError(f"{path}: not valid TOML: {exc}") from None
+        raise SpecError(f"{path}: not valid TOML: {shown(str(exc), 200)[1:-1]}") from None
+    except RecursionError:
+        raise SpecError(f"{path}: not valid TOML: nested deeper than {MAX_DEPTH} levels") from None
+    try:
+        check_values(data)
+    except SpecError as exc:
+        raise SpecError(f"{path}: {exc}") from None
     return data, hashlib.sha256(raw).hexdigest()
+
+
+def check_values(data: Any, where: str = "", depth: int = 0) -> None:
+    """SpecError naming the first value no spec may hold: NaN or infinity, a number beyond the bounds,
+    a string too long, an array too long, nesting too deep, a date or time."""
+    name = where or "the file"
+    if depth > MAX_DEPTH:
+        raise SpecError(f"{name}: nested deeper than {MAX_DEPTH} levels")
+    if isinstance(data, bool):
+        return
+    if isinstance(data, float):
+        if not math.isfinite(data):
+            raise SpecError(f"{name}: {data} is not a finite number")
+        if abs(data) > MAX_MAGNITUDE:
+            raise SpecError(f"{name}: {data:g} is beyond the largest magnitude a spec value may have ({MAX_MAGNITUDE:g})")
+    elif isinstance(data, int):
+        if abs(data) > MAX_INT:
+            raise SpecError(f"{name}: {shown(data, 30)} is beyond the largest integer a spec value may have (2^53)")
+    elif isinstance(data, str):
+        if len(data) > MAX_STRING:
+            raise SpecError(f"{name}: a string of {len(data)} characters (at most {MAX_STRING})")
+    elif isinstance(data, dict):
+        for key, value in data.items():
+            if len(key) > 200:
+                raise SpecError(f"{name}: a key of {len(key)} characters (at most 200)")
+            check_values(value, f"{where}.{key}" if where else key, depth + 1)
+    elif isinstance(data, list):
+        if len(data) > MAX_ITEMS:
+            raise SpecError(f"{name}: an array of {len(data)} items (at most {MAX_ITEMS})")
+        for i, value in enumerate(data):
+            check_values(value, f"{name}[{i}]", depth + 1)
+    else:       # TOML dates and times: no spec field is one
+        raise SpecError(f"{name}: a {type(data).__name__} ({shown(data, 40)}) is not a spec value")
 
 
 def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
@@ -133,36 +192,104 @@ _COMPARISONS = {"greater_than": ("gt", ">"), "greater_than_equal": ("ge", ">="),
                 "less_than": ("lt", "<"), "less_than_equal": ("le", "<=")}
 
 
+#: pydantic error type of a wrongly typed value -> what was expected
+_TYPES = {"float_type": "a number", "float_parsing": "a number", "int_type": "an integer", "int_parsing": "an integer",
+          "int_from_float": "an integer", "bool_type": "true or false", "string_type": "a string",
+          "model_type": "a table", "dict_type": "a table", "model_attributes_type": "a table",
+          "list_type": "an array", "tuple_type": "an array", "finite_number": "a finite number"}
+
+
+def _model_in(tp: Any) -> Any:
+    """The pydantic model an annotation leads into (through Optional, unions, lists, Annotated), or None."""
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return tp
+    for arg in getattr(tp, "__args__", ()) or ():
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _field_at(model: type[BaseModel], loc: tuple):
+    """The pydantic field at ``loc`` (TOML keys, list indices skipped), or None."""
+    current: Any = model
+    found = None
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(current, "model_fields", None) or {}
+        found = next((f for n, f in fields.items() if part in (n, f.alias)), None)
+        if found is None:
+            return None
+        current = _model_in(found.annotation)
+    return found
+
+
+def _unit_hint(model: type[BaseModel], loc: tuple) -> str:
+    """" in mm" (the field's unit, from its description) or ""."""
+    from synthesis.spec.docmeta import units_in
+
+    field = _field_at(model, loc)
+    units = units_in(field.description) if field is not None else []
+    return f" in {' or '.join(units)}" if units else ""
+
+
+def _pair_text(model: type[BaseModel], loc: tuple) -> str:
+    field = _field_at(model, loc)
+    lo_hi = loc and loc[-1] == "bounds" or field is not None and "[lo, hi]" in (field.description or "")
+    return "[lo, hi] (two numbers)" if lo_hi else "two numbers"
+
+
 def _describe(err: dict, model: type[BaseModel]) -> str:
     kind, ctx, got = err["type"], err.get("ctx", {}), err.get("input")
     # pydantic reports union branches as extra path parts ("float", "FreeVariable"): drop them
     loc = tuple(p for p in err["loc"] if p not in ("float", "FreeVariable", "function-after[_ordered(), FreeVariable]"))
+    if kind == "missing" and len(loc) > 1 and isinstance(loc[-1], int) and isinstance(got, list):
+        # a tuple given too few items: pydantic names the first missing index ("bounds.1")
+        return f"{'.'.join(map(str, loc[:-1]))}: expected {_pair_text(model, loc[:-1])}, got {shown(got)}"
+    if kind == "too_long" and ctx.get("field_type") == "Tuple" and isinstance(got, list) and ctx.get("max_length") == 2:
+        return f"{'.'.join(map(str, loc))}: expected {_pair_text(model, loc)}, got {shown(got)}"
     if kind == "missing":
         return f"{'.'.join(map(str, loc))}: missing required field"
     if kind == "extra_forbidden":
         allowed = _fields_at(model, loc[:-1])
-        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.5)
+        key = str(loc[-1])
+        close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.7) or \
+            [a for a in allowed if len(a) >= 3 and (key.startswith(a) or a.startswith(key))][:1]
         hint = f"; did you mean '{close[0]}'?" if close else (f"; allowed: {', '.join(allowed)}" if allowed else "")
+        if len(loc) == 1 and not close:
+            hint += " (a note about the spec goes in source = \"...\" or a # comment)"
         return f"{'.'.join(map(str, loc))}: unknown field{hint}"
     path = ".".join(map(str, loc))
     if kind in _COMPARISONS:
         key, symbol = _COMPARISONS[kind]
         limit = ctx[key]
-        return f"{path}: expected {symbol} {limit:g}, got {got}" if isinstance(limit, (int, float)) else \
-            f"{path}: expected {symbol} {limit}, got {got}"
+        return f"{path}: expected {symbol} {limit:g}, got {shown(got)}" if isinstance(limit, (int, float)) else \
+            f"{path}: expected {symbol} {limit}, got {shown(got)}"
     if kind == "value_error":
         message = str(ctx.get("error", err["msg"]))
         # a whole-model validator (empty path) names the fields itself
         return f"{path}: {message}" if path else message
+    if kind in ("float_type", "float_parsing") and isinstance(got, str):
+        # "0.8 m/s", "300 rpm": the unit of every field is fixed; say which
+        return f"{path}: expected a number{_unit_hint(model, loc)}, written without a unit, got {shown(got)}"
+    if kind in _TYPES:
+        return f"{path}: expected {_TYPES[kind]}, got {shown(got)}"
     if kind == "literal_error":
-        return f"{path}: expected {ctx.get('expected')}, got {got!r}"
-    return f"{path}: {err['msg'].lower()}, got {got!r}"
+        return f"{path}: expected {ctx.get('expected')}, got {shown(got)}"
+    return f"{path}: {err['msg'].lower()}, got {shown(got)}"
 
 
 def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseModel:
     """Validate ``data`` into ``model``; on failure raise SpecError listing every bad field."""
     try:
-        return model.model_validate(data)
+        text = json.dumps(data, allow_nan=False)
+    except (TypeError, ValueError, RecursionError):     # Python objects (not from a file): validated as they are
+        text = None
+    try:
+        # strict, from JSON: a float field takes integers and floats only (never ``true`` or ``"75"``), an
+        # integer field integers only; arrays still fill tuples
+        return model.model_validate(data) if text is None else model.model_validate_json(text, strict=True)
     except ValidationError as exc:
         seen: list[str] = []
         for err in exc.errors():
@@ -174,5 +301,35 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
 
 
 def _prune_union_noise(lines: list[str]) -> list[str]:
-    specific = [ln for ln in lines if "input should be a valid" not in ln and "dictionary" not in ln]
-    return specific or lines
+    """Merge a "number | table" union's two complaints about one field into one line."""
+    out: list[str] = []
+    for ln in lines:
+        path, _, rest = ln.partition(": expected a number, got ")
+        table = f"{path}: expected a table, got {rest}"
+        if rest and table in lines:
+            out.append(f"{path}: expected a number (or a table {{init = ..., bounds = [lo, hi]}}), got {rest}")
+        elif ln.partition(": expected a table, got ")[2] and \
+                f"{ln.partition(': expected a table, got ')[0]}: expected a number, got " \
+                f"{ln.partition(': expected a table, got ')[2]}" in lines:
+            continue
+        else:
+            out.append(ln)
+    # a table given for a "number | table" field: the table's own complaints say what is wrong with it
+    out = [ln for ln in out if not (": expected a number, got {" in ln and
+                                    any(o.startswith(ln.partition(": expected a number, got ")[0] + ".") for o in out))]
+    out = [_free_hint(ln) for ln in out]
+    specific = [ln for ln in out if "input should be a valid" not in ln and "dictionary" not in ln]
+    return specific or out
+
+
+def _free_hint(line: str) -> str:
+    """``l2 = [25, 45]`` for a number-or-table field: show the table that frees it within those bounds."""
+    path, sep, got = line.partition(": expected a number (or a table {init = ..., bounds = [lo, hi]}), got ")
+    try:
+        lo, hi = (float(x) for x in got.strip("[]").split(","))
+    except ValueError:
+        return line
+    if not sep or not lo <= hi:
+        return line
+    return (f"{path}: expected a number, or a table to free it: "
+            f"{path.rsplit('.', 1)[-1]} = {{init = {0.5 * (lo + hi):g}, bounds = [{lo:g}, {hi:g}]}}, got {got}")

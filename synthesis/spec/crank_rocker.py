@@ -22,7 +22,7 @@ KIND = "crank_rocker"
 class Requirements(StrictModel):
     """What the rocker must do (seed 001: K = 1.25, psi = 50 deg, gamma_min = 40 deg)."""
 
-    time_ratio: float = Field(ge=1.0, le=3.0, description="time ratio K = slow stroke / quick stroke (1 = no quick return)")
+    time_ratio: float = Field(ge=1.0, le=3.0, description="time ratio K = slow stroke / quick stroke, dimensionless (1 = no quick return)")
     rocker_swing: float = Field(gt=0.0, lt=180.0, description="rocker swing psi between its extreme positions, deg")
     min_transmission_angle: float = Field(gt=0.0, lt=90.0, description="smallest transmission angle over a turn, deg")
 
@@ -30,7 +30,7 @@ class Requirements(StrictModel):
 class Tolerances(StrictModel):
     """How far a *given* design may miss K and psi in ``check`` (solve imposes them exactly)."""
 
-    time_ratio: float = Field(0.005, ge=0.0, description="|K - K_required| allowed")
+    time_ratio: float = Field(0.005, ge=0.0, description="|K - K_required| allowed, dimensionless")
     rocker_swing: float = Field(0.1, ge=0.0, description="|psi - psi_required| allowed, deg")
 
 
@@ -50,6 +50,8 @@ class LinkSection(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the designs that satisfy every requirement."""
+
     name: Literal["min_total_length", "max_transmission_angle"] = Field(
         "min_total_length",
         description="min_total_length: shortest l7 + l8 + l9 + l10 meeting every requirement (the published "
@@ -66,7 +68,7 @@ class SolverSection(MultistartSettings):
 
 
 class CrankRockerSpec(ProblemSpec):
-    kind: Literal["crank_rocker"]
+    kind: Literal["crank_rocker"] = Field(description="the problem kind (crank_rocker)")
     requirements: Requirements
     tolerances: Tolerances = Field(default_factory=Tolerances)
     links: LinkSection

@@ -28,6 +28,7 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
 
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel, max_iter_field, starts_field
+from synthesis.spec.docmeta import TomlType
 
 KIND = "fourbar_path"
 LENGTHS = ("r1", "r2", "r3", "r4")
@@ -72,7 +73,7 @@ def _angle(v: Any) -> float:
     return _number(v, "angle")
 
 
-Bound = Annotated[tuple[float, float], BeforeValidator(_bound)]
+Bound = Annotated[tuple[float, float], BeforeValidator(_bound), TomlType("number (fixes it) or [lo, hi] (frees it)")]
 Point = Annotated[tuple[float, float], BeforeValidator(_point)]
 Angle = Annotated[float, BeforeValidator(_angle)]
 Finite = Annotated[float, BeforeValidator(lambda v: _number(v, "value"))]
@@ -126,19 +127,22 @@ class BoundsSection(StrictModel):
 class DesignSection(StrictModel):
     """A given design: what ``check`` evaluates and the first start of ``solve`` (result.json names)."""
 
-    r1: Finite | None = None
-    r2: Finite | None = None
-    r3: Finite | None = None
-    r4: Finite | None = None
-    rcx: Finite | None = None
-    rcy: Finite | None = None
-    x0: Finite | None = None
-    y0: Finite | None = None
-    theta0: Finite | None = None
-    crank_deg: list[Angle] | None = Field(None, description="crank angle of each target (free timing only)")
+    r1: Finite | None = Field(None, description="frame O -> O', mm (default: the midpoint of bounds.r1)")
+    r2: Finite | None = Field(None, description="input crank O -> A, mm (default: the midpoint of its bounds)")
+    r3: Finite | None = Field(None, description="coupler A -> B, mm (default: the midpoint of its bounds)")
+    r4: Finite | None = Field(None, description="output link O' -> B, mm (default: the midpoint of its bounds)")
+    rcx: Finite | None = Field(None, description="coupler point along A -> B, mm (default: the midpoint of its bounds)")
+    rcy: Finite | None = Field(None, description="coupler point normal to A -> B, mm (default: the midpoint of its "
+                                                 "bounds)")
+    x0: Finite | None = Field(None, description="input pivot O, x, mm (default: the midpoint of its bounds)")
+    y0: Finite | None = Field(None, description="input pivot O, y, mm (default: the midpoint of its bounds)")
+    theta0: Finite | None = Field(None, description="frame angle, deg (default: the midpoint of its bounds)")
+    crank_deg: list[Angle] | None = Field(None, description="crank angle of each target, deg (free timing only)")
 
 
 class RulesSection(StrictModel):
+    """The design rules besides passing through the targets: Grashof class, transmission angle, order."""
+
     grashof: Literal["crank-rocker", "double-crank", "any"] = Field(
         "crank-rocker", description="crank-rocker: r2 shortest and s + l <= p + q (the crank turns fully); "
                                     "double-crank: r1 shortest and s + l <= p + q; any: no Grashof rule, "
@@ -177,7 +181,7 @@ class SolverSection(MultistartSettings):
 
 
 class FourbarPathSpec(ProblemSpec):
-    kind: Literal["fourbar_path"]
+    kind: Literal["fourbar_path"] = Field(description="the problem kind (fourbar_path)")
     branch: Literal["open", "crossed"] = Field("open", description="assembly branch (kinematics.coupler_point)")
     crank_speed: float = Field(60.0, gt=0, le=10000, description="r/min; only the time scale of the trajectory")
     targets: TargetsSection

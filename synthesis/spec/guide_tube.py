@@ -26,6 +26,8 @@ _NAME = r"^[A-Za-z0-9]+$"
 
 
 class DropSection(StrictModel):
+    """Where the pot seedling is dropped and how air slows it (seed 001 §2.4)."""
+
     height: float = Field(600.0, gt=0, le=10000, description="drop point N1 above the paddy, mm (seed 001 §2.1.1: 600)")
     gravity: float = Field(9.8, gt=0, le=100, description="gravitational acceleration, m/s^2 (seed 001: 9.8)")
     terminal_speed: float = Field(17.5, gt=0, description="float (terminal) speed v_L of a pot seedling in air, "
@@ -37,7 +39,7 @@ class CalibrationSection(StrictModel):
 
     tube: str = Field(description="name of the tube whose landing time was measured")
     landing_time: float = Field(gt=0, le=60, description="measured drop time t_z, s (seed 001: tube I, 0.445)")
-    mu_range: Interval = Field((0.0, 1.5), description="friction coefficients searched, [lo, hi]")
+    mu_range: Interval = Field((0.0, 1.5), description="friction coefficients searched, [lo, hi], dimensionless")
 
     @model_validator(mode="after")
     def _range(self) -> "CalibrationSection":
@@ -50,7 +52,7 @@ class CalibrationSection(StrictModel):
 class FrictionSection(StrictModel):
     """Coulomb friction between pot seedling and wall: give mu, or calibrate it (not printed in seed 001)."""
 
-    mu: float | None = Field(None, ge=0, le=10, description="friction coefficient")
+    mu: float | None = Field(None, ge=0, le=10, description="friction coefficient, dimensionless")
     calibrate: CalibrationSection | None = None
 
     @model_validator(mode="after")
@@ -61,6 +63,8 @@ class FrictionSection(StrictModel):
 
 
 class RowsSection(StrictModel):
+    """Row spacings the tubes serve, and the forward speed turning time into position."""
+
     tray_pitch: float = Field(300.0, gt=0, description="pitch of the seedlings picked from the tray, mm (seed 001: 300)")
     design_spacing: float = Field(230.0, gt=0, description="row spacing at which the tubes' l3 are given and the "
                                                            "landing times are equalised, mm (seed 001: 230)")
@@ -85,6 +89,8 @@ class RowsSection(StrictModel):
 
 
 class TubeSection(StrictModel):
+    """One guide tube (or a symmetric pair, see mirror): geometry and wall angle."""
+
     name: str = Field(pattern=_NAME, description="tube name, e.g. I")
     mirror: str | None = Field(None, pattern=_NAME, description="its symmetric twin sharing geometry and angle, e.g. IV")
     l3: float = Field(gt=0, description="drop point - tube centre horizontal distance at rows.design_spacing, mm")
@@ -106,6 +112,8 @@ class TubeSection(StrictModel):
 
 
 class RulesSection(StrictModel):
+    """Limits of the design rules."""
+
     max_time_spread: float = Field(0.001, gt=0, description="largest landing-time difference between tubes at "
                                                           "the design row spacing, s")
     max_spacing_error: float | None = Field(None, gt=0, description="largest plant-position error (forward speed x "
@@ -116,6 +124,8 @@ class RulesSection(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the wall angles that satisfy every rule."""
+
     name: Literal["nearest", "fastest", "uniform"] = Field(
         "nearest", description="nearest: smallest change of the free angles (default); fastest: shortest common "
                                "landing time; uniform: smallest worst plant-position error over rows.spacings "
@@ -128,11 +138,12 @@ class SolverSection(MultistartSettings):
                                                       "(the check uses 10x as many)")
     max_iter: int = max_iter_field(200)
     backoff: float = Field(0.02, ge=0, le=1, description="inequality limits tightened by backoff x the rule's "
-                                                         "scale, so rules hold between the sampled row spacings")
+                                                         "scale, so rules hold between the sampled row spacings "
+                                                         "(dimensionless)")
 
 
 class GuideTubeSpec(ProblemSpec):
-    kind: Literal["guide_tube"]
+    kind: Literal["guide_tube"] = Field(description="the problem kind (guide_tube)")
     drop: DropSection = Field(default_factory=DropSection)
     friction: FrictionSection
     rows: RowsSection
@@ -171,6 +182,10 @@ class GuideTubeSpec(ProblemSpec):
                                  f"row spacing {min(self.rows.design_spacing, self.rows.spacings[0]):g} mm) above "
                                  f"the drop point ({room:g} mm above it); keep it below {steepest:.2f} deg")
         return self
+
+    def variables(self) -> dict[str, Variable]:
+        """Every design variable (spec units) by its result.json name: the wall angle of each tube."""
+        return {f"delta_{t.name}": t.angle for t in self.tubes}
 
     def given_angles(self) -> dict[str, float]:
         """tube name -> the wall angle `check` evaluates (deg)."""

@@ -46,11 +46,11 @@ class ConicSegment(StrictModel):
     name: str = Field(description="segment name, e.g. 'CD'")
     start: str = Field(alias="from", description="key point where the claw enters the segment")
     end: str = Field(alias="to", description="key point where it leaves it")
-    coefficients: tuple[float, float, float, float, float] = Field(description="a1..a5 as printed")
+    coefficients: tuple[float, float, float, float, float] = Field(description="a1..a5 as printed (a1, a2 dimensionless; a3, a4 mm; a5 mm^2)")
     branch: Literal["minus", "plus"] = Field(description="inverse kinematics: theta = gamma - phi (eq 7) or + phi")
     form: Literal["y+", "y-", "x+", "x-"] | None = Field(
         None, description="the paper's explicit form (§3(2)): y(x) or x(y) with the + or - root; checked")
-    via: Point | None = Field(None, description="a point of the segment choosing the arc of an ellipse "
+    via: Point | None = Field(None, description="a point of the segment choosing the arc of an ellipse, mm "
                                                 "(default: the shorter arc)")
 
 
@@ -65,12 +65,14 @@ class SplineSection(StrictModel):
     fold: str = Field(description="the key point where the claw folds onto the arm: moved along OM onto "
                                   "|OM| = R - d, tangent perpendicular to OM, and the inverse kinematics "
                                   "changes branch there (minus before it in the paper's eq 7 ... see GUIDE_WAY.md)")
-    min_speed: float = Field(0.2, gt=0, description="|dM/du| at a key tangent, at least this x the loop length")
+    min_speed: float = Field(0.2, gt=0, description="|dM/du| at a key tangent, at least this x the loop length (dimensionless)")
     move: float = Field(40.0, gt=0, description="IPOPT stage: each control point stays within this of the "
                                                 "convex fit, mm")
 
 
 class RulesSection(StrictModel):
+    """Limits of the design rules and the tolerances of the joints and the fold."""
+
     roller_margin: float = Field(0.0, ge=0, description="smallest centre-line radius of curvature = roller radius + "
                                                         "this, mm (0: just no undercut)")
     max_pressure_angle: float = Field(45.0, gt=0, lt=90, description="max pressure angle, deg")
@@ -86,6 +88,8 @@ class RulesSection(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the paths that satisfy every rule."""
+
     name: Literal["smoothness"] = Field("smoothness", description="smoothness: the claw path's squared third "
                                                                    "derivative, relative to the convex fit's")
 
@@ -97,7 +101,7 @@ class SolverSection(MultistartSettings):
 
 
 class GuideWaySpec(ProblemSpec):
-    kind: Literal["guide_way"]
+    kind: Literal["guide_way"] = Field(description="the problem kind (guide_way)")
     arm: ArmSection
     points: dict[str, Point] = Field(description="key points of the claw-tip path, mm")
     fold: str | None = Field(None, description="conic path: the key point where the claw folds onto the arm (D)")

@@ -8,10 +8,11 @@ phi3 = frame AD below the +x axis, phi4 = CM turned counter-clockwise from BC.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from synthesis.spec.docmeta import SPEC_FILE
 from synthesis.spec.common import (
     MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of,
 )
@@ -62,12 +63,16 @@ class LinkageSection(StrictModel):
 
 
 class PickerRules(StrictModel):
+    """Limits of the design rules (seed 001 §2.1.2)."""
+
     min_transmission_angle: float = Field(40.0, gt=0.0, lt=90.0,
                                           description="smallest transmission angle at C over the working swing, deg")
     x_a_min: float = Field(0.0, description="eq (7): the pivot A lies between the frame and the tray, x_A > x_a_min, mm")
 
 
 class PickerObjective(StrictModel):
+    """What `solve` minimises: how far the clamp point misses the target points."""
+
     name: Literal["sum_of_distances", "sum_of_squares"] = Field(
         "sum_of_distances", description="sum_of_distances: seed 001 eq (4), sum of |M_i - target_i| (mm); "
                                         "sum_of_squares: sum of |M_i - target_i|^2 (mm^2)")
@@ -82,7 +87,7 @@ class PickerSolver(MultistartSettings):
 
 
 class PickerDoubleCrankSpec(ProblemSpec):
-    kind: Literal["picker_double_crank"]
+    kind: Literal["picker_double_crank"] = Field(description="the problem kind (picker_double_crank)")
     target: TargetArc
     drive: DriveSection
     linkage: LinkageSection
@@ -112,6 +117,8 @@ class Installation(StrictModel):
 
 
 class Operation(StrictModel):
+    """Operating condition of the combined picker."""
+
     crank_speed: float = Field(gt=0.0, le=2000.0, description="crank GF speed, r/min (seed 001: 60)")
 
 
@@ -122,9 +129,11 @@ class Published(StrictModel):
 
 
 class PickerSpec(ProblemSpec):
-    kind: Literal["picker"]
-    crank_rocker: str = Field(description="crank_rocker spec file of the drive, relative to this file")
-    double_crank: str = Field(description="picker_double_crank spec file of the linkage, relative to this file")
+    kind: Literal["picker"] = Field(description="the problem kind (picker)")
+    crank_rocker: Annotated[str, SPEC_FILE] = Field(description="crank_rocker spec file of the drive, relative to "
+                                                                "this file")
+    double_crank: Annotated[str, SPEC_FILE] = Field(description="picker_double_crank spec file of the linkage, "
+                                                                "relative to this file")
     installation: Installation
     operation: Operation
     published: Published = Field(default_factory=Published)

@@ -56,6 +56,8 @@ class SeedbedSection(StrictModel):
 
 
 class OperationSection(StrictModel):
+    """Operating condition: forward speed and crank speed (the plant spacing follows)."""
+
     forward_speed: float = Field(ge=0, le=2.0, description="machine forward speed, m/s (seed 000 analyses 0.50-0.75)")
     crank_speed: float = Field(gt=0, le=2000, description="crank (driving shaft) speed, r/min")
 
@@ -111,6 +113,8 @@ class RulesSection(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the designs that satisfy every rule."""
+
     name: Literal["nearest", "robust", "smooth"] = Field(
         "nearest", description="nearest: smallest change from the given design (default); robust: maximise the "
                                "smallest normalised rule margin; smooth: minimise the peak claw acceleration")
@@ -122,11 +126,12 @@ class SolverSection(MultistartSettings):
     samples_per_turn: int = Field(72, ge=12, le=3600, description="samples of a crank turn (transmission, lowest)")
     max_iter: int = max_iter_field(500)
     backoff: float = Field(0.02, ge=0, le=1, description="the NLP tightens every rule limit by backoff x the "
-                                                         "rule's scale, so rules hold between the samples too")
+                                                         "rule's scale, so rules hold between the samples too "
+                                                         "(dimensionless)")
 
 
 class PlantingFourbarSpec(ProblemSpec):
-    kind: Literal["planting_fourbar"]
+    kind: Literal["planting_fourbar"] = Field(description="the problem kind (planting_fourbar)")
     arm: ArmSection
     seedbed: SeedbedSection
     operation: OperationSection

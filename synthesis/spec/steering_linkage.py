@@ -62,6 +62,8 @@ def _text(v: Variable) -> str:
 
 
 class Requirements(StrictModel):
+    """What the trapezoid must do: reach the lock, keep the transmission angle, arm length range."""
+
     max_inside_lock: float = Field(gt=0.0, lt=60.0, description="largest inside lock beta the linkage must reach, "
                                                                "deg (Model-3: 27; Table 12 runs to 40)")
     min_transmission_angle: float = Field(gt=0.0, lt=90.0, description="smallest angle between tie rod and either "
@@ -77,6 +79,8 @@ class Requirements(StrictModel):
 
 
 class MaxLockRow(StrictModel):
+    """The printed row at the maximum lock."""
+
     inside: float = Field(gt=0.0, lt=90.0, description="inside lock, deg")
     accurate: float = Field(gt=0.0, lt=90.0, description="'accurate' (Ackermann) outside lock, deg")
     actual: float = Field(gt=0.0, lt=90.0, description="actual outside lock, deg")
@@ -103,6 +107,8 @@ class Published(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the trapezoids that satisfy every requirement."""
+
     name: Literal["min_max_error"] = Field(
         "min_max_error", description="min_max_error: smallest largest |alpha - alpha_Ackermann| over 0 .. "
                                      "max_inside_lock (a smooth epigraph over the sampled locks)")
@@ -118,7 +124,7 @@ class SolverSection(MultistartSettings):
 
 
 class SteeringSpec(ProblemSpec):
-    kind: Literal["steering_linkage"]
+    kind: Literal["steering_linkage"] = Field(description="the problem kind (steering_linkage)")
     vehicle: Vehicle
     trapezoid: Trapezoid
     requirements: Requirements

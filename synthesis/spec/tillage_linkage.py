@@ -27,6 +27,8 @@ def _range(v: Variable) -> tuple[float, float]:
 
 
 class Linkage(StrictModel):
+    """The linkage (seed 002 eq 3-11). A number fixes a value, ``{init, bounds}`` frees it."""
+
     a: Variable = Field(description="crank radius AB on the flywheel, mm")
     b: Variable = Field(description="distance AC from the flywheel centre A to the roller pair C, mm")
     c: Variable = Field(description="tillage bar length BD, mm")
@@ -49,11 +51,15 @@ class Linkage(StrictModel):
 
 
 class Operation(StrictModel):
+    """Operating condition: flywheel speed and forward speed."""
+
     crank_speed: float = Field(gt=0.0, le=2000.0, description="flywheel speed, r/min (counter-clockwise)")
     forward_speed: float = Field(ge=0.0, le=5.0, description="machine travel speed towards +x, m/s")
 
 
 class Requirements(StrictModel):
+    """What the tool tip must do in the soil, and the bar and slot limits."""
+
     depth: tuple[float, float] = Field(description="[lo, hi] depth of the tool tip's lowest point below the "
                                                    "ground, mm (text: pods 5-8 cm deep; slip grows past 12 cm)")
     lift: float = Field(ge=0.0, description="least height of the tool tip's highest point above the ground, mm")
@@ -73,6 +79,8 @@ class Requirements(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the linkages that satisfy every rule."""
+
     name: Literal["min_bar_length", "max_margin"] = Field(
         "min_bar_length", description="min_bar_length: the shortest bar c meeting every rule (a compact, light "
                                       "tool); max_margin: the largest smallest normalised rule margin")
@@ -90,7 +98,7 @@ class SolverSection(MultistartSettings):
 
 
 class TillageSpec(ProblemSpec):
-    kind: Literal["tillage_linkage"]
+    kind: Literal["tillage_linkage"] = Field(description="the problem kind (tillage_linkage)")
     linkage: Linkage
     operation: Operation
     requirements: Requirements

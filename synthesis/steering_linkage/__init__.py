@@ -16,6 +16,18 @@ KIND = Kind(
     figures={"steering.png": "synthesis.steering_linkage.plots:steering_figure"},
     compare="synthesis.steering_linkage.plots:compare_figure",
     solving="synthesis.steering_linkage.solve:SOLVING",
+    bench="synthesis.steering_linkage:bench_cases",
     objectives={"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"},
     example="steering/steering_redesign_40.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "steering/steering_redesign_40.toml",
+            "steering/steering_redesign_27.toml",
+    ])

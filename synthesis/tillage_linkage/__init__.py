@@ -16,7 +16,18 @@ KIND = Kind(
     figures={"tillage.png": "synthesis.tillage_linkage.plots:tillage_figure"},
     compare="synthesis.tillage_linkage.plots:compare_figure",
     solving="synthesis.tillage_linkage.solve:SOLVING",
+    bench="synthesis.tillage_linkage:bench_cases",
     objectives={"min_bar_length": "shortest tillage bar c meeting every rule, mm",
                 "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"},
     example="tillage/tillage_redesign.toml",
 )
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "tillage/tillage_redesign.toml",
+    ])

@@ -1,0 +1,70 @@
+"""The extreme-case matrix of ``agrisynth bench``: tests/extreme/ run as they are, one row per case.
+
+:func:`extreme_matrix` runs ``pytest tests/extreme`` in a subprocess with this module as a plugin
+(``-p synthesis.bench_extreme``), which writes one JSON row per test: the file (its kind), the case
+(test name and parameters), what was tried (the docstring, or the name), passed/failed/skipped, the
+time, and any figure the test records (``record_property("figure", ...)``).  Without a tests/extreme
+folder (an installed copy) the matrix is empty and bench.md says so.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+EXTREME = ROOT / "tests" / "extreme"
+_ROWS: list[dict] = []
+_DOCS: dict[str, str] = {}
+
+
+def pytest_addoption(parser) -> None:
+    parser.addoption("--extreme-json", default=None, help="agrisynth bench: write the extreme-case rows here")
+
+
+def pytest_collection_modifyitems(session, config, items) -> None:
+    for item in items:
+        doc = getattr(getattr(item, "function", None), "__doc__", None) or ""
+        _DOCS[item.nodeid] = " ".join(doc.split())
+
+
+def pytest_runtest_logreport(report) -> None:
+    if report.when == "call" or (report.when == "setup" and report.outcome != "passed"):
+        name = report.nodeid.split("::", 1)[-1]
+        figure = "; ".join(f"{k} {v}" for k, v in report.user_properties)
+        _ROWS.append({"file": report.nodeid.split("::", 1)[0].rsplit("/", 1)[-1],
+                      "case": name.replace("test_", "", 1).replace("_", " "),
+                      "tried": _DOCS.get(report.nodeid) or name.replace("test_", "", 1).replace("_", " "),
+                      "outcome": report.outcome, "seconds": round(report.duration, 2),
+                      "figure": figure or ("assertions held" if report.outcome == "passed" else
+                                           (str(report.longrepr).splitlines() or ["?"])[-1][:200])})
+
+
+def pytest_sessionfinish(session, exitstatus) -> None:
+    target = session.config.getoption("--extreme-json")
+    if target:
+        Path(target).write_text(json.dumps(_ROWS))
+
+
+def extreme_matrix(timeout_s: float = 600.0) -> list[dict]:
+    """Run tests/extreme/ and return its rows ([] when there is no such folder)."""
+    if not EXTREME.is_dir():
+        return []
+    fd, out = tempfile.mkstemp(prefix="agrisynth-extreme.", suffix=".json")
+    os.close(fd)
+    try:
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+        subprocess.run([sys.executable, "-m", "pytest", str(EXTREME), "-q", "-p", "no:cacheprovider",
+                        "-p", "synthesis.bench_extreme", f"--extreme-json={out}", "-W", "ignore"],
+                       cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=timeout_s)
+        text = Path(out).read_text()
+        return json.loads(text) if text else []
+    except (subprocess.TimeoutExpired, OSError, json.JSONDecodeError) as exc:
+        return [{"file": "tests/extreme", "case": "the matrix", "tried": "run tests/extreme", "outcome": "error",
+                 "seconds": None, "figure": f"{type(exc).__name__}: {exc}"}]
+    finally:
+        os.remove(out)

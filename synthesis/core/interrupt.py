@@ -1,0 +1,96 @@
+"""SIGINT / SIGTERM during a solve: stop at the next safe point, keep every finished start.
+
+CasADi checks Python's signal handlers while IPOPT iterates; when a handler raises, CasADi swallows the
+exception, prints ``KeyboardInterruptException`` and returns the start as ``NonIpopt_Exception_Thrown``
+-- a solve that *looks* finished.  So the handler installed here first records the signal (``pending()``)
+and only then raises ``KeyboardInterrupt`` (which stops IPOPT at once).  The multistart checks
+``pending()`` after every in-process solve and discards a start that was interrupted; blocks that must
+not be cut in half (appending a start to ``starts.jsonl``, moving a run folder into place) run under
+:func:`deferred`, which only records the signal and raises when the block ends.
+
+Exit codes: 130 for SIGINT (Ctrl-C), 143 for SIGTERM (128 + the signal number, the shell convention).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+
+_pending: int | None = None      # the first signal received since install()
+_defer_depth = 0
+
+
+class Interrupted(Exception):
+    """The run was stopped by a signal; ``partial`` holds whatever the caller could keep."""
+
+    def __init__(self, signum: int, partial=None):
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signum = signum
+        self.partial = partial
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + self.signum
+
+
+def _handler(signum, frame) -> None:
+    global _pending
+    if _pending is None:
+        _pending = signum
+    if _defer_depth == 0:
+        raise KeyboardInterrupt
+
+
+def install() -> None:
+    """Handle SIGINT and SIGTERM in this (main) process as described above (a no-op off the main thread)."""
+    global _pending
+    _pending = None
+    if threading.current_thread() is not threading.main_thread():
+        return
+    signal.signal(signal.SIGINT, _handler)
+    signal.signal(signal.SIGTERM, _handler)
+
+
+def uninstall() -> None:
+    global _pending
+    _pending = None
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def pending() -> int | None:
+    """The signal received since :func:`install` (None: none)."""
+    return _pending
+
+
+def signal_of(exc: BaseException) -> int:
+    """The signal behind a KeyboardInterrupt (SIGINT when no handler recorded one)."""
+    return _pending or signal.SIGINT
+
+
+def check() -> None:
+    """Raise KeyboardInterrupt if a signal arrived (for loops with a safe point)."""
+    if _pending is not None and _defer_depth == 0:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred(reraise: bool = True):
+    """Record a signal arriving inside the block and raise KeyboardInterrupt only when it ends
+    (``reraise=False``: not even then -- for the blocks that keep an interrupted run's results)."""
+    global _defer_depth
+    _defer_depth += 1
+    try:
+        yield
+    finally:
+        _defer_depth -= 1
+    if reraise:
+        check()
+
+
+def simulate(signum: int = signal.SIGINT) -> None:
+    """Record ``signum`` as if it had arrived (tests)."""
+    global _pending
+    _pending = signum

@@ -1,0 +1,179 @@
+"""``starts.jsonl``: every finished start of a solve, one JSON line each, appended and flushed as it finishes.
+
+The first line is a header naming the run (kind, name, sha256 of the spec file, starts, seed, agrisynth
+version) and their ``fingerprint``; ``agrisynth solve SPEC --resume RUN_DIR`` reads the starts back only
+when the fingerprint of the new run is the same, and solves only the starts that are not there.  A
+start's line holds its whole outcome (design, objective, IPOPT's status, log and decision vector), every
+float exactly (JSON numbers round-trip), so the resumed run re-checks and chooses exactly as the
+uninterrupted one would.  JSON has no NaN or infinity: such a float is written as ``{"$f": "nan"}``.
+A line that cannot be read (cut off by a crash) is skipped: that start is solved again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from synthesis.core.ipopt import NLPOutcome
+from synthesis.core.outcome import StartOutcome
+from synthesis.errors import OutputError
+
+FILENAME = "starts.jsonl"
+FORMAT = 1
+#: a starts.jsonl larger than this is refused rather than read
+MAX_BYTES = 2 * 1024**3
+
+
+def fingerprint(kind: str, name: str, spec_sha256: str, starts: int, seed: int) -> tuple[dict, str]:
+    """The settings that decide a run's starts, and their sha256 (what --resume must match)."""
+    from synthesis import __version__
+
+    settings = {"kind": kind, "name": name, "spec_sha256": spec_sha256, "starts": int(starts), "seed": int(seed),
+                "agrisynth": __version__}
+    return settings, hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()
+
+
+def _enc(v: Any) -> Any:
+    if isinstance(v, (bool, str)) or v is None:
+        return v
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return v if math.isfinite(v) else {"$f": repr(v)}
+    if isinstance(v, np.ndarray):
+        return {"$a": [_enc(x) for x in v.ravel().tolist()], "dtype": str(v.dtype), "shape": list(v.shape)}
+    if isinstance(v, tuple):
+        return {"$t": [_enc(x) for x in v]}
+    if isinstance(v, list):
+        return [_enc(x) for x in v]
+    if isinstance(v, dict):
+        if not all(isinstance(k, str) for k in v):
+            raise TypeError("a dict with keys that are not strings")
+        return {k: _enc(x) for k, x in v.items()}
+    if isinstance(v, NLPOutcome):
+        return {"$nlp": {k: _enc(getattr(v, k)) for k in ("start", "x", "objective", "return_status", "success",
+                                                          "iterations", "wall_s", "lam_g")}}
+    raise TypeError(f"cannot record a {type(v).__name__}")
+
+
+def _dec(v: Any) -> Any:
+    if isinstance(v, list):
+        return [_dec(x) for x in v]
+    if not isinstance(v, dict):
+        return v
+    if len(v) == 1 and "$f" in v:
+        return float(v["$f"])
+    if "$a" in v and set(v) == {"$a", "dtype", "shape"}:
+        return np.array([_dec(x) for x in v["$a"]], dtype=v["dtype"]).reshape(v["shape"])
+    if len(v) == 1 and "$t" in v:
+        return tuple(_dec(x) for x in v["$t"])
+    if len(v) == 1 and "$nlp" in v:
+        return NLPOutcome(**{k: _dec(x) for k, x in v["$nlp"].items()}, log="")
+    return {k: _dec(x) for k, x in v.items()}
+
+
+def encode(outcome: Any) -> dict:
+    """A start's outcome as a JSON-able dict (TypeError when it holds something JSON cannot)."""
+    if not isinstance(outcome, StartOutcome):
+        raise TypeError(f"cannot record a {type(outcome).__name__}")
+    fields = ("start", "design", "objective", "return_status", "success", "iterations", "wall_s", "log", "raw",
+              "details")
+    return {"outcome": {k: _enc(getattr(outcome, k)) for k in fields}}
+
+
+def decode(line: dict) -> StartOutcome:
+    fields = {k: _dec(v) for k, v in line["outcome"].items()}
+    out = StartOutcome(**fields)
+    if out.raw is not None:
+        out.raw.log = out.log
+    return out
+
+
+class StartLog:
+    """Appends one line per finished start to ``path`` (flushed at once), after a header line."""
+
+    def __init__(self, path: Path, settings: dict, print_: str):
+        self.path = path
+        self.fh = open(path, "a", encoding="utf-8")
+        self._line({"agrisynth_starts": FORMAT, "fingerprint": print_, "settings": settings})
+
+    def _line(self, data: dict) -> None:
+        self.fh.write(json.dumps(data, allow_nan=False, separators=(",", ":")) + "\n")
+        self.fh.flush()
+
+    def append(self, outcome: Any) -> None:
+        try:
+            data = encode(outcome)
+            json.dumps(data, allow_nan=False)
+        except (TypeError, ValueError) as exc:        # kept as a note; a resumed run solves this start again
+            data = {"unrecorded": getattr(outcome, "start", None), "why": str(exc)}
+        self._line(data)
+
+    def close(self) -> None:
+        self.fh.close()
+
+
+def settings_of(folder: Path) -> dict:
+    """The settings in the header line of ``folder/starts.jsonl`` ({} when there is none to read)."""
+    if not (Path(folder) / FILENAME).is_file():
+        return {}
+    try:
+        with open(Path(folder) / FILENAME, encoding="utf-8", errors="replace") as fh:
+            line = json.loads(fh.readline(1_000_000))
+    except (OSError, ValueError, RecursionError):
+        return {}
+    settings = line.get("settings") if isinstance(line, dict) else None
+    return settings if isinstance(settings, dict) else {}
+
+
+def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
+    """The finished starts recorded in ``folder/starts.jsonl`` of a run with fingerprint ``print_``.
+
+    OutputError (exit 2) when there is no such file or it belongs to a run with other settings."""
+    path = Path(folder) / FILENAME
+    try:
+        st = os.stat(path)
+    except OSError:
+        raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)") from None
+    import stat
+
+    if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_BYTES:
+        raise OutputError(f"--resume {folder}: {FILENAME} is not a regular file of at most {MAX_BYTES} bytes")
+    finished: dict[int, StartOutcome] = {}
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        header = None
+        for n, text in enumerate(fh):
+            try:
+                line = json.loads(text)
+            except (ValueError, RecursionError):
+                continue          # cut off by a crash: that start is solved again
+            if not isinstance(line, dict):
+                continue
+            if "agrisynth_starts" in line:
+                if header is None:
+                    header = line
+                if line.get("fingerprint") != print_:
+                    settings = line.get("settings") if isinstance(line.get("settings"), dict) else {}
+                    mine = ", ".join(f"{k} {v}" for k, v in sorted(settings.items()) if k != "spec_sha256")
+                    raise OutputError(f"--resume {folder}: that run had other settings or another spec file "
+                                      f"({mine or 'unknown'}; spec sha256 {str(settings.get('spec_sha256'))[:12]}); "
+                                      f"resume with the same spec file, --starts and --seed")
+                continue
+            if header is None:
+                raise OutputError(f"--resume {folder}: {FILENAME} has no header line; not written by agrisynth")
+            if "outcome" in line:
+                try:
+                    out = decode(line)
+                except (TypeError, ValueError, KeyError):
+                    continue
+                finished[out.start] = out
+    if header is None:
+        raise OutputError(f"--resume {folder}: {FILENAME} is empty")
+    return finished

@@ -1,0 +1,84 @@
+"""What a spec says of each design variable: where it is written (TOML path), its unit, its bounds, free or fixed.
+
+Read from the spec model alone, for every kind the same way: a spec model lists its variables by their
+result.json names (``variables()``: name -> a number or a free variable), or, as ``fourbar_path`` does,
+in a ``[bounds]`` table (a number fixes a variable, ``[lo, hi]`` frees it).  The TOML path of a variable
+is found by walking the model to the very object ``variables()`` returned.
+
+Reports and the terminal show units, bounds, free/fixed and at-bound marks from it; ``solved.toml``
+writes the solved value of each free variable at its path.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel
+
+from synthesis.spec.common import FreeVariable
+from synthesis.spec.docmeta import units_in
+
+#: a value within this fraction of its bounds' width (at least this absolute, mm or deg) is "at the bound"
+AT_BOUND = 1e-6
+
+
+def _walk(model: BaseModel, prefix: str = ""):
+    """(TOML path, FieldInfo, value) of every value in the model, depth first (list items as path[i])."""
+    for name, field in type(model).model_fields.items():
+        key = field.alias or name
+        value = getattr(model, name)
+        path = f"{prefix}{key}"
+        yield path, field, value
+        if isinstance(value, BaseModel) and not isinstance(value, FreeVariable):
+            yield from _walk(value, f"{path}.")
+        elif isinstance(value, (list, tuple)):
+            for i, item in enumerate(value):
+                yield f"{path}[{i}]", field, item
+                if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
+                    yield from _walk(item, f"{path}[{i}].")
+
+
+def _entry(path: str | None, field, bounds, free: bool) -> dict[str, Any]:
+    units = units_in(field.description) if field is not None else []
+    return {"path": path, "unit": " or ".join(units), "bounds": None if bounds is None else [float(b) for b in bounds],
+            "free": free}
+
+
+def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
+    """design name -> {path, unit, bounds, free}; empty when the model declares no variables."""
+    out: dict[str, dict[str, Any]] = {}
+    variables = getattr(spec, "variables", None)
+    if callable(variables):
+        where = {id(value): (path, field) for path, field, value in _walk(spec)}
+        for name, v in variables().items():
+            path, field = where.get(id(v), (None, None))
+            if isinstance(v, FreeVariable):
+                out[name] = _entry(path, field, v.bounds, True)
+            elif isinstance(v, (int, float)) and not isinstance(v, bool):
+                out[name] = _entry(path, field, None, False)
+        return out
+    bounds = getattr(spec, "bounds", None)
+    if isinstance(bounds, BaseModel):          # a [bounds] table: a number fixes a variable, [lo, hi] frees it
+        for name, field in type(bounds).model_fields.items():
+            lo, hi = getattr(bounds, name)
+            out[name] = _entry(f"bounds.{name}", field, (lo, hi) if lo < hi else None, lo < hi)
+    return out
+
+
+def attach(result, spec: BaseModel):
+    """``result`` told what its spec says of each design variable (result.json ``design_variables``)."""
+    result.design_variables = describe(spec) or None
+    return result
+
+
+def at_bound(value, info: dict | None) -> str:
+    """"lower" or "upper" when a free variable's value sits on that bound, else ""."""
+    if not info or not info.get("free") or not info.get("bounds") or not isinstance(value, (int, float)):
+        return ""
+    lo, hi = info["bounds"]
+    tol = AT_BOUND * max(1.0, abs(hi - lo))
+    if abs(value - lo) <= tol:
+        return "lower"
+    if abs(value - hi) <= tol:
+        return "upper"
+    return ""

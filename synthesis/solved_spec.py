@@ -1,0 +1,95 @@
+"""``solved.toml``: a solve's design written as a spec with every design variable fixed.
+
+The spec file as the user wrote it, with each free variable (``{init, bounds}``, or ``[lo, hi]`` in a
+``[bounds]`` table) replaced by its solved value (floats written by repr, so they read back
+bit-identical), a ``[design]`` table's values (the given design some kinds read) set to the solution,
+and the name ``<name>_solved`` (so checking it never touches the solve's own folder).
+``agrisynth check results/<name>/solved.toml`` then evaluates exactly the solved design.
+
+Generic over kinds: where each variable is written comes from :mod:`synthesis.design_info`.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from pydantic import BaseModel
+
+from synthesis.design_info import describe
+from synthesis.errors import SpecError
+from synthesis.spec.common import read_toml
+
+FILENAME = "solved.toml"
+_PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+
+
+def _parts(path: str) -> list[str | int]:
+    return [int(i) if i else key for key, i in _PART.findall(path)]
+
+
+def _set(data: Any, path: str, value: Any) -> None:
+    *head, last = _parts(path)
+    for part in head:
+        data = data[part]
+    data[last] = value
+
+
+def solved_data(loaded, result) -> dict[str, Any]:
+    """The spec file's data with the solved design in place of every free variable."""
+    data, _ = read_toml(loaded.path)
+    info = describe(loaded.model)
+    if not info:
+        raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables() or a [bounds] "
+                        f"table), so the solved design cannot be written as a spec")
+    for name, var in info.items():
+        if not var["free"]:
+            continue
+        if var["path"] is None or name not in result.design:
+            raise SpecError(f"kind {loaded.kind}: the free variable {name} has no "
+                            f"{'place in the spec file' if var['path'] is None else 'solved value'}")
+        _set(data, var["path"], float(result.design[name]))
+    data["name"] = f"{loaded.name}_solved"
+    _given_design(loaded, result, data)
+    return data
+
+
+def _given_design(loaded, result, data: dict) -> None:
+    """A ``[design]`` table (the given design a kind reads, e.g. fourbar_path's, with free timing its crank
+    angles too): each of its fields the result has is set to the solution, where the spec allows it (a
+    field the spec already prescribes elsewhere, e.g. timed targets' crank angles, is left out)."""
+    from synthesis.spec.common import validate
+
+    model = type(loaded.model)
+    field = model.model_fields.get("design")
+    section = getattr(loaded.model, "design", None)
+    if field is None or not isinstance(section, BaseModel):
+        return
+    design = data.setdefault("design", {})
+    for name in type(section).model_fields:
+        if name not in result.design:
+            continue
+        value = result.design[name]
+        trial = dict(design, **{name: [float(x) for x in value] if isinstance(value, list) else float(value)})
+        try:
+            validate(model, dict(data, design=trial), prefix=loaded.kind)
+        except SpecError:
+            continue
+        design.clear()
+        design.update(trial)
+    if not design:
+        del data["design"]
+
+
+def solved_toml(loaded, result) -> str:
+    from synthesis.specref import write_toml
+
+    data = solved_data(loaded, result)
+    objective = result.objective or {}
+    value = objective.get("value")
+    head = [f"# {result.name} as solved by `agrisynth solve` (status {result.status}"
+            + (f", {objective.get('name')} = {value:.6g}" if isinstance(value, (int, float)) else "") + "):",
+            f"# the spec {loaded.path.name} with every free design variable fixed at its solved value.",
+            f"#   agrisynth check {FILENAME}   evaluates exactly this design (the solve's rule table).",
+            f"# spec sha256 {loaded.sha256}", ""]
+    return "\n".join(head + write_toml(type(loaded.model), data, documented=False)) + "\n"

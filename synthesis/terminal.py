@@ -1,0 +1,75 @@
+"""What the CLI prints besides the rule tables: the spec reference, the solved design, per-start lines.
+
+Tables fit the terminal: on a terminal rich wraps the long columns to its width; piped, nothing is ever
+cut (a file name or a number is printed whole, lines may be as long as they need).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+#: piped output: wide enough that no table cell is cut (lines are as long as their content)
+PIPED_WIDTH = 10_000
+
+
+def console_for(stream=None, *, stderr: bool = False) -> Console:
+    """A console as wide as the terminal, or, when piped, wide enough never to cut or wrap a cell."""
+    stream = stream or (sys.stderr if stderr else sys.stdout)
+    tty = stream.isatty()
+    return Console(file=stream if stream not in (sys.stdout, sys.stderr) else None, stderr=stderr,
+                   highlight=False, width=None if tty else PIPED_WIDTH, soft_wrap=not tty)
+
+
+def plain_table(title: str | None = None) -> Table:
+    """A table that never cuts a cell: overflowing text folds onto the next line of its cell on a terminal,
+    and a piped console is wide enough for every line."""
+    return Table(title=escape(title) if title else None, title_justify="left")
+
+
+def reference_table(kind_name: str, summary: str, rows) -> Table:
+    """``agrisynth spec KIND``: every field with TOML path, type, unit, default (or required), range, meaning."""
+    table = plain_table(f"{kind_name}: {summary}")
+    for col, wrap in (("TOML path", False), ("type", True), ("unit", False), ("default", True), ("range", True),
+                      ("description", True)):
+        table.add_column(col, no_wrap=not wrap, overflow="fold")
+    for e in rows:
+        if e.section:
+            table.add_row(f"[bold]{escape(e.heading)}[/]", "", "", "required" if e.required else escape(e.default),
+                          escape(e.range), f"[bold]{escape(e.description)}[/]")
+        else:
+            table.add_row(escape(e.path), escape(e.type), escape(e.unit),
+                          "required" if e.required else escape(e.default), escape(e.range), escape(e.description))
+    return table
+
+
+def _value(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, bool):
+        return str(v).lower()
+    if isinstance(v, float):
+        return f"{v:.6g}" if math.isfinite(v) else str(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    return str(v)
+
+
+def design_table(rows, title: str) -> Table:
+    """The solved design beside the given one: value, unit, bounds, free/fixed and at-bound marks
+    (rows: :func:`synthesis.report.tables.design_info_rows`)."""
+    table = plain_table(title)
+    for col, just in (("variable", "left"), ("given", "right"), ("solution", "right"), ("unit", "left"),
+                      ("bounds", "right"), ("", "left")):
+        table.add_column(col, justify=just, no_wrap=True, overflow="fold")
+    for r in rows:
+        bounds = {None: "", False: "fixed"}.get(r.free, f"[{_value(r.bounds[0])}, {_value(r.bounds[1])}]"
+                                                 if r.bounds else "free")
+        mark = r.at_bound[0] if r.at_bound else ""
+        table.add_row(escape(r.name), escape(_value(r.given)), escape(_value(r.values[0])), escape(r.unit),
+                      escape(bounds), f"[yellow]at {mark} bound[/]" if mark else "")
+    return table

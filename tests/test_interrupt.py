@@ -1,0 +1,177 @@
+"""Nothing lost (issue 22): Ctrl-C and SIGTERM stop a solve with the finished starts kept (starts.jsonl, a
+best-so-far result with status interrupted, exit 130 / 143), no worker outlives its run, and --resume ends
+with exactly the uninterrupted result."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import LIBRARY
+from synthesis.core import interrupt, startlog
+from synthesis.core.interrupt import Interrupted
+
+SPEC = LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml"
+NAME = "cai2020_crank_rocker_synthesis"
+
+
+def cli(*args, cwd: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "synthesis.cli", *map(str, args)], cwd=cwd,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def logged_starts(out: Path) -> int:
+    """Finished starts in the running solve's starts.jsonl (its staging folder while it runs)."""
+    files = list(out.glob(f".{NAME}.run-*/starts.jsonl")) + list(out.glob(f"{NAME}/starts.jsonl"))
+    return max([len(f.read_text().splitlines()) - 1 for f in files] + [0])
+
+
+def wait_for_starts(proc: subprocess.Popen, out: Path, k: int, timeout: float = 90) -> None:
+    t0 = time.monotonic()
+    while logged_starts(out) < k:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < timeout
+        time.sleep(0.05)
+
+
+def children(pid: int) -> list[int]:
+    kids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            kids.append(int(stat.parent.name))
+    return kids
+
+
+def comparable(data: dict) -> dict:
+    """A result without what depends on the clock or the machine."""
+    data = json.loads(json.dumps(data))
+    for key in ("wall_s", "workers"):
+        data["solver"].pop(key, None)
+    for row in data["starts"]:
+        row.pop("wall_s")
+    return data
+
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+
+
+def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_uninterrupted_run(tmp_path):
+    """--workers 1: IPOPT runs in this process and CasADi swallows the KeyboardInterrupt; it must still stop."""
+    proc = cli("solve", SPEC, "--out", tmp_path / "a", "--starts", 24, "--workers", 1, cwd=tmp_path)
+    wait_for_starts(proc, tmp_path / "a", 3)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "interrupted by SIGINT after" in err and "--resume" in err and "Traceback" not in err
+    run = tmp_path / "a" / NAME
+    result = json.loads((run / "result.json").read_text())
+    lines = (run / "starts.jsonl").read_text().splitlines()
+    kept = result["solver"]["starts_run"]
+    assert result["status"] == "interrupted" and 3 <= kept < 24
+    assert len(lines) == kept + 1 and [r["start"] for r in result["starts"]] == list(range(kept))
+    assert sorted(json.loads(ln)["outcome"]["start"] for ln in lines[1:]) == list(range(kept))
+    assert not any("NonIpopt" in r["return_status"] for r in result["starts"])   # the cut-short start is not kept
+    assert (run / "report.html").is_file()
+
+    resumed = cli("solve", SPEC, "--resume", run, cwd=tmp_path)
+    out, err = resumed.communicate(timeout=300)
+    assert resumed.returncode == 0, err
+    assert f"resumed: {kept} finished start(s)" in out
+    whole = cli("solve", SPEC, "--out", tmp_path / "b", "--starts", 24, "--workers", 1, cwd=tmp_path)
+    assert whole.wait(timeout=300) == 0
+    a = json.loads((run / "result.json").read_text())
+    b = json.loads((tmp_path / "b" / NAME / "result.json").read_text())
+    assert comparable(a) == comparable(b)       # design bits, start table, verdict: identical
+    assert len((run / "starts.jsonl").read_text().splitlines()) == 25
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == [NAME]
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGKILL, -9)])
+def test_two_workers_stop_with_the_run_and_none_outlives_it(tmp_path, sig, code):
+    proc = cli("solve", SPEC, "--out", tmp_path, "--starts", 400, "--workers", 2, cwd=tmp_path)
+    wait_for_starts(proc, tmp_path, 2)
+    workers = children(proc.pid)
+    assert len(workers) >= 2
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code, err
+    deadline = time.monotonic() + 5
+    while any(Path(f"/proc/{w}").exists() and "Z" not in Path(f"/proc/{w}/stat").read_text().split()[2]
+              for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not [w for w in workers if Path(f"/proc/{w}").exists()
+                and "Z" not in Path(f"/proc/{w}/stat").read_text().rsplit(")", 1)[1].split()[0]]
+    if sig == signal.SIGTERM:
+        result = json.loads((tmp_path / NAME / "result.json").read_text())
+        assert result["status"] == "interrupted" and result["solver"]["starts_run"] >= 2
+    else:       # SIGKILL: nothing could run, but every finished start is in the staging folder's starts.jsonl
+        assert logged_starts(tmp_path) >= 2
+
+
+def test_in_process_interrupt_and_resume_give_the_uninterrupted_result_bit_for_bit():
+    """The one multistart path of every kind: interrupted after k starts, resumed from the decoded
+    starts.jsonl lines, equal to the uninterrupted run (designs compared as floats, exactly)."""
+    from synthesis import kinds
+    from synthesis.core.solve import run_solve
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(SPEC)
+    kind = kinds.get(loaded.kind)
+    whole, _, _ = run_solve(kind, loaded, starts=8, seed=3, workers=1)
+    lines: list[str] = []
+
+    def record(outcome):
+        lines.append(json.dumps(startlog.encode(outcome), allow_nan=False))
+
+    def stop_after_three(report, best):
+        if len(lines) == 3:
+            interrupt.simulate(signal.SIGINT)
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(kind, loaded, starts=8, seed=3, workers=1, on_start=stop_after_three, record=record)
+    finally:
+        interrupt.uninstall()
+    partial, reports, _ = caught.value.partial
+    assert partial.status == "interrupted" and len(reports) == 3 and caught.value.exit_code == 130
+    finished = {o.start: o for o in (startlog.decode(json.loads(ln)) for ln in lines)}
+    resumed, _, _ = run_solve(kind, loaded, starts=8, seed=3, workers=1, finished=finished)
+    assert comparable(resumed.to_json()) == comparable(whole.to_json())
+    assert resumed.design == whole.design
+
+
+def test_a_start_outcome_survives_starts_jsonl_exactly():
+    from synthesis.core.ipopt import NLPOutcome
+    from synthesis.core.outcome import StartOutcome
+
+    raw = NLPOutcome(4, np.array([0.1, 1 / 3, -np.inf]), math.inf, "Invalid_Number_Detected", False, 7, 0.5, "log",
+                     np.array([np.nan]))
+    out = StartOutcome.of(raw, {"l1": 1 / 3, "branch": "open"}, math.inf, crank_deg=(1.0, 2.0), angles=[math.nan])
+    back = startlog.decode(json.loads(json.dumps(startlog.encode(out), allow_nan=False)))
+    assert back.design == out.design and back.start == 4 and back.objective == math.inf
+    assert back.raw.x.tobytes() == raw.x.tobytes() and np.isnan(back.raw.lam_g[0])
+    assert back.details["crank_deg"] == (1.0, 2.0) and math.isnan(back.details["angles"][0])
+
+
+def test_resume_refuses_another_spec_or_other_settings(tmp_path):
+    from synthesis.errors import OutputError
+
+    settings, print_ = startlog.fingerprint("crank_rocker", NAME, "ab" * 32, 24, 0)
+    log = startlog.StartLog(tmp_path / startlog.FILENAME, settings, print_)
+    log.close()
+    assert startlog.read(tmp_path, print_) == {}
+    _, other = startlog.fingerprint("crank_rocker", NAME, "ab" * 32, 25, 0)
+    with pytest.raises(OutputError, match="other settings or another spec file"):
+        startlog.read(tmp_path, other)

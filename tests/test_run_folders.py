@@ -1,0 +1,99 @@
+"""Output folders (issue 22): a run replaces only an earlier agrisynth run, and only with --force; anything
+else at OUT/<name> is kept (exit 2); two runs racing into one folder leave one whole run and no leftovers."""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import PLANTING
+from synthesis.errors import OutputError
+from synthesis.result import RUN_MARKER, is_run_folder, open_run_folder, write_folder
+
+
+def artifacts(token: str) -> dict:
+    """Two files written from the same token: a folder mixing two runs has different tokens in them."""
+    return {"result.json": lambda p: p.write_text(json.dumps({"token": token})),
+            "report.html": lambda p: p.write_text(token)}
+
+
+def test_a_run_folder_carries_the_marker_and_is_replaced_only_with_force(tmp_path):
+    final, replaced = write_folder(tmp_path / "run", artifacts("a"))
+    assert not replaced and is_run_folder(final) and (final / RUN_MARKER).is_file()
+    with pytest.raises(OutputError, match="holds an earlier agrisynth run; give --force"):
+        write_folder(tmp_path / "run", artifacts("b"))
+    assert json.loads((final / "result.json").read_text())["token"] == "a"
+    _, replaced = write_folder(tmp_path / "run", artifacts("b"), force=True)
+    assert replaced and json.loads((final / "result.json").read_text())["token"] == "b"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]       # no staging or .old leftovers
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_folder_agrisynth_did_not_write_is_never_replaced(tmp_path, force):
+    precious = tmp_path / "precious"
+    precious.mkdir()
+    (precious / "thesis.txt").write_text("data")
+    with pytest.raises(OutputError, match="agrisynth did not write .*never replaces or deletes it"):
+        write_folder(precious, artifacts("a"), force=force)
+    assert (precious / "thesis.txt").read_text() == "data"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["precious"]
+
+
+def test_the_spec_file_itself_is_never_replaced(tmp_path):
+    spec = tmp_path / "myspec.toml"
+    spec.write_text((PLANTING / "taiwan_example1.toml").read_text().replace('name = "taiwan_example1"',
+                                                                             'name = "myspec.toml"'))
+    before = spec.read_text()
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", "myspec.toml", "--out", ".", "--force"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    assert "myspec.toml is the spec file itself" in proc.stderr and "Traceback" not in proc.stderr
+    assert spec.read_text() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["myspec.toml"]
+
+
+@pytest.mark.parametrize("where", ["file/sub", "name-not-a-folder"])
+def test_an_impossible_out_is_refused_before_any_work(tmp_path, where):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "name-not-a-folder").write_text("x")
+    with pytest.raises(OutputError, match="--out"):
+        open_run_folder(tmp_path / where, "run")
+
+
+@pytest.mark.parametrize("name", ["", "..", "a/b", "x" * 101, ".hidden", "a b"])
+def test_a_name_that_is_not_a_slug_is_refused(tmp_path, name):
+    with pytest.raises(OutputError, match="is not a folder name"):
+        open_run_folder(tmp_path, name)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _race(out: str, who: str, n: int, errors) -> None:
+    for i in range(n):
+        try:
+            write_folder(Path(out) / "run", artifacts(f"{who}{i}"), force=True)
+        except Exception as exc:        # noqa: BLE001 -- counted by the test
+            errors.put(f"{who}{i}: {exc!r}")
+
+
+def test_two_processes_racing_into_one_folder_leave_one_whole_run(tmp_path):
+    errors = multiprocessing.Queue()
+    procs = [multiprocessing.Process(target=_race, args=(str(tmp_path), who, 150, errors)) for who in "ab"]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(120)
+        assert p.exitcode == 0
+    failed = []
+    while not errors.empty():
+        failed.append(errors.get())
+    assert failed == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]        # no staging, no .old folders
+    run = tmp_path / "run"
+    token = json.loads((run / "result.json").read_text())["token"]
+    assert (run / "report.html").read_text() == token and token in ("a149", "b149")
+    assert sorted(p.name for p in run.iterdir()) == sorted([RUN_MARKER, "result.json", "report.html"])

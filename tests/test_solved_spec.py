@@ -1,0 +1,95 @@
+"""solved.toml: every solve's design as a spec with everything fixed; `check` of it reproduces the solve's
+rule table exactly.  And what a piped `solve` prints: a line per finished start, the solved design.
+
+Every solving kind of the registry is covered (kinds added later too); a kind whose package does not import
+is skipped with the import error as the reason.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from conftest import LIBRARY
+from synthesis import design_info, kinds
+from synthesis.core import solve as core
+from synthesis.solved_spec import FILENAME, solved_toml
+from synthesis.spec import load_spec
+
+#: kinds whose `check` cannot reproduce a solve's rule table, and why (xfail strict: a fix turns them red)
+KNOWN = {
+    "guide_way": "its solve moves the spline's control points, which the spec cannot hold (it lists no design "
+                 "variables): solved.toml needs a spec field for them",
+    "comb_finger": "its check samples the finger turn on CHECK_TURN_SAMPLES, its re-check on 10 x "
+                   "[solver] turn_samples: the same design gives two rule values",
+}
+
+
+def _solving_kinds() -> list:
+    out = []
+    for name in kinds.names():
+        try:
+            solves = kinds.get(name).solves
+        except Exception as exc:    # noqa: BLE001 - a kind another session is still writing
+            out.append(pytest.param(name, marks=pytest.mark.skip(reason=f"kind {name} does not import: {exc}")))
+            continue
+        if solves:
+            marks = [pytest.mark.xfail(reason=KNOWN[name], strict=True)] if name in KNOWN else []
+            out.append(pytest.param(name, marks=marks))
+    return out
+
+
+def _table(rules: list[dict]) -> list[tuple]:
+    return [(r["name"], r["value"], r["limit"], r["unit"], r["satisfied"], r["margin"]) for r in rules]
+
+
+@pytest.mark.parametrize("kind_name", _solving_kinds())
+def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
+    kind = kinds.get(kind_name)
+    loaded = load_spec(LIBRARY / kind.example)
+    assert design_info.describe(loaded.model), "the spec model lists no design variables to fix"
+    result, _, _ = core.run_solve(kinds.solving_kind(kind_name), loaded, starts=1, workers=1)
+    path = tmp_path / FILENAME
+    path.write_text(solved_toml(loaded, result))
+    again = load_spec(path)
+    assert again.name == f"{loaded.name}_solved"
+    described = design_info.describe(again.model)
+    assert described and not any(v["free"] for v in described.values())      # everything fixed
+    assert _table(kinds.checker(kind_name)(again).rules) == _table(result.rules)
+
+
+def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_path):
+    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+    for old, new in (('name = "cai2020_crank_rocker_synthesis"', 'name = "tight"'),
+                     ("l7 = { init = 50.0, bounds = [5.0, 200.0] }", "l7 = { init = 50.0, bounds = [5.0, 52.0] }")):
+        assert old in text, old
+        text = text.replace(old, new)
+    spec = tmp_path / "tight.toml"
+    spec.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(spec), "--out", str(tmp_path / "out"),
+                           "--workers", "1", "--starts", "3"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    started = [ln for ln in lines if ln.startswith("start ") and " finished (" in ln]
+    assert sorted(int(ln.split()[1]) for ln in started) == [0, 1, 2]
+    assert {ln.split("(")[1].split(")")[0] for ln in started} == {"1/3", "2/3", "3/3"}
+    # the solved design: given, solution, unit, bounds and the at-bound mark, one row per variable
+    row = next(ln for ln in lines if ln.startswith("│ l7 "))
+    cells = [c.strip() for c in row.strip("│").split("│")]
+    assert cells == ["l7", "50", "52", "mm", "[5, 52]", "at upper bound"]
+    l10 = [c.strip() for c in next(ln for ln in lines if ln.startswith("│ l10 ")).strip("│").split("│")]
+    assert l10 == ["l10", "140", "140", "mm", "fixed", ""]
+    # solved.toml beside the result, and `check` of it gives the solve's rule table
+    folder = tmp_path / "out" / "tight"
+    check = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(folder / FILENAME), "--out",
+                            str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    assert check.returncode == 0, check.stderr
+    import json
+
+    solved = json.loads((folder / "result.json").read_text())
+    checked = json.loads((tmp_path / "out" / "tight_solved" / "result.json").read_text())
+    assert _table(checked["rules"]) == _table(solved["rules"])
+    assert checked["design"] == solved["design"]
+    assert solved["design_variables"]["l7"] == {"path": "links.l7", "unit": "mm", "bounds": [5.0, 52.0], "free": True}

@@ -1,0 +1,72 @@
+"""Bad input says what was expected in one line, in the user's terms (issue 17, "Messages")."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from conftest import PLANTING
+from synthesis.errors import SpecError
+from synthesis.spec import load_spec
+
+REDESIGN = (PLANTING / "redesign_from_example1.toml").read_text()
+L2 = "l2 = { init = 35, bounds = [28, 42] }"
+
+
+def message(tmp_path, old: str, new: str, lines: int = 1) -> str:
+    assert old in REDESIGN, old
+    path = tmp_path / "bad.toml"
+    path.write_text(REDESIGN.replace(old, new, 1))
+    with pytest.raises(SpecError) as exc:
+        load_spec(path)
+    text = str(exc.value)
+    assert len(text.splitlines()) == lines, text     # one line per bad field
+    assert text.startswith(f"{path}: planting_fourbar.")
+    return text.removeprefix(f"{path}: planting_fourbar.")
+
+
+@pytest.mark.parametrize("old, new, expected", [
+    ("forward_speed = 0.6", 'forward_speed = "0.8 m/s"',
+     "operation.forward_speed: expected a number in m/s, written without a unit, got '0.8 m/s'"),
+    ("crank_speed = 250", 'crank_speed = "300 rpm"',
+     "operation.crank_speed: expected a number in r/min, written without a unit, got '300 rpm'"),
+    (L2, "l2 = { init = 35, bounds = [25] }", "arm.l2.bounds: expected [lo, hi] (two numbers), got [25]"),
+    (L2, "l2 = { init = 35, bounds = [25, 30, 40] }",
+     "arm.l2.bounds: expected [lo, hi] (two numbers), got [25, 30, 40]"),
+    (L2, "l2 = [25, 45]",
+     "arm.l2: expected a number, or a table to free it: l2 = {init = 35, bounds = [25, 45]}, got [25, 45]"),
+    (L2, "l2 = { bounds = [28, 42] }", "arm.l2.init: missing required field"),
+])
+def test_value_messages(tmp_path, old, new, expected):
+    text = message(tmp_path, old, new)
+    assert text == expected
+    assert "FreeVariable" not in text and "dictionary" not in text
+
+
+def test_unknown_top_level_key_suggests_nothing_unrelated(tmp_path):
+    text = message(tmp_path, "source = ", 'description = "my arm"\nsource = ')
+    assert text == ("description: unknown field; allowed: name, source, kind, arm, seedbed, operation, soil, rules, "
+                    "objective, solver (a note about the spec goes in source = \"...\" or a # comment)")
+
+
+@pytest.mark.parametrize("typo, meant", [("seedbd", "seedbed"), ("operations", "operation")])
+def test_unknown_key_close_to_a_field_suggests_it(tmp_path, typo, meant):
+    text = message(tmp_path, f"[{meant}]", f"[{typo}]", lines=2)      # and the section it meant is missing
+    assert text.startswith(f"{typo}: unknown field; did you mean '{meant}'?")
+
+
+def test_rule_key_named_as_in_the_output_suggests_the_spec_key(tmp_path):
+    text = message(tmp_path, "[objective]", "[rules]\np1p3_distance = [100, 110]\n\n[objective]")
+    assert text == "rules.p1p3_distance: unknown field; did you mean 'p1p3'?"
+
+
+def test_linkage_that_cannot_assemble_names_the_file(tmp_path):
+    path = tmp_path / "far.toml"
+    path.write_text(REDESIGN.replace("l1 = 75", "l1 = 400", 1))
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.startswith(f"error: {path}: planting_fourbar: linkage cannot assemble at any crank angle")
+    assert len(proc.stderr.strip().splitlines()) == 1

@@ -1,0 +1,127 @@
+"""The spec reference (`agrisynth spec KIND`, `--template`, docs/specs.md), generated from the spec models.
+
+Every registered kind is covered, including kinds added after this file was written: the tests iterate
+the registry.  A kind whose package does not import is skipped with the import error as the reason.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tomllib
+
+import pytest
+from click.testing import CliRunner
+
+from synthesis import kinds, specref
+from synthesis.cli import cli
+from synthesis.spec import load_spec
+from synthesis.spec.common import read_toml
+
+
+def _kind(name: str):
+    try:
+        kind = kinds.get(name)
+        return kind, kind.model_class()
+    except Exception as exc:    # noqa: BLE001 - a kind another session is still writing
+        pytest.skip(f"kind {name}: its package does not import ({type(exc).__name__}: {exc})")
+
+
+@pytest.fixture(params=kinds.names())
+def kind_name(request) -> str:
+    return request.param
+
+
+def test_every_field_has_a_description_and_a_unit(kind_name):
+    _, model = _kind(kind_name)
+    assert specref.missing_descriptions(model) == []
+
+
+def test_template_validates_and_checks_like_its_example(kind_name, tmp_path):
+    kind, model = _kind(kind_name)
+    assert kind.example, f"{kind_name}: Kind.example names no library spec to start a template from"
+    path = tmp_path / "sub" / "start.toml"
+    path.parent.mkdir()
+    path.write_text(specref.template(kind_name, path.parent))
+    loaded = load_spec(path)                                  # validates
+    assert loaded.kind == kind_name and loaded.name == f"my_{kind_name}"
+    # nothing of the example is lost: the same data apart from name and source (spec files re-pointed)
+    example = specref.LIBRARY / kind.example
+    ours, theirs = tomllib.loads(path.read_text()), read_toml(example)[0]
+    for key in ("name", "source"):
+        ours.pop(key), theirs.pop(key, None)
+    for key, _ in specref._spec_file_fields(model):
+        if key in theirs:
+            assert (path.parent / ours.pop(key)).resolve() == (example.parent / theirs.pop(key)).resolve()
+    assert ours == theirs
+    # and `check` runs on it, with the example's rule table
+    rules = kinds.checker(kind_name)(loaded).rules
+    expected = kinds.checker(kind_name)(load_spec(example)).rules
+    assert [(r["name"], r["value"], r["satisfied"]) for r in rules] == \
+        [(r["name"], r["value"], r["satisfied"]) for r in expected]
+
+
+def test_template_comments_every_field(kind_name):
+    _, model = _kind(kind_name)
+    text = specref.template(kind_name)
+    for e in specref.entries(model):
+        if not e.section:
+            key = e.path.rsplit(".", 1)[-1]
+            assert f"\n{key} = " in text or f"\n# {key} = " in text, e.path
+        assert e.description.split()[0] in text
+
+
+def test_reference_lists_every_field(kind_name):
+    _, model = _kind(kind_name)
+    result = CliRunner().invoke(cli, ["spec", kind_name])
+    assert result.exit_code == 0, result.output
+    for e in specref.entries(model):
+        assert (e.heading if e.section else e.path) in result.output
+        assert e.description in result.output          # piped: never cut or wrapped
+
+
+def test_docs_specs_md_is_current():
+    """docs/specs.md is generated; regenerate it with `python -m synthesis.specref` when a model changes."""
+    current = specref.DOCS.read_text() if specref.DOCS.exists() else ""
+    assert current == specref.markdown(), f"docs/specs.md is stale: run `{specref.REGENERATE}`"
+    for name in kinds.names():
+        assert f"\n## {name}\n" in current
+
+
+def test_reference_reads_units_and_ranges():
+    rows = {e.path: e for e in specref.kind_entries("planting_fourbar")}
+    assert (rows["arm.l2"].unit, rows["arm.l2"].required) == ("mm", True)
+    assert rows["arm.l2"].type == "number, or {init, bounds} (free)"
+    assert (rows["operation.crank_speed"].unit, rows["operation.crank_speed"].range) == ("r/min", "> 0, <= 2000")
+    assert (rows["rules.p1p3"].default, rows["solver.starts"].default) == ("[105.0, 115.0]", "16")
+    assert rows["rules"].section and not rows["rules"].required
+    path = {e.path: e for e in specref.kind_entries("fourbar_path")}
+    assert path["bounds.rcy"].unit == "mm"            # "(90 deg counter-clockwise), mm": the aside is not the unit
+    assert path["bounds.r1"].type == "number (fixes it) or [lo, hi] (frees it)"
+    tubes = {e.path: e for e in specref.kind_entries("guide_tube")}
+    assert tubes["tubes[]"].many and tubes["tubes[].angle"].unit == "deg"
+
+
+def test_spec_command_errors_are_one_line(tmp_path):
+    unknown = subprocess.run([sys.executable, "-m", "synthesis.cli", "spec", "planting_forbar"], capture_output=True,
+                             text=True, timeout=120)
+    assert unknown.returncode == 2 and unknown.stdout == ""
+    assert unknown.stderr.startswith("error: unknown kind 'planting_forbar' (known kinds: planting_fourbar, ")
+    assert len(unknown.stderr.strip().splitlines()) == 1
+    runner = CliRunner()
+    existing = tmp_path / "mine.toml"
+    existing.write_text("keep me")
+    refused = runner.invoke(cli, ["spec", "crank_rocker", "--template", "--out", str(existing)])
+    assert refused.exit_code != 0 and "already exists" in str(refused.exception)
+    assert existing.read_text() == "keep me"
+    written = runner.invoke(cli, ["spec", "crank_rocker", "--template", "--out", str(tmp_path / "new.toml")])
+    assert written.exit_code == 0 and load_spec(tmp_path / "new.toml").kind == "crank_rocker"
+
+
+def test_piped_problems_table_never_cuts_a_file_name():
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "problems"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    for path in sorted(specref.LIBRARY.rglob("*.toml")):
+        assert str(path.relative_to(specref.LIBRARY)) in proc.stdout
+    assert "…" not in proc.stdout
