@@ -22,8 +22,6 @@ from synthesis.spec import load_spec
 KNOWN = {
     "guide_way": "its solve moves the spline's control points, which the spec cannot hold (it lists no design "
                  "variables): solved.toml needs a spec field for them",
-    "comb_finger": "its check samples the finger turn on CHECK_TURN_SAMPLES, its re-check on 10 x "
-                   "[solver] turn_samples: the same design gives two rule values",
 }
 
 

@@ -84,8 +84,14 @@ def rules_of(spec: CombFingerSpec, tr: Trace) -> list[Rule]:
     return rules
 
 
-def evaluate(spec: CombFingerSpec, design: dict, turn_samples: int = CHECK_TURN_SAMPLES) -> tuple[list[Rule], Trace]:
-    tr = trace(spec, design, turn_samples)
+def fine_samples(spec: CombFingerSpec) -> int:
+    """The turn grid of check and of the solve's re-check alike (so a solved design's check reproduces the
+    solve's rule table): at least CHECK_TURN_SAMPLES and at least 10x the solver's samples."""
+    return max(CHECK_TURN_SAMPLES, 10 * spec.solver.turn_samples)
+
+
+def evaluate(spec: CombFingerSpec, design: dict, turn_samples: int | None = None) -> tuple[list[Rule], Trace]:
+    tr = trace(spec, design, fine_samples(spec) if turn_samples is None else turn_samples)
     return rules_of(spec, tr), tr
 
 

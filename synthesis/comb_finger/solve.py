@@ -8,7 +8,7 @@ import math
 from synthesis.comb_finger.check import evaluate, facts
 from synthesis.comb_finger.nlp import CombFingerNLP
 from synthesis.core.kind import Finished, Setting, Solving
-from synthesis.core.verdict import FINE, Recheck, StartReport
+from synthesis.core.verdict import Recheck, StartReport
 
 
 def build(setting: Setting, elastic: bool = False) -> CombFingerNLP:
@@ -18,7 +18,7 @@ def build(setting: Setting, elastic: bool = False) -> CombFingerNLP:
 def recheck(setting: Setting, outcome) -> Recheck:
     """The rules of a returned design on floats, the finger's turn sampled 10x finer; theta measured anew."""
     spec = setting.spec
-    rules, tr = evaluate(spec, dict(outcome.design), FINE * spec.solver.turn_samples)
+    rules, tr = evaluate(spec, dict(outcome.design))          # check's grid: >= 10x the solver's
     return Recheck(rules, tr, lambda report, tr=tr: math.degrees(tr.theta))
 
 
