@@ -30,14 +30,19 @@ def pressure_angle_rule(segment: str, alpha_deg, limit_deg: float) -> Rule:
 
 
 def undercut_rule(kappa, roller_radius, min_working_radius: float, flank: str = "inner") -> Rule:
-    """No cusp on the roller envelope: radius of curvature of the pitch curve >= roller + margin.
+    """The working profile's smallest radius of curvature >= ``min_working_radius``: what a cutter (or grinding
+    wheel) can make and a roller can run on; 0 only forbids the undercut cusp.
 
     inner flank (the working profile of a spring-loaded disc cam): where the pitch curve is convex
-    (kappa > 0); outer flank (groove): where it is concave.  kappa = signed pitch curvature, 1/mm.
+    (kappa > 0), working radius = pitch radius - roller radius; outer flank (groove): where the pitch curve
+    is concave, the outer wall's radius = concave pitch radius - roller radius.  kappa = signed pitch
+    curvature, 1/mm.  The value is the working radius (mm), the limit ``min_working_radius``.
     """
     name = "no_undercut" if flank == "inner" else "no_undercut_outer"
     sign = 1.0 if flank == "inner" else -1.0
-    where = ("convex pitch curve over the turn" if flank == "inner" else "concave pitch curve over the turn")
+    where = ("convex working profile: radius of curvature (pitch radius - roller radius)" if flank == "inner"
+             else "outer groove wall: radius of curvature (concave pitch radius - roller radius)")
+    where += f", at least {float(min_working_radius):g} mm (rules.min_working_radius: the smallest a cutter makes)"
     need = roller_radius + min_working_radius
     if _symbolic(kappa) or _symbolic(roller_radius):
         # (r + m) kappa <= 1  <=>  rho >= r + m where the flank bends round the roller; always true elsewhere
@@ -48,8 +53,9 @@ def undercut_rule(kappa, roller_radius, min_working_radius: float, flank: str = 
     if np.any(radius < roller_radius):
         note = (f"undercut: the pitch curve bends tighter ({radius.min():.4g} mm) than the roller "
                 f"({float(roller_radius):g} mm); the envelope has a cusp and the cam cannot reproduce the motion")
-    rule = Rule(name, radius, float(need), None, "mm", 1.0, where)
-    return rule if note is None else Rule(name, radius, float(need), None, "mm", 1.0, f"{where}; {note}")
+    working = radius - float(roller_radius)
+    rule = Rule(name, working, float(min_working_radius), None, "mm", 1.0, where)
+    return rule if note is None else Rule(name, working, float(min_working_radius), None, "mm", 1.0, f"{where}; {note}")
 
 
 def timing_rule(kind: str, index: int, window_deg: tuple[float, float], dwell_start, dwell_end) -> Rule:

@@ -202,13 +202,30 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
     return out
 
 
-def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[dict] | None = None) -> Path:
+def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[dict] | None = None, *,
+                force: bool = False, run_folder=None) -> Path:
     """OUT/bench/: bench.json, bench.md, error_vs_time.png and one samples_<problem>.png per swept problem,
-    each written to a temporary file and renamed (bench.json last)."""
+    written into a staging folder (with the ``.agrisynth-run`` marker) moved into place at the end, as
+    check and solve do: an earlier bench there is replaced only with ``force``, anything else is never
+    replaced (OutputError, exit 2).  ``run_folder``: that folder opened already (the CLI opens it first)."""
+    from synthesis.errors import OutputError
+    from synthesis.result import open_run_folder
+
+    run_folder = open_run_folder(out, "bench", force=force) if run_folder is None else run_folder
+    try:
+        _write_bench_files(run_folder.staging, results, settings, extreme)
+        run_folder.commit()
+    except OutputError:
+        raise
+    except BaseException:
+        run_folder.discard()
+        raise
+    return run_folder.final
+
+
+def _write_bench_files(folder: Path, results: list[dict], settings: dict, extreme: list[dict] | None) -> None:
     from synthesis.result import atomic_write_text, versions
 
-    folder = out / "bench"
-    folder.mkdir(parents=True, exist_ok=True)
     rows = [row for res in results for row in res["rows"]]
     data = {"settings": settings, "versions": versions(), "machine": machine(), "problems": [
         {k: v for k, v in res.items() if k != "rows"} for res in results], "rows": rows,
@@ -230,7 +247,6 @@ def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[di
     data = _json_safe(data)
     atomic_write_text(folder / "bench.md", markdown(data))
     atomic_write_text(folder / "bench.json", json.dumps(data, indent=1) + "\n")
-    return folder
 
 
 def machine() -> dict:
@@ -274,7 +290,11 @@ def summary(results: list[dict]) -> list[dict]:
         if fd is not None:
             line |= {"fd_median_s": fd["median_s"], "fd_median_iterations": fd["details"]["median_iterations"],
                      "fd_successes": f"{fd['details']['successes']}/{fd['details']['starts']}",
-                     "fd_objective_gap": fd["objective_gap"], "fd_ratio": fd["time_ratio_text"]}
+                     "fd_objective_gap": fd["objective_gap"], "fd_ratio": fd["time_ratio_text"],
+                     # the solver's own time, build left out (an exact Hessian costs build time FD does not pay)
+                     "fd_ipopt_ratio": (f"{fd['details']['ipopt_s'] / ad['details']['ipopt_s']:.1f}x"
+                                        if fd["time_ratio_text"].endswith("x") and ad["details"]["ipopt_s"] > 0
+                                        else None)}
         for peer in ("slsqp", "differential_evolution"):
             row = _row(res, peer)
             if row is not None:
@@ -324,7 +344,7 @@ def markdown(data: dict) -> str:
         ("kind", "kind"), ("problem", "problem"), ("reach", "samples at violation <= 1e-6"), ("reach_s", "its median s"),
         ("ad_median_s", "AD median s"), ("ad_median_iterations", "AD iterations"), ("ad_successes", "AD success"),
         ("fd_median_s", "FD median s"), ("fd_median_iterations", "FD iterations"), ("fd_successes", "FD success"),
-        ("fd_ratio", "FD / AD time"), ("slsqp_ratio", "SLSQP / AD time"),
+        ("fd_ratio", "FD / AD time"), ("fd_ipopt_ratio", "FD / AD IPOPT time"), ("slsqp_ratio", "SLSQP / AD time"),
         ("differential_evolution_ratio", "DE / AD time"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
         ("recheck_s", "re-check s")]))
     rows = [r | {"iters": (r.get("details") or {}).get("median_iterations"),

@@ -333,6 +333,16 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     interrupt.install()
     loaded = load_spec(spec)
     kind = kinds.solving_kind(loaded.kind)
+    if scheduler is not None:       # a peer that is no dask scheduler: exit 2 now, within the connect timeout
+        try:
+            from synthesis.core.cluster import probe_scheduler
+        except ImportError:
+            raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
+        probe_scheduler(scheduler)
+    if loaded.model.tolerance is not None:        # [tolerance]: every rule at its linearised worst case (issue 20)
+        from synthesis.tolerance.robust import robust_kind
+
+        kind = robust_kind(kind, loaded.model)
     workers = min(workers or default_workers(), MAX_WORKERS)
     if resume is not None:
         if not is_run_folder(resume):
@@ -379,16 +389,16 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         log_file.close()
         if verbose:
             console.print(log, markup=False)
+        baseline = core.baseline_rules(kind, loaded)
         with interrupt.deferred():
             artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log),
-                                               **_solved_spec(loaded, result)})
+                                               **_solved_spec(loaded, result)}, given_rules=baseline)
             folder, replaced = write_run(out, result, artifacts, folder=run_folder)
             committed = True
     except BaseException as exc:
         if not committed and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
-    baseline = core.baseline_rules(kind, loaded)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
     _print_design(result)
     s = result.solver
@@ -411,6 +421,57 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         console.print(f"[bold red]{len(bad)} rule(s) violated:[/] {', '.join(escape(r['name']) for r in bad)}")
         sys.exit(1)
     console.print("[green]every rule satisfied on the fine grid[/]")
+
+
+@cli.command("tolerance")
+@click.argument("target", metavar="RESULT|SPEC", type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+              help="writes OUT/<name>-tolerance/")
+@click.option("--length", type=click.FloatRange(min=0), default=None, help="half-width for every length, mm")
+@click.option("--angle", type=click.FloatRange(min=0), default=None, help="half-width for every angle, deg")
+@click.option("--samples", type=click.IntRange(min=0, max=1_000_000), default=None,
+              help="Monte-Carlo samples (default the spec's [tolerance] samples, else 1000)")
+@click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None, help="Monte-Carlo seed (default 0)")
+@click.option("--force", is_flag=True, help=FORCE_HELP)
+def tolerance(target: Path, out: Path, length: float | None, angle: float | None, samples: int | None,
+              seed: int | None, force: bool) -> None:
+    """Exact sensitivities, linear tolerance stack-up and a seeded Monte-Carlo of a design.
+
+    RESULT: a run folder (its solved.toml is the design); SPEC: the spec's given design.  Tolerances
+    from --length/--angle, else the spec's [tolerance] table.  Writes OUT/<name>-tolerance/.
+    Exit 0 when every Monte-Carlo sample passes every rule, 1 otherwise.
+    """
+    from synthesis import kinds
+    from synthesis.errors import SpecError
+    from synthesis.result import write_folder
+    from synthesis.spec import load_spec
+    from synthesis.tolerance.analysis import analyse
+    from synthesis.tolerance.output import artifacts, table
+
+    if target.is_dir():
+        if not (target / "solved.toml").is_file():
+            raise SpecError(f"{target}: no solved.toml in this folder (give a solve's run folder or a spec file)")
+        target = target / "solved.toml"
+    loaded = load_spec(target)
+    kind = kinds.solving_kind(loaded.kind)
+    spec = loaded.model
+    tol = spec.tolerance
+    length = length if length is not None else (tol.length if tol else None)
+    angle = angle if angle is not None else (tol.angle if tol else None)
+    per_variable = dict(tol.variables) if tol else {}
+    if not (length or angle or any(per_variable.values())) and samples != 0:
+        raise SpecError("tolerance: give --length and/or --angle (or a [tolerance] table in the spec)")
+    samples = samples if samples is not None else (tol.samples if tol else 1000)
+    seed = seed if seed is not None else (tol.seed if tol else 0)
+    design = kinds.checker(loaded.kind)(loaded).design
+    facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
+                    seed=seed)
+    name = spec.name.removesuffix("_solved")
+    folder, _ = write_folder(out / f"{name}-tolerance", artifacts(kind.name, name, loaded.sha256, facts), force=force)
+    console.print(escape(table(facts)))
+    console.print(f"wrote {escape(str(folder))}/")
+    if facts["monte_carlo"]["pass_rate"] != 1.0:
+        sys.exit(1)
 
 
 def _keep_interrupted(exc, run_folder, spec: Path, n: int) -> bool:
@@ -440,8 +501,11 @@ def _keep_interrupted(exc, run_folder, spec: Path, n: int) -> bool:
 @cli.command()
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/compare"),
-              show_default=True, help="folder for compare.html and its figures")
-def compare(results: tuple[Path, ...], out: Path) -> None:
+              show_default=True, help="folder for compare.html and its figures (an agrisynth output folder)")
+@click.option("--force", is_flag=True, help="replace OUT when it holds an earlier agrisynth output (without --force "
+                                            "it is kept and the command exits 2; a folder agrisynth did not write "
+                                            "is never replaced)")
+def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     """Compare RESULT... (run folders or result.json files of one kind) side by side.
 
     \b
@@ -461,41 +525,52 @@ def compare(results: tuple[Path, ...], out: Path) -> None:
       agrisynth solve problems/planting_arm/redesign_from_example1.toml
       agrisynth compare results/taiwan_example1 results/redesign_from_example1
     """
-    from synthesis.compare import is_bench, load_bench, load_candidates, write_comparison
+    from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
 
-    bench = [res for p in results if is_bench(p) for res in load_bench(p)]
-    cands = load_candidates([p for p in results if not is_bench(p)])
-    page = write_comparison(cands, out, bench)
+    folder = open_output_folder(out, force)          # refused (exit 2) before anything is read
+    try:
+        bench = [res for p in results if is_bench(p) for res in load_bench(p)]
+        cands = load_candidates([p for p in results if not is_bench(p)])
+    except BaseException:
+        folder.discard()
+        raise
+    page = write_comparison(cands, out, bench, folder=folder)
     for c in cands:
         bad = c.result.violated()
         verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"
         console.print(f"{escape(c.label)}: {c.result.status}, {verdict}")
-    console.print(f"wrote {page}")
+    console.print(f"wrote {escape(str(page))}")
 
 
 @cli.command()
-@click.argument("problems", nargs=-1, metavar="[KIND | SPEC]...")
+@click.argument("problems", nargs=-1, metavar="[PROBLEM]...")
 @click.option("--problems", "spec_files", multiple=True, type=click.Path(dir_okay=False, path_type=Path),
               metavar="SPEC", help="a spec file to bench (repeatable; instead of its kind's default set)")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
 @click.option("--repeats", type=click.IntRange(min=1), default=None,
               help="runs of each IPOPT method per problem (median wall time) [default: 3; --quick: 1]")
-@click.option("--quick", is_flag=True, help="fewer starts, sample counts and peers, the first problem of each kind")
+@click.option("--quick", is_flag=True, help="2 starts, 2 sample counts, no peers, no extreme matrix, the first "
+                                            "problem of each kind")
 @click.option("--no-extreme", is_flag=True, help="leave out the extreme-case matrix (tests/extreme/)")
+@click.option("--force", is_flag=True, help="replace OUT/bench/ when it holds an earlier agrisynth bench (without "
+                                            "--force it is kept and the command exits 2 before benching; a folder "
+                                            "agrisynth did not write is never replaced)")
 def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, repeats: int | None, quick: bool,
-          no_extreme: bool) -> None:
+          no_extreme: bool, force: bool) -> None:
     """Error against run time for every kind that solves, side by side in one run.
 
     \b
-    KIND: that kind's default bench set (library redesigns); SPEC: a spec file; none: every kind.
+    PROBLEM is a kind name (its default bench set: library redesigns) or a spec file; none: every
+    kind that solves.
     Per problem: IPOPT multistart with exact (CasADi) derivatives against the same NLP with
     finite differences and a limited-memory Hessian, scipy SLSQP and differential_evolution
     (time ratio only where both reach the same target: best known + tolerance, every rule on the
     fine grid); the sample-count sweep (time, iterations, fine-grid violation, objective gap);
     build against solve time; kind studies (planting: seed 000's difference scheme); and the
-    extreme-case matrix of tests/extreme/.  Writes OUT/bench/bench.json, bench.md and plots
-    (`agrisynth compare ... OUT/bench` shows them).
+    extreme-case matrix of tests/extreme/.  Writes OUT/bench/bench.json, bench.md,
+    error_vs_time.png (log-log: objective gap and violation against wall time) and
+    samples_<problem>.png (`agrisynth compare ... OUT/bench` shows them).
     \b
     Examples:
       agrisynth bench --quick
@@ -530,6 +605,10 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
             raise click.BadParameter(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
                                      param_hint="PROBLEM")
     cases = []
+    from synthesis.result import open_run_folder
+
+    run_folder = open_run_folder(out, "bench", force=force)       # refused (exit 2) before any benching
+    click.get_current_context().call_on_close(run_folder.discard)  # the staging folder, if the bench stops
     with benchmod.quick_mode(quick):
         for kind, specs in by_kind.items():
             try:
@@ -539,7 +618,7 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
                     raise
                 err_console.print(f"[yellow]bench: kind {kind} left out: its bench cases could not be made "
                                   f"({type(exc).__name__}: {escape(str(exc))})[/]")
-    extreme_on = not no_extreme and not items
+    extreme_on = not no_extreme and not items and not quick
     total = sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)
     results = []
     extreme = None
@@ -564,9 +643,9 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
             tick(None)
     settings = {"repeats": repeats, "quick": quick, "problems": [c.problem for c in cases],
                 "wall_s": round(time.perf_counter() - t0, 1)}
-    folder = benchmod.write_bench(out, results, settings, extreme)
+    folder = benchmod.write_bench(out, results, settings, extreme, run_folder=run_folder)
     console.print(bench_table(results, repeats))
-    console.print(f"wrote {folder}/bench.json, bench.md and plots ({settings['wall_s']:.0f} s)")
+    console.print(f"wrote {escape(str(folder))}/bench.json, bench.md and plots ({settings['wall_s']:.0f} s)")
 
 
 def bench_table(results: list[dict], repeats: int) -> Table:

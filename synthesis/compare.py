@@ -9,15 +9,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
-from synthesis.errors import ResultError
+from synthesis.errors import OutputError, ResultError
 from synthesis.report import comparison_figures
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
-from synthesis.result import load_result
+from synthesis.result import atomic_write_text, load_result, open_run_folder
 
 
 def is_bench(path: Path) -> bool:
@@ -27,9 +25,13 @@ def is_bench(path: Path) -> bool:
 
 def load_bench(path: Path) -> list[dict]:
     """The per-problem results of a bench.json, shaped as ``synthesis.bench.run_case`` returns them."""
+    from synthesis.files import read_regular
+    from synthesis.result import MAX_RESULT_BYTES, _no_constant
+
     path = path if path.name == "bench.json" else path / "bench.json"
+    raw = read_regular(path, MAX_RESULT_BYTES, "bench.json", ResultError)
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
         rows, problems = data["rows"], data["problems"]
         for row in rows:
             missing = [key for key in BENCH_ROW_KEYS if key not in row]
@@ -38,8 +40,11 @@ def load_bench(path: Path) -> list[dict]:
             row["worst_violation"] = _number(row["worst_violation"])
         return [dict(p, rows=[r for r in rows if r["problem"] == p["problem"]], best_known=_number(p["best_known"]))
                 for p in problems]
-    except (OSError, json.JSONDecodeError, KeyError, TypeError, AttributeError) as exc:
-        raise ResultError(f"{path}: not a readable agrisynth bench.json ({type(exc).__name__}: {exc})") from None
+    except RecursionError:
+        raise ResultError(f"{path}: nested too deeply; not a bench.json agrisynth wrote") from None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ResultError(f"{path}: not a readable agrisynth bench.json ({type(exc).__name__}: "
+                          f"{str(exc)[:120]})") from None
 
 
 #: what the error-against-run-time plot and table read from each bench row
@@ -70,10 +75,15 @@ def load_candidates(paths: list[Path]) -> list[Candidate]:
     return candidates(results, files)
 
 
-def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None = None) -> Path:
-    """Write ``out/compare.html`` and its figures; every file lands by rename, the page last."""
-    out.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".compare.", dir=out))
+def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None = None, *, force: bool = False,
+                     folder=None) -> Path:
+    """Write the folder ``out`` (compare.html and its figures) as a run folder (``.agrisynth-run``
+    marker): through a staging folder moved into place at the end.  An earlier agrisynth output there
+    is replaced only with ``force``; anything else there is never replaced (OutputError, exit 2).
+    ``folder``: the :class:`~synthesis.result.RunFolder` already opened for ``out`` (the CLI opens it
+    before reading anything, so a refusal comes before any work)."""
+    folder = open_output_folder(out, force) if folder is None else folder
+    staging = folder.staging
     try:
         figures, notes = comparison_figures(cands, staging)
         if bench:
@@ -86,10 +96,23 @@ def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None
             except Exception as exc:    # noqa: BLE001 - the table still shows the bench; say why the plot is missing
                 notes.append(f"error_vs_time.png not drawn: {type(exc).__name__}: {exc}")
         title = "compare: " + " vs ".join(c.label for c in cands)
-        (staging / "compare.html").write_text(render(cands, figures, notes, title, bench))
-        for f, _ in figures:
-            os.replace(staging / f, out / f)
-        os.replace(staging / "compare.html", out / "compare.html")
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return out / "compare.html"
+        atomic_write_text(staging / "compare.html", render(cands, figures, notes, title, bench))
+        folder.commit()
+    except OutputError:
+        raise
+    except BaseException:
+        folder.discard()
+        raise
+    return Path(out) / "compare.html"
+
+
+def open_output_folder(out: Path, force: bool = False):
+    """The run folder of an output written to ``out`` itself (compare, bench): :func:`open_run_folder` of
+    its parent and name (OutputError, exit 2, when something that must be kept is there)."""
+    from synthesis.result import RUN_NAME
+
+    full = Path(os.path.abspath(out))
+    if not RUN_NAME.match(full.name):
+        raise OutputError(f"--out {out}: the output folder's name must be letters, digits and _ . - only "
+                          f"(at most 100 characters, starting with a letter or digit)")
+    return open_run_folder(full.parent, full.name, force=force)

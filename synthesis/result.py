@@ -104,6 +104,18 @@ def _no_constant(name: str):
     raise ValueError(f"{name} is not a JSON number (JSON has no NaN or infinity)")
 
 
+def _finite_float(text: str) -> float:
+    """A JSON number as a float; one too large for a float (1e400 would read as infinity) is refused."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text[:40]} is too large a number (no float holds it)")
+    return value
+
+
+#: longest name (the result's, a rule's) or string design value a result may hold (a run name is <= 100)
+MAX_NAME = 200
+
+
 def load_result(path: str | Path) -> Result:
     """Read a run folder's result.json (or the file itself); ResultError (exit 2) says what is wrong."""
     from synthesis.files import read_regular
@@ -117,7 +129,7 @@ def load_result(path: str | Path) -> Result:
     except UnicodeDecodeError as exc:
         raise ResultError(f"{path}: not a UTF-8 text file (byte {exc.start}); not a result.json agrisynth wrote") from None
     try:
-        data = json.loads(text, parse_constant=_no_constant)
+        data = json.loads(text, parse_constant=_no_constant, parse_float=_finite_float)
     except json.JSONDecodeError as exc:
         # a cut-off write leaves an object that never closes; anything else is plain bad JSON
         what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
@@ -126,7 +138,8 @@ def load_result(path: str | Path) -> Result:
     except RecursionError:
         raise ResultError(f"{path}: nested too deeply; not a result.json agrisynth wrote") from None
     except ValueError as exc:       # NaN / Infinity, or an integer of thousands of digits
-        raise ResultError(f"{path}: {str(exc)[:120]}; not a result.json agrisynth wrote") from None
+        what = "a number of thousands of digits" if "integer string conversion" in str(exc) else str(exc)[:120]
+        raise ResultError(f"{path}: {what}; not a result.json agrisynth wrote") from None
     if not isinstance(data, dict):
         raise ResultError(f"{path}: expected a JSON object, got {type(data).__name__}")
     version = data.get("schema_version", 1)     # results written before the key existed are version 1
@@ -154,6 +167,8 @@ def _shape_problem(data: dict) -> str | None:
             return f"{key} must be a string, got {type(data[key]).__name__}"
     if data["status"] not in STATUSES:
         return f"status {data['status']!r} is not one of {', '.join(STATUSES)}"
+    if len(data["name"]) > MAX_NAME:
+        return f"name is {len(data['name'])} characters long (at most {MAX_NAME})"
     for key in ("design", "versions", "objective", "solver", "trajectory", "facts", "elastic", "baseline_design",
                 "design_variables"):
         if key in data and data[key] is not None and not isinstance(data[key], dict):
@@ -162,6 +177,19 @@ def _shape_problem(data: dict) -> str | None:
         return "versions must be an object, got null"
     if "starts" in data and not isinstance(data["starts"], (list, type(None))):
         return f"starts must be a list, got {type(data['starts']).__name__}"
+    objective = data.get("objective")
+    if isinstance(objective, dict):
+        value = objective.get("value")
+        if value is not None and not _number(value):
+            return "objective value must be a number or null"
+        if not all(isinstance(objective.get(k), (str, type(None))) for k in ("name", "unit")):
+            return "objective name and unit must be strings"
+    for name, value in (data.get("design") or {}).items():
+        if isinstance(value, dict) or (isinstance(value, str) and len(value) > MAX_NAME):
+            return f"design[{name[:60]!r}] must be a number, a short string or a list"
+    for name, info in (data.get("design_variables") or {}).items():
+        if not isinstance(info, dict):
+            return f"design_variables[{name[:60]!r}] must be an object"
     if not isinstance(data["rules"], list):
         return f"rules must be a list, got {type(data['rules']).__name__}"
     for i, rule in enumerate(data["rules"]):
@@ -169,15 +197,22 @@ def _shape_problem(data: dict) -> str | None:
             return f"rules[{i}] must be an object"
         if not isinstance(rule.get("name"), str) or not isinstance(rule.get("satisfied"), bool):
             return f"rules[{i}] needs a string name and a true/false satisfied"
-        for key in ("value", "margin"):
+        if len(rule["name"]) > MAX_NAME:
+            return f"rules[{i}]: name is {len(rule['name'])} characters long (at most {MAX_NAME})"
+        for key in ("value", "margin", "normalised_margin"):
             v = rule.get(key)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+            if v is not None and not _number(v):
                 return f"rules[{i}] ({rule['name'][:60]}): {key} must be a number or null"
+        if not isinstance(rule.get("unit"), (str, type(None))):
+            return f"rules[{i}] ({rule['name'][:60]}): unit must be a string"
         limit = rule.get("limit")
-        if not (isinstance(limit, list) and len(limit) == 2
-                and all(v is None or isinstance(v, (int, float)) for v in limit)):
-            return f"rules[{i}] ({rule['name']}): limit must be [lower, upper] with numbers or null"
+        if not (isinstance(limit, list) and len(limit) == 2 and all(v is None or _number(v) for v in limit)):
+            return f"rules[{i}] ({rule['name'][:60]}): limit must be [lower, upper] with numbers or null"
     return None
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 #: the file that proves a folder is an agrisynth run (written first, into every run folder)

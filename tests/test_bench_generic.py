@@ -87,12 +87,11 @@ def test_quick_case_runs_every_study_and_writes_the_summary():
 
     loaded = load_spec(STEERING)
     case = case_for(loaded, QUICK)
-    case.methods.pop("slsqp")                    # the peer is tested above; keep this test short
     res = run_case(case, 1)
     assert [r["method"] for r in res["rows"]] == ["ipopt_multistart", "ipopt_finite_differences"]
     assert res["best_known"] == pytest.approx(BEST, abs=1e-5)
     sweep = res["sweep"]
-    assert [r["samples"]["samples"] for r in sweep["rows"]] == [20, 40, 80]
+    assert [r["samples"]["samples"] for r in sweep["rows"]] == [20, 40]
     assert all(r["worst_violation"] == 0 for r in sweep["rows"])
     assert sweep["reaching"]["samples"] == {"samples": 20}
     line = summary([res])[0]

@@ -55,8 +55,9 @@ def test_check_writes_result_plots_and_workshop_files(tmp_path):
         assert (folder / name).stat().st_size > 20_000
     html = (folder / "report.html").read_text()
     assert "<img src='motion.png'" in html and "<a href='profile.dxf'>" in html
-    # CSV: header, closed (last row = first), the working profile of result.json
-    rows = np.loadtxt(folder / "profile.csv", delimiter=",", skiprows=1)
+    # CSV: header, closed (last row = first but for the cam angle 360), the working profile of result.json
+    # (the other columns: tests/test_exports.py)
+    rows = np.genfromtxt(folder / "profile.csv", delimiter=",", skip_header=1)[:, 2:4]
     assert rows.shape == (3601, 2) and np.array_equal(rows[0], rows[-1])
     assert rows[:-1] == pytest.approx(np.column_stack([data["facts"]["profile"]["working"]["x"],
                                                        data["facts"]["profile"]["working"]["y"]]), abs=1e-6)

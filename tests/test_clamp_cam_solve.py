@@ -52,12 +52,22 @@ def independent_recheck(loaded: LoadedSpec, design: dict) -> list:
     return [r.record() for r in rules]
 
 
+def without_cutter_floor(loaded: LoadedSpec) -> LoadedSpec:
+    """The spec with rules.min_working_radius = 0 (only the undercut cusp forbidden): the cam the pressure
+    angles alone size, which root finding in r0 reproduces."""
+    spec = loaded.model
+    rules = spec.rules.model_copy(update={"min_working_radius": 0.0})
+    return LoadedSpec(spec.model_copy(update={"rules": rules}), loaded.path, loaded.sha256)
+
+
 @pytest.fixture(scope="module")
 def solved():
     out = {}
     for name in ("opening_cam_redesign", "rotating_cam_redesign", "opening_cam_redesign_return"):
         loaded = load_spec(CAMS / f"{name}.toml")
         out[name] = (loaded, *run_solve(loaded, workers=1)[:2])
+    loaded = without_cutter_floor(load_spec(CAMS / "opening_cam_redesign.toml"))
+    out["opening_cam_redesign_no_cutter_floor"] = (loaded, *run_solve(loaded, workers=1)[:2])
     return out
 
 
@@ -89,7 +99,7 @@ def test_redesigns_hold_every_rule_rechecked_independently(solved, name):
         "pressure_angle_rise" in [r.name for r in base if not r.satisfied]
 
 
-@pytest.mark.parametrize("name, stroke, rise, ret", [("opening_cam_redesign", 10.0, 40.0, 14.0),
+@pytest.mark.parametrize("name, stroke, rise, ret", [("opening_cam_redesign_no_cutter_floor", 10.0, 40.0, 14.0),
                                                      ("rotating_cam_redesign", 25.0, 60.0, 60.0)])
 def test_smallest_cam_agrees_with_root_finding(solved, name, stroke, rise, ret):
     """The NLP samples each segment 100 times and tightens the limits by 0.05 deg; the true peaks lie
@@ -108,7 +118,9 @@ def test_smallest_cam_agrees_with_root_finding(solved, name, stroke, rise, ret):
 
 def test_pinned_redesign_values(solved):
     """What the optimiser proposes (closing note of issue 7)."""
-    d = solved["opening_cam_redesign"][1].design
+    d = solved["opening_cam_redesign"][1].design       # the 3 mm working radius and the return's 45 deg bind
+    assert (d["base_radius"], d["offset"]) == pytest.approx((71.076, -6.305), abs=2e-3)
+    d = solved["opening_cam_redesign_no_cutter_floor"][1].design    # the pressure angles alone (rise, return)
     assert (d["base_radius"], d["offset"]) == pytest.approx((66.378, -11.763), abs=2e-3)
     d = solved["rotating_cam_redesign"][1].design
     assert (d["base_radius"], d["offset"]) == pytest.approx((50.837, 12.593), abs=2e-3)
@@ -178,7 +190,8 @@ def test_peak_pressure_angle_objective_balances_rise_and_return():
     loaded = load_spec(CAMS / "opening_cam_redesign.toml")
     minimax = _with(loaded, cam={"base_radius": 70.0}, follower={"offset": FreeVariable(init=0.0, bounds=(-40, 40))},
                     objective={"name": "pressure_angle"},
-                    rules={"pressure_angle_rise": 89.0, "pressure_angle_return": 89.0})
+                    rules={"pressure_angle_rise": 89.0, "pressure_angle_return": 89.0,
+                           "min_working_radius": 0.0})      # the angles alone (the 3 mm floor would hold e)
     result, _, _ = run_solve(minimax, starts=1, workers=1)
     assert result.status == "optimal"
     e = result.design["offset"]
@@ -232,8 +245,9 @@ def test_every_library_cam_checks_and_its_free_variables_solve(path):
 def test_modified_sine_gives_the_smallest_opening_cam():
     result, _, _ = run_solve(load_spec(CAMS / "opening_cam_redesign_modified_sine.toml"), workers=1)
     d = result.design
-    assert (d["base_radius"], d["offset"]) == pytest.approx((57.873, -10.335), abs=2e-3)
-    assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 15.0
+    assert (d["base_radius"], d["offset"]) == pytest.approx((68.569, 1.259), abs=2e-3)   # 3 mm working radius binds
+    assert d["base_radius"] < 71.07                     # still smaller than the cycloidal redesign
+    assert smallest_base_radius(0.0, 10.0, 40.0, 14.0, tighten=0.0) > d["base_radius"] + 8.0
 
 
 def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
@@ -278,3 +292,23 @@ def test_an_inaccurately_solved_law_is_flagged_in_the_result_and_the_rules():
         if flagged:
             assert "optimal_inaccurate" in extra["warnings"][0]
             assert "pressure_angle_return" in records
+
+
+def test_the_cutter_floor_sizes_the_opening_cam(solved):
+    """rules.min_working_radius (default 3 mm): the published cam's 0.77 mm working radius fails it, the
+    redesign's smallest working radius sits on it (up to the NLP's 1 % back-off), re-checked at 100x, and it
+    costs 4.7 mm of base radius over the cam the pressure angles alone allow (working radius 2.04 mm)."""
+    from synthesis.clamp_cam.check import run_check
+
+    published = {r["name"]: r for r in run_check(load_spec(CAMS / "opening_cam.toml")).rules}["no_undercut"]
+    assert not published["satisfied"] and published["value"] == pytest.approx(0.77187, abs=1e-4)
+    assert published["limit"] == [3.0, None] and "cutter" in published["where"]
+    loaded, result, _ = solved["opening_cam_redesign"]
+    assert loaded.model.rules.min_working_radius == 3.0
+    working = result.extra["cam"]["min_working_radius_mm"]
+    assert 3.0 <= working <= 3.0 + 0.01 * 6.5 + 1e-6
+    rechecked = {r.name: r for r in independent_recheck(loaded, result.design)}["no_undercut"]
+    assert rechecked.satisfied and rechecked.value == pytest.approx(working, abs=1e-3)
+    free = solved["opening_cam_redesign_no_cutter_floor"][1]
+    assert free.extra["cam"]["min_working_radius_mm"] == pytest.approx(2.04, abs=0.01)
+    assert result.design["base_radius"] - free.design["base_radius"] == pytest.approx(4.70, abs=0.01)

@@ -73,3 +73,91 @@ def test_a_failing_worker_is_reported_not_a_traceback(cluster):
 
     with pytest.raises(AgrisynthError, match="a dask worker failed: .*No module named 'casadi'"):
         run_starts(_BrokenFactory(), np.zeros((2, 1)), 1, scheduler=cluster.scheduler_address)
+
+
+class _Peer:
+    """A local TCP server on a free port: ``greeting`` bytes sent on accept (None: it stays silent), then
+    the connection is held open, or closed with ``hang_up``."""
+
+    def __init__(self, greeting: bytes | None, hang_up: bool = False):
+        import socket
+        import threading
+
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(4)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.greeting, self.hang_up, self.held = greeting, hang_up, []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            if self.greeting is not None:
+                conn.sendall(self.greeting)
+            if self.hang_up:
+                conn.close()
+            else:
+                self.held.append(conn)          # kept open: a silent peer never closes
+
+    def close(self) -> None:
+        for c in self.held:
+            c.close()
+        self.sock.close()
+
+
+HTTP = b"HTTP/1.1 400 Bad Request\r\nContent-Type: text/plain\r\nContent-Length: 11\r\n\r\nBad Request"
+
+
+@pytest.mark.parametrize("greeting, hang_up, complaint", [
+    (HTTP, False, "does not speak the dask protocol (it speaks HTTP"),
+    (None, False, "sent nothing within 0.5 s"),
+    (b"SSH-2", True, "closed the connection without a dask handshake"),
+])
+def test_a_peer_that_is_no_dask_scheduler_is_refused_within_the_timeout(greeting, hang_up, complaint):
+    """issue 22: a peer answering HTTP made dask allocate 3 EiB; a silent one hung for minutes."""
+    import time
+
+    from synthesis.core.cluster import probe_scheduler
+    from synthesis.errors import AgrisynthError
+
+    peer = _Peer(greeting, hang_up)
+    t0 = time.perf_counter()
+    try:
+        with pytest.raises(AgrisynthError) as err:
+            probe_scheduler(peer.address, timeout=0.5)
+    finally:
+        peer.close()
+    assert time.perf_counter() - t0 < 2.0
+    assert err.value.exit_code == 2 and complaint in str(err.value) and "\n" not in str(err.value)
+
+
+def test_other_schemes_are_refused_and_a_real_scheduler_passes_the_probe():
+    from synthesis.core.cluster import probe_scheduler
+    from synthesis.errors import AgrisynthError
+
+    for address in ("tls://127.0.0.1:8786", "ucx://127.0.0.1:8786"):
+        with pytest.raises(AgrisynthError, match="only tcp://host:port addresses are supported"):
+            probe_scheduler(address, timeout=0.5)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0", protocol="tcp") as c:
+        probe_scheduler(c.scheduler_address, timeout=5)
+
+
+def test_solve_with_an_http_peer_as_scheduler_exits_2_in_one_line(tmp_path):
+    from synthesis.core import interrupt
+    from test_run_folders import cli_in_process
+
+    peer = _Peer(HTTP)
+    try:
+        code, err = cli_in_process("solve", str(PLANTING / "redesign_from_example1.toml"), "--out", str(tmp_path),
+                                   "--scheduler", peer.address)
+    finally:
+        peer.close()
+        interrupt.uninstall()
+    assert code == 2, err
+    assert "does not speak the dask protocol" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []          # refused before any output folder was made

@@ -172,3 +172,23 @@ def test_spec_files_are_data_no_code_runs_from_them():
             if FORBIDDEN.search(code) and not (path.name == "kind.py" and "importlib.import_module(module)" in code):
                 hits.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
     assert hits == []
+
+
+def test_a_spec_with_many_bad_fields_gets_a_few_lines_naming_the_first(tmp_path):
+    """One line per problem, the first naming the first bad field, at most 5 lines ("... and N more")."""
+    from synthesis.spec.common import MAX_PROBLEM_LINES
+
+    base = tomllib.loads((LIBRARY / "planting_arm" / "taiwan_example1.toml").read_text())
+    base["arm"] = {k: f"{v} mm" if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+                   for k, v in base["arm"].items()}
+    for i in range(30):
+        base[f"extra{i}"] = 1
+    path = tmp_path / "many.toml"
+    path.write_text(toml_document(base))
+    with pytest.raises(AgrisynthError) as err:
+        load_spec(path)
+    lines = str(err.value).splitlines()
+    assert len(lines) == MAX_PROBLEM_LINES and err.value.exit_code == 2
+    assert "planting_fourbar.arm.l1: expected a number in mm, written without a unit, got '75 mm'" in lines[0]
+    assert re.fullmatch(r"\.\.\. and \d+ more problem\(s\) in the spec \(fix these first\)", lines[-1])
+    assert not any("expected a table" in ln for ln in lines)     # the number|table union says it once

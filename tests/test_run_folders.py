@@ -97,3 +97,68 @@ def test_two_processes_racing_into_one_folder_leave_one_whole_run(tmp_path):
     token = json.loads((run / "result.json").read_text())["token"]
     assert (run / "report.html").read_text() == token and token in ("a149", "b149")
     assert sorted(p.name for p in run.iterdir()) == sorted([RUN_MARKER, "result.json", "report.html"])
+
+
+def test_compare_output_follows_the_run_folder_rules(tmp_path):
+    """`compare --out DIR` writes DIR as an agrisynth output (marker): a second compare there needs --force,
+    a folder agrisynth did not write is never touched (issue 22: compare wrote into any folder)."""
+    from synthesis import kinds
+    from synthesis.compare import load_candidates, open_output_folder, write_comparison
+    from synthesis.result import result_text
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(PLANTING.parent / "comb_finger" / "peanut_baseline.toml")     # a page without figures: fast
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "result.json").write_text(result_text(kinds.checker(loaded.kind)(loaded)))
+    cands = load_candidates([run])
+    page = write_comparison(cands, tmp_path / "cmp")
+    assert page.is_file() and is_run_folder(tmp_path / "cmp")
+    with pytest.raises(OutputError, match="holds an earlier agrisynth run; give --force"):
+        write_comparison(cands, tmp_path / "cmp")
+    page.write_text("old")
+    write_comparison(cands, tmp_path / "cmp", force=True)
+    assert page.read_text() != "old" and sorted(p.name for p in tmp_path.iterdir()) == ["cmp", "run"]
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    for force in (False, True):
+        with pytest.raises(OutputError, match="a folder agrisynth did not write"):
+            open_output_folder(mine, force)
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
+
+
+def cli_in_process(*args: str) -> tuple[int, str]:
+    """``agrisynth ARGS`` in this process (no interpreter start-up): exit code and stderr."""
+    import contextlib
+    import io
+
+    from synthesis import cli
+
+    err = io.StringIO()
+    old_argv, sys.argv = sys.argv, ["agrisynth", *args]
+    old_file = cli.err_console.file
+    cli.err_console.file = err
+    try:
+        with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as done:
+            cli.main()
+    finally:
+        sys.argv, cli.err_console.file = old_argv, old_file
+    return done.value.code, err.getvalue()
+
+
+def test_bench_output_follows_the_run_folder_rules(tmp_path):
+    from synthesis.bench import write_bench
+
+    folder = write_bench(tmp_path, [], {"repeats": 1})
+    assert folder == tmp_path / "bench" and is_run_folder(folder) and (folder / "bench.json").is_file()
+    with pytest.raises(OutputError, match="holds an earlier agrisynth run; give --force"):
+        write_bench(tmp_path, [], {"repeats": 2})
+    write_bench(tmp_path, [], {"repeats": 2}, force=True)
+    assert json.loads((folder / "bench.json").read_text())["settings"] == {"repeats": 2}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bench"]
+    mine = tmp_path / "other"
+    (mine / "bench").mkdir(parents=True)
+    code, err = cli_in_process("bench", "guide_tube", "--out", str(mine), "--force")
+    assert code == 2 and "a folder agrisynth did not write" in err, err
+    assert [p.name for p in mine.iterdir()] == ["bench"] and list((mine / "bench").iterdir()) == []

@@ -47,8 +47,11 @@ def test_value_messages(tmp_path, old, new, expected):
 
 def test_unknown_top_level_key_suggests_nothing_unrelated(tmp_path):
     text = message(tmp_path, "source = ", 'description = "my arm"\nsource = ')
-    assert text == ("description: unknown field; allowed: name, source, kind, arm, seedbed, operation, soil, rules, "
-                    "objective, solver (a note about the spec goes in source = \"...\" or a # comment)")
+    assert text.startswith("description: unknown field; allowed: name, source, ")
+    assert "did you mean" not in text
+    assert text.endswith("(a note about the spec goes in source = \"...\" or a # comment)")
+    for section in ("kind", "arm", "seedbed", "operation", "soil", "rules", "objective", "solver"):
+        assert section in text
 
 
 @pytest.mark.parametrize("typo, meant", [("seedbd", "seedbed"), ("operations", "operation")])

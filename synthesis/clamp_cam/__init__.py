@@ -9,6 +9,7 @@ KIND = Kind(
     check="synthesis.clamp_cam.check:run_check",
     figures={"motion.png": "synthesis.clamp_cam.plots:motion_figure",
              "profile.png": "synthesis.clamp_cam.plots:profile_figure",
+             "profile.svg": "synthesis.clamp_cam.plots:profile_figure",
              "profile.csv": "synthesis.clamp_cam.export:write_csv",
              "profile.dxf": "synthesis.clamp_cam.export:write_dxf"},
     compare="synthesis.clamp_cam.plots:compare_figure",

@@ -145,9 +145,19 @@ def profile(scene: CamScene) -> dict:
     mirror = -1.0 if scene.spec.cam.rotation == "clockwise" else 1.0
     px, py = cf.pitch_curve(c, phi)
     wx, wy = cf.envelope(c, phi, scene.roller_radius, side=-1)
+    spec, w = scene.spec, scene.omega
     out = {"cam_angle_deg": phi_deg.tolist(), "rotation": scene.spec.cam.rotation,
+           "crank_deg": np.round((start + phi_deg) % 360.0, 9).tolist(),
            "pitch": {"x": np.round(px, 7).tolist(), "y": np.round(mirror * py, 7).tolist()},
            "working": {"x": np.round(wx, 7).tolist(), "y": np.round(mirror * wy, 7).tolist()},
+           # signed curvature of the pitch curve (1/mm, > 0 convex): radii of curvature of pitch and working
+           # profile follow from it and the roller radius (the CSV export writes them)
+           "pitch_curvature_1_mm": cf.pitch_curvature(c).tolist(),
+           # the follower at each cam angle (stroke unit, per s, per s^2) and the pressure angle
+           "follower": {"unit": stroke_unit(spec), "s": to_report_units(spec, smp.s).tolist(),
+                        "v": (to_report_units(spec, smp.ds) * w).tolist(),
+                        "a": (to_report_units(spec, smp.dds) * w**2).tolist(),
+                        "pressure_angle_deg": np.degrees(cf.pressure_angle(c)).tolist()},
            "roller_radius": scene.roller_radius, "base_radius": scene.design["base_radius"]}
     if scene.spec.rules.groove:
         ox, oy = cf.envelope(c, phi, scene.roller_radius, side=+1)

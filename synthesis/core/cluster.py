@@ -49,6 +49,70 @@ def _worker_failed(scheduler: str, exc: Exception) -> AgrisynthError:
                           f"(do the workers run the same agrisynth and its dependencies?)")
 
 
+#: a dask handshake message is a few hundred bytes; a first frame announcing more is not dask talking
+MAX_HANDSHAKE_BYTES = 1 << 20
+
+
+def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Check within ``timeout`` seconds that a dask scheduler answers at ``address`` (tcp://host:port).
+
+    A dask server speaks first: right after accepting a connection it sends its handshake, a frame whose
+    first 8 bytes are its length (little-endian).  So: connect, read 8 bytes, check the length.  A peer
+    that answers otherwise (an HTTP server, an SSH daemon) or says nothing within the timeout is refused
+    here (AgrisynthError, exit 2) rather than left to dask, which would wait for ever or try to allocate
+    what the peer's bytes announce.  Only plain TCP is spoken (tls:// and ucx:// are refused; an inproc://
+    scheduler lives in this process and needs no probe)."""
+    import socket
+    import struct
+    import time
+
+    scheme, sep, rest = address.partition("://")
+    if scheme == "inproc":          # a scheduler in this very process (tests): nothing to probe
+        return
+    if not sep or scheme != "tcp":
+        raise AgrisynthError(f"--scheduler {address[:80]}: only tcp://host:port addresses are supported")
+    host, _, port_text = rest.rpartition(":")
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise AgrisynthError(f"--scheduler {address[:80]}: no port number (give tcp://host:port)") from None
+    deadline = time.monotonic() + timeout
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout)
+    except socket.timeout:
+        raise AgrisynthError(f"--scheduler {address}: no answer within {timeout:g} s (nothing accepts "
+                             f"connections there, or a firewall drops them)") from None
+    except OSError as exc:
+        raise AgrisynthError(f"--scheduler {address}: cannot reach a dask scheduler there "
+                             f"({exc.strerror or exc})") from None
+    head = b""
+    try:
+        with sock:
+            while len(head) < 8:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise socket.timeout
+                sock.settimeout(left)
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except socket.timeout:
+        raise AgrisynthError(f"--scheduler {address}: the peer accepted the connection but sent nothing "
+                             f"within {timeout:g} s; a dask scheduler greets at once, so this is not one") from None
+    except OSError as exc:
+        raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+    if len(head) < 8:
+        raise AgrisynthError(f"--scheduler {address}: the peer closed the connection without a dask handshake; "
+                             f"not a dask scheduler")
+    (length,) = struct.unpack("<Q", head)
+    if not 8 <= length <= MAX_HANDSHAKE_BYTES:
+        what = " (it speaks HTTP: a web server or the dashboard port?)" if head.startswith(b"HTTP") else ""
+        raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol{what}; "
+                             f"it began with {head!r}")
+
+
 def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
                           on_done: Callable[[Any], None] = lambda outcome: None,
                           indices: list[int] | None = None,
@@ -63,6 +127,7 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
     """
     indices = list(range(len(starts))) if indices is None else list(indices)
     outcomes: dict[int, Any] = {}
+    probe_scheduler(scheduler)
     try:
         client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
     except (OSError, ValueError, TimeoutError) as exc:

@@ -61,6 +61,22 @@ def per_rule_backoff(of: Callable[[Rule], float]) -> Backoff:
     return lambda rule, limit: of(rule) * rule.scale
 
 
+@dataclass(frozen=True)
+class Tolerance:
+    """Hold every rule at its linearised worst case in a tolerance box on the design (robust synthesis).
+
+    ``x[:n_design]`` are the design coordinates z, ``x[n_design:]`` auxiliary variables pinned by the
+    structural equality rows; the design is d = d0 + J z (``design_jacobian`` J, the identity when
+    None); ``box[j]`` is the half-width of design variable j's tolerance (its unit), 0 for none.  Each
+    inequality row g of a rule is held at g -/+ sum_j |dg/dd_j| box_j (implicit-function derivatives,
+    :mod:`synthesis.core.sensitivity`), the absolute values as epigraph rows (:mod:`synthesis.core.transcribe`).
+    """
+
+    n_design: int
+    box: np.ndarray
+    design_jacobian: np.ndarray | None = None
+
+
 @dataclass
 class Problem:
     """min f  s.t.  structural rows, every rule's rows, lbx <= x <= ubx, with parameters p.
@@ -85,6 +101,8 @@ class Problem:
     ipopt: str = "tight"
     ipopt_options: dict = field(default_factory=dict)
     max_iter: int = 500
+    #: robust synthesis: hold the rules at the linearised worst case of this tolerance box (None: nominal)
+    tolerance: Tolerance | None = None
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)

@@ -18,11 +18,12 @@ from typing import Any, Callable
 import numpy as np
 
 from synthesis.core import interrupt
-from synthesis.core.executor import latin_hypercube_starts, run_starts
+from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.kind import Kind, Setting, Solving
 from synthesis.core.verdict import (FINE, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
-                                    diagnosis_of, measured, report_of, status_note, status_of, unsatisfied_error)
+                                    diagnosis_of, failure_of, measured, report_of, status_note, status_of,
+                                    unsatisfied_error)
 from synthesis.errors import AgrisynthError, SolverError, SpecError
 from synthesis.result import Result
 
@@ -81,22 +82,38 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
                 best[:] = [rep]
             on_start(rep, best[0])
 
+    def failed(index: int, status: str, reason: str):
+        """A start that raised or whose worker died: its starting point as its design (starts table)."""
+        out = failed_start(index, status, reason)
+        out.design = {n: float(v) for n, v in zip(nlp.names, x_starts[index])}
+        return out
+
     local = workers <= 1 and scheduler is None
     factory = (lambda: nlp) if local else functools.partial(solving.build, setting, False)
     t0 = time.perf_counter()
     try:
         outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler, finished=finished,
-                              stop_when=None if stop is None else (lambda out: stop(reports[out.start])))
+                              stop_when=None if stop is None else (lambda out: stop(reports[out.start])),
+                              failure=failed)
     except KeyboardInterrupt as exc:
         wall = time.perf_counter() - t0
         kept = [reports[i] for i in sorted(reports)]
-        partial = (Run(kept, best_in_start_order(kept, maximise), starts, setting.seed,
-                       None if scheduler else workers, scheduler, wall) if kept else None)
+        best_kept = best_in_start_order(kept, maximise) if kept else None
+        partial = (Run(kept, best_kept, starts, setting.seed, None if scheduler else workers, scheduler, wall)
+                   if best_kept is not None and failure_of(best_kept.outcome) is None else None)
         raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
     ordered = [reports[o.start] for o in outcomes]       # the starts that count (an early stop: 0..k)
-    return Run(ordered, best_in_start_order(ordered, maximise), starts, setting.seed,
-               None if scheduler else workers, scheduler, wall)
+    best = best_in_start_order(ordered, maximise)
+    if failure_of(best.outcome) is not None:             # ranked last: every start failed to run
+        raise SolverError(f"{kind.name}: no start could be solved: {_failures(ordered)}")
+    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall)
+
+
+def _failures(reports: list[StartReport], shown: int = 3) -> str:
+    """'start 0 Worker_Crashed: its worker ...; start 1 ...' for the first few, and how many more."""
+    text = "; ".join(f"start {r.outcome.start} {r.outcome.return_status} ({r.why})" for r in reports[:shown])
+    return text + (f"; and {len(reports) - shown} more" if len(reports) > shown else "")
 
 
 def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosis:

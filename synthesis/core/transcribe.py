@@ -5,17 +5,113 @@ back-off (equalities kept), plus the objective's rows.  *Elastic*: every relaxab
 slack s_k >= 0 on all its rows, lb - scale*s <= row <= ub + scale*s, and the objective is sum s_k:
 the smallest relaxation, in units of each rule's typical margin; rules whose slack stays positive
 are the ones that conflict.  Rules named hard stay hard (their slack is fixed at 0).
+
+*Robust* (either form, when the problem has a :class:`~synthesis.core.problem.Tolerance`, or one is
+given by :func:`tolerance_box` while it is transcribed): every inequality row g of a rule is held at its
+linearised worst case in the tolerance box, g - sum_j t_j box_j >= lb and g + sum_j t_j box_j <= ub, with
+epigraph variables t_j >= dg/dd_j, t_j >= -dg/dd_j (so t_j >= |dg/dd_j| smoothly).  dg/dd is exact: AD
+partials and, where auxiliaries are pinned by structural equalities, the implicit-function sensitivity
+S = da/dz held by the rows dh/da S + dh/dz = 0 (:mod:`synthesis.core.sensitivity`).  These extra variables
+follow the objective's (or the slacks); :meth:`Transcription.full_extra` gives their start values.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
+from typing import Callable, Iterator, Sequence
 
 import casadi as ca
 import numpy as np
 
-from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, Row
+from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, Row, Tolerance
+from synthesis.core.sensitivity import pinning_rows, total_jacobian
+
+_tolerance_of: ContextVar[Callable[[Problem], Tolerance | None] | None] = ContextVar("agrisynth_tolerance_of",
+                                                                                      default=None)
+
+
+@contextmanager
+def tolerance_box(resolver: Callable[[Problem], Tolerance | None] | None) -> Iterator[None]:
+    """Problems transcribed inside (and without their own ``tolerance``) get ``resolver(problem)``'s box:
+    how a robust solve reaches the NLP a kind builds without the kind knowing of it."""
+    token = _tolerance_of.set(resolver)
+    try:
+        yield
+    finally:
+        _tolerance_of.reset(token)
+
+
+class _Robust:
+    """The robust rows of a problem's rules in a tolerance box, with their extra variables."""
+
+    def __init__(self, problem: Problem, tol: Tolerance):
+        self.problem, self.n = problem, tol.n_design
+        J = np.eye(self.n) if tol.design_jacobian is None else np.asarray(tol.design_jacobian, float)
+        self.J_inv = np.linalg.inv(J)
+        self.box = np.asarray(tol.box, float)
+        if self.box.shape != (self.n,) or np.any(self.box < 0):
+            raise ValueError(f"problem {problem.name}: a tolerance box needs {self.n} half-widths >= 0")
+        self.active = [j for j in range(self.n) if self.box[j] > 0]
+        x = problem.x
+        z, a = x[:self.n], x[self.n:]
+        na = a.numel()
+        h = pinning_rows(problem, self.n)
+        if not h.numel():                # auxiliaries not pinned by any row (free timing): held where they are
+            na, a = 0, ca.SX(0, 1)
+        self.S = ca.SX.sym("da_dz", na, self.n)
+        self.rows: list[Row] = []
+        if na:
+            self.rows.append((ca.vec(ca.mtimes(ca.jacobian(h, a), self.S) + ca.jacobian(h, z)), 0.0, 0.0))
+        self.extra = [ca.vec(self.S)]
+        self.lb = [-np.inf] * (na * self.n)
+        self.derivs: list[ca.SX] = []
+        self._start = None
+        self._hjac = ca.Function("pinning_jacobians", [x, problem.parameters],
+                                 [ca.jacobian(h, a) if na else ca.SX(0, 0), ca.jacobian(h, z) if na else ca.SX(0, self.n)])
+
+    def hold(self, rule, rows: Sequence[Row]) -> list[Row]:
+        """``rows`` of ``rule`` held at their linearised worst case (equalities kept as they are)."""
+        out: list[Row] = []
+        for expr, lb, ub in rows:
+            if (lb is not None and ub is not None and lb == ub) or not self.active:
+                out.append((expr, lb, ub))
+                continue
+            e = ca.vec(ca.SX(expr))
+            D = total_jacobian(e, self.problem, self.n, self.S, self.J_inv)[:, self.active]
+            T = ca.SX.sym(f"abs_sensitivity_{rule.name}", e.numel(), len(self.active))
+            self.extra.append(ca.vec(T))
+            self.lb += [0.0] * T.numel()
+            self.derivs.append(ca.vec(D))
+            self.rows += [(ca.vec(T - D), 0.0, None), (ca.vec(T + D), 0.0, None)]
+            spread = ca.mtimes(T, ca.DM(self.box[self.active]))
+            if lb is not None:
+                out.append((e - spread, lb, None))
+            if ub is not None:
+                out.append((e + spread, None, ub))
+        return out
+
+    @property
+    def w(self) -> ca.SX:
+        return ca.vertcat(*self.extra)
+
+    def start(self, x0: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Start values of the extras at x0: S = -(dh/da)^-1 dh/dz there, t = |dg/dd| (+ a little)."""
+        if self._start is None:
+            self._start = ca.Function("robust_start", [self.problem.x, ca.vec(self.S), self.problem.parameters],
+                                      [ca.vertcat(*self.derivs) if self.derivs else ca.SX(0, 1)])
+        Ha, Hz = (np.asarray(v, float) for v in self._hjac(x0, p))
+        try:
+            S = -np.linalg.solve(Ha, Hz) if Ha.size else np.zeros((0, self.n))
+        except np.linalg.LinAlgError:
+            S = np.zeros(Hz.shape)
+        if not np.all(np.isfinite(S)):
+            S = np.zeros(Hz.shape)
+        s = S.ravel(order="F")          # ca.vec is column-major
+        t = np.abs(np.asarray(self._start(x0, s, p), float).ravel())
+        t = np.where(np.isfinite(t), t, 0.0)
+        return np.concatenate([s, 1.01 * t + 1e-9])
 
 
 class _Rows:
@@ -53,6 +149,17 @@ class Transcription:
     owner: list                  # rule index (or None: structural / objective row) of each row of g
     extra_init: np.ndarray       # default start of the extra variables (epigraph, slacks)
     hard: list[bool]             # per rule: kept hard in the elastic form
+    robust: _Robust | None = None           # the tolerance box's rows and variables (robust form)
+    n_own_extra: int = 0                    # extras of the objective / slacks (the robust ones follow)
+
+    def full_extra(self, own: np.ndarray | None, x0: np.ndarray, p: np.ndarray | None = None) -> np.ndarray:
+        """Every extra variable's start: ``own`` (the objective's or slacks'; default the transcription's)
+        then, in the robust form, the sensitivity and epigraph variables evaluated at x0."""
+        own = self.extra_init[:self.n_own_extra] if own is None else np.asarray(own, float)
+        if self.robust is None or len(own) != self.n_own_extra:
+            return own
+        p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
+        return np.concatenate([own, self.robust.start(np.asarray(x0, float), p)])
 
     @property
     def n_x(self) -> int:
@@ -87,6 +194,11 @@ def _max_min_margin(problem: Problem, objective: MaxMinMargin) -> ObjectiveParts
 
 
 def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
+    tol = problem.tolerance
+    if tol is None and _tolerance_of.get() is not None:
+        tol = _tolerance_of.get()(problem)
+    robust = None if tol is None else _Robust(problem, tol)
+    hold = (lambda rule, rows: rows) if robust is None else robust.hold
     hard = [elastic and rule.name in problem.hard_in_elastic for rule in problem.rules]
     g = _Rows()
     g.add(problem.structural)
@@ -94,10 +206,10 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
         slack = ca.SX.sym("slack", len(problem.rules))
         for k, rule in enumerate(problem.rules):
             if hard[k]:
-                g.add(rule.rows(), k)
+                g.add(hold(rule, rule.rows()), k)
                 continue
             relax = rule.scale * slack[k]
-            for expr, lb, ub in rule.rows():
+            for expr, lb, ub in hold(rule, rule.rows()):
                 if lb is not None:
                     g.add([(expr + relax, lb, None)], k)
                 if ub is not None:
@@ -108,7 +220,7 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
         f = ca.sum1(slack)
     else:
         for k, rule in enumerate(problem.rules):
-            g.add(_backed_off(problem, rule), k)
+            g.add(hold(rule, _backed_off(problem, rule)), k)
         objective = problem.objective
         if isinstance(objective, MaxMinMargin):
             objective = _max_min_margin(problem, objective)
@@ -116,9 +228,18 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
         extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
         extra_init = np.array(objective.extra_init, dtype=float)
         f = objective.f
+    n_own = int(ca.SX(extra).numel())
+    if robust is not None:
+        g.add(robust.rows)
+        w_robust = robust.w
+        extra = ca.vertcat(extra, w_robust)
+        extra_lb = list(extra_lb) + robust.lb
+        extra_ub = list(extra_ub) + [np.inf] * len(robust.lb)
+        extra_init = np.concatenate([np.asarray(extra_init, float), np.zeros(w_robust.numel())])
     return Transcription(
         problem=problem, elastic=elastic, w=ca.vertcat(problem.x, extra), f=f,
         g=ca.vertcat(*g.exprs) if g.exprs else ca.SX(0, 1),
         lbw=np.concatenate([problem.lbx, np.asarray(extra_lb, float)]),
         ubw=np.concatenate([problem.ubx, np.asarray(extra_ub, float)]),
-        lbg=np.array(g.lbg, float), ubg=np.array(g.ubg, float), owner=g.owner, extra_init=extra_init, hard=hard)
+        lbg=np.array(g.lbg, float), ubg=np.array(g.ubg, float), owner=g.owner, extra_init=extra_init, hard=hard,
+        robust=robust, n_own_extra=n_own)

@@ -67,7 +67,7 @@ def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
     could not be solved (it raised, its worker died: ``details["failure"]``) is not re-checked."""
     failure = failure_of(outcome)
     if failure is not None:
-        return StartReport(outcome, False, math.inf, why=f"{outcome.return_status}: {failure}")
+        return StartReport(outcome, False, math.inf, why=failure)
     try:
         rc = recheck(outcome)
     except (AgrisynthError, ValueError, ArithmeticError) as exc:

@@ -17,6 +17,7 @@ KIND = Kind(
     spec_model="synthesis.spec.guide_tube:GuideTubeSpec",
     check="synthesis.guide_tube.check:run_check",
     figures={"drop_times.png": "synthesis.guide_tube.plots:drop_times_figure",
+             "drop_times.svg": "synthesis.guide_tube.plots:drop_times_figure",
              "drop_profiles.png": "synthesis.guide_tube.plots:drop_profile_figure",
              "sensitivity.png": "synthesis.guide_tube.plots:sensitivity_figure"},
     compare="synthesis.guide_tube.plots:compare_figures",

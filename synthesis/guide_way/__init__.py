@@ -9,6 +9,7 @@ KIND = Kind(
     spec_model="synthesis.spec.guide_way:GuideWaySpec",
     check="synthesis.guide_way.check:run_check",
     figures={"guide_way.png": "synthesis.guide_way.plots:guide_figure",
+             "guide_way.svg": "synthesis.guide_way.plots:guide_figure",
              "cycle.png": "synthesis.guide_way.plots:cycle_figure",
              "animation.gif": "synthesis.guide_way.plots:animation",
              "centre_line.csv": "synthesis.guide_way.export:write_centre_csv",

@@ -121,7 +121,7 @@ def animation(result: Result, path: Path, frames: int = ANIMATION_FRAMES) -> Non
     crank_line, = ax.plot([], [], "-", color="tab:purple", lw=2.5)
     roller = plt.Circle((0, 0), rr, fill=False, color="tab:purple", lw=1.5)
     ax.add_patch(roller)
-    text = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9)
+    text = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10)
     if ax.get_legend():
         ax.get_legend().remove()
 
@@ -131,10 +131,10 @@ def animation(result: Result, path: Path, frames: int = ANIMATION_FRAMES) -> Non
         claw_line.set_data([px[i], mx[i]], [py[i], my[i]])
         crank_line.set_data([px[i], nx[i]], [py[i], ny[i]])
         roller.center = (nx[i], ny[i])
-        text.set_text(f"theta = {th[i] % 360:.1f} deg")
+        text.set_text(f"frame {k + 1}/{frames}, theta = {th[i] % 360:.1f} deg")
         return arm_line, claw_line, crank_line, roller, text
 
-    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=10), dpi=60)
+    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=10), dpi=100)
     plt.close(fig)
 
 

@@ -166,10 +166,10 @@ def picker_animation(result: Result, path: Path) -> None:
         for line, (p, q) in zip(lines, DOUBLE_CRANK + DRIVE):
             line.set_data([j[p][0], j[q][0]], [j[p][1], j[q][1]])
         dot.set_data([j["M"][0]], [j["M"][1]])
-        label.set_text(f"{result.name}: t = {frames[k]['t']:.2f} s")
+        label.set_text(f"{result.name}: frame {k + 1}/{len(frames)}, t = {frames[k]['t']:.2f} s")
         return lines + [dot, label]
 
     anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     fps = max(1, round(len(frames) / (2 * ex["operation"]["period_s"])))    # half speed: one cycle in 2 periods
-    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=80)
+    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=110)     # 704 x 550 px
     plt.close(fig)

@@ -30,8 +30,9 @@ def _colour(i: int) -> str:
     return f"C{i % 10}"
 
 
-def _label(result: Result, i: int) -> str:
-    return f"{result.name}{' (baseline)' if i == 0 else ''}"
+def _label(result: Result, i: int, n: int = 2) -> str:
+    """The candidate's legend entry; "(baseline)" only beside other candidates, never on a run's own figure."""
+    return f"{result.name}{' (baseline)' if i == 0 and n > 1 else ''}"
 
 
 def _design(result: Result) -> ArmDesign:
@@ -46,8 +47,8 @@ def paths_figure(results: list[Result], path: Path) -> None:
         tr, col = r.trajectory, _colour(i)
         if tr is None:
             continue
-        ax_m.plot(tr["machine"]["x"], tr["machine"]["y"], color=col, lw=1.4, label=_label(r, i))
-        ax_g.plot(tr["x"], tr["y"], color=col, lw=1.4, label=_label(r, i))
+        ax_m.plot(tr["machine"]["x"], tr["machine"]["y"], color=col, lw=1.4, label=_label(r, i, len(results)))
+        ax_g.plot(tr["x"], tr["y"], color=col, lw=1.4, label=_label(r, i, len(results)))
         soil = r.extra.get("soil_level_mm")
         for ax in (ax_m, ax_g):
             if soil is not None:
@@ -83,7 +84,7 @@ def kinematics_figure(results: list[Result], path: Path) -> None:
         if tr is None:
             continue
         t = np.asarray(tr["t"])
-        axes[0].plot(t, tr["vx"], color=col, label=_label(r, i))
+        axes[0].plot(t, tr["vx"], color=col, label=_label(r, i, len(results)))
         axes[1].plot(t, tr["vy"], color=col)
         axes[2].plot(t, np.asarray(tr["ay"]) / 1000.0, color=col)
         pts = r.extra.get("precision_points", {})
@@ -122,6 +123,23 @@ def _draw_linkage(ax, joints: dict[str, np.ndarray], k: int, colour: str, alpha:
     return lines
 
 
+def annotate_linkage(ax, joints: dict[str, np.ndarray], k: int = 0, lengths: bool = True, colour: str = "k",
+                     fontsize: float = 8) -> list:
+    """Joint letters at sample k and (``lengths``) each link's length, mm, at its middle; returns the artists."""
+    artists = []
+    for name in ("O", "O'", "A", "B", "C"):
+        x, y = joints[name][:, k]
+        artists.append(ax.annotate(name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=fontsize,
+                                   fontweight="bold", color=colour, zorder=8))
+    if lengths:
+        for p, q in (("O", "O'"), ("O", "A"), ("A", "B"), ("O'", "B"), ("A", "C"), ("B", "C")):
+            a, b = joints[p][:, k], joints[q][:, k]
+            artists.append(ax.annotate(f"{np.hypot(*(b - a)):.1f}", (a + b) / 2, textcoords="offset points",
+                                       xytext=(0, -9), ha="center", fontsize=fontsize - 1, color="0.3", zorder=8,
+                                       bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7)))
+    return artists
+
+
 def linkage_figure(results: list[Result], path: Path) -> None:
     """The linkage of every candidate at each of its precision points P1-P6 (machine frame)."""
     fig, axes = plt.subplots(2, 3, figsize=(12, 7.6), sharex=True, sharey=True)
@@ -136,12 +154,14 @@ def linkage_figure(results: list[Result], path: Path) -> None:
                 continue
             joints = joint_positions(design, math.radians(p["crank_deg"]))
             _draw_linkage(ax, joints, 0, col)
+            if i == 0:          # letters on every panel, link lengths (mm) on the first
+                annotate_linkage(ax, joints, 0, lengths=name == "P1", colour=col)
             ax.plot(p["x"], p["y"], "o", color=POINT_COLOURS[name], mec=col, ms=7)
     for ax, name in zip(axes.ravel(), POINTS):
         ax.set_title(name, fontsize=10)
         ax.set_aspect("equal", adjustable="box")
         ax.grid(alpha=0.3)
-    handles = [plt.Line2D([], [], color=_colour(i), label=_label(r, i)) for i, r in enumerate(results)]
+    handles = [plt.Line2D([], [], color=_colour(i), label=_label(r, i, len(results))) for i, r in enumerate(results)]
     fig.legend(handles=handles, loc="lower center", ncol=min(4, len(results)), fontsize=8)
     fig.suptitle("linkage at the precision points (machine frame, mm)", fontsize=11)
     fig.tight_layout(rect=(0, 0.05, 1, 0.97))
@@ -151,13 +171,13 @@ def linkage_figure(results: list[Result], path: Path) -> None:
 
 def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_FRAMES) -> None:
     """Every candidate's linkage over one crank turn (machine frame), as a small looping GIF."""
-    fig, ax = plt.subplots(figsize=(5.6, 4.6))
+    fig, ax = plt.subplots(figsize=(8.0, 6.4))          # 720 x 576 px at dpi 90: legible legend and counter
     theta = np.linspace(0.0, 2 * np.pi, frames, endpoint=False)
     all_joints = [joint_positions(_design(r), theta) for r in results]
     for i, (r, joints) in enumerate(zip(results, all_joints)):
         if r.trajectory is not None:
             ax.plot(r.trajectory["machine"]["x"], r.trajectory["machine"]["y"], color=_colour(i), lw=0.7,
-                    alpha=0.6, label=_label(r, i))
+                    alpha=0.6, label=_label(r, i, len(results)))
         soil = r.extra.get("soil_level_mm")
         if soil is not None:
             ax.axhline(soil, color=_colour(i), lw=0.6, ls="--")
@@ -167,8 +187,10 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
     ax.set_ylim(xy[1].min() - pad, xy[1].max() + pad)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6, loc="upper right")
-    ax.set_title("one crank turn (machine frame, mm)", fontsize=9)
+    ax.legend(fontsize=9, loc="upper right")
+    ax.set_title("one crank turn (machine frame, mm)", fontsize=11)
+    counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10,
+                      bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.8"))
     drawn: list = []
 
     def frame(k: int):
@@ -177,9 +199,12 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
         drawn.clear()
         for i, joints in enumerate(all_joints):
             drawn.extend(_draw_linkage(ax, joints, k, _colour(i)))
-        return drawn
+        if len(all_joints) == 1:
+            drawn.extend(annotate_linkage(ax, all_joints[0], k, lengths=False, fontsize=9))
+        counter.set_text(f"frame {k + 1}/{frames}, crank {np.degrees(theta[k]):.0f} deg")
+        return drawn + [counter]
 
-    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=12), dpi=70)
+    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=12), dpi=90)
     plt.close(fig)
 
 
@@ -196,3 +221,16 @@ def overlay_figures(results: list[Result], folder: Path) -> list[tuple[str, str]
     for name, _, draw in figures:
         draw(results, folder / name)
     return [(name, caption) for name, caption, _ in figures]
+
+
+# one run's own figures (report.html of a check or solve): the same drawings of one candidate
+def kinematics_of_one(result: Result, path: Path) -> None:
+    kinematics_figure([result], path)
+
+
+def linkage_of_one(result: Result, path: Path) -> None:
+    linkage_figure([result], path)
+
+
+def animation_of_one(result: Result, path: Path) -> None:
+    animation_figure([result], path)

@@ -35,9 +35,10 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
 
 
-def run_artifacts(result: Result, files: dict | None = None) -> dict:
+def run_artifacts(result: Result, files: dict | None = None, given_rules: list | None = None) -> dict:
     """What a check or solve writes beside result.json: ``files`` (e.g. ipopt.log), the kind's figures,
-    then report.html, which shows the figures and links the other files.
+    then report.html, which shows the figures and links the other files; ``given_rules`` (a solve) the rule
+    table of the spec's given design, shown beside the solution's.
 
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
@@ -58,13 +59,14 @@ def run_artifacts(result: Result, files: dict | None = None) -> dict:
 
     writers = {**(files or {}), **kinds.figure_writers(result)}
     artifacts = {name: guarded(name, w) for name, w in writers.items()}
-    artifacts["report.html"] = lambda path: write_report(result, path, written, failed)
+    artifacts["report.html"] = lambda path: write_report(result, path, written, failed, given_rules)
     return artifacts
 
 
-def write_report(result: Result, path: Path, figures: list[str], notes: list[str] = ()) -> None:
-    """report.html of one run, beside its own figures (``figures``) and the kind's overlay figures."""
-    cands = candidates([result])
-    extra, overlay_notes = comparison_figures(cands, path.parent)
-    shown = [(f, _caption(f)) for f in figures] + [f for f in extra if f[0] not in figures]
-    atomic_write_text(path, render(cands, shown, list(notes) + overlay_notes, result.name))
+def write_report(result: Result, path: Path, figures: list[str], notes: list[str] = (),
+                 given_rules: list | None = None) -> None:
+    """report.html of one run, beside its own figures (``figures``): the kind's figures of this one design.
+    The comparison overlays (several candidates in one plot) belong to ``agrisynth compare`` only."""
+    cands = [dataclasses.replace(c, given_rules=given_rules) for c in candidates([result])]
+    shown = [(f, _caption(f)) for f in figures]
+    atomic_write_text(path, render(cands, shown, list(notes), result.name))

@@ -10,7 +10,8 @@ import html
 import math
 
 from constraints.base import limit_text
-from synthesis.report.tables import Candidate, design_rows, rule_rows, run_facts, shows_given, worst_margins
+from synthesis.report.tables import (Candidate, RuleCell, design_rows, operating_conditions, rule_rows, run_facts, shows_given,
+                                     shows_given_rules, worst_margins)
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
 
@@ -124,11 +125,29 @@ RULE_COLUMNS = (
 )
 
 
-def rule_columns() -> str:
-    return "<dl class='columns'>" + "".join(f"<dt>{k}</dt><dd>{v}</dd>" for k, v in RULE_COLUMNS) + "</dl>"
+def rule_columns(cands: list[Candidate] | None = None) -> str:
+    items = list(RULE_COLUMNS)
+    if cands is not None and shows_given_rules(cands):
+        items.insert(1, ("given (start 0)", "the rule at the design written in the spec (the question); the next "
+                                            "column is the solution's (the answer)."))
+    return "<dl class='columns'>" + "".join(f"<dt>{k}</dt><dd>{v}</dd>" for k, v in items) + "</dl>"
+
+
+def _rule_cell(cell: RuleCell | None, row_limit) -> str:
+    if cell is None:
+        return "<td class='note'>no such rule</td>"
+    own_limit = "" if cell.limit == row_limit else f" (limit {_limit(cell.limit)})"
+    if cell.satisfied:
+        return (f"<td class='num pass' title='{html.escape(cell.note)}'>{_num(cell.value)} "
+                f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
+    if cell.value is None:
+        return f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}</span></td>"
+    return (f"<td class='num fail' title='{html.escape(cell.note)}'>{_num(cell.value)} FAIL"
+            f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
 
 
 def rule_table(cands: list[Candidate]) -> str:
+    given = shows_given_rules(cands)
     summary = []
     for w in worst_margins(cands):
         if w.rule is None:
@@ -137,27 +156,34 @@ def rule_table(cands: list[Candidate]) -> str:
             margin = "not evaluated" if w.normalised_margin is None else f"normalised margin {w.normalised_margin:.3g}"
             tally = f"{w.violated} violated" if w.violated else "all pass"
             summary.append(f"<td class='{'fail' if w.violated else 'pass'}'>{html.escape(w.rule)}: {margin}; {tally}</td>")
-    rows = [f"<tr class='summary'><td>worst margin</td><td></td><td></td>{''.join(summary)}</tr>"]
+    if given:
+        bad = [r for r in cands[0].given_rules if not r.get("satisfied")]
+        start = (f"<td class='{'fail' if bad else 'pass'}'>{len(bad)} violated</td>" if bad
+                 else "<td class='pass'>all pass</td>")
+    else:
+        start = ""
+    rows = [f"<tr class='summary'><td>worst margin</td><td></td><td></td>{start}{''.join(summary)}</tr>"]
     for row in rule_rows(cands):
-        cells = []
-        for cell in row.cells:
-            if cell is None:
-                cells.append("<td class='note'>no such rule</td>")
-                continue
-            own_limit = "" if cell.limit == row.limit else f" (limit {_limit(cell.limit)})"
-            if cell.satisfied:
-                cells.append(f"<td class='num pass' title='{html.escape(cell.note)}'>{_num(cell.value)} "
-                             f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
-            elif cell.value is None:
-                cells.append(f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}</span></td>")
-            else:
-                cells.append(f"<td class='num fail' title='{html.escape(cell.note)}'>{_num(cell.value)} FAIL"
-                             f"<span class='note'>margin {_num(cell.margin, 3)}"
-                             f"{own_limit}</span></td>")
+        first = _rule_cell(row.given, row.limit) if given and row.given is not None else (
+            "<td class='note'>&ndash;</td>" if given else "")
+        cells = "".join(_rule_cell(cell, row.limit) for cell in row.cells)
         rows.append(f"<tr><td>{html.escape(row.name)}</td><td class='limit'>{_limit(row.limit)}</td>"
-                    f"<td>{html.escape(row.unit)}</td>{''.join(cells)}</tr>")
-    return (f"<table class='rules'><tr><th>rule</th><th>limit</th><th>unit</th>{_header(cands)}</tr>\n"
+                    f"<td>{html.escape(row.unit)}</td>{first}{cells}</tr>")
+    head = "<th>given (start 0)</th>" if given else ""
+    return (f"<table class='rules'><tr><th>rule</th><th>limit</th><th>unit</th>{head}{_header(cands)}</tr>\n"
             + "\n".join(rows) + "</table>")
+
+
+def conditions_table(cands: list[Candidate]) -> str:
+    """The operating conditions (crank and forward speed ...) the designs were evaluated at; "" if none."""
+    rows = operating_conditions(cands)
+    if not rows:
+        return ""
+    body = "\n".join(f"<tr><td>{html.escape(name)}</td><td>{html.escape(unit)}</td>"
+                     + "".join(f"<td class='num'>{_num(v, 6)}</td>" for v in values) + "</tr>"
+                     for name, unit, values in rows)
+    return ("<h2>Operating conditions</h2>\n<div class='scroll'><table class='conditions'><tr><th>condition</th>"
+            f"<th>unit</th>{_header(cands)}</tr>\n{body}</table></div>")
 
 
 def facts_table(cands: list[Candidate]) -> str:
@@ -198,8 +224,11 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
     ``bench`` = the per-problem results of an ``agrisynth bench`` run, shown as a table."""
     kind = cands[0].result.kind
     source = cands[0].result.extra.get("source") or ""
-    images = [(f, cap) for f, cap in figures if f.lower().endswith(IMAGE_SUFFIXES)]
-    exports = [f for f, _ in figures if not f.lower().endswith(IMAGE_SUFFIXES)]   # CSV, DXF ...: linked
+    names = {f for f, _ in figures}
+    # an SVG beside a PNG of the same figure is the scalable copy: linked, not shown twice
+    copies = {f for f in names if f.lower().endswith(".svg") and f[:-4] + ".png" in names}
+    images = [(f, cap) for f, cap in figures if f.lower().endswith(IMAGE_SUFFIXES) and f not in copies]
+    exports = [f for f, _ in figures if not f.lower().endswith(IMAGE_SUFFIXES) or f in copies]   # CSV, DXF, SVG
     figs = "\n".join(f"<figure><img src='{html.escape(f)}' alt='{html.escape(cap)}'>"
                      f"<figcaption>{html.escape(cap)}</figcaption></figure>" for f, cap in images)
     if exports:
@@ -214,11 +243,12 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
 <p class="lede">kind <code>{html.escape(kind)}</code>{(' &middot; ' + html.escape(source)) if source else ''}</p>
 {_verdicts(cands)}
 <h2>Rules</h2>
-{rule_columns()}
+{rule_columns(cands)}
 <div class="scroll">{rule_table(cands)}</div>
 <h2>Design</h2>
 {design_columns(cands)}
 <div class="scroll">{design_table(cands)}</div>
+{conditions_table(cands)}
 <h2>Figures</h2>
 {figs}
 {missing}

@@ -21,6 +21,8 @@ class Candidate:
     label: str          # unique column heading
     result: Result
     source: Path | None = None
+    #: a solve's report: the rule table of the spec's given design (start 0), shown beside the solution's
+    given_rules: list | None = None
 
 
 def candidates(results: list[Result], sources: list[Path | None] | None = None) -> list[Candidate]:
@@ -101,6 +103,7 @@ class RuleRow:
     unit: str
     limit: list                        # the baseline's limit (cells carry their own when they differ)
     cells: list[RuleCell | None]       # None: the candidate has no such rule
+    given: RuleCell | None = None      # a single solve: the rule at the spec's given design (start 0)
 
     @property
     def violated(self) -> list[bool]:
@@ -119,12 +122,55 @@ def rule_rows(cands: list[Candidate]) -> list[RuleRow]:
     names: list[str] = []
     for c in cands:
         names += [r["name"] for r in c.result.rules if r["name"] not in names]
+    given = {r["name"]: r for r in (cands[0].given_rules or [])} if shows_given_rules(cands) else {}
     rows = []
     for n in names:
         first = next(b[n] for b in by_candidate if n in b)
         rows.append(RuleRow(n, first.get("unit", ""), first.get("limit", [None, None]),
-                            [_cell(b[n]) if n in b else None for b in by_candidate]))
+                            [_cell(b[n]) if n in b else None for b in by_candidate],
+                            _cell(given[n]) if n in given else None))
     return rows
+
+
+def shows_given_rules(cands: list[Candidate]) -> bool:
+    """A single solve's report shows the rules of the given design (start 0) beside the solution's."""
+    return len(cands) == 1 and cands[0].result.solver is not None and bool(cands[0].given_rules)
+
+
+#: result key suffix -> unit, for the operating-conditions table
+_SUFFIX_UNITS = (("_m_s2", "m/s^2"), ("_m_s", "m/s"), ("_r_min", "r/min"), ("_rpm", "r/min"), ("_mm", "mm"),
+                 ("_deg", "deg"), ("_s", "s"))
+
+
+def _condition(key: str) -> tuple[str, str]:
+    for suffix, unit in _SUFFIX_UNITS:
+        if key.endswith(suffix):
+            return key[: -len(suffix)].replace("_", " "), unit
+    return key.replace("_", " "), ""
+
+
+def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
+    """(condition, unit, one value per candidate): the speeds and sizes a design was evaluated at (crank and
+    forward speed, plant spacing, the vehicle ...), from the result's facts: its ``operation`` and ``vehicle``
+    tables, a cam's speed, a path's crank speed."""
+    rows: dict[tuple[str, str], list] = {}
+
+    def put(label: str, unit: str, i: int, value) -> None:
+        if isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            rows.setdefault((label, unit), [None] * len(cands))[i] = value
+
+    for i, c in enumerate(cands):
+        facts = c.result.extra or {}
+        for section in ("operation", "vehicle"):
+            for key, value in (facts.get(section) or {}).items():
+                put(*_condition(key), i, value)
+        cam = facts.get("cam") or {}
+        if "crank_speed_rpm" in cam:
+            put("crank speed", "r/min", i, cam["crank_speed_rpm"])
+        tr = c.result.trajectory or {}
+        if "crank_speed_rpm" in tr:
+            put("crank speed", "r/min", i, tr["crank_speed_rpm"])
+    return [(label, unit, values) for (label, unit), values in rows.items()]
 
 
 @dataclass(frozen=True)

@@ -171,8 +171,10 @@ class RulesSection(StrictModel):
 
     pressure_angle_rise: float = Field(30.0, gt=0, lt=90, description="max |pressure angle| on the rise, deg")
     pressure_angle_return: float = Field(45.0, gt=0, lt=90, description="max |pressure angle| on the return, deg")
-    min_working_radius: float = Field(0.0, ge=0, description="smallest radius of curvature of the convex working "
-                                                             "profile, mm (0: only forbid the undercut cusp)")
+    min_working_radius: float = Field(3.0, ge=0, description="smallest radius of curvature of the working profile "
+                                                             "a cutter can make and a roller can run on, mm "
+                                                             "(default 3: machine-design texts ask 3-5 mm; "
+                                                             "0 only forbids the undercut cusp)")
     groove: bool = Field(False, description="the roller runs in a groove: also forbid the undercut of the outer "
                                             "flank (concave pitch radius < roller radius)")
     max_acceleration: float | None = Field(None, gt=0, description="max |follower acceleration| at the crank speed: "

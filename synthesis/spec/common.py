@@ -75,11 +75,25 @@ Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
 RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 
 
+class ToleranceSpec(StrictModel):
+    """[tolerance]: manufacturing tolerances of the design variables (half-widths of a box around the design).
+    In a spec, ``solve`` holds every rule at its linearised worst case in the box and Monte-Carlo checks the
+    answer; ``agrisynth tolerance`` reads it too."""
+
+    length: float | None = Field(None, ge=0, le=1e3, description="half-width for every length, mm")
+    angle: float | None = Field(None, ge=0, le=90, description="half-width for every angle, deg")
+    variables: dict[str, float] = Field(default_factory=dict,
+                                        description="half-width per design variable (its unit), overrides length/angle")
+    samples: int = Field(2000, ge=0, le=1_000_000, description="Monte-Carlo samples of the answer")
+    seed: int = Field(0, ge=0, le=2**53, description="Monte-Carlo seed")
+
+
 class ProblemSpec(StrictModel):
     """What every spec file has besides its ``kind`` and its own sections."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100, description="result folder name (at most 100 characters)")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
+    tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve (issue 20)")
 
 
 def starts_field(default: int):
@@ -292,12 +306,44 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         return model.model_validate(data) if text is None else model.model_validate_json(text, strict=True)
     except ValidationError as exc:
         seen: list[str] = []
-        for err in exc.errors():
+        order = _file_order(data)
+        for err in sorted(exc.errors(), key=lambda e: _position(order, e["loc"])):      # in file order
             line = f"{prefix}.{_describe(err, model)}"
             if line not in seen:
                 seen.append(line)
         # a union of "number | table" yields one error per branch: keep the most specific ones
-        raise SpecError("\n".join(_prune_union_noise(seen))) from None
+        raise SpecError("\n".join(capped(_prune_union_noise(seen)))) from None
+
+
+def _file_order(data: Any, prefix: tuple = (), order: dict | None = None) -> dict[tuple, int]:
+    """Every key path of ``data`` -> its position in the file (TOML tables keep the file's order)."""
+    order = {} if order is None else order
+    items = data.items() if isinstance(data, dict) else enumerate(data) if isinstance(data, list) else ()
+    for key, value in items:
+        order[(*prefix, key)] = len(order)
+        if len(order) < 100_000:
+            _file_order(value, (*prefix, key), order)
+    return order
+
+
+def _position(order: dict[tuple, int], loc: tuple) -> int:
+    """Where the field an error is about sits in the file: its longest prefix that is in the file (a
+    missing top-level field: after everything in the file)."""
+    for n in range(len(loc), 0, -1):
+        if tuple(loc[:n]) in order:
+            return order[tuple(loc[:n])]
+    return len(order)
+
+
+#: a message lists at most this many problems (the first names the first bad field), then "and N more"
+MAX_PROBLEM_LINES = 5
+
+
+def capped(lines: list[str], most: int = MAX_PROBLEM_LINES) -> list[str]:
+    """The first ``most - 1`` lines and "... and N more", when there are more than ``most``."""
+    if len(lines) <= most:
+        return lines
+    return [*lines[:most - 1], f"... and {len(lines) - most + 1} more problem(s) in the spec (fix these first)"]
 
 
 def _prune_union_noise(lines: list[str]) -> list[str]:
@@ -314,6 +360,9 @@ def _prune_union_noise(lines: list[str]) -> list[str]:
             continue
         else:
             out.append(ln)
+    # "expected a number in mm, written without a unit" already says what to write: drop the table branch
+    out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
+        o.startswith(ln.partition(": expected a table, got ")[0] + ": expected a number") for o in out))]
     # a table given for a "number | table" field: the table's own complaints say what is wrong with it
     out = [ln for ln in out if not (": expected a number, got {" in ln and
                                     any(o.startswith(ln.partition(": expected a number, got ")[0] + ".") for o in out))]

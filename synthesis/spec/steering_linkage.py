@@ -103,6 +103,14 @@ class Published(StrictModel):
         for name in ("accurate_outside", "actual_outside", "error"):
             if len(getattr(self, name)) != n:
                 raise ValueError(f"{name}: expected {n} values (one per inside_lock), got {len(getattr(self, name))}")
+        for name in ("inside_lock", "accurate_outside", "actual_outside"):      # a lock is an angle in (0, 90) deg
+            for i, v in enumerate(getattr(self, name)):
+                if not 0.0 < v < 90.0:
+                    raise ValueError(f"{name}[{i}] = {v:g}: a lock must lie in (0, 90) deg")
+        for i, v in enumerate([*self.accurate_outside, self.max_lock.accurate]):   # Table 12 explained: alpha +- resolution
+            if not 0.0 < v - self.resolution and v + self.resolution < 90.0:
+                raise ValueError(f"resolution = {self.resolution:g}: the 'accurate' lock {v:g} deg +- resolution "
+                                 f"must stay in (0, 90) deg")
         return self
 
 

@@ -1,0 +1,140 @@
+"""Exact sensitivities of a :class:`~synthesis.core.problem.Problem`'s rules w.r.t. its design.
+
+The decision vector is x = (z, a): z the design coordinates (``x[:n_design]``), a auxiliary variables
+(e.g. the crank angles of precision points) pinned by the structural equality rows h(z, a) = 0 that
+depend on a -- one row per auxiliary.  By the implicit function theorem da/dz = -(dh/da)^-1 dh/dz, so a
+rule row g(z, a(z)) has the total derivative
+
+    dg/dz = dg/dz|_a - dg/da (dh/da)^-1 dh/dz,
+
+and with the design an affine function of the coordinates, d = d0 + J z, dg/dd = (dg/dz) J^-1.  Every
+partial derivative is CasADi AD; the linear algebra is on their numeric values (analysis) or, for the
+robust transcription, on symbols with the sensitivity matrix S = da/dz as extra decision variables held
+by the rows dh/da S + dh/dz = 0.  The core knows no kind: which entries are design coordinates and how
+they map to the design is the caller's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from synthesis.core.problem import Problem
+
+
+class PinningError(ValueError):
+    """The auxiliary variables are not pinned by as many structural equality rows as there are of them."""
+
+
+def pinning_rows(problem: Problem, n_design: int) -> ca.SX:
+    """h(z, a): the structural equality rows (expr - value) that depend on the auxiliaries a.  No such row
+    at all: the auxiliaries are free choices of the optimiser (e.g. free timing), held where they are."""
+    a = problem.x[n_design:]
+    rows = []
+    if a.numel():
+        for expr, lb, ub in problem.structural:
+            if lb is None or ub is None or lb != ub:
+                continue
+            v = ca.vec(ca.SX(expr))
+            for i in range(v.numel()):
+                if ca.depends_on(v[i], a):
+                    rows.append(v[i] - lb)
+    h = ca.vertcat(*rows) if rows else ca.SX(0, 1)
+    if h.numel() and h.numel() != a.numel():
+        raise PinningError(f"problem {problem.name}: {a.numel()} auxiliary variables but {h.numel()} structural "
+                           f"equality rows pin them; sensitivities need one row per auxiliary")
+    return h
+
+
+def rule_vector(problem: Problem) -> tuple[ca.SX, list[slice]]:
+    """Every rule's value (``Rule.expr``, a vector for sampled rules) stacked, and each rule's slice."""
+    parts, slices, at = [], [], 0
+    for rule in problem.rules:
+        v = ca.vec(ca.SX(rule.expr))
+        parts.append(v)
+        slices.append(slice(at, at + v.numel()))
+        at += v.numel()
+    return (ca.vertcat(*parts) if parts else ca.SX(0, 1)), slices
+
+
+@dataclass
+class Point:
+    """The rules at one design: values (stacked as :func:`rule_vector`) and their total derivatives
+    w.r.t. the design variables (rows x n_design, design units), and the decision vector used."""
+
+    x: np.ndarray
+    values: np.ndarray
+    jacobian: np.ndarray
+
+
+class Sensitivity:
+    """Numeric rule values and implicit-function derivatives of a problem, at any design."""
+
+    def __init__(self, problem: Problem, n_design: int, design_jacobian: np.ndarray | None = None):
+        self.problem = problem
+        self.n_design = n_design
+        self.J = np.eye(n_design) if design_jacobian is None else np.asarray(design_jacobian, float)
+        x, p = problem.x, problem.parameters
+        self.h = pinning_rows(problem, n_design)
+        g, self.slices = rule_vector(problem)
+        self._g = ca.Function("rules_and_jacobian", [x, p], [g, ca.jacobian(g, x)])
+        self._h = ca.Function("pinning_and_jacobian", [x, p], [self.h, ca.jacobian(self.h, x)])
+
+    @property
+    def n_aux(self) -> int:
+        """Auxiliaries pinned by structural rows (0 when they are held where they are)."""
+        return self.h.numel()
+
+    def pin(self, x0: np.ndarray, p=None, tol: float = 1e-11, iterations: int = 60) -> np.ndarray:
+        """x0 with its auxiliaries moved onto h(z, a) = 0 (Newton on a, z held; AD Jacobian)."""
+        x = np.array(x0, dtype=float)
+        if not self.n_aux:
+            return x
+        p = self._p(p)
+        n = self.n_design
+        for _ in range(iterations):
+            h, H = (np.asarray(v, float) for v in self._h(x, p))
+            h = h.ravel()
+            if np.max(np.abs(h)) <= tol * max(1.0, np.max(np.abs(x[n:]))):
+                return x
+            x[n:] -= np.linalg.lstsq(H[:, n:], h, rcond=None)[0]
+        h = np.asarray(self._h(x, p)[0], float).ravel()
+        if np.max(np.abs(h)) > 1e-8:
+            raise ArithmeticError(f"the auxiliary variables of {self.problem.name} do not converge onto their "
+                                  f"structural rows (residual {np.max(np.abs(h)):.3g})")
+        return x
+
+    def at(self, x: np.ndarray, p=None) -> Point:
+        """Rule values and dg/dd at a decision vector whose auxiliaries are pinned (see :meth:`pin`)."""
+        p = self._p(p)
+        x = np.asarray(x, float)
+        n = self.n_design
+        g, G = (np.asarray(v, float) for v in self._g(x, p))
+        dz = G[:, :n]
+        if self.n_aux:
+            _, H = (np.asarray(v, float) for v in self._h(x, p))
+            dz = dz - G[:, n:] @ np.linalg.solve(H[:, n:], H[:, :n])
+        return Point(x, g.ravel(), np.linalg.solve(self.J.T, dz.T).T)
+
+    def _p(self, p):
+        return np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
+
+
+def total_jacobian(expr: ca.SX, problem: Problem, n_design: int, S: ca.SX, J_inv: np.ndarray) -> ca.SX:
+    """Symbolic dg/dd of rows ``expr``: (dg/dz + dg/da S) J^-1 with S = da/dz a matrix of symbols."""
+    G = ca.jacobian(expr, problem.x)
+    dz = G[:, :n_design]
+    if S.numel():
+        dz = dz + ca.mtimes(G[:, n_design:], S)
+    return ca.mtimes(dz, ca.DM(J_inv))
+
+
+def linear_worst(values: np.ndarray, lower, upper, jacobian: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per sample: the nominal margin and the linearised worst-case margin min(g - lo, up - g) - sum_j
+    |dg/dd_j| box_j (lower / upper as in a Rule; None for an open side)."""
+    spread = np.abs(jacobian) @ box
+    lo = np.full_like(values, np.inf) if lower is None else values - lower
+    hi = np.full_like(values, np.inf) if upper is None else upper - values
+    return np.minimum(lo, hi), np.minimum(lo, hi) - spread

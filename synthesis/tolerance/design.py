@@ -1,0 +1,164 @@
+"""A kind's NLP seen as a design: which decision entries are design coordinates, their affine map to the
+design variables, the variables' units and the tolerance box.  Kind-agnostic except for the small table
+of kinds whose NLP works in other coordinates than the design itself."""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from pydantic import BaseModel
+
+from synthesis.core.ipopt import NLPOutcome, solved_with
+from synthesis.core.verdict import FINE
+from synthesis.design_info import describe
+from synthesis.errors import SpecError
+from synthesis.spec.common import FreeVariable
+
+
+def _grashof(target: str):
+    def affine(nlp, n):
+        from synthesis.core.kind import resolve
+
+        coords = resolve(target)
+        z = ca.SX.sym("z", n)
+        d = coords.design(z)
+        f = ca.Function("design", [z], [d, ca.jacobian(d, z)])
+        d0, J = f(np.zeros(n))
+        return np.asarray(d0, float).ravel(), np.asarray(J, float)
+    return affine
+
+
+def _nominal_units(nlp, n):
+    return np.asarray(nlp.offset, float), np.diag(np.asarray(nlp.scale, float))
+
+
+#: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
+AFFINE = {
+    "crank_rocker": _grashof("synthesis.crank_rocker.nlp:COORDINATES"),
+    "picker_double_crank": _grashof("synthesis.picker.nlp:COORDINATES"),
+    "fourbar_path": _nominal_units,
+}
+
+
+#: unit of the design variables of kinds whose spec lists none (guide_way: control points of the path, mm)
+UNITS = {"guide_way": "mm"}
+
+
+def freed(spec: BaseModel) -> BaseModel:
+    """The spec with every fixed design variable written as a free one with bounds [v, v], so the kind's
+    NLP carries it as a decision entry (a tolerance applies to fixed dimensions too)."""
+    update = {}
+    for name, field in type(spec).model_fields.items():
+        value = getattr(spec, name)
+        if isinstance(value, FreeVariable):
+            continue
+        if isinstance(value, BaseModel):
+            new = freed(value)
+            if new is not value:
+                update[name] = new
+        elif isinstance(value, list) and value and all(isinstance(v, BaseModel) for v in value):
+            new = [freed(v) for v in value]
+            if any(a is not b for a, b in zip(new, value)):
+                update[name] = new
+        elif isinstance(value, (int, float)) and not isinstance(value, bool) and "FreeVariable" in str(field.annotation):
+            update[name] = FreeVariable(init=float(value), bounds=(float(value), float(value)))
+    return spec.model_copy(update=update) if update else spec
+
+
+def fine(spec: BaseModel) -> BaseModel:
+    """The spec with every ``[solver]`` sample count FINE x larger: the analysis samples the rules on
+    the re-check's grid."""
+    solver = getattr(spec, "solver", None)
+    if not isinstance(solver, BaseModel):
+        return spec
+    update = {n: FINE * getattr(solver, n) for n in type(solver).model_fields
+              if "samples" in n and isinstance(getattr(solver, n), int) and not isinstance(getattr(solver, n), bool)}
+    return spec.model_copy(update={"solver": solver.model_copy(update=update)}) if update else spec
+
+
+@dataclass
+class DesignMap:
+    """The design variables of a kind's NLP and how its decision vector holds them."""
+
+    names: list[str]           # design variables, NLP order
+    keys: list[str]            # their keys in result.json ``design``
+    units: list[str]
+    d0: np.ndarray
+    J: np.ndarray              # d = d0 + J x[:n]
+
+    @property
+    def n(self) -> int:
+        return len(self.names)
+
+    def coordinates(self, d: np.ndarray) -> np.ndarray:
+        return np.linalg.solve(self.J, np.asarray(d, float) - self.d0)
+
+
+def design_map(kind: str, nlp, spec) -> DesignMap:
+    names = list(nlp.names)
+    info = describe(spec)
+    keys = []
+    for n in names:
+        if n in info:
+            keys.append(n)
+        else:
+            match = [k for k in info if k.endswith("_" + n)]
+            keys.append(match[0] if len(match) == 1 else n)
+    units = [info[k]["unit"] if k in info else UNITS.get(kind, "") for k in keys]
+    affine = AFFINE.get(kind)
+    d0, J = affine(nlp, len(names)) if affine else (np.zeros(len(names)), np.eye(len(names)))
+    return DesignMap(names, keys, units, d0, J)
+
+
+def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_variable: dict[str, float]) -> np.ndarray:
+    """Half-width per design variable: by name (or result key) from ``per_variable``, else by unit."""
+    known = set(dmap.names) | set(dmap.keys)
+    unknown = sorted(set(per_variable) - known)
+    if unknown:
+        raise SpecError(f"tolerance: unknown design variable(s) {', '.join(unknown)} (known: {', '.join(dmap.keys)})")
+    box = []
+    for name, key, unit in zip(dmap.names, dmap.keys, dmap.units):
+        if key in per_variable or name in per_variable:
+            box.append(float(per_variable.get(key, per_variable.get(name))))
+        elif unit == "mm" and length is not None:
+            box.append(float(length))
+        elif unit == "deg" and angle is not None:
+            box.append(float(angle))
+        else:
+            box.append(0.0)
+    return np.array(box)
+
+
+@contextmanager
+def without_ipopt():
+    """Kind NLPs built inside get no IPOPT instance (the analysis evaluates their problem, never solves
+    it; IPOPT's setup of the exact Hessian is most of a build on the 10x grid)."""
+    original = ca.nlpsol
+    ca.nlpsol = lambda *args, **kwargs: None
+    try:
+        yield
+    finally:
+        ca.nlpsol = original
+
+
+def kind_start(nlp, x_design: np.ndarray):
+    """(compiled NLP, decision vector, parameters) the kind's own solve would start IPOPT from at this
+    design: its guesses of the auxiliaries (crank angles of precision points, extremes, ...), never solved."""
+    seen = []
+
+    def capture(compiled, start, w0, p):
+        seen.append((compiled, np.array(w0, float), np.array(p, float)))
+        return NLPOutcome(start, np.array(w0, float), 0.0, "captured", True, 0, 0.0, "")
+
+    with solved_with(capture):
+        try:
+            nlp.solve(0, np.asarray(x_design, float))
+        except Exception:   # noqa: BLE001 - only the captured start matters
+            pass
+    if not seen:
+        raise SpecError("the kind's NLP made no solve call to take its start from")
+    compiled, w0, p = seen[0]
+    return compiled, w0[:compiled.problem.x.numel()], p

@@ -1,0 +1,65 @@
+"""The folder of ``agrisynth tolerance``: result.json (result-like, schema version 2, the analysis under
+``facts``), report.md (the stack-up table) and tornado.png (each rule's linear margin loss by variable)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from synthesis.result import atomic_write_text
+
+
+def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
+    rules = facts["nominal_rules"]
+    return {"schema_version": 2, "kind": kind, "name": f"{name}-tolerance", "spec_sha256": sha,
+            "status": "evaluated", "design": facts["design"], "rules": rules, "facts": {"tolerance": facts}}
+
+
+def table(facts: dict) -> str:
+    mc = facts["monte_carlo"]
+    lines = [f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
+             f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule", "",
+             "| rule | unit | margin | linear worst margin | drivers | MC pass | MC worst margin | linear / sampled loss |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in facts["stack_up"]:
+        def f(v, fmt="{:.4g}"):
+            return "-" if v is None else fmt.format(v)
+        drivers = ", ".join(f"{d['variable']} {d['contribution']:.3g}" for d in r["drivers"])
+        lines.append(f"| {r['name']} | {r['unit']} | {f(r['recheck_margin'])} | {f(r['linear_worst_margin'])} | {drivers} "
+                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])} | {f(r['linear_over_sampled'], '{:.2f}')} |")
+    return "\n".join(lines) + "\n"
+
+
+def tornado(facts: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = facts["stack_up"]
+    keys = list(facts["tolerance"])
+    box = np.array([facts["tolerance"][k]["half_width"] for k in keys])
+    # normalised loss per rule and variable: |dg/dd_j| tol_j / rule scale
+    loss = np.array([[abs(r["sensitivity"][k]) * b / r["scale"] for k, b in zip(keys, box)] for r in rows])
+    order = np.argsort(loss.sum(axis=1))
+    fig, ax = plt.subplots(figsize=(8, 0.35 * len(rows) + 1.5))
+    left = np.zeros(len(rows))
+    for j, k in enumerate(keys):
+        if not np.any(loss[:, j] > 0):
+            continue
+        ax.barh(np.arange(len(rows)), loss[order, j], left=left[order], label=k)
+        left[order] += loss[order, j]
+    ax.set_yticks(np.arange(len(rows)), [rows[i]["name"] for i in order])
+    ax.set_xlabel("linear margin loss at the box's worst corner / rule scale")
+    ax.set_title("tolerance stack-up by design variable")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def artifacts(kind: str, name: str, sha: str, facts: dict) -> dict:
+    return {"result.json": lambda p: atomic_write_text(p, json.dumps(result_json(kind, name, sha, facts), indent=1)),
+            "report.md": lambda p: atomic_write_text(p, table(facts)),
+            "tornado.png": lambda p: tornado(facts, p)}

@@ -1,0 +1,195 @@
+"""`agrisynth compare` and result files no one should trust (issue 22): every malformed file is refused with
+one line naming it (exit 2) before anything is drawn -- never a traceback, a hang or a page with NaN.
+
+The default suite runs the catalogue below (each refused at load, so it is fast); ``pytest -m fuzz`` adds a
+hypothesis study that mutates a real result.json and runs the whole compare, drawing included.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import PLANTING
+from synthesis import kinds
+from synthesis.compare import load_candidates, write_comparison
+from synthesis.errors import AgrisynthError
+from synthesis.result import result_text
+from synthesis.spec import load_spec
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory) -> tuple[Path, dict]:
+    """A real result.json (seed 000 example 1, checked) and its data."""
+    folder = tmp_path_factory.mktemp("good")
+    loaded = load_spec(PLANTING / "taiwan_example1.toml")
+    (folder / "result.json").write_text(result_text(kinds.checker(loaded.kind)(loaded)))
+    return folder / "result.json", json.loads((folder / "result.json").read_text())
+
+
+def _edit(base: dict, change) -> bytes:
+    data = copy.deepcopy(base)
+    change(data)
+    return json.dumps(data).encode()
+
+
+def _rule(key, value):
+    return lambda d: d["rules"][0].update({key: value})
+
+
+def _raw_number(base: dict, key: str, text: str) -> bytes:
+    """rules[0][key] written as a bare JSON token (NaN, Infinity, 1e400, 5,001 digits)."""
+    return _edit(base, _rule(key, "@@")).replace(b'"@@"', text.encode())
+
+
+def malformed(base: dict) -> dict[str, bytes]:
+    utf8 = json.dumps(base).encode()
+    return {
+        "not_utf8": b'{"kind": "\xff\xfe"}',
+        "latin1": utf8.replace(b'"kind"', b'"k\xe9ind"'),
+        "utf16": json.dumps(base).encode("utf-16"),
+        "bom": b"\xef\xbb\xbf" + utf8,
+        "empty": b"",
+        "nul_bytes": b"\x00" * 1000,
+        "truncated": utf8[:300],
+        "nested_list": b"[" * 100_000 + b"]" * 100_000,
+        "nested_object": b'{"a":' * 50_000 + b"1" + b"}" * 50_000,
+        "nested_in_rules": utf8.replace(b'"rules": [', b'"rules": [' + b"[" * 3000 + b"]" * 3000 + b",", 1),
+        "top_level_list": b"[1, 2]",
+        "digits_5001": _raw_number(base, "value", "9" * 5001),
+        "nan_value": _raw_number(base, "value", "NaN"),
+        "infinite_margin": _raw_number(base, "margin", "-Infinity"),
+        "overflowing_value": _raw_number(base, "value", "1e400"),
+        "overflowing_design": _edit(base, lambda d: d["design"].update(l1="@@")).replace(b'"@@"', b"1e999"),
+        "string_value": _edit(base, _rule("value", "12.5")),
+        "string_margin": _edit(base, _rule("margin", "lots")),
+        "string_normalised_margin": _edit(base, _rule("normalised_margin", "x")),
+        "string_limit": _edit(base, _rule("limit", ["0", 1])),
+        "boolean_limit": _edit(base, _rule("limit", [True, None])),
+        "scalar_limit": _edit(base, _rule("limit", 3.0)),
+        "numeric_unit": _edit(base, _rule("unit", 5)),
+        "string_satisfied": _edit(base, _rule("satisfied", "true")),
+        "numeric_rule_name": _edit(base, _rule("name", 7)),
+        "huge_rule_name": _edit(base, _rule("name", "r" * 200_000)),
+        "rules_object": _edit(base, lambda d: d.update(rules={"a": 1})),
+        "rules_strings": _edit(base, lambda d: d.update(rules=["a", "b"])),
+        "missing_rules": _edit(base, lambda d: d.pop("rules")),
+        "kind_list": _edit(base, lambda d: d.update(kind=["planting_fourbar"])),
+        "kind_unknown": _edit(base, lambda d: d.update(kind="teleporter")),
+        "huge_name": _edit(base, lambda d: d.update(name="<script>alert(1)</script>" * 1000)),
+        "status_unknown": _edit(base, lambda d: d.update(status="great")),
+        "schema_string": _edit(base, lambda d: d.update(schema_version="2")),
+        "schema_future": _edit(base, lambda d: d.update(schema_version=99)),
+        "design_list": _edit(base, lambda d: d.update(design=[1, 2])),
+        "design_nested": _edit(base, lambda d: d.update(design={k: {"a": [1]} for k in d["design"]})),
+        "design_variables_numbers": _edit(base, lambda d: d.update(design_variables={"l1": 5})),
+        "objective_string_value": _edit(base, lambda d: d.update(objective={"name": "x", "value": "low"})),
+        "objective_list": _edit(base, lambda d: d.update(objective=[1])),
+        "solver_list": _edit(base, lambda d: d.update(solver=[1])),
+        "trajectory_list": _edit(base, lambda d: d.update(trajectory=[1, 2])),
+    }
+
+
+def _special(name: str, folder: Path) -> Path:
+    path = folder / f"{name}.json"
+    if name == "fifo":
+        os.mkfifo(path)
+    elif name == "dev_zero_link":
+        path.symlink_to("/dev/zero")
+    elif name == "oversized":
+        with open(path, "wb") as fh:
+            fh.truncate(600 * 1024**2)        # sparse, larger than a result may be
+    elif name == "folder_without_result":
+        path.mkdir()
+    return path
+
+
+SPECIAL = ("fifo", "dev_zero_link", "oversized", "folder_without_result", "missing")
+
+
+def _refused(paths: list[Path]) -> str:
+    with pytest.raises(AgrisynthError) as err:
+        load_candidates(paths)
+    message = str(err.value)
+    assert err.value.exit_code == 2 and "\n" not in message and len(message) < 400, message
+    return message
+
+
+def test_every_malformed_result_file_is_refused_in_one_line(good, tmp_path):
+    path, base = good
+    cases = malformed(base)
+    assert len(cases) + len(SPECIAL) >= 40
+    for name, raw in cases.items():
+        bad = tmp_path / f"{name}.json"
+        bad.write_bytes(raw)
+        assert str(bad) in _refused([path, bad]), name
+    for name in SPECIAL:
+        bad = _special(name, tmp_path)
+        assert str(bad) in _refused([path, bad]), name
+
+
+def test_compare_cli_refuses_a_fifo_and_non_utf8_in_one_line_and_writes_nothing(good, tmp_path):
+    path, _ = good
+    fifo = _special("fifo", tmp_path)
+    latin = tmp_path / "latin.json"
+    latin.write_bytes(b'{"kind": "\xe9"}')
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(path), str(fifo),
+                           "--out", str(tmp_path / "cmp")], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and str(fifo) in proc.stderr
+    from test_run_folders import cli_in_process
+
+    code, err = cli_in_process("compare", str(path), str(latin), "--out", str(tmp_path / "cmp"))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and f"{latin}: not a UTF-8 text file" in err, err
+    assert not (tmp_path / "cmp").exists()
+
+
+# --- the study: mutate a real result.json and run the whole compare (pytest -m fuzz) ---------------------
+
+@pytest.mark.fuzz
+def test_no_mutated_result_file_crashes_compare(good, tmp_path):
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    path, base = good
+    leaves = st.one_of(st.none(), st.booleans(), st.integers(), st.floats(allow_nan=False, allow_infinity=False),
+                       st.sampled_from([1e308, -1e308, 5e-324, 0.0, -0.0]), st.text(max_size=30))
+    values = st.recursive(leaves, lambda inner: st.one_of(st.lists(inner, max_size=4),
+                                                          st.dictionaries(st.text(max_size=6), inner, max_size=3)),
+                          max_leaves=8)
+    keys = ["design", "rules", "objective", "solver", "trajectory", "facts", "versions", "design_variables",
+            "starts", "elastic", "baseline_design", "status", "name"]
+    runs = {"n": 0}
+
+    @settings(max_examples=60, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(st.sampled_from(keys), st.integers(0, 50), values)
+    def run(key, which, value):
+        data = copy.deepcopy(base)
+        target = data.get(key)
+        if isinstance(target, dict) and target:
+            target[sorted(target)[which % len(target)]] = value
+        elif isinstance(target, list) and target:
+            entry = target[which % len(target)]
+            if isinstance(entry, dict) and entry:
+                entry[sorted(entry)[which % len(entry)]] = value
+            else:
+                target[which % len(target)] = value
+        else:
+            data[key] = value
+        runs["n"] += 1
+        bad = tmp_path / f"m{runs['n']}.json"
+        bad.write_text(json.dumps(data))
+        try:
+            page = write_comparison(load_candidates([path, bad]), tmp_path / f"cmp{runs['n']}")
+        except AgrisynthError as exc:
+            assert exc.exit_code == 2 and "\n" not in str(exc)
+            return
+        assert "NaN" not in page.read_text()
+
+    run()
