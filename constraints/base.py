@@ -40,6 +40,9 @@ class Rule:
         if self.missing is not None:
             return RuleRecord(self.name, None, limit, self.unit, False, None, None, self.where, self.missing)
         values = np.atleast_1d(np.asarray(self.expr, dtype=float)).ravel()
+        if np.any(np.isnan(values)):     # NaN is no evidence either way (an infinite radius is): not evaluated
+            return RuleRecord(self.name, None, limit, self.unit, False, None, None, self.where,
+                              "not evaluated: the value is not a number at this design")
         lo = np.full_like(values, np.inf) if self.lower is None else values - self.lower
         hi = np.full_like(values, np.inf) if self.upper is None else self.upper - values
         margins = np.minimum(lo, hi)

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+#: methods that are not IPOPT: one run per case whatever ``repeats`` says (their budgets bound them)
+PEERS = {"slsqp", "differential_evolution"}
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
 NOT_REACHED = "n/a (target not reached)"
 
@@ -93,15 +95,33 @@ def kinds_with_bench() -> list[str]:
     return [k.name for k in kinds.all_kinds() if k.bench is not None]
 
 
-def cases_for(kind: str, specs, seed: int) -> list[BenchCase]:
-    """The kind's bench cases: ``Kind.bench(specs: list[LoadedSpec] | None, seed)``; None = its default set."""
+#: an every-kind run (``agrisynth bench`` with no KIND) takes at most this many of a kind's own
+#: (non-generic) default cases; ``agrisynth bench KIND`` runs them all
+OWN_CASES_IN_EVERY_KIND_RUN = 1
+
+
+def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list[BenchCase]:
+    """The kind's bench cases: ``Kind.bench(specs: list[LoadedSpec] | None, seed)``; None = its default set.
+
+    ``own_limit``: keep at most this many of the default cases of a kind with its own bench methods
+    (not the generic studies).  ``--quick``: the first case only, and a kind with its own methods and a
+    library example runs only the generic studies on that example (its own cases -- reference solve,
+    its peers -- are the slow part; the case note says so)."""
     from synthesis import kinds
     from synthesis.core.kind import resolve
 
     cases = resolve(kinds.get(kind).bench)(specs, seed)
-    if _quick.get():
+    own = specs is None and kinds.get(kind).solves and not any(c.loaded is not None for c in cases)
+    left_out = 0
+    if own and _quick.get() and kinds.get(kind).example:
+        left_out, cases = len(cases), []
+    elif _quick.get():
         cases = cases[:1]
-    if specs is None and kinds.get(kind).solves and not any(c.loaded is not None for c in cases):
+    elif own and own_limit is not None and len(cases) > own_limit:
+        left_out, cases = len(cases) - own_limit, cases[:own_limit]
+    if own:
+        for case in cases:      # peers (not IPOPT) run once in every case, as in the generic studies
+            case.single_runs = set(case.single_runs) | (set(case.methods) & PEERS)
         # a kind with its own bench methods: the generic studies too, on its library example
         from synthesis.bench_generic import LIBRARY, case_for
         from synthesis.spec import load_spec
@@ -110,6 +130,9 @@ def cases_for(kind: str, specs, seed: int) -> list[BenchCase]:
         if example:
             case = case_for(load_spec(LIBRARY / example), current_settings(), seed)
             case.problem = f"{case.problem} (generic studies)"
+            if left_out:
+                case.note += (f"; {left_out} case(s) of the kind's own bench set not run here"
+                              f" ({'--quick' if _quick.get() else 'every-kind run'}: `agrisynth bench {kind}` runs them)")
             cases.append(case)
     return cases
 
@@ -335,6 +358,18 @@ def markdown(data: dict) -> str:
              "ratios within one run).  A time ratio exists only where both methods reached the same target "
              "(best known objective + tolerance, every rule on the fine grid); objectives are minimised "
              "(a maximising kind's is negated)."]
+    study = st.get("study") if isinstance(st, dict) else None
+    if study:
+        parts.append(f"Budgets: {study['starts']} start(s) per method (at most the spec's), "
+                     + (f"SLSQP stopped at {study['slsqp_budget_s']:g} s per run (shared by its starts), "
+                        if "slsqp" in study["peers"] else "")
+                     + (f"differential_evolution one run stopped at {study['de_budget_s']:g} s, "
+                        if "differential_evolution" in study["peers"] else "")
+                     + ("" if study["peers"] else "no peers (SLSQP, differential_evolution), ")
+                     + f"sample counts x {', '.join(f'{f:g}' for f in study['factors'])} with a count skipped when "
+                     f"predicted over {study['sweep_budget_s']:g} s, "
+                     + (f"best known from an untimed multistart of at most {study['reference_starts']} starts."
+                        if study["reference"] else "best known: the best any run reached."))
     summ = []
     for line in data["summary"]:
         reach = line.get("samples_reaching") or {}
@@ -342,9 +377,10 @@ def markdown(data: dict) -> str:
                             "reach_s": reach.get("median_s") if reach else None})
     parts.append("## Summary per problem\n\n" + _table(summ, [
         ("kind", "kind"), ("problem", "problem"), ("reach", "samples at violation <= 1e-6"), ("reach_s", "its median s"),
-        ("ad_median_s", "AD median s"), ("ad_median_iterations", "AD iterations"), ("ad_successes", "AD success"),
-        ("fd_median_s", "FD median s"), ("fd_median_iterations", "FD iterations"), ("fd_successes", "FD success"),
-        ("fd_ratio", "FD / AD time"), ("fd_ipopt_ratio", "FD / AD IPOPT time"), ("slsqp_ratio", "SLSQP / AD time"),
+        ("ad_median_iterations", "AD iterations"), ("fd_median_iterations", "FD iterations"),
+        ("fd_ratio", "FD / AD time"), ("fd_ipopt_ratio", "FD / AD IPOPT time"),
+        ("ad_median_s", "AD median s"), ("fd_median_s", "FD median s"), ("ad_successes", "AD success"),
+        ("fd_successes", "FD success"), ("slsqp_ratio", "SLSQP / AD time"),
         ("differential_evolution_ratio", "DE / AD time"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
         ("recheck_s", "re-check s")]))
     rows = [r | {"iters": (r.get("details") or {}).get("median_iterations"),
@@ -371,6 +407,8 @@ def markdown(data: dict) -> str:
                                                ("median_iterations", "median iterations"),
                                                ("worst_violation", "worst violation"), ("objective", "objective"),
                                                ("objective_gap", "gap to finest")])
+                         + "".join(f"\n\nNot run: samples {_fmt(k['samples'])} (predicted {k['predicted_s']:.0f} s "
+                                   f"> sweep budget {k['budget_s']:g} s)" for k in sw.get("skipped") or [])
                          + f"\n\n![samples](samples_{p['problem']}.png)")
     for p in data["problems"]:
         for name, rows_ in (p.get("studies") or {}).items():

@@ -35,7 +35,7 @@ def pytest_collection_modifyitems(session, config, items) -> None:
 def pytest_runtest_logreport(report) -> None:
     if report.when == "call" or (report.when == "setup" and report.outcome != "passed"):
         name = report.nodeid.split("::", 1)[-1]
-        figure = "; ".join(f"{k} {v}" for k, v in report.user_properties)
+        figure = "; ".join(str(v) if k == "figure" else f"{k} {v}" for k, v in report.user_properties)
         _ROWS.append({"file": report.nodeid.split("::", 1)[0].rsplit("/", 1)[-1],
                       "case": name.replace("test_", "", 1).replace("_", " "),
                       "tried": _DOCS.get(report.nodeid) or name.replace("test_", "", 1).replace("_", " "),

@@ -11,7 +11,8 @@ ipopt_finite_differences  the same NLP with IPOPT fed function values only: forw
 slsqp                     scipy.optimize.minimize(method="SLSQP") on the same transcribed NLP (the kind's
                           f and g as numeric CasADi Functions, scipy's finite differences, the rows as
                           scipy constraints, maxiter = the spec's max_iter, ftol 1e-9), from the same starts
-                          (:func:`synthesis.core.ipopt.solved_with`)
+                          (:func:`synthesis.core.ipopt.solved_with`), stopped at its time budget
+                          (``slsqp_budget_s`` per run, shared by the starts)
 differential_evolution    scipy's differential_evolution over the same NLP's variables (its bounds; rows
                           as a NonlinearConstraint), one run from the spec's start (x0), default strategy
                           and population, no polish, stopped at the time budget; not run where a
@@ -58,13 +59,19 @@ class StudySettings:
     factors: tuple[float, ...] = (0.25, 0.5, 1.0, 2.0, 4.0)   # sample-count factors of the sweep
     sweep_repeats: int = 1
     peers: tuple[str, ...] = ("slsqp", "differential_evolution")
-    de_budget_s: float = 15.0
-    reference: bool = True               # best known from an untimed full multistart (the spec's starts)
+    de_budget_s: float = 10.0            # differential_evolution: stopped at this wall time (one run)
+    slsqp_budget_s: float = 15.0         # SLSQP: this wall time shared by its starts, each stopped at its share
+    #: the sweep skips a sample count whose predicted time (the last count's median x the count ratio)
+    #: exceeds this; bench.md lists what it skipped
+    sweep_budget_s: float = 30.0
+    reference: bool = True               # best known from an untimed multistart (the spec's starts, at most ...)
+    reference_starts: int = 16           # ... this many)
 
 
 FULL = StudySettings()
-#: --quick: two starts, two sample counts, no peers, the first problem of each kind (and no extreme matrix)
-QUICK = StudySettings(starts=2, factors=(0.5, 1.0), peers=(), reference=False)
+#: --quick: one start, two sample counts (the spec's own is the AD run, not solved again), no peers, no
+#: reference solve, one run per method, the first problem of each kind, no extreme matrix
+QUICK = StudySettings(starts=1, factors=(0.5, 1.0), peers=(), reference=False, sweep_budget_s=30.0)
 
 
 def tolerance(best: float) -> float:
@@ -136,8 +143,9 @@ def _nlp_functions(compiled, p):
     return f, g
 
 
-def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray):
-    """scipy SLSQP on the transcribed NLP from the kind's start; function values only (scipy's differences)."""
+def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: float = math.inf):
+    """scipy SLSQP on the transcribed NLP from the kind's start; function values only (scipy's differences);
+    stopped (StopIteration from its callback) once ``budget_s`` of wall time has passed."""
     from scipy.optimize import minimize
 
     from synthesis.core.ipopt import NLPOutcome
@@ -155,12 +163,22 @@ def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray):
     bounds = [(a if math.isfinite(a) else None, b if math.isfinite(b) else None) for a, b in zip(t.lbw, t.ubw)]
     x0 = np.clip(w0, t.lbw, t.ubw)
     t0 = time.perf_counter()
-    res = minimize(f, x0, method="SLSQP", bounds=bounds, constraints=constraints,
+
+    def budget(xk) -> None:        # callback(x): scipy 1.17 prints a callback(intermediate_result) when it drops fixed variables
+        if time.perf_counter() - t0 > budget_s:
+            raise StopIteration
+
+    res = minimize(f, x0, method="SLSQP", bounds=bounds, constraints=constraints, callback=budget,
                    options={"maxiter": compiled.problem.max_iter, "ftol": 1e-9})
     wall = time.perf_counter() - t0
     x = np.asarray(res.x, float)
     return NLPOutcome(start, x, f(x), f"SLSQP: {res.message}", bool(res.success), int(res.nit), wall, "",
                       np.zeros(len(lbg)))
+
+
+def slsqp_with_budget(budget_s: float) -> Callable:
+    """:func:`slsqp_runner` stopped at ``budget_s`` per start."""
+    return lambda compiled, start, w0, p: slsqp_runner(compiled, start, w0, p, budget_s)
 
 
 def de_runner(budget_s: float, seed: int) -> Callable:
@@ -226,12 +244,20 @@ def scaled_samples(model, factor: float) -> dict[str, int]:
 
 
 def sample_sweep(loaded, settings: StudySettings, seed: int = 0,
-                 tick: Callable[[str | None], None] = lambda what: None) -> dict:
+                 tick: Callable[[str | None], None] = lambda what: None,
+                 reuse: Callable[[], list[MethodRun]] | None = None) -> dict:
     """The solve at each factor of the spec's sample counts: median wall time, iterations, fine-grid
     worst violation and the objective's gap to the finest run; and the first count at which the
-    violation falls (and stays) at or below VIOLATION_TARGET."""
+    violation falls (and stays) at or below VIOLATION_TARGET.
+
+    ``reuse()``: runs already made at the spec's own counts with the same starts and seed (the case's
+    ipopt_multistart runs), taken for that count instead of solving it again.  A count whose predicted
+    time (the last count's median x the ratio of the factors) exceeds ``settings.sweep_budget_s`` is
+    not run; the table's ``skipped`` lists it."""
     starts = min(settings.starts, loaded.model.solver.starts)
+    own = tuple(sorted(sample_settings(loaded.model).items()))
     rows = []
+    skipped = []
     seen = set()
     for factor in settings.factors:
         samples = scaled_samples(loaded.model, factor)
@@ -239,8 +265,18 @@ def sample_sweep(loaded, settings: StudySettings, seed: int = 0,
         if key in seen:
             continue
         seen.add(key)
-        runs = []
-        for k in range(settings.sweep_repeats):
+        free = key == own and reuse is not None and len(reuse()) > 0     # measured already
+        predicted = rows[-1]["median_s"] * factor / rows[-1]["factor"] if rows else 0.0
+        if not free and predicted > settings.sweep_budget_s:
+            for k in range(settings.sweep_repeats if key != own or reuse is None else 0):
+                tick(f"{loaded.name}: samples {_samples_text(samples)} skipped (over budget)")
+                tick(None)
+            skipped.append({"factor": factor, "samples": samples, "predicted_s": predicted,
+                            "budget_s": settings.sweep_budget_s})
+            continue
+        runs = list(reuse()[:settings.sweep_repeats]) if key == own and reuse is not None else []
+        reused = len(runs)
+        for k in range(len(runs), settings.sweep_repeats):
             tick(f"{loaded.name}: samples {_samples_text(samples)} {k + 1}/{settings.sweep_repeats}")
             runs.append(measure(_with_solver(loaded, **samples), starts, seed))
             tick(None)
@@ -252,7 +288,8 @@ def sample_sweep(loaded, settings: StudySettings, seed: int = 0,
                      "iterations": typical.details["iterations"],
                      "median_iterations": typical.details["median_iterations"],
                      "objective": typical.objective, "worst_violation": typical.worst_violation,
-                     "satisfied": typical.worst_violation == 0 and math.isfinite(typical.objective)})
+                     "satisfied": typical.worst_violation == 0 and math.isfinite(typical.objective),
+                     "reused_runs": reused})
     finest = rows[-1]["objective"] if rows else math.nan
     for row in rows:
         row["objective_gap"] = (abs(row["objective"] - finest) if math.isfinite(row["objective"]) and math.isfinite(finest)
@@ -263,7 +300,7 @@ def sample_sweep(loaded, settings: StudySettings, seed: int = 0,
             reaching = i
             break
     return {"problem": loaded.name, "kind": loaded.kind, "starts": starts, "repeats": settings.sweep_repeats,
-            "violation_target": VIOLATION_TARGET, "rows": rows,
+            "violation_target": VIOLATION_TARGET, "rows": rows, "skipped": skipped,
             "reaching": None if reaching is None else {"samples": rows[reaching]["samples"],
                                                        "median_s": rows[reaching]["median_s"],
                                                        "worst_violation": rows[reaching]["worst_violation"]}}
@@ -275,8 +312,13 @@ def _samples_text(samples: dict) -> str:
 
 # ---------------------------------------------------------------------------- the cases
 
-def _method(loaded, starts: int, seed: int, **how) -> Callable[[float], MethodRun]:
-    return lambda target: measure(loaded, starts, seed, **how)
+def _method(loaded, starts: int, seed: int, keep: list | None = None, **how) -> Callable[[float], MethodRun]:
+    def run(target: float) -> MethodRun:
+        out = measure(loaded, starts, seed, **how)
+        if keep is not None:
+            keep.append(out)
+        return out
+    return run
 
 
 def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dict | None = None) -> BenchCase:
@@ -284,27 +326,35 @@ def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dic
     sample sweep (``case.sweep``)."""
     starts = min(settings.starts, loaded.model.solver.starts)
     spec_seed = loaded.model.solver.seed + seed
-    methods = {"ipopt_multistart": _method(loaded, starts, spec_seed),
+    ad_runs: list[MethodRun] = []        # the sweep takes these for the spec's own sample counts
+    methods = {"ipopt_multistart": _method(loaded, starts, spec_seed, ad_runs),
                "ipopt_finite_differences": _method(loaded, starts, spec_seed, derivatives="finite_difference")}
     if "slsqp" in settings.peers:
-        methods["slsqp"] = _method(loaded, starts, spec_seed, runner=slsqp_runner)
+        methods["slsqp"] = _method(loaded, starts, spec_seed,
+                                   runner=slsqp_with_budget(settings.slsqp_budget_s / max(starts, 1)))
     if "differential_evolution" in settings.peers:
         methods["differential_evolution"] = _method(loaded, 1, spec_seed,
                                                     runner=de_runner(settings.de_budget_s, spec_seed))
     best_known = None
     if settings.reference:
         def best_known() -> float:
-            run = measure(loaded, loaded.model.solver.starts, spec_seed + REFERENCE_SEED_OFFSET)
+            run = measure(loaded, min(loaded.model.solver.starts, settings.reference_starts),
+                          spec_seed + REFERENCE_SEED_OFFSET)
             return run.objective if run.worst_violation == 0 else math.inf
     return BenchCase(problem=loaded.name, kind=loaded.kind, methods=methods, best_known=best_known, tolerance=tolerance,
-                     note=f"{starts} starts per method" + (f" (differential_evolution: 1, budget {settings.de_budget_s:g} s)"
-                                                           if "differential_evolution" in settings.peers else "")
-                     + ("; best known: a full multistart (the spec's starts, another seed)" if settings.reference
-                        else "; best known: the best any run reached"),
+                     note=f"{starts} start(s) per method"
+                     + (f"; SLSQP stopped at {settings.slsqp_budget_s / max(starts, 1):g} s per start"
+                        if "slsqp" in settings.peers else "")
+                     + (f"; differential_evolution: 1 run, stopped at {settings.de_budget_s:g} s"
+                        if "differential_evolution" in settings.peers else "")
+                     + (f"; best known: an untimed multistart ({min(loaded.model.solver.starts, settings.reference_starts)}"
+                        " starts, another seed)" if settings.reference
+                        else "; best known: the best any run reached")
+                     + ("; peers (SLSQP, differential_evolution) not run" if not settings.peers else ""),
                      loaded=loaded, single_runs={"slsqp", "differential_evolution"},
-                     sweep=lambda tick: sample_sweep(loaded, settings, spec_seed, tick),
-                     sweep_runs=len({tuple(sorted(scaled_samples(loaded.model, f).items())) for f in settings.factors})
-                     * settings.sweep_repeats,
+                     sweep=lambda tick: sample_sweep(loaded, settings, spec_seed, tick, reuse=lambda: ad_runs),
+                     sweep_runs=len({tuple(sorted(scaled_samples(loaded.model, f).items())) for f in settings.factors}
+                                    - {tuple(sorted(sample_settings(loaded.model).items()))}) * settings.sweep_repeats,
                      studies=studies or {}, warmup=lambda: measure(loaded, 1, spec_seed))
 
 

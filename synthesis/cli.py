@@ -150,8 +150,13 @@ def check(spec: Path, out: Path, force: bool) -> None:
     loaded = load_spec(spec)
     run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
     try:
-        result = _described(_in_file(loaded, kinds.checker(loaded.kind)), loaded)
-        folder, replaced = write_run(out, result, run_artifacts(result), folder=run_folder)
+        from synthesis.library_log import captured_warnings
+        from synthesis.result import atomic_write_text
+
+        with captured_warnings() as said:        # scipy/CasADi warnings: into warnings.log, not the terminal
+            result = _described(_in_file(loaded, kinds.checker(loaded.kind)), loaded)
+        files = {"warnings.log": lambda path: atomic_write_text(path, said())} if said() else {}
+        folder, replaced = write_run(out, result, run_artifacts(result, files), folder=run_folder)
     except BaseException as exc:
         from synthesis.errors import OutputError
 
@@ -332,17 +337,13 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
     interrupt.install()
     loaded = load_spec(spec)
-    kind = kinds.solving_kind(loaded.kind)
+    kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     if scheduler is not None:       # a peer that is no dask scheduler: exit 2 now, within the connect timeout
         try:
             from synthesis.core.cluster import probe_scheduler
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
         probe_scheduler(scheduler)
-    if loaded.model.tolerance is not None:        # [tolerance]: every rule at its linearised worst case (issue 20)
-        from synthesis.tolerance.robust import robust_kind
-
-        kind = robust_kind(kind, loaded.model)
     workers = min(workers or default_workers(), MAX_WORKERS)
     if resume is not None:
         if not is_run_folder(resume):
@@ -377,8 +378,13 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                     _start_line(report, best, progress.tasks[task].completed, n)
 
             try:
-                result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
-                                                      record=log_file.append, finished=finished)
+                from synthesis.library_log import captured_warnings
+
+                with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
+                    result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
+                                                          record=log_file.append, finished=finished)
+                if said():
+                    log += f"\n# library warnings outside the IPOPT runs\n{said()}"
                 _described(result, loaded)
             except core.Interrupted as exc:
                 log_file.close()
@@ -550,8 +556,9 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
               help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
 @click.option("--repeats", type=click.IntRange(min=1), default=None,
               help="runs of each IPOPT method per problem (median wall time) [default: 3; --quick: 1]")
-@click.option("--quick", is_flag=True, help="2 starts, 2 sample counts, no peers, no extreme matrix, the first "
-                                            "problem of each kind")
+@click.option("--quick", is_flag=True, help="1 start, 1 run, sample counts x 0.5 and x 1, no peers, no reference "
+                                            "solve, no extreme matrix, the first problem of each kind (a kind with "
+                                            "its own bench set: the generic studies only); about 1 minute on 2 cores")
 @click.option("--no-extreme", is_flag=True, help="leave out the extreme-case matrix (tests/extreme/)")
 @click.option("--force", is_flag=True, help="replace OUT/bench/ when it holds an earlier agrisynth bench (without "
                                             "--force it is kept and the command exits 2 before benching; a folder "
@@ -612,7 +619,8 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
     with benchmod.quick_mode(quick):
         for kind, specs in by_kind.items():
             try:
-                cases += benchmod.cases_for(kind, specs, 0)
+                cases += benchmod.cases_for(kind, specs, 0,
+                                            None if items else benchmod.OWN_CASES_IN_EVERY_KIND_RUN)
             except Exception as exc:      # noqa: BLE001 - one kind's broken bench set must not stop the others
                 if items:
                     raise
@@ -641,7 +649,11 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
             tick("extreme-case matrix (tests/extreme/)")
             extreme = extreme_matrix()
             tick(None)
-    settings = {"repeats": repeats, "quick": quick, "problems": [c.problem for c in cases],
+    with benchmod.quick_mode(quick):
+        import dataclasses
+
+        study = dataclasses.asdict(benchmod.current_settings())
+    settings = {"repeats": repeats, "quick": quick, "study": study, "problems": [c.problem for c in cases],
                 "wall_s": round(time.perf_counter() - t0, 1)}
     folder = benchmod.write_bench(out, results, settings, extreme, run_folder=run_folder)
     console.print(bench_table(results, repeats))

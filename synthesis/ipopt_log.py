@@ -11,20 +11,28 @@ from contextlib import contextmanager
 
 @contextmanager
 def captured_stdout():
-    """Send fd 1 (where IPOPT prints) to a temporary file; yields a callable returning the text."""
+    """Send fd 1 (where IPOPT prints) to a temporary file; yields a callable returning the text.  CasADi's
+    warnings (written to ``sys.stderr``) and Python warnings raised meanwhile are appended to it
+    (:mod:`synthesis.library_log`): they belong in the run's log, not on the terminal."""
+    from synthesis.library_log import captured_warnings
+
     sys.stdout.flush()
     saved = os.dup(1)
+    text: list[str] = []
+    said = None
     with tempfile.TemporaryFile(mode="w+b") as tmp:
-        os.dup2(tmp.fileno(), 1)
-        text: list[str] = []
         try:
-            yield lambda: "".join(text)
+            with captured_warnings() as said:
+                os.dup2(tmp.fileno(), 1)
+                yield lambda: "".join(text)
         finally:
             sys.stdout.flush()
             os.dup2(saved, 1)
             os.close(saved)
             tmp.seek(0)
             text.append(tmp.read().decode(errors="replace"))
+            if said is not None:
+                text.append(said())
 
 
 def reached_optimum(return_status: str) -> bool:

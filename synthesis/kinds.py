@@ -85,3 +85,14 @@ def solving_kind(name: str) -> Kind:
         raise SpecError(f"kind {name!r} has nothing to optimise (`agrisynth check` evaluates it); "
                         f"kinds that solve: {', '.join(solvable)}")
     return kind
+
+
+def solving_kind_for(loaded) -> Kind:
+    """The kind that solves a loaded spec: its own, or -- when the spec has a ``[tolerance]`` table -- the
+    same kind holding every rule at its linearised worst case in the box (synthesis.tolerance.robust)."""
+    kind = solving_kind(loaded.kind)
+    if getattr(loaded.model, "tolerance", None) is None:
+        return kind
+    from synthesis.tolerance.robust import robust_kind
+
+    return robust_kind(kind, loaded.model)

@@ -159,9 +159,9 @@ def _with(tmp_path, edit) -> str:
     (lambda d: d["targets"].update(crank_deg=d["targets"]["crank_deg"][:5]),
      "fourbar_path.targets.crank_deg: expected one angle per point (6), got 5"),
     (lambda d: d["targets"]["points"].__setitem__(3, [float("nan"), 1.0]),
-     "fourbar_path.targets.points.3: x: expected a finite number, got nan"),
+     "targets.points[3][0]: nan is not a finite number"),         # the loader, before any model
     (lambda d: d["targets"]["points"].__setitem__(1, [2.0, float("inf")]),
-     "fourbar_path.targets.points.1: y: expected a finite number, got inf"),
+     "targets.points[1][1]: inf is not a finite number"),
     (lambda d: d["bounds"].update(r3=[60, 5]), "fourbar_path.bounds.r3: [60, 5] has lo > hi; write it as [5, 60]"),
     (lambda d: d["bounds"].update(rc_x=[5, 60]), "fourbar_path.bounds.rc_x: unknown field; did you mean 'rcx'?"),
     (lambda d: d["bounds"].update(theta_0=[0, 360]),
@@ -173,9 +173,14 @@ def _with(tmp_path, edit) -> str:
      "fourbar_path.solver.mu_strategy: expected 'monotone' or 'adaptive', got 'fast'"),
     # magnitudes whose squares overflow a float: named, not a traceback from the kinematics
     (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
-     "fourbar_path.targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+300"),
+     "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)"),
     (lambda d: d["bounds"].update(r3=[5, 1e200]),
-     "fourbar_path.bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+200"),
+     "bounds.r3[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
+    # within what any spec may hold, beyond what a four-bar in mm can mean: the kind's own cap
+    (lambda d: d["targets"]["points"].__setitem__(0, [1e8, 0.0]),
+     "fourbar_path.targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+08"),
+    (lambda d: d["bounds"].update(r3=[5, 1e9]),
+     "fourbar_path.bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+09"),
 ])
 def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
     assert message in _with(tmp_path, edit)
@@ -189,11 +194,11 @@ def test_too_many_points(tmp_path):
 
 @pytest.mark.parametrize("edit, message", [
     (lambda d: d["targets"]["points"].__setitem__(2, [float("nan"), 0.0]),
-     "targets.points.2: x: expected a finite number, got nan"),
+     "targets.points[2][0]: nan is not a finite number"),
     (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
-     "targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+300"),
+     "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)"),
     (lambda d: d["bounds"].update(r3=[5, 1e200]),
-     "bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+200"),
+     "bounds.r3[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
 ], ids=["nan", "huge-point", "huge-bound"])
 def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
     data = truth_data(0, 6, timed=False)

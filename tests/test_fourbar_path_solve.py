@@ -334,9 +334,9 @@ def test_a_fourbar_path_run_imports_no_other_kind(tmp_path):
     script = (
         "import json, sys\n"
         "from synthesis.cli import cli\n"
-        f"for args in (['check', {str(PATH_LIBRARY / 'picking_arc.toml')!r}, '--out', {str(tmp_path)!r}],\n"
+        f"for args in (['check', {str(PATH_LIBRARY / 'picking_arc.toml')!r}, '--out', {str(tmp_path / 'c')!r}],\n"
         f"             ['solve', {str(PATH_LIBRARY / 'picking_arc.toml')!r}, '--starts', '1', '--workers', '1',\n"
-        f"              '--out', {str(tmp_path)!r}]):\n"
+        f"              '--out', {str(tmp_path / 's')!r}]):\n"
         "    try:\n"
         "        cli.main(args, standalone_mode=False)\n"
         "    except SystemExit:\n"

@@ -70,11 +70,15 @@ def test_compare_page_has_one_red_cell_per_violation_and_every_figure(runs, tmp_
     assert not list(page.parent.glob(".compare.*"))             # no staging folder left behind
 
 
-def test_single_run_report_shows_the_overlay_figures_too(runs):
+def test_single_run_report_shows_the_runs_own_figures_not_the_overlays(runs):
+    """One design's drawings (issue 17): its trajectory, speeds, linkage and animation; not the comparison
+    overlay of the same paths (paths.png), which belongs to `agrisynth compare`."""
     folder, _ = runs[0]
     text = (folder / "report.html").read_text()
-    for f in ("trajectory.png", "paths.png", "kinematics.png", "linkage.png", "animation.gif"):
+    for f in ("trajectory.png", "kinematics.png", "linkage.png", "animation.gif"):
         assert f"src='{f}'" in text and (folder / f).exists()
+    assert "paths.png" not in text and not (folder / "paths.png").exists()
+    assert "(baseline)" not in text
 
 
 def test_figure_that_cannot_be_drawn_is_a_note_not_a_crash(runs, tmp_path):

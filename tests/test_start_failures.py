@@ -67,7 +67,10 @@ def test_a_worker_that_dies_and_a_start_that_raises_do_not_end_the_run():
     assert time.perf_counter() - t0 < 20
     assert [o.start for o in out] == list(range(8)) and sorted(seen) == list(range(8))
     assert out[1].return_status == "Worker_Crashed"
-    assert failure_of(out[1]) == "its worker process ended with exit code 7 while solving this start"
+    # the exit code is named when the pool has reaped the process by the time it notices the break; under
+    # load it may notice first (then "died")
+    assert failure_of(out[1]) in ("its worker process ended with exit code 7 while solving this start",
+                                  "its worker process died while solving this start")
     assert out[3].return_status == "Start_Raised: ZeroDivisionError"
     assert all(isinstance(o, Outcome) for i, o in enumerate(out) if i not in (1, 3))
 

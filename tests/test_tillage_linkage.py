@@ -272,7 +272,7 @@ FORBIDDEN = ("synthesis.steering_linkage", "synthesis.kinematics.steering_trapez
              "synthesis.planting", "synthesis.picker", "synthesis.fourbar_path", "synthesis.crank_rocker",
              "synthesis.clamp_cam", "synthesis.guide_tube", "synthesis.kinematics.planting_arm",
              "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.combing_chain",
-             "synthesis.comb_finger", "synthesis.guide_way", "cvxpy", "ezdxf")
+             "synthesis.comb_finger", "synthesis.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 
 def test_a_tillage_run_imports_no_other_kind(tmp_path):

@@ -206,3 +206,52 @@ def test_a_satisfied_best_start_is_optimal_only_at_solve_succeeded():
                              ("Infeasible_Problem_Detected", "feasible"), ("Maximum_Iterations_Exceeded", "feasible")):
         best = StartReport(SimpleNamespace(start=0, return_status=status, success=False), True, 0.0)
         assert status_of(best, None) == expected
+
+
+def test_optimal_needs_the_kept_stage_to_have_converged():
+    """A multi-stage kind may keep an earlier stage's design (success False) while the last stage's IPOPT
+    said Solve_Succeeded: that design was not converged to, so the run is feasible, not optimal."""
+    best = StartReport(SimpleNamespace(start=0, return_status="Solve_Succeeded", success=False), True, 0.0)
+    assert status_of(best, None) == "feasible"
+
+
+def test_a_rule_value_that_is_not_a_number_is_an_infinite_violation():
+    import math
+
+    import numpy as np
+
+    from constraints.base import Rule
+    from synthesis.core.verdict import Recheck, report_of
+
+    def recheck(outcome):
+        return Recheck([Rule("gap", np.array([1.0, float("nan")]), 0.0, None, "mm", 1.0)])
+
+    rep = report_of(SimpleNamespace(start=0, objective=1.0, details={}), recheck)
+    assert not rep.satisfied and rep.worst_violation == math.inf
+    assert rep.records[0].value is None and "not a number" in rep.records[0].note
+
+
+def test_a_tolerance_box_no_design_can_hold_fails_instead_of_passing(tmp_path):
+    """steering_redesign_40 with a +-60 mm / +-15 deg box (wider than half the arm's range): the nominal
+    rules hold at the best start, the linearised worst cases do not -> failed, exit 3, named."""
+    text = (LIBRARY / "steering" / "steering_redesign_40.toml").read_text()
+    path = tmp_path / "robust.toml"
+    path.write_text(text + "\n[tolerance]\nlength = 60.0\nangle = 15.0\nsamples = 50\nseed = 0\n")
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path / "out"),
+                           "--starts", "2", "--workers", "1"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    err = " ".join(proc.stderr.split())
+    assert "@tolerance" in err and "does not keep its promise" in err and "Traceback" not in proc.stderr
+    data = json.loads((tmp_path / "out" / "steering_redesign_40" / "result.json").read_text())
+    assert data["status"] == "failed"
+    assert any(r["name"].endswith("@tolerance") and not r["satisfied"] for r in data["rules"])
+
+
+def test_a_tolerance_box_for_a_kind_that_cannot_take_one_is_bad_input(tmp_path):
+    text = (LIBRARY / "guide_tube" / "cai2020_delta2.toml").read_text()
+    path = tmp_path / "robust.toml"
+    path.write_text(text + "\n[tolerance]\nangle = 0.5\nsamples = 20\n")
+    loaded = load_spec(path)
+    with pytest.raises(SpecError, match="not supported for this kind yet"):
+        run_solve(loaded, starts=1, workers=1)

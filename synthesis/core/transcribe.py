@@ -177,12 +177,13 @@ def _backed_off(problem: Problem, rule) -> list[Row]:
     return rows
 
 
-def _max_min_margin(problem: Problem, objective: MaxMinMargin) -> ObjectiveParts:
-    """max tau s.t. every backed-off rule row is at least tau x its rule's scale inside its limits."""
+def _max_min_margin(problem: Problem, objective: MaxMinMargin, hold=lambda rule, rows: rows) -> ObjectiveParts:
+    """max tau s.t. every backed-off rule row is at least tau x its rule's scale inside its limits (in the
+    robust form: its linearised worst case in the tolerance box, ``hold``)."""
     tau = ca.SX.sym("min_normalised_margin")
     rows: list[Row] = []
     for rule in problem.rules:
-        for expr, lb, ub in _backed_off(problem, rule):
+        for expr, lb, ub in hold(rule, _backed_off(problem, rule)):
             if lb is not None and ub is not None and lb == ub:
                 continue          # an equality has no margin to maximise
             if lb is not None:
@@ -223,7 +224,7 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
             g.add(hold(rule, _backed_off(problem, rule)), k)
         objective = problem.objective
         if isinstance(objective, MaxMinMargin):
-            objective = _max_min_margin(problem, objective)
+            objective = _max_min_margin(problem, objective, hold)
         g.add(objective.rows)
         extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
         extra_init = np.array(objective.extra_init, dtype=float)

@@ -73,7 +73,9 @@ def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
     except (AgrisynthError, ValueError, ArithmeticError) as exc:
         return StartReport(outcome, False, math.inf, why=str(exc))
     records = [r.record() for r in rc.rules]
-    worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None else -math.inf)
+    # a margin that is not a finite number counts as an infinite violation, never as none (max() skips NaN)
+    worst = max([0.0] + [-(r.normalised_margin if r.normalised_margin is not None
+                           and math.isfinite(r.normalised_margin) else -math.inf)
                          for r in records if not r.satisfied])
     report = StartReport(outcome, all(r.satisfied for r in records), worst, records, rc.context)
     if rc.objective is not None:
@@ -171,7 +173,8 @@ def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
 def status_of(best: StartReport, elastic: ElasticDiagnosis | None) -> str:
     """The DESIGN.md status of a multistart run (see the module docstring)."""
     if best.satisfied:
-        return "optimal" if reached_optimum(best.outcome.return_status) else "feasible"
+        # success: the stage whose design was kept converged (a multi-stage kind may keep an earlier stage's)
+        return "optimal" if best.outcome.success and reached_optimum(best.outcome.return_status) else "feasible"
     if elastic is not None and elastic.relaxed:
         return "infeasible"
     return "failed"

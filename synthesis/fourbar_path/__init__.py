@@ -8,7 +8,10 @@ KIND = Kind(
     spec_model="synthesis.spec.fourbar_path:FourbarPathSpec",
     check="synthesis.fourbar_path.check:run_check",
     figures={"coupler_curve.png": "synthesis.fourbar_path.plots:coupler_curve_figure",
-             "linkage.gif": "synthesis.fourbar_path.plots:linkage_animation"},
+             "coupler_curve.svg": "synthesis.fourbar_path.plots:coupler_curve_figure",
+             "linkage.gif": "synthesis.fourbar_path.plots:linkage_animation",
+             "paths.csv": "synthesis.fourbar_path.export:write_paths_csv",
+             "linkage.dxf": "synthesis.fourbar_path.export:write_linkage_dxf"},
     compare="synthesis.fourbar_path.plots:compare_coupler_curves",
     solving="synthesis.fourbar_path.solve:SOLVING",
     objectives={"sum_squared_distance": "sum of squared distances of the coupler point to the targets, mm^2 "

@@ -55,6 +55,19 @@ def _linkage_lines(ax, joints: dict, k: int = 0) -> list:
     return artists
 
 
+def _annotate(ax, joints: dict, k: int = 0) -> None:
+    """Joint letters and each link's length (mm) at its middle."""
+    z = {n: complex(v[k]) for n, v in joints.items()}
+    for name, p in z.items():
+        ax.annotate(name, (p.real, p.imag), textcoords="offset points", xytext=(5, 5), fontsize=9,
+                    fontweight="bold", zorder=8)
+    for a, b in (("O", "O'"), ("O", "A"), ("A", "B"), ("B", "O'"), ("A", "P"), ("B", "P")):
+        m = (z[a] + z[b]) / 2
+        ax.annotate(f"{abs(z[b] - z[a]):.1f}", (m.real, m.imag), textcoords="offset points", xytext=(0, -10),
+                    ha="center", fontsize=7.5, color="0.3", zorder=8,
+                    bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
+
+
 def _frame_axes(ax, result: Result, joints_all: list[np.ndarray]) -> None:
     pts = np.concatenate([np.asarray(j) for j in joints_all if np.size(j)])
     pts = pts[np.isfinite(pts)]
@@ -93,7 +106,8 @@ def coupler_curve_figure(result: Result, path: Path) -> None:
     joints = joint_positions(design, crank[:1] if crank.size else np.zeros(1), branch)
     if all(np.isfinite(v[0]) for v in joints.values()):
         _linkage_lines(ax, joints)
-        ax.plot([], [], **LINK, label="linkage at target 1")
+        _annotate(ax, joints)
+        ax.plot([], [], **LINK, label="linkage at target 1 (lengths in mm)")
     _frame_axes(ax, result, [x + 1j * y, targets[:, 0] + 1j * targets[:, 1] if targets.size else np.zeros(0),
                              *joints.values()])
     ax.legend(fontsize=8, loc="best")
@@ -107,7 +121,7 @@ def linkage_animation(result: Result, path: Path) -> None:
     """The linkage over one cycle of the trajectory (GIF, GIF_FRAMES frames)."""
     design, branch = _design(result)
     tr = result.trajectory
-    fig, ax = plt.subplots(figsize=(4.6, 4.2))
+    fig, ax = plt.subplots(figsize=(6.4, 5.8))          # 640 x 580 px at dpi 100
     if not tr:     # nothing moves: a one-frame GIF that says why
         ax.text(0.5, 0.5, "the linkage does not assemble", ha="center", transform=ax.transAxes)
         FuncAnimation(fig, lambda k: [], frames=[0]).save(str(path), writer=PillowWriter(fps=1), dpi=64)
@@ -128,6 +142,8 @@ def linkage_animation(result: Result, path: Path) -> None:
     triangle, = ax.plot([], [], color="0.25", lw=1.0, ls="--", zorder=4)  # A - P - B
     pins, = ax.plot([], [], "o", color="w", mec="k", ms=5, zorder=6)
     point, = ax.plot([], [], "o", color="tab:red", ms=6, zorder=7)
+    counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10, zorder=9,
+                      bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.8"))
     fig.tight_layout()
 
     def draw(k: int):
@@ -136,10 +152,11 @@ def linkage_animation(result: Result, path: Path) -> None:
         triangle.set_data([a.real, p.real, b.real], [a.imag, p.imag, b.imag])
         pins.set_data([a.real, b.real], [a.imag, b.imag])
         point.set_data([p.real], [p.imag])
-        return chain, triangle, pins, point
+        counter.set_text(f"frame {k + 1}/{GIF_FRAMES}, crank {np.degrees(crank[frames[k]]) % 360:.0f} deg")
+        return chain, triangle, pins, point, counter
 
     FuncAnimation(fig, draw, frames=range(GIF_FRAMES), blit=True).save(
-        str(path), writer=PillowWriter(fps=12), dpi=64)
+        str(path), writer=PillowWriter(fps=12), dpi=100)
     plt.close(fig)
 
 

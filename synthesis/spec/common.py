@@ -83,7 +83,7 @@ class ToleranceSpec(StrictModel):
     length: float | None = Field(None, ge=0, le=1e3, description="half-width for every length, mm")
     angle: float | None = Field(None, ge=0, le=90, description="half-width for every angle, deg")
     variables: dict[str, float] = Field(default_factory=dict,
-                                        description="half-width per design variable (its unit), overrides length/angle")
+                                        description="half-width per design variable, in its own unit (mm for lengths, deg for angles); overrides length/angle")
     samples: int = Field(2000, ge=0, le=1_000_000, description="Monte-Carlo samples of the answer")
     seed: int = Field(0, ge=0, le=2**53, description="Monte-Carlo seed")
 

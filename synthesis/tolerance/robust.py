@@ -17,6 +17,7 @@ from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.transcribe import tolerance_box
 from synthesis.design_info import describe
+from synthesis.errors import SpecError
 from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of
 
 
@@ -37,8 +38,16 @@ class _Resolver:
         info = describe(self.spec)
         names = list(info)
         n = len(names)
+        unsupported = SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
+                                f"yet (its NLP does not work in the spec's design variables {names}); "
+                                f"`agrisynth tolerance RESULT` analyses a solved design")
+        if problem.x.numel() < n:
+            raise unsupported
         affine = AFFINE.get(self.kind_name)
-        d0, J = (np.zeros(n), np.eye(n)) if affine is None else affine(_Stub(self.spec), n)
+        try:
+            d0, J = (np.zeros(n), np.eye(n)) if affine is None else affine(_Stub(self.spec), n)
+        except AttributeError:        # the map needs the built NLP (e.g. nominal units): not from the spec alone
+            raise unsupported from None
         dmap = DesignMap(names, names, [info[k]["unit"] or UNITS.get(self.kind_name, "") for k in names], d0, J)
         tol = self.spec.tolerance
         return Tolerance(n, box_of(dmap, tol.length, tol.angle, dict(tol.variables)), J)
@@ -66,8 +75,15 @@ class RobustBuild:
     kind_name: str
 
     def __call__(self, setting: Setting, elastic: bool = False):
+        expected = list(describe(setting.spec))
         with tolerance_box(_Resolver(self.kind_name, setting.spec)):
             nlp = self.base(setting, elastic)
+        if list(getattr(nlp, "names", [])) != expected:
+            # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
+            # variables (a subset, nominal units) cannot take it yet
+            raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind yet "
+                            f"(its NLP variables {list(getattr(nlp, 'names', []))} are not the spec's {expected}); "
+                            f"`agrisynth tolerance RESULT` analyses a solved design")
         for compiled in [getattr(nlp, "compiled", None), *getattr(nlp, "stages", [])]:
             if compiled is not None and compiled.t.robust is not None:
                 compiled.solve = _padded(compiled)
@@ -95,7 +111,30 @@ class RobustFinish:
             mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
             facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
                                   "held_at": "linearised worst case of every rule row in the box"}
+            # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
+            # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
+            worst = _worst_case_records(self.kind, spec, design, box)
+            return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst)
         return dataclasses.replace(finished, facts=facts)
+
+
+def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray) -> list[dict]:
+    """One rule row per rule: its linearised worst-case margin in the tolerance box (>= 0 holds)."""
+    from synthesis.tolerance.analysis import linearise, stack_up
+
+    lin = linearise(kind, spec, design)
+    if list(lin.dmap.keys) != list(describe(spec)):     # the box is in the spec's order (RobustBuild checks the NLP)
+        raise SpecError(f"{kind.name}: the analysis variables {lin.dmap.keys} are not the spec's {list(describe(spec))}")
+    rows = []
+    for row in stack_up(lin, np.asarray(box, float)):
+        margin = row["linear_worst_margin"]
+        finite = bool(np.isfinite(margin))
+        rows.append({"name": f"{row['name']}@tolerance", "value": margin if finite else None, "limit": [0.0, None],
+                     "unit": row["unit"], "satisfied": finite and margin >= -1e-9 * row["scale"],
+                     "margin": margin if finite else None,
+                     "normalised_margin": margin / row["scale"] if finite else None,
+                     "where": "linearised worst case in the tolerance box", "note": None})
+    return rows
 
 
 def robust_kind(kind: Kind, spec) -> Kind:
