@@ -73,3 +73,25 @@ def test_linkage_that_cannot_assemble_names_the_file(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.startswith(f"error: {path}: planting_fourbar: linkage cannot assemble at any crank angle")
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_planting_limits_follow_the_seedling_height_and_the_mat_thickness(tmp_path):
+    """Issue 17: P1P3 and P2P3 not written in the spec follow the inputs they stand for (the paper's
+    [105, 115] mm for a 110 mm seedling, about 22 mm for a 22 mm mat); written ones are kept as written."""
+    from conftest import PLANTING
+    from synthesis.spec import load_spec
+
+    text = (PLANTING / "taiwan_example1.toml").read_text()
+    assert "p1p3" not in text and "seedling_height = " in text and "thickness = " in text
+    spec = load_spec(PLANTING / "taiwan_example1.toml").model
+    assert spec.rules.p1p3 == pytest.approx((105.0, 115.0)) and spec.rules.p2p3 == pytest.approx((21.0, 23.0))
+    path = tmp_path / "taller.toml"
+    path.write_text(text.replace("seedling_height = 110", "seedling_height = 120").replace("thickness = 22", "thickness = 20"))
+    taller = load_spec(path).model
+    assert taller.rules.p1p3 == pytest.approx((120 * 105 / 110, 120 * 115 / 110))
+    assert taller.rules.p2p3 == pytest.approx((20 * 21 / 22, 20 * 23 / 22))
+    assert set(taller.derived_limits()) == {"p1p3", "p2p3"} and "seedling height 120 mm" in taller.derived_limits()["p1p3"]
+    path.write_text(text.replace("[rules]", "[rules]\np1p3 = [100, 120]") if "[rules]" in text
+                    else text + "\n[rules]\np1p3 = [100, 120]\n")
+    given = load_spec(path).model
+    assert given.rules.p1p3 == (100.0, 120.0) and set(given.derived_limits()) == {"p2p3"}

@@ -87,6 +87,8 @@ def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict
         "soil_level_mm": None if pts is None else pts.soil_level,
         "seedbed": {"x": seedbed.point[0], "y": seedbed.point[1], "tilt_deg": math.degrees(seedbed.tilt),
                     "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
+        # rule limits the spec did not write, and how they follow from its inputs
+        "rule_limits_from_inputs": spec.derived_limits(),
     }
 
 

@@ -184,8 +184,11 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
             idx = [i for i in _crossings(s, level, downward=True)
                    if theta["P6"] < cycle[i] and cycle[i + 1] <= end]
             if not idx:
+                what = {"P1": "[seedbed] seedling_height", "P2": "[seedbed] thickness"}.get(name)
+                hint = (f" (that line is {what} = {level:g} mm: lower it, or give the arm a taller loop)"
+                        if what else "")
                 problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
-                                  f"seedbed bottom on its way down between soil exit and entry")
+                                  f"seedbed bottom on its way down between soil exit and entry{hint}")
                 break
             i = idx[-1]
             theta[name] = _refine(lambda t, lv=level: float(bed.height(f(t, p)[0])) - lv, cycle[i], cycle[i + 1])

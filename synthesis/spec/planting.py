@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, PrivateAttr, model_validator
 
 from synthesis.spec.common import (
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
@@ -91,8 +91,10 @@ class AccelerationSigns(StrictModel):
 class RulesSection(StrictModel):
     """Limits of the design rules (seed 000 §6.2); defaults are the paper's values."""
 
-    p1p3: Interval = Field((105.0, 115.0), description="distance P1-P3, mm")
-    p2p3: Interval = Field((21.0, 23.0), description="distance P2-P3 (about the 22 mm seedbed), mm")
+    p1p3: Interval | None = Field(None, description="distance P1-P3, mm; default: follows the seedling height h, "
+                                                    "[105/110, 115/110] x h (seed 000: [105, 115] mm for 110 mm)")
+    p2p3: Interval | None = Field(None, description="distance P2-P3, mm; default: follows the seedbed thickness t, "
+                                                    "[21/22, 23/22] x t (seed 000: about 22 mm; [21, 23] mm)")
     collinearity: float = Field(5.0, gt=0, le=90, description="max turn of the claw path at P2 between "
                                                              "P1->P2 and P2->P3, deg (0 = collinear)")
     entry_angle_min: float = Field(80.0, gt=0, le=90, description="min angle of the ground-frame velocity "
@@ -106,6 +108,8 @@ class RulesSection(StrictModel):
     @model_validator(mode="after")
     def _ordered(self) -> "RulesSection":
         for name in ("p1p3", "p2p3", "depth", "transmission_angle"):
+            if getattr(self, name) is None:
+                continue
             lo, hi = getattr(self, name)
             if lo > hi:
                 raise ValueError(f"{name}: [{lo:g}, {hi:g}] has lo > hi")
@@ -139,6 +143,36 @@ class PlantingFourbarSpec(ProblemSpec):
     rules: RulesSection = Field(default_factory=RulesSection)
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    _derived: tuple = PrivateAttr(default=())          # rule limits filled in from the inputs
+
+    @model_validator(mode="after")
+    def _limits_follow_the_inputs(self) -> "PlantingFourbarSpec":
+        """P1P3 and P2P3 not given: the paper's limits scaled with the seedling height and the mat thickness
+        they stand for (seed 000: [105, 115] mm for a 110 mm seedling, about 22 mm for a 22 mm mat)."""
+        derived = {}
+        h, t = self.seedbed.seedling_height, self.seedbed.thickness
+        if self.rules.p1p3 is None:
+            derived["p1p3"] = (105.0 / 110.0 * h, 115.0 / 110.0 * h)
+        if self.rules.p2p3 is None:
+            derived["p2p3"] = (21.0 / 22.0 * t, 23.0 / 22.0 * t)
+        if derived:
+            # the model is frozen once validated; this is its own validation, before anyone reads it
+            object.__setattr__(self, "rules", self.rules.model_copy(update=derived))
+            self._derived = tuple(derived)
+        return self
+
+    def derived_limits(self) -> dict[str, str]:
+        """How each limit that was not written in the spec follows from the inputs (for the report)."""
+        out = {}
+        if "p1p3" in self._derived:
+            lo, hi = self.rules.p1p3
+            out["p1p3"] = (f"[{lo:.4g}, {hi:.4g}] mm = [105/110, 115/110] x seedling height "
+                           f"{self.seedbed.seedling_height:g} mm (seed 000: [105, 115] mm for 110 mm)")
+        if "p2p3" in self._derived:
+            lo, hi = self.rules.p2p3
+            out["p2p3"] = (f"[{lo:.4g}, {hi:.4g}] mm = [21/22, 23/22] x seedbed thickness "
+                           f"{self.seedbed.thickness:g} mm (seed 000: about 22 mm for a 22 mm mat)")
+        return out
 
     def variables(self) -> dict[str, Variable]:
         """Every design variable (spec units) by its result.json name."""
