@@ -93,7 +93,7 @@ def test_reference_reads_units_and_ranges():
     assert (rows["arm.l2"].unit, rows["arm.l2"].required) == ("mm", True)
     assert rows["arm.l2"].type == "number, or {init, bounds} (free)"
     assert (rows["operation.crank_speed"].unit, rows["operation.crank_speed"].range) == ("r/min", "> 0, <= 2000")
-    assert (rows["rules.p1p3"].default, rows["solver.starts"].default) == ("[105.0, 115.0]", "16")
+    assert (rows["rules.p1p3"].default, rows["solver.starts"].default) == ("unset", "16")   # follows seedling_height
     assert rows["rules"].section and not rows["rules"].required
     path = {e.path: e for e in specref.kind_entries("fourbar_path")}
     assert path["bounds.rcy"].unit == "mm"            # "(90 deg counter-clockwise), mm": the aside is not the unit
