@@ -31,3 +31,5 @@ def test_the_core_contract_names_every_kind_package():
     contract = next(c for c in config["tool"]["importlinter"]["contracts"] if c["name"] == "the solve core knows no kind")
     packages = {target.split(":")[0] for target in _REGISTRY.values()}
     assert packages <= set(contract["forbidden_modules"]), packages - set(contract["forbidden_modules"])
+    independent = next(c for c in config["tool"]["importlinter"]["contracts"] if c["type"] == "independence")
+    assert packages == set(independent["modules"]), packages ^ set(independent["modules"])
