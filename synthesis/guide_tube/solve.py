@@ -50,7 +50,8 @@ def unevaluated_rules(spec, why: str) -> list:
 
 def finish(setting: Setting, best: StartReport) -> Finished:
     spec, scene = setting.spec, setting.data
-    objective = {"name": spec.objective.name, "value": best.outcome.objective,
+    # no start could be evaluated: the result shows the given design, so no start's objective belongs to it
+    objective = {"name": spec.objective.name, "value": None if best.why is not None else best.outcome.objective,
                  "unit": OBJECTIVE_UNITS[spec.objective.name]}
     settings = {"samples": spec.solver.samples}
     given = design_of(spec.given_angles())
