@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fourbar_path_support import PATH_LIBRARY, cli, independent_check, independent_failures, toml_text, write_spec
-from solving import diagnose_infeasible, recheck_rules, run_solve
+from solving import diagnose_infeasible, modules_after_runs, recheck_rules, run_solve
 from synthesis.core.executor import latin_hypercube_starts
 from synthesis.errors import SpecError
 from synthesis.fourbar_path.check import evaluate
@@ -331,20 +329,9 @@ FORBIDDEN = ("synthesis.planting", "synthesis.kinematics.planting_arm", "synthes
 
 
 def test_a_fourbar_path_run_imports_no_other_kind(tmp_path):
-    script = (
-        "import json, sys\n"
-        "from synthesis.cli import cli\n"
-        f"for args in (['check', {str(PATH_LIBRARY / 'picking_arc.toml')!r}, '--out', {str(tmp_path / 'c')!r}],\n"
-        f"             ['solve', {str(PATH_LIBRARY / 'picking_arc.toml')!r}, '--starts', '1', '--workers', '1',\n"
-        f"              '--out', {str(tmp_path / 's')!r}]):\n"
-        "    try:\n"
-        "        cli.main(args, standalone_mode=False)\n"
-        "    except SystemExit:\n"
-        "        pass\n"
-        f"open({str(tmp_path / 'modules.json')!r}, 'w').write(json.dumps(sorted(sys.modules)))\n")
-    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    modules = json.loads((tmp_path / "modules.json").read_text())
+    arc = str(PATH_LIBRARY / "picking_arc.toml")
+    modules = modules_after_runs(tmp_path, [["check", arc, "--out", str(tmp_path / "c")],
+                                            ["solve", arc, "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")]])
     assert "synthesis.fourbar_path.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
 

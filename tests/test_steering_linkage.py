@@ -8,18 +8,14 @@ numbers of our own fits carry 1e-6 relative, the determinism of IPOPT at "precis
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from conftest import LIBRARY, ROOT
-from solving import run_solve
+from conftest import LIBRARY
+from solving import cli_run, modules_after_runs, run_solve, spec_with, strict_json
 from synthesis.kinematics.steering_trapezoid import (ackermann_kingpin_spacing, ackermann_outer, inner_tip,
                                                      loop_residual, outer_lock, outer_tip, tie_rod_length,
                                                      transmission_angles, turning_radii)
@@ -237,44 +233,25 @@ def test_redesign_over_the_machine_s_0_27_deg():
 
 # --- CLI: figures, bad input, isolation -------------------------------------------------------------------
 
-def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
-
-
-def _spec_with(tmp_path: Path, source: Path, replacements: list[tuple[str, str]]) -> Path:
-    text = source.read_text()
-    for old, new in replacements:
-        assert old in text, old
-        text = text.replace(old, new, 1)
-    path = tmp_path / "spec.toml"
-    path.write_text(text)
-    return path
-
-
-def _strict_json(path: Path) -> dict:
-    def refuse(constant):
-        raise AssertionError(f"{path}: {constant} in result.json")
-    return json.loads(path.read_text(), parse_constant=refuse)
 
 
 def test_check_cli_writes_result_and_figure(tmp_path):
-    proc = run("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
+    proc = cli_run("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     folder = tmp_path / "hwang_model3_steering"
-    data = _strict_json(folder / "result.json")
+    data = strict_json(folder / "result.json")
     assert data["facts"]["table12"]["kingpin_spacing"]["inconsistent_rows_inside_deg"] == [40.0]
     assert (folder / "steering.png").stat().st_size > 10_000
 
 
 def test_a_trapezoid_through_its_dead_centre_is_a_rule_failure_naming_the_lock(tmp_path):
-    path = _spec_with(tmp_path, BASELINE, [("arm_length = 150.0 ", "arm_length = 200.0 "),
+    path = spec_with(tmp_path, BASELINE, [("arm_length = 150.0 ", "arm_length = 200.0 "),
                                            ("base_angle = 72.4 ", "base_angle = 20.0 "),
                                            ("max_inside_lock = 40.0", "max_inside_lock = 45.0")])
-    proc = run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
-    data = _strict_json(tmp_path / "hwang_model3_steering" / "result.json")
+    data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "tie_rod_transmission_angle")
     assert not rule["satisfied"] and rule["value"] is None
     assert "dead centre at inside lock 44.46 deg" in rule["note"] and "base_angle 20 deg" in rule["note"]
@@ -298,13 +275,13 @@ def test_a_trapezoid_through_its_dead_centre_is_a_rule_failure_naming_the_lock(t
 ])
 def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
     if message is None:       # arms so long they cross: 2 x 400 x cos(20 deg) = 752 mm > w = 734 mm
-        path = _spec_with(tmp_path, BASELINE, [(old, new), ("arm_length = 150.0 ", "arm_length = 400.0 ")])
+        path = spec_with(tmp_path, BASELINE, [(old, new), ("arm_length = 150.0 ", "arm_length = 400.0 ")])
         message = ("steering_linkage.trapezoid: the arms cross: tie rod w - 2 r cos(gamma) = -17.75 mm <= 0 at arm_length "
                    "400 mm, base_angle 20 deg")
     else:
-        path = _spec_with(tmp_path, BASELINE, [(old, new)])
+        path = spec_with(tmp_path, BASELINE, [(old, new)])
     for command in ("check", "solve"):
-        proc = run(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
+        proc = cli_run(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert message in " ".join(proc.stderr.split()), proc.stderr
         assert "Traceback" not in proc.stderr
@@ -318,18 +295,8 @@ FORBIDDEN = ("synthesis.tillage_linkage", "synthesis.kinematics.tillage_linkage"
 
 
 def test_a_steering_run_imports_no_other_kind(tmp_path):
-    script = (
-        "import json, sys\n"
-        "from synthesis.cli import cli\n"
-        f"for args in (['check', {str(BASELINE)!r}], ['solve', {str(REDESIGN_27)!r}, '--workers', '1']):\n"
-        "    try:\n"
-        f"        cli.main(args + ['--out', {str(tmp_path)!r}], standalone_mode=False)\n"
-        "    except SystemExit:\n"
-        "        pass\n"
-        f"open({str(tmp_path / 'modules.json')!r}, 'w').write(json.dumps(sorted(sys.modules)))\n")
-    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    modules = json.loads((tmp_path / "modules.json").read_text())
+    modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", str(tmp_path)],
+                                            ["solve", str(REDESIGN_27), "--workers", "1", "--out", str(tmp_path)]])
     assert "synthesis.steering_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
     assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base", "constraints.steering"]

@@ -9,17 +9,13 @@ own runs carry 1e-6 relative (IPOPT at tight tolerances, deterministic starts).
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from solving import run_solve
+from solving import cli_run, modules_after_runs, run_solve, spec_with, strict_json
 from synthesis.kinematics.tillage_linkage import bar_angle, joints, path_function, tool_point
 from synthesis.spec import load_spec
 from synthesis.tillage_linkage import printed as pr
@@ -188,52 +184,33 @@ def test_max_margin_reaches_the_depth_band_s_half_width(tmp_path):
 
 # --- CLI: bad input, isolation -----------------------------------------------------------------------------
 
-def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
-
-
-def _spec_with(tmp_path: Path, source: Path, replacements: list[tuple[str, str]]) -> Path:
-    text = source.read_text()
-    for old, new in replacements:
-        assert old in text, old
-        text = text.replace(old, new, 1)
-    path = tmp_path / "spec.toml"
-    path.write_text(text)
-    return path
-
-
-def _strict_json(path: Path) -> dict:
-    def refuse(constant):
-        raise AssertionError(f"{path}: {constant} in result.json")
-    return json.loads(path.read_text(), parse_constant=refuse)
 
 
 def test_check_cli_writes_result_trajectory_and_figure(tmp_path):
-    proc = run("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = cli_run("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     folder = tmp_path / "out" / "hwang_tillage_baseline"
-    data = _strict_json(folder / "result.json")
+    data = strict_json(folder / "result.json")
     assert set(data["trajectory"]) >= {"t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay", "frame"}
     assert (folder / "tillage.png").stat().st_size > 10_000
 
 
 def test_a_bar_that_leaves_the_roller_pair_is_a_rule_failure(tmp_path):
     """c = 300 < a + b = 370: at omega = theta the bar's end has passed the rollers (D between B and C)."""
-    path = _spec_with(tmp_path, BASELINE, [("c = 500.0 ", "c = 300.0 ")])
-    proc = run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    path = spec_with(tmp_path, BASELINE, [("c = 500.0 ", "c = 300.0 ")])
+    proc = cli_run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
-    data = _strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
+    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "bar_engagement")
     assert rule["value"] == -70.0 and not rule["satisfied"]
 
 
 def test_a_tool_that_never_reaches_the_soil_names_why(tmp_path):
-    path = _spec_with(tmp_path, BASELINE, [("height_c = 130.0 ", "height_c = 400.0 ")])
-    proc = run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    path = spec_with(tmp_path, BASELINE, [("height_c = 130.0 ", "height_c = 400.0 ")])
+    proc = cli_run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    data = _strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
+    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
     rules = {r["name"]: r for r in data["rules"]}
     assert rules["rearward_in_soil"]["value"] is None
     assert "never enters the soil" in rules["rearward_in_soil"]["note"]
@@ -253,18 +230,18 @@ def test_a_tool_that_never_reaches_the_soil_names_why(tmp_path):
     ("height_c = 130.0", "heigth_c = 130.0", "tillage_linkage.linkage.heigth_c: unknown field; did you mean 'height_c'?"),
 ])
 def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
-    path = _spec_with(tmp_path, BASELINE, [(old, new)])
+    path = spec_with(tmp_path, BASELINE, [(old, new)])
     for command in ("check", "solve"):
-        proc = run(command, str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+        proc = cli_run(command, str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert message in " ".join(proc.stderr.split()), proc.stderr
         assert "Traceback" not in proc.stderr
 
 
 def test_free_bounds_that_let_the_crank_reach_the_rollers_are_bad_input(tmp_path):
-    path = _spec_with(tmp_path, REDESIGN, [("a = { init = 120.0, bounds = [40.0, 150.0] }",
+    path = spec_with(tmp_path, REDESIGN, [("a = { init = 120.0, bounds = [40.0, 150.0] }",
                                             "a = { init = 120.0, bounds = [40.0, 170.0] }")])
-    proc = run("solve", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = cli_run("solve", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 2 and "a = 170 mm >= b = 160 mm" in " ".join(proc.stderr.split()), proc.stderr
 
 
@@ -276,18 +253,9 @@ FORBIDDEN = ("synthesis.steering_linkage", "synthesis.kinematics.steering_trapez
 
 
 def test_a_tillage_run_imports_no_other_kind(tmp_path):
-    script = (
-        "import json, sys\n"
-        "from synthesis.cli import cli\n"
-        f"for args in (['check', {str(BASELINE)!r}], ['solve', {str(REDESIGN)!r}, '--workers', '1', '--starts', '2']):\n"
-        "    try:\n"
-        f"        cli.main(args + ['--out', {str(tmp_path / 'out')!r}], standalone_mode=False)\n"
-        "    except SystemExit:\n"
-        "        pass\n"
-        f"open({str(tmp_path / 'modules.json')!r}, 'w').write(json.dumps(sorted(sys.modules)))\n")
-    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    modules = json.loads((tmp_path / "modules.json").read_text())
+    out = str(tmp_path / "out")
+    modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", out],
+                                            ["solve", str(REDESIGN), "--workers", "1", "--starts", "2", "--out", out]])
     assert "synthesis.tillage_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
     assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base", "constraints.tillage"]
