@@ -7,14 +7,13 @@ from __future__ import annotations
 import math
 
 import casadi as ca
-import numpy as np
 
 from synthesis.comb_finger.check import rules_of, trace
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.spec.comb_finger import NAMES, CombFingerSpec
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import design_box
 
 #: the objective is -theta / THETA_SCALE (deg): unit-sized gradients
 THETA_SCALE = 10.0
@@ -27,8 +26,7 @@ class CombFingerNLP:
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
-        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
-        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        self.bounds, self.init = design_box(variables, NAMES)
         x = ca.SX.sym("x", len(NAMES))
         tr = trace(spec, {n: x[i] for i, n in enumerate(NAMES)}, spec.solver.turn_samples)
         theta_deg = tr.theta * (180.0 / math.pi)

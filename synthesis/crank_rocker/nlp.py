@@ -23,7 +23,7 @@ from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.core.starts import pull_inside
 from synthesis.kinematics import fourbar
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import design_box
 from synthesis.spec.crank_rocker import CrankRockerSpec
 
 TWO_PI = 2.0 * math.pi
@@ -49,9 +49,7 @@ class CrankRockerNLP:
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
-        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
-        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
-        req = spec.requirements
+        self.bounds, self.init = design_box(variables, NAMES)
         # decision coordinates z: l7, the three Grashof slacks (>= 0: the crank always turns, so the
         # kinematics are defined at every iterate), phi_a, phi_b; x: the lengths and angles they give
         z = ca.SX.sym("z", 6)

@@ -27,7 +27,7 @@ from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_function
 from synthesis.picker.check import arc_error, linkage, rules_of, swing_angles, target_angles, target_points
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import design_box
 from synthesis.spec.picker import PickerDoubleCrankSpec
 
 NAMES = ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")
@@ -53,8 +53,7 @@ class PickerNLP:
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
-        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
-        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        self.bounds, self.init = design_box(variables, NAMES)
         # decision coordinates z: the design with l1, l2, l3 replaced by the three Grashof slacks (>= 0:
         # the loop closes at every crank angle and iterate); x: the design they give
         z = ca.SX.sym("z", 9)

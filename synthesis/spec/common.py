@@ -10,12 +10,11 @@ import difflib
 import hashlib
 import json
 import math
-import os
-import stat
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Union
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from synthesis.errors import SpecError
@@ -56,6 +55,13 @@ def value_of(v: Variable) -> float:
 def bounds_of(v: Variable) -> tuple[float, float]:
     """[lo, hi] for the optimiser; a fixed variable has lo = hi."""
     return v.bounds if isinstance(v, FreeVariable) else (float(v), float(v))
+
+
+def design_box(variables: dict[str, Variable], names) -> tuple[np.ndarray, np.ndarray]:
+    """The optimiser's box of the design variables ``names``: bounds (n x 2; a fixed one has lo = hi) and
+    the given (start) values, in spec units."""
+    return (np.array([bounds_of(variables[n]) for n in names], dtype=float),
+            np.array([value_of(variables[n]) for n in names], dtype=float))
 
 
 def is_free(v: Variable) -> bool:

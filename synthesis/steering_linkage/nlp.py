@@ -21,7 +21,7 @@ from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
 from synthesis.kinematics.steering_trapezoid import ackermann_outer, loop_residual, outer_lock, transmission_angles
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import design_box
 from synthesis.spec.steering_linkage import SteeringSpec
 from synthesis.steering_linkage.check import lock_grid, rules_of
 
@@ -38,8 +38,7 @@ class SteeringNLP:
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
-        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
-        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        self.bounds, self.init = design_box(variables, NAMES)
         v, req = spec.vehicle, spec.requirements
         self.w, self.w_over_l = v.kingpin_spacing, v.kingpin_spacing / v.wheelbase
         self.beta = lock_grid(req.max_inside_lock, spec.solver.samples)[1:]        # beta = 0 is straight ahead

@@ -23,7 +23,7 @@ from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, per_rule_backoff
 from synthesis.kinematics.tillage_linkage import path_function
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import design_box
 from synthesis.spec.tillage_linkage import NAMES, TillageSpec
 from synthesis.tillage_linkage.check import TWO_PI, crank_rate, motion, rules_of
 
@@ -40,8 +40,7 @@ class TillageNLP:
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
-        self.bounds = np.array([bounds_of(variables[n]) for n in NAMES], dtype=float)
-        self.init = np.array([value_of(variables[n]) for n in NAMES], dtype=float)
+        self.bounds, self.init = design_box(variables, NAMES)
         s = spec.solver
         z = ca.SX.sym("z", 9)
         a, b, c, theta_deg, h = (z[i] for i in range(5))
