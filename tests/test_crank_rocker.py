@@ -130,3 +130,16 @@ def test_check_result_facts():
     assert m["strokes_deg"]["folded_to_extended"] == pytest.approx(160.0, abs=0.01)     # 180 - theta, eq (8)
     assert m["extreme_crank_angle_deg"] == pytest.approx(20.0, abs=0.01)
     assert m["min_transmission_at_crank_deg"] == pytest.approx(0.0, abs=1e-9)         # eq (10): crank along AG
+
+
+def test_a_crank_too_short_to_find_the_extremes_is_not_evaluated_not_a_crash(tmp_path):
+    """Found by the fuzz test: l7 = 5e-324 mm passes Grashof, but the rocker has no extremes to root-find;
+    K, swing and transmission are reported not evaluated, with the reason, instead of a ValueError."""
+    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+    path = tmp_path / "tiny.toml"
+    path.write_text(text.replace("l7 = { init = 50.0, bounds = [5.0, 200.0] }", "l7 = 5e-324"))
+    assert "l7 = 5e-324" in path.read_text()
+    rules = {r["name"]: r for r in run_check(load_spec(path)).rules}
+    for name in ("time_ratio", "rocker_swing", "min_transmission_angle"):
+        assert rules[name]["value"] is None and not rules[name]["satisfied"]
+        assert "extreme positions cannot be found" in rules[name]["where"] + str(rules[name].get("note"))

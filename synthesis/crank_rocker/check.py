@@ -45,15 +45,20 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
              ) -> tuple[list[Rule], QuickReturn | None]:
     """Every rule of the spec for the mechanism ``cr``; K, swing and transmission need a turning crank."""
     req, tol = spec.requirements, spec.tolerances
+
+    def not_evaluated(why: str) -> tuple[list[Rule], None]:
+        return [grashof_rule(cr.l10, cr.l7, cr.l8, cr.l9),
+                time_ratio_rule(None, req.time_ratio, tol.time_ratio, why),
+                rocker_swing_rule(None, None, None, req.rocker_swing, tol.rocker_swing, why),
+                acute_transmission_rule(None, req.min_transmission_angle, "over a turn", missing=why)], None
+
     if not cr.crank_turns():
-        rules = [grashof_rule(cr.l10, cr.l7, cr.l8, cr.l9)]
-        why = ("the crank cannot make a full turn (Grashof crank-rocker slacks "
-               + ", ".join(f"{k} {v:.3g} mm" for k, v in cr.grashof_slacks().items()) + ")")
-        rules += [time_ratio_rule(None, req.time_ratio, tol.time_ratio, why),
-                  rocker_swing_rule(None, None, None, req.rocker_swing, tol.rocker_swing, why),
-                  acute_transmission_rule(None, req.min_transmission_angle, "over a turn", missing=why)]
-        return rules, None
-    q = quick_return(cr)
+        return not_evaluated("the crank cannot make a full turn (Grashof crank-rocker slacks "
+                             + ", ".join(f"{k} {v:.3g} mm" for k, v in cr.grashof_slacks().items()) + ")")
+    try:
+        q = quick_return(cr)
+    except ValueError as exc:     # e.g. a crank so short (5e-324 mm) that the rocker has no extremes to find
+        return not_evaluated(f"the rocker's extreme positions cannot be found: {exc}")
     ex = q.extremes
     tips = rocker_curve(cr, np.array([ex.phi_folded, ex.phi_extended]))["tip"]
     a = np.array([cr.l10, 0.0])
