@@ -133,13 +133,23 @@ def test_check_result_facts():
 
 
 def test_a_crank_too_short_to_find_the_extremes_is_not_evaluated_not_a_crash(tmp_path):
-    """Found by the fuzz test: l7 = 5e-324 mm passes Grashof, but the rocker has no extremes to root-find;
-    K, swing and transmission are reported not evaluated, with the reason, instead of a ValueError."""
-    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+    """Found by the fuzz test: l7 = 5e-324 mm passes Grashof, but the rocker has no extremes to root-find.
+    A spec file can no longer hold such a number (the loader refuses subnormal magnitudes); a design that
+    reaches the kinematics some other way gets K, swing and transmission reported as not evaluated, with the
+    reason, instead of a ValueError."""
+    from synthesis.errors import SpecError
+    from synthesis.kinematics.crank_rocker import CrankRocker
+
+    text = (PICKER / "cai2020_crank_rocker_synthesis.toml").read_text()
     path = tmp_path / "tiny.toml"
     path.write_text(text.replace("l7 = { init = 50.0, bounds = [5.0, 200.0] }", "l7 = 5e-324"))
     assert "l7 = 5e-324" in path.read_text()
-    rules = {r["name"]: r for r in run_check(load_spec(path)).rules}
+    with pytest.raises(SpecError, match=r"links.l7: 4.94066e-324 is below the smallest magnitude"):
+        load_spec(path)
+    spec = load_spec(PICKER / "cai2020_crank_rocker_synthesis.toml").model
+    rules, q = evaluate(spec, CrankRocker(5e-324, 120.0, 120.0, 140.0, spec.branch))
+    records = {r.name: r.record() for r in rules}
+    assert q is None
     for name in ("time_ratio", "rocker_swing", "min_transmission_angle"):
-        assert rules[name]["value"] is None and not rules[name]["satisfied"]
-        assert "extreme positions cannot be found" in rules[name]["where"] + str(rules[name].get("note"))
+        assert records[name].value is None and not records[name].satisfied
+        assert "extreme positions cannot be found" in records[name].note + records[name].where

@@ -130,13 +130,13 @@ def check_in_process(raw: bytes, folder: Path) -> None:
         assert not isinstance(value, float) or math.isfinite(value), (name, value)
 
 
-def fuzz(kind: str, examples: int, tmp_path: Path) -> None:
+def fuzz(kind: str, examples: int, tmp_path: Path, derandomize: bool = False) -> None:
     example = LIBRARY / kinds.get(kind).example
     base = tomllib.loads(example.read_text())
     for sibling in example.parent.glob("*.toml"):     # specs a spec refers to (the picker's two linkages)
         (tmp_path / sibling.name).write_bytes(sibling.read_bytes())
 
-    @settings(max_examples=examples, deadline=None, database=None,
+    @settings(max_examples=examples, deadline=None, database=None, derandomize=derandomize,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
     @given(documents(base))
     def run(raw):
@@ -149,7 +149,8 @@ def fuzz(kind: str, examples: int, tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("kind", library_kinds())
 def test_no_spec_document_crashes_check(kind, tmp_path):
-    fuzz(kind, 100, tmp_path)
+    # the default suite sees the same 100 documents every run (deterministic CI); the study explores anew
+    fuzz(kind, 100, tmp_path, derandomize=True)
 
 
 @pytest.mark.fuzz

@@ -126,6 +126,7 @@ MAX_DEPTH = 16
 MAX_STRING = 10_000
 MAX_ITEMS = 100_000
 MAX_MAGNITUDE = 1e12
+MIN_MAGNITUDE = 1e-12     #: the smallest non-zero magnitude of a spec number
 MAX_INT = 2**53
 
 
@@ -169,6 +170,11 @@ def check_values(data: Any, where: str = "", depth: int = 0) -> None:
             raise SpecError(f"{name}: {data} is not a finite number")
         if abs(data) > MAX_MAGNITUDE:
             raise SpecError(f"{name}: {data:g} is beyond the largest magnitude a spec value may have ({MAX_MAGNITUDE:g})")
+        if data != 0.0 and abs(data) < MIN_MAGNITUDE:
+            # below this, products and quotients of spec values underflow to 0 or overflow (1 / 5e-324):
+            # no physical quantity in mm, s, deg or m/s is that small
+            raise SpecError(f"{name}: {data:g} is below the smallest magnitude a spec value may have "
+                            f"({MIN_MAGNITUDE:g}); write 0 if you mean zero")
     elif isinstance(data, int):
         if abs(data) > MAX_INT:
             raise SpecError(f"{name}: {shown(data, 30)} is beyond the largest integer a spec value may have (2^53)")
