@@ -1,9 +1,8 @@
 """What a spec says of each design variable: where it is written (TOML path), its unit, its bounds, free or fixed.
 
 Read from the spec model alone, for every kind the same way: a spec model lists its variables by their
-result.json names (``variables()``: name -> a number or a free variable), or, as ``fourbar_path`` does,
-in a ``[bounds]`` table (a number fixes a variable, ``[lo, hi]`` frees it).  The TOML path of a variable
-is found by walking the model to the very object ``variables()`` returned.
+result.json names (``variables()``: name -> a number or a free variable ``{init, bounds}``).  The TOML
+path of a variable is found by walking the model to the very object ``variables()`` returned.
 
 Reports and the terminal show units, bounds, free/fixed and at-bound marks from it; ``solved.toml``
 writes the solved value of each free variable at its path.
@@ -56,12 +55,6 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
                 out[name] = _entry(path, field, v.bounds, True)
             elif isinstance(v, (int, float)) and not isinstance(v, bool):
                 out[name] = _entry(path, field, None, False)
-        return out
-    bounds = getattr(spec, "bounds", None)
-    if isinstance(bounds, BaseModel):          # a [bounds] table: a number fixes a variable, [lo, hi] frees it
-        for name, field in type(bounds).model_fields.items():
-            lo, hi = getattr(bounds, name)
-            out[name] = _entry(f"bounds.{name}", field, (lo, hi) if lo < hi else None, lo < hi)
     return out
 
 

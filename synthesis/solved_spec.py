@@ -1,8 +1,8 @@
 """``solved.toml``: a solve's design written as a spec with every design variable fixed.
 
-The spec file as the user wrote it, with each free variable (``{init, bounds}``, or ``[lo, hi]`` in a
-``[bounds]`` table) replaced by its solved value (floats written by repr, so they read back
-bit-identical), a ``[design]`` table's values (the given design some kinds read) set to the solution,
+The spec file as the user wrote it, with each free variable (``{init, bounds}``) replaced by its solved
+value (floats written by repr, so they read back bit-identical), a ``[design]`` table's values (the
+given design some kinds read, e.g. fourbar_path's free-timing crank angles) set to the solution,
 and the name ``<name>_solved`` (so checking it never touches the solve's own folder).
 ``agrisynth check results/<name>/solved.toml`` then evaluates exactly the solved design.
 
@@ -40,8 +40,8 @@ def solved_data(loaded, result) -> dict[str, Any]:
     data, _ = read_toml(loaded.path)
     info = describe(loaded.model)
     if not info:
-        raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables() or a [bounds] "
-                        f"table), so the solved design cannot be written as a spec")
+        raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables()), so the "
+                        f"solved design cannot be written as a spec")
     for name, var in info.items():
         if not var["free"]:
             continue

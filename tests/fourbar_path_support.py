@@ -24,6 +24,8 @@ def _value(v) -> str:
         return json.dumps(v)
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):             # a free variable: an inline table {init = .., bounds = [..]}
+        return "{" + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + "}"
     return repr(float(v)) if isinstance(v, float) else str(v)
 
 

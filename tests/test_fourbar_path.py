@@ -16,9 +16,11 @@ from synthesis.fourbar_path.construction import joint_positions, transmission_de
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.arc import picking_arc
-from synthesis.kinematics.coupler_point import (coupler_function, cos_transmission, design_parameters,
+from synthesis.kinematics.coupler_point import (BRANCHES, coupler_function, cos_transmission, design_parameters,
                                                 joints as symbolic_joints)
 from synthesis.spec import load_spec
+from synthesis.spec.common import FreeVariable, validate
+from synthesis.spec.fourbar_path import FourbarPathSpec
 
 THETA = np.linspace(0.0, 2 * math.pi, 37)
 
@@ -162,25 +164,31 @@ def _with(tmp_path, edit) -> str:
      "targets.points[3][0]: nan is not a finite number"),         # the loader, before any model
     (lambda d: d["targets"]["points"].__setitem__(1, [2.0, float("inf")]),
      "targets.points[1][1]: inf is not a finite number"),
-    (lambda d: d["bounds"].update(r3=[60, 5]), "fourbar_path.bounds.r3: [60, 5] has lo > hi; write it as [5, 60]"),
-    (lambda d: d["bounds"].update(rc_x=[5, 60]), "fourbar_path.bounds.rc_x: unknown field; did you mean 'rcx'?"),
-    (lambda d: d["bounds"].update(theta_0=[0, 360]),
-     "fourbar_path.bounds.theta_0: unknown field; did you mean 'theta0'?"),
-    (lambda d: d["bounds"].update(r2=[-1, 60]),
-     "fourbar_path.bounds.r2: a link length must be > 0, got lower bound -1"),
-    (lambda d: d["rules"].update(grashof="crank_rocker"), "fourbar_path.rules.grashof: expected 'crank-rocker'"),
+    (lambda d: d["linkage"].update(r3={"init": 30, "bounds": [60, 5]}),
+     "fourbar_path.linkage.r3: bounds [60, 5] have lo > hi; write them as [5, 60]"),
+    (lambda d: d["linkage"].update(rc_x={"init": 30, "bounds": [5, 60]}),
+     "fourbar_path.linkage.rc_x: unknown field; did you mean 'rcx'?"),
+    (lambda d: d["linkage"].update(theta_0={"init": 0, "bounds": [0, 360]}),
+     "fourbar_path.linkage.theta_0: unknown field; did you mean 'theta0'?"),
+    (lambda d: d["linkage"].update(r2={"init": 30, "bounds": [-1, 60]}),
+     "fourbar_path.linkage: r2: expected > 0, got -1 (lower bound)"),
+    (lambda d: d["linkage"].update(branch=0), "fourbar_path.linkage.branch: expected -1 or 1, got 0"),
+    (lambda d: d["rules"].update(grashof="crank rocker"),
+     "fourbar_path.rules.grashof: expected 'crank_rocker', 'double_crank' or 'any', got 'crank rocker'"),
     (lambda d: d["solver"].update(mu_strategy="fast"),
      "fourbar_path.solver.mu_strategy: expected 'monotone' or 'adaptive', got 'fast'"),
     # magnitudes whose squares overflow a float: named, not a traceback from the kinematics
     (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
      "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)"),
-    (lambda d: d["bounds"].update(r3=[5, 1e200]),
-     "bounds.r3[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
+    (lambda d: d["linkage"].update(r3={"init": 30, "bounds": [5, 1e200]}),
+     "linkage.r3.bounds[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
     # within what any spec may hold, beyond what a four-bar in mm can mean: the kind's own cap
     (lambda d: d["targets"]["points"].__setitem__(0, [1e8, 0.0]),
      "fourbar_path.targets.points.0: x: expected a magnitude of at most 1e+06 (mm or deg), got 1e+08"),
-    (lambda d: d["bounds"].update(r3=[5, 1e9]),
-     "fourbar_path.bounds.r3: hi: expected a magnitude of at most 1e+06 (mm or deg), got 1e+09"),
+    (lambda d: d["linkage"].update(r3={"init": 30, "bounds": [5, 1e9]}),
+     "fourbar_path.linkage: r3.bounds: expected a magnitude of at most 1e+06 (mm or deg), got 1e+09"),
+    (lambda d: d["linkage"].update(x0=-2e6),
+     "fourbar_path.linkage: x0: expected a magnitude of at most 1e+06 (mm or deg), got -2e+06"),
 ])
 def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
     assert message in _with(tmp_path, edit)
@@ -197,8 +205,8 @@ def test_too_many_points(tmp_path):
      "targets.points[2][0]: nan is not a finite number"),
     (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
      "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)"),
-    (lambda d: d["bounds"].update(r3=[5, 1e200]),
-     "bounds.r3[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
+    (lambda d: d["linkage"].update(r3={"init": 30, "bounds": [5, 1e200]}),
+     "linkage.r3.bounds[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
 ], ids=["nan", "huge-point", "huge-bound"])
 def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
     data = truth_data(0, 6, timed=False)
@@ -210,3 +218,65 @@ def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert message in " ".join(proc.stderr.split())
         assert "Traceback" not in proc.stderr
+
+
+# ---------------------------------------------------------------------------- the forms of issue 5, refused
+
+OLD_PICKING_ARC = """kind = "fourbar_path"
+name = "old_form"
+branch = "crossed"
+
+[targets]
+points = [[376.0, 123.7], [332.3, 183.9], [205.0, 258.0]]
+
+[bounds]
+r1 = [20, 200]
+r2 = 35
+x0 = [0, 150]
+
+[design]
+x0 = 40
+
+[rules]
+grashof = "double-crank"
+"""
+
+
+def test_the_old_forms_are_refused_with_the_new_spelling_of_the_users_values(tmp_path):
+    """[bounds] (with its [design] value as the init), branch "open"/"crossed" at the top and the hyphenated
+    Grashof classes: one line each, exit 2, the values of the file spelled the new way."""
+    path = tmp_path / "old.toml"
+    path.write_text(OLD_PICKING_ARC)
+    proc = cli("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.splitlines() == [
+        f"error: {path}: fourbar_path.bounds: [bounds] is no longer read; write each variable under [linkage], a "
+        "number fixes it, {init, bounds} frees it: r1 = {init = 110, bounds = [20, 200]}; r2 = 35; "
+        "x0 = {init = 40, bounds = [0, 150]}",
+        "fourbar_path.branch: \"crossed\" is no longer read at the top; write branch = -1 under [linkage] "
+        "(+1: B left of A -> O', the open assembly; -1: the crossed one)",
+        "fourbar_path.rules.grashof: \"double-crank\" is no longer read; write grashof = \"double_crank\""]
+
+
+def test_design_values_outside_the_linkage_are_refused_with_the_init_form():
+    data = truth_data(0, 6, timed=False)
+    data["design"] = {"r3": 31.5}
+    with pytest.raises(SpecError) as err:
+        validate(FourbarPathSpec, data, prefix="fourbar_path")
+    assert str(err.value) == ("fourbar_path.design.r3: [design] holds only crank_deg now; write the given value as "
+                              "the init of the variable under [linkage]: r3 = {init = 31.5, bounds = [lo, hi]}")
+
+
+def test_the_new_spelling_reaches_the_kinematics_and_result_names():
+    """branch = -1 is the crossed assembly, grashof = "double_crank" the double-crank rows; result.json keeps
+    the assembly's name and the class's hyphenated name (schema_version 2 unchanged)."""
+    data = truth_data(0, 6, timed=False)
+    data["linkage"]["branch"] = -1
+    data["rules"]["grashof"] = "double_crank"
+    spec = validate(FourbarPathSpec, data, prefix="fourbar_path")
+    assert (spec.linkage.branch, spec.branch, BRANCHES[spec.branch]) == (-1, "crossed", -1)
+    assert spec.rules.grashof_class == "double_crank" and spec.rules.grashof == "double-crank"
+    assert spec.design_values()["r1"] == 32.5 and spec.bounds_array()[0] == (5.0, 60.0)
+    default = validate(FourbarPathSpec, {**data, "linkage": {k: v for k, v in data["linkage"].items()
+                                                              if k != "theta0"}}, prefix="fourbar_path")
+    assert default.linkage.theta0 == FreeVariable(init=180.0, bounds=(0.0, 360.0))

@@ -19,7 +19,7 @@ from synthesis.fourbar_path.check import evaluate
 from synthesis.fourbar_path.construction import joint_positions
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.plots import compare_coupler_curves
-from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
+from synthesis.fourbar_path.synthetic import BOUNDS, POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.result import load_result
 from synthesis.spec import LoadedSpec, load_spec
@@ -97,7 +97,7 @@ def test_without_early_stop_the_best_start_is_reported_with_the_starts_needed():
     assert log.count("===== start") == 16
 
 
-@pytest.mark.parametrize("grashof", ["any", "double-crank"])
+@pytest.mark.parametrize("grashof", ["any", "double_crank"])
 def test_other_grashof_classes_and_their_rules(grashof):
     data = truth_data(5, 6, timed=grashof == "any", solver={"stop_at_objective": RECOVERED, "starts": 32})
     data["rules"]["grashof"] = grashof
@@ -107,7 +107,7 @@ def test_other_grashof_classes_and_their_rules(grashof):
     independently_rechecked_generic(loaded, result)
     d = result.design
     r1, r2, r3, r4 = (d[k] for k in ("r1", "r2", "r3", "r4"))
-    if grashof == "double-crank":          # frame shortest, s + l <= p + q
+    if grashof == "double_crank":          # frame shortest, s + l <= p + q
         s_, p_, q_, l_ = sorted((r1, r2, r3, r4))
         assert s_ == r1 and s_ + l_ <= p_ + q_
         assert "grashof" in {r["name"] for r in result.rules}
@@ -141,11 +141,11 @@ def test_clockwise_direction_and_order_off():
     assert "sequence" not in {r["name"] for r in unordered.rules}
 
 
-def test_numbers_in_bounds_fix_variables():
+def test_numbers_in_the_linkage_fix_variables():
     truth, _ = random_crank_rocker(7)
     data = truth_data(7, 10, timed=False, solver={"stop_at_objective": RECOVERED})
     fixed = {k: truth[k] for k in ("r1", "x0", "theta0")}
-    data["bounds"].update(fixed)
+    data["linkage"].update(fixed)
     result, _, _ = run_solve(truth_spec_from(data), workers=1)
     assert result.objective["value"] < RECOVERED
     assert {k: result.design[k] for k in fixed} == fixed       # exactly, not approximately
@@ -156,7 +156,7 @@ def test_a_failed_start_reports_the_objective_of_the_design_it_returns():
     Each start's objective is the error of its returned design (inf where that is not a number),
     never IPOPT's last f (0.0 after Invalid_Number_Detected)."""
     data = truth_data(0, 6, timed=False)
-    data["bounds"].update(r1=5, r2=60)
+    data["linkage"].update(r1=5, r2=60)
     nlp = PathNLP(truth_spec_from(data).model, seed=0)
     starts = latin_hypercube_starts(nlp.bounds, nlp.init, 8, 0)
     statuses = set()
@@ -231,7 +231,8 @@ def test_solve_cli_writes_the_contract_and_figures(tmp_path):
 
 def test_check_cli_evaluates_a_given_design(tmp_path):
     data = truth_data(6, 10, timed=False)
-    data["design"], _ = random_crank_rocker(6)          # the mechanism the targets came from
+    truth, _ = random_crank_rocker(6)          # the mechanism the targets came from, as the given design
+    data["linkage"].update({n: {"init": v, "bounds": BOUNDS[n]} for n, v in truth.items()})
     proc = cli("check", str(write_spec(tmp_path, data)), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     out = json.loads((tmp_path / data["name"] / "result.json").read_text())
@@ -300,7 +301,8 @@ def test_no_crank_rocker_in_the_bounds_is_infeasible_and_says_why():
     Grashof slack is -30 mm: r2 = 50, r1 = r3 = r4 = 20).  The elastic re-solve names grashof, the facts
     say by how much the class misses."""
     data = truth_data(0, 6, timed=False, solver={"starts": 4})
-    data["bounds"].update(r2=[50, 60], r1=[5, 20], r3=[5, 20], r4=[5, 20])
+    data["linkage"].update(r2={"init": 55, "bounds": [50, 60]}, **{n: {"init": 12.5, "bounds": [5, 20]}
+                                                                   for n in ("r1", "r3", "r4")})
     loaded = truth_spec_from(data)
     result, reports, _ = run_solve(loaded, workers=1)
     assert result.status == "infeasible" and "grashof" in result.elastic["relaxed"]
@@ -314,7 +316,7 @@ def test_no_crank_rocker_in_the_bounds_is_infeasible_and_says_why():
 def test_nothing_free_is_bad_input(tmp_path):
     data = truth_data(3, 6, timed=False)
     truth, _ = random_crank_rocker(3)
-    data["bounds"] = dict(truth)               # every variable a fixed number: the timing alone is free
+    data["linkage"] = dict(truth)              # every variable a fixed number: the timing alone is free
     loaded = truth_spec_from(data)
     with pytest.raises(SpecError, match="fourbar_path: solve needs at least one free design variable"):
         run_solve(loaded, starts=2, workers=1)

@@ -6,6 +6,7 @@ the registry.  A kind whose package does not import is skipped with the import e
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import tomllib
@@ -96,10 +97,30 @@ def test_reference_reads_units_and_ranges():
     assert (rows["rules.p1p3"].default, rows["solver.starts"].default) == ("unset", "16")   # follows seedling_height
     assert rows["rules"].section and not rows["rules"].required
     path = {e.path: e for e in specref.kind_entries("fourbar_path")}
-    assert path["bounds.rcy"].unit == "mm"            # "(90 deg counter-clockwise), mm": the aside is not the unit
-    assert path["bounds.r1"].type == "number (fixes it) or [lo, hi] (frees it)"
+    assert path["linkage.rcy"].unit == "mm"           # "(90 deg counter-clockwise), mm": the aside is not the unit
+    assert path["linkage.r1"].type == "number, or {init, bounds} (free)"
     tubes = {e.path: e for e in specref.kind_entries("guide_tube")}
     assert tubes["tubes[]"].many and tubes["tubes[].angle"].unit == "deg"
+
+
+#: a name with a hyphen between letters ("crank-rocker"); signs such as guide_way's form "y-" are not names
+HYPHENATED = re.compile(r"[a-z]-[a-z]")
+
+
+@pytest.mark.parametrize("kind_name", kinds.names())
+def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
+    """Issue 17: every design variable is a number (fixed) or {init, bounds} (free), never a [lo, hi] pair
+    of its own; every linkage assembly is branch = -1 | 1; every named choice is written with underscores."""
+    entries = specref.kind_entries(kind_name)
+    for e in entries:
+        assert "[lo, hi] (frees it)" not in e.type, e.path
+        if e.path.rsplit(".", 1)[-1] == "branch" and kind_name != "guide_way":     # guide_way: the arm's IK sign
+            assert e.type == "-1 | 1", (e.path, e.type)
+        for choice in re.findall(r'"([^"]*)"', e.type):
+            assert not HYPHENATED.search(choice), (e.path, choice)
+    variables = getattr(kinds.get(kind_name).model_class(), "variables", None)
+    if kinds.get(kind_name).solves and kind_name != "guide_way":     # guide_way frees its path's control points
+        assert callable(variables), f"{kind_name}: the spec model lists its design variables (variables())"
 
 
 def test_spec_command_errors_are_one_line(tmp_path):

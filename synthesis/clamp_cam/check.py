@@ -146,7 +146,8 @@ def profile(scene: CamScene) -> dict:
     px, py = cf.pitch_curve(c, phi)
     wx, wy = cf.envelope(c, phi, scene.roller_radius, side=-1)
     spec, w = scene.spec, scene.omega
-    out = {"cam_angle_deg": phi_deg.tolist(), "rotation": scene.spec.cam.rotation,
+    # result.json keeps its spelling ("counter-clockwise") though the spec's is "counter_clockwise"
+    out = {"cam_angle_deg": phi_deg.tolist(), "rotation": scene.spec.cam.rotation.replace("_", "-"),
            "crank_deg": np.round((start + phi_deg) % 360.0, 9).tolist(),
            "pitch": {"x": np.round(px, 7).tolist(), "y": np.round(mirror * py, 7).tolist()},
            "working": {"x": np.round(wx, 7).tolist(), "y": np.round(mirror * wy, 7).tolist()},

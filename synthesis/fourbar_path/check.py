@@ -188,9 +188,6 @@ def run_check(loaded: LoadedSpec) -> Result:
     if not all(np.isfinite(ev.errors_mm)):
         open_at = [i for i, e in enumerate(ev.errors_mm) if not math.isfinite(e)]
         facts["note"] = f"the loop does not close at target(s) {open_at}: no coupler point there"
-    midpoints = spec.midpoint_variables()
-    if midpoints:
-        facts["midpoint_variables"] = midpoints
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=result_design(design, ev.crank_deg, spec), rules=records,
                   trajectory=trajectory(spec, design, ev.crank_deg, _direction("either", ev.crank_deg)[0]),

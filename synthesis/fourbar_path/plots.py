@@ -19,6 +19,7 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from synthesis.fourbar_path.construction import joint_positions  # noqa: E402
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES  # noqa: E402
+from synthesis.report.labels import candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 GIF_FRAMES = 36
@@ -169,7 +170,7 @@ def compare_coupler_curves(results: list[Result], folder: Path) -> list[str]:
         colour = colours[k % len(colours)]
         x, y = _curve(result)
         err = (result.extra.get("path_error") or {}).get("sum_squared_mm2")
-        label = result.name + (" (baseline)" if k == 0 else "") + (f", {err:.3g} mm$^2$" if err is not None else "")
+        label = candidate_label(result.name, k, len(results)) + (f", {err:.3g} mm$^2$" if err is not None else "")
         ax.plot(x, y, color=colour, lw=1.4 if k else 2.0, label=label)
         targets = _targets(result)
         if targets.size:

@@ -29,7 +29,9 @@ from synthesis.spec.fourbar_path import FourbarPathSpec
 
 BOUNDS = {"r1": [5, 60], "r2": [5, 60], "r3": [5, 60], "r4": [5, 60], "rcx": [-60, 60], "rcy": [-60, 60],
           "x0": [-60, 60], "y0": [-60, 60], "theta0": [0, 360]}
-RULES = {"grashof": "crank-rocker", "transmission_angle": [30, 150]}
+#: [linkage]: every variable free within BOUNDS, starting at the middle (nothing of the truth is given)
+LINKAGE = {n: {"init": 0.5 * (lo + hi), "bounds": [lo, hi]} for n, (lo, hi) in BOUNDS.items()}
+RULES = {"grashof": "crank_rocker", "transmission_angle": [30, 150]}
 SEEDS = tuple(range(10))
 POINT_COUNTS = (6, 10, 18)
 
@@ -79,7 +81,7 @@ def truth_data(seed: int, n: int, timed: bool, solver: dict | None = None, span_
     return {"kind": "fourbar_path", "name": truth_name(seed, n, timed, span_deg),
             "source": f"synthetic: {n} coupler points{over} of random crank-rocker {seed} "
                       f"(synthesis.fourbar_path.synthetic)",
-            "targets": targets, "bounds": dict(BOUNDS), "rules": dict(RULES), "solver": dict(solver or {})}
+            "targets": targets, "linkage": {n: dict(v) for n, v in LINKAGE.items()}, "rules": dict(RULES), "solver": dict(solver or {})}
 
 
 def truth_spec(seed: int, n: int, timed: bool, solver: dict | None = None, span_deg: float = 360.0) -> LoadedSpec:

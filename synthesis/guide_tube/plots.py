@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.labels import baseline_note  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 PHASES = (("t_fall", "free fall (eq 14)", "tab:blue"), ("t_slide", "slide on the wall (eq 17)", "tab:orange"),
@@ -169,7 +170,7 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     ax_e.set_ylim(bottom=0)
     ax_e.grid(alpha=0.3)
     ax_e.legend(fontsize=7)
-    fig.suptitle("guide tubes compared (baseline first)", fontsize=11)
+    fig.suptitle("guide tubes" + baseline_note(" compared (baseline first)", len(results)), fontsize=11)
     fig.tight_layout()
     fig.savefig(folder / name, dpi=110)
     plt.close(fig)

@@ -18,6 +18,7 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from synthesis.kinematics.planting_arm import ArmDesign, joint_positions  # noqa: E402
 from synthesis.planting.plots import COLOURS as POINT_COLOURS, style_plane  # noqa: E402
+from synthesis.report.labels import baseline_note, candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
@@ -32,7 +33,7 @@ def _colour(i: int) -> str:
 
 def _label(result: Result, i: int, n: int = 2) -> str:
     """The candidate's legend entry; "(baseline)" only beside other candidates, never on a run's own figure."""
-    return f"{result.name}{' (baseline)' if i == 0 and n > 1 else ''}"
+    return candidate_label(result.name, i, n)
 
 
 def _design(result: Result) -> ArmDesign:
@@ -65,7 +66,7 @@ def paths_figure(results: list[Result], path: Path) -> None:
             span = 0.3 * (max(tr["machine"]["x"]) - min(tr["machine"]["x"])) + 40
             ax_m.plot([sb["x"] - span * math.cos(t), sb["x"] + span * math.cos(t)],
                       [sb["y"] - span * math.sin(t), sb["y"] + span * math.sin(t)], color="0.35", lw=1,
-                      label="seedbed bottom (baseline)")
+                      label="seedbed bottom" + baseline_note(" (baseline)", len(results)))
     ax_m.set_title("machine frame (dashed: soil surface)")
     ax_g.set_title("ground frame")
     for ax in (ax_m, ax_g):
@@ -103,7 +104,8 @@ def kinematics_figure(results: list[Result], path: Path) -> None:
     axes[1].set_ylabel("v_y, mm/s")
     axes[2].set_ylabel("a_y, m/s²")
     axes[2].axhline(0.0, color="k", lw=0.6)
-    axes[2].set_xlabel("time from soil exit P6, s (shaded: the baseline's hold / throw / release phases)")
+    axes[2].set_xlabel("time from soil exit P6, s (shaded: the " + baseline_note("baseline's ", len(results))
+                       + "hold / throw / release phases)")
     axes[0].legend(fontsize=7)
     for ax in axes:
         ax.grid(alpha=0.3)

@@ -13,6 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.labels import candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 
@@ -23,7 +24,7 @@ def trajectory_overlay(results: list[Result], folder: Path) -> list[tuple[str, s
         tr = r.trajectory
         if not tr:
             continue
-        label = f"{r.name}{' (baseline)' if i == 0 else ''}"
+        label = candidate_label(r.name, i, len(results))
         ax_path.plot(tr["x"], tr["y"], color=f"C{i % 10}", lw=1.4, label=label)
         ax_path.plot(tr["x"][0], tr["y"][0], "o", color=f"C{i % 10}", ms=5)
         speed = np.hypot(np.asarray(tr["vx"], float), np.asarray(tr["vy"], float)) / 1000.0

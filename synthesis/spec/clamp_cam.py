@@ -42,8 +42,8 @@ class CamSection(StrictModel):
     base_radius: Variable = Field(description="pitch base circle: smallest distance of the roller centre "
                                               "from the cam centre, mm (seed 001 Table 1: 50)")
     roller_radius: Variable = Field(description="roller radius, mm (seed 001 Table 1: 3.5)")
-    rotation: Literal["counter-clockwise", "clockwise"] = Field(
-        "counter-clockwise", description="turning sense of the cam seen from the side the profile is drawn on; "
+    rotation: Literal["counter_clockwise", "clockwise"] = Field(
+        "counter_clockwise", description="turning sense of the cam seen from the side the profile is drawn on; "
                                          "clockwise mirrors the exported profile (seed 001 eq 12 is counter-clockwise)")
 
     @field_validator("roller_radius")

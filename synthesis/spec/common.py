@@ -307,7 +307,15 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
 
 
 def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseModel:
-    """Validate ``data`` into ``model``; on failure raise SpecError listing every bad field."""
+    """Validate ``data`` into ``model``; on failure raise SpecError listing every bad field.
+
+    A model may refuse forms it no longer reads, with their new spelling, before anything else:
+    ``old_forms(data) -> str`` (a line per form, "" when there is none)."""
+    old_forms = getattr(model, "old_forms", None)
+    if callable(old_forms) and isinstance(data, dict):
+        message = old_forms(data)
+        if message:
+            raise SpecError("\n".join(f"{prefix}.{line}" for line in message.splitlines()))
     try:
         text = json.dumps(data, allow_nan=False)
     except (TypeError, ValueError, RecursionError):     # Python objects (not from a file): validated as they are

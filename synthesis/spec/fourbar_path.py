@@ -1,19 +1,20 @@
 """Spec model of kind ``fourbar_path``: a four-bar whose coupler point passes through target points.
 
-The table and variable names are fixed by the problem statement (issue 5), since other tools write
-specs in this form::
+::
 
     [targets]  points = [[x, y], ...]  (mm, 3 to 100)   crank_deg = [...]  (optional: timing)
-    [bounds]   r1 r2 r3 r4 rcx rcy x0 y0 theta0: [lo, hi] frees a variable, a number fixes it
-    [rules]    grashof = "crank-rocker" | "double-crank" | "any";  transmission_angle = [lo, hi];
-               order = true | false
-    [solver]   starts = 64, seed = 0
+    [linkage]  r1 r2 r3 r4 rcx rcy x0 y0 theta0: a number fixes a variable, {init, bounds} frees it
+               (as in every kind); branch = 1 | -1
+    [design]   crank_deg = [...]  (free timing: the given design's crank angle at each target)
+    [rules]    grashof = "crank_rocker" | "double_crank" | "any";  transmission_angle = [lo, hi];
+               order = true | false;  direction = "either" | "ccw" | "cw"
+    [solver]   starts = 64, seed = 0, stop_at_objective, max_iter, mu_strategy, samples
 
-Our additions, all optional: ``branch`` ("open" | "crossed"), ``[rules] direction`` (which way the
-crank turns through the targets when the timing is free), ``[design]`` (the design ``check``
-evaluates and the first multistart start; a free variable without a value there starts from the
-midpoint of its bounds), ``[solver] stop_at_objective`` (end the multistart early), and
-``crank_speed`` (r/min, only sets the time scale of the reported trajectory).
+Issue 5 wrote the variables in a ``[bounds]`` table (``[lo, hi]`` frees, a number fixes, the given
+design in ``[design]``), the branch as "open"/"crossed" and the Grashof classes with hyphens; those
+forms are refused with a one-line message that spells the user's own values the new way
+(:func:`old_form_message`).  Internally, and in result.json, the branch keeps its assembly name
+("open" / "crossed") and the class its hyphenated name (``spec.branch``, ``spec.rules.grashof``).
 
 Angles: theta0 and crank_deg in degrees; crank_deg is the crank angle measured from the frame line
 O -> O', counter-clockwise (see synthesis.kinematics.coupler_point).
@@ -24,11 +25,13 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.kinematics.coupler_point import VARIABLES
-from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel, max_iter_field, starts_field
-from synthesis.spec.docmeta import TomlType
+from synthesis.spec.common import (
+    FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
+    require_positive, starts_field, value_of,
+)
 
 KIND = "fourbar_path"
 LENGTHS = ("r1", "r2", "r3", "r4")
@@ -48,21 +51,6 @@ def _number(v: Any, what: str) -> float:
     return float(v)
 
 
-def _bound(v: Any) -> tuple[float, float]:
-    """A number fixes the variable (lo = hi); [lo, hi] frees it within those bounds."""
-    if isinstance(v, (list, tuple)):
-        if len(v) != 2:
-            raise ValueError(f"expected a number (fixes it) or [lo, hi] (frees it), got a list of {len(v)}")
-        lo, hi = _number(v[0], "lo"), _number(v[1], "hi")
-        if lo > hi:
-            raise ValueError(f"[{lo:g}, {hi:g}] has lo > hi; write it as [{hi:g}, {lo:g}]")
-        return lo, hi
-    if isinstance(v, dict):
-        raise ValueError(f"expected a number (fixes it) or [lo, hi] (frees it), got a table {v!r}")
-    x = _number(v, "value")
-    return x, x
-
-
 def _point(v: Any) -> tuple[float, float]:
     if not isinstance(v, (list, tuple)) or len(v) != 2:
         raise ValueError(f"expected a point [x, y] in mm, got {v!r}")
@@ -73,7 +61,6 @@ def _angle(v: Any) -> float:
     return _number(v, "angle")
 
 
-Bound = Annotated[tuple[float, float], BeforeValidator(_bound), TomlType("number (fixes it) or [lo, hi] (frees it)")]
 Point = Annotated[tuple[float, float], BeforeValidator(_point)]
 Angle = Annotated[float, BeforeValidator(_angle)]
 Finite = Annotated[float, BeforeValidator(lambda v: _number(v, "value"))]
@@ -103,50 +90,52 @@ class TargetsSection(StrictModel):
         return angles
 
 
-class BoundsSection(StrictModel):
-    """[lo, hi] frees a design variable within those bounds, a number fixes it. mm and deg."""
+class LinkageSection(StrictModel):
+    """The four-bar and its coupler point: a number fixes a variable, ``{init, bounds}`` frees it (mm, deg).
+    ``init`` is the given design: what ``check`` evaluates and the first start of ``solve``."""
 
-    r1: Bound = Field(description="frame O -> O', mm")
-    r2: Bound = Field(description="input crank O -> A, mm")
-    r3: Bound = Field(description="coupler A -> B, mm")
-    r4: Bound = Field(description="output link O' -> B, mm")
-    rcx: Bound = Field(description="coupler point along A -> B, mm")
-    rcy: Bound = Field(description="coupler point normal to A -> B (90 deg counter-clockwise), mm")
-    x0: Bound = Field(description="input pivot O, x, mm")
-    y0: Bound = Field(description="input pivot O, y, mm")
-    theta0: Bound = Field((0.0, 360.0), description="frame angle, direction of O -> O' from +x, deg")
+    r1: Variable = Field(description="frame O -> O', mm")
+    r2: Variable = Field(description="input crank O -> A, mm")
+    r3: Variable = Field(description="coupler A -> B, mm")
+    r4: Variable = Field(description="output link O' -> B, mm")
+    rcx: Variable = Field(description="coupler point along A -> B, mm")
+    rcy: Variable = Field(description="coupler point normal to A -> B (90 deg counter-clockwise), mm")
+    x0: Variable = Field(description="input pivot O, x, mm")
+    y0: Variable = Field(description="input pivot O, y, mm")
+    theta0: Variable = Field(FreeVariable(init=180.0, bounds=(0.0, 360.0)),
+                             description="frame angle, direction of O -> O' from +x, deg")
+    branch: Literal[-1, 1] = Field(1, description="assembly: B left (+1, the open assembly) or right (-1, the "
+                                                  "crossed one) of the line A -> O'")
 
-    @field_validator(*LENGTHS, mode="after")
-    @classmethod
-    def _positive_length(cls, v: tuple[float, float]) -> tuple[float, float]:
-        if v[0] <= 0:
-            raise ValueError(f"a link length must be > 0, got {'lower bound ' if v[0] < v[1] else ''}{v[0]:g}")
-        return v
+    @model_validator(mode="after")
+    def _sizes(self) -> "LinkageSection":
+        for name in VARIABLES:
+            v = getattr(self, name)
+            for what, x in ((f"{name}", value_of(v)),) if not is_free(v) else \
+                    ((f"{name}.init", v.init), (f"{name}.bounds", v.bounds[0]), (f"{name}.bounds", v.bounds[1])):
+                if abs(x) > MAX_MAGNITUDE:
+                    raise ValueError(f"{what}: expected a magnitude of at most {MAX_MAGNITUDE:g} (mm or deg), "
+                                     f"got {x:g}")
+        for name in LENGTHS:
+            require_positive(name, getattr(self, name))
+        return self
 
 
 class DesignSection(StrictModel):
-    """A given design: what ``check`` evaluates and the first start of ``solve`` (result.json names)."""
+    """Free timing: the crank angle of each target in the given design (``check`` and start 0)."""
 
-    r1: Finite | None = Field(None, description="frame O -> O', mm (default: the midpoint of bounds.r1)")
-    r2: Finite | None = Field(None, description="input crank O -> A, mm (default: the midpoint of its bounds)")
-    r3: Finite | None = Field(None, description="coupler A -> B, mm (default: the midpoint of its bounds)")
-    r4: Finite | None = Field(None, description="output link O' -> B, mm (default: the midpoint of its bounds)")
-    rcx: Finite | None = Field(None, description="coupler point along A -> B, mm (default: the midpoint of its bounds)")
-    rcy: Finite | None = Field(None, description="coupler point normal to A -> B, mm (default: the midpoint of its "
-                                                 "bounds)")
-    x0: Finite | None = Field(None, description="input pivot O, x, mm (default: the midpoint of its bounds)")
-    y0: Finite | None = Field(None, description="input pivot O, y, mm (default: the midpoint of its bounds)")
-    theta0: Finite | None = Field(None, description="frame angle, deg (default: the midpoint of its bounds)")
-    crank_deg: list[Angle] | None = Field(None, description="crank angle of each target, deg (free timing only)")
+    crank_deg: list[Angle] | None = Field(None, description="crank angle of each target, deg (free timing only; "
+                                                            "default: the nearest point of the coupler curve)")
 
 
 class RulesSection(StrictModel):
     """The design rules besides passing through the targets: Grashof class, transmission angle, order."""
 
-    grashof: Literal["crank-rocker", "double-crank", "any"] = Field(
-        "crank-rocker", description="crank-rocker: r2 shortest and s + l <= p + q (the crank turns fully); "
-                                    "double-crank: r1 shortest and s + l <= p + q; any: no Grashof rule, "
-                                    "the loop must close at every target and between them")
+    grashof_class: Literal["crank_rocker", "double_crank", "any"] = Field(
+        "crank_rocker", alias="grashof",
+        description="crank_rocker: r2 shortest and s + l <= p + q (the crank turns fully); "
+                    "double_crank: r1 shortest and s + l <= p + q; any: no Grashof rule, "
+                    "the loop must close at every target and between them")
     transmission_angle: tuple[Finite, Finite] | None = Field(
         None, description="[lo, hi] deg: the transmission angle over the crank's motion")
     order: bool = Field(True, description="free timing: the crank meets the targets in the given order "
@@ -154,6 +143,12 @@ class RulesSection(StrictModel):
     direction: Literal["either", "ccw", "cw"] = Field(
         "either", description="free timing: the crank turns counter-clockwise, clockwise, or either way "
                               "(chosen per start) through the targets")
+
+    @property
+    def grashof(self) -> str:
+        """The class as :mod:`constraints.grashof_class`, the start generator and result.json's ``grashof``
+        name it ("crank-rocker", "double-crank", "any"): the spec's spelling changed, those did not."""
+        return self.grashof_class.replace("_", "-")
 
     @field_validator("transmission_angle", mode="after")
     @classmethod
@@ -182,24 +177,24 @@ class SolverSection(MultistartSettings):
 
 class FourbarPathSpec(ProblemSpec):
     kind: Literal["fourbar_path"] = Field(description="the problem kind (fourbar_path)")
-    branch: Literal["open", "crossed"] = Field("open", description="assembly branch (kinematics.coupler_point)")
     crank_speed: float = Field(60.0, gt=0, le=10000, description="r/min; only the time scale of the trajectory")
     targets: TargetsSection
-    bounds: BoundsSection
+    linkage: LinkageSection
     design: DesignSection = Field(default_factory=DesignSection)
     rules: RulesSection = Field(default_factory=RulesSection)
     solver: SolverSection = Field(default_factory=SolverSection)
 
+    @classmethod
+    def old_forms(cls, data: dict) -> str:
+        """The forms of issue 5 ([bounds], [design] values, branch "open"/"crossed", hyphenated Grashof
+        classes), each with the new spelling of the user's own values; read by spec.common.validate
+        before the model (a before-validator would cost the strict JSON validation its arrays)."""
+        return old_form_message(data)
+
     @field_validator("design", mode="after")
     @classmethod
     def _design_fits(cls, design: DesignSection, info: ValidationInfo) -> DesignSection:
-        bounds, targets = info.data.get("bounds"), info.data.get("targets")
-        if bounds is not None:
-            for name in VARIABLES:
-                v = getattr(design, name)
-                lo, hi = getattr(bounds, name)
-                if v is not None and not lo <= v <= hi:
-                    raise ValueError(f"{name} = {v:g} lies outside bounds.{name} [{lo:g}, {hi:g}]")
+        targets = info.data.get("targets")
         if design.crank_deg is not None and targets is not None:
             if targets.crank_deg is not None:
                 raise ValueError("crank_deg: the timing is already prescribed by targets.crank_deg; remove one")
@@ -213,19 +208,63 @@ class FourbarPathSpec(ProblemSpec):
         """True when targets.crank_deg prescribes the crank angle of every point."""
         return self.targets.crank_deg is not None
 
+    @property
+    def branch(self) -> str:
+        """The assembly as kinematics.coupler_point and result.json name it ("open" = +1, "crossed" = -1)."""
+        return ASSEMBLIES[self.linkage.branch]
+
+    def variables(self) -> dict[str, Variable]:
+        """The design variables by result.json name (r1 .. theta0): a number or a free variable."""
+        return {n: getattr(self.linkage, n) for n in VARIABLES}
+
     def bounds_array(self) -> list[tuple[float, float]]:
-        return [getattr(self.bounds, n) for n in VARIABLES]
+        return [bounds_of(v) for v in self.variables().values()]
 
     def design_values(self) -> dict[str, float]:
-        """The given design: [design] value, else the fixed number, else the midpoint of [lo, hi]."""
-        out = {}
-        for name in VARIABLES:
-            v = getattr(self.design, name)
-            lo, hi = getattr(self.bounds, name)
-            out[name] = v if v is not None else 0.5 * (lo + hi)
-        return out
+        """The given design: each fixed value and each free variable's init."""
+        return {n: value_of(v) for n, v in self.variables().items()}
 
-    def midpoint_variables(self) -> list[str]:
-        """Free variables whose given value is the midpoint convention (no [design] value)."""
-        return [n for n in VARIABLES
-                if getattr(self.design, n) is None and getattr(self.bounds, n)[0] < getattr(self.bounds, n)[1]]
+
+#: linkage.branch -> the assembly's name in kinematics.coupler_point.BRANCHES and result.json
+ASSEMBLIES = {1: "open", -1: "crossed"}
+
+
+def _free_text(name: str, bound: Any, given: Any) -> str:
+    """``r1 = {init = 110, bounds = [20, 200]}`` (or ``r1 = 75``) from an old [bounds] entry and [design] value."""
+    if isinstance(bound, (list, tuple)) and len(bound) == 2 and all(isinstance(b, (int, float)) for b in bound):
+        lo, hi = bound
+        init = given if isinstance(given, (int, float)) and not isinstance(given, bool) else 0.5 * (lo + hi)
+        return f"{name} = {{init = {init:g}, bounds = [{lo:g}, {hi:g}]}}"
+    return f"{name} = {bound:g}" if isinstance(bound, (int, float)) and not isinstance(bound, bool) else \
+        f"{name} = {{init = ..., bounds = [lo, hi]}}"
+
+
+def old_form_message(data: dict) -> str:
+    """A line per form of issue 5 in ``data``, naming it and its new spelling ("" when there is none)."""
+    fixes: list[str] = []
+    bounds = data.get("bounds")
+    design = data.get("design") if isinstance(data.get("design"), dict) else {}
+    moved = [n for n in VARIABLES if n in design]
+    if bounds is not None:
+        entries = bounds.items() if isinstance(bounds, dict) else ()
+        example = "; ".join(_free_text(n, b, design.get(n)) for n, b in entries) or \
+            "r2 = {init = 30, bounds = [25, 45]}"
+        fixes.append(f"bounds: [bounds] is no longer read; write each variable under [linkage], a number fixes it, "
+                     f"{{init, bounds}} frees it: {example}")
+    elif moved:
+        fixes.append(f"design.{moved[0]}: [design] holds only crank_deg now; write the given value as the init of "
+                     f"the variable under [linkage]: {_free_text(moved[0], [0, 0], design[moved[0]]).replace('[0, 0]', '[lo, hi]')}")
+    if "branch" in data:
+        old = data["branch"]
+        new = {"open": 1, "crossed": -1}.get(old, old) if isinstance(old, (str, int)) else old
+        fixes.append(f"branch: {json_text(old)} is no longer read at the top; write branch = {json_text(new)} under "
+                     f"[linkage] (+1: B left of A -> O', the open assembly; -1: the crossed one)")
+    rules = data.get("rules")
+    if isinstance(rules, dict) and rules.get("grashof") in ("crank-rocker", "double-crank"):
+        fixes.append(f"rules.grashof: {json_text(rules['grashof'])} is no longer read; write grashof = "
+                     f"{json_text(rules['grashof'].replace('-', '_'))}")
+    return "\n".join(fixes)
+
+
+def json_text(v: Any) -> str:
+    return f'"{v}"' if isinstance(v, str) else str(v)

@@ -142,6 +142,21 @@ def test_clockwise_cam_is_the_mirror_image(tmp_path):
     assert a["x"] == b["x"] and a["y"] == pytest.approx([-y for y in b["y"]], abs=1e-12)
 
 
+def test_rotation_is_spelled_with_an_underscore_and_result_json_keeps_its_name(tmp_path):
+    """Issue 17: names are written with underscores in every kind; the hyphenated spelling is refused
+    naming the new one, and result.json's facts.profile.rotation is spelled as before (schema 2)."""
+    from synthesis.errors import SpecError
+
+    with pytest.raises(SpecError) as err:
+        spec_text(tmp_path, OPENING, ("roller_radius = 3.5", 'roller_radius = 3.5\nrotation = "counter-clockwise"'))
+    assert str(err.value).endswith("clamp_cam.cam.rotation: expected 'counter_clockwise' or 'clockwise', "
+                                   "got 'counter-clockwise'")
+    ccw = CamScene.from_spec(spec_text(tmp_path, OPENING, ("roller_radius = 3.5",
+                                                           'roller_radius = 3.5\nrotation = "counter_clockwise"')).model)
+    assert profile(ccw)["rotation"] == "counter-clockwise"
+    assert profile(ccw)["working"] == profile(CamScene.from_spec(load_spec(CAMS / "opening_cam.toml").model))["working"]
+
+
 def test_smallest_bspline_is_still_c2(tmp_path):
     loaded = spec_text(tmp_path, (CAMS / "opening_cam_optimised_law.toml").read_text(),
                        ("spans = 32", "spans = 4"), ("degree = 5", "degree = 3"))

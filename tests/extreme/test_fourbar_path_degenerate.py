@@ -15,7 +15,7 @@ def test_change_point_linkage_is_diagnosed_not_crashed(tmp_path):
     """r1 = r2 fixed: the only crank-rockers are change-point linkages (r3 = r4), where O'A shrinks to
     zero at theta2 = 0 and the transmission angle to 0 deg, so [30, 150] cannot hold: exit 3 naming it."""
     data = truth_data(0, 6, timed=False, solver={"starts": 8})
-    data["bounds"].update(r1=30.0, r2=30.0)
+    data["linkage"].update(r1=30.0, r2=30.0)
     proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     assert "transmission_angle_min" in proc.stderr and "Traceback" not in proc.stderr
@@ -50,7 +50,7 @@ def test_check_of_a_linkage_that_never_closes_reports_it_without_nan(tmp_path):
     coupler curve and no crank angle to give the targets.  check exits 1 with every such rule failed
     and says why; result.json holds no NaN (crank angles not found are null)."""
     data = truth_data(0, 6, timed=False)
-    data["bounds"]["r3"] = 500.0
+    data["linkage"]["r3"] = 500.0
     proc = cli("check", str(write_spec(tmp_path, data)), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
