@@ -390,7 +390,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                 log_file.close()
                 if exc.partial is not None:
                     _described(exc.partial[0], loaded)
-                committed = _keep_interrupted(exc, run_folder, spec, n)
+                committed = _keep_interrupted(exc, run_folder, spec, n, lambda: core.baseline_rules(kind, loaded))
                 sys.exit(exc.exit_code)
         log_file.close()
         if verbose:
@@ -480,9 +480,11 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
         sys.exit(1)
 
 
-def _keep_interrupted(exc, run_folder, spec: Path, n: int) -> bool:
+def _keep_interrupted(exc, run_folder, spec: Path, n: int, given_rules) -> bool:
     """Write an interrupted run's best-so-far result (status interrupted), its report and starts.jsonl,
-    and say how to finish it; nothing is written (and nothing replaced) when no start had finished."""
+    and say how to finish it; nothing is written (and nothing replaced) when no start had finished.
+    ``given_rules()``: the rule table of the spec's given design, shown beside the best-so-far as in a
+    finished solve's report."""
     import signal as _signal
 
     from synthesis.core import interrupt
@@ -496,7 +498,8 @@ def _keep_interrupted(exc, run_folder, spec: Path, n: int) -> bool:
         return False
     result, reports, log = exc.partial
     with interrupt.deferred(reraise=False):
-        artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)})
+        artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)},
+                                  given_rules=given_rules())
         folder, _ = write_run(run_folder.final.parent, result, artifacts, folder=run_folder)
     err_console.print(f"interrupted by {name} after {len(reports)} of {n} starts: kept them and their best "
                       f"(status interrupted) in {escape(str(folder))}/; finish the run with\n"

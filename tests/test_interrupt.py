@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -65,6 +66,23 @@ def comparable(data: dict) -> dict:
     return data
 
 
+GIVEN = {"l7": 50.0, "l8": 120.0, "l9": 120.0, "l10": 140.0}        # the spec's [links]: inits and l10 fixed
+
+
+def assert_given_design_kept(run: Path) -> None:
+    """Issue 17: an interrupted and a resumed run keep the question beside the answer: result.json's
+    baseline_design is the spec's given design, and report.html shows it (and its rule table) in a
+    "given (start 0)" column of the design and rule tables."""
+    result = json.loads((run / "result.json").read_text())
+    assert result["baseline_design"] == GIVEN
+    page = (run / "report.html").read_text()
+    assert page.count("<th>given (start 0)</th>") == 2
+    for name, value in GIVEN.items():
+        assert re.search(rf"<tr><td>{name}</td><td>mm</td><td[^>]*>[^<]*</td><td class='num'>{value:g}</td>", page), name
+    # the given design's rule table: K and swing missed (time_ratio 1.178, rocker_swing 51.27 deg)
+    assert "<tr class='summary'><td>worst margin</td><td></td><td></td><td class='fail'>2 violated</td>" in page
+
+
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 
 
@@ -84,12 +102,13 @@ def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_unin
     assert len(lines) == kept + 1 and [r["start"] for r in result["starts"]] == list(range(kept))
     assert sorted(json.loads(ln)["outcome"]["start"] for ln in lines[1:]) == list(range(kept))
     assert not any("NonIpopt" in r["return_status"] for r in result["starts"])   # the cut-short start is not kept
-    assert (run / "report.html").is_file()
+    assert_given_design_kept(run)
 
     resumed = cli("solve", SPEC, "--resume", run, cwd=tmp_path)
     out, err = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, err
     assert f"resumed: {kept} finished start(s)" in out
+    assert_given_design_kept(run)
     whole = cli("solve", SPEC, "--out", tmp_path / "b", "--starts", 24, "--workers", 1, cwd=tmp_path)
     assert whole.wait(timeout=300) == 0
     a = json.loads((run / "result.json").read_text())

@@ -8,8 +8,8 @@ more finely sampled than the NLP.  The coupler point is the closed form of
 ``kinematics.coupler_point``.  The textbook complex-number construction
 (:mod:`synthesis.fourbar_path.construction`) is the tests' independent oracle of both.
 
-Which design ``check`` evaluates: each variable's [design] value, else its fixed number in [bounds],
-else the midpoint of its [lo, hi] (the result notes which).  The crank angle of each target: the
+Which design ``check`` evaluates: each [linkage] variable's fixed number or ``init``.  The crank angle
+of each target: the
 prescribed targets.crank_deg, else [design] crank_deg, else the crank angle of the nearest point of
 the coupler curve (a 0.1 deg grid refined by bounded scalar minimisation) -- then the `sequence`
 rule tells whether those nearest points come in order.
