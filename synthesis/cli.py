@@ -187,11 +187,12 @@ def _start_line(report, best, done: int, total: int) -> None:
 def _print_design(result) -> None:
     """The solved design beside the given one: value, unit, bounds, at-bound marks."""
     from synthesis import terminal
-    from synthesis.report.tables import candidates, design_rows
+    from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, solved_heading
 
     rows = design_rows(candidates([result]))
     if rows:
-        console.print(terminal.design_table(rows, "design: given (start 0) vs solution"))
+        console.print(terminal.design_table(rows, f"design: {GIVEN_HEADING} vs {solved_heading(result)}",
+                                            solved_heading(result)))
 
 
 def _solved_spec(loaded, result) -> dict:
@@ -222,9 +223,12 @@ def _in_file(loaded, evaluate):
 
 
 def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
+    """A solve's rule table: each rule at the given design (start 0) and at the solved one."""
+    from synthesis.report.tables import GIVEN_HEADING
+
     table = Table(title=escape(title), title_justify="left")
-    for col, just in (("rule", "left"), ("limit", "right"), ("baseline", "right"), ("", "left"),
-                      ("solution", "right"), ("", "left"), ("unit", "left")):
+    for col, just in (("rule", "left"), ("limit", "right"), (GIVEN_HEADING, "right"), ("", "left"),
+                      ("solved", "right"), ("", "left"), ("unit", "left")):
         table.add_column(col, justify=just, no_wrap=True, overflow="fold")
     base = {r["name"]: r for r in baseline or []}
 
@@ -405,7 +409,8 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         if not committed and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
-    console.print(comparison_table(result.rules, baseline, f"{result.name}: baseline (given design) vs solution"))
+    console.print(comparison_table(result.rules, baseline, f"{result.name}: rules at the given design (start 0) "
+                                                           f"and at the solved one"))
     _print_design(result)
     s = result.solver
     console.print(f"objective {objective_text(result.objective)}; IPOPT "

@@ -59,11 +59,11 @@ def _value(v) -> str:
     return str(v)
 
 
-def design_table(rows, title: str) -> Table:
+def design_table(rows, title: str, solved: str = "solved") -> Table:
     """The solved design beside the given one: value, unit, bounds, free/fixed and at-bound marks
-    (rows: :func:`synthesis.report.tables.design_info_rows`)."""
+    (rows: :func:`synthesis.report.tables.design_rows`); ``solved``: the answer's column heading."""
     table = plain_table(title)
-    for col, just in (("variable", "left"), ("given", "right"), ("solution", "right"), ("unit", "left"),
+    for col, just in (("variable", "left"), ("given (start 0)", "right"), (solved, "right"), ("unit", "left"),
                       ("bounds", "right"), ("", "left")):
         table.add_column(col, justify=just, no_wrap=True, overflow="fold")
     for r in rows:

@@ -176,6 +176,10 @@ def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
 @pytest.mark.parametrize("edit, message", [
     (("claw = 119.6829", "claw = 60.0"), "segment DE: the arm cannot reach the claw tip"),
     (("C = [179.0, 39.0]", "C = [179.0, 41.0]"), "the conics do not meet at C"),
+    # issue 17: the branch is a sign in every kind; the earlier word is refused with its new spelling
+    (("branch = 1 ", 'branch = "plus" '),
+     'guide_way.conic.0.branch: "plus" is no longer read; write branch = 1 (theta = gamma + phi)'),
+    (("branch = 1 ", "branch = 2 "), "guide_way.conic.0.branch: expected -1 or 1, got 2"),
 ])
 def test_bad_input_is_one_line_exit_2(tmp_path, edit, message):
     text = (LIBRARY / "guide_way" / "liang_2z.toml").read_text().replace(*edit)

@@ -77,6 +77,8 @@ def assert_given_design_kept(run: Path) -> None:
     assert result["baseline_design"] == GIVEN
     page = (run / "report.html").read_text()
     assert page.count("<th>given (start 0)</th>") == 2
+    answer = "best so far (interrupted)" if result["status"] == "interrupted" else "solved"
+    assert page.count(f"<th>{answer}</th>") >= 2                 # design and rule tables (and the facts)
     for name, value in GIVEN.items():
         assert re.search(rf"<tr><td>{name}</td><td>mm</td><td[^>]*>[^<]*</td><td class='num'>{value:g}</td>", page), name
     # the given design's rule table: K and swing missed (time_ratio 1.178, rocker_swing 51.27 deg)

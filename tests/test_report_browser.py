@@ -135,7 +135,7 @@ def test_solve_report_in_headless_chromium(tmp_path, sync_playwright):
             widths = overflow(browser, page_path)
         finally:
             browser.close()
-    assert rows[0] == ["variable", "unit", "bounds", "given (start 0)", "tight"]
+    assert rows[0] == ["variable", "unit", "bounds", "given (start 0)", "solved"]
     by_name = {r[0]: r for r in rows[1:]}
     assert by_name["l7"][:4] == ["l7", "mm", "[5, 52]", "50"]
     assert by_name["l7"][4] == "52 at upper bound"          # the smallest total length wants a longer crank

@@ -251,7 +251,8 @@ def test_solve_cli_writes_the_contract(tmp_path):
     assert data["objective"]["name"] == "nearest" and data["solver"]["starts"] == 2
     assert "EXIT: Optimal Solution Found" in (tmp_path / "redesign_from_example4" / "ipopt.log").read_text()
     assert "<a href='ipopt.log'>ipopt.log</a>" in (tmp_path / "redesign_from_example4" / "report.html").read_text()
-    assert "baseline" in proc.stdout and "solution" in proc.stdout
+    # the question beside the answer, named as on the report: "given (start 0)" and "solved", never "baseline"
+    assert "given (start 0)" in proc.stdout and "solved" in proc.stdout and "baseline" not in proc.stdout
 
 
 BASE = (PLANTING / "redesign_from_example1.toml").read_text()

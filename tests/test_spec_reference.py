@@ -114,7 +114,7 @@ def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
     entries = specref.kind_entries(kind_name)
     for e in entries:
         assert "[lo, hi] (frees it)" not in e.type, e.path
-        if e.path.rsplit(".", 1)[-1] == "branch" and kind_name != "guide_way":     # guide_way: the arm's IK sign
+        if e.path.rsplit(".", 1)[-1] == "branch":
             assert e.type == "-1 | 1", (e.path, e.type)
         for choice in re.findall(r'"([^"]*)"', e.type):
             assert not HYPHENATED.search(choice), (e.path, choice)

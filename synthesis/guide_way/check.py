@@ -117,12 +117,16 @@ def key_angles(scene: sc.Scene) -> dict:
     return out
 
 
+#: result.json keeps the branch's name ("minus": theta = gamma - phi) though the spec writes its sign
+IK_BRANCH_NAMES = {-1: "minus", 1: "plus"}
+
+
 def conic_facts(scene: sc.Scene) -> list[dict]:
     out = []
     for piece, seg in zip(scene.pieces, scene.spec.conic):
         a = seg.coefficients
         entry = {"name": seg.name, "from": seg.start, "to": seg.end, "coefficients": list(a),
-                 "type": "hyperbola" if piece.conic.hyperbola else "ellipse", "ik_branch": seg.branch,
+                 "type": "hyperbola" if piece.conic.hyperbola else "ellipse", "ik_branch": IK_BRANCH_NAMES[seg.branch],
                  "key_point_gap_mm": piece.gaps,
                  "slope_at": {p: cn.slope(a, *scene.spec.points[p]) for p in (seg.start, seg.end)}}
         if seg.form is not None:

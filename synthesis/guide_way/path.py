@@ -23,6 +23,7 @@ from synthesis.guide_way import conics as cn
 from synthesis.guide_way import spline as sp
 from synthesis.guide_way.trace import Stretch
 
+#: the inverse-kinematics branch's sign by its name (theta = gamma + sign * phi); a conic's spec writes the sign
 BRANCH = {"minus": -1.0, "plus": 1.0}
 #: spline stretches stop this far (in u) short of the fold on either side
 FOLD_OFFSET = 1e-3
@@ -74,7 +75,7 @@ def conic_pieces(spec) -> list[ConicPiece]:
                 raise SpecError(f"{where}: point {name} ({p[0]:g}, {p[1]:g}) lies {gap:.4g} mm from the conic "
                                 f"(rules.joint_gap = {spec.rules.joint_gap:g} mm): the conics do not meet at {name}")
         t0, t1 = cn.span(conic, start, end, seg.via)
-        pieces.append(ConicPiece(seg.name, conic, t0, t1, BRANCH[seg.branch], seg.form, seg.start, seg.end, gaps))
+        pieces.append(ConicPiece(seg.name, conic, t0, t1, float(seg.branch), seg.form, seg.start, seg.end, gaps))
     return pieces
 
 

@@ -10,8 +10,8 @@ import html
 import math
 
 from constraints.base import limit_text
-from synthesis.report.tables import (Candidate, RuleCell, design_rows, operating_conditions, rule_rows, run_facts, shows_given,
-                                     shows_given_rules, worst_margins)
+from synthesis.report.tables import (GIVEN_HEADING, Candidate, RuleCell, design_rows, is_single_solve, operating_conditions,
+                                     rule_rows, run_facts, shows_given, shows_given_rules, solved_heading, worst_margins)
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
 
@@ -69,6 +69,8 @@ def _limit(limit) -> str:
 
 
 def _header(cands: list[Candidate]) -> str:
+    if is_single_solve(cands):          # a solve's page: the question (given) beside the answer (solved)
+        return f"<th>{html.escape(solved_heading(cands[0].result))}</th>"
     return "".join(f"<th>{html.escape(c.label)}{' (baseline)' if i == 0 and len(cands) > 1 else ''}</th>"
                    for i, c in enumerate(cands))
 
@@ -96,7 +98,7 @@ def design_table(cands: list[Candidate]) -> str:
         start = f"<td class='num'>{_num(row.given, 6)}</td>" if given else ""
         rows.append(f"<tr><td>{html.escape(row.name)}</td><td>{html.escape(row.unit)}</td>{_bounds_cell(row)}"
                     f"{start}{''.join(cells)}</tr>")
-    head = "<th>given (start 0)</th>" if given else ""
+    head = f"<th>{GIVEN_HEADING}</th>" if given else ""
     return (f"<table class='design'><tr><th>variable</th><th>unit</th><th>bounds</th>{head}{_header(cands)}</tr>\n"
             + "\n".join(rows) + "</table>")
 
@@ -169,7 +171,7 @@ def rule_table(cands: list[Candidate]) -> str:
         cells = "".join(_rule_cell(cell, row.limit) for cell in row.cells)
         rows.append(f"<tr><td>{html.escape(row.name)}</td><td class='limit'>{_limit(row.limit)}</td>"
                     f"<td>{html.escape(row.unit)}</td>{first}{cells}</tr>")
-    head = "<th>given (start 0)</th>" if given else ""
+    head = f"<th>{GIVEN_HEADING}</th>" if given else ""
     return (f"<table class='rules'><tr><th>rule</th><th>limit</th><th>unit</th>{head}{_header(cands)}</tr>\n"
             + "\n".join(rows) + "</table>")
 

@@ -82,6 +82,20 @@ def design_rows(cands: list[Candidate]) -> list[DesignRow]:
     return rows
 
 
+#: the column headings of a solve's question and answer, on the page and in the terminal alike
+GIVEN_HEADING = "given (start 0)"
+
+
+def solved_heading(result: Result) -> str:
+    """The heading of a solve's answer column: "solved", or what an interrupted run's answer is."""
+    return "best so far (interrupted)" if result.status == "interrupted" else "solved"
+
+
+def is_single_solve(cands: list[Candidate]) -> bool:
+    """One candidate, and a solve's result: its page heads the answer "solved", not the design's name."""
+    return len(cands) == 1 and cands[0].result.solver is not None
+
+
 def shows_given(cands: list[Candidate]) -> bool:
     """A single solve's report shows the given design (start 0) beside the solution."""
     return len(cands) == 1 and cands[0].result.solver is not None and bool(cands[0].result.baseline_design)

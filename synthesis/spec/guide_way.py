@@ -40,6 +40,10 @@ class ArmSection(StrictModel):
         return self
 
 
+#: the branch's earlier spelling -> its sign (result.json's facts keep the words: ``ik_branch``)
+OLD_BRANCHES = {"minus": -1, "plus": 1}
+
+
 class ConicSegment(StrictModel):
     """One conic x^2 + a1 xy + a2 y^2 + a3 x + a4 y + a5 = 0 (eq 1) between two key points, in time order."""
 
@@ -47,7 +51,8 @@ class ConicSegment(StrictModel):
     start: str = Field(alias="from", description="key point where the claw enters the segment")
     end: str = Field(alias="to", description="key point where it leaves it")
     coefficients: tuple[float, float, float, float, float] = Field(description="a1..a5 as printed (a1, a2 dimensionless; a3, a4 mm; a5 mm^2)")
-    branch: Literal["minus", "plus"] = Field(description="inverse kinematics: theta = gamma - phi (eq 7) or + phi")
+    branch: Literal[-1, 1] = Field(description="inverse kinematics: theta = gamma + branch * phi, i.e. -1: "
+                                               "gamma - phi (the paper's eq 7), +1: gamma + phi")
     form: Literal["y+", "y-", "x+", "x-"] | None = Field(
         None, description="the paper's explicit form (§3(2)): y(x) or x(y) with the + or - root; checked")
     via: Point | None = Field(None, description="a point of the segment choosing the arc of an ellipse, mm "
@@ -110,6 +115,17 @@ class GuideWaySpec(ProblemSpec):
     rules: RulesSection = Field(default_factory=RulesSection)
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+
+    @classmethod
+    def old_forms(cls, data: dict) -> str:
+        """Earlier spellings of a conic's branch ("minus" / "plus"), each with its new one (see spec.common.validate)."""
+        conics = data.get("conic")
+        if not isinstance(conics, list):
+            return ""
+        return "\n".join(f"conic.{k}.branch: \"{seg['branch']}\" is no longer read; write branch = "
+                         f"{OLD_BRANCHES[seg['branch']]} (theta = gamma {'+' if OLD_BRANCHES[seg['branch']] > 0 else '-'} phi)"
+                         for k, seg in enumerate(conics)
+                         if isinstance(seg, dict) and isinstance(seg.get("branch"), str) and seg["branch"] in OLD_BRANCHES)
 
     @model_validator(mode="after")
     def _path(self) -> "GuideWaySpec":
