@@ -166,3 +166,23 @@ def test_library_warnings_go_to_the_log_not_the_terminal(capfd):
     assert "RuntimeWarning" in said() and 'CasADi - WARNING("x")' in said()
     out, err = capfd.readouterr()
     assert "WARNING" not in out + err and "delta_grad" not in out + err and "RuntimeWarning" not in out + err
+
+
+def test_warnings_while_drawing_go_to_the_runs_log_not_the_terminal(tmp_path):
+    """A planting arm whose links cannot close (l4 = 2 mm) has no trajectory: matplotlib warns that its
+    legends are empty.  `check` prints none of it: the run's warnings.log has it and the report links it."""
+    import subprocess
+
+    text = (PROBLEMS / "planting_arm" / "redesign_from_example1.toml").read_text()
+    old = "l4 = { init = 80, bounds = [64, 96] }"
+    assert old in text
+    spec = tmp_path / "open_arm.toml"
+    spec.write_text(text.replace(old, "l4 = 2"))
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(spec), "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr == "" and "Warning" not in proc.stdout
+    run = tmp_path / "redesign_from_example1"
+    log = (run / "warnings.log").read_text()
+    assert "warning: UserWarning: No artists with labels found to put in legend" in log
+    assert "<a href='warnings.log'>warnings.log</a>" in (run / "report.html").read_text()

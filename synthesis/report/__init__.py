@@ -43,24 +43,51 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
     from synthesis import kinds
+    from synthesis.library_log import captured_warnings
 
     written: list[str] = []
     failed: list[str] = []
+    said: list[str] = []            # library warnings while drawing (matplotlib's): for the run's log
 
     def guarded(name: str, writer):
         def write(path: Path) -> None:
             try:
-                writer(path)
+                with captured_warnings() as text:
+                    writer(path)
+                said.append(text())
                 written.append(name)
             except Exception as exc:    # noqa: BLE001 - reported on the page, the run's result is kept
                 path.unlink(missing_ok=True)
                 failed.append(f"{name} not written: {type(exc).__name__}: {exc}")
         return write
 
+    def report(path: Path) -> None:
+        _log_drawing_warnings(path.parent, "".join(said), written)
+        write_report(result, path, written, failed, given_rules)
+
     writers = {**(files or {}), **kinds.figure_writers(result)}
     artifacts = {name: guarded(name, w) for name, w in writers.items()}
-    artifacts["report.html"] = lambda path: write_report(result, path, written, failed, given_rules)
+    artifacts["report.html"] = report
     return artifacts
+
+
+#: the run's log, where library warnings go: a solve's ipopt.log, else warnings.log
+RUN_LOGS = ("ipopt.log", "warnings.log")
+
+
+def _log_drawing_warnings(folder: Path, text: str, written: list[str]) -> None:
+    """Append what the libraries said while the figures were drawn to the run's log (written already, in the
+    run's staging folder), or start warnings.log with it: never onto the terminal."""
+    if not text:
+        return
+    log = next((name for name in RUN_LOGS if name in written), None)
+    if log is None:
+        log = "warnings.log"
+        (folder / log).write_text(text)
+        written.append(log)
+    else:
+        with open(folder / log, "a") as out:
+            out.write(f"\n# library warnings while drawing the figures\n{text}")
 
 
 def write_report(result: Result, path: Path, figures: list[str], notes: list[str] = (),
