@@ -73,6 +73,8 @@ class Result:
             del data["solver"]
         if data["trajectory"] is None:
             del data["trajectory"]
+        elif isinstance(data["trajectory"], dict):
+            data["trajectory"] = with_units(data["trajectory"])
         if data["design_variables"] is None:
             del data["design_variables"]
         for key in RUN_KEYS:
@@ -93,6 +95,18 @@ class Result:
             args["extra"] = {k: v for k, v in data.items()
                              if k not in known and k not in RUN_KEYS and k != "schema_version"}
         return cls(**args)
+
+
+#: the units of the DESIGN.md trajectory keys; a nested frame (``machine``) has the same
+TRAJECTORY_UNITS = {"t": "s", "crank_deg": "deg", "x": "mm", "y": "mm", "vx": "mm/s", "vy": "mm/s",
+                    "ax": "mm/s^2", "ay": "mm/s^2"}
+
+
+def with_units(trajectory: dict[str, Any]) -> dict[str, Any]:
+    """The trajectory with ``units``: key -> unit of each DESIGN.md key it holds (an additive key of schema
+    version 2: the keys and their units are unchanged, the file now says them)."""
+    units = {k: u for k, u in TRAJECTORY_UNITS.items() if k in trajectory}
+    return {**trajectory, "units": units} if units else trajectory
 
 
 REQUIRED_KEYS = ("kind", "name", "spec_sha256", "status", "design", "rules")
