@@ -50,3 +50,23 @@ def test_one_design_is_never_the_baseline(kind_name, tmp_path, monkeypatch):
     assert f"{result.name}_copy" in " ".join(both)
     assert not [t for t in both if "baseline" in t and result.name not in t and "first" not in t
                 and "baseline's" not in t and "seedbed" not in t], both
+
+
+def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monkeypatch):
+    """Issue 17: speeds in m/s as p2_speed, the vertical acceleration in mm/s^2 as accel_*; the plotted
+    numbers are the trajectory's converted (ground vx in m/s, ay unchanged)."""
+    import numpy as np
+
+    from synthesis.planting.compare_plots import kinematics_figure
+
+    result = kinds.checker("planting_fourbar")(load_spec(LIBRARY / "planting_arm" / "taiwan_example1.toml"))
+    units = {r["name"]: r["unit"] for r in result.rules}
+    assert (units["p2_speed"], units["accel_hold"]) == ("m/s", "mm/s^2")
+    figures: list[Figure] = []
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
+    kinematics_figure([result], tmp_path / "kinematics.png")
+    axes = figures[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["v_x ground, m/s", "v_y, m/s", "a_y, mm/s²"]
+    vx, ay = axes[0].lines[0].get_ydata(), axes[2].lines[0].get_ydata()
+    assert np.max(vx) == pytest.approx(max(result.trajectory["vx"]) / 1000.0, rel=1e-12)
+    assert np.min(ay) == pytest.approx(min(result.trajectory["ay"]), rel=1e-12)

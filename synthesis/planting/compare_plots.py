@@ -78,16 +78,17 @@ def paths_figure(results: list[Result], path: Path) -> None:
 
 
 def kinematics_figure(results: list[Result], path: Path) -> None:
-    """Ground-frame speeds and the vertical acceleration against time, acceleration-rule phases shaded."""
+    """Ground-frame speeds and the vertical acceleration against time, acceleration-rule phases shaded.
+    In the units of the rule table: speeds in m/s (p2_speed), the acceleration in mm/s^2 (accel_*)."""
     fig, axes = plt.subplots(3, 1, figsize=(11, 8), sharex=True)
     for i, r in enumerate(results):
         tr, col = r.trajectory, _colour(i)
         if tr is None:
             continue
         t = np.asarray(tr["t"])
-        axes[0].plot(t, tr["vx"], color=col, label=_label(r, i, len(results)))
-        axes[1].plot(t, tr["vy"], color=col)
-        axes[2].plot(t, np.asarray(tr["ay"]) / 1000.0, color=col)
+        axes[0].plot(t, np.asarray(tr["vx"]) / 1000.0, color=col, label=_label(r, i, len(results)))
+        axes[1].plot(t, np.asarray(tr["vy"]) / 1000.0, color=col)
+        axes[2].plot(t, tr["ay"], color=col)
         pts = r.extra.get("precision_points", {})
         if i == 0:
             for phase, a, b, shade in PHASES:
@@ -100,9 +101,9 @@ def kinematics_figure(results: list[Result], path: Path) -> None:
         for name, p in pts.items():
             if p.get("found"):
                 axes[2].axvline(p["t"], color=col, lw=0.5, ls=":")
-    axes[0].set_ylabel("v_x ground, mm/s")
-    axes[1].set_ylabel("v_y, mm/s")
-    axes[2].set_ylabel("a_y, m/s²")
+    axes[0].set_ylabel("v_x ground, m/s")
+    axes[1].set_ylabel("v_y, m/s")
+    axes[2].set_ylabel("a_y, mm/s²")
     axes[2].axhline(0.0, color="k", lw=0.6)
     axes[2].set_xlabel("time from soil exit P6, s (shaded: the " + baseline_note("baseline's ", len(results))
                        + "hold / throw / release phases)")
