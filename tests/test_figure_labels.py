@@ -70,3 +70,19 @@ def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monke
     vx, ay = axes[0].lines[0].get_ydata(), axes[2].lines[0].get_ydata()
     assert np.max(vx) == pytest.approx(max(result.trajectory["vx"]) / 1000.0, rel=1e-12)
     assert np.min(ay) == pytest.approx(min(result.trajectory["ay"]), rel=1e-12)
+
+
+def test_guide_tube_bars_start_at_zero_and_carry_their_values(tmp_path, monkeypatch):
+    """Issue 17: the comparison bar chart's time axis started at 0.9 x the shortest time (0.40 s), which
+    made a few ms look like a factor; the bars now start at 0 s and each is labelled with its t_z."""
+    from synthesis.guide_tube.plots import compare_figures
+
+    first = kinds.checker("guide_tube")(load_spec(LIBRARY / "guide_tube" / "cai2020_tubes.toml"))
+    other = kinds.checker("guide_tube")(load_spec(LIBRARY / "guide_tube" / "cai2020_delta2.toml"))
+    figures: list[Figure] = []
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
+    compare_figures([first, other], tmp_path)
+    ax = figures[0].axes[0]
+    assert ax.get_ylim()[0] == 0.0
+    labels = [t.get_text() for t in ax.texts]
+    assert labels == [f"{t['t_z']:.4f}" for r in (first, other) for t in r.extra["tubes"]]

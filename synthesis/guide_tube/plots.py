@@ -156,14 +156,16 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     for k, (res, colour) in enumerate(zip(results, colours * 10)):
         tubes = res.extra["tubes"]
         x = np.arange(len(tubes)) + (k - (len(results) - 1) / 2) * width
-        ax_t.bar(x, [t["t_z"] for t in tubes], width, color=colour,
-                 label=f"{res.name}: " + ", ".join(f"{t['name']} {t['delta_deg']:.1f} deg" for t in tubes))
+        bars = ax_t.bar(x, [t["t_z"] for t in tubes], width, color=colour,
+                        label=f"{res.name}: " + ", ".join(f"{t['name']} {t['delta_deg']:.1f} deg" for t in tubes))
+        # the bars start at 0 s (a bar's length is its time); the differences, a few ms, are written on them
+        ax_t.bar_label(bars, labels=[f"{t['t_z']:.4f}" for t in tubes], fontsize=7, rotation=90, padding=2)
         _spacing_axis(ax_e, res, res.name, colour)
     first = results[0].extra["tubes"]
     ax_t.set_xticks(np.arange(len(first)), [f"tube {_label(t)}" for t in first])
-    lo = min(t["t_z"] for r in results for t in r.extra["tubes"])
-    ax_t.set_ylim(0.9 * lo, None)
-    ax_t.set_ylabel("landing time t_z, s")
+    hi = max(t["t_z"] for r in results for t in r.extra["tubes"])
+    ax_t.set_ylim(0.0, 1.25 * hi)           # room for the value labels above the bars
+    ax_t.set_ylabel("landing time t_z, s (value on each bar)")
     ax_t.legend(fontsize=7)
     ax_e.set_xlabel("row spacing, mm")
     ax_e.set_ylabel("plant-position error, mm")
