@@ -26,10 +26,11 @@ err_console = Console(stderr=True, highlight=False)
 
 
 def rule_table(rules: list[dict], title: str) -> Table:
+    from synthesis.terminal import add_columns
+
     table = Table(title=escape(title), title_justify="left")
-    for col, just in (("rule", "left"), ("value", "right"), ("limit", "right"), ("unit", "left"),
-                      ("margin", "right"), ("", "left"), ("where / why", "left")):
-        table.add_column(col, justify=just, no_wrap=col != "where / why", overflow="fold")
+    add_columns(table, (("rule", "left"), ("value", "right"), ("limit", "right"), ("unit", "left"),
+                        ("margin", "right"), ("", "left"), ("where / why", "left")))
     for r in rules:
         limit = limit_text(r["limit"])
         value = "-" if r["value"] is None else f"{r['value']:.4g}"
@@ -68,16 +69,16 @@ def problems(library: Path) -> None:
     from synthesis import kinds
     from synthesis.spec.common import read_toml
 
-    kinds_table = Table(title="kinds", title_justify="left")
-    for col in ("kind", "mechanism", "commands", "try"):
-        kinds_table.add_column(col, overflow="fold")
+    from synthesis.terminal import add_columns
+
+    kinds_table = add_columns(Table(title="kinds", title_justify="left"),
+                              [(col, "left") for col in ("kind", "mechanism", "commands", "try")])
     for kind in kinds.all_kinds():
         kinds_table.add_row(kind.name, escape(kind.summary), "check, solve" if kind.solves else "check",
                             f"problems/{kind.example}" if kind.example else "")
     console.print(kinds_table)
-    table = Table(title=f"problem library: {library}", title_justify="left")
-    for col in ("kind", "name", "file", "source"):
-        table.add_column(col, overflow="fold")
+    table = add_columns(Table(title=f"problem library: {library}", title_justify="left"),
+                        [(col, "left") for col in ("kind", "name", "file", "source")])
     for path in sorted(library.rglob("*.toml")):
         data, _ = read_toml(path)
         table.add_row(str(data.get("kind", "?")), str(data.get("name", "?")),
@@ -225,11 +226,11 @@ def _in_file(loaded, evaluate):
 def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
     """A solve's rule table: each rule at the given design (start 0) and at the solved one."""
     from synthesis.report.tables import GIVEN_HEADING
+    from synthesis.terminal import add_columns
 
     table = Table(title=escape(title), title_justify="left")
-    for col, just in (("rule", "left"), ("limit", "right"), (GIVEN_HEADING, "right"), ("", "left"),
-                      ("solved", "right"), ("", "left"), ("unit", "left")):
-        table.add_column(col, justify=just, no_wrap=True, overflow="fold")
+    add_columns(table, (("rule", "left"), ("limit", "right"), (GIVEN_HEADING, "right"), ("", "left"),
+                        ("solved", "right"), ("", "left"), ("unit", "left")))
     base = {r["name"]: r for r in baseline or []}
 
     def cell(r):
@@ -669,12 +670,13 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
 
 
 def bench_table(results: list[dict], repeats: int) -> Table:
+    from synthesis.terminal import add_columns
+
     table = Table(title=f"bench: objective reached and median wall time (IPOPT methods: {repeats} runs)",
                   title_justify="left")
-    for col, just in (("problem", "left"), ("method", "left"), ("objective", "right"), ("gap to best", "right"),
-                      ("worst violation", "right"), ("median s", "right"), ("iterations", "right"),
-                      ("time ratio", "right")):
-        table.add_column(col, justify=just, no_wrap=True)
+    add_columns(table, (("problem", "left"), ("method", "left"), ("objective", "right"), ("gap to best", "right"),
+                        ("worst violation", "right"), ("median s", "right"), ("iterations", "right"),
+                        ("time ratio", "right")))
     for res in results:
         for row in res["rows"]:
             details = row.get("details") if isinstance(row.get("details"), dict) else {}

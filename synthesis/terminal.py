@@ -25,6 +25,14 @@ def console_for(stream=None, *, stderr: bool = False) -> Console:
                    highlight=False, width=None if tty else PIPED_WIDTH, soft_wrap=not tty)
 
 
+def add_columns(table: Table, columns) -> Table:
+    """Columns (heading, justify) that fold instead of cutting: on a terminal narrower than the table a
+    long cell (a file name, a number) continues on the next line of its cell, never ends in "..."."""
+    for heading, justify in columns:
+        table.add_column(heading, justify=justify, overflow="fold")
+    return table
+
+
 def plain_table(title: str | None = None) -> Table:
     """A table that never cuts a cell: overflowing text folds onto the next line of its cell on a terminal,
     and a piped console is wide enough for every line."""
@@ -34,9 +42,7 @@ def plain_table(title: str | None = None) -> Table:
 def reference_table(kind_name: str, summary: str, rows) -> Table:
     """``agrisynth spec KIND``: every field with TOML path, type, unit, default (or required), range, meaning."""
     table = plain_table(f"{kind_name}: {summary}")
-    for col, wrap in (("TOML path", False), ("type", True), ("unit", False), ("default", True), ("range", True),
-                      ("description", True)):
-        table.add_column(col, no_wrap=not wrap, overflow="fold")
+    add_columns(table, [(col, "left") for col in ("TOML path", "type", "unit", "default", "range", "description")])
     for e in rows:
         if e.section:
             table.add_row(f"[bold]{escape(e.heading)}[/]", "", "", "required" if e.required else escape(e.default),
@@ -63,9 +69,8 @@ def design_table(rows, title: str, solved: str = "solved") -> Table:
     """The solved design beside the given one: value, unit, bounds, free/fixed and at-bound marks
     (rows: :func:`synthesis.report.tables.design_rows`); ``solved``: the answer's column heading."""
     table = plain_table(title)
-    for col, just in (("variable", "left"), ("given (start 0)", "right"), (solved, "right"), ("unit", "left"),
-                      ("bounds", "right"), ("", "left")):
-        table.add_column(col, justify=just, no_wrap=True, overflow="fold")
+    add_columns(table, (("variable", "left"), ("given (start 0)", "right"), (solved, "right"), ("unit", "left"),
+                        ("bounds", "right"), ("", "left")))
     for r in rows:
         bounds = {None: "", False: "fixed"}.get(r.free, f"[{_value(r.bounds[0])}, {_value(r.bounds[1])}]"
                                                  if r.bounds else "free")

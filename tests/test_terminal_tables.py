@@ -1,0 +1,52 @@
+"""Issue 17: terminal tables adapt to the terminal's width by folding a long cell onto the next lines of
+that cell, never by cutting it ("opening_cam_optimised_l..." or a number losing its digits)."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+from rich.console import Console
+
+from synthesis import terminal
+from synthesis.cli import bench_table, comparison_table, rule_table
+from synthesis.report.tables import DesignRow
+
+NAME = "opening_cam_redesign_modified_sine_return"
+RULE = {"name": "transmission_angle_minimum", "value": 40.123456, "limit": [40.0, None], "unit": "deg",
+        "satisfied": True, "margin": 0.123456, "where": "over a turn, at theta2 = 180 deg"}
+BENCH = [{"rows": [{"problem": NAME, "method": "ipopt_exact", "objective": 1.2345678, "objective_gap": 0.0,
+                    "worst_violation": 0.0, "median_s": 6.38555, "details": {"median_iterations": 12},
+                    "time_ratio_text": "1.0x"}]}]
+DESIGN = [DesignRow("base_radius_of_the_cam", [52.345678], [False], "mm", [10.0, 150.0], True, ["upper"], 50.0)]
+
+
+def body_cells(text: str) -> list[str]:
+    """The cells of a one-row rich table as printed: each column's fragments over the row's lines, joined,
+    without spaces (a cell may wrap at one)."""
+    lines = [ln for ln in text.splitlines() if ln.startswith("│")]
+    columns = [ln.strip("│").split("│") for ln in lines]
+    return ["".join(parts[i] for parts in columns).replace(" ", "") for i in range(len(columns[0]))]
+
+
+def printed(table, width: int) -> str:
+    buf = io.StringIO()
+    Console(file=buf, width=width, highlight=False).print(table)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("width", [60, 100, 10_000])
+@pytest.mark.parametrize("name, table, cells", [
+    ("rules", lambda: rule_table([RULE], "t"), ["transmission_angle_minimum", "40.12", ">=40", "deg", "0.1235",
+                                                  "pass", "overaturn,attheta2=180deg"]),
+    ("given vs solved", lambda: comparison_table([RULE], [RULE], "t"),
+     ["transmission_angle_minimum", ">=40", "40.12", "pass", "40.12", "pass", "deg"]),
+    ("bench", lambda: bench_table(BENCH, 3), [NAME, "ipopt_exact", "1.235", "0", "0", "6.386", "12", "1.0x"]),
+    ("design", lambda: terminal.design_table(DESIGN, "t"),
+     ["base_radius_of_the_cam", "50", "52.3457", "mm", "[10,150]", "atupperbound"]),
+])
+def test_no_cell_is_cut_at_any_width(name, table, cells, width):
+    text = printed(table(), width)
+    assert "…" not in text
+    assert body_cells(text) == cells
+    assert max(len(ln) for ln in text.splitlines()) <= width
