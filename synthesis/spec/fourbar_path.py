@@ -252,8 +252,10 @@ def old_form_message(data: dict) -> str:
         fixes.append(f"bounds: [bounds] is no longer read; write each variable under [linkage], a number fixes it, "
                      f"{{init, bounds}} frees it: {example}")
     elif moved:
+        given = design[moved[0]]
+        init = f"{given:g}" if isinstance(given, (int, float)) and not isinstance(given, bool) else "..."
         fixes.append(f"design.{moved[0]}: [design] holds only crank_deg now; write the given value as the init of "
-                     f"the variable under [linkage]: {_free_text(moved[0], [0, 0], design[moved[0]]).replace('[0, 0]', '[lo, hi]')}")
+                     f"the variable under [linkage]: {moved[0]} = {{init = {init}, bounds = [lo, hi]}}")
     if "branch" in data:
         old = data["branch"]
         new = {"open": 1, "crossed": -1}.get(old, old) if isinstance(old, (str, int)) else old
