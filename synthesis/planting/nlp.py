@@ -17,11 +17,12 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, scaled_backoff
+from synthesis.core.problem import Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, scaled_backoff
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.planting.scene import PlantingScene, find_precision_points
 from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.operating import ranges_of
 from synthesis.spec.planting import PlantingFourbarSpec
 
 MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecutive precision points
@@ -41,6 +42,11 @@ class PlantingNLP:
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
+        # the operating conditions as symbols (the core substitutes their nominal values, or in an envelope
+        # replicates the rules that read them once per sampled value)
+        self.forward_speed = ca.SX.sym("forward_speed")       # m/s
+        self.crank_speed = ca.SX.sym("crank_speed")           # r/min
+        self.omega_sym = self.crank_speed * TWO_PI / 60.0
         x = ca.SX.sym("x", len(self.names))
         th = ca.SX.sym("theta", 6)
         v = {n: x[i] for i, n in enumerate(self.names)}
@@ -48,6 +54,7 @@ class PlantingNLP:
         p = self._arm(v)
         tip = tip_derivatives(spec.arm.branch)
         states = {n: self._state(tip, theta[n], p) for n in POINTS}
+        ranges = ranges_of(spec)
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
@@ -60,6 +67,9 @@ class PlantingNLP:
             hard_in_elastic=HARD_IN_ELASTIC,
             ipopt="standard",
             max_iter=spec.solver.max_iter,
+            operating=(Operating("forward_speed", self.forward_speed, spec.operation.forward_speed, "m/s"),
+                       Operating("crank_speed", self.crank_speed, spec.operation.crank_speed, "r/min")),
+            envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None,
         )
         self.compiled = CompiledNLP(self.problem, elastic)
 
@@ -72,14 +82,15 @@ class PlantingNLP:
         return ca.vertcat(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"] * rad, v["phi"] * rad)
 
     def _state(self, tip, theta, p) -> tuple:
-        """(position mm, velocity mm/s) of the claw tip at crank angle theta: one node each, shared by
-        the structural rows and the rules."""
+        """(position mm, velocity mm/s, d position / d crank angle mm/rad) of the claw tip at crank angle
+        theta: one node each, shared by the structural rows (which read the crank-angle derivative, free of
+        the crank speed) and the rules."""
         pos, dpos, _ = tip(theta, p)
-        return pos, dpos * self.omega
+        return pos, dpos * self.omega_sym, dpos
 
     def _trace(self, v, p, theta, states) -> Trace:
         """The rules' trace on decision variables, sampled as ``[solver]`` says."""
-        spec, omega = self.spec, self.omega
+        spec, omega = self.spec, self.omega_sym
         n = spec.solver.samples_per_phase
         s = np.linspace(0.0, 1.0, n)
         tip = tip_derivatives(spec.arm.branch).map(n)
@@ -93,14 +104,14 @@ class PlantingNLP:
         return Trace(theta=theta, pos={k: (st[0][0], st[0][1]) for k, st in states.items()},
                      vel={k: (st[1][0], st[1][1]) for k, st in states.items()},
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
-                     mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=spec.operation.forward_speed * 1000.0,
-                     acc_scale=omega**2 * value_of(spec.arm.l2))
+                     mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
+                     acc_scale=self.omega**2 * value_of(spec.arm.l2))
 
     def _structural(self, v, p, theta, states) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound."""
         spec = self.spec
         pos = {k: st[0] for k, st in states.items()}
-        vel = {k: st[1] for k, st in states.items()}
+        vel = {k: st[2] for k, st in states.items()}          # d/dtheta: the same directions at any crank speed
         tilt = v["seedbed_tilt"] * math.pi / 180.0
         normal = (-ca.sin(tilt), ca.cos(tilt))
 
@@ -110,7 +121,7 @@ class PlantingNLP:
         soil = v["soil_level"] if spec.soil.level is not None else pos["P5"][1] + spec.soil.analysis_depth
         rows = [
             (pos["P4"][1] - soil, 0.0, 0.0), (pos["P6"][1] - soil, 0.0, 0.0),        # on the soil line
-            (vel["P5"][1], 0.0, 0.0),                                                  # lowest: vy = 0
+            (vel["P5"][1], 0.0, 0.0),                                                  # lowest: dy/dtheta = 0
             (height(pos["P3"]), 0.0, 0.0),
             (height(pos["P2"]) - spec.seedbed.thickness, 0.0, 0.0),
             (height(pos["P1"]) - spec.seedbed.seedling_height, 0.0, 0.0),

@@ -58,6 +58,11 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         return write
 
     writers = {**(files or {}), **kinds.figure_writers(result)}
+    if isinstance((result.extra or {}).get("envelope"), dict):
+        # an operating envelope (issue 20): each rule that changes over the range, against the condition
+        from synthesis.tolerance.envelope import plot
+
+        writers["envelope.png"] = lambda path: plot(result, path)
     artifacts = {name: guarded(name, w) for name, w in writers.items()}
     artifacts["report.html"] = lambda path: write_report(result, path, written, failed, given_rules)
     return artifacts
