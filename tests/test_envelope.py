@@ -116,3 +116,41 @@ def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesig
     assert np.allclose(table["p4p6_distance"]["values"], p4p6, atol=1e-9)
     # and the price of the envelope in the objective
     assert envelope.objective["value"] > nominal.objective["value"]
+
+
+def _ode_spread_mm(design: dict, mu: float, spacing: float) -> float:
+    """Plant-position error (0.5 m/s x landing-time spread of tubes I and II) by the ODE twin of the drop
+    (scipy integration of the printed equations of motion, not the closed form the NLP and check use)."""
+    from synthesis.guide_tube.drop import Physics, Tube
+    from synthesis.guide_tube.ode import simulate
+
+    physics = Physics(0.6, 9.8, 17.5, mu)
+    scale = (300.0 - spacing) / 70.0                 # l3 shifts with the row spacing (GUIDE_TUBE.md)
+    times = [simulate(design[f"delta_{name}"], Tube(name, l3 * scale * 1e-3, 0.04, 0.21), physics).landing_time
+             for name, l3 in (("I", 105.0), ("II", 35.0))]
+    return 500.0 * abs(times[0] - times[1])
+
+
+def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nominal_design_does_not(tmp_path):
+    from tests.solving import spec_with
+
+    source = LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"
+    envelope, _, _ = solve_spec(load_spec(source), starts=1, workers=1)
+    fixed = spec_with(tmp_path, source, [("mu = { range = [0.48476005, 0.72714007], samples = 3, nominal = 0.60595006 }",
+                                          "mu = 0.60595006")])
+    nominal, _, _ = solve_spec(load_spec(fixed), starts=1, workers=1)
+    assert envelope.status == nominal.status == "optimal"
+    # min-max over 3 mu x 8 spacings: 5.681 mm; designed at the nominal mu only: 4.999 mm there
+    assert envelope.objective["value"] == pytest.approx(5.68133, abs=1e-4)
+    assert nominal.objective["value"] == pytest.approx(4.99898, abs=1e-4)
+    mus = np.linspace(0.48476005, 0.72714007, 21)
+    spacings = [230.0, 240.0, 250.0, 260.0, 270.0, 280.0, 290.0, 300.0 - 1e-6]
+    env = np.array([[_ode_spread_mm(envelope.design, m, w) for w in spacings] for m in mus])
+    nom = np.array([[_ode_spread_mm(nominal.design, m, w) for w in spacings] for m in mus])
+    assert env.max() <= 6.0 and env.max() == pytest.approx(5.6813, abs=2e-3)
+    assert nom.max() > 6.0 and nom.max() == pytest.approx(6.5266, abs=2e-3)
+    assert nom[-1].max() == nom.max()                    # the nominal design misses at mu + 20 %
+    assert nom[10].max() == pytest.approx(4.999, abs=2e-3)
+    # the result's own re-check over 21 mu agrees
+    table = envelope.extra["envelope"]["rules"]["spacing_error"]
+    assert len(table["values"]) == 21 and max(table["values"]) == pytest.approx(env.max(), abs=2e-3)

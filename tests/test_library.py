@@ -41,6 +41,7 @@ EXPECTED: dict[str, dict] = {
     "guide_tube/cai2020_tubes.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_tube/fastest_equal_time.toml": {"check": 1, "solve": ("optimal", 402.3011966799367)},
     "guide_tube/uniform_spacing.toml": {"check": 1, "solve": ("optimal", 8.758766813306126)},
+    "guide_tube/uniform_spacing_mu_envelope.toml": {"check": 1, "solve": ("optimal", 5.68133024913431)},
     "guide_way/liang_2z.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.9872647563039696)},
     "steering/hwang_model3_steering.toml": {"check": 0, "solve": ("exit", 2)},
@@ -75,7 +76,8 @@ EXPECTED: dict[str, dict] = {
 SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 #: specs whose solve takes more than a few seconds: run with the studies (`pytest -m benchmark`)
 STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
-           "planting_arm/envelope_redesign_from_example1.toml"}  # 26-point envelope re-check per start, about 40 s
+           "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
+           "guide_tube/uniform_spacing_mu_envelope.toml"}        # 21 mu x 80 spacings re-check per start, about 25 s
 
 
 def test_every_library_spec_is_recorded():

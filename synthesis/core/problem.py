@@ -154,7 +154,8 @@ class Problem:
         """Replace the operating symbols by numbers, so every later stage (transcription, sensitivities, the
         solver, the elastic diagnosis) sees an ordinary problem.
 
-        Structural rows and the objective take the nominal values.  A rule whose rows depend on a condition
+        Structural rows and the objective's f take the nominal values, the objective's rows (an epigraph)
+        are held at every scenario where they read a sampled condition.  A rule whose rows depend on a condition
         the envelope samples becomes one rule per scenario, ``<rule>@<condition>=<value>``, each with that
         scenario's values (the other conditions nominal); a rule that depends on none stays one rule.  The
         structural rows pin auxiliaries (crank angles of precision points) shared by every scenario, so they
@@ -212,8 +213,13 @@ class Problem:
         self.rules = rules
         self.hard_in_elastic = tuple(hard)
         if isinstance(self.objective, ObjectiveParts):
-            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal),
-                                                 rows=rows_at(self.objective.rows, nominal))
+            # f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where
+            # they read a sampled condition, so a min-max objective is the worst over the envelope
+            rows = []
+            for row in self.objective.rows:
+                scenarios = envelope.scenarios() if depends(row[0]) else [{}]
+                rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
+            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal), rows=rows)
         self.operating = ()           # resolved: a copy of this problem (dataclasses.replace) stays as it is
 
 
