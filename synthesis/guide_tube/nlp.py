@@ -49,12 +49,12 @@ class GuideTubeNLP:
         # (every kind's nothing-free error is the core's; this one comes first because a guide-tube NLP
         # has no variables at all when every angle is fixed)
         self.spec, self.elastic = spec, elastic
-        # mu as a symbol: the core substitutes its value, or in an envelope holds every rule reading it once per
-        # sampled mu (spec friction.mu = {range, samples})
-        self.mu = ca.SX.sym("mu")
-        nominal_mu = scene.physics.mu
-        self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu))
+        # mu given as a range (friction.mu = {range, samples}) is a symbol: the core holds every rule reading it
+        # once per sampled mu (an envelope); a number stays a number
         ranges = ranges_of(spec)
+        nominal_mu = scene.physics.mu
+        self.mu = ca.SX.sym("mu") if "mu" in ranges else nominal_mu
+        self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu))
         self.names = [t.name for t in free]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
@@ -70,10 +70,11 @@ class GuideTubeNLP:
         self.problem = Problem("guide_tube", delta, self.bounds[:, 0], self.bounds[:, 1], [], rules,
                                self._objective(delta, angles, design_times, uniform), max_iter=spec.solver.max_iter,
                                backoff=scaled_backoff(spec.solver.backoff), ipopt="precise",
-                               operating=[Operating("mu", self.mu, nominal_mu, "-")],
+                               operating=[Operating("mu", self.mu, nominal_mu, "-")] if ranges else [],
                                envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None)
-        self._times = ca.Function("design_times", [delta], [ca.substitute(ca.vertcat(*design_times), self.mu,
-                                                                          ca.SX(nominal_mu))])
+        times = ca.vertcat(*design_times)
+        self._times = ca.Function("design_times", [delta], [ca.substitute(times, self.mu, ca.SX(nominal_mu))
+                                                            if ranges else times])
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
 

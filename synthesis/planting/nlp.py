@@ -42,11 +42,14 @@ class PlantingNLP:
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
-        # the operating conditions as symbols (the core substitutes their nominal values, or in an envelope
-        # replicates the rules that read them once per sampled value)
-        self.forward_speed = ca.SX.sym("forward_speed")       # m/s
-        self.crank_speed = ca.SX.sym("crank_speed")           # r/min
-        self.omega_sym = self.crank_speed * TWO_PI / 60.0
+        # an operating condition given as a range is a symbol (the core holds the rules that read it once per
+        # sampled value: an envelope); one given as a number stays a number
+        ranges = ranges_of(spec)
+        self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if n in ranges]
+        op = {o.name: o.symbol for o in self.operating}
+        self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
+        self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
         x = ca.SX.sym("x", len(self.names))
         th = ca.SX.sym("theta", 6)
         v = {n: x[i] for i, n in enumerate(self.names)}
@@ -54,7 +57,6 @@ class PlantingNLP:
         p = self._arm(v)
         tip = tip_derivatives(spec.arm.branch)
         states = {n: self._state(tip, theta[n], p) for n in POINTS}
-        ranges = ranges_of(spec)
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
@@ -67,8 +69,7 @@ class PlantingNLP:
             hard_in_elastic=HARD_IN_ELASTIC,
             ipopt="standard",
             max_iter=spec.solver.max_iter,
-            operating=(Operating("forward_speed", self.forward_speed, spec.operation.forward_speed, "m/s"),
-                       Operating("crank_speed", self.crank_speed, spec.operation.crank_speed, "r/min")),
+            operating=self.operating,
             envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None,
         )
         self.compiled = CompiledNLP(self.problem, elastic)
@@ -82,11 +83,13 @@ class PlantingNLP:
         return ca.vertcat(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"] * rad, v["phi"] * rad)
 
     def _state(self, tip, theta, p) -> tuple:
-        """(position mm, velocity mm/s, d position / d crank angle mm/rad) of the claw tip at crank angle
-        theta: one node each, shared by the structural rows (which read the crank-angle derivative, free of
-        the crank speed) and the rules."""
+        """(position mm, velocity mm/s, velocity at the nominal crank speed mm/s) of the claw tip at crank
+        angle theta: one node each, shared by the rules and the structural rows (which read the velocity at the
+        nominal crank speed: the directions they fix are the same at any crank speed, and the rows stay free of
+        the crank-speed symbol an envelope samples)."""
         pos, dpos, _ = tip(theta, p)
-        return pos, dpos * self.omega_sym, dpos
+        vel = dpos * self.omega_sym
+        return pos, vel, (vel if isinstance(self.omega_sym, float) else dpos * self.omega)
 
     def _trace(self, v, p, theta, states) -> Trace:
         """The rules' trace on decision variables, sampled as ``[solver]`` says."""
@@ -111,7 +114,7 @@ class PlantingNLP:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound."""
         spec = self.spec
         pos = {k: st[0] for k, st in states.items()}
-        vel = {k: st[2] for k, st in states.items()}          # d/dtheta: the same directions at any crank speed
+        vel = {k: st[2] for k, st in states.items()}          # at the nominal crank speed (see _state)
         tilt = v["seedbed_tilt"] * math.pi / 180.0
         normal = (-ca.sin(tilt), ca.cos(tilt))
 
@@ -121,7 +124,7 @@ class PlantingNLP:
         soil = v["soil_level"] if spec.soil.level is not None else pos["P5"][1] + spec.soil.analysis_depth
         rows = [
             (pos["P4"][1] - soil, 0.0, 0.0), (pos["P6"][1] - soil, 0.0, 0.0),        # on the soil line
-            (vel["P5"][1], 0.0, 0.0),                                                  # lowest: dy/dtheta = 0
+            (vel["P5"][1], 0.0, 0.0),                                                  # lowest: vy = 0
             (height(pos["P3"]), 0.0, 0.0),
             (height(pos["P2"]) - spec.seedbed.thickness, 0.0, 0.0),
             (height(pos["P1"]) - spec.seedbed.seedling_height, 0.0, 0.0),
