@@ -91,6 +91,12 @@ def solving_kind_for(loaded) -> Kind:
     """The kind that solves a loaded spec: its own, or -- when the spec has a ``[tolerance]`` table -- the
     same kind holding every rule at its linearised worst case in the box (synthesis.tolerance.robust)."""
     kind = solving_kind(loaded.kind)
+    from synthesis.spec.operating import ranges_of
+
+    if ranges_of(loaded.model):
+        from synthesis.tolerance.envelope import envelope_kind
+
+        kind = envelope_kind(kind, loaded.model)
     if getattr(loaded.model, "tolerance", None) is None:
         return kind
     from synthesis.tolerance.robust import robust_kind

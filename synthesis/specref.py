@@ -211,9 +211,23 @@ def entries(model: type[BaseModel], prefix: str = "") -> list[Entry]:
         desc = _one_line(field.description)
         unit = " or ".join(units_in(desc)) if numeric else ""
         values.append(Entry(path, False, False, text, unit, default,
-                            _range_text(field.metadata, "characters" if field.annotation is str else "item(s)"),
+                            _range_text(field.metadata + _number_arm_meta(field.annotation),
+                                        "characters" if field.annotation is str else "item(s)"),
                             field.is_required(), desc, numeric))
     return values + sections
+
+
+def _number_arm_meta(tp) -> list:
+    """The constraints of a "number or table" union's number arm (``Annotated[float, Field(gt=0)] | Range``)."""
+    tp, _ = _unwrap(tp)
+    if get_origin(tp) not in (Union, types.UnionType):
+        return []
+    meta = []
+    for arg in get_args(tp):
+        inner, more = _unwrap(arg)
+        if inner in (float, int):
+            meta += [m for field_info in more for m in getattr(field_info, "metadata", [field_info])]
+    return meta
 
 
 def missing_descriptions(model: type[BaseModel]) -> list[str]:

@@ -41,6 +41,7 @@ EXPECTED: dict[str, dict] = {
     "guide_tube/cai2020_tubes.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_tube/fastest_equal_time.toml": {"check": 1, "solve": ("optimal", 402.3011966799367)},
     "guide_tube/uniform_spacing.toml": {"check": 1, "solve": ("optimal", 8.758766813306126)},
+    "guide_tube/uniform_spacing_mu_envelope.toml": {"check": 1, "solve": ("optimal", 5.68133024913431)},
     "guide_way/liang_2z.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.9872647563039696)},
     "steering/hwang_model3_steering.toml": {"check": 0, "solve": ("exit", 2)},
@@ -51,6 +52,7 @@ EXPECTED: dict[str, dict] = {
     "fourbar_path/picking_arc.toml": {"check": 1, "solve": ("feasible", 1.0293447294002422e-4)},
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("infeasible", 1.116522628182273)},
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
+    "planting_arm/envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 0.9380752773248703)},
     "planting_arm/redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6391376807772884)},
     "planting_arm/redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.29332215894486)},
@@ -73,7 +75,9 @@ EXPECTED: dict[str, dict] = {
 
 SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 #: specs whose solve takes more than a few seconds: run with the studies (`pytest -m benchmark`)
-STUDIES = {"planting_arm/robust_redesign_from_example1.toml"}   # tolerance-robust, about 90 s
+STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
+           "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
+           "guide_tube/uniform_spacing_mu_envelope.toml"}        # 21 mu x 80 spacings re-check per start, about 25 s
 
 
 def test_every_library_spec_is_recorded():

@@ -9,6 +9,8 @@ is :mod:`synthesis.core.transcribe`; which solver runs it is :mod:`synthesis.cor
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
@@ -77,6 +79,35 @@ class Tolerance:
     design_jacobian: np.ndarray | None = None
 
 
+@dataclass(frozen=True)
+class Operating:
+    """An operating condition (forward speed, crank speed, friction, ...) the problem's expressions are written
+    in: a scalar ``symbol`` standing for it and its ``nominal`` value (used wherever no envelope asks for more)."""
+
+    name: str
+    symbol: ca.SX
+    nominal: float
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """Operating envelope: every rule that depends on an operating condition holds at each scenario, with one
+    shared design (a multi-scenario NLP).  ``samples[name]`` are the values sampled of that condition; the
+    scenarios are every combination of them."""
+
+    samples: dict[str, tuple[float, ...]]
+
+    def scenarios(self) -> list[dict[str, float]]:
+        names = list(self.samples)
+        return [dict(zip(names, combo)) for combo in itertools.product(*(self.samples[n] for n in names))]
+
+
+def scenario_label(values: dict[str, float]) -> str:
+    """``forward_speed=0.583`` (several conditions joined by ``,``): the suffix of a rule held at a scenario."""
+    return ",".join(f"{n}={v:.4g}" for n, v in values.items())
+
+
 @dataclass
 class Problem:
     """min f  s.t.  structural rows, every rule's rows, lbx <= x <= ubx, with parameters p.
@@ -103,12 +134,106 @@ class Problem:
     max_iter: int = 500
     #: robust synthesis: hold the rules at the linearised worst case of this tolerance box (None: nominal)
     tolerance: Tolerance | None = None
+    #: operating conditions the expressions are written in (substituted by their nominal values or, for rules
+    #: that depend on one the envelope samples, once per scenario: see :meth:`_resolve_operating`)
+    operating: Sequence[Operating] = ()
+    envelope: Envelope | None = None
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)
         self.ubx = np.asarray(self.ubx, dtype=float)
         self.rules = list(self.rules)
+        if self.operating:
+            self._resolve_operating()
         names = [r.name for r in self.rules]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"problem {self.name}: rule names must be unique, repeated: {', '.join(dup)}")
+
+    def _resolve_operating(self) -> None:
+        """Replace the operating symbols by numbers, so every later stage (transcription, sensitivities, the
+        solver, the elastic diagnosis) sees an ordinary problem.
+
+        Structural rows and the objective's f take the nominal values, the objective's rows (an epigraph)
+        are held at every scenario where they read a sampled condition.  A rule whose rows depend on a condition
+        the envelope samples becomes one rule per scenario, ``<rule>@<condition>=<value>``, each with that
+        scenario's values (the other conditions nominal); a rule that depends on none stays one rule.  The
+        structural rows pin auxiliaries (crank angles of precision points) shared by every scenario, so they
+        may not depend on a sampled condition (one copy of the auxiliaries per scenario is not built)."""
+        ops = list(self.operating)
+        names = [o.name for o in ops]
+        if len(set(names)) != len(names):
+            raise ValueError(f"problem {self.name}: operating conditions repeated in {names}")
+        envelope = self.envelope
+        unknown = sorted(set(envelope.samples) - set(names)) if envelope else []
+        if unknown:
+            raise ValueError(f"problem {self.name}: the envelope samples {', '.join(unknown)}, which the problem "
+                             f"does not depend on (its operating conditions: {', '.join(names) or 'none'})")
+        syms = ca.vertcat(*[o.symbol for o in ops])
+        nominal = {o.name: float(o.nominal) for o in ops}
+        sampled = ca.vertcat(*[o.symbol for o in ops if envelope and o.name in envelope.samples])
+
+        def at(expr, values: dict[str, float]):
+            if not isinstance(expr, ca.SX):
+                return expr
+            return ca.substitute(expr, syms, ca.SX(ca.DM([values[n] for n in names])))
+
+        def rows_at(rows, values):
+            return tuple((at(e, values), lb, ub) for e, lb, ub in rows)
+
+        def depends(expr) -> bool:
+            e = _sx(expr)
+            return sampled.numel() > 0 and e.numel() > 0 and ca.depends_on(ca.vec(e), sampled)
+
+        bad = [i for i, (e, _, _) in enumerate(self.structural) if depends(e)]
+        if bad:
+            raise ValueError(f"problem {self.name}: structural rows {bad} depend on a condition the envelope "
+                             f"samples ({', '.join(envelope.samples)}); write them free of it (the auxiliaries "
+                             f"they pin are shared by every scenario)")
+        self.structural = list(rows_at(self.structural, nominal))
+        rules, hard = [], list(self.hard_in_elastic)
+        for rule in self.rules:
+            varies = any(depends(e) for e, _, _ in rule.rows()) or depends(rule.expr)
+            if not varies:
+                rules.append(dataclasses.replace(rule, expr=at(rule.expr, nominal),
+                                                 nlp_rows=rows_at(rule.nlp_rows, nominal)))
+                continue
+            for scenario in envelope.scenarios():
+                values = {**nominal, **scenario}
+                label = scenario_label({n: v for n, v in scenario.items()
+                                        if depends_on_one(rule, next(o.symbol for o in ops if o.name == n))})
+                name = f"{rule.name}@{label}"
+                if any(r.name == name for r in rules):
+                    continue                # the rule does not depend on this scenario's other conditions
+                rules.append(dataclasses.replace(rule, name=name, expr=at(rule.expr, values),
+                                                 nlp_rows=rows_at(rule.nlp_rows, values),
+                                                 where=f"{rule.where}, {label}" if rule.where else label))
+                if rule.name in self.hard_in_elastic:
+                    hard.append(name)
+        self.rules = rules
+        self.hard_in_elastic = tuple(hard)
+        if isinstance(self.objective, ObjectiveParts):
+            # f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where
+            # they read a sampled condition, so a min-max objective is the worst over the envelope
+            rows = []
+            for row in self.objective.rows:
+                scenarios = envelope.scenarios() if depends(row[0]) else [{}]
+                rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
+            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal), rows=rows)
+        self.operating = ()           # resolved: a copy of this problem (dataclasses.replace) stays as it is
+
+
+def depends_on_one(rule: Rule, symbol: ca.SX) -> bool:
+    """Whether any row (or the value) of ``rule`` depends on ``symbol``."""
+    exprs = [_sx(e) for e, _, _ in rule.rows()] + [_sx(rule.expr)]
+    return any(e.numel() > 0 and ca.depends_on(ca.vec(e), symbol) for e in exprs)
+
+
+def _sx(expr) -> ca.SX:
+    """A rule's or row's expression as SX (an empty one for None or a non-numeric value)."""
+    if isinstance(expr, ca.SX):
+        return expr
+    try:
+        return ca.SX(expr)
+    except (NotImplementedError, TypeError, RuntimeError):
+        return ca.SX(0, 1)

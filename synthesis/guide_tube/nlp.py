@@ -13,6 +13,7 @@ The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the core's
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -24,9 +25,10 @@ from synthesis.guide_tube.drop import DropPhases, Physics, Tube, drop_phases
 from synthesis.guide_tube.scene import GuideTubeScene
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
+from synthesis.core.problem import Envelope, ObjectiveParts, Operating, Problem, scaled_backoff
 from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.guide_tube import GuideTubeSpec
+from synthesis.spec.operating import ranges_of
 
 #: unit of each objective's value: squared change of the free angles, tube 1's landing time, position error
 OBJECTIVE_UNITS = {"nearest": "deg^2", "fastest": "ms", "uniform": "mm"}
@@ -46,7 +48,13 @@ class GuideTubeNLP:
                             "every angle is fixed, so use `agrisynth check`")
         # (every kind's nothing-free error is the core's; this one comes first because a guide-tube NLP
         # has no variables at all when every angle is fixed)
-        self.spec, self.scene, self.elastic = spec, scene, elastic
+        self.spec, self.elastic = spec, elastic
+        # mu given as a range (friction.mu = {range, samples}) is a symbol: the core holds every rule reading it
+        # once per sampled mu (an envelope); a number stays a number
+        ranges = ranges_of(spec)
+        nominal_mu = scene.physics.mu
+        self.mu = ca.SX.sym("mu") if "mu" in ranges else nominal_mu
+        self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu))
         self.names = [t.name for t in free]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
@@ -57,12 +65,16 @@ class GuideTubeNLP:
         rules = rules_of(scene, angles, self.grid, spec.rules, drop=symbolic_drop, equalise=not uniform)
         design_times = [symbolic_drop(angles[t.name], scene.tube(i, scene.rows.design_spacing), scene.physics)
                         .landing_time for i, t in enumerate(spec.tubes)]
-        self._times = ca.Function("design_times", [delta], [ca.vertcat(*design_times)])
         self.bounds = np.array([bounds_of(t.angle) for t in free], dtype=float)
         self.init = np.array([value_of(t.angle) for t in free])
         self.problem = Problem("guide_tube", delta, self.bounds[:, 0], self.bounds[:, 1], [], rules,
                                self._objective(delta, angles, design_times, uniform), max_iter=spec.solver.max_iter,
-                               backoff=scaled_backoff(spec.solver.backoff), ipopt="precise")
+                               backoff=scaled_backoff(spec.solver.backoff), ipopt="precise",
+                               operating=[Operating("mu", self.mu, nominal_mu, "-")] if ranges else [],
+                               envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None)
+        times = ca.vertcat(*design_times)
+        self._times = ca.Function("design_times", [delta], [ca.substitute(times, self.mu, ca.SX(nominal_mu))
+                                                            if ranges else times])
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
 

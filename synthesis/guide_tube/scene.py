@@ -9,6 +9,7 @@ import numpy as np
 from synthesis.errors import SpecError
 from synthesis.guide_tube.calibrate import MuCalibration, calibrate_mu
 from synthesis.guide_tube.drop import Physics, Tube
+from synthesis.spec.common import value_of
 from synthesis.spec.guide_tube import GuideTubeSpec, RowsSection, TubeSection
 
 MM = 1e-3
@@ -37,7 +38,7 @@ class GuideTubeScene:
             return scene
         index = next(i for i, t in enumerate(spec.tubes) if cal.tube in (t.name, t.mirror))
         tube = spec.tubes[index]
-        result = calibrate_mu(cal.landing_time, float(tube.angle), scene.tube(index, spec.rows.design_spacing),
+        result = calibrate_mu(cal.landing_time, value_of(tube.angle), scene.tube(index, spec.rows.design_spacing),
                               physics, cal.mu_range)
         if len(result.roots) != 1:
             raise SpecError(calibration_failure(result))

@@ -17,11 +17,12 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, scaled_backoff
+from synthesis.core.problem import Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, scaled_backoff
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.planting.scene import PlantingScene, find_precision_points
 from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.operating import ranges_of
 from synthesis.spec.planting import PlantingFourbarSpec
 
 MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecutive precision points
@@ -41,6 +42,14 @@ class PlantingNLP:
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
+        # an operating condition given as a range is a symbol (the core holds the rules that read it once per
+        # sampled value: an envelope); one given as a number stays a number
+        ranges = ranges_of(spec)
+        self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if n in ranges]
+        op = {o.name: o.symbol for o in self.operating}
+        self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
+        self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
         x = ca.SX.sym("x", len(self.names))
         th = ca.SX.sym("theta", 6)
         v = {n: x[i] for i, n in enumerate(self.names)}
@@ -60,6 +69,8 @@ class PlantingNLP:
             hard_in_elastic=HARD_IN_ELASTIC,
             ipopt="standard",
             max_iter=spec.solver.max_iter,
+            operating=self.operating,
+            envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None,
         )
         self.compiled = CompiledNLP(self.problem, elastic)
 
@@ -72,14 +83,17 @@ class PlantingNLP:
         return ca.vertcat(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"] * rad, v["phi"] * rad)
 
     def _state(self, tip, theta, p) -> tuple:
-        """(position mm, velocity mm/s) of the claw tip at crank angle theta: one node each, shared by
-        the structural rows and the rules."""
+        """(position mm, velocity mm/s, velocity at the nominal crank speed mm/s) of the claw tip at crank
+        angle theta: one node each, shared by the rules and the structural rows (which read the velocity at the
+        nominal crank speed: the directions they fix are the same at any crank speed, and the rows stay free of
+        the crank-speed symbol an envelope samples)."""
         pos, dpos, _ = tip(theta, p)
-        return pos, dpos * self.omega
+        vel = dpos * self.omega_sym
+        return pos, vel, (vel if isinstance(self.omega_sym, float) else dpos * self.omega)
 
     def _trace(self, v, p, theta, states) -> Trace:
         """The rules' trace on decision variables, sampled as ``[solver]`` says."""
-        spec, omega = self.spec, self.omega
+        spec, omega = self.spec, self.omega_sym
         n = spec.solver.samples_per_phase
         s = np.linspace(0.0, 1.0, n)
         tip = tip_derivatives(spec.arm.branch).map(n)
@@ -93,14 +107,14 @@ class PlantingNLP:
         return Trace(theta=theta, pos={k: (st[0][0], st[0][1]) for k, st in states.items()},
                      vel={k: (st[1][0], st[1][1]) for k, st in states.items()},
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
-                     mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=spec.operation.forward_speed * 1000.0,
-                     acc_scale=omega**2 * value_of(spec.arm.l2))
+                     mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
+                     acc_scale=self.omega**2 * value_of(spec.arm.l2))
 
     def _structural(self, v, p, theta, states) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound."""
         spec = self.spec
         pos = {k: st[0] for k, st in states.items()}
-        vel = {k: st[1] for k, st in states.items()}
+        vel = {k: st[2] for k, st in states.items()}          # at the nominal crank speed (see _state)
         tilt = v["seedbed_tilt"] * math.pi / 180.0
         normal = (-ca.sin(tilt), ca.cos(tilt))
 

@@ -66,6 +66,11 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         write_report(result, path, written, failed, given_rules)
 
     writers = {**(files or {}), **kinds.figure_writers(result)}
+    if isinstance((result.extra or {}).get("envelope"), dict):
+        # an operating envelope (issue 20): each rule that changes over the range, against the condition
+        from synthesis.tolerance.envelope import plot
+
+        writers["envelope.png"] = lambda path: plot(result, path)
     artifacts = {name: guarded(name, w) for name, w in writers.items()}
     artifacts["report.html"] = report
     return artifacts

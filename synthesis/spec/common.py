@@ -269,7 +269,8 @@ def _pair_text(model: type[BaseModel], loc: tuple) -> str:
 def _describe(err: dict, model: type[BaseModel]) -> str:
     kind, ctx, got = err["type"], err.get("ctx", {}), err.get("input")
     # pydantic reports union branches as extra path parts ("float", "FreeVariable"): drop them
-    loc = tuple(p for p in err["loc"] if p not in ("float", "FreeVariable", "function-after[_ordered(), FreeVariable]"))
+    loc = tuple(p for p in err["loc"] if p not in ("float", "FreeVariable", "function-after[_ordered(), FreeVariable]",
+                                                   "OperatingRange", "constrained-float"))
     if kind == "missing" and len(loc) > 1 and isinstance(loc[-1], int) and isinstance(got, list):
         # a tuple given too few items: pydantic names the first missing index ("bounds.1")
         return f"{'.'.join(map(str, loc[:-1]))}: expected {_pair_text(model, loc[:-1])}, got {shown(got)}"
@@ -386,6 +387,10 @@ def _prune_union_noise(lines: list[str]) -> list[str]:
     # a table given for a "number | table" field: the table's own complaints say what is wrong with it
     out = [ln for ln in out if not (": expected a number, got {" in ln and
                                     any(o.startswith(ln.partition(": expected a number, got ")[0] + ".") for o in out))]
+    # a number given for a "number | range table" field: the number's own complaint says what is wrong with it
+    out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
+        o != ln and o.startswith(ln.partition(": expected a table, got ")[0] + ": expected ")
+        and o.endswith(", got " + ln.partition(": expected a table, got ")[2]) for o in out))]
     out = [_free_hint(ln) for ln in out]
     specific = [ln for ln in out if "input should be a valid" not in ln and "dictionary" not in ln]
     return specific or out

@@ -12,10 +12,11 @@ at another row spacing w it scales with the tube's shift, l3 (tray_pitch - w) / 
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, PrivateAttr, model_validator
 
+from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
     FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
     is_free, max_iter_field, starts_field, value_of,
@@ -50,15 +51,21 @@ class CalibrationSection(StrictModel):
 
 
 class FrictionSection(StrictModel):
-    """Coulomb friction between pot seedling and wall: give mu, or calibrate it (not printed in seed 001)."""
+    """Coulomb friction between pot seedling and wall: give mu, or calibrate it (not printed in seed 001).
+    mu may be given as a range ``{range = [lo, hi], samples = N}``: solve then holds every rule at each
+    sampled mu (an operating envelope, one shared design) and re-checks the answer on a finer grid of it."""
 
-    mu: float | None = Field(None, ge=0, le=10, description="friction coefficient, dimensionless")
+    mu: Annotated[float, Field(ge=0, le=10)] | OperatingRange | None = Field(
+        None, description="friction coefficient, dimensionless; or a range {range = [lo, hi], samples = 4, "
+                          "nominal = (lo+hi)/2, step = re-check spacing}")
     calibrate: CalibrationSection | None = None
+    _ranges: dict = PrivateAttr(default_factory=dict)
 
     @model_validator(mode="after")
     def _one_of(self) -> "FrictionSection":
         if (self.mu is None) == (self.calibrate is None):
             raise ValueError("give exactly one of friction.mu or friction.calibrate")
+        resolve_ranges(self, {"mu": ">= 0, <= 10"})
         return self
 
 

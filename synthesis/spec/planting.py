@@ -11,10 +11,11 @@ curve at every speed, so that finding needs the crank speed held fixed.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, PrivateAttr, model_validator
 
+from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
     value_of,
@@ -56,10 +57,21 @@ class SeedbedSection(StrictModel):
 
 
 class OperationSection(StrictModel):
-    """Operating condition: forward speed and crank speed (the plant spacing follows)."""
+    """Operating condition: forward speed and crank speed (the plant spacing follows).  Either may be given
+    as a range ``{range = [lo, hi], samples = N}``: the solve then holds every rule at each sampled value
+    (an operating envelope, one shared design) and re-checks the answer on a finer grid of the range."""
 
-    forward_speed: float = Field(ge=0, le=2.0, description="machine forward speed, m/s (seed 000 analyses 0.50-0.75)")
-    crank_speed: float = Field(gt=0, le=2000, description="crank (driving shaft) speed, r/min")
+    forward_speed: Annotated[float, Field(ge=0, le=2.0)] | OperatingRange = Field(
+        description="machine forward speed, m/s (seed 000 analyses 0.50-0.75); or a range "
+                    "{range = [lo, hi], samples = 4, nominal = (lo+hi)/2, step = re-check spacing}")
+    crank_speed: Annotated[float, Field(gt=0, le=2000)] | OperatingRange = Field(
+        description="crank (driving shaft) speed, r/min; or a range as for forward_speed")
+    _ranges: dict = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _nominal(self) -> "OperationSection":
+        resolve_ranges(self, {"forward_speed": ">= 0, <= 2", "crank_speed": "> 0, <= 2000"})
+        return self
 
 
 class SoilSection(StrictModel):

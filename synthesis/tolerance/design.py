@@ -31,15 +31,11 @@ def _grashof(target: str):
     return affine
 
 
-def _nominal_units(nlp, n):
-    return np.asarray(nlp.offset, float), np.diag(np.asarray(nlp.scale, float))
-
-
 #: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
+#: (fourbar_path's NLP works in the design variables since it moved onto the core)
 AFFINE = {
     "crank_rocker": _grashof("synthesis.crank_rocker.nlp:COORDINATES"),
     "picker_double_crank": _grashof("synthesis.picker.nlp:COORDINATES"),
-    "fourbar_path": _nominal_units,
 }
 
 

@@ -1,0 +1,156 @@
+"""Issue 20 part 3, operating envelopes: the core's multi-scenario NLP on a problem with a closed-form answer,
+the range spec, and the planting envelope redesign re-checked at every 0.01 m/s, independently of the solver
+(the kind's float ``check`` of the spec at each forward speed: root-found precision points, no NLP)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from constraints.base import Rule
+from synthesis import kinds
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.problem import Envelope, ObjectiveParts, Operating, Problem
+from synthesis.core.solve import solve_spec
+from synthesis.spec import LoadedSpec, load_spec
+from synthesis.spec.operating import at_operating, ranges_of
+
+LIBRARY = Path(__file__).resolve().parents[1] / "problems"
+
+
+def _toy(envelope, structural_on_v: bool = False):
+    """min x s.t. x >= v^2 (rule 'floor', reads the operating condition v) and x <= 10 ('cap', does not)."""
+    x, v = ca.SX.sym("x"), ca.SX.sym("v")
+    structural = [(x - v, None, 100.0)] if structural_on_v else []
+    return Problem("toy", x, [0.0], [20.0], structural,
+                   [Rule("floor", x - v * v, 0.0, None, "-", 1.0), Rule("cap", x, None, 10.0, "-", 1.0)],
+                   ObjectiveParts(f=x), operating=[Operating("v", v, 1.5)], envelope=envelope)
+
+
+def test_envelope_replicates_only_the_rules_that_read_a_sampled_condition():
+    nominal = CompiledNLP(_toy(None))
+    assert [r.name for r in nominal.rules] == ["floor", "cap"]
+    assert nominal.solve(0, [5.0]).x[0] == pytest.approx(1.5**2, abs=1e-6)     # x = v_nominal^2
+    env = CompiledNLP(_toy(Envelope({"v": (1.0, 1.5, 2.0)})))
+    assert [r.name for r in env.rules] == ["floor@v=1", "floor@v=1.5", "floor@v=2", "cap"]
+    out = env.solve(0, [5.0])
+    assert out.success and out.x[0] == pytest.approx(4.0, abs=1e-6)            # the worst scenario, v = 2
+    assert env.active_rules(out) == ["floor@v=2"]
+    # the elastic form names the scenario that conflicts: cap 10 against x >= v^2 at v = 4
+    elastic = CompiledNLP(_toy(Envelope({"v": (1.0, 4.0)})), elastic=True)
+    slacks = elastic.slack_values(elastic.solve(0, [5.0]).x)
+    assert slacks["floor@v=1"] == pytest.approx(0.0, abs=1e-6)
+    assert slacks["floor@v=4"] + slacks["cap"] == pytest.approx(6.0, abs=1e-5)
+
+
+def test_structural_rows_may_not_read_a_sampled_condition():
+    with pytest.raises(ValueError, match=r"structural rows \[0\] depend on a condition the envelope samples \(v\)"):
+        _toy(Envelope({"v": (1.0, 2.0)}), structural_on_v=True)
+    with pytest.raises(ValueError, match="the envelope samples w, which the problem does not depend on"):
+        _toy(Envelope({"w": (1.0, 2.0)}))
+
+
+def test_range_spec_grids():
+    loaded = load_spec(LIBRARY / "planting_arm/envelope_redesign_from_example1.toml")
+    spec = loaded.model
+    assert spec.operation.forward_speed == 0.6                    # check, figures and objective read the nominal
+    (field, rng), = ranges_of(spec).values()
+    assert field == "operation"
+    assert rng.solver_values() == pytest.approx((0.5, 0.5 + 0.25 / 3, 0.5 + 0.5 / 3, 0.75), abs=1e-15)
+    grid = rng.recheck_values()
+    assert len(grid) == 26 and grid[0] == 0.5 and grid[-1] == 0.75
+    assert np.allclose(np.diff(grid), 0.01, atol=1e-12)
+    at = at_operating(spec, {"forward_speed": 0.71})
+    assert at.operation.forward_speed == 0.71 and ranges_of(at) == {} and ranges_of(spec) != {}
+
+
+def _check_at(loaded, design: dict, speed: float) -> dict:
+    """The kind's float check (no NLP) of ``design`` with the forward speed set: name -> record."""
+    spec = at_operating(loaded.model, {"forward_speed": speed})
+    arm = {k: design[k] for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
+    seedbed = {k: design[f"seedbed_{k}"] for k in ("x", "y", "tilt")}
+    spec = spec.model_copy(update={"arm": spec.arm.model_copy(update=arm),
+                                   "seedbed": spec.seedbed.model_copy(update=seedbed)})
+    result = kinds.get("planting_fourbar").checker()(LoadedSpec(spec, loaded.path, loaded.sha256))
+    return {r["name"]: r for r in result.rules}
+
+
+def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesign_does_not():
+    speeds = [round(0.50 + 0.01 * k, 2) for k in range(26)]
+    nominal_loaded = load_spec(LIBRARY / "planting_arm/redesign_from_example1.toml")
+    env_loaded = load_spec(LIBRARY / "planting_arm/envelope_redesign_from_example1.toml")
+    nominal, _, _ = solve_spec(nominal_loaded, starts=1, workers=1)
+    envelope, _, _ = solve_spec(env_loaded, starts=1, workers=1)
+    assert nominal.status == envelope.status == "optimal"
+    # the envelope's NLP held entry angle and P4P6 at 4 speeds; the result's re-check at 26
+    names = [r["name"] for r in envelope.rules]
+    assert {"entry_angle@envelope", "p4p6_distance@envelope"} <= set(names)
+    assert not any(n.endswith("@envelope") for n in names if n.split("@")[0] not in ("entry_angle", "p4p6_distance"))
+    table = envelope.extra["envelope"]["rules"]
+    assert len(table["entry_angle"]["values"]) == 26 and envelope.extra["envelope"]["all_satisfied"]
+
+    nominal_fails, entry, p4p6 = [], [], []
+    for v in speeds:
+        n = _check_at(nominal_loaded, nominal.design, v)
+        if not (n["entry_angle"]["satisfied"] and n["p4p6_distance"]["satisfied"]):
+            nominal_fails.append(v)
+        e = _check_at(env_loaded, envelope.design, v)
+        assert all(r["satisfied"] for r in e.values()), (v, [r["name"] for r in e.values() if not r["satisfied"]])
+        entry.append(e["entry_angle"]["value"])
+        p4p6.append(e["p4p6_distance"]["value"])
+    # the nominal redesign (designed at 0.6 m/s) enters too flat above 0.70 m/s: 77.4 deg at 0.75
+    assert nominal_fails == [0.71, 0.72, 0.73, 0.74, 0.75]
+    assert _check_at(nominal_loaded, nominal.design, 0.75)["entry_angle"]["value"] == pytest.approx(77.40, abs=0.01)
+    # the envelope design: entry angle >= 80 deg and P4P6 >= 20 mm at every 0.01 m/s; the binding end is the
+    # fast one for the entry angle (kept 0.2 deg = the back-off inside), the slow one for P4P6
+    assert min(entry) >= 80.0 and min(p4p6) >= 20.0
+    assert int(np.argmin(entry)) == 25 and min(entry) == pytest.approx(80.2, abs=1e-3)
+    assert int(np.argmin(p4p6)) == 0
+    # the result's own table agrees with the independent check
+    assert np.allclose(table["entry_angle"]["values"], entry, atol=1e-9)
+    assert np.allclose(table["p4p6_distance"]["values"], p4p6, atol=1e-9)
+    # and the price of the envelope in the objective
+    assert envelope.objective["value"] > nominal.objective["value"]
+
+
+def _ode_spread_mm(design: dict, mu: float, spacing: float) -> float:
+    """Plant-position error (0.5 m/s x landing-time spread of tubes I and II) by the ODE twin of the drop
+    (scipy integration of the printed equations of motion, not the closed form the NLP and check use)."""
+    from synthesis.guide_tube.drop import Physics, Tube
+    from synthesis.guide_tube.ode import simulate
+
+    physics = Physics(0.6, 9.8, 17.5, mu)
+    scale = (300.0 - spacing) / 70.0                 # l3 shifts with the row spacing (GUIDE_TUBE.md)
+    times = [simulate(design[f"delta_{name}"], Tube(name, l3 * scale * 1e-3, 0.04, 0.21), physics).landing_time
+             for name, l3 in (("I", 105.0), ("II", 35.0))]
+    return 500.0 * abs(times[0] - times[1])
+
+
+def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nominal_design_does_not(tmp_path):
+    from tests.solving import spec_with
+
+    source = LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"
+    envelope, _, _ = solve_spec(load_spec(source), starts=1, workers=1)
+    fixed = spec_with(tmp_path, source, [("mu = { range = [0.48476005, 0.72714007], samples = 3, nominal = 0.60595006 }",
+                                          "mu = 0.60595006")])
+    nominal, _, _ = solve_spec(load_spec(fixed), starts=1, workers=1)
+    assert envelope.status == nominal.status == "optimal"
+    # min-max over 3 mu x 8 spacings: 5.681 mm; designed at the nominal mu only: 4.999 mm there
+    assert envelope.objective["value"] == pytest.approx(5.68133, abs=1e-4)
+    assert nominal.objective["value"] == pytest.approx(4.99898, abs=1e-4)
+    mus = np.linspace(0.48476005, 0.72714007, 21)
+    spacings = [230.0, 240.0, 250.0, 260.0, 270.0, 280.0, 290.0, 300.0 - 1e-6]
+    env = np.array([[_ode_spread_mm(envelope.design, m, w) for w in spacings] for m in mus])
+    nom = np.array([[_ode_spread_mm(nominal.design, m, w) for w in spacings] for m in mus])
+    assert env.max() <= 6.0 and env.max() == pytest.approx(5.6813, abs=2e-3)
+    assert nom.max() > 6.0 and nom.max() == pytest.approx(6.5266, abs=2e-3)
+    assert nom[-1].max() == nom.max()                    # the nominal design misses at mu + 20 %
+    assert nom[10].max() == pytest.approx(4.999, abs=2e-3)
+    # the result's own re-check over 21 mu agrees
+    table = envelope.extra["envelope"]["rules"]["spacing_error"]
+    assert len(table["values"]) == 21 and max(table["values"]) == pytest.approx(env.max(), abs=2e-3)
