@@ -1,0 +1,102 @@
+"""The two grids the studio evaluates on: coarse while a slider moves, the check's own (fine) on release.
+
+Fine is ``agrisynth check`` itself.  Coarse is the same check on fewer samples:
+
+* most kinds' checks evaluate their sampled rules on 10x the ``[solver]`` sample counts (the fine
+  re-check grid); coarse runs that check with every ``[solver]`` sample count divided by 10 (not below
+  the least the spec model allows), i.e. on the optimiser's own grid;
+* planting_fourbar's check has its grid built in (400 samples per phase, 3600 per turn); coarse calls
+  the same evaluation on 40 and 360;
+* a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from synthesis import kinds
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec
+
+GRIDS = ("coarse", "fine")
+#: sample counts of the check divided by this while dragging (the check's fine grid is 10x the solver's)
+COARSENING = 10
+#: planting_fourbar: the check's built-in grid and the coarse one (samples per phase, per turn, trajectory)
+PLANTING_FINE = (400, 3600, 361)
+PLANTING_COARSE = (40, 360, 121)
+#: kinds whose check grid is fixed in the kind (no [solver] sample count reaches it)
+ONE_GRID = {"combing_chain", "guide_tube", "picker", "crank_rocker", "picker_double_crank"}
+
+
+def _sample_fields(spec) -> dict[str, tuple[int, int]]:
+    """[solver] field -> (value, least allowed) for every sample count of the spec."""
+    solver = getattr(spec, "solver", None)
+    if solver is None:
+        return {}
+    out = {}
+    for name, info in type(solver).model_fields.items():
+        value = getattr(solver, name)
+        if "samples" in name and isinstance(value, int) and not isinstance(value, bool):
+            least = next((m.ge for m in info.metadata if hasattr(m, "ge")), 1)
+            step = next((m.multiple_of for m in info.metadata if hasattr(m, "multiple_of")), 1)
+            out[name] = (value, int(least), int(step))
+    return out
+
+
+def _coarser(spec):
+    """The spec with every [solver] sample count divided by COARSENING."""
+    fields = _sample_fields(spec)
+    changes = {}
+    for name, (value, least, step) in fields.items():
+        coarse = max(least, value // COARSENING)
+        changes[name] = max(least, coarse - coarse % step) if step > 1 else coarse
+    return spec.model_copy(update={"solver": spec.solver.model_copy(update=changes)})
+
+
+def _planting(samples: tuple[int, int, int]) -> Callable[[LoadedSpec], Result]:
+    def evaluate(loaded: LoadedSpec) -> Result:
+        from synthesis.planting.check import evaluate, scene_facts, trajectory
+        from synthesis.planting.scene import PlantingScene
+
+        spec = loaded.model
+        scene = PlantingScene.from_spec(spec)
+        rules, pts = evaluate(scene, spec.rules, samples[0], samples[1])
+        design = dict(spec.design_values())
+        design["branch"] = spec.arm.branch
+        return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
+                      design=design, rules=[r.record().to_json() for r in rules],
+                      trajectory=trajectory(scene, pts, samples[2]), extra=scene_facts(spec, scene, pts))
+    return evaluate
+
+
+def evaluator(kind: str, grid: str) -> Callable[[LoadedSpec], Result]:
+    """loaded spec -> Result, on ``grid``."""
+    check = kinds.checker(kind)
+    if grid == "fine":
+        return check
+    if kind == "planting_fourbar":
+        return _planting(PLANTING_COARSE)
+    if kind in ONE_GRID:
+        return check
+
+    def coarse(loaded: LoadedSpec) -> Result:
+        if not _sample_fields(loaded.model):
+            return check(loaded)
+        return check(LoadedSpec(_coarser(loaded.model), loaded.path, loaded.sha256))
+    return coarse
+
+
+def note(kind: str, grid: str, spec=None) -> str:
+    """What the grid is, in words, for the page."""
+    if kind == "planting_fourbar":
+        phase, turn, _ = PLANTING_COARSE if grid == "coarse" else PLANTING_FINE
+        return f"{phase} samples per phase, {turn} per crank turn"
+    if grid == "fine":
+        return "agrisynth check's own grid"
+    if kind in ONE_GRID or (spec is not None and not _sample_fields(spec)):
+        return "the check's one grid (this kind's check has no coarser one)"
+    if spec is None:
+        return f"the check with [solver] sample counts / {COARSENING}"
+    fields = _sample_fields(spec)
+    coarse = _coarser(spec).solver
+    return "the check with " + ", ".join(f"[solver] {n} {v} -> {getattr(coarse, n)}" for n, (v, _, _) in fields.items())
