@@ -42,8 +42,24 @@ def _r(v):
     return None if v is None or not math.isfinite(v) else round(float(v), 3)
 
 
-def _walk(node: Any, path: str, lines: list, points: list, poses: list) -> None:
+def _chart(node: dict, path: str) -> dict | None:
+    """Angles over an angle (e.g. steering's outside lock over the inside lock, a follower's pressure angle over
+    the crank): the table's first ``*_deg`` list against its other ``*_deg`` lists of the same length."""
+    series = [(k, v) for k, v in node.items() if k.endswith("_deg") and _numbers(v)]
+    if len(series) < 2 or any(len(v) != len(series[0][1]) for _, v in series):
+        return None
+    (x_name, xs), rest = series[0], series[1:]
+    thinned = [_thin(xs, ys) for _, ys in rest]
+    return {"name": path or "curve", "x_name": x_name, "x": thinned[0][0],
+            "series": [{"name": k, "y": t[1]} for (k, _), t in zip(rest, thinned)]}
+
+
+def _walk(node: Any, path: str, lines: list, points: list, poses: list, charts: list | None = None) -> None:
+    charts = [] if charts is None else charts
     if isinstance(node, dict):
+        chart = _chart(node, path)
+        if chart is not None and len(charts) < 4:
+            charts.append(chart)
         xs, ys = node.get("x"), node.get("y")
         if _numbers(xs) and _numbers(ys) and len(xs) == len(ys):
             lines.append({"name": path, "x": _thin(xs, ys)[0], "y": _thin(xs, ys)[1]})
@@ -60,7 +76,7 @@ def _walk(node: Any, path: str, lines: list, points: list, poses: list) -> None:
                 continue
             if key in ("x", "y") or key == "machine":
                 continue
-            _walk(value, f"{path}.{key}" if path else key, lines, points, poses)
+            _walk(value, f"{path}.{key}" if path else key, lines, points, poses, charts)
     elif isinstance(node, list) and node:
         if all(_pair(v) for v in node) and "target" in path:
             points.extend({"name": f"{path.rsplit('.', 1)[-1]}[{i}]", "x": _r(v[0]), "y": _r(v[1])}
@@ -68,7 +84,7 @@ def _walk(node: Any, path: str, lines: list, points: list, poses: list) -> None:
             return
         for i, value in enumerate(node[:50]):
             if isinstance(value, (dict, list)):
-                _walk(value, f"{path}[{i}]", lines, points, poses)
+                _walk(value, f"{path}[{i}]", lines, points, poses, charts)
 
 
 def _pose(item: dict) -> dict[str, list] | None:
@@ -99,11 +115,13 @@ BARS = {"planting_fourbar": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], [
 
 
 def drawing(result: Result) -> dict[str, Any]:
-    """Panels of polylines and points, and the mechanism's poses, in the check's own frames and units (mm)."""
+    """Panels of polylines and points and the mechanism's poses, in the check's own frames and units (mm), and
+    charts of angles over an angle."""
     lines: list = []
     points: list = []
     poses: list = []
-    _walk(result.extra, "", lines, points, poses)
+    charts: list = []
+    _walk(result.extra, "", lines, points, poses, charts)
     ground = None
     traj = result.trajectory
     if traj and _numbers(traj.get("x")) and _numbers(traj.get("y")):
@@ -127,4 +145,4 @@ def drawing(result: Result) -> dict[str, Any]:
         step = max(1, -(-len(frames) // MOST_FRAMES))
         frames = frames[::step]
     return {"main": {"lines": lines, "points": points}, "ground": ground,
-            "mechanism": {"frames": frames, "bars": BARS.get(result.kind)}}
+            "mechanism": {"frames": frames, "bars": BARS.get(result.kind)}, "charts": charts}

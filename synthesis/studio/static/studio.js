@@ -274,6 +274,46 @@ function renderDrawing() {
     });
     if (ghost) legend.append(el("span", {}, "grey dashed: baseline (the spec's given design)"));
   }
+  renderCharts(d.charts || [], b ? b.charts : null);
+}
+
+function renderCharts(charts, ghosts) {
+  const box = document.getElementById("panels");
+  box.querySelectorAll(".chart").forEach((node) => { if (Number(node.dataset.index) >= charts.length) node.remove(); });
+  charts.forEach((chart, i) => {
+    let panelBox = document.getElementById(`chart-${i}`);
+    if (!panelBox) {
+      panelBox = el("div", { class: "panel chart", id: `chart-${i}`, "data-index": String(i) });
+      panelBox.append(el("h3"), svg("svg", { preserveAspectRatio: "none" }), el("div", { class: "legend" }));
+      box.append(panelBox);
+    }
+    panelBox.querySelector("h3").textContent = `${chart.name}: deg over ${chart.x_name}`;
+    const ghost = ghosts && ghosts[i] && ghosts[i].name === chart.name ? ghosts[i] : null;
+    const all = [chart, ghost].filter(Boolean);
+    const xs = all.flatMap((c) => c.x).filter((v) => v !== null);
+    const ys = all.flatMap((c) => c.series.flatMap((s) => s.y)).filter((v) => v !== null);
+    const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
+    const w = Math.max(x1 - x0, 1e-9), h = Math.max(y1 - y0, 1e-9);
+    const root = panelBox.querySelector("svg");
+    root.setAttribute("viewBox", `${x0} ${-y1 - 0.05 * h} ${w} ${1.1 * h}`);
+    root.replaceChildren();
+    for (const [c, grey] of [[ghost, true], [chart, false]]) {
+      if (!c) continue;
+      c.series.forEach((s, k) => root.append(svg("path", { d: pathOf(c.x, s.y), fill: "none", "data-series": s.name,
+        stroke: grey ? "#888" : COLOURS[k % COLOURS.length], "stroke-width": 1.5, "stroke-dasharray": grey ? "4 3" : "",
+        "vector-effect": "non-scaling-stroke", opacity: grey ? "0.5" : "1" })));
+    }
+    const legend = panelBox.querySelector(".legend");
+    legend.replaceChildren(el("span", {}, `${chart.x_name} ${fmt(x0)} … ${fmt(x1)};`));
+    chart.series.forEach((s, k) => {
+      const item = el("span");
+      const swatch = el("i");
+      swatch.style.background = COLOURS[k % COLOURS.length];
+      const finite = s.y.filter((v) => v !== null);
+      item.append(swatch, document.createTextNode(`${s.name} ${fmt(Math.min(...finite))} … ${fmt(Math.max(...finite))}`));
+      legend.append(item);
+    });
+  });
 }
 
 function tick() {

@@ -1,0 +1,160 @@
+"""agrisynth studio without a browser: the guard (token, Host, Origin), what it writes, and that its rule
+table is `agrisynth check`'s at the same values, for every kind it serves."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from solving import cli_run, strict_json
+from studio_fixtures import STUDIO_SPECS, api, moved_values, request, running_studio
+
+pytest.importorskip("starlette")
+
+
+@pytest.fixture(scope="module")
+def planting_studio(tmp_path_factory):
+    with running_studio(STUDIO_SPECS["planting_fourbar"], tmp_path_factory.mktemp("studio")) as studio:
+        yield studio
+
+
+def test_the_page_needs_the_token(planting_studio):
+    s = planting_studio
+    for token in (None, "", "x" * len(s.token), s.token[:-1]):
+        status, _, body = request(s, "GET", "/api/session", token=token)
+        assert status == 403 and b"token" in body, (token, status, body)
+    conn_status, headers, body = request(s, "GET", f"/?token={s.token}", token=None)
+    assert conn_status == 200 and b"studio.js?token=" + s.token.encode() in body
+    assert "default-src 'none'" in headers["content-security-policy"]
+    assert "connect-src 'self'" in headers["content-security-policy"]
+    assert request(s, "GET", "/studio.js", token=None)[0] == 403
+    assert request(s, "GET", f"/studio.js?token={s.token}", token=None)[0] == 200
+    assert api(s, "/api/session")["kind"] == "planting_fourbar"
+
+
+def test_other_hosts_and_origins_are_refused(planting_studio):
+    s = planting_studio
+    for host in ("evil.example", f"evil.example:{s.port}", f"127.0.0.1:{s.port + 1}", f"127.0.0.2:{s.port}", ""):
+        status, _, body = request(s, "GET", "/api/session", host=host)
+        assert status == 403 and b"Host" in body, (host, status)
+    assert request(s, "GET", "/api/session", host=f"localhost:{s.port}")[0] == 200
+    values = {v.name: v.value for v in s.session.free}
+    for origin in ("http://evil.example", f"http://evil.example:{s.port}", "null", f"https://127.0.0.1:{s.port}"):
+        status, _, body = request(s, "POST", "/api/save", {"values": values}, origin=origin)
+        assert status == 403 and b"Origin" in body, (origin, status)
+    assert list(s.out.iterdir()) == []          # nothing refused wrote a file
+    status, _, _ = request(s, "POST", "/api/evaluate", {"values": values}, origin=f"http://127.0.0.1:{s.port}")
+    assert status == 200
+
+
+def test_bad_values_get_one_line_naming_the_field(planting_studio):
+    s = planting_studio
+    cases = [({"values": {"l2": 999.0}}, "values.l2: 999 lies outside its bounds [28, 42]"),
+             ({"values": {"l1": 70.0}}, "values.l1: not a free design variable"),
+             ({"values": {"l2": "35"}}, "values.l2: expected a finite number, got '35'"),
+             ({"values": [1, 2]}, "values: expected an object of design values, got list"),
+             ({"values": {}, "grid": "medium"}, "grid: expected one of coarse, fine, got 'medium'")]
+    for body, message in cases:
+        status, _, raw = request(s, "POST", "/api/evaluate", body)
+        answer = json.loads(raw)
+        assert status == 400 and answer["error"].startswith(message) and "\n" not in answer["error"], (body, answer)
+    status, _, raw = request(s, "POST", "/api/evaluate", b'{"values": {"l2": NaN}}')
+    assert status == 400 and json.loads(raw)["error"].startswith("request: not JSON")
+    status, _, raw = request(s, "POST", "/api/evaluate", b"values=1", content_type="application/x-www-form-urlencoded")
+    assert status == 400 and "Content-Type" in json.loads(raw)["error"]
+
+
+def test_saves_only_into_its_folder_with_names_it_picks(planting_studio, tmp_path):
+    s = planting_studio
+    values = moved_values(s.session)
+    first = api(s, "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    second = api(s, "/api/save", {"values": values})
+    assert (first["file"], second["file"]) == ("redesign_from_example1_saved_1.toml",
+                                               "redesign_from_example1_saved_2.toml")
+    assert sorted(p.name for p in s.out.iterdir()) == [first["file"], second["file"]]
+    assert not (s.out.parent / "escape.toml").exists()
+    # the saved spec holds the page's values as start values, bounds kept, under its own name
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(s.out / first["file"])
+    assert loaded.name == "redesign_from_example1_saved_1"
+    assert loaded.model.arm.l2.init == values["l2"] and tuple(loaded.model.arm.l2.bounds) == (28.0, 42.0)
+    assert loaded.model.arm.l1 == 75.0
+
+
+def _rows(rules: list[dict]) -> list[tuple]:
+    return [(r["name"], r["value"], r["satisfied"]) for r in rules]
+
+
+@pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
+def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
+    """The page's fine-grid table equals `agrisynth check` run on the spec "save spec" writes, value for value;
+    the coarse table has the same rules; the drawing has something to draw."""
+    with running_studio(STUDIO_SPECS[kind], tmp_path / "studio") as s:
+        values = moved_values(s.session)
+        fine = api(s, "/api/evaluate", {"values": values, "grid": "fine"})
+        coarse = api(s, "/api/evaluate", {"values": values, "grid": "coarse"})
+        saved = api(s, "/api/save", {"values": values})
+    assert fine["error"] is None and coarse["error"] is None
+    proc = cli_run("check", str(tmp_path / "studio" / saved["file"]), "--out", str(tmp_path / "runs"), cwd=tmp_path)
+    assert proc.returncode in (0, 1), proc.stderr
+    checked = strict_json(tmp_path / "runs" / saved["name"] / "result.json")
+    assert _rows(fine["rules"]) == _rows(checked["rules"])
+    assert proc.returncode == (1 if any(not r["satisfied"] for r in fine["rules"]) else 0)
+    for name, value in values.items():
+        assert checked["design"][name] == value
+    assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
+    drawing = fine["drawing"]
+    lines = drawing["main"]["lines"]
+    assert lines or drawing["mechanism"]["frames"]
+    assert all(len(l["x"]) == len(l["y"]) >= 2 for l in lines)
+    assert all(len(s["y"]) == len(c["x"]) for c in drawing["charts"] for s in c["series"])
+    assert all(math.isfinite(x) for l in lines for x in l["x"] if x is not None)
+
+
+def test_planting_draws_the_arm_and_both_frames(planting_studio):
+    s = planting_studio
+    given = {v.name: v.value for v in s.session.free}
+    answer = api(s, "/api/evaluate", {"values": given, "grid": "fine"})
+    drawing = answer["drawing"]
+    assert drawing["ground"] is not None
+    assert {p["name"] for p in drawing["ground"]["points"]} == {"P1", "P2", "P3", "P4", "P5", "P6"}
+    frames = drawing["mechanism"]["frames"]
+    assert 36 <= len(frames) <= 72 and set(frames[0]) == {"O", "O'", "A", "B", "C"}
+    # the pose's joints keep the link lengths of the design (l2 = |OA|, l3 = |AB|, l4 = |O'B|, l5 = |AC|)
+    for f in frames:
+        for (a, b), length in ((("O", "A"), given["l2"]), (("A", "B"), given["l3"]), (("O'", "B"), given["l4"]),
+                               (("A", "C"), given["l5"])):
+            assert math.dist(f[a], f[b]) == pytest.approx(length, abs=2e-3)
+    # the claw tip C of the poses lies on the drawn machine-frame path
+    path = drawing["main"]["lines"][0]
+    assert path["name"] == "path (machine frame)"
+    for f in frames[::9]:
+        assert min(math.dist(f["C"], xy) for xy in zip(path["x"], path["y"])) < 3.0
+
+
+def test_coarse_grid_is_coarser_and_says_so(planting_studio):
+    s = planting_studio
+    info = api(s, "/api/session")
+    assert info["grids"] == {"coarse": "40 samples per phase, 360 per crank turn",
+                             "fine": "400 samples per phase, 3600 per crank turn"}
+    given = {v.name: v.value for v in s.session.free}
+    coarse = api(s, "/api/evaluate", {"values": given, "grid": "coarse"})
+    fine = api(s, "/api/evaluate", {"values": given, "grid": "fine"})
+    # the transmission angle is sampled over a turn: on 360 samples its extreme is at most 1 deg of crank off
+    by_name = {r["name"]: r for r in fine["rules"]}
+    for r in coarse["rules"]:
+        assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.02, abs=0.05), r["name"]
+
+
+def test_a_kind_whose_check_reads_solver_samples_gets_them_divided(tmp_path):
+    from synthesis.spec import load_spec
+    from synthesis.studio import grids
+
+    spec = load_spec(STUDIO_SPECS["tillage_linkage"]).model
+    coarse = grids._coarser(spec)
+    assert (coarse.solver.samples, coarse.solver.soil_samples) == (max(12, spec.solver.samples // 10),
+                                                                   max(3, spec.solver.soil_samples // 10))
+    assert grids.note("tillage_linkage", "coarse", spec).startswith("the check with [solver] samples")
