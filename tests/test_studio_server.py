@@ -8,7 +8,6 @@ import math
 
 import pytest
 
-from solving import cli_run, strict_json
 from studio_fixtures import STUDIO_SPECS, api, moved_values, request, running_studio
 
 pytest.importorskip("starlette")
@@ -90,7 +89,7 @@ def _rows(rules: list[dict]) -> list[tuple]:
 
 @pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
 def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
-    """The page's fine-grid table equals `agrisynth check` run on the spec "save spec" writes, value for value;
+    """The page's fine-grid table equals the check of the spec "save spec" writes, value for value;
     the coarse table has the same rules; the drawing has something to draw."""
     with running_studio(STUDIO_SPECS[kind], tmp_path / "studio") as s:
         values = moved_values(s.session)
@@ -98,13 +97,14 @@ def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
         coarse = api(s, "/api/evaluate", {"values": values, "grid": "coarse"})
         saved = api(s, "/api/save", {"values": values})
     assert fine["error"] is None and coarse["error"] is None
-    proc = cli_run("check", str(tmp_path / "studio" / saved["file"]), "--out", str(tmp_path / "runs"), cwd=tmp_path)
-    assert proc.returncode in (0, 1), proc.stderr
-    checked = strict_json(tmp_path / "runs" / saved["name"] / "result.json")
-    assert _rows(fine["rules"]) == _rows(checked["rules"])
-    assert proc.returncode == (1 if any(not r["satisfied"] for r in fine["rules"]) else 0)
+    # what `agrisynth check SAVED` evaluates (the CLI path is run in tests/test_studio_browser.py)
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    checked = kinds.checker(kind)(load_spec(tmp_path / "studio" / saved["file"]))
+    assert _rows(fine["rules"]) == _rows(checked.rules)
     for name, value in values.items():
-        assert checked["design"][name] == value
+        assert checked.design[name] == value
     assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
     drawing = fine["drawing"]
     lines = drawing["main"]["lines"]
@@ -158,3 +158,19 @@ def test_a_kind_whose_check_reads_solver_samples_gets_them_divided(tmp_path):
     assert (coarse.solver.samples, coarse.solver.soil_samples) == (max(12, spec.solver.samples // 10),
                                                                    max(3, spec.solver.soil_samples // 10))
     assert grids.note("tillage_linkage", "coarse", spec).startswith("the check with [solver] samples")
+
+
+def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
+    s = planting_studio
+    values = moved_values(s.session, 0.1)
+    first = api(s, "/api/solve", {"values": values, "starts": 256})
+    assert first["state"] == "running" and first["total"] == 256
+    status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 1})
+    assert status == 409 and json.loads(raw)["error"].startswith("a solve is running (redesign_from_example1_solve_1)")
+    cancelled = api(s, "/api/solve/cancel", {})
+    assert cancelled["state"] == "cancelled" and cancelled["exit_code"] in (143, -15), cancelled
+    assert cancelled["done"] < 256
+    assert api(s, "/api/solve")["state"] == "cancelled"
+    assert s.job.process.poll() is not None         # the worker process is gone
+    status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
+    assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"

@@ -25,7 +25,7 @@ from synthesis.studio.session import finite
 _PROGRESS = re.compile(r"^start (\d+) finished \((\d+)/(\d+)\)")
 #: exit codes of `agrisynth solve` (DESIGN.md) in words
 EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad input", 3: "infeasible or failed",
-         130: "interrupted", 143: "cancelled"}
+         130: "interrupted", 143: "cancelled (the finished starts are kept)", -15: "cancelled before any start finished"}
 #: last lines of the solve's output kept for the page
 TAIL = 12
 
