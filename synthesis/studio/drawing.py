@@ -18,6 +18,8 @@ from synthesis.result import Result
 MOST_POINTS = 400
 #: poses of an animated mechanism at most
 MOST_FRAMES = 72
+#: charts at most (the first ones the check's facts hold)
+MOST_CHARTS = 2
 
 
 def _numbers(values: Any) -> bool:
@@ -42,13 +44,19 @@ def _r(v):
     return None if v is None or not math.isfinite(v) else round(float(v), 3)
 
 
+#: angles that only say where in the cycle a sample is (never charted against each other)
+CLOCKS = {"crank_deg", "cam_angle_deg", "theta_deg"}
+
+
 def _chart(node: dict, path: str) -> dict | None:
     """Angles over an angle (e.g. steering's outside lock over the inside lock, a follower's pressure angle over
     the crank): the table's first ``*_deg`` list against its other ``*_deg`` lists of the same length."""
     series = [(k, v) for k, v in node.items() if k.endswith("_deg") and _numbers(v)]
     if len(series) < 2 or any(len(v) != len(series[0][1]) for _, v in series):
         return None
-    (x_name, xs), rest = series[0], series[1:]
+    (x_name, xs), rest = series[0], [(k, v) for k, v in series[1:] if k not in CLOCKS]
+    if not rest:
+        return None
     thinned = [_thin(xs, ys) for _, ys in rest]
     return {"name": path or "curve", "x_name": x_name, "x": thinned[0][0],
             "series": [{"name": k, "y": t[1]} for (k, _), t in zip(rest, thinned)]}
@@ -58,7 +66,7 @@ def _walk(node: Any, path: str, lines: list, points: list, poses: list, charts: 
     charts = [] if charts is None else charts
     if isinstance(node, dict):
         chart = _chart(node, path)
-        if chart is not None and len(charts) < 4:
+        if chart is not None and len(charts) < MOST_CHARTS:
             charts.append(chart)
         xs, ys = node.get("x"), node.get("y")
         if _numbers(xs) and _numbers(ys) and len(xs) == len(ys):
@@ -73,6 +81,9 @@ def _walk(node: Any, path: str, lines: list, points: list, poses: list, charts: 
                     lines.append({"name": f"{path}.{key[:-2]}" if path else key[:-2], "x": tx, "y": ty})
             if key == "positions" and isinstance(value, list) and value and isinstance(value[0], dict):
                 poses.extend(value)
+                continue
+            if key == "joints" and isinstance(value, dict) and value and all(_pair(p) for p in value.values()):
+                poses.append(value)            # one pose (e.g. a crank-rocker's extreme positions)
                 continue
             if key in ("x", "y") or key == "machine":
                 continue

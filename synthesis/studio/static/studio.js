@@ -124,14 +124,18 @@ function showError(text) {
   box.textContent = text || "";
 }
 
-function render(data, roundTripMs) {
+function render(data, answerMs) {
+  const began = performance.now();
   state.evaluations += 1;
   state.current = data;
   showError(data.error);
   renderTable(data);
   renderDrawing();
+  const drawMs = performance.now() - began;
   document.getElementById("status").textContent =
-    `${data.grid} grid (${data.grid_note || ""}): evaluated in ${data.ms.toFixed(1)} ms, shown ${roundTripMs.toFixed(0)} ms after the input`;
+    `${data.grid} grid (${data.grid_note || ""}): evaluated in ${data.ms.toFixed(1)} ms, answered ` +
+    `${answerMs.toFixed(0)} ms after the input, drawn in ${drawMs.toFixed(0)} ms`;
+  document.body.dataset.drawMs = drawMs.toFixed(1);
   document.body.dataset.grid = data.grid;
   document.body.dataset.evaluations = String(state.evaluations);
 }
