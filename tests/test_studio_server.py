@@ -174,3 +174,32 @@ def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     assert s.job.process.poll() is not None         # the worker process is gone
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
     assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"
+
+
+@pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
+def test_the_corners_of_the_box_evaluate_to_finite_json(kind):
+    """Every slider at a bound (alternately low and high): a table or a one-line reason, never NaN or infinity."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS[kind])
+    for corner in (0, 1):
+        values = {v.name: v.bounds[(corner + i) % 2] for i, v in enumerate(session.free)}
+        for grid in ("coarse", "fine"):
+            out = session.evaluate(values, grid)
+            json.dumps(out, allow_nan=False)
+            assert (out["error"] is None) == bool(out["rules"]), out["error"]
+            assert out["error"] is None or "\n" not in out["error"]
+
+
+def test_steering_coarse_grid_samples_fewer_locks_and_skips_the_table12_fits():
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["steering_linkage"])
+    values = moved_values(session, 0.2)
+    coarse, fine = session.evaluate(values, "coarse"), session.evaluate(values, "fine")
+    by_name = {r["name"]: r for r in fine["rules"]}
+    for r in coarse["rules"]:
+        # the transmission angle's extreme over 41 locks instead of 401: within a tenth of a degree here
+        assert r["value"] == pytest.approx(by_name[r["name"]]["value"], abs=0.1), r["name"]
+    assert len(coarse["drawing"]["charts"][0]["x"]) == 41 and len(fine["drawing"]["charts"][0]["x"]) > 41
+    assert coarse["grid_note"] == "the check with [solver] samples 40 -> 4, without its Table 12 explanation"

@@ -156,6 +156,9 @@ class Studio:
             return self._answer({"error": str(exc)}, exc.status)
         except AgrisynthError as exc:
             return self._answer({"error": str(exc)}, 400)
+        except Exception as exc:          # a bug, not bad input: one line to the page, never a traceback
+            first = (str(exc).splitlines() or [""])[0][:200]
+            return self._answer({"error": f"internal error: {type(exc).__name__}: {first}"}, 500)
 
     async def describe(self, request: Request) -> JSONResponse:
         return await self._handle(request, lambda body: self.session.describe() | {"folder": str(self.out)})

@@ -243,7 +243,10 @@ function renderDrawing() {
   const data = state.current;
   const comparing = document.getElementById("compare").checked && state.baseline && state.baseline.drawing;
   document.body.classList.toggle("comparing", Boolean(comparing));
-  if (!data || !data.drawing) return;
+  if (!data || !data.drawing) {           // not evaluated at these values: draw nothing rather than a stale design
+    document.getElementById("panels").replaceChildren();
+    return;
+  }
   const d = data.drawing;
   const b = comparing ? state.baseline.drawing : null;
   const mech = d.mechanism && d.mechanism.frames.length ? d.mechanism : null;
