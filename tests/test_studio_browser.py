@@ -100,6 +100,25 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         page.click("#save")
         page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
         saved = page.get_attribute("body", "data-saved")
+
+        # compare: the baseline drawn under the design (grey, dashed) and its margins beside the current ones
+        assert page.locator("#panel-main g.baseline").count() == 0 and not page.is_visible("th.base")
+        page.check("#compare")
+        assert page.locator("#panel-main g.baseline path").count() == 1
+        assert page.locator("#panel-ground g.baseline path").count() == 1 and page.is_visible("th.base")
+        base_margins = page.eval_on_selector_all("#rules tbody td.base", "cells => cells.map(c => c.textContent)")
+        assert base_margins[0] == "5"                  # p1p3_distance of the given design: 110 mm in 105 ... 115
+        # animate: the pose moves along the cycle
+        cx = page.get_attribute("#panel-main circle[data-joint='B']", "cx")
+        page.check("#animate")
+        page.wait_for_function(f"() => document.querySelector(\"#panel-main circle[data-joint='B']\")"
+                               f".getAttribute('cx') !== '{cx}'", timeout=10_000)
+        # reset: the given design and its table again
+        count = int(page.get_attribute("body", "data-evaluations"))
+        page.click("#reset")
+        wait_for_evaluations(page, count)
+        assert float(page.input_value("#number-l4")) == 80.0
+        assert [(r["name"], r["red"]) for r in page.evaluate(TABLE)] == [(r["name"], r["red"]) for r in baseline]
         assert seen["left"] == [] and seen["errors"] == []
         assert all(urlsplit(u).hostname == "127.0.0.1" for u in seen["requests"]) and seen["requests"]
 

@@ -203,3 +203,13 @@ def test_steering_coarse_grid_samples_fewer_locks_and_skips_the_table12_fits():
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], abs=0.1), r["name"]
     assert len(coarse["drawing"]["charts"][0]["x"]) == 41 and len(fine["drawing"]["charts"][0]["x"]) > 41
     assert coarse["grid_note"] == "the check with [solver] samples 40 -> 4, without its Table 12 explanation"
+
+
+def test_answers_are_not_held_back_by_nagles_algorithm(planting_studio):
+    """The listening socket says it is TCP, so asyncio turns Nagle's algorithm off on every connection (with
+    it on, each keep-alive answer waited for the browser's delayed ACK, ~40 ms: measured by the benchmark)."""
+    import socket
+
+    s = planting_studio
+    assert s.socket.proto == socket.IPPROTO_TCP
+    assert s.socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0

@@ -61,7 +61,10 @@ class Studio:
         except OSError as exc:
             raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.token = token or secrets.token_urlsafe(24)
-        self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        # proto IPPROTO_TCP (not 0): asyncio turns Nagle's algorithm off only on sockets saying so; with it on,
+        # each keep-alive answer waited ~40 ms for the browser's delayed ACK
+        self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.socket.bind((HOST, port))
         self.port = self.socket.getsockname()[1]
