@@ -22,13 +22,21 @@ MOST_FRAMES = 72
 MOST_CHARTS = 2
 
 
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
 def _numbers(values: Any) -> bool:
-    return isinstance(values, list) and len(values) >= 2 and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+    """A list of numbers (judged by its first, middle and last items: the check's lists are uniform, and
+    looking at every item of every list cost more than the evaluation; None where a value is missing is fine)."""
+    if not isinstance(values, list) or len(values) < 2:
+        return False
+    probe = [v for v in (values[0], values[len(values) // 2], values[-1]) if v is not None]
+    return bool(probe) and all(_number(v) for v in probe)
 
 
 def _pair(value: Any) -> bool:
-    return _numbers(value) and len(value) == 2
+    return isinstance(value, list) and len(value) == 2 and _number(value[0]) and _number(value[1])
 
 
 def _thin(xs: list, ys: list) -> tuple[list, list]:
@@ -41,7 +49,7 @@ def _thin(xs: list, ys: list) -> tuple[list, list]:
 
 
 def _r(v):
-    return None if v is None or not math.isfinite(v) else round(float(v), 3)
+    return round(float(v), 3) if _number(v) and math.isfinite(v) else None
 
 
 #: angles that only say where in the cycle a sample is (never charted against each other)
@@ -89,7 +97,7 @@ def _walk(node: Any, path: str, lines: list, points: list, poses: list, charts: 
                 continue
             _walk(value, f"{path}.{key}" if path else key, lines, points, poses, charts)
     elif isinstance(node, list) and node:
-        if all(_pair(v) for v in node) and "target" in path:
+        if "target" in path and all(_pair(v) for v in node):
             points.extend({"name": f"{path.rsplit('.', 1)[-1]}[{i}]", "x": _r(v[0]), "y": _r(v[1])}
                           for i, v in enumerate(node))
             return

@@ -10,6 +10,12 @@ Fine is ``agrisynth check`` itself.  Coarse is the same check on fewer samples:
 * steering_linkage's check also explains the paper's Table 12 (least-squares fits of the published rows,
   about nine tenths of its time); that explanation does not depend on the design, so the coarse grid
   leaves it out of the facts (the rules are the check's, on the [solver] lock samples);
+* tillage_linkage's check also measures, at the design, how far the paper's printed equations 3-11 are
+  from the constructed geometry (four fifths of its time); that is a fact about the paper, not a rule, so
+  the coarse grid leaves it out (the rules are the check's, on the [solver] samples);
+* clamp_cam's check also tabulates each motion segment's extremes, refined by scalar searches (half its
+  time); the coarse grid draws the profile and follower without that table (the rules are the check's, on the
+  [solver] samples per segment);
 * a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so).
 """
 
@@ -82,15 +88,49 @@ def _steering(loaded: LoadedSpec) -> Result:
                   rules=[r.record().to_json() for r in rules], extra=facts(spec, design, trace, {}))
 
 
+def _tillage(loaded: LoadedSpec) -> Result:
+    import math
+
+    from synthesis.tillage_linkage.check import curves, evaluate, joints, params
+
+    spec = loaded.model
+    design = spec.design_values()
+    rules, motion = evaluate(spec, design, spec.solver.samples, spec.solver.soil_samples)
+    machine, trajectory = curves(spec, design, motion)
+    a, b, c, th = params(design)
+    # the check's curve and its poses 45 deg apart (its facts "curve" and "positions"), nothing else
+    poses = [{"crank_deg": k * 45.0, **{n: list(v) for n, v in joints(math.radians(k * 45.0), a, b, c, th).items()}}
+             for k in range(8)]
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
+                  rules=[r.record().to_json() for r in rules], trajectory=trajectory,
+                  extra={"curve": machine, "positions": poses})
+
+
+def _clamp_cam(loaded: LoadedSpec) -> Result:
+    from synthesis.clamp_cam.check import evaluate, follower_motion, profile
+    from synthesis.clamp_cam.scene import CamScene
+
+    spec = loaded.model
+    scene = CamScene.from_spec(spec)
+    rules, _ = evaluate(scene, spec.solver.samples_per_segment)
+    trajectory, follower = follower_motion(scene)
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
+                  design=dict(scene.design), rules=[r.record().to_json() for r in rules], trajectory=trajectory,
+                  extra={"follower": follower, "profile": profile(scene)})
+
+
+#: kinds whose coarse grid is their check's rules on the [solver] samples with only what the page draws
+TRIMMED = {"planting_fourbar": _planting(PLANTING_COARSE), "steering_linkage": _steering,
+           "tillage_linkage": _tillage, "clamp_cam": _clamp_cam}
+
+
 def evaluator(kind: str, grid: str) -> Callable[[LoadedSpec], Result]:
     """loaded spec -> Result, on ``grid``."""
     check = kinds.checker(kind)
     if grid == "fine":
         return check
-    if kind == "planting_fourbar":
-        return _planting(PLANTING_COARSE)
-    if kind == "steering_linkage":
-        return _steering
+    if kind in TRIMMED:
+        return TRIMMED[kind]
     if kind in ONE_GRID:
         return check
 
@@ -117,4 +157,10 @@ def note(kind: str, grid: str, spec=None) -> str:
     if kind == "steering_linkage":
         return (f"the check with [solver] samples {spec.solver.samples} -> {coarse.samples}, "
                 f"without its Table 12 explanation")
+    if kind == "tillage_linkage":
+        return (f"the check's rules on [solver] samples {spec.solver.samples} and soil_samples "
+                f"{spec.solver.soil_samples} (fine: 10x), without the printed-equation residuals")
+    if kind == "clamp_cam":
+        return (f"the check's rules on [solver] samples_per_segment {spec.solver.samples_per_segment} (fine: 10x), "
+                f"without the table of segment extremes")
     return "the check with " + ", ".join(f"[solver] {n} {v} -> {getattr(coarse, n)}" for n, (v, _, _) in fields.items())
