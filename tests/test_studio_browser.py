@@ -70,7 +70,7 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         assert {r["name"] for r in baseline if r["red"]} == {"p1p2p3_collinearity", "entry_angle",
                                                             "transmission_angle_min"}
         path_before = page.get_attribute("#panel-main path[data-line='path (machine frame)']", "d")
-        pose_before = page.get_attribute("#panel-main circle[data-joint='B']", "cx")
+        pose_before = page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx")
         page.uncheck("#animate")            # the drawn pose stays put, so a change of it is the design's
         page.evaluate(RECORD_GRIDS)
         count = int(page.get_attribute("body", "data-evaluations"))
@@ -92,7 +92,7 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         assert 64 <= l4 < 72, l4
         assert "coarse" in grids and grids[-1] == "fine", grids
         assert page.get_attribute("#panel-main path[data-line='path (machine frame)']", "d") != path_before
-        assert page.get_attribute("#panel-main circle[data-joint='B']", "cx") != pose_before
+        assert page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx") != pose_before
         table = page.evaluate(TABLE)
         status = page.inner_text("#status")
         assert status.startswith("fine grid (400 samples per phase, 3600 per crank turn)")
@@ -109,9 +109,10 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         base_margins = page.eval_on_selector_all("#rules tbody td.base", "cells => cells.map(c => c.textContent)")
         assert base_margins[0] == "5"                  # p1p3_distance of the given design: 110 mm in 105 ... 115
         # animate: the pose moves along the cycle
-        cx = page.get_attribute("#panel-main circle[data-joint='B']", "cx")
+        assert page.locator("#panel-main g.ghost-poses circle[data-joint='B']").count() == 1
+        cx = page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx")
         page.check("#animate")
-        page.wait_for_function(f"() => document.querySelector(\"#panel-main circle[data-joint='B']\")"
+        page.wait_for_function(f"() => document.querySelector(\"#panel-main g.poses circle[data-joint='B']\")"
                                f".getAttribute('cx') !== '{cx}'", timeout=10_000)
         # reset: the given design and its table again
         count = int(page.get_attribute("body", "data-evaluations"))

@@ -264,7 +264,11 @@ function renderDrawing() {
     root.replaceChildren();
     if (ghost) drawGroup(root, ghost, unit, true);
     drawGroup(root, group, unit, false);
-    if (ghostMech && ghostMech.frames.length) drawPose(root, ghostMech, state.frame, unit, true);
+    if (ghostMech && ghostMech.frames.length) {
+      const ghostPoses = svg("g", { class: "ghost-poses" });
+      root.append(ghostPoses);
+      drawPose(ghostPoses, ghostMech, state.frame, unit, true);
+    }
     if (mechanism) {
       const poses = svg("g", { class: "poses" });
       root.append(poses);
@@ -331,8 +335,14 @@ function tick() {
   const poses = root && root.querySelector("g.poses");
   if (!poses) return;
   const view = root.getAttribute("viewBox").split(" ").map(Number);
+  const unit = Math.max(view[2], view[3]) / 200;
   poses.replaceChildren();
-  drawPose(poses, data.drawing.mechanism, state.frame, Math.max(view[2], view[3]) / 200, false);
+  drawPose(poses, data.drawing.mechanism, state.frame, unit, false);
+  const ghostPoses = root.querySelector("g.ghost-poses");      // the baseline moves in step when compared
+  if (ghostPoses && state.baseline && state.baseline.drawing) {
+    ghostPoses.replaceChildren();
+    drawPose(ghostPoses, state.baseline.drawing.mechanism, state.frame, unit, true);
+  }
 }
 
 function animate() {
