@@ -55,12 +55,13 @@ def wait_for_evaluations(page, more_than: int) -> None:
 
 
 def fmt4(v) -> str:
-    """The page's number format for a table value (4 significant digits)."""
+    """The page's number format for a table value: 4 significant digits as JavaScript writes them."""
     if v is None:
         return "-"
     if abs(v) >= 1e5 or (abs(v) < 1e-3 and v != 0):
         return f"{v:.3e}".replace("e+0", "e+").replace("e-0", "e-")
-    return f"{float(f'{v:.4g}'):.15g}".removesuffix(".0") if float(f"{v:.4g}") != int(float(f"{v:.4g}")) or abs(v) >= 1e15 else str(int(float(f"{v:.4g}")))
+    x = float(f"{v:.4g}")
+    return str(int(x)) if x.is_integer() else repr(x)
 
 
 def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):

@@ -7,6 +7,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 import urllib.error
 import urllib.request
 
@@ -48,8 +49,6 @@ def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
                 page = urllib.request.urlopen(url, timeout=10).read().decode()
                 break
             except urllib.error.URLError:
-                import time
-
                 time.sleep(0.05)
         assert "agrisynth studio" in page
         with pytest.raises(urllib.error.HTTPError) as refused:

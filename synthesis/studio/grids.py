@@ -16,6 +16,8 @@ Fine is ``agrisynth check`` itself.  Coarse is the same check on fewer samples:
 * clamp_cam's check also tabulates each motion segment's extremes, refined by scalar searches (half its
   time); the coarse grid draws the profile and follower without that table (the rules are the check's, on the
   [solver] samples per segment);
+* crank_rocker's check samples the transmission angle on 3600 crank angles; coarse on the [solver]
+  samples_per_turn;
 * a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so).
 """
 
@@ -34,7 +36,7 @@ COARSENING = 10
 PLANTING_FINE = (400, 3600, 361)
 PLANTING_COARSE = (40, 360, 121)
 #: kinds whose check grid is fixed in the kind (no [solver] sample count reaches it)
-ONE_GRID = {"combing_chain", "guide_tube", "picker", "crank_rocker", "picker_double_crank"}
+ONE_GRID = {"combing_chain", "guide_tube", "picker", "picker_double_crank"}
 
 
 def _sample_fields(spec) -> dict[str, tuple[int, int]]:
@@ -119,9 +121,19 @@ def _clamp_cam(loaded: LoadedSpec) -> Result:
                   extra={"follower": follower, "profile": profile(scene)})
 
 
+def _crank_rocker(loaded: LoadedSpec) -> Result:
+    from synthesis.crank_rocker.check import evaluate, facts, mechanism
+
+    spec = loaded.model
+    cr = mechanism(spec)
+    rules, q = evaluate(spec, cr, samples=spec.solver.samples_per_turn)
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
+                  design=spec.design_values(), rules=[r.record().to_json() for r in rules], extra=facts(spec, cr, q))
+
+
 #: kinds whose coarse grid is their check's rules on the [solver] samples with only what the page draws
 TRIMMED = {"planting_fourbar": _planting(PLANTING_COARSE), "steering_linkage": _steering,
-           "tillage_linkage": _tillage, "clamp_cam": _clamp_cam}
+           "tillage_linkage": _tillage, "clamp_cam": _clamp_cam, "crank_rocker": _crank_rocker}
 
 
 def evaluator(kind: str, grid: str) -> Callable[[LoadedSpec], Result]:
@@ -160,6 +172,11 @@ def note(kind: str, grid: str, spec=None) -> str:
     if kind == "tillage_linkage":
         return (f"the check's rules on [solver] samples {spec.solver.samples} and soil_samples "
                 f"{spec.solver.soil_samples} (fine: 10x), without the printed-equation residuals")
+    if kind == "crank_rocker":
+        from synthesis.crank_rocker.check import CHECK_SAMPLES
+
+        return (f"the check with [solver] samples_per_turn {spec.solver.samples_per_turn} crank angles "
+                f"(fine: {CHECK_SAMPLES})")
     if kind == "clamp_cam":
         return (f"the check's rules on [solver] samples_per_segment {spec.solver.samples_per_segment} (fine: 10x), "
                 f"without the table of segment extremes")

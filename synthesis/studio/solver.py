@@ -9,7 +9,6 @@ cancelling sends SIGTERM, which ``solve`` answers by keeping the finished starts
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import subprocess
