@@ -21,6 +21,9 @@ STUDIO_SPECS = {
     "guide_way": LIBRARY / "guide_way/smooth_redesign.toml",
     "tillage_linkage": LIBRARY / "tillage/tillage_redesign.toml",
     "steering_linkage": LIBRARY / "steering/steering_redesign_40.toml",
+    "comb_finger": LIBRARY / "comb_finger/redesign_max_combing.toml",
+    "combing_chain": LIBRARY / "combing_chain/redesign_window_80_100.toml",
+    "picker": LIBRARY / "picker/cai2020_picker.toml",
 }
 
 

@@ -18,8 +18,8 @@ from test_report_browser import CHROMIUM, LAUNCH_FLAGS, sync_playwright  # noqa:
 pytest.importorskip("starlette")
 pytestmark = pytest.mark.benchmark
 
-#: kinds whose spec frees a variable to move (guide_way's spec frees none: its page only shows)
-MOVABLE = sorted(k for k in STUDIO_SPECS if k != "guide_way")
+#: kinds whose spec frees a variable to move (guide_way's spec frees none, picker is check-only: their pages show)
+MOVABLE = sorted(k for k in STUDIO_SPECS if k not in ("guide_way", "picker"))
 ROUNDS = {"coarse": 40, "fine": 10}
 
 #: one input on the first free slider, to ``value``; resolves with the ms until the page drew the answer

@@ -110,7 +110,7 @@ def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
     assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
     drawing = fine["drawing"]
     lines = drawing["main"]["lines"]
-    assert lines or drawing["mechanism"]["frames"]
+    assert lines or drawing["mechanism"]["frames"] or drawing["charts"]
     assert all(len(l["x"]) == len(l["y"]) >= 2 for l in lines)
     assert all(len(s["y"]) == len(c["x"]) for c in drawing["charts"] for s in c["series"])
     assert all(math.isfinite(x) for l in lines for x in l["x"] if x is not None)

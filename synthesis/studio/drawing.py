@@ -58,8 +58,12 @@ CLOCKS = {"crank_deg", "cam_angle_deg", "theta_deg"}
 
 def _chart(node: dict, path: str) -> dict | None:
     """Angles over an angle (e.g. steering's outside lock over the inside lock, a follower's pressure angle over
-    the crank): the table's first ``*_deg`` list against its other ``*_deg`` lists of the same length."""
+    the crank): the table's first ``*_deg`` list against its other ``*_deg`` lists of the same length (its own,
+    and those of the tables in its ``series`` list)."""
     series = [(k, v) for k, v in node.items() if k.endswith("_deg") and _numbers(v)]
+    for i, item in enumerate(node.get("series") or []):     # curves listed under "series" (one per gear, ...)
+        if isinstance(item, dict):
+            series.extend((f"{k}[{i}]", v) for k, v in item.items() if k.endswith("_deg") and _numbers(v))
     if len(series) < 2 or any(len(v) != len(series[0][1]) for _, v in series):
         return None
     (x_name, xs), rest = series[0], [(k, v) for k, v in series[1:] if k not in CLOCKS]

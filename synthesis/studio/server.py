@@ -184,7 +184,7 @@ class Studio:
         with self._writing:
             name = self._free_name(what)
             path = self.out / f"{name}.toml"
-            atomic_write_text(path, self.session.spec_text(values, name, note))
+            atomic_write_text(path, self.session.spec_text(values, name, note, self.out))
         return name, path
 
     async def save(self, request: Request) -> JSONResponse:

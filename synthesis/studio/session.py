@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import os
 import json
 import math
 import re
@@ -123,10 +124,27 @@ class Session:
             out[name] = float(value)
         return out
 
-    def spec_data(self, values: dict[str, float], name: str | None = None) -> dict[str, Any]:
+    def _other_spec_files(self) -> list[tuple[str, Path]]:
+        """(TOML path, file) of every field naming another spec file (relative to the spec that holds it)."""
+        from synthesis.design_info import _walk
+        from synthesis.spec.docmeta import SpecFile
+
+        return [(path, (self.loaded.path.parent / value).resolve()) for path, field, value in _walk(self.loaded.model)
+                if isinstance(value, str) and any(isinstance(m, SpecFile) for m in field.metadata)]
+
+    def spec_data(self, values: dict[str, float], name: str | None = None,
+                  folder: Path | None = None) -> dict[str, Any]:
         """The spec file's data with each free variable's start value (what ``check`` evaluates and start
-        0 of ``solve``) set to ``values``; named ``name`` when given."""
+        0 of ``solve``) set to ``values``; named ``name`` when given; written into ``folder`` (not the spec's
+        own), the other spec files it names are named relative to that folder."""
         data = copy.deepcopy(self.data)
+        if folder is not None:
+            for path, target in self._other_spec_files():
+                *head, last = _parts(path)
+                node = data
+                for part in head:
+                    node = node[part]
+                node[last] = os.path.relpath(target, folder)
         for var in self.free:
             node = _node(data, var.path)
             if isinstance(node, dict):                      # {init, bounds}: the start value
@@ -143,11 +161,11 @@ class Session:
         digest = hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
         return LoadedSpec(model, self.loaded.path, digest)
 
-    def spec_text(self, values: dict[str, float], name: str, note: str) -> str:
-        """A spec file holding ``values`` as the free variables' start values (bounds kept)."""
+    def spec_text(self, values: dict[str, float], name: str, note: str, folder: Path) -> str:
+        """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
         from synthesis.specref import write_toml
 
-        data = self.spec_data(values, name)
+        data = self.spec_data(values, name, folder)
         validate(type(self.loaded.model), data, prefix=self.kind)       # never write a spec check refuses
         head = [f"# {note}", f"# from {self.loaded.path.name} (sha256 {self.loaded.sha256})", ""]
         return "\n".join(head + write_toml(type(self.loaded.model), data, documented=False)) + "\n"
