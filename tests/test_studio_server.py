@@ -161,7 +161,7 @@ def test_a_kind_whose_check_reads_solver_samples_gets_them_divided():
 
 
 @pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam",
-                                         "crank_rocker", "fourbar_path"]))
+                                         "crank_rocker", "combing_chain", "fourbar_path"]))
 def test_coarse_rules_are_the_checks_on_fewer_samples(kind):
     """Same rules, values close to the fine grid's (sampled extremes move a little), a different grid note."""
     from synthesis.studio import grids

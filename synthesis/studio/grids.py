@@ -18,6 +18,8 @@ Fine is ``agrisynth check`` itself.  Coarse is the same check on fewer samples:
   [solver] samples per segment);
 * crank_rocker's check samples the transmission angle on 3600 crank angles; coarse on the [solver]
   samples_per_turn;
+* combing_chain's check samples 181 plant angles x 51 machine speeds per gear and explains the paper's
+  published figures; coarse: the [solver] beta_samples x speed_samples, and only the curves the page draws;
 * a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so).
 """
 
@@ -36,7 +38,7 @@ COARSENING = 10
 PLANTING_FINE = (400, 3600, 361)
 PLANTING_COARSE = (40, 360, 121)
 #: kinds whose check grid is fixed in the kind (no [solver] sample count reaches it)
-ONE_GRID = {"combing_chain", "guide_tube", "picker", "picker_double_crank"}
+ONE_GRID = {"guide_tube", "picker", "picker_double_crank"}
 
 
 def _sample_fields(spec) -> dict[str, tuple[int, int]]:
@@ -131,9 +133,20 @@ def _crank_rocker(loaded: LoadedSpec) -> Result:
                   design=spec.design_values(), rules=[r.record().to_json() for r in rules], extra=facts(spec, cr, q))
 
 
+def _combing_chain(loaded: LoadedSpec) -> Result:
+    from synthesis.combing_chain.check import curves, evaluate
+
+    spec = loaded.model
+    design = spec.design_values()
+    rules, _ = evaluate(spec, design, spec.solver.beta_samples, spec.solver.speed_samples)
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
+                  rules=[r.record().to_json() for r in rules], extra={"curves": curves(spec, design)})
+
+
 #: kinds whose coarse grid is their check's rules on the [solver] samples with only what the page draws
 TRIMMED = {"planting_fourbar": _planting(PLANTING_COARSE), "steering_linkage": _steering,
-           "tillage_linkage": _tillage, "clamp_cam": _clamp_cam, "crank_rocker": _crank_rocker}
+           "tillage_linkage": _tillage, "clamp_cam": _clamp_cam, "crank_rocker": _crank_rocker,
+           "combing_chain": _combing_chain}
 
 
 def evaluator(kind: str, grid: str) -> Callable[[LoadedSpec], Result]:
@@ -177,6 +190,11 @@ def note(kind: str, grid: str, spec=None) -> str:
 
         return (f"the check with [solver] samples_per_turn {spec.solver.samples_per_turn} crank angles "
                 f"(fine: {CHECK_SAMPLES})")
+    if kind == "combing_chain":
+        from synthesis.combing_chain.check import CHECK_BETA_SAMPLES, CHECK_SPEED_SAMPLES
+
+        return (f"the check's rules on [solver] beta_samples {spec.solver.beta_samples} x speed_samples "
+                f"{spec.solver.speed_samples} (fine: {CHECK_BETA_SAMPLES} x {CHECK_SPEED_SAMPLES}), only the curves drawn")
     if kind == "clamp_cam":
         return (f"the check's rules on [solver] samples_per_segment {spec.solver.samples_per_segment} (fine: 10x), "
                 f"without the table of segment extremes")
