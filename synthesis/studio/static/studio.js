@@ -386,8 +386,18 @@ function poll() {
     showSolve(s);
     if (s.state === "running") { state.polling = setTimeout(poll, 300); return; }
     if (s.design) {
+      // IPOPT may end a hair outside a bound (its bound relaxation, ~1e-8 relative); a spec's start value must lie
+      // within its bounds, so such a value is put on the bound, and the page says by how much
+      const clamped = [];
       for (const v of state.info.variables) {
-        if (v.free && typeof s.design[v.name] === "number") setValue(v.name, s.design[v.name]);
+        const x = s.design[v.name];
+        if (!v.free || typeof x !== "number") continue;
+        const inside = Math.min(v.bounds[1], Math.max(v.bounds[0], x));
+        if (inside !== x) clamped.push(`${v.name} by ${fmt(Math.abs(inside - x))} ${v.unit}`);
+        setValue(v.name, inside);
+      }
+      if (clamped.length) {
+        document.getElementById("solve-state").textContent += `; put on its bound: ${clamped.join(", ")}`;
       }
       request("fine");
     }
