@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import os
 import json
 import math
-import re
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,16 +22,10 @@ from typing import Any
 from synthesis import kinds
 from synthesis.design_info import describe
 from synthesis.errors import AgrisynthError, SpecError
+from synthesis.solved_spec import _parts, _set     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import read_toml, validate
 from synthesis.studio import drawing, grids
-
-_PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
-
-
-def _parts(path: str) -> list[str | int]:
-    return [int(i) if i else key for key, i in _PART.findall(path)]
-
 
 def _node(data: Any, path: str) -> Any:
     for part in _parts(path):
@@ -140,11 +133,7 @@ class Session:
         data = copy.deepcopy(self.data)
         if folder is not None:
             for path, target in self._other_spec_files():
-                *head, last = _parts(path)
-                node = data
-                for part in head:
-                    node = node[part]
-                node[last] = os.path.relpath(target, folder)
+                _set(data, path, os.path.relpath(target, folder))
         for var in self.free:
             node = _node(data, var.path)
             if isinstance(node, dict):                      # {init, bounds}: the start value
