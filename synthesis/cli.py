@@ -435,6 +435,39 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     console.print("[green]every rule satisfied on the fine grid[/]")
 
 
+@cli.command("studio")
+@click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/studio"),
+              show_default=True, help="the one folder the page writes into (saved specs, solve runs)")
+@click.option("--port", type=click.IntRange(min=0, max=65535), default=0, show_default=True,
+              help="port on 127.0.0.1 (0: any free one)")
+@click.option("--open", "open_browser", is_flag=True, help="open the page in the default browser")
+def studio(spec: Path, out: Path, port: int, open_browser: bool) -> None:
+    """An interactive design page for SPEC, served on 127.0.0.1 only (needs the `studio` extra).
+
+    A slider per design variable; the mechanism, its path and every rule of `agrisynth check` redrawn as
+    you drag (a coarse grid while dragging, the check's grid on release); solve from here (`agrisynth
+    solve` with the page's values as start 0, in a worker process), save spec, reset, compare with the
+    baseline. Prints the page's address (with its random token); Ctrl-C stops the server.
+    """
+    try:
+        from synthesis.studio.server import Studio
+    except ImportError as exc:
+        raise AgrisynthError(f"agrisynth studio needs the studio extra ({exc.name} is missing): "
+                             f"pip install -e '.[studio]'") from None
+    try:
+        app = Studio(spec, out, port)
+    except OSError as exc:
+        raise AgrisynthError(f"--port {port}: cannot listen on 127.0.0.1 ({exc.strerror})") from None
+    console.print(f"agrisynth studio for {escape(str(spec))}: open\n  {app.url}\n"
+                  f"writing into {escape(str(app.out))}/; Ctrl-C stops", soft_wrap=True)
+    if open_browser:
+        import webbrowser
+
+        webbrowser.open(app.url)
+    app.serve()
+
+
 @cli.command("tolerance")
 @click.argument("target", metavar="RESULT|SPEC", type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,

@@ -1,0 +1,265 @@
+"""The studio's web server: one page and a small JSON API, on 127.0.0.1 only, behind a random token.
+
+Every request must carry the token (``?token=`` for the page and its assets, the ``X-Studio-Token``
+header for the API), name this server in ``Host`` (127.0.0.1 or localhost and its port: a page of
+another site that rebinds its DNS name to 127.0.0.1 is refused), and, when a browser sends an
+``Origin``, come from this page's origin.  The page sends design values by name; it never sends a path:
+the server names every file it writes, inside the folder chosen at start-up.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import secrets
+import socket
+import threading
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import JSONResponse, PlainTextResponse, Response
+from starlette.routing import Route
+
+from synthesis.errors import AgrisynthError, OutputError
+from synthesis.result import atomic_write_text
+from synthesis.studio.session import Session
+from synthesis.studio.solver import SolveJob
+
+HOST = "127.0.0.1"
+TOKEN_HEADER = "x-studio-token"
+#: the page's own assets (shipped in the package: nothing is fetched from a network)
+ASSETS = {"/studio.js": "application/javascript", "/studio.css": "text/css"}
+#: the page may load and connect to nothing but this server
+SECURITY_HEADERS = {
+    "content-security-policy": "default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; "
+                               "img-src 'self' data:; base-uri 'none'; form-action 'none'; frame-ancestors 'none'",
+    "referrer-policy": "no-referrer", "x-content-type-options": "nosniff", "cache-control": "no-store",
+    "x-frame-options": "DENY"}
+#: largest request body read, bytes (design values are a few hundred)
+MAX_BODY = 64 * 1024
+#: most starts a solve from the page may ask for
+MAX_STARTS = 256
+
+
+class Refused(Exception):
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+class Studio:
+    """The session, the folder it writes into, the one solve job, and the ASGI app serving them."""
+
+    def __init__(self, spec: Path, out: Path, port: int = 0, token: str | None = None):
+        self.session = Session.open(spec)
+        self.out = Path(out).resolve()
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
+        self.token = token or secrets.token_urlsafe(24)
+        # proto IPPROTO_TCP (not 0): asyncio turns Nagle's algorithm off only on sockets saying so; with it on,
+        # each keep-alive answer waited ~40 ms for the browser's delayed ACK
+        self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.socket.bind((HOST, port))
+        self.port = self.socket.getsockname()[1]
+        self.job: SolveJob | None = None
+        self._evaluating = threading.Lock()       # one evaluation at a time (two cores; CasADi calls)
+        self._writing = threading.Lock()          # file names are picked and written one at a time
+        self.app = self._guarded(Starlette(routes=[
+            Route("/", self.page),
+            *(Route(path, self.asset) for path in ASSETS),
+            Route("/api/session", self.describe),
+            Route("/api/evaluate", self.evaluate, methods=["POST"]),
+            Route("/api/save", self.save, methods=["POST"]),
+            Route("/api/solve", self.solve_status, methods=["GET"]),
+            Route("/api/solve", self.solve, methods=["POST"]),
+            Route("/api/solve/cancel", self.cancel, methods=["POST"]),
+        ]))
+
+    @property
+    def url(self) -> str:
+        return f"http://{HOST}:{self.port}/?token={self.token}"
+
+    # -- the guard ------------------------------------------------------------------------------------------
+    def _allowed_hosts(self) -> set[str]:
+        return {f"{HOST}:{self.port}", f"localhost:{self.port}"}
+
+    def _check(self, scope) -> None:
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
+        host = headers.get("host", "")
+        if host not in self._allowed_hosts():
+            raise Refused(403, f"refused: Host {host[:80]!r} is not this studio ({HOST}:{self.port})")
+        origin = headers.get("origin")
+        if origin is not None and origin not in {f"http://{h}" for h in self._allowed_hosts()}:
+            raise Refused(403, f"refused: Origin {origin[:80]!r} is not this studio's page")
+        query = dict(p.split("=", 1) for p in scope.get("query_string", b"").decode("latin-1").split("&") if "=" in p)
+        given = headers.get(TOKEN_HEADER) or query.get("token") or ""
+        if not secrets.compare_digest(given.encode(), self.token.encode()):
+            raise Refused(403, "refused: missing or wrong studio token (open the address `agrisynth studio` printed)")
+
+    def _guarded(self, app):
+        async def guarded(scope, receive, send):
+            if scope["type"] == "http":
+                try:
+                    self._check(scope)
+                except Refused as exc:
+                    response = PlainTextResponse(str(exc) + "\n", status_code=exc.status, headers=SECURITY_HEADERS)
+                    await response(scope, receive, send)
+                    return
+            elif scope["type"] == "websocket":
+                return
+            await app(scope, receive, send)
+        return guarded
+
+    # -- the page -------------------------------------------------------------------------------------------
+    def _asset(self, name: str) -> str:
+        return resources.files("synthesis.studio").joinpath("static", name).read_text(encoding="utf-8")
+
+    async def page(self, request: Request) -> Response:
+        page = self._asset("index.html").replace("__TOKEN__", self.token)
+        return Response(page, media_type="text/html; charset=utf-8", headers=SECURITY_HEADERS)
+
+    async def asset(self, request: Request) -> Response:
+        path = request.url.path
+        return Response(self._asset(path.lstrip("/")), media_type=ASSETS[path], headers=SECURITY_HEADERS)
+
+    # -- the API --------------------------------------------------------------------------------------------
+    @staticmethod
+    def _answer(data: Any, status: int = 200) -> JSONResponse:
+        return JSONResponse(data, status_code=status, headers=SECURITY_HEADERS)
+
+    @staticmethod
+    async def _body(request: Request) -> dict:
+        if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
+            raise AgrisynthError("request: expected Content-Type application/json")
+        raw = await request.body()
+        if len(raw) > MAX_BODY:
+            raise AgrisynthError(f"request: body of {len(raw)} bytes is larger than {MAX_BODY}")
+        try:
+            data = json.loads(raw, parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
+        except ValueError as exc:
+            raise AgrisynthError(f"request: not JSON ({str(exc)[:60]})") from None
+        if not isinstance(data, dict):
+            raise AgrisynthError("request: expected a JSON object")
+        return data
+
+    async def _handle(self, request: Request, work) -> JSONResponse:
+        from starlette.concurrency import run_in_threadpool
+
+        try:
+            body = await self._body(request) if request.method == "POST" else {}
+            return self._answer(await run_in_threadpool(work, body))
+        except Refused as exc:
+            return self._answer({"error": str(exc)}, exc.status)
+        except AgrisynthError as exc:
+            return self._answer({"error": str(exc)}, 400)
+        except Exception as exc:          # a bug, not bad input: one line to the page, never a traceback
+            first = (str(exc).splitlines() or [""])[0][:200]
+            return self._answer({"error": f"internal error: {type(exc).__name__}: {first}"}, 500)
+
+    async def describe(self, request: Request) -> JSONResponse:
+        return await self._handle(request, lambda body: self.session.describe() | {"folder": str(self.out)})
+
+    async def evaluate(self, request: Request) -> JSONResponse:
+        def work(body):
+            with self._evaluating:
+                return self.session.evaluate(body.get("values", {}), body.get("grid", "fine"))
+        return await self._handle(request, work)
+
+    def _free_name(self, what: str) -> str:
+        """``<spec name>_<what>_<n>``: the first n with neither a spec file nor a folder of that name."""
+        base = re.sub(r"[^A-Za-z0-9_.-]", "_", self.session.loaded.name)[:80]
+        n = 1
+        while (self.out / f"{base}_{what}_{n}.toml").exists() or (self.out / f"{base}_{what}_{n}").exists():
+            n += 1
+        return f"{base}_{what}_{n}"
+
+    def _write_spec(self, values: dict[str, float], what: str, note: str) -> tuple[str, Path]:
+        with self._writing:
+            name = self._free_name(what)
+            path = self.out / f"{name}.toml"
+            atomic_write_text(path, self.session.spec_text(values, name, note, self.out))
+        return name, path
+
+    async def save(self, request: Request) -> JSONResponse:
+        def work(body):
+            values = self.session.values_of(body.get("values", {}))
+            name, path = self._write_spec(values, "saved", "saved from agrisynth studio: the free variables' "
+                                                           "start values are the page's values")
+            return {"file": path.name, "name": name, "folder": str(self.out)}
+        return await self._handle(request, work)
+
+    async def solve(self, request: Request) -> JSONResponse:
+        def work(body):
+            if not self.session.free:
+                raise AgrisynthError(f"kind {self.session.kind}: the spec has no free design variable to solve for")
+            from synthesis import kinds
+
+            if not kinds.get(self.session.kind).solves:
+                raise AgrisynthError(f"kind {self.session.kind} has nothing to optimise (check-only)")
+            if self.job is not None and self.job.running:
+                raise Refused(409, f"a solve is running ({self.job.run_name}); cancel it or wait")
+            starts = body.get("starts", 1)
+            if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= MAX_STARTS:
+                raise AgrisynthError(f"starts: expected a whole number 1..{MAX_STARTS}, got {str(starts)[:20]!r}")
+            values = self.session.values_of(body.get("values", {}))
+            name, path = self._write_spec(values, "solve", "solved from here by agrisynth studio: start 0 is the "
+                                                           "page's values")
+            self.job = SolveJob(name, path, self.out, starts)
+            self.job.start()
+            return self.job.status()
+        return await self._handle(request, work)
+
+    async def solve_status(self, request: Request) -> JSONResponse:
+        return await self._handle(request, lambda body: self.job.status() if self.job else {"state": "idle"})
+
+    async def cancel(self, request: Request) -> JSONResponse:
+        def work(body):
+            if self.job is None or not self.job.running:
+                return {"state": "idle" if self.job is None else self.job.status()["state"]}
+            self.job.cancel()
+            self.job.wait(30)
+            return self.job.status()
+        return await self._handle(request, work)
+
+    # -- serving --------------------------------------------------------------------------------------------
+    def start_in_thread(self) -> "threading.Thread":
+        """Serve from a background thread (tests, benchmarks); returns once the server listens."""
+        import time
+
+        self._server = self.server()
+        thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
+        thread.start()
+        while not self._server.started:
+            if not thread.is_alive():
+                raise RuntimeError("the studio server did not start")
+            time.sleep(0.01)
+        return thread
+
+    def stop(self) -> None:
+        if self.job is not None:
+            self.job.cancel()
+            self.job.wait(30)
+        if getattr(self, "_server", None) is not None:
+            self._server.should_exit = True
+
+    def server(self):
+        import uvicorn
+
+        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off")
+        return uvicorn.Server(config)
+
+    def serve(self) -> None:
+        """Serve until interrupted (Ctrl-C); a running solve is cancelled on the way out."""
+        try:
+            self.server().run(sockets=[self.socket])
+        finally:
+            if self.job is not None:
+                self.job.cancel()
+                self.job.wait(30)

@@ -1,0 +1,186 @@
+"""One studio session: a spec, its design variables, and the evaluation of any values of them.
+
+The page sends design values by name only; the session writes them into a copy of the spec file's
+data where :mod:`synthesis.design_info` says each variable lives (a free variable's ``init``, or the
+``[design]`` table of a kind whose free variables are a ``[bounds]`` table), validates that data with
+the kind's spec model and runs the kind's own ``check`` on it: the rule table the page shows is the
+one ``agrisynth check`` prints for a spec holding those values.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from synthesis import kinds
+from synthesis.design_info import describe
+from synthesis.errors import AgrisynthError, SpecError
+from synthesis.solved_spec import _parts, _set     # TOML paths as solved.toml writes them
+from synthesis.spec import LoadedSpec, load_spec
+from synthesis.spec.common import read_toml, validate
+from synthesis.studio import drawing, grids
+
+def _node(data: Any, path: str) -> Any:
+    for part in _parts(path):
+        data = data[part]
+    return data
+
+
+def finite(value: Any) -> Any:
+    """``value`` with every NaN or infinity replaced by None (JSON has neither)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {str(k): finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite(v) for v in value]
+    if hasattr(value, "tolist"):            # numpy scalars and arrays
+        return finite(value.tolist())
+    return value
+
+
+@dataclass
+class Variable:
+    """One slider: a design variable the page may move (free) or only show (fixed)."""
+
+    name: str
+    value: float
+    unit: str
+    bounds: tuple[float, float] | None
+    free: bool
+    path: str | None
+
+    def to_json(self) -> dict:
+        return finite({"name": self.name, "value": self.value, "unit": self.unit, "free": self.free,
+                       "bounds": None if self.bounds is None else list(self.bounds)})
+
+
+@dataclass
+class Session:
+    """The spec the studio was started on, and what the page may do with it."""
+
+    loaded: LoadedSpec
+    data: dict[str, Any]                  # the spec file's data, as read (never changed)
+    variables: list[Variable] = field(default_factory=list)
+
+    @classmethod
+    def open(cls, spec_path: Path) -> "Session":
+        loaded = load_spec(spec_path)
+        data, _ = read_toml(loaded.path)
+        info = describe(loaded.model)
+        given = loaded.model.design_values() if hasattr(loaded.model, "design_values") else {}
+        variables = []
+        for name, value in given.items():       # a kind that declares no variables (guide_way): all shown fixed
+            if not isinstance(value, (int, float)) or isinstance(value, bool):
+                continue
+            var = info.get(name, {"unit": "", "bounds": None, "free": False, "path": None})
+            free = bool(var["free"] and var["bounds"] and var["path"])
+            variables.append(Variable(name, float(value), var["unit"], tuple(var["bounds"]) if free else None,
+                                      free, var["path"]))
+        return cls(loaded, data, variables)
+
+    @property
+    def kind(self) -> str:
+        return self.loaded.kind
+
+    @property
+    def free(self) -> list[Variable]:
+        return [v for v in self.variables if v.free]
+
+    def given(self) -> dict[str, float]:
+        return {v.name: v.value for v in self.variables}
+
+    # -- values -> spec ---------------------------------------------------------------------------------
+    def values_of(self, sent: Any) -> dict[str, float]:
+        """The page's values, checked: a dict of finite numbers for free variables, each within its
+        bounds; missing ones keep the given value.  SpecError names the first bad one."""
+        if not isinstance(sent, dict):
+            raise SpecError(f"values: expected an object of design values, got {type(sent).__name__}")
+        free = {v.name: v for v in self.free}
+        out = self.given()
+        for name, value in sent.items():
+            if name not in free:
+                raise SpecError(f"values.{str(name)[:60]}: not a free design variable of {self.loaded.name} "
+                                f"(free: {', '.join(free) or 'none'})")
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+                raise SpecError(f"values.{name}: expected a finite number, got {str(value)[:40]!r}")
+            lo, hi = free[name].bounds
+            if not lo <= value <= hi:
+                raise SpecError(f"values.{name}: {value:g} lies outside its bounds [{lo:g}, {hi:g}]")
+            out[name] = float(value)
+        return out
+
+    def _other_spec_files(self) -> list[tuple[str, Path]]:
+        """(TOML path, file) of every field naming another spec file (relative to the spec that holds it)."""
+        from synthesis.design_info import _walk
+        from synthesis.spec.docmeta import SpecFile
+
+        return [(path, (self.loaded.path.parent / value).resolve()) for path, field, value in _walk(self.loaded.model)
+                if isinstance(value, str) and any(isinstance(m, SpecFile) for m in field.metadata)]
+
+    def spec_data(self, values: dict[str, float], name: str | None = None,
+                  folder: Path | None = None) -> dict[str, Any]:
+        """The spec file's data with each free variable's start value (what ``check`` evaluates and start
+        0 of ``solve``) set to ``values``; named ``name`` when given; written into ``folder`` (not the spec's
+        own), the other spec files it names are named relative to that folder."""
+        data = copy.deepcopy(self.data)
+        if folder is not None:
+            for path, target in self._other_spec_files():
+                _set(data, path, os.path.relpath(target, folder))
+        for var in self.free:
+            node = _node(data, var.path)
+            if isinstance(node, dict):                      # {init, bounds}: the start value
+                node["init"] = values[var.name]
+            else:                                           # a [bounds] pair: the [design] table's value
+                data.setdefault("design", {})[var.name] = values[var.name]
+        if name is not None:
+            data["name"] = name
+        return data
+
+    def loaded_with(self, values: dict[str, float]) -> LoadedSpec:
+        data = self.spec_data(values)
+        model = validate(type(self.loaded.model), data, prefix=self.kind)
+        digest = hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+        return LoadedSpec(model, self.loaded.path, digest)
+
+    def spec_text(self, values: dict[str, float], name: str, note: str, folder: Path) -> str:
+        """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
+        from synthesis.specref import write_toml
+
+        data = self.spec_data(values, name, folder)
+        validate(type(self.loaded.model), data, prefix=self.kind)       # never write a spec check refuses
+        head = [f"# {note}", f"# from {self.loaded.path.name} (sha256 {self.loaded.sha256})", ""]
+        return "\n".join(head + write_toml(type(self.loaded.model), data, documented=False)) + "\n"
+
+    # -- evaluation -------------------------------------------------------------------------------------
+    def evaluate(self, sent: Any, grid: str = "fine") -> dict[str, Any]:
+        """The rule table and the drawing at the page's values, on the coarse or the fine (``check``'s) grid."""
+        if grid not in grids.GRIDS:
+            raise SpecError(f"grid: expected one of {', '.join(grids.GRIDS)}, got {str(grid)[:20]!r}")
+        values = self.values_of(sent)
+        began = time.perf_counter()
+        try:
+            loaded = self.loaded_with(values)
+            result = grids.evaluator(self.kind, grid)(loaded)
+        except AgrisynthError as exc:        # e.g. a linkage that does not assemble at these values
+            return {"grid": grid, "values": values, "error": str(exc), "rules": [], "drawing": None,
+                    "ms": 1e3 * (time.perf_counter() - began)}
+        rules = [{k: r.get(k) for k in ("name", "value", "limit", "unit", "margin", "satisfied")}
+                 | {"note": r.get("note") or r.get("where") or ""} for r in result.rules]
+        return finite({"grid": grid, "grid_note": grids.note(self.kind, grid, self.loaded.model), "values": values, "error": None,
+                       "rules": rules, "drawing": drawing.drawing(result),
+                       "ms": 1e3 * (time.perf_counter() - began)})
+
+    def describe(self) -> dict[str, Any]:
+        return finite({"kind": self.kind, "name": self.loaded.name, "spec": self.loaded.path.name,
+                       "variables": [v.to_json() for v in self.variables],
+                       "grids": {g: grids.note(self.kind, g, self.loaded.model) for g in grids.GRIDS},
+                       "solves": kinds.get(self.kind).solves,
+                       "starts": getattr(getattr(self.loaded.model, "solver", None), "starts", 1)})

@@ -1,0 +1,445 @@
+// agrisynth studio page: sliders -> /api/evaluate (coarse while dragging, fine on release) -> rule table and SVG.
+// Talks to its own server only (the token travels in a header); draws with plain SVG.
+"use strict";
+
+const TOKEN = new URLSearchParams(location.search).get("token") || "";
+const SVGNS = "http://www.w3.org/2000/svg";
+const COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"];
+
+const state = {
+  info: null, values: {}, given: {}, inflight: false, pending: null, evaluations: 0,
+  current: null, baseline: null, frame: 0, timer: null, polling: null,
+};
+
+async function api(path, body) {
+  const options = { headers: { "X-Studio-Token": TOKEN } };
+  if (body !== undefined) {
+    options.method = "POST";
+    options.headers["Content-Type"] = "application/json";
+    options.body = JSON.stringify(body);
+  }
+  const response = await fetch(path, options);
+  const data = await response.json();
+  if (!response.ok) throw new Error(data.error || response.statusText);
+  return data;
+}
+
+function el(tag, attrs, text) {
+  const node = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs || {})) node.setAttribute(k, v);
+  if (text !== undefined) node.textContent = text;
+  return node;
+}
+
+function svg(tag, attrs) {
+  const node = document.createElementNS(SVGNS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) node.setAttribute(k, v);
+  return node;
+}
+
+function fmt(v) {
+  if (v === null || v === undefined) return "-";
+  if (typeof v !== "number") return String(v);
+  return Math.abs(v) >= 1e5 || (Math.abs(v) < 1e-3 && v !== 0) ? v.toExponential(3) : Number(v.toPrecision(4)).toString();
+}
+
+function limitText(limit) {
+  if (!Array.isArray(limit)) return fmt(limit);
+  const [lo, hi] = limit;
+  if (lo !== null && hi !== null) return lo === hi ? `= ${fmt(lo)}` : `${fmt(lo)} … ${fmt(hi)}`;
+  if (lo !== null) return `≥ ${fmt(lo)}`;
+  if (hi !== null) return `≤ ${fmt(hi)}`;
+  return "-";
+}
+
+// ---- sliders --------------------------------------------------------------------------------------------
+function buildSliders() {
+  const box = document.getElementById("sliders");
+  box.replaceChildren();
+  for (const v of state.info.variables) {
+    const row = el("div", { class: v.free ? "var" : "var fixed", "data-var": v.name });
+    row.append(el("label", { for: `range-${v.name}` }, v.name));
+    const range = el("input", { type: "range", id: `range-${v.name}`, name: v.name });
+    const number = el("input", { type: "number", id: `number-${v.name}`, name: v.name });
+    for (const input of [range, number]) {
+      if (v.free) {
+        input.min = v.bounds[0]; input.max = v.bounds[1];
+        input.step = "any";
+      } else {
+        input.disabled = true;
+      }
+      input.value = v.value;
+    }
+    if (!v.free) { range.min = v.value - 1; range.max = v.value + 1; range.value = v.value; }
+    range.step = v.free ? String((v.bounds[1] - v.bounds[0]) / 1000) : "any";
+    range.addEventListener("input", () => { setValue(v.name, Number(range.value)); request("coarse"); });
+    range.addEventListener("change", () => { setValue(v.name, Number(range.value)); request("fine"); });
+    number.addEventListener("change", () => {
+      const x = Number(number.value);
+      if (!Number.isFinite(x) || x < v.bounds[0] || x > v.bounds[1]) { number.value = state.values[v.name]; return; }
+      setValue(v.name, x); request("fine");
+    });
+    row.append(range, number, el("span", { class: "unit" }, v.unit || ""));
+    row.append(el("span", { class: "bounds" }, v.free ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]` : "fixed in the spec"));
+    box.append(row);
+  }
+}
+
+function setValue(name, x) {
+  state.values[name] = x;
+  const range = document.getElementById(`range-${name}`);
+  const number = document.getElementById(`number-${name}`);
+  if (Number(range.value) !== x) range.value = x;
+  if (Number(number.value) !== x) number.value = x;
+}
+
+function freeValues() {
+  const out = {};
+  for (const v of state.info.variables) if (v.free) out[v.name] = state.values[v.name];
+  return out;
+}
+
+// ---- evaluation: one request in flight; the latest values go next (fine wins over coarse) -------------------
+function request(grid) {
+  if (state.inflight) {
+    if (state.pending !== "fine") state.pending = grid;
+    return;
+  }
+  state.inflight = true;
+  const began = performance.now();
+  api("/api/evaluate", { values: freeValues(), grid })
+    .then((data) => { render(data, performance.now() - began); })
+    .catch((err) => { showError(String(err.message || err)); })
+    .finally(() => {
+      state.inflight = false;
+      const next = state.pending;
+      state.pending = null;
+      if (next) request(next);
+    });
+}
+
+function showError(text) {
+  const box = document.getElementById("error");
+  box.hidden = !text;
+  box.textContent = text || "";
+}
+
+function render(data, answerMs) {
+  const began = performance.now();
+  state.evaluations += 1;
+  state.current = data;
+  showError(data.error);
+  renderTable(data);
+  renderDrawing();
+  const drawMs = performance.now() - began;
+  document.getElementById("status").textContent =
+    `${data.grid} grid (${data.grid_note || ""}): evaluated in ${data.ms.toFixed(1)} ms, answered ` +
+    `${answerMs.toFixed(0)} ms after the input, drawn in ${drawMs.toFixed(0)} ms`;
+  document.body.dataset.drawMs = drawMs.toFixed(1);
+  document.body.dataset.grid = data.grid;
+  document.body.dataset.evaluations = String(state.evaluations);
+}
+
+function renderTable(data) {
+  const body = document.querySelector("#rules tbody");
+  body.replaceChildren();
+  const base = {};
+  for (const r of (state.baseline && state.baseline.rules) || []) base[r.name] = r;
+  let bad = 0;
+  for (const r of data.rules) {
+    const row = el("tr", { "data-rule": r.name, "data-satisfied": String(r.satisfied) });
+    if (!r.satisfied) { row.className = "violated"; bad += 1; }
+    const b = base[r.name];
+    for (const [text, cls] of [[r.name], [fmt(r.value)], [limitText(r.limit)], [r.unit || ""], [fmt(r.margin)],
+                               [b ? fmt(b.margin) : "-", "base"], [r.note || ""]]) {
+      row.append(el("td", cls ? { class: cls } : {}, text));
+    }
+    body.append(row);
+  }
+  const verdict = document.getElementById("verdict");
+  verdict.textContent = data.error ? "(not evaluated)" : bad ? `${bad} violated` : "every rule satisfied";
+  verdict.className = bad || data.error ? "bad" : "good";
+}
+
+// ---- drawing --------------------------------------------------------------------------------------------
+function extent(groups) {
+  let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+  const add = (x, y) => {
+    if (x === null || y === null) return;
+    x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
+  };
+  for (const g of groups) {
+    if (!g) continue;
+    for (const l of g.lines || []) l.x.forEach((x, i) => add(x, l.y[i]));
+    for (const p of g.points || []) add(p.x, p.y);
+    for (const f of g.frames || []) for (const xy of Object.values(f)) add(xy[0], xy[1]);
+  }
+  if (!Number.isFinite(x0)) return [-1, -1, 2, 2];
+  const pad = 0.06 * Math.max(x1 - x0, y1 - y0, 1);
+  return [x0 - pad, -y1 - pad, x1 - x0 + 2 * pad, y1 - y0 + 2 * pad];   // SVG y runs down: y drawn as -y
+}
+
+function pathOf(xs, ys) {
+  let d = "";
+  xs.forEach((x, i) => {
+    if (x === null || ys[i] === null) return;
+    d += `${d && xs[i - 1] !== null && ys[i - 1] !== null ? "L" : "M"}${x},${-ys[i]}`;
+  });
+  return d;
+}
+
+function drawGroup(root, group, unit, ghost) {
+  const g = svg("g", { class: ghost ? "baseline" : "current", opacity: ghost ? "0.35" : "1" });
+  (group.lines || []).forEach((l, i) => {
+    g.append(svg("path", { d: pathOf(l.x, l.y), fill: "none", "data-line": l.name,
+      stroke: ghost ? "#888" : COLOURS[i % COLOURS.length], "stroke-width": l.main ? 2.2 : 1.2,
+      "stroke-dasharray": ghost ? "4 3" : "", "vector-effect": "non-scaling-stroke" }));
+  });
+  for (const p of group.points || []) {
+    if (p.x === null || p.y === null) continue;
+    g.append(svg("circle", { cx: p.x, cy: -p.y, r: 0.9 * unit, fill: ghost ? "#888" : "#d62728", "data-point": p.name }));
+    if (!ghost) {
+      const t = svg("text", { x: p.x + 1.2 * unit, y: -p.y - 1.2 * unit, "font-size": 3.2 * unit, fill: "#333" });
+      t.textContent = p.name;
+      g.append(t);
+    }
+  }
+  root.append(g);
+}
+
+function drawPose(root, mechanism, k, unit, ghost) {
+  const frame = mechanism.frames[k % mechanism.frames.length];
+  const names = Object.keys(frame);
+  const bars = mechanism.bars || names.slice(1).map((n, i) => [names[i], n]);
+  const g = svg("g", { class: ghost ? "pose baseline" : "pose", opacity: ghost ? "0.35" : "1" });
+  for (const [a, b] of bars) {
+    if (!frame[a] || !frame[b]) continue;
+    g.append(svg("line", { x1: frame[a][0], y1: -frame[a][1], x2: frame[b][0], y2: -frame[b][1],
+      stroke: ghost ? "#888" : "#333", "stroke-width": 3, "stroke-linecap": "round", "vector-effect": "non-scaling-stroke" }));
+  }
+  for (const n of names) {
+    g.append(svg("circle", { cx: frame[n][0], cy: -frame[n][1], r: 1.1 * unit, fill: "#fff", stroke: "#333",
+      "vector-effect": "non-scaling-stroke", "data-joint": n }));
+    if (!ghost) {
+      const t = svg("text", { x: frame[n][0] + 1.5 * unit, y: -frame[n][1] + 3 * unit, "font-size": 3 * unit, fill: "#555" });
+      t.textContent = n;
+      g.append(t);
+    }
+  }
+  root.append(g);
+}
+
+function panel(id, title) {
+  let box = document.getElementById(id);
+  if (!box) {
+    box = el("div", { class: "panel", id });
+    box.append(el("h3", {}, title), svg("svg", { preserveAspectRatio: "xMidYMid meet" }), el("div", { class: "legend" }));
+    document.getElementById("panels").append(box);
+  }
+  return box;
+}
+
+function renderDrawing() {
+  const data = state.current;
+  const comparing = document.getElementById("compare").checked && state.baseline && state.baseline.drawing;
+  document.body.classList.toggle("comparing", Boolean(comparing));
+  if (!data || !data.drawing) {           // not evaluated at these values: draw nothing rather than a stale design
+    document.getElementById("panels").replaceChildren();
+    return;
+  }
+  const d = data.drawing;
+  const b = comparing ? state.baseline.drawing : null;
+  const mech = d.mechanism && d.mechanism.frames.length ? d.mechanism : null;
+  const sections = [["panel-main", d.ground ? "machine frame (mm)" : "mechanism and curves (mm)", d.main, b && b.main, mech, b && b.mechanism]];
+  if (d.ground) sections.push(["panel-ground", "ground frame (mm)", d.ground, b && b.ground, null, null]);
+  for (const id of ["panel-main", "panel-ground"]) {
+    if (!sections.some((s) => s[0] === id) && document.getElementById(id)) document.getElementById(id).remove();
+  }
+  for (const [id, title, group, ghost, mechanism, ghostMech] of sections) {
+    const box = panel(id, title);
+    const root = box.querySelector("svg");
+    const view = extent([group, ghost, mechanism, ghostMech && ghostMech.frames.length ? ghostMech : null]);
+    const unit = Math.max(view[2], view[3]) / 200;
+    root.setAttribute("viewBox", view.join(" "));
+    root.replaceChildren();
+    if (ghost) drawGroup(root, ghost, unit, true);
+    drawGroup(root, group, unit, false);
+    if (ghostMech && ghostMech.frames.length) {
+      const ghostPoses = svg("g", { class: "ghost-poses" });
+      root.append(ghostPoses);
+      drawPose(ghostPoses, ghostMech, state.frame, unit, true);
+    }
+    if (mechanism) {
+      const poses = svg("g", { class: "poses" });
+      root.append(poses);
+      drawPose(poses, mechanism, state.frame, unit, false);
+    }
+    const legend = box.querySelector(".legend");
+    legend.replaceChildren();
+    (group.lines || []).forEach((l, i) => {
+      const s = el("span");
+      const swatch = el("i");
+      swatch.style.background = COLOURS[i % COLOURS.length];
+      s.append(swatch, document.createTextNode(l.name));
+      legend.append(s);
+    });
+    if (ghost) legend.append(el("span", {}, "grey dashed: baseline (the spec's given design)"));
+  }
+  renderCharts(d.charts || [], b ? b.charts : null);
+}
+
+function renderCharts(charts, ghosts) {
+  const box = document.getElementById("panels");
+  box.querySelectorAll(".chart").forEach((node) => { if (Number(node.dataset.index) >= charts.length) node.remove(); });
+  charts.forEach((chart, i) => {
+    let panelBox = document.getElementById(`chart-${i}`);
+    if (!panelBox) {
+      panelBox = el("div", { class: "panel chart", id: `chart-${i}`, "data-index": String(i) });
+      panelBox.append(el("h3"), svg("svg", { preserveAspectRatio: "none" }), el("div", { class: "legend" }));
+      box.append(panelBox);
+    }
+    panelBox.querySelector("h3").textContent = `${chart.name}: deg over ${chart.x_name}`;
+    const ghost = ghosts && ghosts[i] && ghosts[i].name === chart.name ? ghosts[i] : null;
+    const all = [chart, ghost].filter(Boolean);
+    const xs = all.flatMap((c) => c.x).filter((v) => v !== null);
+    const ys = all.flatMap((c) => c.series.flatMap((s) => s.y)).filter((v) => v !== null);
+    const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
+    const w = Math.max(x1 - x0, 1e-9), h = Math.max(y1 - y0, 1e-9);
+    const root = panelBox.querySelector("svg");
+    root.setAttribute("viewBox", `${x0} ${-y1 - 0.05 * h} ${w} ${1.1 * h}`);
+    root.replaceChildren();
+    for (const [c, grey] of [[ghost, true], [chart, false]]) {
+      if (!c) continue;
+      c.series.forEach((s, k) => root.append(svg("path", { d: pathOf(c.x, s.y), fill: "none", "data-series": s.name,
+        stroke: grey ? "#888" : COLOURS[k % COLOURS.length], "stroke-width": 1.5, "stroke-dasharray": grey ? "4 3" : "",
+        "vector-effect": "non-scaling-stroke", opacity: grey ? "0.5" : "1" })));
+    }
+    const legend = panelBox.querySelector(".legend");
+    legend.replaceChildren(el("span", {}, `${chart.x_name} ${fmt(x0)} … ${fmt(x1)};`));
+    chart.series.forEach((s, k) => {
+      const item = el("span");
+      const swatch = el("i");
+      swatch.style.background = COLOURS[k % COLOURS.length];
+      const finite = s.y.filter((v) => v !== null);
+      item.append(swatch, document.createTextNode(`${s.name} ${fmt(Math.min(...finite))} … ${fmt(Math.max(...finite))}`));
+      legend.append(item);
+    });
+  });
+}
+
+function tick() {
+  const data = state.current;
+  if (!data || !data.drawing || !data.drawing.mechanism.frames.length) return;
+  state.frame += 1;
+  const root = document.querySelector("#panel-main svg");
+  const poses = root && root.querySelector("g.poses");
+  if (!poses) return;
+  const view = root.getAttribute("viewBox").split(" ").map(Number);
+  const unit = Math.max(view[2], view[3]) / 200;
+  poses.replaceChildren();
+  drawPose(poses, data.drawing.mechanism, state.frame, unit, false);
+  const ghostPoses = root.querySelector("g.ghost-poses");      // the baseline moves in step when compared
+  if (ghostPoses && state.baseline && state.baseline.drawing) {
+    ghostPoses.replaceChildren();
+    drawPose(ghostPoses, state.baseline.drawing.mechanism, state.frame, unit, true);
+  }
+}
+
+function animate() {
+  clearInterval(state.timer);
+  state.timer = document.getElementById("animate").checked ? setInterval(tick, 80) : null;
+}
+
+// ---- buttons --------------------------------------------------------------------------------------------
+async function save() {
+  try {
+    const data = await api("/api/save", { values: freeValues() });
+    document.getElementById("saved").textContent = `saved ${data.file} in ${data.folder}`;
+    document.body.dataset.saved = data.file;
+  } catch (err) { showError(String(err.message || err)); }
+}
+
+function reset() {
+  for (const v of state.info.variables) setValue(v.name, state.given[v.name]);
+  request("fine");
+}
+
+function showSolve(s) {
+  const running = s.state === "running";
+  document.getElementById("solve").disabled = running;
+  document.getElementById("cancel").disabled = !running;
+  const bar = document.getElementById("progress");
+  bar.max = Math.max(1, s.total || 1);
+  bar.value = s.done || 0;
+  let text = s.state === "idle" ? "no solve yet" : `${s.run}: ${s.state}, ${s.done || 0}/${s.total || "?"} starts`;
+  if (!running && s.exit_code !== null && s.exit_code !== undefined) text += `; exit ${s.exit_code} (${s.exit})`;
+  if (s.status) text += `; status ${s.status}` + (s.objective ? `, ${s.objective.name} = ${fmt(s.objective.value)}` : "");
+  if (s.folder) text += `; run written to ${s.folder}/`;
+  document.getElementById("solve-state").textContent = text;
+  document.getElementById("solve-lines").textContent = (s.lines || []).join("\n");
+  document.body.dataset.solve = s.state;
+}
+
+function poll() {
+  clearTimeout(state.polling);
+  api("/api/solve").then((s) => {
+    showSolve(s);
+    if (s.state === "running") { state.polling = setTimeout(poll, 300); return; }
+    if (s.design) {
+      // IPOPT may end a hair outside a bound (its bound relaxation, ~1e-8 relative); a spec's start value must lie
+      // within its bounds, so such a value is put on the bound, and the page says by how much
+      const clamped = [];
+      for (const v of state.info.variables) {
+        const x = s.design[v.name];
+        if (!v.free || typeof x !== "number") continue;
+        const inside = Math.min(v.bounds[1], Math.max(v.bounds[0], x));
+        if (inside !== x) clamped.push(`${v.name} by ${fmt(Math.abs(inside - x))} ${v.unit}`);
+        setValue(v.name, inside);
+      }
+      if (clamped.length) {
+        document.getElementById("solve-state").textContent += `; put on its bound: ${clamped.join(", ")}`;
+      }
+      request("fine");
+    }
+  }).catch((err) => showError(String(err.message || err)));
+}
+
+async function solve() {
+  try {
+    const starts = Number(document.getElementById("starts").value);
+    showSolve(await api("/api/solve", { values: freeValues(), starts }));
+    poll();
+  } catch (err) { showError(String(err.message || err)); }
+}
+
+async function cancel() {
+  try { showSolve(await api("/api/solve/cancel", {})); poll(); } catch (err) { showError(String(err.message || err)); }
+}
+
+async function start() {
+  state.info = await api("/api/session");
+  document.getElementById("title").textContent = `— ${state.info.name} (${state.info.kind}, ${state.info.spec})`;
+  document.getElementById("grids").textContent =
+    `While a slider moves the rules are evaluated on the coarse grid (${state.info.grids.coarse}); ` +
+    `on release, on the fine grid (${state.info.grids.fine}) — the grid agrisynth check uses. ` +
+    `Files are written to ${state.info.folder}.`;
+  for (const v of state.info.variables) { state.values[v.name] = v.value; state.given[v.name] = v.value; }
+  document.getElementById("starts").value = state.info.starts;
+  const solvable = state.info.solves && state.info.variables.some((v) => v.free);
+  document.getElementById("solve").disabled = !solvable;
+  if (!solvable) document.getElementById("solve-state").textContent = "nothing free to solve for in this spec";
+  buildSliders();
+  state.baseline = await api("/api/evaluate", { values: freeValues(), grid: "fine" });
+  render(state.baseline, 0);
+  document.getElementById("save").addEventListener("click", save);
+  document.getElementById("reset").addEventListener("click", reset);
+  document.getElementById("solve").addEventListener("click", solve);
+  document.getElementById("cancel").addEventListener("click", cancel);
+  document.getElementById("compare").addEventListener("change", () => { renderTable(state.current); renderDrawing(); });
+  document.getElementById("animate").addEventListener("change", animate);
+  animate();
+  if (solvable) poll();
+  document.body.dataset.ready = "1";
+}
+
+start().catch((err) => showError(String(err.message || err)));

@@ -1,0 +1,193 @@
+"""agrisynth studio in headless Chromium, as a user drives it: drag a slider, watch the table and the drawing,
+save the spec and check it, solve from here and compare with `agrisynth solve`.
+
+Needs Debian's chromium and playwright (skipped without them, failed when AGRISYNTH_REQUIRE_BROWSER=1)."""
+
+from __future__ import annotations
+
+import contextlib
+from urllib.parse import urlsplit
+
+import pytest
+
+from solving import cli_run, strict_json
+from studio_fixtures import STUDIO_SPECS, running_studio
+from test_report_browser import CHROMIUM, LAUNCH_FLAGS, sync_playwright  # noqa: F401 - the fixture
+
+pytest.importorskip("starlette")
+
+#: every change of the body's data-grid attribute, in order (coarse while dragging, fine on release)
+RECORD_GRIDS = """() => { window.__grids = [];
+  new MutationObserver(() => window.__grids.push(document.body.dataset.grid))
+    .observe(document.body, {attributes: true, attributeFilter: ["data-evaluations"]}); }"""
+TABLE = """() => Array.from(document.querySelectorAll('#rules tbody tr')).map(r => ({
+  name: r.dataset.rule, red: r.classList.contains('violated'),
+  colour: getComputedStyle(r.cells[0]).color, value: r.cells[1].textContent}))"""
+
+
+@contextlib.contextmanager
+def studio_page(sync_playwright, studio):
+    """A page on the studio, with every request recorded (any not to the studio is aborted) and console errors."""
+    seen = {"requests": [], "left": [], "errors": []}
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=LAUNCH_FLAGS)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+
+            def route(r):
+                seen["requests"].append(r.request.url)
+                if urlsplit(r.request.url).netloc != f"127.0.0.1:{studio.port}":
+                    seen["left"].append(r.request.url)
+                    return r.abort()
+                return r.continue_()
+            page.route("**/*", route)
+            page.on("console", lambda m: seen["errors"].append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: seen["errors"].append(str(e)))
+            page.goto(studio.url)
+            page.wait_for_selector("body[data-ready='1']", timeout=30_000)
+            yield page, seen
+        finally:
+            browser.close()
+
+
+def wait_for_evaluations(page, more_than: int) -> None:
+    page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {more_than}", timeout=30_000)
+
+
+def fmt4(v) -> str:
+    """The page's number format for a table value: 4 significant digits as JavaScript writes them."""
+    if v is None:
+        return "-"
+    if abs(v) >= 1e5 or (abs(v) < 1e-3 and v != 0):
+        return f"{v:.3e}".replace("e+0", "e+").replace("e-0", "e-")
+    x = float(f"{v:.4g}")
+    return str(int(x)) if x.is_integer() else repr(x)
+
+
+def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
+    """Drag l4 of the planting arm: coarse tables while dragging, the fine one on release, the drawing redrawn;
+    red exactly where the check of the saved spec says violated; compare, animate, reset."""
+    spec = STUDIO_SPECS["planting_fourbar"]
+    with running_studio(spec, tmp_path / "studio") as studio, studio_page(sync_playwright, studio) as (page, seen):
+        baseline = page.evaluate(TABLE)
+        assert {r["name"] for r in baseline if r["red"]} == {"p1p2p3_collinearity", "entry_angle",
+                                                            "transmission_angle_min"}
+        path_before = page.get_attribute("#panel-main path[data-line='path (machine frame)']", "d")
+        pose_before = page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx")
+        page.uncheck("#animate")            # the drawn pose stays put, so a change of it is the design's
+        page.evaluate(RECORD_GRIDS)
+        count = int(page.get_attribute("body", "data-evaluations"))
+        # drag l4 (64..96 mm, given 80: the thumb sits mid-way) to about a tenth of its range
+        box = page.locator("#range-l4").bounding_box()
+        y = box["y"] + box["height"] / 2
+        page.mouse.move(box["x"] + box["width"] / 2, y)
+        page.mouse.down()
+        for k in range(1, 9):
+            page.mouse.move(box["x"] + box["width"] * (0.5 - 0.05 * k), y)
+            page.wait_for_timeout(40)
+        page.mouse.up()
+        page.wait_for_function("() => document.body.dataset.grid === 'fine' && !document.querySelector('#status')"
+                               ".textContent.startsWith('coarse')", timeout=30_000)
+        wait_for_evaluations(page, count)
+        page.wait_for_timeout(300)           # any evaluation still queued has landed
+        grids = page.evaluate("window.__grids")
+        l4 = float(page.input_value("#number-l4"))
+        assert 64 <= l4 < 72, l4
+        assert "coarse" in grids and grids[-1] == "fine", grids
+        assert page.get_attribute("#panel-main path[data-line='path (machine frame)']", "d") != path_before
+        assert page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx") != pose_before
+        table = page.evaluate(TABLE)
+        status = page.inner_text("#status")
+        assert status.startswith("fine grid (400 samples per phase, 3600 per crank turn)")
+
+        page.click("#save")
+        page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
+        saved = page.get_attribute("body", "data-saved")
+
+        # compare: the baseline drawn under the design (grey, dashed) and its margins beside the current ones
+        assert page.locator("#panel-main g.baseline").count() == 0 and not page.is_visible("th.base")
+        page.check("#compare")
+        assert page.locator("#panel-main g.baseline path").count() == 1
+        assert page.locator("#panel-ground g.baseline path").count() == 1 and page.is_visible("th.base")
+        base_margins = page.eval_on_selector_all("#rules tbody td.base", "cells => cells.map(c => c.textContent)")
+        assert base_margins[0] == "5"                  # p1p3_distance of the given design: 110 mm in 105 ... 115
+        # animate: the pose moves along the cycle
+        assert page.locator("#panel-main g.ghost-poses circle[data-joint='B']").count() == 1
+        cx = page.get_attribute("#panel-main g.poses circle[data-joint='B']", "cx")
+        page.check("#animate")
+        page.wait_for_function(f"() => document.querySelector(\"#panel-main g.poses circle[data-joint='B']\")"
+                               f".getAttribute('cx') !== '{cx}'", timeout=10_000)
+        # reset: the given design and its table again
+        count = int(page.get_attribute("body", "data-evaluations"))
+        page.click("#reset")
+        wait_for_evaluations(page, count)
+        assert float(page.input_value("#number-l4")) == 80.0
+        assert [(r["name"], r["red"]) for r in page.evaluate(TABLE)] == [(r["name"], r["red"]) for r in baseline]
+        assert seen["left"] == [] and seen["errors"] == []
+        assert all(urlsplit(u).hostname == "127.0.0.1" for u in seen["requests"]) and seen["requests"]
+
+    # what `agrisynth check SAVED` evaluates (run in-process here: planting's check writes an animation; the
+    # command itself is run on the saved spec of the solve test below)
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    checked = kinds.checker("planting_fourbar")(load_spec(tmp_path / "studio" / saved)).to_json()
+    assert checked["design"]["l4"] == l4
+    assert [r["name"] for r in table] == [r["name"] for r in checked["rules"]]
+    # red exactly where check says violated, and the drag changed which ones are
+    assert {r["name"] for r in table if r["red"]} == {r["name"] for r in checked["rules"] if not r["satisfied"]}
+    assert {r["name"] for r in table if r["red"]} != {r["name"] for r in baseline if r["red"]}
+    assert all(r["colour"] == "rgb(187, 0, 0)" for r in table if r["red"])
+    assert all(r["colour"] != "rgb(187, 0, 0)" for r in table if not r["red"])
+    for row, rule in zip(table, checked["rules"]):
+        assert row["value"] == fmt4(rule["value"]), (row, rule["value"])
+
+
+def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwright):
+    """Type a start value, solve from here (one start: the page runs `agrisynth solve` in a worker process) and get
+    what the same solve gets run again from the spec the page wrote; then "save spec" and `agrisynth check` on it
+    reproduce the page's table."""
+    spec = STUDIO_SPECS["crank_rocker"]
+    with running_studio(spec, tmp_path / "studio") as studio, studio_page(sync_playwright, studio) as (page, seen):
+        count = int(page.get_attribute("body", "data-evaluations"))
+        page.fill("#number-l7", "42.5")
+        page.press("#number-l7", "Enter")
+        wait_for_evaluations(page, count)
+        page.fill("#starts", "1")
+        count = int(page.get_attribute("body", "data-evaluations"))
+        page.click("#solve")
+        page.wait_for_function("() => document.body.dataset.solve === 'finished'", timeout=120_000)
+        wait_for_evaluations(page, count)
+        state = page.inner_text("#solve-state")
+        values = {v.name: float(page.input_value(f"#number-{v.name}")) for v in studio.session.free}
+        table = page.evaluate(TABLE)
+        page.click("#save")
+        page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
+        saved = page.get_attribute("body", "data-saved")
+        assert seen["left"] == [] and seen["errors"] == []
+    run = tmp_path / "studio" / "cai2020_crank_rocker_synthesis_solve_1"
+    assert "finished" in state and "status optimal" in state, state
+    here_spec = run.with_suffix(".toml")
+    from synthesis.studio.session import Session
+
+    assert Session.open(here_spec).given()["l7"] == 42.5              # start 0 was the page's value
+    ours = strict_json(run / "result.json")
+    assert (run / "solved.toml").is_file() and (run / "report.html").is_file()
+    # the solve `agrisynth solve HERE --starts 1` runs (core.solve_spec), again, in this process
+    from synthesis.core.solve import solve_spec
+    from synthesis.spec import load_spec
+
+    theirs = solve_spec(load_spec(here_spec), starts=1, workers=1)[0].to_json()
+    assert ours["design"] == theirs["design"] and ours["objective"] == theirs["objective"]
+    assert ours["solver"]["best_start"] == 0 and ours["solver"]["starts"] == 1
+    bounds = {v.name: v.bounds for v in Session.open(spec).free}
+    assert values == {name: min(max(theirs["design"][name], bounds[name][0]), bounds[name][1]) for name in values}
+    assert values["l7"] != 42.5
+    assert {r["name"] for r in table if r["red"]} == {r["name"] for r in theirs["rules"] if not r["satisfied"]}
+    # "save spec" at the solution, then `agrisynth check` on it: the page's table, value for value
+    proc = cli_run("check", str(tmp_path / "studio" / saved), "--out", str(tmp_path / "checked"), cwd=tmp_path)
+    checked = strict_json(tmp_path / "checked" / saved.removesuffix(".toml") / "result.json")
+    assert proc.returncode == (1 if any(r["red"] for r in table) else 0), proc.stderr
+    assert {name: checked["design"][name] for name in values} == values
+    assert [(r["name"], r["value"], r["red"]) for r in table] == [
+        (r["name"], fmt4(r["value"]), not r["satisfied"]) for r in checked["rules"]]

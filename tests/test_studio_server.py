@@ -1,0 +1,233 @@
+"""agrisynth studio without a browser: the guard (token, Host, Origin), what it writes, and that its rule
+table is `agrisynth check`'s at the same values, for every kind it serves."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from studio_fixtures import STUDIO_SPECS, api, moved_values, request, running_studio
+
+pytest.importorskip("starlette")
+
+
+@pytest.fixture(scope="module")
+def planting_studio(tmp_path_factory):
+    with running_studio(STUDIO_SPECS["planting_fourbar"], tmp_path_factory.mktemp("studio")) as studio:
+        yield studio
+
+
+def test_the_page_needs_the_token(planting_studio):
+    s = planting_studio
+    for token in (None, "", "x" * len(s.token), s.token[:-1]):
+        status, _, body = request(s, "GET", "/api/session", token=token)
+        assert status == 403 and b"token" in body, (token, status, body)
+    conn_status, headers, body = request(s, "GET", f"/?token={s.token}", token=None)
+    assert conn_status == 200 and b"studio.js?token=" + s.token.encode() in body
+    assert "default-src 'none'" in headers["content-security-policy"]
+    assert "connect-src 'self'" in headers["content-security-policy"]
+    assert request(s, "GET", "/studio.js", token=None)[0] == 403
+    assert request(s, "GET", f"/studio.js?token={s.token}", token=None)[0] == 200
+    assert api(s, "/api/session")["kind"] == "planting_fourbar"
+
+
+def test_other_hosts_and_origins_are_refused(planting_studio):
+    s = planting_studio
+    for host in ("evil.example", f"evil.example:{s.port}", f"127.0.0.1:{s.port + 1}", f"127.0.0.2:{s.port}", ""):
+        status, _, body = request(s, "GET", "/api/session", host=host)
+        assert status == 403 and b"Host" in body, (host, status)
+    assert request(s, "GET", "/api/session", host=f"localhost:{s.port}")[0] == 200
+    values = {v.name: v.value for v in s.session.free}
+    files = sorted(s.out.iterdir())
+    for origin in ("http://evil.example", f"http://evil.example:{s.port}", "null", f"https://127.0.0.1:{s.port}"):
+        status, _, body = request(s, "POST", "/api/save", {"values": values}, origin=origin)
+        assert status == 403 and b"Origin" in body, (origin, status)
+    assert sorted(s.out.iterdir()) == files         # nothing refused wrote a file
+    status, _, _ = request(s, "POST", "/api/evaluate", {"values": values}, origin=f"http://127.0.0.1:{s.port}")
+    assert status == 200
+
+
+def test_bad_values_get_one_line_naming_the_field(planting_studio):
+    s = planting_studio
+    cases = [({"values": {"l2": 999.0}}, "values.l2: 999 lies outside its bounds [28, 42]"),
+             ({"values": {"l1": 70.0}}, "values.l1: not a free design variable"),
+             ({"values": {"l2": "35"}}, "values.l2: expected a finite number, got '35'"),
+             ({"values": [1, 2]}, "values: expected an object of design values, got list"),
+             ({"values": {}, "grid": "medium"}, "grid: expected one of coarse, fine, got 'medium'")]
+    for body, message in cases:
+        status, _, raw = request(s, "POST", "/api/evaluate", body)
+        answer = json.loads(raw)
+        assert status == 400 and answer["error"].startswith(message) and "\n" not in answer["error"], (body, answer)
+    status, _, raw = request(s, "POST", "/api/evaluate", b'{"values": {"l2": NaN}}')
+    assert status == 400 and json.loads(raw)["error"].startswith("request: not JSON")
+    status, _, raw = request(s, "POST", "/api/evaluate", b"values=1", content_type="application/x-www-form-urlencoded")
+    assert status == 400 and "Content-Type" in json.loads(raw)["error"]
+
+
+def test_saves_only_into_its_folder_with_names_it_picks(planting_studio, tmp_path):
+    s = planting_studio
+    values = moved_values(s.session)
+    before = {p.name for p in s.out.iterdir()}
+    first = api(s, "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    second = api(s, "/api/save", {"values": values})
+    assert (first["file"], second["file"]) == ("redesign_from_example1_saved_1.toml",
+                                               "redesign_from_example1_saved_2.toml")
+    assert {p.name for p in s.out.iterdir()} - before == {first["file"], second["file"]}
+    assert not (s.out.parent / "escape.toml").exists()
+    # the saved spec holds the page's values as start values, bounds kept, under its own name
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(s.out / first["file"])
+    assert loaded.name == "redesign_from_example1_saved_1"
+    assert loaded.model.arm.l2.init == values["l2"] and tuple(loaded.model.arm.l2.bounds) == (28.0, 42.0)
+    assert loaded.model.arm.l1 == 75.0
+
+
+def _rows(rules: list[dict]) -> list[tuple]:
+    return [(r["name"], r["value"], r["satisfied"]) for r in rules]
+
+
+@pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
+def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
+    """The page's fine-grid table equals the check of the spec "save spec" writes, value for value;
+    the coarse table has the same rules; the drawing has something to draw."""
+    with running_studio(STUDIO_SPECS[kind], tmp_path / "studio") as s:
+        values = moved_values(s.session)
+        fine = api(s, "/api/evaluate", {"values": values, "grid": "fine"})
+        coarse = api(s, "/api/evaluate", {"values": values, "grid": "coarse"})
+        saved = api(s, "/api/save", {"values": values})
+    assert fine["error"] is None and coarse["error"] is None
+    # what `agrisynth check SAVED` evaluates (the CLI path is run in tests/test_studio_browser.py)
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    checked = kinds.checker(kind)(load_spec(tmp_path / "studio" / saved["file"]))
+    assert _rows(fine["rules"]) == _rows(checked.rules)
+    for name, value in values.items():
+        assert checked.design[name] == value
+    assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
+    drawing = fine["drawing"]
+    lines = drawing["main"]["lines"]
+    assert lines or drawing["mechanism"]["frames"] or drawing["charts"]
+    assert all(len(l["x"]) == len(l["y"]) >= 2 for l in lines)
+    assert all(len(s["y"]) == len(c["x"]) for c in drawing["charts"] for s in c["series"])
+    assert all(math.isfinite(x) for l in lines for x in l["x"] if x is not None)
+
+
+def test_planting_draws_the_arm_and_both_frames(planting_studio):
+    s = planting_studio
+    given = {v.name: v.value for v in s.session.free}
+    answer = api(s, "/api/evaluate", {"values": given, "grid": "fine"})
+    drawing = answer["drawing"]
+    assert drawing["ground"] is not None
+    assert {p["name"] for p in drawing["ground"]["points"]} == {"P1", "P2", "P3", "P4", "P5", "P6"}
+    frames = drawing["mechanism"]["frames"]
+    assert 36 <= len(frames) <= 72 and set(frames[0]) == {"O", "O'", "A", "B", "C"}
+    # the pose's joints keep the link lengths of the design (l2 = |OA|, l3 = |AB|, l4 = |O'B|, l5 = |AC|)
+    for f in frames:
+        for (a, b), length in ((("O", "A"), given["l2"]), (("A", "B"), given["l3"]), (("O'", "B"), given["l4"]),
+                               (("A", "C"), given["l5"])):
+            assert math.dist(f[a], f[b]) == pytest.approx(length, abs=2e-3)
+    # the claw tip C of the poses lies on the drawn machine-frame path
+    path = drawing["main"]["lines"][0]
+    assert path["name"] == "path (machine frame)"
+    for f in frames[::9]:
+        assert min(math.dist(f["C"], xy) for xy in zip(path["x"], path["y"])) < 3.0
+
+
+def test_coarse_grid_is_coarser_and_says_so(planting_studio):
+    s = planting_studio
+    info = api(s, "/api/session")
+    assert info["grids"] == {"coarse": "40 samples per phase, 360 per crank turn",
+                             "fine": "400 samples per phase, 3600 per crank turn"}
+    given = {v.name: v.value for v in s.session.free}
+    coarse = api(s, "/api/evaluate", {"values": given, "grid": "coarse"})
+    fine = api(s, "/api/evaluate", {"values": given, "grid": "fine"})
+    # the transmission angle is sampled over a turn: on 360 samples its extreme is at most 1 deg of crank off
+    by_name = {r["name"]: r for r in fine["rules"]}
+    for r in coarse["rules"]:
+        assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.02, abs=0.05), r["name"]
+
+
+def test_a_kind_whose_check_reads_solver_samples_gets_them_divided():
+    from synthesis.spec import load_spec
+    from synthesis.studio import grids
+
+    spec = load_spec(STUDIO_SPECS["fourbar_path"]).model
+    assert spec.solver.samples == 36 and grids._coarser(spec).solver.samples == 4      # not below ge=4
+    assert grids.note("fourbar_path", "coarse", spec) == "the check with [solver] samples 36 -> 4"
+
+
+@pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam",
+                                         "crank_rocker", "combing_chain", "fourbar_path"]))
+def test_coarse_rules_are_the_checks_on_fewer_samples(kind):
+    """Same rules, values close to the fine grid's (sampled extremes move a little), a different grid note."""
+    from synthesis.studio import grids
+    from synthesis.studio.session import Session
+
+    assert kind == "fourbar_path" or kind in grids.TRIMMED
+    session = Session.open(STUDIO_SPECS[kind])
+    values = moved_values(session, 0.1)
+    coarse, fine = session.evaluate(values, "coarse"), session.evaluate(values, "fine")
+    assert coarse["grid_note"] != fine["grid_note"]
+    by_name = {r["name"]: r for r in fine["rules"]}
+    assert [r["name"] for r in coarse["rules"]] == list(by_name)
+    for r in coarse["rules"]:
+        assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.03, abs=0.1), r["name"]
+
+
+def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
+    s = planting_studio
+    values = moved_values(s.session, 0.1)
+    first = api(s, "/api/solve", {"values": values, "starts": 256})
+    assert first["state"] == "running" and first["total"] == 256
+    status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 1})
+    assert status == 409 and json.loads(raw)["error"].startswith("a solve is running (redesign_from_example1_solve_1)")
+    cancelled = api(s, "/api/solve/cancel", {})
+    assert cancelled["state"] == "cancelled" and cancelled["exit_code"] in (143, -15), cancelled
+    assert cancelled["done"] < 256
+    assert api(s, "/api/solve")["state"] == "cancelled"
+    assert s.job.process.poll() is not None         # the worker process is gone
+    status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
+    assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"
+
+
+@pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
+def test_the_corners_of_the_box_evaluate_to_finite_json(kind):
+    """Every slider at a bound (alternately low and high): a table or a one-line reason, never NaN or infinity."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS[kind])
+    for corner in (0, 1):
+        values = {v.name: v.bounds[(corner + i) % 2] for i, v in enumerate(session.free)}
+        for grid in ("coarse", "fine"):
+            out = session.evaluate(values, grid)
+            json.dumps(out, allow_nan=False)
+            assert (out["error"] is None) == bool(out["rules"]), out["error"]
+            assert out["error"] is None or "\n" not in out["error"]
+
+
+def test_steering_coarse_grid_samples_fewer_locks_and_skips_the_table12_fits():
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["steering_linkage"])
+    values = moved_values(session, 0.2)
+    coarse, fine = session.evaluate(values, "coarse"), session.evaluate(values, "fine")
+    by_name = {r["name"]: r for r in fine["rules"]}
+    for r in coarse["rules"]:
+        # the transmission angle's extreme over 41 locks instead of 401: within a tenth of a degree here
+        assert r["value"] == pytest.approx(by_name[r["name"]]["value"], abs=0.1), r["name"]
+    assert len(coarse["drawing"]["charts"][0]["x"]) == 41 and len(fine["drawing"]["charts"][0]["x"]) > 41
+    assert coarse["grid_note"] == "the check with [solver] samples 40 -> 4, without its Table 12 explanation"
+
+
+def test_answers_are_not_held_back_by_nagles_algorithm(planting_studio):
+    """The listening socket says it is TCP, so asyncio turns Nagle's algorithm off on every connection (with
+    it on, each keep-alive answer waited for the browser's delayed ACK, ~40 ms: measured by the benchmark)."""
+    import socket
+
+    s = planting_studio
+    assert s.socket.proto == socket.IPPROTO_TCP
+    assert s.socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
