@@ -42,6 +42,7 @@ BACKOFF = 1e-9
 
 
 SCALED = True
+OBJECTIVE_SCALED = True
 
 
 def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -54,6 +55,12 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     offset = np.array([0, 0, 0, 0, 0, 0, centre[0], centre[1], 0.0])
     scale = np.array([size] * 8 + [180.0 / math.pi])
     return offset, scale
+
+
+#: samples per gap between targets of the first solve of grashof = "any" (0: the spec's samples only)
+COARSE = 4
+#: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
+MU_INIT = 1e-6
 
 
 class PathNLP:
@@ -80,27 +87,61 @@ class PathNLP:
         self.n_theta = theta.numel()
         sign = ca.SX.sym("direction")
         p = design_parameters(v)
-        f = 0
+        res = []
         for th, (tx, ty) in zip(thetas, targets):
             px, py = coupler_point(th, p, BRANCHES[spec.branch])
-            f += (px - tx) ** 2 + (py - ty) ** 2
+            res += [px - tx, py - ty]
+        residuals = ca.vertcat(*res)
+        f = ca.sumsqr(residuals)
         decision = ca.vertcat(x, theta)
-        f_unit = self.scale[0] ** 2 if SCALED else 1.0      # the objective in (target size)^2
-        self.problem = Problem(
-            "fourbar_path", decision,
-            np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])]),
-            np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])]),
-            structural=(), rules=path_rules(spec, v, thetas, sign, spec.solver.samples),
-            objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
-            # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
-            # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
-            # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
-            ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy},
-            max_iter=spec.solver.max_iter)
-        self.compiled = CompiledNLP(self.problem, elastic)
+        f_unit = self.scale[0] ** 2 if SCALED and OBJECTIVE_SCALED else 1.0      # the objective in (target size)^2
+        lbx = np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])])
+        ubx = np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])])
+
+        def problem(samples: int) -> Problem:
+            out = Problem(
+                "fourbar_path", decision, lbx, ubx,
+                structural=(), rules=path_rules(spec, v, thetas, sign, samples),
+                objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
+                # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
+                # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
+                # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
+                ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
+                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
+                max_iter=spec.solver.max_iter)
+            return out
+
+        self._problem_of = problem
+        self.lbx, self.ubx = lbx, ubx
+        self._full = None
+        # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
+        # keep the answer when every row of the spec's samples holds there (full_rows); else re-solve
+        # with those rows from it
+        self.coarse = None
+        if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
+                and spec.solver.samples > COARSE):
+            self.coarse = CompiledNLP(problem(COARSE), elastic)
+            full = path_rules(spec, v, thetas, sign, spec.solver.samples)
+            rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
+            self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
+            self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
+            self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
+        else:
+            self._full = CompiledNLP(problem(spec.solver.samples), elastic)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.starts = StartMaker(spec, seed)
+
+    @property
+    def compiled(self) -> CompiledNLP:
+        """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
+        if self._full is None:
+            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic)
+        return self._full
+
+    @property
+    def problem(self) -> Problem:
+        return self.compiled.problem
 
     def nominal(self, design: np.ndarray) -> np.ndarray:
         """Design values (spec units) -> the NLP's nominal units."""
@@ -110,6 +151,16 @@ class PathNLP:
         """The NLP's nominal units -> design values (spec units); a fixed variable is its bound exactly."""
         return np.where(self.fixed, self.bounds[:, 0], self.offset + self.scale * np.asarray(z, float))
 
+    def holds_every_sample(self, w: np.ndarray, sign: float) -> bool | None:
+        """Whether every row of the spec's samples of the motion holds (limits exact, no back-off) at the
+        decision vector ``w``; None when ``w`` is not a number or there is no coarse NLP."""
+        if self.coarse is None:
+            return None
+        g = np.asarray(self.full_rows(w, sign), dtype=float).ravel()
+        if not np.all(np.isfinite(g)):
+            return None
+        return bool(np.all(g >= self.full_lb) and np.all(g <= self.full_ub))
+
     def start(self, index: int, x_design: np.ndarray) -> StartPoint:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
         return self.starts(index, x_design)
@@ -117,9 +168,19 @@ class PathNLP:
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
         """One IPOPT run; the crank angle of each target (deg) and the direction in the start's details."""
         sp = self.start(index, x_design)
-        z0 = np.clip(self.nominal(sp.design), self.problem.lbx[:9], self.problem.ubx[:9])
-        out = self.compiled.solve(index, np.concatenate([z0, sp.theta]), p=sp.sign)
-        xs = out.x[: self.compiled.n_x]
+        z0 = np.clip(self.nominal(sp.design), self.lbx[:9], self.ubx[:9])
+        w0 = np.concatenate([z0, sp.theta])
+        if self.coarse is None:
+            out = self.compiled.solve(index, w0, p=sp.sign)
+        else:
+            out = self.coarse.solve(index, w0, p=sp.sign)
+            if self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
+                first = out
+                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign)
+                out.iterations += first.iterations
+                out.wall_s += first.wall_s
+                out.log = first.log + "\n===== re-solved with every sample of the motion\n" + out.log
+        xs = out.x[: len(self.lbx)]
         design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
         if self.spec.timed:
             crank = [float(a) for a in self.spec.targets.crank_deg]

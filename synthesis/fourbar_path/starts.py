@@ -62,6 +62,7 @@ SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 POOL = 1024            # candidate linkage shapes screened once per spec and seed (free timing)
 POOL_PHASES = 24       # trial phases of the arc-length correspondence in the pool screening
 SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
+ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
 STRATEGY = "mix"       # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool"
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
@@ -381,6 +382,10 @@ class StartMaker:
         out = np.array(design, dtype=float)
         if self.anchor is not None and self.anchor[1] > 0:
             out[:4] = pull_into_class(out[:4], self.anchor[0], KEEP_SLACK * self.anchor[1], self.spec.rules.grashof)
+        elif ANY_STARTS_ROTATE and self.anchor is None and self.pool_anchor is not None and self.pool_anchor[1] > 0:
+            # grashof = "any": a crank-rocker start closes the loop at every crank angle (a random one
+            # often closes at none of the start angles, and IPOPT stops at iteration 0 on NaN)
+            out[:4] = pull_into_class(out[:4], self.pool_anchor[0], KEEP_SLACK * self.pool_anchor[1], self.pool_grashof)
         return out
 
     def __call__(self, index: int, x: np.ndarray) -> StartPoint:
