@@ -6,6 +6,13 @@
                targets, transmission angle (2 exact rows over a turn), sequence of the angles (linear,
                free timing); grashof = "any": closure and transmission sampled along the motion
 
+The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
+the targets' size, the input pivot from the targets' centre in that unit, theta0 in rad, and the
+objective in (target size)^2.  Raw mm and degrees put bounds 0.05-6 diameters wide and theta0 in
+degrees side by side; measured on the inexact set of issue 19 (PATH.md) nominal units halve the
+wall time of egg16 and let its best start end at IPOPT's full tolerances (Solve_Succeeded instead
+of Solved_To_Acceptable_Level).  The objective a start reports is the path error in mm^2.
+
 P is the closed-form coupler point (kinematics.coupler_point, no inverse cosine).  The crank
 direction of the sequence rule is an NLP *parameter* (+1 / -1), so one built solver serves starts
 that go either way.  The core transcribes it (back-off, elastic form) and runs IPOPT
@@ -34,6 +41,28 @@ THETA_RANGE = (-4.0 * math.pi, 6.0 * math.pi)    # bounds of the free crank angl
 BACKOFF = 1e-9
 
 
+SCALED = True
+OBJECTIVE_SCALED = True
+
+
+def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(offset, scale) of the nominal units of r1 r2 r3 r4 rcx rcy x0 y0 theta0: lengths in units of
+    the targets' size (largest extent), the input pivot from the targets' centre, theta0 in rad."""
+    lo, hi = targets.min(axis=0), targets.max(axis=0)
+    size = float(np.max(hi - lo))
+    size = size if size > 0 else 1.0
+    centre = 0.5 * (lo + hi)
+    offset = np.array([0, 0, 0, 0, 0, 0, centre[0], centre[1], 0.0])
+    scale = np.array([size] * 8 + [180.0 / math.pi])
+    return offset, scale
+
+
+#: samples per gap between targets of the first solve of grashof = "any" (0: the spec's samples only)
+COARSE = 4
+#: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
+MU_INIT = 1e-6
+
+
 class PathNLP:
     """Built once per spec and seed; :meth:`solve` runs one IPOPT solve from a start design."""
 
@@ -44,8 +73,11 @@ class PathNLP:
         self.bounds = np.array(spec.bounds_array(), dtype=float)
         self.init = np.array([spec.design_values()[n] for n in self.names], dtype=float)
         targets = np.array(spec.targets.points, dtype=float)
-        x = ca.SX.sym("x", len(self.names))
-        v = dict(zip(self.names, (x[i] for i in range(len(self.names)))))
+        self.offset, self.scale = nominal_scales(targets) if SCALED else (np.zeros(9), np.ones(9))
+        x = ca.SX.sym("x", len(self.names))          # the design in nominal units: (design - offset) / scale
+        self.fixed = self.bounds[:, 0] == self.bounds[:, 1]     # fixed variables enter as their exact numbers
+        v = {n: float(self.bounds[i, 0]) if self.fixed[i] else self.offset[i] + self.scale[i] * x[i]
+             for i, n in enumerate(self.names)}
         if spec.timed:
             theta = ca.SX(0, 1)
             thetas = [math.radians(a) for a in spec.targets.crank_deg]
@@ -55,26 +87,79 @@ class PathNLP:
         self.n_theta = theta.numel()
         sign = ca.SX.sym("direction")
         p = design_parameters(v)
-        f = 0
+        res = []
         for th, (tx, ty) in zip(thetas, targets):
             px, py = coupler_point(th, p, BRANCHES[spec.branch])
-            f += (px - tx) ** 2 + (py - ty) ** 2
+            res += [px - tx, py - ty]
+        residuals = ca.vertcat(*res)
+        f = ca.sumsqr(residuals)
         decision = ca.vertcat(x, theta)
-        self.problem = Problem(
-            "fourbar_path", decision,
-            np.concatenate([self.bounds[:, 0], np.full(self.n_theta, THETA_RANGE[0])]),
-            np.concatenate([self.bounds[:, 1], np.full(self.n_theta, THETA_RANGE[1])]),
-            structural=(), rules=path_rules(spec, v, thetas, sign, spec.solver.samples),
-            objective=ObjectiveParts(f), parameters=sign, backoff=relative_backoff(BACKOFF),
-            # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
-            # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
-            # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
-            ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy},
-            max_iter=spec.solver.max_iter)
-        self.compiled = CompiledNLP(self.problem, elastic)
+        f_unit = self.scale[0] ** 2 if SCALED and OBJECTIVE_SCALED else 1.0      # the objective in (target size)^2
+        lbx = np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])])
+        ubx = np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])])
+
+        def problem(samples: int) -> Problem:
+            out = Problem(
+                "fourbar_path", decision, lbx, ubx,
+                structural=(), rules=path_rules(spec, v, thetas, sign, samples),
+                objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
+                # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
+                # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
+                # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
+                ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
+                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
+                max_iter=spec.solver.max_iter)
+            return out
+
+        self._problem_of = problem
+        self.lbx, self.ubx = lbx, ubx
+        self._full = None
+        # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
+        # keep the answer when every row of the spec's samples holds there (full_rows); else re-solve
+        # with those rows from it
+        self.coarse = None
+        if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
+                and spec.solver.samples > COARSE):
+            self.coarse = CompiledNLP(problem(COARSE), elastic)
+            full = path_rules(spec, v, thetas, sign, spec.solver.samples)
+            rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
+            self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
+            self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
+            self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
+        else:
+            self._full = CompiledNLP(problem(spec.solver.samples), elastic)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.starts = StartMaker(spec, seed)
+
+    @property
+    def compiled(self) -> CompiledNLP:
+        """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
+        if self._full is None:
+            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic)
+        return self._full
+
+    @property
+    def problem(self) -> Problem:
+        return self.compiled.problem
+
+    def nominal(self, design: np.ndarray) -> np.ndarray:
+        """Design values (spec units) -> the NLP's nominal units."""
+        return (np.asarray(design, float) - self.offset) / self.scale
+
+    def design_of(self, z: np.ndarray) -> np.ndarray:
+        """The NLP's nominal units -> design values (spec units); a fixed variable is its bound exactly."""
+        return np.where(self.fixed, self.bounds[:, 0], self.offset + self.scale * np.asarray(z, float))
+
+    def holds_every_sample(self, w: np.ndarray, sign: float) -> bool | None:
+        """Whether every row of the spec's samples of the motion holds (limits exact, no back-off) at the
+        decision vector ``w``; None when ``w`` is not a number or there is no coarse NLP."""
+        if self.coarse is None:
+            return None
+        g = np.asarray(self.full_rows(w, sign), dtype=float).ravel()
+        if not np.all(np.isfinite(g)):
+            return None
+        return bool(np.all(g >= self.full_lb) and np.all(g <= self.full_ub))
 
     def start(self, index: int, x_design: np.ndarray) -> StartPoint:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
@@ -83,9 +168,20 @@ class PathNLP:
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
         """One IPOPT run; the crank angle of each target (deg) and the direction in the start's details."""
         sp = self.start(index, x_design)
-        out = self.compiled.solve(index, np.concatenate([sp.design, sp.theta]), p=sp.sign)
-        xs = out.x[: self.compiled.n_x]
-        design = dict(zip(self.names, (float(a) for a in xs[: len(self.names)])))
+        z0 = np.clip(self.nominal(sp.design), self.lbx[:9], self.ubx[:9])
+        w0 = np.concatenate([z0, sp.theta])
+        if self.coarse is None:
+            out = self.compiled.solve(index, w0, p=sp.sign)
+        else:
+            out = self.coarse.solve(index, w0, p=sp.sign)
+            if self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
+                first = out
+                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign)
+                out.iterations += first.iterations
+                out.wall_s += first.wall_s
+                out.log = first.log + "\n===== re-solved with every sample of the motion\n" + out.log
+        xs = out.x[: len(self.lbx)]
+        design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
         if self.spec.timed:
             crank = [float(a) for a in self.spec.targets.crank_deg]
             direction = "given"
@@ -94,8 +190,6 @@ class PathNLP:
             shift = 360.0 * math.floor(crank[0] / 360.0)       # first angle in [0, 360), the rest follow it
             crank = [a - shift for a in crank]
             direction = "ccw" if sp.sign > 0 else "cw"
-        objective = out.objective
-        if self.elastic:
-            objective = float(self.fit(xs, sp.sign))
-            objective = objective if math.isfinite(objective) else math.inf
+        objective = float(self.fit(xs, sp.sign))          # mm^2, at the returned point
+        objective = objective if math.isfinite(objective) else math.inf
         return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction)

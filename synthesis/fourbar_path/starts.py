@@ -9,10 +9,18 @@ becomes an IPOPT start as follows.
    just far enough that every slack is >= 5 % of the anchor's.  The class is a convex polytope, so
    the pulled start stays in the bounds and keeps as much of its randomness as it can.
 2. *Placement.*  Start 0 (the given design) and the even starts keep their design as it is, which
-   keeps the spread of the hypercube.  The odd starts are *screened*: the row and SCREENED - 1 more
-   random designs (seeded by the multistart seed and the start index) each have their coupler
-   curve laid onto the targets by the best similarity (scale, turn, shift; Umeyama's closed form
-   with nearest-point refinement), and the one that then fits the targets best is the start.
+   keeps the spread of the hypercube.  The odd starts are *screened*.  Prescribed timing: the row
+   and SCREENED - 1 more random designs (seeded by the multistart seed and the start index) each
+   have their coupler curve laid onto the targets by the best similarity (scale, turn, shift;
+   Umeyama's closed form with nearest-point refinement), and the one that then fits the targets
+   best is the start.  Free timing (issue 19): a *pool* of POOL random designs (seeded by the
+   multistart seed only, so every worker builds the same pool) is screened once, vectorised: each
+   coupler curve against the targets at trial arc-length correspondences (POOL_PHASES phases, both
+   directions, for an open arc SPANS of the curve) with the best similarity whose scale keeps the
+   lengths in their bounds; odd start 2k + 1 is the k-th best of the pool, placed as above.  Then
+   (every screened start) REFIT_ROUNDS alternations of a linear least-squares refit of (x0, y0, rcx,
+   rcy) -- the coupler point is linear in them once the links, frame angle and crank angles are
+   fixed -- and the nearest-point crank angles, while the residual falls.
 3. *Crank angles (free timing).*  Each target's angle starts at the nearest point of the start's
    coupler curve, unwrapped in the crank direction.  With direction "either", start 0 takes the
    direction whose unwrapped angles span less, the screened starts the direction that fits best,
@@ -24,6 +32,10 @@ starts that reach the zero-error optimum): all even starts unscreened with the s
 mean 22, worst problem 3; screening the odd starts: mean 32, worst 1; screening plus alternating
 the direction of the even starts (this module): mean 30, worst 2 (mechanism 0, 10 points), and
 every problem reached by start 44 (tests/test_bench_fourbar_path.py, ``pytest -m benchmark``).
+The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/PATH.md,
+"Inexact targets"): STRATEGY "pool" (every start from the pool) needs the fewest iterations but
+reaches the best known from fewer starts than "mix" (this module), which keeps the even starts'
+spread.
 """
 
 from __future__ import annotations
@@ -36,7 +48,8 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import linprog
 
-from synthesis.kinematics.coupler_point import BRANCHES, coupler_function
+from synthesis.fourbar_path.construction import joint_positions
+from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_function
 from synthesis.spec.fourbar_path import FourbarPathSpec
 
 TWO_PI = 2.0 * math.pi
@@ -46,6 +59,13 @@ SCREENED = 8           # candidate designs per screened start
 PHASES = 12            # trial phases of the target <-> curve correspondence
 ICP_ROUNDS = 5         # nearest-point refinements of the alignment
 SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
+POOL = 1024            # candidate linkage shapes screened once per spec and seed (free timing)
+POOL_PHASES = 24       # trial phases of the arc-length correspondence in the pool screening
+SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
+ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
+STRATEGY = "mix"       # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool"
+REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
+CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
 
 #: the Grashof class as rows  A @ (r1, r2, r3, r4) >= 0  (constraints.grashof_class)
 CLASS_ROWS = {
@@ -242,6 +262,103 @@ def moved_design(design: np.ndarray, bounds: np.ndarray, sim: tuple, mean_src: n
     return np.clip(out, bounds[:, 0], bounds[:, 1])
 
 
+def refit_placement(design: np.ndarray, theta: np.ndarray, targets: np.ndarray, bounds: np.ndarray,
+                    branch: int) -> np.ndarray:
+    """The design with (x0, y0, rcx, rcy) refitted to the targets at the crank angles ``theta``.
+
+    With the links, the frame angle and the crank angles fixed, the coupler point P = O + A + (rcx + i rcy) u
+    (complex; u the unit vector A -> B) is linear in O = x0 + i y0 and rcx + i rcy: a 2-unknown complex
+    least-squares problem, solved in closed form, its answer clipped to the bounds."""
+    d = {name: design[k] for k, name in enumerate(VARIABLES)}
+    d.update(x0=0.0, y0=0.0)
+    j = joint_positions(d, theta, branch)
+    a, u = j["A"], (j["B"] - j["A"]) / design[2]
+    t = targets[:, 0] + 1j * targets[:, 1]
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(u))):
+        return design
+    m = np.column_stack([np.ones_like(u), u])
+    sol, *_ = np.linalg.lstsq(m, t - a, rcond=None)
+    out = design.copy()
+    out[6], out[7], out[4], out[5] = sol[0].real, sol[0].imag, sol[1].real, sol[1].imag
+    return np.clip(out, bounds[:, 0], bounds[:, 1])
+
+
+# ---------------------------------------------------------------------------- the screened pool
+
+def is_closed_loop(targets: np.ndarray) -> bool:
+    """Whether the targets go round a loop: the gap from the last back to the first is at most
+    CLOSING_GAP x the median gap between neighbours."""
+    gaps = np.hypot(*np.diff(targets, axis=0).T)
+    return bool(np.hypot(*(targets[0] - targets[-1])) <= CLOSING_GAP * np.median(gaps))
+
+
+def arc_fractions(targets: np.ndarray, closed: bool) -> np.ndarray:
+    """Each target's fraction of the arc length along the polygon of the targets (closed: of the loop)."""
+    pts = np.vstack([targets, targets[:1]]) if closed else targets
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    if cum[-1] <= 0:
+        return np.arange(len(targets)) / len(targets)
+    return (cum[:-1] if closed else cum) / cum[-1]
+
+
+def pool_curves(designs: np.ndarray, branch: int) -> np.ndarray:
+    """(M, CURVE_SAMPLES) complex coupler curves of M designs over a turn (NaN where the loop is open);
+    vectorised numpy (the construction of construction.py, the same branch convention)."""
+    angles = np.linspace(0.0, TWO_PI, CURVE_SAMPLES, endpoint=False)
+    d = {name: designs[:, k:k + 1] for k, name in enumerate(VARIABLES)}
+    return joint_positions(d, angles[None, :], branch)["P"]
+
+
+def scale_limits(designs: np.ndarray, bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per design the range [lo, hi] of scale factors s with s * (r1..r4, rcx, rcy) within the bounds."""
+    v = designs[:, :6]
+    lo_b, hi_b = bounds[:6, 0], bounds[:6, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b = lo_b / v, hi_b / v
+    lo = np.where(v > 0, a, np.where(v < 0, b, 0.0))
+    hi = np.where(v > 0, b, np.where(v < 0, a, np.inf))
+    return np.max(lo, axis=1), np.min(hi, axis=1)
+
+
+def correspondences(targets: np.ndarray, signs: tuple, closed: bool) -> np.ndarray:
+    """(C, N) trial curve fractions (of the curve's arc length) of the targets: PHASES phases in each
+    direction; an open arc also spans SPANS of the curve."""
+    frac = arc_fractions(targets, closed)
+    rows = []
+    for sign in signs:
+        for span in ((1.0,) if closed else SPANS):
+            for k in range(POOL_PHASES):
+                rows.append((k / POOL_PHASES + sign * span * frac) % 1.0)
+    return np.array(rows)
+
+
+def pool_residuals(curves: np.ndarray, targets: np.ndarray, u: np.ndarray, s_lo: np.ndarray,
+                   s_hi: np.ndarray) -> np.ndarray:
+    """Per curve the smallest residual of the targets against the curve points at arc-length
+    fractions u (each row one trial), after the best similarity with its scale within [s_lo, s_hi];
+    inf for a curve that does not close over the whole turn."""
+    zb = targets[:, 0] + 1j * targets[:, 1]
+    zb = zb - zb.mean()
+    bb = float(np.sum(np.abs(zb) ** 2))
+    out = np.full(len(curves), np.inf)
+    n = curves.shape[1]
+    for m, c in enumerate(curves):
+        if not np.all(np.isfinite(c)):
+            continue
+        seg = np.abs(np.diff(np.append(c, c[0])))
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        if s[-1] <= 0:
+            continue
+        idx = np.rint(np.interp(u, s / s[-1], np.arange(n + 1))).astype(int) % n
+        za = c[idx]
+        za = za - za.mean(axis=1, keepdims=True)
+        aa = np.sum(np.abs(za) ** 2, axis=1)
+        cross = np.abs(np.sum(np.conj(za) * zb, axis=1))
+        scale = np.clip(cross / np.maximum(aa, 1e-300), s_lo[m], s_hi[m])
+        out[m] = float(np.min(bb - 2.0 * scale * cross + scale ** 2 * aa))
+    return out
+
+
 # ---------------------------------------------------------------------------- the starts
 
 class StartMaker:
@@ -255,11 +372,20 @@ class StartMaker:
         self.branch = BRANCHES[spec.branch]
         self.anchor = grashof_anchor(self.bounds, spec.rules.grashof)
         self.timed_theta = None if not spec.timed else np.radians(spec.targets.crank_deg)
+        self.closed = is_closed_loop(self.targets)
+        self.pool_grashof = "crank-rocker" if spec.rules.grashof == "any" else spec.rules.grashof
+        self.pool_anchor = grashof_anchor(self.bounds, self.pool_grashof)
+        self._ranked = None
+        self.refit = REFIT_ROUNDS > 0
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
         out = np.array(design, dtype=float)
         if self.anchor is not None and self.anchor[1] > 0:
             out[:4] = pull_into_class(out[:4], self.anchor[0], KEEP_SLACK * self.anchor[1], self.spec.rules.grashof)
+        elif ANY_STARTS_ROTATE and self.anchor is None and self.pool_anchor is not None and self.pool_anchor[1] > 0:
+            # grashof = "any": a crank-rocker start closes the loop at every crank angle (a random one
+            # often closes at none of the start angles, and IPOPT stops at iteration 0 on NaN)
+            out[:4] = pull_into_class(out[:4], self.pool_anchor[0], KEEP_SLACK * self.pool_anchor[1], self.pool_grashof)
         return out
 
     def __call__(self, index: int, x: np.ndarray) -> StartPoint:
@@ -267,6 +393,8 @@ class StartMaker:
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
+        if self.timed_theta is None and STRATEGY != "old" and (STRATEGY == "pool" or index % 2 == 1):
+            return self.from_pool(index)
         if index % 2 == 0:
             return self.as_it_is(design, index)
         rng = np.random.default_rng([self.seed, index])
@@ -274,6 +402,36 @@ class StartMaker:
         candidates = [design] + [self.in_class(lo + rng.random(len(lo)) * (hi - lo)) for _ in range(SCREENED - 1)]
         scored = [self.placed(c, index) for c in candidates]
         return min(scored, key=lambda pair: pair[0])[1]
+
+    @property
+    def ranked(self) -> np.ndarray:
+        """The pool of candidate designs, best placement residual first (built on first use)."""
+        if self._ranked is None:
+            rng = np.random.default_rng([self.seed, 19])
+            lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+            designs = np.array([self.pool_class(lo + rng.random(len(lo)) * (hi - lo)) for _ in range(POOL)])
+            curves = pool_curves(designs, self.branch)
+            s_lo, s_hi = scale_limits(designs, self.bounds)
+            u = correspondences(self.targets, SIGNS[self.spec.rules.direction], self.closed)
+            res = pool_residuals(curves, self.targets, u, s_lo, s_hi)
+            order = np.argsort(res, kind="stable")
+            self._ranked = designs[order[np.isfinite(res[order])]]
+            if len(self._ranked) == 0:
+                self._ranked = designs
+        return self._ranked
+
+    def pool_class(self, design: np.ndarray) -> np.ndarray:
+        """A pool candidate of a class whose crank turns fully (for "any": a crank-rocker)."""
+        out = np.array(design, dtype=float)
+        if self.pool_anchor is not None and self.pool_anchor[1] > 0:
+            out[:4] = pull_into_class(out[:4], self.pool_anchor[0], KEEP_SLACK * self.pool_anchor[1],
+                                      self.pool_grashof)
+        return out
+
+    def from_pool(self, index: int) -> StartPoint:
+        ranked = self.ranked
+        k = (index - 1) // (1 if STRATEGY == "pool" else 2)
+        return self.placed(ranked[k % len(ranked)], 0)[1]
 
     def direction(self, index: int) -> str:
         """The crank direction a start may take: the spec's, or for "either" on the unscreened starts
@@ -308,6 +466,12 @@ class StartMaker:
             start = StartPoint(moved, np.zeros(0), 1.0)
         else:
             nearest, d2 = nearest_angles(moved, self.targets, self.branch)
+            for _ in range(REFIT_ROUNDS if self.refit else 0):
+                refit = refit_placement(moved, nearest, self.targets, self.bounds, self.branch)
+                near2, e2 = nearest_angles(refit, self.targets, self.branch)
+                if not np.sum(e2) < np.sum(d2):
+                    break
+                moved, nearest, d2 = refit, near2, e2
             theta, sign = ordered_angles(nearest, self.targets, self.direction(index))
             start = StartPoint(moved, theta, sign)
         residual = float(np.sum(d2))
