@@ -36,17 +36,23 @@ def opening_with_return(tmp_path: Path, ret: float) -> LoadedSpec:
                      ("hold_near = [[0.0, 146.0]]", f"hold_near = [[0.0, {160.0 - ret!r}]]"))
 
 
-def test_the_published_return_is_1_7_deg_from_undercut(tmp_path):
-    """Shortest cycloidal return of 10 mm on the 50 mm / 3.5 mm cam before the roller envelope cusps."""
+def test_the_published_return_is_1_7_deg_from_undercut(tmp_path, record_property):
+    """Shortest cycloidal return of 10 mm on the 50 mm / 3.5 mm cam before the roller envelope cusps
+    (threshold 12.301 deg within 1e-3 deg; working-radius margin at the published 14 deg within 1e-5 mm)."""
     def margin(ret):
         return cam_facts(CamScene.from_spec(opening_with_return(tmp_path, ret).model))["min_working_radius_mm"]
     threshold = brentq(margin, 6.0, 14.0, xtol=1e-9)
     assert threshold == pytest.approx(12.301, abs=1e-3)
     assert margin(14.0) == pytest.approx(0.77187, abs=1e-5)
+    record_property("figure", f"undercut threshold: return {threshold:.3f} deg; the published 14 deg keeps "
+                              f"{margin(14.0):.4f} mm of working radius")
 
 
 @pytest.mark.parametrize("ret", [8.0, 3.0, 1.0])
-def test_very_short_return_undercuts_and_the_cutter_envelope_departs(tmp_path, ret):
+def test_very_short_return_undercuts_and_the_cutter_envelope_departs(tmp_path, ret, record_property):
+    """A return shorter than the 12.3 deg undercut threshold: check reports no_undercut violated, every
+    pressure angle finite, and the cam a cutter leaves departs from the looping analytic envelope by
+    more than 0.05 mm (sampled roller envelope, 36000 angles)."""
     loaded = opening_with_return(tmp_path, ret)
     result = run_check(loaded)
     rule = {r["name"]: r for r in result.rules}["no_undercut"]
@@ -60,18 +66,29 @@ def test_very_short_return_undercuts_and_the_cutter_envelope_departs(tmp_path, r
     scene = CamScene.from_spec(loaded.model)
     centres = translating_pitch(scene.motion.at(146.0 + np.degrees(phi)).s, phi, 50.0)
     cut = sampled_roller_envelope(centres, 3.5, np.arctan2(w[:, 1], w[:, 0]))
-    assert np.max(np.hypot(w[:, 0], w[:, 1]) - cut) > 0.05
+    departs = np.max(np.hypot(w[:, 0], w[:, 1]) - cut)
+    assert departs > 0.05
+    record_property("figure", f"return {ret:g} deg: undercut reported, min working radius "
+                              f"{result.extra['cam']['min_working_radius_mm']:.3f} mm, max return pressure angle "
+                              f"{result.extra['cam']['segments']['return']['max_pressure_angle_deg']:.1f} deg, "
+                              f"cutter envelope {departs:.3f} mm inside the analytic one")
 
 
-def test_roller_almost_as_big_as_the_base_circle(tmp_path):
+def test_roller_almost_as_big_as_the_base_circle(tmp_path, record_property):
+    """A 49.9 mm roller on the rotating cam (50 mm base circle): check reports no_undercut violated with the
+    working radius pitch radius - roller within 1e-4 mm, no NaN."""
     loaded = spec_text(tmp_path, (CAMS / "rotating_cam.toml").read_text(), ("roller_radius = 3.5", "roller_radius = 49.9"))
     result = run_check(loaded)
     names = [r["name"] for r in result.violated()]
     assert "no_undercut" in names                     # 26.5 mm pitch radius < 49.9 mm roller
     assert result.extra["cam"]["min_working_radius_mm"] == pytest.approx(26.51296 - 49.9, abs=1e-4)
+    record_property("figure", f"roller 49.9 mm: no_undercut violated, min working radius "
+                              f"{result.extra['cam']['min_working_radius_mm']:.4f} mm (= 26.513 - 49.9)")
 
 
-def test_zero_dwells_rise_straight_into_return(tmp_path):
+def test_zero_dwells_rise_straight_into_return(tmp_path, record_property):
+    """No far dwell: the rise runs straight into the return; the follower still reaches the 25 mm stroke
+    (1e-6 mm) and comes back to 0 (1e-12 mm), the near hold is met."""
     loaded = spec_text(tmp_path, (CAMS / "rotating_cam.toml").read_text(),
                        ("far_dwell = 160.0", "far_dwell = 0.0"), ("near_dwell = 80.0", "near_dwell = 240.0"),
                        ("hold_far = [[140.0, 300.0]]", "hold_far = []"),
@@ -80,6 +97,8 @@ def test_zero_dwells_rise_straight_into_return(tmp_path):
     f = result.extra["follower"]
     assert max(f["s"]) == pytest.approx(25.0, abs=1e-6) and min(f["s"]) == pytest.approx(0.0, abs=1e-12)
     assert {r["name"]: r["satisfied"] for r in result.rules}["timing_hold_near[0]"] is True
+    record_property("figure", f"far dwell 0: stroke {max(f['s']):.6f} mm, lowest {min(f['s']):.1e} mm, every pressure "
+                              f"angle finite: {bool(np.all(np.isfinite(f['pressure_angle_deg'])))}")
 
 
 OSCILLATING = """
@@ -168,7 +187,7 @@ def test_smallest_bspline_is_still_c2(tmp_path):
     assert scene.optimised.ratio_to_cycloidal["rise"] > 1.0
 
 
-def test_solve_where_the_undercut_binds(tmp_path):
+def test_solve_where_the_undercut_binds(tmp_path, record_property):
     """A textbook working-radius floor (3 mm) with the pressure-angle limits relaxed: the smallest cam
     is set by the curvature of the 14 deg return."""
     loaded = spec_text(tmp_path, OPENING, ("base_radius = 50.0", "base_radius = { init = 50.0, bounds = [10, 150] }"),
@@ -181,3 +200,5 @@ def test_solve_where_the_undercut_binds(tmp_path):
     rules, _ = evaluate(CamScene.from_spec(loaded.model, result.design), 5000)
     assert [r.name for r in rules if not r.record().satisfied] == []
     assert json.dumps(result.to_json(), allow_nan=False)
+    record_property("figure", f"base radius {result.design['base_radius']:.3f} mm, working radius "
+                              f"{rule['value']:.4f} mm against the 3 mm floor (within 3 %)")
