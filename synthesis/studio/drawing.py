@@ -176,7 +176,9 @@ def drawing(result: Result) -> dict[str, Any]:
             mx, my = _thin(machine["x"], machine["y"])
             lines.insert(0, {"name": "path (machine frame)", "x": mx, "y": my, "main": True})
             ground = {"lines": [{"name": "path (ground frame)", "x": tx, "y": ty, "main": True}], "points": []}
-        else:
+        elif traj.get("frame") == "ground" and lines:   # a moving machine whose check draws machine-frame curves
+            ground = {"lines": [{"name": "traced point (ground frame)", "x": tx, "y": ty, "main": True}], "points": []}
+        else:                                           # one frame (a machine that stands, or no other curve)
             lines.insert(0, {"name": f"traced point ({traj.get('frame', 'machine')} frame)", "x": tx, "y": ty,
                              "main": True})
     if ground is not None:          # key points in the ground frame where the check gives them (x_ground)
