@@ -231,3 +231,21 @@ def test_answers_are_not_held_back_by_nagles_algorithm(planting_studio):
     s = planting_studio
     assert s.socket.proto == socket.IPPROTO_TCP
     assert s.socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
+
+
+def test_fourbar_path_draws_its_linkage_from_the_kinds_own_construction():
+    """Poses from the textbook construction the kind's figures use: the links keep their lengths and the
+    coupler point P runs on the path the check traced."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["fourbar_path"])
+    values = moved_values(session, 0.25)
+    drawing = session.evaluate(values, "fine")["drawing"]
+    frames = drawing["mechanism"]["frames"]
+    assert len(frames) >= 24 and set(frames[0]) == {"O", "A", "B", "O'", "P"}
+    path = drawing["main"]["lines"][0]
+    for f in frames:
+        for (a, b), length in ((("O", "A"), values["r2"]), (("A", "B"), values["r3"]), (("O'", "B"), values["r4"]),
+                               (("O", "O'"), values["r1"])):
+            assert math.dist(f[a], f[b]) == pytest.approx(length, abs=2e-3)
+        assert min(math.dist(f["P"], xy) for xy in zip(path["x"], path["y"])) < 2.0

@@ -3,8 +3,10 @@
 Generic over kinds: every polyline the check already computed (a table with equal-length ``x`` and ``y``
 lists, or ``<name>_x`` / ``<name>_y`` pairs), every key point (a table with numbers ``x`` and ``y``; a
 list of ``[x, y]`` targets), the traced point's trajectory, and mechanism poses (a ``positions`` list of
-joint tables).  Only planting_fourbar's check gives no poses; they come from the kinematics it uses
-(:func:`synthesis.kinematics.planting_arm.joint_positions`), on the trajectory's crank angles.
+joint tables, or a ``joints`` table).  planting_fourbar's and fourbar_path's checks give no poses; they come
+from what the kinds' own figures draw the linkage with (``joint_positions`` of
+:mod:`synthesis.kinematics.planting_arm` and :mod:`synthesis.fourbar_path.construction`), on the
+trajectory's crank angles.
 """
 
 from __future__ import annotations
@@ -133,8 +135,28 @@ def _planting_poses(result: Result) -> list[dict]:
     return [{name: [_r(xy[0, k]), _r(xy[1, k])] for name, xy in joints.items()} for k in range(len(theta))]
 
 
+def _fourbar_path_poses(result: Result) -> list[dict]:
+    import numpy as np
+
+    from synthesis.fourbar_path.construction import joint_positions
+    from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
+
+    traj = result.trajectory
+    if not traj or not _numbers(traj.get("crank_deg")):
+        return []
+    design = {n: float(result.design[n]) for n in VARIABLES}
+    crank = traj["crank_deg"]
+    theta = np.radians(crank[::-(-len(crank) // MOST_FRAMES)])
+    joints = joint_positions(design, theta, BRANCHES[result.design.get("branch", "open")])
+    poses = [{name: [_r(z[k].real), _r(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
+    return [p for p in poses if all(None not in xy for xy in p.values())]     # none where the loop is open
+
+
 #: links drawn between joints, where the kind's joint names say how they connect (else joints in order)
-BARS = {"planting_fourbar": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "C"], ["B", "C"]]}
+BARS = {"planting_fourbar": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "C"], ["B", "C"]],
+        "fourbar_path": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "P"], ["B", "P"]]}
+#: kinds whose check gives no poses: drawn from the kinematics the kind's own figures draw them with
+POSES = {"planting_fourbar": _planting_poses, "fourbar_path": _fourbar_path_poses}
 
 
 def drawing(result: Result) -> dict[str, Any]:
@@ -154,15 +176,17 @@ def drawing(result: Result) -> dict[str, Any]:
             mx, my = _thin(machine["x"], machine["y"])
             lines.insert(0, {"name": "path (machine frame)", "x": mx, "y": my, "main": True})
             ground = {"lines": [{"name": "path (ground frame)", "x": tx, "y": ty, "main": True}], "points": []}
-        else:
+        elif traj.get("frame") == "ground" and lines:   # a moving machine whose check draws machine-frame curves
+            ground = {"lines": [{"name": "traced point (ground frame)", "x": tx, "y": ty, "main": True}], "points": []}
+        else:                                           # one frame (a machine that stands, or no other curve)
             lines.insert(0, {"name": f"traced point ({traj.get('frame', 'machine')} frame)", "x": tx, "y": ty,
                              "main": True})
     if ground is not None:          # key points in the ground frame where the check gives them (x_ground)
         for name, p in (result.extra.get("precision_points") or {}).items():
             if isinstance(p, dict) and p.get("found") and isinstance(p.get("x_ground"), (int, float)):
                 ground["points"].append({"name": name, "x": _r(p["x_ground"]), "y": _r(p["y"])})
-    if result.kind == "planting_fourbar":
-        frames = _planting_poses(result)
+    if result.kind in POSES:
+        frames = POSES[result.kind](result)
     else:
         frames = [f for f in (_pose(p) for p in poses) if f]
         step = max(1, -(-len(frames) // MOST_FRAMES))

@@ -151,7 +151,7 @@ function renderTable(data) {
     if (!r.satisfied) { row.className = "violated"; bad += 1; }
     const b = base[r.name];
     for (const [text, cls] of [[r.name], [fmt(r.value)], [limitText(r.limit)], [r.unit || ""], [fmt(r.margin)],
-                               [b ? fmt(b.margin) : "-", "base"], [r.note || ""]]) {
+                               [b ? fmt(b.margin) : "-", b && !b.satisfied ? "base bad" : "base"], [r.note || ""]]) {
       row.append(el("td", cls ? { class: cls } : {}, text));
     }
     body.append(row);
