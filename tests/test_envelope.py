@@ -48,6 +48,22 @@ def test_envelope_replicates_only_the_rules_that_read_a_sampled_condition():
     assert slacks["floor@v=4"] + slacks["cap"] == pytest.approx(6.0, abs=1e-5)
 
 
+def test_an_epigraph_objective_is_the_worst_over_the_envelope():
+    """min tau s.t. tau >= (x - v)^2 (objective rows): v in {1, 3} -> x = 2, tau = 1; the nominal v = 1.5 alone:
+    x = 1.5, tau = 0."""
+    def problem(envelope):
+        x, tau, v = ca.SX.sym("x"), ca.SX.sym("tau"), ca.SX.sym("v")
+        objective = ObjectiveParts(f=tau, extra=tau, extra_lb=[0.0], extra_ub=[np.inf], extra_init=[10.0],
+                                   rows=[(tau - (x - v) ** 2, 0.0, None)])
+        return Problem("minmax", x, [-10.0], [10.0], [], [Rule("cap", x, None, 5.0, "-", 1.0)], objective,
+                       operating=[Operating("v", v, 1.5)], envelope=envelope)
+
+    out = CompiledNLP(problem(Envelope({"v": (1.0, 3.0)}))).solve(0, [0.0])
+    assert out.success and out.x[0] == pytest.approx(2.0, abs=1e-6) and out.objective == pytest.approx(1.0, abs=1e-6)
+    out = CompiledNLP(problem(None)).solve(0, [0.0])
+    assert out.x[0] == pytest.approx(1.5, abs=1e-5) and out.objective == pytest.approx(0.0, abs=1e-8)
+
+
 def test_structural_rows_may_not_read_a_sampled_condition():
     with pytest.raises(ValueError, match=r"structural rows \[0\] depend on a condition the envelope samples \(v\)"):
         _toy(Envelope({"v": (1.0, 2.0)}), structural_on_v=True)
