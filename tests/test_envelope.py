@@ -170,3 +170,26 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
     # the result's own re-check over 21 mu agrees
     table = envelope.extra["envelope"]["rules"]["spacing_error"]
     assert len(table["values"]) == 21 and max(table["values"]) == pytest.approx(env.max(), abs=2e-3)
+
+
+def test_envelope_run_folder_through_the_cli(tmp_path):
+    """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
+    and the @envelope rows for the solution and the given design, envelope.png beside the report."""
+    from tests.solving import cli_run, strict_json
+
+    run = cli_run("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
+                  "--starts", "1", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    folder = tmp_path / "uniform_spacing_mu_envelope"
+    assert (folder / "envelope.png").stat().st_size > 0 and "envelope.png" in (folder / "report.html").read_text()
+    result = strict_json(folder / "result.json")
+    assert result["schema_version"] == 2 and result["status"] == "optimal"
+    env = result["facts"]["envelope"]
+    mus = env["conditions"]["mu"]["recheck_values"]
+    assert len(mus) == 21 and mus[0] == 0.48476005 and mus[-1] == 0.72714007 and len(env["grid"]) == 21
+    assert env["conditions"]["mu"]["solver_values"] == pytest.approx([0.48476005, 0.60595006, 0.72714007])
+    rows = {r["name"]: r for r in result["rules"]}
+    assert rows["spacing_error@envelope"]["satisfied"] and rows["spacing_error@envelope"]["value"] <= 6.0
+    assert max(env["rules"]["spacing_error"]["values"]) == pytest.approx(rows["spacing_error@envelope"]["value"])
+    # the given angles (45 / 41 deg) miss the stated error over the envelope: 12.4 mm, in the terminal's table
+    assert "spacing_error@envelope" in run.stdout and "12.36" in run.stdout
