@@ -48,6 +48,22 @@ def test_envelope_replicates_only_the_rules_that_read_a_sampled_condition():
     assert slacks["floor@v=4"] + slacks["cap"] == pytest.approx(6.0, abs=1e-5)
 
 
+def test_an_epigraph_objective_is_the_worst_over_the_envelope():
+    """min tau s.t. tau >= (x - v)^2 (objective rows): v in {1, 3} -> x = 2, tau = 1; the nominal v = 1.5 alone:
+    x = 1.5, tau = 0."""
+    def problem(envelope):
+        x, tau, v = ca.SX.sym("x"), ca.SX.sym("tau"), ca.SX.sym("v")
+        objective = ObjectiveParts(f=tau, extra=tau, extra_lb=[0.0], extra_ub=[np.inf], extra_init=[10.0],
+                                   rows=[(tau - (x - v) ** 2, 0.0, None)])
+        return Problem("minmax", x, [-10.0], [10.0], [], [Rule("cap", x, None, 5.0, "-", 1.0)], objective,
+                       operating=[Operating("v", v, 1.5)], envelope=envelope)
+
+    out = CompiledNLP(problem(Envelope({"v": (1.0, 3.0)}))).solve(0, [0.0])
+    assert out.success and out.x[0] == pytest.approx(2.0, abs=1e-6) and out.objective == pytest.approx(1.0, abs=1e-6)
+    out = CompiledNLP(problem(None)).solve(0, [0.0])
+    assert out.x[0] == pytest.approx(1.5, abs=1e-5) and out.objective == pytest.approx(0.0, abs=1e-8)
+
+
 def test_structural_rows_may_not_read_a_sampled_condition():
     with pytest.raises(ValueError, match=r"structural rows \[0\] depend on a condition the envelope samples \(v\)"):
         _toy(Envelope({"v": (1.0, 2.0)}), structural_on_v=True)
@@ -154,3 +170,26 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
     # the result's own re-check over 21 mu agrees
     table = envelope.extra["envelope"]["rules"]["spacing_error"]
     assert len(table["values"]) == 21 and max(table["values"]) == pytest.approx(env.max(), abs=2e-3)
+
+
+def test_envelope_run_folder_through_the_cli(tmp_path):
+    """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
+    and the @envelope rows for the solution and the given design, envelope.png beside the report."""
+    from tests.solving import cli_run, strict_json
+
+    run = cli_run("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
+                  "--starts", "1", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    folder = tmp_path / "uniform_spacing_mu_envelope"
+    assert (folder / "envelope.png").stat().st_size > 0 and "envelope.png" in (folder / "report.html").read_text()
+    result = strict_json(folder / "result.json")
+    assert result["schema_version"] == 2 and result["status"] == "optimal"
+    env = result["facts"]["envelope"]
+    mus = env["conditions"]["mu"]["recheck_values"]
+    assert len(mus) == 21 and mus[0] == 0.48476005 and mus[-1] == 0.72714007 and len(env["grid"]) == 21
+    assert env["conditions"]["mu"]["solver_values"] == pytest.approx([0.48476005, 0.60595006, 0.72714007])
+    rows = {r["name"]: r for r in result["rules"]}
+    assert rows["spacing_error@envelope"]["satisfied"] and rows["spacing_error@envelope"]["value"] <= 6.0
+    assert max(env["rules"]["spacing_error"]["values"]) == pytest.approx(rows["spacing_error@envelope"]["value"])
+    # the given angles (45 / 41 deg) miss the stated error over the envelope: 12.4 mm, in the terminal's table
+    assert "spacing_error@envelope" in run.stdout and "12.36" in run.stdout

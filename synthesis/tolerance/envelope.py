@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+import re
 
 import numpy as np
 
@@ -24,7 +25,9 @@ from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import scenario_label
 from synthesis.core.verdict import Recheck
+from synthesis.design_info import describe
 from synthesis.errors import AgrisynthError
+from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
 
 SUFFIX = "@envelope"
@@ -137,6 +140,17 @@ class EnvelopeFinish:
         return dataclasses.replace(finished, facts=facts)
 
 
+def given_design(spec) -> dict[str, float]:
+    """The spec's given design by result.json key (each variable's number or start value, read at its path)."""
+    out = {}
+    for key, info in describe(spec).items():
+        node = spec
+        for name, index in re.findall(r"([^.\[\]]+)|\[(\d+)\]", info["path"]):
+            node = node[int(index)] if index else getattr(node, name)
+        out[key] = value_of(node)
+    return out
+
+
 @dataclasses.dataclass
 class EnvelopeBaseline:
     """The given design's rule table with its ``@envelope`` rows (none when it cannot be evaluated over the grid)."""
@@ -149,10 +163,10 @@ class EnvelopeBaseline:
         if rows is None:
             return None
         try:
-            outcome = StartOutcome(0, dict(setting.spec.design_values()), 0.0, "", True, 0, 0.0, "")
+            outcome = StartOutcome(0, given_design(setting.spec), 0.0, "", True, 0, 0.0, "")
             _, grid, rules_at = self.recheck.over_grid(setting, outcome)
             extra, _ = envelope_rules(grid, rules_at)
-        except (AgrisynthError, ValueError, ArithmeticError, KeyError):
+        except (AgrisynthError, ValueError, ArithmeticError, KeyError, AttributeError, IndexError):
             return rows
         return rows + [r.record().to_json() for r in extra]
 
