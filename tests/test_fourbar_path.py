@@ -239,6 +239,7 @@ x0 = 40
 
 [rules]
 grashof = "double-crank"
+direction = "cw"
 """
 
 
@@ -255,7 +256,8 @@ def test_the_old_forms_are_refused_with_the_new_spelling_of_the_users_values(tmp
         "x0 = {init = 40, bounds = [0, 150]}",
         "fourbar_path.branch: \"crossed\" is no longer read at the top; write branch = -1 under [linkage] "
         "(+1: B left of A -> O', the open assembly; -1: the crossed one)",
-        "fourbar_path.rules.grashof: \"double-crank\" is no longer read; write grashof = \"double_crank\""]
+        "fourbar_path.rules.grashof: \"double-crank\" is no longer read; write grashof = \"double_crank\"",
+        "fourbar_path.rules.direction: \"cw\" is no longer read; write direction = \"clockwise\""]
 
 
 def test_design_values_outside_the_linkage_are_refused_with_the_init_form():
@@ -276,6 +278,9 @@ def test_the_new_spelling_reaches_the_kinematics_and_result_names():
     spec = validate(FourbarPathSpec, data, prefix="fourbar_path")
     assert (spec.linkage.branch, spec.branch, BRANCHES[spec.branch]) == (-1, "crossed", -1)
     assert spec.rules.grashof_class == "double_crank" and spec.rules.grashof == "double-crank"
+    for spelled, short in (("counter_clockwise", "ccw"), ("clockwise", "cw"), ("either", "either")):
+        data["rules"]["direction"] = spelled
+        assert validate(FourbarPathSpec, data, prefix="fourbar_path").rules.direction == short
     assert spec.design_values()["r1"] == 32.5 and spec.bounds_array()[0] == (5.0, 60.0)
     default = validate(FourbarPathSpec, {**data, "linkage": {k: v for k, v in data["linkage"].items()
                                                               if k != "theta0"}}, prefix="fourbar_path")

@@ -129,7 +129,7 @@ def truth_spec_from(data: dict) -> LoadedSpec:
 def test_clockwise_direction_and_order_off():
     data = truth_data(2, 10, timed=False, solver={"stop_at_objective": RECOVERED})
     data["targets"]["points"] = data["targets"]["points"][::-1]       # the crank must now turn clockwise
-    data["rules"]["direction"] = "cw"
+    data["rules"]["direction"] = "clockwise"
     result, _, _ = run_solve(truth_spec_from(data), workers=1)
     assert result.objective["value"] < RECOVERED and result.extra["crank_direction"] == "cw"
     crank = result.design["crank_deg"]

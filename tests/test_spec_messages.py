@@ -95,3 +95,19 @@ def test_planting_limits_follow_the_seedling_height_and_the_mat_thickness(tmp_pa
                     else text + "\n[rules]\np1p3 = [100, 120]\n")
     given = load_spec(path).model
     assert given.rules.p1p3 == (100.0, 120.0) and set(given.derived_limits()) == {"p2p3"}
+
+
+def test_a_precision_point_not_searched_says_which_point_was_missing_and_why():
+    """Issue 17: on taiwan_example2 the claw never crosses the 22 mm mat line, so P2 is not found and P1
+    (searched above it) never looked for; the P1 rules used to say only "P1 not found"."""
+    from conftest import PLANTING
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    result = kinds.checker("planting_fourbar")(load_spec(PLANTING / "taiwan_example2.toml"))
+    notes = {r["name"]: r.get("note") for r in result.rules}
+    p2 = ("P2 not found: the claw does not cross the line 22 mm above the seedbed bottom on its way down between "
+          "soil exit and entry (that line is [seedbed] thickness = 22 mm: lower it, or give the arm a taller loop)")
+    assert notes["p2_speed"] == p2
+    for name in ("p1p3_distance", "p2p3_distance", "p1p2p3_collinearity"):     # each needs P1 (P1P2P3 frame)
+        assert notes[name] == f"P1 not searched: {p2}"

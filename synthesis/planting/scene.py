@@ -180,7 +180,8 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
     if theta["P4"] is not None:
         s = bed.height(state.pos)
         end = theta["P4"]
-        for name, level in (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height)):
+        levels = (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height))
+        for k, (name, level) in enumerate(levels):
             idx = [i for i in _crossings(s, level, downward=True)
                    if theta["P6"] < cycle[i] and cycle[i + 1] <= end]
             if not idx:
@@ -189,6 +190,8 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
                         if what else "")
                 problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
                                   f"seedbed bottom on its way down between soil exit and entry{hint}")
+                for later, _ in levels[k + 1:]:      # searched before `name` on the way down: its reason is theirs
+                    problems[later] = f"{later} not searched: {problems[name]}"
                 break
             i = idx[-1]
             theta[name] = _refine(lambda t, lv=level: float(bed.height(f(t, p)[0])) - lv, cycle[i], cycle[i + 1])

@@ -7,14 +7,15 @@
                (as in every kind); branch = 1 | -1
     [design]   crank_deg = [...]  (free timing: the given design's crank angle at each target)
     [rules]    grashof = "crank_rocker" | "double_crank" | "any";  transmission_angle = [lo, hi];
-               order = true | false;  direction = "either" | "ccw" | "cw"
+               order = true | false;  direction = "either" | "counter_clockwise" | "clockwise"
     [solver]   starts = 64, seed = 0, stop_at_objective, max_iter, mu_strategy, samples
 
 Issue 5 wrote the variables in a ``[bounds]`` table (``[lo, hi]`` frees, a number fixes, the given
-design in ``[design]``), the branch as "open"/"crossed" and the Grashof classes with hyphens; those
-forms are refused with a one-line message that spells the user's own values the new way
-(:func:`old_form_message`).  Internally, and in result.json, the branch keeps its assembly name
-("open" / "crossed") and the class its hyphenated name (``spec.branch``, ``spec.rules.grashof``).
+design in ``[design]``), the branch as "open"/"crossed", the Grashof classes with hyphens and the
+crank direction as "ccw"/"cw"; those forms are refused with a line each that spells the user's own
+values the new way (:func:`old_form_message`).  Internally, and in result.json, the branch keeps its assembly name
+("open" / "crossed"), the class its hyphenated name and the direction its short one (``spec.branch``,
+``spec.rules.grashof``, ``spec.rules.direction``).
 
 Angles: theta0 and crank_deg in degrees; crank_deg is the crank angle measured from the frame line
 O -> O', counter-clockwise (see synthesis.kinematics.coupler_point).
@@ -140,9 +141,16 @@ class RulesSection(StrictModel):
         None, description="[lo, hi] deg: the transmission angle over the crank's motion")
     order: bool = Field(True, description="free timing: the crank meets the targets in the given order "
                                           "within one turn (the `sequence` rule)")
-    direction: Literal["either", "ccw", "cw"] = Field(
-        "either", description="free timing: the crank turns counter-clockwise, clockwise, or either way "
-                              "(chosen per start) through the targets")
+    crank_turns: Literal["either", "counter_clockwise", "clockwise"] = Field(
+        "either", alias="direction",
+        description="free timing: the crank turns counter_clockwise, clockwise, or either way (chosen per start) "
+                    "through the targets (spelled as clamp_cam's rotation)")
+
+    @property
+    def direction(self) -> str:
+        """The turning sense as the start generator and result.json's ``crank_direction`` name it ("ccw", "cw",
+        "either")."""
+        return TURNING[self.crank_turns]
 
     @property
     def grashof(self) -> str:
@@ -225,6 +233,9 @@ class FourbarPathSpec(ProblemSpec):
         return {n: value_of(v) for n, v in self.variables().items()}
 
 
+#: [rules] direction -> the turning sense's short name inside and in result.json
+TURNING = {"either": "either", "counter_clockwise": "ccw", "clockwise": "cw"}
+
 #: linkage.branch -> the assembly's name in kinematics.coupler_point.BRANCHES and result.json
 ASSEMBLIES = {1: "open", -1: "crossed"}
 
@@ -265,6 +276,10 @@ def old_form_message(data: dict) -> str:
     if isinstance(rules, dict) and rules.get("grashof") in ("crank-rocker", "double-crank"):
         fixes.append(f"rules.grashof: {json_text(rules['grashof'])} is no longer read; write grashof = "
                      f"{json_text(rules['grashof'].replace('-', '_'))}")
+    if isinstance(rules, dict) and rules.get("direction") in ("ccw", "cw"):
+        spelled = {"ccw": "counter_clockwise", "cw": "clockwise"}[rules["direction"]]
+        fixes.append(f"rules.direction: {json_text(rules['direction'])} is no longer read; write direction = "
+                     f"{json_text(spelled)}")
     return "\n".join(fixes)
 
 
