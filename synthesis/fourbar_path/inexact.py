@@ -9,7 +9,7 @@ coupler curve, so the optimum has a positive error and many local optima.
 
 Everything is a function of the problem's name; ``inexact_spec(name)`` is what ``agrisynth solve``
 would see.  The bench (``agrisynth bench fourbar_path``) runs them with the library specs; the best
-known objective of each is in BEST_KNOWN (a long cross-check run, see problems/fourbar_path/PATH.md).
+known objective of each is in BEST_KNOWN (see problems/fourbar_path/INEXACT.md).
 """
 
 from __future__ import annotations

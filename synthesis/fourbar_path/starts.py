@@ -32,10 +32,11 @@ starts that reach the zero-error optimum): all even starts unscreened with the s
 mean 22, worst problem 3; screening the odd starts: mean 32, worst 1; screening plus alternating
 the direction of the even starts (this module): mean 30, worst 2 (mechanism 0, 10 points), and
 every problem reached by start 44 (tests/test_bench_fourbar_path.py, ``pytest -m benchmark``).
-The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/PATH.md,
-"Inexact targets"): STRATEGY "pool" (every start from the pool) needs the fewest iterations but
-reaches the best known from fewer starts than "mix" (this module), which keeps the even starts'
-spread.
+The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/INEXACT.md):
+STRATEGY "pool" (every start from the pool) needs the fewest iterations but reaches the best known
+from fewer starts than "mix" (this module), which keeps the even starts' spread.  With grashof = "any"
+every start is pulled into the crank-rockers (ANY_STARTS_ROTATE): a random linkage of a wide box
+mostly closes the loop at none of its start angles, and IPOPT stops at iteration 0 on NaN.
 """
 
 from __future__ import annotations
