@@ -419,7 +419,8 @@ def markdown(data: dict) -> str:
         ext = data["extreme"]
         passed = sum(r["outcome"] == "passed" for r in ext)
         parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed)\n\n"
-                     + _table(ext, [("case", "case"), ("tried", "what was tried"), ("outcome", "outcome"),
+                     + _table(ext, [("file", "file"), ("case", "case"), ("tried", "what was tried"),
+                                    ("outcome", "outcome"),
                                     ("figure", "figure / what the tool did"), ("seconds", "s")]))
     parts.append("![error against run time](error_vs_time.png)")
     return "\n\n".join(parts) + "\n"

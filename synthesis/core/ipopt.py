@@ -5,15 +5,34 @@ setup are the expensive part) and solves from as many starts as it is given.  IP
 each solve is captured from file descriptor 1 (:mod:`synthesis.ipopt_log`), so no log file is left
 behind, in workers or not.
 
-Two hooks serve the bench (:mod:`synthesis.bench_generic`) and nothing else; both are context-local,
-so a solve outside them is untouched:
+IPOPT sees every variable at a *nominal scale*: w = s * z elementwise, IPOPT works on z, and nothing
+outside this module sees z (starts, bounds, the returned point and the multipliers are mapped in and out;
+:attr:`CompiledNLP.t`, ``f_function`` and ``g_function`` stay in the kind's units).  s_i is the power of
+1000 that brings the variable's size -- the width of its box, or its start when it has none -- into
+[1, 1000) (:func:`nominal_scale`): a length bounded [5, 400] mm gets s = 1, the same length in metres
+s = 1e-3 and x 1e3 s = 1e3, so z is the same number in all three (issue 18's scale case,
+tests/extreme/test_scale.py); an objective with |f| >= 1000 at the start is divided by its power of 1000
+alike, a small one is not scaled up (a least-squares fit starts near its optimum 0: scaled up, IPOPT's
+finite-difference mode missed steering's Table 12 fit; so a metre-sized objective keeps its own scale and
+its design settles to ~1e-8 relative instead of ~1e-12).
+A start whose every variable already has s = 1 -- every library problem in mm but one ratio of
+combing_chain -- is solved by the unscaled NLP exactly as before.  Scaling every variable to size 1 was
+measured on the library first and not kept: no fewer iterations overall (x 1.03 .. 1.05), fourbar_path lost
+22 of its 52 converging starts, guide_way its solve (box-magnitude scale) and other local optima came out of
+the elastic diagnosis.  The scaled NLP (s and the objective's scale are its parameters) is built on the first
+start that needs it, so one build serves every start.
+
+Three hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
+context-local, so a solve outside them is untouched:
 
 * :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
   only -- IPOPT differences f and g itself (``gradient_approximation`` / ``jacobian_approximation =
   finite-difference-values``) and keeps a limited-memory Hessian -- instead of CasADi's exact derivatives
   (the exact-against-approximate study; DESIGN.md: never in a solve);
 * :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
-  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts).
+  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts);
+* :func:`variable_scaling` ``("none")``: CompiledNLPs built inside give IPOPT the raw variables (s = 1),
+  to measure what the nominal scaling does.
 """
 
 from __future__ import annotations
@@ -56,9 +75,11 @@ FINITE_DIFFERENCE = {"ipopt.hessian_approximation": "limited-memory",
                      "ipopt.gradient_approximation": "finite-difference-values",
                      "ipopt.jacobian_approximation": "finite-difference-values"}
 DERIVATIVES = ("exact", "finite_difference")
+SCALINGS = ("nominal", "none")
 
 _derivatives: ContextVar[str] = ContextVar("agrisynth_ipopt_derivatives", default="exact")
 _solve_with: ContextVar[Callable | None] = ContextVar("agrisynth_solve_with", default=None)
+_scaling: ContextVar[str] = ContextVar("agrisynth_variable_scaling", default="nominal")
 
 
 @contextmanager
@@ -71,6 +92,48 @@ def derivatives(mode: str) -> Iterator[None]:
         yield
     finally:
         _derivatives.reset(token)
+
+
+@contextmanager
+def variable_scaling(mode: str) -> Iterator[None]:
+    """CompiledNLPs built inside give IPOPT ``mode`` variables ("nominal": w = s * z, or "none": w)."""
+    if mode not in SCALINGS:
+        raise ValueError(f"variable_scaling: {mode!r} is not one of {', '.join(SCALINGS)}")
+    token = _scaling.set(mode)
+    try:
+        yield
+    finally:
+        _scaling.reset(token)
+
+
+def unit_power(size: np.ndarray) -> np.ndarray:
+    """1000**floor(log10(size) / 3): the power of 1000 (unit prefix) that brings a positive size into
+    [1, 1000); 1 for sizes already there, for 0 and for non-finite sizes."""
+    size = np.asarray(size, float)
+    ok = np.isfinite(size) & (size > 0)
+    exponent = np.floor(np.log10(np.where(ok, size, 1.0)) / 3.0)
+    return np.where(ok, 1000.0 ** exponent, 1.0)
+
+
+def nominal_scale(lbw: np.ndarray, ubw: np.ndarray, w0: np.ndarray) -> np.ndarray:
+    """The nominal value s_i of each variable (IPOPT sees z_i = w_i / s_i): the :func:`unit_power` of its size.
+
+    A variable's size is the width of its box, ub - lb, when both bounds are finite and differ, else |w0_i|
+    of the start.  A start scales a variable up only when some boxed variable was scaled (the problem is in
+    other units): in a problem whose boxes are all in [1, 1000), a start near zero says nothing about how
+    large the variable gets.  A length bounded [5, 400] mm: s = 1; in metres [0.005, 0.4]: s = 1e-3; x 1e3:
+    s = 1e3 -- z is the same number of mm in all three.
+    """
+    lbw, ubw, w0 = (np.asarray(v, float) for v in (lbw, ubw, w0))
+    with np.errstate(invalid="ignore"):
+        width = ubw - lbw
+    boxed = np.isfinite(width) & (width > 0)
+    start = np.abs(w0)
+    boxed_scale = unit_power(width)
+    # a start scales up only where the boxed variables show the problem is in other units than mm-like ones
+    moved = bool(np.any(boxed & (boxed_scale != 1.0)))
+    free = unit_power(start) if moved else np.where(start >= 1000.0, unit_power(start), 1.0)
+    return np.where(boxed, boxed_scale, free)
 
 
 @contextmanager
@@ -101,11 +164,13 @@ class NLPOutcome:
 class CompiledNLP:
     """A transcribed problem with its IPOPT solver, built once and reused for every start."""
 
-    def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None):
+    def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None,
+                 scaling: str | None = None):
         t0 = time.perf_counter()
         self.problem = problem
         self.elastic = elastic
         self.derivatives = _derivatives.get() if derivatives is None else derivatives
+        self.scaling = _scaling.get() if scaling is None else scaling
         self.t: Transcription = transcribe(problem, elastic)
         opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 5, "ipopt.sb": "yes",
                 **PRESETS[problem.ipopt], **problem.ipopt_options, "ipopt.max_iter": problem.max_iter,
@@ -113,10 +178,25 @@ class CompiledNLP:
         nlp = {"x": self.t.w, "f": self.t.f, "g": self.t.g}
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
+        self._opts = opts
         self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts)
+        self._scaled_solver = None         # built on the first start that has a variable to scale
         self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
         self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])
         self.build_s = time.perf_counter() - t0     # transcription and IPOPT's setup (the bench reports it)
+
+    def scaled_solver(self):
+        """IPOPT on z with w = s * z, s (the nominal values) appended to the problem's parameters; built once,
+        its build time added to ``build_s``."""
+        if self._scaled_solver is None:
+            t0 = time.perf_counter()
+            w, n = self.t.w, self.t.w.numel()
+            z, s, sf = ca.SX.sym("z", n), ca.SX.sym("nominal", n), ca.SX.sym("objective_nominal")
+            f, g = ca.substitute([self.t.f, self.t.g], [w], [s * z])
+            nlp = {"x": z, "f": f / sf, "g": g, "p": ca.vertcat(self.problem.parameters, s, sf)}
+            self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, self._opts)
+            self.build_s += time.perf_counter() - t0
+        return self._scaled_solver
 
     @property
     def rules(self) -> list:
@@ -135,20 +215,34 @@ class CompiledNLP:
         runner = _solve_with.get()
         if runner is not None:
             return runner(self, start, args["x0"], p)
-        if p.size:
+        s = nominal_scale(self.t.lbw, self.t.ubw, args["x0"]) if self.scaling == "nominal" else None
+        solver = self.solver
+        if s is not None and np.all(s == 1.0):
+            s = None                       # every variable well scaled: IPOPT sees the kind's own NLP
+        sf = 1.0
+        if s is not None:
+            solver = self.scaled_solver()
+            # a large objective in its own unit power at the start (module docstring)
+            f0 = abs(float(self.f_function(args["x0"], p)))
+            sf = float(unit_power(f0)) if f0 >= 1000.0 else 1.0
+            args.update(x0=args["x0"] / s, lbx=self.t.lbw / s, ubx=self.t.ubw / s, p=np.concatenate([p, s, [sf]]))
+        elif p.size:
             args["p"] = p
         t0 = time.perf_counter()
         with captured_stdout() as log:
-            sol = self.solver(**args)
+            sol = solver(**args)
         wall = time.perf_counter() - t0
-        stats = self.solver.stats()
+        stats = solver.stats()
         x = np.asarray(sol["x"]).ravel()
+        if s is not None:
+            # back to the kind's units; a bound IPOPT returned exactly stays exact (s * (lb / s) may round)
+            x = np.clip(s * x, self.t.lbw, self.t.ubw)
         # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another
         # point (even 0.0 after Invalid_Number_Detected)
         f = float(self.f_function(x, p))
         return NLPOutcome(start, x, f if math.isfinite(f) else math.inf, stats["return_status"],
                           bool(stats["success"]), int(stats["iter_count"]), wall, log(),
-                          np.asarray(sol["lam_g"]).ravel())
+                          np.asarray(sol["lam_g"]).ravel() * sf)
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
         """Elastic form: each relaxable rule's slack at a returned decision vector, in the rule's unit."""

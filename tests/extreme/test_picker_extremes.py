@@ -47,7 +47,8 @@ def simulated(loaded, design):
 
 
 @pytest.mark.parametrize("time_ratio", ["1.0", "1.0001"])
-def test_no_quick_return(tmp_path, time_ratio):
+def test_no_quick_return(tmp_path, time_ratio, record_property):
+    """K = 1 (and 1 + 1e-4): the simulated design has K and the 50 deg swing within 1e-6, gamma_min >= 40 deg."""
     loaded = load_spec(spec_file(tmp_path, time_ratio, "50.0", "40.0"))
     result, _, _ = run_solve(loaded, starts=2, workers=1)
     assert result.status == "optimal"
@@ -57,10 +58,13 @@ def test_no_quick_return(tmp_path, time_ratio):
     assert gmin >= 40.0
     if time_ratio == "1.0":   # no quick return: the two extremes lie exactly half a crank turn apart
         assert math.degrees(q.stroke_fold_to_ext) == pytest.approx(180.0, abs=1e-6)
+    record_property("figure", f"K = {time_ratio}: {result.status}, simulated K {q.time_ratio:.7f}, swing "
+                              f"{math.degrees(q.swing):.6f} deg, gamma_min {gmin:.3f} deg")
 
 
 @pytest.mark.parametrize("swing", ["0.5", "0.05"])
-def test_vanishing_swing(tmp_path, swing):
+def test_vanishing_swing(tmp_path, swing, record_property):
+    """Swing 0.5 and 0.05 deg: the swing within 1e-6 relative, K within 1e-6, every rule re-checked."""
     loaded = load_spec(spec_file(tmp_path, "1.25", swing, "40.0", lower="0.01"))
     result, _, _ = run_solve(loaded, starts=2, workers=1)
     # a crank of a few hundredths of a mm: IPOPT may stop at its acceptable (looser) tolerances, which
@@ -74,6 +78,8 @@ def test_vanishing_swing(tmp_path, swing):
     assert result.design["l7"] < 0.02 * float(swing) * 140.0          # the crank shrinks with the swing
     rules = recheck_rules(loaded.model, result.design)
     assert all(r.record().satisfied for r in rules)
+    record_property("figure", f"swing {swing} deg: {result.status}, crank {result.design['l7']:.4f} mm, simulated "
+                              f"swing {math.degrees(q.swing):.6f} deg, K {q.time_ratio:.7f}")
 
 
 def test_zero_swing_is_bad_input(tmp_path):
@@ -91,7 +97,9 @@ def test_time_ratio_below_one_is_bad_input(tmp_path):
 
 @pytest.mark.parametrize("time_ratio, swing, gamma", [("1.25", "50.0", "45.0"), ("1.25", "50.0", "60.0"),
                                                       ("2.0", "120.0", "40.0")])
-def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_ratio, swing, gamma):
+def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_ratio, swing, gamma,
+                                                              record_property):
+    """No crank-rocker with this K and swing has this gamma_min: exit 3 naming the conflicting rules."""
     path = spec_file(tmp_path, time_ratio, swing, gamma)
     proc = cli("solve", str(path), "--out", str(tmp_path / "out"), "--starts", "3", "--workers", "1", cwd=tmp_path)
     assert proc.returncode == 3, proc.stdout + proc.stderr
@@ -100,6 +108,7 @@ def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_r
     assert "time_ratio" in err and "rocker_swing" in err
     assert "IPOPT said" in err and "Traceback" not in proc.stderr
     assert (tmp_path / "out" / "cai2020_crank_rocker_synthesis" / "result.json").exists()   # written first
+    record_property("figure", "exit 3: " + err[err.index("min_transmission_angle (misses"):][:90])
 
 
 def test_swing_near_180_deg_exits_3_with_a_result_file(tmp_path):
