@@ -8,7 +8,7 @@
 
 The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
-the objective divided by D (mm^2 / mm).  The objective a start reports is the path error in mm^2.
+the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
 grashof = "any" is solved with COARSE samples of the motion per gap first; the answer is kept when
 every row of the spec's samples holds there, else re-solved from it with every row.  Why each of
 these, and what was tried instead, with the numbers: problems/fourbar_path/INEXACT.md (issue 19).
@@ -43,7 +43,7 @@ BACKOFF = 1e-9
 
 #: study switches (INEXACT.md): variables in nominal units; IPOPT's objective in mm^2 / D^OBJECTIVE_POWER
 SCALED = True
-OBJECTIVE_POWER = 1.0
+OBJECTIVE_POWER = 0.5
 
 
 def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
