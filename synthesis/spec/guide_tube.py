@@ -59,7 +59,7 @@ class FrictionSection(StrictModel):
         None, description="friction coefficient, dimensionless; or a range {range = [lo, hi], samples = 4, "
                           "nominal = (lo+hi)/2, step = re-check spacing}")
     calibrate: CalibrationSection | None = None
-    _ranges: dict = PrivateAttr(default_factory=dict)
+    _operating_ranges: dict = PrivateAttr(default_factory=dict)
 
     @model_validator(mode="after")
     def _one_of(self) -> "FrictionSection":

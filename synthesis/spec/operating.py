@@ -83,7 +83,7 @@ class OperatingRange(StrictModel):
 def resolve_ranges(section: BaseModel, limits: dict[str, str]) -> None:
     """In a section's after-validator: each field of ``limits`` given as a range has both ends checked
     against the field's allowed values (``limits[name]``, e.g. ``"> 0, <= 2000"``), is kept in the section's
-    ``_ranges`` and replaced by its nominal value."""
+    ``_operating_ranges`` and replaced by its nominal value."""
     ranges = {}
     for name, allowed in limits.items():
         value = getattr(section, name)
@@ -94,7 +94,7 @@ def resolve_ranges(section: BaseModel, limits: dict[str, str]) -> None:
                 raise ValueError(f"{name}: range value {v:g}: expected {allowed}")
         ranges[name] = value
         object.__setattr__(section, name, value.centre)     # frozen once validated; this is its own validation
-    section._ranges = ranges              # the section declares ``_ranges: dict = PrivateAttr(default_factory=dict)``
+    section._operating_ranges = ranges   # declared as ``_operating_ranges: dict = PrivateAttr(default_factory=dict)``
 
 
 def _holds(v: float, test: list[str]) -> bool:
@@ -107,7 +107,7 @@ def ranges_of(spec: BaseModel) -> dict[str, tuple[str, OperatingRange]]:
     out = {}
     for field in type(spec).model_fields:
         section = getattr(spec, field)
-        for name, rng in (getattr(section, "_ranges", None) or {}).items():
+        for name, rng in (getattr(section, "_operating_ranges", None) or {}).items():
             out[name] = (field, rng)
     return out
 
@@ -123,7 +123,7 @@ def at_operating(spec: BaseModel, values: dict[str, float]) -> BaseModel:
     sections = {}
     for field, changes in update.items():
         section = getattr(spec, field).model_copy(update=changes)
-        section._ranges = {k: r for k, r in section._ranges.items() if k not in changes}
+        section._operating_ranges = {k: r for k, r in section._operating_ranges.items() if k not in changes}
         sections[field] = section
     return spec.model_copy(update=sections)
 

@@ -66,7 +66,7 @@ class OperationSection(StrictModel):
                     "{range = [lo, hi], samples = 4, nominal = (lo+hi)/2, step = re-check spacing}")
     crank_speed: Annotated[float, Field(gt=0, le=2000)] | OperatingRange = Field(
         description="crank (driving shaft) speed, r/min; or a range as for forward_speed")
-    _ranges: dict = PrivateAttr(default_factory=dict)
+    _operating_ranges: dict = PrivateAttr(default_factory=dict)
 
     @model_validator(mode="after")
     def _nominal(self) -> "OperationSection":
