@@ -171,6 +171,6 @@ def inexact_spec(name: str, solver: dict | None = None) -> LoadedSpec:
 BEST_KNOWN: dict[str, float] = {
     "ellipse20": 1.0486382171183883, "egg16": 0.46122510610392164, "triangle18": 12.480514291299421,
     "d_shape22": 10.547337872207915, "kidney25": 12.127710074402076, "square24": 137.6917138934006,
-    "noisy_loop20": 2.3719628395676278, "dwell_arc15": 0.06906667209059945, "s_curve12": 2.183892490339011,
+    "noisy_loop20": 2.3719628395676278, "dwell_arc15": 0.06481626836102779, "s_curve12": 2.183892490339011,
     "stroke_lift14": 0.2614509878120902,
 }
