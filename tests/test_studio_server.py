@@ -249,3 +249,13 @@ def test_fourbar_path_draws_its_linkage_from_the_kinds_own_construction():
                                (("O", "O'"), values["r1"])):
             assert math.dist(f[a], f[b]) == pytest.approx(length, abs=2e-3)
         assert min(math.dist(f["P"], xy) for xy in zip(path["x"], path["y"])) < 2.0
+
+
+def test_a_huge_integer_is_a_400_naming_the_field(planting_studio):
+    """A JSON integer beyond a float's range (330 digits) is bad input, not an internal error."""
+    s = planting_studio
+    huge = b'{"values": {"l2": 1' + b"0" * 330 + b'}}'
+    for path in ("/api/evaluate", "/api/save", "/api/solve"):
+        status, _, raw = request(s, "POST", path, huge)
+        answer = json.loads(raw)
+        assert status == 400 and answer["error"].startswith("values.l2: expected a finite number, got '1000"), answer

@@ -33,6 +33,15 @@ def _node(data: Any, path: str) -> Any:
     return data
 
 
+def _finite_number(value: int | float) -> bool:
+    """Whether ``value`` is a finite float: JSON's integers have any number of digits, and one beyond a
+    float's range (about 309 digits) makes math.isfinite raise OverflowError."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def finite(value: Any) -> Any:
     """``value`` with every NaN or infinity replaced by None (JSON has neither)."""
     if isinstance(value, float):
@@ -109,7 +118,7 @@ class Session:
             if name not in free:
                 raise SpecError(f"values.{str(name)[:60]}: not a free design variable of {self.loaded.name} "
                                 f"(free: {', '.join(free) or 'none'})")
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not _finite_number(value):
                 raise SpecError(f"values.{name}: expected a finite number, got {str(value)[:40]!r}")
             lo, hi = free[name].bounds
             if not lo <= value <= hi:
