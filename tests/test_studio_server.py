@@ -178,6 +178,19 @@ def test_coarse_rules_are_the_checks_on_fewer_samples(kind):
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.03, abs=0.1), r["name"]
 
 
+def settled(studio, deadline_s: float = 120.0) -> dict:
+    """/api/solve once the solve has ended (polled; the deadline only bounds a hung worker)."""
+    import time
+
+    end = time.monotonic() + deadline_s
+    while True:
+        answer = api(studio, "/api/solve")
+        if answer["state"] not in ("running", "cancelling"):
+            return answer
+        assert time.monotonic() < end, answer
+        time.sleep(0.1)
+
+
 def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     s = planting_studio
     values = moved_values(s.session, 0.1)
@@ -185,10 +198,11 @@ def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     assert first["state"] == "running" and first["total"] == 256
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 1})
     assert status == 409 and json.loads(raw)["error"].startswith("a solve is running (redesign_from_example1_solve_1)")
-    cancelled = api(s, "/api/solve/cancel", {})
+    cancelling = api(s, "/api/solve/cancel", {})
+    assert cancelling["state"] in ("cancelling", "cancelled"), cancelling
+    cancelled = settled(s)
     assert cancelled["state"] == "cancelled" and cancelled["exit_code"] in (143, -15), cancelled
     assert cancelled["done"] < 256
-    assert api(s, "/api/solve")["state"] == "cancelled"
     assert s.job.process.poll() is not None         # the worker process is gone
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
     assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"
@@ -259,3 +273,81 @@ def test_a_huge_integer_is_a_400_naming_the_field(planting_studio):
         status, _, raw = request(s, "POST", path, huge)
         answer = json.loads(raw)
         assert status == 400 and answer["error"].startswith("values.l2: expected a finite number, got '1000"), answer
+
+
+def test_only_one_of_simultaneous_solves_starts(tmp_path):
+    """Two solve requests at once, each held where it writes its spec until the other arrives there too (or,
+    when the other cannot, as it must not, for 2 s): exactly one starts, the other is told a solve is running."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        both_there = threading.Barrier(2)
+        write_spec = s._write_spec
+
+        def held(*args):
+            try:
+                both_there.wait(timeout=2)
+            except threading.BrokenBarrierError:
+                pass
+            return write_spec(*args)
+        s._write_spec = held
+        values = moved_values(s.session, 0.1)
+        with ThreadPoolExecutor(2) as pool:
+            answers = list(pool.map(lambda _: request(s, "POST", "/api/solve", {"values": values, "starts": 64}),
+                                    range(2)))
+        assert sorted(status for status, _, _ in answers) == [200, 409], [a[0] for a in answers]
+        assert len(list(s.out.glob("*_solve_*.toml"))) == 1
+
+
+def test_cancel_answers_at_once_and_kills_a_worker_that_does_not_stop(tmp_path):
+    """A worker that cannot answer SIGTERM (stopped here with SIGSTOP): cancel answers "cancelling" without
+    waiting for it, and after the grace period the worker's process group is killed."""
+    import os
+    import signal
+    import time
+
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        s.grace = 0.5
+        api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 256})
+        # stopped once it answers SIGTERM itself (a start has finished): a stopped process with SIGTERM's default
+        # action would still be ended by it
+        while api(s, "/api/solve")["done"] < 1:
+            assert s.job.running, s.job.status()
+            time.sleep(0.05)
+        os.killpg(s.job.process.pid, signal.SIGSTOP)
+        answer = api(s, "/api/solve/cancel", {})
+        assert answer["state"] == "cancelling" and answer["exit_code"] is None, answer
+        assert api(s, "/api/solve")["state"] == "cancelling"
+        ended = settled(s)
+        assert ended["state"] == "cancelled" and ended["exit_code"] == -signal.SIGKILL, ended
+        assert ended["exit"] == "killed after 0.5 s of not stopping (nothing kept)"
+
+
+def test_a_solve_runs_the_studios_own_package_whatever_its_folder(tmp_path, monkeypatch):
+    """Started with a relative PYTHONPATH (`PYTHONPATH=. agrisynth studio ...`): the worker, which runs in the
+    studio's folder, still imports this synthesis package and its run is written."""
+    from pathlib import Path
+
+    import synthesis
+
+    monkeypatch.chdir(Path(synthesis.__file__).parent.parent)
+    monkeypatch.setenv("PYTHONPATH", ".")
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 1})
+        ended = settled(s)
+    assert ended["state"] == "finished" and ended["exit_code"] in (0, 1), ended
+    assert ended["exit"] == {0: "every rule satisfied", 1: "solved, some rule violated"}[ended["exit_code"]]
+    assert (tmp_path / "studio" / ended["run"] / "result.json").is_file() and ended["status"] == "optimal"
+
+
+def test_a_solve_that_fails_says_so_with_its_last_line(tmp_path):
+    """No result.json: the exit code is not read as `solve`'s verdict; the page gets the worker's last line."""
+    from synthesis.studio.solver import SolveJob
+
+    job = SolveJob("gone", tmp_path / "gone.toml", tmp_path, 1)
+    job.start()
+    job.wait(120)
+    status = job.status()
+    assert status["state"] == "failed" and status["exit_code"] == 2, status
+    assert status["exit"].startswith("failed (exit 2): ") and "gone.toml" in status["exit"], status

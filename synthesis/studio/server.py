@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import json
 import re
+import asyncio
 import secrets
+import signal
 import socket
 import threading
 from importlib import resources
@@ -26,7 +28,7 @@ from starlette.routing import Route
 from synthesis.errors import AgrisynthError, OutputError
 from synthesis.result import atomic_write_text
 from synthesis.studio.session import Session
-from synthesis.studio.solver import SolveJob
+from synthesis.studio.solver import GRACE, SolveJob
 
 HOST = "127.0.0.1"
 TOKEN_HEADER = "x-studio-token"
@@ -69,6 +71,8 @@ class Studio:
         self.socket.bind((HOST, port))
         self.port = self.socket.getsockname()[1]
         self.job: SolveJob | None = None
+        self.grace = GRACE                        # seconds a cancelled worker gets before it is killed
+        self._solving = threading.Lock()          # "is a solve running?" and starting one are one step
         self._evaluating = threading.Lock()       # one evaluation at a time (two cores; CasADi calls)
         self._writing = threading.Lock()          # file names are picked and written one at a time
         self.app = self._guarded(Starlette(routes=[
@@ -203,63 +207,93 @@ class Studio:
 
             if not kinds.get(self.session.kind).solves:
                 raise AgrisynthError(f"kind {self.session.kind} has nothing to optimise (check-only)")
-            if self.job is not None and self.job.running:
-                raise Refused(409, f"a solve is running ({self.job.run_name}); cancel it or wait")
             starts = body.get("starts", 1)
             if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= MAX_STARTS:
                 raise AgrisynthError(f"starts: expected a whole number 1..{MAX_STARTS}, got {str(starts)[:20]!r}")
             values = self.session.values_of(body.get("values", {}))
-            name, path = self._write_spec(values, "solve", "solved from here by agrisynth studio: start 0 is the "
-                                                           "page's values")
-            self.job = SolveJob(name, path, self.out, starts)
-            self.job.start()
-            return self.job.status()
+            with self._solving:
+                if self.job is not None and self.job.running:
+                    raise Refused(409, f"a solve is running ({self.job.run_name}); cancel it or wait")
+                name, path = self._write_spec(values, "solve", "solved from here by agrisynth studio: start 0 is "
+                                                               "the page's values")
+                self.job = SolveJob(name, path, self.out, starts)
+                self.job.start()
+                return self.job.status()
         return await self._handle(request, work)
 
     async def solve_status(self, request: Request) -> JSONResponse:
         return await self._handle(request, lambda body: self.job.status() if self.job else {"state": "idle"})
 
     async def cancel(self, request: Request) -> JSONResponse:
+        """Ask the running solve to stop and answer at once ("cancelling"); the page polls /api/solve."""
         def work(body):
-            if self.job is None or not self.job.running:
-                return {"state": "idle" if self.job is None else self.job.status()["state"]}
-            self.job.cancel()
-            self.job.wait(30)
+            if self.job is None:
+                return {"state": "idle"}
+            self.job.cancel(self.grace)
             return self.job.status()
         return await self._handle(request, work)
 
     # -- serving --------------------------------------------------------------------------------------------
+    def stop_job(self) -> None:
+        """Cancel a running solve and return once its worker is gone (killed after the grace period if it does
+        not stop): every way the studio ends goes through here, so no worker outlives it."""
+        job = self.job
+        if job is not None and job.running:
+            job.cancel(self.grace)
+            job.wait(self.grace + 5)
+
     def start_in_thread(self) -> "threading.Thread":
         """Serve from a background thread (tests, benchmarks); returns once the server listens."""
         import time
 
         self._server = self.server()
-        thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
-        thread.start()
+        self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
+        self._thread.start()
         while not self._server.started:
-            if not thread.is_alive():
+            if not self._thread.is_alive():
                 raise RuntimeError("the studio server did not start")
             time.sleep(0.01)
-        return thread
+        return self._thread
 
     def stop(self) -> None:
-        if self.job is not None:
-            self.job.cancel()
-            self.job.wait(30)
+        """Stop serving (the server's shutdown cancels a running solve) and wait until it has."""
         if getattr(self, "_server", None) is not None:
             self._server.should_exit = True
+            self._thread.join(self.grace + 30)
+        self.stop_job()
 
     def server(self):
         import uvicorn
 
-        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off")
-        return uvicorn.Server(config)
+        studio = self
+
+        class Server(uvicorn.Server):
+            async def shutdown(self, sockets=None) -> None:
+                # here, not after run() returns: on SIGTERM uvicorn re-raises the signal as soon as it has shut
+                # down, which ends the process before any code after run() would cancel the solve
+                await super().shutdown(sockets)
+                await asyncio.to_thread(studio.stop_job)
+
+        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off", ws="none")
+        return Server(config)
 
     def serve(self) -> None:
-        """Serve until interrupted (Ctrl-C); a running solve is cancelled on the way out."""
+        """Serve until Ctrl-C, SIGTERM or SIGHUP; a running solve is cancelled on the way out, then the signal
+        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it)."""
+        server = self.server()
+        # uvicorn shuts down gracefully on SIGINT and SIGTERM only; a closed terminal (SIGHUP) would otherwise
+        # end the studio at once and leave its worker running
+        hung_up = []
+
+        def hang_up(sig, frame):
+            hung_up.append(sig)
+            server.should_exit = True
+
+        previous = signal.signal(signal.SIGHUP, hang_up)
         try:
-            self.server().run(sockets=[self.socket])
+            server.run(sockets=[self.socket])
         finally:
-            if self.job is not None:
-                self.job.cancel()
-                self.job.wait(30)
+            self.stop_job()
+            signal.signal(signal.SIGHUP, previous)
+        if hung_up:
+            signal.raise_signal(signal.SIGHUP)
