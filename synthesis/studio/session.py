@@ -20,15 +20,15 @@ from pathlib import Path
 from typing import Any
 
 from synthesis import kinds
-from synthesis.design_info import describe
+from synthesis.design_info import describe, walk_fields
 from synthesis.errors import AgrisynthError, SpecError
-from synthesis.solved_spec import _parts, _set     # TOML paths as solved.toml writes them
+from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import read_toml, validate
 from synthesis.studio import drawing, grids
 
 def _node(data: Any, path: str) -> Any:
-    for part in _parts(path):
+    for part in path_parts(path):
         data = data[part]
     return data
 
@@ -128,10 +128,10 @@ class Session:
 
     def _other_spec_files(self) -> list[tuple[str, Path]]:
         """(TOML path, file) of every field naming another spec file (relative to the spec that holds it)."""
-        from synthesis.design_info import _walk
         from synthesis.spec.docmeta import SpecFile
 
-        return [(path, (self.loaded.path.parent / value).resolve()) for path, field, value in _walk(self.loaded.model)
+        return [(path, (self.loaded.path.parent / value).resolve())
+                for path, field, value in walk_fields(self.loaded.model)
                 if isinstance(value, str) and any(isinstance(m, SpecFile) for m in field.metadata)]
 
     def spec_data(self, values: dict[str, float], name: str | None = None,
@@ -142,7 +142,7 @@ class Session:
         data = copy.deepcopy(self.data)
         if folder is not None:
             for path, target in self._other_spec_files():
-                _set(data, path, os.path.relpath(target, folder))
+                set_at_path(data, path, os.path.relpath(target, folder))
         for var in self.free:
             node = _node(data, var.path)
             if isinstance(node, dict):                      # {init, bounds}: the start value
