@@ -151,13 +151,31 @@ def test_coarse_grid_is_coarser_and_says_so(planting_studio):
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.02, abs=0.05), r["name"]
 
 
-def test_a_kind_whose_check_reads_solver_samples_gets_them_divided():
+def test_the_coarse_grid_note_states_the_samples_evaluated():
+    """Each note gives the counts the check runs on, not the [solver] value it is derived from; a check that
+    reads no (effective) sample count is said to have one grid, and its coarse table is its fine one."""
     from synthesis.spec import load_spec
     from synthesis.studio import grids
+    from synthesis.studio.session import Session
 
     spec = load_spec(STUDIO_SPECS["fourbar_path"]).model
     assert spec.solver.samples == 36 and grids._coarser(spec).solver.samples == 4      # not below ge=4
-    assert grids.note("fourbar_path", "coarse", spec) == "the check with [solver] samples 36 -> 4"
+    assert spec.rules.grashof == "crank-rocker"          # path_rules reads the samples only for grashof "any"
+    assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank-rocker\"")
+    anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof": "any"})})
+    assert grids.note("fourbar_path", "coarse", anything) == "the check on 40 samples per gap between targets (fine: 360)"
+    steering = load_spec(STUDIO_SPECS["steering_linkage"]).model
+    assert grids.note("steering_linkage", "coarse", steering) == ("the check on 41 inside locks (fine: 401), without its "
+                                                                  "Table 12 explanation")
+    guide_way = load_spec(STUDIO_SPECS["guide_way"]).model
+    assert grids.note("guide_way", "coarse", guide_way) == "the check on 50 samples per segment (fine: 400)"
+    comb = load_spec(STUDIO_SPECS["comb_finger"]).model
+    assert grids.note("comb_finger", "coarse", comb) == ("the check's one grid (3600 finger turn angles: it does not "
+                                                         "go below that for [solver] turn_samples 72)")
+    for kind in ("fourbar_path", "comb_finger"):
+        session = Session.open(STUDIO_SPECS[kind])
+        values = moved_values(session, 0.1)
+        assert session.evaluate(values, "coarse")["rules"] == session.evaluate(values, "fine")["rules"], kind
 
 
 @pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam",
@@ -234,7 +252,7 @@ def test_steering_coarse_grid_samples_fewer_locks_and_skips_the_table12_fits():
         # the transmission angle's extreme over 41 locks instead of 401: within a tenth of a degree here
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], abs=0.1), r["name"]
     assert len(coarse["drawing"]["charts"][0]["x"]) == 41 and len(fine["drawing"]["charts"][0]["x"]) > 41
-    assert coarse["grid_note"] == "the check with [solver] samples 40 -> 4, without its Table 12 explanation"
+    assert coarse["grid_note"] == "the check on 41 inside locks (fine: 401), without its Table 12 explanation"
 
 
 def test_answers_are_not_held_back_by_nagles_algorithm(planting_studio):
