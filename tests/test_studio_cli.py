@@ -31,6 +31,20 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
     assert port.returncode == 2 and "--port" in port.stderr
 
 
+def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        busy = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", str(port), "--out",
+                       str(tmp_path / "new" / "studio"), cwd=tmp_path)
+    assert busy.returncode == 2 and busy.stderr.strip().splitlines() == [busy.stderr.strip()], busy.stderr
+    assert f"--port {port}: cannot listen on 127.0.0.1" in busy.stderr and "Traceback" not in busy.stderr
+    assert not (tmp_path / "new").exists()
+
+
 def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
                              "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,

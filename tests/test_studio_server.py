@@ -47,6 +47,35 @@ def test_other_hosts_and_origins_are_refused(planting_studio):
     assert sorted(s.out.iterdir()) == files         # nothing refused wrote a file
     status, _, _ = request(s, "POST", "/api/evaluate", {"values": values}, origin=f"http://127.0.0.1:{s.port}")
     assert status == 200
+    # the page and its assets are guarded alike (the token in the address does not let another Host or Origin in)
+    for path in ("/", "/studio.js", "/studio.css"):
+        status, _, body = request(s, "GET", f"{path}?token={s.token}", token=None, host=f"evil.example:{s.port}")
+        assert status == 403 and b"Host" in body, (path, status)
+        status, _, body = request(s, "GET", f"{path}?token={s.token}", token=None, origin="http://evil.example")
+        assert status == 403 and b"Origin" in body, (path, status)
+        assert request(s, "GET", f"{path}?token={s.token}", token=None)[0] == 200
+
+
+def test_on_port_80_a_host_without_the_port_is_this_studio(tmp_path):
+    """A browser leaves out the default port: on port 80 Host is `127.0.0.1` or `localhost`, Origin likewise."""
+    from synthesis.studio.server import Refused, Studio
+
+    studio = Studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio")
+    try:
+        def check(host, origin=None):
+            headers = [(b"host", host.encode())] + ([(b"origin", origin.encode())] if origin else [])
+            studio._check({"headers": headers, "query_string": f"token={studio.token}".encode()})
+        studio.port = 80
+        for host in ("127.0.0.1", "localhost", "127.0.0.1:80", "localhost:80"):
+            check(host, f"http://{host}")
+        studio.port = 8765
+        for host in ("127.0.0.1", "localhost", "127.0.0.1:80"):
+            with pytest.raises(Refused, match="Host"):
+                check(host)
+        with pytest.raises(Refused, match="Origin"):
+            check("127.0.0.1:8765", "http://127.0.0.1")
+    finally:
+        studio.socket.close()
 
 
 def test_bad_values_get_one_line_naming_the_field(planting_studio):
@@ -64,13 +93,23 @@ def test_bad_values_get_one_line_naming_the_field(planting_studio):
     assert status == 400 and json.loads(raw)["error"].startswith("request: not JSON")
     status, _, raw = request(s, "POST", "/api/evaluate", b"values=1", content_type="application/x-www-form-urlencoded")
     assert status == 400 and "Content-Type" in json.loads(raw)["error"]
+    for path, body, message in (
+            ("/api/evaluate", {"values": {}, "grids": "fine"}, "request: unknown key 'grids' (expected: grid, values)"),
+            ("/api/save", {"values": {}, "file": "../x.toml"}, "request: unknown key 'file' (expected: values)"),
+            ("/api/solve", {"start": 3}, "request: unknown key 'start' (expected: starts, values)"),
+            ("/api/solve/cancel", {"now": True}, "request: unknown key 'now' (expected: none)")):
+        status, _, raw = request(s, "POST", path, body)
+        assert status == 400 and json.loads(raw)["error"] == message, (path, raw)
+    assert s.job is None                 # the refused solve did not start
 
 
 def test_saves_only_into_its_folder_with_names_it_picks(planting_studio, tmp_path):
     s = planting_studio
     values = moved_values(s.session)
     before = {p.name for p in s.out.iterdir()}
-    first = api(s, "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    status, _, _ = request(s, "POST", "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    assert status == 400                 # the page never names a file: such a request is refused outright
+    first = api(s, "/api/save", {"values": values})
     second = api(s, "/api/save", {"values": values})
     assert (first["file"], second["file"]) == ("redesign_from_example1_saved_1.toml",
                                                "redesign_from_example1_saved_2.toml")
@@ -109,11 +148,17 @@ def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
         assert checked.design[name] == value
     assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
     drawing = fine["drawing"]
-    lines = drawing["main"]["lines"]
-    assert lines or drawing["mechanism"]["frames"] or drawing["charts"]
-    assert all(len(l["x"]) == len(l["y"]) >= 2 for l in lines)
-    assert all(len(s["y"]) == len(c["x"]) for c in drawing["charts"] for s in c["series"])
-    assert all(math.isfinite(x) for l in lines for x in l["x"] if x is not None)
+    lines, frames, charts = drawing["main"]["lines"], drawing["mechanism"]["frames"], drawing["charts"]
+    assert len(lines) + len(frames) + len(charts) > 0, drawing
+    for l in lines:
+        assert len(l["x"]) == len(l["y"]) >= 2, l["name"]
+        finite_xy = [(x, y) for x, y in zip(l["x"], l["y"]) if x is not None and y is not None]
+        assert len(finite_xy) >= 2 and all(math.isfinite(x) and math.isfinite(y) for x, y in finite_xy), l["name"]
+    for c in charts:
+        assert c["series"] and len(c["x"]) >= 2, c["name"]
+        assert all(len(series["y"]) == len(c["x"]) for series in c["series"]), c["name"]
+    for f in frames:
+        assert f and all(len(xy) == 2 and all(math.isfinite(v) for v in xy) for xy in f.values())
 
 
 def test_planting_draws_the_arm_and_both_frames(planting_studio):

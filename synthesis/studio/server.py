@@ -47,9 +47,17 @@ MAX_STARTS = 256
 
 
 class Refused(Exception):
+    """A request this studio will not serve (wrong Host, Origin or token; a second solve): answered with
+    ``status`` and the one-line message, never reaching the session."""
+
     def __init__(self, status: int, message: str):
         super().__init__(message)
         self.status = status
+
+
+def _refuse_constant(name: str):
+    """json.loads's hook for NaN, Infinity and -Infinity, which Python reads but JSON does not have."""
+    raise ValueError(f"{name} is not JSON")
 
 
 class Studio:
@@ -58,18 +66,24 @@ class Studio:
     def __init__(self, spec: Path, out: Path, port: int = 0, token: str | None = None):
         self.session = Session.open(spec)
         self.out = Path(out).resolve()
-        try:
-            self.out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.token = token or secrets.token_urlsafe(24)
         # proto IPPROTO_TCP (not 0): asyncio turns Nagle's algorithm off only on sockets saying so; with it on,
         # each keep-alive answer waited ~40 ms for the browser's delayed ACK
         self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM, socket.IPPROTO_TCP)
-        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.socket.bind((HOST, port))
+        try:
+            self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            self.socket.bind((HOST, port))
+        except OSError:
+            self.socket.close()
+            raise
         self.port = self.socket.getsockname()[1]
+        # created only once the port is ours: a studio that cannot listen leaves no folder behind
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            self.socket.close()
+            raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.job: SolveJob | None = None
         self.grace = GRACE                        # seconds a cancelled worker gets before it is killed
         self._solving = threading.Lock()          # "is a solve running?" and starting one are one step
@@ -92,7 +106,11 @@ class Studio:
 
     # -- the guard ------------------------------------------------------------------------------------------
     def _allowed_hosts(self) -> set[str]:
-        return {f"{HOST}:{self.port}", f"localhost:{self.port}"}
+        names = {HOST, "localhost"}
+        hosts = {f"{name}:{self.port}" for name in names}
+        if self.port == 80:                # a browser leaves out the scheme's default port in Host and Origin
+            hosts |= names
+        return hosts
 
     def _check(self, scope) -> None:
         headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
@@ -139,25 +157,29 @@ class Studio:
         return JSONResponse(data, status_code=status, headers=SECURITY_HEADERS)
 
     @staticmethod
-    async def _body(request: Request) -> dict:
+    async def _body(request: Request, keys: frozenset[str]) -> dict:
         if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
             raise AgrisynthError("request: expected Content-Type application/json")
         raw = await request.body()
         if len(raw) > MAX_BODY:
             raise AgrisynthError(f"request: body of {len(raw)} bytes is larger than {MAX_BODY}")
         try:
-            data = json.loads(raw, parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
+            data = json.loads(raw, parse_constant=_refuse_constant)
         except ValueError as exc:
             raise AgrisynthError(f"request: not JSON ({str(exc)[:60]})") from None
         if not isinstance(data, dict):
             raise AgrisynthError("request: expected a JSON object")
+        unknown = sorted(str(k)[:40] for k in data if k not in keys)
+        if unknown:
+            raise AgrisynthError(f"request: unknown key {unknown[0]!r} (expected: {', '.join(sorted(keys)) or 'none'})")
         return data
 
-    async def _handle(self, request: Request, work) -> JSONResponse:
+    async def _handle(self, request: Request, work, keys: frozenset[str] = frozenset()) -> JSONResponse:
+        """Run ``work(body)`` off the event loop; ``keys``: the only keys a POST body may have."""
         from starlette.concurrency import run_in_threadpool
 
         try:
-            body = await self._body(request) if request.method == "POST" else {}
+            body = await self._body(request, keys) if request.method == "POST" else {}
             return self._answer(await run_in_threadpool(work, body))
         except Refused as exc:
             return self._answer({"error": str(exc)}, exc.status)
@@ -174,7 +196,7 @@ class Studio:
         def work(body):
             with self._evaluating:
                 return self.session.evaluate(body.get("values", {}), body.get("grid", "fine"))
-        return await self._handle(request, work)
+        return await self._handle(request, work, frozenset({"values", "grid"}))
 
     def _free_name(self, what: str) -> str:
         """``<spec name>_<what>_<n>``: the first n with neither a spec file nor a folder of that name."""
@@ -197,7 +219,7 @@ class Studio:
             name, path = self._write_spec(values, "saved", "saved from agrisynth studio: the free variables' "
                                                            "start values are the page's values")
             return {"file": path.name, "name": name, "folder": str(self.out)}
-        return await self._handle(request, work)
+        return await self._handle(request, work, frozenset({"values"}))
 
     async def solve(self, request: Request) -> JSONResponse:
         def work(body):
@@ -219,7 +241,7 @@ class Studio:
                 self.job = SolveJob(name, path, self.out, starts)
                 self.job.start()
                 return self.job.status()
-        return await self._handle(request, work)
+        return await self._handle(request, work, frozenset({"values", "starts"}))
 
     async def solve_status(self, request: Request) -> JSONResponse:
         return await self._handle(request, lambda body: self.job.status() if self.job else {"state": "idle"})
