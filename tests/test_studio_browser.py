@@ -186,6 +186,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
     assert "cai2020_crank_rocker_synthesis_solve_1: finished" in reload_state and "not loaded" in reload_state
     run = tmp_path / "studio" / "cai2020_crank_rocker_synthesis_solve_1"
     assert "finished" in state and "status optimal" in state, state
+    assert "; exit 0: every rule satisfied" in state or "; exit 1: solved, some rule violated" in state, state
     here_spec = run.with_suffix(".toml")
     from synthesis.studio.session import Session
 

@@ -265,6 +265,8 @@ def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     assert cancelling["state"] in ("cancelling", "cancelled"), cancelling
     cancelled = settled(s)
     assert cancelled["state"] == "cancelled" and cancelled["exit_code"] in (143, -15), cancelled
+    assert cancelled["exit"] in ("exit 143: cancelled (the finished starts are kept)",
+                                 "cancelled before any start finished (nothing kept)"), cancelled
     assert cancelled["done"] < 256
     assert s.job.process.poll() is not None         # the worker process is gone
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
@@ -400,7 +402,7 @@ def test_a_solve_runs_the_studios_own_package_whatever_its_folder(tmp_path, monk
         api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 1})
         ended = settled(s)
     assert ended["state"] == "finished" and ended["exit_code"] in (0, 1), ended
-    assert ended["exit"] == {0: "every rule satisfied", 1: "solved, some rule violated"}[ended["exit_code"]]
+    assert ended["exit"] == {0: "exit 0: every rule satisfied", 1: "exit 1: solved, some rule violated"}[ended["exit_code"]]
     assert (tmp_path / "studio" / ended["run"] / "result.json").is_file() and ended["status"] == "optimal"
 
 

@@ -29,7 +29,7 @@ from synthesis.studio.session import finite
 _PROGRESS = re.compile(r"^start (\d+) finished \((\d+)/(\d+)\)")
 #: exit codes of `agrisynth solve` (DESIGN.md) in words
 EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad input", 3: "infeasible or failed",
-         130: "interrupted", 143: "cancelled (the finished starts are kept)", -15: "cancelled before any start finished"}
+         130: "interrupted", 143: "cancelled (the finished starts are kept)"}
 #: last lines of the solve's output kept for the page
 TAIL = 12
 #: seconds a cancelled worker has to write its finished starts before it is killed
@@ -125,14 +125,15 @@ class SolveJob:
         return load_result(path).to_json()
 
     def _exit_words(self, result: dict[str, Any] | None) -> str:
-        """The exit code in words: DESIGN.md's meaning only when the run wrote its result (a crash exits 1 too)."""
+        """How the worker ended, in words the page shows as they are: the exit code in DESIGN.md's meaning only
+        when the run wrote its result (a crash exits 1 too)."""
         if self.exit_code is None:
             return ""
         if result is not None:
-            return EXITS.get(self.exit_code, f"exit {self.exit_code}")
+            return f"exit {self.exit_code}: {EXITS.get(self.exit_code, 'not an exit code of agrisynth solve')}"
         if self.killed:
             return f"killed after {self.grace:g} s of not stopping (nothing kept)"
-        if self.cancelled and self.exit_code in (143, -15):
+        if self.cancelled and self.exit_code in (143, -signal.SIGTERM):    # -15: ended before solve set its handler
             return "cancelled before any start finished (nothing kept)"
         last = self.lines[-1][:200] if self.lines else "no output"
         return f"failed (exit {self.exit_code}): {last}"

@@ -386,7 +386,7 @@ function showSolve(s) {
   bar.max = Math.max(1, s.total || 1);
   bar.value = s.done || 0;
   let text = s.state === "idle" ? "no solve yet" : `${s.run}: ${s.state}, ${s.done || 0}/${s.total || "?"} starts`;
-  if (!running && s.exit_code !== null && s.exit_code !== undefined) text += `; exit ${s.exit_code} (${s.exit})`;
+  if (!running && s.exit) text += `; ${s.exit}`;
   if (s.status) text += `; status ${s.status}` + (s.objective ? `, ${s.objective.name} = ${fmt(s.objective.value)}` : "");
   if (s.folder) text += `; run written to ${s.folder}/`;
   document.getElementById("solve-state").textContent = text;
