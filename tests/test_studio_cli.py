@@ -115,7 +115,8 @@ def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(
         base, token = f"http://127.0.0.1:{match.group(1)}", match.group(2)
 
         def call(path, body=None):
-            req = urllib.request.Request(base + path, headers={"X-Studio-Token": token, "Content-Type": "application/json"},
+            headers = {"X-Studio-Token": token, "Content-Type": "application/json"}
+            req = urllib.request.Request(base + path, headers=headers,
                                          data=None if body is None else json.dumps(body).encode())
             for _ in range(200):          # the address is printed just before the server listens
                 try:

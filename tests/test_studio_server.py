@@ -208,10 +208,11 @@ def test_the_coarse_grid_note_states_the_samples_evaluated():
     assert spec.rules.grashof == "crank-rocker"          # path_rules reads the samples only for grashof "any"
     assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank-rocker\"")
     anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof": "any"})})
-    assert grids.note("fourbar_path", "coarse", anything) == "the check on 40 samples per gap between targets (fine: 360)"
+    assert grids.note("fourbar_path", "coarse", anything) == ("the check on 40 samples per gap between targets "
+                                                              "(fine: 360)")
     steering = load_spec(STUDIO_SPECS["steering_linkage"]).model
-    assert grids.note("steering_linkage", "coarse", steering) == ("the check on 41 inside locks (fine: 401), without its "
-                                                                  "Table 12 explanation")
+    assert grids.note("steering_linkage", "coarse", steering) == ("the check on 41 inside locks (fine: 401), "
+                                                                  "without its Table 12 explanation")
     guide_way = load_spec(STUDIO_SPECS["guide_way"]).model
     assert grids.note("guide_way", "coarse", guide_way) == "the check on 50 samples per segment (fine: 400)"
     comb = load_spec(STUDIO_SPECS["comb_finger"]).model
@@ -402,7 +403,8 @@ def test_a_solve_runs_the_studios_own_package_whatever_its_folder(tmp_path, monk
         api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 1})
         ended = settled(s)
     assert ended["state"] == "finished" and ended["exit_code"] in (0, 1), ended
-    assert ended["exit"] == {0: "exit 0: every rule satisfied", 1: "exit 1: solved, some rule violated"}[ended["exit_code"]]
+    words = {0: "exit 0: every rule satisfied", 1: "exit 1: solved, some rule violated"}
+    assert ended["exit"] == words[ended["exit_code"]]
     assert (tmp_path / "studio" / ended["run"] / "result.json").is_file() and ended["status"] == "optimal"
 
 

@@ -41,8 +41,8 @@ PACKAGE_ROOT = Path(synthesis.__file__).resolve().parent.parent
 
 def worker_env() -> dict[str, str]:
     """The environment of the worker: this one, with the package root first on PYTHONPATH."""
-    path = os.environ.get("PYTHONPATH", "")
-    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(PACKAGE_ROOT)] + ([path] if path else [])))
+    given = os.environ.get("PYTHONPATH", "")
+    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(PACKAGE_ROOT)] + ([given] if given else [])))
 
 
 @dataclass
