@@ -21,7 +21,7 @@ from synthesis.spec.docmeta import units_in
 AT_BOUND = 1e-6
 
 
-def _walk(model: BaseModel, prefix: str = ""):
+def walk_fields(model: BaseModel, prefix: str = ""):
     """(TOML path, FieldInfo, value) of every value in the model, depth first (list items as path[i])."""
     for name, field in type(model).model_fields.items():
         key = field.alias or name
@@ -29,12 +29,12 @@ def _walk(model: BaseModel, prefix: str = ""):
         path = f"{prefix}{key}"
         yield path, field, value
         if isinstance(value, BaseModel) and not isinstance(value, FreeVariable):
-            yield from _walk(value, f"{path}.")
+            yield from walk_fields(value, f"{path}.")
         elif isinstance(value, (list, tuple)):
             for i, item in enumerate(value):
                 yield f"{path}[{i}]", field, item
                 if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
-                    yield from _walk(item, f"{path}[{i}].")
+                    yield from walk_fields(item, f"{path}[{i}].")
 
 
 def _entry(path: str | None, field, bounds, free: bool) -> dict[str, Any]:
@@ -48,7 +48,7 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     variables = getattr(spec, "variables", None)
     if callable(variables):
-        where = {id(value): (path, field) for path, field, value in _walk(spec)}
+        where = {id(value): (path, field) for path, field, value in walk_fields(spec)}
         for name, v in variables().items():
             path, field = where.get(id(v), (None, None))
             if isinstance(v, FreeVariable):

@@ -24,12 +24,15 @@ FILENAME = "solved.toml"
 _PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 
 
-def _parts(path: str) -> list[str | int]:
+def path_parts(path: str) -> list[str | int]:
+    """The keys and list indices of a TOML path as design_info writes it: ``arm.l2`` -> ["arm", "l2"],
+    ``targets[1].x`` -> ["targets", 1, "x"]."""
     return [int(i) if i else key for key, i in _PART.findall(path)]
 
 
-def _set(data: Any, path: str, value: Any) -> None:
-    *head, last = _parts(path)
+def set_at_path(data: Any, path: str, value: Any) -> None:
+    """Put ``value`` at the TOML ``path`` of ``data`` (every container on the way must exist)."""
+    *head, last = path_parts(path)
     for part in head:
         data = data[part]
     data[last] = value
@@ -48,7 +51,7 @@ def solved_data(loaded, result) -> dict[str, Any]:
         if var["path"] is None or name not in result.design:
             raise SpecError(f"kind {loaded.kind}: the free variable {name} has no "
                             f"{'place in the spec file' if var['path'] is None else 'solved value'}")
-        _set(data, var["path"], float(result.design[name]))
+        set_at_path(data, var["path"], float(result.design[name]))
     data["name"] = f"{loaded.name}_solved"
     _given_design(loaded, result, data)
     return data

@@ -86,10 +86,11 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
             page.mouse.move(box["x"] + box["width"] * (0.5 - 0.05 * k), y)
             page.wait_for_timeout(40)
         page.mouse.up()
-        page.wait_for_function("() => document.body.dataset.grid === 'fine' && !document.querySelector('#status')"
-                               ".textContent.startsWith('coarse')", timeout=30_000)
-        wait_for_evaluations(page, count)
-        page.wait_for_timeout(300)           # any evaluation still queued has landed
+        # settled: a table drawn since the drag began (the first is a coarse one), nothing in flight or queued, and
+        # the last one drawn is the fine one the release asked for
+        page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {count} && "
+                               "document.body.dataset.busy === '0' && document.body.dataset.grid === 'fine'",
+                               timeout=30_000)
         grids = page.evaluate("window.__grids")
         l4 = float(page.input_value("#number-l4"))
         assert 64 <= l4 < 72, l4
@@ -123,6 +124,17 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         wait_for_evaluations(page, count)
         assert float(page.input_value("#number-l4")) == 80.0
         assert [(r["name"], r["red"]) for r in page.evaluate(TABLE)] == [(r["name"], r["red"]) for r in baseline]
+        # an evaluation the server refuses: no table or drawing of the earlier values beside the new ones
+        page.route("**/api/evaluate*", lambda r: r.fulfill(status=500, content_type="application/json",
+                                                            body='{"error": "internal error: made up by the test"}'))
+        page.fill("#number-l4", "70")
+        page.press("#number-l4", "Enter")
+        page.wait_for_function("() => document.body.dataset.busy === '0' && !document.querySelector('#error').hidden",
+                               timeout=30_000)
+        assert page.inner_text("#error") == "internal error: made up by the test"
+        assert page.evaluate(TABLE) == [] and page.inner_text("#verdict") == "(not evaluated)"
+        assert page.locator("#panel-main").count() == 0 and page.get_attribute("body", "data-grid") == "none"
+        seen["errors"] = [e for e in seen["errors"] if "500" not in e]        # the browser logs the refused fetch
         assert seen["left"] == [] and seen["errors"] == []
         assert all(urlsplit(u).hostname == "127.0.0.1" for u in seen["requests"]) and seen["requests"]
 
@@ -164,9 +176,17 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
         page.click("#save")
         page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
         saved = page.get_attribute("body", "data-saved")
+        # reloaded, the page opens on the spec's values; the last run is only reported
+        page.reload()
+        page.wait_for_selector("body[data-ready='1'][data-solve='finished']", timeout=30_000)
+        reloaded = {v.name: float(page.input_value(f"#number-{v.name}")) for v in studio.session.free}
+        reload_state = page.inner_text("#solve-state")
         assert seen["left"] == [] and seen["errors"] == []
+    assert reloaded == {v.name: v.value for v in studio.session.free} != values
+    assert "cai2020_crank_rocker_synthesis_solve_1: finished" in reload_state and "not loaded" in reload_state
     run = tmp_path / "studio" / "cai2020_crank_rocker_synthesis_solve_1"
     assert "finished" in state and "status optimal" in state, state
+    assert "; exit 0: every rule satisfied" in state or "; exit 1: solved, some rule violated" in state, state
     here_spec = run.with_suffix(".toml")
     from synthesis.studio.session import Session
 

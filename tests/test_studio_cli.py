@@ -31,6 +31,20 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
     assert port.returncode == 2 and "--port" in port.stderr
 
 
+def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        busy = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", str(port), "--out",
+                       str(tmp_path / "new" / "studio"), cwd=tmp_path)
+    assert busy.returncode == 2 and busy.stderr.strip().splitlines() == [busy.stderr.strip()], busy.stderr
+    assert f"--port {port}: cannot listen on 127.0.0.1" in busy.stderr and "Traceback" not in busy.stderr
+    assert not (tmp_path / "new").exists()
+
+
 def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
                              "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
@@ -58,3 +72,74 @@ def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and err.strip() == "interrupted", err     # Ctrl-C: the CLI's exit 130
+
+
+def _children(pid: int) -> set[int]:
+    """Pids of the direct children of ``pid`` (Linux /proc: every thread's list)."""
+    from pathlib import Path
+
+    out = set()
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        out |= {int(c) for c in (task / "children").read_text().split()}
+    return out
+
+
+def _alive(pid: int) -> bool:
+    import os
+
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(tmp_path, sig):
+    """SIGTERM (or a closed terminal's SIGHUP) to `agrisynth studio` while a solve runs: the worker stops too,
+    and the run folder keeps the starts finished so far, with status interrupted."""
+    import json
+
+    from solving import strict_json
+
+    proc = subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
+                             "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        match = None
+        for _ in range(5):
+            match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", proc.stdout.readline())
+            if match:
+                break
+        assert match, "no address printed"
+        base, token = f"http://127.0.0.1:{match.group(1)}", match.group(2)
+
+        def call(path, body=None):
+            headers = {"X-Studio-Token": token, "Content-Type": "application/json"}
+            req = urllib.request.Request(base + path, headers=headers,
+                                         data=None if body is None else json.dumps(body).encode())
+            for _ in range(200):          # the address is printed just before the server listens
+                try:
+                    return json.loads(urllib.request.urlopen(req, timeout=30).read())
+                except urllib.error.URLError as exc:
+                    if isinstance(exc, urllib.error.HTTPError):
+                        raise
+                    time.sleep(0.05)
+            raise AssertionError("the studio never answered")
+
+        call("/api/solve", {"starts": 256})
+        while (answer := call("/api/solve"))["done"] < 1:      # a start finished, so there is something to keep
+            assert answer["state"] == "running", answer
+            time.sleep(0.1)
+        (worker,) = _children(proc.pid)
+        proc.send_signal(sig)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == -sig
+    assert not _alive(worker), f"the solve's worker {worker} outlived the studio"
+    (run,) = [p for p in (tmp_path / "studio").iterdir() if p.is_dir()]
+    result = strict_json(run / "result.json")
+    assert result["status"] == "interrupted" and 1 <= len((run / "starts.jsonl").read_text().splitlines()) < 256

@@ -47,6 +47,35 @@ def test_other_hosts_and_origins_are_refused(planting_studio):
     assert sorted(s.out.iterdir()) == files         # nothing refused wrote a file
     status, _, _ = request(s, "POST", "/api/evaluate", {"values": values}, origin=f"http://127.0.0.1:{s.port}")
     assert status == 200
+    # the page and its assets are guarded alike (the token in the address does not let another Host or Origin in)
+    for path in ("/", "/studio.js", "/studio.css"):
+        status, _, body = request(s, "GET", f"{path}?token={s.token}", token=None, host=f"evil.example:{s.port}")
+        assert status == 403 and b"Host" in body, (path, status)
+        status, _, body = request(s, "GET", f"{path}?token={s.token}", token=None, origin="http://evil.example")
+        assert status == 403 and b"Origin" in body, (path, status)
+        assert request(s, "GET", f"{path}?token={s.token}", token=None)[0] == 200
+
+
+def test_on_port_80_a_host_without_the_port_is_this_studio(tmp_path):
+    """A browser leaves out the default port: on port 80 Host is `127.0.0.1` or `localhost`, Origin likewise."""
+    from synthesis.studio.server import Refused, Studio
+
+    studio = Studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio")
+    try:
+        def check(host, origin=None):
+            headers = [(b"host", host.encode())] + ([(b"origin", origin.encode())] if origin else [])
+            studio._check({"headers": headers, "query_string": f"token={studio.token}".encode()})
+        studio.port = 80
+        for host in ("127.0.0.1", "localhost", "127.0.0.1:80", "localhost:80"):
+            check(host, f"http://{host}")
+        studio.port = 8765
+        for host in ("127.0.0.1", "localhost", "127.0.0.1:80"):
+            with pytest.raises(Refused, match="Host"):
+                check(host)
+        with pytest.raises(Refused, match="Origin"):
+            check("127.0.0.1:8765", "http://127.0.0.1")
+    finally:
+        studio.socket.close()
 
 
 def test_bad_values_get_one_line_naming_the_field(planting_studio):
@@ -64,13 +93,23 @@ def test_bad_values_get_one_line_naming_the_field(planting_studio):
     assert status == 400 and json.loads(raw)["error"].startswith("request: not JSON")
     status, _, raw = request(s, "POST", "/api/evaluate", b"values=1", content_type="application/x-www-form-urlencoded")
     assert status == 400 and "Content-Type" in json.loads(raw)["error"]
+    for path, body, message in (
+            ("/api/evaluate", {"values": {}, "grids": "fine"}, "request: unknown key 'grids' (expected: grid, values)"),
+            ("/api/save", {"values": {}, "file": "../x.toml"}, "request: unknown key 'file' (expected: values)"),
+            ("/api/solve", {"start": 3}, "request: unknown key 'start' (expected: starts, values)"),
+            ("/api/solve/cancel", {"now": True}, "request: unknown key 'now' (expected: none)")):
+        status, _, raw = request(s, "POST", path, body)
+        assert status == 400 and json.loads(raw)["error"] == message, (path, raw)
+    assert s.job is None                 # the refused solve did not start
 
 
 def test_saves_only_into_its_folder_with_names_it_picks(planting_studio, tmp_path):
     s = planting_studio
     values = moved_values(s.session)
     before = {p.name for p in s.out.iterdir()}
-    first = api(s, "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    status, _, _ = request(s, "POST", "/api/save", {"values": values, "file": "../../escape.toml", "name": "/etc/passwd"})
+    assert status == 400                 # the page never names a file: such a request is refused outright
+    first = api(s, "/api/save", {"values": values})
     second = api(s, "/api/save", {"values": values})
     assert (first["file"], second["file"]) == ("redesign_from_example1_saved_1.toml",
                                                "redesign_from_example1_saved_2.toml")
@@ -109,11 +148,17 @@ def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
         assert checked.design[name] == value
     assert [r["name"] for r in coarse["rules"]] == [r["name"] for r in fine["rules"]]
     drawing = fine["drawing"]
-    lines = drawing["main"]["lines"]
-    assert lines or drawing["mechanism"]["frames"] or drawing["charts"]
-    assert all(len(l["x"]) == len(l["y"]) >= 2 for l in lines)
-    assert all(len(s["y"]) == len(c["x"]) for c in drawing["charts"] for s in c["series"])
-    assert all(math.isfinite(x) for l in lines for x in l["x"] if x is not None)
+    lines, frames, charts = drawing["main"]["lines"], drawing["mechanism"]["frames"], drawing["charts"]
+    assert len(lines) + len(frames) + len(charts) > 0, drawing
+    for l in lines:
+        assert len(l["x"]) == len(l["y"]) >= 2, l["name"]
+        finite_xy = [(x, y) for x, y in zip(l["x"], l["y"]) if x is not None and y is not None]
+        assert len(finite_xy) >= 2 and all(math.isfinite(x) and math.isfinite(y) for x, y in finite_xy), l["name"]
+    for c in charts:
+        assert c["series"] and len(c["x"]) >= 2, c["name"]
+        assert all(len(series["y"]) == len(c["x"]) for series in c["series"]), c["name"]
+    for f in frames:
+        assert f and all(len(xy) == 2 and all(math.isfinite(v) for v in xy) for xy in f.values())
 
 
 def test_planting_draws_the_arm_and_both_frames(planting_studio):
@@ -151,13 +196,32 @@ def test_coarse_grid_is_coarser_and_says_so(planting_studio):
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.02, abs=0.05), r["name"]
 
 
-def test_a_kind_whose_check_reads_solver_samples_gets_them_divided():
+def test_the_coarse_grid_note_states_the_samples_evaluated():
+    """Each note gives the counts the check runs on, not the [solver] value it is derived from; a check that
+    reads no (effective) sample count is said to have one grid, and its coarse table is its fine one."""
     from synthesis.spec import load_spec
     from synthesis.studio import grids
+    from synthesis.studio.session import Session
 
     spec = load_spec(STUDIO_SPECS["fourbar_path"]).model
     assert spec.solver.samples == 36 and grids._coarser(spec).solver.samples == 4      # not below ge=4
-    assert grids.note("fourbar_path", "coarse", spec) == "the check with [solver] samples 36 -> 4"
+    assert spec.rules.grashof == "crank-rocker"          # path_rules reads the samples only for grashof "any"
+    assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank-rocker\"")
+    anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof": "any"})})
+    assert grids.note("fourbar_path", "coarse", anything) == ("the check on 40 samples per gap between targets "
+                                                              "(fine: 360)")
+    steering = load_spec(STUDIO_SPECS["steering_linkage"]).model
+    assert grids.note("steering_linkage", "coarse", steering) == ("the check on 41 inside locks (fine: 401), "
+                                                                  "without its Table 12 explanation")
+    guide_way = load_spec(STUDIO_SPECS["guide_way"]).model
+    assert grids.note("guide_way", "coarse", guide_way) == "the check on 50 samples per segment (fine: 400)"
+    comb = load_spec(STUDIO_SPECS["comb_finger"]).model
+    assert grids.note("comb_finger", "coarse", comb) == ("the check's one grid (3600 finger turn angles: it does not "
+                                                         "go below that for [solver] turn_samples 72)")
+    for kind in ("fourbar_path", "comb_finger"):
+        session = Session.open(STUDIO_SPECS[kind])
+        values = moved_values(session, 0.1)
+        assert session.evaluate(values, "coarse")["rules"] == session.evaluate(values, "fine")["rules"], kind
 
 
 @pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam",
@@ -178,6 +242,19 @@ def test_coarse_rules_are_the_checks_on_fewer_samples(kind):
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], rel=0.03, abs=0.1), r["name"]
 
 
+def settled(studio, deadline_s: float = 120.0) -> dict:
+    """/api/solve once the solve has ended (polled; the deadline only bounds a hung worker)."""
+    import time
+
+    end = time.monotonic() + deadline_s
+    while True:
+        answer = api(studio, "/api/solve")
+        if answer["state"] not in ("running", "cancelling"):
+            return answer
+        assert time.monotonic() < end, answer
+        time.sleep(0.1)
+
+
 def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     s = planting_studio
     values = moved_values(s.session, 0.1)
@@ -185,10 +262,13 @@ def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     assert first["state"] == "running" and first["total"] == 256
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 1})
     assert status == 409 and json.loads(raw)["error"].startswith("a solve is running (redesign_from_example1_solve_1)")
-    cancelled = api(s, "/api/solve/cancel", {})
+    cancelling = api(s, "/api/solve/cancel", {})
+    assert cancelling["state"] in ("cancelling", "cancelled"), cancelling
+    cancelled = settled(s)
     assert cancelled["state"] == "cancelled" and cancelled["exit_code"] in (143, -15), cancelled
+    assert cancelled["exit"] in ("exit 143: cancelled (the finished starts are kept)",
+                                 "cancelled before any start finished (nothing kept)"), cancelled
     assert cancelled["done"] < 256
-    assert api(s, "/api/solve")["state"] == "cancelled"
     assert s.job.process.poll() is not None         # the worker process is gone
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
     assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"
@@ -220,7 +300,7 @@ def test_steering_coarse_grid_samples_fewer_locks_and_skips_the_table12_fits():
         # the transmission angle's extreme over 41 locks instead of 401: within a tenth of a degree here
         assert r["value"] == pytest.approx(by_name[r["name"]]["value"], abs=0.1), r["name"]
     assert len(coarse["drawing"]["charts"][0]["x"]) == 41 and len(fine["drawing"]["charts"][0]["x"]) > 41
-    assert coarse["grid_note"] == "the check with [solver] samples 40 -> 4, without its Table 12 explanation"
+    assert coarse["grid_note"] == "the check on 41 inside locks (fine: 401), without its Table 12 explanation"
 
 
 def test_answers_are_not_held_back_by_nagles_algorithm(planting_studio):
@@ -249,3 +329,92 @@ def test_fourbar_path_draws_its_linkage_from_the_kinds_own_construction():
                                (("O", "O'"), values["r1"])):
             assert math.dist(f[a], f[b]) == pytest.approx(length, abs=2e-3)
         assert min(math.dist(f["P"], xy) for xy in zip(path["x"], path["y"])) < 2.0
+
+
+def test_a_huge_integer_is_a_400_naming_the_field(planting_studio):
+    """A JSON integer beyond a float's range (330 digits) is bad input, not an internal error."""
+    s = planting_studio
+    huge = b'{"values": {"l2": 1' + b"0" * 330 + b'}}'
+    for path in ("/api/evaluate", "/api/save", "/api/solve"):
+        status, _, raw = request(s, "POST", path, huge)
+        answer = json.loads(raw)
+        assert status == 400 and answer["error"].startswith("values.l2: expected a finite number, got '1000"), answer
+
+
+def test_only_one_of_simultaneous_solves_starts(tmp_path):
+    """Two solve requests at once, each held where it writes its spec until the other arrives there too (or,
+    when the other cannot, as it must not, for 2 s): exactly one starts, the other is told a solve is running."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        both_there = threading.Barrier(2)
+        write_spec = s._write_spec
+
+        def held(*args):
+            try:
+                both_there.wait(timeout=2)
+            except threading.BrokenBarrierError:
+                pass
+            return write_spec(*args)
+        s._write_spec = held
+        values = moved_values(s.session, 0.1)
+        with ThreadPoolExecutor(2) as pool:
+            answers = list(pool.map(lambda _: request(s, "POST", "/api/solve", {"values": values, "starts": 64}),
+                                    range(2)))
+        assert sorted(status for status, _, _ in answers) == [200, 409], [a[0] for a in answers]
+        assert len(list(s.out.glob("*_solve_*.toml"))) == 1
+
+
+def test_cancel_answers_at_once_and_kills_a_worker_that_does_not_stop(tmp_path):
+    """A worker that cannot answer SIGTERM (stopped here with SIGSTOP): cancel answers "cancelling" without
+    waiting for it, and after the grace period the worker's process group is killed."""
+    import os
+    import signal
+    import time
+
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        s.grace = 0.5
+        api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 256})
+        # stopped once it answers SIGTERM itself (a start has finished): a stopped process with SIGTERM's default
+        # action would still be ended by it
+        while api(s, "/api/solve")["done"] < 1:
+            assert s.job.running, s.job.status()
+            time.sleep(0.05)
+        os.killpg(s.job.process.pid, signal.SIGSTOP)
+        answer = api(s, "/api/solve/cancel", {})
+        assert answer["state"] == "cancelling" and answer["exit_code"] is None, answer
+        assert api(s, "/api/solve")["state"] == "cancelling"
+        ended = settled(s)
+        assert ended["state"] == "cancelled" and ended["exit_code"] == -signal.SIGKILL, ended
+        assert ended["exit"] == "killed after 0.5 s of not stopping (nothing kept)"
+
+
+def test_a_solve_runs_the_studios_own_package_whatever_its_folder(tmp_path, monkeypatch):
+    """Started with a relative PYTHONPATH (`PYTHONPATH=. agrisynth studio ...`): the worker, which runs in the
+    studio's folder, still imports this synthesis package and its run is written."""
+    from pathlib import Path
+
+    import synthesis
+
+    monkeypatch.chdir(Path(synthesis.__file__).parent.parent)
+    monkeypatch.setenv("PYTHONPATH", ".")
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio") as s:
+        api(s, "/api/solve", {"values": moved_values(s.session, 0.1), "starts": 1})
+        ended = settled(s)
+    assert ended["state"] == "finished" and ended["exit_code"] in (0, 1), ended
+    words = {0: "exit 0: every rule satisfied", 1: "exit 1: solved, some rule violated"}
+    assert ended["exit"] == words[ended["exit_code"]]
+    assert (tmp_path / "studio" / ended["run"] / "result.json").is_file() and ended["status"] == "optimal"
+
+
+def test_a_solve_that_fails_says_so_with_its_last_line(tmp_path):
+    """No result.json: the exit code is not read as `solve`'s verdict; the page gets the worker's last line."""
+    from synthesis.studio.solver import SolveJob
+
+    job = SolveJob("gone", tmp_path / "gone.toml", tmp_path, 1)
+    job.start()
+    job.wait(120)
+    status = job.status()
+    assert status["state"] == "failed" and status["exit_code"] == 2, status
+    assert status["exit"].startswith("failed (exit 2): ") and "gone.toml" in status["exit"], status

@@ -20,7 +20,11 @@ Fine is ``agrisynth check`` itself.  Coarse is the same check on fewer samples:
   samples_per_turn;
 * combing_chain's check samples 181 plant angles x 51 machine speeds per gear and explains the paper's
   published figures; coarse: the [solver] beta_samples x speed_samples, and only the curves the page draws;
-* a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so).
+* a kind whose check reads no sample count is evaluated on its one grid while dragging too (the page says so):
+  fourbar_path unless its grashof is "any" (its rules are at the targets and in closed form), and comb_finger
+  while 10x its turn_samples is below the check's least 3600 turn angles.
+
+Each note states the sample counts the coarse and the fine grid actually evaluate.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from __future__ import annotations
 from typing import Callable
 
 from synthesis import kinds
+from synthesis.core.verdict import FINE
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
@@ -179,9 +184,26 @@ def note(kind: str, grid: str, spec=None) -> str:
         return f"the check with [solver] sample counts / {COARSENING}"
     fields = _sample_fields(spec)
     coarse = _coarser(spec).solver
-    if kind == "steering_linkage":
-        return (f"the check with [solver] samples {spec.solver.samples} -> {coarse.samples}, "
-                f"without its Table 12 explanation")
+    if kind == "steering_linkage":        # lock_grid: samples + 1 locks, the check's on 10x the [solver] samples
+        return (f"the check on {FINE * coarse.samples + 1} inside locks (fine: "
+                f"{FINE * spec.solver.samples + 1}), without its Table 12 explanation")
+    if kind == "fourbar_path":
+        if spec.rules.grashof != "any":   # path_rules samples between targets only for grashof "any"
+            return (f"the check's one grid (grashof = \"{spec.rules.grashof}\": its rules are evaluated at the "
+                    f"targets and in closed form, on no sample count)")
+        return (f"the check on {FINE * coarse.samples} samples per gap between targets (fine: "
+                f"{FINE * spec.solver.samples})")
+    if kind == "guide_way":
+        return (f"the check on {FINE * coarse.samples_per_segment} samples per segment (fine: "
+                f"{FINE * spec.solver.samples_per_segment})")
+    if kind == "comb_finger":
+        from synthesis.comb_finger.check import fine_samples
+
+        ours, theirs = fine_samples(_coarser(spec)), fine_samples(spec)
+        if ours == theirs:                 # the check samples at least CHECK_TURN_SAMPLES, whatever [solver] says
+            return (f"the check's one grid ({theirs} finger turn angles: it does not go below that for [solver] "
+                    f"turn_samples {spec.solver.turn_samples})")
+        return f"the check on {ours} finger turn angles (fine: {theirs})"
     if kind == "tillage_linkage":
         return (f"the check's rules on [solver] samples {spec.solver.samples} and soil_samples "
                 f"{spec.solver.soil_samples} (fine: 10x), without the printed-equation residuals")

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import json
 import re
+import asyncio
 import secrets
+import signal
 import socket
 import threading
 from importlib import resources
@@ -26,7 +28,7 @@ from starlette.routing import Route
 from synthesis.errors import AgrisynthError, OutputError
 from synthesis.result import atomic_write_text
 from synthesis.studio.session import Session
-from synthesis.studio.solver import SolveJob
+from synthesis.studio.solver import GRACE, SolveJob
 
 HOST = "127.0.0.1"
 TOKEN_HEADER = "x-studio-token"
@@ -45,9 +47,17 @@ MAX_STARTS = 256
 
 
 class Refused(Exception):
+    """A request this studio will not serve (wrong Host, Origin or token; a second solve): answered with
+    ``status`` and the one-line message, never reaching the session."""
+
     def __init__(self, status: int, message: str):
         super().__init__(message)
         self.status = status
+
+
+def _refuse_constant(name: str):
+    """json.loads's hook for NaN, Infinity and -Infinity, which Python reads but JSON does not have."""
+    raise ValueError(f"{name} is not JSON")
 
 
 class Studio:
@@ -56,19 +66,27 @@ class Studio:
     def __init__(self, spec: Path, out: Path, port: int = 0, token: str | None = None):
         self.session = Session.open(spec)
         self.out = Path(out).resolve()
-        try:
-            self.out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.token = token or secrets.token_urlsafe(24)
         # proto IPPROTO_TCP (not 0): asyncio turns Nagle's algorithm off only on sockets saying so; with it on,
         # each keep-alive answer waited ~40 ms for the browser's delayed ACK
         self.socket = socket.socket(socket.AF_INET, socket.SOCK_STREAM, socket.IPPROTO_TCP)
-        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.socket.bind((HOST, port))
+        try:
+            self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            self.socket.bind((HOST, port))
+        except OSError:
+            self.socket.close()
+            raise
         self.port = self.socket.getsockname()[1]
+        # created only once the port is ours: a studio that cannot listen leaves no folder behind
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            self.socket.close()
+            raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.job: SolveJob | None = None
+        self.grace = GRACE                        # seconds a cancelled worker gets before it is killed
+        self._solving = threading.Lock()          # "is a solve running?" and starting one are one step
         self._evaluating = threading.Lock()       # one evaluation at a time (two cores; CasADi calls)
         self._writing = threading.Lock()          # file names are picked and written one at a time
         self.app = self._guarded(Starlette(routes=[
@@ -88,7 +106,11 @@ class Studio:
 
     # -- the guard ------------------------------------------------------------------------------------------
     def _allowed_hosts(self) -> set[str]:
-        return {f"{HOST}:{self.port}", f"localhost:{self.port}"}
+        names = {HOST, "localhost"}
+        hosts = {f"{name}:{self.port}" for name in names}
+        if self.port == 80:                # a browser leaves out the scheme's default port in Host and Origin
+            hosts |= names
+        return hosts
 
     def _check(self, scope) -> None:
         headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
@@ -135,25 +157,29 @@ class Studio:
         return JSONResponse(data, status_code=status, headers=SECURITY_HEADERS)
 
     @staticmethod
-    async def _body(request: Request) -> dict:
+    async def _body(request: Request, keys: frozenset[str]) -> dict:
         if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
             raise AgrisynthError("request: expected Content-Type application/json")
         raw = await request.body()
         if len(raw) > MAX_BODY:
             raise AgrisynthError(f"request: body of {len(raw)} bytes is larger than {MAX_BODY}")
         try:
-            data = json.loads(raw, parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
+            data = json.loads(raw, parse_constant=_refuse_constant)
         except ValueError as exc:
             raise AgrisynthError(f"request: not JSON ({str(exc)[:60]})") from None
         if not isinstance(data, dict):
             raise AgrisynthError("request: expected a JSON object")
+        unknown = sorted(str(k)[:40] for k in data if k not in keys)
+        if unknown:
+            raise AgrisynthError(f"request: unknown key {unknown[0]!r} (expected: {', '.join(sorted(keys)) or 'none'})")
         return data
 
-    async def _handle(self, request: Request, work) -> JSONResponse:
+    async def _handle(self, request: Request, work, keys: frozenset[str] = frozenset()) -> JSONResponse:
+        """Run ``work(body)`` off the event loop; ``keys``: the only keys a POST body may have."""
         from starlette.concurrency import run_in_threadpool
 
         try:
-            body = await self._body(request) if request.method == "POST" else {}
+            body = await self._body(request, keys) if request.method == "POST" else {}
             return self._answer(await run_in_threadpool(work, body))
         except Refused as exc:
             return self._answer({"error": str(exc)}, exc.status)
@@ -170,7 +196,7 @@ class Studio:
         def work(body):
             with self._evaluating:
                 return self.session.evaluate(body.get("values", {}), body.get("grid", "fine"))
-        return await self._handle(request, work)
+        return await self._handle(request, work, frozenset({"values", "grid"}))
 
     def _free_name(self, what: str) -> str:
         """``<spec name>_<what>_<n>``: the first n with neither a spec file nor a folder of that name."""
@@ -193,7 +219,7 @@ class Studio:
             name, path = self._write_spec(values, "saved", "saved from agrisynth studio: the free variables' "
                                                            "start values are the page's values")
             return {"file": path.name, "name": name, "folder": str(self.out)}
-        return await self._handle(request, work)
+        return await self._handle(request, work, frozenset({"values"}))
 
     async def solve(self, request: Request) -> JSONResponse:
         def work(body):
@@ -203,63 +229,93 @@ class Studio:
 
             if not kinds.get(self.session.kind).solves:
                 raise AgrisynthError(f"kind {self.session.kind} has nothing to optimise (check-only)")
-            if self.job is not None and self.job.running:
-                raise Refused(409, f"a solve is running ({self.job.run_name}); cancel it or wait")
             starts = body.get("starts", 1)
             if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= MAX_STARTS:
                 raise AgrisynthError(f"starts: expected a whole number 1..{MAX_STARTS}, got {str(starts)[:20]!r}")
             values = self.session.values_of(body.get("values", {}))
-            name, path = self._write_spec(values, "solve", "solved from here by agrisynth studio: start 0 is the "
-                                                           "page's values")
-            self.job = SolveJob(name, path, self.out, starts)
-            self.job.start()
-            return self.job.status()
-        return await self._handle(request, work)
+            with self._solving:
+                if self.job is not None and self.job.running:
+                    raise Refused(409, f"a solve is running ({self.job.run_name}); cancel it or wait")
+                name, path = self._write_spec(values, "solve", "solved from here by agrisynth studio: start 0 is "
+                                                               "the page's values")
+                self.job = SolveJob(name, path, self.out, starts)
+                self.job.start()
+                return self.job.status()
+        return await self._handle(request, work, frozenset({"values", "starts"}))
 
     async def solve_status(self, request: Request) -> JSONResponse:
         return await self._handle(request, lambda body: self.job.status() if self.job else {"state": "idle"})
 
     async def cancel(self, request: Request) -> JSONResponse:
+        """Ask the running solve to stop and answer at once ("cancelling"); the page polls /api/solve."""
         def work(body):
-            if self.job is None or not self.job.running:
-                return {"state": "idle" if self.job is None else self.job.status()["state"]}
-            self.job.cancel()
-            self.job.wait(30)
+            if self.job is None:
+                return {"state": "idle"}
+            self.job.cancel(self.grace)
             return self.job.status()
         return await self._handle(request, work)
 
     # -- serving --------------------------------------------------------------------------------------------
+    def stop_job(self) -> None:
+        """Cancel a running solve and return once its worker is gone (killed after the grace period if it does
+        not stop): every way the studio ends goes through here, so no worker outlives it."""
+        job = self.job
+        if job is not None and job.running:
+            job.cancel(self.grace)
+            job.wait(self.grace + 5)
+
     def start_in_thread(self) -> "threading.Thread":
         """Serve from a background thread (tests, benchmarks); returns once the server listens."""
         import time
 
         self._server = self.server()
-        thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
-        thread.start()
+        self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
+        self._thread.start()
         while not self._server.started:
-            if not thread.is_alive():
+            if not self._thread.is_alive():
                 raise RuntimeError("the studio server did not start")
             time.sleep(0.01)
-        return thread
+        return self._thread
 
     def stop(self) -> None:
-        if self.job is not None:
-            self.job.cancel()
-            self.job.wait(30)
+        """Stop serving (the server's shutdown cancels a running solve) and wait until it has."""
         if getattr(self, "_server", None) is not None:
             self._server.should_exit = True
+            self._thread.join(self.grace + 30)
+        self.stop_job()
 
     def server(self):
         import uvicorn
 
-        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off")
-        return uvicorn.Server(config)
+        studio = self
+
+        class Server(uvicorn.Server):
+            async def shutdown(self, sockets=None) -> None:
+                # here, not after run() returns: on SIGTERM uvicorn re-raises the signal as soon as it has shut
+                # down, which ends the process before any code after run() would cancel the solve
+                await super().shutdown(sockets)
+                await asyncio.to_thread(studio.stop_job)
+
+        config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off", ws="none")
+        return Server(config)
 
     def serve(self) -> None:
-        """Serve until interrupted (Ctrl-C); a running solve is cancelled on the way out."""
+        """Serve until Ctrl-C, SIGTERM or SIGHUP; a running solve is cancelled on the way out, then the signal
+        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it)."""
+        server = self.server()
+        # uvicorn shuts down gracefully on SIGINT and SIGTERM only; a closed terminal (SIGHUP) would otherwise
+        # end the studio at once and leave its worker running
+        hung_up = []
+
+        def hang_up(sig, frame):
+            hung_up.append(sig)
+            server.should_exit = True
+
+        previous = signal.signal(signal.SIGHUP, hang_up)
         try:
-            self.server().run(sockets=[self.socket])
+            server.run(sockets=[self.socket])
         finally:
-            if self.job is not None:
-                self.job.cancel()
-                self.job.wait(30)
+            self.stop_job()
+            signal.signal(signal.SIGHUP, previous)
+        if hung_up:
+            signal.raise_signal(signal.SIGHUP)

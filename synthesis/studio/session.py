@@ -20,17 +20,26 @@ from pathlib import Path
 from typing import Any
 
 from synthesis import kinds
-from synthesis.design_info import describe
+from synthesis.design_info import describe, walk_fields
 from synthesis.errors import AgrisynthError, SpecError
-from synthesis.solved_spec import _parts, _set     # TOML paths as solved.toml writes them
+from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import read_toml, validate
 from synthesis.studio import drawing, grids
 
 def _node(data: Any, path: str) -> Any:
-    for part in _parts(path):
+    for part in path_parts(path):
         data = data[part]
     return data
+
+
+def _finite_number(value: int | float) -> bool:
+    """Whether ``value`` is a finite float: JSON's integers have any number of digits, and one beyond a
+    float's range (about 309 digits) makes math.isfinite raise OverflowError."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def finite(value: Any) -> Any:
@@ -109,7 +118,7 @@ class Session:
             if name not in free:
                 raise SpecError(f"values.{str(name)[:60]}: not a free design variable of {self.loaded.name} "
                                 f"(free: {', '.join(free) or 'none'})")
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not _finite_number(value):
                 raise SpecError(f"values.{name}: expected a finite number, got {str(value)[:40]!r}")
             lo, hi = free[name].bounds
             if not lo <= value <= hi:
@@ -119,10 +128,10 @@ class Session:
 
     def _other_spec_files(self) -> list[tuple[str, Path]]:
         """(TOML path, file) of every field naming another spec file (relative to the spec that holds it)."""
-        from synthesis.design_info import _walk
         from synthesis.spec.docmeta import SpecFile
 
-        return [(path, (self.loaded.path.parent / value).resolve()) for path, field, value in _walk(self.loaded.model)
+        return [(path, (self.loaded.path.parent / value).resolve())
+                for path, field, value in walk_fields(self.loaded.model)
                 if isinstance(value, str) and any(isinstance(m, SpecFile) for m in field.metadata)]
 
     def spec_data(self, values: dict[str, float], name: str | None = None,
@@ -133,7 +142,7 @@ class Session:
         data = copy.deepcopy(self.data)
         if folder is not None:
             for path, target in self._other_spec_files():
-                _set(data, path, os.path.relpath(target, folder))
+                set_at_path(data, path, os.path.relpath(target, folder))
         for var in self.free:
             node = _node(data, var.path)
             if isinstance(node, dict):                      # {init, bounds}: the start value

@@ -4,13 +4,17 @@ The values are written as a spec (the spec file with each free variable's start 
 they are start 0) into the studio's folder, and ``agrisynth solve`` runs on it there, exactly as a
 user would run it: the same multistart, the same run folder (result.json, report, solved.toml, ipopt.log).
 Progress is read from the lines ``solve`` prints for each finished start when its output is piped;
-cancelling sends SIGTERM, which ``solve`` answers by keeping the finished starts (exit 143).
+cancelling sends SIGTERM, which ``solve`` answers by keeping the finished starts (exit 143); a worker
+still alive GRACE seconds later is killed (SIGKILL).  The worker runs in its own process group, so the
+studio, not the terminal, decides when it stops (Ctrl-C, SIGTERM or SIGHUP to the studio cancel it the
+same way) and the kill reaches anything it started.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -18,15 +22,27 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import synthesis
 from synthesis.studio.session import finite
 
 #: "start 3 finished (2/16): ..." -- one line per finished start (synthesis.cli._start_line)
 _PROGRESS = re.compile(r"^start (\d+) finished \((\d+)/(\d+)\)")
 #: exit codes of `agrisynth solve` (DESIGN.md) in words
 EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad input", 3: "infeasible or failed",
-         130: "interrupted", 143: "cancelled (the finished starts are kept)", -15: "cancelled before any start finished"}
+         130: "interrupted", 143: "cancelled (the finished starts are kept)"}
 #: last lines of the solve's output kept for the page
 TAIL = 12
+#: seconds a cancelled worker has to write its finished starts before it is killed
+GRACE = 10.0
+#: the folder holding the ``synthesis`` package this studio runs: the worker imports the same one, whatever
+#: its working directory (the studio's folder) and however the studio found it (a relative PYTHONPATH, say)
+PACKAGE_ROOT = Path(synthesis.__file__).resolve().parent.parent
+
+
+def worker_env() -> dict[str, str]:
+    """The environment of the worker: this one, with the package root first on PYTHONPATH."""
+    given = os.environ.get("PYTHONPATH", "")
+    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(PACKAGE_ROOT)] + ([given] if given else [])))
 
 
 @dataclass
@@ -43,14 +59,18 @@ class SolveJob:
     lines: list[str] = field(default_factory=list)
     exit_code: int | None = None
     cancelled: bool = False
+    killed: bool = False
+    grace: float = GRACE
     _reader: threading.Thread | None = None
 
     def start(self) -> None:
         cmd = [sys.executable, "-m", "synthesis.cli", "solve", str(self.spec_file), "--out", str(self.out),
                "--starts", str(self.starts), "--workers", "1"]
         self.total = self.starts
+        # its own session (so its own process group): a Ctrl-C in the studio's terminal reaches the studio only,
+        # which then cancels the worker, and the group can be killed as a whole
         self.process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        env=dict(os.environ, COLUMNS="120"), cwd=self.out)
+                                        env=worker_env(), cwd=self.out, start_new_session=True)
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -69,10 +89,27 @@ class SolveJob:
     def running(self) -> bool:
         return self.exit_code is None
 
-    def cancel(self) -> None:
-        if self.process is not None and self.running:
-            self.cancelled = True
-            self.process.terminate()
+    def _signal_group(self, sig: int) -> None:
+        assert self.process is not None
+        try:
+            os.killpg(self.process.pid, sig)
+        except ProcessLookupError:         # already gone
+            pass
+
+    def cancel(self, grace: float = GRACE) -> None:
+        """Ask the worker to stop (SIGTERM: it keeps its finished starts) and return at once; the worker's
+        process group is killed if it is still alive ``grace`` seconds later."""
+        if self.process is None or not self.running or self.cancelled:
+            return
+        self.cancelled, self.grace = True, grace
+        self._signal_group(signal.SIGTERM)
+        threading.Thread(target=self._kill_after, daemon=True).start()
+
+    def _kill_after(self) -> None:
+        self.wait(self.grace)
+        if self.running:
+            self.killed = True
+            self._signal_group(signal.SIGKILL)
 
     def wait(self, timeout: float | None = None) -> None:
         if self._reader is not None:
@@ -87,12 +124,30 @@ class SolveJob:
 
         return load_result(path).to_json()
 
+    def _exit_words(self, result: dict[str, Any] | None) -> str:
+        """How the worker ended, in words the page shows as they are: the exit code in DESIGN.md's meaning only
+        when the run wrote its result (a crash exits 1 too)."""
+        if self.exit_code is None:
+            return ""
+        if result is not None:
+            return f"exit {self.exit_code}: {EXITS.get(self.exit_code, 'not an exit code of agrisynth solve')}"
+        if self.killed:
+            return f"killed after {self.grace:g} s of not stopping (nothing kept)"
+        if self.cancelled and self.exit_code in (143, -signal.SIGTERM):    # -15: ended before solve set its handler
+            return "cancelled before any start finished (nothing kept)"
+        last = self.lines[-1][:200] if self.lines else "no output"
+        return f"failed (exit {self.exit_code}): {last}"
+
     def status(self) -> dict[str, Any]:
-        state = "running" if self.running else ("cancelled" if self.cancelled else "finished")
-        out: dict[str, Any] = {"state": state, "run": self.run_name, "done": self.done, "total": self.total,
-                               "lines": self.lines, "exit_code": self.exit_code,
-                               "exit": EXITS.get(self.exit_code, "") if self.exit_code is not None else ""}
+        if self.running:
+            state = "cancelling" if self.cancelled else "running"
+        else:
+            state = "cancelled" if self.cancelled else "finished"
         result = self.result()
+        if state == "finished" and result is None:
+            state = "failed"
+        out: dict[str, Any] = {"state": state, "run": self.run_name, "done": self.done, "total": self.total,
+                               "lines": self.lines, "exit_code": self.exit_code, "exit": self._exit_words(result)}
         if result is not None:
             out.update(status=result["status"], design=result["design"], objective=result.get("objective"),
                        folder=self.run_name)

@@ -8,7 +8,7 @@ const COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2
 
 const state = {
   info: null, values: {}, given: {}, inflight: false, pending: null, evaluations: 0,
-  current: null, baseline: null, frame: 0, timer: null, polling: null,
+  current: null, baseline: null, frame: 0, timer: null, polling: null, solving: false,
 };
 
 async function api(path, body) {
@@ -100,22 +100,36 @@ function freeValues() {
 }
 
 // ---- evaluation: one request in flight; the latest values go next (fine wins over coarse) -------------------
+// body[data-busy] is "1" from a request until nothing is in flight or pending: the moment the page shows the
+// answer for the sliders' values (tests wait for it)
 function request(grid) {
   if (state.inflight) {
     if (state.pending !== "fine") state.pending = grid;
     return;
   }
   state.inflight = true;
+  document.body.dataset.busy = "1";
   const began = performance.now();
   api("/api/evaluate", { values: freeValues(), grid })
     .then((data) => { render(data, performance.now() - began); })
-    .catch((err) => { showError(String(err.message || err)); })
+    .catch((err) => { stale(String(err.message || err)); })
     .finally(() => {
       state.inflight = false;
       const next = state.pending;
       state.pending = null;
       if (next) request(next);
+      else document.body.dataset.busy = "0";
     });
+}
+
+// no answer for the sliders' values: the table and drawing of earlier values must not stand beside them
+function stale(message) {
+  state.current = null;
+  showError(message);
+  renderTable({ rules: [], error: message });
+  renderDrawing();
+  document.getElementById("status").textContent = `not evaluated: ${message}`;
+  document.body.dataset.grid = "none";
 }
 
 function showError(text) {
@@ -365,14 +379,14 @@ function reset() {
 }
 
 function showSolve(s) {
-  const running = s.state === "running";
+  const running = s.state === "running" || s.state === "cancelling";
   document.getElementById("solve").disabled = running;
   document.getElementById("cancel").disabled = !running;
   const bar = document.getElementById("progress");
   bar.max = Math.max(1, s.total || 1);
   bar.value = s.done || 0;
   let text = s.state === "idle" ? "no solve yet" : `${s.run}: ${s.state}, ${s.done || 0}/${s.total || "?"} starts`;
-  if (!running && s.exit_code !== null && s.exit_code !== undefined) text += `; exit ${s.exit_code} (${s.exit})`;
+  if (!running && s.exit) text += `; ${s.exit}`;
   if (s.status) text += `; status ${s.status}` + (s.objective ? `, ${s.objective.name} = ${fmt(s.objective.value)}` : "");
   if (s.folder) text += `; run written to ${s.folder}/`;
   document.getElementById("solve-state").textContent = text;
@@ -380,12 +394,19 @@ function showSolve(s) {
   document.body.dataset.solve = s.state;
 }
 
+// the sliders take a solve's design only when this page started it and it finished; an earlier run (found on
+// load, or cancelled) is only reported in the solve line: the page opens on the spec's values
 function poll() {
   clearTimeout(state.polling);
   api("/api/solve").then((s) => {
     showSolve(s);
-    if (s.state === "running") { state.polling = setTimeout(poll, 300); return; }
-    if (s.design) {
+    if (s.state === "running" || s.state === "cancelling") { state.polling = setTimeout(poll, 300); return; }
+    const adopt = state.solving && s.state === "finished";
+    state.solving = false;
+    if (!adopt && s.design) {
+      document.getElementById("solve-state").textContent += "; its design is not loaded into the sliders";
+    }
+    if (adopt && s.design) {
       // IPOPT may end a hair outside a bound (its bound relaxation, ~1e-8 relative); a spec's start value must lie
       // within its bounds, so such a value is put on the bound, and the page says by how much
       const clamped = [];
@@ -408,6 +429,7 @@ async function solve() {
   try {
     const starts = Number(document.getElementById("starts").value);
     showSolve(await api("/api/solve", { values: freeValues(), starts }));
+    state.solving = true;
     poll();
   } catch (err) { showError(String(err.message || err)); }
 }
@@ -431,11 +453,15 @@ async function start() {
   buildSliders();
   state.baseline = await api("/api/evaluate", { values: freeValues(), grid: "fine" });
   render(state.baseline, 0);
+  document.body.dataset.busy = "0";
   document.getElementById("save").addEventListener("click", save);
   document.getElementById("reset").addEventListener("click", reset);
   document.getElementById("solve").addEventListener("click", solve);
   document.getElementById("cancel").addEventListener("click", cancel);
-  document.getElementById("compare").addEventListener("change", () => { renderTable(state.current); renderDrawing(); });
+  document.getElementById("compare").addEventListener("change", () => {
+    if (state.current) renderTable(state.current);
+    renderDrawing();
+  });
   document.getElementById("animate").addEventListener("change", animate);
   animate();
   if (solvable) poll();
