@@ -43,10 +43,11 @@ class PlantingNLP:
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
         # an operating condition given as a range is a symbol (the core holds the rules that read it once per
-        # sampled value: an envelope); one given as a number stays a number
+        # sampled value: an envelope); with any range, the other condition is a symbol too, resolved at its number
+        # (so `agrisynth tolerance` has every rule's derivative w.r.t. both); without ranges both stay numbers
         ranges = ranges_of(spec)
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
-                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if n in ranges]
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if ranges]
         op = {o.name: o.symbol for o in self.operating}
         self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
@@ -114,8 +115,9 @@ class PlantingNLP:
 
     def _structural(self, v, p, theta, states, top=None) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
-        seedling clearance, the loop's top (crank angle ``top``, between P6 and P1) at least that far above the
-        seedling-top line, so P1 is a crossing with a sign change and not a touch."""
+        seedling clearance, the loop's top (crank angle ``top``: the height above the seedbed stationary there,
+        between P6 and P1) at least that far above the seedling-top line, so P1 is a crossing with a sign change
+        and not a touch."""
         spec = self.spec
         pos = {k: st[0] for k, st in states.items()}
         vel = {k: st[2] for k, st in states.items()}          # at the nominal crank speed (see _state)
@@ -140,10 +142,11 @@ class PlantingNLP:
         for a, b in zip(order, order[1:]):
             rows.append((theta[b] - theta[a], MIN_GAP, None))
         rows.append((theta["P5"] + TWO_PI - theta["P4"], MIN_GAP, None))
-        if top is not None:
-            rows += [(top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
-                     (height(tip_derivatives(spec.arm.branch)(top, p)[0]) - spec.seedbed.seedling_height,
-                      self.clearance, None)]
+        if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
+            q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
+            rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
+                     (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
+                     (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
         n = spec.solver.samples_per_turn
         samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]

@@ -25,6 +25,7 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
+from synthesis.spec.operating import at_operating
 from synthesis.tolerance.design import DesignMap, box_of, design_map, fine, freed, kind_start, without_ipopt
 
 
@@ -38,6 +39,10 @@ class Linearised:
     slices: list
     values: np.ndarray
     jacobian: np.ndarray   # rows x design variables (design units)
+    #: operating conditions the NLP was written in (an envelope spec): names, units, rows x conditions, and
+    #: the values each rule was resolved at (nominal, or its scenario's); None without
+    operating: tuple | None = None
+    operating_points: list | None = None
 
     def rule_jacobian(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         s = self.slices[k]
@@ -61,8 +66,11 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)
+    src = compiled.problem.operating_source
+    ops = sens.operating(x, p)
+    ops = None if ops is None else (*ops, dict(src.nominal))
     return Linearised(dmap, {k: float(v) for k, v in zip(dmap.keys, d)}, list(compiled.problem.rules), sens.slices,
-                      pt.values, pt.jacobian)
+                      pt.values, pt.jacobian, ops, None if src is None else [dict(v) for _, v in src.rules])
 
 
 def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
@@ -86,6 +94,10 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             "corner": [float(c) for c in _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
         })
+        if lin.operating is not None:
+            names, _, W, _ = lin.operating
+            rows[-1]["operating_point"] = lin.operating_points[k]
+            rows[-1]["operating_sensitivity"] = {n: float(W[lin.slices[k]][i_nom, i]) for i, n in enumerate(names)}
     return rows
 
 
@@ -99,6 +111,22 @@ def _corner(value: float, lower, upper, grad: np.ndarray, box: np.ndarray) -> np
 
 #: the issue's bound on |linear loss - sampled loss| / sampled loss; a rule above it gets an explanation
 GAP_LIMIT = 0.10
+
+
+class _Settings:
+    """The re-check's setting of each stack-up row: the spec's, or for a rule held at an envelope's scenario
+    (``<rule>@<condition>=<value>``) the spec at that operating point, where the re-check names it ``<rule>``."""
+
+    def __init__(self, solving, spec, seed: int):
+        self.solving, self.spec, self.seed, self.cache = solving, spec, seed, {}
+
+    def __call__(self, row: dict) -> tuple[Setting, str]:
+        point = row.get("operating_point") if "@" in row["name"] else None
+        key = None if point is None else tuple(sorted(point.items()))
+        if key not in self.cache:
+            spec = self.spec if point is None else at_operating(self.spec, point)
+            self.cache[key] = Setting(spec, self.seed, self.solving.prepare(spec))
+        return self.cache[key], row["name"].split("@")[0]
 
 
 def _margin_at(solving, setting, design: dict, dmap: DesignMap, offsets, name: str) -> tuple[float | None, str | None]:
@@ -121,9 +149,10 @@ def corner_margins(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[d
     """Each stack-up row's nonlinear margin at its linear worst corner (``corner_margin``, the kind's float
     re-check; None with the reason in ``corner_note`` when that design cannot be evaluated)."""
     solving = kind.solver_side()
-    setting = Setting(spec, seed, solving.prepare(spec))
+    settings = _Settings(solving, spec, seed)
     for row in rows:
-        row["corner_margin"], note = _margin_at(solving, setting, design, dmap, row["corner"], row["name"])
+        setting, name = settings(row)
+        row["corner_margin"], note = _margin_at(solving, setting, design, dmap, row["corner"], name)
         row["corner_note"] = None if note is None else f"at the linear worst corner: {note}"
 
 
@@ -135,7 +164,7 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
     (the worst sample switching, a max/min of the rule, an active bound).  The absolute difference is stated
     against the nominal margin, which is what the robust transcription's linear worst case gives away."""
     solving = kind.solver_side()
-    setting = Setting(spec, seed, solving.prepare(spec))
+    settings = _Settings(solving, spec, seed)
     for row in rows:
         row["gap_explanation"] = None
         gap, base = row.get("linear_vs_sampled_gap"), row.get("recheck_margin")
@@ -155,7 +184,8 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
             continue
         diff = row["linear_worst_margin"] - row["sampled_worst_margin"]
         share = f"{abs(diff):.3g} {row['unit']} = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
-        half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), row["name"])
+        setting, name = settings(row)
+        half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), name)
         lin_half = base - 0.5 * row["linear_loss"]
         if half is None or base - half <= 0:
             row["gap_explanation"] = f"gap {gap:.1%}: {share}; at half the tolerance {note or 'no loss'}"
@@ -214,8 +244,14 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed)
     corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)
     recheck = {r.name: r for r in nominal}
+    settings = _Settings(solving, spec, seed)
     for row in rows:
         r = recheck.get(row["name"])
+        if r is None and "@" in row["name"]:         # a rule held at an envelope's scenario: re-checked there
+            setting, name = settings(row)
+            r = next((q.record() for q in solving.recheck(setting, StartOutcome(0, dict(lin.design), 0.0, "", True, 0,
+                                                                                  0.0, "")).rules if q.name == name),
+                     None)
         row["recheck_margin"] = None if r is None else r.margin
         m = mc["rules"].get(row["name"], {})
         row["mc_pass_rate"], row["mc_worst_margin"] = m.get("pass_rate"), m.get("worst_margin")
@@ -234,7 +270,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
         # the NLP may write a rule in other terms than the re-check reports (a curvature for a radius, cos^2 for an
         # angle): then the two losses are in different units and are not compared
         row["same_terms"] = (base is not None and row["linear_loss"] is not None
-                             and abs(row["nominal_margin"] - base) <= 0.1 * max(row["linear_loss"], 1e-12))
+                             and abs(row["nominal_margin"] - base) <= 0.1 * max(row["linear_loss"], 1e-9 * max(1.0, abs(base))))
         if row["same_terms"] and worst:
             loss = base - min(worst)
             if loss > 1e-9 * max(1.0, abs(row["scale"] or 1.0)):
@@ -243,5 +279,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     return {"design": lin.design, "nominal_rules": [r.to_json() for r in nominal],
             "tolerance": {key: {"half_width": float(b), "unit": u} for key, b, u in zip(lin.dmap.keys, box, lin.dmap.units)},
             "stack_up": rows, "monte_carlo": mc,
+            **({"operating": {n: {"unit": u, "nominal": lin.operating[3][n]}
+                              for n, u in zip(lin.operating[0], lin.operating[1])}} if lin.operating else {}),
             "method": "exact AD sensitivities (implicit function theorem through the structural rows), rules on "
                       "the re-check's 10x grid; Monte-Carlo with the kind's float re-check"}

@@ -34,6 +34,15 @@ def table(facts: dict) -> str:
                      f"| {f(r.get('corner_margin'))} | {f(r.get('linear_vs_sampled_gap'), '{:.1%}')} |")
         if r.get("gap_explanation"):
             notes.append(f"* {r['name']}: {r['gap_explanation']}")
+    if facts.get("operating"):
+        ops = facts["operating"]
+        lines += ["", "Derivatives w.r.t. the operating conditions (exact, each rule at its scenario's values; "
+                      "nominal " + ", ".join(f"{n} = {o['nominal']:g} {o['unit']}" for n, o in ops.items()) + "):", "",
+                  "| rule | unit | " + " | ".join(f"d/d {n} (per {o['unit']})" for n, o in ops.items()) + " |",
+                  "|---|---|" + "---|" * len(ops)]
+        for r in facts["stack_up"]:
+            sens = r.get("operating_sensitivity") or {}
+            lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(f"{sens.get(n, 0.0):.4g}" for n in ops) + " |")
     if notes:
         lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
                       "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
