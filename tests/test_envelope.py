@@ -193,3 +193,63 @@ def test_envelope_run_folder_through_the_cli(tmp_path):
     assert max(env["rules"]["spacing_error"]["values"]) == pytest.approx(rows["spacing_error@envelope"]["value"])
     # the given angles (45 / 41 deg) miss the stated error over the envelope: 12.4 mm, in the terminal's table
     assert "spacing_error@envelope" in run.stdout and "12.36" in run.stdout
+
+
+def _check_at_crank(loaded, design: dict, rpm: float) -> dict:
+    """The kind's float check (no NLP) of ``design`` with the crank speed set: name -> record."""
+    spec = at_operating(loaded.model, {"crank_speed": rpm})
+    arm = {k: design[k] for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
+    seedbed = {k: design[f"seedbed_{k}"] for k in ("x", "y", "tilt")}
+    spec = spec.model_copy(update={"arm": spec.arm.model_copy(update=arm),
+                                   "seedbed": spec.seedbed.model_copy(update=seedbed)})
+    result = kinds.get("planting_fourbar").checker()(LoadedSpec(spec, loaded.path, loaded.sha256))
+    return {r["name"]: r for r in result.rules}
+
+
+def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_redesign_does_not():
+    """200-300 r/min at 0.6 m/s, re-checked every 2 r/min by the float check; the 2 mm seedling clearance keeps P1 a
+    crossing (without it one start ends on a loop that only touches the seedling-top line: no P1 in the re-check)."""
+    rpms = [200.0 + 2.0 * k for k in range(51)]
+    nominal_loaded = load_spec(LIBRARY / "planting_arm/redesign_from_example1.toml")
+    env_loaded = load_spec(LIBRARY / "planting_arm/crank_speed_envelope_redesign_from_example1.toml")
+    nominal, _, _ = solve_spec(nominal_loaded, starts=1, workers=1)
+    envelope, _, _ = solve_spec(env_loaded, starts=1, workers=1)
+    assert nominal.status == envelope.status == "optimal"
+    assert envelope.extra["envelope"]["all_satisfied"]
+    nominal_fails, entry, p4p6 = [], [], []
+    for rpm in rpms:
+        n = _check_at_crank(nominal_loaded, nominal.design, rpm)
+        nominal_fails += [rpm] if not all(r["satisfied"] for r in n.values()) else []
+        e = _check_at_crank(env_loaded, envelope.design, rpm)
+        assert all(r["satisfied"] for r in e.values()), (rpm, [r["name"] for r in e.values() if not r["satisfied"]])
+        entry.append(e["entry_angle"]["value"])
+        p4p6.append(e["p4p6_distance"]["value"])
+    # the nominal redesign (250 r/min only) enters too flat below 220 r/min: 77.4 deg at 200
+    assert nominal_fails and max(nominal_fails) < 220.0
+    assert _check_at_crank(nominal_loaded, nominal.design, 200.0)["entry_angle"]["value"] == pytest.approx(77.4, abs=0.05)
+    assert min(entry) >= 80.0 and min(p4p6) >= 20.0 and int(np.argmin(entry)) == 0
+    table = envelope.extra["envelope"]["rules"]
+    assert np.allclose(table["entry_angle"]["values"], entry, atol=1e-9)
+    assert envelope.objective["value"] > nominal.objective["value"]
+    # the ground-frame path depends on the forward speed only through v / omega (the plant spacing): 200-300 r/min
+    # at 0.6 m/s spans the spacings of 0.50-0.75 m/s at 250 r/min (120-180 mm), and the rules that read omega alone
+    # (P2 speed >= 1.137 m/s, the accelerations) do not bind, so both envelopes give the same design
+    assert envelope.objective["value"] == pytest.approx(0.5695780708252276, rel=1e-6)
+    assert min(entry) == pytest.approx(80.2, abs=1e-3)
+
+
+def test_seedling_clearance_keeps_p1_a_crossing(tmp_path):
+    """The crank-speed envelope from start 0 of a 230-270 r/min range without a clearance ends with the loop's top
+    on the seedling-top line (P1 a tangency: 'failed', P1 not found by the float check); with 2 mm it is found."""
+    from tests.solving import spec_with
+    source = LIBRARY / "planting_arm/crank_speed_envelope_redesign_from_example1.toml"
+    narrow = "crank_speed = { range = [230, 270], samples = 4, nominal = 250, step = 4 }"
+    old = "crank_speed = { range = [200, 300], samples = 4, nominal = 250, step = 2 }"
+    touching = spec_with(tmp_path, source, [(old, narrow), ("seedling_clearance = 2", "seedling_clearance = 0")])
+    clear = spec_with(tmp_path, source, [(old, narrow)], name="clear.toml")
+    bad, _, _ = solve_spec(load_spec(touching), starts=1, workers=1)
+    good, _, _ = solve_spec(load_spec(clear), starts=1, workers=1)
+    assert bad.status == "failed"
+    p1 = next(r for r in bad.rules if r["name"] == "p1p3_distance")
+    assert p1["value"] is None and "P1 not found" in (p1["note"] or "")
+    assert good.status == "optimal"

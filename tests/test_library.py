@@ -53,6 +53,7 @@ EXPECTED: dict[str, dict] = {
     "fourbar_path/picking_arc.toml": {"check": 1, "solve": ("feasible", 1.0293447294002422e-4)},
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("infeasible", 1.116522628182273)},
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
+    "planting_arm/crank_speed_envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 0.9380752773248703)},
     "planting_arm/redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6391376807772884)},
@@ -78,6 +79,7 @@ SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 #: specs whose solve takes more than a few seconds: run with the studies (`pytest -m benchmark`)
 STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
            "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
+           "planting_arm/crank_speed_envelope_redesign_from_example1.toml",  # 51-point re-check per start, about 80 s
            "guide_tube/uniform_spacing_mu_envelope.toml"}        # 21 mu x 80 spacings re-check per start, about 25 s
 
 

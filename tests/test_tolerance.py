@@ -193,3 +193,90 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
     worst = {r["name"]: r for r in robust[0].rules if r["name"].endswith("@tolerance")}
     assert worst["pressure_angle_return@tolerance"]["satisfied"] and worst["no_undercut@tolerance"]["satisfied"]
     assert robust[0].extra["tolerance"]["monte_carlo"]["pass_rate"] == 1.0
+
+
+@pytest.mark.parametrize("spec, explained", [
+    # p1p3 curves: 11.8 % at +-0.2 mm / +-0.3 deg, 6.2 % at half of it (second order), 0.02 mm of a 4.7 mm margin;
+    # planting depth is the analysis depth by definition (no loss to compare)
+    ("planting_arm/redesign_from_example1.toml", {"p1p3_distance": "second order", "planting_depth": "no margin loss"}),
+    ("picker/cai2020_crank_rocker_synthesis.toml", {}),
+    # the NLP holds kappa (r + m) - 1, the re-check reports the working radius in mm
+    ("clamp_cam/opening_cam_redesign_modified_sine.toml", {"no_undercut": "other terms"}),
+])
+def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explained(spec, explained):
+    """Issue 20: per rule, |linear loss - sampled loss| / sampled loss <= 10 %, the sampled worst case being the
+    Monte-Carlo's and the nonlinear re-check at the rule's linear worst corner of the box; else an explanation."""
+    from synthesis.core.solve import solve_spec
+    from synthesis.tolerance.analysis import analyse
+    loaded = load_spec(LIBRARY / spec)
+    solved, _, _ = solve_spec(loaded, starts=1, workers=1)
+    facts = analyse(kinds.get(loaded.kind), loaded.model, solved.design, length=0.2, angle=0.3, samples=100, seed=0)
+    seen = {}
+    for row in facts["stack_up"]:
+        if row["linear_vs_sampled_gap"] is not None and row["linear_vs_sampled_gap"] <= 0.10:
+            assert row["gap_explanation"] is None
+            # the corner is at least as bad as every Monte-Carlo sample, to second order
+            assert row["sampled_worst_margin"] == row["corner_margin"] or row["corner_margin"] is None
+            continue
+        assert row["gap_explanation"], row["name"]
+        seen[row["name"]] = row["gap_explanation"]
+    assert set(seen) == set(explained)
+    for name, why in explained.items():
+        assert why in seen[name], seen[name]
+    if "p1p3_distance" in explained:
+        row = next(r for r in facts["stack_up"] if r["name"] == "p1p3_distance")
+        assert row["linear_vs_sampled_gap"] == pytest.approx(0.1175, abs=2e-3)
+        assert row["half_tolerance_gap"] == pytest.approx(0.062, abs=2e-3)
+        assert abs(row["linear_worst_margin"] - row["sampled_worst_margin"]) < 0.01 * row["recheck_margin"]
+
+
+@pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
+                                  "guide_tube/uniform_spacing_mu_envelope.toml"])
+def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
+    """Issue 20: on an envelope spec, every rule's derivative w.r.t. every operating condition the NLP is written in
+    (planting: forward and crank speed; guide tube: mu), each rule at its scenario's values, equals central
+    differences (1e-6 relative) of the kind's float re-check at that operating point."""
+    from synthesis.spec.operating import at_operating
+    loaded = load_spec(LIBRARY / spec)
+    kind = kinds.solving_kind(loaded.kind)
+    solving = kind.solver_side()
+    lin = linearise(kind, loaded.model, kinds.checker(loaded.kind)(loaded).design)
+    rows = stack_up(lin, np.zeros(lin.dmap.n))
+    names = lin.operating[0]
+    assert set(names) == ({"forward_speed", "crank_speed"} if "planting" in spec else {"mu"})
+    compared = moving = 0
+    for row in rows:
+        point, rule = row["operating_point"], row["name"].split("@")[0]
+        for w in names:
+            h = 1e-6 * max(1.0, abs(point[w]))
+            values = []
+            for sign in (1.0, -1.0):
+                at = at_operating(loaded.model, {**point, w: point[w] + sign * h})
+                records = _records(solving, Setting(at, 0, solving.prepare(at)), lin.design)
+                values.append(records[rule].value)
+            if values[0] is None:
+                continue
+            cd = (values[0] - values[1]) / (2 * h)
+            grad = max([abs(v) for v in row["sensitivity"].values()] + [abs(row["operating_sensitivity"][w])])
+            tol = LOOSER.get((loaded.kind, rule), 1e-6) * max(grad, 1e-3)
+            assert abs(row["operating_sensitivity"][w] - cd) <= tol, (row["name"], w, row["operating_sensitivity"][w], cd)
+            compared += 1
+            moving += abs(cd) > 1e-6
+    assert compared and moving
+
+
+def test_tolerance_cli_on_an_envelope_spec_reports_operating_sensitivities(tmp_path):
+    """`agrisynth tolerance` of an envelope spec: result.json facts.tolerance.operating (mu, its nominal) and each
+    stack-up row's operating_sensitivity and operating_point; report.md's table of d/d mu."""
+    from tests.solving import cli_run, strict_json
+    repo = Path(__file__).resolve().parents[1]
+    run = cli_run("tolerance", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--length", "0.2",
+                  "--angle", "0.3", "--samples", "5", "--out", str(tmp_path), cwd=repo)
+    assert run.returncode in (0, 1), run.stderr
+    folder = tmp_path / "uniform_spacing_mu_envelope-tolerance"
+    facts = strict_json(folder / "result.json")["facts"]["tolerance"]
+    assert list(facts["operating"]) == ["mu"] and facts["operating"]["mu"]["nominal"] == pytest.approx(0.60595006)
+    scenario = [r for r in facts["stack_up"] if "@mu=" in r["name"]]
+    assert scenario and all(r["operating_point"]["mu"] != facts["operating"]["mu"]["nominal"] for r in scenario)
+    assert any(abs(r["operating_sensitivity"]["mu"]) > 0 for r in scenario)
+    assert "d/d mu" in (folder / "report.md").read_text()

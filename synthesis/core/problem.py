@@ -91,6 +91,20 @@ class Operating:
 
 
 @dataclass(frozen=True)
+class OperatingSource:
+    """What :meth:`Problem._resolve_operating` substituted, kept for sensitivities w.r.t. the operating conditions:
+    their ``symbols`` (in ``names`` order), the structural rows and every resolved rule's value before the
+    substitution, and the values each rule was resolved at (nominal, or its scenario's)."""
+
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    symbols: ca.SX
+    structural: tuple
+    rules: tuple          # (expression before substitution, {name: value}) per resolved rule, in rule order
+    nominal: dict         # name -> nominal value (the structural rows' and the objective's)
+
+
+@dataclass(frozen=True)
 class Envelope:
     """Operating envelope: every rule that depends on an operating condition holds at each scenario, with one
     shared design (a multi-scenario NLP).  ``samples[name]`` are the values sampled of that condition; the
@@ -138,6 +152,8 @@ class Problem:
     #: that depend on one the envelope samples, once per scenario: see :meth:`_resolve_operating`)
     operating: Sequence[Operating] = ()
     envelope: Envelope | None = None
+    #: set when the operating conditions are resolved (sensitivities w.r.t. them: :mod:`synthesis.core.sensitivity`)
+    operating_source: OperatingSource | None = None
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)
@@ -190,13 +206,15 @@ class Problem:
             raise ValueError(f"problem {self.name}: structural rows {bad} depend on a condition the envelope "
                              f"samples ({', '.join(envelope.samples)}); write them free of it (the auxiliaries "
                              f"they pin are shared by every scenario)")
+        source_structural = tuple(self.structural)
         self.structural = list(rows_at(self.structural, nominal))
-        rules, hard = [], list(self.hard_in_elastic)
+        rules, hard, sources = [], list(self.hard_in_elastic), []
         for rule in self.rules:
             varies = any(depends(e) for e, _, _ in rule.rows()) or depends(rule.expr)
             if not varies:
                 rules.append(dataclasses.replace(rule, expr=at(rule.expr, nominal),
                                                  nlp_rows=rows_at(rule.nlp_rows, nominal)))
+                sources.append((rule.expr, dict(nominal)))
                 continue
             for scenario in envelope.scenarios():
                 values = {**nominal, **scenario}
@@ -208,10 +226,13 @@ class Problem:
                 rules.append(dataclasses.replace(rule, name=name, expr=at(rule.expr, values),
                                                  nlp_rows=rows_at(rule.nlp_rows, values),
                                                  where=f"{rule.where}, {label}" if rule.where else label))
+                sources.append((rule.expr, values))
                 if rule.name in self.hard_in_elastic:
                     hard.append(name)
         self.rules = rules
         self.hard_in_elastic = tuple(hard)
+        self.operating_source = OperatingSource(tuple(names), tuple(o.unit for o in ops), syms, source_structural,
+                                                tuple(sources), dict(nominal))
         if isinstance(self.objective, ObjectiveParts):
             # f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where
             # they read a sampled condition, so a min-max objective is the worst over the envelope

@@ -28,13 +28,15 @@ class PinningError(ValueError):
     """The auxiliary variables are not pinned by as many structural equality rows as there are of them."""
 
 
-def pinning_rows(problem: Problem, n_design: int) -> ca.SX:
+def pinning_rows(problem: Problem, n_design: int, structural=None) -> ca.SX:
     """h(z, a): the structural equality rows (expr - value) that depend on the auxiliaries a.  No such row
-    at all: the auxiliaries are free choices of the optimiser (e.g. free timing), held where they are."""
+    at all: the auxiliaries are free choices of the optimiser (e.g. free timing), held where they are.
+    ``structural``: these rows instead of the problem's (the same rows before the operating conditions were
+    substituted)."""
     a = problem.x[n_design:]
     rows = []
     if a.numel():
-        for expr, lb, ub in problem.structural:
+        for expr, lb, ub in (problem.structural if structural is None else structural):
             if lb is None or ub is None or lb != ub:
                 continue
             v = ca.vec(ca.SX(expr))
@@ -117,6 +119,36 @@ class Sensitivity:
             _, H = (np.asarray(v, float) for v in self._h(x, p))
             dz = dz - G[:, n:] @ np.linalg.solve(H[:, n:], H[:, :n])
         return Point(x, g.ravel(), np.linalg.solve(self.J.T, dz.T).T)
+
+    def operating(self, x: np.ndarray, p=None) -> tuple[tuple[str, ...], tuple[str, ...], np.ndarray] | None:
+        """(names, units, dg/dw): the total derivative of every rule row w.r.t. each operating condition w the
+        problem was written in (rows x conditions, their units), each rule at the values it was resolved at
+        (its scenario's), the auxiliaries following by the implicit function theorem through the structural rows
+        (dg/dw = dg/dw|_a - dg/da (dh/da)^-1 dh/dw); None for a problem without operating conditions."""
+        src = self.problem.operating_source
+        if src is None or not src.names:
+            return None
+        p = self._p(p)
+        x = np.asarray(x, float)
+        n, X, P, W = self.n_design, self.problem.x, self.problem.parameters, src.symbols
+        w0 = [src.nominal[k] for k in src.names]
+        solve_aux = None
+        if self.n_aux:
+            h = pinning_rows(self.problem, n, src.structural)
+            H = ca.Function("pinning_w", [X, P, W], [ca.jacobian(h, X), ca.jacobian(h, W)])
+            Hx, Hw = (np.asarray(v, float) for v in H(x, p, w0))
+            solve_aux = np.linalg.solve(Hx[:, n:], Hw)          # (dh/da)^-1 dh/dw
+        out = np.zeros((self.slices[-1].stop if self.slices else 0, len(src.names)))
+        for k, (expr, values) in enumerate(src.rules):
+            e = ca.vec(ca.SX(expr))
+            if e.numel() == 0 or (not ca.depends_on(e, W) and (solve_aux is None or not np.any(solve_aux))):
+                continue
+            f = ca.Function("rule_w", [X, P, W], [ca.jacobian(e, W), ca.jacobian(e, X)])
+            Gw, Gx = (np.asarray(v, float) for v in f(x, p, [values[name] for name in src.names]))
+            if solve_aux is not None:
+                Gw = Gw - Gx[:, n:] @ solve_aux
+            out[self.slices[k]] = Gw
+        return src.names, src.units, out
 
     def _p(self, p):
         return np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))

@@ -43,15 +43,18 @@ class PlantingNLP:
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
         # an operating condition given as a range is a symbol (the core holds the rules that read it once per
-        # sampled value: an envelope); one given as a number stays a number
+        # sampled value: an envelope); with any range, the other condition is a symbol too, resolved at its number
+        # (so `agrisynth tolerance` has every rule's derivative w.r.t. both); without ranges both stay numbers
         ranges = ranges_of(spec)
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
-                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if n in ranges]
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if ranges]
         op = {o.name: o.symbol for o in self.operating}
         self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
         x = ca.SX.sym("x", len(self.names))
-        th = ca.SX.sym("theta", 6)
+        # a seedling clearance adds the crank angle of the loop's top before P1 (see _structural)
+        self.clearance = float(spec.solver.seedling_clearance)
+        th = ca.SX.sym("theta", 7 if self.clearance > 0.0 else 6)
         v = {n: x[i] for i, n in enumerate(self.names)}
         theta = dict(zip(POINTS, (th[i] for i in range(6))))
         p = self._arm(v)
@@ -60,9 +63,9 @@ class PlantingNLP:
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
-            lbx=np.concatenate([self.bounds[:, 0], np.full(6, THETA_BOUNDS[0])]),
-            ubx=np.concatenate([self.bounds[:, 1], np.full(6, THETA_BOUNDS[1])]),
-            structural=self._structural(v, p, theta, states),
+            lbx=np.concatenate([self.bounds[:, 0], np.full(th.numel(), THETA_BOUNDS[0])]),
+            ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
+            structural=self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None),
             rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
             objective=self._objective(x, v),
             backoff=scaled_backoff(spec.solver.backoff),
@@ -110,8 +113,11 @@ class PlantingNLP:
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
                      acc_scale=self.omega**2 * value_of(spec.arm.l2))
 
-    def _structural(self, v, p, theta, states) -> list:
-        """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound."""
+    def _structural(self, v, p, theta, states, top=None) -> list:
+        """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
+        seedling clearance, the loop's top (crank angle ``top``: the height above the seedbed stationary there,
+        between P6 and P1) at least that far above the seedling-top line, so P1 is a crossing with a sign change
+        and not a touch."""
         spec = self.spec
         pos = {k: st[0] for k, st in states.items()}
         vel = {k: st[2] for k, st in states.items()}          # at the nominal crank speed (see _state)
@@ -136,6 +142,11 @@ class PlantingNLP:
         for a, b in zip(order, order[1:]):
             rows.append((theta[b] - theta[a], MIN_GAP, None))
         rows.append((theta["P5"] + TWO_PI - theta["P4"], MIN_GAP, None))
+        if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
+            q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
+            rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
+                     (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
+                     (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
         n = spec.solver.samples_per_turn
         samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]
@@ -175,6 +186,12 @@ class PlantingNLP:
         for n in POINTS:
             t = pts.theta[n] if pts is not None else None
             out.append(th5 + spread[n] if t is None else t)
+        if self.clearance > 0.0:      # the loop's top: the highest sample above the seedbed between P6 and P2
+            lo, hi = out[POINTS.index("P6")], out[POINTS.index("P2")]
+            grid = np.linspace(lo, hi if hi > lo else lo + TWO_PI, 721)[1:-1]
+            pos = tip_derivatives(self.spec.arm.branch).map(len(grid))(grid.reshape(1, -1),
+                                                                       scene.design.parameters())[0]
+            out.append(float(grid[int(np.argmax(scene.seedbed.height(np.asarray(pos, float))))]))
         return np.array(out)
 
     def objective_value(self, f: float) -> float:

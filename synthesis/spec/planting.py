@@ -144,6 +144,12 @@ class SolverSection(MultistartSettings):
     backoff: float = Field(0.02, ge=0, le=1, description="the NLP tightens every rule limit by backoff x the "
                                                          "rule's scale, so rules hold between the samples too "
                                                          "(dimensionless)")
+    seedling_clearance: float = Field(
+        0.0, ge=0, le=100, description="the NLP makes the claw tip rise at least this far (mm) above the seedling-top "
+                                       "line before it comes down through it at P1 (one more crank angle, the loop's "
+                                       "top between P6 and P1); 0 admits a path that only touches the line at the "
+                                       "top of its loop, which the float check (a sign change) does not count as a "
+                                       "crossing, so such an answer fails its re-check")
 
 
 class PlantingFourbarSpec(ProblemSpec):

@@ -25,6 +25,7 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
+from synthesis.spec.operating import at_operating
 from synthesis.tolerance.design import DesignMap, box_of, design_map, fine, freed, kind_start, without_ipopt
 
 
@@ -38,6 +39,10 @@ class Linearised:
     slices: list
     values: np.ndarray
     jacobian: np.ndarray   # rows x design variables (design units)
+    #: operating conditions the NLP was written in (an envelope spec): names, units, rows x conditions, and
+    #: the values each rule was resolved at (nominal, or its scenario's); None without
+    operating: tuple | None = None
+    operating_points: list | None = None
 
     def rule_jacobian(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         s = self.slices[k]
@@ -61,8 +66,11 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)
+    src = compiled.problem.operating_source
+    ops = sens.operating(x, p)
+    ops = None if ops is None else (*ops, dict(src.nominal))
     return Linearised(dmap, {k: float(v) for k, v in zip(dmap.keys, d)}, list(compiled.problem.rules), sens.slices,
-                      pt.values, pt.jacobian)
+                      pt.values, pt.jacobian, ops, None if src is None else [dict(v) for _, v in src.rules])
 
 
 def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
@@ -81,9 +89,113 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             "linear_worst_margin": float(worst[i_lin]),
             "linear_loss": float(nominal[i_lin] - worst[i_lin]) if math.isfinite(nominal[i_lin]) else None,
             "sensitivity": {key: float(J[i_nom, j]) for j, key in enumerate(lin.dmap.keys)},
+            # the box's corner the linear stack-up puts this rule's worst at (sign of dg/dd at its worst sample,
+            # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
+            "corner": [float(c) for c in _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
         })
+        if lin.operating is not None:
+            names, _, W, _ = lin.operating
+            rows[-1]["operating_point"] = lin.operating_points[k]
+            rows[-1]["operating_sensitivity"] = {n: float(W[lin.slices[k]][i_nom, i]) for i, n in enumerate(names)}
     return rows
+
+
+def _corner(value: float, lower, upper, grad: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Offsets to the corner of the box where a linear rule value moves furthest towards its nearer limit."""
+    lo = -math.inf if lower is None else value - lower
+    hi = -math.inf if upper is None else upper - value
+    towards = -1.0 if (lower is not None and (upper is None or lo <= hi)) else 1.0
+    return towards * np.sign(grad) * box
+
+
+#: the issue's bound on |linear loss - sampled loss| / sampled loss; a rule above it gets an explanation
+GAP_LIMIT = 0.10
+
+
+class _Settings:
+    """The re-check's setting of each stack-up row: the spec's, or for a rule held at an envelope's scenario
+    (``<rule>@<condition>=<value>``) the spec at that operating point, where the re-check names it ``<rule>``."""
+
+    def __init__(self, solving, spec, seed: int):
+        self.solving, self.spec, self.seed, self.cache = solving, spec, seed, {}
+
+    def __call__(self, row: dict) -> tuple[Setting, str]:
+        point = row.get("operating_point") if "@" in row["name"] else None
+        key = None if point is None else tuple(sorted(point.items()))
+        if key not in self.cache:
+            spec = self.spec if point is None else at_operating(self.spec, point)
+            self.cache[key] = Setting(spec, self.seed, self.solving.prepare(spec))
+        return self.cache[key], row["name"].split("@")[0]
+
+
+def _margin_at(solving, setting, design: dict, dmap: DesignMap, offsets, name: str) -> tuple[float | None, str | None]:
+    """(margin of rule ``name`` at design + offsets by the kind's float re-check, or None and why)."""
+    trial = dict(design)
+    for key, off in zip(dmap.keys, offsets):
+        trial[key] = design[key] + float(off)
+    try:
+        records = {r.name: r.record() for r in
+                   solving.recheck(setting, StartOutcome(0, trial, 0.0, "", True, 0, 0.0, "")).rules}
+    except (AgrisynthError, ValueError, ArithmeticError) as exc:
+        return None, f"not evaluable: {exc}"
+    r = records.get(name)
+    if r is None or r.margin is None:
+        return None, "not evaluated" + (f": {r.note}" if r is not None and r.note else "")
+    return float(r.margin), None
+
+
+def corner_margins(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dict], seed: int = 0) -> None:
+    """Each stack-up row's nonlinear margin at its linear worst corner (``corner_margin``, the kind's float
+    re-check; None with the reason in ``corner_note`` when that design cannot be evaluated)."""
+    solving = kind.solver_side()
+    settings = _Settings(solving, spec, seed)
+    for row in rows:
+        setting, name = settings(row)
+        row["corner_margin"], note = _margin_at(solving, setting, design, dmap, row["corner"], name)
+        row["corner_note"] = None if note is None else f"at the linear worst corner: {note}"
+
+
+def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dict], seed: int = 0) -> None:
+    """``gap_explanation`` of every row whose linear-vs-sampled gap exceeds :data:`GAP_LIMIT` (None elsewhere).
+
+    The rule is re-checked at half the corner's offsets: a smooth rule's second-order term grows with the square
+    of the offset, so its relative gap about halves ("second order"); a gap that does not shrink so is a kink
+    (the worst sample switching, a max/min of the rule, an active bound).  The absolute difference is stated
+    against the nominal margin, which is what the robust transcription's linear worst case gives away."""
+    solving = kind.solver_side()
+    settings = _Settings(solving, spec, seed)
+    for row in rows:
+        row["gap_explanation"] = None
+        gap, base = row.get("linear_vs_sampled_gap"), row.get("recheck_margin")
+        if gap is None:
+            if base is not None and row["linear_loss"] is not None and not row["same_terms"]:
+                row["gap_explanation"] = (f"not compared: the NLP writes this rule in other terms than the re-check "
+                                          f"reports (nominal margin {row['nominal_margin']:.4g} in the NLP's, "
+                                          f"{base:.4g} {row['unit']} in the re-check's)")
+            elif base is None or row.get("sampled_worst_margin") is None or row["linear_loss"] is None:
+                row["gap_explanation"] = "not compared: " + (row.get("corner_note") or "the rule is not evaluated")
+            else:
+                row["gap_explanation"] = (f"not compared: no margin loss (linear {row['linear_loss']:.3g}, sampled "
+                                          f"{base - row['sampled_worst_margin']:.3g} {row['unit']}): the rule's value "
+                                          "does not move with the design in the box")
+            continue
+        if gap <= GAP_LIMIT:
+            continue
+        diff = row["linear_worst_margin"] - row["sampled_worst_margin"]
+        share = f"{abs(diff):.3g} {row['unit']} = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
+        setting, name = settings(row)
+        half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), name)
+        lin_half = base - 0.5 * row["linear_loss"]
+        if half is None or base - half <= 0:
+            row["gap_explanation"] = f"gap {gap:.1%}: {share}; at half the tolerance {note or 'no loss'}"
+            continue
+        gap_half = abs(lin_half - half) / (base - half)
+        row["half_tolerance_gap"] = gap_half
+        what = ("second order (the rule curves: the gap about halves at half the tolerance)"
+                if gap_half <= 0.65 * gap else "a kink (the gap does not shrink with the tolerance)")
+        row["gap_explanation"] = (f"gap {gap:.1%} at the tolerance, {gap_half:.1%} at half of it: {what}; "
+                                  f"the linear worst case is {'optimistic' if diff > 0 else 'conservative'} by {share}")
 
 
 def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray, samples: int, seed: int,
@@ -130,9 +242,16 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     nominal = [r.record() for r in solving.recheck(Setting(spec, seed, solving.prepare(spec)),
                                                    StartOutcome(0, dict(lin.design), 0.0, "", True, 0, 0.0, "")).rules]
     mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed)
+    corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)
     recheck = {r.name: r for r in nominal}
+    settings = _Settings(solving, spec, seed)
     for row in rows:
         r = recheck.get(row["name"])
+        if r is None and "@" in row["name"]:         # a rule held at an envelope's scenario: re-checked there
+            setting, name = settings(row)
+            r = next((q.record() for q in solving.recheck(setting, StartOutcome(0, dict(lin.design), 0.0, "", True, 0,
+                                                                                  0.0, "")).rules if q.name == name),
+                     None)
         row["recheck_margin"] = None if r is None else r.margin
         m = mc["rules"].get(row["name"], {})
         row["mc_pass_rate"], row["mc_worst_margin"] = m.get("pass_rate"), m.get("worst_margin")
@@ -143,8 +262,24 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
             row["linear_over_sampled"] = row["linear_loss"] / sampled_loss if sampled_loss > 1e-12 else None
         else:
             row["sampled_loss"] = row["linear_over_sampled"] = None
+        # the sampled worst case: the Monte-Carlo samples and the rule's linear worst corner; the issue's gap is
+        # |linear loss - sampled loss| / sampled loss
+        worst = [m for m in (row["mc_worst_margin"], row["corner_margin"]) if m is not None]
+        row["sampled_worst_margin"] = min(worst) if worst else None
+        row["linear_vs_sampled_gap"] = None
+        # the NLP may write a rule in other terms than the re-check reports (a curvature for a radius, cos^2 for an
+        # angle): then the two losses are in different units and are not compared
+        row["same_terms"] = (base is not None and row["linear_loss"] is not None
+                             and abs(row["nominal_margin"] - base) <= 0.1 * max(row["linear_loss"], 1e-9 * max(1.0, abs(base))))
+        if row["same_terms"] and worst:
+            loss = base - min(worst)
+            if loss > 1e-9 * max(1.0, abs(row["scale"] or 1.0)):
+                row["linear_vs_sampled_gap"] = abs(row["linear_loss"] - loss) / loss
+    explain_gaps(kind, spec, lin.design, lin.dmap, rows, seed)
     return {"design": lin.design, "nominal_rules": [r.to_json() for r in nominal],
             "tolerance": {key: {"half_width": float(b), "unit": u} for key, b, u in zip(lin.dmap.keys, box, lin.dmap.units)},
             "stack_up": rows, "monte_carlo": mc,
+            **({"operating": {n: {"unit": u, "nominal": lin.operating[3][n]}
+                              for n, u in zip(lin.operating[0], lin.operating[1])}} if lin.operating else {}),
             "method": "exact AD sensitivities (implicit function theorem through the structural rows), rules on "
                       "the re-check's 10x grid; Monte-Carlo with the kind's float re-check"}

@@ -21,14 +21,31 @@ def table(facts: dict) -> str:
     mc = facts["monte_carlo"]
     lines = [f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
              f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule", "",
-             "| rule | unit | margin | linear worst margin | drivers | MC pass | MC worst margin | linear / sampled loss |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| rule | unit | margin | linear worst margin | drivers | MC pass | MC worst margin | linear / sampled loss "
+             "| margin at the linear worst corner | linear vs sampled gap |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    notes = []
     for r in facts["stack_up"]:
         def f(v, fmt="{:.4g}"):
             return "-" if v is None else fmt.format(v)
         drivers = ", ".join(f"{d['variable']} {d['contribution']:.3g}" for d in r["drivers"])
         lines.append(f"| {r['name']} | {r['unit']} | {f(r['recheck_margin'])} | {f(r['linear_worst_margin'])} | {drivers} "
-                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])} | {f(r['linear_over_sampled'], '{:.2f}')} |")
+                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])} | {f(r['linear_over_sampled'], '{:.2f}')} "
+                     f"| {f(r.get('corner_margin'))} | {f(r.get('linear_vs_sampled_gap'), '{:.1%}')} |")
+        if r.get("gap_explanation"):
+            notes.append(f"* {r['name']}: {r['gap_explanation']}")
+    if facts.get("operating"):
+        ops = facts["operating"]
+        lines += ["", "Derivatives w.r.t. the operating conditions (exact, each rule at its scenario's values; "
+                      "nominal " + ", ".join(f"{n} = {o['nominal']:g} {o['unit']}" for n, o in ops.items()) + "):", "",
+                  "| rule | unit | " + " | ".join(f"d/d {n} (per {o['unit']})" for n, o in ops.items()) + " |",
+                  "|---|---|" + "---|" * len(ops)]
+        for r in facts["stack_up"]:
+            sens = r.get("operating_sensitivity") or {}
+            lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(f"{sens.get(n, 0.0):.4g}" for n in ops) + " |")
+    if notes:
+        lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
+                      "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
     return "\n".join(lines) + "\n"
 
 
