@@ -2,7 +2,7 @@
 
 Ten target sets of 12-25 points, closed loops and open arcs, about 60 mm across, with the wide bounds
 of issue 19 (every link in [0.05, 6] x the loop's diameter D, coupler point within +-5 D of A, input
-pivot within +-6 D of the loop's centre), free timing, grashof "any" or "crank-rocker".  Each shape
+pivot within +-6 D of the loop's centre), free timing, grashof "any" or "crank_rocker".  Each shape
 is sampled evenly by arc length and, where it says "hand-drawn", every point is moved by a seeded
 random offset (a designer's hand, not a coupler curve): no target set here lies on a four-bar's
 coupler curve, so the optimum has a positive error and many local optima.
@@ -121,14 +121,14 @@ def _noisy_coupler(n: int, seed: int, closed: bool) -> np.ndarray:
 def _problems() -> dict[str, tuple[bool, str, bool, np.ndarray]]:
     return {
         "ellipse20": (True, "any", False, _placed(_by_arc_length(_ellipse, 20, True), 20.0, 0.01, 1)),
-        "egg16": (True, "crank-rocker", False, _placed(_by_arc_length(_egg, 16, True), -30.0, 0.01, 2)),
+        "egg16": (True, "crank_rocker", False, _placed(_by_arc_length(_egg, 16, True), -30.0, 0.01, 2)),
         "triangle18": (True, "any", False, _placed(_by_arc_length(_rounded_triangle, 18, True), 0.0, 0.01, 3)),
-        "d_shape22": (True, "crank-rocker", False, _placed(_by_arc_length(_d_shape, 22, True), 90.0, 0.005, 4)),
+        "d_shape22": (True, "crank_rocker", False, _placed(_by_arc_length(_d_shape, 22, True), 90.0, 0.005, 4)),
         "kidney25": (True, "any", False, _placed(_by_arc_length(_kidney, 25, True), 0.0, 0.005, 5)),
-        "square24": (True, "crank-rocker", True, _placed(_by_arc_length(_rounded_square, 24, True), 15.0, 0.0, 6)),
+        "square24": (True, "crank_rocker", True, _placed(_by_arc_length(_rounded_square, 24, True), 15.0, 0.0, 6)),
         "noisy_loop20": (True, "any", False, _noisy_coupler(20, 7, closed=True)),
         "dwell_arc15": (False, "any", True, _placed(_dwell_arc(15), 0.0, 0.005, 8)),
-        "s_curve12": (False, "crank-rocker", True,
+        "s_curve12": (False, "crank_rocker", True,
                       _placed(_by_arc_length(_s_curve, 12, False, -1.0, 1.0), 10.0, 0.005, 9)),
         "stroke_lift14": (False, "any", False,
                           _placed(_by_arc_length(_straight_then_lift, 14, False, 0.0, 1.2), 0.0, 0.005, 10)),
@@ -152,7 +152,9 @@ def inexact_data(name: str, solver: dict | None = None) -> dict:
     return {"kind": "fourbar_path", "name": f"inexact_{name}",
             "source": f"issue 19 inexact target: {shape} of {len(points)} points, {d:.0f} mm across "
                       f"(synthesis.fourbar_path.inexact)",
-            "targets": {"points": points.tolist()}, "bounds": bounds,
+            "targets": {"points": points.tolist()},
+            # every variable free in its box, started at the box's midpoint (the given design, start 0)
+            "linkage": {n: {"init": round(0.5 * (lo + hi), 3), "bounds": [lo, hi]} for n, (lo, hi) in bounds.items()},
             "rules": {"grashof": grashof, "order": order}, "solver": dict(solver or {})}
 
 

@@ -46,6 +46,12 @@ SCALED = True
 OBJECTIVE_POWER = 0.5
 
 
+#: the core's unit-prefix scaling of variables (core/ipopt.py) is off: this NLP is already in nominal units of
+#: the targets' size, where box widths straddle 1 (e.g. 0.5 D), which that rule would read as metres and
+#: multiply by 1000 (picking_arc's one-start solve then ended at max_iter, violating the transmission angle)
+OWN_UNITS = "none" if SCALED else None
+
+
 def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(offset, scale) of the nominal units of r1 r2 r3 r4 rcx rcy x0 y0 theta0: lengths in units of
     the targets' size (largest extent), the input pivot from the targets' centre, theta0 in rad."""
@@ -121,14 +127,14 @@ class PathNLP:
         self.coarse = None
         if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
                 and spec.solver.samples > COARSE):
-            self.coarse = CompiledNLP(problem(COARSE), elastic)
+            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS)
             full = path_rules(spec, v, thetas, sign, spec.solver.samples)
             rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
             self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
             self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
             self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
         else:
-            self._full = CompiledNLP(problem(spec.solver.samples), elastic)
+            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.starts = StartMaker(spec, seed)
@@ -137,7 +143,7 @@ class PathNLP:
     def compiled(self) -> CompiledNLP:
         """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
         if self._full is None:
-            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic)
+            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS)
         return self._full
 
     @property

@@ -31,9 +31,16 @@ def _grashof(target: str):
     return affine
 
 
+def _nominal_units(nlp, n):
+    """fourbar_path's NLP works in nominal units (issue 19): design = offset + scale * z."""
+    d0, scale = np.zeros(n), np.ones(n)
+    d0[:len(nlp.offset)], scale[:len(nlp.scale)] = nlp.offset, nlp.scale
+    return d0, np.diag(scale)
+
+
 #: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
-#: (fourbar_path's NLP works in the design variables since it moved onto the core)
 AFFINE = {
+    "fourbar_path": _nominal_units,
     "crank_rocker": _grashof("synthesis.crank_rocker.nlp:COORDINATES"),
     "picker_double_crank": _grashof("synthesis.picker.nlp:COORDINATES"),
 }
