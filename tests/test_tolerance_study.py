@@ -1,5 +1,5 @@
-"""Issue 20 study (``pytest -m benchmark``): the planting redesign of example 1, nominal vs tolerance-robust,
-Monte-Carlo at +-0.2 mm / +-0.3 deg over 10,000 samples (seed 0)."""
+"""Issue 20 study (``pytest -m benchmark``): the planting redesigns of examples 1 and 3, nominal vs
+tolerance-robust, Monte-Carlo at +-0.2 mm / +-0.3 deg (seed 0)."""
 
 from __future__ import annotations
 
@@ -18,9 +18,12 @@ LIBRARY = Path(__file__).resolve().parents[1] / "problems" / "planting_arm"
 
 
 @pytest.mark.benchmark
-def test_robust_planting_redesign_passes_99_percent_of_10000_samples():
+@pytest.mark.parametrize("example, samples", [(1, 10_000), (3, 2_000)])
+def test_robust_planting_redesign_passes_99_percent_of_the_samples(example, samples):
+    """Example 1 on 10,000 samples (about 13 min); example 3 on 2,000 (its spec's count)."""
     rates, objectives = {}, {}
-    for name in ("redesign_from_example1", "robust_redesign_from_example1"):
+    nominal, robust = f"redesign_from_example{example}", f"robust_redesign_from_example{example}"
+    for name in (nominal, robust):
         loaded = load_spec(LIBRARY / f"{name}.toml")
         kind = robust_kind(kinds.get(loaded.kind), loaded.model)
         from synthesis.core.solve import run_solve
@@ -28,9 +31,9 @@ def test_robust_planting_redesign_passes_99_percent_of_10000_samples():
         assert result.status == "optimal"
         lin = linearise(kind, loaded.model, result.design)
         box = box_of(lin.dmap, 0.2, 0.3, {})
-        rates[name] = monte_carlo(kind, loaded.model, lin.design, lin.dmap, box, 10_000, seed=0)["pass_rate"]
+        rates[name] = monte_carlo(kind, loaded.model, lin.design, lin.dmap, box, samples, seed=0)["pass_rate"]
         objectives[name] = result.objective["value"]
-    print(f"\nMonte-Carlo pass rate at +-0.2 mm / +-0.3 deg, 10,000 samples (seed 0): {rates}; objective {objectives}")
-    assert rates["robust_redesign_from_example1"] >= 0.99
-    assert rates["redesign_from_example1"] < 0.9
-    assert objectives["robust_redesign_from_example1"] > objectives["redesign_from_example1"]
+    print(f"\nMonte-Carlo pass rate at +-0.2 mm / +-0.3 deg, {samples} samples (seed 0): {rates}; objective {objectives}")
+    assert rates[robust] >= 0.99
+    assert rates[nominal] < 0.9
+    assert objectives[robust] > objectives[nominal]

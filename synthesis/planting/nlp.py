@@ -25,7 +25,7 @@ from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.operating import ranges_of
 from synthesis.spec.planting import PlantingFourbarSpec
 
-MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecutive precision points
+MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecutive precision points (default)
 THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
 #: the rules without which the kinematics is undefined stay hard in the elastic diagnosis
 HARD_IN_ELASTIC = ("grashof_crank_rocker",)
@@ -139,9 +139,10 @@ class PlantingNLP:
         for n in ("P1", "P2", "P3"):                                                   # passing into the mat
             rows.append((normal[0] * vel[n][0] + normal[1] * vel[n][1], None, 0.0))
         order = ("P5", "P6", "P1", "P2", "P3", "P4")
+        gap = MIN_GAP if spec.solver.point_gap == 1.0 else math.radians(spec.solver.point_gap)
         for a, b in zip(order, order[1:]):
-            rows.append((theta[b] - theta[a], MIN_GAP, None))
-        rows.append((theta["P5"] + TWO_PI - theta["P4"], MIN_GAP, None))
+            rows.append((theta[b] - theta[a], gap, None))
+        rows.append((theta["P5"] + TWO_PI - theta["P4"], gap, None))
         if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
             q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
             rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
