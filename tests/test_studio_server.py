@@ -205,9 +205,9 @@ def test_the_coarse_grid_note_states_the_samples_evaluated():
 
     spec = load_spec(STUDIO_SPECS["fourbar_path"]).model
     assert spec.solver.samples == 36 and grids._coarser(spec).solver.samples == 4      # not below ge=4
-    assert spec.rules.grashof == "crank-rocker"          # path_rules reads the samples only for grashof "any"
-    assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank-rocker\"")
-    anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof": "any"})})
+    assert spec.rules.grashof_class == "crank_rocker"         # path_rules reads the samples only for grashof "any"
+    assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank_rocker\"")
+    anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof_class": "any"})})
     assert grids.note("fourbar_path", "coarse", anything) == ("the check on 40 samples per gap between targets "
                                                               "(fine: 360)")
     steering = load_spec(STUDIO_SPECS["steering_linkage"]).model

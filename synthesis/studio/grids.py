@@ -188,8 +188,8 @@ def note(kind: str, grid: str, spec=None) -> str:
         return (f"the check on {FINE * coarse.samples + 1} inside locks (fine: "
                 f"{FINE * spec.solver.samples + 1}), without its Table 12 explanation")
     if kind == "fourbar_path":
-        if spec.rules.grashof != "any":   # path_rules samples between targets only for grashof "any"
-            return (f"the check's one grid (grashof = \"{spec.rules.grashof}\": its rules are evaluated at the "
+        if spec.rules.grashof_class != "any":   # path_rules samples between targets only for grashof "any"
+            return (f"the check's one grid (grashof = \"{spec.rules.grashof_class}\": its rules are evaluated at the "
                     f"targets and in closed form, on no sample count)")
         return (f"the check on {FINE * coarse.samples} samples per gap between targets (fine: "
                 f"{FINE * spec.solver.samples})")
