@@ -411,14 +411,19 @@ def finite_only(data: Any, path: str = "", found: list[str] | None = None) -> An
     return data
 
 
-def result_text(result: Result) -> str:
-    """result.json's text: never NaN or infinity (JSON has neither); a figure that is not a number is
+def finite_json_text(data: dict) -> str:
+    """A result file's JSON text: never NaN or infinity (JSON has neither); a figure that is not a number is
     written as null and listed under ``not_finite`` (its JSON path)."""
     found: list[str] = []
-    data = finite_only(result.to_json(), "", found)
+    data = finite_only(data, "", found)
     if found:
         data["not_finite"] = found
     return json.dumps(data, indent=1, allow_nan=False) + "\n"
+
+
+def result_text(result: Result) -> str:
+    """result.json's text (:func:`finite_json_text` of the result)."""
+    return finite_json_text(result.to_json())
 
 
 def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Path], None]], *,

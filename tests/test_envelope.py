@@ -253,3 +253,34 @@ def test_seedling_clearance_keeps_p1_a_crossing(tmp_path):
     p1 = next(r for r in bad.rules if r["name"] == "p1p3_distance")
     assert p1["value"] is None and "P1 not found" in (p1["note"] or "")
     assert good.status == "optimal"
+
+
+ENVELOPE_SPEC = LIBRARY / "planting_arm/envelope_redesign_from_example1.toml"
+FORWARD_RANGE = "forward_speed = { range = [0.50, 0.75], samples = 4, nominal = 0.6, step = 0.01 }"
+
+
+def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path):
+    """check reads a range's nominal value: it says so, and its verdict names the nominal point, instead of
+    "every rule satisfied" for a design that may fail inside the range."""
+    from tests.solving import cli_run
+    run = cli_run("check", str(ENVELOPE_SPEC), "--out", str(tmp_path), cwd=tmp_path)
+    out = " ".join(run.stdout.split())
+    assert "forward_speed given as a range: check evaluates the nominal value only" in out
+    assert "violated at the nominal operating point" in out or "every rule satisfied at the nominal operating point" in out
+    plain = cli_run("check", str(LIBRARY / "planting_arm/redesign_from_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
+    assert "nominal operating point" not in plain.stdout and "given as a range" not in plain.stdout
+
+
+@pytest.mark.parametrize("replacement, message", [
+    # two ranges of 50 samples: 2,500 scenarios and ~2.6e5 re-check points
+    (("crank_speed = 250", "crank_speed = { range = [200, 300], samples = 50, step = 0.01 }"),
+     "forward_speed, crank_speed: 200 scenarios and 260026 re-check points together (at most 200 and 20000)"),
+    # samples closer than the 4 significant digits that name a scenario's rules
+    ((FORWARD_RANGE, "forward_speed = { range = [0.6, 0.60001], samples = 4 }"),
+     "forward_speed: samples = 4 over [0.6, 0.60001] are not distinct to 4 significant digits"),
+])
+def test_range_sizes_that_would_blow_up_or_merge_scenarios_are_refused(tmp_path, replacement, message):
+    from tests.solving import cli_run, spec_with
+    run = cli_run("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [replacement])), "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2 and message in " ".join(run.stderr.split()), run.stderr
+    assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1

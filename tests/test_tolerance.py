@@ -280,3 +280,30 @@ def test_tolerance_cli_on_an_envelope_spec_reports_operating_sensitivities(tmp_p
     assert scenario and all(r["operating_point"]["mu"] != facts["operating"]["mu"]["nominal"] for r in scenario)
     assert any(abs(r["operating_sensitivity"]["mu"]) > 0 for r in scenario)
     assert "d/d mu" in (folder / "report.md").read_text()
+
+
+def test_fixed_fourbar_path_dimensions_keep_their_sensitivities():
+    """A solved fourbar_path design (every dimension a number, as in solved.toml) analysed for tolerance: each
+    dimension is freed with bounds [v, v] and must stay a decision entry, so the Grashof margin's derivatives
+    are the analytic +-1 per link (not all 0, as when [v, v] was read as "fixed")."""
+    kind = kinds.get("fourbar_path")
+    loaded = load_spec(LIBRARY / kind.example)
+    model = loaded.model
+    fixed = model.model_copy(update={"linkage": model.linkage.model_copy(update=DESIGNS["fourbar_path"])})
+    lin = linearise(kind, fixed, DESIGNS["fourbar_path"])
+    grashof = {r["name"]: r for r in stack_up(lin, np.zeros(lin.dmap.n))}["grashof"]["sensitivity"]
+    # r1 100, r2 30, r3 90, r4 80: s + l <= p + q with s = r2, l = r1 -> margin = r3 + r4 - r1 - r2
+    assert [grashof[k] for k in ("r1", "r2", "r3", "r4")] == pytest.approx([-1.0, -1.0, 1.0, 1.0], abs=1e-9)
+
+
+def test_tolerance_at_a_design_on_a_rule_s_limit_writes_finite_json(tmp_path):
+    """picking_arc's given design sits on the Grashof limit (r1 = r2 = r3 = r4, margin 0) and its transmission
+    angle is undefined there: the analysis ends without a traceback, and result.json holds no NaN (null, listed
+    under not_finite)."""
+    from tests.solving import cli_run, strict_json
+    run = cli_run("tolerance", str(LIBRARY / "fourbar_path/picking_arc.toml"), "--length", "0.2", "--angle", "0.3",
+                  "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1) and "Traceback" not in run.stderr, run.stderr
+    data = strict_json(tmp_path / "picking_arc-tolerance" / "result.json")
+    assert data["not_finite"] and all(p.startswith("facts.tolerance.") for p in data["not_finite"])
+    assert "the nominal margin is 0" in (tmp_path / "picking_arc-tolerance" / "report.md").read_text()

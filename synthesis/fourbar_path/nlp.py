@@ -32,6 +32,7 @@ from synthesis.core.problem import ObjectiveParts, Problem, relative_backoff
 from synthesis.fourbar_path.rules import path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_point, design_parameters
+from synthesis.spec.common import FreeVariable
 from synthesis.spec.fourbar_path import FourbarPathSpec
 
 DEG = 180.0 / math.pi
@@ -82,7 +83,10 @@ class PathNLP:
         targets = np.array(spec.targets.points, dtype=float)
         self.offset, self.scale = nominal_scales(targets) if SCALED else (np.zeros(9), np.ones(9))
         x = ca.SX.sym("x", len(self.names))          # the design in nominal units: (design - offset) / scale
-        self.fixed = self.bounds[:, 0] == self.bounds[:, 1]     # fixed variables enter as their exact numbers
+        # a number in the spec enters as that exact number; a free variable stays a decision entry even with
+        # bounds [v, v] (the tolerance analysis frees every dimension so: its rules must depend on it)
+        given = spec.variables()
+        self.fixed = np.array([not isinstance(given[n], FreeVariable) for n in self.names])
         v = {n: float(self.bounds[i, 0]) if self.fixed[i] else self.offset[i] + self.scale[i] * x[i]
              for i, n in enumerate(self.names)}
         if spec.timed:

@@ -19,6 +19,9 @@ from synthesis.spec.common import StrictModel
 
 #: the re-check's grid is this much finer than the solver's samples when no ``step`` is given
 FINE = 10
+#: at most this many scenarios (products of the ranges' samples) in one NLP and points in one re-check grid:
+#: each scenario repeats every rule that reads it, each re-check point costs a float check per start
+MAX_SCENARIOS, MAX_RECHECK_POINTS = 200, 20_000
 
 
 class OperatingRange(StrictModel):
@@ -92,8 +95,19 @@ def resolve_ranges(section: BaseModel, limits: dict[str, str]) -> None:
         for v in value.range:
             if not all(_holds(v, part.split()) for part in allowed.split(",")):
                 raise ValueError(f"{name}: range value {v:g}: expected {allowed}")
+        # a scenario's rules are named by the value to 4 significant digits (entry_angle@forward_speed=0.5833):
+        # samples closer than that would share a name and one of them would be dropped
+        labels = [f"{v:.4g}" for v in value.solver_values()]
+        if len(set(labels)) < len(labels):
+            raise ValueError(f"{name}: samples = {value.samples} over [{value.range[0]:g}, {value.range[1]:g}] are not "
+                             f"distinct to 4 significant digits: widen the range or take fewer samples")
         ranges[name] = value
         object.__setattr__(section, name, value.centre)     # frozen once validated; this is its own validation
+    scenarios = math.prod(r.samples for r in ranges.values())
+    points = math.prod(len(r.recheck_values()) for r in ranges.values())
+    if scenarios > MAX_SCENARIOS or points > MAX_RECHECK_POINTS:
+        raise ValueError(f"{', '.join(ranges)}: {scenarios} scenarios and {points} re-check points together "
+                         f"(at most {MAX_SCENARIOS} and {MAX_RECHECK_POINTS}): fewer samples or a coarser step")
     section._operating_ranges = ranges   # declared as ``_operating_ranges: dict = PrivateAttr(default_factory=dict)``
 
 

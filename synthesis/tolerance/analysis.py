@@ -183,7 +183,8 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
         if gap <= GAP_LIMIT:
             continue
         diff = row["linear_worst_margin"] - row["sampled_worst_margin"]
-        share = f"{abs(diff):.3g} {row['unit']} = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
+        share = f"{abs(diff):.3g} {row['unit']}" + (f" = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
+                                                    if base != 0 else " (the nominal margin is 0: the design is on the limit)")
         setting, name = settings(row)
         half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), name)
         lin_half = base - 0.5 * row["linear_loss"]

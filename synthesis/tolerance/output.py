@@ -3,12 +3,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from synthesis.result import atomic_write_text
+from synthesis.result import atomic_write_text, finite_json_text
 
 
 def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
@@ -77,6 +76,6 @@ def tornado(facts: dict, path: Path) -> None:
 
 
 def artifacts(kind: str, name: str, sha: str, facts: dict) -> dict:
-    return {"result.json": lambda p: atomic_write_text(p, json.dumps(result_json(kind, name, sha, facts), indent=1)),
+    return {"result.json": lambda p: atomic_write_text(p, finite_json_text(result_json(kind, name, sha, facts))),
             "report.md": lambda p: atomic_write_text(p, table(facts)),
             "tornado.png": lambda p: tornado(facts, p)}
