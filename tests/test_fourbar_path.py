@@ -260,6 +260,15 @@ def test_the_old_forms_are_refused_with_the_new_spelling_of_the_users_values(tmp
         "fourbar_path.rules.direction: \"cw\" is no longer read; write direction = \"clockwise\""]
 
 
+def test_an_old_branch_name_under_linkage_is_refused_with_its_number():
+    data = truth_data(0, 6, timed=False)
+    data["linkage"]["branch"] = "open"
+    with pytest.raises(SpecError) as err:
+        validate(FourbarPathSpec, data, prefix="fourbar_path")
+    assert str(err.value) == ("fourbar_path.linkage.branch: \"open\" is no longer read; write branch = 1 (+1: B left "
+                              "of A -> O', the open assembly; -1: the crossed one)")
+
+
 def test_design_values_outside_the_linkage_are_refused_with_the_init_form():
     data = truth_data(0, 6, timed=False)
     data["design"] = {"r3": 31.5}

@@ -272,6 +272,11 @@ def old_form_message(data: dict) -> str:
         new = {"open": 1, "crossed": -1}.get(old, old) if isinstance(old, (str, int)) else old
         fixes.append(f"branch: {json_text(old)} is no longer read at the top; write branch = {json_text(new)} under "
                      f"[linkage] (+1: B left of A -> O', the open assembly; -1: the crossed one)")
+    linkage = data.get("linkage")
+    if isinstance(linkage, dict) and linkage.get("branch") in ("open", "crossed"):
+        fixes.append(f"linkage.branch: {json_text(linkage['branch'])} is no longer read; write branch = "
+                     f"{ {'open': 1, 'crossed': -1}[linkage['branch']]} (+1: B left of A -> O', the open assembly; "
+                     f"-1: the crossed one)")
     rules = data.get("rules")
     if isinstance(rules, dict) and rules.get("grashof") in ("crank-rocker", "double-crank"):
         fixes.append(f"rules.grashof: {json_text(rules['grashof'])} is no longer read; write grashof = "
