@@ -85,9 +85,10 @@ def test_range_spec_grids():
     assert at.operation.forward_speed == 0.71 and ranges_of(at) == {} and ranges_of(spec) != {}
 
 
-def _check_at(loaded, design: dict, speed: float) -> dict:
-    """The kind's float check (no NLP) of ``design`` with the forward speed set: name -> record."""
-    spec = at_operating(loaded.model, {"forward_speed": speed})
+def _check_at(loaded, design: dict, **operating: float) -> dict:
+    """The kind's float check (no NLP) of ``design`` at the operating values given (forward_speed=0.6,
+    crank_speed=250): name -> record."""
+    spec = at_operating(loaded.model, operating)
     arm = {k: design[k] for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
     seedbed = {k: design[f"seedbed_{k}"] for k in ("x", "y", "tilt")}
     spec = spec.model_copy(update={"arm": spec.arm.model_copy(update=arm),
@@ -112,16 +113,17 @@ def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesig
 
     nominal_fails, entry, p4p6 = [], [], []
     for v in speeds:
-        n = _check_at(nominal_loaded, nominal.design, v)
+        n = _check_at(nominal_loaded, nominal.design, forward_speed=v)
         if not (n["entry_angle"]["satisfied"] and n["p4p6_distance"]["satisfied"]):
             nominal_fails.append(v)
-        e = _check_at(env_loaded, envelope.design, v)
+        e = _check_at(env_loaded, envelope.design, forward_speed=v)
         assert all(r["satisfied"] for r in e.values()), (v, [r["name"] for r in e.values() if not r["satisfied"]])
         entry.append(e["entry_angle"]["value"])
         p4p6.append(e["p4p6_distance"]["value"])
     # the nominal redesign (designed at 0.6 m/s) enters too flat above 0.70 m/s: 77.4 deg at 0.75
     assert nominal_fails == [0.71, 0.72, 0.73, 0.74, 0.75]
-    assert _check_at(nominal_loaded, nominal.design, 0.75)["entry_angle"]["value"] == pytest.approx(77.40, abs=0.01)
+    slowest = _check_at(nominal_loaded, nominal.design, forward_speed=0.75)
+    assert slowest["entry_angle"]["value"] == pytest.approx(77.40, abs=0.01)
     # the envelope design: entry angle >= 80 deg and P4P6 >= 20 mm at every 0.01 m/s; the binding end is the
     # fast one for the entry angle (kept 0.2 deg = the back-off inside), the slow one for P4P6
     assert min(entry) >= 80.0 and min(p4p6) >= 20.0
@@ -195,17 +197,6 @@ def test_envelope_run_folder_through_the_cli(tmp_path):
     assert "spacing_error@envelope" in run.stdout and "12.36" in run.stdout
 
 
-def _check_at_crank(loaded, design: dict, rpm: float) -> dict:
-    """The kind's float check (no NLP) of ``design`` with the crank speed set: name -> record."""
-    spec = at_operating(loaded.model, {"crank_speed": rpm})
-    arm = {k: design[k] for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
-    seedbed = {k: design[f"seedbed_{k}"] for k in ("x", "y", "tilt")}
-    spec = spec.model_copy(update={"arm": spec.arm.model_copy(update=arm),
-                                   "seedbed": spec.seedbed.model_copy(update=seedbed)})
-    result = kinds.get("planting_fourbar").checker()(LoadedSpec(spec, loaded.path, loaded.sha256))
-    return {r["name"]: r for r in result.rules}
-
-
 def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_redesign_does_not():
     """200-300 r/min at 0.6 m/s, re-checked every 2 r/min by the float check; the 2 mm seedling clearance keeps P1 a
     crossing (without it one start ends on a loop that only touches the seedling-top line: no P1 in the re-check)."""
@@ -218,15 +209,16 @@ def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_re
     assert envelope.extra["envelope"]["all_satisfied"]
     nominal_fails, entry, p4p6 = [], [], []
     for rpm in rpms:
-        n = _check_at_crank(nominal_loaded, nominal.design, rpm)
+        n = _check_at(nominal_loaded, nominal.design, crank_speed=rpm)
         nominal_fails += [rpm] if not all(r["satisfied"] for r in n.values()) else []
-        e = _check_at_crank(env_loaded, envelope.design, rpm)
+        e = _check_at(env_loaded, envelope.design, crank_speed=rpm)
         assert all(r["satisfied"] for r in e.values()), (rpm, [r["name"] for r in e.values() if not r["satisfied"]])
         entry.append(e["entry_angle"]["value"])
         p4p6.append(e["p4p6_distance"]["value"])
     # the nominal redesign (250 r/min only) enters too flat below 220 r/min: 77.4 deg at 200
     assert nominal_fails and max(nominal_fails) < 220.0
-    assert _check_at_crank(nominal_loaded, nominal.design, 200.0)["entry_angle"]["value"] == pytest.approx(77.4, abs=0.05)
+    slowest = _check_at(nominal_loaded, nominal.design, crank_speed=200.0)
+    assert slowest["entry_angle"]["value"] == pytest.approx(77.4, abs=0.05)
     assert min(entry) >= 80.0 and min(p4p6) >= 20.0 and int(np.argmin(entry)) == 0
     table = envelope.extra["envelope"]["rules"]
     assert np.allclose(table["entry_angle"]["values"], entry, atol=1e-9)
