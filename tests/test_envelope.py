@@ -122,8 +122,8 @@ def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesig
         p4p6.append(e["p4p6_distance"]["value"])
     # the nominal redesign (designed at 0.6 m/s) enters too flat above 0.70 m/s: 77.4 deg at 0.75
     assert nominal_fails == [0.71, 0.72, 0.73, 0.74, 0.75]
-    slowest = _check_at(nominal_loaded, nominal.design, forward_speed=0.75)
-    assert slowest["entry_angle"]["value"] == pytest.approx(77.40, abs=0.01)
+    at_end = _check_at(nominal_loaded, nominal.design, forward_speed=0.75)
+    assert at_end["entry_angle"]["value"] == pytest.approx(77.40, abs=0.01)
     # the envelope design: entry angle >= 80 deg and P4P6 >= 20 mm at every 0.01 m/s; the binding end is the
     # fast one for the entry angle (kept 0.2 deg = the back-off inside), the slow one for P4P6
     assert min(entry) >= 80.0 and min(p4p6) >= 20.0
@@ -217,8 +217,8 @@ def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_re
         p4p6.append(e["p4p6_distance"]["value"])
     # the nominal redesign (250 r/min only) enters too flat below 220 r/min: 77.4 deg at 200
     assert nominal_fails and max(nominal_fails) < 220.0
-    slowest = _check_at(nominal_loaded, nominal.design, crank_speed=200.0)
-    assert slowest["entry_angle"]["value"] == pytest.approx(77.4, abs=0.05)
+    at_end = _check_at(nominal_loaded, nominal.design, crank_speed=200.0)
+    assert at_end["entry_angle"]["value"] == pytest.approx(77.4, abs=0.05)
     assert min(entry) >= 80.0 and min(p4p6) >= 20.0 and int(np.argmin(entry)) == 0
     table = envelope.extra["envelope"]["rules"]
     assert np.allclose(table["entry_angle"]["values"], entry, atol=1e-9)
