@@ -55,6 +55,7 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
     "planting_arm/crank_speed_envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
+    "planting_arm/envelope_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.3882984310732636)},
     "planting_arm/envelope_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6541651681735414)},
     "planting_arm/envelope_redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.33305374498363943)},
     "planting_arm/redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 0.9380752773248703)},
@@ -83,6 +84,7 @@ SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
            "planting_arm/robust_redesign_from_example3.toml",    # tolerance-robust, about 80 s
            "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
+           "planting_arm/envelope_redesign_from_example2.toml",  # 26-point envelope re-check per start, about 20 s
            "planting_arm/envelope_redesign_from_example3.toml",  # 26-point envelope re-check per start, about 20 s
            "planting_arm/envelope_redesign_from_example4.toml",  # 26-point envelope re-check per start, about 20 s
            "planting_arm/crank_speed_envelope_redesign_from_example1.toml",  # 51-point re-check per start, about 80 s
