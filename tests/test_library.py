@@ -55,11 +55,16 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
     "planting_arm/crank_speed_envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
+    "planting_arm/envelope_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.3882984310732636)},
+    "planting_arm/envelope_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6541651681735414)},
+    "planting_arm/envelope_redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.33305374498363943)},
     "planting_arm/redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 0.9380752773248703)},
     "planting_arm/redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6391376807772884)},
     "planting_arm/redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.29332215894486)},
     "planting_arm/robust_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6091572046350713)},
+    "planting_arm/robust_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.0211929345487722)},
     "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657664866)},
+    "planting_arm/robust_redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.32770599356294744)},
     "planting_arm/taiwan_example1.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example2.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example2_zeta_minus41.toml": {"check": 1, "solve": ("exit", 2)},
@@ -79,8 +84,13 @@ EXPECTED: dict[str, dict] = {
 SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 #: specs whose solve takes more than a few seconds: run with the studies (`pytest -m benchmark`)
 STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
+           "planting_arm/robust_redesign_from_example2.toml",    # tolerance-robust, 32 starts, about 130 s on 2 workers
            "planting_arm/robust_redesign_from_example3.toml",    # tolerance-robust, about 80 s
+           "planting_arm/robust_redesign_from_example4.toml",    # tolerance-robust, about 100 s on one worker
            "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
+           "planting_arm/envelope_redesign_from_example2.toml",  # 26-point envelope re-check per start, about 20 s
+           "planting_arm/envelope_redesign_from_example3.toml",  # 26-point envelope re-check per start, about 20 s
+           "planting_arm/envelope_redesign_from_example4.toml",  # 26-point envelope re-check per start, about 20 s
            "planting_arm/crank_speed_envelope_redesign_from_example1.toml",  # 51-point re-check per start, about 80 s
            "guide_tube/uniform_spacing_mu_envelope.toml"}        # 21 mu x 80 spacings re-check per start, about 25 s
 
