@@ -149,17 +149,18 @@ def test_planting_envelope_redesigns_of_examples_3_and_4(example, first_fail, en
     assert nominal.status == envelope.status == "optimal"
     nominal_fails, entry, p4p6 = [], [], []
     for v in speeds:
-        n = _check_at(nominal_loaded, nominal.design, v)
+        n = _check_at(nominal_loaded, nominal.design, forward_speed=v)
         failed = [name for name, r in n.items() if not r["satisfied"]]
         assert failed in ([], ["entry_angle"]), (v, failed)
         if failed:
             nominal_fails.append(v)
-        e = _check_at(env_loaded, envelope.design, v)
+        e = _check_at(env_loaded, envelope.design, forward_speed=v)
         assert all(r["satisfied"] for r in e.values()), (v, [r["name"] for r in e.values() if not r["satisfied"]])
         entry.append(e["entry_angle"]["value"])
         p4p6.append(e["p4p6_distance"]["value"])
     assert nominal_fails == [v for v in speeds if v >= first_fail]
-    assert _check_at(nominal_loaded, nominal.design, 0.75)["entry_angle"]["value"] == pytest.approx(entry_at_075, abs=0.01)
+    at_end = _check_at(nominal_loaded, nominal.design, forward_speed=0.75)
+    assert at_end["entry_angle"]["value"] == pytest.approx(entry_at_075, abs=0.01)
     assert int(np.argmin(entry)) == 25 and min(entry) == pytest.approx(80.2, abs=1e-3)
     assert int(np.argmin(p4p6)) == 0 and min(p4p6) == pytest.approx(p4p6_min, abs=0.01)
     assert envelope.objective["value"] > nominal.objective["value"]
