@@ -285,7 +285,12 @@ class RunFolder:
         if not os.path.lexists(self.final):
             return False
         if not is_run_folder(self.final):
-            raise OutputError(_refusal(self.final, self.spec))
+            # the check when a run opens its folder takes no lock: another run's commit may have moved the old
+            # run away (and perhaps its own in) between the looks -- look again before refusing
+            if not os.path.lexists(self.final):
+                return False                # nothing there now; the locked commit looks again
+            if not is_run_folder(self.final):
+                raise OutputError(_refusal(self.final, self.spec))
         if self.force or (self.replaceable is not None and _same(self.final, self.replaceable)):
             return True
         raise OutputError(f"{self.final} holds an earlier agrisynth run; give --force to replace it, "
