@@ -25,7 +25,7 @@ from synthesis.guide_tube.plots import compare_figures
 from synthesis.guide_tube.printed import printed_landing_time, printed_phase
 from synthesis.guide_tube.scene import GuideTubeScene, calibration_failure
 from synthesis.guide_tube.slope import landing_time_slope
-from solving import run_solve
+from solving import run_solve, spec_with
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -159,15 +159,6 @@ def test_casadi_ad_slope_equals_the_analytic_derivative(tube, delta, mu, vl):
 
 
 # --- the solve's invariants ------------------------------------------------------------------------------------
-
-def _spec_with(tmp_path: Path, source: Path, replacements: list[tuple[str, str]], name: str = "spec.toml") -> Path:
-    text = source.read_text()
-    for old, new in replacements:
-        assert old in text, old
-        text = text.replace(old, new, 1)
-    path = tmp_path / name
-    path.write_text(text)
-    return path
 
 
 def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times():
@@ -306,14 +297,14 @@ print("LOADED", sorted(other))
                                                        "tray_pitch = 300, got [230, 320]"),
 ])
 def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
-    proc = run("check", str(_spec_with(tmp_path, BASELINE, [(old, new)])), cwd=tmp_path)
+    proc = run("check", str(spec_with(tmp_path, BASELINE, [(old, new)])), cwd=tmp_path)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in " ".join(proc.stderr.split()), proc.stderr
     assert "Traceback" not in proc.stderr
 
 
 def test_infeasible_angle_range_exits_3_naming_the_rule(tmp_path):
-    path = _spec_with(tmp_path, DELTA2, [("init = 41, bounds = [25, 70]", "init = 60, bounds = [50, 70]")])
+    path = spec_with(tmp_path, DELTA2, [("init = 41, bounds = [25, 70]", "init = 60, bounds = [50, 70]")])
     proc = run("solve", str(path), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     assert "landing_time_spread" in " ".join(proc.stderr.split())
@@ -344,7 +335,7 @@ def test_same_spec_and_seed_give_the_same_angles():
 
 
 def _both_free_with_spacing_limit(tmp_path: Path, limit_mm: float) -> Path:
-    return _spec_with(tmp_path, TUBES / "uniform_spacing.toml", [
+    return spec_with(tmp_path, TUBES / "uniform_spacing.toml", [
         ('name = "uniform"', 'name = "nearest"'),
         ("min_free_fall = 0 ", f"max_spacing_error = {limit_mm}\nmin_free_fall = 0 ")])
 
