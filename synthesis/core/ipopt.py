@@ -83,27 +83,25 @@ _scaling: ContextVar[str] = ContextVar("agrisynth_variable_scaling", default="no
 
 
 @contextmanager
-def derivatives(mode: str) -> Iterator[None]:
+def _mode(var: ContextVar[str], mode: str, allowed, what: str) -> Iterator[None]:
+    """``var`` set to ``mode`` (one of ``allowed``) while the block runs: CompiledNLPs built there read it."""
+    if mode not in allowed:
+        raise ValueError(f"{what}: {mode!r} is not one of {', '.join(allowed)}")
+    token = var.set(mode)
+    try:
+        yield
+    finally:
+        var.reset(token)
+
+
+def derivatives(mode: str):
     """CompiledNLPs built inside get ``mode`` derivatives ("exact" or "finite_difference")."""
-    if mode not in DERIVATIVES:
-        raise ValueError(f"derivatives: {mode!r} is not one of {', '.join(DERIVATIVES)}")
-    token = _derivatives.set(mode)
-    try:
-        yield
-    finally:
-        _derivatives.reset(token)
+    return _mode(_derivatives, mode, DERIVATIVES, "derivatives")
 
 
-@contextmanager
-def variable_scaling(mode: str) -> Iterator[None]:
+def variable_scaling(mode: str):
     """CompiledNLPs built inside give IPOPT ``mode`` variables ("nominal": w = s * z, or "none": w)."""
-    if mode not in SCALINGS:
-        raise ValueError(f"variable_scaling: {mode!r} is not one of {', '.join(SCALINGS)}")
-    token = _scaling.set(mode)
-    try:
-        yield
-    finally:
-        _scaling.reset(token)
+    return _mode(_scaling, mode, SCALINGS, "variable_scaling")
 
 
 def unit_power(size: np.ndarray) -> np.ndarray:
