@@ -180,7 +180,7 @@ def _ode_spread_mm(design: dict, mu: float, spacing: float) -> float:
 
 
 def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nominal_design_does_not(tmp_path):
-    from tests.solving import spec_with
+    from solving import spec_with
 
     source = LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"
     envelope, _, _ = solve_spec(load_spec(source), starts=1, workers=1)
@@ -207,7 +207,7 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
 def test_envelope_run_folder_through_the_cli(tmp_path):
     """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
     and the @envelope rows for the solution and the given design, envelope.png beside the report."""
-    from tests.solving import cli_run, strict_json
+    from solving import cli_run, strict_json
 
     run = cli_run("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
                   "--starts", "1", cwd=tmp_path)
@@ -263,7 +263,7 @@ def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_re
 def test_seedling_clearance_keeps_p1_a_crossing(tmp_path):
     """The crank-speed envelope from start 0 of a 230-270 r/min range without a clearance ends with the loop's top
     on the seedling-top line (P1 a tangency: 'failed', P1 not found by the float check); with 2 mm it is found."""
-    from tests.solving import spec_with
+    from solving import spec_with
     source = LIBRARY / "planting_arm/crank_speed_envelope_redesign_from_example1.toml"
     narrow = "crank_speed = { range = [230, 270], samples = 4, nominal = 250, step = 4 }"
     old = "crank_speed = { range = [200, 300], samples = 4, nominal = 250, step = 2 }"
@@ -284,7 +284,7 @@ FORWARD_RANGE = "forward_speed = { range = [0.50, 0.75], samples = 4, nominal = 
 def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path):
     """check reads a range's nominal value: it says so, and its verdict names the nominal point, instead of
     "every rule satisfied" for a design that may fail inside the range."""
-    from tests.solving import cli_run
+    from solving import cli_run
     run = cli_run("check", str(ENVELOPE_SPEC), "--out", str(tmp_path), cwd=tmp_path)
     out = " ".join(run.stdout.split())
     assert "forward_speed given as a range: check evaluates the nominal value only" in out
@@ -302,7 +302,7 @@ def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path
      "forward_speed: samples = 4 over [0.6, 0.60001] are not distinct to 4 significant digits"),
 ])
 def test_range_sizes_that_would_blow_up_or_merge_scenarios_are_refused(tmp_path, replacement, message):
-    from tests.solving import cli_run, spec_with
+    from solving import cli_run, spec_with
     run = cli_run("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [replacement])), "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2 and message in " ".join(run.stderr.split()), run.stderr
     assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
