@@ -31,10 +31,17 @@ def walk_fields(model: BaseModel, prefix: str = ""):
         if isinstance(value, BaseModel) and not isinstance(value, FreeVariable):
             yield from walk_fields(value, f"{path}.")
         elif isinstance(value, (list, tuple)):
-            for i, item in enumerate(value):
-                yield f"{path}[{i}]", field, item
-                if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
-                    yield from walk_fields(item, f"{path}[{i}].")
+            yield from _walk_items(value, path, field)
+
+
+def _walk_items(items, path: str, field):
+    """The items of a list (and of lists in it, e.g. guide_way's control points ``spline.control[3][0]``)."""
+    for i, item in enumerate(items):
+        yield f"{path}[{i}]", field, item
+        if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
+            yield from walk_fields(item, f"{path}[{i}].")
+        elif isinstance(item, (list, tuple)):
+            yield from _walk_items(item, f"{path}[{i}]", field)
 
 
 def _entry(path: str | None, field, bounds, free: bool) -> dict[str, Any]:

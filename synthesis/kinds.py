@@ -102,3 +102,10 @@ def solving_kind_for(loaded) -> Kind:
     from synthesis.tolerance.robust import robust_kind
 
     return robust_kind(kind, loaded.model)
+
+
+def explicit_design(loaded, data: dict) -> dict:
+    """The spec file's ``data`` with every design variable written out (see ``Kind.explicit_design``): the data
+    itself for a kind whose specs always hold their whole design."""
+    target = get(loaded.kind).explicit_design
+    return data if target is None else resolve(target)(loaded, data)

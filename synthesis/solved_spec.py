@@ -6,7 +6,9 @@ given design some kinds read, e.g. fourbar_path's free-timing crank angles) set 
 and the name ``<name>_solved`` (so checking it never touches the solve's own folder).
 ``agrisynth check results/<name>/solved.toml`` then evaluates exactly the solved design.
 
-Generic over kinds: where each variable is written comes from :mod:`synthesis.design_info`.
+Generic over kinds: where each variable is written comes from :mod:`synthesis.design_info`; a kind whose
+spec may leave part of its design to the kind (guide_way's control points, the convex fit by default) first
+writes it out (``Kind.explicit_design``), so the solved values have a place.
 """
 
 from __future__ import annotations
@@ -40,7 +42,14 @@ def set_at_path(data: Any, path: str, value: Any) -> None:
 
 def solved_data(loaded, result) -> dict[str, Any]:
     """The spec file's data with the solved design in place of every free variable."""
+    from synthesis import kinds
+    from synthesis.spec.common import validate
+
     data, _ = read_toml(loaded.path)
+    explicit = kinds.explicit_design(loaded, data)
+    if explicit is not data:                 # a design the spec left to the kind, now written out
+        data = explicit
+        loaded = type(loaded)(validate(type(loaded.model), data, prefix=loaded.kind), loaded.path, loaded.sha256)
     info = describe(loaded.model)
     if not info:
         raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables()), so the "

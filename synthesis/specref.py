@@ -274,6 +274,19 @@ def toml_value(v: Any) -> str:
     raise TypeError(f"cannot write {type(v).__name__} as TOML")
 
 
+#: a list of lists written inline longer than this is written one item a line
+LONG_LIST = 100
+
+
+def _assignment(key: str, value: Any, lead: str) -> list[str]:
+    """``key = value`` as lines: a long list of lists (e.g. guide_way's control points) one item a line."""
+    inline = toml_value(value)
+    if len(inline) <= LONG_LIST or not isinstance(value, (list, tuple)) or not all(isinstance(v, (list, tuple))
+                                                                                  for v in value):
+        return [f"{lead}{key} = {inline}"]
+    return [f"{lead}{key} = ["] + [f"{lead}    {toml_value(v)}," for v in value] + [f"{lead}]"]
+
+
 def _comment(text: str, indent: str = "") -> list[str]:
     return textwrap.wrap(text, width=100, initial_indent=f"{indent}# ", subsequent_indent=f"{indent}#   ")
 
@@ -309,7 +322,7 @@ def _table(model, data, prefix, lines, *, commented, documented, rewrite, path_p
             lines += _comment(_field_note(e))
         if given:
             value = rewrite.get(e.path, data[key])
-            lines.append(f"{'# ' if commented else ''}{toml_key(key)} = {toml_value(value)}")
+            lines += _assignment(toml_key(key), value, "# " if commented else "")
         elif documented:
             lines.append(f"# {toml_key(key)} = {e.default if e.default not in ('', 'unset') else '<' + e.type + '>'}")
     for name, field in model.model_fields.items():

@@ -19,10 +19,7 @@ from synthesis.solved_spec import FILENAME, solved_toml
 from synthesis.spec import load_spec
 
 #: kinds whose `check` cannot reproduce a solve's rule table, and why (xfail strict: a fix turns them red)
-KNOWN = {
-    "guide_way": "its solve moves the spline's control points, which the spec cannot hold (it lists no design "
-                 "variables): solved.toml needs a spec field for them",
-}
+KNOWN: dict[str, str] = {}
 
 
 def _solving_kinds() -> list:

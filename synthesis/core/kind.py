@@ -46,6 +46,11 @@ class Kind:
     objectives: dict[str, str] = field(default_factory=dict)  # objective -> one-line meaning (first = default)
     bench: str | None = None              # "module:function"(specs | None, seed) -> bench cases
     example: str | None = None            # a library spec to try, relative to problems/
+    #: "module:function"(loaded spec, spec file data) -> that data with a design the spec may leave to the kind
+    #: (guide_way: the convex fit's control points) written out as free variables, so it solves and checks the
+    #: same and every variable has a place in the file (the studio's sliders, solved.toml); None: specs always
+    #: hold their whole design
+    explicit_design: str | None = None
 
     @property
     def solves(self) -> bool:

@@ -20,6 +20,7 @@ KIND = Kind(
     bench="synthesis.guide_way:bench_cases",
     objectives={"smoothness": "the claw path's squared third derivative, relative to the convex fit's"},
     example="guide_way/smooth_redesign.toml",
+    explicit_design="synthesis.guide_way.check:explicit_design",
 )
 
 

@@ -204,11 +204,58 @@ def result_of(spec, sha: str, scene: sc.Scene, status: str = "evaluated") -> Res
                   rules=[r.record().to_json() for r in scene.rules], extra=describe(scene))
 
 
-def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
-    control = None
-    if spec.spline is not None:
+def given_control(spec) -> np.ndarray | None:
+    """The (n, 2) control points a spline spec gives (``[spline] control``: fixed values and free ones' start
+    values), or None when it leaves them to the convex fit."""
+    from synthesis.spec.common import value_of
+
+    if spec.spline is None or spec.spline.control is None:
+        return None
+    return np.array([[value_of(x), value_of(y)] for x, y in spec.spline.control], float)
+
+
+def control_to_check(spec) -> np.ndarray | None:
+    """What ``check`` evaluates: the spec's control points, else the convex fit (None for the paper's conics)."""
+    if spec.spline is None:
+        return None
+    control = given_control(spec)
+    if control is None:
         from synthesis.guide_way.fit import fit_path
 
         control = fit_path(spec).control
-    return result_of(spec, loaded.sha256, scene_for(spec, control))
+    return control
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    return result_of(spec, loaded.sha256, scene_for(spec, control_to_check(spec)))
+
+
+def coarse_check(loaded: LoadedSpec) -> Result:
+    """The check on the [solver] samples per stretch (the fine grid's tenth): the studio's grid while dragging."""
+    spec = loaded.model
+    return result_of(spec, loaded.sha256, scene_for(spec, control_to_check(spec), spec.solver.samples_per_segment))
+
+
+def coarse_note(spec, grid: str) -> str:
+    if grid == "fine":
+        return "agrisynth check's own grid"
+    return (f"the check on {spec.solver.samples_per_segment} samples per segment (fine: "
+            f"{FINE * spec.solver.samples_per_segment})")
+
+
+def explicit_design(loaded: LoadedSpec, data: dict) -> dict:
+    """The spec file's ``data`` with the control points written out when it leaves them to the convex fit: each
+    coordinate ``{init = fit, bounds = [fit - move, fit + move]}``, the very start and box ``solve`` uses then,
+    so the spec solves and checks as before, and the studio and ``solved.toml`` have a place for each point."""
+    spec = loaded.model
+    if spec.spline is None or spec.spline.control is not None:
+        return data
+    from synthesis.guide_way.fit import fit_path
+
+    move = spec.spline.move
+    control = fit_path(spec).control
+    out = dict(data)
+    out["spline"] = dict(data["spline"], control=[[{"init": float(v), "bounds": [float(v) - move, float(v) + move]}
+                                                   for v in point] for point in control])
+    return out

@@ -1,7 +1,7 @@
 """The IPOPT stage of the redesign: the spline's control points held to every rule of the guide way.
 
-Decision variables: the control points P (n x 2), each within ``[spline] move`` mm of the convex fit
-(start 0 is the fit itself).  Structural rows (exact, no back-off): every key point, every key
+Decision variables: the control points P (n x 2): those the spec gives (``[spline] control``, start 0 their
+init values, within their bounds), else each within ``[spline] move`` mm of the convex fit (start 0 the fit).  Structural rows (exact, no back-off): every key point, every key
 tangent's direction (M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min) and |OM| having its minimum at the
 fold (|M'|^2 + M . M'' >= v_min^2 / 2 there).  Rules: the same sampled rules as the check
 (:func:`synthesis.guide_way.scene.rules_of` on the control points as CasADi symbols; the pressure-angle
@@ -37,6 +37,20 @@ def control_of(x, n: int):
     return np.column_stack([x[:n], x[n:]])
 
 
+def design_box(spec, fit) -> tuple[np.ndarray, np.ndarray]:
+    """Start 0 and the bounds (2n x 2) of the control points: the spec's ``[spline] control`` where it gives them
+    (a fixed coordinate has lo = hi), else the convex fit, each coordinate within ``move`` of it."""
+    from synthesis.spec.common import bounds_of, value_of
+
+    given = spec.spline.control
+    if given is None:
+        init = np.concatenate([fit.control[:, 0], fit.control[:, 1]])
+        return init, np.column_stack([init - spec.spline.move, init + spec.spline.move])
+    coordinates = [point[k] for k in (0, 1) for point in given]         # x coordinates first, as names_of
+    return (np.array([value_of(v) for v in coordinates], float),
+            np.array([bounds_of(v) for v in coordinates], float))
+
+
 class FixedGuide:
     """A conic (published) guide way: nothing to optimise; the driver refuses it as bad input (exit 2)."""
 
@@ -53,8 +67,7 @@ class GuideNLP:
         n = s.control_points
         self.spec, self.n, self.fit = spec, n, fit
         self.names = names_of(n)
-        self.init = np.concatenate([fit.control[:, 0], fit.control[:, 1]])
-        self.bounds = np.column_stack([self.init - s.move, self.init + s.move])
+        self.init, self.bounds = design_box(spec, fit)
         x = ca.SX.sym("P", 2 * n)
         control = control_of(x, n)
         samples = spec.solver.samples_per_segment

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
-from synthesis.guide_way.check import FINE, describe, scene_for
+from synthesis.guide_way.check import FINE, describe, given_control, scene_for
 
 
 def prepare(spec):
@@ -47,8 +47,15 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     return Finished(design=dict(best.outcome.design),
                     objective={"name": "smoothness", "value": best.outcome.objective, "unit": "-"},
                     facts=facts, solver_settings={"samples_per_segment": spec.solver.samples_per_segment},
-                    baseline_design={**spec.design_values(),
-                                     **dict(zip(*_fit_design(spec, setting.data)))})
+                    baseline_design=_baseline_design(spec, setting.data))
+
+
+def _baseline_design(spec, fit) -> dict:
+    """The given design: the arm and the spec's control points, else the convex fit's."""
+    design = dict(spec.design_values())
+    for name, value in zip(*_fit_design(spec, fit)):
+        design.setdefault(name, value)
+    return design
 
 
 def _fit_design(spec, fit):
@@ -61,10 +68,11 @@ def _fit_design(spec, fit):
 
 
 def baseline_rules(setting: Setting) -> list[dict] | None:
-    """The rule table of the convex fit (the given design of a spline spec)."""
+    """The rule table of the given design of a spline spec: its control points, else the convex fit."""
     if setting.data is None:
         return None
-    scene = scene_for(setting.spec, setting.data.control)
+    given = given_control(setting.spec)
+    scene = scene_for(setting.spec, setting.data.control if given is None else given)
     return [r.record().to_json() for r in scene.rules]
 
 

@@ -385,8 +385,10 @@ def _prune_union_noise(lines: list[str]) -> list[str]:
     out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
         o.startswith(ln.partition(": expected a table, got ")[0] + ": expected a number") for o in out))]
     # a table given for a "number | table" field: the table's own complaints say what is wrong with it
-    out = [ln for ln in out if not (": expected a number, got {" in ln and
-                                    any(o.startswith(ln.partition(": expected a number, got ")[0] + ".") for o in out))]
+    # (its fields' complaints, or its own: e.g. "init 500 lies outside its bounds [28, 42]")
+    out = [ln for ln in out if not (": expected a number, got {" in ln and any(
+        o != ln and o.startswith(tuple(ln.partition(": expected a number, got ")[0] + end for end in (".", ": ")))
+        for o in out))]
     # a number given for a "number | range table" field: the number's own complaint says what is wrong with it
     out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
         o != ln and o.startswith(ln.partition(": expected a table, got ")[0] + ": expected ")

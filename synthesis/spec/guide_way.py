@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import MultistartSettings, ProblemSpec, StrictModel
+from synthesis.spec.common import FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, value_of
 
 KIND = "guide_way"
 Point = tuple[float, float]
@@ -71,8 +71,32 @@ class SplineSection(StrictModel):
                                   "|OM| = R - d, tangent perpendicular to OM, and the inverse kinematics "
                                   "changes branch there (minus before it in the paper's eq 7 ... see GUIDE_WAY.md)")
     min_speed: float = Field(0.2, gt=0, description="|dM/du| at a key tangent, at least this x the loop length (dimensionless)")
-    move: float = Field(40.0, gt=0, description="IPOPT stage: each control point stays within this of the "
-                                                "convex fit, mm")
+    move: float = Field(40.0, gt=0, description="IPOPT stage, when `control` is not given: each control point "
+                                                "stays within this of the convex fit, mm")
+    control: list[tuple[Variable, Variable]] | None = Field(
+        None, description="the control points (x, y) round the loop, mm, one pair per control point (default: the "
+                          "convex fit, each coordinate free within `move` of it); a number fixes a coordinate, "
+                          "{init, bounds} frees it (init: what `check` evaluates and start 0 of `solve`)")
+
+    @model_validator(mode="after")
+    def _control(self) -> "SplineSection":
+        if self.control is None:
+            return self
+        if len(self.control) != self.control_points:
+            raise ValueError(f"control: expected {self.control_points} control points (control_points), got "
+                             f"{len(self.control)}")
+        for j, point in enumerate(self.control):
+            for axis, v in zip("xy", point):
+                numbers = (v.init, *v.bounds) if isinstance(v, FreeVariable) else (v,)
+                if not all(math.isfinite(n) for n in numbers):
+                    raise ValueError(f"control[{j}].{axis}: expected finite numbers, got {_shown(v)}")
+        return self
+
+
+def _shown(v) -> str:
+    if isinstance(v, FreeVariable):
+        return f"{{init = {v.init}, bounds = [{v.bounds[0]}, {v.bounds[1]}]}}"
+    return str(v)
 
 
 class RulesSection(StrictModel):
@@ -159,7 +183,19 @@ class GuideWaySpec(ProblemSpec):
                 raise ValueError(f"points.{name}: expected finite coordinates, got [{x}, {y}]")
         return self
 
-    def design_values(self) -> dict[str, float]:
-        """The published (or given) path's numbers: the arm geometry (the conics are in ``facts``)."""
+    def variables(self) -> dict[str, Variable]:
+        """Every design variable by its result.json name: the arm geometry (fixed) and, when the spec gives them,
+        the spline's control points, x coordinates first (``P<j>_x``, then ``P<j>_y``: the NLP's order)."""
         a = self.arm
-        return {"R": a.radius, "d": a.claw, "r": a.crank, "beta": a.beta, "roller_radius": a.roller_radius}
+        out: dict[str, Variable] = {"R": a.radius, "d": a.claw, "r": a.crank, "beta": a.beta,
+                                    "roller_radius": a.roller_radius}
+        control = self.spline.control if self.spline is not None else None
+        if control is not None:
+            for k, axis in enumerate("xy"):
+                out.update({f"P{j}_{axis}": point[k] for j, point in enumerate(control)})
+        return out
+
+    def design_values(self) -> dict[str, float]:
+        """The published (or given) path's numbers: the arm geometry and the given control points (the conics,
+        and the convex fit a spline spec without control points starts from, are in ``facts``)."""
+        return {n: value_of(v) for n, v in self.variables().items()}
