@@ -199,12 +199,13 @@ def test_coarse_grid_is_coarser_and_says_so(planting_studio):
 def test_the_coarse_grid_note_states_the_samples_evaluated():
     """Each note gives the counts the check runs on, not the [solver] value it is derived from; a check that
     reads no (effective) sample count is said to have one grid, and its coarse table is its fine one."""
+    from synthesis.core.coarse import coarser
     from synthesis.spec import load_spec
     from synthesis.studio import grids
     from synthesis.studio.session import Session
 
     spec = load_spec(STUDIO_SPECS["fourbar_path"]).model
-    assert spec.solver.samples == 36 and grids._coarser(spec).solver.samples == 4      # not below ge=4
+    assert spec.solver.samples == 36 and coarser(spec).solver.samples == 4      # not below ge=4
     assert spec.rules.grashof_class == "crank_rocker"         # path_rules reads the samples only for grashof "any"
     assert grids.note("fourbar_path", "coarse", spec).startswith("the check's one grid (grashof = \"crank_rocker\"")
     anything = spec.model_copy(update={"rules": spec.rules.model_copy(update={"grashof_class": "any"})})
@@ -224,14 +225,12 @@ def test_the_coarse_grid_note_states_the_samples_evaluated():
         assert session.evaluate(values, "coarse")["rules"] == session.evaluate(values, "fine")["rules"], kind
 
 
-@pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam",
+@pytest.mark.parametrize("kind", sorted(["planting_fourbar", "steering_linkage", "tillage_linkage", "clamp_cam", "guide_way",
                                          "crank_rocker", "combing_chain", "fourbar_path"]))
 def test_coarse_rules_are_the_checks_on_fewer_samples(kind):
     """Same rules, values close to the fine grid's (sampled extremes move a little), a different grid note."""
-    from synthesis.studio import grids
     from synthesis.studio.session import Session
 
-    assert kind == "fourbar_path" or kind in grids.TRIMMED
     session = Session.open(STUDIO_SPECS[kind])
     values = moved_values(session, 0.1)
     coarse, fine = session.evaluate(values, "coarse"), session.evaluate(values, "fine")

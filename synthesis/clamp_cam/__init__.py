@@ -19,6 +19,7 @@ KIND = Kind(
                 "pressure_angle": "smallest peak pressure angle (measured on the fine grid), deg",
                 "nearest": "smallest change from the given cam"},
     example="clamp_cam/opening_cam_redesign_modified_sine.toml",
+    coarse_check="synthesis.clamp_cam.coarse:COARSE",
 )
 
 

@@ -20,6 +20,7 @@ KIND = Kind(
     objectives={"max_window_margin": "largest smallest margin of the plant angle before the cut to the window, deg",
                 "min_chain_speed": "slowest chain(s) keeping every plant in the window: sum of gear speeds, m/s"},
     example="combing_chain/redesign_window_80_100.toml",
+    coarse_check="synthesis.combing_chain.coarse:COARSE",
 )
 
 

@@ -46,6 +46,9 @@ class Kind:
     objectives: dict[str, str] = field(default_factory=dict)  # objective -> one-line meaning (first = default)
     bench: str | None = None              # "module:function"(specs | None, seed) -> bench cases
     example: str | None = None            # a library spec to try, relative to problems/
+    #: "module:object" of a CoarseCheck: the check on a coarser grid (the studio's, while a slider moves);
+    #: None: the studio evaluates the check itself on both grids
+    coarse_check: str | None = None
     #: "module:function"(loaded spec, spec file data) -> that data with a design the spec may leave to the kind
     #: (guide_way: the convex fit's control points) written out as free variables, so it solves and checks the
     #: same and every variable has a place in the file (the studio's sliders, solved.toml); None: specs always
@@ -64,6 +67,21 @@ class Kind:
 
     def solver_side(self) -> "Solving":
         return resolve(self.solving)
+
+
+def _the_check(spec) -> str:
+    return "agrisynth check's own grid"
+
+
+@dataclass(frozen=True)
+class CoarseCheck:
+    """The kind's check on a coarser grid, for ``agrisynth studio`` while a slider moves (the fine grid, on release,
+    is ``check`` itself): the same rules, fewer samples, and only the facts the page draws.
+    Helpers for the usual cases: :mod:`synthesis.core.coarse`."""
+
+    evaluate: Callable[[Any], Any]               # loaded spec -> Result (status "evaluated"), the check's rules
+    note: Callable[[Any], str]                   # spec -> what the coarse grid evaluates, in words (sample counts)
+    fine_note: Callable[[Any], str] = _the_check  # spec -> what the fine grid (the check) evaluates, in words
 
 
 @dataclass(frozen=True)

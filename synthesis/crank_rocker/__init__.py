@@ -17,6 +17,7 @@ KIND = Kind(
     objectives={"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
                 "max_transmission_angle": "largest smallest transmission angle over a turn, deg"},
     example="picker/cai2020_crank_rocker_synthesis.toml",
+    coarse_check="synthesis.crank_rocker.coarse:COARSE",
 )
 
 

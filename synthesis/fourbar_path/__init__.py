@@ -19,4 +19,5 @@ KIND = Kind(
                                         "in start order, that reaches it)"},
     bench="synthesis.fourbar_path.bench:bench_cases",
     example="fourbar_path/picking_arc.toml",
+    coarse_check="synthesis.fourbar_path.coarse:COARSE",
 )

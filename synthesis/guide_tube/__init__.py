@@ -27,6 +27,7 @@ KIND = Kind(
                 "fastest": "earliest landing of tube 1, ms",
                 "uniform": "smallest worst plant-position error over the row spacings, mm"},
     example="guide_tube/cai2020_delta2.toml",
+    coarse_check="synthesis.guide_tube.coarse:COARSE",
 )
 
 

@@ -21,6 +21,7 @@ KIND = Kind(
     objectives={"smoothness": "the claw path's squared third derivative, relative to the convex fit's"},
     example="guide_way/smooth_redesign.toml",
     explicit_design="synthesis.guide_way.check:explicit_design",
+    coarse_check="synthesis.guide_way.coarse:COARSE",
 )
 
 

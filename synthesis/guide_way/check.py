@@ -57,6 +57,23 @@ def curves(scene: sc.Scene) -> list[dict]:
     return out
 
 
+#: arm poses listed in the facts (``positions``), evenly over the controlled path's samples
+POSES = 36
+
+
+def positions(scene: sc.Scene) -> list[dict]:
+    """Arm poses along the controlled path, in time order: the wheel centre O, the pivot P, the claw tip M and the
+    roller centre N (mm), for drawing and animating the mechanism."""
+    rows = [(a, i) for a in scene.arms for i in range(np.asarray(a.theta).size)]
+    step = max(1, -(-len(rows) // POSES))
+    out = []
+    for a, i in rows[::step]:
+        out.append({"theta_deg": float(np.degrees(float(a.theta[i])) % 360.0), "O": [0.0, 0.0],
+                    "P": [float(a.p[0][i]), float(a.p[1][i])], "M": [float(a.m[0][i]), float(a.m[1][i])],
+                    "N": [float(a.n[0][i]), float(a.n[1][i])]})
+    return out
+
+
 def undercut_stretches(scene: sc.Scene) -> list[dict]:
     """Every run of samples where the centre line bends tighter than the roller: the wall on the concave side
     (left or right of the direction of motion) has a cusp there and cannot be cut."""
@@ -168,6 +185,7 @@ def describe(scene: sc.Scene) -> dict:
                                                            np.argmax),
         "fold_window_deg": spec.rules.fold_window,
         "curves": curves(scene),
+        "positions": positions(scene),
     }
     if scene.pieces is not None:
         facts["conics"] = conic_facts(scene)
@@ -192,9 +210,12 @@ def spline_facts(scene: sc.Scene) -> dict:
             got = math.degrees(math.atan2(t[1], t[0]))
             entry.update(tangent_target_deg=math.degrees(math.atan2(want[1], want[0])), tangent_deg=got,
                          tangent_miss_deg=abs(sc._wrap(got - math.degrees(math.atan2(want[1], want[0])))))
+        entry.update(x=float(m[0]), y=float(m[1]))          # where the path passes (drawn as the key point)
         met[name] = entry
     h = sp.energy_matrix(path.n)
+    closed = np.vstack([c, c[:1]])
     return {"control_points": [[float(x), float(y)] for x, y in c], "keys": met,
+            "control_polygon": {"x": _r(closed[:, 0]), "y": _r(closed[:, 1])},
             "energy": float(c[:, 0] @ h @ c[:, 0] + c[:, 1] @ h @ c[:, 1]),
             "uncontrolled_claw": {"x": _r(scene.closing[:, 0]), "y": _r(scene.closing[:, 1])}}
 
@@ -229,19 +250,6 @@ def control_to_check(spec) -> np.ndarray | None:
 def run_check(loaded: LoadedSpec) -> Result:
     spec = loaded.model
     return result_of(spec, loaded.sha256, scene_for(spec, control_to_check(spec)))
-
-
-def coarse_check(loaded: LoadedSpec) -> Result:
-    """The check on the [solver] samples per stretch (the fine grid's tenth): the studio's grid while dragging."""
-    spec = loaded.model
-    return result_of(spec, loaded.sha256, scene_for(spec, control_to_check(spec), spec.solver.samples_per_segment))
-
-
-def coarse_note(spec, grid: str) -> str:
-    if grid == "fine":
-        return "agrisynth check's own grid"
-    return (f"the check on {spec.solver.samples_per_segment} samples per segment (fine: "
-            f"{FINE * spec.solver.samples_per_segment})")
 
 
 def explicit_design(loaded: LoadedSpec, data: dict) -> dict:

@@ -17,6 +17,7 @@ DOUBLE_CRANK = Kind(
     objectives={"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
                 "sum_of_squares": "sum of squared distances, mm^2"},
     example="picker/picker_double_crank_redesign.toml",
+    coarse_check="synthesis.picker.coarse:DOUBLE_CRANK",
 )
 
 PICKER = Kind(        # evaluated only: the combined mechanism of two solved designs
@@ -31,6 +32,7 @@ PICKER = Kind(        # evaluated only: the combined mechanism of two solved des
              "linkage.dxf": "synthesis.picker.export:write_picker_dxf"},
     compare="synthesis.report.trajectory_overlay:trajectory_overlay",
     example="picker/cai2020_picker.toml",
+    coarse_check="synthesis.picker.coarse:PICKER",
 )
 
 

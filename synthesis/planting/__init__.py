@@ -21,6 +21,7 @@ KIND = Kind(
                 "robust": "largest smallest normalised rule margin (measured on the fine grid)",
                 "smooth": "smallest peak claw acceleration over a turn, mm/s^2"},
     example="planting_arm/redesign_from_example1.toml",
+    coarse_check="synthesis.planting.coarse:COARSE",
 )
 
 

@@ -22,6 +22,7 @@ KIND = Kind(
     bench="synthesis.steering_linkage:bench_cases",
     objectives={"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"},
     example="steering/steering_redesign_40.toml",
+    coarse_check="synthesis.steering_linkage.coarse:COARSE",
 )
 
 

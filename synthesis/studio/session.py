@@ -66,9 +66,18 @@ class Variable:
     free: bool
     path: str | None
 
+    @property
+    def group(self) -> str | None:
+        """The list item holding this variable with others (``spline.control[3]`` for ``spline.control[3][0]``):
+        the page shows such variables together, and the items of one list in one scrolling box."""
+        if self.path is None or not self.path.endswith("]"):
+            return None
+        head = self.path[: self.path.rindex("[")]
+        return head if head.endswith("]") else None
+
     def to_json(self) -> dict:
         return finite({"name": self.name, "value": self.value, "unit": self.unit, "free": self.free,
-                       "bounds": None if self.bounds is None else list(self.bounds)})
+                       "bounds": None if self.bounds is None else list(self.bounds), "group": self.group})
 
 
 @dataclass
@@ -83,10 +92,14 @@ class Session:
     def open(cls, spec_path: Path) -> "Session":
         loaded = load_spec(spec_path)
         data, _ = read_toml(loaded.path)
+        explicit = kinds.explicit_design(loaded, data)
+        if explicit is not data:         # a design the spec leaves to the kind (guide_way's fit), written out
+            data = explicit
+            loaded = LoadedSpec(validate(type(loaded.model), data, prefix=loaded.kind), loaded.path, loaded.sha256)
         info = describe(loaded.model)
         given = loaded.model.design_values() if hasattr(loaded.model, "design_values") else {}
         variables = []
-        for name, value in given.items():       # a kind that declares no variables (guide_way): all shown fixed
+        for name, value in given.items():       # a kind that declares no variables: all shown fixed
             if not isinstance(value, (int, float)) or isinstance(value, bool):
                 continue
             var = info.get(name, {"unit": "", "bounds": None, "free": False, "path": None})

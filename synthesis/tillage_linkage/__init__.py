@@ -23,6 +23,7 @@ KIND = Kind(
     objectives={"min_bar_length": "shortest tillage bar c meeting every rule, mm",
                 "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"},
     example="tillage/tillage_redesign.toml",
+    coarse_check="synthesis.tillage_linkage.coarse:COARSE",
 )
 
 

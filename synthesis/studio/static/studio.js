@@ -53,6 +53,25 @@ function limitText(limit) {
 }
 
 // ---- sliders --------------------------------------------------------------------------------------------
+// variables of one list item (guide_way's control point j: spline.control[j]) share a fieldset; the items of
+// one list (spline.control) share a scrolling box, so 24 control points do not push the buttons off the page
+function containerOf(box, v) {
+  if (!v.group) return box;
+  const list = v.group.slice(0, v.group.lastIndexOf("["));
+  let scroller = box.querySelector(`div.group-list[data-list="${list}"]`);
+  if (!scroller) {
+    scroller = el("div", { class: "group-list", "data-list": list });
+    box.append(el("h3", {}, list), scroller);
+  }
+  let set = scroller.querySelector(`fieldset[data-group="${v.group}"]`);
+  if (!set) {
+    set = el("fieldset", { "data-group": v.group });
+    set.append(el("legend", {}, v.group.slice(list.length)));
+    scroller.append(set);
+  }
+  return set;
+}
+
 function buildSliders() {
   const box = document.getElementById("sliders");
   box.replaceChildren();
@@ -81,7 +100,7 @@ function buildSliders() {
     });
     row.append(range, number, el("span", { class: "unit" }, v.unit || ""));
     row.append(el("span", { class: "bounds" }, v.free ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]` : "fixed in the spec"));
-    box.append(row);
+    containerOf(box, v).append(row);
   }
 }
 
