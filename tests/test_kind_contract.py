@@ -106,3 +106,25 @@ def test_solve_of_a_check_only_kind_is_bad_input(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(LIBRARY / "picker" / "cai2020_picker.toml"),
                            "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert proc.returncode == 2 and "has nothing to optimise" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_every_kind_with_a_studio_page_evaluates_its_own_coarse_grid():
+    """`agrisynth studio` opens a spec of any kind: each registered kind gives its coarse grid (Kind.coarse_check,
+    a CoarseCheck in its own package) and says in words what that grid and the fine one evaluate; the studio holds
+    no list of kinds of its own."""
+    import re
+
+    from synthesis.core.kind import CoarseCheck, resolve
+    from synthesis.spec import load_spec
+
+    for kind in kinds.all_kinds():
+        assert kind.coarse_check is not None, kind.name
+        assert kind.coarse_check.startswith(f"{kind.check.split('.')[0]}.{kind.check.split('.')[1]}."), kind.name
+        coarse = resolve(kind.coarse_check)
+        assert isinstance(coarse, CoarseCheck), kind.name
+        spec = load_spec(LIBRARY / kind.example).model
+        for note in (coarse.note(spec), coarse.fine_note(spec)):
+            assert isinstance(note, str) and note and "\n" not in note, (kind.name, note)
+    names = "|".join(re.escape(n) for n in kinds.names())
+    grids = (ROOT / "synthesis" / "studio" / "grids.py").read_text()
+    assert not re.search(rf"[\"']({names})[\"']", grids), "the studio's grids name a kind"

@@ -211,3 +211,99 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
     assert {name: checked["design"][name] for name in values} == values
     assert [(r["name"], r["value"], r["red"]) for r in table] == [
         (r["name"], fmt4(r["value"]), not r["satisfied"]) for r in checked["rules"]]
+
+
+def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright):
+    """guide_way, whose design is the spline's 48 control points (the spec leaves them to the convex fit; the
+    studio writes them out): a slider and a number box per coordinate, grouped per point; drag P4_y up and the
+    undercut rule, violated by the fit, is met (coarse tables while dragging, the fine one on release, the claw
+    path and the control polygon redrawn), red exactly where the check of the saved spec says violated; solve from
+    here ends with the design `agrisynth solve` gets from the spec the page wrote; save spec at the solution and
+    the check of it gives the page's table."""
+    spec = STUDIO_SPECS["guide_way"]
+    with running_studio(spec, tmp_path / "studio") as studio, studio_page(sync_playwright, studio) as (page, seen):
+        free = studio.session.free
+        assert len(free) == 48 and page.locator("div.group-list fieldset").count() == 24
+        assert page.locator("fieldset[data-group='spline.control[4]'] input[type=range]:not([disabled])").count() == 2
+        assert page.locator("#range-R").is_disabled() and page.locator("#number-R").is_disabled()
+        assert page.inner_text(".var[data-var='P4_y'] .unit") == "mm"
+        baseline = page.evaluate(TABLE)
+        assert {r["name"] for r in baseline if r["red"]} == {"no_undercut"}
+        polygon = "#panel-main path[data-line='spline.control_polygon']"
+        claw = "#panel-main path[data-line='curves[0].claw']"
+        polygon_before, claw_before = page.get_attribute(polygon, "d"), page.get_attribute(claw, "d")
+        page.uncheck("#animate")
+        page.evaluate(RECORD_GRIDS)
+        count = int(page.get_attribute("body", "data-evaluations"))
+        # drag P4_y (given: the fit, mid-way in fit -40 ... fit +40 mm) to about three quarters of its range
+        page.locator("#range-P4_y").scroll_into_view_if_needed()
+        box = page.locator("#range-P4_y").bounding_box()
+        y = box["y"] + box["height"] / 2
+        page.mouse.move(box["x"] + box["width"] / 2, y)
+        page.mouse.down()
+        for k in range(1, 6):
+            page.mouse.move(box["x"] + box["width"] * (0.5 + 0.05 * k), y)
+            page.wait_for_timeout(40)
+        page.mouse.up()
+        page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {count} && "
+                               "document.body.dataset.busy === '0' && document.body.dataset.grid === 'fine'",
+                               timeout=30_000)
+        grids = page.evaluate("window.__grids")
+        moved = float(page.input_value("#number-P4_y"))
+        given = {v.name: v.value for v in free}
+        assert 15 < moved - given["P4_y"] < 25, moved - given["P4_y"]
+        assert "coarse" in grids and grids[-1] == "fine", grids
+        assert page.get_attribute(polygon, "d") != polygon_before and page.get_attribute(claw, "d") != claw_before
+        table = page.evaluate(TABLE)
+        page.click("#save")
+        page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
+        dragged_file = page.get_attribute("body", "data-saved")
+
+        # solve from here, one start, from the dragged values
+        page.fill("#starts", "1")
+        count = int(page.get_attribute("body", "data-evaluations"))
+        page.click("#solve")
+        page.wait_for_function("() => document.body.dataset.solve === 'finished'", timeout=180_000)
+        wait_for_evaluations(page, count)
+        page.wait_for_function("() => document.body.dataset.busy === '0'", timeout=30_000)
+        state = page.inner_text("#solve-state")
+        solved_values = {v.name: float(page.input_value(f"#number-{v.name}")) for v in free}
+        solved_table = page.evaluate(TABLE)
+        page.evaluate("() => { delete document.body.dataset.saved; }")
+        page.click("#save")
+        page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
+        solved_file = page.get_attribute("body", "data-saved")
+        assert seen["left"] == [] and seen["errors"] == []
+
+    from synthesis import kinds
+    from synthesis.core.solve import solve_spec
+    from synthesis.spec import load_spec
+
+    # the dragged design: red exactly where the check of the saved spec says violated, and the drag changed that
+    checked = kinds.checker("guide_way")(load_spec(tmp_path / "studio" / dragged_file)).to_json()
+    assert checked["design"]["P4_y"] == moved
+    assert {r["name"] for r in table if r["red"]} == {r["name"] for r in checked["rules"] if not r["satisfied"]}
+    assert {r["name"] for r in table if r["red"]} != {r["name"] for r in baseline if r["red"]}
+    assert [(r["name"], r["value"]) for r in table] == [(r["name"], fmt4(r["value"])) for r in checked["rules"]]
+    # solve from here = `agrisynth solve` (core.solve_spec, run again in this process) on the spec the page wrote,
+    # whose start 0 is the page's values: the same design to the last digit (tolerance 1e-9 mm: the same IPOPT on
+    # the same floats; a difference would mean the worker solved something else)
+    run = tmp_path / "studio" / "smooth_redesign_solve_1"
+    assert "finished" in state and "status optimal" in state, state
+    here = load_spec(run.with_suffix(".toml"))
+    assert here.model.spline.control[4][1].init == moved
+    ours = strict_json(run / "result.json")
+    assert (run / "solved.toml").is_file() and (run / "report.html").is_file()
+    theirs = solve_spec(here, starts=1, workers=1)[0].to_json()
+    names = [v.name for v in free]
+    difference = max(abs(ours["design"][n] - theirs["design"][n]) for n in names)
+    assert difference <= 1e-9, difference
+    assert ours["objective"]["value"] == pytest.approx(theirs["objective"]["value"], abs=1e-12)
+    assert ours["design"]["P4_y"] != moved                       # the solve moved the dragged point
+    assert solved_values == {n: ours["design"][n] for n in names}   # the sliders hold the solution (inside bounds)
+    assert {r["name"] for r in solved_table if r["red"]} == {r["name"] for r in ours["rules"] if not r["satisfied"]}
+    # "save spec" at the solution, then check: the page's table, value for value
+    again = kinds.checker("guide_way")(load_spec(tmp_path / "studio" / solved_file)).to_json()
+    assert {n: again["design"][n] for n in names} == solved_values
+    assert [(r["name"], r["value"], r["red"]) for r in solved_table] == [
+        (r["name"], fmt4(r["value"]), not r["satisfied"]) for r in again["rules"]]
