@@ -206,3 +206,56 @@ def test_redesign_solves_smooth_without_undercut(baseline):
     j = f["joints"]["D"]
     assert j["position_jump_mm"] < 1e-3 and j["tangent_jump_deg"] < 1e-2 and j["curvature_jump_per_mm"] < 1e-4
     assert f["fold"]["excess_mm"] == pytest.approx(0.0, abs=1e-9)
+
+
+def _redesign_with_control(control):
+    from synthesis.spec.common import read_toml
+
+    data, _ = read_toml(LIBRARY / "guide_way" / "smooth_redesign.toml")
+    data["spline"] = dict(data["spline"], control=control)
+    return data
+
+
+@pytest.mark.parametrize("control, message", [
+    ([[0.0, 0.0]] * 23, "guide_way.spline: control: expected 24 control points (control_points), got 23"),
+    ([[0.0, 0.0]] * 5 + [[1.0]] + [[0.0, 0.0]] * 18, "guide_way.spline.control.5: expected two numbers, got [1.0]"),
+    ([[0.0, 0.0]] * 3 + [[0.0, {"init": 500.0, "bounds": [-1.0, 1.0]}]] + [[0.0, 0.0]] * 20,
+     "guide_way.spline.control.3.1: init 500 lies outside its bounds [-1, 1]"),
+    ([[0.0, 0.0]] * 3 + [[0.0, float("inf")]] + [[0.0, 0.0]] * 20,
+     "guide_way.spline: control[3].y: expected finite numbers, got inf"),
+])
+def test_control_points_in_the_spec_are_checked_with_one_line_naming_the_field(control, message):
+    from synthesis.errors import SpecError
+    from synthesis.spec.common import validate
+    from synthesis.spec.guide_way import GuideWaySpec
+
+    with pytest.raises(SpecError) as err:
+        validate(GuideWaySpec, _redesign_with_control(control), prefix="guide_way")
+    assert str(err.value) == message
+
+
+def test_a_spec_holding_the_fits_control_points_checks_and_solves_as_the_one_leaving_them_to_the_fit(tmp_path):
+    """Kind.explicit_design writes the convex fit out as {init, bounds = init -+ move}: the same rule table (the
+    check evaluates the same floats) and the same NLP box and start 0 as the spec that leaves them out."""
+    from synthesis import kinds
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.guide_way.nlp import design_box, names_of
+    from synthesis.spec.common import read_toml, validate
+
+    loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
+    data, _ = read_toml(loaded.path)
+    explicit = validate(type(loaded.model), kinds.explicit_design(loaded, data), prefix="guide_way")
+    assert len(explicit.spline.control) == 24
+    fit = fit_path(loaded.model)
+    for written_out, left_out in zip(design_box(explicit, fit), design_box(loaded.model, fit)):
+        assert np.array_equal(written_out, left_out)            # bit for bit: the same floats
+    given = kinds.checker("guide_way")(loaded)
+    written = kinds.checker("guide_way")(type(loaded)(explicit, loaded.path, loaded.sha256))
+    assert [(r["name"], r["value"]) for r in written.rules] == [(r["name"], r["value"]) for r in given.rules]
+    assert [written.design[n] for n in names_of(24)] == [*fit.control[:, 0], *fit.control[:, 1]]
+    # a fixed coordinate is a box of width 0; the others keep their own bounds
+    fixed = _redesign_with_control([[float(x), {"init": float(y), "bounds": [float(y) - 1, float(y) + 2]}]
+                                    for x, y in fit.control])
+    start, box = design_box(validate(type(loaded.model), fixed, prefix="guide_way"), fit)
+    assert np.array_equal(box[:24, 0], box[:24, 1]) and np.array_equal(start[:24], fit.control[:, 0])
+    assert np.allclose(box[24:] - start[24:, None], [[-1.0, 2.0]] * 24, atol=1e-12)
