@@ -5,6 +5,11 @@ A kind is one package exporting one :class:`Kind` (``KIND``).  Everything in it 
 ``solve --help``, the bench) imports no kind's code, and a run imports only its own kind.
 The registry of kinds is :mod:`synthesis.kinds`.
 
+For ``agrisynth studio`` a kind gives its check on a coarser grid (``coarse_check``: a :class:`CoarseCheck`, what
+the page evaluates while a slider moves), the mechanism's poses where its check's facts hold none (``poses``: a
+:class:`Poses`), and, when its spec may leave part of the design to the kind (guide_way's convex fit), that design
+written out as free variables (``explicit_design``; ``solved.toml`` uses it too).  The studio itself names no kind.
+
 A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one multistart driver
 (:mod:`synthesis.core.solve`) needs, none of which names a solver:
 
@@ -49,6 +54,8 @@ class Kind:
     #: "module:object" of a CoarseCheck: the check on a coarser grid (the studio's, while a slider moves);
     #: None: the studio evaluates the check itself on both grids
     coarse_check: str | None = None
+    #: "module:object" of a Poses: the mechanism's poses where the check's facts give none (the studio draws them)
+    poses: str | None = None
     #: "module:function"(loaded spec, spec file data) -> that data with a design the spec may leave to the kind
     #: (guide_way: the convex fit's control points) written out as free variables, so it solves and checks the
     #: same and every variable has a place in the file (the studio's sliders, solved.toml); None: specs always
@@ -82,6 +89,15 @@ class CoarseCheck:
     evaluate: Callable[[Any], Any]               # loaded spec -> Result (status "evaluated"), the check's rules
     note: Callable[[Any], str]                   # spec -> what the coarse grid evaluates, in words (sample counts)
     fine_note: Callable[[Any], str] = _the_check  # spec -> what the fine grid (the check) evaluates, in words
+
+
+@dataclass(frozen=True)
+class Poses:
+    """The mechanism's poses for the studio's drawing, for a kind whose check's facts hold none (no ``positions``
+    or ``joints``): from the kinematics the kind's own figures draw it with, on the trajectory's crank angles."""
+
+    frames: Callable[[Any, int], list]           # (Result, at most this many) -> [{joint: [x, y] mm}], in order
+    bars: list[list[str]] | None = None          # links drawn between joints (None: the joints in order)
 
 
 @dataclass(frozen=True)

@@ -20,4 +20,5 @@ KIND = Kind(
     bench="synthesis.fourbar_path.bench:bench_cases",
     example="fourbar_path/picking_arc.toml",
     coarse_check="synthesis.fourbar_path.coarse:COARSE",
+    poses="synthesis.fourbar_path.poses:POSES",
 )

@@ -22,6 +22,7 @@ KIND = Kind(
                 "smooth": "smallest peak claw acceleration over a turn, mm/s^2"},
     example="planting_arm/redesign_from_example1.toml",
     coarse_check="synthesis.planting.coarse:COARSE",
+    poses="synthesis.planting.poses:POSES",
 )
 
 

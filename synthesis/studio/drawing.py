@@ -3,10 +3,8 @@
 Generic over kinds: every polyline the check already computed (a table with equal-length ``x`` and ``y``
 lists, or ``<name>_x`` / ``<name>_y`` pairs), every key point (a table with numbers ``x`` and ``y``; a
 list of ``[x, y]`` targets), the traced point's trajectory, and mechanism poses (a ``positions`` list of
-joint tables, or a ``joints`` table).  planting_fourbar's and fourbar_path's checks give no poses; they come
-from what the kinds' own figures draw the linkage with (``joint_positions`` of
-:mod:`synthesis.kinematics.planting_arm` and :mod:`synthesis.fourbar_path.construction`), on the
-trajectory's crank angles.
+joint tables, or a ``joints`` table).  A kind whose check gives no poses gives them itself (``Kind.poses``:
+from the kinematics its own figures draw the linkage with, on the trajectory's crank angles).
 """
 
 from __future__ import annotations
@@ -118,47 +116,6 @@ def _pose(item: dict) -> dict[str, list] | None:
     return out or None
 
 
-def _planting_poses(result: Result) -> list[dict]:
-    import numpy as np
-
-    from synthesis.kinematics.planting_arm import ArmDesign, joint_positions
-
-    traj = result.trajectory
-    if not traj:
-        return []
-    d = result.design
-    design = ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
-    crank = traj["crank_deg"]
-    step = -(-len(crank) // MOST_FRAMES)
-    theta = [math.radians(c) for c in crank[::step]]
-    joints = joint_positions(design, np.array(theta))
-    return [{name: [_r(xy[0, k]), _r(xy[1, k])] for name, xy in joints.items()} for k in range(len(theta))]
-
-
-def _fourbar_path_poses(result: Result) -> list[dict]:
-    import numpy as np
-
-    from synthesis.fourbar_path.construction import joint_positions
-    from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
-
-    traj = result.trajectory
-    if not traj or not _numbers(traj.get("crank_deg")):
-        return []
-    design = {n: float(result.design[n]) for n in VARIABLES}
-    crank = traj["crank_deg"]
-    theta = np.radians(crank[::-(-len(crank) // MOST_FRAMES)])
-    joints = joint_positions(design, theta, BRANCHES[result.design.get("branch", "open")])
-    poses = [{name: [_r(z[k].real), _r(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
-    return [p for p in poses if all(None not in xy for xy in p.values())]     # none where the loop is open
-
-
-#: links drawn between joints, where the kind's joint names say how they connect (else joints in order)
-BARS = {"planting_fourbar": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "C"], ["B", "C"]],
-        "fourbar_path": [["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "P"], ["B", "P"]]}
-#: kinds whose check gives no poses: drawn from the kinematics the kind's own figures draw them with
-POSES = {"planting_fourbar": _planting_poses, "fourbar_path": _fourbar_path_poses}
-
-
 def drawing(result: Result) -> dict[str, Any]:
     """Panels of polylines and points and the mechanism's poses, in the check's own frames and units (mm), and
     charts of angles over an angle."""
@@ -185,11 +142,21 @@ def drawing(result: Result) -> dict[str, Any]:
         for name, p in (result.extra.get("precision_points") or {}).items():
             if isinstance(p, dict) and p.get("found") and isinstance(p.get("x_ground"), (int, float)):
                 ground["points"].append({"name": name, "x": _r(p["x_ground"]), "y": _r(p["y"])})
-    if result.kind in POSES:
-        frames = POSES[result.kind](result)
+    kind_poses = _kind_poses(result.kind)
+    if kind_poses is not None:
+        frames, bars = kind_poses.frames(result, MOST_FRAMES), kind_poses.bars
     else:
         frames = [f for f in (_pose(p) for p in poses) if f]
         step = max(1, -(-len(frames) // MOST_FRAMES))
-        frames = frames[::step]
+        frames, bars = frames[::step], None
     return {"main": {"lines": lines, "points": points}, "ground": ground,
-            "mechanism": {"frames": frames, "bars": BARS.get(result.kind)}, "charts": charts}
+            "mechanism": {"frames": frames, "bars": bars}, "charts": charts}
+
+
+def _kind_poses(kind: str):
+    """The kind's own poses (``Kind.poses``) where its check's facts give none, else None."""
+    from synthesis import kinds
+    from synthesis.core.kind import resolve
+
+    target = kinds.get(kind).poses
+    return None if target is None else resolve(target)

@@ -1,0 +1,30 @@
+"""The planting arm's poses for the studio's drawing: its check gives none, so they come from the joint positions
+the kind's figures draw the linkage with (:mod:`synthesis.kinematics.planting_arm`), on the trajectory's crank
+angles."""
+
+from __future__ import annotations
+
+import math
+
+from synthesis.core.kind import Poses
+
+
+def frames(result, most: int) -> list[dict]:
+    import numpy as np
+
+    from synthesis.kinematics.planting_arm import ArmDesign, joint_positions
+
+    traj = result.trajectory
+    if not traj:
+        return []
+    d = result.design
+    design = ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
+    crank = traj["crank_deg"]
+    step = -(-len(crank) // most)
+    theta = [math.radians(c) for c in crank[::step]]
+    joints = joint_positions(design, np.array(theta))
+    return [{name: [round(float(xy[0, k]), 3), round(float(xy[1, k]), 3)] for name, xy in joints.items()}
+            for k in range(len(theta))]
+
+
+POSES = Poses(frames=frames, bars=[["O", "A"], ["A", "B"], ["B", "O'"], ["O", "O'"], ["A", "C"], ["B", "C"]])
