@@ -104,8 +104,13 @@ def solving_kind_for(loaded) -> Kind:
     return robust_kind(kind, loaded.model)
 
 
-def explicit_design(loaded, data: dict) -> dict:
-    """The spec file's ``data`` with every design variable written out (see ``Kind.explicit_design``): the data
-    itself for a kind whose specs always hold their whole design."""
+def explicit_design(loaded, data: dict) -> tuple:
+    """(loaded spec, spec file data) with every design variable written out (see ``Kind.explicit_design``) and
+    the spec validated again from that data; both as given for a kind whose specs always hold their whole design."""
     target = get(loaded.kind).explicit_design
-    return data if target is None else resolve(target)(loaded, data)
+    written = data if target is None else resolve(target)(loaded, data)
+    if written is data:
+        return loaded, data
+    from synthesis.spec.common import validate
+
+    return type(loaded)(validate(type(loaded.model), written, prefix=loaded.kind), loaded.path, loaded.sha256), written

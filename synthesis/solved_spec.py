@@ -43,13 +43,9 @@ def set_at_path(data: Any, path: str, value: Any) -> None:
 def solved_data(loaded, result) -> dict[str, Any]:
     """The spec file's data with the solved design in place of every free variable."""
     from synthesis import kinds
-    from synthesis.spec.common import validate
 
     data, _ = read_toml(loaded.path)
-    explicit = kinds.explicit_design(loaded, data)
-    if explicit is not data:                 # a design the spec left to the kind, now written out
-        data = explicit
-        loaded = type(loaded)(validate(type(loaded.model), data, prefix=loaded.kind), loaded.path, loaded.sha256)
+    loaded, data = kinds.explicit_design(loaded, data)     # a design the spec left to the kind, written out
     info = describe(loaded.model)
     if not info:
         raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables()), so the "

@@ -92,10 +92,7 @@ class Session:
     def open(cls, spec_path: Path) -> "Session":
         loaded = load_spec(spec_path)
         data, _ = read_toml(loaded.path)
-        explicit = kinds.explicit_design(loaded, data)
-        if explicit is not data:         # a design the spec leaves to the kind (guide_way's fit), written out
-            data = explicit
-            loaded = LoadedSpec(validate(type(loaded.model), data, prefix=loaded.kind), loaded.path, loaded.sha256)
+        loaded, data = kinds.explicit_design(loaded, data)     # a design the spec leaves to the kind, written out
         info = describe(loaded.model)
         given = loaded.model.design_values() if hasattr(loaded.model, "design_values") else {}
         variables = []
