@@ -1,5 +1,5 @@
 """Design rules of a rotary-arm slide guide way (seed 003): reach, arm direction, undercut, pressure angle,
-continuity of the roller-centre line at joints and the fold conditions.
+continuity of the roller-centre line at joints, the fold conditions and (spline path) the key points and tangents.
 
 Each builder takes samples of the trace.  On floats it gives the record a user reads (mm, deg); on
 CasADi symbols smooth NLP rows: the undercut as a bound on curvature (smooth through inflections,
@@ -74,3 +74,19 @@ def fold_distance_rule(point: str, excess: float, tol: float) -> Rule:
 def fold_angle_rule(point: str, error_deg: float, tol: float) -> Rule:
     """The path's tangent at the fold point is perpendicular to OD (within tol deg)."""
     return Rule("fold_tangent", float(error_deg), -tol, tol, "deg", tol, f"angle(O{point}, tangent) - 90 at {point}")
+
+
+def key_points_rule(misses: dict[str, float], tol: float) -> Rule:
+    """The spline path passes every key point: the distance from each key point to the path at the key's
+    parameter, at most ``tol`` mm (value: the largest)."""
+    worst = max(misses, key=misses.__getitem__)
+    return Rule("key_points", np.array(list(misses.values()), float), None, tol, "mm", tol,
+                f"key points {'-'.join(misses)}: path to key point, largest at {worst}")
+
+
+def key_tangents_rule(misses: dict[str, float], tol: float) -> Rule:
+    """The spline path runs along the given tangent at each key point that has one: the angle between its
+    direction of motion there and the tangent, at most ``tol`` deg (value: the largest)."""
+    worst = max(misses, key=misses.__getitem__)
+    return Rule("key_tangents", np.array(list(misses.values()), float), None, tol, "deg", tol,
+                f"tangents at {'-'.join(misses)}: path's direction to the given one, largest at {worst}")

@@ -417,3 +417,36 @@ def test_a_solve_that_fails_says_so_with_its_last_line(tmp_path):
     status = job.status()
     assert status["state"] == "failed" and status["exit_code"] == 2, status
     assert status["exit"].startswith("failed (exit 2): ") and "gone.toml" in status["exit"], status
+
+
+def test_guide_way_key_points_turn_red_exactly_when_check_says_so(tmp_path):
+    """Control point 0 weighs 1/6 at E (u = 0 of a uniform cubic B-spline): moved up dy, the path misses E by dy / 6.
+    key_points (<= 0.01 mm) holds at dy = 0.05 (0.0083 mm) and fails at 0.07 (0.0117 mm) and 20 (3.33 mm), on both
+    grids and in the check of the spec "save spec" writes; the key point E is drawn at its target, and where the path
+    passes beside it once it misses."""
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    with running_studio(STUDIO_SPECS["guide_way"], tmp_path / "studio") as s:
+        given = {v.name: v.value for v in s.session.free}
+        seen = {}
+        for dy in (0.0, 0.05, 0.07, 20.0):
+            values = dict(given, P0_y=given["P0_y"] + dy)
+            answers = [api(s, "/api/evaluate", {"values": values, "grid": grid}) for grid in ("coarse", "fine")]
+            saved = api(s, "/api/save", {"values": values})
+            result = kinds.checker("guide_way")(load_spec(tmp_path / "studio" / saved["file"]))
+            checked = {r["name"]: r for r in result.rules}
+            for answer in answers:
+                row = next(r for r in answer["rules"] if r["name"] == "key_points")
+                want = checked["key_points"]
+                assert (row["value"], row["satisfied"]) == (want["value"], want["satisfied"])
+            seen[dy] = checked["key_points"]["value"], checked["key_points"]["satisfied"]
+            points = {p["name"]: (p["x"], p["y"]) for p in answers[1]["drawing"]["main"]["points"]}
+            assert points["E"] == (-50.087, -221.2)                      # the target, rounded to 1e-3 mm
+            if checked["key_points"]["satisfied"]:
+                assert "path_at_E" not in points
+            else:
+                assert points["path_at_E"] == (-50.087, pytest.approx(-221.2 + dy / 6, abs=1.5e-3))
+    assert [ok for _, ok in seen.values()] == [True, True, False, False]
+    for dy, (value, _) in seen.items():
+        assert value == pytest.approx(dy / 6, abs=1e-9)

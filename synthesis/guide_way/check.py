@@ -199,19 +199,12 @@ def spline_facts(scene: sc.Scene) -> dict:
 
     path = scene.spline
     c = np.asarray(path.control, float)
-    keys = path.keys
-    met = {}
-    for name, u, p in zip(keys.names, keys.u, keys.points):
-        m = (sp.basis(path.n, u) @ c)[0]
-        entry = {"u": u, "target": list(p), "point": [float(m[0]), float(m[1])], "miss_mm": math.dist(m, p)}
-        if name in keys.tangents:
-            t = (sp.basis(path.n, u, 1) @ c)[0]
-            want = keys.tangents[name]
-            got = math.degrees(math.atan2(t[1], t[0]))
-            entry.update(tangent_target_deg=math.degrees(math.atan2(want[1], want[0])), tangent_deg=got,
-                         tangent_miss_deg=abs(sc._wrap(got - math.degrees(math.atan2(want[1], want[0])))))
-        entry.update(x=float(m[0]), y=float(m[1]))          # where the path passes (drawn as the key point)
-        met[name] = entry
+    met = sc.key_misses(path)
+    tol = scene.spec.rules.key_point
+    for name, entry in met.items():
+        entry.update(x=entry["target"][0], y=entry["target"][1])       # drawn: the key point itself
+        if entry["miss_mm"] > tol:                                      # and where the path passes, when it misses
+            entry["path_at_" + name] = {"x": entry["point"][0], "y": entry["point"][1]}
     h = sp.energy_matrix(path.n)
     closed = np.vstack([c, c[:1]])
     return {"control_points": [[float(x), float(y)] for x, y in c], "keys": met,

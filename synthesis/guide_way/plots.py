@@ -44,6 +44,13 @@ def _draw_guide(ax, res: Result, colour: str | None, label: str, details: bool) 
         for name, (x, y) in zip(keys, pts):
             ax.plot(x, y, "ko", ms=3)
             ax.annotate(name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=9)
+        for name, e in (spline or {}).get("keys", {}).items():      # a key point the path misses: its target too
+            if f"path_at_{name}" in e:
+                (tx, ty), (px, py) = e["target"], e["point"]
+                ax.plot([px, tx], [py, ty], color="tab:red", lw=0.8)
+                ax.plot(tx, ty, "s", mfc="none", mec="tab:red", ms=7)
+                ax.annotate(f"{name} target (missed by {e['miss_mm']:.3g} mm)", (tx, ty), textcoords="offset points",
+                            xytext=(4, -12), fontsize=8, color="tab:red")
         for u in f["undercut"]:
             ax.plot(*u["smallest_at_centre"], "rx", ms=9, mew=2)
         ax.plot(0, 0, "k+", ms=10)

@@ -162,7 +162,33 @@ class Scene:
         if self.fold is not None:
             rules += [gw.fold_distance_rule(self.fold["point"], self.fold["excess_mm"], lim.fold_distance),
                       gw.fold_angle_rule(self.fold["point"], self.fold["tangent_error_deg"], lim.fold_angle)]
+        if self.spline is not None:          # the NLP holds these as equality rows; a given control polygon may not
+            met = key_misses(self.spline)
+            rules.append(gw.key_points_rule({k: e["miss_mm"] for k, e in met.items()}, lim.key_point))
+            tangents = {k: e["tangent_miss_deg"] for k, e in met.items() if "tangent_miss_deg" in e}
+            if tangents:
+                rules.append(gw.key_tangents_rule(tangents, lim.key_tangent))
         return rules
+
+
+def key_misses(path: pth.SplinePath) -> dict[str, dict]:
+    """Per key point of a spline path: its parameter u, the target (the fold moved onto |OM| = R - d), where the
+    path is at u and the distance between them (mm); with a tangent, the path's direction there, the given one
+    and the angle between them (deg)."""
+    c = np.asarray(path.control, float)
+    keys = path.keys
+    met = {}
+    for name, u, p in zip(keys.names, keys.u, keys.points):
+        m = (sp.basis(path.n, u) @ c)[0]
+        entry = {"u": u, "target": [float(p[0]), float(p[1])], "point": [float(m[0]), float(m[1])],
+                 "miss_mm": math.dist(m, p)}
+        if name in keys.tangents:
+            t = (sp.basis(path.n, u, 1) @ c)[0]
+            want = math.degrees(math.atan2(keys.tangents[name][1], keys.tangents[name][0]))
+            got = math.degrees(math.atan2(t[1], t[0]))
+            entry.update(tangent_target_deg=want, tangent_deg=got, tangent_miss_deg=abs(_wrap(got - want)))
+        met[name] = entry
+    return met
 
 
 def _unreachable(spec, stretch_name: str, arm: Arm) -> None:

@@ -113,6 +113,10 @@ class RulesSection(StrictModel):
     joint_curvature: float = Field(1e-4, gt=0, description="largest curvature jump at a joint, 1/mm")
     fold_distance: float = Field(0.01, gt=0, description="| |OD| - (R - d) | at the fold point, at most, mm")
     fold_angle: float = Field(0.01, gt=0, description="| angle(OD, tangent) - 90 | at the fold point, at most, deg")
+    key_point: float = Field(0.01, gt=0, description="spline path: largest distance from a key point to the path "
+                                                     "at the key's parameter, mm")
+    key_tangent: float = Field(0.01, gt=0, description="spline path: largest angle between the path's direction at a "
+                                                       "key point and its given tangent, deg")
     joint_gap: float = Field(0.05, gt=0, description="bad input: a key point farther than this from its conic, mm")
 
 
