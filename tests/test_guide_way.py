@@ -260,3 +260,44 @@ def test_a_spec_holding_the_fits_control_points_checks_and_solves_as_the_one_lea
     start, box = design_box(validate(type(loaded.model), fixed, prefix="guide_way"), fit)
     assert np.array_equal(box[:24, 0], box[:24, 1]) and np.array_equal(start[:24], fit.control[:, 0])
     assert np.allclose(box[24:] - start[24:, None], [[-1.0, 2.0]] * 24, atol=1e-12)
+
+
+def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_and_tangents(tmp_path):
+    """The NLP holds the key points and tangents as equality rows; `check` of a given control polygon holds them as
+    rules (key_points <= 0.01 mm, key_tangents <= 0.01 deg).  The convex fit meets them to 3e-14 mm and 0 deg;
+    control point 21 moved 20 mm up pulls the path 5.75 mm off A and 2.53 mm and 7.0 deg off B.  (Roller radius
+    5 mm here, so that the fit itself satisfies every rule and the exit code is the key points' alone.)"""
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.spec.guide_way import GuideWaySpec
+    from synthesis.specref import write_toml
+
+    fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
+    results = {}
+    for name, dy in (("at_fit", 0.0), ("moved", 20.0)):
+        control = [[float(x), float(y) + (dy if j == 21 else 0.0)] for j, (x, y) in enumerate(fit)]
+        data = _redesign_with_control(control)
+        data.update(name=name, arm=dict(data["arm"], roller_radius=5.0))
+        path = tmp_path / f"{name}.toml"
+        path.write_text("\n".join(write_toml(GuideWaySpec, data, documented=False)) + "\n")
+        proc = _run(["check", str(path), "--out", str(tmp_path)])
+        rules = {r["name"]: r for r in json.loads((tmp_path / name / "result.json").read_text())["rules"]}
+        results[name] = proc, rules
+    proc, rules = results["at_fit"]
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert rules["key_points"]["value"] < 1e-12 and rules["key_points"]["limit"] == [None, 0.01]
+    assert rules["key_tangents"]["value"] < 1e-9 and rules["key_tangents"]["limit"] == [None, 0.01]
+    proc, rules = results["moved"]
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    violated = next(ln for ln in proc.stdout.splitlines() if "violated:" in ln)
+    assert "key_points" in violated and "key_tangents" in violated, violated
+    assert rules["key_points"]["value"] == pytest.approx(5.75, abs=0.01) and not rules["key_points"]["satisfied"]
+    assert rules["key_points"]["where"].endswith("largest at A")
+    assert rules["key_tangents"]["value"] == pytest.approx(7.0, abs=0.05) and not rules["key_tangents"]["satisfied"]
+    assert rules["key_tangents"]["where"].endswith("largest at B")
+    keys = json.loads((tmp_path / "moved" / "result.json").read_text())["facts"]["spline"]["keys"]
+    # the key point is drawn at its target, and where the path passes beside it when it misses
+    assert (keys["A"]["x"], keys["A"]["y"]) == tuple(keys["A"]["target"])
+    assert math.dist(keys["A"]["target"], (keys["A"]["path_at_A"]["x"], keys["A"]["path_at_A"]["y"])) == \
+        pytest.approx(keys["A"]["miss_mm"], rel=1e-12)
+    assert "path_at_E" not in keys["E"] and keys["E"]["miss_mm"] < 1e-12
+
