@@ -301,3 +301,34 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
         pytest.approx(keys["A"]["miss_mm"], rel=1e-12)
     assert "path_at_E" not in keys["E"] and keys["E"]["miss_mm"] < 1e-12
 
+
+def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0():
+    """The fold window's samples come from start 0 (the spec's control points, else the fit), as the check finds
+    them on the path it evaluates.  smooth_redesign (no control given): start 0 is the fit, the masks and start 0's
+    solve as before the change (objective 0.9872647563039696 in 16 iterations).  Control point 6 of the fit 10 mm
+    lower: the window leaves out 8 and 12 samples of E-D and D-C (the fit's: 11 and 12)."""
+    from synthesis.guide_way import scene as sc
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.guide_way.nlp import GuideNLP
+    from synthesis.spec.common import validate
+
+    spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
+    fit = fit_path(spec)
+    samples = spec.solver.samples_per_segment
+    at_fit = sc.pressure_masks(spec, sc.spline_scene(spec, samples, fit.control).arms)
+    assert [int((~m).sum()) for m in at_fit] == [11, 12, 0, 0]
+    nlp = GuideNLP(spec, fit)
+    assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_fit))
+    out = nlp.solve(0, nlp.init)
+    assert out.success and out.iterations == 16
+    assert out.objective == pytest.approx(0.9872647563039696, rel=1e-9)
+    moved = fit.control.copy()
+    moved[6, 1] -= 10.0
+    data = _redesign_with_control([[{"init": float(v), "bounds": [float(v) - 40, float(v) + 40]} for v in point]
+                                   for point in moved])
+    given = validate(type(spec), data, prefix="guide_way")
+    nlp = GuideNLP(given, fit)
+    at_start = sc.pressure_masks(given, sc.spline_scene(given, samples, moved).arms)
+    assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
+    assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
+

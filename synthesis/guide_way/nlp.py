@@ -1,12 +1,13 @@
 """The IPOPT stage of the redesign: the spline's control points held to every rule of the guide way.
 
-Decision variables: the control points P (n x 2): those the spec gives (``[spline] control``, start 0 their
-init values, within their bounds), else each within ``[spline] move`` mm of the convex fit (start 0 the fit).  Structural rows (exact, no back-off): every key point, every key
-tangent's direction (M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min) and |OM| having its minimum at the
-fold (|M'|^2 + M . M'' >= v_min^2 / 2 there).  Rules: the same sampled rules as the check
+Decision variables: the control points P (n x 2): those the spec gives (``[spline] control``, start 0
+their init values, within their bounds), else each within ``[spline] move`` mm of the convex fit (start
+0 the fit).  Structural rows (exact, no back-off): every key point, every key tangent's direction
+(M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min) and |OM| having its minimum at the fold
+(|M'|^2 + M . M'' >= v_min^2 / 2 there).  Rules: the same sampled rules as the check
 (:func:`synthesis.guide_way.scene.rules_of` on the control points as CasADi symbols; the pressure-angle
-samples are those outside the fold window at the fit).  Objective: the smoothness energy relative to
-the fit's, so 1 when the fit already meets every rule.
+samples are those outside the fold window on the path of start 0).  Objective: the smoothness energy
+relative to the fit's, so 1 when the fit already meets every rule.
 """
 
 from __future__ import annotations
@@ -51,6 +52,13 @@ def design_box(spec, fit) -> tuple[np.ndarray, np.ndarray]:
             np.array([bounds_of(v) for v in coordinates], float))
 
 
+def pressure_masks_at(spec, control: np.ndarray, samples: int) -> list[np.ndarray]:
+    """The samples the NLP holds the pressure-angle rule at: those outside the fold window on the path of
+    ``control`` (start 0, the design box's init: the spec's control points, else the convex fit), as the check
+    finds them on its path."""
+    return sc.pressure_masks(spec, sc.spline_scene(spec, samples, control).arms)
+
+
 class FixedGuide:
     """A conic (published) guide way: nothing to optimise; the driver refuses it as bad input (exit 2)."""
 
@@ -71,8 +79,7 @@ class GuideNLP:
         x = ca.SX.sym("P", 2 * n)
         control = control_of(x, n)
         samples = spec.solver.samples_per_segment
-        fit_arms = sc.spline_scene(spec, samples, fit.control).arms
-        masks = sc.pressure_masks(spec, fit_arms)
+        self.masks = masks = pressure_masks_at(spec, control_of(self.init, n), samples)
         rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks)
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
