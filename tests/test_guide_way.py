@@ -332,3 +332,34 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
 
+
+def test_solve_with_a_tolerance_table_is_refused_with_one_line(tmp_path):
+    """The robust transcription needs the spec's design variables as the NLP's; guide_way's NLP works in the
+    control points held to the key points by equality rows (it raised a PinningError traceback)."""
+    text = (LIBRARY / "guide_way" / "smooth_redesign.toml").read_text() + "\n[tolerance]\nlength = 0.05\nsamples = 50\n"
+    path = tmp_path / "tol.toml"
+    path.write_text(text)
+    proc = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out")])
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        "error: tolerance: a [tolerance] table in `solve` is not supported for kind guide_way (its NLP works in the "
+        "spline's 2 x control_points coordinates, held to the key points by equality rows on them, not in the spec's "
+        "design variables); leave it out to solve, and analyse the solved design with `agrisynth tolerance RESULT`"]
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceback(tmp_path, monkeypatch):
+    """Without the refusal above, the robust transcription's PinningError (43 = 48 - 5 auxiliaries, 14 rows) comes
+    out as the same kind of one-line SpecError (exit 2), for any kind it happens to."""
+    from synthesis.core.solve import solve_spec
+    from synthesis.errors import SpecError
+    from synthesis.tolerance import robust
+
+    monkeypatch.setattr(robust, "NOT_ROBUST", {})
+    path = tmp_path / "tol.toml"
+    path.write_text((LIBRARY / "guide_way" / "smooth_redesign.toml").read_text() + "\n[tolerance]\nlength = 0.05\n")
+    with pytest.raises(SpecError) as err:
+        solve_spec(load_spec(path), starts=1, workers=1)
+    assert str(err.value) == ("guide_way: a [tolerance] table in `solve` is not supported for this kind yet (problem "
+                              "guide_way: 43 auxiliary variables but 14 structural equality rows pin them; sensitivities "
+                              "need one row per auxiliary); `agrisynth tolerance RESULT` analyses a solved design")

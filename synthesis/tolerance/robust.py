@@ -15,10 +15,18 @@ import numpy as np
 
 from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.problem import Problem, Tolerance
+from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
 from synthesis.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of
+
+
+#: kinds the robust transcription cannot take, and why: refused with one line before anything is prepared or built
+NOT_ROBUST = {
+    "guide_way": "its NLP works in the spline's 2 x control_points coordinates, held to the key points by equality "
+                 "rows on them, not in the spec's design variables",
+}
 
 
 def _box_text(spec) -> str:
@@ -77,7 +85,11 @@ class RobustBuild:
     def __call__(self, setting: Setting, elastic: bool = False):
         expected = list(describe(setting.spec))
         with tolerance_box(_Resolver(self.kind_name, setting.spec)):
-            nlp = self.base(setting, elastic)
+            try:
+                nlp = self.base(setting, elastic)
+            except PinningError as exc:     # structural rows that do not pin the NLP's other variables
+                raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
+                                f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
         if list(getattr(nlp, "names", [])) != expected:
             # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
             # variables (a subset, nominal units) cannot take it yet
@@ -141,6 +153,10 @@ def robust_kind(kind: Kind, spec) -> Kind:
     """The kind, solving with the spec's ``[tolerance]`` box (the kind itself when the spec has none)."""
     if getattr(spec, "tolerance", None) is None:
         return kind
+    if kind.name in NOT_ROBUST:
+        raise SpecError(f"tolerance: a [tolerance] table in `solve` is not supported for kind {kind.name} "
+                        f"({NOT_ROBUST[kind.name]}); leave it out to solve, and analyse the solved design with "
+                        f"`agrisynth tolerance RESULT`")
     base = kind.solver_side()
     hint = (f"The rules are held at their linearised worst case in the tolerance box ({_box_text(spec)}): "
             f"loosen the tolerances of the [tolerance] table, or those rules. ")
