@@ -114,13 +114,15 @@ def test_every_kind_with_a_studio_page_evaluates_its_own_coarse_grid():
     no list of kinds of its own."""
     import re
 
+    from synthesis.core.coarse import of_kind
     from synthesis.core.kind import CoarseCheck, Poses, resolve
     from synthesis.spec import load_spec
 
     for kind in kinds.all_kinds():
-        assert kind.coarse_check is not None, kind.name
+        assert kind.coarse_check is not None, kind.name          # the library's kinds each give their own
         assert kind.coarse_check.startswith(f"{kind.check.split('.')[0]}.{kind.check.split('.')[1]}."), kind.name
-        coarse = resolve(kind.coarse_check)
+        coarse = of_kind(kind)
+        assert coarse is resolve(kind.coarse_check), kind.name
         assert isinstance(coarse, CoarseCheck), kind.name
         spec = load_spec(LIBRARY / kind.example).model
         for note in (coarse.note(spec), coarse.fine_note(spec)):
@@ -132,3 +134,25 @@ def test_every_kind_with_a_studio_page_evaluates_its_own_coarse_grid():
     for kind in kinds.all_kinds():
         if kind.poses is not None:
             assert isinstance(resolve(kind.poses), Poses), kind.name
+
+
+def test_a_kind_without_its_own_coarse_grid_gets_its_check_on_a_tenth_of_the_solver_samples(monkeypatch):
+    """Kind.coarse_check None (allowed): the studio's coarse grid is the check with every [solver] sample count
+    divided by 10, not below the model's least (guide_way's smooth_redesign: samples_per_segment 40 -> 5)."""
+    import dataclasses
+
+    from synthesis.spec import LoadedSpec, load_spec
+    from synthesis.studio import grids
+
+    bare = dataclasses.replace(kinds.get("guide_way"), coarse_check=None)
+    real_get = kinds.get
+    monkeypatch.setattr(kinds, "get", lambda name: bare if name == "guide_way" else real_get(name))
+    loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
+    assert grids.note("guide_way", "coarse", loaded.model) == "the check with [solver] samples_per_segment 40 -> 5"
+    assert grids.note("guide_way", "fine", loaded.model) == "agrisynth check's own grid"
+    coarse = grids.evaluator("guide_way", "coarse")(loaded)
+    spec5 = loaded.model.model_copy(update={"solver": loaded.model.solver.model_copy(update={"samples_per_segment": 5})})
+    at_5 = kinds.checker("guide_way")(LoadedSpec(spec5, loaded.path, loaded.sha256))
+    fine = grids.evaluator("guide_way", "fine")(loaded)
+    assert [(r["name"], r["value"]) for r in coarse.rules] == [(r["name"], r["value"]) for r in at_5.rules]
+    assert [r["value"] for r in coarse.rules] != [r["value"] for r in fine.rules]

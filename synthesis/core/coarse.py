@@ -69,3 +69,11 @@ def by_solver_samples(check: str, note: Callable[[Any], str] = solver_samples_no
 def one_grid(check: str) -> CoarseCheck:
     """A check whose grid is fixed in the kind (no [solver] sample count reaches it): evaluated as it is."""
     return CoarseCheck(evaluate=lambda loaded: resolve(check)(loaded), note=lambda spec: ONE_GRID_NOTE)
+
+
+def of_kind(kind) -> CoarseCheck:
+    """The kind's coarse grid: its own (``Kind.coarse_check``), else its check with every [solver] sample count
+    divided by :data:`COARSENING` (:func:`by_solver_samples`; one grid when the spec has no sample count)."""
+    if kind.coarse_check is not None:
+        return resolve(kind.coarse_check)
+    return by_solver_samples(kind.check)

@@ -6,7 +6,7 @@ A kind is one package exporting one :class:`Kind` (``KIND``).  Everything in it 
 The registry of kinds is :mod:`synthesis.kinds`.
 
 For ``agrisynth studio`` a kind gives its check on a coarser grid (``coarse_check``: a :class:`CoarseCheck`, what
-the page evaluates while a slider moves), the mechanism's poses where its check's facts hold none (``poses``: a
+the page evaluates while a slider moves; default: the check on its [solver] sample counts / 10), the mechanism's poses where its check's facts hold none (``poses``: a
 :class:`Poses`), and, when its spec may leave part of the design to the kind (guide_way's convex fit), that design
 written out as free variables (``explicit_design``; ``solved.toml`` uses it too).  The studio itself names no kind.
 
@@ -52,7 +52,7 @@ class Kind:
     bench: str | None = None              # "module:function"(specs | None, seed) -> bench cases
     example: str | None = None            # a library spec to try, relative to problems/
     #: "module:object" of a CoarseCheck: the check on a coarser grid (the studio's, while a slider moves);
-    #: None: the studio evaluates the check itself on both grids
+    #: None: the check with every [solver] sample count divided by 10 (:func:`synthesis.core.coarse.of_kind`)
     coarse_check: str | None = None
     #: "module:object" of a Poses: the mechanism's poses where the check's facts give none (the studio draws them)
     poses: str | None = None
