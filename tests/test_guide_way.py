@@ -363,3 +363,47 @@ def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceb
     assert str(err.value) == ("guide_way: a [tolerance] table in `solve` is not supported for this kind yet (problem "
                               "guide_way: 43 auxiliary variables but 14 structural equality rows pin them; sensitivities "
                               "need one row per auxiliary); `agrisynth tolerance RESULT` analyses a solved design")
+
+
+def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path):
+    """All fixed: solve names where to free one ([spline] control[0][0]); `move` with `control` is refused (it would
+    be ignored); a control polygon the arm cannot follow names the file and [spline] control, in check and solve."""
+    from synthesis.errors import SpecError
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.spec.common import validate
+    from synthesis.spec.guide_way import GuideWaySpec
+    from synthesis.specref import write_toml
+
+    fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
+    fixed = [[float(x), float(y)] for x, y in fit]
+
+    def written(name, control, **spline):
+        data = _redesign_with_control(control)
+        data["spline"].update(spline)
+        path = tmp_path / f"{name}.toml"
+        path.write_text("\n".join(write_toml(GuideWaySpec, dict(data, name=name), documented=False)) + "\n")
+        return path
+
+    proc = _run(["solve", str(written("fixed", fixed)), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == ("error: guide_way: solve needs at least one free design variable (give one bounds, "
+                                   "e.g. [spline] control[0][0] = {init = ..., bounds = [lo, hi]}); every one is fixed, "
+                                   "so use `agrisynth check`")
+    with pytest.raises(SpecError) as err:
+        validate(GuideWaySpec, dict(_redesign_with_control(fixed), spline=dict(_redesign_with_control(fixed)["spline"],
+                                                                                 move=20.0)), prefix="guide_way")
+    assert str(err.value) == ("guide_way.spline: move: 20 is not read when `control` is given (each free coordinate "
+                              "has its own bounds there); leave it out")
+    # control point 7 of the fit 20 mm lower: the path dips inside |OM| = R - d on stretch E-D
+    low = [list(p) for p in fixed]
+    low[7][1] -= 20.0
+    path = written("low", low)
+    proc = _run(["check", str(path), "--out", str(tmp_path)])
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    line = proc.stderr.strip()
+    assert line.startswith(f"error: {path}: [spline] control: segment ED: the arm cannot reach the claw tip at ")
+    assert "lies outside [R - d, R + d] = [20.32, 259.7] mm" in line and "\n" not in line
+    free_low = [p if j != 7 else [p[0], {"init": p[1], "bounds": [p[1] - 5.0, p[1] + 5.0]}] for j, p in enumerate(low)]
+    proc = _run(["solve", str(written("free_low", free_low)), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().startswith("error: [spline] control, start 0: segment ED: the arm cannot reach the claw tip")

@@ -450,3 +450,21 @@ def test_guide_way_key_points_turn_red_exactly_when_check_says_so(tmp_path):
     assert [ok for _, ok in seen.values()] == [True, True, False, False]
     for dy, (value, _) in seen.items():
         assert value == pytest.approx(dy / 6, abs=1e-9)
+
+
+def test_planting_poses_send_none_for_a_joint_that_is_not_finite(monkeypatch):
+    """An open loop gives NaN joints; the page gets null there (JSON has no NaN), as the studio's own rounding did."""
+    import numpy as np
+
+    import synthesis.kinematics.planting_arm as arm
+    from synthesis.planting.poses import frames
+
+    class Checked:
+        trajectory = {"crank_deg": [0.0, 10.0, 20.0]}
+        design = {"l1": 1.0, "l2": 1.0, "l3": 1.0, "l4": 1.0, "l5": 1.0, "zeta": 0.0, "phi": 0.0, "branch": 1}
+
+    monkeypatch.setattr(arm, "joint_positions",
+                        lambda design, theta: {"A": np.array([[np.nan, 1.23456, np.inf], [0.5, 0.5, 0.5]])})
+    got = frames(Checked(), 72)
+    assert got == [{"A": [None, 0.5]}, {"A": [1.235, 0.5]}, {"A": [None, 0.5]}]
+    json.dumps(got, allow_nan=False)

@@ -50,6 +50,17 @@ def free_variables(nlp) -> list[str]:
     return [n for n, (lo, hi) in zip(nlp.names, nlp.bounds) if hi > lo]
 
 
+def _written_at(spec, name: str) -> str:
+    """Where the spec file writes design variable ``name`` (``[links] l7``, ``[spline] control[0][0]``), else the name."""
+    from synthesis.design_info import describe
+
+    path = (describe(spec).get(name) or {}).get("path")
+    if not path:
+        return name
+    table, _, key = path.partition(".")
+    return f"[{table}] {key}" if key else path
+
+
 def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
                    on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
                    record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None) -> Run:
@@ -62,8 +73,8 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
     if not free_variables(nlp):
         raise SpecError(f"{kind.name}: solve needs at least one free design variable (give one bounds, e.g. "
-                        f"{nlp.names[0]} = {{init = ..., bounds = [lo, hi]}}); every one is fixed, so use "
-                        f"`agrisynth check`")
+                        f"{_written_at(setting.spec, nlp.names[0])} = {{init = ..., bounds = [lo, hi]}}); every one "
+                        f"is fixed, so use `agrisynth check`")
     x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
                                       setting.seed)
     maximise = solving.maximise(setting)

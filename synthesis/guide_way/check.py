@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from synthesis.errors import SpecError
 from synthesis.guide_way import conics as cn
 from synthesis.guide_way import scene as sc
 from synthesis.result import Result
@@ -240,9 +241,22 @@ def control_to_check(spec) -> np.ndarray | None:
     return control
 
 
+def whose_path(spec) -> str:
+    """Where a spline path's control points come from, for a message: the spec's ``[spline] control`` or the fit."""
+    if given_control(spec) is not None:
+        return "[spline] control"
+    return "[spline] (the convex fit through its key points)"
+
+
 def run_check(loaded: LoadedSpec) -> Result:
     spec = loaded.model
-    return result_of(spec, loaded.sha256, scene_for(spec, control_to_check(spec)))
+    try:
+        scene = scene_for(spec, control_to_check(spec))
+    except SpecError as exc:
+        if spec.spline is None:
+            raise
+        raise SpecError(f"{loaded.path}: {whose_path(spec)}: {exc}") from None
+    return result_of(spec, loaded.sha256, scene)
 
 
 def explicit_design(loaded: LoadedSpec, data: dict) -> dict:
@@ -257,6 +271,7 @@ def explicit_design(loaded: LoadedSpec, data: dict) -> dict:
     move = spec.spline.move
     control = fit_path(spec).control
     out = dict(data)
-    out["spline"] = dict(data["spline"], control=[[{"init": float(v), "bounds": [float(v) - move, float(v) + move]}
+    spline = {k: v for k, v in data["spline"].items() if k != "move"}      # move is in the bounds now
+    out["spline"] = dict(spline, control=[[{"init": float(v), "bounds": [float(v) - move, float(v) + move]}
                                                    for v in point] for point in control])
     return out

@@ -18,6 +18,7 @@ import numpy as np
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
+from synthesis.errors import SpecError
 from synthesis.guide_way import scene as sc
 from synthesis.guide_way import spline as sp
 
@@ -79,7 +80,12 @@ class GuideNLP:
         x = ca.SX.sym("P", 2 * n)
         control = control_of(x, n)
         samples = spec.solver.samples_per_segment
-        self.masks = masks = pressure_masks_at(spec, control_of(self.init, n), samples)
+        try:
+            self.masks = masks = pressure_masks_at(spec, control_of(self.init, n), samples)
+        except SpecError as exc:                        # start 0's path cannot be driven by the arm
+            from synthesis.guide_way.check import whose_path
+
+            raise SpecError(f"{whose_path(spec)}, start 0: {exc}") from None
         rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks)
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])

@@ -78,5 +78,6 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
                   samples_hint="[solver] samples_per_segment",
-                  relax_hint="Loosen those limits ([rules]), move the key points or tangents, or raise "
-                             "[spline] control_points or move.")
+                  relax_hint="Loosen those limits ([rules]), move the key points or tangents, or give the path "
+                             "room: more [spline] control_points, a larger [spline] move (control points left to "
+                             "the fit) or wider bounds in [spline] control (control points given).")

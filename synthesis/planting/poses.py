@@ -9,6 +9,10 @@ import math
 from synthesis.core.kind import Poses
 
 
+def _rounded(v: float) -> float | None:
+    return round(float(v), 3) if math.isfinite(v) else None
+
+
 def frames(result, most: int) -> list[dict]:
     import numpy as np
 
@@ -23,7 +27,7 @@ def frames(result, most: int) -> list[dict]:
     step = -(-len(crank) // most)
     theta = [math.radians(c) for c in crank[::step]]
     joints = joint_positions(design, np.array(theta))
-    return [{name: [round(float(xy[0, k]), 3), round(float(xy[1, k]), 3)] for name, xy in joints.items()}
+    return [{name: [_rounded(xy[0, k]), _rounded(xy[1, k])] for name, xy in joints.items()}      # None: not finite
             for k in range(len(theta))]
 
 

@@ -71,8 +71,8 @@ class SplineSection(StrictModel):
                                   "|OM| = R - d, tangent perpendicular to OM, and the inverse kinematics "
                                   "changes branch there (minus before it in the paper's eq 7 ... see GUIDE_WAY.md)")
     min_speed: float = Field(0.2, gt=0, description="|dM/du| at a key tangent, at least this x the loop length (dimensionless)")
-    move: float = Field(40.0, gt=0, description="IPOPT stage, when `control` is not given: each control point "
-                                                "stays within this of the convex fit, mm")
+    move: float = Field(40.0, gt=0, description="IPOPT stage, when `control` is not given (refused with it): each "
+                                                "control point stays within this of the convex fit, mm")
     control: list[tuple[Variable, Variable]] | None = Field(
         None, description="the control points (x, y) round the loop, mm, one pair per control point (default: the "
                           "convex fit, each coordinate free within `move` of it); a number fixes a coordinate, "
@@ -82,6 +82,9 @@ class SplineSection(StrictModel):
     def _control(self) -> "SplineSection":
         if self.control is None:
             return self
+        if "move" in self.model_fields_set:
+            raise ValueError(f"move: {self.move:g} is not read when `control` is given (each free coordinate has its "
+                             "own bounds there); leave it out")
         if len(self.control) != self.control_points:
             raise ValueError(f"control: expected {self.control_points} control points (control_points), got "
                              f"{len(self.control)}")

@@ -85,7 +85,7 @@ class Session:
     """The spec the studio was started on, and what the page may do with it."""
 
     loaded: LoadedSpec
-    data: dict[str, Any]                  # the spec file's data, as read (never changed)
+    data: dict[str, Any]                  # the spec file's data with the kind's written-out design (explicit_design)
     variables: list[Variable] = field(default_factory=list)
 
     @classmethod
