@@ -361,8 +361,9 @@ def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceb
     with pytest.raises(SpecError) as err:
         solve_spec(load_spec(path), starts=1, workers=1)
     assert str(err.value) == ("guide_way: a [tolerance] table in `solve` is not supported for this kind yet (problem "
-                              "guide_way: 43 auxiliary variables but 14 structural equality rows pin them; sensitivities "
-                              "need one row per auxiliary); `agrisynth tolerance RESULT` analyses a solved design")
+                              "guide_way: 43 auxiliary variables but 14 structural equality rows pin them; "
+                              "sensitivities need one row per auxiliary); `agrisynth tolerance RESULT` analyses a "
+                              "solved design")
 
 
 def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path):
@@ -387,8 +388,8 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     proc = _run(["solve", str(written("fixed", fixed)), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip() == ("error: guide_way: solve needs at least one free design variable (give one bounds, "
-                                   "e.g. [spline] control[0][0] = {init = ..., bounds = [lo, hi]}); every one is fixed, "
-                                   "so use `agrisynth check`")
+                                   "e.g. [spline] control[0][0] = {init = ..., bounds = [lo, hi]}); every one is "
+                                   "fixed, so use `agrisynth check`")
     with pytest.raises(SpecError) as err:
         validate(GuideWaySpec, dict(_redesign_with_control(fixed), spline=dict(_redesign_with_control(fixed)["spline"],
                                                                                  move=20.0)), prefix="guide_way")
@@ -404,6 +405,8 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     assert line.startswith(f"error: {path}: [spline] control: segment ED: the arm cannot reach the claw tip at ")
     assert "lies outside [R - d, R + d] = [20.32, 259.7] mm" in line and "\n" not in line
     free_low = [p if j != 7 else [p[0], {"init": p[1], "bounds": [p[1] - 5.0, p[1] + 5.0]}] for j, p in enumerate(low)]
-    proc = _run(["solve", str(written("free_low", free_low)), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
+    proc = _run(["solve", str(written("free_low", free_low)), "--starts", "1", "--workers", "1",
+                 "--out", str(tmp_path)])
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert proc.stderr.strip().startswith("error: [spline] control, start 0: segment ED: the arm cannot reach the claw tip")
+    assert proc.stderr.strip().startswith("error: [spline] control, start 0: segment ED: the arm cannot reach the "
+                                          "claw tip")

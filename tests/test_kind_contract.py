@@ -151,7 +151,8 @@ def test_a_kind_without_its_own_coarse_grid_gets_its_check_on_a_tenth_of_the_sol
     assert grids.note("guide_way", "coarse", loaded.model) == "the check with [solver] samples_per_segment 40 -> 5"
     assert grids.note("guide_way", "fine", loaded.model) == "agrisynth check's own grid"
     coarse = grids.evaluator("guide_way", "coarse")(loaded)
-    spec5 = loaded.model.model_copy(update={"solver": loaded.model.solver.model_copy(update={"samples_per_segment": 5})})
+    solver5 = loaded.model.solver.model_copy(update={"samples_per_segment": 5})
+    spec5 = loaded.model.model_copy(update={"solver": solver5})
     at_5 = kinds.checker("guide_way")(LoadedSpec(spec5, loaded.path, loaded.sha256))
     fine = grids.evaluator("guide_way", "fine")(loaded)
     assert [(r["name"], r["value"]) for r in coarse.rules] == [(r["name"], r["value"]) for r in at_5.rules]

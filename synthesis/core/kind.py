@@ -6,9 +6,10 @@ A kind is one package exporting one :class:`Kind` (``KIND``).  Everything in it 
 The registry of kinds is :mod:`synthesis.kinds`.
 
 For ``agrisynth studio`` a kind gives its check on a coarser grid (``coarse_check``: a :class:`CoarseCheck`, what
-the page evaluates while a slider moves; default: the check on its [solver] sample counts / 10), the mechanism's poses where its check's facts hold none (``poses``: a
-:class:`Poses`), and, when its spec may leave part of the design to the kind (guide_way's convex fit), that design
-written out as free variables (``explicit_design``; ``solved.toml`` uses it too).  The studio itself names no kind.
+the page evaluates while a slider moves; default: the check on its [solver] sample counts / 10), the mechanism's
+poses where its check's facts hold none (``poses``: a :class:`Poses`), and, when its spec may leave part of the
+design to the kind (guide_way's convex fit), that design written out as free variables (``explicit_design``;
+``solved.toml`` uses it too).  The studio itself names no kind.
 
 A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one multistart driver
 (:mod:`synthesis.core.solve`) needs, none of which names a solver:

@@ -51,7 +51,8 @@ def free_variables(nlp) -> list[str]:
 
 
 def _written_at(spec, name: str) -> str:
-    """Where the spec file writes design variable ``name`` (``[links] l7``, ``[spline] control[0][0]``), else the name."""
+    """Where the spec file writes design variable ``name`` (``[links] l7``, ``[spline] control[0][0]``), else its
+    name."""
     from synthesis.design_info import describe
 
     path = (describe(spec).get(name) or {}).get("path")

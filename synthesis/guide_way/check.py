@@ -9,8 +9,6 @@ centre line, both walls of the groove).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from synthesis.errors import SpecError
