@@ -15,12 +15,14 @@ sees the kind's variables and objective whatever the length unit (issue 18's sca
 tests/extreme/test_scale.py); the rows stay in the new unit (IPOPT's own gradient-based row scaling takes
 them).  In the kind's own units every s is 1 and IPOPT sees the kind's NLP unchanged.
 An earlier rule read the unit from each variable's box (the power of 1000 bringing its width into [1, 1000)),
-and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3: combing_chain's
-finite-difference solve went from 13 to 140 iterations.  A narrow box is not a unit choice; a declared unit is.
+and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3 (combing_chain's
+finite-difference solve went from 13 to 140 iterations), and an unboxed start over 1000 for kilometres (the robust
+sensitivity variables of planting's tolerance-box redesigns).  A narrow box is not a unit choice; a declared
+unit is.
 The scaled NLP (s and the objective's scale are its parameters) is built on the first start that needs it, so
 one build serves every start.
 
-Three hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
+Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
 
 * :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values

@@ -16,7 +16,6 @@ f' = c_f f -- the same feasible set and minimiser, in the numbers a user working
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Sequence
 
 import casadi as ca
@@ -28,9 +27,10 @@ from synthesis.core.problem import MaxMinMargin, ObjectiveParts
 #: carry one length; "1", "-" and "" are plain numbers (ratios, normalised margins)
 LENGTH_POWER: dict[str, int] = {
     "mm": 1, "m": 1, "mm/s": 1, "m/s": 1, "mm/s^2": 1, "m/s^2": 1, "mm/rad": 1,
-    "mm^2": 2, "m^2": 2, "mm^2/s^2": 2, "m^2/s^2": 2, "mm^4/s^4": 4,
+    "mm^2": 2, "m^2": 2, "mm^2/s^2": 2, "m^2/s^2": 2,
     "1/mm": -1, "deg/mm": -1,
-    "deg": 0, "rad": 0, "deg^2": 0, "deg/s^2": 0, "s": 0, "ms": 0, "r/min": 0, "rad/s": 0, "1": 0, "-": 0, "": 0, "%": 0,
+    "deg": 0, "rad": 0, "deg^2": 0, "deg/s^2": 0, "s": 0, "ms": 0, "r/min": 0, "rad/s": 0,
+    "1": 0, "-": 0, "": 0, "%": 0,
 }
 
 
