@@ -58,9 +58,14 @@ DESIGN_TOLERANCE = 1e-6
 #: within 2.1e-9
 TIGHT = {"ipopt.tol": 1e-11, "ipopt.acceptable_tol": 1e-11}
 OWN_ERRORS = 3.0
-#: "a comparable number of iterations": start 0's IPOPT iterations in the other unit at most this many times
-#: the mm count.  Not 1: IPOPT sees the same variables and objective but rows 1e-3 .. 1e-6 (or 1e3 .. 1e6)
-#: times as large, which changes its constraint scaling and barrier path (measured: 0.5 .. 2.0 on these)
+#: "a comparable number of iterations": IPOPT's iterations in the other unit (start 0's in the default test, the
+#: total over the starts in the library rows) at most this many times the mm count.  Not 1: IPOPT sees the same
+#: variables and objective but rows 1e-3 .. 1e-6 (or 1e3 .. 1e6) times as large, which changes its constraint
+#: scaling and barrier path (start 0 of the default problems: 0.5 .. 2.0).  Over several starts a start IPOPT
+#: finds locally infeasible ends when its restoration phase gives up, which depends on the rows' absolute
+#: size: planting envelope_redesign_from_example2 in metres runs 4 of its 32 starts to max_iter (500) where mm
+#: stops them as infeasible after 74-184 iterations (total 2.22 x), while its 7 starts converging in both units
+#: take 0.85 x the mm iterations; the ratio over starts converging in both units is in the figures too
 ITERATION_RATIO = 3.0
 #: problems whose optimum is not a point: two designs with the same objective and every rule satisfied exist,
 #: so the design is compared through the objective (the proof is test_comb_finger_optimum_is_not_a_point)
@@ -277,13 +282,6 @@ def test_start_0_in_metres_and_x1e3_reaches_the_mm_design(relative, record_prope
 
 # ------------------------------------------------------------------- every library problem (benchmark)
 
-#: over several starts, "a comparable number of iterations": the iterations of the starts that converge in both
-#: units at most 2 x the mm ones.  The total over all starts is reported, not bounded: a start IPOPT finds
-#: locally infeasible ends by its restoration phase giving up, which depends on the rows' absolute size --
-#: planting envelope_redesign_from_example2 in metres: 4 of 32 starts run to max_iter (500) where mm stops
-#: them as infeasible after 74-184 iterations, total 2.22 x, while its 7 starts converging in both take
-#: 0.85 x the mm iterations
-COMPARABLE = 2.0
 #: the bench's start count (synthesis.bench_generic.FULL.starts): one row per library problem in bench.md's
 #: extreme matrix compares the best of a problem's first 4 starts (its own seed) in each unit; the full study
 #: below takes every start
@@ -299,8 +297,8 @@ def _library_params():
 def test_library_problem_in_metres_and_x1e3(relative, record_property):
     """One library problem, its first 4 starts in mm, metres (x 1e-3) and x 1e3: the best design within
     1e-6 (relative, 1 unit floor; the objective where the optimum is not a point; the conflicting rules where
-    none is feasible), and the starts converging in both units in at most 2 x the mm iterations (the total is
-    in the figure).  A problem with a tolerance box is refused (its sensitivity variables mix units)."""
+    none is feasible), and the total iterations at most 3 x the mm total (the ratio over the starts converging in
+    both units is in the figure).  A problem with a tolerance box is refused (its sensitivity variables mix units)."""
     loaded = load_spec(LIBRARY / relative)
     if getattr(loaded.model, "tolerance", None) is not None:
         with pytest.raises(ValueError, match="tolerance box"):
@@ -312,7 +310,7 @@ def test_library_problem_in_metres_and_x1e3(relative, record_property):
                     + figure(row))
     for f in FACTORS:
         assert same(row, f)
-        assert row[f]["converged_ratio"] <= COMPARABLE
+        assert row[f]["ratio"] <= ITERATION_RATIO
 
 
 @pytest.mark.benchmark
@@ -335,5 +333,5 @@ def test_every_library_problem_every_start(record_property):
     lines.append(f"refused (tolerance box): {', '.join(refused)}")
     record_property("figure", "\n".join(lines))
     print("\n".join(lines))
-    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and r[f]["converged_ratio"] <= COMPARABLE)]
+    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and r[f]["ratio"] <= ITERATION_RATIO)]
     assert not bad, bad
