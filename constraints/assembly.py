@@ -20,4 +20,4 @@ def assembly_rule(d2: list, r3, r4, where: str) -> Rule:
         d = ca.sqrt(ca.fmax(q, 0.0))        # d^2 >= (r1 - r2)^2 >= 0; fmax only guards the last digit
         values += [d - ca.fabs(r3 - r4), r3 + r4 - d]
         rows += [(q - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - q, 0.0, None)]
-    return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows))
+    return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")

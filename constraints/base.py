@@ -30,6 +30,8 @@ class Rule:
     missing: str | None = None
     #: a caveat on an evaluated value (e.g. it rests on a fit solved only inaccurately); shown in the table
     note: str | None = field(default=None, compare=False)
+    #: the unit of ``nlp_rows`` when it is not ``unit`` (e.g. squared speeds for a speed rule)
+    row_unit: str | None = field(default=None, compare=False)
 
     def rows(self) -> tuple:
         return self.nlp_rows or ((self.expr, self.lower, self.upper),)

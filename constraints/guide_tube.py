@@ -57,7 +57,7 @@ def wall_exit_speed_rule(tube: str, exit_speed_sq: Sequence, minimum: float) -> 
     speeds = [ca.sqrt(ca.fmax(v, 0.0)) for v in exit_speed_sq]
     rows = tuple((v, minimum * minimum, None) for v in exit_speed_sq)
     return Rule(f"wall_exit_speed_{tube}", _vector(speeds), minimum, None, "m/s", max(minimum, 0.1),
-                "at the wall end, every sampled row spacing", nlp_rows=rows)
+                "at the wall end, every sampled row spacing", nlp_rows=rows, row_unit="m^2/s^2")
 
 
 def free_fall_height_rule(tube: str, heights_mm: Sequence, minimum: float) -> Rule:

@@ -82,3 +82,9 @@ def at_bound(value, info: dict | None) -> str:
     if abs(value - hi) <= tol:
         return "upper"
     return ""
+
+
+def units_of(spec: BaseModel, names) -> list[str]:
+    """The declared unit of each design variable in ``names`` (a kind's NLP declares its x with them)."""
+    info = describe(spec)
+    return [info[n]["unit"] for n in names]

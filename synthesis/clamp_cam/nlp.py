@@ -26,6 +26,7 @@ from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backof
 from synthesis.kinematics import cam_follower as cf
 from synthesis.kinematics.motion_laws import law as closed_form_law
 from synthesis.spec.clamp_cam import ClampCamSpec
+from synthesis.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
 
 DEG = math.pi / 180.0
@@ -54,8 +55,14 @@ class CamNLP:
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
         rules = self._rules(v, alpha, kappa, acc)
         backoff = spec.solver.backoff
-        self.problem = Problem("clamp_cam", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(v), rules,
-                               self._objective(x, v, alpha), max_iter=spec.solver.max_iter, ipopt="moderate",
+        structural = self._structural(v)
+        translating = spec.follower.type == "translating"
+        objective = self._objective(x, v, alpha)
+        self.problem = Problem("clamp_cam", x, self.bounds[:, 0], self.bounds[:, 1], structural, rules,
+                               objective, max_iter=spec.solver.max_iter, ipopt="moderate",
+                               x_units=units_of(spec, self.names),
+                               structural_units=["deg", "mm^2"] if translating else ["deg", "mm", "mm^2", "rad"],
+                               objective_unit="deg" if spec.objective.name == "pressure_angle" else "",
                                backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0))
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
@@ -117,7 +124,8 @@ class CamNLP:
         tau = ca.SX.sym("tau")
         both = ca.vertcat(alpha["rise"], alpha["return"])
         return ObjectiveParts(f=tau / 10.0, extra=tau, extra_lb=[0.0], extra_ub=[90.0], extra_init=[0.0],
-                              rows=[(tau - both, 0.0, None), (tau + both, 0.0, None)])
+                              rows=[(tau - both, 0.0, None), (tau + both, 0.0, None)], extra_units=["deg"],
+                              row_units=["deg", "deg"])
 
     # ------------------------------------------------------------------ solving
 

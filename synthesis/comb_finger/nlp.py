@@ -12,6 +12,7 @@ from synthesis.comb_finger.check import rules_of, trace
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.design_info import units_of
 from synthesis.spec.comb_finger import NAMES, CombFingerSpec
 from synthesis.spec.common import design_box
 
@@ -32,7 +33,8 @@ class CombFingerNLP:
         theta_deg = tr.theta * (180.0 / math.pi)
         self.theta = ca.Function("theta", [x], [theta_deg])
         self.problem = Problem("comb_finger", x, self.bounds[:, 0], self.bounds[:, 1], [], rules_of(spec, tr),
-                               ObjectiveParts(f=-theta_deg / THETA_SCALE), ipopt="tight", max_iter=spec.solver.max_iter)
+                               ObjectiveParts(f=-theta_deg / THETA_SCALE), ipopt="tight", max_iter=spec.solver.max_iter,
+                               x_units=units_of(spec, NAMES), objective_unit="deg")
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def solve(self, start: int, x0) -> StartOutcome:

@@ -17,6 +17,7 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.errors import SpecError
 from synthesis.spec.combing_chain import CombingChainSpec
+from synthesis.design_info import units_of
 from synthesis.spec.common import bounds_of, is_free, value_of
 
 
@@ -61,11 +62,13 @@ class CombingChainNLP:
             m = ca.SX.sym("window_margin")
             deltas = ca.vertcat(*[d for gt in tr.gears for row in gt.delta for d in row])
             objective = ObjectiveParts(f=-m, extra=m, extra_lb=[-180.0], extra_ub=[180.0], extra_init=[0.0],
-                                       rows=[(deltas - lo - m, 0.0, None), (hi - deltas - m, 0.0, None)])
+                                       rows=[(deltas - lo - m, 0.0, None), (hi - deltas - m, 0.0, None)],
+                                       extra_units=["deg"], row_units=["deg", "deg"])
         else:
             objective = ObjectiveParts(f=ca.sum1(ca.vertcat(*speeds)))
         self.problem = Problem("combing_chain", x, self.bounds[:, 0], self.bounds[:, 1], [], rules, objective,
-                               ipopt="tight", max_iter=spec.solver.max_iter)
+                               ipopt="tight", x_units=units_of(spec, self.names),
+                               objective_unit="deg" if self.margin_objective else "m/s", max_iter=spec.solver.max_iter)
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def solve(self, start: int, x0) -> StartOutcome:

@@ -5,24 +5,24 @@ setup are the expensive part) and solves from as many starts as it is given.  IP
 each solve is captured from file descriptor 1 (:mod:`synthesis.ipopt_log`), so no log file is left
 behind, in workers or not.
 
-IPOPT sees every variable at a *nominal scale*: w = s * z elementwise, IPOPT works on z, and nothing
-outside this module sees z (starts, bounds, the returned point and the multipliers are mapped in and out;
-:attr:`CompiledNLP.t`, ``f_function`` and ``g_function`` stay in the kind's units).  s_i is the power of
-1000 that brings the variable's size -- the width of its box, or its start when it has none -- into
-[1, 1000) (:func:`nominal_scale`): a length bounded [5, 400] mm gets s = 1, the same length in metres
-s = 1e-3 and x 1e3 s = 1e3, so z is the same number in all three (issue 18's scale case,
-tests/extreme/test_scale.py); an objective with |f| >= 1000 at the start is divided by its power of 1000
-alike, a small one is not scaled up (a least-squares fit starts near its optimum 0: scaled up, IPOPT's
-finite-difference mode missed steering's Table 12 fit; so a metre-sized objective keeps its own scale and
-its design settles to ~1e-8 relative instead of ~1e-12).
-A start whose every variable already has s = 1 -- every library problem in mm but one ratio of
-combing_chain -- is solved by the unscaled NLP exactly as before.  Scaling every variable to size 1 was
-measured on the library first and not kept: no fewer iterations overall (x 1.03 .. 1.05), fourbar_path lost
-22 of its 52 converging starts, guide_way its solve (box-magnitude scale) and other local optima came out of
-the elastic diagnosis.  The scaled NLP (s and the objective's scale are its parameters) is built on the first
-start that needs it, so one build serves every start.
+IPOPT sees every variable at its *nominal scale*, the kind's own unit: w = s * z elementwise, IPOPT works on z,
+and nothing outside this module sees z (starts, bounds, the returned point and the multipliers are mapped in and
+out; :attr:`CompiledNLP.t`, ``f_function`` and ``g_function`` stay in the kind's units).  s is read from the
+units the problem declares, not guessed from numbers: solved with every length ``factor`` times its number in
+the kind's unit (:func:`length_unit`; 1e-3: metres for mm), a variable of length power p (mm, m/s: 1, mm^2: 2,
+deg, rad, ratios: 0) has s = factor**p and the objective is divided by factor**p of its unit alike, so IPOPT
+sees the kind's variables and objective whatever the length unit (issue 18's scale case,
+tests/extreme/test_scale.py); the rows stay in the new unit (IPOPT's own gradient-based row scaling takes
+them).  In the kind's own units every s is 1 and IPOPT sees the kind's NLP unchanged.
+An earlier rule read the unit from each variable's box (the power of 1000 bringing its width into [1, 1000)),
+and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3 (combing_chain's
+finite-difference solve went from 13 to 140 iterations), and an unboxed start over 1000 for kilometres (the robust
+sensitivity variables of planting's tolerance-box redesigns).  A narrow box is not a unit choice; a declared
+unit is.
+The scaled NLP (s and the objective's scale are its parameters) is built on the first start that needs it, so
+one build serves every start.
 
-Three hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
+Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
 
 * :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
@@ -32,7 +32,11 @@ context-local, so a solve outside them is untouched:
 * :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
   w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts);
 * :func:`variable_scaling` ``("none")``: CompiledNLPs built inside give IPOPT the raw variables (s = 1),
-  to measure what the nominal scaling does.
+  to measure what the nominal scaling does;
+* :func:`length_unit` ``(factor)``: CompiledNLPs built inside hand IPOPT the problem with every length
+  ``factor`` times its number in the kind's unit (1e-3: metres for mm; :mod:`synthesis.core.units`), mapping
+  starts, the returned point and the multipliers to and from the kind's units, so the kind and the multistart
+  see mm as always (the scale case of tests/extreme/test_scale.py).
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ import numpy as np
 
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, transcribe
+from synthesis.core.units import objective_factor, row_factors, variable_factors
 from synthesis.ipopt_log import captured_stdout
 
 #: named option presets; a problem picks one by name and may override single options
@@ -80,6 +85,7 @@ SCALINGS = ("nominal", "none")
 _derivatives: ContextVar[str] = ContextVar("agrisynth_ipopt_derivatives", default="exact")
 _solve_with: ContextVar[Callable | None] = ContextVar("agrisynth_solve_with", default=None)
 _scaling: ContextVar[str] = ContextVar("agrisynth_variable_scaling", default="nominal")
+_length_factor: ContextVar[float] = ContextVar("agrisynth_length_factor", default=1.0)
 
 
 @contextmanager
@@ -104,34 +110,17 @@ def variable_scaling(mode: str):
     return _mode(_scaling, mode, SCALINGS, "variable_scaling")
 
 
-def unit_power(size: np.ndarray) -> np.ndarray:
-    """1000**floor(log10(size) / 3): the power of 1000 (unit prefix) that brings a positive size into
-    [1, 1000); 1 for sizes already there, for 0 and for non-finite sizes."""
-    size = np.asarray(size, float)
-    ok = np.isfinite(size) & (size > 0)
-    exponent = np.floor(np.log10(np.where(ok, size, 1.0)) / 3.0)
-    return np.where(ok, 1000.0 ** exponent, 1.0)
-
-
-def nominal_scale(lbw: np.ndarray, ubw: np.ndarray, w0: np.ndarray) -> np.ndarray:
-    """The nominal value s_i of each variable (IPOPT sees z_i = w_i / s_i): the :func:`unit_power` of its size.
-
-    A variable's size is the width of its box, ub - lb, when both bounds are finite and differ, else |w0_i|
-    of the start.  A start scales a variable up only when some boxed variable was scaled (the problem is in
-    other units): in a problem whose boxes are all in [1, 1000), a start near zero says nothing about how
-    large the variable gets.  A length bounded [5, 400] mm: s = 1; in metres [0.005, 0.4]: s = 1e-3; x 1e3:
-    s = 1e3 -- z is the same number of mm in all three.
-    """
-    lbw, ubw, w0 = (np.asarray(v, float) for v in (lbw, ubw, w0))
-    with np.errstate(invalid="ignore"):
-        width = ubw - lbw
-    boxed = np.isfinite(width) & (width > 0)
-    start = np.abs(w0)
-    boxed_scale = unit_power(width)
-    # a start scales up only where the boxed variables show the problem is in other units than mm-like ones
-    moved = bool(np.any(boxed & (boxed_scale != 1.0)))
-    free = unit_power(start) if moved else np.where(start >= 1000.0, unit_power(start), 1.0)
-    return np.where(boxed, boxed_scale, free)
+@contextmanager
+def length_unit(factor: float) -> Iterator[None]:
+    """CompiledNLPs built inside solve their problem with every length in a unit ``factor`` times the kind's."""
+    factor = float(factor)
+    if not (math.isfinite(factor) and factor > 0.0):
+        raise ValueError(f"length_unit: the factor must be a positive number, not {factor!r}")
+    token = _length_factor.set(factor)
+    try:
+        yield
+    finally:
+        _length_factor.reset(token)
 
 
 @contextmanager
@@ -163,17 +152,34 @@ class CompiledNLP:
     """A transcribed problem with its IPOPT solver, built once and reused for every start."""
 
     def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None,
-                 scaling: str | None = None):
+                 scaling: str | None = None, length_factor: float | None = None):
         t0 = time.perf_counter()
         self.problem = problem
         self.elastic = elastic
         self.derivatives = _derivatives.get() if derivatives is None else derivatives
         self.scaling = _scaling.get() if scaling is None else scaling
         self.t: Transcription = transcribe(problem, elastic)
+        # what IPOPT is given: the kind's NLP, or it in another length unit (length_unit): w' = u w, g' = c_g g,
+        # f' = c_f f (synthesis.core.units); t stays the kind's
+        factor = _length_factor.get() if length_factor is None else float(length_factor)
+        if factor != 1.0 and self.t.robust is not None:
+            raise ValueError(f"problem {problem.name}: a length unit change of a tolerance box (robust) problem is "
+                             f"not built (its sensitivity variables mix units)")
+        n_w = self.t.w.numel()
+        self._unit = variable_factors(problem, factor, n_w, elastic)
+        self._row_unit = row_factors(problem, factor, self.t.owner, elastic)
+        self._objective_unit = objective_factor(problem, factor, elastic)
+        self._w = self.t.w
+        if factor == 1.0:
+            self._f, self._g = self.t.f, self.t.g
+        else:
+            self._w = ca.SX.sym("w_unit", n_w)
+            f, g = ca.substitute([self.t.f, self.t.g], [self.t.w], [self._w / ca.DM(self._unit)])
+            self._f, self._g = f * self._objective_unit, g * ca.DM(self._row_unit)
         opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 5, "ipopt.sb": "yes",
                 **PRESETS[problem.ipopt], **problem.ipopt_options, "ipopt.max_iter": problem.max_iter,
                 **(FINITE_DIFFERENCE if self.derivatives == "finite_difference" else {})}
-        nlp = {"x": self.t.w, "f": self.t.f, "g": self.t.g}
+        nlp = {"x": self._w, "f": self._f, "g": self._g}
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
         self._opts = opts
@@ -188,9 +194,9 @@ class CompiledNLP:
         its build time added to ``build_s``."""
         if self._scaled_solver is None:
             t0 = time.perf_counter()
-            w, n = self.t.w, self.t.w.numel()
+            w, n = self._w, self._w.numel()
             z, s, sf = ca.SX.sym("z", n), ca.SX.sym("nominal", n), ca.SX.sym("objective_nominal")
-            f, g = ca.substitute([self.t.f, self.t.g], [w], [s * z])
+            f, g = ca.substitute([self._f, self._g], [w], [s * z])
             nlp = {"x": z, "f": f / sf, "g": g, "p": ca.vertcat(self.problem.parameters, s, sf)}
             self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, self._opts)
             self.build_s += time.perf_counter() - t0
@@ -213,17 +219,18 @@ class CompiledNLP:
         runner = _solve_with.get()
         if runner is not None:
             return runner(self, start, args["x0"], p)
-        s = nominal_scale(self.t.lbw, self.t.ubw, args["x0"]) if self.scaling == "nominal" else None
+        # into the unit IPOPT is given (all factors 1 in the kind's own units)
+        u = self._unit
+        c = self._row_unit
+        args.update(x0=args["x0"] * u, lbx=self.t.lbw * u, ubx=self.t.ubw * u, lbg=self.t.lbg * c, ubg=self.t.ubg * c)
+        # nominal scaling: IPOPT's z is the kind's unit again (module docstring)
+        nominal = self.scaling == "nominal" and not (np.all(u == 1.0) and self._objective_unit == 1.0)
+        s = u if nominal else None
+        sf = self._objective_unit if nominal else 1.0
         solver = self.solver
-        if s is not None and np.all(s == 1.0):
-            s = None                       # every variable well scaled: IPOPT sees the kind's own NLP
-        sf = 1.0
         if s is not None:
             solver = self.scaled_solver()
-            # a large objective in its own unit power at the start (module docstring)
-            f0 = abs(float(self.f_function(args["x0"], p)))
-            sf = float(unit_power(f0)) if f0 >= 1000.0 else 1.0
-            args.update(x0=args["x0"] / s, lbx=self.t.lbw / s, ubx=self.t.ubw / s, p=np.concatenate([p, s, [sf]]))
+            args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, p=np.concatenate([p, s, [sf]]))
         elif p.size:
             args["p"] = p
         t0 = time.perf_counter()
@@ -233,14 +240,17 @@ class CompiledNLP:
         stats = solver.stats()
         x = np.asarray(sol["x"]).ravel()
         if s is not None:
+            x = s * x
+        if s is not None or not np.all(u == 1.0):
             # back to the kind's units; a bound IPOPT returned exactly stays exact (s * (lb / s) may round)
-            x = np.clip(s * x, self.t.lbw, self.t.ubw)
+            x = np.clip(x / u, self.t.lbw, self.t.ubw)
         # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another
         # point (even 0.0 after Invalid_Number_Detected)
         f = float(self.f_function(x, p))
+        # multipliers of the kind's rows: IPOPT's of f / sf and rows c * g are sf * c / c_f of the kind's f and g
+        lam = np.asarray(sol["lam_g"]).ravel() * sf * self._row_unit / self._objective_unit
         return NLPOutcome(start, x, f if math.isfinite(f) else math.inf, stats["return_status"],
-                          bool(stats["success"]), int(stats["iter_count"]), wall, log(),
-                          np.asarray(sol["lam_g"]).ravel() * sf)
+                          bool(stats["success"]), int(stats["iter_count"]), wall, log(), lam)
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
         """Elastic form: each relaxable rule's slack at a returned decision vector, in the rule's unit."""

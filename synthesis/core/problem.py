@@ -32,6 +32,9 @@ class ObjectiveParts:
     extra_ub: Sequence[float] = ()
     extra_init: Sequence[float] = ()
     rows: Sequence[Row] = ()
+    #: the unit of each extra variable and of each row (:mod:`synthesis.core.units`; None: not declared)
+    extra_units: Sequence[str] | None = None
+    row_units: Sequence[str] | None = None
 
 
 @dataclass(frozen=True)
@@ -154,6 +157,11 @@ class Problem:
     envelope: Envelope | None = None
     #: set when the operating conditions are resolved (sensitivities w.r.t. them: :mod:`synthesis.core.sensitivity`)
     operating_source: OperatingSource | None = None
+    #: the declared unit of each entry of x, of each structural row and of the objective f (mm, deg, rad, m/s,
+    #: mm^2, "" for a plain number ...; :mod:`synthesis.core.units`); None: not declared
+    x_units: Sequence[str] | None = None
+    structural_units: Sequence[str] | None = None
+    objective_unit: str | None = None
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)
@@ -236,11 +244,14 @@ class Problem:
         if isinstance(self.objective, ObjectiveParts):
             # f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where
             # they read a sampled condition, so a min-max objective is the worst over the envelope
-            rows = []
-            for row in self.objective.rows:
+            rows, units = [], []
+            declared = self.objective.row_units
+            for i, row in enumerate(self.objective.rows):
                 scenarios = envelope.scenarios() if depends(row[0]) else [{}]
                 rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
-            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal), rows=rows)
+                units += [declared[i]] * len(scenarios) if declared is not None else []
+            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal), rows=rows,
+                                                 row_units=None if declared is None else units)
         self.operating = ()           # resolved: a copy of this problem (dataclasses.replace) stays as it is
 
 

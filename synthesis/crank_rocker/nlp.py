@@ -70,6 +70,10 @@ class CrankRockerNLP:
         # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
         self.problem = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
                                hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
+                               # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
+                               # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
+                               x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,
+                               objective_unit="mm" if spec.objective.name == "min_total_length" else "deg",
                                max_iter=spec.solver.max_iter)
         self.compiled = CompiledNLP(self.problem, elastic)
 
@@ -80,7 +84,8 @@ class CrankRockerNLP:
         # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
         rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
         return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
-                              extra_init=[self.spec.requirements.min_transmission_angle], rows=rows)
+                              extra_init=[self.spec.requirements.min_transmission_angle], rows=rows,
+                              extra_units=["deg"], row_units=["deg", "deg"])
 
     def report_objective(self, design: dict[str, float], f: float) -> float:
         """Total length (mm) of the design itself, or the smallest transmission angle (deg) the epigraph

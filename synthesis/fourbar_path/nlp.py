@@ -47,9 +47,10 @@ SCALED = True
 OBJECTIVE_POWER = 0.5
 
 
-#: the core's unit-prefix scaling of variables (core/ipopt.py) is off: this NLP is already in nominal units of
-#: the targets' size, where box widths straddle 1 (e.g. 0.5 D), which that rule would read as metres and
-#: multiply by 1000 (picking_arc's one-start solve then ended at max_iter, violating the transmission angle)
+#: the core's nominal scaling of variables (core/ipopt.py) is off: this NLP is already in nominal units of the
+#: targets' size (its x declares plain numbers, which the core's declared-unit rule leaves alone anyway; an
+#: earlier box-width rule read widths like 0.5 D as metres and multiplied them by 1000, and picking_arc's
+#: one-start solve then ended at max_iter, violating the transmission angle)
 OWN_UNITS = "none" if SCALED else None
 
 
@@ -119,7 +120,9 @@ class PathNLP:
                 # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
                 ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
                                                   **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
-                max_iter=spec.solver.max_iter)
+                max_iter=spec.solver.max_iter,
+                # x in units of the target size (plain numbers under a change of the length unit), crank angles
+                x_units=[""] * 9 + ["rad"] * self.n_theta, objective_unit="")
             return out
 
         self._problem_of = problem

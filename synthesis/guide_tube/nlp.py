@@ -70,6 +70,7 @@ class GuideTubeNLP:
         self.problem = Problem("guide_tube", delta, self.bounds[:, 0], self.bounds[:, 1], [], rules,
                                self._objective(delta, angles, design_times, uniform), max_iter=spec.solver.max_iter,
                                backoff=scaled_backoff(spec.solver.backoff), ipopt="precise",
+                               x_units=["deg"] * len(free), objective_unit=OBJECTIVE_UNITS[spec.objective.name],
                                operating=[Operating("mu", self.mu, nominal_mu, "-")] if ranges else [],
                                envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None)
         times = ca.vertcat(*design_times)
@@ -96,7 +97,8 @@ class GuideTubeNLP:
                 for j in range(i + 1, len(times)):
                     diff = scene.forward_mm_per_s * (times[i] - times[j])
                     rows += [(tau - diff, 0.0, None), (tau + diff, 0.0, None)]
-        return ObjectiveParts(f=tau, extra=tau, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[0.0], rows=rows)
+        return ObjectiveParts(f=tau, extra=tau, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[0.0], rows=rows,
+                              extra_units=["mm"], row_units=["mm"] * len(rows))
 
     def _tau_start(self, delta0: np.ndarray) -> np.ndarray:
         """tau at a start: the spread of the design landing times there, plus 1 mm (strictly feasible)."""

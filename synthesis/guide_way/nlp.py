@@ -92,25 +92,29 @@ class GuideNLP:
         self.problem = Problem("guide_way", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(control),
                                rules, ObjectiveParts(f=energy / fit.energy), hard_in_elastic=("reach",),
                                backoff=per_rule_backoff(lambda rule: BACKOFF.get(rule.name, 0.0)),
-                               ipopt="standard", max_iter=spec.solver.max_iter)
+                               ipopt="standard", max_iter=spec.solver.max_iter, x_units=["mm"] * (2 * n),
+                               structural_units=self._structural_units, objective_unit="")
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def _structural(self, control) -> list:
         keys = sc.spline_path(self.spec, None).keys
         v_min = self.spec.spline.min_speed * keys.length
-        rows = []
+        rows, units = [], []
         for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
             m = ca.mtimes(ca.DM(sp.basis(self.n, u)), control)
             rows += [(m[0] - kx, 0.0, 0.0), (m[1] - ky, 0.0, 0.0)]
+            units += ["mm", "mm"]
             if name in keys.tangents:
                 tx, ty = keys.tangents[name]
                 m1 = ca.mtimes(ca.DM(sp.basis(self.n, u, 1)), control)
                 rows += [((m1[0] * ty - m1[1] * tx) / keys.length, 0.0, 0.0), (m1[0] * tx + m1[1] * ty, v_min, None)]
+                units += ["", "mm"]           # the cross product relative to the path length; the speed (mm)
         fold_u = keys.u[keys.index(keys.fold)]
         m = ca.mtimes(ca.DM(sp.basis(self.n, fold_u)), control)
         m1 = ca.mtimes(ca.DM(sp.basis(self.n, fold_u, 1)), control)
         m2 = ca.mtimes(ca.DM(sp.basis(self.n, fold_u, 2)), control)
         rows.append(((ca.sumsqr(m1) + ca.dot(m, m2)) / v_min**2, 0.5, None))
+        self._structural_units = units + [""]
         return rows
 
     def solve(self, start: int, x0) -> StartOutcome:

@@ -70,14 +70,18 @@ class PickerNLP:
         rules = rules_of(spec, *(x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4")), mu)
         lb, ub = self.bounds[:, 0], self.bounds[:, 1]
         common = dict(max_iter=spec.solver.max_iter, backoff=scaled_backoff(spec.solver.backoff), ipopt="tight",
-                      hard_in_elastic=("grashof_double_crank",))
+                      hard_in_elastic=("grashof_double_crank",),
+                      # z: x_a, y_a, l2 and the slacks, l5 (mm), phi3, phi4 (deg); rows: three lengths' bounds
+                      x_units=["mm"] * 7 + ["deg"] * 2, structural_units=["mm"] * 3)
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
         shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
-        self.stages = [CompiledNLP(Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), **common),
+        self.stages = [CompiledNLP(Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), objective_unit="mm^2",
+                                           **common),
                                    elastic)]
         self.stage_names = ["least_squares"]
         if spec.objective.name == "sum_of_distances" and not elastic:
-            self.stages.append(CompiledNLP(Problem("picker_eq4", *shape, _sum_of_distances(r), **common)))
+            self.stages.append(CompiledNLP(Problem("picker_eq4", *shape, _sum_of_distances(r), objective_unit="mm",
+                                                      **common)))
             self.stage_names.append("sum_of_distances")
         # the elastic diagnosis reads the least-squares stage (the only one in elastic mode)
         self.compiled = self.stages[0]
@@ -137,4 +141,5 @@ def _sum_of_distances(r) -> ObjectiveParts:
     rows = [(r - u * ca.repmat(t.T, 2, 1), 0.0, 0.0), (ca.sum1(u * u).T, None, 1.0)]
     return ObjectiveParts(f=ca.sum1(t) / 10.0, extra=ca.vertcat(t, ca.vec(u)),
                           extra_lb=[0.0] * n + [-1.0] * (2 * n), extra_ub=[np.inf] * n + [1.0] * (2 * n),
-                          extra_init=[1.0] * n + [0.0] * (2 * n), rows=rows)
+                          extra_init=[1.0] * n + [0.0] * (2 * n), rows=rows,
+                          extra_units=["mm"] * n + [""] * (2 * n), row_units=["mm", ""])

@@ -21,6 +21,7 @@ from synthesis.core.problem import Envelope, MaxMinMargin, ObjectiveParts, Opera
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.planting.scene import PlantingScene, find_precision_points
+from synthesis.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.operating import ranges_of
 from synthesis.spec.planting import PlantingFourbarSpec
@@ -74,6 +75,8 @@ class PlantingNLP:
             max_iter=spec.solver.max_iter,
             operating=self.operating,
             envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None,
+            x_units=[*units_of(spec, self.names), *["rad"] * th.numel()],
+            structural_units=self._structural_units(), objective_unit="",
         )
         self.compiled = CompiledNLP(self.problem, elastic)
 
@@ -154,6 +157,13 @@ class PlantingNLP:
         rows.append((ca.vec(ys) - pos["P5"][1], 0.0, None))
         return rows
 
+    def _structural_units(self) -> list[str]:
+        """The unit of each row of :meth:`_structural`, in its order."""
+        units = ["mm", "mm", "mm/s", "mm", "mm", "mm", "mm/s", "mm/s"] + ["mm/s"] * 3 + ["rad"] * 6
+        if self.clearance > 0.0:
+            units += ["mm/rad", "rad", "rad", "mm"]
+        return units + ["mm"]
+
     def _objective(self, x, v) -> ObjectiveParts | MaxMinMargin:
         name = self.spec.objective.name
         if name == "nearest":          # squared change, relative to each variable's bounds
@@ -166,8 +176,10 @@ class PlantingNLP:
         grid = np.linspace(0.0, TWO_PI, m, endpoint=False).reshape(1, -1)
         acc = tip_derivatives(self.spec.arm.branch).map(m)(grid, self._arm(v))[2] * self.omega**2
         z = ca.SX.sym("peak_acc_sq")
+        # z: the peak squared acceleration in units of (omega^2 x 100 mm)^2, a plain number
         return ObjectiveParts(f=z, extra=z, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[0.0],
-                              rows=[(z - ca.vec(ca.sum1(acc**2)) / self._smooth_scale(), 0.0, None)])
+                              rows=[(z - ca.vec(ca.sum1(acc**2)) / self._smooth_scale(), 0.0, None)],
+                              extra_units=[""], row_units=[""])
 
     def _smooth_scale(self) -> float:
         return (self.omega**2 * 100.0) ** 2

@@ -52,13 +52,17 @@ class SteeringNLP:
         error = (alpha - ackermann_outer(beta, self.w_over_l)) / DEG
         t = ca.SX.sym("max_error_deg")
         objective = ObjectiveParts(f=t, extra=t, extra_lb=[0.0], extra_ub=[90.0], extra_init=[1.0],
-                                   rows=[(t - error, 0.0, None), (t + error, 0.0, None)])
+                                   rows=[(t - error, 0.0, None), (t + error, 0.0, None)], extra_units=["deg"],
+                                   row_units=["deg", "deg"])
         lbx = np.concatenate([self.bounds[:, 0], np.full(n, -0.5 * math.pi)])
         ubx = np.concatenate([self.bounds[:, 1], np.full(n, 0.5 * math.pi)])
         backoff = spec.solver.backoff
         self.problem = Problem("steering_linkage", z, lbx, ubx, structural, rules, objective,
                                backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 1e-7),
-                               ipopt="tight", max_iter=spec.solver.max_iter)
+                               ipopt="tight", max_iter=spec.solver.max_iter,
+                               # z: arm length (mm), base angle (deg), the outer wheel's angles (rad); the loop
+                               # residual is relative to the kingpin spacing squared (a plain number)
+                               x_units=["mm", "deg"] + ["rad"] * n, structural_units=[""], objective_unit="deg")
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def alpha_guess(self, r: float, gamma_deg: float) -> np.ndarray:

@@ -80,7 +80,11 @@ class TillageNLP:
         backoff = s.backoff
         self.problem = Problem("tillage_linkage", z, lbx, ubx, structural, rules, objective,
                                backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 1e-7),
-                               ipopt="tight", max_iter=s.max_iter)
+                               ipopt="tight", max_iter=s.max_iter,
+                               # z: a, b, c (mm), theta (deg), height_c (mm), four crank angles (rad); the rows
+                               # in mm are divided by the constant MM (plain numbers), the angle gaps in rad
+                               x_units=["mm", "mm", "mm", "deg", "mm"] + ["rad"] * 4,
+                               structural_units=[""] * 6 + ["rad"] * 3, objective_unit="")
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def angles_guess(self, design: dict[str, float]) -> np.ndarray:

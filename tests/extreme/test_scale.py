@@ -1,130 +1,347 @@
-"""Scale (issue 18's extreme matrix): the crank-rocker library synthesis with every length x 1e-3
-(metres instead of mm) and x 1e3, against the same problem in mm.
+"""Scale (issue 18's extreme matrix): every library problem with free variables solved with its lengths in
+metres (every length x 1e-3) and x 1e3 instead of mm, against the same problem in mm.
 
-The rules are angles and a time ratio (scale-free), the objective is the total length, so the
-optimum scales exactly.  IPOPT sees every variable at its nominal scale (synthesis.core.ipopt): a box
-of width 0.195 m or 1.95e5 is mapped to the same 195 z-units as the mm problem's 195 mm, and the
-objective to its own unit power at the start.  What is not mapped: rows in length units (the crank-
-rocker's length bounds held as rows) stay x k, and absolute margins of the kind (the crank_rocker
-start pull-in of 1 mm, the Grashof slack floor of 1e-6) do not scale, so the library's random starts
-differ in z between the three problems; the second test therefore also gives IPOPT the same eight
-starts mapped to each unit.
+The unit change is applied to the problem's NLP in the core (``ipopt.length_unit``, synthesis.core.units):
+every variable, row, bound and the objective of declared length power p is multiplied by factor**p (mm, m/s,
+mm/s^2: p = 1, mm^2: 2, deg, rad, ratios: 0) -- the same feasible set and minimiser, the numbers a user in
+metres would hand IPOPT.  Kinds carry mm constants and specs are in mm by contract, so the change is made on the
+NLP, not on the spec; the kind and the multistart see mm as always (starts, re-check, result), IPOPT sees the
+variables and the objective at their nominal scale (the kind's units) and the rows in the new unit.
+
+The measure of "the same design": max over the design's entries of |d - d_mm| / max(1, |d_mm|) (mm or deg: a
+relative difference, absolute below 1 unit).  Iterations: IPOPT's, summed over the starts compared.
 """
 
 from __future__ import annotations
 
-import math
-import re
 import statistics
-import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from synthesis.core import ipopt
+from solving import run_solve
+from synthesis import kinds
+from synthesis.core import ipopt, units
+from synthesis.core.kind import Setting
+from synthesis.core.solve import run_multistart
+from synthesis.design_info import describe
+from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parents[2]
-SYNTHESIS = ROOT / "problems" / "picker" / "cai2020_crank_rocker_synthesis.toml"
-#: the mm problem's optimum (tests/test_library.py records the total 435.13428762281086 mm)
-MM_OPTIMUM = {"l7": 54.040295283, "l8": 107.627164354, "l9": 133.466827986}
-MM_TOTAL = 435.13428762281086
-#: start 0 of the mm problem (the spec's own start): Solve_Succeeded in 8 iterations
-MM_ITERATIONS = 8
+LIBRARY = ROOT / "problems"
+FACTORS = (1e-3, 1e3)
+
+#: one problem per kind whose start 0 (the spec's own design) is cheap and converges in mm: the default suite
+#: solves it in mm, in metres and x 1e3 (about 10 s in all); every library problem and all its starts are the
+#: benchmark study below.  Left to the study: guide_way (a 20 s build), fourbar_path (start 0 of picking_arc
+#: stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of tillage_redesign
+#: takes 244 iterations in mm, and x 1e3 ends it in another local optimum, c = 393.3 against 373.1 mm: a start
+#: that far from the optimum tests the multistart, which the study compares).
+FAST = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/picker_double_crank_redesign.toml",
+        "clamp_cam/opening_cam_redesign.toml", "comb_finger/redesign_max_combing.toml",
+        "combing_chain/redesign_window_80_100.toml", "guide_tube/uniform_spacing.toml",
+        "steering/steering_redesign_27.toml", "planting_arm/redesign_from_example3.toml")
+
+#: start 0 in mm, metres and x 1e3 reaches the same design within this (relative, 1 unit floor).  IPOPT stops
+#: at a KKT error of 1e-8 .. 1e-10 on the kind's scale; in metres the rows it meets to its absolute
+#: constraint tolerance are 1e-3 (mm) .. 1e-6 (mm^2) of their mm size, so a design may move by more than the
+#: 1e-12 of rounding, but an optimum with binding rules and a regular Hessian moves far less than 1e-6
+#: (measured on the library's best designs: at most 5.4e-7, most below 1e-9)
+DESIGN_TOLERANCE = 1e-6
+#: where a design differs by more, the mm design's own accuracy decides: solved again at tol 1e-11 (TIGHT) it
+#: moves by e; two solves each stopping within e of the optimum differ by up to 2 e, so "the same" is within
+#: 3 e.  guide_way smooth_redesign: its flat spline-energy optimum moves 1.1e-5 in mm itself from IPOPT's
+#: tol 1e-8 to 1e-11 (objective 0.98726475630 -> 0.98726475310), and at tol 1e-11 the three units agree
+#: within 2.1e-9
+TIGHT = {"ipopt.tol": 1e-11, "ipopt.acceptable_tol": 1e-11}
+OWN_ERRORS = 3.0
+#: "a comparable number of iterations": IPOPT's iterations in the other unit (start 0's in the default test, the
+#: total over the starts in the library rows) at most this many times the mm count.  Not 1: IPOPT sees the same
+#: variables and objective but rows 1e-3 .. 1e-6 (or 1e3 .. 1e6) times as large, which changes its constraint
+#: scaling and barrier path (start 0 of the default problems: 0.5 .. 2.0).  Over several starts a start IPOPT
+#: finds locally infeasible ends when its restoration phase gives up, which depends on the rows' absolute
+#: size: planting envelope_redesign_from_example2 in metres runs 4 of its 32 starts to max_iter (500) where mm
+#: stops them as infeasible after 74-184 iterations (total 2.22 x), while its 7 starts converging in both units
+#: take 0.85 x the mm iterations; the ratio over starts converging in both units is in the figures too
+ITERATION_RATIO = 3.0
+#: problems whose optimum is not a point: two designs with the same objective and every rule satisfied exist,
+#: so the design is compared through the objective (the proof is test_comb_finger_optimum_is_not_a_point)
+NOT_A_POINT = {"comb_finger"}
 
 
-def scaled_spec(tmp_path: Path, k: float) -> Path:
-    """The library spec with every length (inits, bounds, the fixed frame) times k."""
-    text = SYNTHESIS.read_text()
+def library_problems() -> list[str]:
+    """Every library spec (relative to problems/) whose kind solves and that has a free design variable."""
+    out = []
+    for path in sorted(LIBRARY.rglob("*.toml")):
+        loaded = load_spec(path)
+        try:
+            kinds.solving_kind_for(loaded)
+        except SpecError:
+            continue
+        free = any(v["free"] for v in describe(loaded.model).values())
+        if loaded.kind == "guide_way":          # its free variables are the spline's control points
+            free = getattr(loaded.model, "spline", None) is not None
+        if free:
+            out.append(str(path.relative_to(LIBRARY)))
+    return out
+
+
+def solve_in(loaded, factor: float, starts: int):
+    """The kind's multistart (one worker, the spec's seed) with every length factor x its mm number."""
+    kind = kinds.solving_kind_for(loaded)
+    solving = kind.solver_side()
+    spec = loaded.model
+    # prepare (fits to published tables, laws) is data for the problem, in mm: not the NLP a unit change is about
+    setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
+    with ipopt.length_unit(factor):
+        return run_multistart(kind, setting, starts=starts, workers=1)
+
+
+def design_difference(design: dict, reference: dict) -> float:
+    return max((abs(design[k] - v) / max(1.0, abs(v)) for k, v in reference.items()
+                if isinstance(v, (int, float)) and not isinstance(v, bool)), default=0.0)
+
+
+def compare(relative: str, starts: int) -> dict:
+    """mm, x 1e-3 and x 1e3 of one library problem from its first ``starts`` starts: per factor the best
+    design's difference, the objective's relative difference, the iteration ratio, the satisfied starts and
+    each start's (iterations, return status); for a problem no start of which satisfies every rule in mm
+    (infeasible), the rules its elastic diagnosis names as conflicting, in each unit."""
+    loaded = load_spec(LIBRARY / relative)
+    runs = {f: solve_in(loaded, f, starts) for f in (1.0, *FACTORS)}
+    mm = runs[1.0]
+    mm_iterations = sum(r.outcome.iterations for r in mm.reports)
+    out = {"kind": loaded.kind, "mm_iterations": mm_iterations, "mm_satisfied": mm.best.satisfied,
+           "mm_starts": [(r.outcome.iterations, r.outcome.objective, r.outcome.return_status) for r in mm.reports]}
+    conflicting = {f: conflicting_rules(loaded, f, starts) for f in (1.0, *FACTORS)} if not mm.best.satisfied else {}
+    out["mm_own_accuracy"] = None
+    for f in FACTORS:
+        run = runs[f]
+        iterations = sum(r.outcome.iterations for r in run.reports)
+        a, b = run.best.outcome.objective, mm.best.outcome.objective
+        both = [(m.outcome.iterations, r.outcome.iterations) for m, r in zip(mm.reports, run.reports)
+                if m.outcome.success and r.outcome.success]
+        out[f] = {"design": design_difference(run.best.outcome.design, mm.best.outcome.design),
+                  "objective": abs(a - b) / max(1e-12, abs(b)), "iterations": iterations,
+                  "ratio": iterations / max(1, mm_iterations), "satisfied": run.best.satisfied,
+                  "starts": [(r.outcome.iterations, r.outcome.return_status) for r in run.reports],
+                  "converged": len(both), "mm_converged": sum(m.outcome.success for m in mm.reports),
+                  "converged_ratio": sum(r for _, r in both) / max(1, sum(m for m, _ in both))}
+        if conflicting:
+            out[f]["conflicting"] = conflicting[f]
+            out[f]["same_conflict"] = conflicting[f] == conflicting[1.0]
+    if (mm.best.satisfied and loaded.kind not in NOT_A_POINT
+            and any(out[f]["design"] >= DESIGN_TOLERANCE for f in FACTORS)):
+        out["mm_own_accuracy"] = own_accuracy(loaded, mm.best.outcome, starts)
+    return out
+
+
+def own_accuracy(loaded, best, starts: int) -> float | None:
+    """How far the mm design itself is from the optimum IPOPT's tolerance leaves it: the move of the best
+    start's design when that start is solved again in mm with tol 1e-11 (None where the kind's NLP is not in
+    its design variables alone, so the start is not a design)."""
+    import dataclasses
+
+    from synthesis.core.executor import latin_hypercube_starts
+
+    solving = kinds.solving_kind_for(loaded).solver_side()
+    setting = Setting(loaded.model, loaded.model.solver.seed, solving.prepare(loaded.model))
+    nlp = solving.build(setting, False)
+    problem = getattr(nlp, "problem", None)
+    if problem is None or problem.x.numel() != len(nlp.names):
+        return None
+    x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
+                                      setting.seed)
+    tight = dataclasses.replace(problem, ipopt_options={**problem.ipopt_options, **TIGHT})
+    out = ipopt.CompiledNLP(tight).solve(best.start, np.asarray(x_starts[best.start], float))
+    tight_design = dict(zip(nlp.names, map(float, out.x[:len(nlp.names)])))
+    return design_difference(tight_design, best.design) if out.success else None
+
+
+def conflicting_rules(loaded, factor: float, starts: int) -> list[str]:
+    """The conflicting rules of the whole solve (multistart, then the elastic diagnosis) in that unit."""
+    with ipopt.length_unit(factor):
+        result, _, _ = run_solve(loaded, starts=starts, workers=1)
+    return sorted((result.elastic or {}).get("conflicting", []))
+
+
+def same(row: dict, f: float) -> bool:
+    """The unit's solve is the mm one: the same design (the objective where the optimum is not a point; the
+    same conflicting rules where no design satisfies them all) and the same verdict."""
+    r = row[f]
+    if r["satisfied"] != row["mm_satisfied"]:
+        return False
+    if not row["mm_satisfied"]:
+        return r["same_conflict"]
+    if row["kind"] in NOT_A_POINT:
+        return r["objective"] < DESIGN_TOLERANCE
+    own = row.get("mm_own_accuracy")
+    return r["design"] < max(DESIGN_TOLERANCE, OWN_ERRORS * own if own is not None else 0.0)
+
+
+def figure(row: dict) -> str:
+    verdict = "" if row["mm_satisfied"] else "no design satisfies every rule (as in mm); "
+    own = row.get("mm_own_accuracy")
+    own_text = "" if own is None else f" (the mm design itself moves {own:.1e} at tol 1e-11)"
+    return "; ".join(f"x{f:g}: {verdict}" + (f"conflicting rules {'the same' if row[f]['same_conflict'] else 'OTHER'} "
+                                             f"({', '.join(row[f]['conflicting'])}), " if not row["mm_satisfied"] else "")
+                     + f"design within {row[f]['design']:.1e}{own_text}, objective {row[f]['objective']:.1e}, "
+                     f"iterations {row[f]['iterations']} / {row['mm_iterations']} mm = {row[f]['ratio']:.2f}, "
+                     f"over the {row[f]['converged']} starts converging in both units "
+                     f"{row[f]['converged_ratio']:.2f} ({row[f]['converged']} of {len(row[f]['starts'])} converge, "
+                     f"mm {row[f]['mm_converged']})"
+                     for f in FACTORS)
+
+
+# ------------------------------------------------------------------------------------------ the units themselves
+
+def test_length_power_table_and_an_unknown_unit():
+    """The table's powers (mm 1, mm^2 2, m/s 1, mm/s^2 1, 1/mm -1, deg 0, ratios 0) and a unit not in it
+    refused with the quantity named, not guessed."""
+    assert [units.length_power(u) for u in ("mm", "mm^2", "m/s", "mm/s^2", "1/mm", "deg", "rad", "", "-")] == \
+        [1, 2, 1, 1, -1, 0, 0, 0, 0]
+    with pytest.raises(ValueError, match="rule spacing.*'furlong'"):
+        units.length_power("furlong", "rule spacing")
+    with pytest.raises(ValueError):
+        with ipopt.length_unit(0.0):
+            pass
+
+
+def _crank_rocker_spec(tmp_path, k: float):
+    """The crank-rocker synthesis with every length of the spec x k (a physically k-times larger mechanism:
+    its rules are angles and a time ratio, so it is the mm problem in another length unit)."""
+    import re
+
+    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
     text, n = re.subn(r"(l\d+ = \{ init = )([\d.]+), bounds = \[([\d.]+), ([\d.]+)\]",
                       lambda m: f"{m.group(1)}{float(m.group(2)) * k!r}, bounds = [{float(m.group(3)) * k!r}, "
                                 f"{float(m.group(4)) * k!r}]", text)
     assert n == 3 and "l10 = 140.0" in text
     path = tmp_path / f"scaled_{k:g}.toml"
     path.write_text(text.replace("l10 = 140.0", f"l10 = {140.0 * k!r}"))
-    return path
+    return load_spec(path)
 
 
-@pytest.mark.parametrize("k", [1e-3, 1e3])
-def test_scaled_lengths_solve_to_the_scaled_design(tmp_path, k, record_property):
-    """The library's own multistart (8 starts) in metres (x 1e-3) and x 1e3: the best design / k is the mm
-    optimum within 1e-7 relative (IPOPT stops at tol 1e-9 on the objective's own scale, which in metres is
-    1e-3 of the mm one and not scaled up: measured 1.4e-8), and start 0 -- the spec's start, the same z as
-    in mm -- converges in at most 2 x the mm problem's 8 iterations."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from solving import run_solve
+@pytest.mark.parametrize("k", FACTORS)
+def test_declared_units_match_the_physics(tmp_path, k):
+    """Independent re-check of the declared units: the crank-rocker's spec with every length x k builds (by the
+    kind's own code) the NLP a length unit change must give, so at any point its rows and objective equal the
+    mm NLP's rows x factor**p of their declared units -- at 5 random points, to 1e-9 relative."""
+    from synthesis.crank_rocker.nlp import CrankRockerNLP
 
-    result, reports, _ = run_solve(load_spec(scaled_spec(tmp_path, k)), workers=1)
-    assert result.status == "optimal"
-    worst = max(abs(result.design[n] / k - v) / v for n, v in MM_OPTIMUM.items())
-    assert worst < 1e-7
-    assert result.objective["value"] / k == pytest.approx(MM_TOTAL, rel=1e-7)
-    iterations = reports[0].outcome.iterations
-    assert reports[0].outcome.success and iterations <= 2 * MM_ITERATIONS
-    record_property("figure", f"x{k:g}: best design / k within {worst:.0e} relative of the mm optimum; start 0 "
-                              f"{iterations} iterations (mm {MM_ITERATIONS}, ratio {iterations / MM_ITERATIONS:.2f}); "
-                              f"{sum(r.outcome.success for r in reports)} of {len(reports)} starts converged")
-
-
-def _same_starts(k_values, scaling: str):
-    """Eight random lengths in the mm box (seeded), pulled inside the crank-rocker region and given their
-    simulated extremes in mm, then mapped to each unit (lengths x k, angles as they are) and solved by
-    each unit's CompiledNLP: {k: [(converged to the optimum, iterations)]}."""
-    from synthesis.crank_rocker.nlp import COORDINATES, CrankRockerNLP
-
-    rng = np.random.default_rng(0)
-    out = {}
-    with ipopt.variable_scaling(scaling), tempfile.TemporaryDirectory() as folder:
-        mm = CrankRockerNLP(load_spec(scaled_spec(Path(folder), 1.0)).model)
-        starts = []
-        for _ in range(8):
-            lengths = mm.prepared_start(np.concatenate([rng.uniform(mm.bounds[:3, 0], mm.bounds[:3, 1]), [140.0]]))
-            starts.append(np.concatenate([lengths, mm.extremes_guess(lengths)]))
-        for k in k_values:
-            nlp = CrankRockerNLP(load_spec(scaled_spec(Path(folder), k)).model)
-            rows = []
-            for i, x in enumerate(starts):
-                xk = x.copy()
-                xk[:4] *= k
-                res = nlp.compiled.solve(i, COORDINATES.coordinates(xk))
-                total = float(np.sum(COORDINATES.design(res.x[:6])[:4])) / k
-                rows.append((res.success and abs(total - MM_TOTAL) < 1e-6 * MM_TOTAL, res.iterations))
-            out[k] = rows
-    return out
+    mm = CrankRockerNLP(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").model)
+    scaled = CrankRockerNLP(_crank_rocker_spec(tmp_path, k).model)
+    declared = ipopt.CompiledNLP(mm.problem, length_factor=k)
+    n_w = mm.compiled.t.w.numel()
+    u, c = declared._unit, declared._row_unit
+    assert u.tolist() == [k] * 4 + [1.0] * 2 and n_w == 6          # lengths and slacks x k, the angles not
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        w = np.concatenate([rng.uniform(20.0, 150.0, 4), rng.uniform(0.0, 6.0, 2)])
+        g_mm = np.asarray(mm.compiled.g_function(w, []), float).ravel()
+        g_k = np.asarray(scaled.compiled.g_function(w * u, []), float).ravel()
+        np.testing.assert_allclose(g_k, c * g_mm, rtol=1e-9, atol=1e-12 * np.max(np.abs(g_mm)))
+        f_mm, f_k = float(mm.compiled.f_function(w, [])), float(scaled.compiled.f_function(w * u, []))
+        assert f_k == pytest.approx(declared._objective_unit * f_mm, rel=1e-12)
 
 
-def test_the_same_starts_in_every_unit_reach_the_optimum(record_property):
-    """The same eight starts in mm, metres and x 1e3, IPOPT on the nominally scaled NLP: in each unit at
-    least as many starts reach the optimum (1e-6 relative) as in mm, and the median iterations of those
-    that do is within 2 x the mm median (the rows in length units still differ by k: 'comparable', not
-    'equal').  The figure also gives the raw variables (no nominal scaling) for comparison."""
-    ks = [1.0, 1e-3, 1e3]
-    nominal = _same_starts(ks, "nominal")
-    raw = _same_starts(ks, "none")
-    reached = {k: sum(ok for ok, _ in rows) for k, rows in nominal.items()}
-    median = {k: statistics.median(it for ok, it in rows if ok) for k, rows in nominal.items()}
-    for k in (1e-3, 1e3):
-        assert reached[k] >= reached[1.0]
-        assert median[k] <= 2 * median[1.0]
-    raw_reached = {k: sum(ok for ok, _ in rows) for k, rows in raw.items()}
-    record_property("figure", "starts reaching the optimum of 8, nominal (raw): " + ", ".join(
-        f"x{k:g} {reached[k]} ({raw_reached[k]}), median {median[k]:g} it (ratio {median[k] / median[1.0]:.2f})"
-        for k in ks))
+def test_a_robust_problem_is_refused_not_solved_wrongly():
+    """A tolerance-box problem's sensitivity variables mix units: the change is refused with the reason."""
+    loaded = load_spec(LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml")
+    with pytest.raises(ValueError, match="tolerance box"):
+        solve_in(loaded, 1e-3, 1)
 
 
-def test_nominal_scale_is_the_unit_power_of_each_box():
-    """s = 1000**floor(log10(size) / 3): the mm box of this problem is left alone, its metre and x 1e3
-    versions get 1e-3 and 1e3; an unboxed variable follows its start only once a box was scaled."""
-    sizes = [0.195, 195.0, 1.95e5, 1.0, 999.9, 1000.0, 1e-3, 0.0, math.inf]
-    assert ipopt.unit_power(sizes).tolist() == [1e-3, 1.0, 1e3, 1.0, 1.0, 1e3, 1e-3, 1.0, 1.0]
-    lb, ub = np.array([5.0, 1e-6, -4 * math.pi]), np.array([200.0, math.inf, 6 * math.pi])
-    w0 = np.array([50.0, 50.0, 1.0])
-    assert ipopt.nominal_scale(lb, ub, w0).tolist() == [1.0, 1.0, 1.0]          # mm: nothing to scale
-    k = np.array([1e-3, 1e-3, 1.0])
-    assert ipopt.nominal_scale(lb * k, ub * k, w0 * k).tolist() == [1e-3, 1e-3, 1.0]   # metres: the slack too
-    assert ipopt.nominal_scale(lb, ub, np.array([50.0, 5e4, 1.0])).tolist() == [1.0, 1e3, 1.0]
-    with pytest.raises(ValueError):
-        with ipopt.variable_scaling("log"):
-            pass
+def test_comb_finger_optimum_is_not_a_point():
+    """redesign_max_combing: two designs with the same combing angle (objective) and every rule satisfied
+    that are not the same design -- its optimum is a set, so its scale rows compare the objective."""
+    loaded = load_spec(LIBRARY / "comb_finger" / "redesign_max_combing.toml")
+    mm, metres = solve_in(loaded, 1.0, 1), solve_in(loaded, 1e-3, 1)
+    assert mm.best.satisfied and metres.best.satisfied
+    assert metres.best.outcome.objective == pytest.approx(mm.best.outcome.objective, rel=1e-8)
+    assert design_difference(metres.best.outcome.design, mm.best.outcome.design) > 1e-4
+
+
+# ------------------------------------------------------------------------------------- the scale case, start 0
+
+@pytest.mark.parametrize("relative", FAST)
+def test_start_0_in_metres_and_x1e3_reaches_the_mm_design(relative, record_property):
+    """Start 0 (the spec's design) of the problem in mm, metres (x 1e-3) and x 1e3: the same design within
+    1e-6 (relative, 1 mm / 1 deg floor; the objective within 1e-6 where the optimum is not a point) and at most
+    3 x the mm iterations."""
+    row = compare(relative, 1)
+    record_property("figure", f"{relative}: " + figure(row))
+    assert row["mm_satisfied"]
+    for f in FACTORS:
+        assert row[f]["satisfied"] and same(row, f)
+        assert row[f]["ratio"] <= ITERATION_RATIO
+
+
+# ------------------------------------------------------------------- every library problem (benchmark)
+
+#: the bench's start count (synthesis.bench_generic.FULL.starts): one row per library problem in bench.md's
+#: extreme matrix compares the best of a problem's first 4 starts (its own seed) in each unit; the full study
+#: below takes every start
+BENCH_STARTS = 4
+
+
+#: rows known to fail, with the measured cause (strict: the row fails the day it passes, so this is re-read)
+KNOWN_FAILING = {
+    "planting_arm/envelope_redesign_from_example2.toml":
+        "over its first 4 starts no start satisfies every rule in any unit, mm included (the full multistart "
+        "finds the design: 32 starts), so the rows compare elastic diagnoses, which are local solves from "
+        "different least-violating designs and name different rules; iterations 3.41x in metres: a start IPOPT "
+        "gives up on as locally infeasible in mm after 102 iterations runs to max_iter (500) in metres",
+}
+
+
+def _library_params():
+    return [pytest.param(p, id=p, marks=[pytest.mark.xfail(reason=KNOWN_FAILING[p], strict=True)]
+                         if p in KNOWN_FAILING else []) for p in library_problems()]
+
+
+@pytest.mark.benchmark
+@pytest.mark.parametrize("relative", _library_params())
+def test_library_problem_in_metres_and_x1e3(relative, record_property):
+    """One library problem, its first 4 starts in mm, metres (x 1e-3) and x 1e3: the best design within
+    1e-6 (relative, 1 unit floor; the objective where the optimum is not a point; the conflicting rules where
+    none is feasible), and the total iterations at most 3 x the mm total (the ratio over the starts converging in
+    both units is in the figure).  A problem with a tolerance box is refused (its sensitivity variables mix units)."""
+    loaded = load_spec(LIBRARY / relative)
+    if getattr(loaded.model, "tolerance", None) is not None:
+        with pytest.raises(ValueError, match="tolerance box"):
+            solve_in(loaded, 1e-3, 1)
+        record_property("figure", f"{relative}: refused (a tolerance box: its sensitivity variables mix units)")
+        return
+    row = compare(relative, min(BENCH_STARTS, loaded.model.solver.starts))
+    record_property("figure", f"{relative}, first {min(BENCH_STARTS, loaded.model.solver.starts)} starts: "
+                    + figure(row))
+    for f in FACTORS:
+        assert same(row, f)
+        assert row[f]["ratio"] <= ITERATION_RATIO
+
+
+@pytest.mark.benchmark
+def test_every_library_problem_every_start(record_property):
+    """Every library problem with free variables, all its starts (its own count and seed), mm against x 1e-3
+    and x 1e3: the best design and objective and the iterations, with the median and worst ratio, under the
+    bench row's tolerances (not part of bench.md: minutes of solves)."""
+    rows, refused = {}, []
+    for relative in library_problems():
+        loaded = load_spec(LIBRARY / relative)
+        if getattr(loaded.model, "tolerance", None) is not None:
+            refused.append(relative)
+            continue
+        rows[relative] = compare(relative, loaded.model.solver.starts)
+    lines = [f"{p}: " + figure(r) for p, r in rows.items()]
+    for key, what in (("ratio", "total"), ("converged_ratio", "over starts converging in both units")):
+        ratios = [r[f][key] for r in rows.values() for f in FACTORS]
+        lines.append(f"iteration ratio ({what}) over {len(rows)} problems x 2 units: median "
+                     f"{statistics.median(ratios):.2f}, worst {max(ratios):.2f}, best {min(ratios):.2f}")
+    lines.append(f"refused (tolerance box): {', '.join(refused)}")
+    record_property("figure", "\n".join(lines))
+    print("\n".join(lines))
+    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and r[f]["ratio"] <= ITERATION_RATIO)]
+    assert not bad, bad
