@@ -231,10 +231,12 @@ def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explai
 
 
 @pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
-                                  "guide_tube/uniform_spacing_mu_envelope.toml"])
+                                  "guide_tube/uniform_spacing_mu_envelope.toml",
+                                  "planting_arm/redesign_from_example1.toml", "guide_tube/uniform_spacing.toml"])
 def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
-    """Issue 20: on an envelope spec, every rule's derivative w.r.t. every operating condition the NLP is written in
-    (planting: forward and crank speed; guide tube: mu), each rule at its scenario's values, equals central
+    """Issue 20: on an envelope spec and on a nominal one (no range: the analysis declares the conditions as
+    symbols all the same), every rule's derivative w.r.t. every operating condition the kind reads (planting:
+    forward and crank speed; guide tube: mu and forward speed), each rule at its scenario's values, equals central
     differences (1e-6 relative) of the kind's float re-check at that operating point."""
     from synthesis.spec.operating import at_operating
     loaded = load_spec(LIBRARY / spec)
@@ -243,7 +245,7 @@ def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     lin = linearise(kind, loaded.model, kinds.checker(loaded.kind)(loaded).design)
     rows = stack_up(lin, np.zeros(lin.dmap.n))
     names = lin.operating[0]
-    assert set(names) == ({"forward_speed", "crank_speed"} if "planting" in spec else {"mu"})
+    assert set(names) == ({"forward_speed", "crank_speed"} if "planting" in spec else {"mu", "forward_speed"})
     compared = moving = 0
     for row in rows:
         point, rule = row["operating_point"], row["name"].split("@")[0]
@@ -275,7 +277,9 @@ def test_tolerance_cli_on_an_envelope_spec_reports_operating_sensitivities(tmp_p
     assert run.returncode in (0, 1), run.stderr
     folder = tmp_path / "uniform_spacing_mu_envelope-tolerance"
     facts = strict_json(folder / "result.json")["facts"]["tolerance"]
-    assert list(facts["operating"]) == ["mu"] and facts["operating"]["mu"]["nominal"] == pytest.approx(0.60595006)
+    assert list(facts["operating"]) == ["mu", "forward_speed"]
+    assert facts["operating"]["mu"]["nominal"] == pytest.approx(0.60595006)
+    assert facts["operating"]["forward_speed"] == {"unit": "m/s", "nominal": 0.5}
     scenario = [r for r in facts["stack_up"] if "@mu=" in r["name"]]
     assert scenario and all(r["operating_point"]["mu"] != facts["operating"]["mu"]["nominal"] for r in scenario)
     assert any(abs(r["operating_sensitivity"]["mu"]) > 0 for r in scenario)
@@ -307,3 +311,53 @@ def test_tolerance_at_a_design_on_a_rule_s_limit_writes_finite_json(tmp_path):
     data = strict_json(tmp_path / "picking_arc-tolerance" / "result.json")
     assert data["not_finite"] and all(p.startswith("facts.tolerance.") for p in data["not_finite"])
     assert "the nominal margin is 0" in (tmp_path / "picking_arc-tolerance" / "report.md").read_text()
+
+
+def test_nominal_planting_analysis_has_the_analytic_operating_derivatives():
+    """A nominal planting spec (no range) gets d rule / d operating condition by AD all the same, and they are the
+    analytic ones: the tip's velocity scales with the crank speed n (v = omega x dpos/dtheta, omega = 2 pi n / 60),
+    so d P2 speed / dn = v / n; its accelerations with the square, d a / dn = 2 a / n; the value of a rule that reads
+    no speed (a distance along the path, the Grashof margin) has derivative 0; the entry angle and P4P6 (the
+    furrow) move with the forward speed."""
+    loaded = load_spec(LIBRARY / "planting_arm/redesign_from_example1.toml")
+    kind = kinds.solving_kind(loaded.kind)
+    lin = linearise(kind, loaded.model, kinds.checker(loaded.kind)(loaded).design)
+    assert lin.operating[0] == ("forward_speed", "crank_speed")
+    assert lin.operating[3] == {"forward_speed": 0.6, "crank_speed": 250.0}
+    rows = {r["name"]: r for r in stack_up(lin, np.zeros(lin.dmap.n))}
+    n = 250.0
+    p2 = rows["p2_speed"]
+    assert p2["operating_sensitivity"]["crank_speed"] == pytest.approx(p2["value"] / n, rel=1e-9)
+    assert p2["operating_sensitivity"]["crank_speed"] == pytest.approx(0.0073390, abs=1e-7)     # m/s per r/min
+    assert p2["operating_sensitivity"]["forward_speed"] == 0.0
+    for accel in ("accel_hold", "accel_throw", "accel_release"):
+        row = rows[accel]
+        assert row["operating_sensitivity"]["crank_speed"] == pytest.approx(2.0 * row["value"] / n, rel=1e-9), accel
+    assert rows["accel_hold"]["operating_sensitivity"]["crank_speed"] == pytest.approx(45.9168, abs=1e-4)
+    for still in ("p1p3_distance", "p2p3_distance", "planting_depth", "grashof_crank_rocker", "transmission_angle_min"):
+        assert rows[still]["operating_sensitivity"] == {"forward_speed": 0.0, "crank_speed": 0.0}, still
+    # the entry angle flattens and the furrow (P4P6) lengthens as the tractor goes faster (per m/s)
+    assert rows["entry_angle"]["operating_sensitivity"]["forward_speed"] == pytest.approx(-47.8953, abs=1e-3)
+    assert rows["p4p6_distance"]["operating_sensitivity"]["forward_speed"] == pytest.approx(60.2068, abs=1e-3)
+
+
+@pytest.mark.parametrize("spec, objective, iterations", [("planting_arm/redesign_from_example1.toml", 0.5611548410639178, 18),
+                                                         ("guide_tube/uniform_spacing.toml", 8.758766813306126, 13)])
+def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, objective, iterations):
+    """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
+    spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start
+    ends at the objective and iteration count measured on main before the change, to the bit.  The analysis's
+    symbolic build is the same problem (its conditions resolved at their nominal values): same iterations, the
+    objective to rounding."""
+    from synthesis.core.problem import operating_as_symbols
+    loaded = load_spec(LIBRARY / spec)
+    solving = kinds.solving_kind(loaded.kind).solver_side()
+    setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
+    nominal = solving.build(setting, False)
+    assert nominal.problem.operating_source is None
+    with operating_as_symbols():
+        symbolic = solving.build(setting, False)
+    assert symbolic.problem.operating_source is not None
+    solved, again = nominal.solve(0, nominal.init), symbolic.solve(0, symbolic.init)
+    assert solved.success and (solved.objective, solved.iterations) == (objective, iterations)
+    assert again.iterations == iterations and again.objective == pytest.approx(objective, rel=1e-13)

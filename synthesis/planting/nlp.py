@@ -17,7 +17,8 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, scaled_backoff
+from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+                                    scaled_backoff)
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.planting.scene import PlantingScene, find_precision_points
@@ -43,11 +44,13 @@ class PlantingNLP:
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
         # an operating condition given as a range is a symbol (the core holds the rules that read it once per
-        # sampled value: an envelope); with any range, the other condition is a symbol too, resolved at its number
-        # (so `agrisynth tolerance` has every rule's derivative w.r.t. both); without ranges both stay numbers
+        # sampled value: an envelope); with any range, or when the sensitivity analysis asks, both conditions are
+        # symbols, resolved at their numbers where not sampled (so `agrisynth tolerance` has every rule's derivative
+        # w.r.t. both); otherwise, as a solve of a nominal spec sees them, both stay numbers
         ranges = ranges_of(spec)
+        symbolic = bool(ranges) or operating_symbols_wanted()
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
-                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if ranges]
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if symbolic]
         op = {o.name: o.symbol for o in self.operating}
         self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega

@@ -22,6 +22,7 @@ import numpy as np
 
 from synthesis.core.kind import Kind, Setting
 from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import operating_as_symbols
 from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
@@ -54,7 +55,9 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     solving = kind.solver_side()
     aspec = fine(freed(spec))
     data = solving.prepare(aspec)
-    with without_ipopt():
+    # every operating condition a symbol (resolved at its nominal value, the rules' values unchanged): the
+    # derivatives w.r.t. forward speed, crank speed, friction, ... of a nominal spec too
+    with without_ipopt(), operating_as_symbols():
         nlp = solving.build(Setting(aspec, seed, data), False)
     dmap = design_map(kind.name, nlp, spec)
     missing = [k for k in dmap.keys if k not in design]
