@@ -24,7 +24,6 @@ LIBRARY = Path(__file__).resolve().parents[1] / "problems"
 
 #: rules whose NLP value cannot be compared with the re-check's, and why
 NOT_COMPARABLE = {
-    "comb_finger": {"finger_clear_of_other_unit"},
     # free timing: the crank angle of each target is a decision variable of the NLP, held where it is by the
     # sensitivity (no structural row pins it), while the re-check finds it from the design (closest approach
     # of the coupler point): the re-check's derivative has the extra term d theta / d design
@@ -45,9 +44,14 @@ AS_NLP = {
     # the pressure angle in deg on floats, (velocity along the crank)^2 = cos^2 of it in the NLP
     ("guide_way", "pressure_angle"): lambda v, d, spec: math.cos(math.radians(v)) ** 2,
 }
-#: vector rules whose worst sample is a tie at this design (the dwell sits exactly on the timing window: both
-#: margins 0, their minimum has no derivative there): compared sample by sample instead
-PER_SAMPLE = {("clamp_cam", "timing_hold_near[0]"), ("clamp_cam", "timing_hold_far[0]")}
+#: vector rules compared sample by sample instead of at their worst sample, with the stride of the analysis's
+#: samples in the re-check's.  clamp_cam: the worst sample is a tie at this design (the dwell sits exactly on the
+#: timing window: both margins 0, their minimum has no derivative there).  comb_finger: the analysis samples the
+#: finger's turn at 10 x [solver] turn_samples = 720 angles, the re-check at 3600 (CHECK_TURN_SAMPLES), so their
+#: worst samples are different angles whose derivatives differ by ~6e-4 relative (neither is the closed-form
+#: minimum's); every 5th re-check angle is an analysis angle, and there the two agree sample by sample
+PER_SAMPLE = {("clamp_cam", "timing_hold_near[0]"): 1, ("clamp_cam", "timing_hold_far[0]"): 1,
+              ("comb_finger", "finger_clear_of_other_unit"): 5}
 KINDS = ["planting_fourbar", "crank_rocker", "picker_double_crank", "steering_linkage", "tillage_linkage",
          "combing_chain", "comb_finger", "clamp_cam", "fourbar_path", "guide_tube",
          pytest.param("guide_way", marks=pytest.mark.benchmark)]     # 48 control-point coordinates: ~1 min
@@ -95,9 +99,11 @@ def test_ad_sensitivities_equal_central_differences_of_the_recheck(name):
             grad = max(abs(v) for v in row["sensitivity"].values())
             tol = LOOSER.get((name, rule), 1e-6) * max(grad, 1e-3)
             if (name, rule) in PER_SAMPLE:
+                stride = PER_SAMPLE[(name, rule)]
                 values, J = lin.rule_jacobian(index[rule])
-                cd = (np.asarray(up[rule].expr, float) - np.asarray(dn[rule].expr, float)) / (2 * h)
-                assert np.allclose(values, np.asarray(_rules(solving, setting, lin.design)[rule].expr, float), atol=1e-9)
+                cd = (np.asarray(up[rule].expr, float) - np.asarray(dn[rule].expr, float))[::stride] / (2 * h)
+                at = np.asarray(_rules(solving, setting, lin.design)[rule].expr, float)[::stride]
+                assert values.shape == at.shape and np.allclose(values, at, atol=1e-9)
                 assert np.all(np.abs(J[:, j] - cd) <= tol), (rule, key, J[:, j], cd)
             elif (name, rule) in AS_NLP:
                 as_nlp = AS_NLP[(name, rule)]

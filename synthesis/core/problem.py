@@ -177,11 +177,18 @@ class Problem:
     envelope: Envelope | None = None
     #: set when the operating conditions are resolved (sensitivities w.r.t. them: :mod:`synthesis.core.sensitivity`)
     operating_source: OperatingSource | None = None
+    #: indices of structural inequality rows a tolerance box holds at their linearised worst case, as it holds a
+    #: rule's rows (a clearance the kind keeps without reporting it as a rule); elsewhere they are as written
+    robust_structural: Sequence[int] = ()
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)
         self.ubx = np.asarray(self.ubx, dtype=float)
         self.rules = list(self.rules)
+        bad = [i for i in self.robust_structural if not 0 <= i < len(self.structural)
+               or (self.structural[i][1] is not None and self.structural[i][1] == self.structural[i][2])]
+        if bad:
+            raise ValueError(f"problem {self.name}: robust_structural {bad} are not structural inequality rows")
         if self.operating:
             self._resolve_operating()
         names = [r.name for r in self.rules]

@@ -63,12 +63,16 @@ class PlantingNLP:
         p = self._arm(v)
         tip = tip_derivatives(spec.arm.branch)
         states = {n: self._state(tip, theta[n], p) for n in POINTS}
+        # with a clearance, its row (the last of the structural rows about the top) is held at its linearised worst
+        # case in a tolerance box, like a rule: P1 stays a crossing for every design in the box, not the nominal only
+        structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
             lbx=np.concatenate([self.bounds[:, 0], np.full(th.numel(), THETA_BOUNDS[0])]),
             ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
-            structural=self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None),
+            structural=structural,
+            robust_structural=(self._clearance_row,) if self.clearance > 0.0 else (),
             rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
             objective=self._objective(x, v),
             backoff=scaled_backoff(spec.solver.backoff),
@@ -151,6 +155,7 @@ class PlantingNLP:
             rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
                      (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
                      (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
+            self._clearance_row = len(rows) - 1
         n = spec.solver.samples_per_turn
         samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]
