@@ -146,6 +146,26 @@ def _toy(tolerance, aux: bool):
                    ObjectiveParts(f=x[0]), tolerance=tolerance)
 
 
+def test_robust_structural_rows_are_held_at_their_worst_case_only_in_a_tolerance_box():
+    """A structural inequality row named in robust_structural (planting's seedling clearance) is held like a rule's
+    row in a tolerance box: min d s.t. a = 2 d (pins a), a^2 >= 4 (structural) -> 4 d^2 - 8 d tol >= 4, d = tol +
+    sqrt(1 + tol^2); without the box, or when the row is not named, d = 1."""
+    def toy(tolerance, held):
+        x = ca.SX.sym("x", 2)
+        d, a = x[0], x[1]
+        return Problem("toy_structural", x, [0.0, -10.0], [10.0, 10.0], [(a - 2 * d, 0.0, 0.0), (a * a, 4.0, None)],
+                       [Rule("cap", d, None, 9.0, "-", 1.0)], ObjectiveParts(f=d), tolerance=tolerance,
+                       robust_structural=held)
+    x0 = np.array([2.0, 4.0])
+    box = Tolerance(1, np.array([0.1]))
+    for tolerance, held, expected in ((None, (1,), 1.0), (box, (), 1.0), (box, (1,), 0.1 + math.sqrt(1.01))):
+        nlp = CompiledNLP(toy(tolerance, held))
+        out = nlp.solve(0, x0, nlp.t.full_extra(None, x0))
+        assert out.success and out.x[0] == pytest.approx(expected, abs=1e-6), (tolerance, held)
+    with pytest.raises(ValueError, match="robust_structural \\[0\\] are not structural inequality rows"):
+        toy(None, (0,))
+
+
 @pytest.mark.parametrize("aux", [False, True])
 def test_robust_transcription_holds_the_linearised_worst_case(aux):
     """Robust: d^2 - 2 d tol >= 1 -> d = tol + sqrt(1 + tol^2); with a = 2 d: 4 d^2 - 8 d tol >= 4, the same d."""
