@@ -256,14 +256,21 @@ def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explai
         assert abs(row["linear_worst_margin"] - row["sampled_worst_margin"]) < 0.01 * row["recheck_margin"]
 
 
+#: the operating conditions each kind declares to the sensitivity analysis
+OPERATING = {"planting_fourbar": {"forward_speed", "crank_speed"}, "guide_tube": {"mu", "forward_speed"},
+             "tillage_linkage": {"crank_speed", "forward_speed"}}
+
+
 @pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
                                   "guide_tube/uniform_spacing_mu_envelope.toml",
-                                  "planting_arm/redesign_from_example1.toml", "guide_tube/uniform_spacing.toml"])
+                                  "planting_arm/redesign_from_example1.toml", "guide_tube/uniform_spacing.toml",
+                                  "tillage/tillage_redesign.toml"])
 def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     """Issue 20: on an envelope spec and on a nominal one (no range: the analysis declares the conditions as
     symbols all the same), every rule's derivative w.r.t. every operating condition the kind reads (planting:
-    forward and crank speed; guide tube: mu and forward speed), each rule at its scenario's values, equals central
-    differences (1e-6 relative) of the kind's float re-check at that operating point."""
+    forward and crank speed; guide tube: mu and forward speed; tillage: crank and forward speed), each rule at its
+    scenario's values, equals central differences (1e-6 relative) of the kind's float re-check at that operating
+    point."""
     from synthesis.spec.operating import at_operating
     loaded = load_spec(LIBRARY / spec)
     kind = kinds.solving_kind(loaded.kind)
@@ -271,7 +278,7 @@ def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     lin = linearise(kind, loaded.model, kinds.checker(loaded.kind)(loaded).design)
     rows = stack_up(lin, np.zeros(lin.dmap.n))
     names = lin.operating[0]
-    assert set(names) == ({"forward_speed", "crank_speed"} if "planting" in spec else {"mu", "forward_speed"})
+    assert set(names) == OPERATING[loaded.kind]
     compared = moving = 0
     for row in rows:
         point, rule = row["operating_point"], row["name"].split("@")[0]
