@@ -394,3 +394,56 @@ def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(sp
     solved, again = nominal.solve(0, nominal.init), symbolic.solve(0, symbolic.init)
     assert solved.success and (solved.objective, solved.iterations) == (objective, iterations)
     assert again.iterations == iterations and again.objective == pytest.approx(objective, rel=1e-13)
+
+
+def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_box():
+    """robust_redesign_from_example3 (2 mm clearance, +-0.2 mm / +-0.3 deg): the robust NLP's clearance row is the
+    loop top's height above the seedling-top line minus sum_j |d height / d d_j| tol_j, its lower bound the clearance.
+    Checked at the spec's start (auxiliaries pinned; the epigraph variables at their start 1.01 |dg/dd| + 1e-9)
+    against an independent evaluation: the top found by a golden-section search of the claw tip's height over the
+    crank angle (kinematics only), its derivatives by central differences of that maximum.  The nominal NLP's row
+    is the plain height (held at the nominal design, as before)."""
+    from synthesis.core.sensitivity import Sensitivity
+    from synthesis.kinematics.planting_arm import tip_derivatives
+    from synthesis.tolerance.design import without_ipopt
+
+    loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example3.toml")
+    spec = loaded.model
+    rows = {}
+    for label, kind in (("robust", kinds.solving_kind_for(loaded)), ("nominal", kinds.solving_kind(loaded.kind))):
+        solving = kind.solver_side()
+        with without_ipopt():
+            nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
+        n, t = len(nlp.names), nlp.compiled.t
+        (k,) = nlp.problem.robust_structural
+        x = Sensitivity(nlp.problem, n).pin(np.concatenate([nlp.init, nlp.theta_guess(dict(zip(nlp.names, nlp.init)))]))
+        g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
+        rows[label] = (g, t.lbg, x)
+    x = rows["robust"][2]
+    tip = tip_derivatives(spec.arm.branch)
+    names = list(spec.variables())
+
+    def top_height(d):
+        v = dict(zip(names, d))
+        p = [v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], math.radians(v["zeta"]), math.radians(v["phi"])]
+        tilt = math.radians(v["seedbed_tilt"])
+
+        def height(theta):
+            q = np.asarray(tip(theta, p)[0], float).ravel()
+            return -math.sin(tilt) * (q[0] - v["seedbed_x"]) + math.cos(tilt) * (q[1] - v["seedbed_y"])
+        lo, hi, r = x[-1] - 0.2, x[-1] + 0.2, (math.sqrt(5.0) - 1.0) / 2.0
+        for _ in range(100):
+            a, b = hi - r * (hi - lo), lo + r * (hi - lo)
+            lo, hi = (lo, b) if height(a) > height(b) else (a, hi)
+        return height(0.5 * (lo + hi)) - spec.seedbed.seedling_height
+
+    d = x[:len(names)]
+    box = np.array([0.2] * 5 + [0.3] * 2 + [0.2, 0.2, 0.3])      # l1-l5 mm, zeta phi deg, tray x y mm, tilt deg
+    slope = np.array([(top_height(d + e) - top_height(d - e)) / 2e-4 for e in np.eye(len(names)) * 1e-4])
+    above = top_height(d)
+    worst = above - np.sum((1.01 * np.abs(slope) + 1e-9) * box)
+    g, lbg, _ = rows["robust"]
+    assert lbg[k] == 2.0 and g[k] == pytest.approx(worst, abs=1e-7)
+    assert worst < above - 3.0          # the box costs the top about 4.45 mm of height here: a real difference
+    g, lbg, _ = rows["nominal"]
+    assert lbg[k] == 2.0 and g[k] == pytest.approx(above, abs=1e-7)
