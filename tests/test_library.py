@@ -63,7 +63,7 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.29332215894486)},
     "planting_arm/robust_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6091572046350713)},
     "planting_arm/robust_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.0284017444069604)},
-    "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657664866)},
+    "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657649764)},
     "planting_arm/robust_redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.32770599356294744)},
     "planting_arm/taiwan_example1.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example2.toml": {"check": 1, "solve": ("exit", 2)},
