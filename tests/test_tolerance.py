@@ -375,7 +375,8 @@ def test_nominal_planting_analysis_has_the_analytic_operating_derivatives():
 
 
 @pytest.mark.parametrize("spec, objective, iterations", [("planting_arm/redesign_from_example1.toml", 0.5611548410639178, 18),
-                                                         ("guide_tube/uniform_spacing.toml", 8.758766813306126, 13)])
+                                                         ("guide_tube/uniform_spacing.toml", 8.758766813306126, 13),
+                                                         ("tillage/tillage_redesign.toml", 373.06012290551644, 244)])
 def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, objective, iterations):
     """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
     spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start

@@ -51,17 +51,18 @@ class GuideTubeNLP:
         # has no variables at all when every angle is fixed)
         self.spec, self.elastic = spec, elastic
         # mu given as a range (friction.mu = {range, samples}) is a symbol: the core holds every rule reading it
-        # once per sampled mu (an envelope).  With a range, or when the sensitivity analysis asks, mu and the forward
-        # speed are symbols resolved at their numbers where not sampled (every rule's derivative w.r.t. both);
-        # otherwise, as a solve of a nominal spec sees them, numbers
+        # once per sampled mu (an envelope).  When the sensitivity analysis asks, mu and the forward speed are symbols
+        # resolved at their numbers where not sampled (every rule's derivative w.r.t. both); otherwise, as a solve
+        # sees them, numbers (but a mu range)
         ranges = ranges_of(spec)
-        symbolic = bool(ranges) or operating_symbols_wanted()
+        wanted = operating_symbols_wanted()
+        symbolic = bool(ranges) or wanted
         nominal_mu, nominal_speed = scene.physics.mu, spec.rows.forward_speed
         self.mu = ca.SX.sym("mu") if symbolic else nominal_mu
-        forward = ca.SX.sym("forward_speed") if symbolic else None
+        forward = ca.SX.sym("forward_speed") if wanted else None
         self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu), forward_speed=forward)
-        self.operating = ([Operating("mu", self.mu, nominal_mu, "-"), Operating("forward_speed", forward, nominal_speed,
-                                                                                "m/s")] if symbolic else [])
+        self.operating = ([Operating("mu", self.mu, nominal_mu, "-")] if symbolic else []) + (
+            [Operating("forward_speed", forward, nominal_speed, "m/s")] if wanted else [])
         self.names = [t.name for t in free]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
