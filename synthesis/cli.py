@@ -491,6 +491,9 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
 
     RESULT: a run folder (its solved.toml is the design); SPEC: the spec's given design.  Tolerances
     from --length/--angle, else the spec's [tolerance] table.  Writes OUT/<name>-tolerance/.
+    Derivatives w.r.t. the operating conditions (forward speed, crank speed, friction, ...) are always
+    listed; with an operating range each Monte-Carlo sample is re-checked at every point of the range's
+    re-check grid and passes only if every rule holds at all of them.
     Exit 0 when every Monte-Carlo sample passes every rule, 1 otherwise.
     """
     from synthesis import kinds
@@ -516,6 +519,12 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     samples = samples if samples is not None else (tol.samples if tol else 1000)
     seed = seed if seed is not None else (tol.seed if tol else 0)
     design = kinds.checker(loaded.kind)(loaded).design
+    from synthesis.tolerance.envelope import grid_of
+
+    points = len(grid_of(spec))
+    if points > 1:        # an envelope: every sample is re-checked at every point of the range's grid
+        err_console.print(f"Monte-Carlo: {samples} samples, each re-checked at the nominal operating point and at "
+                          f"{points} points of the operating range ({samples * (points + 1)} re-checks)")
     facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
                     seed=seed)
     name = spec.name.removesuffix("_solved")

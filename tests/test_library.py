@@ -62,8 +62,8 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6391376807772884)},
     "planting_arm/redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.29332215894486)},
     "planting_arm/robust_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6091572046350713)},
-    "planting_arm/robust_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.0211929345487722)},
-    "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657664866)},
+    "planting_arm/robust_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.0284017444069604)},
+    "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657649764)},
     "planting_arm/robust_redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.32770599356294744)},
     "planting_arm/taiwan_example1.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example2.toml": {"check": 1, "solve": ("exit", 2)},
@@ -84,7 +84,7 @@ EXPECTED: dict[str, dict] = {
 SPECS = sorted(str(p.relative_to(LIBRARY)) for p in LIBRARY.rglob("*.toml"))
 #: specs whose solve takes more than a few seconds: run with the studies (`pytest -m benchmark`)
 STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-robust, about 90 s
-           "planting_arm/robust_redesign_from_example2.toml",    # tolerance-robust, 32 starts, about 130 s on 2 workers
+           "planting_arm/robust_redesign_from_example2.toml",    # tolerance-robust, 32 starts, 900 s on 2 workers of a busy machine
            "planting_arm/robust_redesign_from_example3.toml",    # tolerance-robust, about 80 s
            "planting_arm/robust_redesign_from_example4.toml",    # tolerance-robust, about 100 s on one worker
            "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
 import casadi as ca
 import numpy as np
@@ -120,6 +122,27 @@ class Envelope:
         return [dict(zip(names, combo)) for combo in itertools.product(*(self.samples[n] for n in names))]
 
 
+_operating_as_symbols: ContextVar[bool] = ContextVar("agrisynth_operating_as_symbols", default=False)
+
+
+@contextmanager
+def operating_as_symbols() -> Iterator[None]:
+    """Kinds building a problem inside declare every operating condition they read as an :class:`Operating`
+    symbol, even when no envelope samples it (the problem resolves it at its nominal value): the sensitivity
+    analysis then has every rule's derivative w.r.t. it.  Outside, a kind with no envelope writes the conditions
+    as numbers, so the NLP a solve sees is the one it always was."""
+    token = _operating_as_symbols.set(True)
+    try:
+        yield
+    finally:
+        _operating_as_symbols.reset(token)
+
+
+def operating_symbols_wanted() -> bool:
+    """Whether a kind should declare its operating conditions as symbols (see :func:`operating_as_symbols`)."""
+    return _operating_as_symbols.get()
+
+
 def scenario_label(values: dict[str, float]) -> str:
     """``forward_speed=0.583`` (several conditions joined by ``,``): the suffix of a rule held at a scenario."""
     return ",".join(f"{n}={v:.4g}" for n, v in values.items())
@@ -162,11 +185,18 @@ class Problem:
     x_units: Sequence[str] | None = None
     structural_units: Sequence[str] | None = None
     objective_unit: str | None = None
+    #: indices of structural inequality rows a tolerance box holds at their linearised worst case, as it holds a
+    #: rule's rows (a clearance the kind keeps without reporting it as a rule); elsewhere they are as written
+    robust_structural: Sequence[int] = ()
 
     def __post_init__(self) -> None:
         self.lbx = np.asarray(self.lbx, dtype=float)
         self.ubx = np.asarray(self.ubx, dtype=float)
         self.rules = list(self.rules)
+        bad = [i for i in self.robust_structural if not 0 <= i < len(self.structural)
+               or (self.structural[i][1] is not None and self.structural[i][1] == self.structural[i][2])]
+        if bad:
+            raise ValueError(f"problem {self.name}: robust_structural {bad} are not structural inequality rows")
         if self.operating:
             self._resolve_operating()
         names = [r.name for r in self.rules]

@@ -73,6 +73,10 @@ class _Robust:
 
     def hold(self, rule, rows: Sequence[Row]) -> list[Row]:
         """``rows`` of ``rule`` held at their linearised worst case (equalities kept as they are)."""
+        return self.hold_rows(rule.name, rows)
+
+    def hold_rows(self, name: str, rows: Sequence[Row]) -> list[Row]:
+        """``rows`` (of the rule or structural row ``name``) held at their linearised worst case."""
         out: list[Row] = []
         for expr, lb, ub in rows:
             if (lb is not None and ub is not None and lb == ub) or not self.active:
@@ -80,7 +84,7 @@ class _Robust:
                 continue
             e = ca.vec(ca.SX(expr))
             D = total_jacobian(e, self.problem, self.n, self.S, self.J_inv)[:, self.active]
-            T = ca.SX.sym(f"abs_sensitivity_{rule.name}", e.numel(), len(self.active))
+            T = ca.SX.sym(f"abs_sensitivity_{name}", e.numel(), len(self.active))
             self.extra.append(ca.vec(T))
             self.lb += [0.0] * T.numel()
             self.derivs.append(ca.vec(D))
@@ -202,7 +206,9 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
     hold = (lambda rule, rows: rows) if robust is None else robust.hold
     hard = [elastic and rule.name in problem.hard_in_elastic for rule in problem.rules]
     g = _Rows()
-    g.add(problem.structural)
+    held = set(problem.robust_structural) if robust is not None else set()
+    for i, row in enumerate(problem.structural):       # in their order: a nominal NLP's rows are as they were
+        g.add(robust.hold_rows(f"structural_{i}", [row]) if i in held else [row])
     if elastic:
         slack = ca.SX.sym("slack", len(problem.rules))
         for k, rule in enumerate(problem.rules):

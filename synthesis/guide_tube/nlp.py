@@ -25,7 +25,8 @@ from synthesis.guide_tube.drop import DropPhases, Physics, Tube, drop_phases
 from synthesis.guide_tube.scene import GuideTubeScene
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import Envelope, ObjectiveParts, Operating, Problem, scaled_backoff
+from synthesis.core.problem import (Envelope, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+                                    scaled_backoff)
 from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.guide_tube import GuideTubeSpec
 from synthesis.spec.operating import ranges_of
@@ -50,11 +51,18 @@ class GuideTubeNLP:
         # has no variables at all when every angle is fixed)
         self.spec, self.elastic = spec, elastic
         # mu given as a range (friction.mu = {range, samples}) is a symbol: the core holds every rule reading it
-        # once per sampled mu (an envelope); a number stays a number
+        # once per sampled mu (an envelope).  When the sensitivity analysis asks, mu and the forward speed are symbols
+        # resolved at their numbers where not sampled (every rule's derivative w.r.t. both); otherwise, as a solve
+        # sees them, numbers (but a mu range)
         ranges = ranges_of(spec)
-        nominal_mu = scene.physics.mu
-        self.mu = ca.SX.sym("mu") if "mu" in ranges else nominal_mu
-        self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu))
+        wanted = operating_symbols_wanted()
+        symbolic = bool(ranges) or wanted
+        nominal_mu, nominal_speed = scene.physics.mu, spec.rows.forward_speed
+        self.mu = ca.SX.sym("mu") if symbolic else nominal_mu
+        forward = ca.SX.sym("forward_speed") if wanted else None
+        self.scene = scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=self.mu), forward_speed=forward)
+        self.operating = ([Operating("mu", self.mu, nominal_mu, "-")] if symbolic else []) + (
+            [Operating("forward_speed", forward, nominal_speed, "m/s")] if wanted else [])
         self.names = [t.name for t in free]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
@@ -71,11 +79,11 @@ class GuideTubeNLP:
                                self._objective(delta, angles, design_times, uniform), max_iter=spec.solver.max_iter,
                                backoff=scaled_backoff(spec.solver.backoff), ipopt="precise",
                                x_units=["deg"] * len(free), objective_unit=OBJECTIVE_UNITS[spec.objective.name],
-                               operating=[Operating("mu", self.mu, nominal_mu, "-")] if ranges else [],
+                               operating=self.operating,
                                envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None)
         times = ca.vertcat(*design_times)
         self._times = ca.Function("design_times", [delta], [ca.substitute(times, self.mu, ca.SX(nominal_mu))
-                                                            if ranges else times])
+                                                            if symbolic else times])
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
 
@@ -105,7 +113,7 @@ class GuideTubeNLP:
         if self.elastic or self.spec.objective.name != "uniform":
             return None
         t = np.array(self._times(delta0)).ravel()
-        return np.array([self.scene.forward_mm_per_s * (t.max() - t.min()) + 1.0])
+        return np.array([self.spec.rows.forward_speed * 1000.0 * (t.max() - t.min()) + 1.0])
 
     def design(self, delta: np.ndarray) -> dict[str, float]:
         values = dict(zip(self.names, map(float, delta)))

@@ -27,6 +27,8 @@ class GuideTubeScene:
     tubes: tuple[TubeSection, ...]
     rows: RowsSection
     calibration: MuCalibration | None
+    #: the forward speed (m/s) as a CasADi symbol when the NLP declares it an operating condition; None: rows'
+    forward_speed: object = None
 
     @classmethod
     def from_spec(cls, spec: GuideTubeSpec) -> "GuideTubeScene":
@@ -59,7 +61,7 @@ class GuideTubeScene:
 
     @property
     def forward_mm_per_s(self) -> float:
-        return self.rows.forward_speed * 1000.0
+        return (self.rows.forward_speed if self.forward_speed is None else self.forward_speed) * 1000.0
 
 
 def calibration_failure(c: MuCalibration) -> str:

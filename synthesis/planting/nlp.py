@@ -17,7 +17,8 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, scaled_backoff
+from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+                                    scaled_backoff)
 from synthesis.kinematics.planting_arm import link_function, tip_derivatives
 from synthesis.planting.rules import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.planting.scene import PlantingScene, find_precision_points
@@ -44,11 +45,13 @@ class PlantingNLP:
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         self.omega = spec.operation.crank_speed * TWO_PI / 60.0
         # an operating condition given as a range is a symbol (the core holds the rules that read it once per
-        # sampled value: an envelope); with any range, the other condition is a symbol too, resolved at its number
-        # (so `agrisynth tolerance` has every rule's derivative w.r.t. both); without ranges both stay numbers
+        # sampled value: an envelope); with any range, or when the sensitivity analysis asks, both conditions are
+        # symbols, resolved at their numbers where not sampled (so `agrisynth tolerance` has every rule's derivative
+        # w.r.t. both); otherwise, as a solve of a nominal spec sees them, both stay numbers
         ranges = ranges_of(spec)
+        symbolic = bool(ranges) or operating_symbols_wanted()
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
-                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if ranges]
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if symbolic]
         op = {o.name: o.symbol for o in self.operating}
         self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
@@ -61,12 +64,16 @@ class PlantingNLP:
         p = self._arm(v)
         tip = tip_derivatives(spec.arm.branch)
         states = {n: self._state(tip, theta[n], p) for n in POINTS}
+        # with a clearance, its row (the last of the structural rows about the top) is held at its linearised worst
+        # case in a tolerance box, like a rule: P1 stays a crossing for every design in the box, not the nominal only
+        structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
             lbx=np.concatenate([self.bounds[:, 0], np.full(th.numel(), THETA_BOUNDS[0])]),
             ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
-            structural=self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None),
+            structural=structural,
+            robust_structural=(self._clearance_row,) if self.clearance > 0.0 else (),
             rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
             objective=self._objective(x, v),
             backoff=scaled_backoff(spec.solver.backoff),
@@ -151,6 +158,7 @@ class PlantingNLP:
             rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
                      (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
                      (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
+            self._clearance_row = len(rows) - 1
         n = spec.solver.samples_per_turn
         samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]

@@ -137,7 +137,9 @@ def at_operating(spec: BaseModel, values: dict[str, float]) -> BaseModel:
     sections = {}
     for field, changes in update.items():
         section = getattr(spec, field).model_copy(update=changes)
-        section._operating_ranges = {k: r for k, r in section._operating_ranges.items() if k not in changes}
+        ranged = getattr(section, "_operating_ranges", None)     # None: a section that takes no range (a number)
+        if ranged is not None:
+            section._operating_ranges = {k: r for k, r in ranged.items() if k not in changes}
         sections[field] = section
     return spec.model_copy(update=sections)
 

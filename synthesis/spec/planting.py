@@ -154,7 +154,8 @@ class SolverSection(MultistartSettings):
                                        "line before it comes down through it at P1 (one more crank angle, the loop's "
                                        "top between P6 and P1); 0 admits a path that only touches the line at the "
                                        "top of its loop, which the float check (a sign change) does not count as a "
-                                       "crossing, so such an answer fails its re-check")
+                                       "crossing, so such an answer fails its re-check; with a [tolerance] table the "
+                                       "clearance is held at its linearised worst case in the box, as the rules are")
 
 
 class PlantingFourbarSpec(ProblemSpec):

@@ -21,7 +21,8 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, per_rule_backoff
+from synthesis.core.problem import (MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+                                    per_rule_backoff)
 from synthesis.kinematics.tillage_linkage import path_function
 from synthesis.spec.common import design_box
 from synthesis.spec.tillage_linkage import NAMES, TillageSpec
@@ -69,7 +70,16 @@ class TillageNLP:
         frac = np.linspace(0.0, 1.0, s.soil_samples + 1)
         w_soil = w_in + (w_out - w_in) * ca.DM(frac).T
         dx_soil = f.map(s.soil_samples + 1)(w_soil, p)[2].T
-        vx_soil = crank_rate(spec) * dx_soil / 1000.0 + spec.operation.forward_speed
+        # the speeds are numbers in a solve; symbols (resolved at their numbers) when the sensitivity analysis asks,
+        # so it has every rule's derivative w.r.t. them (they enter only the in-soil velocity, never a structural row)
+        self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min"),
+                           Operating("forward_speed", ca.SX.sym("forward_speed"), spec.operation.forward_speed, "m/s")]
+                          if operating_symbols_wanted() else [])
+        if self.operating:
+            rate, forward = self.operating[0].symbol * TWO_PI / 60.0, self.operating[1].symbol
+        else:
+            rate, forward = crank_rate(spec), spec.operation.forward_speed
+        vx_soil = rate * dx_soil / 1000.0 + forward
         rules = rules_of(spec, a, b, c, ground - y_low, y_top - ground, vx_soil)
         if spec.objective.name == "min_bar_length":
             objective: ObjectiveParts | MaxMinMargin = ObjectiveParts(f=c / MM)
@@ -84,7 +94,7 @@ class TillageNLP:
                                # z: a, b, c (mm), theta (deg), height_c (mm), four crank angles (rad); the rows
                                # in mm are divided by the constant MM (plain numbers), the angle gaps in rad
                                x_units=["mm", "mm", "mm", "deg", "mm"] + ["rad"] * 4,
-                               structural_units=[""] * 6 + ["rad"] * 3, objective_unit="")
+                               structural_units=[""] * 6 + ["rad"] * 3, objective_unit="", operating=self.operating)
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def angles_guess(self, design: dict[str, float]) -> np.ndarray:

@@ -176,6 +176,8 @@ def envelope_kind(kind: Kind, spec) -> Kind:
     if not ranges_of(spec):
         return kind
     base = kind.solver_side()
+    if isinstance(base.recheck, EnvelopeRecheck):       # wrapped already (a robust solve's kind, re-wrapped)
+        return kind
     recheck = EnvelopeRecheck(base.recheck, _Points(base))
     names = ", ".join(f"{n} {r.range[0]:g}-{r.range[1]:g}" for n, (_, r) in ranges_of(spec).items())
     hint = (f"Every rule must hold over the operating range ({names}): narrow the range, or loosen those rules. ")

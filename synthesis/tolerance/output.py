@@ -19,7 +19,9 @@ def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
 def table(facts: dict) -> str:
     mc = facts["monte_carlo"]
     lines = [f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
-             f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule", "",
+             f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
+             + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the nominal "
+                "point alone)" if mc.get("envelope") else ""), *_envelope_lines(mc), "",
              "| rule | unit | margin | linear worst margin | drivers | MC pass | MC worst margin | linear / sampled loss "
              "| margin at the linear worst corner | linear vs sampled gap |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -46,6 +48,16 @@ def table(facts: dict) -> str:
         lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
                       "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
     return "\n".join(lines) + "\n"
+
+
+def _envelope_lines(mc: dict) -> list[str]:
+    """The Monte-Carlo's pass rate of each rule over the operating range (its worst grid point), for an envelope."""
+    rows = {n: r for n, r in mc["rules"].items() if n.endswith("@envelope")}
+    if not rows:
+        return []
+    return ["", "| rule over the operating range | MC pass (every point) | MC worst margin |", "|---|---|---|"] + [
+        f"| {n} | {r['pass_rate']:.1%} | {'-' if r['worst_margin'] is None else format(r['worst_margin'], '.4g')} |"
+        for n, r in rows.items()]
 
 
 def tornado(facts: dict, path: Path) -> None:
