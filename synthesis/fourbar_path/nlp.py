@@ -45,6 +45,9 @@ BACKOFF = 1e-9
 #: study switches (INEXACT.md): variables in nominal units; IPOPT's objective in mm^2 / D^OBJECTIVE_POWER
 SCALED = True
 OBJECTIVE_POWER = 0.5
+import os as _os, json as _json  # noqa: E401 - study switches (removed before commit)
+OBJECTIVE_POWER = float(_os.environ.get("OBJ_POWER", OBJECTIVE_POWER))
+EXTRA_OPTS = _json.loads(_os.environ.get("EXTRA_OPTS", "{}"))
 
 
 #: the core's unit-prefix scaling of variables (core/ipopt.py) is off: this NLP is already in nominal units of
@@ -69,6 +72,12 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 COARSE = 4
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
+#: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration CUT_AT a start whose path
+#: error is above CUT_FACTOR x the best screened start's (StartMaker.reference, the same in every worker) is
+#: stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count
+CUT_AT = int(_os.environ.get("CUT_AT", 30))
+CUT_FACTOR = float(_os.environ.get("CUT_FACTOR", 1.0))
+TRACE = bool(_os.environ.get("CUT_TRACE"))
 
 
 class PathNLP:
@@ -118,11 +127,16 @@ class PathNLP:
                 # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
                 # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
                 ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
-                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
+                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {}), **EXTRA_OPTS},
                 max_iter=spec.solver.max_iter)
             return out
 
         self._problem_of = problem
+        self.f_unit = f_unit
+        self.starts = StartMaker(spec, seed)
+        # the early cut: free timing, not elastic; its reference is the best screened start's path error
+        self.reference = None if elastic or spec.timed or not CUT_AT else self.starts.reference
+        self.watched = self.reference is not None or TRACE
         self.lbx, self.ubx = lbx, ubx
         self._full = None
         # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
@@ -131,23 +145,23 @@ class PathNLP:
         self.coarse = None
         if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
                 and spec.solver.samples > COARSE):
-            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS)
+            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS, watched=self.watched)
             full = path_rules(spec, v, thetas, sign, spec.solver.samples)
             rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
             self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
             self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
             self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
         else:
-            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS)
+            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
-        self.starts = StartMaker(spec, seed)
 
     @property
     def compiled(self) -> CompiledNLP:
         """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
         if self._full is None:
-            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS)
+            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS,
+                                     watched=self.watched)
         return self._full
 
     @property
@@ -176,18 +190,35 @@ class PathNLP:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
         return self.starts(index, x_design)
 
+    def watch(self, trace: list):
+        """The early cut of one start (None: no cut): stop at iteration CUT_AT when the path error (mm^2) is
+        above CUT_FACTOR x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
+        if not self.watched:
+            return None
+        limit = None if self.reference is None else CUT_FACTOR * self.reference
+
+        def rule(iteration: int, f: float) -> bool:
+            mm2 = f * self.f_unit
+            if TRACE:
+                trace.append((iteration, mm2))
+            return limit is not None and iteration == CUT_AT and not mm2 <= limit
+        return rule
+
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
         """One IPOPT run; the crank angle of each target (deg) and the direction in the start's details."""
         sp = self.start(index, x_design)
         z0 = np.clip(self.nominal(sp.design), self.lbx[:9], self.ubx[:9])
         w0 = np.concatenate([z0, sp.theta])
+        trace: list = []
+        watch = self.watch(trace)
         if self.coarse is None:
-            out = self.compiled.solve(index, w0, p=sp.sign)
+            out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         else:
-            out = self.coarse.solve(index, w0, p=sp.sign)
-            if self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
+            out = self.coarse.solve(index, w0, p=sp.sign, watch=watch)
+            if out.return_status != "User_Requested_Stop" and \
+                    self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
                 first = out
-                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign)
+                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign, watch=self.watch(trace))
                 out.iterations += first.iterations
                 out.wall_s += first.wall_s
                 out.log = first.log + "\n===== re-solved with every sample of the motion\n" + out.log
@@ -203,4 +234,5 @@ class PathNLP:
             direction = "ccw" if sp.sign > 0 else "cw"
         objective = float(self.fit(xs, sp.sign))          # mm^2, at the returned point
         objective = objective if math.isfinite(objective) else math.inf
-        return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction)
+        extra = {"trace": trace} if TRACE else {}
+        return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction, **extra)
