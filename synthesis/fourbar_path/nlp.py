@@ -10,7 +10,11 @@ The decision vector is in nominal units (nominal_scales): lengths and the couple
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
 grashof = "any" is solved with COARSE samples of the motion per gap first; the answer is kept when
-every row of the spec's samples holds there, else re-solved from it with every row.  Why each of
+every row of the spec's samples holds there, else re-solved from it with every row (free timing: only when its
+path error is within RESOLVE_WITHIN x the reference below).  Free timing: every start is watched
+(CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
+*reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
+seed, the same in every worker, so the cut is the same for any number of workers).  Why each of
 these, and what was tried instead, with the numbers: problems/fourbar_path/INEXACT.md (issue 19).
 
 P is the closed-form coupler point (kinematics.coupler_point, no inverse cosine).  The crank
@@ -45,9 +49,6 @@ BACKOFF = 1e-9
 #: study switches (INEXACT.md): variables in nominal units; IPOPT's objective in mm^2 / D^OBJECTIVE_POWER
 SCALED = True
 OBJECTIVE_POWER = 0.5
-import os as _os, json as _json  # noqa: E401 - study switches (removed before commit)
-OBJECTIVE_POWER = float(_os.environ.get("OBJ_POWER", OBJECTIVE_POWER))
-EXTRA_OPTS = _json.loads(_os.environ.get("EXTRA_OPTS", "{}"))
 
 
 #: the core's unit-prefix scaling of variables (core/ipopt.py) is off: this NLP is already in nominal units of
@@ -72,12 +73,14 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 COARSE = 4
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
-#: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration CUT_AT a start whose path
-#: error is above CUT_FACTOR x the best screened start's (StartMaker.reference, the same in every worker) is
-#: stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count
-CUT_AT = int(_os.environ.get("CUT_AT", 30))
-CUT_FACTOR = float(_os.environ.get("CUT_FACTOR", 1.0))
-TRACE = bool(_os.environ.get("CUT_TRACE"))
+#: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration k of each (k, factor) a start
+#: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
+#: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count
+CUTS = ((30, 1e4), (200, 1.0), (400, 0.6))
+#: grashof = "any": a coarse answer that fails a row of the spec's samples is re-solved with every row only when
+#: its path error is at most this x the reference (an answer above the best screened start's cannot be the best)
+RESOLVE_WITHIN = 1.0
+TRACE = False            # study switch: each start's details get its path error at every iteration
 
 
 class PathNLP:
@@ -127,7 +130,7 @@ class PathNLP:
                 # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
                 # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
                 ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
-                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {}), **EXTRA_OPTS},
+                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
                 max_iter=spec.solver.max_iter)
             return out
 
@@ -135,7 +138,7 @@ class PathNLP:
         self.f_unit = f_unit
         self.starts = StartMaker(spec, seed)
         # the early cut: free timing, not elastic; its reference is the best screened start's path error
-        self.reference = None if elastic or spec.timed or not CUT_AT else self.starts.reference
+        self.reference = None if elastic or spec.timed or not CUTS else self.starts.reference
         self.watched = self.reference is not None or TRACE
         self.lbx, self.ubx = lbx, ubx
         self._full = None
@@ -191,17 +194,17 @@ class PathNLP:
         return self.starts(index, x_design)
 
     def watch(self, trace: list):
-        """The early cut of one start (None: no cut): stop at iteration CUT_AT when the path error (mm^2) is
-        above CUT_FACTOR x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
+        """The early cut of one start (None: no cut): stop at iteration k of CUTS when the path error (mm^2) is
+        above its factor x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
         if not self.watched:
             return None
-        limit = None if self.reference is None else CUT_FACTOR * self.reference
+        limits = {} if self.reference is None else {k: factor * self.reference for k, factor in CUTS}
 
         def rule(iteration: int, f: float) -> bool:
             mm2 = f * self.f_unit
             if TRACE:
                 trace.append((iteration, mm2))
-            return limit is not None and iteration == CUT_AT and not mm2 <= limit
+            return iteration in limits and not mm2 <= limits[iteration]
         return rule
 
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
@@ -215,7 +218,9 @@ class PathNLP:
             out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         else:
             out = self.coarse.solve(index, w0, p=sp.sign, watch=watch)
-            if out.return_status != "User_Requested_Stop" and \
+            promising = self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= \
+                RESOLVE_WITHIN * self.reference
+            if out.return_status != "User_Requested_Stop" and promising and \
                     self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
                 first = out
                 out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign, watch=self.watch(trace))

@@ -32,6 +32,12 @@ starts that reach the zero-error optimum): all even starts unscreened with the s
 mean 22, worst problem 3; screening the odd starts: mean 32, worst 1; screening plus alternating
 the direction of the even starts (this module): mean 30, worst 2 (mechanism 0, 10 points), and
 every problem reached by start 44 (tests/test_bench_fourbar_path.py, ``pytest -m benchmark``).
+Since issue 19's second pass (STRATEGY "screen_mix") starts 3, 7, 11, ... of free timing come from screen.py
+(starts 1, 5, 9, ... stay the pool's, in order):
+thousands of normalised linkage shapes traced vectorised and laid onto the targets by a similarity and
+nearest-point rounds, the best *distinct* ones (DISTINCT apart) in order, each finished here (nearest-point
+crank angles on the fine curve, the linear refit); the even starts stay the hypercube's, whose long IPOPT
+trajectories reach global optima the screened shapes miss (egg16, d_shape22: INEXACT.md).
 The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/INEXACT.md):
 STRATEGY "pool" (every start from the pool) needs the fewest iterations but reaches the best known
 from fewer starts than "mix" (this module), which keeps the even starts' spread.  With grashof = "any"
@@ -65,8 +71,7 @@ POOL = 1024            # candidate linkage shapes screened once per spec and see
 POOL_PHASES = 24       # trial phases of the arc-length correspondence in the pool screening
 SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
 ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
-import os as _os  # noqa: E402 - study switch (removed before commit)
-STRATEGY = _os.environ.get("STRATEGY", "screen")    # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
+STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
 #                        "screen" (every start after 0 one of the best distinct shapes of screen.py)
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
@@ -423,8 +428,10 @@ class StartMaker:
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
         if self.timed_theta is None and STRATEGY == "screen" and index > 0:
             return self.from_screen(index)
-        if self.timed_theta is None and STRATEGY == "screen_mix" and index % 2 == 1:
-            return self.from_screen((index + 1) // 2)
+        if self.timed_theta is None and STRATEGY == "screen_mix" and index % 4 == 3:
+            return self.from_screen((index + 1) // 4)
+        if self.timed_theta is None and STRATEGY == "screen_mix" and index % 4 == 1:
+            return self.placed(self.ranked[((index - 1) // 4) % len(self.ranked)], 0)[1]
         if self.timed_theta is None and STRATEGY not in ("old", "screen") and (STRATEGY == "pool" or index % 2 == 1):
             return self.from_pool(index)
         if index % 2 == 0:
