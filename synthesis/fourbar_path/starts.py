@@ -72,7 +72,8 @@ POOL_PHASES = 24       # trial phases of the arc-length correspondence in the po
 SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
 ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
 STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
-#                        "screen" (every start after 0 one of the best distinct shapes of screen.py)
+#                        "screen" (every start after 0 one of the best distinct shapes of screen.py), "screen_mix"
+#                        (starts 3, 7, ... from screen.py, 1, 5, ... from the pool, even ones the hypercube's)
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
