@@ -137,9 +137,11 @@ class PathNLP:
         self._problem_of = problem
         self.f_unit = f_unit
         self.starts = StartMaker(spec, seed)
-        # the early cut: free timing, not elastic; its reference is the best screened start's path error
-        self.reference = None if elastic or spec.timed or not CUTS else self.starts.reference
-        self.watched = self.reference is not None or TRACE
+        # the early cut: free timing, not elastic; its reference is the best screened start's path error, screened
+        # on first use (a run whose starts all converge before the first cut never screens)
+        self.cut = not elastic and self.starts.screening and bool(CUTS)
+        self._reference: list = []
+        self.watched = self.cut or TRACE
         self.lbx, self.ubx = lbx, ubx
         self._full = None
         # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
@@ -193,18 +195,27 @@ class PathNLP:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
         return self.starts(index, x_design)
 
+    @property
+    def reference(self) -> float | None:
+        """The early cut's yardstick: the best screened start's path error (mm^2); None: no cut."""
+        if not self._reference:
+            self._reference.append(self.starts.reference if self.cut else None)
+        return self._reference[0]
+
     def watch(self, trace: list):
         """The early cut of one start (None: no cut): stop at iteration k of CUTS when the path error (mm^2) is
         above its factor x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
         if not self.watched:
             return None
-        limits = {} if self.reference is None else {k: factor * self.reference for k, factor in CUTS}
+        factors = dict(CUTS) if self.cut else {}
 
         def rule(iteration: int, f: float) -> bool:
             mm2 = f * self.f_unit
             if TRACE:
                 trace.append((iteration, mm2))
-            return iteration in limits and not mm2 <= limits[iteration]
+            if iteration not in factors or self.reference is None:
+                return False
+            return not mm2 <= factors[iteration] * self.reference
         return rule
 
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
@@ -218,10 +229,9 @@ class PathNLP:
             out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         else:
             out = self.coarse.solve(index, w0, p=sp.sign, watch=watch)
-            promising = self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= \
-                RESOLVE_WITHIN * self.reference
-            if out.return_status != "User_Requested_Stop" and promising and \
-                    self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
+            if out.return_status != "User_Requested_Stop" and \
+                    self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False and \
+                    (self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= RESOLVE_WITHIN * self.reference):
                 first = out
                 out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign, watch=self.watch(trace))
                 out.iterations += first.iterations

@@ -74,6 +74,10 @@ ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into th
 STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
 #                        "screen" (every start after 0 one of the best distinct shapes of screen.py), "screen_mix"
 #                        (starts 3, 7, ... from screen.py, 1, 5, ... from the pool, even ones the hypercube's)
+#: the screen (and the early cut, nlp.CUTS) serve target sets of at least this many points (issue 19's 12-25);
+#: smaller free-timing sets keep the pool starts ("mix") and no cut: the screen's 1 s CPU is more than their
+#: whole solve (10 synthetic 6-point problems: 1.4 s CPU with the pool, 6.1 s with the screen)
+SCREEN_MIN_TARGETS = 12
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
@@ -410,6 +414,7 @@ class StartMaker:
         self.pool_anchor = grashof_anchor(self.bounds, self.pool_grashof)
         self._ranked = None
         self._screened = None
+        self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
         self.refit = REFIT_ROUNDS > 0
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
@@ -427,13 +432,14 @@ class StartMaker:
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
-        if self.timed_theta is None and STRATEGY == "screen" and index > 0:
+        if self.screening and STRATEGY == "screen" and index > 0:
             return self.from_screen(index)
-        if self.timed_theta is None and STRATEGY == "screen_mix" and index % 4 == 3:
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 3:
             return self.from_screen((index + 1) // 4)
-        if self.timed_theta is None and STRATEGY == "screen_mix" and index % 4 == 1:
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 1:
             return self.placed(self.ranked[((index - 1) // 4) % len(self.ranked)], 0)[1]
-        if self.timed_theta is None and STRATEGY not in ("old", "screen") and (STRATEGY == "pool" or index % 2 == 1):
+        if self.timed_theta is None and (STRATEGY in ("mix", "pool") or (not self.screening and STRATEGY == "screen_mix")) \
+                and (STRATEGY == "pool" or index % 2 == 1):
             return self.from_pool(index)
         if index % 2 == 0:
             return self.as_it_is(design, index)
@@ -479,7 +485,7 @@ class StartMaker:
     @property
     def reference(self) -> float | None:
         """The path error (mm^2) of the best screened start (the early cut's yardstick); None: no screening."""
-        if STRATEGY not in ("screen", "screen_mix") or self.timed_theta is not None:
+        if STRATEGY not in ("screen", "screen_mix") or not self.screening:
             return None
         designs, _ = self.screened
         if len(designs) == 0:
