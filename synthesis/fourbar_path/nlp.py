@@ -138,10 +138,12 @@ class PathNLP:
         self.f_unit = f_unit
         self.starts = StartMaker(spec, seed)
         # the early cut: free timing, not elastic; its reference is the best screened start's path error, screened
-        # on first use (a run whose starts all converge before the first cut never screens)
+        # here, when the NLP is built (the main process builds it first: forked workers inherit the screen)
         self.cut = not elastic and self.starts.screening and bool(CUTS)
         self._reference: list = []
         self.watched = self.cut or TRACE
+        if self.cut:
+            _ = self.reference
         self.lbx, self.ubx = lbx, ubx
         self._full = None
         # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
