@@ -22,6 +22,11 @@ unit is.
 The scaled NLP (s and the objective's scale are its parameters) is built on the first start that needs it, so
 one build serves every start.
 
+A kind may watch the iterations of a solve (``CompiledNLP(..., watched=True)``, then ``solve(...,
+watch=rule)``): ``rule(iteration, f)`` is called at every IPOPT iteration with the objective in the problem's
+units and stops the solve (``User_Requested_Stop``) when it returns True -- a deterministic early cut of a
+hopeless start, decided by iterations and objective, not by time (fourbar_path, issue 19).
+
 Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
 
@@ -148,11 +153,47 @@ class NLPOutcome:
     lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))   # constraint multipliers at return
 
 
+class _Watch(ca.Callback):
+    """IPOPT's intermediate callback: ``rule(iteration, f)`` (set per solve) True stops the solve."""
+
+    def __init__(self, n_w: int, n_g: int, n_p: int):
+        ca.Callback.__init__(self)
+        self.sizes = {"x": n_w, "lam_x": n_w, "g": n_g, "lam_g": n_g, "f": 1, "lam_p": n_p}
+        self.rule: Callable[[int, float], bool] | None = None
+        self.scale = 1.0
+        self.calls = 0
+        self.construct("iteration_watch", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "stop"
+
+    def get_sparsity_in(self, i):
+        return ca.Sparsity.dense(self.sizes[ca.nlpsol_out(i)], 1)
+
+    def _at_iteration(self, arg):
+        iteration = self.calls                  # IPOPT calls it at iteration 0, 1, ...
+        self.calls += 1
+        stop = self.rule is not None and bool(self.rule(iteration, float(arg[1]) * self.scale))
+        return [1 if stop else 0]
+
+    eval = _at_iteration        # the name CasADi's Callback calls (bound so, not defined so: tests/test_fuzz.py)
+
+
 class CompiledNLP:
     """A transcribed problem with its IPOPT solver, built once and reused for every start."""
 
     def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None,
-                 scaling: str | None = None, length_factor: float | None = None):
+                 scaling: str | None = None, length_factor: float | None = None,
+                 watched: bool = False):
         t0 = time.perf_counter()
         self.problem = problem
         self.elastic = elastic
@@ -182,6 +223,10 @@ class CompiledNLP:
         nlp = {"x": self._w, "f": self._f, "g": self._g}
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
+        self._watch = None
+        if watched:      # one watch per solver (the scaled one has 2 n_w + 1 more parameters)
+            self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
+            opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
         self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts)
         self._scaled_solver = None         # built on the first start that has a variable to scale
@@ -198,7 +243,11 @@ class CompiledNLP:
             z, s, sf = ca.SX.sym("z", n), ca.SX.sym("nominal", n), ca.SX.sym("objective_nominal")
             f, g = ca.substitute([self._f, self._g], [w], [s * z])
             nlp = {"x": z, "f": f / sf, "g": g, "p": ca.vertcat(self.problem.parameters, s, sf)}
-            self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, self._opts)
+            opts = self._opts
+            if self._watch is not None:
+                self._scaled_watch = _Watch(n, self.t.g.numel(), nlp["p"].numel())
+                opts = {**opts, "iteration_callback": self._scaled_watch}
+            self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, opts)
             self.build_s += time.perf_counter() - t0
         return self._scaled_solver
 
@@ -210,8 +259,9 @@ class CompiledNLP:
     def n_x(self) -> int:
         return self.t.n_x
 
-    def solve(self, start: int, x0, extra0=None, p=None) -> NLPOutcome:
-        """One IPOPT run from x0 (the problem's x) and extra0 (extra variables; default the transcription's)."""
+    def solve(self, start: int, x0, extra0=None, p=None, watch: Callable[[int, float], bool] | None = None) -> NLPOutcome:
+        """One IPOPT run from x0 (the problem's x) and extra0 (extra variables; default the transcription's);
+        ``watch(iteration, f)`` True stops it (a solver built ``watched=True``; module docstring)."""
         extra0 = self.t.extra_init if extra0 is None else np.asarray(extra0, float)
         p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
         args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self.t.lbw, ubx=self.t.ubw,
@@ -233,9 +283,19 @@ class CompiledNLP:
             args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, p=np.concatenate([p, s, [sf]]))
         elif p.size:
             args["p"] = p
+        watcher = None
+        if self._watch is not None:
+            watcher = self._watch if solver is self.solver else self._scaled_watch
+            watcher.rule, watcher.scale, watcher.calls = watch, sf, 0
+        elif watch is not None:
+            raise ValueError("solve(watch=...) needs a CompiledNLP built with watched=True")
         t0 = time.perf_counter()
-        with captured_stdout() as log:
-            sol = solver(**args)
+        try:
+            with captured_stdout() as log:
+                sol = solver(**args)
+        finally:
+            if watcher is not None:
+                watcher.rule = None
         wall = time.perf_counter() - t0
         stats = solver.stats()
         x = np.asarray(sol["x"]).ravel()

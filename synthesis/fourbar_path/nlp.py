@@ -10,7 +10,11 @@ The decision vector is in nominal units (nominal_scales): lengths and the couple
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
 grashof = "any" is solved with COARSE samples of the motion per gap first; the answer is kept when
-every row of the spec's samples holds there, else re-solved from it with every row.  Why each of
+every row of the spec's samples holds there, else re-solved from it with every row (free timing: only when its
+path error is within RESOLVE_WITHIN x the reference below).  Free timing: every start is watched
+(CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
+*reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
+seed, the same in every worker, so the cut is the same for any number of workers).  Why each of
 these, and what was tried instead, with the numbers: problems/fourbar_path/INEXACT.md (issue 19).
 
 P is the closed-form coupler point (kinematics.coupler_point, no inverse cosine).  The crank
@@ -70,6 +74,14 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 COARSE = 4
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
+#: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration k of each (k, factor) a start
+#: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
+#: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count
+CUTS = ((30, 1e4), (200, 1.0), (400, 0.6))
+#: grashof = "any": a coarse answer that fails a row of the spec's samples is re-solved with every row only when
+#: its path error is at most this x the reference (an answer above the best screened start's cannot be the best)
+RESOLVE_WITHIN = 1.0
+TRACE = False            # study switch: each start's details get its path error at every iteration
 
 
 class PathNLP:
@@ -126,6 +138,15 @@ class PathNLP:
             return out
 
         self._problem_of = problem
+        self.f_unit = f_unit
+        self.starts = StartMaker(spec, seed)
+        # the early cut: free timing, not elastic; its reference is the best screened start's path error, screened
+        # here, when the NLP is built (the main process builds it first: forked workers inherit the screen)
+        self.cut = not elastic and self.starts.screening and bool(CUTS)
+        self._reference: list = []
+        self.watched = self.cut or TRACE
+        if self.cut:
+            _ = self.reference
         self.lbx, self.ubx = lbx, ubx
         self._full = None
         # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
@@ -134,23 +155,23 @@ class PathNLP:
         self.coarse = None
         if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
                 and spec.solver.samples > COARSE):
-            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS)
+            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS, watched=self.watched)
             full = path_rules(spec, v, thetas, sign, spec.solver.samples)
             rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
             self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
             self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
             self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
         else:
-            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS)
+            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
-        self.starts = StartMaker(spec, seed)
 
     @property
     def compiled(self) -> CompiledNLP:
         """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
         if self._full is None:
-            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS)
+            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS,
+                                     watched=self.watched)
         return self._full
 
     @property
@@ -179,18 +200,45 @@ class PathNLP:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
         return self.starts(index, x_design)
 
+    @property
+    def reference(self) -> float | None:
+        """The early cut's yardstick: the best screened start's path error (mm^2); None: no cut."""
+        if not self._reference:
+            self._reference.append(self.starts.reference if self.cut else None)
+        return self._reference[0]
+
+    def watch(self, trace: list):
+        """The early cut of one start (None: no cut): stop at iteration k of CUTS when the path error (mm^2) is
+        above its factor x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
+        if not self.watched:
+            return None
+        factors = dict(CUTS) if self.cut else {}
+
+        def rule(iteration: int, f: float) -> bool:
+            mm2 = f * self.f_unit
+            if TRACE:
+                trace.append((iteration, mm2))
+            if iteration not in factors or self.reference is None:
+                return False
+            return not mm2 <= factors[iteration] * self.reference
+        return rule
+
     def solve(self, index: int, x_design: np.ndarray) -> StartOutcome:
         """One IPOPT run; the crank angle of each target (deg) and the direction in the start's details."""
         sp = self.start(index, x_design)
         z0 = np.clip(self.nominal(sp.design), self.lbx[:9], self.ubx[:9])
         w0 = np.concatenate([z0, sp.theta])
+        trace: list = []
+        watch = self.watch(trace)
         if self.coarse is None:
-            out = self.compiled.solve(index, w0, p=sp.sign)
+            out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         else:
-            out = self.coarse.solve(index, w0, p=sp.sign)
-            if self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False:
+            out = self.coarse.solve(index, w0, p=sp.sign, watch=watch)
+            if out.return_status != "User_Requested_Stop" and \
+                    self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False and \
+                    (self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= RESOLVE_WITHIN * self.reference):
                 first = out
-                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign)
+                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign, watch=self.watch(trace))
                 out.iterations += first.iterations
                 out.wall_s += first.wall_s
                 out.log = first.log + "\n===== re-solved with every sample of the motion\n" + out.log
@@ -206,4 +254,5 @@ class PathNLP:
             direction = "ccw" if sp.sign > 0 else "cw"
         objective = float(self.fit(xs, sp.sign))          # mm^2, at the returned point
         objective = objective if math.isfinite(objective) else math.inf
-        return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction)
+        extra = {"trace": trace} if TRACE else {}
+        return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction, **extra)

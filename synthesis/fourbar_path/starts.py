@@ -32,6 +32,12 @@ starts that reach the zero-error optimum): all even starts unscreened with the s
 mean 22, worst problem 3; screening the odd starts: mean 32, worst 1; screening plus alternating
 the direction of the even starts (this module): mean 30, worst 2 (mechanism 0, 10 points), and
 every problem reached by start 44 (tests/test_bench_fourbar_path.py, ``pytest -m benchmark``).
+Since issue 19's second pass (STRATEGY "screen_mix") starts 3, 7, 11, ... of free timing come from screen.py
+(starts 1, 5, 9, ... stay the pool's, in order):
+thousands of normalised linkage shapes traced vectorised and laid onto the targets by a similarity and
+nearest-point rounds, the best *distinct* ones (DISTINCT apart) in order, each finished here (nearest-point
+crank angles on the fine curve, the linear refit); the even starts stay the hypercube's, whose long IPOPT
+trajectories reach global optima the screened shapes miss (egg16, d_shape22: INEXACT.md).
 The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/INEXACT.md):
 STRATEGY "pool" (every start from the pool) needs the fewest iterations but reaches the best known
 from fewer starts than "mix" (this module), which keeps the even starts' spread.  With grashof = "any"
@@ -49,6 +55,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import linprog
 
+from synthesis.fourbar_path import screen
 from synthesis.fourbar_path.construction import joint_positions
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_function
 from synthesis.spec.fourbar_path import FourbarPathSpec
@@ -64,7 +71,14 @@ POOL = 1024            # candidate linkage shapes screened once per spec and see
 POOL_PHASES = 24       # trial phases of the arc-length correspondence in the pool screening
 SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
 ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
-STRATEGY = "mix"       # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool"
+STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
+#                        "screen" (every start after 0 one of the best distinct shapes of screen.py), "screen_mix"
+#                        (starts 3, 7, ... from screen.py, 1, 5, ... from the pool, even ones the hypercube's)
+#: the screen (and the early cut, nlp.CUTS) serve target sets of at least this many points (issue 19's 12-25);
+#: smaller free-timing sets keep the pool starts ("mix") and no cut: the screen's 1 s CPU is more than their
+#: whole solve (10 synthetic 6-point problems: 1.4 s CPU with the pool, 6.1 s with the screen)
+SCREEN_MIN_TARGETS = 12
+DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
 
@@ -362,6 +376,28 @@ def pool_residuals(curves: np.ndarray, targets: np.ndarray, u: np.ndarray, s_lo:
 
 # ---------------------------------------------------------------------------- the starts
 
+_SCREENED: dict = {}      # the last screened list of this process (StartMaker.screened)
+
+
+def distinct(designs: np.ndarray, residuals: np.ndarray, size: float,
+             keep: int = 512) -> tuple[np.ndarray, np.ndarray]:
+    """The first ``keep`` designs (in the given order) each farther than DISTINCT (max-norm, nominal units:
+    lengths / the targets' size, theta0 in rad) from every one kept before it."""
+    unit = np.array([size] * 8 + [180.0 / math.pi])
+    z = designs / unit
+    kept: list[int] = []
+    for i in range(len(z)):
+        if len(kept) >= keep:
+            break
+        if kept:
+            gap = np.abs(z[kept] - z[i])
+            gap[:, 8] = np.minimum(gap[:, 8], TWO_PI - gap[:, 8])
+            if np.min(np.max(gap, axis=1)) <= DISTINCT:
+                continue
+        kept.append(i)
+    return designs[kept], residuals[kept]
+
+
 class StartMaker:
     """Turns a Latin-hypercube row into an IPOPT start; built once per spec and seed."""
 
@@ -377,6 +413,8 @@ class StartMaker:
         self.pool_grashof = "crank-rocker" if spec.rules.grashof == "any" else spec.rules.grashof
         self.pool_anchor = grashof_anchor(self.bounds, self.pool_grashof)
         self._ranked = None
+        self._screened = None
+        self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
         self.refit = REFIT_ROUNDS > 0
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
@@ -394,7 +432,14 @@ class StartMaker:
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
-        if self.timed_theta is None and STRATEGY != "old" and (STRATEGY == "pool" or index % 2 == 1):
+        if self.screening and STRATEGY == "screen" and index > 0:
+            return self.from_screen(index)
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 3:
+            return self.from_screen((index + 1) // 4)
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 1:
+            return self.placed(self.ranked[((index - 1) // 4) % len(self.ranked)], 0)[1]
+        if self.timed_theta is None and (STRATEGY in ("mix", "pool") or (not self.screening and STRATEGY == "screen_mix")) \
+                and (STRATEGY == "pool" or index % 2 == 1):
             return self.from_pool(index)
         if index % 2 == 0:
             return self.as_it_is(design, index)
@@ -420,6 +465,56 @@ class StartMaker:
             if len(self._ranked) == 0:
                 self._ranked = designs
         return self._ranked
+
+    @property
+    def screened(self) -> tuple[np.ndarray, np.ndarray]:
+        """(designs, residual mm^2) of the best distinct screened shapes, best first (screen.py; one list per
+        spec and seed, cached per process: a forked worker inherits its parent's)."""
+        if self._screened is None:
+            key = (self.targets.tobytes(), self.bounds.tobytes(), self.branch, self.spec.rules.grashof,
+                   self.spec.rules.direction, self.seed)
+            if key not in _SCREENED:
+                designs, res = screen.screen(self.targets, self.bounds, self.branch, self.spec.rules.grashof,
+                                             SIGNS[self.spec.rules.direction], self.closed,
+                                             arc_fractions(self.targets, self.closed), self.seed)
+                _SCREENED.clear()
+                _SCREENED[key] = distinct(designs, res, float(np.max(np.ptp(self.targets, axis=0))) or 1.0)
+            self._screened = _SCREENED[key]
+        return self._screened
+
+    @property
+    def reference(self) -> float | None:
+        """The path error (mm^2) of the best screened start (the early cut's yardstick); None: no screening."""
+        if STRATEGY not in ("screen", "screen_mix") or not self.screening:
+            return None
+        designs, _ = self.screened
+        if len(designs) == 0:
+            return None
+        residual = self.finish(designs[0], 1)[0]
+        return residual if math.isfinite(residual) else None
+
+    def from_screen(self, index: int) -> StartPoint:
+        """Start ``index`` (>= 1): the (index - 1)-th best distinct screened shape, its crank angles the
+        nearest points of its coupler curve and (x0, y0, rcx, rcy) refitted to them (``finish``)."""
+        designs, _ = self.screened
+        if len(designs) == 0:
+            return self.from_pool(index)
+        return self.finish(designs[(index - 1) % len(designs)], index)[1]
+
+    def finish(self, design: np.ndarray, index: int = 0) -> tuple[float, StartPoint]:
+        """(residual mm^2, start) of a placed design: nearest-point crank angles on the fine curve, then
+        REFIT_ROUNDS linear refits of (x0, y0, rcx, rcy) while the residual falls."""
+        moved = np.clip(design, self.bounds[:, 0], self.bounds[:, 1])
+        nearest, d2 = nearest_angles(moved, self.targets, self.branch)
+        for _ in range(REFIT_ROUNDS if self.refit else 0):
+            refit = refit_placement(moved, nearest, self.targets, self.bounds, self.branch)
+            near2, e2 = nearest_angles(refit, self.targets, self.branch)
+            if not np.sum(e2) < np.sum(d2):
+                break
+            moved, nearest, d2 = refit, near2, e2
+        theta, sign = ordered_angles(nearest, self.targets, self.direction(index))
+        residual = float(np.sum(d2))
+        return (residual if math.isfinite(residual) else math.inf), StartPoint(moved, theta, sign)
 
     def pool_class(self, design: np.ndarray) -> np.ndarray:
         """A pool candidate of a class whose crank turns fully (for "any": a crank-rocker)."""

@@ -1,0 +1,190 @@
+"""Screening of candidate linkage shapes for free-timing path synthesis (issue 19).
+
+The fastest published path-synthesis methods do not start a local optimiser from random designs: they
+screen many cheap candidate *shapes* and start it only from the best few.  A shape is a four-bar in a
+normalised frame -- input pivot O = 0, output pivot O' = 1 (r1 = 1, theta0 = 0) -- with link ratios
+r2, r3, r4 and the coupler point (rcx, rcy) in that unit.  Its coupler curve c(theta2) is traced,
+vectorised in numpy over a crank-angle grid, for every shape at once (construction.joint_positions,
+the spec's assembly branch).  The targets t_i are laid onto it by a similarity z -> a z + b (a complex:
+scale |a| and turn arg a; b the image of O): with the correspondence fixed, the best (a, b) is a
+complex linear least-squares solve in closed form (Umeyama in the plane); with free timing the
+correspondence is the nearest curve point of each target, so the fit alternates the two (a few ICP
+rounds), starting from the best of trial arc-length correspondences (phases, both directions, for an
+open target arc several spans of the curve).  |a| is kept within the scales that put every length of
+the shape in its bounds, b within the input pivot's bounds.  The shapes are ranked by the residual
+sum |a c(theta_i) + b - t_i|^2 (mm^2, the NLP's objective), and the best are the starts: design =
+the shape scaled by |a|, turned by arg a, shifted to b; crank angles = each target's nearest curve
+parameter (refined by starts.StartMaker on the fine curve).
+
+Everything is a function of the spec and the seed (numpy's generator seeded by [seed, SEED_TAG]), so
+every worker screens the same shapes and gets the same list; the list is cached per process (a forked
+worker inherits the one its parent made when it built the NLP).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from synthesis.fourbar_path.construction import joint_positions
+
+SHAPES = 12000         # candidate shapes screened per spec and seed
+GRID = 128             # crank-angle samples of each coarse coupler curve
+PHASES = 24            # trial phases of the arc-length correspondence
+SPANS = (0.2, 0.35, 0.5, 0.7)   # open target arcs: trial fractions of the curve they cover
+ICP_ROUNDS = 4         # nearest-point / similarity alternations on the coarse curves
+SEED_TAG = 1919        # the shapes' generator is seeded by [seed, SEED_TAG]
+CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x GRID)
+TWO_PI = 2.0 * math.pi
+
+
+def _log_uniform(rng, lo: float, hi: float, n: int) -> np.ndarray:
+    return np.exp(rng.uniform(math.log(lo), math.log(hi), n))
+
+
+def sample_shapes(rng: np.random.Generator, n: int, grashof: str) -> np.ndarray:
+    """(n, 6) normalised shapes (r1 = 1, r2, r3, r4, rcx, rcy) whose crank turns fully: crank-rockers
+    (r2 shortest, s + l <= p + q) or, for "double-crank" and a quarter of "any", double-cranks (r1 shortest)."""
+    out = np.empty((n, 6))
+    kinds = np.zeros(n, dtype=int)                 # 0 crank-rocker, 1 double-crank
+    if grashof == "double-crank":
+        kinds[:] = 1
+    elif grashof == "any":
+        kinds[rng.random(n) < 0.25] = 1
+    r3 = _log_uniform(rng, 0.04, 5.0, n)
+    r4 = _log_uniform(rng, 0.04, 5.0, n)
+    frac = rng.uniform(0.06, 0.95, n)
+    # crank-rocker: r1 = 1, r3, r4 drawn, r2 the shortest with room s + l <= p + q
+    others = np.column_stack([np.ones(n), r3, r4])
+    longest = others.max(axis=1)
+    room = np.minimum(others.min(axis=1), others.sum(axis=1) - 2.0 * longest)
+    r2_cr = frac * room
+    # double-crank: the frame r1 = 1 shortest; r2, r3, r4 >= 1 with l + 1 <= p + q
+    r2_dc = _log_uniform(rng, 1.05, 4.0, n)
+    ok_cr = room > 0.02
+    out[:, 0] = 1.0
+    out[:, 1] = np.where(kinds == 0, r2_cr, r2_dc)
+    out[:, 2] = np.where(kinds == 0, r3, np.maximum(r3, 1.05))
+    out[:, 3] = np.where(kinds == 0, r4, np.maximum(r4, 1.05))
+    lengths = out[:, :4]
+    s, l = lengths.min(axis=1), lengths.max(axis=1)
+    grashof_ok = s + l <= lengths.sum(axis=1) - s - l - 0.02
+    valid = np.where(kinds == 0, ok_cr, grashof_ok)
+    # coupler point: polar about the crank pin A, radius a log-uniform multiple of the coupler r3 (half of
+    # the shapes) or of the frame r1 (the other half)
+    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
+    ang = rng.uniform(0.0, TWO_PI, n)
+    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    return out[valid]
+
+
+def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """(crank angles (samples,), complex coupler curves (S, samples)) of the shapes in their normalised
+    frame (O = 0, O' = 1); NaN where the loop does not close."""
+    theta = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+    d = {"r1": shapes[:, 0:1], "r2": shapes[:, 1:2], "r3": shapes[:, 2:3], "r4": shapes[:, 3:4],
+         "rcx": shapes[:, 4:5], "rcy": shapes[:, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
+    return theta, joint_positions(d, theta[None, :], branch)["P"]
+
+
+def scale_room(shapes: np.ndarray, bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per shape the scales s with s * (r1, r2, r3, r4, rcx, rcy) within their bounds ([lo, hi]; lo > hi: none)."""
+    v = shapes[:, :6]
+    lo_b, hi_b = bounds[:6, 0], bounds[:6, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b = lo_b / v, hi_b / v
+    lo = np.where(v > 0, a, np.where(v < 0, b, np.where(lo_b <= 0.0, 0.0, np.inf)))
+    hi = np.where(v > 0, b, np.where(v < 0, a, np.where(hi_b >= 0.0, np.inf, 0.0)))
+    return np.max(lo, axis=1), np.min(hi, axis=1)
+
+
+def _similarity(c: np.ndarray, t: np.ndarray, s_lo: np.ndarray, s_hi: np.ndarray):
+    """Best a, b (complex) of sum |a c + b - t|^2 over the last axis, |a| clipped to [s_lo, s_hi]; and that
+    residual.  c: (..., N), t: (N,), s_lo/s_hi broadcast over the leading axes."""
+    cm = c.mean(axis=-1, keepdims=True)
+    tm = t.mean()
+    cc, tc = c - cm, t - tm
+    aa = np.sum(np.abs(cc) ** 2, axis=-1)
+    cross = np.sum(np.conj(cc) * tc, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = cross / aa
+    mod = np.abs(a)
+    clipped = np.clip(mod, s_lo, s_hi)
+    a = np.where(mod > 0, a * (clipped / np.where(mod > 0, mod, 1.0)), clipped)
+    b = tm - a * cm[..., 0]
+    res = np.sum(np.abs(a[..., None] * c + b[..., None] - t) ** 2, axis=-1)
+    return a, b, res
+
+
+def trial_fractions(fractions: np.ndarray, signs: tuple, closed: bool) -> np.ndarray:
+    """(C, N) trial curve fractions of the targets (PHASES phases per direction; open arcs SPANS each)."""
+    rows = []
+    for sign in signs:
+        for span in ((1.0,) if closed else SPANS):
+            for k in range(PHASES):
+                rows.append((k / PHASES + sign * span * fractions) % 1.0)
+    return np.array(rows)
+
+
+def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarray, s_hi: np.ndarray):
+    """Screen one block of full-turn curves (B, K): (a, b, residual, curve index of each target)."""
+    nb, k = curves.shape
+    seg = np.abs(np.diff(np.concatenate([curves, curves[:, :1]], axis=1), axis=1))
+    cum = np.concatenate([np.zeros((nb, 1)), np.cumsum(seg, axis=1)], axis=1)
+    cum = cum[:, :-1] / cum[:, -1:]                       # (B, K) arc-length fraction of each sample
+    rows = np.arange(nb)[:, None, None]
+    flat = (cum + np.arange(nb)[:, None] * 2.0).ravel()   # rows apart by 2 (fractions are in [0, 1))
+    q = trials[None, :, :] + rows * 2.0
+    idx = np.clip(np.searchsorted(flat, q.ravel(), side="right").reshape(q.shape) - 1 - rows * k, 0, k - 1)
+    a, b, res = _similarity(curves[rows, idx], t, s_lo[:, None], s_hi[:, None])
+    best = np.argmin(np.where(np.isfinite(res), res, np.inf), axis=1)
+    pick = np.arange(nb)
+    a, b, res, idx = a[pick, best], b[pick, best], res[pick, best], idx[pick, best]
+    for _ in range(ICP_ROUNDS):
+        moved = a[:, None] * curves + b[:, None]                          # (B, K)
+        d2 = np.abs(moved[:, None, :] - t[None, :, None]) ** 2            # (B, N, K)
+        idx = np.argmin(d2, axis=2)
+        a2, b2, res2 = _similarity(curves[np.arange(nb)[:, None], idx], t, s_lo, s_hi)
+        better = res2 < res
+        a, b, res = np.where(better, a2, a), np.where(better, b2, b), np.where(better, res2, res)
+    return a, b, res
+
+
+def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, signs: tuple, closed: bool,
+           fractions: np.ndarray, seed: int, shapes: int = SHAPES) -> tuple[np.ndarray, np.ndarray]:
+    """(designs r1..theta0 in spec units, residual mm^2), best first, of the screened shapes that fit in
+    the bounds (see the module docstring)."""
+    rng = np.random.default_rng([seed, SEED_TAG])
+    blocks, count = [], 0
+    for _ in range(40):                  # draw until `shapes` valid ones (a bounded number of draws)
+        blocks.append(sample_shapes(rng, shapes, grashof))
+        count += len(blocks[-1])
+        if count >= shapes:
+            break
+    cand = np.concatenate(blocks)[:shapes]
+    _, curves = shape_curves(cand, branch, GRID)
+    ok = np.all(np.isfinite(curves), axis=1)
+    cand, curves = cand[ok], curves[ok]
+    s_lo, s_hi = scale_room(cand, bounds)
+    fit = s_lo <= s_hi
+    cand, curves, s_lo, s_hi = cand[fit], curves[fit], s_lo[fit], s_hi[fit]
+    t = targets[:, 0] + 1j * targets[:, 1]
+    trials = trial_fractions(fractions, signs, closed)
+    a = np.empty(len(cand), complex)
+    b = np.empty(len(cand), complex)
+    res = np.empty(len(cand))
+    for lo in range(0, len(cand), CHUNK):
+        sl = slice(lo, lo + CHUNK)
+        a[sl], b[sl], res[sl] = _block(curves[sl], t, trials, s_lo[sl], s_hi[sl])
+    scale = np.abs(a)
+    design = np.column_stack([cand[:, :6] * scale[:, None], b.real, b.imag,
+                              np.degrees(np.angle(a)) % 360.0])
+    lo, hi = bounds[:, 0], bounds[:, 1]
+    theta0 = design[:, 8]
+    if hi[8] - lo[8] >= 360.0:
+        design[:, 8] = lo[8] + (theta0 - lo[8]) % 360.0
+    inside = np.all((design >= lo - 1e-9) & (design <= hi + 1e-9), axis=1) & np.isfinite(res)
+    design, res = np.clip(design[inside], lo, hi), res[inside]
+    order = np.argsort(res, kind="stable")
+    return design[order], res[order]
