@@ -224,7 +224,7 @@ class CompiledNLP:
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
         self._watch = None
-        if watched:      # one watch per solver (the scaled one has 2 n_w + 1 more parameters)
+        if watched:      # one watch per solver (the scaled one has n_w + 1 more parameters: s and the objective's scale)
             self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
@@ -286,7 +286,9 @@ class CompiledNLP:
         watcher = None
         if self._watch is not None:
             watcher = self._watch if solver is self.solver else self._scaled_watch
-            watcher.rule, watcher.scale, watcher.calls = watch, sf, 0
+            # IPOPT minimises c_f f / sf (c_f: the objective's length-unit factor; sf = c_f in the scaled solver,
+            # 1 in the unscaled one), so sf / c_f gives the rule f in the problem's own units either way
+            watcher.rule, watcher.scale, watcher.calls = watch, sf / self._objective_unit, 0
         elif watch is not None:
             raise ValueError("solve(watch=...) needs a CompiledNLP built with watched=True")
         t0 = time.perf_counter()

@@ -345,3 +345,24 @@ def test_every_library_problem_every_start(record_property):
     print("\n".join(lines))
     bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and r[f]["ratio"] <= ITERATION_RATIO)]
     assert not bad, bad
+
+
+@pytest.mark.parametrize("factor, scaling", [(1.0, "nominal"), (1e-3, "nominal"), (1e3, "nominal"), (1e-3, "none")])
+def test_a_watched_solve_sees_the_objective_in_the_problem_s_units(factor, scaling):
+    """The iteration watch (fourbar_path's early cut) is handed f in the kind's units whatever unit IPOPT works
+    in: at iteration 0 it is f(x0) exactly, and at the end the optimum 7 mm^2 (a merge once handed it c_f f)."""
+    import casadi as ca
+    from synthesis.core.ipopt import CompiledNLP
+    from synthesis.core.problem import ObjectiveParts, Problem
+
+    x = ca.SX.sym("x", 2)
+    problem = Problem("watched", x, [0.0, 0.0], [100.0, 100.0], [], [],
+                      ObjectiveParts(f=(x[0] - 30) ** 2 + (x[1] - 40) ** 2 + 7.0), x_units=["mm", "mm"],
+                      objective_unit="mm^2")
+    with ipopt.length_unit(factor), ipopt.variable_scaling(scaling):
+        nlp = CompiledNLP(problem, watched=True)
+    seen = []
+    out = nlp.solve(0, np.array([1.0, 2.0]), watch=lambda k, f: seen.append(f) or False)
+    assert seen[0] == pytest.approx(29.0 ** 2 + 38.0 ** 2 + 7.0, rel=1e-12)
+    assert seen[-1] == pytest.approx(7.0, rel=1e-6)
+    assert out.objective == pytest.approx(7.0, rel=1e-6)
