@@ -220,6 +220,7 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
     passed: dict[str, int] = {}
     worst: dict[str, float] = {}
     all_pass = nominal_pass = unevaluable = 0
+    verdicts: list[dict[str, bool]] = []     # per evaluated sample: rule name -> satisfied
     t0 = time.perf_counter()
     for i in range(samples):
         trial = dict(design)
@@ -231,8 +232,8 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
             unevaluable += 1
             continue
         ok = at_nominal = True
+        verdicts.append({r.name: bool(r.satisfied) for r in records})
         for r in records:
-            passed[r.name] = passed.get(r.name, 0) + int(bool(r.satisfied))
             m = -math.inf if r.margin is None else r.margin
             worst[r.name] = min(worst.get(r.name, math.inf), m)
             ok = ok and bool(r.satisfied)
@@ -240,6 +241,13 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
                 at_nominal = at_nominal and bool(r.satisfied)
         all_pass += int(ok)
         nominal_pass += int(at_nominal)
+    # a <rule>@envelope row is written only where the rule's value changes over the grid; in a sample without it
+    # the rule has its nominal value at every operating point, so its nominal verdict is its verdict over the range
+    every_name = list(dict.fromkeys(n for v in verdicts for n in v))
+    for held_in in verdicts:
+        for name in every_name:
+            held = held_in.get(name, held_in.get(name[:-len(SUFFIX)]) if name.endswith(SUFFIX) else None)
+            passed[name] = passed.get(name, 0) + int(bool(held))
     out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
            "pass_rate": all_pass / samples if samples else None, "unevaluable": unevaluable,
            "rules": {n: {"pass_rate": passed[n] / samples, "worst_margin": worst[n] if math.isfinite(worst[n]) else None}
