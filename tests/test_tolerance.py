@@ -258,7 +258,8 @@ def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explai
 
 #: the operating conditions each kind declares to the sensitivity analysis
 OPERATING = {"planting_fourbar": {"forward_speed", "crank_speed"}, "guide_tube": {"mu", "forward_speed"},
-             "tillage_linkage": {"crank_speed", "forward_speed"}}
+             "tillage_linkage": {"crank_speed", "forward_speed"}, "clamp_cam": {"crank_speed"},
+             "comb_finger": {"machine_speed", "row_spacing"}}
 
 
 @pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
@@ -374,19 +375,35 @@ def test_nominal_planting_analysis_has_the_analytic_operating_derivatives():
     assert rows["p4p6_distance"]["operating_sensitivity"]["forward_speed"] == pytest.approx(60.2068, abs=1e-3)
 
 
-@pytest.mark.parametrize("spec, objective, iterations", [("planting_arm/redesign_from_example1.toml", 0.5611548410639178, 18),
-                                                         ("guide_tube/uniform_spacing.toml", 8.758766813306126, 13),
-                                                         ("tillage/tillage_redesign.toml", 373.06012290551644, 244)])
-def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, objective, iterations):
+def _cam_in_seconds_with_a_cap(model):
+    """The library cam with its windows timed in seconds (the same windows: one turn is 1 s at its 60 r/min) and a
+    follower acceleration cap of 40,000 mm/s^2 (its 14 deg modified sine return peaks at 36,552): both rules then
+    read the crank speed, which in the library's cams (degree clocks, no cap) no rule does."""
+    t = model.timing
+    timing = t.model_copy(update={"clock": "s", "hold_near": [(a / 360.0, b / 360.0) for a, b in t.hold_near],
+                                  "hold_far": [(a / 360.0, b / 360.0) for a, b in t.hold_far]})
+    return model.model_copy(update={"timing": timing, "rules": model.rules.model_copy(update={"max_acceleration": 40000.0})})
+
+
+@pytest.mark.parametrize("spec, variant, objective, iterations", [
+    ("planting_arm/redesign_from_example1.toml", None, 0.5611548410639178, 18),
+    ("guide_tube/uniform_spacing.toml", None, 8.758766813306126, 13),
+    ("tillage/tillage_redesign.toml", None, 373.06012290551644, 244),
+    ("clamp_cam/opening_cam_redesign_modified_sine.toml", None, 68.56927256227823, 33),
+    ("clamp_cam/opening_cam_redesign_modified_sine.toml", _cam_in_seconds_with_a_cap, 68.56927256227823, 33),
+    ("comb_finger/redesign_max_combing.toml", None, 56.90966723057299, 8)])
+def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, variant, objective, iterations):
     """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
     spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start
-    ends at the objective and iteration count measured on main before the change, to the bit.  The analysis's
-    symbolic build is the same problem (its conditions resolved at their nominal values): same iterations, the
-    objective to rounding."""
+    ends at the objective and iteration count measured on main before the change, to the bit (clamp_cam and
+    comb_finger: measured on the integration branch at cc5d746, before their symbols).  The analysis's symbolic
+    build is the same problem (its conditions resolved at their nominal values): same iterations, the objective to
+    rounding."""
     from synthesis.core.problem import operating_as_symbols
     loaded = load_spec(LIBRARY / spec)
+    model = loaded.model if variant is None else variant(loaded.model)
     solving = kinds.solving_kind(loaded.kind).solver_side()
-    setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
+    setting = Setting(model, 0, solving.prepare(model))
     nominal = solving.build(setting, False)
     assert nominal.problem.operating_source is None
     with operating_as_symbols():
@@ -448,3 +465,87 @@ def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_
     assert worst < above - 3.0          # the box costs the top about 4.45 mm of height here: a real difference
     g, lbg, _ = rows["nominal"]
     assert lbg[k] == 2.0 and g[k] == pytest.approx(above, abs=1e-7)
+
+
+@pytest.mark.parametrize("seconds", [False, True])
+def test_clamp_cam_crank_speed_sensitivities_equal_central_differences_and_the_analytic_ones(seconds):
+    """clamp_cam declares its crank speed n (r/min) to the analysis.  On the library cam (degree clock, no cap) and
+    on it with the windows in seconds and an acceleration cap: every rule's derivative w.r.t. n, sample by sample
+    (the analysis samples the re-check's grid), equals central differences (1e-6 relative) of the kind's float
+    re-check at n +- h; and the analytic ones: the follower acceleration a = omega^2 s''(phi) gives da/dn = 2 a / n;
+    a window timed in seconds is [lo, hi] deg = 6 n [t_lo, t_hi], so the margins (window start - dwell start, dwell
+    end - window end) move by (lo, -hi) / n, and by 0 on a degree clock; the pressure angles and the working radius
+    are cam geometry in degrees of cam angle, no time in them: exactly 0."""
+    from synthesis.spec.operating import at_operating
+    loaded = load_spec(LIBRARY / "clamp_cam/opening_cam_redesign_modified_sine.toml")
+    spec = _cam_in_seconds_with_a_cap(loaded.model) if seconds else loaded.model
+    kind = kinds.get("clamp_cam")
+    solving = kind.solver_side()
+    lin = linearise(kind, spec, kind.checker()(loaded).design)
+    names, units, W, nominal = lin.operating
+    assert (names, units, nominal) == (("crank_speed",), ("r/min",), {"crank_speed": 60.0})
+    n0 = 60.0
+    h = 1e-6 * n0
+
+    def rules_at(n):
+        at = at_operating(spec, {"crank_speed": n})
+        return _rules(solving, Setting(at, 0, solving.prepare(at)), lin.design)
+    up, dn, mid = rules_at(n0 + h), rules_at(n0 - h), rules_at(n0)
+    windows = {"timing_hold_near[0]": (0.0, 146.0), "timing_hold_far[0]": (186.0, 346.0)}     # deg at 60 r/min
+    assert {r.name for r in lin.rules} == {"pressure_angle_rise", "pressure_angle_return", "no_undercut", *windows,
+                                           *(["max_acceleration"] if seconds else [])}
+    moving = 0
+    for k, rule in enumerate(lin.rules):
+        values, w = lin.values[lin.slices[k]], W[lin.slices[k], 0]
+        cd = (np.asarray(up[rule.name].expr, float) - np.asarray(dn[rule.name].expr, float)) / (2 * h)
+        if rule.name == "max_acceleration":
+            # the NLP bounds the signed acceleration, the float rule its magnitude, at the same samples
+            assert np.allclose(np.abs(values), np.asarray(mid[rule.name].expr, float), rtol=1e-9, atol=0.0)
+            assert np.max(np.abs(values)) == pytest.approx(36552.2009, abs=1e-3)          # mm/s^2
+            assert np.allclose(w, 2.0 * values / n0, rtol=1e-9, atol=1e-12)
+            ad = np.sign(values) * w
+        elif rule.name in windows:
+            assert np.allclose(values, np.asarray(mid[rule.name].expr, float), atol=1e-9)
+            lo, hi = windows[rule.name]
+            assert w == pytest.approx([lo / n0, -hi / n0] if seconds else [0.0, 0.0], abs=1e-12)
+            ad = w
+        else:
+            assert np.all(w == 0.0) and np.all(cd == 0.0), rule.name
+            continue
+        assert np.all(np.abs(ad - cd) <= 1e-6 * max(np.max(np.abs(ad)), 1e-3)), (rule.name, ad, cd)
+        moving += int(np.any(ad != 0.0))
+    assert moving == (3 if seconds else 0)
+    # the acceleration's worst sample, as the stack-up reports it: 2 x -36552.2 / 60 (m m/s^2 per r/min)
+    if seconds:
+        row = {r["name"]: r for r in stack_up(lin, np.zeros(lin.dmap.n))}["max_acceleration"]
+        assert row["operating_sensitivity"]["crank_speed"] == pytest.approx(-1218.40670, abs=1e-4)
+
+
+def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
+    """comb_finger reads its machine speed only in the combing angle (eq 21, the objective) and its row spacing only
+    in unit_within_row's limit (half of it), so no rule's value depends on either: the analysis declares both,
+    reports the derivative 0 for every rule (and says so in report.md) rather than leaving them out.  The re-check
+    agrees: at +-1 % of each condition every rule's value is unchanged, to the bit; what does move is
+    unit_within_row's margin (by half the spacing's change)."""
+    from synthesis.spec.operating import at_operating
+    from synthesis.tolerance.analysis import analyse
+    from synthesis.tolerance.output import table
+    loaded = load_spec(LIBRARY / "comb_finger/redesign_max_combing.toml")
+    kind = kinds.get("comb_finger")
+    solving = kind.solver_side()
+    design = kind.checker()(loaded).design
+    facts = analyse(kind, loaded.model, design, length=0.2, angle=0.3, samples=3, seed=0)
+    assert facts["operating"] == {"machine_speed": {"unit": "m/s", "nominal": 0.4},
+                                  "row_spacing": {"unit": "mm", "nominal": 450.0}}
+    assert facts["operating_dependence"] == {"machine_speed": [], "row_spacing": []}
+    assert len(facts["stack_up"]) == 7
+    assert all(r["operating_sensitivity"] == {"machine_speed": 0.0, "row_spacing": 0.0} for r in facts["stack_up"])
+    assert "No rule's value depends on machine_speed, row_spacing" in table(facts)
+    base = _records(solving, Setting(loaded.model, 0, solving.prepare(loaded.model)), facts["design"])
+    for name, nominal in (("machine_speed", 0.4), ("row_spacing", 450.0)):
+        for factor in (0.99, 1.01):
+            at = at_operating(loaded.model, {name: nominal * factor})
+            moved = _records(solving, Setting(at, 0, solving.prepare(at)), facts["design"])
+            assert {r: moved[r].value for r in base} == {r: base[r].value for r in base}, (name, factor)
+            shift = moved["unit_within_row"].margin - base["unit_within_row"].margin
+            assert shift == pytest.approx(0.5 * nominal * (factor - 1.0) if name == "row_spacing" else 0.0, abs=1e-9)
