@@ -391,12 +391,14 @@ def _cam_in_seconds_with_a_cap(model):
     ("tillage/tillage_redesign.toml", None, 373.06012290551644, 244),
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", None, 68.56927256227823, 33),
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", _cam_in_seconds_with_a_cap, 68.56927256227823, 33),
-    ("comb_finger/redesign_max_combing.toml", None, 56.90966723057299, 8)])
+    ("comb_finger/redesign_max_combing.toml", None, 56.90966723057299, 8),
+    ("combing_chain/redesign_window_80_100.toml", None, 0.39935765896037506, 12),
+    ("combing_chain/redesign_two_speed.toml", None, 1.8261361473864457, 7)])
 def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, variant, objective, iterations):
     """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
     spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start
-    ends at the objective and iteration count measured on main before the change, to the bit (clamp_cam and
-    comb_finger: measured on the integration branch at cc5d746, before their symbols).  The analysis's symbolic
+    ends at the objective and iteration count measured on main before the change, to the bit (clamp_cam,
+    comb_finger and combing_chain: measured on the integration branch at cc5d746, before their symbols).  The analysis's symbolic
     build is the same problem (its conditions resolved at their nominal values): same iterations, the objective to
     rounding."""
     from synthesis.core.problem import operating_as_symbols
@@ -549,3 +551,63 @@ def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
             assert {r: moved[r].value for r in base} == {r: base[r].value for r in base}, (name, factor)
             shift = moved["unit_within_row"].margin - base["unit_within_row"].margin
             assert shift == pytest.approx(0.5 * nominal * (factor - 1.0) if name == "row_spacing" else 0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("spec", ["combing_chain/redesign_window_80_100.toml", "combing_chain/redesign_two_speed.toml"])
+def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the_analytic_ones(spec):
+    """combing_chain's operating conditions are ranges its rules already hold over (machine speed V_s, initial
+    plant angle beta): the analysis declares their four ends.  Every rule's derivative w.r.t. every end equals
+    central differences (1e-6 relative) of the float re-check with that end moved; and the analytic ones: the tine
+    reaches the plant while V_r - V_s cos(theta) > 0, worst at the fastest machine, so d/d V_s hi = -cos(theta) (0
+    for the lower end, and for a first gear that stops at the switch speed); delta depends on V_r / V_s only (the
+    chain travel K D), so at a window rule's worst corner d delta / d V_s = -(V_r / V_s) d delta / d V_r, its
+    derivative w.r.t. the gear's chain speed (a design sensitivity of the same analysis)."""
+    loaded = load_spec(LIBRARY / spec)
+    model = loaded.model
+    kind = kinds.get("combing_chain")
+    solving = kind.solver_side()
+    lin = linearise(kind, model, kind.checker()(loaded).design)
+    names = lin.operating[0]
+    assert names == ("machine_speed_lo", "machine_speed_hi", "plant_angle_lo", "plant_angle_hi")
+    rows = stack_up(lin, np.zeros(lin.dmap.n))
+    op = model.operation
+
+    def moved(name, step):
+        field, end = name.rsplit("_", 1)
+        lo, hi = getattr(op, field)
+        ends = (lo + step, hi) if end == "lo" else (lo, hi + step)
+        at = model.model_copy(update={"operation": op.model_copy(update={field: ends})})
+        # in rule order: a window rule's name carries the range end it is worst at (..._Vs0.55), which moves
+        records = list(_records(solving, Setting(at, 0, solving.prepare(at)), lin.design).values())
+        assert [r.name.split("_at_")[0] for r in records] == [r["name"].split("_at_")[0] for r in rows]
+        return records
+    compared = moving = 0
+    for w in names:
+        h = 1e-6 * max(1.0, abs(lin.operating[3][w]))
+        up, dn = moved(w, h), moved(w, -h)
+        for k, row in enumerate(rows):
+            cd = (up[k].value - dn[k].value) / (2 * h)
+            ad = row["operating_sensitivity"][w]
+            grad = max([abs(v) for v in row["sensitivity"].values()] + [abs(v) for v in row["operating_sensitivity"].values()])
+            assert abs(ad - cd) <= 1e-6 * max(grad, 1e-3), (row["name"], w, ad, cd)
+            compared += 1
+            moving += abs(cd) > 1e-6
+    assert compared == 4 * len(rows) and moving >= 5
+    cos_theta = math.cos(math.radians(model.chain.theta))
+    vr = {k: v for k, v in lin.design.items() if k.startswith("chain_speed")}
+    last = sorted(vr)[-1]                   # the gear that runs up to V_s hi
+    for row in rows:
+        sens = row["operating_sensitivity"]
+        if row["name"].endswith("tine_reaches_plant"):
+            top = last in row["sensitivity"] and row["sensitivity"][last] == 1.0
+            assert sens == pytest.approx({"machine_speed_lo": 0.0, "machine_speed_hi": -cos_theta if top else 0.0,
+                                          "plant_angle_lo": 0.0, "plant_angle_hi": 0.0}, abs=1e-12), row["name"]
+            continue
+        gear = next(k for k in vr if abs(row["sensitivity"][k]) > 0)
+        end = "hi" if row["name"].endswith(f"Vs{op.machine_speed[1]:g}") else "lo" if row["name"].endswith(
+            f"Vs{op.machine_speed[0]:g}") else None
+        if end is None:                     # a corner at the (free) switch speed: no range end there
+            assert sens["machine_speed_lo"] == sens["machine_speed_hi"] == 0.0
+            continue
+        vs = op.machine_speed[1 if end == "hi" else 0]
+        assert sens[f"machine_speed_{end}"] == pytest.approx(-lin.design[gear] / vs * row["sensitivity"][gear], rel=1e-9)
