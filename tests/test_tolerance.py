@@ -611,3 +611,37 @@ def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the
             continue
         vs = op.machine_speed[1 if end == "hi" else 0]
         assert sens[f"machine_speed_{end}"] == pytest.approx(-lin.design[gear] / vs * row["sensitivity"][gear], rel=1e-9)
+
+
+def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve_is_unchanged():
+    """fourbar_path's crank_speed only scales the trajectory's time (no rule reads it): the analysis declares it and
+    reports d rule / d crank speed = 0 for every rule (the re-check's values at +-1 % are the same, to the bit).  The
+    solve's NLP is unchanged: one IPOPT solve from the comparison design (DESIGNS: the library spec's own start, on
+    the Grashof limit, is no start to compare at) runs to the 1000-iteration cap at the objective measured on the
+    integration branch at cc5d746, to the bit, and the analysis's symbolic build does the same."""
+    from synthesis.core.problem import operating_as_symbols
+    from synthesis.spec.operating import at_operating
+    from synthesis.tolerance.analysis import operating_dependence
+    kind = kinds.get("fourbar_path")
+    loaded = load_spec(LIBRARY / kind.example)
+    solving = kind.solver_side()
+    lin = linearise(kind, loaded.model, DESIGNS["fourbar_path"])
+    assert lin.operating[0] == ("crank_speed",) and lin.operating[3] == {"crank_speed": 60.0}
+    assert operating_dependence(lin) == {"crank_speed": []}
+    rows = stack_up(lin, np.zeros(lin.dmap.n))
+    assert len(rows) >= 3 and all(r["operating_sensitivity"] == {"crank_speed": 0.0} for r in rows)
+    base = _records(solving, Setting(loaded.model, 0, solving.prepare(loaded.model)), lin.design)
+    for n in (59.4, 60.6):
+        at = at_operating(loaded.model, {"crank_speed": n})
+        moved = _records(solving, Setting(at, 0, solving.prepare(at)), lin.design)
+        assert {r: moved[r].value for r in base} == {r: base[r].value for r in base}
+    setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
+    nominal = solving.build(setting, False)
+    assert nominal.problem.operating_source is None
+    with operating_as_symbols():
+        symbolic = solving.build(setting, False)
+    assert symbolic.problem.operating_source is not None
+    x0 = np.array([DESIGNS["fourbar_path"][n] for n in nominal.names])
+    solved, again = nominal.solve(0, x0), symbolic.solve(0, x0)
+    assert (solved.objective, solved.iterations) == (0.0007600964028870801, 1000)
+    assert again.iterations == 1000 and again.objective == pytest.approx(solved.objective, rel=1e-12)
