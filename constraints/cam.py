@@ -58,17 +58,20 @@ def undercut_rule(kappa, roller_radius, min_working_radius: float, flank: str = 
     return rule if note is None else Rule(name, working, float(min_working_radius), None, "mm", 1.0, f"{where}; {note}")
 
 
-def timing_rule(kind: str, index: int, window_deg: tuple[float, float], dwell_start, dwell_end) -> Rule:
+def timing_rule(kind: str, index: int, window_deg: tuple, dwell_start, dwell_end,
+                shown: tuple[float, float] | None = None) -> Rule:
     """The dwell covers the window: both margins (window start - dwell start, dwell end - window end) >= 0.
 
-    ``window_deg`` is already unwrapped to the turn the dwell is measured on.
+    ``window_deg`` is already unwrapped to the turn the dwell is measured on; its ends may be CasADi symbols (a
+    window timed in seconds, converted at a symbolic crank speed), and then ``shown`` (its numbers) describes it.
     """
     a, b = window_deg
+    sa, sb = (a, b) if shown is None else shown
     name = f"timing_{kind}[{index}]"
     level = "rest (near dwell)" if kind == "hold_near" else "full stroke (far dwell)"
-    where = f"follower at {level} through {a % 360:g}-{b % 360 if b % 360 else 360:g} deg"
+    where = f"follower at {level} through {sa % 360:g}-{sb % 360 if sb % 360 else 360:g} deg"
     margins = (a - dwell_start, dwell_end - b)
-    if _symbolic(dwell_start) or _symbolic(dwell_end):
+    if _symbolic(dwell_start) or _symbolic(dwell_end) or _symbolic(a) or _symbolic(b):
         return Rule(name, ca.vertcat(*margins), 0.0, None, "deg", 1.0, where)
     return Rule(name, np.array(margins, dtype=float), 0.0, None, "deg", 1.0, where)
 

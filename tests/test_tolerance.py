@@ -258,7 +258,8 @@ def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explai
 
 #: the operating conditions each kind declares to the sensitivity analysis
 OPERATING = {"planting_fourbar": {"forward_speed", "crank_speed"}, "guide_tube": {"mu", "forward_speed"},
-             "tillage_linkage": {"crank_speed", "forward_speed"}}
+             "tillage_linkage": {"crank_speed", "forward_speed"}, "clamp_cam": {"crank_speed"},
+             "comb_finger": {"machine_speed", "row_spacing"}}
 
 
 @pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
@@ -374,19 +375,37 @@ def test_nominal_planting_analysis_has_the_analytic_operating_derivatives():
     assert rows["p4p6_distance"]["operating_sensitivity"]["forward_speed"] == pytest.approx(60.2068, abs=1e-3)
 
 
-@pytest.mark.parametrize("spec, objective, iterations", [("planting_arm/redesign_from_example1.toml", 0.5611548410639178, 18),
-                                                         ("guide_tube/uniform_spacing.toml", 8.758766813306126, 13),
-                                                         ("tillage/tillage_redesign.toml", 373.06012290551644, 244)])
-def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, objective, iterations):
+def _cam_in_seconds_with_a_cap(model):
+    """The library cam with its windows timed in seconds (the same windows: one turn is 1 s at its 60 r/min) and a
+    follower acceleration cap of 40,000 mm/s^2 (its 14 deg modified sine return peaks at 36,552): both rules then
+    read the crank speed, which in the library's cams (degree clocks, no cap) no rule does."""
+    t = model.timing
+    timing = t.model_copy(update={"clock": "s", "hold_near": [(a / 360.0, b / 360.0) for a, b in t.hold_near],
+                                  "hold_far": [(a / 360.0, b / 360.0) for a, b in t.hold_far]})
+    return model.model_copy(update={"timing": timing, "rules": model.rules.model_copy(update={"max_acceleration": 40000.0})})
+
+
+@pytest.mark.parametrize("spec, variant, objective, iterations", [
+    ("planting_arm/redesign_from_example1.toml", None, 0.5611548410639178, 18),
+    ("guide_tube/uniform_spacing.toml", None, 8.758766813306126, 13),
+    ("tillage/tillage_redesign.toml", None, 373.06012290551644, 244),
+    ("clamp_cam/opening_cam_redesign_modified_sine.toml", None, 68.56927256227823, 33),
+    ("clamp_cam/opening_cam_redesign_modified_sine.toml", _cam_in_seconds_with_a_cap, 68.56927256227823, 33),
+    ("comb_finger/redesign_max_combing.toml", None, 56.90966723057299, 8),
+    ("combing_chain/redesign_window_80_100.toml", None, 0.39935765896037506, 12),
+    ("combing_chain/redesign_two_speed.toml", None, 1.8261361473864457, 7)])
+def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, variant, objective, iterations):
     """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
     spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start
-    ends at the objective and iteration count measured on main before the change, to the bit.  The analysis's
-    symbolic build is the same problem (its conditions resolved at their nominal values): same iterations, the
-    objective to rounding."""
+    ends at the objective and iteration count measured on main before the change, to the bit (clamp_cam,
+    comb_finger and combing_chain: measured on the integration branch at cc5d746, before their symbols).  The analysis's symbolic
+    build is the same problem (its conditions resolved at their nominal values): same iterations, the objective to
+    rounding."""
     from synthesis.core.problem import operating_as_symbols
     loaded = load_spec(LIBRARY / spec)
+    model = loaded.model if variant is None else variant(loaded.model)
     solving = kinds.solving_kind(loaded.kind).solver_side()
-    setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
+    setting = Setting(model, 0, solving.prepare(model))
     nominal = solving.build(setting, False)
     assert nominal.problem.operating_source is None
     with operating_as_symbols():
@@ -448,3 +467,181 @@ def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_
     assert worst < above - 3.0          # the box costs the top about 4.45 mm of height here: a real difference
     g, lbg, _ = rows["nominal"]
     assert lbg[k] == 2.0 and g[k] == pytest.approx(above, abs=1e-7)
+
+
+@pytest.mark.parametrize("seconds", [False, True])
+def test_clamp_cam_crank_speed_sensitivities_equal_central_differences_and_the_analytic_ones(seconds):
+    """clamp_cam declares its crank speed n (r/min) to the analysis.  On the library cam (degree clock, no cap) and
+    on it with the windows in seconds and an acceleration cap: every rule's derivative w.r.t. n, sample by sample
+    (the analysis samples the re-check's grid), equals central differences (1e-6 relative) of the kind's float
+    re-check at n +- h; and the analytic ones: the follower acceleration a = omega^2 s''(phi) gives da/dn = 2 a / n;
+    a window timed in seconds is [lo, hi] deg = 6 n [t_lo, t_hi], so the margins (window start - dwell start, dwell
+    end - window end) move by (lo, -hi) / n, and by 0 on a degree clock; the pressure angles and the working radius
+    are cam geometry in degrees of cam angle, no time in them: exactly 0."""
+    from synthesis.spec.operating import at_operating
+    loaded = load_spec(LIBRARY / "clamp_cam/opening_cam_redesign_modified_sine.toml")
+    spec = _cam_in_seconds_with_a_cap(loaded.model) if seconds else loaded.model
+    kind = kinds.get("clamp_cam")
+    solving = kind.solver_side()
+    lin = linearise(kind, spec, kind.checker()(loaded).design)
+    names, units, W, nominal = lin.operating
+    assert (names, units, nominal) == (("crank_speed",), ("r/min",), {"crank_speed": 60.0})
+    n0 = 60.0
+    h = 1e-6 * n0
+
+    def rules_at(n):
+        at = at_operating(spec, {"crank_speed": n})
+        return _rules(solving, Setting(at, 0, solving.prepare(at)), lin.design)
+    up, dn, mid = rules_at(n0 + h), rules_at(n0 - h), rules_at(n0)
+    windows = {"timing_hold_near[0]": (0.0, 146.0), "timing_hold_far[0]": (186.0, 346.0)}     # deg at 60 r/min
+    assert {r.name for r in lin.rules} == {"pressure_angle_rise", "pressure_angle_return", "no_undercut", *windows,
+                                           *(["max_acceleration"] if seconds else [])}
+    moving = 0
+    for k, rule in enumerate(lin.rules):
+        values, w = lin.values[lin.slices[k]], W[lin.slices[k], 0]
+        cd = (np.asarray(up[rule.name].expr, float) - np.asarray(dn[rule.name].expr, float)) / (2 * h)
+        if rule.name == "max_acceleration":
+            # the NLP bounds the signed acceleration, the float rule its magnitude, at the same samples
+            assert np.allclose(np.abs(values), np.asarray(mid[rule.name].expr, float), rtol=1e-9, atol=0.0)
+            assert np.max(np.abs(values)) == pytest.approx(36552.2009, abs=1e-3)          # mm/s^2
+            assert np.allclose(w, 2.0 * values / n0, rtol=1e-9, atol=1e-12)
+            ad = np.sign(values) * w
+        elif rule.name in windows:
+            assert np.allclose(values, np.asarray(mid[rule.name].expr, float), atol=1e-9)
+            lo, hi = windows[rule.name]
+            assert w == pytest.approx([lo / n0, -hi / n0] if seconds else [0.0, 0.0], abs=1e-12)
+            ad = w
+        else:
+            assert np.all(w == 0.0) and np.all(cd == 0.0), rule.name
+            continue
+        assert np.all(np.abs(ad - cd) <= 1e-6 * max(np.max(np.abs(ad)), 1e-3)), (rule.name, ad, cd)
+        moving += int(np.any(ad != 0.0))
+    assert moving == (3 if seconds else 0)
+    # the acceleration's worst sample, as the stack-up reports it: 2 x -36552.2 / 60 (m m/s^2 per r/min)
+    if seconds:
+        row = {r["name"]: r for r in stack_up(lin, np.zeros(lin.dmap.n))}["max_acceleration"]
+        assert row["operating_sensitivity"]["crank_speed"] == pytest.approx(-1218.40670, abs=1e-4)
+
+
+def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
+    """comb_finger reads its machine speed only in the combing angle (eq 21, the objective) and its row spacing only
+    in unit_within_row's limit (half of it), so no rule's value depends on either: the analysis declares both,
+    reports the derivative 0 for every rule (and says so in report.md) rather than leaving them out.  The re-check
+    agrees: at +-1 % of each condition every rule's value is unchanged, to the bit; what does move is
+    unit_within_row's margin (by half the spacing's change)."""
+    from synthesis.spec.operating import at_operating
+    from synthesis.tolerance.analysis import analyse
+    from synthesis.tolerance.output import table
+    loaded = load_spec(LIBRARY / "comb_finger/redesign_max_combing.toml")
+    kind = kinds.get("comb_finger")
+    solving = kind.solver_side()
+    design = kind.checker()(loaded).design
+    facts = analyse(kind, loaded.model, design, length=0.2, angle=0.3, samples=3, seed=0)
+    assert facts["operating"] == {"machine_speed": {"unit": "m/s", "nominal": 0.4},
+                                  "row_spacing": {"unit": "mm", "nominal": 450.0}}
+    assert facts["operating_dependence"] == {"machine_speed": [], "row_spacing": []}
+    assert len(facts["stack_up"]) == 7
+    assert all(r["operating_sensitivity"] == {"machine_speed": 0.0, "row_spacing": 0.0} for r in facts["stack_up"])
+    assert "No rule's value depends on machine_speed, row_spacing" in table(facts)
+    base = _records(solving, Setting(loaded.model, 0, solving.prepare(loaded.model)), facts["design"])
+    for name, nominal in (("machine_speed", 0.4), ("row_spacing", 450.0)):
+        for factor in (0.99, 1.01):
+            at = at_operating(loaded.model, {name: nominal * factor})
+            moved = _records(solving, Setting(at, 0, solving.prepare(at)), facts["design"])
+            assert {r: moved[r].value for r in base} == {r: base[r].value for r in base}, (name, factor)
+            shift = moved["unit_within_row"].margin - base["unit_within_row"].margin
+            assert shift == pytest.approx(0.5 * nominal * (factor - 1.0) if name == "row_spacing" else 0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("spec", ["combing_chain/redesign_window_80_100.toml", "combing_chain/redesign_two_speed.toml"])
+def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the_analytic_ones(spec):
+    """combing_chain's operating conditions are ranges its rules already hold over (machine speed V_s, initial
+    plant angle beta): the analysis declares their four ends.  Every rule's derivative w.r.t. every end equals
+    central differences (1e-6 relative) of the float re-check with that end moved; and the analytic ones: the tine
+    reaches the plant while V_r - V_s cos(theta) > 0, worst at the fastest machine, so d/d V_s hi = -cos(theta) (0
+    for the lower end, and for a first gear that stops at the switch speed); delta depends on V_r / V_s only (the
+    chain travel K D), so at a window rule's worst corner d delta / d V_s = -(V_r / V_s) d delta / d V_r, its
+    derivative w.r.t. the gear's chain speed (a design sensitivity of the same analysis)."""
+    loaded = load_spec(LIBRARY / spec)
+    model = loaded.model
+    kind = kinds.get("combing_chain")
+    solving = kind.solver_side()
+    lin = linearise(kind, model, kind.checker()(loaded).design)
+    names = lin.operating[0]
+    assert names == ("machine_speed_lo", "machine_speed_hi", "plant_angle_lo", "plant_angle_hi")
+    rows = stack_up(lin, np.zeros(lin.dmap.n))
+    op = model.operation
+
+    def moved(name, step):
+        field, end = name.rsplit("_", 1)
+        lo, hi = getattr(op, field)
+        ends = (lo + step, hi) if end == "lo" else (lo, hi + step)
+        at = model.model_copy(update={"operation": op.model_copy(update={field: ends})})
+        # in rule order: a window rule's name carries the range end it is worst at (..._Vs0.55), which moves
+        records = list(_records(solving, Setting(at, 0, solving.prepare(at)), lin.design).values())
+        assert [r.name.split("_at_")[0] for r in records] == [r["name"].split("_at_")[0] for r in rows]
+        return records
+    compared = moving = 0
+    for w in names:
+        h = 1e-6 * max(1.0, abs(lin.operating[3][w]))
+        up, dn = moved(w, h), moved(w, -h)
+        for k, row in enumerate(rows):
+            cd = (up[k].value - dn[k].value) / (2 * h)
+            ad = row["operating_sensitivity"][w]
+            grad = max([abs(v) for v in row["sensitivity"].values()] + [abs(v) for v in row["operating_sensitivity"].values()])
+            assert abs(ad - cd) <= 1e-6 * max(grad, 1e-3), (row["name"], w, ad, cd)
+            compared += 1
+            moving += abs(cd) > 1e-6
+    assert compared == 4 * len(rows) and moving >= 5
+    cos_theta = math.cos(math.radians(model.chain.theta))
+    vr = {k: v for k, v in lin.design.items() if k.startswith("chain_speed")}
+    last = sorted(vr)[-1]                   # the gear that runs up to V_s hi
+    for row in rows:
+        sens = row["operating_sensitivity"]
+        if row["name"].endswith("tine_reaches_plant"):
+            top = last in row["sensitivity"] and row["sensitivity"][last] == 1.0
+            assert sens == pytest.approx({"machine_speed_lo": 0.0, "machine_speed_hi": -cos_theta if top else 0.0,
+                                          "plant_angle_lo": 0.0, "plant_angle_hi": 0.0}, abs=1e-12), row["name"]
+            continue
+        gear = next(k for k in vr if abs(row["sensitivity"][k]) > 0)
+        end = "hi" if row["name"].endswith(f"Vs{op.machine_speed[1]:g}") else "lo" if row["name"].endswith(
+            f"Vs{op.machine_speed[0]:g}") else None
+        if end is None:                     # a corner at the (free) switch speed: no range end there
+            assert sens["machine_speed_lo"] == sens["machine_speed_hi"] == 0.0
+            continue
+        vs = op.machine_speed[1 if end == "hi" else 0]
+        assert sens[f"machine_speed_{end}"] == pytest.approx(-lin.design[gear] / vs * row["sensitivity"][gear], rel=1e-9)
+
+
+def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve_is_unchanged():
+    """fourbar_path's crank_speed only scales the trajectory's time (no rule reads it): the analysis declares it and
+    reports d rule / d crank speed = 0 for every rule (the re-check's values at +-1 % are the same, to the bit).  The
+    solve's NLP is unchanged: one IPOPT solve from the comparison design (DESIGNS: the library spec's own start, on
+    the Grashof limit, is no start to compare at) runs to the 1000-iteration cap at the objective measured on the
+    integration branch at cc5d746, to the bit, and the analysis's symbolic build does the same."""
+    from synthesis.core.problem import operating_as_symbols
+    from synthesis.spec.operating import at_operating
+    from synthesis.tolerance.analysis import operating_dependence
+    kind = kinds.get("fourbar_path")
+    loaded = load_spec(LIBRARY / kind.example)
+    solving = kind.solver_side()
+    lin = linearise(kind, loaded.model, DESIGNS["fourbar_path"])
+    assert lin.operating[0] == ("crank_speed",) and lin.operating[3] == {"crank_speed": 60.0}
+    assert operating_dependence(lin) == {"crank_speed": []}
+    rows = stack_up(lin, np.zeros(lin.dmap.n))
+    assert len(rows) >= 3 and all(r["operating_sensitivity"] == {"crank_speed": 0.0} for r in rows)
+    base = _records(solving, Setting(loaded.model, 0, solving.prepare(loaded.model)), lin.design)
+    for n in (59.4, 60.6):
+        at = at_operating(loaded.model, {"crank_speed": n})
+        moved = _records(solving, Setting(at, 0, solving.prepare(at)), lin.design)
+        assert {r: moved[r].value for r in base} == {r: base[r].value for r in base}
+    setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
+    nominal = solving.build(setting, False)
+    assert nominal.problem.operating_source is None
+    with operating_as_symbols():
+        symbolic = solving.build(setting, False)
+    assert symbolic.problem.operating_source is not None
+    x0 = np.array([DESIGNS["fourbar_path"][n] for n in nominal.names])
+    solved, again = nominal.solve(0, x0), symbolic.solve(0, x0)
+    assert (solved.objective, solved.iterations) == (0.0007600964028870801, 1000)
+    assert again.iterations == 1000 and again.objective == pytest.approx(solved.objective, rel=1e-12)

@@ -22,7 +22,7 @@ from synthesis.clamp_cam.motion import Timing
 from synthesis.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backoff
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, operating_symbols_wanted, per_rule_backoff
 from synthesis.kinematics import cam_follower as cf
 from synthesis.kinematics.motion_laws import law as closed_form_law
 from synthesis.spec.clamp_cam import ClampCamSpec
@@ -51,6 +51,12 @@ class CamNLP:
             rise_law, return_law = optimised.rise, optimised.return_
         else:
             rise_law = return_law = closed_form_law(spec.motion.law)
+        # the tolerance analysis's build only: the crank speed a symbol (resolved at its value by the core), for
+        # d rule / d crank speed (the acceleration's omega^2, windows timed in seconds).  Not with an optimised law
+        # under an acceleration cap: that law is refitted (cvxpy) at each speed, a change the NLP cannot see
+        self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min")]
+                          if operating_symbols_wanted() and not (spec.motion.law == "optimised"
+                                                                 and spec.rules.max_acceleration is not None) else [])
         alpha, kappa, acc = self._sampled(v, rise_law, return_law)
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
         rules = self._rules(v, alpha, kappa, acc)
@@ -63,7 +69,8 @@ class CamNLP:
                                x_units=units_of(spec, self.names),
                                structural_units=["deg", "mm^2"] if translating else ["deg", "mm", "mm^2", "rad"],
                                objective_unit="deg" if spec.objective.name == "pressure_angle" else "",
-                               backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0))
+                               backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0),
+                               operating=self.operating)
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
 
@@ -109,8 +116,13 @@ class CamNLP:
         spec = self.spec
         scale = 1.0 if spec.follower.type == "translating" else 180.0 / math.pi     # model -> report units
         reference = Timing.from_design(dict(zip(self.names, self.init)))
+        if not self.operating:
+            return rules_of(spec, alpha["rise"], alpha["return"], kappa, v["roller_radius"], Timing.from_design(v),
+                            acc * (scale * omega_of(spec) ** 2), reference)
+        n = self.operating[0].symbol
+        omega = n * (2.0 * math.pi / 60.0)
         return rules_of(spec, alpha["rise"], alpha["return"], kappa, v["roller_radius"], Timing.from_design(v),
-                        acc * (scale * omega_of(spec) ** 2), reference)
+                        acc * (scale * omega**2), reference, crank_speed=n)
 
     def _objective(self, x, v, alpha) -> ObjectiveParts:
         """base_radius (relative to the given one), nearest (scaled squared change) or pressure_angle:

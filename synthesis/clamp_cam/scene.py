@@ -75,9 +75,11 @@ def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
     return cf.Oscillating(v["base_radius"], v["pivot_distance"], v["arm_length"], spec.follower.side)
 
 
-def window_degrees(spec: ClampCamSpec) -> dict[str, list[tuple[float, float]]]:
-    """Timing windows in crank degrees (a clock in seconds is converted at the crank speed)."""
-    factor = 1.0 if spec.timing.clock == "deg" else 360.0 * spec.operation.crank_speed / 60.0
+def window_degrees(spec: ClampCamSpec, crank_speed=None) -> dict[str, list[tuple]]:
+    """Timing windows in crank degrees (a clock in seconds is converted at the crank speed: the spec's, or
+    ``crank_speed``, a CasADi symbol of the tolerance analysis's build)."""
+    n = spec.operation.crank_speed if crank_speed is None else crank_speed
+    factor = 1.0 if spec.timing.clock == "deg" else 360.0 * n / 60.0
     return {kind: [(lo * factor, hi * factor) for lo, hi in getattr(spec.timing, kind)]
             for kind in ("hold_near", "hold_far")}
 
@@ -89,18 +91,28 @@ def unwrap_window(window: tuple[float, float], dwell: tuple[float, float]) -> tu
     return window[0] + 360.0 * k, window[1] + 360.0 * k
 
 
-def timing_rules(spec: ClampCamSpec, timing: Timing, reference: Timing | None = None) -> list[Rule]:
+def timing_rules(spec: ClampCamSpec, timing: Timing, reference: Timing | None = None,
+                 crank_speed=None) -> list[Rule]:
     """One rule per window: the near (far) dwell must cover each hold_near (hold_far) window.
 
-    ``reference`` (numbers) decides the unwrapping, so that symbolic timings unwrap like their start.
+    ``reference`` (numbers) decides the unwrapping, so that symbolic timings unwrap like their start;
+    ``crank_speed`` (a CasADi symbol, the tolerance analysis's) converts windows timed in seconds, unwrapped by
+    the whole turns their nominal values take (a turn count has no derivative).
     """
     ref = reference or timing
+    nominal = window_degrees(spec)
+    windows = nominal if crank_speed is None else window_degrees(spec, crank_speed)
     rules = []
     for kind, dwell in (("hold_near", "near_dwell"), ("hold_far", "far_dwell")):
         lo, hi = timing.span(dwell)
         ref_span = tuple(float(x) for x in ref.span(dwell))
-        for i, w in enumerate(window_degrees(spec)[kind]):
-            rules.append(timing_rule(kind, i, unwrap_window(w, ref_span), lo, hi))
+        for i, (w, w0) in enumerate(zip(windows[kind], nominal[kind])):
+            if crank_speed is None:
+                rules.append(timing_rule(kind, i, unwrap_window(w, ref_span), lo, hi))
+                continue
+            shown = unwrap_window(w0, ref_span)
+            turns = shown[0] - w0[0]
+            rules.append(timing_rule(kind, i, (w[0] + turns, w[1] + turns), lo, hi, shown=shown))
     return rules
 
 
@@ -179,18 +191,19 @@ def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
 
 
 def rules_of(spec: ClampCamSpec, alpha_driven, alpha_return, kappa, roller_radius, timing: Timing, acceleration,
-             reference: Timing | None = None) -> list[Rule]:
+             reference: Timing | None = None, crank_speed=None) -> list[Rule]:
     """Every rule of the spec on a trace of floats or CasADi symbols: the pressure angles (deg) while the
     cam drives (rise and dwells) and on the return, the pitch curvature, the roller radius, the timing,
     and the follower acceleration while it moves (report units per s^2).  Used by check, the NLP and
-    the fine-grid re-check; ``reference`` (numbers) unwraps symbolic timing windows like their start."""
+    the fine-grid re-check; ``reference`` (numbers) unwraps symbolic timing windows like their start;
+    ``crank_speed`` (a symbol, the tolerance analysis's) converts windows timed in seconds."""
     lim = spec.rules
     rules = [pressure_angle_rule("rise", alpha_driven, lim.pressure_angle_rise),
              pressure_angle_rule("return", alpha_return, lim.pressure_angle_return),
              undercut_rule(kappa, roller_radius, lim.min_working_radius)]
     if lim.groove:
         rules.append(undercut_rule(kappa, roller_radius, lim.min_working_radius, flank="outer"))
-    rules += timing_rules(spec, timing, reference)
+    rules += timing_rules(spec, timing, reference, crank_speed)
     if lim.max_acceleration is not None:
         rules.append(acceleration_rule(acceleration, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
     return rules

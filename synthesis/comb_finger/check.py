@@ -51,10 +51,12 @@ def turn_grid(n: int) -> np.ndarray:
     return np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
 
 
-def trace(spec: CombFingerSpec, d: dict, turn_samples: int) -> Trace:
+def trace(spec: CombFingerSpec, d: dict, turn_samples: int, machine_speed=None) -> Trace:
+    """The finger's geometry over a turn; ``machine_speed`` (m/s: a CasADi symbol of the tolerance analysis's
+    build) replaces the spec's in the combing angle (the objective: no rule reads it)."""
     r, e, b, rho = d["r"], d["e"], d["b"], d["rho"]
     alpha, omega = d["alpha"] * (math.pi / 180.0), d["omega"] * RPM
-    vs = 1000.0 * spec.operation.machine_speed
+    vs = 1000.0 * (spec.operation.machine_speed if machine_speed is None else machine_speed)
     sx, sy = g.drum_axis(r, e, alpha, b)
     other = (-sx, sy)                                  # the right unit's drum axis (mirror image)
     turn = turn_grid(turn_samples)

@@ -49,9 +49,10 @@ class Trace:
     gears: list[GearTrace]
 
 
-def gear_ranges(spec: CombingChainSpec, design: dict) -> list[tuple[Any, Any]]:
-    """(lo, hi) machine speeds each gear serves at ``design`` (floats or symbols)."""
-    vlo, vhi = spec.operation.machine_speed
+def gear_ranges(spec: CombingChainSpec, design: dict, machine_speed: tuple | None = None) -> list[tuple[Any, Any]]:
+    """(lo, hi) machine speeds each gear serves at ``design`` (floats or symbols); ``machine_speed`` replaces the
+    spec's range (its ends as symbols: the tolerance analysis's build)."""
+    vlo, vhi = spec.operation.machine_speed if machine_speed is None else machine_speed
     if spec.gears == 1 or spec.chain.switch_speed is None:
         return [(vlo, vhi)] * spec.gears
     sw = design["switch_speed"]
@@ -67,15 +68,26 @@ def _labels(spec: CombingChainSpec, gear: int) -> tuple[str, str]:
     return (f"{vlo:g}", sw_label) if gear == 0 else (sw_label, f"{vhi:g}")
 
 
-def trace(spec: CombingChainSpec, design: dict, beta_samples: int, speed_samples: int) -> Trace:
-    """delta on the (beta, V_s) grid of every gear at ``design`` (chain speeds, switch speed: floats or symbols)."""
+def trace(spec: CombingChainSpec, design: dict, beta_samples: int, speed_samples: int,
+          operation: dict | None = None) -> Trace:
+    """delta on the (beta, V_s) grid of every gear at ``design`` (chain speeds, switch speed: floats or symbols).
+
+    ``operation`` (the tolerance analysis's build) gives the ends of the machine-speed and plant-angle ranges as
+    CasADi symbols, ``{"machine_speed": (lo, hi), "plant_angle": (lo, hi)}``, so the rules have derivatives w.r.t.
+    them; the grid is then written as lo + (hi - lo) i / (n - 1), the numbers' linspace to rounding."""
     c = spec.chain
-    betas = np.linspace(*spec.operation.plant_angle, beta_samples)
+    if operation is None:
+        betas = np.linspace(*spec.operation.plant_angle, beta_samples)
+        ranges = gear_ranges(spec, design)
+    else:
+        b_lo, b_hi = operation["plant_angle"]
+        betas = [b_lo + (b_hi - b_lo) * (i / max(beta_samples - 1, 1)) for i in range(beta_samples)]
+        ranges = gear_ranges(spec, design, operation["machine_speed"])
     gears = []
-    for k, ((lo, hi), name) in enumerate(zip(gear_ranges(spec, design), spec.speed_names())):
+    for k, ((lo, hi), name) in enumerate(zip(ranges, spec.speed_names())):
         vr = design[name]
         speeds = [lo + (hi - lo) * (j / (speed_samples - 1)) for j in range(speed_samples)]
-        delta = [[g.delta(vr, vs, c.h, c.theta, c.e, float(b)) for vs in speeds] for b in betas]
+        delta = [[g.delta(vr, vs, c.h, c.theta, c.e, b if operation else float(b)) for vs in speeds] for b in betas]
         gears.append(GearTrace(k, vr, speeds, delta, *_labels(spec, k)))
     return Trace(betas, gears)
 

@@ -14,7 +14,7 @@ from synthesis.combing_chain import geometry as g
 from synthesis.combing_chain.check import rules_of, trace
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
 from synthesis.errors import SpecError
 from synthesis.spec.combing_chain import CombingChainSpec
 from synthesis.design_info import units_of
@@ -53,7 +53,15 @@ class CombingChainNLP:
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
         x = ca.SX.sym("x", len(self.names))
         design = {n: x[i] for i, n in enumerate(self.names)}
-        tr = trace(spec, design, spec.solver.beta_samples, spec.solver.speed_samples)
+        # the tolerance analysis's build only: the ends of the operating ranges (machine speed, initial plant
+        # angle) symbols, for d rule / d end; a solve's NLP writes them as the numbers it always did
+        op = spec.operation
+        self.operating = ([Operating(f"{name}_{end}", ca.SX.sym(f"{name}_{end}"), getattr(op, name)[i], unit)
+                           for name, unit in (("machine_speed", "m/s"), ("plant_angle", "deg"))
+                           for i, end in enumerate(("lo", "hi"))] if operating_symbols_wanted() else [])
+        ends = [o.symbol for o in self.operating]
+        tr = trace(spec, design, spec.solver.beta_samples, spec.solver.speed_samples,
+                   {"machine_speed": (ends[0], ends[1]), "plant_angle": (ends[2], ends[3])} if ends else None)
         rules = rules_of(spec, tr)
         speeds = [design[n] for n in spec.speed_names()]
         self.margin_objective = spec.objective.name == "max_window_margin" and window is not None
@@ -68,7 +76,8 @@ class CombingChainNLP:
             objective = ObjectiveParts(f=ca.sum1(ca.vertcat(*speeds)))
         self.problem = Problem("combing_chain", x, self.bounds[:, 0], self.bounds[:, 1], [], rules, objective,
                                ipopt="tight", x_units=units_of(spec, self.names),
-                               objective_unit="deg" if self.margin_objective else "m/s", max_iter=spec.solver.max_iter)
+                               objective_unit="deg" if self.margin_objective else "m/s", max_iter=spec.solver.max_iter,
+                               operating=self.operating)
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def solve(self, start: int, x0) -> StartOutcome:

@@ -32,7 +32,7 @@ import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Problem, relative_backoff
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
 from synthesis.fourbar_path.rules import path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_point, design_parameters
@@ -122,6 +122,11 @@ class PathNLP:
         lbx = np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])])
         ubx = np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])])
 
+        # the tolerance analysis's build only: the crank speed a symbol, though no rule reads it (it only scales the
+        # trajectory's time), so the analysis reports d rule / d crank speed = 0 rather than leaving it out
+        operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.crank_speed, "r/min")]
+                     if operating_symbols_wanted() else [])
+
         def problem(samples: int) -> Problem:
             out = Problem(
                 "fourbar_path", decision, lbx, ubx,
@@ -134,7 +139,7 @@ class PathNLP:
                                                   **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
                 max_iter=spec.solver.max_iter,
                 # x in units of the target size (plain numbers under a change of the length unit), crank angles
-                x_units=[""] * 9 + ["rad"] * self.n_theta, objective_unit="")
+                x_units=[""] * 9 + ["rad"] * self.n_theta, objective_unit="", operating=operating)
             return out
 
         self._problem_of = problem

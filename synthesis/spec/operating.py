@@ -131,7 +131,11 @@ def at_operating(spec: BaseModel, values: dict[str, float]) -> BaseModel:
     at one operating point."""
     ranges = ranges_of(spec)
     update: dict[str, dict] = {}
+    top = {}
     for name, v in values.items():
+        if name not in ranges and name in type(spec).model_fields:
+            top[name] = float(v)            # a condition the spec holds outside any section (fourbar_path's crank_speed)
+            continue
         field = ranges[name][0] if name in ranges else _section_of(spec, name)
         update.setdefault(field, {})[name] = float(v)
     sections = {}
@@ -141,7 +145,7 @@ def at_operating(spec: BaseModel, values: dict[str, float]) -> BaseModel:
         if ranged is not None:
             section._operating_ranges = {k: r for k, r in ranged.items() if k not in changes}
         sections[field] = section
-    return spec.model_copy(update=sections)
+    return spec.model_copy(update={**sections, **top})
 
 
 def _section_of(spec: BaseModel, name: str) -> str:

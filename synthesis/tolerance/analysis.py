@@ -105,6 +105,15 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
     return rows
 
 
+def operating_dependence(lin: Linearised) -> dict[str, list[str]]:
+    """Per operating condition, the rules whose value moves with it (a non-zero derivative at any of its samples):
+    an empty list says in result.json that no rule depends on it, rather than leaving the condition out (it may
+    still move a limit or the objective, which are not rule values)."""
+    names, _, W, _ = lin.operating
+    return {n: [rule.name for k, rule in enumerate(lin.rules) if np.any(W[lin.slices[k], i] != 0.0)]
+            for i, n in enumerate(names)}
+
+
 def _corner(value: float, lower, upper, grad: np.ndarray, box: np.ndarray) -> np.ndarray:
     """Offsets to the corner of the box where a linear rule value moves furthest towards its nearer limit."""
     lo = -math.inf if lower is None else value - lower
@@ -311,6 +320,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
             "tolerance": {key: {"half_width": float(b), "unit": u} for key, b, u in zip(lin.dmap.keys, box, lin.dmap.units)},
             "stack_up": rows, "monte_carlo": mc,
             **({"operating": {n: {"unit": u, "nominal": lin.operating[3][n]}
-                              for n, u in zip(lin.operating[0], lin.operating[1])}} if lin.operating else {}),
+                              for n, u in zip(lin.operating[0], lin.operating[1])},
+                "operating_dependence": operating_dependence(lin)} if lin.operating else {}),
             "method": "exact AD sensitivities (implicit function theorem through the structural rows), rules on "
                       "the re-check's 10x grid; Monte-Carlo with the kind's float re-check"}

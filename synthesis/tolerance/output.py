@@ -44,6 +44,10 @@ def table(facts: dict) -> str:
         for r in facts["stack_up"]:
             sens = r.get("operating_sensitivity") or {}
             lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(f"{sens.get(n, 0.0):.4g}" for n in ops) + " |")
+        unused = [n for n, rules in (facts.get("operating_dependence") or {}).items() if not rules]
+        if unused:
+            lines += ["", f"No rule's value depends on {', '.join(unused)}: the derivative is exactly 0 for every rule "
+                          "(the condition may still move a rule's limit or the objective)."]
     if notes:
         lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
                       "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
