@@ -19,7 +19,7 @@ from synthesis.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_data, inex
 from synthesis.fourbar_path import nlp as path_nlp
 from synthesis.fourbar_path import screen
 from synthesis.fourbar_path.nlp import PathNLP
-from synthesis.fourbar_path.starts import StartMaker, arc_fractions, is_closed_loop, points_at, refit_placement
+from synthesis.fourbar_path.starts import DISTINCT, StartMaker, arc_fractions, is_closed_loop, points_at, refit_placement
 from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import validate
@@ -92,9 +92,13 @@ def test_screened_starts_are_distinct_in_bounds_and_crank_rockers():
     assert np.all((bounds[:, 0] <= designs) & (designs <= bounds[:, 1]))
     r = np.sort(designs[:, :4], axis=1)
     assert np.all(designs[:, 1] == r[:, 0]) and np.all(r[:, 0] + r[:, 3] <= r[:, 1] + r[:, 2])
-    z = designs[:64, :8] / 60.0
-    gaps = np.max(np.abs(z[:, None, :] - z[None, :, :]), axis=2) + np.eye(64)
-    assert gaps.min() > 0.0
+    # the metric starts.distinct thins by: lengths over the targets' extent, theta0 (deg) in rad, wrapped
+    size = float(np.max(np.ptp(maker.targets, axis=0)))
+    z = designs[:64] / np.array([size] * 8 + [180.0 / np.pi])
+    gap = np.abs(z[:, None, :] - z[None, :, :])
+    gap[:, :, 8] = np.minimum(gap[:, :, 8], 2.0 * np.pi - gap[:, :, 8])
+    gaps = np.max(gap, axis=2) + np.eye(64)
+    assert gaps.min() > DISTINCT
     assert BEST_KNOWN["egg16"] < maker.reference < 10.0 * BEST_KNOWN["egg16"]
 
 
