@@ -307,3 +307,20 @@ def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright)
     assert {n: again["design"][n] for n in names} == solved_values
     assert [(r["name"], r["value"], r["red"]) for r in solved_table] == [
         (r["name"], fmt4(r["value"]), not r["satisfied"]) for r in again["rules"]]
+
+
+def test_the_cam_page_turns_the_cam_against_its_roller(tmp_path, sync_playwright):
+    """clamp_cam's page draws the cam's working profile and the roller as outlines placed in each pose; animated,
+    the cam turns (its outline's points change) while no request leaves 127.0.0.1 and nothing logs an error."""
+    with running_studio(STUDIO_SPECS["clamp_cam"], tmp_path / "studio") as studio, \
+            studio_page(sync_playwright, studio) as (page, seen):
+        page.wait_for_function("() => Number(document.body.dataset.evaluations) > 0", timeout=30_000)
+        cam = "#panel-main g.poses polyline[data-outline='cam']"
+        assert page.locator(cam).count() == 1
+        assert page.locator("#panel-main g.poses polyline[data-outline='roller']").count() == 1
+        before = page.get_attribute(cam, "points")
+        assert len(before.split()) == 721                       # the closed 720-point profile
+        page.check("#animate")
+        page.wait_for_function(f"() => document.querySelector(\"{cam}\").getAttribute('points') !== '{before}'",
+                               timeout=10_000)
+    assert not seen["left"] and not seen["errors"]

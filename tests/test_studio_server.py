@@ -157,8 +157,14 @@ def test_fine_table_is_agrisynth_checks_at_those_values(kind, tmp_path):
     for c in charts:
         assert c["series"] and len(c["x"]) >= 2, c["name"]
         assert all(len(series["y"]) == len(c["x"]) for series in c["series"]), c["name"]
+    shapes = drawing["mechanism"]["shapes"]
     for f in frames:
-        assert f and all(len(xy) == 2 and all(math.isfinite(v) for v in xy) for xy in f.values())
+        joints = {k: v for k, v in f.items() if not isinstance(v, dict)}
+        placed = {k: v for k, v in f.items() if isinstance(v, dict)}      # a rigid outline: named, moved, turned
+        assert joints and all(len(xy) == 2 and all(math.isfinite(v) for v in xy) for xy in joints.values())
+        for p in placed.values():
+            assert p["shape"] in shapes and len(shapes[p["shape"]]) >= 3 and math.isfinite(p["turn_deg"])
+            assert len(p["at"]) == 2 and all(math.isfinite(v) for v in p["at"])
 
 
 def test_planting_draws_the_arm_and_both_frames(planting_studio):
@@ -468,3 +474,88 @@ def test_planting_poses_send_none_for_a_joint_that_is_not_finite(monkeypatch):
     got = frames(Checked(), 72)
     assert got == [{"A": [None, 0.5]}, {"A": [1.235, 0.5]}, {"A": [None, 0.5]}]
     json.dumps(got, allow_nan=False)
+
+
+def _segment_distance(p, a, b) -> float:
+    """Distance from point p to the segment a-b (plane)."""
+    ax, ay, bx, by = a[0], a[1], b[0], b[1]
+    dx, dy = bx - ax, by - ay
+    t = max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / (dx * dx + dy * dy or 1.0)))
+    return math.dist(p, (ax + t * dx, ay + t * dy))
+
+
+def _placed(mechanism: dict, value: dict) -> list:
+    """A placed shape's outline in the drawing's frame (as the page draws it)."""
+    a = math.radians(value["turn_deg"])
+    c, s = math.cos(a), math.sin(a)
+    return [(value["at"][0] + c * x - s * y, value["at"][1] + s * x + c * y) for x, y in mechanism["shapes"][value["shape"]]]
+
+
+@pytest.mark.parametrize("grid", ["coarse", "fine"])
+def test_the_cam_turns_with_its_follower(grid):
+    """clamp_cam's poses: the working profile turned by the cam angle of each pose touches the roller there -- the
+    roller centre lies one roller radius from the drawn profile (never closer: no overlap) -- and the roller centre
+    runs on the traced path; a whole turn of poses."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["clamp_cam"])
+    values = moved_values(session, 0.3)
+    mechanism = session.evaluate(values, grid)["drawing"]["mechanism"]
+    frames = mechanism["frames"]
+    assert len(frames) >= 36 and {"O", "C", "cam", "roller"} <= set(frames[0])
+    rr = session.given()["roller_radius"]
+    path = session.evaluate(values, grid)["drawing"]["main"]["lines"][0]
+    for f in frames:
+        cam = _placed(mechanism, f["cam"])
+        gap = min(_segment_distance(f["C"], a, b) for a, b in zip(cam, cam[1:]))
+        # the profile is drawn with 720 chords (0.5 deg): a chord lies < 0.01 mm inside the arc it replaces
+        assert gap == pytest.approx(rr, abs=0.02)
+        assert all(math.dist(xy, f["C"]) == pytest.approx(rr, abs=2e-3) for xy in _placed(mechanism, f["roller"]))
+        assert min(math.dist(f["C"], xy) for xy in zip(path["x"], path["y"])) < 0.5
+    # the cam turns: the turn of the poses covers the circle in steps of at most 6 deg
+    turns = sorted(f["cam"]["turn_deg"] for f in frames)
+    assert max(b - a for a, b in zip(turns, turns[1:])) <= 6 and turns[-1] - turns[0] > 350
+
+
+def test_the_crank_rocker_turns_a_whole_turn_keeping_its_links():
+    """crank_rocker's poses: a whole turn (not only the two extremes the check reports), links kept."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["crank_rocker"])
+    values = moved_values(session, 0.5)
+    frames = session.evaluate(values, "fine")["drawing"]["mechanism"]["frames"]
+    assert len(frames) >= 36 and set(frames[0]) == {"G", "F", "E", "A"}
+    for f in frames:
+        for (a, b), name in ((("G", "F"), "l7"), (("F", "E"), "l8"), (("E", "A"), "l9"), (("G", "A"), "l10")):
+            assert math.dist(f[a], f[b]) == pytest.approx(values.get(name, session.given()[name]), abs=2e-3)
+    crank = sorted(math.degrees(math.atan2(f["F"][1], f["F"][0])) % 360 for f in frames)
+    assert max(b - a for a, b in zip(crank, crank[1:])) < 12 and crank[-1] - crank[0] > 340
+
+
+def test_the_comb_finger_turns_about_its_hub():
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["comb_finger"])
+    values = moved_values(session, 0.5)
+    given = session.given() | values
+    frames = session.evaluate(values, "fine")["drawing"]["mechanism"]["frames"]
+    assert len(frames) >= 36
+    for f in frames:
+        assert math.dist(f["T"], f["R"]) == pytest.approx(given["r"], abs=2e-3)
+    mechanism = session.evaluate(values, "fine")["drawing"]["mechanism"]
+    for f in mechanism["frames"]:
+        assert all(math.dist(xy, f["S"]) == pytest.approx(given["rho"], abs=2e-3) for xy in _placed(mechanism, f["drum"]))
+
+
+def test_the_combined_picker_shows_its_design_greyed():
+    """The combined picker (check only) has no variables of its own: the page shows the design it evaluates --
+    its drive's and linkage's lengths from the spec files it names, and its installation angles -- fixed, with units."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["picker"])
+    shown = {v.name: v for v in session.variables}
+    assert shown["crank_rocker.l7"].value == 54.0 and shown["crank_rocker.l7"].unit == "mm"
+    assert shown["double_crank.phi3"].unit == "deg" and shown["theta2"].unit == "deg"
+    assert len(shown) == 15 and not session.free
+    assert session.describe()["variables"][0] == {"name": "crank_rocker.l7", "value": 54.0, "unit": "mm",
+                                                  "free": False, "bounds": None, "group": None}

@@ -20,6 +20,7 @@ KIND = Kind(
                 "nearest": "smallest change from the given cam"},
     example="clamp_cam/opening_cam_redesign_modified_sine.toml",
     coarse_check="synthesis.clamp_cam.coarse:COARSE",
+    poses="synthesis.clamp_cam.poses:POSES",
 )
 
 

@@ -19,6 +19,7 @@ KIND = Kind(
     objectives={"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"},
     example="comb_finger/redesign_max_combing.toml",
     coarse_check="synthesis.comb_finger.coarse:COARSE",
+    poses="synthesis.comb_finger.poses:POSES",
 )
 
 

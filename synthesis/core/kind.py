@@ -99,6 +99,9 @@ class Poses:
 
     frames: Callable[[Any, int], list]           # (Result, at most this many) -> [{joint: [x, y] mm}], in order
     bars: list[list[str]] | None = None          # links drawn between joints (None: the joints in order)
+    #: (Result) -> {name: [[x, y], ...] mm}: rigid outlines in their body's own frame (a cam's profile, a roller),
+    #: sent once; a frame places one as {"shape": name, "at": [x, y], "turn_deg": a} (turned about the body's origin)
+    shapes: Callable[[Any], dict] | None = None
 
 
 @dataclass(frozen=True)

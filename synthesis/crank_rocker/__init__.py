@@ -18,6 +18,7 @@ KIND = Kind(
                 "max_transmission_angle": "largest smallest transmission angle over a turn, deg"},
     example="picker/cai2020_crank_rocker_synthesis.toml",
     coarse_check="synthesis.crank_rocker.coarse:COARSE",
+    poses="synthesis.crank_rocker.poses:POSES",
 )
 
 

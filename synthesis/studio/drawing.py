@@ -143,14 +143,16 @@ def drawing(result: Result) -> dict[str, Any]:
             if isinstance(p, dict) and p.get("found") and isinstance(p.get("x_ground"), (int, float)):
                 ground["points"].append({"name": name, "x": _r(p["x_ground"]), "y": _r(p["y"])})
     kind_poses = _kind_poses(result.kind)
+    shapes: dict = {}
     if kind_poses is not None:
         frames, bars = kind_poses.frames(result, MOST_FRAMES), kind_poses.bars
+        shapes = kind_poses.shapes(result) if kind_poses.shapes is not None and frames else {}
     else:
         frames = [f for f in (_pose(p) for p in poses) if f]
         step = max(1, -(-len(frames) // MOST_FRAMES))
         frames, bars = frames[::step], None
     return {"main": {"lines": lines, "points": points}, "ground": ground,
-            "mechanism": {"frames": frames, "bars": bars}, "charts": charts}
+            "mechanism": {"frames": frames, "bars": bars, "shapes": shapes}, "charts": charts}
 
 
 def _kind_poses(kind: str):

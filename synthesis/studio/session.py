@@ -25,6 +25,7 @@ from synthesis.errors import AgrisynthError, SpecError
 from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import read_toml, validate
+from synthesis.spec.docmeta import units_in
 from synthesis.studio import drawing, grids
 
 def _node(data: Any, path: str) -> Any:
@@ -80,6 +81,32 @@ class Variable:
                        "bounds": None if self.bounds is None else list(self.bounds), "group": self.group})
 
 
+def _shown_only(loaded: LoadedSpec) -> list[Variable]:
+    """The design a kind without variables of its own evaluates (the combined picker: its drive's and its linkage's,
+    read from the spec files it names, and its installation angles), as fixed rows: the page shows them greyed
+    and moves none.  Each value as the kind's check reports it, with the unit its own spec declares."""
+    result = grids.evaluator(loaded.kind, "fine")(loaded)
+    units: dict[str, str] = {}
+    for path, field, _ in walk_fields(loaded.model):            # the spec's own numbers: units from their fields
+        declared = units_in(field.description or "")
+        units[path.rsplit(".", 1)[-1]] = declared[0] if declared else ""
+    part_path = getattr(loaded.model, "part_path", None)
+    out = []
+    for name, value in result.design.items():
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            continue
+        unit = units.get(name, "")
+        if "." in name and callable(part_path):                 # "crank_rocker.l7": the part spec's own unit
+            part, sub = name.split(".", 1)
+            try:
+                info = describe(load_spec(part_path(loaded.path, part)).model)
+            except (AgrisynthError, AttributeError, OSError):
+                info = {}
+            unit = info.get(sub, {}).get("unit", "")
+        out.append(Variable(name, float(value), unit, None, False, None))
+    return out
+
+
 @dataclass
 class Session:
     """The spec the studio was started on, and what the page may do with it."""
@@ -103,6 +130,8 @@ class Session:
             free = bool(var["free"] and var["bounds"] and var["path"])
             variables.append(Variable(name, float(value), var["unit"], tuple(var["bounds"]) if free else None,
                                       free, var["path"]))
+        if not hasattr(loaded.model, "design_values"):
+            variables = _shown_only(loaded)
         return cls(loaded, data, variables)
 
     @property

@@ -77,7 +77,7 @@ function buildSliders() {
   box.replaceChildren();
   for (const v of state.info.variables) {
     const row = el("div", { class: v.free ? "var" : "var fixed", "data-var": v.name });
-    row.append(el("label", { for: `range-${v.name}` }, v.name));
+    row.append(el("label", { for: `range-${v.name}`, title: v.name }, v.name));
     const range = el("input", { type: "range", id: `range-${v.name}`, name: v.name });
     const number = el("input", { type: "number", id: `number-${v.name}`, name: v.name });
     for (const input of [range, number]) {
@@ -205,7 +205,9 @@ function extent(groups) {
     if (!g) continue;
     for (const l of g.lines || []) l.x.forEach((x, i) => add(x, l.y[i]));
     for (const p of g.points || []) add(p.x, p.y);
-    for (const f of g.frames || []) for (const xy of Object.values(f)) add(xy[0], xy[1]);
+    for (const f of g.frames || []) for (const v of Object.values(f)) {
+      if (isPlaced(v)) placedPoints(g, v).forEach((xy) => add(xy[0], xy[1])); else add(v[0], v[1]);
+    }
   }
   if (!Number.isFinite(x0)) return [-1, -1, 2, 2];
   const pad = 0.06 * Math.max(x1 - x0, y1 - y0, 1);
@@ -240,11 +242,32 @@ function drawGroup(root, group, unit, ghost) {
   root.append(g);
 }
 
+// a pose's value is a joint [x, y], or a placed shape {shape, at: [x, y], turn_deg}: one of the mechanism's rigid
+// outlines (a cam's profile, a roller, a drum wall; sent once in mechanism.shapes, in the body's own frame) turned by
+// turn_deg counter-clockwise about the body's origin and moved to ``at``
+function isPlaced(v) {
+  return v !== null && typeof v === "object" && !Array.isArray(v) && typeof v.shape === "string";
+}
+
+function placedPoints(mechanism, v) {
+  const pts = (mechanism.shapes || {})[v.shape] || [];
+  const a = ((v.turn_deg || 0) * Math.PI) / 180, c = Math.cos(a), s = Math.sin(a);
+  return pts.filter((xy) => xy[0] !== null && xy[1] !== null)
+    .map((xy) => [v.at[0] + c * xy[0] - s * xy[1], v.at[1] + s * xy[0] + c * xy[1]]);
+}
+
 function drawPose(root, mechanism, k, unit, ghost) {
-  const frame = mechanism.frames[k % mechanism.frames.length];
+  const pose = mechanism.frames[k % mechanism.frames.length];
+  const frame = {};
+  const g = svg("g", { class: ghost ? "pose baseline" : "pose", opacity: ghost ? "0.35" : "1" });
+  for (const [n, v] of Object.entries(pose)) {
+    if (!isPlaced(v)) { frame[n] = v; continue; }
+    const pts = placedPoints(mechanism, v).map((xy) => `${xy[0]},${-xy[1]}`).join(" ");
+    g.append(svg("polyline", { points: pts, fill: "none", stroke: ghost ? "#888" : "#333", "stroke-width": 2,
+      "vector-effect": "non-scaling-stroke", "data-outline": n }));
+  }
   const names = Object.keys(frame);
   const bars = mechanism.bars || names.slice(1).map((n, i) => [names[i], n]);
-  const g = svg("g", { class: ghost ? "pose baseline" : "pose", opacity: ghost ? "0.35" : "1" });
   for (const [a, b] of bars) {
     if (!frame[a] || !frame[b]) continue;
     g.append(svg("line", { x1: frame[a][0], y1: -frame[a][1], x2: frame[b][0], y2: -frame[b][1],
@@ -285,6 +308,12 @@ function renderDrawing() {
   const mech = d.mechanism && d.mechanism.frames.length ? d.mechanism : null;
   const sections = [["panel-main", d.ground ? "machine frame (mm)" : "mechanism and curves (mm)", d.main, b && b.main, mech, b && b.mechanism]];
   if (d.ground) sections.push(["panel-ground", "ground frame (mm)", d.ground, b && b.ground, null, null]);
+  // a kind whose check draws no curve, point or pose (combing_chain: its answer is a chart) gets no empty panel
+  const drawn = (g) => g && ((g.lines || []).length || (g.points || []).length);
+  for (let i = sections.length - 1; i >= 0; i--) {
+    const [, , group, ghost, mechanism] = sections[i];
+    if (!drawn(group) && !drawn(ghost) && !mechanism) sections.splice(i, 1);
+  }
   for (const id of ["panel-main", "panel-ground"]) {
     if (!sections.some((s) => s[0] === id) && document.getElementById(id)) document.getElementById(id).remove();
   }

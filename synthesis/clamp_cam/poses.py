@@ -1,0 +1,78 @@
+"""The clamp cam's poses for the studio's drawing: the cam turning and its roller follower moving with it.
+
+The check gives the working profile in the cam frame (cam angle 0 where the rise begins; mirrored for a clockwise
+cam) and the roller centre C in the ground frame (cam centre at the origin, follower along +X) over a turn.  At
+crank angle c the cam has turned by phi = c - rise_start, and the pitch point of cam angle phi sits at C
+(cam_follower.pitch_curve is R(-phi) C), so the profile is drawn turned by R(phi) in the model's counter-clockwise
+frame, the frame the trajectory is in.  Each pose: the cam centre O, the roller centre C, the follower's far end
+(a translating stem along +X, or the arm pivot of an oscillating follower), and two outlines -- the cam's working
+profile and the roller."""
+
+from __future__ import annotations
+
+import math
+
+from synthesis.core.kind import Poses
+
+PROFILE_POINTS = 720     # points of the drawn cam outline (0.5 deg: a chord sits < 0.01 mm off a steep return)
+ROLLER_POINTS = 24
+
+
+def _rounded(v: float) -> float | None:
+    return round(float(v), 3) if math.isfinite(v) else None
+
+
+def _finite(*values) -> bool:
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+
+
+def _rise_start(prof: dict):
+    """The crank angle of cam angle 0 (where the rise begins): the profile's first sample."""
+    return (prof.get("crank_deg") or [None])[0]
+
+
+def shapes(result) -> dict:
+    """The cam's working profile in its own frame (the model's counter-clockwise frame: a clockwise cam's profile,
+    which the check mirrors, mirrored back) and the roller, both about their own centre."""
+    import numpy as np
+
+    prof = result.extra.get("profile") or {}
+    working = prof.get("working") or {}
+    mirror = -1.0 if prof.get("rotation") == "clockwise" else 1.0
+    wx = np.asarray(working.get("x") or [], float)
+    wy = mirror * np.asarray(working.get("y") or [], float)
+    if wx.size < 2 or not _finite(prof.get("roller_radius")):
+        return {}
+    keep = np.linspace(0, wx.size, PROFILE_POINTS, endpoint=False).astype(int)
+    rr = float(prof["roller_radius"])
+    ring = np.linspace(0.0, 2.0 * math.pi, ROLLER_POINTS + 1)
+    return {"cam": [[_rounded(wx[i]), _rounded(wy[i])] for i in keep] + [[_rounded(wx[0]), _rounded(wy[0])]],
+            "roller": [[_rounded(rr * math.cos(t)), _rounded(rr * math.sin(t))] for t in ring]}
+
+
+def frames(result, most: int) -> list[dict]:
+    prof = result.extra.get("profile") or {}
+    traj = result.trajectory or {}
+    crank, rise_start = traj.get("crank_deg"), _rise_start(prof)
+    if not (isinstance(crank, list) and len(crank) > 1 and _finite(rise_start)):
+        return []
+    pivot = result.design.get("pivot_distance")
+    stem = 0.6 * float(result.design.get("base_radius", 50.0))
+    step = -(-len(crank) // most)
+    out = []
+    for k in range(0, len(crank), step):
+        c, cx, cy = crank[k], traj["x"][k], traj["y"][k]
+        if not _finite(c, cx, cy):
+            continue
+        end = [float(pivot), 0.0] if _finite(pivot) else [cx + stem, cy]
+        out.append({
+            "O": [0.0, 0.0], "C": [_rounded(cx), _rounded(cy)],
+            "pivot" if _finite(pivot) else "stem": [_rounded(end[0]), _rounded(end[1])],
+            # the cam turned by its cam angle: the pitch point of cam angle phi then sits at C
+            "cam": {"shape": "cam", "at": [0.0, 0.0], "turn_deg": _rounded((c - rise_start) % 360.0)},
+            "roller": {"shape": "roller", "at": [_rounded(cx), _rounded(cy)], "turn_deg": 0.0},
+        })
+    return out
+
+
+POSES = Poses(frames=frames, bars=[["C", "stem"], ["C", "pivot"]], shapes=shapes)

@@ -1,0 +1,34 @@
+"""The crank-rocker's poses for the studio's drawing over a whole turn: its check's facts hold the two extreme
+positions only (as joints) and the rocker tip E over a turn (``motion.curve``); the crank pin F follows from the
+crank angle (G at the origin, A on +x: the check's frame)."""
+
+from __future__ import annotations
+
+import math
+
+from synthesis.core.kind import Poses
+
+
+def _rounded(v: float) -> float | None:
+    return round(float(v), 3) if math.isfinite(v) else None
+
+
+def frames(result, most: int) -> list[dict]:
+    curve = ((result.extra.get("motion") or {}).get("curve")) or {}
+    crank, ex, ey = curve.get("crank_deg"), curve.get("E_x"), curve.get("E_y")
+    if not (isinstance(crank, list) and isinstance(ex, list) and isinstance(ey, list)) or len(crank) < 2 \
+            or not len(crank) == len(ex) == len(ey):
+        return []
+    l7, l10 = float(result.design["l7"]), float(result.design["l10"])
+    step = -(-len(crank) // most)
+    out = []
+    for c, x, y in list(zip(crank, ex, ey))[::step]:
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in (c, x, y)):
+            continue                      # the loop does not close there (a crank that cannot turn)
+        a = math.radians(c)
+        out.append({"G": [0.0, 0.0], "F": [_rounded(l7 * math.cos(a)), _rounded(l7 * math.sin(a))],
+                    "E": [_rounded(x), _rounded(y)], "A": [_rounded(l10), 0.0]})
+    return out
+
+
+POSES = Poses(frames=frames, bars=[["G", "F"], ["F", "E"], ["E", "A"], ["A", "G"]])
