@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from constraints import Rule
@@ -60,10 +61,14 @@ def trace(spec: CombFingerSpec, d: dict, turn_samples: int, machine_speed=None) 
     sx, sy = g.drum_axis(r, e, alpha, b)
     other = (-sx, sy)                                  # the right unit's drum axis (mirror image)
     turn = turn_grid(turn_samples)
-    clearance = []
-    for phi in turn:
-        tx, ty = g.tip(r, e, alpha, b, float(phi))
-        clearance.append(g.sqrt((tx - other[0]) ** 2 + (ty - other[1]) ** 2) - rho)
+    if any(isinstance(v, (ca.SX, ca.MX)) for v in (r, e, alpha, b, rho)):
+        clearance = []
+        for phi in turn:
+            tx, ty = g.tip(r, e, alpha, b, float(phi))
+            clearance.append(g.sqrt((tx - other[0]) ** 2 + (ty - other[1]) ** 2) - rho)
+    else:                                  # floats: the whole turn at once (the studio drags on this grid)
+        tx, ty = g.tip(r, e, alpha, b, np.asarray(turn, dtype=float))
+        clearance = [float(c) for c in np.sqrt((tx - other[0]) ** 2 + (ty - other[1]) ** 2) - rho]
     rx, ry = g.hub(r, e, alpha, b)
     exact = g.sqrt((rx - other[0]) ** 2 + (ry - other[1]) ** 2) - r - rho
     return Trace(r, e, alpha, omega, b, rho, turn, clearance, exact, g.root_clearance(r, e, alpha, b),
