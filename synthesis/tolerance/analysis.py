@@ -97,6 +97,10 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
             "corner": [float(c) for c in _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
+            # every variable's linear change of the margin at that worst sample when it moves by +tol (its share of
+            # the stack-up is the absolute value; the corner moves each variable the way that lowers the margin)
+            "contributions": {lin.dmap.keys[j]: float(-np.sign(c) * contrib[j]) if c else 0.0
+                              for j, c in enumerate(_corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box))},
         })
         if lin.operating is not None:
             names, _, W, _ = lin.operating
