@@ -426,6 +426,11 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
                   f"{f'the cluster at {escape(scheduler)}' if scheduler else f'{workers} worker(s)'}; "
                   f"status {result.status}")
+    mc = ((result.extra or {}).get("tolerance") or {}).get("monte_carlo")
+    if isinstance(mc, dict):        # a tolerance-robust solve: the Monte-Carlo check of the answer
+        from synthesis.tolerance.output import monte_carlo_lines
+
+        console.print(escape("\n".join(monte_carlo_lines(mc))))
     if finished:
         console.print(f"resumed: {len(finished)} finished start(s) read from {escape(str(resume))}/starts.jsonl")
     if replaced:
