@@ -229,7 +229,9 @@ def tolerance_section(cands: list[Candidate]) -> str:
         mc = tol.get("monte_carlo") if isinstance(tol, dict) else None
         if not isinstance(mc, dict):
             continue
-        box = ", ".join(f"{k} ±{v:g}" for k, v in (tol.get("box") or {}).items() if v)
+        info = c.result.design_variables or {}
+        box = ", ".join(f"{k} ±{v:g}" + (f" {info[k]['unit']}" if (info.get(k) or {}).get("unit") else "")
+                        for k, v in (tol.get("box") or {}).items() if v)
         rate = mc.get("pass_rate")
         rows = "".join(f"<tr><td>{html.escape(n)}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"
                        f"<td class='num'>{_num(r.get('worst_margin'))}</td></tr>"
