@@ -426,6 +426,11 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
                   f"{f'the cluster at {escape(scheduler)}' if scheduler else f'{workers} worker(s)'}; "
                   f"status {result.status}")
+    mc = ((result.extra or {}).get("tolerance") or {}).get("monte_carlo")
+    if isinstance(mc, dict):        # a tolerance-robust solve: the Monte-Carlo check of the answer
+        from synthesis.tolerance.output import monte_carlo_lines
+
+        console.print(escape("\n".join(monte_carlo_lines(mc))))
     if finished:
         console.print(f"resumed: {len(finished)} finished start(s) read from {escape(str(resume))}/starts.jsonl")
     if replaced:
@@ -481,16 +486,20 @@ def studio(spec: Path, out: Path, port: int, open_browser: bool) -> None:
               help="writes OUT/<name>-tolerance/")
 @click.option("--length", type=click.FloatRange(min=0), default=None, help="half-width for every length, mm")
 @click.option("--angle", type=click.FloatRange(min=0), default=None, help="half-width for every angle, deg")
+@click.option("--tol", "tols", multiple=True, metavar="NAME=VALUE",
+              help="half-width for one design variable, in its own unit (repeatable; over --length/--angle and the "
+                   "spec's [tolerance] entry of that variable)")
 @click.option("--samples", type=click.IntRange(min=0, max=1_000_000), default=None,
               help="Monte-Carlo samples (default the spec's [tolerance] samples, else 1000)")
 @click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None, help="Monte-Carlo seed (default 0)")
 @click.option("--force", is_flag=True, help=FORCE_HELP)
-def tolerance(target: Path, out: Path, length: float | None, angle: float | None, samples: int | None,
-              seed: int | None, force: bool) -> None:
+def tolerance(target: Path, out: Path, length: float | None, angle: float | None, tols: tuple[str, ...],
+              samples: int | None, seed: int | None, force: bool) -> None:
     """Exact sensitivities, linear tolerance stack-up and a seeded Monte-Carlo of a design.
 
     RESULT: a run folder (its solved.toml is the design); SPEC: the spec's given design.  Tolerances
-    from --length/--angle, else the spec's [tolerance] table.  Writes OUT/<name>-tolerance/.
+    from --length/--angle (every length / angle) and --tol NAME=VALUE (one variable), else the spec's
+    [tolerance] table.  Writes OUT/<name>-tolerance/ (result.json, report.md, tornado.png).
     Derivatives w.r.t. the operating conditions (forward speed, crank speed, friction, ...) are always
     listed; with an operating range each Monte-Carlo sample is re-checked at every point of the range's
     re-check grid and passes only if every rule holds at all of them.
@@ -503,6 +512,7 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     from synthesis.tolerance.analysis import analyse
     from synthesis.tolerance.output import artifacts, table
 
+    given = _per_variable_tolerances(tols)
     if target.is_dir():
         if not (target / "solved.toml").is_file():
             raise SpecError(f"{target}: no solved.toml in this folder (give a solve's run folder or a spec file)")
@@ -513,7 +523,15 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     tol = spec.tolerance
     length = length if length is not None else (tol.length if tol else None)
     angle = angle if angle is not None else (tol.angle if tol else None)
-    per_variable = dict(tol.variables) if tol else {}
+    per_variable = {**(dict(tol.variables) if tol else {}), **given}
+    if given:               # an unknown name is bad input, said before any analysis
+        from synthesis.design_info import describe
+
+        known = list(describe(spec))
+        # (the analysis also takes a variable's name in the kind's NLP, the ending of its key: box_of checks those)
+        unknown = [n for n in given if n not in known and not any(k.endswith("_" + n) for k in known)]
+        if known and unknown:
+            raise SpecError(f"--tol: unknown design variable {', '.join(unknown)} (known: {', '.join(known)})")
     if not (length or angle or any(per_variable.values())) and samples != 0:
         raise SpecError("tolerance: give --length and/or --angle (or a [tolerance] table in the spec)")
     samples = samples if samples is not None else (tol.samples if tol else 1000)
@@ -533,6 +551,28 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     console.print(f"wrote {escape(str(folder))}/")
     if facts["monte_carlo"]["pass_rate"] != 1.0:
         sys.exit(1)
+
+
+def _per_variable_tolerances(tols: tuple[str, ...]) -> dict[str, float]:
+    """--tol NAME=VALUE ... as {name: half-width}; a malformed, non-finite or non-positive value is bad input."""
+    import math
+
+    from synthesis.errors import SpecError
+
+    out: dict[str, float] = {}
+    for item in tols:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise SpecError(f"--tol {item!r}: give NAME=VALUE (a design variable and its half-width in its own unit)")
+        try:
+            value = float(text)
+        except ValueError:
+            raise SpecError(f"--tol {item}: {text!r} is not a number") from None
+        if not math.isfinite(value) or value <= 0:
+            raise SpecError(f"--tol {item}: the half-width must be a finite number > 0")
+        out[name] = value
+    return out
 
 
 def _keep_interrupted(exc, run_folder, spec: Path, n: int, given_rules) -> bool:

@@ -157,3 +157,5 @@ class Solving:
     stop_when: Callable[[Setting], Callable[[Any], bool] | None] = _no_early_stop
     samples_hint: str = "[solver] samples"
     relax_hint: str = "Loosen those requirements or widen the bounds of the design variables."
+    #: (result of a run with status infeasible or failed) -> more words for its exit-3 message, or None
+    explain_failure: Callable[[Any], str | None] | None = None

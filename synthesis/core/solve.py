@@ -10,6 +10,8 @@ before it is written, so ``result.json`` says what the exit-3 message says.
 
 from __future__ import annotations
 
+import dataclasses
+
 import functools
 import time
 from dataclasses import dataclass
@@ -142,7 +144,10 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     except (AgrisynthError, ValueError, ArithmeticError, RuntimeError) as exc:
         # a diagnosis that could not run proves nothing: the run is "failed", and says why
         return ElasticDiagnosis(f"not run: {exc}", False, {}, {}, {})
-    return diagnosis_of(nlp.compiled, outcome.raw)
+    diagnosis = diagnosis_of(nlp.compiled, outcome.raw)
+    design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
+              if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    return dataclasses.replace(diagnosis, design=design or None)
 
 
 def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool) -> dict:
@@ -263,9 +268,12 @@ def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> Solver
     elastic = None if result.elastic is None else ElasticDiagnosis.from_json(result.elastic)
     note = (result.solver or {}).get("status_note")
     if result.status == "failed" and elastic is None and note and "does not keep its promise" in note:
-        return SolverError(f"{note}. {solving.relax_hint}")
-    return unsatisfied_error(result.status, [r["name"] for r in result.violated()], reports, elastic,
-                             samples_hint=solving.samples_hint, relax_hint=solving.relax_hint)
+        error = SolverError(f"{note}. {solving.relax_hint}")
+    else:
+        error = unsatisfied_error(result.status, [r["name"] for r in result.violated()], reports, elastic,
+                                  samples_hint=solving.samples_hint, relax_hint=solving.relax_hint)
+    said_more = solving.explain_failure(result) if solving.explain_failure is not None else None
+    return SolverError(f"{error} {said_more}") if said_more else error
 
 
 def baseline_rules(kind: Kind, loaded) -> list[dict] | None:

@@ -134,6 +134,8 @@ class ElasticDiagnosis:
     scales: dict[str, float]        # rule -> its typical margin (a slack counts above SLACK_TOL x scale)
     binding: list[str] = field(default_factory=list)   # rules with a non-zero multiplier there
     tol: float = SLACK_TOL
+    #: the elastic re-solve's design (variable -> value), where the relaxation's misses are measured; None unknown
+    design: dict | None = None
 
     @property
     def relaxed(self) -> list[str]:
@@ -153,13 +155,14 @@ class ElasticDiagnosis:
         return {"return_status": self.return_status, "converged": self.converged,
                 "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
                 "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
-                "conflicting": self.conflicting}
+                "conflicting": self.conflicting,
+                **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
     def from_json(cls, data: dict) -> "ElasticDiagnosis":
         slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
-                   data.get("binding", []))
+                   data.get("binding", []), design=data.get("design"))
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:

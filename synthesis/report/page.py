@@ -220,6 +220,37 @@ def bench_table(bench: list[dict]) -> str:
             "<th>worst violation</th><th>median s</th><th>time ratio</th></tr>\n" + "\n".join(rows) + "</table>")
 
 
+def tolerance_section(cands: list[Candidate]) -> str:
+    """The Monte-Carlo check of a tolerance-robust solve's answer (result facts ``tolerance.monte_carlo``): N, seed,
+    the pass rate of all rules and of every rule, each rule's worst sampled margin; empty without one."""
+    parts = []
+    for c in cands:
+        tol = (c.result.extra or {}).get("tolerance")
+        mc = tol.get("monte_carlo") if isinstance(tol, dict) else None
+        if not isinstance(mc, dict):
+            continue
+        info = c.result.design_variables or {}
+        box = ", ".join(f"{k} ±{v:g}" + (f" {info[k]['unit']}" if (info.get(k) or {}).get("unit") else "")
+                        for k, v in (tol.get("box") or {}).items() if v)
+        rate = mc.get("pass_rate")
+        rows = "".join(f"<tr><td>{html.escape(n)}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"
+                       f"<td class='num'>{_num(r.get('worst_margin'))}</td></tr>"
+                       for n, r in (mc.get("rules") or {}).items())
+        label = f"<b>{html.escape(c.label)}</b>: " if len(cands) > 1 else ""
+        parts.append(
+            f"<p>{label}Monte-Carlo check of the answer: {mc.get('samples')} samples (seed {mc.get('seed')}, "
+            f"{html.escape(str(mc.get('distribution', '')))}{'; box ' + html.escape(box) if box else ''}): "
+            f"<b>{_rate(rate)}</b> pass every rule"
+            + (f"; {mc['unevaluable']} sample(s) could not be evaluated" if mc.get("unevaluable") else "") + ".</p>"
+            f"<table class='tolerance'><tr><th>rule</th><th>MC pass rate</th><th>worst sampled margin</th></tr>"
+            f"<tr><td><i>all rules</i></td><td class='num'>{_rate(rate)}</td><td></td></tr>{rows}</table>")
+    return "<h2>Tolerance</h2>\n" + "\n".join(parts) if parts else ""
+
+
+def _rate(rate) -> str:
+    return "&ndash;" if rate is None else f"{100 * rate:.2f} %"
+
+
 def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[str], title: str,
            bench: list[dict] | None = None) -> str:
     """``figures`` = [(file name, caption)], ``notes`` = figures that could not be drawn, and why;
@@ -251,6 +282,7 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
 {design_columns(cands)}
 <div class="scroll">{design_table(cands)}</div>
 {conditions_table(cands)}
+{tolerance_section(cands)}
 <h2>Figures</h2>
 {figs}
 {missing}

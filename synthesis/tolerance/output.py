@@ -1,5 +1,6 @@
 """The folder of ``agrisynth tolerance``: result.json (result-like, schema version 2, the analysis under
-``facts``), report.md (the stack-up table) and tornado.png (each rule's linear margin loss by variable)."""
+``facts``), report.md (the stack-up table, with tornado.png embedded) and tornado.png (a tornado of the linear
+stack-up of each of the worst rules)."""
 
 from __future__ import annotations
 
@@ -64,34 +65,98 @@ def _envelope_lines(mc: dict) -> list[str]:
         for n, r in rows.items()]
 
 
+#: rules and variables a tornado shows: the rules with the smallest linear worst margin (relative to their
+#: scale), each with its largest contributions
+TORNADO_RULES, TORNADO_BARS = 6, 8
+
+
+def tornado_rules(facts: dict) -> list[dict]:
+    """The stack-up rows the tornado draws: those with a finite linear worst margin and a non-zero contribution,
+    worst (smallest linear worst margin / rule scale) first."""
+    rows = [r for r in facts["stack_up"]
+            if r.get("linear_worst_margin") is not None and np.isfinite(r["linear_worst_margin"])
+            and any(c for c in (r.get("contributions") or {}).values())]
+    rows.sort(key=lambda r: r["linear_worst_margin"] / (r.get("scale") or 1.0))
+    return rows[:TORNADO_RULES]
+
+
 def tornado(facts: dict, path: Path) -> None:
+    """tornado.png: for each of the worst rules (:func:`tornado_rules`) a tornado of its linear stack-up -- one
+    horizontal bar per driving variable from margin - |dg/dx_i| tol_i to margin + |dg/dx_i| tol_i, centred on the
+    rule's nominal margin at its worst sample, largest at the top; the red line is the limit (margin 0), the dashed
+    one the linear worst case (every bar's low end at once)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = facts["stack_up"]
-    keys = list(facts["tolerance"])
-    box = np.array([facts["tolerance"][k]["half_width"] for k in keys])
-    # normalised loss per rule and variable: |dg/dd_j| tol_j / rule scale
-    loss = np.array([[abs(r["sensitivity"][k]) * b / r["scale"] for k, b in zip(keys, box)] for r in rows])
-    order = np.argsort(loss.sum(axis=1))
-    fig, ax = plt.subplots(figsize=(8, 0.35 * len(rows) + 1.5))
-    left = np.zeros(len(rows))
-    for j, k in enumerate(keys):
-        if not np.any(loss[:, j] > 0):
-            continue
-        ax.barh(np.arange(len(rows)), loss[order, j], left=left[order], label=k)
-        left[order] += loss[order, j]
-    ax.set_yticks(np.arange(len(rows)), [rows[i]["name"] for i in order])
-    ax.set_xlabel("linear margin loss at the box's worst corner / rule scale")
-    ax.set_title("tolerance stack-up by design variable")
-    ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
+    rows = tornado_rules(facts)
+    tol = facts["tolerance"]
+    if not rows:
+        fig, ax = plt.subplots(figsize=(7, 1.6))
+        ax.axis("off")
+        ax.text(0.5, 0.5, "no rule's margin moves with the design in the tolerance box", ha="center", va="center")
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return
+    heights = []
+    for r in rows:
+        n = sum(1 for c in r["contributions"].values() if c)
+        heights.append(min(n, TORNADO_BARS) * 0.32 + 0.9)
+    fig, axes = plt.subplots(len(rows), 1, figsize=(8, sum(heights) + 0.6), squeeze=False,
+                             gridspec_kw={"height_ratios": heights})
+    for ax, r in zip(axes[:, 0], rows):
+        contrib = sorted(((k, c) for k, c in r["contributions"].items() if c), key=lambda kc: -abs(kc[1]))
+        shown = contrib[:TORNADO_BARS]
+        loss = sum(abs(c) for _, c in contrib)
+        centre = r["linear_worst_margin"] + loss        # the nominal margin at the worst sample
+        y = np.arange(len(shown))[::-1]                  # the largest at the top
+        plus = np.array([c for _, c in shown])           # margin change when the variable moves by +tol
+        ax.barh(y, plus, left=centre, color="tab:blue", label="+tol")
+        ax.barh(y, -plus, left=centre, color="tab:orange", label="-tol")
+        ax.set_yticks(y, [f"{k} ±{tol[k]['half_width']:g} {tol[k]['unit']}".rstrip() for k, _ in shown], fontsize=7)
+        ax.axvline(centre, color="black", linewidth=0.8)
+        ax.axvline(r["linear_worst_margin"], color="black", linestyle="--", linewidth=0.8)
+        lo, hi = r["linear_worst_margin"], centre + max(abs(plus))
+        width = max(hi - lo, 1e-12)
+        if lo - 3 * width <= 0.0 <= hi + 3 * width:      # the limit near the bars: drawn
+            ax.axvline(0.0, color="red", linewidth=1)
+        else:                                             # far away: named, so the bars keep their size
+            ax.set_xlim(lo - 0.1 * width, hi + 0.1 * width)
+            ax.set_xlabel(f"the limit (margin 0) is off the axis to the {'left' if 0.0 < lo else 'right'}", fontsize=7,
+                          color="red")
+        more = f" (+{len(contrib) - len(shown)} smaller)" if len(contrib) > len(shown) else ""
+        ax.set_title(f"{r['name']}: margin ({r['unit']}), nominal {centre:.4g}, linear worst {r['linear_worst_margin']:.4g}"
+                     f"{more}", fontsize=8)
+        ax.tick_params(axis="x", labelsize=7)
+    axes[0, 0].legend(fontsize=7, loc="best")
+    fig.suptitle("tolerance tornado: bars ±|dg/dx_i|·tol_i centred on the nominal margin (red: the limit, "
+                 "dashed: linear worst case)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.98))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
+def monte_carlo_lines(mc: dict) -> list[str]:
+    """The Monte-Carlo check in words: N, seed, the pass rate of all rules, then of every rule."""
+    head = (f"Monte-Carlo check: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
+            f"{_pct(mc.get('pass_rate'))} pass every rule")
+    if mc.get("unevaluable"):
+        head += f"; {mc['unevaluable']} sample(s) could not be evaluated (counted as failing)"
+    return [head] + [f"  {n}: {_pct(r.get('pass_rate'))} pass, worst sampled margin "
+                     f"{'-' if r.get('worst_margin') is None else format(r['worst_margin'], '.4g')}"
+                     for n, r in (mc.get("rules") or {}).items()]
+
+
+def _pct(rate) -> str:
+    return "-" if rate is None else f"{100 * rate:.2f} %"
+
+
+TORNADO_LINK = ("\n![tolerance tornado: each of the worst rules' margin, one bar per driving variable "
+                "(±|dg/dx_i|·tol_i, centred on the nominal margin)](tornado.png)\n\n"
+                "[tornado.png](tornado.png): the linear stack-up of the worst rules, the largest contribution at the top\n")
+
+
 def artifacts(kind: str, name: str, sha: str, facts: dict) -> dict:
     return {"result.json": lambda p: atomic_write_text(p, finite_json_text(result_json(kind, name, sha, facts))),
-            "report.md": lambda p: atomic_write_text(p, table(facts)),
+            "report.md": lambda p: atomic_write_text(p, table(facts) + TORNADO_LINK),
             "tornado.png": lambda p: tornado(facts, p)}

@@ -149,6 +149,97 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray) -> list
     return rows
 
 
+def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list[dict]:
+    """The rules the spec's tolerance box breaks at ``design``, from the linearised stack-up (exact derivatives, the
+    analysis grid): every rule whose linear worst-case margin in the box is below 0, those named in ``first`` (e.g.
+    the elastic re-solve's relaxed rules) first, then by normalised worst margin.  Each with its nominal margin,
+    its loss to the tolerances (sum_i |dg/dx_i| tol_i), every variable's share, the shares of all lengths / all
+    angles, and the linear estimate of the largest uniform scale of the box that holds it at this design
+    (nominal margin / loss; 0 when the rule misses even at the nominal design)."""
+    from synthesis.tolerance.analysis import linearise, stack_up
+
+    tol = spec.tolerance
+    lin = linearise(kind, spec, design)
+    box = box_of(lin.dmap, tol.length, tol.angle, dict(tol.variables))
+    units = dict(zip(lin.dmap.keys, lin.dmap.units))
+    widths = dict(zip(lin.dmap.keys, box))
+    out = []
+    for row in stack_up(lin, box):
+        worst = row["linear_worst_margin"]
+        if not np.isfinite(worst) or worst >= -1e-9 * (row["scale"] or 1.0):
+            continue
+        shares = sorted(((k, abs(c)) for k, c in row["contributions"].items() if c), key=lambda kc: -kc[1])
+        loss = float(sum(c for _, c in shares))
+        nominal = worst + loss
+        by_unit = {u: float(sum(c for k, c in shares if units[k] == u)) for u in ("mm", "deg")}
+        out.append({"rule": row["name"], "unit": row["unit"], "scale": row["scale"], "linear_worst_margin": worst,
+                    "nominal_margin": nominal, "loss": loss,
+                    "contributions": [{"variable": k, "half_width": float(widths[k]), "unit": units[k],
+                                       "contribution": c} for k, c in shares],
+                    "by_unit": by_unit,
+                    "linear_scale": (nominal / loss if nominal > 0 and loss > 0 else 0.0)})
+    out.sort(key=lambda r: (r["rule"] not in first, r["linear_worst_margin"] / (r["scale"] or 1.0)))
+    return out
+
+
+def breaking_text(rows: list[dict], where: str, spec, shown: int = 3) -> str | None:
+    """The exit-3 words of :func:`breaking_rules`: the rule, by how much its worst case misses, the tolerances that
+    contribute most, and the linear estimate of the largest uniform scale of the box that can be met."""
+    if not rows:
+        return None
+    parts = []
+    for r in rows[:shown]:
+        u = "" if r["unit"] in ("", "-") else " " + r["unit"]
+        if r["nominal_margin"] < 0:
+            parts.append(f"{r['rule']}@tolerance: misses its limit by {-r['nominal_margin']:.3g}{u} at the nominal "
+                         f"design already (no tolerance box holds it at this design)")
+            continue
+        top = ", ".join(f"{c['variable']} ±{c['half_width']:g} {c['unit']} ({c['contribution']:.3g}{u})"
+                        for c in r["contributions"][:3])
+        units = "; ".join(f"all {'lengths' if k == 'mm' else 'angles'} {v:.3g}{u}" for k, v in r["by_unit"].items() if v)
+        parts.append(f"{r['rule']}@tolerance: its worst case misses by {-r['linear_worst_margin']:.3g}{u} (nominal "
+                     f"margin {r['nominal_margin']:.3g}{u}, lost to the tolerances {r['loss']:.3g}{u}); largest "
+                     f"contributions: {top}" + (f"; by unit: {units}" if units else ""))
+    text = f"The tolerances that break them (linearised stack-up at {where}): " + "; ".join(parts) + "."
+    held = [r for r in rows if r["nominal_margin"] >= 0]
+    if held and len(held) == len(rows):
+        k = min(r["linear_scale"] for r in held)
+        tol = spec.tolerance
+        present = {c["unit"] for r in rows for c in r["contributions"]}    # the units the box gives a width to
+        box = ", ".join([f"lengths ±{k * tol.length:.3g} mm" for _ in [0] if tol.length and "mm" in present]
+                        + [f"angles ±{k * tol.angle:.3g} deg" for _ in [0] if tol.angle and "deg" in present]
+                        + [f"{n} ±{k * v:.3g}" for n, v in tol.variables.items()])
+        text += (f" Linear estimate (at this design, not a solve): the box scaled by {k:.2g} ({box}) is the largest "
+                 f"uniform scale these rules can be held at.")
+    return text
+
+
+@dataclasses.dataclass(frozen=True)
+class ExplainBreak:
+    """``Solving.explain_failure`` of a robust solve: which tolerance breaks which rule (:func:`breaking_rules`), at
+    the elastic re-solve's design when it converged, else at the best start's."""
+
+    kind: Kind
+    spec: object
+
+    def __call__(self, result) -> str | None:
+        from synthesis.errors import AgrisynthError
+
+        elastic = result.elastic or {}
+        names = list(describe(self.spec))
+        use_elastic = bool(elastic.get("converged")) and isinstance(elastic.get("design"), dict)
+        source = dict(result.design or {})
+        if use_elastic:
+            source.update({k: v for k, v in elastic["design"].items() if v is not None})
+        try:
+            design = {k: float(source[k]) for k in names}
+            rows = breaking_rules(self.kind, self.spec, design, first=tuple(elastic.get("relaxed") or ()))
+        except (KeyError, TypeError, AgrisynthError, ValueError, ArithmeticError, RuntimeError) as exc:
+            return f"(Which tolerance breaks which rule could not be worked out: {type(exc).__name__}: {exc}.)"
+        where = "the elastic re-solve's design" if use_elastic else "the best start's design"
+        return breaking_text(rows, where, self.spec)
+
+
 def robust_kind(kind: Kind, spec) -> Kind:
     """The kind, solving with the spec's ``[tolerance]`` box (the kind itself when the spec has none)."""
     if getattr(spec, "tolerance", None) is None:
@@ -161,7 +252,7 @@ def robust_kind(kind: Kind, spec) -> Kind:
     hint = (f"The rules are held at their linearised worst case in the tolerance box ({_box_text(spec)}): "
             f"loosen the tolerances of the [tolerance] table, or those rules. ")
     solving = dataclasses.replace(base, build=RobustBuild(base.build, kind.name), finish=RobustFinish(base.finish, kind),
-                                  relax_hint=hint + base.relax_hint)
+                                  relax_hint=hint + base.relax_hint, explain_failure=ExplainBreak(kind, spec))
 
     class _Kind(Kind):
         def solver_side(self) -> Solving:      # noqa: D102

@@ -1,0 +1,137 @@
+"""`agrisynth tolerance` and the tolerance-robust `solve` as a user meets them (issue 20): the report with its tornado,
+--tol, a run folder as input, the Monte-Carlo pass rates of a robust solve, and the exit 3 of a box no design holds."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from solving import cli_run, strict_json
+
+ROOT = Path(__file__).resolve().parents[1]
+LIBRARY = ROOT / "problems"
+STEERING = LIBRARY / "steering" / "steering_redesign_27.toml"
+
+
+def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
+    """report.md embeds and links tornado.png (written, a PNG); --tol arm_length=0.5 overrides --length for that
+    variable only; every stack-up row's signed contributions add up (in absolute value) to its linear loss, which
+    is what the tornado's bars show, and the tornado draws the worst rules first."""
+    from synthesis.tolerance.output import tornado_rules
+
+    run = cli_run("tolerance", str(STEERING), "--length", "0.2", "--angle", "0.3", "--tol", "arm_length=0.5",
+                  "--samples", "10", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    folder = tmp_path / "steering_redesign_27-tolerance"
+    assert (folder / "tornado.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    report = (folder / "report.md").read_text()
+    assert "](tornado.png)" in report and "[tornado.png](tornado.png)" in report
+    facts = strict_json(folder / "result.json")["facts"]["tolerance"]
+    assert facts["tolerance"] == {"arm_length": {"half_width": 0.5, "unit": "mm"},
+                                  "base_angle": {"half_width": 0.3, "unit": "deg"}}
+    rows = facts["stack_up"]
+    for row in rows:
+        if row["linear_loss"] is not None:
+            assert sum(abs(c) for c in row["contributions"].values()) == pytest.approx(row["linear_loss"], rel=1e-9)
+    arm = next(r for r in rows if r["name"] == "steering_arm_length")
+    assert abs(arm["contributions"]["arm_length"]) == pytest.approx(0.5, rel=1e-9)     # d(arm)/d(arm) = 1, tol 0.5
+    shown = tornado_rules(facts)
+    assert shown and [r["name"] for r in shown] == [r["name"] for r in sorted(
+        shown, key=lambda r: r["linear_worst_margin"] / r["scale"])]
+
+
+@pytest.mark.parametrize("option, said", [
+    ("arm_len=0.2", "--tol: unknown design variable arm_len (known: arm_length, base_angle)"),
+    ("arm_length=0", "--tol arm_length=0: the half-width must be a finite number > 0"),
+    ("base_angle=inf", "--tol base_angle=inf: the half-width must be a finite number > 0"),
+])
+def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, option, said):
+    run = cli_run("tolerance", str(STEERING), "--tol", option, "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert run.stderr.strip() == f"error: {said}"
+    assert not (tmp_path / "steering_redesign_27-tolerance").exists()
+
+
+def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
+    solve = cli_run("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
+                    cwd=tmp_path)
+    assert solve.returncode == 0, solve.stderr
+    run_dir = tmp_path / "runs" / "steering_redesign_27"
+    solved = json.loads((run_dir / "result.json").read_text())["design"]
+    run = cli_run("tolerance", str(run_dir), "--length", "0.2", "--angle", "0.3", "--samples", "10",
+                  "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    data = strict_json(tmp_path / "steering_redesign_27-tolerance" / "result.json")
+    assert data["name"] == "steering_redesign_27-tolerance"
+    assert data["design"] == pytest.approx({k: solved[k] for k in data["design"]}, rel=1e-12)
+    assert data["design"]["arm_length"] != pytest.approx(150.0)       # the solved design, not the spec's start
+    assert data["facts"]["tolerance"]["monte_carlo"]["samples"] == 10
+
+
+def test_robust_solve_states_the_monte_carlo_pass_rates_in_the_terminal_and_the_report(tmp_path):
+    spec = tmp_path / "robust.toml"
+    spec.write_text(STEERING.read_text() + "\n[tolerance]\nlength = 0.2\nangle = 0.3\nsamples = 40\nseed = 3\n")
+    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    mc = json.loads((tmp_path / "out" / "steering_redesign_27" / "result.json").read_text())["facts"]["tolerance"][
+        "monte_carlo"]
+    assert mc["samples"] == 40 and mc["seed"] == 3 and len(mc["rules"]) == 2
+    out = " ".join(run.stdout.split())
+    assert f"Monte-Carlo check: 40 samples (seed 3, uniform in the tolerance box): {100 * mc['pass_rate']:.2f} % pass " \
+           f"every rule" in out
+    page = (tmp_path / "out" / "steering_redesign_27" / "report.html").read_text()
+    section = page[page.index("<h2>Tolerance</h2>"):page.index("<h2>Figures</h2>")]
+    assert "40 samples (seed 3" in section and f"<b>{100 * mc['pass_rate']:.2f} %</b> pass every rule" in section
+    for name, r in mc["rules"].items():
+        assert f"{name}: {100 * r['pass_rate']:.2f} % pass" in out
+        assert f"<td>{name}</td><td class='num'>{100 * r['pass_rate']:.2f} %</td>" in section
+
+
+def test_a_tolerance_box_no_design_can_hold_names_the_rule_and_the_tolerance_that_breaks_it(tmp_path):
+    """cai2020's crank-rocker at +-5 mm: exit 3; the message names min_transmission_angle@tolerance, by how much its
+    linear worst case misses at the elastic re-solve's design (the elastic slack itself), the largest
+    contributions (variable and tolerance) and the labelled linear estimate of the box scale that can be met."""
+    spec = tmp_path / "impossible.toml"
+    spec.write_text((LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+                    + "\n[tolerance]\nlength = 5\nangle = 2\nsamples = 20\n")
+    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert run.returncode == 3, run.stdout + run.stderr
+    err = " ".join(run.stderr.split())
+    assert "Traceback" not in err
+    data = json.loads((tmp_path / "out" / "cai2020_crank_rocker_synthesis" / "result.json").read_text())
+    assert "min_transmission_angle" in data["elastic"]["relaxed"] and data["elastic"]["design"]
+    m = re.search(r"min_transmission_angle@tolerance: its worst case misses by ([0-9.]+) deg \(nominal margin "
+                  r"[-0-9.e]+ deg, lost to the tolerances ([0-9.]+) deg\); largest contributions: (\w+) ±5 mm "
+                  r"\(([0-9.]+) deg\)", err)
+    assert m, err
+    assert float(m[1]) == pytest.approx(data["elastic"]["slacks"]["min_transmission_angle"], rel=0.02)
+    assert m[3] in ("l7", "l8", "l9", "l10") and 0 < float(m[4]) <= float(m[2])
+    assert "at the elastic re-solve's design" in err
+    scale = re.search(r"Linear estimate \(at this design, not a solve\): the box scaled by ([0-9.e-]+) "
+                      r"\(lengths ±([0-9.e-]+) mm\)", err)
+    assert scale, err
+    assert 0 < float(scale[1]) < 1 and float(scale[2]) == pytest.approx(5 * float(scale[1]), rel=0.05)
+    assert "angles ±" not in err          # no angle variable: the angle tolerance breaks nothing
+
+
+def test_a_gap_at_an_unevaluable_corner_says_so_and_is_never_called_second_order():
+    """The planting case of "P3 not found" at the linear worst corner: the gap is against the Monte-Carlo samples
+    only, and the explanation must say that (not classify it as second order or a kink)."""
+    from synthesis.tolerance.analysis import explain_gaps
+
+    kind = SimpleNamespace(solver_side=lambda: None)          # never re-checked: nothing to evaluate at a corner
+    row = {"name": "p2p3_distance", "unit": "mm", "scale": 1.0, "recheck_margin": 0.6, "nominal_margin": 0.6,
+           "linear_worst_margin": 0.5, "linear_loss": 0.1, "same_terms": True, "linear_vs_sampled_gap": 0.6,
+           "mc_worst_margin": 0.5625, "sampled_worst_margin": 0.5625, "corner": [0.2, -0.3], "corner_margin": None,
+           "corner_note": "at the linear worst corner: not evaluated: P3 not found: the claw does not cross the line"}
+    explain_gaps(kind, None, {}, None, [row])
+    why = row["gap_explanation"]
+    assert "not evaluable (not evaluated: P3 not found" in why and "only the Monte-Carlo samples were compared" in why
+    assert "second order" not in why and "kink" not in why
+    assert "0.0625 mm" in why and "below the worst sample" in why
+    assert math.isclose(row["linear_vs_sampled_gap"], 0.6)
