@@ -111,3 +111,43 @@ def test_planting_derivative_error_row_against_the_paper():
     assert rows[0.2, "atan2"]["speed_error_pct"] == pytest.approx(0.00621, rel=0.02)
     assert rows[1.0, "atan"]["printed_acceleration_pct"] == 4.94
     assert math.isfinite(rows[0.2, "atan"]["acceleration_vector_error_pct"])
+
+
+def _swept_result(problem: str) -> dict:
+    """A bench result of one problem with a two-row sample sweep and iteration medians of 1000 and 1580
+    (what .3g printed as 1e+03 / 1.58e+03)."""
+    row = {"problem": problem, "kind": "fourbar_path", "method": "ipopt_multistart", "objective": 1.0,
+           "objectives": [1.0], "objective_gap": 0.0, "best_known": 1.0, "target": 1.0, "reached_target": True,
+           "reached_target_runs": [True], "worst_violation": 0.0, "wall_s": [2.0], "median_s": 2.0,
+           "trace": [(1.0, 1.0)], "time_ratio_text": "1 (reference)",
+           "details": {"median_iterations": 1000.0, "successes": 1, "starts": 1, "build_s": 0.5, "ipopt_s": 1.0,
+                       "recheck_s": 0.5}}
+    fd = row | {"method": "ipopt_finite_differences", "time_ratio_text": "1.5x",
+                "details": row["details"] | {"median_iterations": 1580.0}}
+    sweep = {"problem": problem, "kind": "fourbar_path", "starts": 1, "repeats": 1, "violation_target": 1e-6,
+             "skipped": [], "reaching": {"samples": {"samples": 9}, "median_s": 1.0, "worst_violation": 0.0},
+             "rows": [{"factor": f, "samples": {"samples": n}, "median_s": t, "build_s": 0.1, "ipopt_s": t,
+                       "median_iterations": it, "worst_violation": 0.0, "objective": 1.0, "objective_gap": 0.0}
+                      for f, n, t, it in ((0.5, 9, 1.0, 1000.0), (1.0, 18, 2.0, 18.5))]}
+    return {"problem": problem, "kind": "fourbar_path", "note": "", "best_known": 1.0, "target": 1.0,
+            "rows": [row, fd], "ratios": [], "sweep": sweep}
+
+
+def test_bench_md_plot_link_of_a_name_with_spaces_and_brackets_and_plain_iteration_counts(tmp_path):
+    """bench.md's sweep image link of "picking_arc (generic studies)" names a file that is written and a
+    link target with no space or bracket (a Markdown link stops at those); iteration counts print as 1000 /
+    1580 / 18.5, not 1e+03 / 1.58e+03."""
+    import re as _re
+
+    from synthesis.bench import _write_bench_files, sweep_plot_name
+
+    problem = "picking_arc (generic studies)"
+    assert sweep_plot_name(problem) == "samples_picking_arc_generic_studies.png"
+    _write_bench_files(tmp_path, [_swept_result(problem)], {}, None)
+    text = (tmp_path / "bench.md").read_text()
+    links = _re.findall(r"!\[samples\]\(([^)]*)\)", text)
+    assert links == ["samples_picking_arc_generic_studies.png"]
+    assert (tmp_path / links[0]).is_file() and _re.fullmatch(r"[\w.-]+", links[0])
+    assert "e+0" not in text
+    assert "| 1000 | 1580 |" in text                          # summary: AD, FD iterations
+    assert "| 1 | 1000 | 0 |" in text and "| 2 | 18.5 | 0 |" in text   # the sweep's median iterations
