@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 import pytest
 
 from conftest import LIBRARY
@@ -151,3 +153,27 @@ def test_bench_md_plot_link_of_a_name_with_spaces_and_brackets_and_plain_iterati
     assert "e+0" not in text
     assert "| 1000 | 1580 |" in text                          # summary: AD, FD iterations
     assert "| 1 | 1000 | 0 |" in text and "| 2 | 18.5 | 0 |" in text   # the sweep's median iterations
+
+
+def test_de_bounds_close_an_infinite_bound_around_the_start():
+    """de_bounds: a variable with an infinite bound gets one decade around its start (its finite bound kept),
+    a bounded one keeps its box."""
+    from synthesis.bench_generic import de_bounds
+
+    lo, hi, n = de_bounds(np.array([5.0, 1e-6, -np.inf, 0.0]), np.array([200.0, np.inf, np.inf, 1.0]),
+                          np.array([50.0, 120.0, -3.0, 0.5]))
+    assert n == 2
+    np.testing.assert_allclose(lo, [5.0, 12.0, -33.0, 0.0])
+    np.testing.assert_allclose(hi, [200.0, 1200.0, 27.0, 1.0])
+
+
+def test_de_runs_on_a_problem_with_unbounded_lengths():
+    """crank_rocker's NLP leaves three lengths unbounded above: differential_evolution used to be "not run"
+    there; with the derived box it runs (1 s budget) from the spec's start and returns a finite objective."""
+    from synthesis.bench_generic import de_runner
+
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml")
+    out = measure(loaded, 1, 0, runner=de_runner(1.0, 0))
+    status = out.details["return_status"]
+    assert status.startswith("differential_evolution:") and "derived from the start for 3 variable(s)" in status
+    assert math.isfinite(out.objective)
