@@ -441,7 +441,9 @@ def markdown(data: dict) -> str:
     if data.get("extreme"):
         ext = data["extreme"]
         passed = sum(r["outcome"] == "passed" for r in ext)
-        parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed)\n\n"
+        known = sum(str(r["outcome"]).startswith("known failure") for r in ext)
+        parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed"
+                     + (f", {known} known failure(s) with the measured cause" if known else "") + ")\n\n"
                      + _table(ext, [("file", "file"), ("case", "case"), ("tried", "what was tried"),
                                     ("outcome", "outcome"),
                                     ("figure", "figure / what the tool did"), ("seconds", "s")]))

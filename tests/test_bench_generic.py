@@ -177,3 +177,22 @@ def test_de_runs_on_a_problem_with_unbounded_lengths():
     status = out.details["return_status"]
     assert status.startswith("differential_evolution:") and "derived from the start for 3 variable(s)" in status
     assert math.isfinite(out.objective)
+
+
+def test_extreme_matrix_row_of_a_known_failure():
+    """A strict xfail of tests/extreme/ (pytest reports it "skipped") is a "known failure (xfail)" row with its
+    cause, and bench.md's heading counts it apart from the passed rows."""
+    from types import SimpleNamespace
+
+    from synthesis import bench_extreme
+
+    bench_extreme._ROWS.clear()
+    bench_extreme.pytest_runtest_logreport(SimpleNamespace(
+        when="call", outcome="skipped", nodeid="tests/extreme/test_scale.py::test_x[a]", duration=1.0,
+        user_properties=[("figure", "design within 2.0")], wasxfail="mirror optima", longrepr=None))
+    row = bench_extreme._ROWS.pop()
+    assert row["outcome"] == "known failure (xfail)" and row["figure"] == "design within 2.0; cause: mirror optima"
+    text = markdown({"machine": {"cpu": "x", "cores_usable": 2, "system": "s", "python": "3"}, "settings": {},
+                     "summary": [], "rows": [], "problems": [],
+                     "extreme": [row, row | {"outcome": "passed"}]})
+    assert "(tests/extreme/: 1 of 2 passed, 1 known failure(s) with the measured cause)" in text
