@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import statistics
 import tempfile
 import time
@@ -256,7 +257,7 @@ def _write_bench_files(folder: Path, results: list[dict], settings: dict, extrem
     plots = {"error_vs_time.png": lambda path: plot_error_vs_time(results, path)}
     for res in results:
         if res.get("sweep") and res["sweep"]["rows"]:
-            plots[f"samples_{res['problem']}.png"] = lambda path, sweep=res["sweep"]: plot_sample_sweep(sweep, path)
+            plots[sweep_plot_name(res["problem"])] = lambda path, sweep=res["sweep"]: plot_sample_sweep(sweep, path)
     for name, draw in plots.items():
         fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".png", dir=folder)
         os.close(fd)
@@ -329,6 +330,27 @@ def summary(results: list[dict]) -> list[dict]:
     return out
 
 
+def sweep_plot_name(problem: str) -> str:
+    """The sample sweep plot's file name of a problem: ``samples_<problem>.png`` with every character but
+    letters, digits, ``.``, ``_`` and ``-`` made ``_`` (a name like ``picking_arc (generic studies)`` has spaces
+    and brackets, which break a Markdown image link and are awkward in a file name)."""
+    return "samples_" + re.sub(r"[^A-Za-z0-9._-]+", "_", problem).strip("_") + ".png"
+
+
+#: columns that hold counts (iterations): printed as plain numbers (``1000``, ``1580``, ``18.5``), never as
+#: ``1e+03`` / ``1.58e+03``
+COUNT_COLUMNS = {"ad_median_iterations", "fd_median_iterations", "iters", "median_iterations"}
+
+
+def _count(v) -> str:
+    """A count or a median of counts: an integer, or one decimal for a median halfway between two."""
+    if v is None:
+        return "–"
+    if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
+        return str(int(v)) if float(v).is_integer() else f"{v:.1f}"
+    return _fmt(v)
+
+
 def _fmt(v, spec: str = ".3g") -> str:
     if v is None:
         return "–"
@@ -344,7 +366,8 @@ def _fmt(v, spec: str = ".3g") -> str:
 def _table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
     head = "| " + " | ".join(title for _, title in columns) + " |"
     rule = "|" + "---|" * len(columns)
-    body = ["| " + " | ".join(_fmt(r.get(key)) for key, _ in columns) + " |" for r in rows]
+    body = ["| " + " | ".join((_count if key in COUNT_COLUMNS else _fmt)(r.get(key)) for key, _ in columns) + " |"
+            for r in rows]
     return "\n".join([head, rule, *body])
 
 
@@ -409,7 +432,7 @@ def markdown(data: dict) -> str:
                                                ("objective_gap", "gap to finest")])
                          + "".join(f"\n\nNot run: samples {_fmt(k['samples'])} (predicted {k['predicted_s']:.0f} s "
                                    f"> sweep budget {k['budget_s']:g} s)" for k in sw.get("skipped") or [])
-                         + f"\n\n![samples](samples_{p['problem']}.png)")
+                         + f"\n\n![samples]({sweep_plot_name(p['problem'])})")
     for p in data["problems"]:
         for name, rows_ in (p.get("studies") or {}).items():
             if rows_:
@@ -418,7 +441,9 @@ def markdown(data: dict) -> str:
     if data.get("extreme"):
         ext = data["extreme"]
         passed = sum(r["outcome"] == "passed" for r in ext)
-        parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed)\n\n"
+        known = sum(str(r["outcome"]).startswith("known failure") for r in ext)
+        parts.append(f"## Extreme-case matrix (tests/extreme/: {passed} of {len(ext)} passed"
+                     + (f", {known} known failure(s) with the measured cause" if known else "") + ")\n\n"
                      + _table(ext, [("file", "file"), ("case", "case"), ("tried", "what was tried"),
                                     ("outcome", "outcome"),
                                     ("figure", "figure / what the tool did"), ("seconds", "s")]))

@@ -15,8 +15,9 @@ slsqp                     scipy.optimize.minimize(method="SLSQP") on the same tr
                           (``slsqp_budget_s`` per run, shared by the starts)
 differential_evolution    scipy's differential_evolution over the same NLP's variables (its bounds; rows
                           as a NonlinearConstraint), one run from the spec's start (x0), default strategy
-                          and population, no polish, stopped at the time budget; not run where a
-                          variable has no finite bounds (an epigraph or slack variable)
+                          and population, no polish, stopped at the time budget; a variable with no finite
+                          bound (a length unbounded above, an epigraph or slack variable) is searched within
+                          one decade of its start (:func:`de_bounds`)
 
 Objectives are compared minimised (a maximising kind's objective is negated and the case note says
 so); a run reaches the target when every rule holds on the fine grid and its objective is within
@@ -188,13 +189,10 @@ def de_runner(budget_s: float, seed: int) -> Callable:
         from synthesis.core.ipopt import NLPOutcome
 
         t = compiled.t
-        if not (np.all(np.isfinite(t.lbw)) and np.all(np.isfinite(t.ubw))):
-            return NLPOutcome(start, np.asarray(w0, float), math.inf,
-                              "not run: a variable has no finite bounds (epigraph or slack variable)", False, 0, 0.0, "",
-                              np.zeros(len(t.lbg)))
+        lbw, ubw, derived = de_bounds(t.lbw, t.ubw, w0)
         f, g = _nlp_functions(compiled, p)
-        free = t.ubw > t.lbw
-        base = np.clip(np.asarray(w0, float), t.lbw, t.ubw)
+        free = ubw > lbw
+        base = np.clip(np.asarray(w0, float), lbw, ubw)
 
         def full(z):
             w = base.copy()
@@ -203,14 +201,35 @@ def de_runner(budget_s: float, seed: int) -> Callable:
 
         constraints = [NonlinearConstraint(lambda z: g(full(z)), t.lbg, t.ubg)] if len(t.lbg) else []
         t0 = time.perf_counter()
-        res = differential_evolution(lambda z: f(full(z)), list(zip(t.lbw[free], t.ubw[free])),
+        res = differential_evolution(lambda z: f(full(z)), list(zip(lbw[free], ubw[free])),
                                      constraints=constraints, x0=base[free], rng=seed, polish=False,
                                      callback=lambda intermediate_result: time.perf_counter() - t0 > budget_s)
         wall = time.perf_counter() - t0
         x = full(np.asarray(res.x, float))
-        return NLPOutcome(start, x, f(x), f"differential_evolution: {res.message}", bool(res.success), int(res.nit),
-                          wall, "", np.zeros(len(t.lbg)))
+        note = f" (finite bounds derived from the start for {derived} variable(s): {DE_BOUNDS_RULE})" if derived else ""
+        return NLPOutcome(start, x, f(x), f"differential_evolution: {res.message}{note}", bool(res.success),
+                          int(res.nit), wall, "", np.zeros(len(t.lbg)))
     return run
+
+
+#: how :func:`de_bounds` closes a bound that is infinite (bench.md and the case note repeat it)
+DE_BOUNDS_RULE = ("a variable with an infinite bound searched within one decade of its start value w0 "
+                  "([w0 / 10, 10 w0] for w0 > 0, else w0 -+ 10 max(1, |w0|)), within its own finite bound")
+
+
+def de_bounds(lbw, ubw, w0) -> tuple[np.ndarray, np.ndarray, int]:
+    """differential_evolution needs a finite box: a variable whose lower or upper bound is infinite (a length
+    the kind leaves unbounded above, an epigraph or slack variable) gets :data:`DE_BOUNDS_RULE`'s interval
+    around the spec's start; the variable's finite bound is kept.  (lower, upper, how many were derived)."""
+    lo, hi = np.array(lbw, float), np.array(ubw, float)
+    w0 = np.clip(np.asarray(w0, float), lo, hi)
+    open_ = ~(np.isfinite(lo) & np.isfinite(hi))
+    span = 10.0 * np.maximum(1.0, np.abs(w0))
+    d_lo = np.where(w0 > 0, w0 / 10.0, w0 - span)
+    d_hi = np.where(w0 > 0, w0 * 10.0, w0 + span)
+    lo = np.where(open_ & ~np.isfinite(lo), d_lo, np.where(open_, np.maximum(lo, d_lo), lo))
+    hi = np.where(open_ & ~np.isfinite(hi), d_hi, np.where(open_, np.minimum(hi, d_hi), hi))
+    return lo, np.maximum(hi, lo), int(open_.sum())
 
 
 # ---------------------------------------------------------------------------- sample counts
@@ -345,7 +364,7 @@ def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dic
                      note=f"{starts} start(s) per method"
                      + (f"; SLSQP stopped at {settings.slsqp_budget_s / max(starts, 1):g} s per start"
                         if "slsqp" in settings.peers else "")
-                     + (f"; differential_evolution: 1 run, stopped at {settings.de_budget_s:g} s"
+                     + (f"; differential_evolution: 1 run, stopped at {settings.de_budget_s:g} s ({DE_BOUNDS_RULE})"
                         if "differential_evolution" in settings.peers else "")
                      + (f"; best known: an untimed multistart ({min(loaded.model.solver.starts, settings.reference_starts)}"
                         " starts, another seed)" if settings.reference

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 import pytest
 
 from conftest import LIBRARY
@@ -111,3 +113,86 @@ def test_planting_derivative_error_row_against_the_paper():
     assert rows[0.2, "atan2"]["speed_error_pct"] == pytest.approx(0.00621, rel=0.02)
     assert rows[1.0, "atan"]["printed_acceleration_pct"] == 4.94
     assert math.isfinite(rows[0.2, "atan"]["acceleration_vector_error_pct"])
+
+
+def _swept_result(problem: str) -> dict:
+    """A bench result of one problem with a two-row sample sweep and iteration medians of 1000 and 1580
+    (what .3g printed as 1e+03 / 1.58e+03)."""
+    row = {"problem": problem, "kind": "fourbar_path", "method": "ipopt_multistart", "objective": 1.0,
+           "objectives": [1.0], "objective_gap": 0.0, "best_known": 1.0, "target": 1.0, "reached_target": True,
+           "reached_target_runs": [True], "worst_violation": 0.0, "wall_s": [2.0], "median_s": 2.0,
+           "trace": [(1.0, 1.0)], "time_ratio_text": "1 (reference)",
+           "details": {"median_iterations": 1000.0, "successes": 1, "starts": 1, "build_s": 0.5, "ipopt_s": 1.0,
+                       "recheck_s": 0.5}}
+    fd = row | {"method": "ipopt_finite_differences", "time_ratio_text": "1.5x",
+                "details": row["details"] | {"median_iterations": 1580.0}}
+    sweep = {"problem": problem, "kind": "fourbar_path", "starts": 1, "repeats": 1, "violation_target": 1e-6,
+             "skipped": [], "reaching": {"samples": {"samples": 9}, "median_s": 1.0, "worst_violation": 0.0},
+             "rows": [{"factor": f, "samples": {"samples": n}, "median_s": t, "build_s": 0.1, "ipopt_s": t,
+                       "median_iterations": it, "worst_violation": 0.0, "objective": 1.0, "objective_gap": 0.0}
+                      for f, n, t, it in ((0.5, 9, 1.0, 1000.0), (1.0, 18, 2.0, 18.5))]}
+    return {"problem": problem, "kind": "fourbar_path", "note": "", "best_known": 1.0, "target": 1.0,
+            "rows": [row, fd], "ratios": [], "sweep": sweep}
+
+
+def test_bench_md_plot_link_of_a_name_with_spaces_and_brackets_and_plain_iteration_counts(tmp_path):
+    """bench.md's sweep image link of "picking_arc (generic studies)" names a file that is written and a
+    link target with no space or bracket (a Markdown link stops at those); iteration counts print as 1000 /
+    1580 / 18.5, not 1e+03 / 1.58e+03."""
+    import re as _re
+
+    from synthesis.bench import _write_bench_files, sweep_plot_name
+
+    problem = "picking_arc (generic studies)"
+    assert sweep_plot_name(problem) == "samples_picking_arc_generic_studies.png"
+    _write_bench_files(tmp_path, [_swept_result(problem)], {}, None)
+    text = (tmp_path / "bench.md").read_text()
+    links = _re.findall(r"!\[samples\]\(([^)]*)\)", text)
+    assert links == ["samples_picking_arc_generic_studies.png"]
+    assert (tmp_path / links[0]).is_file() and _re.fullmatch(r"[\w.-]+", links[0])
+    assert "e+0" not in text
+    assert "| 1000 | 1580 |" in text                          # summary: AD, FD iterations
+    assert "| 1 | 1000 | 0 |" in text and "| 2 | 18.5 | 0 |" in text   # the sweep's median iterations
+
+
+def test_de_bounds_close_an_infinite_bound_around_the_start():
+    """de_bounds: a variable with an infinite bound gets one decade around its start (its finite bound kept),
+    a bounded one keeps its box."""
+    from synthesis.bench_generic import de_bounds
+
+    lo, hi, n = de_bounds(np.array([5.0, 1e-6, -np.inf, 0.0]), np.array([200.0, np.inf, np.inf, 1.0]),
+                          np.array([50.0, 120.0, -3.0, 0.5]))
+    assert n == 2
+    np.testing.assert_allclose(lo, [5.0, 12.0, -33.0, 0.0])
+    np.testing.assert_allclose(hi, [200.0, 1200.0, 27.0, 1.0])
+
+
+def test_de_runs_on_a_problem_with_unbounded_lengths():
+    """crank_rocker's NLP leaves three lengths unbounded above: differential_evolution used to be "not run"
+    there; with the derived box it runs (1 s budget) from the spec's start and returns a finite objective."""
+    from synthesis.bench_generic import de_runner
+
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml")
+    out = measure(loaded, 1, 0, runner=de_runner(1.0, 0))
+    status = out.details["return_status"]
+    assert status.startswith("differential_evolution:") and "derived from the start for 3 variable(s)" in status
+    assert math.isfinite(out.objective)
+
+
+def test_extreme_matrix_row_of_a_known_failure():
+    """A strict xfail of tests/extreme/ (pytest reports it "skipped") is a "known failure (xfail)" row with its
+    cause, and bench.md's heading counts it apart from the passed rows."""
+    from types import SimpleNamespace
+
+    from synthesis import bench_extreme
+
+    bench_extreme._ROWS.clear()
+    bench_extreme.pytest_runtest_logreport(SimpleNamespace(
+        when="call", outcome="skipped", nodeid="tests/extreme/test_scale.py::test_x[a]", duration=1.0,
+        user_properties=[("figure", "design within 2.0")], wasxfail="mirror optima", longrepr=None))
+    row = bench_extreme._ROWS.pop()
+    assert row["outcome"] == "known failure (xfail)" and row["figure"] == "design within 2.0; cause: mirror optima"
+    text = markdown({"machine": {"cpu": "x", "cores_usable": 2, "system": "s", "python": "3"}, "settings": {},
+                     "summary": [], "rows": [], "problems": [],
+                     "extreme": [row, row | {"outcome": "passed"}]})
+    assert "(tests/extreme/: 1 of 2 passed, 1 known failure(s) with the measured cause)" in text

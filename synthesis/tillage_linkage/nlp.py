@@ -92,9 +92,11 @@ class TillageNLP:
                                backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 1e-7),
                                ipopt="tight", max_iter=s.max_iter,
                                # z: a, b, c (mm), theta (deg), height_c (mm), four crank angles (rad); the rows
-                               # in mm are divided by the constant MM (plain numbers), the angle gaps in rad
+                               # in mm divided by the constant MM are still lengths (mm / 100: length power 1),
+                               # and so is the objective c / MM -- declared "" once, which left them at mm size
+                               # under a length-unit change (tests/extreme/test_scale.py), the angle gaps in rad
                                x_units=["mm", "mm", "mm", "deg", "mm"] + ["rad"] * 4,
-                               structural_units=[""] * 6 + ["rad"] * 3, objective_unit="", operating=self.operating)
+                               structural_units=["mm"] * 6 + ["rad"] * 3, objective_unit="mm", operating=self.operating)
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def angles_guess(self, design: dict[str, float]) -> np.ndarray:

@@ -37,7 +37,7 @@ FACTORS = (1e-3, 1e3)
 #: solves it in mm, in metres and x 1e3 (about 10 s in all); every library problem and all its starts are the
 #: benchmark study below.  Left to the study: guide_way (a 20 s build), fourbar_path (start 0 of picking_arc
 #: stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of tillage_redesign
-#: takes 244 iterations in mm, and x 1e3 ends it in another local optimum, c = 393.3 against 373.1 mm: a start
+#: takes 244 iterations in mm, and metres end it early at c = 407.8 against 373.1 mm (KNOWN_FAILING): a start
 #: that far from the optimum tests the multistart, which the study compares).
 FAST = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/picker_double_crank_redesign.toml",
         "clamp_cam/opening_cam_redesign.toml", "comb_finger/redesign_max_combing.toml",
@@ -181,6 +181,17 @@ def same(row: dict, f: float) -> bool:
     return r["design"] < max(DESIGN_TOLERANCE, OWN_ERRORS * own if own is not None else 0.0)
 
 
+def comparable_iterations(row: dict, f: float) -> bool:
+    """"Solves ... in a comparable number of iterations" (issue 18): IPOPT's iterations over the starts that
+    converge in both units at most ITERATION_RATIO x the mm ones.  A start that does not solve in one unit is not
+    a solve to compare: a start IPOPT gives up on as locally infeasible ends when its restoration phase gives up,
+    which judges absolute row violations (1e-3 x smaller in metres), so the same infeasible start takes 76
+    iterations in mm and 476 in metres (planting redesign_from_example2, start 0) -- measured, not a unit defect.
+    Where no start converges in both units, the total over all starts is compared (the figure gives both)."""
+    r = row[f]
+    return (r["converged_ratio"] if r["converged"] else r["ratio"]) <= ITERATION_RATIO
+
+
 def figure(row: dict) -> str:
     verdict = "" if row["mm_satisfied"] else "no design satisfies every rule (as in mm); "
     own = row.get("mm_own_accuracy")
@@ -289,6 +300,22 @@ BENCH_STARTS = 4
 
 #: rows known to fail, with the measured cause (strict: the row fails the day it passes, so this is re-read)
 KNOWN_FAILING = {
+    "fourbar_path/picking_arc.toml":
+        "a different local optimum in metres, not a unit defect: its fit has mirror optima rcy = -20.55 mm "
+        "(objective 1.0293e-4 mm^2) and rcy = +20.50 mm (1.0638e-4, 3.4 % higher), both satisfying every rule; "
+        "start 3 converges in every unit, to the first in mm and to the second in metres and x 1e3 (IPOPT's "
+        "path depends on the rows' size), and start 1 (the first in mm after 747 iterations) stops at max_iter (1000) "
+        "in metres at 3.4e-4, so metres' best is the other optimum (design differs by 2.0 = 41 mm / 20.5 mm in "
+        "rcy); x 1e3 reaches the mm design within 4e-14.  Iterations are comparable (0.90 over the 2 starts "
+        "converging in both)",
+    "tillage/tillage_redesign.toml":
+        "IPOPT stops early in metres: start 0 ends Solve_Succeeded at c = 407.77 mm where mm and x 1e3 reach "
+        "373.06 mm; at that point the unscaled dual infeasibility is 2.8e-5 but IPOPT's scaled test (stationarity "
+        "divided by s_d, the mean multiplier / 100) passes at 3.2e-11: with the rows 1e-3 of their mm size the "
+        "multipliers reach 1.7e7 (mm: 3.8) on this degenerate optimum (b = 2a, height_c at its bound).  Solved "
+        "again in mm from 407.77 mm the design moves on (to 385.4 mm): not a local optimum.  A tighter "
+        "dual_inf_tol (1e-6) was tried: it ends at the same point Solved_To_Acceptable_Level and changes the "
+        "mm starts, so it is not kept",
     "planting_arm/envelope_redesign_from_example2.toml":
         "over its first 4 starts no start satisfies every rule in any unit, mm included (the full multistart "
         "finds the design: 32 starts), so the rows compare elastic diagnoses, which are local solves from "
@@ -307,8 +334,8 @@ def _library_params():
 def test_library_problem_in_metres_and_x1e3(relative, record_property):
     """One library problem, its first 4 starts in mm, metres (x 1e-3) and x 1e3: the best design within
     1e-6 (relative, 1 unit floor; the objective where the optimum is not a point; the conflicting rules where
-    none is feasible), and the total iterations at most 3 x the mm total (the ratio over the starts converging in
-    both units is in the figure).  A problem with a tolerance box is refused (its sensitivity variables mix units)."""
+    none is feasible), and the iterations of the starts converging in both units at most 3 x their mm iterations
+    (the total over all starts where none does; both ratios are in the figure).  A problem with a tolerance box is refused (its sensitivity variables mix units)."""
     loaded = load_spec(LIBRARY / relative)
     if getattr(loaded.model, "tolerance", None) is not None:
         with pytest.raises(ValueError, match="tolerance box"):
@@ -320,7 +347,7 @@ def test_library_problem_in_metres_and_x1e3(relative, record_property):
                     + figure(row))
     for f in FACTORS:
         assert same(row, f)
-        assert row[f]["ratio"] <= ITERATION_RATIO
+        assert comparable_iterations(row, f)
 
 
 @pytest.mark.benchmark
@@ -343,7 +370,7 @@ def test_every_library_problem_every_start(record_property):
     lines.append(f"refused (tolerance box): {', '.join(refused)}")
     record_property("figure", "\n".join(lines))
     print("\n".join(lines))
-    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and r[f]["ratio"] <= ITERATION_RATIO)]
+    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and comparable_iterations(r, f))]
     assert not bad, bad
 
 
@@ -366,3 +393,30 @@ def test_a_watched_solve_sees_the_objective_in_the_problem_s_units(factor, scali
     assert seen[0] == pytest.approx(29.0 ** 2 + 38.0 ** 2 + 7.0, rel=1e-12)
     assert seen[-1] == pytest.approx(7.0, rel=1e-6)
     assert out.objective == pytest.approx(7.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("k", FACTORS)
+def test_tillage_declared_units_match_its_kinematics(k):
+    """tillage_linkage's structural rows (the lowest/highest point and soil entry/exit conditions, in mm / 100)
+    and its objective c / 100 are lengths: with a, b, c and height_c x k (angles kept) the tip's path is k times
+    the mm one, so each structural row and the objective is factor**p of its mm value for its declared p --
+    checked at 3 random designs to 1e-9 relative (they were declared plain numbers, which left them at mm size
+    in another length unit: the x 1e3 row then ended start 0 at c = 393.3 instead of 373.1 mm)."""
+    from synthesis.tillage_linkage.nlp import TillageNLP
+
+    nlp = TillageNLP(load_spec(LIBRARY / "tillage" / "tillage_redesign.toml").model)
+    declared = ipopt.CompiledNLP(nlp.problem, length_factor=k)
+    u, c = declared._unit, declared._row_unit
+    structural = np.array([o is None for o in nlp.compiled.t.owner])
+    assert structural.sum() > 6 and declared._objective_unit == k
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        design = np.array([rng.uniform(60, 140), rng.uniform(200, 380), rng.uniform(300, 800), rng.uniform(5, 60),
+                           rng.uniform(100, 300)])
+        w = np.concatenate([design, nlp.angles_guess(dict(zip(nlp.names, design)))])
+        g = np.asarray(nlp.compiled.g_function(w, []), float).ravel()
+        g_k = np.asarray(nlp.compiled.g_function(w * u, []), float).ravel()     # the k-times mechanism in mm
+        np.testing.assert_allclose(g_k[structural], (c * g)[structural], rtol=1e-9,
+                                   atol=1e-12 * np.max(np.abs(g[structural])))
+        assert float(nlp.compiled.f_function(w * u, [])) == pytest.approx(k * float(nlp.compiled.f_function(w, [])),
+                                                                          rel=1e-12)
