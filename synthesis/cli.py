@@ -571,6 +571,8 @@ def _per_variable_tolerances(tols: tuple[str, ...]) -> dict[str, float]:
             raise SpecError(f"--tol {item}: {text!r} is not a number") from None
         if not math.isfinite(value) or value <= 0:
             raise SpecError(f"--tol {item}: the half-width must be a finite number > 0")
+        if name in out:
+            raise SpecError(f"--tol {name}: given twice ({out[name]:g} and {value:g}); give each variable once")
         out[name] = value
     return out
 

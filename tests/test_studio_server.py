@@ -491,30 +491,51 @@ def _placed(mechanism: dict, value: dict) -> list:
     return [(value["at"][0] + c * x - s * y, value["at"][1] + s * x + c * y) for x, y in mechanism["shapes"][value["shape"]]]
 
 
-@pytest.mark.parametrize("grid", ["coarse", "fine"])
-def test_the_cam_turns_with_its_follower(grid):
-    """clamp_cam's poses: the working profile turned by the cam angle of each pose touches the roller there -- the
-    roller centre lies one roller radius from the drawn profile (never closer: no overlap) -- and the roller centre
-    runs on the traced path; a whole turn of poses."""
+#: the library cam (counter-clockwise, translating, no offset), a clockwise one with an offset, and a clockwise
+#: oscillating follower: (replacements of the library spec's lines)
+CAMS = {
+    "counter_clockwise": [],
+    "clockwise_offset": [("roller_radius = 3.5", 'roller_radius = 3.5\nrotation = "clockwise"'),
+                         ("offset = { init = 0.0", "offset = { init = 8.0")],
+    "clockwise_oscillating": [("roller_radius = 3.5", 'roller_radius = 3.5\nrotation = "clockwise"'),
+                              ('type = "translating"', 'type = "oscillating"\npivot_distance = 80.0\n'
+                                                      'arm_length = 60.0\nside = -1'),
+                              ("offset = { init = 0.0, bounds = [-20.0, 20.0] }\n", ""),
+                              ("stroke = 10.0", "stroke = 12.0")],
+}
+
+
+@pytest.mark.parametrize("cam", sorted(CAMS))
+def test_the_cam_turns_with_its_follower(cam, tmp_path):
+    """clamp_cam's poses: the working profile as the check exports it (mirrored for a clockwise cam), placed at
+    each pose's cam angle, touches the roller -- the roller centre lies one roller radius from the drawn profile,
+    never nearer than the chords' 0.01 mm -- the pose at cam angle 0 is the exported profile itself, and a whole
+    turn of poses in the cam's own turning sense, each pose once."""
+    from solving import spec_with
     from synthesis.studio.session import Session
 
-    session = Session.open(STUDIO_SPECS["clamp_cam"])
-    values = moved_values(session, 0.3)
-    mechanism = session.evaluate(values, grid)["drawing"]["mechanism"]
+    spec = spec_with(tmp_path, STUDIO_SPECS["clamp_cam"], CAMS[cam])
+    session = Session.open(spec)
+    answer = session.evaluate({}, "fine")
+    assert answer["error"] is None, answer["error"]
+    mechanism = answer["drawing"]["mechanism"]
     frames = mechanism["frames"]
     assert len(frames) >= 36 and {"O", "C", "cam", "roller"} <= set(frames[0])
     rr = session.given()["roller_radius"]
-    path = session.evaluate(values, grid)["drawing"]["main"]["lines"][0]
     for f in frames:
-        cam = _placed(mechanism, f["cam"])
-        gap = min(_segment_distance(f["C"], a, b) for a, b in zip(cam, cam[1:]))
-        # the profile is drawn with 720 chords (0.5 deg): a chord lies < 0.01 mm inside the arc it replaces
-        assert gap == pytest.approx(rr, abs=0.02)
-        assert all(math.dist(xy, f["C"]) == pytest.approx(rr, abs=2e-3) for xy in _placed(mechanism, f["roller"]))
-        assert min(math.dist(f["C"], xy) for xy in zip(path["x"], path["y"])) < 0.5
-    # the cam turns: the turn of the poses covers the circle in steps of at most 6 deg
-    turns = sorted(f["cam"]["turn_deg"] for f in frames)
-    assert max(b - a for a, b in zip(turns, turns[1:])) <= 6 and turns[-1] - turns[0] > 350
+        cam_xy = _placed(mechanism, f["cam"])
+        gap = min(_segment_distance(f["C"], a, b) for a, b in zip(cam_xy, cam_xy[1:]))
+        assert rr - 0.01 <= gap <= rr + 0.02, (f["cam"]["turn_deg"], gap)
+    # unturned, the outline is the working profile the check exports (and the page draws as profile.working)
+    working = next(line for line in answer["drawing"]["main"]["lines"] if line["name"] == "profile.working")
+    shape = mechanism["shapes"]["cam"]
+    assert max(min(math.dist(xy, w) for w in zip(working["x"], working["y"])) for xy in shape[::20]) < 0.5
+    turns = [f["cam"]["turn_deg"] for f in frames]
+    sense = -1 if cam.startswith("clockwise") else 1
+    assert all(sense * t >= 0 for t in turns) and len(set(turns)) == len(turns)
+    # frame to frame the cam turns on by at most 6 deg in its own sense (wrapping once round at the rise start)
+    steps = [(sense * (b - a)) % 360.0 for a, b in zip(turns, turns[1:])]
+    assert all(0 < step <= 6 for step in steps) and 354 <= sum(steps) < 360
 
 
 def test_the_crank_rocker_turns_a_whole_turn_keeping_its_links():
@@ -542,9 +563,14 @@ def test_the_comb_finger_turns_about_its_hub():
     assert len(frames) >= 36
     for f in frames:
         assert math.dist(f["T"], f["R"]) == pytest.approx(given["r"], abs=2e-3)
-    mechanism = session.evaluate(values, "fine")["drawing"]["mechanism"]
+    drawing = session.evaluate(values, "fine")["drawing"]
+    mechanism = drawing["mechanism"]
+    circle = next(line for line in drawing["main"]["lines"] if line["name"] == "curves.tip_circle")
     for f in mechanism["frames"]:
         assert all(math.dist(xy, f["S"]) == pytest.approx(given["rho"], abs=2e-3) for xy in _placed(mechanism, f["drum"]))
+        # the tip runs on the tip circle the check draws from its own geometry (181 points: chords sag < 0.05 mm)
+        ring = list(zip(circle["x"], circle["y"]))
+        assert min(_segment_distance(f["T"], a, b) for a, b in zip(ring, ring[1:])) < 0.05
 
 
 def test_the_combined_picker_shows_its_design_greyed():
@@ -557,5 +583,6 @@ def test_the_combined_picker_shows_its_design_greyed():
     assert shown["crank_rocker.l7"].value == 54.0 and shown["crank_rocker.l7"].unit == "mm"
     assert shown["double_crank.phi3"].unit == "deg" and shown["theta2"].unit == "deg"
     assert len(shown) == 15 and not session.free
-    assert session.describe()["variables"][0] == {"name": "crank_rocker.l7", "value": 54.0, "unit": "mm",
-                                                  "free": False, "bounds": None, "group": None}
+    assert session.describe()["variables"][0] == {
+        "name": "crank_rocker.l7", "value": 54.0, "unit": "mm", "free": False, "bounds": None, "group": None,
+        "note": "read from the spec file it names (this kind is check-only)"}

@@ -57,6 +57,13 @@ def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, optio
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+def test_tol_refuses_a_variable_given_twice(tmp_path):
+    run = cli_run("tolerance", str(STEERING), "--tol", "arm_length=0.2", "--tol", "arm_length=0.3",
+                  "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2
+    assert run.stderr.strip() == "error: --tol arm_length: given twice (0.2 and 0.3); give each variable once"
+
+
 def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     solve = cli_run("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
                     cwd=tmp_path)

@@ -20,9 +20,12 @@ def frames(result, most: int) -> list[dict]:
             or not len(crank) == len(ex) == len(ey):
         return []
     l7, l10 = float(result.design["l7"]), float(result.design["l10"])
-    step = -(-len(crank) // most)
+    samples = list(zip(crank, ex, ey))
+    if len(samples) > 2 and abs(samples[-1][0] - samples[0][0] - 360.0) < 1e-9:
+        samples = samples[:-1]            # 0 .. 360 deg with both ends: one pose, not two frames of it
+    step = -(-len(samples) // most)
     out = []
-    for c, x, y in list(zip(crank, ex, ey))[::step]:
+    for c, x, y in samples[::step]:
         if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in (c, x, y)):
             continue                      # the loop does not close there (a crank that cannot turn)
         a = math.radians(c)

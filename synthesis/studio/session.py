@@ -66,6 +66,7 @@ class Variable:
     bounds: tuple[float, float] | None
     free: bool
     path: str | None
+    note: str | None = None               # what the page says under a fixed row (default: fixed in the spec)
 
     @property
     def group(self) -> str | None:
@@ -78,7 +79,8 @@ class Variable:
 
     def to_json(self) -> dict:
         return finite({"name": self.name, "value": self.value, "unit": self.unit, "free": self.free,
-                       "bounds": None if self.bounds is None else list(self.bounds), "group": self.group})
+                       "bounds": None if self.bounds is None else list(self.bounds), "group": self.group,
+                       **({"note": self.note} if self.note else {})})
 
 
 def _shown_only(loaded: LoadedSpec) -> list[Variable]:
@@ -103,7 +105,8 @@ def _shown_only(loaded: LoadedSpec) -> list[Variable]:
             except (AgrisynthError, AttributeError, OSError):
                 info = {}
             unit = info.get(sub, {}).get("unit", "")
-        out.append(Variable(name, float(value), unit, None, False, None))
+        where = "read from the spec file it names" if "." in name else "in the spec"
+        out.append(Variable(name, float(value), unit, None, False, None, f"{where} (this kind is check-only)"))
     return out
 
 

@@ -149,6 +149,12 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray) -> list
     return rows
 
 
+def _equalities_only(rule) -> bool:
+    rows = list(rule.rows())
+    return bool(rows) and all(lb is not None and ub is not None and np.all(np.asarray(lb) == np.asarray(ub))
+                              for _, lb, ub in rows)
+
+
 def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list[dict]:
     """The rules the spec's tolerance box breaks at ``design``, from the linearised stack-up (exact derivatives, the
     analysis grid): every rule whose linear worst-case margin in the box is below 0, those named in ``first`` (e.g.
@@ -163,10 +169,13 @@ def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list
     box = box_of(lin.dmap, tol.length, tol.angle, dict(tol.variables))
     units = dict(zip(lin.dmap.keys, lin.dmap.units))
     widths = dict(zip(lin.dmap.keys, box))
+    # a rule whose NLP rows are all equalities (crank_rocker's time ratio and rocker swing) is held at the nominal
+    # design only: the robust transcription cannot hold an equality at a worst case, so it breaks nothing there
+    nominal_only = {r.name for r in lin.rules if _equalities_only(r)}
     out = []
     for row in stack_up(lin, box):
         worst = row["linear_worst_margin"]
-        if not np.isfinite(worst) or worst >= -1e-9 * (row["scale"] or 1.0):
+        if row["name"] in nominal_only or not np.isfinite(worst) or worst >= -1e-9 * (row["scale"] or 1.0):
             continue
         shares = sorted(((k, abs(c)) for k, c in row["contributions"].items() if c), key=lambda kc: -kc[1])
         loss = float(sum(c for _, c in shares))

@@ -77,7 +77,12 @@ function buildSliders() {
   box.replaceChildren();
   for (const v of state.info.variables) {
     const row = el("div", { class: v.free ? "var" : "var fixed", "data-var": v.name });
-    row.append(el("label", { for: `range-${v.name}`, title: v.name }, v.name));
+    const label = el("label", { for: `range-${v.name}`, title: v.name });
+    v.name.split(".").forEach((part, i) => {          // a long dotted name (the picker's crank_rocker.l7) wraps at its dots
+      if (i) label.append(".", document.createElement("wbr"));
+      label.append(part);
+    });
+    row.append(label);
     const range = el("input", { type: "range", id: `range-${v.name}`, name: v.name });
     const number = el("input", { type: "number", id: `number-${v.name}`, name: v.name });
     for (const input of [range, number]) {
@@ -99,7 +104,7 @@ function buildSliders() {
       setValue(v.name, x); request("fine");
     });
     row.append(range, number, el("span", { class: "unit" }, v.unit || ""));
-    row.append(el("span", { class: "bounds" }, v.free ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]` : "fixed in the spec"));
+    row.append(el("span", { class: "bounds" }, v.free ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]` : (v.note || "fixed in the spec")));
     containerOf(box, v).append(row);
   }
 }
