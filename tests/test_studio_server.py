@@ -585,4 +585,4 @@ def test_the_combined_picker_shows_its_design_greyed():
     assert len(shown) == 15 and not session.free
     assert session.describe()["variables"][0] == {
         "name": "crank_rocker.l7", "value": 54.0, "unit": "mm", "free": False, "bounds": None, "group": None,
-        "note": "read from the spec file it names (this kind is check-only)"}
+        "note": "from the part's spec file (check only)"}

@@ -105,8 +105,8 @@ def _shown_only(loaded: LoadedSpec) -> list[Variable]:
             except (AgrisynthError, AttributeError, OSError):
                 info = {}
             unit = info.get(sub, {}).get("unit", "")
-        where = "read from the spec file it names" if "." in name else "in the spec"
-        out.append(Variable(name, float(value), unit, None, False, None, f"{where} (this kind is check-only)"))
+        note = "from the part's spec file (check only)" if "." in name else "fixed in the spec (check only)"
+        out.append(Variable(name, float(value), unit, None, False, None, note))
     return out
 
 
