@@ -105,7 +105,8 @@ class TargetWatch:
     same functions the run's end uses -- the kind's NLP's ``solve`` (its start's own mapping, the solver
     replaced by one returning w) and its ``recheck`` (:func:`synthesis.core.verdict.report_of`) -- so a
     design meets the target mid-run exactly when it would at the end.  The peers call it once per SLSQP
-    iteration / differential_evolution generation; its time (``check_s``) is left out of the run's times
+    iteration / differential_evolution generation, an iterate unchanged since the last call not again
+    (DE's best member often survives generations); its time (``check_s``) is left out of the run's times
     and budgets and reported apart."""
 
     def __init__(self, target: float, recheck: Callable, t0: float):
@@ -117,6 +118,7 @@ class TargetWatch:
         self.hit_s: float | None = None
         self._nlp = self._start = self._x0 = None
         self._stages: dict[int, Any] = {}
+        self._last: tuple | None = None      # (iterate, its answer): an unchanged iterate is not checked again
 
     def now(self) -> float:
         """Seconds since the run's start, the checks left out."""
@@ -147,14 +149,24 @@ class TargetWatch:
         objective at or below the target (and enters the trace when it meets every rule)."""
         if not self.checking:
             return False
+        w = np.array(w, float)
+        key = (id(compiled), self._start, w.tobytes())
+        if self._last is not None and self._last[0] == key:     # the same iterate again (DE's best member kept)
+            return self._last[1]
+        t = time.perf_counter()
+        at = t - self.t0 - self.check_s
+        met = self._meets(compiled, w, p, at)
+        self.check_s += time.perf_counter() - t
+        self.checks += 1
+        self._last = (key, met)
+        return met
+
+    def _meets(self, compiled, w: np.ndarray, p: np.ndarray, at: float) -> bool:
         from synthesis.core import ipopt
         from synthesis.core.ipopt import NLPOutcome
         from synthesis.core.verdict import report_of
         from synthesis.errors import AgrisynthError
 
-        t = time.perf_counter()
-        at = t - self.t0 - self.check_s
-        w = np.array(w, float)
         try:
             f = float(compiled.f_function(w, p))
 
@@ -171,9 +183,6 @@ class TargetWatch:
             report = report_of(outcome, self.recheck)
         except (AgrisynthError, ValueError, ArithmeticError, RuntimeError):
             return False
-        finally:
-            self.check_s += time.perf_counter() - t
-            self.checks += 1
         objective = self.sign * report.outcome.objective
         if not (report.satisfied and report.worst_violation == 0 and math.isfinite(objective)):
             return False

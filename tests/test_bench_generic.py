@@ -220,7 +220,7 @@ def test_differential_evolution_stops_at_a_loose_target_and_times_it():
     assert stopped.details["return_status"].startswith("differential_evolution: stopped at the target")
     assert stopped.details["iterations"][0] < free.details["iterations"][0]           # generations
     assert free.objective < stopped.objective <= target                               # stopped, not converged
-    assert stopped.details["target_checks"] == stopped.details["iterations"][0]       # once per generation
+    assert 1 <= stopped.details["target_checks"] <= stopped.details["iterations"][0]  # at most once per generation
     assert stopped.excluded_s == stopped.details["target_check_s"] > 0
     reached_at = time_to_target(stopped, target)
     assert reached_at is not None and 0 < reached_at < stopped.wall_s
