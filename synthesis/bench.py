@@ -8,9 +8,12 @@ times, takes the median wall time, and writes ``OUT/bench/bench.json`` and ``err
 Equal objective tolerance: each case has a target objective (best known + tolerance) and every
 method stops as soon as it reaches it, or at its own convergence / budget otherwise.  A run reaches
 the target when its objective is at most the target *and* every rule holds on the fine re-check
-grid.  The time ratio (method's median wall time / the reference method's) compares times to the
-same target, so it exists only when every run of both methods reached it; otherwise ``time_ratio``
-is null and ``time_ratio_note`` says "n/a (target not reached)" and by which methods.
+grid.  Each run's *time to target* is the moment it first met the target (:func:`time_to_target`;
+a method that goes on past it is not charged for the rest); a row's ``time_to_target_s`` is the median
+over its runs when every run reached the target, else null and "target not reached".  The time ratio
+(method's median time to target / the reference method's) so compares times to the same target, and
+exists only when every run of both methods reached it; otherwise ``time_ratio`` is null and
+``time_ratio_note`` says "n/a (target not reached)" and by which methods.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from typing import Any, Callable
 PEERS = {"slsqp", "differential_evolution"}
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
 NOT_REACHED = "n/a (target not reached)"
+TARGET_NOT_REACHED = "target not reached"
 
 
 @dataclass
@@ -42,7 +46,14 @@ class MethodRun:
     worst_violation: float               # worst normalised rule violation on the fine re-check grid, 0 = none
     trace: list[tuple[float, float]]     # (seconds since the start, best objective so far)
     details: dict = field(default_factory=dict)
-    wall_s: float = 0.0                  # filled in by the runner
+    wall_s: float = 0.0                  # filled in by the runner (less ``excluded_s``)
+    #: True: ``trace`` holds only designs meeting every rule on the fine grid, its times the method's own, so
+    #: its first point at or below a target is the run's time to that target (:func:`time_to_target`);
+    #: False: a method that stops at the target itself, whose whole run is its time to target
+    trace_satisfied: bool = False
+    #: seconds of the run that were the bench's own instrumentation, not the method's (the peers' check of
+    #: an iterate against the target): left out of ``wall_s``
+    excluded_s: float = 0.0
 
 
 @dataclass
@@ -147,17 +158,33 @@ def reached(run: MethodRun, target: float) -> bool:
     return run.worst_violation == 0 and math.isfinite(run.objective) and run.objective <= target
 
 
+def time_to_target(run: MethodRun, target: float) -> float | None:
+    """Seconds from the run's start to the first moment its design met the target (objective at or below
+    it, every rule on the fine grid), or None when it never did.  A run whose trace holds only designs
+    meeting every rule (``trace_satisfied``: the generic multistart and peers) has it at the trace's first
+    point at or below the target; another run (a kind's own method stopping at the target) at its end."""
+    if not reached(run, target):
+        return None
+    if run.trace_satisfied:
+        hit = next((t for t, f in run.trace if f is not None and math.isfinite(f) and f <= target), None)
+        if hit is not None:
+            return float(hit)
+    return run.wall_s
+
+
 def time_ratio(row: dict, reference: dict) -> dict:
-    """The ratio entry of a method's row against the reference row: a number only when both reached
-    the target in every run."""
+    """The ratio entry of a method's row against the reference row: the ratio of their median times to
+    the target (``time_to_target_s``), a number only when both reached the target in every run."""
     missed = [r["method"] for r in (reference, row) if not all(r["reached_target_runs"])]
     entry = {"problem": row["problem"], "method": row["method"], "reference": reference["method"],
-             "objective": row["objective"], "reference_objective": reference["objective"]}
+             "objective": row["objective"], "reference_objective": reference["objective"],
+             "time_to_target_s": row.get("time_to_target_s"),
+             "reference_time_to_target_s": reference.get("time_to_target_s")}
     if missed:
         return entry | {"time_ratio": None, "time_ratio_note": f"{NOT_REACHED} by {', '.join(missed)}"}
-    if reference["median_s"] <= 0:
+    if not reference["time_to_target_s"] > 0:
         return entry | {"time_ratio": None, "time_ratio_note": "n/a (reference time is 0)"}
-    return entry | {"time_ratio": row["median_s"] / reference["median_s"], "time_ratio_note": None}
+    return entry | {"time_ratio": row["time_to_target_s"] / reference["time_to_target_s"], "time_ratio_note": None}
 
 
 def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] = lambda what: None) -> dict:
@@ -185,7 +212,7 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
             tick(f"{case.problem}: {method} {k + 1}/{n}")
             t0 = time.perf_counter()
             out = run(target)
-            out.wall_s = time.perf_counter() - t0
+            out.wall_s = time.perf_counter() - t0 - out.excluded_s
             runs[method].append(out)
             tick(None)
     feasible = [r.objective for rs in runs.values() for r in rs
@@ -198,6 +225,8 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
         walls = [r.wall_s for r in rs]
         median = _median(walls)
         typical = min(rs, key=lambda r: abs(r.wall_s - median))
+        to_target = [time_to_target(r, target) for r in rs]
+        every = all(t is not None for t in to_target)
         rows.append({
             "problem": case.problem, "kind": case.kind, "method": method,
             "objective": typical.objective, "objectives": [r.objective for r in rs],
@@ -205,6 +234,9 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
             "reached_target": reached(typical, target), "reached_target_runs": [reached(r, target) for r in rs],
             "worst_violation": typical.worst_violation,
             "wall_s": walls, "median_s": median, "trace": typical.trace, "details": typical.details,
+            # median time to the target over the runs, when every run reached it
+            "time_to_target_runs": to_target, "time_to_target_s": _median(to_target) if every else None,
+            "time_to_target_text": f"{_median(to_target):.3g}" if every else TARGET_NOT_REACHED,
         })
     ratios = [time_ratio(r, rows[0]) for r in rows[1:]]
     # what a table prints in its "time ratio" column
@@ -308,6 +340,7 @@ def summary(results: list[dict]) -> list[dict]:
         line = {"problem": res["problem"], "kind": res["kind"], "ad_median_s": ad["median_s"],
                 "ad_median_iterations": ad["details"]["median_iterations"],
                 "ad_successes": f"{ad['details']['successes']}/{ad['details']['starts']}",
+                "ad_time_to_target": ad.get("time_to_target_text"),
                 "build_s": ad["details"]["build_s"], "ipopt_s": ad["details"]["ipopt_s"],
                 "recheck_s": ad["details"]["recheck_s"]}
         fd = _row(res, "ipopt_finite_differences")
@@ -323,6 +356,7 @@ def summary(results: list[dict]) -> list[dict]:
             row = _row(res, peer)
             if row is not None:
                 line[f"{peer}_ratio"] = row["time_ratio_text"]
+                line[f"{peer}_time_to_target"] = row.get("time_to_target_text")
         sweep = res.get("sweep")
         if sweep:
             line["samples_reaching"] = sweep["reaching"]
@@ -378,9 +412,19 @@ def markdown(data: dict) -> str:
     parts = [f"# agrisynth bench\n\nMachine: {m['cpu']}, {m['cores_usable']} usable cores, {m['system']}, "
              f"Python {m['python']}.  Settings: {_fmt(st)}.\n\n"
              "Times are medians of the repeats (wall clock, one worker; the machine may be shared, so read "
-             "ratios within one run).  A time ratio exists only where both methods reached the same target "
-             "(best known objective + tolerance, every rule on the fine grid); objectives are minimised "
-             "(a maximising kind's is negated)."]
+             "ratios within one run).  Objectives are minimised (a maximising kind's is negated).  "
+             "**Time to target**: seconds from a method's start (its NLP build included) to the first moment its "
+             "design met the target (objective at or below best known + tolerance, every rule holding on the fine "
+             "re-check grid), or 'target not reached'; every time ratio is the ratio of two such times (medians "
+             "of the repeats), so no ratio is taken between runs that ended at different objectives.  IPOPT "
+             "(AD and finite differences): the end of the first start whose re-checked design meets the target "
+             "(the time of a multistart stopping there; the run itself goes on, its whole time is 'median s').  "
+             "SLSQP and differential_evolution: the first SLSQP iteration / DE generation whose iterate (DE: best "
+             "member), mapped to the kind's design and objective and re-checked with the kind's own functions, "
+             "meets the target; the peer stops there.  That check runs at most once per iteration / generation "
+             "and its own time is **excluded** from the time to target, from 'median s' and from the budgets "
+             "(bench.json: details.target_check_s, details.target_checks).  A kind's own method that stops at "
+             "the target itself: its whole run."]
     study = st.get("study") if isinstance(st, dict) else None
     if study:
         parts.append(f"Budgets: {study['starts']} start(s) per method (at most the spec's), "
@@ -401,10 +445,12 @@ def markdown(data: dict) -> str:
     parts.append("## Summary per problem\n\n" + _table(summ, [
         ("kind", "kind"), ("problem", "problem"), ("reach", "samples at violation <= 1e-6"), ("reach_s", "its median s"),
         ("ad_median_iterations", "AD iterations"), ("fd_median_iterations", "FD iterations"),
-        ("fd_ratio", "FD / AD time"), ("fd_ipopt_ratio", "FD / AD IPOPT time"),
+        ("fd_ratio", "FD / AD time to target"), ("fd_ipopt_ratio", "FD / AD IPOPT time"),
         ("ad_median_s", "AD median s"), ("fd_median_s", "FD median s"), ("ad_successes", "AD success"),
-        ("fd_successes", "FD success"), ("slsqp_ratio", "SLSQP / AD time"),
-        ("differential_evolution_ratio", "DE / AD time"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
+        ("fd_successes", "FD success"), ("ad_time_to_target", "AD time to target (s)"),
+        ("slsqp_time_to_target", "SLSQP time to target (s)"), ("slsqp_ratio", "SLSQP / AD time to target"),
+        ("differential_evolution_time_to_target", "DE time to target (s)"),
+        ("differential_evolution_ratio", "DE / AD time to target"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
         ("recheck_s", "re-check s")]))
     rows = [r | {"iters": (r.get("details") or {}).get("median_iterations"),
                  "success": (f"{r['details']['successes']}/{r['details']['starts']}"
@@ -412,8 +458,8 @@ def markdown(data: dict) -> str:
             for r in data["rows"]]
     parts.append("## Methods\n\n" + _table(rows, [
         ("problem", "problem"), ("method", "method"), ("objective", "objective"), ("objective_gap", "gap to best"),
-        ("worst_violation", "worst violation"), ("median_s", "median s"), ("iters", "median iterations"),
-        ("success", "solver success"), ("time_ratio_text", "time ratio")]))
+        ("worst_violation", "worst violation"), ("median_s", "median s"), ("time_to_target_text", "time to target (s)"),
+        ("iters", "median iterations"), ("success", "solver success"), ("time_ratio_text", "time-to-target ratio")]))
     for p in data["problems"]:
         if p.get("note"):
             parts.append(f"- {p['problem']}: {p['note']}")

@@ -11,18 +11,28 @@ ipopt_finite_differences  the same NLP with IPOPT fed function values only: forw
 slsqp                     scipy.optimize.minimize(method="SLSQP") on the same transcribed NLP (the kind's
                           f and g as numeric CasADi Functions, scipy's finite differences, the rows as
                           scipy constraints, maxiter = the spec's max_iter, ftol 1e-9), from the same starts
-                          (:func:`synthesis.core.ipopt.solved_with`), stopped at its time budget
-                          (``slsqp_budget_s`` per run, shared by the starts)
+                          (:func:`synthesis.core.ipopt.solved_with`), stopped at the target or its time
+                          budget (``slsqp_budget_s`` per run, shared by the starts)
 differential_evolution    scipy's differential_evolution over the same NLP's variables (its bounds; rows
                           as a NonlinearConstraint), one run from the spec's start (x0), default strategy
-                          and population, no polish, stopped at the time budget; a variable with no finite
+                          and population, no polish, stopped at the target or the time budget; a variable with no finite
                           bound (a length unbounded above, an epigraph or slack variable) is searched within
                           one decade of its start (:func:`de_bounds`)
 
 Objectives are compared minimised (a maximising kind's objective is negated and the case note says
 so); a run reaches the target when every rule holds on the fine grid and its objective is within
-TOLERANCE of the best known (see :mod:`synthesis.bench`), so no ratio is ever taken between runs
-that ended at different objectives.
+TOLERANCE of the best known (see :mod:`synthesis.bench`), and every method is timed to the *first*
+moment it met the target (:func:`synthesis.bench.time_to_target`), so no ratio is ever taken between
+runs that ended at different objectives or at different moments past the target:
+
+* IPOPT methods: the best-so-far trace of :func:`measure` (designs meeting every rule, at the end of
+  each start, re-check included) gives the end of the first start meeting the target -- the time of a
+  multistart that stops there; the run itself is not stopped (the sample sweep reuses the AD runs whole);
+* peers: :class:`TargetWatch` checks the iterate of every SLSQP iteration / the best member of every
+  differential_evolution generation against the target with the kind's own mapping and re-check, and the
+  peer stops at the first that meets it (SLSQP: StopIteration from its callback; DE: its callback returns
+  True), its multistart with it; the checks' time is left out of every time and budget and reported as
+  ``details["target_check_s"]``.
 
 Two studies besides: :func:`sample_sweep` (the solve at scaled sample counts of every ``[solver]``
 ``*samples*`` setting: time, iterations, fine-grid violation, gap to the finest) and the build/solve
@@ -36,8 +46,9 @@ import dataclasses
 import math
 import statistics
 import time
+from contextvars import ContextVar
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -86,29 +97,191 @@ def _with_solver(loaded, **update):
     return dataclasses.replace(loaded, model=spec.model_copy(update={"solver": spec.solver.model_copy(update=update)}))
 
 
-def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: Callable | None = None) -> MethodRun:
+class TargetWatch:
+    """Time to target of one measured run: the run's clock (its own time, the checks below left out), the
+    best-so-far trace of designs meeting every rule, and the check of a peer's iterate against the target.
+
+    :meth:`meets` maps an iterate w of the NLP a peer is solving to the kind's design and objective with the
+    same functions the run's end uses -- the kind's NLP's ``solve`` (its start's own mapping, the solver
+    replaced by one returning w) and its ``recheck`` (:func:`synthesis.core.verdict.report_of`) -- so a
+    design meets the target mid-run exactly when it would at the end.  The peers call it once per SLSQP
+    iteration / differential_evolution generation, an iterate unchanged since the last call not again
+    (DE's best member often survives generations); its time (``check_s``) is left out of the run's times
+    and budgets and reported apart."""
+
+    def __init__(self, target: float, recheck: Callable, t0: float):
+        self.target, self.recheck, self.t0 = target, recheck, t0
+        self.sign = 1.0
+        self.trace: list[tuple[float, float]] = []
+        self.check_s = 0.0
+        self.checks = 0
+        self.hit_s: float | None = None
+        self._nlp = self._start = self._x0 = None
+        self._stages: dict[int, Any] = {}
+        self._last: tuple | None = None      # (iterate, its answer): an unchanged iterate is not checked again
+
+    def now(self) -> float:
+        """Seconds since the run's start, the checks left out."""
+        return time.perf_counter() - self.t0 - self.check_s
+
+    @property
+    def checking(self) -> bool:
+        return math.isfinite(self.target) and self._nlp is not None
+
+    def begin(self, nlp, start: int, x0) -> None:
+        """The kind's NLP is solving ``start`` from ``x0`` (its own coordinates)."""
+        self._nlp, self._start, self._x0 = nlp, start, x0
+        self._stages = {}
+
+    def finished_stage(self, compiled, outcome) -> None:
+        """A solve of ``compiled`` (a stage of the start, for a kind solving several NLPs in turn) returned."""
+        self._stages[id(compiled)] = outcome
+
+    def add(self, at: float, objective: float) -> None:
+        """A design meeting every rule at ``at`` s with ``objective`` (minimised): into the best-so-far trace."""
+        if not self.trace or objective < self.trace[-1][1]:
+            self.trace.append((at, objective))
+        if self.hit_s is None and objective <= self.target:
+            self.hit_s = at
+
+    def meets(self, compiled, w: np.ndarray, p: np.ndarray) -> bool:
+        """The iterate w of ``compiled``'s NLP maps to a design meeting every rule on the fine grid with its
+        objective at or below the target (and enters the trace when it meets every rule)."""
+        if not self.checking:
+            return False
+        w = np.array(w, float)
+        key = (id(compiled), self._start, w.tobytes())
+        if self._last is not None and self._last[0] == key:     # the same iterate again (DE's best member kept)
+            return self._last[1]
+        t = time.perf_counter()
+        at = t - self.t0 - self.check_s
+        met = self._meets(compiled, w, p, at)
+        self.check_s += time.perf_counter() - t
+        self.checks += 1
+        self._last = (key, met)
+        return met
+
+    def _meets(self, compiled, w: np.ndarray, p: np.ndarray, at: float) -> bool:
+        from synthesis.core import ipopt
+        from synthesis.core.ipopt import NLPOutcome
+        from synthesis.core.verdict import report_of
+        from synthesis.errors import AgrisynthError
+
+        try:
+            f = float(compiled.f_function(w, p))
+
+            def iterate(c, start, w0, p_):
+                if c is compiled:
+                    return NLPOutcome(start, w, f if math.isfinite(f) else math.inf, "iterate", False, 0, 0.0, "",
+                                      np.zeros(len(c.t.lbg)))
+                done = self._stages.get(id(c))     # an earlier stage of this start: as it ended
+                return done if done is not None else NLPOutcome(start, np.asarray(w0, float), math.inf, "not run",
+                                                                False, 0, 0.0, "", np.zeros(len(c.t.lbg)))
+
+            with ipopt.solved_with(iterate):
+                outcome = self._nlp.solve(self._start, self._x0)
+            report = report_of(outcome, self.recheck)
+        except (AgrisynthError, ValueError, ArithmeticError, RuntimeError):
+            return False
+        objective = self.sign * report.outcome.objective
+        if not (report.satisfied and report.worst_violation == 0 and math.isfinite(objective)):
+            return False
+        self.add(at, objective)
+        return objective <= self.target
+
+
+_watch: ContextVar[TargetWatch | None] = ContextVar("agrisynth_bench_target_watch", default=None)
+
+
+class _AnnouncedNLP:
+    """The kind's NLP as the multistart sees it, each start's solve announced to the watch first."""
+
+    def __init__(self, nlp, watch: TargetWatch):
+        self._nlp, self._watch = nlp, watch
+
+    def __getattr__(self, name):
+        return getattr(self._nlp, name)
+
+    def solve(self, start, x0, *args, **kwargs):
+        self._watch.begin(self._nlp, start, x0)
+        return self._nlp.solve(start, x0, *args, **kwargs)
+
+
+class _WatchedKind:
+    """The kind with its NLP announced to ``watch`` and, with ``stop``, its multistart ended at the first
+    start whose re-checked design meets the target (besides the kind's own early stop)."""
+
+    def __init__(self, kind, watch: TargetWatch, stop: bool):
+        self.name, self._kind, self._watch, self._stop = kind.name, kind, watch, stop
+
+    def __getattr__(self, name):
+        return getattr(self._kind, name)
+
+    def solver_side(self):
+        solving = self._kind.solver_side()
+        watch = self._watch
+
+        def build(setting, elastic):
+            nlp = solving.build(setting, elastic)
+            return nlp if elastic else _AnnouncedNLP(nlp, watch)
+
+        def stop_when(setting):
+            own = solving.stop_when(setting)
+            if not self._stop:
+                return own
+
+            def stop(report) -> bool:
+                at_target = (report.satisfied and math.isfinite(report.outcome.objective)
+                             and watch.sign * report.outcome.objective <= watch.target)
+                return at_target or (own is not None and own(report))
+            return stop
+        return dataclasses.replace(solving, build=build, stop_when=stop_when)
+
+
+def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: Callable | None = None,
+            target: float = math.inf, stop_at_target: bool = False) -> MethodRun:
     """The kind's multistart on ``loaded`` (one worker), timed: objective (minimised), fine-grid worst
-    violation, best-so-far trace, and the build/solve split and iterations in ``details``."""
+    violation, best-so-far trace of designs meeting every rule (its first point at or below ``target`` is the
+    run's time to target), and the build/solve split and iterations in ``details``.
+
+    ``runner`` (a peer): ``target`` finite, each of its iterates is checked against it (:class:`TargetWatch`;
+    the checks' time is left out of every time and reported as ``details["target_check_s"]``), and
+    ``stop_at_target`` ends the peer's start at the first iterate meeting it and the multistart at that
+    start.  IPOPT (no runner): a start's time to target is its end (re-check included), the time a multistart
+    stopping at the first start meeting the target would take; the run itself is not stopped."""
     from synthesis import kinds
     from synthesis.core import ipopt
     from synthesis.core.kind import Setting
-    from synthesis.core.solve import run_multistart
+    from synthesis.core.solve import _recheck, run_multistart
 
     kind = kinds.get(loaded.kind)
     solving = kind.solver_side()
     spec = loaded.model
-    trace: list[tuple[float, float]] = []
     t0 = time.perf_counter()
-    with ipopt.derivatives(derivatives), ipopt.solved_with(runner):
-        setting = Setting(spec, seed, solving.prepare(spec))
-        sign = -1.0 if solving.maximise(setting) else 1.0
+    watch = TargetWatch(target if runner is not None else math.inf, None, t0)
+    recording = None
+    if runner is not None:
+        def recording(compiled, start, w0, p):
+            out = runner(compiled, start, w0, p)
+            watch.finished_stage(compiled, out)
+            return out
+    token = _watch.set(watch)
+    try:
+        with ipopt.derivatives(derivatives), ipopt.solved_with(recording):
+            setting = Setting(spec, seed, solving.prepare(spec))
+            sign = -1.0 if solving.maximise(setting) else 1.0
+            watch.sign = sign
+            watch.recheck = lambda outcome: _recheck(solving, setting, outcome)
 
-        def on_start(report, best) -> None:
-            if best.satisfied:
-                trace.append((time.perf_counter() - t0, sign * best.outcome.objective))
+            def on_start(report, best) -> None:
+                if best.satisfied:
+                    watch.add(watch.now(), sign * best.outcome.objective)
 
-        run = run_multistart(kind, setting, starts=starts, workers=1, on_start=on_start)
-    total = time.perf_counter() - t0
+            run = run_multistart(_WatchedKind(kind, watch, stop_at_target and runner is not None), setting,
+                                 starts=starts, workers=1, on_start=on_start)
+    finally:
+        _watch.reset(token)
+    total = time.perf_counter() - t0 - watch.check_s
     best = run.best
     ipopt_s = sum(r.outcome.wall_s for r in run.reports)
     objective = sign * best.outcome.objective
@@ -119,10 +292,20 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
         "iterations": iterations, "median_iterations": float(statistics.median(iterations)),
         "best_iterations": best.outcome.iterations, "return_status": best.outcome.return_status,
         "best_start": best.outcome.start, "maximised": sign < 0,
-        "build_s": total - run.wall_s, "ipopt_s": ipopt_s, "recheck_s": max(run.wall_s - ipopt_s, 0.0),
+        "build_s": total - (run.wall_s - watch.check_s), "ipopt_s": ipopt_s,
+        "recheck_s": max(run.wall_s - watch.check_s - ipopt_s, 0.0),
         "samples": sample_settings(spec),
     }
-    return MethodRun(objective if math.isfinite(objective) else math.inf, best.worst_violation, trace, details)
+    if runner is not None:
+        details |= {"target_checks": watch.checks, "target_check_s": watch.check_s,
+                    "stopped_at_target": watch.hit_s is not None and stop_at_target}
+    return MethodRun(objective if math.isfinite(objective) else math.inf, best.worst_violation, watch.trace, details,
+                     trace_satisfied=True, excluded_s=watch.check_s)
+
+
+def current_watch() -> TargetWatch | None:
+    """The target watch of the run being measured (a peer's runner checks its iterates with it)."""
+    return _watch.get()
 
 
 # ---------------------------------------------------------------------------- peers on the same NLP
@@ -146,7 +329,9 @@ def _nlp_functions(compiled, p):
 
 def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: float = math.inf):
     """scipy SLSQP on the transcribed NLP from the kind's start; function values only (scipy's differences);
-    stopped (StopIteration from its callback) once ``budget_s`` of wall time has passed."""
+    stopped (StopIteration from its callback, which scipy honours for SLSQP) once ``budget_s`` of wall time
+    has passed, or -- measured with a target (:class:`TargetWatch`) -- at the first iteration whose iterate
+    meets the target (checked once per iteration; the check's time left out of the budget and the wall time)."""
     from scipy.optimize import minimize
 
     from synthesis.core.ipopt import NLPOutcome
@@ -163,18 +348,27 @@ def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: 
         constraints.append({"type": "ineq", "fun": lambda w: np.concatenate([(g(w) - lbg)[lo], (ubg - g(w))[hi]])})
     bounds = [(a if math.isfinite(a) else None, b if math.isfinite(b) else None) for a, b in zip(t.lbw, t.ubw)]
     x0 = np.clip(w0, t.lbw, t.ubw)
+    watch = current_watch()
+    checked0 = watch.check_s if watch is not None else 0.0
     t0 = time.perf_counter()
+    at_target = []
+
+    def own_s() -> float:       # the run's own seconds: the target checks left out
+        return time.perf_counter() - t0 - ((watch.check_s - checked0) if watch is not None else 0.0)
 
     def budget(xk) -> None:        # callback(x): scipy 1.17 prints a callback(intermediate_result) when it drops fixed variables
-        if time.perf_counter() - t0 > budget_s:
+        if watch is not None and watch.meets(compiled, xk, p):
+            at_target.append(True)
+            raise StopIteration
+        if own_s() > budget_s:
             raise StopIteration
 
     res = minimize(f, x0, method="SLSQP", bounds=bounds, constraints=constraints, callback=budget,
                    options={"maxiter": compiled.problem.max_iter, "ftol": 1e-9})
-    wall = time.perf_counter() - t0
+    wall = own_s()
     x = np.asarray(res.x, float)
-    return NLPOutcome(start, x, f(x), f"SLSQP: {res.message}", bool(res.success), int(res.nit), wall, "",
-                      np.zeros(len(lbg)))
+    status = "SLSQP: stopped at the target" if at_target else f"SLSQP: {res.message}"
+    return NLPOutcome(start, x, f(x), status, bool(res.success), int(res.nit), wall, "", np.zeros(len(lbg)))
 
 
 def slsqp_with_budget(budget_s: float) -> Callable:
@@ -183,6 +377,10 @@ def slsqp_with_budget(budget_s: float) -> Callable:
 
 
 def de_runner(budget_s: float, seed: int) -> Callable:
+    """scipy differential_evolution on the transcribed NLP (one run from the start), stopped at ``budget_s``
+    of wall time or -- measured with a target (:class:`TargetWatch`) -- at the first generation whose best
+    member meets the target (its callback returns True; checked once per generation, the check's time left
+    out of the budget and the wall time)."""
     def run(compiled, start: int, w0: np.ndarray, p: np.ndarray):
         from scipy.optimize import NonlinearConstraint, differential_evolution
 
@@ -200,14 +398,30 @@ def de_runner(budget_s: float, seed: int) -> Callable:
             return w
 
         constraints = [NonlinearConstraint(lambda z: g(full(z)), t.lbg, t.ubg)] if len(t.lbg) else []
+        watch = current_watch()
+        checked0 = watch.check_s if watch is not None else 0.0
         t0 = time.perf_counter()
+        at_target: list[np.ndarray] = []
+
+        def own_s() -> float:
+            return time.perf_counter() - t0 - ((watch.check_s - checked0) if watch is not None else 0.0)
+
+        def generation(intermediate_result) -> bool:
+            w = full(np.asarray(intermediate_result.x, float))
+            if watch is not None and watch.meets(compiled, w, p):
+                at_target.append(w)
+                return True
+            return own_s() > budget_s
+
         res = differential_evolution(lambda z: f(full(z)), list(zip(lbw[free], ubw[free])),
                                      constraints=constraints, x0=base[free], rng=seed, polish=False,
-                                     callback=lambda intermediate_result: time.perf_counter() - t0 > budget_s)
-        wall = time.perf_counter() - t0
-        x = full(np.asarray(res.x, float))
+                                     callback=generation)
+        wall = own_s()
+        # stopped at the target: the member that met it (scipy returns the same best member)
+        x = at_target[0] if at_target else full(np.asarray(res.x, float))
         note = f" (finite bounds derived from the start for {derived} variable(s): {DE_BOUNDS_RULE})" if derived else ""
-        return NLPOutcome(start, x, f(x), f"differential_evolution: {res.message}{note}", bool(res.success),
+        message = "stopped at the target" if at_target else res.message
+        return NLPOutcome(start, x, f(x), f"differential_evolution: {message}{note}", bool(res.success),
                           int(res.nit), wall, "", np.zeros(len(t.lbg)))
     return run
 
@@ -332,8 +546,12 @@ def _samples_text(samples: dict) -> str:
 # ---------------------------------------------------------------------------- the cases
 
 def _method(loaded, starts: int, seed: int, keep: list | None = None, **how) -> Callable[[float], MethodRun]:
+    """run(target): :func:`measure`; a peer (``runner``) checks its iterates against the target and stops there."""
     def run(target: float) -> MethodRun:
-        out = measure(loaded, starts, seed, **how)
+        if how.get("runner") is not None:
+            out = measure(loaded, starts, seed, target=target, stop_at_target=True, **how)
+        else:
+            out = measure(loaded, starts, seed, **how)
         if keep is not None:
             keep.append(out)
         return out

@@ -4,6 +4,7 @@ bench hooks of the solve core.  Correctness only: speed is the bench's, never a 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -196,3 +197,77 @@ def test_extreme_matrix_row_of_a_known_failure():
                      "summary": [], "rows": [], "problems": [],
                      "extreme": [row, row | {"outcome": "passed"}]})
     assert "(tests/extreme/: 1 of 2 passed, 1 known failure(s) with the measured cause)" in text
+
+
+GUIDE_TUBE = LIBRARY / "guide_tube" / "uniform_spacing.toml"
+
+
+def test_differential_evolution_stops_at_a_loose_target_and_times_it():
+    """Issue 18 task 3: a peer is timed to the target.  DE given a loose target (twice the redesign's spread)
+    stops at the first generation whose best member meets it -- re-checked on the fine grid with the kind's
+    own functions -- in fewer generations than the same run without a target, its time to target (the trace's
+    first point at or below the target) inside its whole run, and the checks' time reported apart."""
+    from synthesis.bench import time_to_target
+    from synthesis.bench_generic import de_runner
+
+    loaded = load_spec(GUIDE_TUBE)
+    measure(loaded, 1, 0)                    # imports and CasADi's first build, untimed
+    t0 = time.perf_counter()
+    free = measure(loaded, 1, 0, runner=de_runner(5.0, 0))
+    free.wall_s = time.perf_counter() - t0
+    target = 2.0 * free.objective
+    t0 = time.perf_counter()
+    stopped = measure(loaded, 1, 0, runner=de_runner(5.0, 0), target=target, stop_at_target=True)
+    stopped.wall_s = time.perf_counter() - t0 - stopped.excluded_s
+    assert free.worst_violation == 0 and stopped.worst_violation == 0
+    assert stopped.details["return_status"].startswith("differential_evolution: stopped at the target")
+    assert stopped.details["iterations"][0] < free.details["iterations"][0]           # generations
+    assert free.objective < stopped.objective <= target                               # stopped, not converged
+    assert 1 <= stopped.details["target_checks"] <= stopped.details["iterations"][0]  # at most once per generation
+    assert stopped.excluded_s == stopped.details["target_check_s"] > 0
+    reached_at = time_to_target(stopped, target)
+    assert reached_at is not None and 0 < reached_at < stopped.wall_s < free.wall_s
+    assert stopped.trace[-1] == (reached_at, stopped.objective)
+    assert time_to_target(stopped, free.objective / 2) is None                        # a target it never met
+
+
+def test_the_ratio_is_of_times_to_target():
+    """run_case's time ratio and bench.md's columns are the methods' times to the target, not their whole
+    runs: IPOPT (AD) and DE on the guide tube with a loose best known."""
+    from synthesis.bench_generic import _method, de_runner
+
+    loaded = load_spec(GUIDE_TUBE)
+    case = BenchCase(loaded.name, loaded.kind, {"ipopt_multistart": _method(loaded, 2, 0),
+                                                "differential_evolution": _method(loaded, 1, 0,
+                                                                                  runner=de_runner(5.0, 0))},
+                     12.0, lambda best: 0.0, single_runs={"differential_evolution"})
+    res = run_case(case, 1)
+    ad, de = res["rows"]
+    assert res["target"] == 12.0 and ad["reached_target"] and de["reached_target"]
+    assert de["details"]["return_status"].startswith("differential_evolution: stopped at the target")
+    for row in (ad, de):
+        assert 0 < row["time_to_target_s"] <= row["median_s"]
+        assert row["time_to_target_text"] == f"{row['time_to_target_s']:.3g}"
+    ratio = res["ratios"][0]
+    assert ratio["time_ratio"] == pytest.approx(de["time_to_target_s"] / ad["time_to_target_s"])
+    assert ratio["time_ratio"] != pytest.approx(de["median_s"] / ad["median_s"])
+    assert de["time_ratio_text"] == f"{ratio['time_ratio']:.1f}x"
+    text = markdown({"machine": {"cpu": "x", "cores_usable": 2, "system": "s", "python": "3"},
+                     "settings": {}, "summary": summary([res]), "rows": res["rows"],
+                     "problems": [{k: v for k, v in res.items() if k != "rows"}], "extreme": []})
+    assert "| time to target (s) |" in text and "| time-to-target ratio |" in text
+    assert f"| {de['time_to_target_text']} |" in text and "excluded" in text
+
+
+def test_a_run_that_misses_the_target_has_no_time_to_target():
+    from synthesis.bench import MethodRun
+
+    runs = iter([MethodRun(1.0, 0.0, [(0.5, 2.0), (1.5, 1.0)], trace_satisfied=True),
+                 MethodRun(1.5, 0.0, [(0.2, 1.5)], trace_satisfied=True)])
+    case = BenchCase("p", "k", {"a": lambda target: next(runs), "b": lambda target: next(runs)}, 1.0,
+                     lambda best: 0.0)
+    res = run_case(case, 1)
+    a, b = res["rows"]
+    assert a["time_to_target_s"] == 1.5 and b["time_to_target_s"] is None
+    assert b["time_to_target_text"] == "target not reached"
+    assert b["time_ratio_text"].startswith("n/a (target not reached) by b")
