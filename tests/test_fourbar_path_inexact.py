@@ -195,3 +195,42 @@ def test_inexact_set_64_starts_two_workers():
                      f"{result.status}/{result.solver['return_status']}")
     lines.append(f"median wall {statistics.median(walls):.1f} s, worst {max(walls):.1f} s")
     print("\n".join(lines))
+
+
+def test_the_projected_placement_is_the_linear_least_squares_optimum():
+    """placement(): (x0, y0, rcx, rcy) of sum |O + A_i + rcx U_i + rcy J U_i - T_i|^2 in closed form equals numpy's
+    least squares of the same linear system (random crank pins, unit vectors and targets)."""
+    rng = np.random.default_rng(3)
+    anchors = [tuple(a) for a in rng.normal(0, 30, (14, 2))]
+    angles = rng.uniform(0, 2 * math.pi, 14)
+    units = [(math.cos(a), math.sin(a)) for a in angles]
+    targets = rng.normal(50, 20, (14, 2))
+    got = path_nlp.placement(anchors, units, targets)
+    rows, rhs = [], []
+    for (ax, ay), (ux, uy), (tx, ty) in zip(anchors, units, targets):
+        rows += [[1, 0, ux, -uy], [0, 1, uy, ux]]            # unknowns (x0, y0, rcx, rcy)
+        rhs += [tx - ax, ty - ay]
+    x0, y0, rcx, rcy = np.linalg.lstsq(np.array(rows, float), np.array(rhs), rcond=None)[0]
+    assert got == pytest.approx((x0, y0, rcx, rcy), rel=1e-12, abs=1e-9)
+
+
+def test_the_projected_nlp_is_the_full_nlp_with_the_placement_refitted(monkeypatch):
+    """VARPRO (study switch): the projected NLP's decision vector maps to the full NLP's with (x0, y0, rcx, rcy) its
+    least-squares placement: no worse than the start's own placement, and a minimum over the placement (moving any
+    placement coordinate either way raises the path error)."""
+    monkeypatch.setattr(path_nlp, "VARPRO", True)
+    spec = inexact_spec("egg16").model
+    nlp = PathNLP(spec, 0)
+    assert nlp.varpro is not None
+    start = nlp.start(3, np.array(spec.bounds_array(), float).mean(axis=1))
+    z = nlp.nominal(start.design)
+    wv = np.concatenate([z[list(nlp.KEPT)], start.theta])
+    full = np.asarray(nlp.varpro_full(wv, start.sign), float).ravel()
+    fit_full = float(nlp.fit(full, start.sign))
+    fit_start = float(nlp.fit(np.concatenate([z, start.theta]), start.sign))
+    assert fit_full <= fit_start + 1e-9 * max(1.0, fit_start)
+    for k in (4, 5, 6, 7):                  # moving any placement coordinate off the optimum makes it worse
+        for step in (-1e-3, 1e-3):
+            moved = full.copy()
+            moved[k] += step
+            assert float(nlp.fit(moved, start.sign)) > fit_full

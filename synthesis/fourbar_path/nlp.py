@@ -25,6 +25,7 @@ that go either way.  The core transcribes it (back-off, elastic form) and runs I
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -82,6 +83,36 @@ CUTS = ((30, 1e4), (200, 1.0), (400, 0.6))
 #: its path error is at most this x the reference (an answer above the best screened start's cannot be the best)
 RESOLVE_WITHIN = 1.0
 TRACE = False            # study switch: each start's details get its path error at every iteration
+#: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
+#: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
+#: given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed form
+#: (:func:`placement`), and IPOPT moves only r1..r4, theta0 and the crank angles -- then polished by the full NLP
+VARPRO = False            # study switch (INEXACT.md, third pass): measured, not kept on
+#: the projected answer is kept without the full NLP's polish when its placement is this far inside its bounds
+#: (nominal units: target sizes)
+PLACEMENT_ROOM = 1e-6
+#: IPOPT's tolerances for the free-timing target sets of >= SCREEN_MIN_TARGETS points (None: the preset's)
+SCREEN_TOL: tuple[float, float] | None = None
+
+
+def placement(anchors: list, units: list, targets: np.ndarray) -> tuple:
+    """(x0, y0, rcx, rcy) minimising sum_i |b + c U_i + A_i - T_i|^2 over complex b = x0 + i y0, c = rcx + i rcy,
+    for the crank pins A_i (from the input pivot) and the coupler's unit vectors U_i at the targets T_i: the coupler
+    point is P = O + A + rcx u + rcy (u turned +90 deg) = b + A + c U.  Closed form on the centred sums:
+    c = sum conj(U~_i) R~_i / sum |U~_i|^2 (R = T - A, ~: minus the mean), b = mean(R) - c mean(U).  Floats or
+    CasADi symbols; a coupler that does not turn between the targets (sum |U~|^2 = 0) has no unique c."""
+    n = len(targets)
+    rx = [float(t[0]) - a[0] for t, a in zip(targets, anchors)]
+    ry = [float(t[1]) - a[1] for t, a in zip(targets, anchors)]
+    mux, muy = sum(u[0] for u in units) / n, sum(u[1] for u in units) / n
+    mrx, mry = sum(rx) / n, sum(ry) / n
+    ux = [u[0] - mux for u in units]
+    uy = [u[1] - muy for u in units]
+    qx, qy = [r - mrx for r in rx], [r - mry for r in ry]
+    den = sum(a * a + b * b for a, b in zip(ux, uy))
+    cx = sum(a * c + b * d for a, b, c, d in zip(ux, uy, qx, qy)) / den
+    cy = sum(a * d - b * c for a, b, c, d in zip(ux, uy, qx, qy)) / den
+    return mrx - (cx * mux - cy * muy), mry - (cx * muy + cy * mux), cx, cy
 
 
 class PathNLP:
@@ -135,8 +166,7 @@ class PathNLP:
                 # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
                 # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
                 # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)
-                ipopt="exact_fit", ipopt_options={"ipopt.mu_strategy": spec.solver.mu_strategy,
-                                                  **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})},
+                ipopt="exact_fit", ipopt_options=self._ipopt_options(spec),
                 max_iter=spec.solver.max_iter,
                 # x in units of the target size (plain numbers under a change of the length unit), crank angles
                 x_units=[""] * 9 + ["rad"] * self.n_theta, objective_unit="", operating=operating)
@@ -170,6 +200,64 @@ class PathNLP:
             self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
+        self.varpro = None
+        if (VARPRO and not elastic and self.starts.screening
+                and not any(self.fixed[VARIABLES.index(n)] for n in ("rcx", "rcy", "x0", "y0"))):
+            self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
+
+    def _ipopt_options(self, spec) -> dict:
+        out = {"ipopt.mu_strategy": spec.solver.mu_strategy, **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})}
+        if SCREEN_TOL is not None and self.starts.screening:
+            out.update({"ipopt.tol": SCREEN_TOL[0], "ipopt.acceptable_tol": SCREEN_TOL[1]})
+        return out
+
+    #: the decision entries the variable projection keeps (r1..r4, theta0); the rest are its closed form
+    KEPT = (0, 1, 2, 3, 8)
+
+    def _build_varpro(self, spec, targets, thetas, theta, sign, lbx, ubx, f_unit) -> None:
+        """The NLP in r1..r4, theta0 and the crank angles, (x0, y0, rcx, rcy) the closed-form placement
+        (:func:`placement`) held within their bounds as rows; ``varpro_full`` maps its decision vector to the full
+        NLP's (the start of the polish)."""
+        from synthesis.kinematics import fourbar
+
+        kept = list(self.KEPT)
+        xr = ca.SX.sym("xr", len(kept))
+        v = {}
+        for j, i in enumerate(kept):
+            v[self.names[i]] = float(self.bounds[i, 0]) if self.fixed[i] else self.offset[i] + self.scale[i] * xr[j]
+        th0 = v["theta0"] * (math.pi / 180.0)
+        anchors, units = [], []
+        for th in thetas:
+            (ax, ay), (bx, by) = fourbar.coupler_joint(th, v["r1"], v["r2"], v["r3"], v["r4"], th0,
+                                                       BRANCHES[spec.branch])
+            anchors.append((ax, ay))
+            units.append(((bx - ax) / v["r3"], (by - ay) / v["r3"]))
+        x0, y0, rcx, rcy = placement(anchors, units, targets)
+        v.update(x0=x0, y0=y0, rcx=rcx, rcy=rcy)
+        res = []
+        for (ax, ay), (ux, uy), (tx, ty) in zip(anchors, units, targets):
+            res += [x0 + ax + rcx * ux - rcy * uy - tx, y0 + ay + rcx * uy + rcy * ux - ty]
+        f = ca.sumsqr(ca.vertcat(*res))
+        linear = [VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0")]
+        z_lin = ca.vertcat(*((v[self.names[i]] - self.offset[i]) / self.scale[i] for i in linear))
+        rows = [(z_lin[k], float(lbx[i]), float(ubx[i])) for k, i in enumerate(linear)]   # placement in its bounds
+        decision = ca.vertcat(xr, theta)
+        samples = COARSE if self.coarse is not None else spec.solver.samples
+        problem = Problem(
+            "fourbar_path_varpro", decision,
+            np.concatenate([lbx[kept], lbx[9:]]), np.concatenate([ubx[kept], ubx[9:]]),
+            structural=rows, rules=path_rules(spec, v, thetas, sign, samples),
+            objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
+            ipopt="exact_fit", ipopt_options=self._ipopt_options(spec),
+            max_iter=spec.solver.max_iter, x_units=[""] * len(kept) + ["rad"] * self.n_theta,
+            structural_units=[""] * len(linear), objective_unit="")
+        self.varpro = CompiledNLP(problem, False, scaling=OWN_UNITS, watched=self.watched)
+        full = [None] * 9
+        for j, i in enumerate(kept):
+            full[i] = xr[j]
+        for i in linear:
+            full[i] = (v[self.names[i]] - self.offset[i]) / self.scale[i]
+        self.varpro_full = ca.Function("varpro_full", [decision, sign], [ca.vertcat(*full, theta)])
 
     @property
     def compiled(self) -> CompiledNLP:
@@ -235,6 +323,27 @@ class PathNLP:
         w0 = np.concatenate([z0, sp.theta])
         trace: list = []
         watch = self.watch(trace)
+        pre = None
+        if self.varpro is not None:          # variable projection first, the full NLP only where it must
+            kept = list(self.KEPT)
+            pre = self.varpro.solve(index, np.concatenate([z0[kept], sp.theta]), p=sp.sign, watch=watch)
+            full = np.asarray(self.varpro_full(pre.x[: self.varpro.n_x], sp.sign), dtype=float).ravel()
+            if pre.return_status == "User_Requested_Stop" or not np.all(np.isfinite(full)):
+                return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
+            # a KKT point of the projected NLP whose placement is strictly inside its bounds is one of the full NLP
+            # (the placement is then its exact least-squares optimum: variable projection, Golub & Pereyra 1973)
+            lin = [VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0")]
+            inside = bool(np.all(full[lin] > self.lbx[lin] + PLACEMENT_ROOM)
+                          and np.all(full[lin] < self.ubx[lin] - PLACEMENT_ROOM))
+            w0 = np.concatenate([np.clip(full[:9], self.lbx[:9], self.ubx[:9]), full[9:]])
+            if pre.return_status == "Solve_Succeeded" and inside:
+                out = dataclasses.replace(pre, x=full)
+                if self.coarse is not None and self.holds_every_sample(full, sp.sign) is False and \
+                        (self.reference is None or float(self.fit(full, sp.sign)) <= RESOLVE_WITHIN * self.reference):
+                    out = self._then(pre, self.compiled.solve(index, w0, p=sp.sign, watch=self.watch(trace)),
+                                     "re-solved with every sample of the motion")
+                return self._outcome(out, sp, trace)
+            watch = self.watch(trace)
         if self.coarse is None:
             out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         else:
@@ -242,11 +351,22 @@ class PathNLP:
             if out.return_status != "User_Requested_Stop" and \
                     self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False and \
                     (self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= RESOLVE_WITHIN * self.reference):
-                first = out
-                out = self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign, watch=self.watch(trace))
-                out.iterations += first.iterations
-                out.wall_s += first.wall_s
-                out.log = first.log + "\n===== re-solved with every sample of the motion\n" + out.log
+                out = self._then(out, self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign,
+                                                          watch=self.watch(trace)),
+                                 "re-solved with every sample of the motion")
+        if pre is not None:
+            out = self._then(pre, out, "polished by the full NLP")
+        return self._outcome(out, sp, trace)
+
+    @staticmethod
+    def _then(first, second, why: str):
+        """``second`` (a solve started at ``first``'s answer) counting both solves' iterations, time and log."""
+        second.iterations += first.iterations
+        second.wall_s += first.wall_s
+        second.log = first.log + f"\n===== {why}\n" + second.log
+        return second
+
+    def _outcome(self, out, sp: StartPoint, trace: list) -> StartOutcome:
         xs = out.x[: len(self.lbx)]
         design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
         if self.spec.timed:
