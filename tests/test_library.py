@@ -61,6 +61,7 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 0.9380752773248703)},
     "planting_arm/redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.6391376807772884)},
     "planting_arm/redesign_from_example4.toml": {"check": 1, "solve": ("optimal", 0.29332215894486)},
+    "planting_arm/robust_envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6420816928889608)},
     "planting_arm/robust_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6091572046350713)},
     "planting_arm/robust_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.0284017444069604)},
     "planting_arm/robust_redesign_from_example3.toml": {"check": 1, "solve": ("optimal", 0.7636554657649764)},
@@ -87,6 +88,8 @@ STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-rob
            "planting_arm/robust_redesign_from_example2.toml",    # tolerance-robust, 32 starts, 900 s on 2 workers of a busy machine
            "planting_arm/robust_redesign_from_example3.toml",    # tolerance-robust, about 80 s
            "planting_arm/robust_redesign_from_example4.toml",    # tolerance-robust, about 100 s on one worker
+           # tolerance-robust over 0.50-0.75 m/s: solve about 70 s, its Monte-Carlo (200 samples x 27 speeds) about 150 s
+           "planting_arm/robust_envelope_redesign_from_example1.toml",
            "planting_arm/envelope_redesign_from_example1.toml",  # 26-point envelope re-check per start, about 40 s
            "planting_arm/envelope_redesign_from_example2.toml",  # 26-point envelope re-check per start, about 20 s
            "planting_arm/envelope_redesign_from_example3.toml",  # 26-point envelope re-check per start, about 20 s

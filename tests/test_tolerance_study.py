@@ -18,9 +18,11 @@ LIBRARY = Path(__file__).resolve().parents[1] / "problems" / "planting_arm"
 
 
 @pytest.mark.benchmark
-@pytest.mark.parametrize("example, samples", [(1, 10_000), (2, 2_000), (3, 2_000), (4, 2_000)])
-def test_robust_planting_redesign_passes_99_percent_of_the_samples(example, samples):
-    """Example 1 on 10,000 samples (about 13 min); examples 2 to 4 on 2,000 (their specs' count)."""
+@pytest.mark.parametrize("example", [1, 2, 3, 4])
+def test_robust_planting_redesign_passes_99_percent_of_the_samples(example):
+    """Each example on 10,000 samples, the issue's count (example 1 about 13 min; example 4 about 6 min: solve
+    170 s, Monte-Carlo 150 s on one worker)."""
+    samples = 10_000
     rates, objectives = {}, {}
     nominal, robust = f"redesign_from_example{example}", f"robust_redesign_from_example{example}"
     for name in (nominal, robust):
@@ -37,3 +39,22 @@ def test_robust_planting_redesign_passes_99_percent_of_the_samples(example, samp
     assert rates[robust] >= 0.99
     assert rates[nominal] < 0.9
     assert objectives[robust] > objectives[nominal]
+
+
+@pytest.mark.benchmark
+def test_robust_envelope_redesign_passes_99_percent_over_the_speed_range():
+    """The tolerance box and the forward-speed range in one spec: 2,000 samples, each re-checked at 0.6 m/s and at
+    every 0.01 m/s of 0.50-0.75 (about 20 min on one core).  Measured: 100.00 %, objective 0.642082 (GEOMETRY.md)."""
+    from synthesis.core.solve import run_solve
+    loaded = load_spec(LIBRARY / "robust_envelope_redesign_from_example1.toml")
+    kind = robust_kind(kinds.get(loaded.kind), loaded.model)
+    result, _, _ = run_solve(kind, loaded, None, None, 2, lambda r, b: None, None)
+    assert result.status == "optimal"
+    lin = linearise(kind, loaded.model, result.design)
+    box = box_of(lin.dmap, 0.2, 0.3, {})
+    mc = monte_carlo(kind, loaded.model, lin.design, lin.dmap, box, 2_000, seed=0)
+    print(f"\nover the box and 0.50-0.75 m/s, 2000 samples (seed 0): {mc['pass_rate']:.2%}; objective "
+          f"{result.objective['value']:.6f}")
+    assert mc["envelope"]["points"] == 26
+    assert mc["pass_rate"] >= 0.99
+    assert result.objective["value"] > 0.609157       # the price over the robust-only redesign of example 1
