@@ -12,8 +12,12 @@ units the problem declares, not guessed from numbers: solved with every length `
 the kind's unit (:func:`length_unit`; 1e-3: metres for mm), a variable of length power p (mm, m/s: 1, mm^2: 2,
 deg, rad, ratios: 0) has s = factor**p and the objective is divided by factor**p of its unit alike, so IPOPT
 sees the kind's variables and objective whatever the length unit (issue 18's scale case,
-tests/extreme/test_scale.py); the rows stay in the new unit (IPOPT's own gradient-based row scaling takes
-them).  In the kind's own units every s is 1 and IPOPT sees the kind's NLP unchanged.
+tests/extreme/test_scale.py), and each row is divided by factor**p of its declared unit alike (g / s_g), so
+IPOPT's tolerances, restoration phase and multipliers are those of the kind's NLP in every unit.  (Until
+2026-11-24 the rows stayed in the new unit, 1000x smaller in metres: IPOPT then judged their violations in metres,
+gave up on locally infeasible starts later or stopped early on a degenerate optimum with multipliers 1000x larger
+-- tillage_redesign, planting redesign_from_example2: tests/extreme/test_scale.py.)  In the kind's own units every s
+is 1 and IPOPT sees the kind's NLP unchanged.
 An earlier rule read the unit from each variable's box (the power of 1000 bringing its width into [1, 1000)),
 and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3 (combing_chain's
 finite-difference solve went from 13 to 140 iterations), and an unboxed start over 1000 for kilometres (the robust
@@ -239,10 +243,11 @@ class CompiledNLP:
         its build time added to ``build_s``."""
         if self._scaled_solver is None:
             t0 = time.perf_counter()
-            w, n = self._w, self._w.numel()
+            w, n, m = self._w, self._w.numel(), self._g.numel()
             z, s, sf = ca.SX.sym("z", n), ca.SX.sym("nominal", n), ca.SX.sym("objective_nominal")
+            sg = ca.SX.sym("row_nominal", m)
             f, g = ca.substitute([self._f, self._g], [w], [s * z])
-            nlp = {"x": z, "f": f / sf, "g": g, "p": ca.vertcat(self.problem.parameters, s, sf)}
+            nlp = {"x": z, "f": f / sf, "g": g / sg, "p": ca.vertcat(self.problem.parameters, s, sf, sg)}
             opts = self._opts
             if self._watch is not None:
                 self._scaled_watch = _Watch(n, self.t.g.numel(), nlp["p"].numel())
@@ -273,14 +278,19 @@ class CompiledNLP:
         u = self._unit
         c = self._row_unit
         args.update(x0=args["x0"] * u, lbx=self.t.lbw * u, ubx=self.t.ubw * u, lbg=self.t.lbg * c, ubg=self.t.ubg * c)
-        # nominal scaling: IPOPT's z is the kind's unit again (module docstring)
-        nominal = self.scaling == "nominal" and not (np.all(u == 1.0) and self._objective_unit == 1.0)
-        s = u if nominal else None
-        sf = self._objective_unit if nominal else 1.0
+        # nominal scaling: IPOPT's z is the kind's unit again, and so are its rows (module docstring); a kind that
+        # keeps its own variables (scaling "none": fourbar_path's are already in units of its targets' size) still
+        # has its rows divided back into its units
+        unit_changed = not (np.all(u == 1.0) and self._objective_unit == 1.0 and np.all(c == 1.0))
+        nominal = self.scaling == "nominal"
+        s = (u if nominal else np.ones_like(u)) if unit_changed else None
+        sf = self._objective_unit if nominal and unit_changed else 1.0
+        sg = c if unit_changed else np.ones_like(c)
         solver = self.solver
         if s is not None:
             solver = self.scaled_solver()
-            args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, p=np.concatenate([p, s, [sf]]))
+            args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, lbg=args["lbg"] / sg,
+                        ubg=args["ubg"] / sg, p=np.concatenate([p, s, [sf], sg]))
         elif p.size:
             args["p"] = p
         watcher = None
@@ -309,8 +319,8 @@ class CompiledNLP:
         # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another
         # point (even 0.0 after Invalid_Number_Detected)
         f = float(self.f_function(x, p))
-        # multipliers of the kind's rows: IPOPT's of f / sf and rows c * g are sf * c / c_f of the kind's f and g
-        lam = np.asarray(sol["lam_g"]).ravel() * sf * self._row_unit / self._objective_unit
+        # multipliers of the kind's rows: IPOPT's of f / sf and rows c * g / sg are sf * c / (sg c_f) of the kind's
+        lam = np.asarray(sol["lam_g"]).ravel() * sf * self._row_unit / (sg * self._objective_unit)
         return NLPOutcome(start, x, f if math.isfinite(f) else math.inf, stats["return_status"],
                           bool(stats["success"]), int(stats["iter_count"]), wall, log(), lam)
 
