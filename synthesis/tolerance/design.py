@@ -32,10 +32,33 @@ def _grashof(target: str):
 
 
 def _nominal_units(nlp, n):
-    """fourbar_path's NLP works in nominal units (issue 19): design = offset + scale * z."""
-    d0, scale = np.zeros(n), np.ones(n)
-    d0[:len(nlp.offset)], scale[:len(nlp.scale)] = nlp.offset, nlp.scale
-    return d0, np.diag(scale)
+    """fourbar_path's NLP works in nominal units (issue 19): design = offset + scale * z; read from the built NLP,
+    or, before it is built (the robust build sizes its box first), from the spec's targets as the NLP reads them."""
+    offset, scale = getattr(nlp, "offset", None), getattr(nlp, "scale", None)
+    if offset is None or scale is None:
+        from synthesis.core.kind import resolve
+
+        if resolve("synthesis.fourbar_path.nlp:SCALED"):
+            offset, scale = resolve("synthesis.fourbar_path.nlp:nominal_scales")(
+                np.array(nlp.spec.targets.points, dtype=float))
+        else:
+            offset, scale = np.zeros(n), np.ones(n)
+    d0, s = np.zeros(n), np.ones(n)
+    d0[:len(offset)], s[:len(scale)] = offset, scale
+    return d0, np.diag(s)
+
+
+def spec_keys(names, info) -> list[str]:
+    """The spec's design variable of each NLP variable name: the same name, or the one spec name ending in
+    ``_<name>`` (guide_tube's NLP names its angles I, II; the spec delta_I, delta_II)."""
+    keys = []
+    for n in names:
+        if n in info:
+            keys.append(n)
+        else:
+            match = [k for k in info if k.endswith("_" + n)]
+            keys.append(match[0] if len(match) == 1 else n)
+    return keys
 
 
 #: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
@@ -103,13 +126,7 @@ class DesignMap:
 def design_map(kind: str, nlp, spec) -> DesignMap:
     names = list(nlp.names)
     info = describe(spec)
-    keys = []
-    for n in names:
-        if n in info:
-            keys.append(n)
-        else:
-            match = [k for k in info if k.endswith("_" + n)]
-            keys.append(match[0] if len(match) == 1 else n)
+    keys = spec_keys(names, info)
     units = [info[k]["unit"] if k in info else UNITS.get(kind, "") for k in keys]
     affine = AFFINE.get(kind)
     d0, J = affine(nlp, len(names)) if affine else (np.zeros(len(names)), np.eye(len(names)))

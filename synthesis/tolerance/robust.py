@@ -19,7 +19,7 @@ from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
 from synthesis.design_info import describe
 from synthesis.errors import SpecError
-from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of
+from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of, spec_keys
 
 
 #: kinds the robust transcription cannot take, and why: refused with one line before anything is prepared or built
@@ -72,8 +72,8 @@ def _padded(compiled):
     """compiled.solve with the robust extras' start values appended to the kind's own extras."""
     solve = compiled.solve
 
-    def run(start, x0, extra0=None, p=None):
-        return solve(start, x0, compiled.t.full_extra(extra0, x0, p), p)
+    def run(start, x0, extra0=None, p=None, **options):
+        return solve(start, x0, compiled.t.full_extra(extra0, x0, p), p, **options)
     return run
 
 
@@ -87,16 +87,19 @@ class RobustBuild:
         with tolerance_box(_Resolver(self.kind_name, setting.spec)):
             try:
                 nlp = self.base(setting, elastic)
+                # every compiled NLP of the kind built here, in the box: one built on first use (fourbar_path's full
+                # NLP beside its coarse one) would otherwise be built later, nominal
+                solvers = [getattr(nlp, name, None) for name in ("compiled", "coarse", "varpro")]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
                 raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
-        if list(getattr(nlp, "names", [])) != expected:
+        if spec_keys(list(getattr(nlp, "names", [])), describe(setting.spec)) != expected:
             # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
             # variables (a subset, nominal units) cannot take it yet
             raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind yet "
                             f"(its NLP variables {list(getattr(nlp, 'names', []))} are not the spec's {expected}); "
                             f"`agrisynth tolerance RESULT` analyses a solved design")
-        for compiled in [getattr(nlp, "compiled", None), *getattr(nlp, "stages", [])]:
+        for compiled in [*solvers, *getattr(nlp, "stages", [])]:
             if compiled is not None and compiled.t.robust is not None:
                 compiled.solve = _padded(compiled)
         return nlp
