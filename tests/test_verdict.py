@@ -266,3 +266,12 @@ def test_guide_tube_and_fourbar_path_hold_their_rules_in_a_tolerance_box(tmp_pat
     mc = result.to_json()["facts"]["tolerance"]["monte_carlo"]
     assert mc["samples"] == 20 and mc["pass_rate"] == 1.0
     assert result.status in ("optimal", "feasible")
+
+
+def test_a_tolerance_box_on_a_fixed_variable_the_nlp_takes_as_a_number_is_bad_input(tmp_path):
+    """guide_tube's cai2020_delta2 fixes tube I at 45 deg (its calibration angle), which its NLP takes as a
+    number: a [tolerance] box (on both angles) cannot be held there -- exit 2 saying so, not a wrong solve."""
+    path = tmp_path / "robust.toml"
+    path.write_text((LIBRARY / "guide_tube" / "cai2020_delta2.toml").read_text() + "\n[tolerance]\nangle = 0.3\n")
+    with pytest.raises(SpecError, match="takes a fixed one as a number"):
+        run_solve(load_spec(path), starts=1, workers=1)

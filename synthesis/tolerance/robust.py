@@ -49,8 +49,11 @@ class _Resolver:
         unsupported = SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet (its NLP does not work in the spec's design variables {names}); "
                                 f"`agrisynth tolerance RESULT` analyses a solved design")
-        if problem.x.numel() < n:
-            raise unsupported
+        if problem.x.numel() < n:       # e.g. guide_tube: a fixed wall angle enters its NLP as a number
+            raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` needs every design variable of the "
+                            f"spec ({', '.join(names)}) in the NLP, and this kind's NLP takes a fixed one as a number "
+                            f"({problem.x.numel()} decision entries); `agrisynth tolerance RESULT` analyses a solved "
+                            f"design with the fixed ones toleranced too")
         affine = AFFINE.get(self.kind_name)
         try:
             d0, J = (np.zeros(n), np.eye(n)) if affine is None else affine(_Stub(self.spec), n)
