@@ -388,7 +388,8 @@ def _cam_in_seconds_with_a_cap(model):
 @pytest.mark.parametrize("spec, variant, objective, iterations", [
     ("planting_arm/redesign_from_example1.toml", None, 0.5611548410639178, 18),
     ("guide_tube/uniform_spacing.toml", None, 8.758766813306126, 13),
-    ("tillage/tillage_redesign.toml", None, 373.06012290551644, 244),
+    # re-measured when tillage_linkage relaxed its bounds by 1e-10 (was 373.06012290551644 in 244 iterations)
+    ("tillage/tillage_redesign.toml", None, 373.06012281124424, 631),
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", None, 68.56927256227823, 33),
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", _cam_in_seconds_with_a_cap, 68.56927256227823, 33),
     ("comb_finger/redesign_max_combing.toml", None, 56.90966723057299, 8),

@@ -228,12 +228,13 @@ class CompiledNLP:
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
         self._watch = None
-        if watched:      # one watch per solver (the scaled one has n_w + 1 more parameters: s and the objective's scale)
+        # one watch per solver (the scaled one has n_w + 1 + n_g more parameters: s, the objective's and rows' scales)
+        if watched:
             self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
         self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts)
-        self._scaled_solver = None         # built on the first start that has a variable to scale
+        self._scaled_solver = None         # built on the first start solved in another length unit
         self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
         self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])
         self.build_s = time.perf_counter() - t0     # transcription and IPOPT's setup (the bench reports it)

@@ -27,7 +27,7 @@ from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
-from synthesis.tolerance.design import DesignMap, box_of, design_map, fine, freed, kind_start, without_ipopt
+from synthesis.tolerance.design import ANSWER, DesignMap, box_of, design_map, fine, freed, kind_start, without_ipopt
 from synthesis.tolerance.envelope import SUFFIX, envelope_kind, grid_of
 
 
@@ -67,6 +67,8 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     d = np.array([value_of(design[k]) for k in dmap.keys])
     compiled, x0, p = kind_start(nlp, d)
     x0[:dmap.n] = dmap.coordinates(d)
+    if kind.name in ANSWER:            # the answer's own auxiliaries (fourbar_path's crank angles), where it has them
+        x0, p = ANSWER[kind.name](design, x0, np.asarray(p, float), dmap.n)
     sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)

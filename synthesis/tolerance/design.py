@@ -69,6 +69,26 @@ AFFINE = {
 }
 
 
+def _fourbar_path_answer(design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """fourbar_path with free timing: the crank angle of each target and the crank direction are the answer's
+    (result.json ``design.crank_deg`` / ``direction``), not the start's guesses -- its rules are read there."""
+    crank, direction = design.get("crank_deg"), design.get("direction")
+    if isinstance(crank, list) and len(crank) == x0.size - n and all(
+            isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank):
+        x0 = x0.copy()
+        x0[n:] = np.radians(np.asarray(crank, float))
+    if direction not in ("ccw", "cw") and isinstance(crank, list) and len(crank) > 1:     # result.json: no direction
+        direction = "ccw" if crank[-1] >= crank[0] else "cw"      # the angles run in the crank's turning sense
+    if direction in ("ccw", "cw") and p.size == 1:
+        p = np.array([1.0 if direction == "ccw" else -1.0])
+    return x0, p
+
+
+#: kinds whose answer holds auxiliaries of its NLP (crank angles) the analysis must use instead of a start's guesses:
+#: (design, x0, p, n_design) -> (x0, p)
+ANSWER = {"fourbar_path": _fourbar_path_answer}
+
+
 #: unit of the design variables of kinds whose spec lists none (guide_way: control points of the path, mm)
 UNITS = {"guide_way": "mm"}
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import casadi as ca
 import numpy as np
 
 from synthesis.core.kind import Finished, Kind, Setting, Solving
@@ -61,7 +62,21 @@ class _Resolver:
             raise unsupported from None
         dmap = DesignMap(names, names, [info[k]["unit"] or UNITS.get(self.kind_name, "") for k in names], d0, J)
         tol = self.spec.tolerance
-        return Tolerance(n, box_of(dmap, tol.length, tol.angle, dict(tol.variables)), J)
+        box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
+        # a design entry nothing in the NLP reads (fourbar_path keeps a fixed variable's entry but computes with its
+        # number) would take its tolerance silently nowhere: refused, naming it.  (An entry the objective reads but no
+        # rule does is held trivially: no rule's worst case moves with it.)
+        objective = [ca.vec(ca.SX(problem.objective.f))] if isinstance(getattr(problem.objective, "f", None),
+                                                                        (ca.SX, ca.MX)) else []
+        rows = ca.vertcat(*(ca.vec(ca.SX(e)) for rule in problem.rules for e, _, _ in rule.rows()),
+                          *(ca.vec(ca.SX(e)) for e, _, _ in problem.structural), *objective)
+        ignored = [names[j] for j in range(n) if box[j] > 0 and not ca.depends_on(rows, problem.x[j])]
+        if ignored:
+            raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` cannot hold the tolerance of "
+                            f"{', '.join(ignored)}: this kind's NLP takes a fixed variable as a number; give it as "
+                            f"{{init = v, bounds = [v, v]}} to tolerance it (`agrisynth tolerance RESULT` analyses "
+                            f"fixed dimensions as they are)")
+        return Tolerance(n, box, J)
 
 
 class _Stub:
@@ -92,7 +107,11 @@ class RobustBuild:
                 nlp = self.base(setting, elastic)
                 # every compiled NLP of the kind built here, in the box: one built on first use (fourbar_path's full
                 # NLP beside its coarse one) would otherwise be built later, nominal
-                solvers = [getattr(nlp, name, None) for name in ("compiled", "coarse", "varpro")]
+                solvers = [getattr(nlp, name, None) for name in ("compiled", "coarse")]
+                if getattr(nlp, "varpro", None) is not None:
+                    # fourbar_path's variable-projection study switch: its x is not the spec's design (the box would
+                    # land on the wrong entries), so a robust solve runs the full NLP from every start
+                    nlp.varpro = None
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
                 raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
@@ -127,6 +146,9 @@ class RobustFinish:
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
             mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
+            # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
+            # auxiliaries are (fourbar_path's crank angles, design.ANSWER)
+            design = {**best.outcome.details, **best.outcome.design, **design}
             facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
                                   "held_at": "linearised worst case of every rule row in the box"}
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
@@ -247,7 +269,7 @@ class ExplainBreak:
         if use_elastic:
             source.update({k: v for k, v in elastic["design"].items() if v is not None})
         try:
-            design = {k: float(source[k]) for k in names}
+            design = {**source, **{k: float(source[k]) for k in names}}
             rows = breaking_rules(self.kind, self.spec, design, first=tuple(elastic.get("relaxed") or ()))
         except (KeyError, TypeError, AgrisynthError, ValueError, ArithmeticError, RuntimeError) as exc:
             return f"(Which tolerance breaks which rule could not be worked out: {type(exc).__name__}: {exc}.)"
