@@ -250,7 +250,9 @@ def test_a_tolerance_box_no_design_can_hold_fails_instead_of_passing(tmp_path):
 
 
 @pytest.mark.parametrize("relative, box", [("guide_tube/uniform_spacing.toml", "angle = 0.3"),
-                                          ("fourbar_path/picking_arc.toml", "length = 0.05\nangle = 0.05")])
+                                          ("fourbar_path/picking_arc.toml", "length = 0.05\nangle = 0.05"),
+                                          # its design variables enter only an epigraph's rows and Grashof coordinates
+                                          ("picker/picker_double_crank_redesign.toml", "length = 0.1\nangle = 0.1")])
 def test_guide_tube_and_fourbar_path_hold_their_rules_in_a_tolerance_box(tmp_path, relative, box):
     """Kinds whose NLP is not in the spec's own variables take a tolerance box too: guide_tube (its NLP names the
     angles I, II; the spec delta_I, delta_II) and fourbar_path (its NLP in units of the targets' size: the box is
@@ -298,3 +300,26 @@ def test_a_tolerance_on_a_fixed_fourbar_path_variable_is_refused_not_dropped(tmp
     result, _, _ = run_solve(load_spec(pinned), starts=1, workers=1)
     assert result.design["r1"] == 130.0
     assert all(r["satisfied"] for r in result.rules if r["name"].endswith("@tolerance"))
+
+
+def test_a_robust_grashof_any_path_is_held_and_read_on_the_spec_s_samples(tmp_path):
+    """grashof = "any" samples closure and transmission between the targets; its solve strategy is a coarse first
+    stage.  Under a tolerance box the whole problem is solved and read on the spec's samples (the worst cases of the
+    sampled rules over all of them), at the answer's crank angles: every @tolerance row holds and is no better than
+    its rule's own margin there."""
+    text = (LIBRARY / "fourbar_path" / "picking_arc.toml").read_text()
+    assert 'grashof = "crank_rocker"' in text
+    path = tmp_path / "any.toml"
+    # 8 samples per gap (the default 36 makes this a 40 s test): the NLP's own samples are still more than the
+    # coarse first stage's 4, so a robust NLP built on the coarse stage would read fewer rows than the spec's
+    path.write_text(text.replace('grashof = "crank_rocker"', 'grashof = "any"').replace("seed = 0", "seed = 0\nsamples = 8")
+                    + "\n[tolerance]\nlength = 0.5\nangle = 0.05\nsamples = 20\nseed = 0\n")
+    loaded = load_spec(path)
+    assert loaded.model.solver.samples == 8
+    result, _, _ = run_solve(loaded, starts=1, workers=1)
+    nominal = {r["name"]: r["margin"] for r in result.rules if not r["name"].endswith("@tolerance")}
+    held = [r for r in result.rules if r["name"].endswith("@tolerance")]
+    assert {r["name"].removesuffix("@tolerance") for r in held} == set(nominal)
+    for r in held:
+        assert r["satisfied"] and 0 <= r["margin"] <= nominal[r["name"].removesuffix("@tolerance")] + 1e-9, r
+    assert result.status in ("optimal", "feasible")

@@ -27,7 +27,8 @@ from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
-from synthesis.tolerance.design import ANSWER, DesignMap, box_of, design_map, fine, freed, kind_start, without_ipopt
+from synthesis.tolerance.design import (ANSWER, DesignMap, box_of, design_map, fine, freed, kind_start,
+                                        whole_problem, without_ipopt)
 from synthesis.tolerance.envelope import SUFFIX, envelope_kind, grid_of
 
 
@@ -60,6 +61,7 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     # derivatives w.r.t. forward speed, crank speed, friction, ... of a nominal spec too
     with without_ipopt(), operating_as_symbols():
         nlp = solving.build(Setting(aspec, seed, data), False)
+        whole_problem(nlp)         # every rule on the spec's samples (not a coarse first stage)
     dmap = design_map(kind.name, nlp, spec)
     missing = [k for k in dmap.keys if k not in design]
     if missing:

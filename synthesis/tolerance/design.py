@@ -184,6 +184,18 @@ def without_ipopt():
         ca.nlpsol = original
 
 
+def whole_problem(nlp) -> None:
+    """The kind's NLP solves its whole problem from every start: fourbar_path's solve strategies -- a coarse first
+    stage of grashof = "any" (4 samples per gap, re-solved on the spec's samples only when one fails) and the
+    variable-projection study switch -- are dropped, so a tolerance box holds, and the analysis reads, every rule on
+    the spec's samples in the spec's design coordinates.  The full NLP is built here (call this where the NLP must
+    be built: inside the tolerance box, or before the analysis captures its start)."""
+    if getattr(nlp, "coarse", None) is not None or getattr(nlp, "varpro", None) is not None:
+        _ = nlp.compiled
+        nlp.coarse = None
+        nlp.varpro = None
+
+
 def kind_start(nlp, x_design: np.ndarray):
     """(compiled NLP, decision vector, parameters) the kind's own solve would start IPOPT from at this
     design: its guesses of the auxiliaries (crank angles of precision points, extremes, ...), never solved."""

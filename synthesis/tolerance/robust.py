@@ -20,7 +20,7 @@ from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
 from synthesis.design_info import describe
 from synthesis.errors import SpecError
-from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of, spec_keys
+from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of, spec_keys, whole_problem
 
 
 #: kinds the robust transcription cannot take, and why: refused with one line before anything is prepared or built
@@ -68,9 +68,15 @@ class _Resolver:
         # rule does is held trivially: no rule's worst case moves with it.)
         objective = [ca.vec(ca.SX(problem.objective.f))] if isinstance(getattr(problem.objective, "f", None),
                                                                         (ca.SX, ca.MX)) else []
+        objective += [ca.vec(ca.SX(e)) for e, _, _ in getattr(problem.objective, "rows", ())]   # an epigraph's rows
         rows = ca.vertcat(*(ca.vec(ca.SX(e)) for rule in problem.rules for e, _, _ in rule.rows()),
                           *(ca.vec(ca.SX(e)) for e, _, _ in problem.structural), *objective)
-        ignored = [names[j] for j in range(n) if box[j] > 0 and not ca.depends_on(rows, problem.x[j])]
+        # design variable k is read when a coordinate the NLP reads moves with it: (J^-1)[j, k] != 0 for such a j
+        # (the Grashof coordinates of crank_rocker and the picker mix the lengths)
+        read = [bool(ca.depends_on(rows, problem.x[j])) for j in range(n)]
+        inverse = np.linalg.pinv(np.asarray(J, float))
+        ignored = [names[k] for k in range(n)
+                   if box[k] > 0 and not any(read[j] and abs(inverse[j, k]) > 1e-12 for j in range(n))]
         if ignored:
             raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` cannot hold the tolerance of "
                             f"{', '.join(ignored)}: this kind's NLP takes a fixed variable as a number; give it as "
@@ -107,11 +113,8 @@ class RobustBuild:
                 nlp = self.base(setting, elastic)
                 # every compiled NLP of the kind built here, in the box: one built on first use (fourbar_path's full
                 # NLP beside its coarse one) would otherwise be built later, nominal
-                solvers = [getattr(nlp, name, None) for name in ("compiled", "coarse")]
-                if getattr(nlp, "varpro", None) is not None:
-                    # fourbar_path's variable-projection study switch: its x is not the spec's design (the box would
-                    # land on the wrong entries), so a robust solve runs the full NLP from every start
-                    nlp.varpro = None
+                whole_problem(nlp)
+                solvers = [getattr(nlp, "compiled", None)]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
                 raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
@@ -265,8 +268,10 @@ class ExplainBreak:
         elastic = result.elastic or {}
         names = list(describe(self.spec))
         use_elastic = bool(elastic.get("converged")) and isinstance(elastic.get("design"), dict)
-        source = dict(result.design or {})
-        if use_elastic:
+        # the answer's auxiliaries too (fourbar_path's crank angles and direction: design.ANSWER)
+        source = {"direction": (result.extra or {}).get("crank_direction"), **dict(result.design or {})}
+        if use_elastic:         # the elastic design's own dimensions; the best start's crank angles are not its
+            source.pop("crank_deg", None)
             source.update({k: v for k, v in elastic["design"].items() if v is not None})
         try:
             design = {**source, **{k: float(source[k]) for k in names}}
