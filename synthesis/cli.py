@@ -526,10 +526,12 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     per_variable = {**(dict(tol.variables) if tol else {}), **given}
     if given:               # an unknown name is bad input, said before any analysis
         from synthesis.design_info import describe
+        from synthesis.tolerance.design import spec_keys
 
-        known = list(describe(spec))
-        # (the analysis also takes a variable's name in the kind's NLP, the ending of its key: box_of checks those)
-        unknown = [n for n in given if n not in known and not any(k.endswith("_" + n) for k in known)]
+        info = describe(spec)
+        known = list(info)
+        # (a variable's name in the kind's NLP is taken too, as the analysis maps it: spec_keys)
+        unknown = [n for n, key in zip(given, spec_keys(list(given), info)) if key not in info]
         if known and unknown:
             raise SpecError(f"--tol: unknown design variable {', '.join(unknown)} (known: {', '.join(known)})")
     if not (length or angle or any(per_variable.values())) and samples != 0:

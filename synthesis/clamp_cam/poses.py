@@ -14,14 +14,10 @@ from __future__ import annotations
 
 import math
 
-from synthesis.core.kind import Poses
+from synthesis.core.kind import Poses, pose_mm
 
 PROFILE_POINTS = 720     # points of the drawn cam outline (0.5 deg: a chord sits < 0.01 mm off a steep return)
 ROLLER_POINTS = 24
-
-
-def _rounded(v: float) -> float | None:
-    return round(float(v), 3) if math.isfinite(v) else None
 
 
 def _finite(*values) -> bool:
@@ -47,8 +43,8 @@ def shapes(result) -> dict:
     keep = np.linspace(0, wx.size, PROFILE_POINTS, endpoint=False).astype(int)
     rr = float(prof["roller_radius"])
     ring = np.linspace(0.0, 2.0 * math.pi, ROLLER_POINTS + 1)
-    return {"cam": [[_rounded(wx[i]), _rounded(wy[i])] for i in keep] + [[_rounded(wx[0]), _rounded(wy[0])]],
-            "roller": [[_rounded(rr * math.cos(t)), _rounded(rr * math.sin(t))] for t in ring]}
+    return {"cam": [[pose_mm(wx[i]), pose_mm(wy[i])] for i in keep] + [[pose_mm(wx[0]), pose_mm(wy[0])]],
+            "roller": [[pose_mm(rr * math.cos(t)), pose_mm(rr * math.sin(t))] for t in ring]}
 
 
 def frames(result, most: int) -> list[dict]:
@@ -70,11 +66,11 @@ def frames(result, most: int) -> list[dict]:
         cy = sense * cy
         end = [float(pivot), 0.0] if _finite(pivot) else [cx + stem, cy]
         out.append({
-            "O": [0.0, 0.0], "C": [_rounded(cx), _rounded(cy)],
-            "pivot" if _finite(pivot) else "stem": [_rounded(end[0]), _rounded(end[1])],
+            "O": [0.0, 0.0], "C": [pose_mm(cx), pose_mm(cy)],
+            "pivot" if _finite(pivot) else "stem": [pose_mm(end[0]), pose_mm(end[1])],
             # the cam turned by its cam angle: the pitch point of cam angle phi then sits at C
-            "cam": {"shape": "cam", "at": [0.0, 0.0], "turn_deg": _rounded(sense * ((c - rise_start) % 360.0))},
-            "roller": {"shape": "roller", "at": [_rounded(cx), _rounded(cy)], "turn_deg": 0.0},
+            "cam": {"shape": "cam", "at": [0.0, 0.0], "turn_deg": pose_mm(sense * ((c - rise_start) % 360.0))},
+            "roller": {"shape": "roller", "at": [pose_mm(cx), pose_mm(cy)], "turn_deg": 0.0},
         })
     return out
 

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 from constraints import Rule
@@ -61,7 +60,7 @@ def trace(spec: CombFingerSpec, d: dict, turn_samples: int, machine_speed=None) 
     sx, sy = g.drum_axis(r, e, alpha, b)
     other = (-sx, sy)                                  # the right unit's drum axis (mirror image)
     turn = turn_grid(turn_samples)
-    if any(isinstance(v, (ca.SX, ca.MX)) for v in (r, e, alpha, b, rho)):
+    if g._symbolic(r, e, alpha, b, rho):
         clearance = []
         for phi in turn:
             tx, ty = g.tip(r, e, alpha, b, float(phi))

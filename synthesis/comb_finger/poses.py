@@ -8,13 +8,9 @@ from __future__ import annotations
 
 import math
 
-from synthesis.core.kind import Poses
+from synthesis.core.kind import Poses, pose_mm
 
 DRUM_POINTS = 48
-
-
-def _rounded(v: float) -> float | None:
-    return round(float(v), 3) if math.isfinite(v) else None
 
 
 def _pair(v) -> bool:
@@ -27,7 +23,7 @@ def shapes(result) -> dict:
     rho = result.design.get("rho")
     if not isinstance(rho, (int, float)) or not math.isfinite(rho):
         return {}
-    return {"drum": [[_rounded(rho * math.cos(t)), _rounded(rho * math.sin(t))]
+    return {"drum": [[pose_mm(rho * math.cos(t)), pose_mm(rho * math.sin(t))]
                      for t in (2.0 * math.pi * k / DRUM_POINTS for k in range(DRUM_POINTS + 1))]}
 
 
@@ -42,9 +38,9 @@ def frames(result, most: int) -> list[dict]:
     out = []
     for k in range(count):
         a = 2.0 * math.pi * k / count
-        out.append({"S": [_rounded(s[0]), _rounded(s[1])], "R": [_rounded(r_hub[0]), _rounded(r_hub[1])],
-                    "T": [_rounded(r_hub[0] + r * math.cos(a)), _rounded(r_hub[1] + r * math.sin(a))],
-                    "drum": {"shape": "drum", "at": [_rounded(s[0]), _rounded(s[1])], "turn_deg": 0.0}})
+        out.append({"S": [pose_mm(s[0]), pose_mm(s[1])], "R": [pose_mm(r_hub[0]), pose_mm(r_hub[1])],
+                    "T": [pose_mm(r_hub[0] + r * math.cos(a)), pose_mm(r_hub[1] + r * math.sin(a))],
+                    "drum": {"shape": "drum", "at": [pose_mm(s[0]), pose_mm(s[1])], "turn_deg": 0.0}})
     return out
 
 

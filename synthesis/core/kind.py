@@ -27,6 +27,8 @@ A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one 
 
 from __future__ import annotations
 
+import math
+
 import importlib
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -90,6 +92,11 @@ class CoarseCheck:
     evaluate: Callable[[Any], Any]               # loaded spec -> Result (status "evaluated"), the check's rules
     note: Callable[[Any], str]                   # spec -> what the coarse grid evaluates, in words (sample counts)
     fine_note: Callable[[Any], str] = _the_check  # spec -> what the fine grid (the check) evaluates, in words
+
+
+def pose_mm(v: float) -> float | None:
+    """A coordinate of a pose as the studio's page gets it: mm to 3 decimals, None where it is not finite."""
+    return round(float(v), 3) if math.isfinite(v) else None
 
 
 @dataclass(frozen=True)

@@ -10,11 +10,9 @@ before it is written, so ``result.json`` says what the exit-3 message says.
 
 from __future__ import annotations
 
-import dataclasses
-
 import functools
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -147,7 +145,7 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     diagnosis = diagnosis_of(nlp.compiled, outcome.raw)
     design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
-    return dataclasses.replace(diagnosis, design=design or None)
+    return replace(diagnosis, design=design or None)
 
 
 def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool) -> dict:

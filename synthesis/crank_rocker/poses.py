@@ -6,11 +6,7 @@ from __future__ import annotations
 
 import math
 
-from synthesis.core.kind import Poses
-
-
-def _rounded(v: float) -> float | None:
-    return round(float(v), 3) if math.isfinite(v) else None
+from synthesis.core.kind import Poses, pose_mm
 
 
 def frames(result, most: int) -> list[dict]:
@@ -29,8 +25,8 @@ def frames(result, most: int) -> list[dict]:
         if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in (c, x, y)):
             continue                      # the loop does not close there (a crank that cannot turn)
         a = math.radians(c)
-        out.append({"G": [0.0, 0.0], "F": [_rounded(l7 * math.cos(a)), _rounded(l7 * math.sin(a))],
-                    "E": [_rounded(x), _rounded(y)], "A": [_rounded(l10), 0.0]})
+        out.append({"G": [0.0, 0.0], "F": [pose_mm(l7 * math.cos(a)), pose_mm(l7 * math.sin(a))],
+                    "E": [pose_mm(x), pose_mm(y)], "A": [pose_mm(l10), 0.0]})
     return out
 
 

@@ -88,6 +88,8 @@ TRACE = False            # study switch: each start's details get its path error
 #: given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed form
 #: (:func:`placement`), and IPOPT moves only r1..r4, theta0 and the crank angles -- then polished by the full NLP
 VARPRO = False            # study switch (INEXACT.md, third pass): measured, not kept on
+#: the entries of the design the coupler point is linear in (the projection's closed-form placement)
+PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
 #: the projected answer is kept without the full NLP's polish when its placement is this far inside its bounds
 #: (nominal units: target sizes)
 PLACEMENT_ROOM = 1e-6
@@ -202,7 +204,7 @@ class PathNLP:
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.varpro = None
         if (VARPRO and not elastic and self.starts.screening
-                and not any(self.fixed[VARIABLES.index(n)] for n in ("rcx", "rcy", "x0", "y0"))):
+                and not any(self.fixed[i] for i in PLACEMENT)):
             self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
 
     def _ipopt_options(self, spec) -> dict:
@@ -238,7 +240,7 @@ class PathNLP:
         for (ax, ay), (ux, uy), (tx, ty) in zip(anchors, units, targets):
             res += [x0 + ax + rcx * ux - rcy * uy - tx, y0 + ay + rcx * uy + rcy * ux - ty]
         f = ca.sumsqr(ca.vertcat(*res))
-        linear = [VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0")]
+        linear = list(PLACEMENT)
         z_lin = ca.vertcat(*((v[self.names[i]] - self.offset[i]) / self.scale[i] for i in linear))
         rows = [(z_lin[k], float(lbx[i]), float(ubx[i])) for k, i in enumerate(linear)]   # placement in its bounds
         decision = ca.vertcat(xr, theta)
@@ -332,7 +334,7 @@ class PathNLP:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             # a KKT point of the projected NLP whose placement is strictly inside its bounds is one of the full NLP
             # (the placement is then its exact least-squares optimum: variable projection, Golub & Pereyra 1973)
-            lin = [VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0")]
+            lin = list(PLACEMENT)
             inside = bool(np.all(full[lin] > self.lbx[lin] + PLACEMENT_ROOM)
                           and np.all(full[lin] < self.ubx[lin] - PLACEMENT_ROOM))
             w0 = np.concatenate([np.clip(full[:9], self.lbx[:9], self.ubx[:9]), full[9:]])

@@ -4,13 +4,7 @@ none where the loop does not close."""
 
 from __future__ import annotations
 
-import math
-
-from synthesis.core.kind import Poses
-
-
-def _rounded(v: float) -> float | None:
-    return round(float(v), 3) if math.isfinite(v) else None
+from synthesis.core.kind import Poses, pose_mm
 
 
 def frames(result, most: int) -> list[dict]:
@@ -28,7 +22,7 @@ def frames(result, most: int) -> list[dict]:
     design = {n: float(result.design[n]) for n in VARIABLES}
     theta = np.radians(crank[::-(-len(crank) // most)])
     joints = joint_positions(design, theta, BRANCHES[result.design.get("branch", "open")])
-    poses = [{name: [_rounded(z[k].real), _rounded(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
+    poses = [{name: [pose_mm(z[k].real), pose_mm(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
     return [p for p in poses if all(None not in xy for xy in p.values())]
 
 

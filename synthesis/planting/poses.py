@@ -6,11 +6,7 @@ from __future__ import annotations
 
 import math
 
-from synthesis.core.kind import Poses
-
-
-def _rounded(v: float) -> float | None:
-    return round(float(v), 3) if math.isfinite(v) else None
+from synthesis.core.kind import Poses, pose_mm
 
 
 def frames(result, most: int) -> list[dict]:
@@ -27,7 +23,7 @@ def frames(result, most: int) -> list[dict]:
     step = -(-len(crank) // most)
     theta = [math.radians(c) for c in crank[::step]]
     joints = joint_positions(design, np.array(theta))
-    return [{name: [_rounded(xy[0, k]), _rounded(xy[1, k])] for name, xy in joints.items()}      # None: not finite
+    return [{name: [pose_mm(xy[0, k]), pose_mm(xy[1, k])] for name, xy in joints.items()}      # None: not finite
             for k in range(len(theta))]
 
 

@@ -90,6 +90,7 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
         nominal, worst = linear_worst(values, rule.lower, rule.upper, J, box)
         i_nom, i_lin = int(np.argmin(nominal)), int(np.argmin(worst))
         contrib = np.abs(J[i_lin]) * box
+        corner = _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)
         order = [j for j in np.argsort(-contrib) if contrib[j] > 0][:drivers]
         rows.append({
             "name": rule.name, "unit": rule.unit, "scale": rule.scale,
@@ -99,12 +100,12 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             "sensitivity": {key: float(J[i_nom, j]) for j, key in enumerate(lin.dmap.keys)},
             # the box's corner the linear stack-up puts this rule's worst at (sign of dg/dd at its worst sample,
             # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
-            "corner": [float(c) for c in _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)],
+            "corner": [float(c) for c in corner],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
             # every variable's linear change of the margin at that worst sample when it moves by +tol (its share of
             # the stack-up is the absolute value; the corner moves each variable the way that lowers the margin)
             "contributions": {lin.dmap.keys[j]: float(-np.sign(c) * contrib[j]) if c else 0.0
-                              for j, c in enumerate(_corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box))},
+                              for j, c in enumerate(corner)},
         })
         if lin.operating is not None:
             names, _, W, _ = lin.operating

@@ -30,11 +30,18 @@ NOT_ROBUST = {
 }
 
 
-def _box_text(spec) -> str:
+def _box_text(spec, scale: float | None = None, units: set | None = None) -> str:
+    """The spec's tolerance box in words ("±0.2 mm, ±0.3 deg, l3 ±0.1"); with ``scale``, every half-width times it,
+    named ("lengths ±0.0616 mm") and only the per-unit widths of ``units`` (those the box gives a variable)."""
     tol = spec.tolerance
-    parts = [f"±{tol.length:g} mm" for _ in [0] if tol.length] + [f"±{tol.angle:g} deg" for _ in [0] if tol.angle]
-    parts += [f"{k} ±{v:g}" for k, v in tol.variables.items()]
-    return ", ".join(parts) or "none"
+    parts = []
+    for width, unit, word in ((tol.length, "mm", "lengths"), (tol.angle, "deg", "angles")):
+        if width and scale is None:
+            parts.append(f"±{width:g} {unit}")
+        elif width and (units is None or unit in units):
+            parts.append(f"{word} ±{scale * width:.3g} {unit}")
+    parts += [f"{k} ±{v:g}" if scale is None else f"{k} ±{scale * v:.3g}" for k, v in tol.variables.items()]
+    return ", ".join(parts) or ("none" if scale is None else "")
 
 
 class _Resolver:
@@ -244,11 +251,8 @@ def breaking_text(rows: list[dict], where: str, spec, shown: int = 3) -> str | N
     held = [r for r in rows if r["nominal_margin"] >= 0]
     if held and len(held) == len(rows):
         k = min(r["linear_scale"] for r in held)
-        tol = spec.tolerance
         present = {c["unit"] for r in rows for c in r["contributions"]}    # the units the box gives a width to
-        box = ", ".join([f"lengths ±{k * tol.length:.3g} mm" for _ in [0] if tol.length and "mm" in present]
-                        + [f"angles ±{k * tol.angle:.3g} deg" for _ in [0] if tol.angle and "deg" in present]
-                        + [f"{n} ±{k * v:.3g}" for n, v in tol.variables.items()])
+        box = _box_text(spec, k, present)
         text += (f" Linear estimate (at this design, not a solve): the box scaled by {k:.2g} ({box}) is the largest "
                  f"uniform scale these rules can be held at.")
     return text
