@@ -323,3 +323,30 @@ def test_a_robust_grashof_any_path_is_held_and_read_on_the_spec_s_samples(tmp_pa
     for r in held:
         assert r["satisfied"] and 0 <= r["margin"] <= nominal[r["name"].removesuffix("@tolerance")] + 1e-9, r
     assert result.status in ("optimal", "feasible")
+
+
+def test_a_signal_while_the_answer_is_finished_keeps_every_start(tmp_path, monkeypatch):
+    """Ctrl-C after every start finished, while the kind finishes the answer (a robust solve's Monte-Carlo check,
+    the slow part of one): the run keeps its starts and their best as an interrupted result (exit 130, --resume),
+    and the interrupted result's finish does not start the Monte-Carlo again."""
+    from synthesis.core import interrupt
+    from synthesis.tolerance import analysis
+
+    path = tmp_path / "robust.toml"
+    path.write_text((LIBRARY / "picker" / "picker_double_crank_redesign.toml").read_text()
+                    + "\n[tolerance]\nlength = 0.1\nangle = 0.1\nsamples = 50\n")
+    calls = []
+
+    def interrupted_check(*args, **kwargs):
+        calls.append(1)
+        interrupt.simulate()             # the signal handler records the signal, then raises
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(interrupt, "_pending", None)
+    monkeypatch.setattr(analysis, "monte_carlo", interrupted_check)
+    with pytest.raises(interrupt.Interrupted) as caught:
+        run_solve(load_spec(path), starts=2, workers=1)
+    kept, reports, _ = caught.value.partial
+    assert caught.value.exit_code == 130 and len(reports) == 2 and len(calls) == 1
+    assert kept.status == "interrupted"
+    assert kept.to_json()["facts"]["tolerance"]["monte_carlo"]["samples"] == 0

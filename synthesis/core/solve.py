@@ -208,7 +208,12 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         with interrupt.deferred(reraise=False):
             kept = _result(kind, loaded, setting, run, "interrupted", None)
         raise Interrupted(interrupt.pending(), (kept, run.reports, ipopt_log(run.reports)))
-    result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
+    try:
+        result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
+    except KeyboardInterrupt as exc:          # stopped while the kind finished the answer (a robust solve's
+        with interrupt.deferred(reraise=False):   # Monte-Carlo check): every start is kept, as above
+            kept = _result(kind, loaded, setting, run, "interrupted", None)
+        raise Interrupted(interrupt.signal_of(exc), (kept, run.reports, ipopt_log(run.reports))) from None
     return result, run.reports, ipopt_log(run.reports)
 
 

@@ -14,6 +14,7 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
+from synthesis.core import interrupt
 from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
@@ -155,7 +156,11 @@ class RobustFinish:
                              np.zeros(n), np.eye(n))
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
-            mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
+            if interrupt.pending() is not None:     # an interrupted run keeps its starts now, not after a check
+                mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted "
+                      "(agrisynth tolerance RESULT runs it)", "pass_rate": None, "rules": {}}
+            else:
+                mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
             # auxiliaries are (fourbar_path's crank angles, design.ANSWER)
             design = {**best.outcome.details, **best.outcome.design, **design}
