@@ -21,3 +21,17 @@ def assembly_rule(d2: list, r3, r4, where: str) -> Rule:
         values += [d - ca.fabs(r3 - r4), r3 + r4 - d]
         rows += [(q - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - q, 0.0, None)]
     return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")
+
+
+def assembly_extremes_rule(d2_shortest: list, d2_longest: list, r3, r4, where: str) -> Rule:
+    """Closure over stretches of the crank's motion, each given by its shortest and its longest squared diagonal:
+    the loop closes all along a stretch iff  d_shortest >= |r3 - r4|  and  d_longest <= r3 + r4, so each bound is
+    a row only where it can bind (one row each, never the same row twice)."""
+    values, rows = [], []
+    for q in d2_shortest:
+        values.append(ca.sqrt(ca.fmax(q, 0.0)) - ca.fabs(r3 - r4))
+        rows.append((q - (r3 - r4) ** 2, 0.0, None))
+    for q in d2_longest:
+        values.append(r3 + r4 - ca.sqrt(ca.fmax(q, 0.0)))
+        rows.append(((r3 + r4) ** 2 - q, 0.0, None))
+    return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")

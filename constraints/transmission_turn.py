@@ -68,3 +68,11 @@ def transmission_sampled_rules(cos_mu: list, bounds: tuple) -> list[Rule]:
     lo, hi = bounds
     where, open_at = "over the crank's motion", "everywhere on the crank's motion"
     return [_min_rule(list(cos_mu), lo, where, open_at), _max_rule(list(cos_mu), hi, where, open_at)]
+
+
+def transmission_extremes_rules(cos_largest: list, cos_smallest: list, bounds: tuple) -> list[Rule]:
+    """Over stretches of the crank's motion, each given by cos mu where it is largest (mu smallest: the shortest
+    diagonal) and where it is smallest (mu largest): mu_min binds only at the first, mu_max only at the second."""
+    lo, hi = bounds
+    where, open_at = "over the crank's motion", "everywhere on the crank's motion"
+    return [_min_rule(list(cos_largest), lo, where, open_at), _max_rule(list(cos_smallest), hi, where, open_at)]

@@ -19,6 +19,7 @@ from synthesis.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_data, inex
 from synthesis.fourbar_path import nlp as path_nlp
 from synthesis.fourbar_path import screen
 from synthesis.fourbar_path.nlp import PathNLP
+from synthesis.fourbar_path.rules import EXTREMES
 from synthesis.fourbar_path.starts import DISTINCT, StartMaker, arc_fractions, is_closed_loop, points_at, refit_placement
 from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data
 from synthesis.kinematics.coupler_point import VARIABLES
@@ -135,19 +136,59 @@ def any_spec(order: bool = False) -> FourbarPathSpec:
     return validate(FourbarPathSpec, data, prefix="fourbar_path")
 
 
-def test_the_check_of_a_coarse_solve_sees_the_loop_open_between_targets():
+def _rows_hold(nlp: PathNLP, w: np.ndarray, sign: float = 1.0) -> bool:
+    """Every row of the NLP IPOPT is given holds at ``w`` (limits as transcribed, back-off included)."""
+    c = nlp.compiled
+    g = np.asarray(c.g_function(w, sign), dtype=float).ravel()
+    return bool(np.all(g >= c.t.lbg) and np.all(g <= c.t.ubg))
+
+
+def test_the_exact_motion_rows_see_the_loop_open_between_targets():
     """r1..r4 = 40, 30, 20, 25 close the loop only for |theta2| <= acos(0.1979) = 78.6 deg (d = |O'A| <= r3 + r4).
     Targets at 60, 70 and 300 deg close it, but the crank's motion 70 -> 300 deg passes 180 deg where it
-    is open; at -60, 0, 60 deg it is closed all the way.  The check uses the spec's samples of the motion."""
+    is open; at -60, 0, 60 deg it is closed all the way.  The NLP's rows are the exact form (no coarse stage),
+    two closure rows per gap and no sample of the motion."""
     nlp = PathNLP(any_spec(), seed=0)
-    assert nlp.coarse is not None and nlp.coarse.n_x == nlp.compiled.n_x
+    assert nlp.coarse is None and nlp.samples == EXTREMES
     design = np.array([40.0, 30.0, 20.0, 25.0, 5.0, 3.0, 0.0, 0.0, 0.0])
     z = nlp.nominal(design)
     assert math.degrees(math.acos((40 ** 2 + 30 ** 2 - 45 ** 2) / (2 * 40 * 30))) == pytest.approx(78.58, abs=0.01)
-    assert nlp.holds_every_sample(np.concatenate([z, np.radians([60.0, 70.0, 300.0])]), 1.0) is False
-    assert nlp.holds_every_sample(np.concatenate([z, np.radians([-60.0, 0.0, 60.0])]), 1.0) is True
-    # the coarse NLP has fewer rows than the spec's samples give
-    assert nlp.coarse.t.g.numel() < nlp.compiled.t.g.numel()
+    assert not _rows_hold(nlp, np.concatenate([z, np.radians([60.0, 70.0, 300.0])]))
+    assert _rows_hold(nlp, np.concatenate([z, np.radians([-60.0, 0.0, 60.0])]))
+    # the same gap the other way round (clockwise crank, 300 -> 70 deg, passing 180 again) and one that wraps past
+    # 360 (300 -> 420 = 60 deg, through 0: closed all the way)
+    assert not _rows_hold(nlp, np.concatenate([z, np.radians([60.0, 300.0, 70.0])]))
+    assert _rows_hold(nlp, np.concatenate([z, np.radians([300.0, 340.0, 420.0])]))
+    assert nlp.compiled.t.g.numel() == 2 * 2     # assembly: one row per gap at its shortest, one at its longest diagonal
+
+
+def test_the_exact_motion_extremes_are_the_worst_of_a_dense_sampling():
+    """The exact form's rule values (each gap at the two crank angles of rules.motion_extremes) equal the worst of
+    3,000 samples per gap, for random linkages and random crank angles spanning up to 1.5 turns per gap, either
+    way: closure margins and transmission angles agree to 1e-3 mm / deg (samples 3e-3 rad apart miss a smooth
+    extreme by O(h^2): up to ~1e-4 here), the exact margin is never above the sampled one, and a rule
+    the samples see broken the exact form sees broken."""
+    from synthesis.fourbar_path.rules import path_rules
+
+    data = truth_data(0, 4, timed=False)
+    data["rules"] = {"grashof": "any", "order": False, "transmission_angle": [30.0, 150.0]}
+    spec = validate(FourbarPathSpec, data, prefix="fourbar_path")
+    rng = np.random.default_rng(19)
+    compared = 0
+    for _ in range(300):
+        v = dict(zip(VARIABLES, [*rng.uniform(5.0, 60.0, 4), 1.0, 2.0, 0.0, 0.0, 0.0]))
+        thetas = list(np.cumsum(rng.uniform(-3.0 * math.pi, 3.0 * math.pi, 4)))
+        exact = {r.name: r.record() for r in path_rules(spec, v, thetas, 1.0, EXTREMES)}
+        dense = {r.name: r.record() for r in path_rules(spec, v, thetas, 1.0, 3000)}
+        assert exact.keys() == dense.keys()
+        for name, e in exact.items():
+            d = dense[name]
+            if e.margin is None or d.margin is None:
+                continue
+            compared += 1
+            assert e.margin == pytest.approx(d.margin, abs=1e-3), (name, v, thetas)
+            assert e.margin <= d.margin + 1e-12
+    assert compared > 300
 
 
 def test_a_small_inexact_problem_solves_within_the_rules():

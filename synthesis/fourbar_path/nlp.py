@@ -34,7 +34,7 @@ import numpy as np
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
-from synthesis.fourbar_path.rules import path_rules
+from synthesis.fourbar_path.rules import EXTREMES, path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_point, design_parameters
 from synthesis.spec.common import FreeVariable
@@ -71,7 +71,11 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return offset, scale
 
 
-#: samples per gap between targets of the first solve of grashof = "any" (0: the spec's samples only)
+#: grashof = "any": the NLP holds the closure and transmission rows of the motion between targets exactly, at each
+#: gap's two extremes (rules.motion_extremes), instead of at the spec's samples (issue 19, fourth pass)
+EXACT_MOTION = True
+#: samples per gap between targets of the first solve of grashof = "any" when EXACT_MOTION is off (0: the spec's
+#: samples only)
 COARSE = 4
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
@@ -94,7 +98,7 @@ PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
 #: (nominal units: target sizes)
 PLACEMENT_ROOM = 1e-6
 #: IPOPT's tolerances for the free-timing target sets of >= SCREEN_MIN_TARGETS points (None: the preset's)
-SCREEN_TOL: tuple[float, float] | None = None
+SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 
 
 def placement(anchors: list, units: list, targets: np.ndarray) -> tuple:
@@ -186,11 +190,13 @@ class PathNLP:
             _ = self.reference
         self.lbx, self.ubx = lbx, ubx
         self._full = None
+        # the rows of grashof = "any"'s motion: exact (each gap at its extremes) or the spec's samples
+        self.samples = EXTREMES if EXACT_MOTION and spec.rules.grashof == "any" else spec.solver.samples
         # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
         # keep the answer when every row of the spec's samples holds there (full_rows); else re-solve
         # with those rows from it
         self.coarse = None
-        if (not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
+        if (not EXACT_MOTION and not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
                 and spec.solver.samples > COARSE):
             self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS, watched=self.watched)
             full = path_rules(spec, v, thetas, sign, spec.solver.samples)
@@ -199,7 +205,7 @@ class PathNLP:
             self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
             self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
         else:
-            self._full = CompiledNLP(problem(spec.solver.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
+            self._full = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.varpro = None
@@ -244,7 +250,7 @@ class PathNLP:
         z_lin = ca.vertcat(*((v[self.names[i]] - self.offset[i]) / self.scale[i] for i in linear))
         rows = [(z_lin[k], float(lbx[i]), float(ubx[i])) for k, i in enumerate(linear)]   # placement in its bounds
         decision = ca.vertcat(xr, theta)
-        samples = COARSE if self.coarse is not None else spec.solver.samples
+        samples = COARSE if self.coarse is not None else self.samples
         problem = Problem(
             "fourbar_path_varpro", decision,
             np.concatenate([lbx[kept], lbx[9:]]), np.concatenate([ubx[kept], ubx[9:]]),
@@ -265,7 +271,7 @@ class PathNLP:
     def compiled(self) -> CompiledNLP:
         """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
         if self._full is None:
-            self._full = CompiledNLP(self._problem_of(self.spec.solver.samples), self.elastic, scaling=OWN_UNITS,
+            self._full = CompiledNLP(self._problem_of(self.samples), self.elastic, scaling=OWN_UNITS,
                                      watched=self.watched)
         return self._full
 

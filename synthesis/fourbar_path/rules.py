@@ -13,21 +13,25 @@ What each rule reads:
                               or at every sample of the motion (grashof = "any")
     sequence                  the targets met in order within one turn (free timing, [rules] order)
 
-The only sampled rules are those of grashof = "any": the NLP samples ``[solver] samples`` angles
-per gap between targets, the re-check 10x more.
+The only sampled rules are those of grashof = "any": the check samples ``[solver] samples`` angles per gap
+between targets, the re-check 10x more.  The NLP holds them exactly instead (``samples = EXTREMES``): both rules
+read the crank angle only through cos(theta2) (d^2 = r1^2 + r2^2 - 2 r1 r2 cos theta2, cos mu falls as d^2 grows),
+so over a gap they are extreme where cos(theta2) is, at the two angles of :func:`motion_extremes`.
 """
 
 from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 
 from constraints import Rule, not_evaluated
-from constraints.assembly import assembly_rule
+from constraints.assembly import assembly_extremes_rule, assembly_rule
 from constraints.grashof_class import grashof_class_rule
 from constraints.sequence import sequence_rule
-from constraints.transmission_turn import transmission_sampled_rules, transmission_turn_rules
+from constraints.transmission_turn import (transmission_extremes_rules, transmission_sampled_rules,
+                                           transmission_turn_rules)
 from synthesis.kinematics.coupler_point import cos_transmission
 from synthesis.kinematics.fourbar import diagonal_sq
 from synthesis.spec.fourbar_path import FourbarPathSpec
@@ -41,6 +45,30 @@ def segment_angles(thetas: list, per_segment: int) -> list:
     out = [thetas[0]]
     for a, b in zip(thetas, thetas[1:]):
         out += [a + (b - a) * k / per_segment for k in range(1, per_segment + 1)]
+    return out
+
+
+#: ``samples`` of :func:`path_rules` for the exact form of the sampled rules (the NLP's): each gap at its extremes
+EXTREMES = 0
+
+
+def motion_extremes(thetas: list) -> list:
+    """Per gap between consecutive targets, the two crank angles of the motion from one to the next where
+    cos(theta2) is largest and smallest: the point of the gap [lo, hi] nearest to 2 pi k (resp. pi + 2 pi k), k
+    the multiple nearest to the gap's middle.  When the gap contains such a point (gaps shorter than a turn contain
+    at most one, then the one nearest the middle) that point is the extreme (cos = +1 / -1); otherwise the end
+    nearer to it is, because on a stretch between two such points cos is monotone towards each end.  Every rule
+    of the motion (closure, transmission) is monotone in cos(theta2), so these two angles per gap hold it exactly
+    where sampling holds it only at the samples.  The angles are continuous in the targets' angles, with a
+    continuous derivative where they leave an end (d cos/d theta = 0 there); floats or CasADi symbols."""
+    symbolic = any(isinstance(t, (ca.SX, ca.MX)) for t in thetas)
+    fmin, fmax, floor = (ca.fmin, ca.fmax, ca.floor) if symbolic else (min, max, math.floor)
+    out = []
+    for a, b in zip(thetas, thetas[1:]):
+        lo, hi, mid = fmin(a, b), fmax(a, b), 0.5 * (a + b)
+        for phase in (0.0, math.pi):
+            nearest = phase + 2.0 * math.pi * floor((mid - phase) / (2.0 * math.pi) + 0.5)
+            out.append(fmin(fmax(nearest, lo), hi))
     return out
 
 
@@ -63,7 +91,7 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
     if thetas is None:
         motion = list(np.linspace(0.0, 2.0 * math.pi, TURN_SAMPLES, endpoint=False))
     elif lim.grashof == "any" and len(thetas) > 1:
-        motion = segment_angles(thetas, samples)
+        motion = segment_angles(thetas, samples) if samples != EXTREMES else None
     else:
         motion = thetas
     if lim.grashof != "any":
@@ -73,6 +101,16 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
         if lim.transmission_angle is not None:
             rules += transmission_turn_rules(cos_transmission(0.0, r1, r2, r3, r4),
                                              cos_transmission(math.pi, r1, r2, r3, r4), lim.transmission_angle)
+    elif motion is None:            # the exact form: each gap's shortest and longest diagonal (motion_extremes)
+        extremes = motion_extremes(thetas)
+        nearest, farthest = extremes[0::2], extremes[1::2]
+        rules.append(assembly_extremes_rule([diagonal_sq(th, r1, r2) for th in nearest],
+                                            [diagonal_sq(th, r1, r2) for th in farthest], r3, r4,
+                                            where="at the targets and between them"))
+        if lim.transmission_angle is not None:
+            rules += transmission_extremes_rules([cos_transmission(th, r1, r2, r3, r4) for th in nearest],
+                                                 [cos_transmission(th, r1, r2, r3, r4) for th in farthest],
+                                                 lim.transmission_angle)
     else:
         rules.append(assembly_rule([diagonal_sq(th, r1, r2) for th in motion], r3, r4,
                                    where="at the targets and between them" if thetas is not None else "over a turn"))

@@ -79,6 +79,35 @@ def sample_shapes(rng: np.random.Generator, n: int, grashof: str) -> np.ndarray:
     return out[valid]
 
 
+#: the share of the shapes drawn in units of the crank (sample_long_shapes) rather than of the frame
+LONG_SHARE = 0.5
+#: their longest link, in crank lengths
+LONG = 30.0
+
+
+def sample_long_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 6) crank-rockers drawn in units of the crank (r2 = 1), returned normalised to r1 = 1.  The frame-unit
+    draw above rarely makes a crank much shorter than the frame, so it rarely proposes the linkages a wide box
+    favours: a short crank driving long links (frame and rocker 10-17 cranks on the inexact set's best designs,
+    the frame at its upper bound, close to a slider-crank).  Here two links p, q are log-uniform in [1.2, LONG]
+    cranks, the third l uniform in [max(p, q), p + q - 1] (the crank shortest and s + l <= p + q: Grashof), the
+    three dealt to frame, coupler and rocker in a random order; the coupler point polar about the crank pin,
+    its radius log-uniform in [0.3, LONG] cranks."""
+    p = _log_uniform(rng, 1.2, LONG, n)
+    q = _log_uniform(rng, 1.2, LONG, n)
+    lo = np.maximum(p, q)
+    hi = p + q - 1.0 - 0.02
+    l = lo + rng.random(n) * np.maximum(hi - lo, 0.0)
+    links = np.column_stack([l, p, q])
+    order = np.argsort(rng.random((n, 3)), axis=1)               # a random deal of (l, p, q) to (r1, r3, r4)
+    links = np.take_along_axis(links, order, axis=1)
+    r1, r3, r4 = links[:, 0], links[:, 1], links[:, 2]
+    rad = _log_uniform(rng, 0.3, LONG, n)
+    ang = rng.uniform(0.0, TWO_PI, n)
+    out = np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
+    return out[hi > lo]
+
+
 def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
     """(crank angles (samples,), complex coupler curves (S, samples)) of the shapes in their normalised
     frame (O = 0, O' = 1); NaN where the loop does not close."""
@@ -156,13 +185,18 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
     """(designs r1..theta0 in spec units, residual mm^2), best first, of the screened shapes that fit in
     the bounds (see the module docstring)."""
     rng = np.random.default_rng([seed, SEED_TAG])
-    blocks, count = [], 0
-    for _ in range(40):                  # draw until `shapes` valid ones (a bounded number of draws)
-        blocks.append(sample_shapes(rng, shapes, grashof))
-        count += len(blocks[-1])
-        if count >= shapes:
-            break
-    cand = np.concatenate(blocks)[:shapes]
+    long = int(round(LONG_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
+    cand = []
+    for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long),
+                           (lambda k: sample_long_shapes(rng, k), long)):
+        blocks, count = [], 0
+        for _ in range(40):                  # draw until `wanted` valid ones (a bounded number of draws)
+            if count >= wanted:
+                break
+            blocks.append(family(wanted))
+            count += len(blocks[-1])
+        cand += [np.concatenate(blocks)[:wanted]] if blocks else []
+    cand = np.concatenate(cand)
     _, curves = shape_curves(cand, branch, GRID)
     ok = np.all(np.isfinite(curves), axis=1)
     cand, curves = cand[ok], curves[ok]
