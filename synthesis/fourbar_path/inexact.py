@@ -173,7 +173,9 @@ def inexact_spec(name: str, solver: dict | None = None) -> LoadedSpec:
 #: (not run: see INEXACT.md).
 BEST_KNOWN: dict[str, float] = {
     "ellipse20": 1.0486382171183883, "egg16": 0.46122510610392164, "triangle18": 12.480514291299421,
-    "d_shape22": 10.547337872207915, "kidney25": 12.127710074402076, "square24": 137.6917138934006,
+    # kidney25 and stroke_lift14: lowered on 2026-11-25 by runs of issue 19's fourth and third pass (every rule holding
+    # on the fine grid; INEXACT.md)
+    "d_shape22": 10.547337872207915, "kidney25": 11.854077742761099, "square24": 137.6917138934006,
     "noisy_loop20": 2.3719628395676278, "dwell_arc15": 0.06481626836102779, "s_curve12": 2.183892490339011,
-    "stroke_lift14": 0.25931586915483357,
+    "stroke_lift14": 0.2592664886434775,
 }

@@ -4,14 +4,15 @@
     over       r1 r2 r3 r4 rcx rcy x0 y0 theta0  (+ theta2_1..theta2_N when the timing is free)
     subject to the spec's rules (rules.path_rules): Grashof class (3 linear rows), loop closure at the
                targets, transmission angle (2 exact rows over a turn), sequence of the angles (linear,
-               free timing); grashof = "any": closure and transmission sampled along the motion
+               free timing); grashof = "any": closure and transmission along the motion between targets,
+               exactly (two rows per gap at its extreme crank angles, rules.motion_extremes)
 
 The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
-grashof = "any" is solved with COARSE samples of the motion per gap first; the answer is kept when
-every row of the spec's samples holds there, else re-solved from it with every row (free timing: only when its
-path error is within RESOLVE_WITHIN x the reference below).  Free timing: every start is watched
+grashof = "any" holds its motion rows exactly (EXACT_MOTION; the study switch off restores the second pass's
+solve with COARSE samples of the motion per gap first, re-solved with the spec's samples when one of them fails).
+Target sets the screen serves (free timing, >= 12 points) are solved to IPOPT tol SCREEN_TOL.  Free timing: every start is watched
 (CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
 *reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
 seed, the same in every worker, so the cut is the same for any number of workers).  Why each of
@@ -97,7 +98,9 @@ PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
 #: the projected answer is kept without the full NLP's polish when its placement is this far inside its bounds
 #: (nominal units: target sizes)
 PLACEMENT_ROOM = 1e-6
-#: IPOPT's tolerances for the free-timing target sets of >= SCREEN_MIN_TARGETS points (None: the preset's)
+#: IPOPT's tolerances for the free-timing target sets of >= SCREEN_MIN_TARGETS points (None: the preset's 1e-12,
+#: below the round-off floor of the gradient of an objective of ~1 mm^2: the best starts then ended at IPOPT's
+#: acceptable level; 1e-9: 7 of 10 best starts Solve_Succeeded against 5 -- INEXACT.md, fourth pass)
 SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 
 
