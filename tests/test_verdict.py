@@ -303,15 +303,14 @@ def test_a_tolerance_on_a_fixed_fourbar_path_variable_is_refused_not_dropped(tmp
 
 
 def test_a_robust_grashof_any_path_is_held_and_read_on_the_spec_s_samples(tmp_path):
-    """grashof = "any" samples closure and transmission between the targets; its solve strategy is a coarse first
-    stage.  Under a tolerance box the whole problem is solved and read on the spec's samples (the worst cases of the
-    sampled rules over all of them), at the answer's crank angles: every @tolerance row holds and is no better than
-    its rule's own margin there."""
+    """grashof = "any" holds closure and transmission between the targets (exactly, at each gap's extremes: the
+    rows' crank angles are functions of the targets' ones).  Under a tolerance box the whole problem is solved and
+    read at the answer's crank angles: every @tolerance row holds and is no better than its rule's own margin
+    there."""
     text = (LIBRARY / "fourbar_path" / "picking_arc.toml").read_text()
     assert 'grashof = "crank_rocker"' in text
     path = tmp_path / "any.toml"
-    # 8 samples per gap (the default 36 makes this a 40 s test): the NLP's own samples are still more than the
-    # coarse first stage's 4, so a robust NLP built on the coarse stage would read fewer rows than the spec's
+    # 8 samples per gap for the check and re-check (the default 36 makes this a slower test)
     path.write_text(text.replace('grashof = "crank_rocker"', 'grashof = "any"').replace("seed = 0", "seed = 0\nsamples = 8")
                     + "\n[tolerance]\nlength = 0.5\nangle = 0.05\nsamples = 20\nseed = 0\n")
     loaded = load_spec(path)

@@ -272,7 +272,8 @@ class PathNLP:
 
     @property
     def compiled(self) -> CompiledNLP:
-        """The NLP with every row of the spec's samples (built on first use when a coarse one exists)."""
+        """The NLP with every row: the motion of grashof = "any" exact, or (EXACT_MOTION off) on the spec's samples;
+        built on first use when a coarse one exists."""
         if self._full is None:
             self._full = CompiledNLP(self._problem_of(self.samples), self.elastic, scaling=OWN_UNITS,
                                      watched=self.watched)

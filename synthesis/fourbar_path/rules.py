@@ -8,9 +8,9 @@ What each rule reads:
     grashof                   the class's three linear slacks in r1..r4 (crank-rocker / double-crank)
     assembly                  |r3 - r4| <= |O'A| <= r3 + r4 at every target (a full turn: the Grashof class
                               then closes the loop everywhere), or along the crank's motion from target
-                              to target (grashof = "any", sampled)
+                              to target (grashof = "any": sampled in the check, exact in the NLP)
     transmission_angle_min/max  cos mu at theta2 = 0 and 180 deg, its exact extremes over a full turn;
-                              or at every sample of the motion (grashof = "any")
+                              or along the motion (grashof = "any": as assembly)
     sequence                  the targets met in order within one turn (free timing, [rules] order)
 
 The only sampled rules are those of grashof = "any": the check samples ``[solver] samples`` angles per gap
@@ -59,8 +59,10 @@ def motion_extremes(thetas: list) -> list:
     at most one, then the one nearest the middle) that point is the extreme (cos = +1 / -1); otherwise the end
     nearer to it is, because on a stretch between two such points cos is monotone towards each end.  Every rule
     of the motion (closure, transmission) is monotone in cos(theta2), so these two angles per gap hold it exactly
-    where sampling holds it only at the samples.  The angles are continuous in the targets' angles, with a
-    continuous derivative where they leave an end (d cos/d theta = 0 there); floats or CasADi symbols."""
+    where sampling holds it only at the samples.  The rows' values are continuous in the targets' angles, with a
+    continuous derivative where an extreme leaves an end (d cos/d theta = 0 there); the angle jumps from one end to
+    the other where the nearest multiple switches (both ends then equally near, cos equal there), a kink of the
+    row -- the max(cos a, cos b) kink the rule itself has over a gap with no such point.  Floats or CasADi symbols."""
     symbolic = any(isinstance(t, (ca.SX, ca.MX)) for t in thetas)
     fmin, fmax, floor = (ca.fmin, ca.fmax, ca.floor) if symbolic else (min, max, math.floor)
     out = []

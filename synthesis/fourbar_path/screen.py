@@ -96,16 +96,15 @@ def sample_long_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     p = _log_uniform(rng, 1.2, LONG, n)
     q = _log_uniform(rng, 1.2, LONG, n)
     lo = np.maximum(p, q)
-    hi = p + q - 1.0 - 0.02
-    l = lo + rng.random(n) * np.maximum(hi - lo, 0.0)
+    hi = p + q - 1.0 - 0.02           # > lo: p, q >= 1.2
+    l = lo + rng.random(n) * (hi - lo)
     links = np.column_stack([l, p, q])
     order = np.argsort(rng.random((n, 3)), axis=1)               # a random deal of (l, p, q) to (r1, r3, r4)
     links = np.take_along_axis(links, order, axis=1)
     r1, r3, r4 = links[:, 0], links[:, 1], links[:, 2]
     rad = _log_uniform(rng, 0.3, LONG, n)
     ang = rng.uniform(0.0, TWO_PI, n)
-    out = np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
-    return out[hi > lo]
+    return np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
 
 
 def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:

@@ -179,8 +179,9 @@ class SolverSection(MultistartSettings):
         "monotone", description="IPOPT's barrier update: monotone (default: more starts reach the optimum "
                                 "when the targets go round the whole coupler curve) or adaptive (with "
                                 "max_iter = 3000, recovers targets on a 120 deg arc that monotone misses)")
-    samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion for sampled rules "
-                                                         "(grashof = \"any\"); the re-check is 10x finer")
+    samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion per gap for the check of "
+                                                         "the sampled rules (grashof = \"any\"; the solve holds "
+                                                         "them exactly); the re-check is 10x finer")
 
 
 class FourbarPathSpec(ProblemSpec):
