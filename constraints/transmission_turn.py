@@ -65,9 +65,7 @@ def transmission_turn_rules(cos_at_0, cos_at_pi, bounds: tuple) -> list[Rule]:
 
 def transmission_sampled_rules(cos_mu: list, bounds: tuple) -> list[Rule]:
     """When the crank does not turn fully: cos mu at every sampled crank angle of its motion."""
-    lo, hi = bounds
-    where, open_at = "over the crank's motion", "everywhere on the crank's motion"
-    return [_min_rule(list(cos_mu), lo, where, open_at), _max_rule(list(cos_mu), hi, where, open_at)]
+    return transmission_extremes_rules(cos_mu, cos_mu, bounds)
 
 
 def transmission_extremes_rules(cos_largest: list, cos_smallest: list, bounds: tuple) -> list[Rule]:
