@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 #: methods that are not IPOPT: one run per case whatever ``repeats`` says (their budgets bound them)
-PEERS = {"slsqp", "differential_evolution"}
+PEERS = {"slsqp", "differential_evolution", "differential_evolution_equal_budget"}
 FLOOR = 1e-16      # log axes: a gap or violation of 0 is drawn here
 NOT_REACHED = "n/a (target not reached)"
 TARGET_NOT_REACHED = "target not reached"

@@ -123,3 +123,27 @@ def test_partial_arc_free_timing_study():
         if solver:
             assert max(bests) < 1e-8 and min(hits) >= 1
     print("\n".join(lines))
+
+
+def test_differential_evolution_at_equal_budget_stops_at_the_multistart_cpu_seconds():
+    """The equal-budget peer takes its budget from the multistart run of the same round (the list it appends
+    to) and stops at the first generation past it: a budget of 0 s is one generation, unpolished, and the
+    design it returns is re-checked like any other."""
+    from synthesis.fourbar_path.bench import DE_EQUAL_BUDGET, case_for, differential_evolution_method
+
+    loaded = truth_spec(1, 6, False, {"seed": 0})
+    with pytest.raises(RuntimeError, match="after the IPOPT multistart"):
+        differential_evolution_method(loaded, [])(0.0)
+    run = differential_evolution_method(loaded, [0.0])(0.0)
+    assert run.details["generations"] == 1 and run.details["budget_cpu_s"] == 0.0
+    assert "callback" in run.details["message"]
+    # the objective returned is the decoded design's, evaluated again by the kind's own check
+    from synthesis.fourbar_path.check import evaluate
+
+    design, crank = run.details["design"], run.details["crank_deg"]
+    assert len(crank) == 6 and run.objective > 1e-8          # one generation does not find the exact fit
+    again = evaluate(loaded.model, design, crank, timing="solved").sum_sq
+    assert again == pytest.approx(run.objective, rel=1e-9) if np.isfinite(again) else run.objective >= 1e29
+    # the multistart runs first in its case (its CPU seconds are the peer's budget)
+    assert list(case_for(loaded, best_known=0.0, equal_budget=True).methods) == [
+        "ipopt_multistart", "differential_evolution", DE_EQUAL_BUDGET]

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import resource
 import time
 from pathlib import Path
 
@@ -58,6 +59,7 @@ BIG = 1e30                          # objective where the loop does not close (D
 REFERENCE_SEED_OFFSET = 1000        # the reference solve's seed: the spec's seed + this
 TURN = 360.0 * (1.0 - 1e-12)         # deg: the span the DE gap weights share
 SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
+DE_EQUAL_BUDGET = "differential_evolution_equal_budget"   # its method name (a peer: one run per case)
 INEXACT_WORKERS = 2                 # issue 19's goal is stated for 2 cores (the answer is the same for any count)
 
 
@@ -77,12 +79,22 @@ def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float])
 
 # ---------------------------------------------------------------------------- IPOPT multistart
 
-def ipopt_multistart(loaded: LoadedSpec, workers: int = 1):
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its reaped children (the multistart's worker processes: the pool
+    is shut down and waited for at the end of every solve)."""
+    me, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
+
+
+def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | None = None):
+    """The multistart as ``agrisynth solve`` runs it.  ``spent``: each run appends its CPU seconds (every
+    worker's), the budget of differential_evolution at equal budget."""
     def run(target: float) -> MethodRun:
         spec = loaded.model
         solver = spec.solver.model_copy(update={"stop_at_objective": target})
         staged = dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver}))
         trace: list[tuple[float, float]] = []
+        cpu0 = cpu_seconds()
         t0 = time.perf_counter()
 
         def on_start(report, best) -> None:
@@ -90,13 +102,16 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1):
                 trace.append((time.perf_counter() - t0, best.outcome.objective))
 
         result, reports, _ = run_solve(kinds.get("fourbar_path"), staged, workers=workers, on_start=on_start)
+        cpu = cpu_seconds() - cpu0
+        if spent is not None:
+            spent.append(cpu)
         s = result.solver
         objective, violation = result.objective["value"], result.fine_grid_worst_violation
         return MethodRun(math.inf if objective is None else objective, math.inf if violation is None else violation,
                          trace, {"starts": s["starts"], "starts_run": s["starts_run"],
                                  "starts_needed": s["starts_needed"], "best_start": s["best_start"],
                                  "status": result.status, "return_status": s["return_status"],
-                                 "workers": workers,
+                                 "workers": workers, "cpu_s": cpu,
                                  "median_iterations": float(np.median([r.outcome.iterations for r in reports]))})
     return run
 
@@ -191,14 +206,23 @@ class DEProblem:
         return design, [float(a) for a in self.crank_deg(x[:, None])[:, 0]]
 
 
-def differential_evolution_method(loaded: LoadedSpec):
+def differential_evolution_method(loaded: LoadedSpec, budget: list[float] | None = None):
+    """scipy's differential_evolution on the spec (DEProblem), stopped at the target.
+
+    ``budget``: equal budget -- the list the IPOPT multistart of the same case appends its CPU seconds to
+    (ipopt_multistart's ``spent``; it runs first in every round of the bench).  DE then also stops when its
+    own CPU seconds reach the latest of them, with no generation limit and no polish (scipy's polish runs
+    after the stop and would spend past the budget); the result is DE's best member at that moment."""
     spec = loaded.model
     problem = DEProblem(spec)
 
     def run(target: float) -> MethodRun:
         trace: list[tuple[float, float]] = []
         evaluated = [0]         # designs whose objective was computed (scipy's nfev counts vectorised calls)
-        t0 = time.perf_counter()
+        allowed = None if budget is None else (budget[-1] if budget else None)
+        if budget is not None and allowed is None:
+            raise RuntimeError("differential_evolution at equal budget runs after the IPOPT multistart of its case")
+        t0, cpu0 = time.perf_counter(), time.process_time()
 
         def objective(x: np.ndarray) -> np.ndarray:
             f = problem.objective(x)
@@ -207,6 +231,8 @@ def differential_evolution_method(loaded: LoadedSpec):
 
         def callback(intermediate_result) -> bool:
             trace.append((time.perf_counter() - t0, float(intermediate_result.fun)))
+            if allowed is not None and time.process_time() - cpu0 >= allowed:
+                return True
             return bool(intermediate_result.fun <= target and _feasible(intermediate_result.x))
 
         def _feasible(x) -> bool:
@@ -219,29 +245,37 @@ def differential_evolution_method(loaded: LoadedSpec):
                     return False
             return True
 
+        limits = {} if allowed is None else {"maxiter": 10 ** 9, "polish": False}
         res = differential_evolution(objective, problem.bounds(), constraints=problem.constraints(),
                                      vectorized=True, updating="deferred", rng=spec.solver.seed,
-                                     callback=callback)
+                                     callback=callback, **limits)
         design, crank = problem.decode(res.x)
         fun = float(problem.objective(res.x[:, None])[0])
         trace.append((time.perf_counter() - t0, fun))
         return MethodRun(fun, worst_violation(spec, design, crank), trace,
                          {"generations": int(res.nit), "designs_evaluated": evaluated[0], "scipy_nfev": int(res.nfev),
-                          "message": str(res.message),
+                          "message": str(res.message), "cpu_s": time.process_time() - cpu0,
+                          "budget_cpu_s": allowed,
                           "design": design, "crank_deg": crank})
     return run
 
 
 # ---------------------------------------------------------------------------- the cases
 
-def case_for(loaded: LoadedSpec, best_known=None, tolerance=None, note: str = "", workers: int = 1) -> BenchCase:
+def case_for(loaded: LoadedSpec, best_known=None, tolerance=None, note: str = "", workers: int = 1,
+             equal_budget: bool = False) -> BenchCase:
+    """IPOPT multistart (the reference) and differential evolution at its default budget; ``equal_budget``:
+    also differential evolution given the CPU seconds the multistart spent in the same round."""
     if best_known is None:
         best_known = lambda: reference_objective(loaded)  # noqa: E731 - untimed, once per case
     if tolerance is None:
         tolerance = lambda best: max(SYNTHETIC_TOLERANCE, LIBRARY_RELATIVE_TOLERANCE * abs(best))  # noqa: E731
-    return BenchCase(problem=loaded.name, kind="fourbar_path",
-                     methods={"ipopt_multistart": ipopt_multistart(loaded, workers),
-                              "differential_evolution": differential_evolution_method(loaded)},
+    spent: list[float] = []
+    methods = {"ipopt_multistart": ipopt_multistart(loaded, workers, spent),
+               "differential_evolution": differential_evolution_method(loaded)}
+    if equal_budget:
+        methods[DE_EQUAL_BUDGET] = differential_evolution_method(loaded, spent)
+    return BenchCase(problem=loaded.name, kind="fourbar_path", methods=methods,
                      best_known=best_known, tolerance=tolerance, note=note)
 
 
@@ -267,5 +301,6 @@ def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
     INEXACT_WORKERS workers; best known = the best objective any recorded run found (inexact.BEST_KNOWN),
     else (not yet recorded) the untimed reference multistart of a library spec."""
     return [case_for(inexact_spec(n, {"seed": seed}), best_known=BEST_KNOWN.get(n),
-                     note="inexact target (issue 19): best known from the cross-check runs (inexact.BEST_KNOWN)",
-                     workers=INEXACT_WORKERS) for n in (names or NAMES)]
+                     note="inexact target (issue 19): best known from the cross-check runs (inexact.BEST_KNOWN); "
+                          f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
+                     workers=INEXACT_WORKERS, equal_budget=True) for n in (names or NAMES)]
