@@ -1,5 +1,5 @@
-"""fourbar_path on inexact targets (issue 19): the problem set, the start heuristics, the coarse-then-checked
-solve of grashof = "any", a small solve within the rules, the same answer for any
+"""fourbar_path on inexact targets (issue 19): the problem set, the start heuristics, the exact motion rows
+of grashof = "any", a small solve within the rules, the same answer for any
 number of workers.  The timed study over the set is a benchmark (`pytest -m benchmark`); the figures are
 in problems/fourbar_path/INEXACT.md."""
 
@@ -149,7 +149,7 @@ def test_the_exact_motion_rows_see_the_loop_open_between_targets():
     is open; at -60, 0, 60 deg it is closed all the way.  The NLP's rows are the exact form (no coarse stage),
     two closure rows per gap and no sample of the motion."""
     nlp = PathNLP(any_spec(), seed=0)
-    assert nlp.coarse is None and nlp.samples == EXTREMES
+    assert nlp.samples == EXTREMES
     design = np.array([40.0, 30.0, 20.0, 25.0, 5.0, 3.0, 0.0, 0.0, 0.0])
     z = nlp.nominal(design)
     assert math.degrees(math.acos((40 ** 2 + 30 ** 2 - 45 ** 2) / (2 * 40 * 30))) == pytest.approx(78.58, abs=0.01)

@@ -10,8 +10,8 @@
 The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
-grashof = "any" holds its motion rows exactly (EXACT_MOTION; the study switch off restores the second pass's
-solve with COARSE samples of the motion per gap first, re-solved with the spec's samples when one of them fails).
+grashof = "any" holds its motion rows exactly (rules.motion_extremes; they replaced the second pass's coarse samples
+of the motion re-solved on the spec's samples, removed since: INEXACT.md, fourth pass).
 Target sets the screen serves (free timing, >= 12 points) are solved to IPOPT tol SCREEN_TOL.  Free timing: every start is watched
 (CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
 *reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
@@ -72,21 +72,12 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return offset, scale
 
 
-#: grashof = "any": the NLP holds the closure and transmission rows of the motion between targets exactly, at each
-#: gap's two extremes (rules.motion_extremes), instead of at the spec's samples (issue 19, fourth pass)
-EXACT_MOTION = True
-#: samples per gap between targets of the first solve of grashof = "any" when EXACT_MOTION is off (0: the spec's
-#: samples only)
-COARSE = 4
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
 #: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration k of each (k, factor) a start
 #: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
 #: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count
 CUTS = ((30, 1e4), (200, 1.0), (400, 0.6))
-#: grashof = "any": a coarse answer that fails a row of the spec's samples is re-solved with every row only when
-#: its path error is at most this x the reference (an answer above the best screened start's cannot be the best)
-RESOLVE_WITHIN = 1.0
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
@@ -129,7 +120,6 @@ class PathNLP:
 
     def __init__(self, spec: FourbarPathSpec, seed: int = 0, elastic: bool = False):
         self.spec = spec
-        self.elastic = elastic
         self.names = list(VARIABLES)
         self.bounds = np.array(spec.bounds_array(), dtype=float)
         self.init = np.array([spec.design_values()[n] for n in self.names], dtype=float)
@@ -181,7 +171,6 @@ class PathNLP:
                 x_units=[""] * 9 + ["rad"] * self.n_theta, objective_unit="", operating=operating)
             return out
 
-        self._problem_of = problem
         self.f_unit = f_unit
         self.starts = StartMaker(spec, seed)
         # the early cut: free timing, not elastic; its reference is the best screened start's path error, screened
@@ -192,23 +181,10 @@ class PathNLP:
         if self.cut:
             _ = self.reference
         self.lbx, self.ubx = lbx, ubx
-        self._full = None
-        # the rows of grashof = "any"'s motion: exact (each gap at its extremes) or the spec's samples
-        self.samples = EXTREMES if EXACT_MOTION and spec.rules.grashof == "any" else spec.solver.samples
-        # grashof = "any" samples the motion between targets: solve with COARSE samples per gap first and
-        # keep the answer when every row of the spec's samples holds there (full_rows); else re-solve
-        # with those rows from it
-        self.coarse = None
-        if (not EXACT_MOTION and not elastic and COARSE and spec.rules.grashof == "any" and len(thetas) > 1
-                and spec.solver.samples > COARSE):
-            self.coarse = CompiledNLP(problem(COARSE), elastic, scaling=OWN_UNITS, watched=self.watched)
-            full = path_rules(spec, v, thetas, sign, spec.solver.samples)
-            rows = [(ca.vec(ca.SX(e)), lb, ub) for rule in full for e, lb, ub in rule.rows()]
-            self.full_rows = ca.Function("full_rows", [decision, sign], [ca.vertcat(*(r[0] for r in rows))])
-            self.full_lb = np.concatenate([np.full(r[0].numel(), -np.inf if r[1] is None else r[1]) for r in rows])
-            self.full_ub = np.concatenate([np.full(r[0].numel(), np.inf if r[2] is None else r[2]) for r in rows])
-        else:
-            self._full = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
+        # grashof = "any": the motion's rows exact, each gap at its extremes (EXTREMES); else the spec's samples
+        # (read only by the rules of "any": the others are evaluated at the targets and in closed form)
+        self.samples = EXTREMES if spec.rules.grashof == "any" else spec.solver.samples
+        self.compiled = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         self.varpro = None
@@ -253,7 +229,7 @@ class PathNLP:
         z_lin = ca.vertcat(*((v[self.names[i]] - self.offset[i]) / self.scale[i] for i in linear))
         rows = [(z_lin[k], float(lbx[i]), float(ubx[i])) for k, i in enumerate(linear)]   # placement in its bounds
         decision = ca.vertcat(xr, theta)
-        samples = COARSE if self.coarse is not None else self.samples
+        samples = self.samples
         problem = Problem(
             "fourbar_path_varpro", decision,
             np.concatenate([lbx[kept], lbx[9:]]), np.concatenate([ubx[kept], ubx[9:]]),
@@ -271,15 +247,6 @@ class PathNLP:
         self.varpro_full = ca.Function("varpro_full", [decision, sign], [ca.vertcat(*full, theta)])
 
     @property
-    def compiled(self) -> CompiledNLP:
-        """The NLP with every row: the motion of grashof = "any" exact, or (EXACT_MOTION off) on the spec's samples;
-        built on first use when a coarse one exists."""
-        if self._full is None:
-            self._full = CompiledNLP(self._problem_of(self.samples), self.elastic, scaling=OWN_UNITS,
-                                     watched=self.watched)
-        return self._full
-
-    @property
     def problem(self) -> Problem:
         return self.compiled.problem
 
@@ -290,16 +257,6 @@ class PathNLP:
     def design_of(self, z: np.ndarray) -> np.ndarray:
         """The NLP's nominal units -> design values (spec units); a fixed variable is its bound exactly."""
         return np.where(self.fixed, self.bounds[:, 0], self.offset + self.scale * np.asarray(z, float))
-
-    def holds_every_sample(self, w: np.ndarray, sign: float) -> bool | None:
-        """Whether every row of the spec's samples of the motion holds (limits exact, no back-off) at the
-        decision vector ``w``; None when ``w`` is not a number or there is no coarse NLP."""
-        if self.coarse is None:
-            return None
-        g = np.asarray(self.full_rows(w, sign), dtype=float).ravel()
-        if not np.all(np.isfinite(g)):
-            return None
-        return bool(np.all(g >= self.full_lb) and np.all(g <= self.full_ub))
 
     def start(self, index: int, x_design: np.ndarray) -> StartPoint:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""
@@ -349,23 +306,9 @@ class PathNLP:
                           and np.all(full[lin] < self.ubx[lin] - PLACEMENT_ROOM))
             w0 = np.concatenate([np.clip(full[:9], self.lbx[:9], self.ubx[:9]), full[9:]])
             if pre.return_status == "Solve_Succeeded" and inside:
-                out = dataclasses.replace(pre, x=full)
-                if self.coarse is not None and self.holds_every_sample(full, sp.sign) is False and \
-                        (self.reference is None or float(self.fit(full, sp.sign)) <= RESOLVE_WITHIN * self.reference):
-                    out = self._then(pre, self.compiled.solve(index, w0, p=sp.sign, watch=self.watch(trace)),
-                                     "re-solved with every sample of the motion")
-                return self._outcome(out, sp, trace)
+                return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
-        if self.coarse is None:
-            out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
-        else:
-            out = self.coarse.solve(index, w0, p=sp.sign, watch=watch)
-            if out.return_status != "User_Requested_Stop" and \
-                    self.holds_every_sample(out.x[: self.coarse.n_x], sp.sign) is False and \
-                    (self.reference is None or float(self.fit(out.x[: len(self.lbx)], sp.sign)) <= RESOLVE_WITHIN * self.reference):
-                out = self._then(out, self.compiled.solve(index, out.x[: self.coarse.n_x], p=sp.sign,
-                                                          watch=self.watch(trace)),
-                                 "re-solved with every sample of the motion")
+        out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         if pre is not None:
             out = self._then(pre, out, "polished by the full NLP")
         return self._outcome(out, sp, trace)

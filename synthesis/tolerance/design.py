@@ -185,15 +185,10 @@ def without_ipopt():
 
 
 def whole_problem(nlp) -> None:
-    """The kind's NLP solves its whole problem from every start: fourbar_path's solve strategies -- a coarse first
-    stage of grashof = "any" (study switch nlp.EXACT_MOTION off: 4 samples per gap, re-solved on the spec's samples
-    only when one fails; on, the default, its one NLP holds the motion's rows exactly) and the
-    variable-projection study switch -- are dropped, so a tolerance box holds, and the analysis reads, every rule as
-    the whole problem holds it (the motion exactly, or on the spec's samples) in the spec's design coordinates.  The full NLP is built here (call this where the NLP must
-    be built: inside the tolerance box, or before the analysis captures its start)."""
-    if getattr(nlp, "coarse", None) is not None or getattr(nlp, "varpro", None) is not None:
-        _ = nlp.compiled
-        nlp.coarse = None
+    """The kind's NLP solves its whole problem from every start: fourbar_path's variable-projection study switch is
+    dropped, so a tolerance box holds, and the analysis reads, every rule as the whole problem holds it (for grashof
+    "any" the motion's rows exactly) in the spec's design coordinates."""
+    if getattr(nlp, "varpro", None) is not None:
         nlp.varpro = None
 
 
