@@ -34,6 +34,7 @@ import dataclasses
 import math
 import resource
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -246,9 +247,13 @@ def differential_evolution_method(loaded: LoadedSpec, budget: list[float] | None
             return True
 
         limits = {} if allowed is None else {"maxiter": 10 ** 9, "polish": False}
-        res = differential_evolution(objective, problem.bounds(), constraints=problem.constraints(),
-                                     vectorized=True, updating="deferred", rng=spec.solver.seed,
-                                     callback=callback, **limits)
+        with warnings.catch_warnings():
+            # scipy's polish (trust-constr, quasi-Newton) warns at every flat step of the linear Grashof rows:
+            # noise on the user's terminal, not a finding of the run (its result is re-checked below)
+            warnings.filterwarnings("ignore", message="delta_grad == 0.0", category=UserWarning)
+            res = differential_evolution(objective, problem.bounds(), constraints=problem.constraints(),
+                                         vectorized=True, updating="deferred", rng=spec.solver.seed,
+                                         callback=callback, **limits)
         design, crank = problem.decode(res.x)
         fun = float(problem.objective(res.x[:, None])[0])
         trace.append((time.perf_counter() - t0, fun))
