@@ -285,8 +285,9 @@ def case_for(loaded: LoadedSpec, best_known=None, tolerance=None, note: str = ""
 
 
 def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase]:
-    """The given specs, or the default set: the library's fourbar_path specs, six synthetic problems and
-    the ten inexact-target problems of issue 19 (synthesis.fourbar_path.inexact)."""
+    """The given specs, or the default set: the library's fourbar_path specs, six synthetic problems,
+    the ten inexact-target problems of issue 19 (synthesis.fourbar_path.inexact) and the literature's target sets
+    with their published linkages (synthesis.fourbar_path.literature)."""
     inexact = specs is None
     if specs is None:
         specs = [load_spec(p) for p in sorted(LIBRARY.glob("*.toml"))]
@@ -298,6 +299,7 @@ def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase
                        note="synthetic truth: zero error exists") for s in synthetic]
     if inexact:
         cases += inexact_cases(seed)
+        cases += literature_cases(seed)
     return cases
 
 
@@ -309,3 +311,45 @@ def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
                      note="inexact target (issue 19): best known from the cross-check runs (inexact.BEST_KNOWN); "
                           f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
                      workers=INEXACT_WORKERS, equal_budget=True) for n in (names or NAMES)]
+
+
+
+def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
+    """The literature's target sets (synthesis.fourbar_path.literature), 64 starts on INEXACT_WORKERS workers,
+    with a third method ``published``: the best published linkage (literature.best_published: the lowest objective
+    among the transcribed competitors within the problem's ranges and every rule holding) scored with this
+    package's objective and fine-grid re-check.  Best known: literature.BEST_KNOWN (the lowest any recorded run
+    found); target 1e-6 relative above it (no absolute floor: the objectives go down to 1e-7 units^2)."""
+    from synthesis.fourbar_path import literature
+
+    def published(name: str):
+        def run(target: float) -> MethodRun:
+            score = literature.best_published(name)
+            spec = literature.literature_spec(name).model
+            c = score.competitor
+            violation = worst_violation(spec, c.design(), score.crank_deg)
+            return MethodRun(score.objective, violation, [(0.0, score.objective)],
+                             {"competitor": c.label, "citation": c.citation, "read_from": c.read_from,
+                              "timing": score.timing, "published_error": c.published_error,
+                              "published_error_read_from": c.error_read_from,
+                              "design": c.design(), "crank_deg": score.crank_deg,
+                              "all_competitors": {o.competitor.label: {"objective": o.objective,
+                                                                       "rules_hold": o.rules_hold,
+                                                                       "outside_ranges": o.outside}
+                                                  for o in (literature.evaluate_competitor(name, x)
+                                                            for x in literature.PROBLEMS[name].competitors)}})
+        return run
+
+    cases = []
+    for name in names or literature.NAMES:
+        loaded = literature.literature_spec(name, {"seed": seed})
+        case = case_for(loaded, best_known=literature.BEST_KNOWN.get(name),
+                        tolerance=lambda best: LIBRARY_RELATIVE_TOLERANCE * abs(best),
+                        note="literature target set: best known from the recorded runs (literature.BEST_KNOWN); "
+                             "'published' = the best published linkage, scored with this package's objective; "
+                             f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
+                        workers=INEXACT_WORKERS, equal_budget=True)
+        case.methods["published"] = published(name)
+        case.single_runs = {"published"}
+        cases.append(case)
+    return cases
