@@ -169,17 +169,17 @@ def inexact_spec(name: str, solver: dict | None = None) -> LoadedSpec:
 #: best objective known for each problem (mm^2): the lowest any run found with every rule holding on the fine grid --
 #: the runs of problems/fourbar_path/INEXACT.md (64 and 16 starts, seed 0, before and after the issue-19 changes, and
 #: of the earlier attempt, branch wip/issue-19) and the 2,000-start cross-check issue 19 asks for (seed 7, 2 workers;
-#: fourth and fifth pass), which ran on all ten: it found d_shape22's (start 1715) and dwell_arc15's (start 1165)
-#: below every 64-start run, and agreed with the others.
+#: fourth and fifth pass), which ran on all ten: it found d_shape22's (start 1715), dwell_arc15's (start 1165) and
+#: stroke_lift14's (start 333) below every 64-start run, and agreed with the others.
 BEST_KNOWN: dict[str, float] = {
     "ellipse20": 1.0486382171183883, "egg16": 0.46122510610392164, "triangle18": 12.480514291299421,
-    # kidney25 and stroke_lift14: lowered on 2026-11-25 by runs of issue 19's fourth and third pass, d_shape22 and
-    # dwell_arc15 by the 2,000-start cross-check (seed 7; d_shape22 start 1715, a change-point kite, crank 239 mm;
-    # dwell_arc15 start 1165, a non-Grashof linkage, at IPOPT's max_iter); every rule holding on the fine grid
-    # (INEXACT.md)
+    # kidney25: lowered on 2026-11-25 by a run of issue 19's fourth pass; d_shape22, dwell_arc15 and stroke_lift14 by
+    # the 2,000-start cross-check (seed 7; d_shape22 start 1715, a change-point kite, crank 239 mm; dwell_arc15 start
+    # 1165, a non-Grashof linkage, at IPOPT's max_iter; stroke_lift14 start 333); every rule holding on the fine grid
+    # (INEXACT.md; the designs: BEST_DESIGNS)
     "d_shape22": 10.050598691214857, "kidney25": 11.854077742761099, "square24": 137.6917138934006,
     "noisy_loop20": 2.3719628395676278, "dwell_arc15": 0.059103520920718744, "s_curve12": 2.183892490339011,
-    "stroke_lift14": 0.2592664886434775,
+    "stroke_lift14": 0.2589684425842237,
 }
 
 #: the designs behind BEST_KNOWN that a run found below the earlier best known (design, crank angles, direction)
