@@ -1,13 +1,20 @@
 """Bench cases of kind fourbar_path: IPOPT multistart against scipy's differential_evolution.
 
-Both methods get the same problem and stop at the same target objective (best known + tolerance):
+Every method gets the same problem and stops at the same target objective (best known + tolerance):
 
-ipopt_multistart        ``run_solve`` exactly as ``agrisynth solve`` runs it (one worker), with the
-                        spec's starts and seed and [solver] stop_at_objective = the target
+ipopt_multistart        ``run_solve`` exactly as ``agrisynth solve`` runs it (one worker; the inexact and
+                        literature sets INEXACT_WORKERS), with the spec's starts and seed and
+                        [solver] stop_at_objective = the target
 differential_evolution  scipy.optimize.differential_evolution with its default settings (best1bin,
                         popsize 15, maxiter 1000, tol 0.01, Latin-hypercube init, polish), evaluated
                         vectorised (updating "deferred", which vectorisation needs), the rules as
                         scipy constraints, stopped by its callback at the target; seed = the spec's
+differential_evolution_equal_budget   (inexact and literature sets) the same DE, same seed, given the CPU
+                        seconds the multistart spent in the same round (every worker's: its pool start,
+                        NLP builds and screen included, so the budget leans towards DE), no generation
+                        limit, no polish; its generation count varies with the machine's speed
+published               (literature sets) the best published linkage, scored with this package's
+                        objective and fine-grid re-check (no solve: no time ratio)
 
 DE encoding of free timing (every vector meets the sequence rule, so DE never wastes an evaluation
 on an infeasible order): theta_1 in [0, 360) deg, N gap weights w_i in [0, 1] and, for direction
@@ -20,8 +27,9 @@ angle as its exact extremes (cos mu at theta2 = 0 and 180 deg), and evaluates it
 the complex-number construction (construction.joint_positions, vectorised).  Both results are
 re-checked as every solver start is (check.evaluate: the kind's rules on floats).
 
-Problems: the library specs given, or by default the picking arc and six synthetic-truth problems
-(mechanism 1 with 6, 10, 18 points, timing free and prescribed).  Best known: 0 for the synthetic
+Problems: the library specs given, or by default the picking arc, six synthetic-truth problems
+(mechanism 1 with 6, 10, 18 points, timing free and prescribed), the ten inexact-target problems of
+issue 19 (inexact.py) and the literature's target sets (literature.py).  Best known: 0 for the synthetic
 problems (zero error by construction, tolerance 1e-8 mm^2); for a library spec the objective of
 an untimed reference multistart (all starts, no early stop) with a *different* seed (the spec's
 seed + REFERENCE_SEED_OFFSET), so the target does not come from the very IPOPT run being timed;
@@ -32,10 +40,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import resource
+import multiprocessing
 import time
 import warnings
 from pathlib import Path
+
+try:
+    import resource
+except ImportError:          # not POSIX: the budget falls back to wall time x workers
+    resource = None
 
 import numpy as np
 from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_evolution
@@ -80,9 +93,12 @@ def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float])
 
 # ---------------------------------------------------------------------------- IPOPT multistart
 
-def cpu_seconds() -> float:
-    """CPU seconds of this process and of its reaped children (the multistart's worker processes: the pool
-    is shut down and waited for at the end of every solve)."""
+def cpu_seconds() -> float | None:
+    """CPU seconds of this process and of its reaped children: the multistart's worker processes when they are this
+    process's children (start method "fork"; the pool is shut down and waited for at the end of every solve).  None
+    where that does not hold (another start method: the workers are a fork server's children; no ``resource``)."""
+    if resource is None or multiprocessing.get_start_method() != "fork":
+        return None
     me, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
 
@@ -103,7 +119,11 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
                 trace.append((time.perf_counter() - t0, best.outcome.objective))
 
         result, reports, _ = run_solve(kinds.get("fourbar_path"), staged, workers=workers, on_start=on_start)
-        cpu = cpu_seconds() - cpu0
+        wall = time.perf_counter() - t0
+        cpu1 = cpu_seconds()
+        # the budget of DE at equal budget: the multistart's CPU seconds, or (where they cannot be read) its wall time
+        # times its workers, an upper bound of them
+        cpu, basis = (cpu1 - cpu0, "cpu") if cpu0 is not None and cpu1 is not None else (wall * workers, "wall x workers")
         if spent is not None:
             spent.append(cpu)
         s = result.solver
@@ -112,7 +132,7 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
                          trace, {"starts": s["starts"], "starts_run": s["starts_run"],
                                  "starts_needed": s["starts_needed"], "best_start": s["best_start"],
                                  "status": result.status, "return_status": s["return_status"],
-                                 "workers": workers, "cpu_s": cpu,
+                                 "workers": workers, "cpu_s": cpu, "cpu_basis": basis,
                                  "median_iterations": float(np.median([r.outcome.iterations for r in reports]))})
     return run
 
@@ -313,10 +333,9 @@ def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
                      workers=INEXACT_WORKERS, equal_budget=True) for n in (names or NAMES)]
 
 
-
 def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
     """The literature's target sets (synthesis.fourbar_path.literature), 64 starts on INEXACT_WORKERS workers,
-    with a third method ``published``: the best published linkage (literature.best_published: the lowest objective
+    DE at its default and at equal budget, and a method ``published``: the best published linkage (literature.best_published: the lowest objective
     among the transcribed competitors within the problem's ranges and every rule holding) scored with this
     package's objective and fine-grid re-check.  Best known: literature.BEST_KNOWN (the lowest any recorded run
     found); target 1e-6 relative above it (no absolute floor: the objectives go down to 1e-7 units^2)."""
@@ -329,7 +348,8 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
             c = score.competitor
             violation = worst_violation(spec, c.design(), score.crank_deg)
             return MethodRun(score.objective, violation, [(0.0, score.objective)],
-                             {"competitor": c.label, "citation": c.citation, "read_from": c.read_from,
+                             {"return_status": "not run: the published linkage, scored (no time to compare)",
+                              "competitor": c.label, "citation": c.citation, "read_from": c.read_from,
                               "timing": score.timing, "published_error": c.published_error,
                               "published_error_read_from": c.error_read_from,
                               "design": c.design(), "crank_deg": score.crank_deg,

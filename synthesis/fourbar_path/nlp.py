@@ -11,7 +11,7 @@ The decision vector is in nominal units (nominal_scales): lengths and the couple
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
 grashof = "any" holds its motion rows exactly (rules.motion_extremes; they replaced the second pass's coarse samples
-of the motion re-solved on the spec's samples, removed since: INEXACT.md, fourth pass).
+of the motion re-solved on the spec's samples: INEXACT.md, fourth pass; that path was removed in the fifth).
 Target sets the screen serves (free timing, >= 12 points) are solved to IPOPT tol SCREEN_TOL.  Free timing: every start is watched
 (CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
 *reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
@@ -77,10 +77,11 @@ MU_INIT = 1e-6
 #: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration k of each (k, factor) a start
 #: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
 #: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count.
-#: One cut at iteration 30, 300x: chosen on every start's uncut path-error trace of the ten inexact problems (seed 0)
-#: and checked on seed 1 (INEXACT.md, fifth pass): the second pass's ((30, 1e4), (200, 1.0), (400, 0.6)) ran most
-#: starts to 200 iterations and stopped some that go on to the set's best (stroke_lift14's crawls past 400)
-CUTS = ((30, 300.0),)
+#: One cut at iteration 30, 400x: chosen on every start's uncut path-error trace of the ten inexact problems (seed 0)
+#: and checked on seed 1 (INEXACT.md, fifth pass).  The second pass's ((30, 1e4), (200, 1.0), (400, 0.6)) ran most
+#: starts to 200 iterations and there stopped starts that end at the uncut run's best (s_curve12, stroke_lift14 on
+#: seed 0, triangle18 on seed 1); 300x instead of 400x stops egg16's best start (396x at iteration 30)
+CUTS = ((30, 400.0),)
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for

@@ -119,8 +119,7 @@ class RobustBuild:
         with tolerance_box(_Resolver(self.kind_name, setting.spec)):
             try:
                 nlp = self.base(setting, elastic)
-                # every compiled NLP of the kind built here, in the box: one built on first use (fourbar_path's full
-                # NLP beside its coarse one) would otherwise be built later, nominal
+                # the kind's whole problem, as built here in the box (fourbar_path: its projected study NLP dropped)
                 whole_problem(nlp)
                 solvers = [getattr(nlp, "compiled", None)]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
