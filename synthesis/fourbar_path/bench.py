@@ -123,7 +123,10 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
         cpu1 = cpu_seconds()
         # the budget of DE at equal budget: the multistart's CPU seconds, or (where they cannot be read) its wall time
         # times its workers, an upper bound of them
-        cpu, basis = (cpu1 - cpu0, "cpu") if cpu0 is not None and cpu1 is not None else (wall * workers, "wall x workers")
+        if cpu0 is not None and cpu1 is not None:
+            cpu, basis = cpu1 - cpu0, "cpu"
+        else:
+            cpu, basis = wall * workers, "wall x workers"
         if spent is not None:
             spent.append(cpu)
         s = result.solver
@@ -268,9 +271,11 @@ def differential_evolution_method(loaded: LoadedSpec, budget: list[float] | None
 
         limits = {} if allowed is None else {"maxiter": 10 ** 9, "polish": False}
         with warnings.catch_warnings():
-            # scipy's polish (trust-constr, quasi-Newton) warns at every flat step of the linear Grashof rows:
-            # noise on the user's terminal, not a finding of the run (its result is re-checked below)
+            # scipy's polish (trust-constr, quasi-Newton) warns at every flat step of the linear Grashof rows and
+            # where its constraints' Jacobian is singular: noise on the user's terminal, not a finding of the run
+            # (its result is re-checked below)
             warnings.filterwarnings("ignore", message="delta_grad == 0.0", category=UserWarning)
+            warnings.filterwarnings("ignore", message="Singular Jacobian matrix", category=UserWarning)
             res = differential_evolution(objective, problem.bounds(), constraints=problem.constraints(),
                                          vectorized=True, updating="deferred", rng=spec.solver.seed,
                                          callback=callback, **limits)
@@ -335,10 +340,12 @@ def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
 
 def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
     """The literature's target sets (synthesis.fourbar_path.literature), 64 starts on INEXACT_WORKERS workers,
-    DE at its default and at equal budget, and a method ``published``: the best published linkage (literature.best_published: the lowest objective
-    among the transcribed competitors within the problem's ranges and every rule holding) scored with this
-    package's objective and fine-grid re-check.  Best known: literature.BEST_KNOWN (the lowest any recorded run
-    found); target 1e-6 relative above it (no absolute floor: the objectives go down to 1e-7 units^2)."""
+    DE at its default and at equal budget, and a method ``published``: the best published linkage
+    (literature.best_published: the lowest objective among the transcribed competitors within the problem's ranges
+    and every rule holding) scored with this package's objective and fine-grid re-check. Best known:
+    literature.BEST_KNOWN (the lowest any recorded run found); target 1e-6 relative above it (no absolute floor: the
+    objectives go down to 1e-7 units^2).
+    """
     from synthesis.fourbar_path import literature
 
     def published(name: str):
