@@ -309,3 +309,27 @@ def test_the_recorded_best_known_designs_hold_every_rule_and_reproduce_their_obj
     lo, hi = np.array(spec.bounds_array()).T
     values = np.array([rec["design"][n] for n in ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0", "theta0")])
     assert np.all(values >= lo) and np.all(values <= hi)
+
+
+def test_a_start_stopped_at_max_iter_is_resumed_once_and_kept_only_when_it_converges(monkeypatch):
+    """A fresh IPOPT run from where a promising start reached max_iter (path error within RESUME_WITHIN x the
+    reference): egg16 with max_iter 60, its screened start 3 stops at 60 iterations, and resumed it converges in 20
+    more (Solve_Succeeded, 80 counted).  Start 11 does not converge in its second run either: it keeps its first
+    answer, both runs' iterations counted.  RESUME_WITHIN = 0 turns it off."""
+    spec = inexact_spec("egg16", {"max_iter": 60}).model
+    nlp = PathNLP(spec, seed=0)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
+
+    def one(index):
+        return nlp.solve(index, rows[index])
+
+    resumed, kept_first = one(3), one(11)
+    monkeypatch.setattr(path_nlp, "RESUME_WITHIN", 0.0)
+    plain3, plain11 = one(3), one(11)
+    assert (plain3.return_status, plain3.iterations) == ("Maximum_Iterations_Exceeded", 60)
+    assert (plain11.return_status, plain11.iterations) == ("Maximum_Iterations_Exceeded", 60)
+    assert resumed.return_status == "Solve_Succeeded" and 60 < resumed.iterations <= 120
+    assert "resumed from where it reached max_iter" in resumed.raw.log
+    assert resumed.objective < plain3.objective
+    assert kept_first.return_status == "Maximum_Iterations_Exceeded" and kept_first.iterations == 120
+    assert kept_first.objective == plain11.objective and "not kept" in kept_first.raw.log

@@ -82,6 +82,11 @@ MU_INIT = 1e-6
 #: starts to 200 iterations and there stopped starts that end at the uncut run's best (s_curve12, stroke_lift14 on
 #: seed 0, triangle18 on seed 1); 300x instead of 400x stops egg16's best start (396x at iteration 30)
 CUTS = ((30, 400.0),)
+#: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable);
+#: 0: never
+RESUME_WITHIN = 1.0
+#: the resumed run's iterations at most (a start that does not converge in them keeps its max_iter answer)
+RESUME_ITERATIONS = 150
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
@@ -313,9 +318,32 @@ class PathNLP:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
         out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
+        if self._resumable(out, sp.sign):
+            out = self._resume(index, out, sp.sign)
         if pre is not None:
             out = self._then(pre, out, "polished by the full NLP")
         return self._outcome(out, sp, trace)
+
+    def _resumable(self, out, sign: float) -> bool:
+        """A start that reached max_iter within RESUME_WITHIN x the reference is run once more from where it stopped: a
+        fresh IPOPT (barrier, filter and Hessian regularisation reset) ends most of them Solve_Succeeded in tens of
+        iterations where the first run crawled along a flat valley (INEXACT.md, fifth pass)."""
+        if not RESUME_WITHIN or out.return_status != "Maximum_Iterations_Exceeded" or self.reference is None:
+            return False
+        x = out.x[: self.compiled.n_x]
+        return bool(np.all(np.isfinite(x))) and float(self.fit(x[: len(self.lbx)], sign)) <= RESUME_WITHIN * self.reference
+
+    def _resume(self, index: int, first, sign: float):
+        """One more IPOPT run from where ``first`` stopped at max_iter, itself stopped after RESUME_ITERATIONS: its
+        answer when it converges, else ``first``'s (the iterations and time of both counted either way)."""
+        second = self.compiled.solve(index, first.x[: self.compiled.n_x], p=sign,
+                                     watch=lambda iteration, f: iteration >= RESUME_ITERATIONS)
+        if second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            return self._then(first, second, "resumed from where it reached max_iter")
+        first.iterations += second.iterations
+        first.wall_s += second.wall_s
+        first.log += f"\n===== resumed from where it reached max_iter: {second.return_status}, not kept\n" + second.log
+        return first
 
     @staticmethod
     def _then(first, second, why: str):
