@@ -243,8 +243,12 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
     rows[0]["time_ratio_text"] = "1 (reference)"
     for row, ratio in zip(rows[1:], ratios):
         status = str(row["details"].get("return_status", "")) if isinstance(row["details"], dict) else ""
-        row["time_ratio_text"] = (f"{ratio['time_ratio']:.1f}x" if ratio["time_ratio"] is not None
-                                  else status if status.startswith("not run") else ratio["time_ratio_note"])
+        if status.startswith("not run"):     # not a solve (e.g. a published design, scored): no time to compare
+            ratio.update(time_ratio=None, time_ratio_note=status)
+            row["time_ratio_text"] = status
+        else:
+            row["time_ratio_text"] = (f"{ratio['time_ratio']:.1f}x" if ratio["time_ratio"] is not None
+                                      else ratio["time_ratio_note"])
     out = {"problem": case.problem, "kind": case.kind, "note": case.note, "best_known": best,
            "target": target, "rows": rows, "ratios": ratios}
     if case.sweep is not None:

@@ -5,6 +5,7 @@ in problems/fourbar_path/INEXACT.md."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import statistics
 import time
@@ -21,7 +22,7 @@ from synthesis.fourbar_path import screen
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.rules import EXTREMES
 from synthesis.fourbar_path.starts import DISTINCT, StartMaker, arc_fractions, is_closed_loop, points_at, refit_placement
-from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data
+from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import validate
 from synthesis.spec.fourbar_path import FourbarPathSpec
@@ -315,21 +316,67 @@ def test_a_start_stopped_at_max_iter_is_resumed_once_and_kept_only_when_it_conve
     """A fresh IPOPT run from where a promising start reached max_iter (path error within RESUME_WITHIN x the
     reference): egg16 with max_iter 60, its screened start 3 stops at 60 iterations, and resumed it converges in 20
     more (Solve_Succeeded, 80 counted).  Start 11 does not converge in its second run either: it keeps its first
-    answer, both runs' iterations counted.  RESUME_WITHIN = 0 turns it off."""
+    answer, both runs' iterations counted.  The resume stops after RESUME_ITERATIONS; a start above RESUME_WITHIN x
+    the reference is not resumed; RESUME_WITHIN = 0 turns it off."""
     spec = inexact_spec("egg16", {"max_iter": 60}).model
     nlp = PathNLP(spec, seed=0)
     rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
 
     def one(index):
-        return nlp.solve(index, rows[index])
+        return PathNLP(spec, seed=0).solve(index, rows[index])   # built after the switches below are set
 
     resumed, kept_first = one(3), one(11)
+    assert resumed.return_status == "Solve_Succeeded" and resumed.iterations == 80
+    assert resumed.details["resumed"] == {"return_status": "Solve_Succeeded", "iterations": 20, "kept": True,
+                                          "path_error_mm2": pytest.approx(resumed.objective, rel=1e-12)}
+    assert "resumed from where it reached max_iter" in resumed.raw.log
+    assert kept_first.return_status == "Maximum_Iterations_Exceeded" and kept_first.iterations == 120
+    assert kept_first.details["resumed"]["kept"] is False and "not kept (did not converge)" in kept_first.raw.log
+    # the resume's own limit: stopped after RESUME_ITERATIONS by the watch, not kept
+    monkeypatch.setattr(path_nlp, "RESUME_ITERATIONS", 10)
+    capped = one(3)
+    assert capped.return_status == "Maximum_Iterations_Exceeded" and capped.iterations == 70
+    assert capped.details["resumed"]["return_status"] == "User_Requested_Stop"
+    # start 11 ends at 3.36 mm^2 against a reference of 4.33: within 1x, not within 0.5x
+    monkeypatch.setattr(path_nlp, "RESUME_WITHIN", 0.5)
+    assert nlp.reference == pytest.approx(4.3271, rel=1e-4) and 0.5 * nlp.reference < kept_first.objective
+    above = one(11)
+    assert above.iterations == 60 and "resumed" not in above.details
     monkeypatch.setattr(path_nlp, "RESUME_WITHIN", 0.0)
     plain3, plain11 = one(3), one(11)
     assert (plain3.return_status, plain3.iterations) == ("Maximum_Iterations_Exceeded", 60)
     assert (plain11.return_status, plain11.iterations) == ("Maximum_Iterations_Exceeded", 60)
-    assert resumed.return_status == "Solve_Succeeded" and 60 < resumed.iterations <= 120
-    assert "resumed from where it reached max_iter" in resumed.raw.log
-    assert resumed.objective < plain3.objective
-    assert kept_first.return_status == "Maximum_Iterations_Exceeded" and kept_first.iterations == 120
-    assert kept_first.objective == plain11.objective and "not kept" in kept_first.raw.log
+    assert resumed.objective < plain3.objective and kept_first.objective == plain11.objective
+
+
+def test_a_resume_that_converges_higher_keeps_the_first_answer(monkeypatch):
+    """A fresh IPOPT run need not stay below its start (its barrier and filter start again): a resumed run that
+    converges at a higher path error is not kept.  The second solve is replaced by one that converges at a point
+    moved off the first answer."""
+    spec = inexact_spec("egg16", {"max_iter": 60}).model
+    nlp = PathNLP(spec, seed=0)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
+    first_answer = []
+    real_solve = nlp.compiled.solve
+
+    def solve(start, x0, extra0=None, p=None, watch=None):
+        out = real_solve(start, x0, extra0, p, watch)
+        if not first_answer:                     # the start's own run: kept as IPOPT ended it
+            first_answer.append(out)
+            return out
+        moved = np.array(x0, float)
+        moved[9:] += 0.05                        # every crank angle 0.05 rad off: a higher path error
+        return dataclasses.replace(out, x=moved, return_status="Solve_Succeeded", success=True)
+
+    monkeypatch.setattr(nlp.compiled, "solve", solve)
+    out = nlp.solve(3, rows[3])
+    assert first_answer[0].return_status == "Maximum_Iterations_Exceeded"
+    assert out.return_status == "Maximum_Iterations_Exceeded" and out.details["resumed"]["kept"] is False
+    assert out.details["resumed"]["path_error_mm2"] > out.objective
+    assert "not kept (ended higher" in out.raw.log
+
+
+def test_no_resume_without_a_screened_reference():
+    """Prescribed timing (and target sets under 12 points) have no screen, so no reference: no cut, no resume."""
+    nlp = PathNLP(truth_spec(1, 6, True, {"max_iter": 5}).model, seed=0)
+    assert nlp.reference is None and not nlp.resumes and not nlp.cut

@@ -82,8 +82,8 @@ MU_INIT = 1e-6
 #: starts to 200 iterations and there stopped starts that end at the uncut run's best (s_curve12, stroke_lift14 on
 #: seed 0, triangle18 on seed 1); 300x instead of 400x stops egg16's best start (396x at iteration 30)
 CUTS = ((30, 400.0),)
-#: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable);
-#: 0: never
+#: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable;
+#: its details say how: "resumed"); 0: never
 RESUME_WITHIN = 1.0
 #: the resumed run's iterations at most (a start that does not converge in them keeps its max_iter answer)
 RESUME_ITERATIONS = 150
@@ -182,12 +182,14 @@ class PathNLP:
 
         self.f_unit = f_unit
         self.starts = StartMaker(spec, seed)
-        # the early cut: free timing, not elastic; its reference is the best screened start's path error, screened
-        # here, when the NLP is built (the main process builds it first: forked workers inherit the screen)
-        self.cut = not elastic and self.starts.screening and bool(CUTS)
+        # the early cut and the resume: free timing, not elastic; their reference is the best screened start's path
+        # error, screened here, when the NLP is built (the main process builds it first: forked workers inherit it)
+        self.referenced = not elastic and self.starts.screening
+        self.cut = self.referenced and bool(CUTS)
+        self.resumes = self.referenced and bool(RESUME_WITHIN)
         self._reference: list = []
-        self.watched = self.cut or TRACE
-        if self.cut:
+        self.watched = self.cut or self.resumes or TRACE
+        if self.referenced:
             _ = self.reference
         self.lbx, self.ubx = lbx, ubx
         # grashof = "any": the motion's rows exact, each gap at its extremes (EXTREMES); else the spec's samples
@@ -275,7 +277,7 @@ class PathNLP:
     def reference(self) -> float | None:
         """The early cut's yardstick: the best screened start's path error (mm^2); None: no cut."""
         if not self._reference:
-            self._reference.append(self.starts.reference if self.cut else None)
+            self._reference.append(self.starts.reference if self.referenced else None)
         return self._reference[0]
 
     def watch(self, trace: list):
@@ -318,32 +320,43 @@ class PathNLP:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
         out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
+        resumed = None
         if self._resumable(out, sp.sign):
-            out = self._resume(index, out, sp.sign)
+            out, resumed = self._resume(index, out, sp.sign)
         if pre is not None:
             out = self._then(pre, out, "polished by the full NLP")
-        return self._outcome(out, sp, trace)
+        return self._outcome(out, sp, trace, resumed)
 
     def _resumable(self, out, sign: float) -> bool:
-        """A start that reached max_iter within RESUME_WITHIN x the reference is run once more from where it stopped: a
-        fresh IPOPT (barrier, filter and Hessian regularisation reset) ends most of them Solve_Succeeded in tens of
-        iterations where the first run crawled along a flat valley (INEXACT.md, fifth pass)."""
-        if not RESUME_WITHIN or out.return_status != "Maximum_Iterations_Exceeded" or self.reference is None:
+        """A start that reached max_iter within RESUME_WITHIN x the reference is run once more from where it stopped, by
+        a fresh IPOPT (barrier, filter and Hessian regularisation reset).  Few converge so (seed 0: 2 of 49 resumed
+        starts; INEXACT.md, fifth pass), but those are starts that crawled along a flat valley to max_iter, as
+        stroke_lift14's best did; so a start may run max_iter + RESUME_ITERATIONS iterations."""
+        if not self.resumes or out.return_status != "Maximum_Iterations_Exceeded" or self.reference is None:
             return False
         x = out.x[: self.compiled.n_x]
-        return bool(np.all(np.isfinite(x))) and float(self.fit(x[: len(self.lbx)], sign)) <= RESUME_WITHIN * self.reference
+        return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
 
     def _resume(self, index: int, first, sign: float):
-        """One more IPOPT run from where ``first`` stopped at max_iter, itself stopped after RESUME_ITERATIONS: its
-        answer when it converges, else ``first``'s (the iterations and time of both counted either way)."""
-        second = self.compiled.solve(index, first.x[: self.compiled.n_x], p=sign,
-                                     watch=lambda iteration, f: iteration >= RESUME_ITERATIONS)
-        if second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
-            return self._then(first, second, "resumed from where it reached max_iter")
+        """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped at max_iter, itself stopped
+        after RESUME_ITERATIONS: its answer when it converged at a path error no higher than ``first``'s (a fresh run
+        need not stay below its start), else ``first``'s; the iterations and time of both counted either way."""
+        x1 = first.x[: self.compiled.n_x]
+        second = self.compiled.solve(index, x1, p=sign, watch=lambda iteration, f: iteration >= RESUME_ITERATIONS)
+        x2 = second.x[: self.compiled.n_x]
+        before, after = float(self.fit(x1, sign)), float(self.fit(x2, sign))
+        converged = second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+        kept = converged and math.isfinite(after) and after <= before
+        resumed = {"return_status": second.return_status, "iterations": second.iterations, "kept": kept,
+                   "path_error_mm2": after if math.isfinite(after) else None}
+        if kept:
+            return self._then(first, second, "resumed from where it reached max_iter"), resumed
         first.iterations += second.iterations
         first.wall_s += second.wall_s
-        first.log += f"\n===== resumed from where it reached max_iter: {second.return_status}, not kept\n" + second.log
-        return first
+        why = "did not converge" if not converged else f"ended higher, {after:.9g} mm^2 against {before:.9g}"
+        first.log += (f"\n===== resumed from where it reached max_iter: {second.return_status}, not kept ({why})\n"
+                      + second.log)
+        return first, resumed
 
     @staticmethod
     def _then(first, second, why: str):
@@ -353,7 +366,7 @@ class PathNLP:
         second.log = first.log + f"\n===== {why}\n" + second.log
         return second
 
-    def _outcome(self, out, sp: StartPoint, trace: list) -> StartOutcome:
+    def _outcome(self, out, sp: StartPoint, trace: list, resumed: dict | None = None) -> StartOutcome:
         xs = out.x[: len(self.lbx)]
         design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
         if self.spec.timed:
@@ -367,4 +380,6 @@ class PathNLP:
         objective = float(self.fit(xs, sp.sign))          # mm^2, at the returned point
         objective = objective if math.isfinite(objective) else math.inf
         extra = {"trace": trace} if TRACE else {}
+        if resumed is not None:
+            extra["resumed"] = resumed
         return StartOutcome.of(out, design, objective, crank_deg=crank, direction=direction, **extra)

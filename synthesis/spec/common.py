@@ -106,8 +106,8 @@ def starts_field(default: int):
     return Field(default, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
 
 
-def max_iter_field(default: int):
-    return Field(default, ge=1, le=1_000_000, description="IPOPT iteration limit per start")
+def max_iter_field(default: int, note: str = ""):
+    return Field(default, ge=1, le=1_000_000, description="IPOPT iteration limit per start" + note)
 
 
 class MultistartSettings(StrictModel):
