@@ -380,3 +380,18 @@ def test_no_resume_without_a_screened_reference():
     """Prescribed timing (and target sets under 12 points) have no screen, so no reference: no cut, no resume."""
     nlp = PathNLP(truth_spec(1, 6, True, {"max_iter": 5}).model, seed=0)
     assert nlp.reference is None and not nlp.resumes and not nlp.cut
+
+
+def test_the_screens_arc_index_is_a_count_of_samples_at_or_before_each_trial():
+    """screen.arc_index (a merge of every curve's samples into the sorted trials) against its definition, a binary
+    search per curve and trial: ascending rows with repeated values, trials equal to samples, 0 and just under 1."""
+    rng = np.random.default_rng(5)
+    cum = np.sort(rng.random((40, 33)), axis=1)
+    cum[:, 0] = 0.0
+    cum[:, 10:13] = cum[:, 10:11]                           # a slow stretch: three samples at one fraction
+    trials = rng.random((7, 9))
+    trials[0, :4] = cum[3, [0, 5, 10, 32]]                   # exactly at samples of curve 3
+    trials[1, 0], trials[1, 1] = 0.0, np.nextafter(1.0, 0.0)
+    got = screen.arc_index(cum, trials)
+    want = np.stack([np.clip(np.searchsorted(row, trials, side="right") - 1, 0, cum.shape[1] - 1) for row in cum])
+    assert got.shape == (40, 7, 9) and np.array_equal(got, want)

@@ -155,6 +155,25 @@ def trial_fractions(fractions: np.ndarray, signs: tuple, closed: bool) -> np.nda
     return np.array(rows)
 
 
+def arc_index(cum: np.ndarray, trials: np.ndarray) -> np.ndarray:
+    """(B, C, N) index of the last sample of each curve at or before each trial fraction: (the number of cum[b, :] <=
+    trials[c, n]) - 1, clipped to [0, K - 1]; cum (B, K) ascending along each row.  Counted by one merge of every
+    curve's samples into the sorted trial fractions -- B K binary searches in C N values and a running count --
+    instead of a binary search per (curve, trial, target) in the B K samples (the screen's costliest step)."""
+    nb, k = cum.shape
+    flat = trials.ravel()
+    order = np.argsort(flat, kind="stable")
+    qs = flat[order]
+    m = qs.size
+    # cum_j <= qs[i]  <=>  i >= (the first sorted trial at or above cum_j)
+    first = np.searchsorted(qs, cum, side="left")                                  # (B, K) in [0, m]
+    hits = np.bincount((np.arange(nb)[:, None] * (m + 1) + first).ravel(), minlength=nb * (m + 1))
+    at_or_below = np.cumsum(hits.reshape(nb, m + 1), axis=1)[:, :m]               # (B, m): samples <= qs[i]
+    count = np.empty((nb, m), dtype=np.int64)
+    count[:, order] = at_or_below
+    return np.clip(count - 1, 0, k - 1).reshape(nb, *trials.shape)
+
+
 def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarray, s_hi: np.ndarray):
     """Screen one block of full-turn curves (B, K): (a, b, residual, curve index of each target)."""
     nb, k = curves.shape
@@ -162,9 +181,7 @@ def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarr
     cum = np.concatenate([np.zeros((nb, 1)), np.cumsum(seg, axis=1)], axis=1)
     cum = cum[:, :-1] / cum[:, -1:]                       # (B, K) arc-length fraction of each sample
     rows = np.arange(nb)[:, None, None]
-    flat = (cum + np.arange(nb)[:, None] * 2.0).ravel()   # rows apart by 2 (fractions are in [0, 1))
-    q = trials[None, :, :] + rows * 2.0
-    idx = np.clip(np.searchsorted(flat, q.ravel(), side="right").reshape(q.shape) - 1 - rows * k, 0, k - 1)
+    idx = arc_index(cum, trials)
     a, b, res = _similarity(curves[rows, idx], t, s_lo[:, None], s_hi[:, None])
     best = np.argmin(np.where(np.isfinite(res), res, np.inf), axis=1)
     pick = np.arange(nb)
