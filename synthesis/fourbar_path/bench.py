@@ -243,9 +243,9 @@ def differential_evolution_method(loaded: LoadedSpec, budget: list[float] | None
     def run(target: float) -> MethodRun:
         trace: list[tuple[float, float]] = []
         evaluated = [0]         # designs whose objective was computed (scipy's nfev counts vectorised calls)
-        allowed = None if budget is None else (budget[-1] if budget else None)
-        if budget is not None and allowed is None:
+        if budget is not None and not budget:
             raise RuntimeError("differential_evolution at equal budget runs after the IPOPT multistart of its case")
+        allowed = budget[-1] if budget else None
         t0, cpu0 = time.perf_counter(), time.process_time()
 
         def objective(x: np.ndarray) -> np.ndarray:
@@ -348,10 +348,10 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
     """
     from synthesis.fourbar_path import literature
 
-    def published(name: str):
+    def published(name: str, spec):
         def run(target: float) -> MethodRun:
-            score = literature.best_published(name)
-            spec = literature.literature_spec(name).model
+            scores = literature.competitor_scores(name)
+            score = literature.best_published(name, scores)
             c = score.competitor
             violation = worst_violation(spec, c.design(), score.crank_deg)
             return MethodRun(score.objective, violation, [(0.0, score.objective)],
@@ -363,8 +363,7 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
                               "all_competitors": {o.competitor.label: {"objective": o.objective,
                                                                        "rules_hold": o.rules_hold,
                                                                        "outside_ranges": o.outside}
-                                                  for o in (literature.evaluate_competitor(name, x)
-                                                            for x in literature.PROBLEMS[name].competitors)}})
+                                                  for o in scores}})
         return run
 
     cases = []
@@ -376,7 +375,7 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
                              "'published' = the best published linkage, scored with this package's objective; "
                              f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
                         workers=INEXACT_WORKERS, equal_budget=True)
-        case.methods["published"] = published(name)
+        case.methods["published"] = published(name, loaded.model)
         case.single_runs = {"published"}
         cases.append(case)
     return cases

@@ -267,12 +267,18 @@ def outside_ranges(name: str, design: dict) -> list[str]:
     return out
 
 
-def best_published(name: str) -> CompetitorScore:
+def competitor_scores(name: str) -> list[CompetitorScore]:
+    """Every published linkage of the named problem, scored (evaluate_competitor, the source's own crank angles)."""
+    return [evaluate_competitor(name, c) for c in PROBLEMS[name].competitors]
+
+
+def best_published(name: str, scores: list[CompetitorScore] | None = None) -> CompetitorScore:
     """The published linkage with the lowest objective among those on the spec's branch, within the problem's
     ranges, whose every rule holds (the bench's ``published`` competitor); free timing: at the source's own crank
-    angles."""
-    scores = [evaluate_competitor(name, c) for c in PROBLEMS[name].competitors if c.branch == 1]
-    return min((s for s in scores if s.rules_hold and not s.outside), key=lambda s: s.objective)
+    angles.  ``scores``: competitor_scores(name), when already computed."""
+    scores = competitor_scores(name) if scores is None else scores
+    return min((s for s in scores if s.competitor.branch == 1 and s.rules_hold and not s.outside),
+               key=lambda s: s.objective)
 
 
 #: best objective known for each problem (units^2): the lowest any recorded run found with every rule holding on
