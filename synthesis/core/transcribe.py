@@ -43,6 +43,12 @@ def tolerance_box(resolver: Callable[[Problem], Tolerance | None] | None) -> Ite
         _tolerance_of.reset(token)
 
 
+def in_tolerance_box() -> bool:
+    """Whether problems built now are transcribed in a tolerance box (a robust solve): a kind keeps then to the
+    one form whose auxiliaries its rows pin (fourbar_path: the crank-angle form, not its configuration form)."""
+    return _tolerance_of.get() is not None
+
+
 class _Robust:
     """The robust rows of a problem's rules in a tolerance box, with their extra variables."""
 

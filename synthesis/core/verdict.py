@@ -24,7 +24,7 @@ from synthesis.ipopt_log import reached_optimum
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
 FINE = 10
-#: objectives within this relative distance (of max(1, |f|)) are a tie; the lower start index wins
+#: objectives within this relative distance (of max(1, |f|)) are a tie: a converged start, then the lower start index wins
 TIE = 1e-9
 #: an elastic slack counts (the rule gives way) above this fraction of the rule's scale
 SLACK_TOL = 1e-6
@@ -93,7 +93,9 @@ def failure_of(outcome) -> str | None:
 
 
 def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
-    """Feasible first; among feasible ones the objective (ties within TIE: the lower start index);
+    """Feasible first; among feasible ones the objective (ties within TIE: a start IPOPT finished at its full
+    tolerances before one it did not -- the same design, but only the first makes the run's "optimal" true --
+    then the lower start index);
     among infeasible ones the smaller worst violation (ties: the lower start index), a start that
     could not be solved at all last."""
     if a.satisfied != b.satisfied:
@@ -105,7 +107,13 @@ def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
     if maximise:
         fa, fb = -fa, -fb
     tie = TIE * max(1.0, abs(fb))
-    return fa < fb - tie or (abs(fa - fb) <= tie and a.outcome.start < b.outcome.start)
+    return fa < fb - tie or (abs(fa - fb) <= tie and (not _converged(a), a.outcome.start)
+                             < (not _converged(b), b.outcome.start))
+
+
+def _converged(report: StartReport) -> bool:
+    """IPOPT stopped at this start's design meeting its full tolerances (what status_of calls optimal)."""
+    return bool(report.outcome.success) and reached_optimum(report.outcome.return_status)
 
 
 def best_in_start_order(reports: list[StartReport], maximise: bool) -> StartReport:

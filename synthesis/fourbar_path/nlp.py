@@ -35,6 +35,8 @@ import numpy as np
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
+from synthesis.core.transcribe import in_tolerance_box
+from synthesis.fourbar_path.natural import ConfigurationNLP
 from synthesis.fourbar_path.rules import EXTREMES, path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES, coupler_point, design_parameters
@@ -87,6 +89,10 @@ CUTS = ((30, 400.0),)
 RESUME_WITHIN = 1.0
 #: the resumed run's iterations at most (a start that does not converge in them keeps its max_iter answer)
 RESUME_ITERATIONS = 150
+#: grashof = "any", free timing: the configuration form (natural.py, regular at the crank's dead positions) as
+#: "main" (every start solved in it), "polish" (a start the crank-angle form did not finish, within RESUME_WITHIN x
+#: the reference, solved again in it), or None
+CONFIGURATION: str | None = "main"
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
@@ -198,6 +204,11 @@ class PathNLP:
         self.compiled = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
+        self.configuration = None
+        if (CONFIGURATION and spec.rules.grashof == "any" and not spec.timed and not elastic
+                and not in_tolerance_box() and not operating_symbols_wanted()):
+            self.configuration = ConfigurationNLP(spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
+                                                  self._ipopt_options(spec), spec.solver.max_iter)
         self.varpro = None
         if (VARPRO and not elastic and self.starts.screening
                 and not any(self.fixed[i] for i in PLACEMENT)):
@@ -319,10 +330,15 @@ class PathNLP:
             if pre.return_status == "Solve_Succeeded" and inside:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
-        out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
         resumed = None
-        if self._resumable(out, sp.sign):
-            out, resumed = self._resume(index, out, sp.sign)
+        if self.configuration is not None and CONFIGURATION == "main":
+            out = self.configuration.solve(index, w0, sp.design, sp.sign, watch=watch)
+        else:
+            out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
+            if self.configuration is not None and self._polishable(out, sp.sign):
+                out, resumed = self._polish(index, out, sp.sign)
+            elif self._resumable(out, sp.sign):
+                out, resumed = self._resume(index, out, sp.sign)
         if pre is not None:
             out = self._then(pre, out, "polished by the full NLP")
         return self._outcome(out, sp, trace, resumed)
@@ -357,6 +373,32 @@ class PathNLP:
         first.log += (f"\n===== resumed from where it reached max_iter: {second.return_status}, not kept ({why})\n"
                       + second.log)
         return first, resumed
+
+    def _polishable(self, out, sign: float) -> bool:
+        """grashof = "any": a start the crank-angle form did not finish (not converged, not cut) within RESUME_WITHIN x
+        the reference is solved again in the configuration form."""
+        if out.return_status in ("Solve_Succeeded", "User_Requested_Stop") or self.reference is None:
+            return False
+        x = out.x[: self.compiled.n_x]
+        return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
+
+    def _polish(self, index: int, first, sign: float):
+        """(outcome, what the polish did): the configuration form from where ``first`` stopped; its answer when it
+        converged at a path error no higher than ``first``'s, else ``first``'s; both runs' iterations counted."""
+        x1 = first.x[: self.compiled.n_x]
+        second = self.configuration.solve(index, x1, self.design_of(x1[:9]), sign)
+        x2 = second.x[: self.compiled.n_x]
+        before, after = float(self.fit(x1, sign)), float(self.fit(x2, sign))
+        converged = second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+        kept = converged and math.isfinite(after) and after <= before
+        polished = {"form": "configuration", "return_status": second.return_status, "iterations": second.iterations,
+                    "kept": kept, "path_error_mm2": after if math.isfinite(after) else None}
+        if kept:
+            return self._then(first, second, "polished in the configuration form"), polished
+        first.iterations += second.iterations
+        first.wall_s += second.wall_s
+        first.log += f"\n===== polished in the configuration form: {second.return_status}, not kept\n" + second.log
+        return first, polished
 
     @staticmethod
     def _then(first, second, why: str):

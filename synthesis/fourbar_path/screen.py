@@ -107,6 +107,73 @@ def sample_long_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
 
 
+#: open target arcs with grashof = "any": shapes whose crank only rocks, screened on the crank's range of motion
+ROCKING = 6000
+#: their trial spans of that range (open curves: the targets' arc starts anywhere in it, no wrap)
+ROCKING_SPANS = (0.35, 0.5, 0.7, 1.0)
+
+
+def sample_rocking_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 6) normalised shapes (r1 = 1) of any Grashof class: r2, r3, r4 log-uniform in [0.02, 6]; the coupler
+    point as in sample_shapes.  rocking_runs keeps those whose crank cannot turn fully."""
+    out = np.empty((n, 6))
+    out[:, 0] = 1.0
+    out[:, 1:4] = _log_uniform(rng, 0.02, 6.0, 3 * n).reshape(n, 3)
+    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
+    ang = rng.uniform(0.0, TWO_PI, n)
+    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    return out
+
+
+def rocking_runs(shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(shape index, first angle, last angle) of every interval of crank angles over which the loop of a shape
+    whose crank cannot turn fully closes.  The frame-to-crank-pin distance d(theta)^2 = 1 + r2^2 - 2 r2 cos theta
+    must lie in [|r3 - r4|, r3 + r4]; d grows with |theta| on [0, pi], so the closing angles are +-[a, b]: one
+    interval around 0 (a = 0), one around pi (b = pi), or two mirror intervals [a, b] and [-b, -a]."""
+    r2, r3, r4 = shapes[:, 1], shapes[:, 2], shapes[:, 3]
+    lo = np.maximum(np.abs(r3 - r4), np.abs(1.0 - r2))
+    hi = np.minimum(r3 + r4, 1.0 + r2)
+    angle = lambda d: np.arccos(np.clip((1.0 + r2 * r2 - d * d) / (2.0 * r2), -1.0, 1.0))   # noqa: E731
+    a, b = angle(lo), angle(hi)
+    at_zero = np.abs(1.0 - r2) >= np.abs(r3 - r4)          # the folded limit is not reached: a = 0
+    at_pi = 1.0 + r2 <= r3 + r4                            # the extended limit is not reached: b = pi
+    usable = (lo < hi) & ~(at_zero & at_pi) & (b - a > 1e-3)
+    inset = 1e-6
+    idx, first, last = [], [], []
+    one = usable & (at_zero | at_pi)
+    k = np.flatnonzero(one & at_zero)
+    idx.append(k), first.append(-b[k] + inset), last.append(b[k] - inset)
+    k = np.flatnonzero(one & at_pi)
+    idx.append(k), first.append(a[k] + inset), last.append(TWO_PI - a[k] - inset)
+    k = np.flatnonzero(usable & ~at_zero & ~at_pi)
+    idx += [k, k]
+    first += [a[k] + inset, -b[k] + inset]
+    last += [b[k] - inset, -a[k] - inset]
+    return np.concatenate(idx), np.concatenate(first), np.concatenate(last)
+
+
+def run_angles(first: np.ndarray, last: np.ndarray, samples: int) -> np.ndarray:
+    """(R, samples) crank angles over each interval [first, last], crowded towards its ends like a cosine grid:
+    at a dead position the coupler point moves as the square root of the crank angle's distance to it, so
+    samples even in theta would leave the curve's ends coarse; theta = middle + half-width sin(phi), phi even,
+    spaces the points evenly in that square root near each end."""
+    phi = np.linspace(-0.5 * math.pi, 0.5 * math.pi, samples)
+    mid, half = 0.5 * (np.asarray(first) + np.asarray(last)), 0.5 * (np.asarray(last) - np.asarray(first))
+    return mid[..., None] + half[..., None] * np.sin(phi)
+
+
+def open_trials(fractions: np.ndarray, signs: tuple) -> np.ndarray:
+    """(C, N) trial fractions of the targets along an open curve: each span of ROCKING_SPANS placed at PHASES
+    starts from one end of the curve to the other, in each direction."""
+    rows = []
+    for sign in signs:
+        for span in ROCKING_SPANS:
+            for k in range(PHASES if span < 1.0 else 1):
+                start = k / (PHASES - 1) * (1.0 - span)
+                rows.append(start + span * fractions if sign > 0 else start + span * (1.0 - fractions))
+    return np.clip(np.array(rows), 0.0, 1.0)
+
+
 def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
     """(crank angles (samples,), complex coupler curves (S, samples)) of the shapes in their normalised
     frame (O = 0, O' = 1); NaN where the loop does not close."""
@@ -174,12 +241,15 @@ def arc_index(cum: np.ndarray, trials: np.ndarray) -> np.ndarray:
     return np.clip(count - 1, 0, k - 1).reshape(nb, *trials.shape)
 
 
-def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarray, s_hi: np.ndarray):
-    """Screen one block of full-turn curves (B, K): (a, b, residual, curve index of each target)."""
+def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarray, s_hi: np.ndarray,
+           closed_curve: bool = True):
+    """Screen one block of curves (B, K), full-turn (closed) or a crank's range of motion (open): (a, b,
+    residual)."""
     nb, k = curves.shape
-    seg = np.abs(np.diff(np.concatenate([curves, curves[:, :1]], axis=1), axis=1))
+    ends = np.concatenate([curves, curves[:, :1]], axis=1) if closed_curve else curves
+    seg = np.abs(np.diff(ends, axis=1))
     cum = np.concatenate([np.zeros((nb, 1)), np.cumsum(seg, axis=1)], axis=1)
-    cum = cum[:, :-1] / cum[:, -1:]                       # (B, K) arc-length fraction of each sample
+    cum = (cum[:, :-1] if closed_curve else cum) / cum[:, -1:]     # (B, K) arc-length fraction of each sample
     rows = np.arange(nb)[:, None, None]
     idx = arc_index(cum, trials)
     a, b, res = _similarity(curves[rows, idx], t, s_lo[:, None], s_hi[:, None])
@@ -227,6 +297,30 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
     for lo in range(0, len(cand), CHUNK):
         sl = slice(lo, lo + CHUNK)
         a[sl], b[sl], res[sl] = _block(curves[sl], t, trials, s_lo[sl], s_hi[sl])
+    if grashof == "any" and not closed and ROCKING > 0:
+        # an open arc needs no full turn: with grashof = "any" the linkages whose crank only rocks are candidates
+        # too, each laid onto the targets along the open curve of its range of motion
+        rock = sample_rocking_shapes(rng, ROCKING)
+        which, first, last = rocking_runs(rock)
+        rock = rock[which]
+        theta = run_angles(first, last, GRID)
+        d = {"r1": rock[:, 0:1], "r2": rock[:, 1:2], "r3": rock[:, 2:3], "r4": rock[:, 3:4],
+             "rcx": rock[:, 4:5], "rcy": rock[:, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
+        rcurves = joint_positions(d, theta, branch)["P"]
+        ok = np.all(np.isfinite(rcurves), axis=1)
+        rock, rcurves = rock[ok], rcurves[ok]
+        r_lo, r_hi = scale_room(rock, bounds)
+        fit = r_lo <= r_hi
+        rock, rcurves, r_lo, r_hi = rock[fit], rcurves[fit], r_lo[fit], r_hi[fit]
+        ra = np.empty(len(rock), complex)
+        rb = np.empty(len(rock), complex)
+        rres = np.empty(len(rock))
+        otrials = open_trials(fractions, signs)
+        for lo in range(0, len(rock), CHUNK):
+            sl = slice(lo, lo + CHUNK)
+            ra[sl], rb[sl], rres[sl] = _block(rcurves[sl], t, otrials, r_lo[sl], r_hi[sl], closed_curve=False)
+        cand, a, b, res = (np.concatenate([cand, rock]), np.concatenate([a, ra]), np.concatenate([b, rb]),
+                           np.concatenate([res, rres]))
     scale = np.abs(a)
     design = np.column_stack([cand[:, :6] * scale[:, None], b.real, b.imag,
                               np.degrees(np.angle(a)) % 360.0])

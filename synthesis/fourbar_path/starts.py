@@ -175,6 +175,29 @@ def nearest_angles(design: np.ndarray, targets: np.ndarray, branch: int) -> tupl
     return angles[k], d2[np.arange(len(targets)), k]
 
 
+def shape_of(design: np.ndarray) -> np.ndarray:
+    """(1, 6) the design's shape normalised to r1 = 1 (screen's form)."""
+    return (np.asarray(design[:6], dtype=float) / design[0])[None, :]
+
+
+def nearest_in_run(design: np.ndarray, targets: np.ndarray, branch: int) -> tuple[np.ndarray, np.ndarray]:
+    """nearest_angles for a linkage whose crank only rocks: every target's nearest point within one interval of
+    crank angles over which the loop closes (screen.rocking_runs; the one nearer to the targets in sum), so the
+    crank reaches every target without passing a dead position; inf where the loop closes nowhere."""
+    _, first, last = screen.rocking_runs(shape_of(design))
+    best = (np.full(len(targets), math.inf), np.full(len(targets), math.inf))
+    for a, b in zip(first, last):
+        angles = screen.run_angles(a, b, CURVE_SAMPLES)
+        pos = points_at(design, angles, branch).T
+        d2 = (pos[0][None, :] - targets[:, :1]) ** 2 + (pos[1][None, :] - targets[:, 1:]) ** 2
+        d2 = np.where(np.isfinite(d2), d2, np.inf)
+        k = np.argmin(d2, axis=1)
+        found = (angles[k], d2[np.arange(len(targets)), k])
+        if np.sum(found[1]) < np.sum(best[1]):
+            best = found
+    return best
+
+
 def ordered_angles(nearest: np.ndarray, targets: np.ndarray, direction: str) -> tuple[np.ndarray, float]:
     """(crank angles in order within one turn, direction sign) starting from the nearest-point angles."""
     options = []
@@ -505,14 +528,19 @@ class StartMaker:
         """(residual mm^2, start) of a placed design: nearest-point crank angles on the fine curve, then
         REFIT_ROUNDS linear refits of (x0, y0, rcx, rcy) while the residual falls."""
         moved = np.clip(design, self.bounds[:, 0], self.bounds[:, 1])
-        nearest, d2 = nearest_angles(moved, self.targets, self.branch)
+        rocking = len(screen.rocking_runs(shape_of(moved))[0]) > 0
+        nearest_of = nearest_in_run if rocking else nearest_angles
+        nearest, d2 = nearest_of(moved, self.targets, self.branch)
         for _ in range(REFIT_ROUNDS if self.refit else 0):
             refit = refit_placement(moved, nearest, self.targets, self.bounds, self.branch)
-            near2, e2 = nearest_angles(refit, self.targets, self.branch)
+            near2, e2 = nearest_of(refit, self.targets, self.branch)
             if not np.sum(e2) < np.sum(d2):
                 break
             moved, nearest, d2 = refit, near2, e2
-        theta, sign = ordered_angles(nearest, self.targets, self.direction(index))
+        if rocking:       # the crank only rocks: the angles stay as found, in one interval of its motion
+            theta, sign = nearest, (1.0 if nearest[-1] >= nearest[0] else -1.0)
+        else:
+            theta, sign = ordered_angles(nearest, self.targets, self.direction(index))
         residual = float(np.sum(d2))
         return (residual if math.isfinite(residual) else math.inf), StartPoint(moved, theta, sign)
 
