@@ -61,3 +61,26 @@ def test_best_in_start_order_keeps_the_earlier_of_equals():
     assert best_in_start_order(reports, maximise=True).outcome.start == 3
     infeasible = [rep(0, False, 1.0, 0.5), rep(1, False, 0.0, 0.2), rep(2, False, 0.0, 0.2)]
     assert best_in_start_order(infeasible, maximise=False).outcome.start == 1
+
+
+def test_among_tied_objectives_a_converged_start_wins():
+    """A tie (within 1e-9 relative) between a start IPOPT finished at its full tolerances and one it did not goes to
+    the converged one whatever their order -- the run's "optimal" is then true of the design it reports (kidney25:
+    starts 3, Solved_To_Acceptable_Level, and 11, Solve_Succeeded, 4e-12 apart); among converged ones, or
+    unconverged ones, the earlier start; a lower objective beyond the tie still wins unconverged."""
+    from types import SimpleNamespace
+
+    from synthesis.core.verdict import StartReport, best_in_start_order, status_of
+
+    def rep(start, objective, status):
+        out = SimpleNamespace(start=start, objective=objective, return_status=status,
+                              success=status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"))
+        return StartReport(out, True, 0.0)
+
+    reports = [rep(0, 12.0, "Solve_Succeeded"), rep(3, 11.854077735411, "Solved_To_Acceptable_Level"),
+               rep(11, 11.854077735372, "Solve_Succeeded"), rep(12, 11.854077735372, "Solve_Succeeded")]
+    best = best_in_start_order(reports, maximise=False)
+    assert best.outcome.start == 11 and status_of(best, None) == "optimal"
+    reports[1] = rep(3, 11.85407, "Maximum_Iterations_Exceeded")          # 6e-7 lower: not a tie
+    best = best_in_start_order(reports, maximise=False)
+    assert best.outcome.start == 3 and status_of(best, None) == "feasible"

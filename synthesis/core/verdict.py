@@ -24,7 +24,7 @@ from synthesis.ipopt_log import reached_optimum
 
 #: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
 FINE = 10
-#: objectives within this relative distance (of max(1, |f|)) are a tie: a converged start, then the lower start index wins
+#: objectives within this relative distance (of max(1, |f|)) are a tie: a converged start, then the lower index wins
 TIE = 1e-9
 #: an elastic slack counts (the rule gives way) above this fraction of the rule's scale
 SLACK_TOL = 1e-6
@@ -113,7 +113,8 @@ def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
 
 def _converged(report: StartReport) -> bool:
     """IPOPT stopped at this start's design meeting its full tolerances (what status_of calls optimal)."""
-    return bool(report.outcome.success) and reached_optimum(report.outcome.return_status)
+    out = report.outcome
+    return bool(getattr(out, "success", False)) and reached_optimum(getattr(out, "return_status", ""))
 
 
 def best_in_start_order(reports: list[StartReport], maximise: bool) -> StartReport:

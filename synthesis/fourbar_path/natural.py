@@ -76,8 +76,13 @@ class ConfigurationNLP:
             gy = v["y0"] + turn_s * px + turn_c * py
             res += [gx - float(targets[i, 0]), gy - float(targets[i, 1])]
         f = ca.sumsqr(ca.vertcat(*res))
-        thetas = [theta[i] for i in range(n)]
         decision = ca.vertcat(x, theta, psi)
+        #: (closure rows, assembly sign rows) of a decision vector (x, theta2, psi), in units of the size squared
+        self.rows = ca.Function("rows", [decision], [ca.vertcat(*[r[0] for r in structural[0::2]]),
+                                                     ca.vertcat(*[r[0] for r in structural[1::2]])])
+        #: the path error (mm^2) of a decision vector (x, theta2, psi)
+        self.fit = ca.Function("fit", [decision], [f])
+        thetas = [theta[i] for i in range(n)]
         self.lbx = np.concatenate([lbx, np.full(n, PSI_RANGE[0])])
         self.ubx = np.concatenate([ubx, np.full(n, PSI_RANGE[1])])
         problem = Problem(

@@ -89,10 +89,11 @@ CUTS = ((30, 400.0),)
 RESUME_WITHIN = 1.0
 #: the resumed run's iterations at most (a start that does not converge in them keeps its max_iter answer)
 RESUME_ITERATIONS = 150
-#: grashof = "any", free timing: the configuration form (natural.py, regular at the crank's dead positions) as
-#: "main" (every start solved in it), "polish" (a start the crank-angle form did not finish, within RESUME_WITHIN x
-#: the reference, solved again in it), or None
-CONFIGURATION: str | None = "main"
+#: grashof = "any", free timing: the configuration form (natural.py, regular at the crank's dead positions) solves
+#: every start of an open target arc (whose best linkages often rock the crank to a dead position), and polishes a
+#: start of a closed loop that the crank-angle form did not finish (within RESUME_WITHIN x the reference; a closed
+#: loop needs a full turn, so no dead position, but its best linkages may sit on a change point: kidney25); False: off
+CONFIGURATION = True
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
@@ -204,8 +205,10 @@ class PathNLP:
         self.compiled = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
+        # grashof = "any" on a screened free-timing target set (issue 19): the configuration form too (CONFIGURATION;
+        # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
-        if (CONFIGURATION and spec.rules.grashof == "any" and not spec.timed and not elastic
+        if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and not in_tolerance_box() and not operating_symbols_wanted()):
             self.configuration = ConfigurationNLP(spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
                                                   self._ipopt_options(spec), spec.solver.max_iter)
@@ -331,12 +334,14 @@ class PathNLP:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
         resumed = None
-        if self.configuration is not None and CONFIGURATION == "main":
+        if self.configuration is not None and not self.starts.closed:
             out = self.configuration.solve(index, w0, sp.design, sp.sign, watch=watch)
+            if self._resumable(out, sp.sign):
+                out, resumed = self._resume(index, out, sp.sign, "configuration")
         else:
             out = self.compiled.solve(index, w0, p=sp.sign, watch=watch)
             if self.configuration is not None and self._polishable(out, sp.sign):
-                out, resumed = self._polish(index, out, sp.sign)
+                out, resumed = self._resume(index, out, sp.sign, "configuration")
             elif self._resumable(out, sp.sign):
                 out, resumed = self._resume(index, out, sp.sign)
         if pre is not None:
@@ -353,52 +358,45 @@ class PathNLP:
         x = out.x[: self.compiled.n_x]
         return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
 
-    def _resume(self, index: int, first, sign: float):
-        """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped at max_iter, itself stopped
-        after RESUME_ITERATIONS: its answer when it converged at a path error no higher than ``first``'s (a fresh run
-        need not stay below its start), else ``first``'s; the iterations and time of both counted either way."""
+    def _resume(self, index: int, first, sign: float, form: str = "angle"):
+        """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped, itself stopped after
+        RESUME_ITERATIONS, in the crank-angle form or (``form`` "configuration") the configuration form: its answer
+        when it converged at a path error no higher than ``first``'s (a fresh run need not stay below its start), else
+        ``first``'s; the iterations and time of both counted either way."""
         x1 = first.x[: self.compiled.n_x]
-        second = self.compiled.solve(index, x1, p=sign, watch=lambda iteration, f: iteration >= RESUME_ITERATIONS)
+        cap = lambda iteration, f: iteration >= RESUME_ITERATIONS      # noqa: E731
+        if form == "configuration":
+            second = self.configuration.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
+            what = ("polished in the configuration form" if first.return_status != "Maximum_Iterations_Exceeded"
+                    else "resumed in the configuration form from where it reached max_iter")
+        else:
+            second = self.compiled.solve(index, x1, p=sign, watch=cap)
+            what = "resumed from where it reached max_iter"
         x2 = second.x[: self.compiled.n_x]
         before, after = float(self.fit(x1, sign)), float(self.fit(x2, sign))
         converged = second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
         kept = converged and math.isfinite(after) and after <= before
         resumed = {"return_status": second.return_status, "iterations": second.iterations, "kept": kept,
                    "path_error_mm2": after if math.isfinite(after) else None}
+        if form == "configuration":
+            resumed["form"] = "configuration"
         if kept:
-            return self._then(first, second, "resumed from where it reached max_iter"), resumed
+            return self._then(first, second, what), resumed
         first.iterations += second.iterations
         first.wall_s += second.wall_s
         why = "did not converge" if not converged else f"ended higher, {after:.9g} mm^2 against {before:.9g}"
-        first.log += (f"\n===== resumed from where it reached max_iter: {second.return_status}, not kept ({why})\n"
-                      + second.log)
+        first.log += f"\n===== {what}: {second.return_status}, not kept ({why})\n" + second.log
         return first, resumed
 
     def _polishable(self, out, sign: float) -> bool:
-        """grashof = "any": a start the crank-angle form did not finish (not converged, not cut) within RESUME_WITHIN x
-        the reference is solved again in the configuration form."""
-        if out.return_status in ("Solve_Succeeded", "User_Requested_Stop") or self.reference is None:
+        """grashof = "any", a closed loop: a start the crank-angle form did not finish (neither converged nor cut)
+        within RESUME_WITHIN x the reference is solved again in the configuration form (kidney25's best start ends
+        with a failed step on a change point in the crank-angle form, Solve_Succeeded so)."""
+        if (not self.resumes or out.return_status in ("Solve_Succeeded", "User_Requested_Stop")
+                or self.reference is None):
             return False
         x = out.x[: self.compiled.n_x]
         return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
-
-    def _polish(self, index: int, first, sign: float):
-        """(outcome, what the polish did): the configuration form from where ``first`` stopped; its answer when it
-        converged at a path error no higher than ``first``'s, else ``first``'s; both runs' iterations counted."""
-        x1 = first.x[: self.compiled.n_x]
-        second = self.configuration.solve(index, x1, self.design_of(x1[:9]), sign)
-        x2 = second.x[: self.compiled.n_x]
-        before, after = float(self.fit(x1, sign)), float(self.fit(x2, sign))
-        converged = second.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-        kept = converged and math.isfinite(after) and after <= before
-        polished = {"form": "configuration", "return_status": second.return_status, "iterations": second.iterations,
-                    "kept": kept, "path_error_mm2": after if math.isfinite(after) else None}
-        if kept:
-            return self._then(first, second, "polished in the configuration form"), polished
-        first.iterations += second.iterations
-        first.wall_s += second.wall_s
-        first.log += f"\n===== polished in the configuration form: {second.return_status}, not kept\n" + second.log
-        return first, polished
 
     @staticmethod
     def _then(first, second, why: str):
