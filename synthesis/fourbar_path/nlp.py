@@ -94,6 +94,10 @@ RESUME_ITERATIONS = 150
 #: start of a closed loop that the crank-angle form did not finish (within RESUME_WITHIN x the reference; a closed
 #: loop needs a full turn, so no dead position, but its best linkages may sit on a change point: kidney25); False: off
 CONFIGURATION = True
+#: a closed loop's polish in the configuration form stops after this many iterations: from where the crank-angle form
+#: stopped, a regular point converges in a few dozen (kidney25's best start: 29), the rest do not converge at all (20
+#: of its 21 polished starts on seed 0 still ran at 150 iterations)
+POLISH_ITERATIONS = 60
 TRACE = False            # study switch: each start's details get its path error at every iteration
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
@@ -360,14 +364,17 @@ class PathNLP:
 
     def _resume(self, index: int, first, sign: float, form: str = "angle"):
         """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped, itself stopped after
-        RESUME_ITERATIONS, in the crank-angle form or (``form`` "configuration") the configuration form: its answer
+        RESUME_ITERATIONS (a polish of a start that did not reach max_iter: POLISH_ITERATIONS), in the crank-angle form
+        or (``form`` "configuration") the configuration form: its answer
         when it converged at a path error no higher than ``first``'s (a fresh run need not stay below its start), else
         ``first``'s; the iterations and time of both counted either way."""
         x1 = first.x[: self.compiled.n_x]
-        cap = lambda iteration, f: iteration >= RESUME_ITERATIONS      # noqa: E731
+        polish = form == "configuration" and first.return_status != "Maximum_Iterations_Exceeded"
+        limit = POLISH_ITERATIONS if polish else RESUME_ITERATIONS
+        cap = lambda iteration, f: iteration >= limit      # noqa: E731
         if form == "configuration":
             second = self.configuration.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
-            what = ("polished in the configuration form" if first.return_status != "Maximum_Iterations_Exceeded"
+            what = ("polished in the configuration form" if polish
                     else "resumed in the configuration form from where it reached max_iter")
         else:
             second = self.compiled.solve(index, x1, p=sign, watch=cap)
