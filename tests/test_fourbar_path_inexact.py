@@ -120,7 +120,8 @@ def test_the_early_cut_stops_a_start_at_its_iteration(monkeypatch):
 
 def test_grashof_any_starts_close_the_loop_at_their_start_angles():
     """A random design of the wide box often closes the loop at none of its start angles (IPOPT then stops
-    at iteration 0 on NaN); every start of a grashof = "any" problem is a linkage whose crank turns."""
+    at iteration 0 on NaN); every start of a grashof = "any" closed loop is a linkage whose crank turns (an open
+    arc's screened starts may rock the crank: tests/test_fourbar_path_configuration.py)."""
     spec = inexact_spec("ellipse20", {"starts": 12}).model
     maker = StartMaker(spec, 0)
     bounds = np.array(spec.bounds_array(), dtype=float)

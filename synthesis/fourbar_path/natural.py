@@ -11,15 +11,15 @@ Here each target has two angles, the crank's theta2 and the coupler's psi (direc
 frame), and the loop's closure is an equality row, |A + r3 e^{i psi} - O'|^2 = r4^2.  The configuration curve
 {closure = 0} is smooth and its gradient does not vanish at a dead position of the crank (there d closure /
 d psi = 0 but d closure / d theta2 != 0), so the coupler point A + (rcx + i rcy) e^{i psi} is a smooth function on
-a regular constraint set: the dead position is an ordinary point where one inequality -- the assembly's side
--- becomes active.  The assembly (branch) is held by a sign row: B on the spec's side of the line O' -> A, the
+a regular constraint set: the dead position is an ordinary point (there the assembly's side may change, so the
+motion rule between the targets, |O'A| <= r3 + r4 or >= |r3 - r4|, is what holds the crank at it).  The assembly (branch) is held by a sign row: B on the spec's side of the line O' -> A, the
 side the crank-angle form's ``branch`` picks (construction.joint_positions).  Only at a change point (all four
 links in line) does the closure's gradient vanish; no formulation is regular there.
 
 Every rule of the spec is the crank-angle form's (rules.path_rules on the same theta2), so a design and crank
 angles returned from here are checked exactly as any other; the coupler point of this form equals the closed
-form's wherever the closure and sign rows hold.  Used as a polish of a start that the crank-angle form did not
-finish (PathNLP.solve).
+form's wherever the closure and sign rows hold.  PathNLP.solve solves every start of an open target arc in it, and
+polishes in it a closed loop's start that the crank-angle form ended with a failed step.
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ class ConfigurationNLP:
         crank-angle form's layout (its multipliers are this form's rows', not that form's: left out)."""
         theta = np.asarray(w[9:9 + self.n], dtype=float)
         psi = self.psi_of(design, theta)
-        # the coupler angle nearest the crank angle's own turn keeps the two unwrapped alike
+        # each coupler angle within half a turn of the previous one (the crank angles are unwrapped so too)
         psi = np.unwrap(psi)
         out = self.compiled.solve(index, np.concatenate([w[:9 + self.n], psi]), p=sign, watch=watch)
         out.x = out.x[: self.n_x]

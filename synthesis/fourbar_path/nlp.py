@@ -348,7 +348,7 @@ class PathNLP:
             watch = self.watch(trace)
         resumed = None
         if self.configuration is not None and not self.starts.closed:
-            out = self.configuration.solve(index, w0, sp.design, sp.sign, watch=watch)
+            out = self.configuration.solve(index, w0, self.design_of(w0[:9]), sp.sign, watch=watch)
             if self._resumable(out, sp.sign):
                 out, resumed = self._resume(index, out, sp.sign, "configuration")
         else:
@@ -372,9 +372,10 @@ class PathNLP:
         return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
 
     def _resume(self, index: int, first, sign: float, form: str = "angle"):
-        """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped, itself stopped after
-        RESUME_ITERATIONS (a polish of a start that did not reach max_iter: POLISH_ITERATIONS), in the crank-angle form
-        or (``form`` "configuration") the configuration form: its answer
+        """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped (in the configuration
+        form its coupler angles recomputed by the closed form at that design and those crank angles), itself stopped
+        after RESUME_ITERATIONS (a polish of a start that did not reach max_iter: POLISH_ITERATIONS), in the
+        crank-angle form or (``form`` "configuration") the configuration form: its answer
         when it converged at a path error no higher than ``first``'s (a fresh run need not stay below its start), else
         ``first``'s; the iterations and time of both counted either way."""
         x1 = first.x[: self.compiled.n_x]
@@ -405,11 +406,12 @@ class PathNLP:
         return first, resumed
 
     def _polishable(self, out, sign: float) -> bool:
-        """grashof = "any", a closed loop: a start the crank-angle form did not finish (neither converged nor cut)
-        within RESUME_WITHIN x the reference is solved again in the configuration form (kidney25's best start ends
-        with a failed step on a change point in the crank-angle form, Solve_Succeeded so)."""
-        if (not self.resumes or out.return_status in ("Solve_Succeeded", "User_Requested_Stop")
-                or self.reference is None):
+        """grashof = "any", a closed loop: a start the crank-angle form ended otherwise than converged, cut or at
+        max_iter (which is resumed in the crank-angle form: _resumable) within RESUME_WITHIN x the reference is solved
+        again in the configuration form (kidney25's best start ends with a failed step on a change point in the
+        crank-angle form, Solve_Succeeded so)."""
+        if (not self.resumes or self.reference is None
+                or out.return_status in ("Solve_Succeeded", "User_Requested_Stop", "Maximum_Iterations_Exceeded")):
             return False
         x = out.x[: self.compiled.n_x]
         return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference

@@ -16,6 +16,11 @@ sum |a c(theta_i) + b - t_i|^2 (mm^2, the NLP's objective), and the best are the
 the shape scaled by |a|, turned by arg a, shifted to b; crank angles = each target's nearest curve
 parameter (refined by starts.StartMaker on the fine curve).
 
+An open target arc with grashof = "any" needs no full turn: it is also laid onto ROCKING shapes of any class whose
+crank only rocks, each over an interval of crank angles where its loop closes (``rocking_runs``, in closed form;
+sampled on a cosine grid, ``run_angles``), the targets' arc lengths along that open curve (``open_trials``).  The
+two families are ranked together.
+
 Everything is a function of the spec and the seed (numpy's generator seeded by [seed, SEED_TAG]), so
 every worker screens the same shapes and gets the same list; the list is cached per process (a forked
 worker inherits the one its parent made when it built the NLP).

@@ -35,7 +35,9 @@ def recheck(setting: Setting, outcome) -> Recheck:
     without them: its ``crank_deg``, else the nearest points of its coupler curve)."""
     details = getattr(outcome, "details", {}) or {}
     crank = details.get("crank_deg", outcome.design.get("crank_deg"))
-    direction = details.get("direction")
+    # a direction the spec fixes is the one checked, whatever a start's details say
+    fixed = setting.spec.rules.direction
+    direction = fixed if fixed in ("ccw", "cw") else details.get("direction")
     ev = evaluate(setting.spec, outcome.design, crank, timing="solved" if crank is not None else "nearest",
                   direction=direction if direction in ("ccw", "cw") else None)
     return Recheck(ev.rules, ev)

@@ -42,7 +42,9 @@ The pool and the refit were measured on the inexact set of issue 19 (problems/fo
 STRATEGY "pool" (every start from the pool) needs the fewest iterations but reaches the best known
 from fewer starts than "mix" (this module), which keeps the even starts' spread.  With grashof = "any"
 every start is pulled into the crank-rockers (ANY_STARTS_ROTATE): a random linkage of a wide box
-mostly closes the loop at none of its start angles, and IPOPT stops at iteration 0 on NaN.
+mostly closes the loop at none of its start angles, and IPOPT stops at iteration 0 on NaN.  The exception is a
+screened shape whose crank only rocks (an open arc with grashof = "any": screen.py): its crank angles are the
+nearest points within one interval of its motion (``nearest_in_run``), never across a dead position.
 """
 
 from __future__ import annotations
@@ -538,7 +540,9 @@ class StartMaker:
                 break
             moved, nearest, d2 = refit, near2, e2
         if rocking:       # the crank only rocks: the angles stay as found, in one interval of its motion
-            theta, sign = nearest, (1.0 if nearest[-1] >= nearest[0] else -1.0)
+            allowed = SIGNS[self.direction(index)]
+            sign = (1.0 if nearest[-1] >= nearest[0] else -1.0) if len(allowed) > 1 else allowed[0]
+            theta = nearest
         else:
             theta, sign = ordered_angles(nearest, self.targets, self.direction(index))
         residual = float(np.sum(d2))

@@ -185,9 +185,10 @@ def without_ipopt():
 
 
 def whole_problem(nlp) -> None:
-    """The kind's NLP solves its whole problem from every start: fourbar_path's variable-projection study switch and
-    its configuration form (grashof "any", natural.py: two angles per target) are dropped, so a tolerance box holds, and the analysis reads, every rule as the whole problem holds it (for grashof
-    "any" the motion's rows exactly) in the spec's design coordinates."""
+    """The kind's NLP solves its whole problem from every start: fourbar_path's variable-projection study switch
+    and its configuration form (grashof "any", natural.py: two angles per target) are dropped, so a tolerance box
+    holds, and the analysis reads, every rule as the whole problem holds it (for grashof "any" the motion's rows
+    exactly) in the spec's design coordinates."""
     if getattr(nlp, "varpro", None) is not None:
         nlp.varpro = None
     if getattr(nlp, "configuration", None) is not None:     # fourbar_path: its crank-angle form is the whole problem
