@@ -149,3 +149,26 @@ def test_a_closed_loop_start_the_crank_angle_form_does_not_finish_is_polished_in
     assert out.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)
     ev = evaluate(spec, out.design, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
     assert all(r.record().satisfied for r in ev.rules)
+
+
+def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
+    """A start's details carry the direction it was solved in; where the spec fixes one, the re-check holds the
+    spec's.  dwell_arc15's best known design meets its ordered targets counter-clockwise: re-checked for a spec
+    that says clockwise, its sequence rule fails, whatever direction the start's details claim."""
+    from types import SimpleNamespace
+
+    from synthesis.core.kind import Setting
+    from synthesis.fourbar_path.solve import recheck
+    from synthesis.fourbar_path.inexact import inexact_data
+    from synthesis.spec.common import validate
+    from synthesis.spec.fourbar_path import FourbarPathSpec
+
+    rec = best_known_designs()["dwell_arc15"]
+    for direction, holds in (("counter_clockwise", True), ("clockwise", False)):
+        data = inexact_data("dwell_arc15")
+        data["rules"]["direction"] = direction
+        spec = validate(FourbarPathSpec, data, prefix="fourbar_path")
+        outcome = SimpleNamespace(design=rec["design"], details={"crank_deg": rec["crank_deg"], "direction": "ccw"})
+        checked = recheck(Setting(spec), outcome)
+        sequence = [r.record() for r in checked.rules if r.record().name == "sequence"]
+        assert len(sequence) == 1 and sequence[0].satisfied is holds

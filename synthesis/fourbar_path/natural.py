@@ -12,8 +12,9 @@ frame), and the loop's closure is an equality row, |A + r3 e^{i psi} - O'|^2 = r
 {closure = 0} is smooth and its gradient does not vanish at a dead position of the crank (there d closure /
 d psi = 0 but d closure / d theta2 != 0), so the coupler point A + (rcx + i rcy) e^{i psi} is a smooth function on
 a regular constraint set: the dead position is an ordinary point (there the assembly's side may change, so the
-motion rule between the targets, |O'A| <= r3 + r4 or >= |r3 - r4|, is what holds the crank at it).  The assembly (branch) is held by a sign row: B on the spec's side of the line O' -> A, the
-side the crank-angle form's ``branch`` picks (construction.joint_positions).  Only at a change point (all four
+motion rule between the targets, |O'A| <= r3 + r4 or >= |r3 - r4|, is what holds the crank at it).  The assembly
+(branch) is held by a sign row: B on the spec's side of the line O' -> A, the side the crank-angle form's
+``branch`` picks (construction.joint_positions).  Only at a change point (all four
 links in line) does the closure's gradient vanish; no formulation is regular there.
 
 Every rule of the spec is the crank-angle form's (rules.path_rules on the same theta2), so a design and crank
