@@ -172,3 +172,48 @@ def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
         checked = recheck(Setting(spec), outcome)
         sequence = [r.record() for r in checked.rules if r.record().name == "sequence"]
         assert len(sequence) == 1 and sequence[0].satisfied is holds
+
+
+def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form_a_failed_step_polished_and_capped():
+    """kidney25 with max_iter 60 (seed 0): start 3 reaches max_iter and is resumed in the crank-angle form (its details
+    name no form); start 13 ends with a failed step and is polished in the configuration form, stopped after
+    POLISH_ITERATIONS (60) without converging, so it keeps its own answer."""
+    from synthesis.fourbar_path import nlp as path_nlp
+
+    spec = inexact_spec("kidney25", {"max_iter": 60}).model
+    nlp = PathNLP(spec, seed=0)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
+    resumed = nlp.solve(3, rows[3])
+    assert "form" not in resumed.details["resumed"]
+    assert "resumed from where it reached max_iter" in resumed.raw.log
+    polished = nlp.solve(13, rows[13])
+    assert polished.details["resumed"]["form"] == "configuration"
+    assert polished.details["resumed"]["iterations"] <= path_nlp.POLISH_ITERATIONS
+    assert polished.details["resumed"]["return_status"] == "User_Requested_Stop"
+    assert polished.details["resumed"]["kept"] is False and polished.return_status == "Error_In_Step_Computation"
+
+
+def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spec_fixes():
+    """dwell_arc15's screened starts whose crank only rocks: with direction "either" each start's direction is the
+    order of its crank angles within its interval of motion (not the cw / ccw alternation of the unscreened starts);
+    with "clockwise" every one is clockwise."""
+    from synthesis.fourbar_path.inexact import inexact_data
+    from synthesis.fourbar_path.starts import StartMaker
+    from synthesis.spec.common import validate
+    from synthesis.spec.fourbar_path import FourbarPathSpec
+
+    for direction in ("either", "clockwise"):
+        data = inexact_data("dwell_arc15")
+        data["rules"]["direction"] = direction
+        maker = StartMaker(validate(FourbarPathSpec, data, prefix="fourbar_path"), 0)
+        designs, _ = maker.screened
+        rocking = 0
+        for rank in range(1, 41):
+            design = designs[rank - 1]
+            if not len(screen.rocking_runs(shape_of(design))[0]):
+                continue
+            rocking += 1
+            _, start = maker.finish(design, rank)
+            order = 1.0 if start.theta[-1] >= start.theta[0] else -1.0
+            assert start.sign == (order if direction == "either" else -1.0), rank
+        assert rocking >= 10

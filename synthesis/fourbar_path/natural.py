@@ -20,7 +20,8 @@ links in line) does the closure's gradient vanish; no formulation is regular the
 Every rule of the spec is the crank-angle form's (rules.path_rules on the same theta2), so a design and crank
 angles returned from here are checked exactly as any other; the coupler point of this form equals the closed
 form's wherever the closure and sign rows hold.  PathNLP.solve solves every start of an open target arc in it, and
-polishes in it a closed loop's start that the crank-angle form ended with a failed step.
+polishes in it a closed loop's start that the crank-angle form ended otherwise than converged, cut or at max_iter
+(a failed step, mostly).
 """
 
 from __future__ import annotations

@@ -117,8 +117,8 @@ SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 #: above 1, so a start far from the targets (large residuals, large gradient) had its objective scaled down by up to
 #: 10^2-10^3 and its tolerance loosened by as much (egg16's best start stopped 4e-6 above the optimum of its own
 #: basin).  max_gradient 1000 (IPOPT's default 100): median iterations 79 -> 40.5 (seed 0), 77.25 -> 57.5 (seed 1),
-#: at the best known on 7 / 4 of 10 against 6 / 6 (egg16, s_curve12 gained, square24 lost on seed 0; triangle18 and
-#: stroke_lift14 lost on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md, sixth pass)
+#: at the best known on 6 / 4 of 10 against 5 / 5 (egg16, s_curve12 gained, square24 lost on seed 0; triangle18 lost
+#: on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md, sixth pass)
 SCREEN_SCALING: dict | None = {"ipopt.nlp_scaling_max_gradient": 1000.0}
 
 

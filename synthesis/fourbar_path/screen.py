@@ -132,7 +132,7 @@ def sample_rocking_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
 
 def rocking_runs(shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(shape index, first angle, last angle) of every interval of crank angles over which the loop of a shape
-    whose crank cannot turn fully closes.  The frame-to-crank-pin distance d(theta)^2 = 1 + r2^2 - 2 r2 cos theta
+    whose crank cannot turn fully closes.  The frame-to-crank-pin distance d, d(theta)^2 = 1 + r2^2 - 2 r2 cos theta,
     must lie in [|r3 - r4|, r3 + r4]; d grows with |theta| on [0, pi], so the closing angles are +-[a, b]: one
     interval around 0 (a = 0), one around pi (b = pi), or two mirror intervals [a, b] and [-b, -a]."""
     r2, r3, r4 = shapes[:, 1], shapes[:, 2], shapes[:, 3]

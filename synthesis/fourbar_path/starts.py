@@ -528,7 +528,12 @@ class StartMaker:
 
     def finish(self, design: np.ndarray, index: int = 0) -> tuple[float, StartPoint]:
         """(residual mm^2, start) of a placed design: nearest-point crank angles on the fine curve, then
-        REFIT_ROUNDS linear refits of (x0, y0, rcx, rcy) while the residual falls."""
+        REFIT_ROUNDS linear refits of (x0, y0, rcx, rcy) while the residual falls.  ``index`` is the screened
+        shape's rank + 1 (from_screen): with direction "either" an even rank unwraps its angles in the direction
+        ``direction(index)`` gives, counter-clockwise and clockwise in turn, as the unscreened starts do -- a spread
+        measured to reach the best known more often than the best-fitting direction for every shape (INEXACT.md,
+        sixth pass) --, except a shape whose crank only rocks: the order of its angles within its one interval of
+        motion is its direction (forced to the spec's when the spec fixes one)."""
         moved = np.clip(design, self.bounds[:, 0], self.bounds[:, 1])
         rocking = len(screen.rocking_runs(shape_of(moved))[0]) > 0
         nearest_of = nearest_in_run if rocking else nearest_angles
@@ -540,7 +545,7 @@ class StartMaker:
                 break
             moved, nearest, d2 = refit, near2, e2
         if rocking:       # the crank only rocks: the angles stay as found, in one interval of its motion
-            allowed = SIGNS[self.direction(index)]
+            allowed = SIGNS[self.spec.rules.direction]        # not direction(index): see the docstring
             sign = (1.0 if nearest[-1] >= nearest[0] else -1.0) if len(allowed) > 1 else allowed[0]
             theta = nearest
         else:
