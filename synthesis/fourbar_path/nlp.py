@@ -91,8 +91,9 @@ RESUME_WITHIN = 1.0
 RESUME_ITERATIONS = 150
 #: grashof = "any", free timing: the configuration form (natural.py, regular at the crank's dead positions) solves
 #: every start of an open target arc (whose best linkages often rock the crank to a dead position), and polishes a
-#: start of a closed loop that the crank-angle form did not finish (within RESUME_WITHIN x the reference; a closed
-#: loop needs a full turn, so no dead position, but its best linkages may sit on a change point: kidney25); False: off
+#: start of a closed loop that the crank-angle form ended otherwise than converged, cut or at max_iter (within
+#: RESUME_WITHIN x the reference; a closed loop needs a full turn, so no dead position, but its best linkages may sit
+#: on a change point: kidney25); False: off
 CONFIGURATION = True
 #: a closed loop's polish in the configuration form stops after this many iterations: from where the crank-angle form
 #: stopped, a regular point converges in a few dozen (kidney25's best start: 29), the rest do not converge at all (20
@@ -366,7 +367,11 @@ class PathNLP:
         a fresh IPOPT (barrier, filter and Hessian regularisation reset).  Few converge so (seed 0: 2 of 49 resumed
         starts; INEXACT.md, fifth pass), but those are starts that crawled along a flat valley to max_iter, as
         stroke_lift14's best did; so a start may run max_iter + RESUME_ITERATIONS iterations."""
-        if not self.resumes or out.return_status != "Maximum_Iterations_Exceeded" or self.reference is None:
+        return out.return_status == "Maximum_Iterations_Exceeded" and self._near_reference(out, sign)
+
+    def _near_reference(self, out, sign: float) -> bool:
+        """Whether a start's answer is a number with a path error within RESUME_WITHIN x the reference (resumes on)."""
+        if not self.resumes or self.reference is None:
             return False
         x = out.x[: self.compiled.n_x]
         return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
@@ -410,11 +415,8 @@ class PathNLP:
         max_iter (which is resumed in the crank-angle form: _resumable) within RESUME_WITHIN x the reference is solved
         again in the configuration form (kidney25's best start ends with a failed step on a change point in the
         crank-angle form, Solve_Succeeded so)."""
-        if (not self.resumes or self.reference is None
-                or out.return_status in ("Solve_Succeeded", "User_Requested_Stop", "Maximum_Iterations_Exceeded")):
-            return False
-        x = out.x[: self.compiled.n_x]
-        return bool(np.all(np.isfinite(x))) and float(self.fit(x, sign)) <= RESUME_WITHIN * self.reference
+        finished = ("Solve_Succeeded", "User_Requested_Stop", "Maximum_Iterations_Exceeded")
+        return out.return_status not in finished and self._near_reference(out, sign)
 
     @staticmethod
     def _then(first, second, why: str):

@@ -179,13 +179,19 @@ def open_trials(fractions: np.ndarray, signs: tuple) -> np.ndarray:
     return np.clip(np.array(rows), 0.0, 1.0)
 
 
-def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
-    """(crank angles (samples,), complex coupler curves (S, samples)) of the shapes in their normalised
-    frame (O = 0, O' = 1); NaN where the loop does not close."""
-    theta = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+def shape_points(shapes: np.ndarray, theta: np.ndarray, branch: int) -> np.ndarray:
+    """(S, K) complex coupler points of the shapes in their normalised frame (O = 0, O' = 1) at crank angles
+    ``theta`` ((K,) for all, or (S, K) one row per shape); NaN where the loop does not close."""
     d = {"r1": shapes[:, 0:1], "r2": shapes[:, 1:2], "r3": shapes[:, 2:3], "r4": shapes[:, 3:4],
          "rcx": shapes[:, 4:5], "rcy": shapes[:, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
-    return theta, joint_positions(d, theta[None, :], branch)["P"]
+    return joint_positions(d, np.atleast_2d(theta), branch)["P"]
+
+
+def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """(crank angles (samples,), complex coupler curves (S, samples)) of the shapes over a turn; NaN where the
+    loop does not close."""
+    theta = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+    return theta, shape_points(shapes, theta, branch)
 
 
 def scale_room(shapes: np.ndarray, bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -271,6 +277,24 @@ def _block(curves: np.ndarray, t: np.ndarray, trials: np.ndarray, s_lo: np.ndarr
     return a, b, res
 
 
+def _fit_family(shapes: np.ndarray, curves: np.ndarray, t: np.ndarray, trials: np.ndarray, bounds: np.ndarray,
+                closed_curve: bool):
+    """(shapes, a, b, residual) of one family of shapes with their curves (S, K): those whose curve closes at every
+    sample and whose scale room in the bounds is not empty, each laid onto the targets t by _block, CHUNK at a time."""
+    ok = np.all(np.isfinite(curves), axis=1)
+    shapes, curves = shapes[ok], curves[ok]
+    s_lo, s_hi = scale_room(shapes, bounds)
+    fit = s_lo <= s_hi
+    shapes, curves, s_lo, s_hi = shapes[fit], curves[fit], s_lo[fit], s_hi[fit]
+    a = np.empty(len(shapes), complex)
+    b = np.empty(len(shapes), complex)
+    res = np.empty(len(shapes))
+    for lo in range(0, len(shapes), CHUNK):
+        sl = slice(lo, lo + CHUNK)
+        a[sl], b[sl], res[sl] = _block(curves[sl], t, trials, s_lo[sl], s_hi[sl], closed_curve)
+    return shapes, a, b, res
+
+
 def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, signs: tuple, closed: bool,
            fractions: np.ndarray, seed: int, shapes: int = SHAPES) -> tuple[np.ndarray, np.ndarray]:
     """(designs r1..theta0 in spec units, residual mm^2), best first, of the screened shapes that fit in
@@ -288,42 +312,17 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
             count += len(blocks[-1])
         cand += [np.concatenate(blocks)[:wanted]] if blocks else []
     cand = np.concatenate(cand)
-    _, curves = shape_curves(cand, branch, GRID)
-    ok = np.all(np.isfinite(curves), axis=1)
-    cand, curves = cand[ok], curves[ok]
-    s_lo, s_hi = scale_room(cand, bounds)
-    fit = s_lo <= s_hi
-    cand, curves, s_lo, s_hi = cand[fit], curves[fit], s_lo[fit], s_hi[fit]
     t = targets[:, 0] + 1j * targets[:, 1]
-    trials = trial_fractions(fractions, signs, closed)
-    a = np.empty(len(cand), complex)
-    b = np.empty(len(cand), complex)
-    res = np.empty(len(cand))
-    for lo in range(0, len(cand), CHUNK):
-        sl = slice(lo, lo + CHUNK)
-        a[sl], b[sl], res[sl] = _block(curves[sl], t, trials, s_lo[sl], s_hi[sl])
+    cand, a, b, res = _fit_family(cand, shape_curves(cand, branch, GRID)[1], t,
+                                  trial_fractions(fractions, signs, closed), bounds, closed_curve=True)
     if grashof == "any" and not closed and ROCKING > 0:
         # an open arc needs no full turn: with grashof = "any" the linkages whose crank only rocks are candidates
         # too, each laid onto the targets along the open curve of its range of motion
         rock = sample_rocking_shapes(rng, ROCKING)
         which, first, last = rocking_runs(rock)
         rock = rock[which]
-        theta = run_angles(first, last, GRID)
-        d = {"r1": rock[:, 0:1], "r2": rock[:, 1:2], "r3": rock[:, 2:3], "r4": rock[:, 3:4],
-             "rcx": rock[:, 4:5], "rcy": rock[:, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
-        rcurves = joint_positions(d, theta, branch)["P"]
-        ok = np.all(np.isfinite(rcurves), axis=1)
-        rock, rcurves = rock[ok], rcurves[ok]
-        r_lo, r_hi = scale_room(rock, bounds)
-        fit = r_lo <= r_hi
-        rock, rcurves, r_lo, r_hi = rock[fit], rcurves[fit], r_lo[fit], r_hi[fit]
-        ra = np.empty(len(rock), complex)
-        rb = np.empty(len(rock), complex)
-        rres = np.empty(len(rock))
-        otrials = open_trials(fractions, signs)
-        for lo in range(0, len(rock), CHUNK):
-            sl = slice(lo, lo + CHUNK)
-            ra[sl], rb[sl], rres[sl] = _block(rcurves[sl], t, otrials, r_lo[sl], r_hi[sl], closed_curve=False)
+        rock, ra, rb, rres = _fit_family(rock, shape_points(rock, run_angles(first, last, GRID), branch), t,
+                                         open_trials(fractions, signs), bounds, closed_curve=False)
         cand, a, b, res = (np.concatenate([cand, rock]), np.concatenate([a, ra]), np.concatenate([b, rb]),
                            np.concatenate([res, rres]))
     scale = np.abs(a)

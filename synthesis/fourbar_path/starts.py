@@ -168,13 +168,17 @@ def spread_by_arc_length(targets: np.ndarray, first: float, sign: float) -> np.n
     return first + sign * TWO_PI * frac
 
 
-def nearest_angles(design: np.ndarray, targets: np.ndarray, branch: int) -> tuple[np.ndarray, np.ndarray]:
-    """(angle of the nearest curve sample to each target, its squared distance), mm^2."""
-    angles, pos = coupler_curve(design, branch)
+def _nearest_samples(angles: np.ndarray, pos: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(angle of the nearest of the curve samples pos (2, K) at ``angles`` to each target, its squared distance)."""
     d2 = (pos[0][None, :] - targets[:, :1]) ** 2 + (pos[1][None, :] - targets[:, 1:]) ** 2
     d2 = np.where(np.isfinite(d2), d2, np.inf)
     k = np.argmin(d2, axis=1)
     return angles[k], d2[np.arange(len(targets)), k]
+
+
+def nearest_angles(design: np.ndarray, targets: np.ndarray, branch: int) -> tuple[np.ndarray, np.ndarray]:
+    """(angle of the nearest curve sample to each target, its squared distance), mm^2."""
+    return _nearest_samples(*coupler_curve(design, branch), targets)
 
 
 def shape_of(design: np.ndarray) -> np.ndarray:
@@ -190,11 +194,7 @@ def nearest_in_run(design: np.ndarray, targets: np.ndarray, branch: int) -> tupl
     best = (np.full(len(targets), math.inf), np.full(len(targets), math.inf))
     for a, b in zip(first, last):
         angles = screen.run_angles(a, b, CURVE_SAMPLES)
-        pos = points_at(design, angles, branch).T
-        d2 = (pos[0][None, :] - targets[:, :1]) ** 2 + (pos[1][None, :] - targets[:, 1:]) ** 2
-        d2 = np.where(np.isfinite(d2), d2, np.inf)
-        k = np.argmin(d2, axis=1)
-        found = (angles[k], d2[np.arange(len(targets)), k])
+        found = _nearest_samples(angles, points_at(design, angles, branch).T, targets)
         if np.sum(found[1]) < np.sum(best[1]):
             best = found
     return best
