@@ -142,6 +142,11 @@ def solved_with(runner: Callable | None) -> Iterator[None]:
         _solve_with.reset(token)
 
 
+def peer_method_active() -> bool:
+    """Whether CompiledNLP.solve is answered by a peer method (inside solved_with) rather than IPOPT."""
+    return _solve_with.get() is not None
+
+
 @dataclass
 class NLPOutcome:
     """One IPOPT run as it ended: where, how, how long."""
@@ -265,20 +270,33 @@ class CompiledNLP:
     def n_x(self) -> int:
         return self.t.n_x
 
-    def solve(self, start: int, x0, extra0=None, p=None, watch: Callable[[int, float], bool] | None = None) -> NLPOutcome:
+    def solve(self, start: int, x0, extra0=None, p=None, watch: Callable[[int, float], bool] | None = None,
+              x_bounds: tuple[np.ndarray, np.ndarray] | None = None) -> NLPOutcome:
         """One IPOPT run from x0 (the problem's x) and extra0 (extra variables; default the transcription's);
-        ``watch(iteration, f)`` True stops it (a solver built ``watched=True``; module docstring)."""
+        ``watch(iteration, f)`` True stops it (a solver built ``watched=True``; module docstring); ``x_bounds``
+        (lower, upper) replace the bounds of the problem's x for this run only (within them: an entry with equal
+        bounds is held fixed, e.g. a phase of a continuation).  A peer method (solved_with) has no such run."""
         extra0 = self.t.extra_init if extra0 is None else np.asarray(extra0, float)
         p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
-        args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=self.t.lbw, ubx=self.t.ubw,
+        lbw, ubw = self.t.lbw, self.t.ubw
+        if x_bounds is not None:
+            n = self.t.n_x
+            lo, hi = (np.asarray(b, float) for b in x_bounds)
+            if lo.shape != (n,) or hi.shape != (n,) or np.any(lo < lbw[:n]) or np.any(hi > ubw[:n]) or np.any(lo > hi):
+                raise ValueError(f"problem {self.problem.name}: x_bounds must be {n} lower and upper values within "
+                                 f"the problem's bounds, lower <= upper")
+            lbw, ubw = np.concatenate([lo, lbw[n:]]), np.concatenate([hi, ubw[n:]])
+        args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=lbw, ubx=ubw,
                     lbg=self.t.lbg, ubg=self.t.ubg)
         runner = _solve_with.get()
         if runner is not None:
+            if x_bounds is not None:
+                raise ValueError(f"problem {self.problem.name}: a run with its own x_bounds has no peer method")
             return runner(self, start, args["x0"], p)
         # into the unit IPOPT is given (all factors 1 in the kind's own units)
         u = self._unit
         c = self._row_unit
-        args.update(x0=args["x0"] * u, lbx=self.t.lbw * u, ubx=self.t.ubw * u, lbg=self.t.lbg * c, ubg=self.t.ubg * c)
+        args.update(x0=args["x0"] * u, lbx=lbw * u, ubx=ubw * u, lbg=self.t.lbg * c, ubg=self.t.ubg * c)
         # nominal scaling: IPOPT's z is the kind's unit again, and so are its rows (module docstring); a kind that
         # keeps its own variables (scaling "none": fourbar_path's are already in units of its targets' size) still
         # has its rows divided back into its units
@@ -316,7 +334,7 @@ class CompiledNLP:
             x = s * x
         if s is not None or not np.all(u == 1.0):
             # back to the kind's units; a bound IPOPT returned exactly stays exact (s * (lb / s) may round)
-            x = np.clip(x / u, self.t.lbw, self.t.ubw)
+            x = np.clip(x / u, lbw, ubw)
         # f of the returned point, evaluated here: after a failure IPOPT's own f may belong to another
         # point (even 0.0 after Invalid_Number_Detected)
         f = float(self.f_function(x, p))

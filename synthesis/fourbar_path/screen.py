@@ -112,6 +112,30 @@ def sample_long_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
 
 
+#: the share of the shapes drawn at the Grashof limit (sample_change_point_shapes)
+CHANGE_POINT_SHARE = 0.0
+#: how far inside the limit they are drawn (relative, on the crank): at the limit the coupler curve has a singular point
+CHANGE_POINT_INSET = 1e-3
+
+
+def sample_change_point_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 6) crank-rockers at the Grashof limit s + l = p + q (a change point: all four links fall in line once a
+    turn), the crank s drawn CHANGE_POINT_INSET inside it.  Two of the inexact set's best designs are such linkages
+    (kidney25, d_shape22: slack 1e-13 and 2e-9), which the other families, drawn with Grashof room, never propose.
+    In units of the longest link l = 1: s / l log-uniform in [0.02, 0.98], p uniform in [s, l], q = s + l - p; l, p,
+    q dealt to frame, coupler and rocker in a random order; the coupler point as in sample_shapes."""
+    s = _log_uniform(rng, 0.02, 0.98, n)
+    p = s + rng.random(n) * (1.0 - s)
+    links = np.column_stack([np.ones(n), p, s + 1.0 - p])
+    order = np.argsort(rng.random((n, 3)), axis=1)
+    r1, r3, r4 = np.take_along_axis(links, order, axis=1).T
+    out = np.column_stack([np.ones(n), s * (1.0 - CHANGE_POINT_INSET) / r1, r3 / r1, r4 / r1, np.zeros(n), np.zeros(n)])
+    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
+    ang = rng.uniform(0.0, TWO_PI, n)
+    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    return out
+
+
 #: open target arcs with grashof = "any": shapes whose crank only rocks, screened on the crank's range of motion
 ROCKING = 6000
 #: their trial spans of that range (open curves: the targets' arc starts anywhere in it, no wrap)
@@ -301,8 +325,9 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
     the bounds (see the module docstring)."""
     rng = np.random.default_rng([seed, SEED_TAG])
     long = int(round(LONG_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
+    limit = int(round(CHANGE_POINT_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
     cand = []
-    for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long),
+    for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long - limit),
                            (lambda k: sample_long_shapes(rng, k), long)):
         blocks, count = [], 0
         for _ in range(40):                  # draw until `wanted` valid ones (a bounded number of draws)
@@ -311,6 +336,8 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
             blocks.append(family(wanted))
             count += len(blocks[-1])
         cand += [np.concatenate(blocks)[:wanted]] if blocks else []
+    if limit:                    # drawn last: the other families' draws stay as they were
+        cand.append(sample_change_point_shapes(rng, limit))
     cand = np.concatenate(cand)
     t = targets[:, 0] + 1j * targets[:, 1]
     cand, a, b, res = _fit_family(cand, shape_curves(cand, branch, GRID)[1], t,
