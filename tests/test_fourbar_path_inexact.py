@@ -213,11 +213,15 @@ def test_a_small_inexact_problem_solves_within_the_rules():
     assert min(r.outcome.iterations for r in reports) > 0
 
 
-def test_an_inexact_any_problem_gives_the_same_answer_on_one_and_two_workers():
-    loaded = inexact_spec("stroke_lift14", {"starts": 4})
-    a, _, _ = run_solve(loaded, workers=1)
-    b, _, _ = run_solve(loaded, workers=2)
+@pytest.mark.parametrize("name", ["stroke_lift14", "egg16"])
+def test_an_inexact_problem_gives_the_same_answer_on_one_and_two_workers(name):
+    """An open "any" arc (the configuration form) and a closed loop whose starts 2 and 4 are fitted at their crank
+    angles first (nlp.TIMING_FIRST)."""
+    loaded = inexact_spec(name, {"starts": 6})
+    a, ra, _ = run_solve(loaded, workers=1)
+    b, rb, _ = run_solve(loaded, workers=2)
     assert a.solver["best_start"] == b.solver["best_start"] and a.objective["value"] == b.objective["value"]
+    assert [r.outcome.objective for r in ra] == [r.outcome.objective for r in rb]
     for k in VARIABLES:
         assert b.design[k] == a.design[k]
     assert all(r["satisfied"] for r in a.rules)
@@ -396,3 +400,85 @@ def test_the_screens_arc_index_is_a_count_of_samples_at_or_before_each_trial():
     got = screen.arc_index(cum, trials)
     want = np.stack([np.clip(np.searchsorted(row, trials, side="right") - 1, 0, cum.shape[1] - 1) for row in cum])
     assert got.shape == (40, 7, 9) and np.array_equal(got, want)
+
+
+def _path_error_independent(design: np.ndarray, theta: np.ndarray, targets: np.ndarray, branch: int) -> float:
+    """sum |P - T|^2 (mm^2) by the textbook construction (not the NLP's closed form)."""
+    p = joint_positions(dict(zip(VARIABLES, design)), theta, branch)["P"]
+    return float(np.sum(np.abs(p - (targets[:, 0] + 1j * targets[:, 1])) ** 2))
+
+
+def test_a_run_with_its_own_x_bounds_holds_fixed_entries_exactly_and_is_checked():
+    """CompiledNLP.solve(x_bounds=...): entries with equal bounds come back exactly as given (egg16's crank angles),
+    the rest move; bounds outside the problem's, of the wrong length or crossed are refused, and so is such a run
+    under a peer method (solved_with), which has no way to hold them."""
+    from synthesis.core.ipopt import solved_with
+    spec = inexact_spec("egg16").model
+    nlp = PathNLP(spec, seed=0)
+    sp = nlp.start(2, nlp.init)
+    w0 = np.concatenate([np.clip(nlp.nominal(sp.design), nlp.lbx[:9], nlp.ubx[:9]), sp.theta])
+    lo, hi = nlp.lbx.copy(), nlp.ubx.copy()
+    lo[9:], hi[9:] = sp.theta, sp.theta
+    out = nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=(lo, hi))
+    assert np.array_equal(out.x[9:nlp.compiled.n_x], sp.theta)
+    assert not np.allclose(out.x[:9], w0[:9])
+    assert float(nlp.fit(out.x[:nlp.compiled.n_x], sp.sign)) < float(nlp.fit(w0, sp.sign))
+    wider = lo.copy()
+    wider[0] = nlp.lbx[0] - 1.0
+    for bad in ((wider, hi), (lo[:-1], hi[:-1]), (hi, lo)):
+        with pytest.raises(ValueError, match="x_bounds"):
+            nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=bad)
+    with solved_with(lambda compiled, start, x0, p: None):
+        with pytest.raises(ValueError, match="no peer method"):
+            nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=(lo, hi))
+
+
+def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
+    """Continuation (nlp.TIMING_FIRST): only the Latin-hypercube starts of a screened set (even starts after 0) are
+    marked; such a start's first phase holds its crank angles and moves the design, lowering the path error at those
+    angles (re-checked by the independent construction), within TIMING_FIRST iterations; its iterations count in the
+    start's; TIMING_FIRST = 0 turns it off.  Run to convergence, the first phase ends where no coordinate of the design
+    lowers the path error at those angles (independent central differences)."""
+    spec = inexact_spec("egg16").model
+    maker = StartMaker(spec, 0)
+    rows = latin_hypercube_starts(np.array(spec.bounds_array(), float),
+                                  np.array([spec.design_values()[n] for n in VARIABLES]), 8, 0)
+    assert [maker(i, rows[i]).timing_first for i in range(8)] == [False, False, True, False, True, False, True, False]
+    data = inexact_data("egg16")
+    data["targets"]["points"] = data["targets"]["points"][:8]     # below SCREEN_MIN_TARGETS: no screen, no mark
+    small = validate(FourbarPathSpec, data, prefix="fourbar_path")
+    assert not any(StartMaker(small, 0)(i, rows[i]).timing_first for i in range(8))
+
+    targets = np.array(spec.targets.points, float)
+    branch = maker.branch
+    sp = maker(2, rows[2])
+    out = PathNLP(spec, seed=0).solve(2, rows[2])
+    first = out.details["timing_first"]
+    assert 0 < first["iterations"] <= path_nlp.TIMING_FIRST
+    assert first["path_error_mm2"] < _path_error_independent(sp.design, sp.theta, targets, branch)
+    assert out.iterations > first["iterations"]
+    assert "free timing from the fit at the start's crank angles" in out.raw.log
+    monkeypatch.setattr(path_nlp, "TIMING_FIRST", 0)
+    plain = PathNLP(spec, seed=0).solve(2, rows[2])
+    assert "timing_first" not in plain.details and plain.objective != out.objective
+
+    # the first phase to convergence: a minimum of the path error over the design at those crank angles
+    monkeypatch.setattr(path_nlp, "TIMING_FIRST", 3000)
+    nlp = PathNLP(spec, seed=0)
+    w0 = np.concatenate([np.clip(nlp.nominal(sp.design), nlp.lbx[:9], nlp.ubx[:9]), sp.theta])
+    w, (phase, details) = nlp._fit_at_start_timing(2, w0, sp.sign)
+    assert phase.return_status == "Solve_Succeeded"
+    design = nlp.design_of(w[:9])
+    e = _path_error_independent(design, sp.theta, targets, branch)
+    assert e == pytest.approx(details["path_error_mm2"], rel=1e-9)
+    span = nlp.bounds[:, 1] - nlp.bounds[:, 0]
+    for i in range(9):
+        h = 1e-6 * span[i]
+        if not (nlp.bounds[i, 0] + h < design[i] < nlp.bounds[i, 1] - h):
+            continue                                          # at a bound: one-sided, not a stationary coordinate
+        up, down = design.copy(), design.copy()
+        up[i] += h
+        down[i] -= h
+        grad = (_path_error_independent(up, sp.theta, targets, branch)
+                - _path_error_independent(down, sp.theta, targets, branch)) / (2 * h)
+        assert abs(grad) * span[i] <= 1e-4 * max(e, 1.0), VARIABLES[i]

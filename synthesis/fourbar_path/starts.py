@@ -83,9 +83,6 @@ STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd
 SCREEN_MIN_TARGETS = 12
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
-#: study switch: the prescribed timing of a timing_first start: its curve's nearest crank angles, or ("arc_length") a
-#: turn in proportion to the targets' arc length from its first one
-TIMING_FIRST_ANGLES = "nearest"
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
 
 #: the Grashof class as rows  A @ (r1, r2, r3, r4) >= 0  (constraints.grashof_class)
@@ -475,11 +472,7 @@ class StartMaker:
             return self.from_pool(index)
         if index % 2 == 0:
             start = self.as_it_is(design, index)
-            first = self.screening and index > 0 and len(start.theta) > 0
-            if first and TIMING_FIRST_ANGLES == "arc_length" and self.closed:
-                start = dataclasses.replace(start, theta=spread_by_arc_length(self.targets, float(start.theta[0]),
-                                                                              start.sign))
-            return dataclasses.replace(start, timing_first=first)
+            return dataclasses.replace(start, timing_first=self.screening and index > 0 and len(start.theta) > 0)
         rng = np.random.default_rng([self.seed, index])
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
         candidates = [design] + [self.in_class(lo + rng.random(len(lo)) * (hi - lo)) for _ in range(SCREENED - 1)]
