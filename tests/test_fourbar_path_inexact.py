@@ -472,13 +472,57 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     e = _path_error_independent(design, sp.theta, targets, branch)
     assert e == pytest.approx(details["path_error_mm2"], rel=1e-9)
     span = nlp.bounds[:, 1] - nlp.bounds[:, 0]
+    interior = 0
     for i in range(9):
         h = 1e-6 * span[i]
-        if not (nlp.bounds[i, 0] + h < design[i] < nlp.bounds[i, 1] - h):
-            continue                                          # at a bound: one-sided, not a stationary coordinate
+        lower, upper = design[i] <= nlp.bounds[i, 0] + h, design[i] >= nlp.bounds[i, 1] - h
+        if lower or upper:          # at a bound: one-sided difference, the path error must not fall into the box
+            step = design.copy()
+            step[i] += h if lower else -h
+            assert _path_error_independent(step, sp.theta, targets, branch) >= e - 1e-9 * max(e, 1.0), VARIABLES[i]
+            continue
+        interior += 1
         up, down = design.copy(), design.copy()
         up[i] += h
         down[i] -= h
         grad = (_path_error_independent(up, sp.theta, targets, branch)
                 - _path_error_independent(down, sp.theta, targets, branch)) / (2 * h)
         assert abs(grad) * span[i] <= 1e-4 * max(e, 1.0), VARIABLES[i]
+    assert interior >= 3            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
+
+
+def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase():
+    """s_curve12 orders its targets ([rules] order): a random start whose nearest curve points give two neighbouring
+    targets the same crank angle (a step of 0, which no design repairs) is solved as it is; one with room is fitted
+    first.  Decided by the same sequence slacks the rule uses."""
+    from constraints.sequence import sequence_slacks
+    spec = inexact_spec("s_curve12").model
+    nlp = PathNLP(spec, seed=0)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
+    marked = [(i, nlp.start(i, rows[i])) for i in range(64) if nlp.start(i, rows[i]).timing_first]
+    tied = [i for i, sp in marked if min(sequence_slacks(list(np.degrees(sp.theta)), sp.sign)) <= path_nlp.SEQUENCE_ROOM]
+    room = [i for i, sp in marked if i not in tied]
+    assert tied and room
+    assert "timing_first" not in nlp.solve(tied[0], rows[tied[0]]).details
+    assert "timing_first" in nlp.solve(room[0], rows[room[0]]).details
+
+
+def test_x_bounds_refuse_not_a_number():
+    spec = inexact_spec("egg16").model
+    nlp = PathNLP(spec, seed=0)
+    lo, hi = nlp.lbx.copy(), nlp.ubx.copy()
+    lo[0] = math.nan
+    with pytest.raises(ValueError, match="x_bounds"):
+        nlp.compiled.solve(0, np.clip(np.zeros(len(lo)), nlp.lbx, nlp.ubx), p=1.0, x_bounds=(lo, hi))
+
+
+def test_change_point_shapes_sit_at_the_grashof_limit_with_the_crank_shortest():
+    """screen.sample_change_point_shapes (a study switch, off): the crank is the shortest link and
+    s + l - p - q = -CHANGE_POINT_INSET * s (its crank drawn that far inside the limit)."""
+    shapes = screen.sample_change_point_shapes(np.random.default_rng(3), 500)
+    links = shapes[:, :4]
+    s, l = links.min(axis=1), links.max(axis=1)
+    assert np.array_equal(np.argmin(links, axis=1), np.ones(500, dtype=int))        # r2, the crank
+    slack = s + l - (links.sum(axis=1) - s - l)
+    crank_at_limit = s / (1.0 - screen.CHANGE_POINT_INSET)
+    np.testing.assert_allclose(slack, -screen.CHANGE_POINT_INSET * crank_at_limit, rtol=1e-9, atol=1e-15)

@@ -39,7 +39,9 @@ context-local, so a solve outside them is untouched:
   finite-difference-values``) and keeps a limited-memory Hessian -- instead of CasADi's exact derivatives
   (the exact-against-approximate study; DESIGN.md: never in a solve);
 * :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
-  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts);
+  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts; a kind's own
+  extra phase before a start, such as fourbar_path's fixed-timing fit of its random starts, is IPOPT's, so a peer
+  starts those from the start as drawn);
 * :func:`variable_scaling` ``("none")``: CompiledNLPs built inside give IPOPT the raw variables (s = 1),
   to measure what the nominal scaling does;
 * :func:`length_unit` ``(factor)``: CompiledNLPs built inside hand IPOPT the problem with every length
@@ -282,7 +284,8 @@ class CompiledNLP:
         if x_bounds is not None:
             n = self.t.n_x
             lo, hi = (np.asarray(b, float) for b in x_bounds)
-            if lo.shape != (n,) or hi.shape != (n,) or np.any(lo < lbw[:n]) or np.any(hi > ubw[:n]) or np.any(lo > hi):
+            if lo.shape != (n,) or hi.shape != (n,) or not (np.all(lbw[:n] <= lo) and np.all(lo <= hi)
+                                                            and np.all(hi <= ubw[:n])):      # NaN fails too
                 raise ValueError(f"problem {self.problem.name}: x_bounds must be {n} lower and upper values within "
                                  f"the problem's bounds, lower <= upper")
             lbw, ubw = np.concatenate([lo, lbw[n:]]), np.concatenate([hi, ubw[n:]])

@@ -38,6 +38,7 @@ from synthesis.core.ipopt import CompiledNLP, peer_method_active
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
 from synthesis.core.transcribe import in_tolerance_box
+from constraints.sequence import sequence_slacks
 from synthesis.fourbar_path.natural import ConfigurationNLP
 from synthesis.fourbar_path.rules import EXTREMES, path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
@@ -112,7 +113,11 @@ POLISH_ITERATIONS = 60
 #: cut of CUTS; INEXACT.md, seventh pass); the screened and pool starts, already placed on the targets, lose by it, and
 #: the open arcs of the configuration form gain nothing (they skip it: PathNLP.solve); 0: off
 TIMING_FIRST = 40
-TRACE = False            # study switch: each start's details get its path error at every iteration
+#: the smallest step (deg) of the sequence rule a start's fixed crank angles must leave for its fixed phase to run
+SEQUENCE_ROOM = 1e-6
+#: study switch: each start's details get its path error at every iteration (of its main run: not of a fixed-timing
+#: phase, whose iterations precede the trace's iteration 0, nor of a resume)
+TRACE = False
 #: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
 #: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
 #: given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed form
@@ -220,7 +225,8 @@ class PathNLP:
         self.cut = self.referenced and bool(CUTS)
         self.resumes = self.referenced and bool(RESUME_WITHIN)
         self._reference: list = []
-        self.watched = self.cut or self.resumes or TRACE
+        self.continuation = self.referenced and TIMING_FIRST > 0      # its fixed phase is stopped by a watch
+        self.watched = self.cut or self.resumes or self.continuation or TRACE
         if self.referenced:
             _ = self.reference
         self.lbx, self.ubx = lbx, ubx
@@ -361,14 +367,14 @@ class PathNLP:
                 return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
             watch = self.watch(trace)
         first = None
-        # not for an open arc in the configuration form: there it changed no answer on six seeds and cost 150
-        # iterations per start (dwell_arc15, stroke_lift14; INEXACT.md, seventh pass)
+        # not for an open arc in the configuration form: there it found no more best designs on six seeds and cost
+        # 150-420 iterations per start (dwell_arc15, stroke_lift14; INEXACT.md, seventh pass)
         in_configuration = self.configuration is not None and not self.starts.closed
-        if (sp.timing_first and TIMING_FIRST and self.watched and pre is None and not in_configuration
-                and not peer_method_active()):
+        if (sp.timing_first and self.continuation and pre is None and not in_configuration
+                and self._sequence_can_hold(sp) and not peer_method_active()):
             w0, first = self._fit_at_start_timing(index, w0, sp.sign)
         resumed = None
-        if self.configuration is not None and not self.starts.closed:
+        if in_configuration:
             out = self.configuration.solve(index, w0, self.design_of(w0[:9]), sp.sign, watch=watch)
             if self._resumable(out, sp.sign):
                 out, resumed = self._resume(index, out, sp.sign, "configuration")
@@ -384,10 +390,19 @@ class PathNLP:
             out = self._then(first[0], out, "free timing from the fit at the start's crank angles")
         return self._outcome(out, sp, trace, resumed, first[1] if first is not None else None)
 
+    def _sequence_can_hold(self, sp: StartPoint) -> bool:
+        """Whether the start's crank angles, held fixed, leave the sequence rule (the spec's [rules] order) room: a
+        random start often gives two neighbouring targets the same nearest curve sample, a step of 0 that no design
+        can repair (its fixed phase then ends Infeasible_Problem_Detected); such a start is solved as it is."""
+        if not self.spec.rules.order:
+            return True
+        return min(sequence_slacks(list(np.degrees(sp.theta)), sp.sign)) > SEQUENCE_ROOM
+
     def _fit_at_start_timing(self, index: int, w0: np.ndarray, sign: float):
-        """(decision vector, (outcome, its details)) of TIMING_FIRST's first phase: IPOPT on the design with the crank
-        angles of ``w0`` held fixed, stopped after TIMING_FIRST iterations; the vector its design and those angles (w0
-        itself when that run ended on no number)."""
+        """(decision vector, (outcome, its details) or None) of TIMING_FIRST's first phase: IPOPT on the design with
+        the crank angles of ``w0`` held fixed, stopped after TIMING_FIRST iterations; the vector its design and those
+        angles (w0 itself, with the details, when that run ended on no number; w0 and None, no run, when an angle is
+        outside THETA_RANGE)."""
         lo, hi = self.lbx.copy(), self.ubx.copy()
         theta = w0[9:]
         if np.any(theta < lo[9:]) or np.any(theta > hi[9:]):

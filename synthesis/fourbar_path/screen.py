@@ -121,9 +121,10 @@ CHANGE_POINT_INSET = 1e-3
 def sample_change_point_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     """(n, 6) crank-rockers at the Grashof limit s + l = p + q (a change point: all four links fall in line once a
     turn), the crank s drawn CHANGE_POINT_INSET inside it.  Two of the inexact set's best designs are such linkages
-    (kidney25, d_shape22: slack 1e-13 and 2e-9), which the other families, drawn with Grashof room, never propose.
-    In units of the longest link l = 1: s / l log-uniform in [0.02, 0.98], p uniform in [s, l], q = s + l - p; l, p,
-    q dealt to frame, coupler and rocker in a random order; the coupler point as in sample_shapes."""
+    (kidney25, d_shape22: slack 7e-14 and 2e-9 relative), which the other families, drawn with Grashof room, never
+    propose.  In units of the longest link l = 1: s / l log-uniform in [0.02, 0.98], p uniform in [s, l],
+    q = s + l - p; l, p, q dealt to frame, coupler and rocker in a random order; the coupler point as in sample_shapes.
+    A study switch (CHANGE_POINT_SHARE, off: INEXACT.md, seventh pass)."""
     s = _log_uniform(rng, 0.02, 0.98, n)
     p = s + rng.random(n) * (1.0 - s)
     links = np.column_stack([np.ones(n), p, s + 1.0 - p])
@@ -336,7 +337,7 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
             blocks.append(family(wanted))
             count += len(blocks[-1])
         cand += [np.concatenate(blocks)[:wanted]] if blocks else []
-    if limit:                    # drawn last: the other families' draws stay as they were
+    if limit:                    # (on, it takes its share from the first family: the draws of every family change)
         cand.append(sample_change_point_shapes(rng, limit))
     cand = np.concatenate(cand)
     t = targets[:, 0] + 1j * targets[:, 1]

@@ -49,8 +49,8 @@ nearest points within one interval of its motion (``nearest_in_run``), never acr
 
 from __future__ import annotations
 
-import math
 import dataclasses
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
