@@ -488,21 +488,29 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
         grad = (_path_error_independent(up, sp.theta, targets, branch)
                 - _path_error_independent(down, sp.theta, targets, branch)) / (2 * h)
         assert abs(grad) * span[i] <= 1e-4 * max(e, 1.0), VARIABLES[i]
-    assert interior >= 3            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
+    assert interior >= 6            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
 
 
 def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase():
     """s_curve12 orders its targets ([rules] order): a random start whose nearest curve points give two neighbouring
-    targets the same crank angle (a step of 0, which no design repairs) is solved as it is; one with room is fitted
-    first.  Decided by the same sequence slacks the rule uses."""
+    targets the same crank angle (a step of 0, which no design repairs: its fixed phase cannot converge) is solved as
+    it is; one with room is fitted first.  Decided by the same sequence slacks the rule uses."""
     from constraints.sequence import sequence_slacks
     spec = inexact_spec("s_curve12").model
     nlp = PathNLP(spec, seed=0)
     rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
-    marked = [(i, nlp.start(i, rows[i])) for i in range(64) if nlp.start(i, rows[i]).timing_first]
-    tied = [i for i, sp in marked if min(sequence_slacks(list(np.degrees(sp.theta)), sp.sign)) <= path_nlp.SEQUENCE_ROOM]
+    starts = [(i, nlp.start(i, rows[i])) for i in range(64)]
+    marked = [(i, sp) for i, sp in starts if sp.timing_first]
+    tied = [i for i, sp in marked
+            if min(sequence_slacks(list(np.degrees(sp.theta)), sp.sign)) <= path_nlp.SEQUENCE_ROOM]
     room = [i for i, sp in marked if i not in tied]
     assert tied and room
+    sp = dict(starts)[tied[0]]         # inside THETA_RANGE: skipped by the sequence check, not by the range guard
+    assert np.all(sp.theta > path_nlp.THETA_RANGE[0]) and np.all(sp.theta < path_nlp.THETA_RANGE[1])
+    w0 = np.concatenate([np.clip(nlp.nominal(sp.design), nlp.lbx[:9], nlp.ubx[:9]), sp.theta])
+    # held there, no design meets the rule: that phase cannot converge (it ends at its cap or detects infeasibility)
+    assert nlp._fit_at_start_timing(tied[0], w0, sp.sign)[1][0].return_status in ("User_Requested_Stop",
+                                                                                   "Infeasible_Problem_Detected")
     assert "timing_first" not in nlp.solve(tied[0], rows[tied[0]]).details
     assert "timing_first" in nlp.solve(room[0], rows[room[0]]).details
 

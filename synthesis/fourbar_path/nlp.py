@@ -34,11 +34,11 @@ import math
 import casadi as ca
 import numpy as np
 
+from constraints.sequence import sequence_slacks
 from synthesis.core.ipopt import CompiledNLP, peer_method_active
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
 from synthesis.core.transcribe import in_tolerance_box
-from constraints.sequence import sequence_slacks
 from synthesis.fourbar_path.natural import ConfigurationNLP
 from synthesis.fourbar_path.rules import EXTREMES, path_rules
 from synthesis.fourbar_path.starts import StartMaker, StartPoint
@@ -89,7 +89,7 @@ MU_INIT = 1e-6
 #: cut, at iteration 200 above 1x, came with TIMING_FIRST (seventh pass): the starts fitted at their crank angles first
 #: pass the cut at iteration 30 within 400x and ran on to convergence or max_iter; replayed on their uncut traces
 #: (seeds 0 and 1) it keeps every best start (0.6x loses 2 of 20), and on six seeds it took 32 % fewer iterations and
-#: 20 % less CPU, at the best known on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
+#: 21 % less CPU, at the best known on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
 CUTS = ((30, 400.0), (200, 1.0))
 #: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable;
 #: its details say how: "resumed"); 0: never
