@@ -48,6 +48,16 @@ def _log_uniform(rng, lo: float, hi: float, n: int) -> np.ndarray:
     return np.exp(rng.uniform(math.log(lo), math.log(hi), n))
 
 
+def _draw_coupler_points(rng: np.random.Generator, out: np.ndarray) -> None:
+    """Fill the coupler points (rcx, rcy) = out[:, 4:6] of shapes (r1 = 1, r2, r3, r4 in out[:, :4]): polar about the
+    crank pin A, the radius a log-uniform multiple of the coupler r3 (half of the shapes) or of the frame r1 (the
+    other half), the angle uniform."""
+    n = len(out)
+    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
+    ang = rng.uniform(0.0, TWO_PI, n)
+    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+
+
 def sample_shapes(rng: np.random.Generator, n: int, grashof: str) -> np.ndarray:
     """(n, 6) normalised shapes (r1 = 1, r2, r3, r4, rcx, rcy) whose crank turns fully: crank-rockers
     (r2 shortest, s + l <= p + q) or, for "double-crank" and a quarter of "any", double-cranks (r1 shortest)."""
@@ -76,11 +86,7 @@ def sample_shapes(rng: np.random.Generator, n: int, grashof: str) -> np.ndarray:
     s, l = lengths.min(axis=1), lengths.max(axis=1)
     grashof_ok = s + l <= lengths.sum(axis=1) - s - l - 0.02
     valid = np.where(kinds == 0, ok_cr, grashof_ok)
-    # coupler point: polar about the crank pin A, radius a log-uniform multiple of the coupler r3 (half of
-    # the shapes) or of the frame r1 (the other half)
-    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
-    ang = rng.uniform(0.0, TWO_PI, n)
-    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    _draw_coupler_points(rng, out)
     return out[valid]
 
 
@@ -131,9 +137,7 @@ def sample_change_point_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     order = np.argsort(rng.random((n, 3)), axis=1)
     r1, r3, r4 = np.take_along_axis(links, order, axis=1).T
     out = np.column_stack([np.ones(n), s * (1.0 - CHANGE_POINT_INSET) / r1, r3 / r1, r4 / r1, np.zeros(n), np.zeros(n)])
-    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
-    ang = rng.uniform(0.0, TWO_PI, n)
-    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    _draw_coupler_points(rng, out)
     return out
 
 
@@ -149,9 +153,7 @@ def sample_rocking_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     out = np.empty((n, 6))
     out[:, 0] = 1.0
     out[:, 1:4] = _log_uniform(rng, 0.02, 6.0, 3 * n).reshape(n, 3)
-    rad = np.where(rng.random(n) < 0.5, out[:, 2] * _log_uniform(rng, 0.1, 4.0, n), _log_uniform(rng, 0.02, 2.0, n))
-    ang = rng.uniform(0.0, TWO_PI, n)
-    out[:, 4], out[:, 5] = rad * np.cos(ang), rad * np.sin(ang)
+    _draw_coupler_points(rng, out)
     return out
 
 

@@ -49,9 +49,8 @@ nearest points within one interval of its motion (``nearest_in_run``), never acr
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import casadi as ca
@@ -472,7 +471,7 @@ class StartMaker:
             return self.from_pool(index)
         if index % 2 == 0:
             start = self.as_it_is(design, index)
-            return dataclasses.replace(start, timing_first=self.screening and index > 0 and len(start.theta) > 0)
+            return replace(start, timing_first=self.screening and index > 0)     # screened: free timing
         rng = np.random.default_rng([self.seed, index])
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
         candidates = [design] + [self.in_class(lo + rng.random(len(lo)) * (hi - lo)) for _ in range(SCREENED - 1)]
