@@ -333,7 +333,8 @@ def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
     INEXACT_WORKERS workers; best known = the best objective any recorded run found (inexact.BEST_KNOWN),
     else (not yet recorded) the untimed reference multistart of a library spec."""
     return [case_for(inexact_spec(n, {"seed": seed}), best_known=BEST_KNOWN.get(n),
-                     note="inexact target (issue 19): best known from the cross-check runs and searches (inexact.BEST_KNOWN); "
+                     note="inexact target (issue 19): best known from the cross-check runs and searches "
+                          "(inexact.BEST_KNOWN); "
                           f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
                      workers=INEXACT_WORKERS, equal_budget=True) for n in (names or NAMES)]
 

@@ -170,7 +170,9 @@ def inexact_spec(name: str, solver: dict | None = None) -> LoadedSpec:
 #: the runs of problems/fourbar_path/INEXACT.md (64 and 16 starts, seed 0, before and after the issue-19 changes, and
 #: of the earlier attempt, branch wip/issue-19) and the 2,000-start cross-check issue 19 asks for (seed 7, 2 workers;
 #: fourth and fifth pass), which ran on all ten: it found d_shape22's (start 1715), dwell_arc15's (start 1165) and
-#: stroke_lift14's (start 333) below every 64-start run, and agreed with the others.
+#: stroke_lift14's (start 333) below every 64-start run, and agreed with the others.  Later passes lowered
+#: dwell_arc15's and stroke_lift14's again (the notes in the dict below), stroke_lift14's last by basin hopping
+#: from its recorded design (eighth pass).
 BEST_KNOWN: dict[str, float] = {
     "ellipse20": 1.0486382171183883, "egg16": 0.46122510610392164, "triangle18": 12.480514291299421,
     # kidney25: lowered on 2026-11-25 by a run of issue 19's fourth pass; d_shape22, dwell_arc15 and stroke_lift14 by
