@@ -178,8 +178,8 @@ BEST_KNOWN: dict[str, float] = {
     "ellipse20": 1.0486382171183883, "egg16": 0.46122510610392164,
     # triangle18 (12.4805 -> 3.89328) and stroke_lift14 (0.202531 -> 0.147114) lowered by the ninth pass's runs with
     # every start from the screen (starts.STRATEGY = "screen", a study switch; 512 starts seed 9, 64 starts seed 1): a
-    # self-crossing three-lobed coupler curve of a double-crank, and a rocking crank reversing between targets
-    # (order = false allows both)
+    # self-crossing three-lobed coupler curve of a double-crank, and a rocking crank whose one sweep meets the targets
+    # out of their drawn order, ending at its dead position (order = false allows both)
     "triangle18": 3.8932754809803853,
     # kidney25: lowered on 2026-11-25 by a run of issue 19's fourth pass; d_shape22, dwell_arc15 and stroke_lift14 by
     # the 2,000-start cross-check (seed 7; d_shape22 start 1715, a change-point kite, crank 239 mm; dwell_arc15 start
@@ -189,7 +189,7 @@ BEST_KNOWN: dict[str, float] = {
     # stroke_lift14 lowered again (0.258968 -> 0.235265) by the sixth pass's 2,000-start cross-check (seed 7, start
     # 39: a screened linkage whose crank only rocks), which agreed on dwell_arc15; stroke_lift14 lowered once more
     # (0.235265 -> 0.202531) by basin hopping from that design (eighth pass: jittered shapes laid by the rocking screen;
-    # the same hopping from dwell_arc15's best found nothing lower)
+    # the same hopping from dwell_arc15's best found nothing lower), and to 0.147114 by the ninth pass (above)
     "d_shape22": 10.050598691214857, "kidney25": 11.854077742761099, "square24": 137.6917138934006,
     "noisy_loop20": 2.3719628395676278, "dwell_arc15": 0.0566724090275194, "s_curve12": 2.183892490339011,
     "stroke_lift14": 0.14711361512869858,

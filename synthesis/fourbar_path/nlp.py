@@ -89,7 +89,7 @@ MU_INIT = 1e-6
 #: cut, at iteration 200 above 1x, came with TIMING_FIRST (seventh pass): the starts fitted at their crank angles first
 #: pass the cut at iteration 30 within 400x and ran on to convergence or max_iter; replayed on their uncut traces
 #: (seeds 0 and 1) it keeps every best start (0.6x loses 2 of 20), and on six seeds it took 32 % fewer iterations and
-#: 21 % less CPU, at the best known on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
+#: 21 % less CPU, at the seventh pass's best known on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
 CUTS = ((30, 400.0), (200, 1.0))
 #: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable;
 #: its details say how: "resumed"); 0: never
@@ -109,7 +109,7 @@ POLISH_ITERATIONS = 60
 #: continuation (issue 19): an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
 #: (prescribed timing: the design alone, at most this many iterations), then solved with free timing from that fit.
-#: Six seeds of the ten inexact problems: at the best known on 41 of 60 against 31 of 60 without (40 with the second
+#: Six seeds of the ten inexact problems: at the seventh pass's best known on 41 of 60 against 31 of 60 without (40 with the second
 #: cut of CUTS; INEXACT.md, seventh pass); the screened and pool starts, already placed on the targets, lose by it, and
 #: the open arcs of the configuration form gain nothing (they skip it: PathNLP.solve); 0: off
 TIMING_FIRST = 40
