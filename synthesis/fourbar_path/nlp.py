@@ -110,8 +110,8 @@ POLISH_ITERATIONS = 60
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
 #: (prescribed timing: the design alone, at most this many iterations), then solved with free timing from that fit.
 #: Six seeds of the ten inexact problems: at the seventh pass's best known on 41 of 60 against 31 of 60 without (40
-#: with the second cut of CUTS; INEXACT.md, seventh pass); the screened and pool starts, already placed on the targets, lose by it, and
-#: the open arcs of the configuration form gain nothing (they skip it: PathNLP.solve); 0: off
+#: with the second cut of CUTS; INEXACT.md, seventh pass); the screened and pool starts, already placed on the
+#: targets, lose by it, and the open arcs of the configuration form gain nothing (they skip it: PathNLP.solve); 0: off
 TIMING_FIRST = 40
 #: the smallest step (deg) of the sequence rule a start's fixed crank angles must leave for its fixed phase to run
 SEQUENCE_ROOM = 1e-6
