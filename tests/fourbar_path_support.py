@@ -56,6 +56,15 @@ TURN = np.linspace(0.0, 2.0 * math.pi, 3600, endpoint=False)       # 0.1 deg, 0 
 FINE = 10
 
 
+def independent_path_error(spec, design: dict, thetas) -> float:
+    """sum |P - T|^2 (mm^2) of the coupler point at crank angles ``thetas`` (rad) by the textbook construction
+    (construction.joint_positions, not the NLP's closed form)."""
+    branch = {"open": 1, "crossed": -1}[spec.branch]
+    targets = np.asarray(spec.targets.points, dtype=float)
+    p = joint_positions(design, np.asarray(thetas, dtype=float), branch)["P"]
+    return float(np.sum(np.abs(p - (targets[:, 0] + 1j * targets[:, 1])) ** 2))
+
+
 def independent_check(spec, design: dict, crank_deg: list[float]) -> dict[str, float]:
     """A design checked from scratch, sharing nothing with the solver or with ``check`` but the spec:
     joint positions from the textbook complex-number construction (construction.joint_positions, not
@@ -67,10 +76,7 @@ def independent_check(spec, design: dict, crank_deg: list[float]) -> dict[str, f
     sum of squared distances of the constructed coupler point to the targets."""
     branch = {"open": 1, "crossed": -1}[spec.branch]
     thetas = np.radians(np.asarray(crank_deg, dtype=float))
-    targets = np.asarray(spec.targets.points, dtype=float)
-    out: dict[str, float] = {}
-    p = joint_positions(design, thetas, branch)["P"]
-    out["path_error_mm2"] = float(np.sum(np.abs(p - (targets[:, 0] + 1j * targets[:, 1])) ** 2))
+    out: dict[str, float] = {"path_error_mm2": independent_path_error(spec, design, thetas)}
     lim = spec.rules
     if lim.grashof != "any":
         lengths = {k: float(design[k]) for k in ("r1", "r2", "r3", "r4")}

@@ -13,6 +13,7 @@ import time
 import numpy as np
 import pytest
 
+from fourbar_path_support import independent_path_error
 from solving import run_solve
 from synthesis.core.executor import latin_hypercube_starts
 from synthesis.fourbar_path.construction import joint_positions
@@ -403,10 +404,9 @@ def test_the_screens_arc_index_is_a_count_of_samples_at_or_before_each_trial():
     assert got.shape == (40, 7, 9) and np.array_equal(got, want)
 
 
-def _path_error_independent(design: np.ndarray, theta: np.ndarray, targets: np.ndarray, branch: int) -> float:
-    """sum |P - T|^2 (mm^2) by the textbook construction (not the NLP's closed form)."""
-    p = joint_positions(dict(zip(VARIABLES, design)), theta, branch)["P"]
-    return float(np.sum(np.abs(p - (targets[:, 0] + 1j * targets[:, 1])) ** 2))
+def _path_error_independent(spec, design: np.ndarray, theta: np.ndarray) -> float:
+    """sum |P - T|^2 (mm^2) of a design vector r1..theta0 by the textbook construction (not the NLP's closed form)."""
+    return independent_path_error(spec, dict(zip(VARIABLES, design)), theta)
 
 
 def test_a_run_with_its_own_x_bounds_holds_fixed_entries_exactly_and_is_checked():
@@ -450,13 +450,11 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     small = validate(FourbarPathSpec, data, prefix="fourbar_path")
     assert not any(StartMaker(small, 0)(i, rows[i]).timing_first for i in range(8))
 
-    targets = np.array(spec.targets.points, float)
-    branch = maker.branch
     sp = maker(2, rows[2])
     out = PathNLP(spec, seed=0).solve(2, rows[2])
     first = out.details["timing_first"]
     assert 0 < first["iterations"] <= path_nlp.TIMING_FIRST
-    assert first["path_error_mm2"] < _path_error_independent(sp.design, sp.theta, targets, branch)
+    assert first["path_error_mm2"] < _path_error_independent(spec, sp.design, sp.theta)
     assert out.iterations > first["iterations"]
     assert "free timing from the fit at the start's crank angles" in out.raw.log
     monkeypatch.setattr(path_nlp, "TIMING_FIRST", 0)
@@ -470,7 +468,7 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     w, (phase, details) = nlp._fit_at_start_timing(2, w0, sp.sign)
     assert phase.return_status == "Solve_Succeeded"
     design = nlp.design_of(w[:9])
-    e = _path_error_independent(design, sp.theta, targets, branch)
+    e = _path_error_independent(spec, design, sp.theta)
     assert e == pytest.approx(details["path_error_mm2"], rel=1e-9)
     span = nlp.bounds[:, 1] - nlp.bounds[:, 0]
     interior = 0
@@ -480,14 +478,14 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
         if lower or upper:          # at a bound: one-sided difference, the path error must not fall into the box
             step = design.copy()
             step[i] += h if lower else -h
-            assert _path_error_independent(step, sp.theta, targets, branch) >= e - 1e-9 * max(e, 1.0), VARIABLES[i]
+            assert _path_error_independent(spec, step, sp.theta) >= e - 1e-9 * max(e, 1.0), VARIABLES[i]
             continue
         interior += 1
         up, down = design.copy(), design.copy()
         up[i] += h
         down[i] -= h
-        grad = (_path_error_independent(up, sp.theta, targets, branch)
-                - _path_error_independent(down, sp.theta, targets, branch)) / (2 * h)
+        grad = (_path_error_independent(spec, up, sp.theta)
+                - _path_error_independent(spec, down, sp.theta)) / (2 * h)
         assert abs(grad) * span[i] <= 1e-4 * max(e, 1.0), VARIABLES[i]
     assert interior >= 6            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
 
