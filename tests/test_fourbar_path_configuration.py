@@ -174,10 +174,11 @@ def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
         assert len(sequence) == 1 and sequence[0].satisfied is holds
 
 
-def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form_a_failed_step_polished_and_capped():
+def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form_a_failed_step_polished_and_capped(
+        monkeypatch):
     """kidney25 with max_iter 60 (seed 0): start 3 reaches max_iter and is resumed in the crank-angle form (its details
-    name no form); start 13 ends with a failed step and is polished in the configuration form, stopped after
-    POLISH_ITERATIONS (60) without converging, so it keeps its own answer."""
+    name no form); start 13 ends with a failed step and is polished in the configuration form, where it converges at
+    the best known; stopped after POLISH_ITERATIONS (here 5) without converging, it keeps its own answer."""
     from synthesis.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("kidney25", {"max_iter": 60}).model
@@ -189,8 +190,39 @@ def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form_a_fail
     polished = nlp.solve(13, rows[13])
     assert polished.details["resumed"]["form"] == "configuration"
     assert polished.details["resumed"]["iterations"] <= path_nlp.POLISH_ITERATIONS
-    assert polished.details["resumed"]["return_status"] == "User_Requested_Stop"
-    assert polished.details["resumed"]["kept"] is False and polished.return_status == "Error_In_Step_Computation"
+    assert polished.details["resumed"]["kept"] is True and polished.return_status == "Solve_Succeeded"
+    assert polished.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)
+    monkeypatch.setattr(path_nlp, "POLISH_ITERATIONS", 5)
+    capped = nlp.solve(13, rows[13])
+    assert capped.details["resumed"]["iterations"] == 5
+    assert capped.details["resumed"]["return_status"] == "User_Requested_Stop"
+    assert capped.details["resumed"]["kept"] is False and capped.return_status == "Error_In_Step_Computation"
+    assert capped.objective > 1.05 * BEST_KNOWN["kidney25"]
+
+
+def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(monkeypatch):
+    """kidney25, seed 2, start 35: the crank-angle form ends with a failed step on the change point (target 0 at crank
+    180 deg, r1 + r2 = r3 + r4: the links in line).  The polish (POLISH_MU_INIT 1e-2) converges there, Solve_Succeeded
+    at the best known; started with the starts' barrier parameter (1e-6) it leaves the point and is not kept."""
+    from synthesis.fourbar_path import nlp as path_nlp
+
+    spec = inexact_spec("kidney25").model
+    nlp = PathNLP(spec, seed=2)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 2)
+    out = nlp.solve(35, rows[35])
+    assert out.details["resumed"]["form"] == "configuration" and out.details["resumed"]["kept"] is True
+    assert out.return_status == "Solve_Succeeded"
+    assert out.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)
+    d = out.design
+    assert d["r1"] + d["r2"] == pytest.approx(d["r3"] + d["r4"], rel=1e-7)
+    assert out.details["crank_deg"][0] == pytest.approx(180.0, abs=0.01)
+    ev = evaluate(spec, d, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
+    assert all(r.record().satisfied for r in ev.rules)
+    monkeypatch.setattr(path_nlp, "POLISH_MU_INIT", None)
+    nlp = PathNLP(spec, seed=2)
+    before = nlp.solve(35, rows[35])
+    assert before.details["resumed"]["kept"] is False and before.return_status == "Error_In_Step_Computation"
+    assert before.details["resumed"]["path_error_mm2"] > 100 * BEST_KNOWN["kidney25"]
 
 
 def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spec_fixes():

@@ -106,6 +106,17 @@ CONFIGURATION = True
 #: stopped, a regular point converges in a few dozen (kidney25's best start: 29), the rest do not converge at all (20
 #: of its 21 polished starts on seed 0 still ran at 150 iterations)
 POLISH_ITERATIONS = 60
+#: IPOPT's initial barrier parameter of a resume or a polish in the configuration form (its own solver,
+#: PathNLP.polisher; None: MU_INIT, the starts' solver).  kidney25's best lies on a change point with a target at the
+#: links-in-line position; the crank-angle form ends there with a failed step (seeds 2 and 4), and the polish from that
+#: point with the starts' 1e-6 diverged (path error 9,029 / 252,865 mm^2 after 60 / 300 iterations); with 1e-2 it
+#: converged, Solve_Succeeded, in 53 / 47 iterations at the best known.  Six seeds: the same best objectives and hits,
+#: best start Solve_Succeeded on 59 of 60 against 56 (INEXACT.md, tenth pass)
+POLISH_MU_INIT: float | None = 1e-2
+#: the iterations of a resume in the configuration form from max_iter (None: RESUME_ITERATIONS): stroke_lift14's best
+#: start on seed 1 converges in 187 more (0.259043 -> 0.258968 mm^2, Solve_Succeeded), not in 150; 400 did not catch
+#: seed 5's (it converged in 367 from a start rounded differently: a crawl, not a margin to count on)
+CONFIGURATION_RESUME_ITERATIONS: int | None = 250
 #: continuation (issue 19): an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
 #: (prescribed timing: the design alone, at most this many iterations), then solved with free timing from that fit.
@@ -239,6 +250,7 @@ class PathNLP:
         # grashof = "any" on a screened free-timing target set (issue 19): the configuration form too (CONFIGURATION;
         # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
+        self._polisher: list = []
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and not in_tolerance_box() and not operating_symbols_wanted()):
             self.configuration = ConfigurationNLP(spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
@@ -247,6 +259,18 @@ class PathNLP:
         if (VARPRO and not elastic and self.starts.screening
                 and not any(self.fixed[i] for i in PLACEMENT)):
             self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
+
+    @property
+    def polisher(self) -> ConfigurationNLP:
+        """The configuration form that resumes and polishes (built on first use, once per process)."""
+        if POLISH_MU_INIT is None:
+            return self.configuration
+        if not self._polisher:
+            spec = self.spec
+            options = {**self._ipopt_options(spec), "ipopt.mu_init": POLISH_MU_INIT}
+            self._polisher.append(ConfigurationNLP(spec, self.offset, self.scale, self.fixed, self.lbx, self.ubx,
+                                                   self.f_unit, BACKOFF, options, spec.solver.max_iter))
+        return self._polisher[0]
 
     def _ipopt_options(self, spec) -> dict:
         out = {"ipopt.mu_strategy": spec.solver.mu_strategy, **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})}
@@ -442,9 +466,11 @@ class PathNLP:
         x1 = first.x[: self.compiled.n_x]
         polish = form == "configuration" and first.return_status != "Maximum_Iterations_Exceeded"
         limit = POLISH_ITERATIONS if polish else RESUME_ITERATIONS
+        if form == "configuration" and not polish and CONFIGURATION_RESUME_ITERATIONS is not None:
+            limit = CONFIGURATION_RESUME_ITERATIONS
         cap = lambda iteration, f: iteration >= limit      # noqa: E731
         if form == "configuration":
-            second = self.configuration.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
+            second = self.polisher.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
             what = ("polished in the configuration form" if polish
                     else "resumed in the configuration form from where it reached max_iter")
         else:
