@@ -15,7 +15,10 @@ a regular constraint set: the dead position is an ordinary point (there the asse
 motion rule between the targets, |O'A| <= r3 + r4 or >= |r3 - r4|, is what holds the crank at it).  The assembly
 (branch) is held by a sign row: B on the spec's side of the line O' -> A, the side the crank-angle form's
 ``branch`` picks (construction.joint_positions).  Only at a change point (all four
-links in line) does the closure's gradient vanish; no formulation is regular there.
+links in line) does the closure's gradient in (theta2, psi) vanish; its gradient in the lengths is then parallel to
+the active motion row's (crank at 180 deg: both along (1, 1, -1, -1) in r1..r4, r1 + r2 = r3 + r4), so no constraint
+qualification holds there in any form.  kidney25's best designs sit so; IPOPT converges on them from a larger
+barrier parameter (nlp.POLISH_MU_INIT), not from the starts'.
 
 Every rule of the spec is the crank-angle form's (rules.path_rules on the same theta2), so a design and crank
 angles returned from here are checked exactly as any other; the coupler point of this form equals the closed
