@@ -225,6 +225,28 @@ def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(mon
     assert before.details["resumed"]["path_error_mm2"] > 100 * BEST_KNOWN["kidney25"]
 
 
+def test_an_open_arcs_max_iter_start_resumes_in_the_configuration_form_for_its_own_iteration_budget():
+    """stroke_lift14 (open arc, grashof "any", seed 1): start 43 reaches max_iter in the configuration form and its
+    resume converges after more than RESUME_ITERATIONS (150, the crank-angle form's budget, which would have stopped
+    it: the run is the same up to there) and within CONFIGURATION_RESUME_ITERATIONS, below the max_iter answer
+    (0.259043 mm^2), Solve_Succeeded, every rule holding."""
+    from synthesis.fourbar_path import nlp as path_nlp
+
+    spec = inexact_spec("stroke_lift14").model
+    nlp = PathNLP(spec, seed=1)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 1)
+    out = nlp.solve(43, rows[43])
+    resumed = out.details["resumed"]
+    assert resumed["form"] == "configuration" and resumed["kept"] is True
+    assert path_nlp.RESUME_ITERATIONS < resumed["iterations"] <= path_nlp.CONFIGURATION_RESUME_ITERATIONS
+    assert out.iterations == spec.solver.max_iter + resumed["iterations"]
+    assert out.return_status == "Solve_Succeeded"
+    assert out.objective == pytest.approx(0.258968442580562, rel=1e-7)
+    ev = evaluate(spec, out.design, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
+    assert ev.sum_sq == pytest.approx(out.objective, rel=1e-9)
+    assert all(r.record().satisfied for r in ev.rules)
+
+
 def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spec_fixes():
     """dwell_arc15's screened starts whose crank only rocks: with direction "either" each start's direction is the
     order of its crank angles within its interval of motion (not the cw / ccw alternation of the unscreened starts);

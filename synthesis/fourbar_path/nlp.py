@@ -28,6 +28,7 @@ that go either way.  The core transcribes it (back-off, elastic form) and runs I
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import math
 
@@ -95,7 +96,7 @@ CUTS = ((30, 400.0), (200, 1.0))
 #: its details say how: "resumed"); 0: never
 RESUME_WITHIN = 1.0
 #: the resumed run's iterations at most (a start that does not converge in them keeps its max_iter answer)
-RESUME_ITERATIONS = 150
+RESUME_ITERATIONS = 150         # in the crank-angle form (the configuration form's: CONFIGURATION_RESUME_ITERATIONS)
 #: grashof = "any", free timing: the configuration form (natural.py, regular at the crank's dead positions) solves
 #: every start of an open target arc (whose best linkages often rock the crank to a dead position), and polishes a
 #: start of a closed loop that the crank-angle form ended otherwise than converged, cut or at max_iter (within
@@ -103,19 +104,22 @@ RESUME_ITERATIONS = 150
 #: on a change point: kidney25); False: off
 CONFIGURATION = True
 #: a closed loop's polish in the configuration form stops after this many iterations: from where the crank-angle form
-#: stopped, a regular point converges in a few dozen (kidney25's best start: 29), the rest do not converge at all (20
-#: of its 21 polished starts on seed 0 still ran at 150 iterations)
-POLISH_ITERATIONS = 60
+#: stopped, a regular point converges in a few dozen, the rest do not converge at all (with the starts' mu_init, 20 of
+#: kidney25's 21 polished starts on seed 0 still ran at 150 iterations).  With POLISH_MU_INIT kidney25's converging
+#: polishes take 34-57 iterations (seeds 0, 2, 4), so 60 left ~10 % margin: 100 gave the same best objectives and
+#: statuses on seeds 0-5 for the four closed "any" loops (INEXACT.md, tenth pass)
+POLISH_ITERATIONS = 100
 #: IPOPT's initial barrier parameter of a resume or a polish in the configuration form (its own solver,
 #: PathNLP.polisher; None: MU_INIT, the starts' solver).  kidney25's best lies on a change point with a target at the
-#: links-in-line position; the crank-angle form ends there with a failed step (seeds 2 and 4), and the polish from that
-#: point with the starts' 1e-6 diverged (path error 9,029 / 252,865 mm^2 after 60 / 300 iterations); with 1e-2 it
-#: converged, Solve_Succeeded, in 53 / 47 iterations at the best known.  Six seeds: the same best objectives and hits,
-#: best start Solve_Succeeded on 59 of 60 against 56 (INEXACT.md, tenth pass)
+#: links-in-line position; the crank-angle form ends there with a failed step (seeds 2 and 4: starts 35 and 59), and
+#: the polish from that point with the starts' 1e-6 left it (path error 9,029 / 285,587 mm^2 when stopped after 60
+#: iterations); with 1e-2 it converges, Solve_Succeeded, in 53 / 48 iterations at the best known.  Six seeds with this
+#: and CONFIGURATION_RESUME_ITERATIONS: the same hits, best start Solve_Succeeded on 59 of 60 against 56 (INEXACT.md,
+#: tenth pass)
 POLISH_MU_INIT: float | None = 1e-2
 #: the iterations of a resume in the configuration form from max_iter (None: RESUME_ITERATIONS): stroke_lift14's best
-#: start on seed 1 converges in 187 more (0.259043 -> 0.258968 mm^2, Solve_Succeeded), not in 150; 400 did not catch
-#: seed 5's (it converged in 367 from a start rounded differently: a crawl, not a margin to count on)
+#: start on seed 1 (start 43) converges in 173 more (0.259043 -> 0.258968 mm^2, Solve_Succeeded), not in 150; 400 did
+#: not catch seed 5's (a study script's start, rounded differently, converged in 367: a crawl, not a margin to count on)
 CONFIGURATION_RESUME_ITERATIONS: int | None = 250
 #: continuation (issue 19): an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
@@ -251,25 +255,31 @@ class PathNLP:
         # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
         self._polisher: list = []
+        self._polisher_settings = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and not in_tolerance_box() and not operating_symbols_wanted()):
             self.configuration = ConfigurationNLP(spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
                                                   self._ipopt_options(spec), spec.solver.max_iter)
+            if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
+                self._polisher_settings = (
+                    (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
+                     {**self._ipopt_options(spec), "ipopt.mu_init": POLISH_MU_INIT}, spec.solver.max_iter),
+                    contextvars.copy_context())
         self.varpro = None
         if (VARPRO and not elastic and self.starts.screening
                 and not any(self.fixed[i] for i in PLACEMENT)):
             self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
 
     @property
-    def polisher(self) -> ConfigurationNLP:
-        """The configuration form that resumes and polishes (built on first use, once per process)."""
-        if POLISH_MU_INIT is None:
+    def polisher(self) -> ConfigurationNLP | None:
+        """The configuration form that resumes and polishes: the starts' own (``configuration``) but for IPOPT's
+        initial barrier parameter POLISH_MU_INIT; built on first use (once per PathNLP: per worker), from the
+        settings captured when this NLP was built."""
+        if self._polisher_settings is None:
             return self.configuration
         if not self._polisher:
-            spec = self.spec
-            options = {**self._ipopt_options(spec), "ipopt.mu_init": POLISH_MU_INIT}
-            self._polisher.append(ConfigurationNLP(spec, self.offset, self.scale, self.fixed, self.lbx, self.ubx,
-                                                   self.f_unit, BACKOFF, options, spec.solver.max_iter))
+            args, context = self._polisher_settings
+            self._polisher.append(context.run(ConfigurationNLP, *args))
         return self._polisher[0]
 
     def _ipopt_options(self, spec) -> dict:
@@ -446,7 +456,8 @@ class PathNLP:
         """A start that reached max_iter within RESUME_WITHIN x the reference is run once more from where it stopped, by
         a fresh IPOPT (barrier, filter and Hessian regularisation reset).  Few converge so (seed 0: 2 of 49 resumed
         starts; INEXACT.md, fifth pass), but those are starts that crawled along a flat valley to max_iter, as
-        stroke_lift14's best did; so a start may run max_iter + RESUME_ITERATIONS iterations."""
+        stroke_lift14's best did; so a start may run max_iter + RESUME_ITERATIONS (in the configuration form
+        CONFIGURATION_RESUME_ITERATIONS) iterations."""
         return out.return_status == "Maximum_Iterations_Exceeded" and self._near_reference(out, sign)
 
     def _near_reference(self, out, sign: float) -> bool:
@@ -459,7 +470,8 @@ class PathNLP:
     def _resume(self, index: int, first, sign: float, form: str = "angle"):
         """(outcome, what the resume did) for one more IPOPT run from where ``first`` stopped (in the configuration
         form its coupler angles recomputed by the closed form at that design and those crank angles), itself stopped
-        after RESUME_ITERATIONS (a polish of a start that did not reach max_iter: POLISH_ITERATIONS), in the
+        after RESUME_ITERATIONS (in the configuration form CONFIGURATION_RESUME_ITERATIONS; a polish of a start that
+        did not reach max_iter: POLISH_ITERATIONS), in the
         crank-angle form or (``form`` "configuration") the configuration form: its answer
         when it converged at a path error no higher than ``first``'s (a fresh run need not stay below its start), else
         ``first``'s; the iterations and time of both counted either way."""
