@@ -136,19 +136,31 @@ def test_the_configuration_form_converges_where_the_crank_reaches_its_dead_posit
     assert angle.return_status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
+def _solved_start(spec, seed: int, index: int):
+    """Start ``index`` of a 64-start run of ``spec`` with ``seed`` (its Latin-hypercube row), solved by PathNLP."""
+    nlp = PathNLP(spec, seed=seed)
+    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, seed)
+    return nlp.solve(index, rows[index])
+
+
+def _kept_from_the_configuration_form(spec, out):
+    """Assert that ``out`` kept the configuration form's resume or polish and ends Solve_Succeeded with every rule
+    holding on the fine grid; return the check's evaluation."""
+    assert out.details["resumed"]["form"] == "configuration" and out.details["resumed"]["kept"] is True
+    assert out.return_status == "Solve_Succeeded"
+    ev = evaluate(spec, out.design, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
+    assert all(r.record().satisfied for r in ev.rules)
+    return ev
+
+
 def test_a_closed_loop_start_the_crank_angle_form_does_not_finish_is_polished_in_the_configuration_form():
     """kidney25 (closed loop, grashof "any", seed 0): start 45 ends without converging in the crank-angle form; the
     configuration form takes it on from there and converges (Solve_Succeeded) at the best known objective, its
     details saying so; the design holds every rule on the fine grid."""
     spec = inexact_spec("kidney25").model
-    nlp = PathNLP(spec, seed=0)
-    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)
-    out = nlp.solve(45, rows[45])
-    assert out.details["resumed"]["form"] == "configuration" and out.details["resumed"]["kept"] is True
-    assert out.return_status == "Solve_Succeeded"
+    out = _solved_start(spec, 0, 45)
+    _kept_from_the_configuration_form(spec, out)
     assert out.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)
-    ev = evaluate(spec, out.design, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
-    assert all(r.record().satisfied for r in ev.rules)
 
 
 def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
@@ -207,20 +219,14 @@ def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(mon
     from synthesis.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("kidney25").model
-    nlp = PathNLP(spec, seed=2)
-    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 2)
-    out = nlp.solve(35, rows[35])
-    assert out.details["resumed"]["form"] == "configuration" and out.details["resumed"]["kept"] is True
-    assert out.return_status == "Solve_Succeeded"
+    out = _solved_start(spec, 2, 35)
+    _kept_from_the_configuration_form(spec, out)
     assert out.objective == pytest.approx(BEST_KNOWN["kidney25"], rel=1e-8)
     d = out.design
     assert d["r1"] + d["r2"] == pytest.approx(d["r3"] + d["r4"], rel=1e-7)
     assert out.details["crank_deg"][0] == pytest.approx(180.0, abs=0.01)
-    ev = evaluate(spec, d, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
-    assert all(r.record().satisfied for r in ev.rules)
     monkeypatch.setattr(path_nlp, "POLISH_MU_INIT", None)
-    nlp = PathNLP(spec, seed=2)
-    before = nlp.solve(35, rows[35])
+    before = _solved_start(spec, 2, 35)
     assert before.details["resumed"]["kept"] is False and before.return_status == "Error_In_Step_Computation"
     assert before.details["resumed"]["path_error_mm2"] > 100 * BEST_KNOWN["kidney25"]
 
@@ -233,18 +239,13 @@ def test_an_open_arcs_max_iter_start_resumes_in_the_configuration_form_for_its_o
     from synthesis.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("stroke_lift14").model
-    nlp = PathNLP(spec, seed=1)
-    rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 1)
-    out = nlp.solve(43, rows[43])
+    out = _solved_start(spec, 1, 43)
+    ev = _kept_from_the_configuration_form(spec, out)
     resumed = out.details["resumed"]
-    assert resumed["form"] == "configuration" and resumed["kept"] is True
     assert path_nlp.RESUME_ITERATIONS < resumed["iterations"] <= path_nlp.CONFIGURATION_RESUME_ITERATIONS
     assert out.iterations == spec.solver.max_iter + resumed["iterations"]
-    assert out.return_status == "Solve_Succeeded"
     assert out.objective == pytest.approx(0.258968442580562, rel=1e-7)
-    ev = evaluate(spec, out.design, out.details["crank_deg"], timing="solved", direction=out.details["direction"])
     assert ev.sum_sq == pytest.approx(out.objective, rel=1e-9)
-    assert all(r.record().satisfied for r in ev.rules)
 
 
 def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spec_fixes():
