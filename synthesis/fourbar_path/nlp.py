@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextvars
 import dataclasses
+import functools
 import math
 
 import casadi as ca
@@ -254,7 +255,6 @@ class PathNLP:
         # grashof = "any" on a screened free-timing target set (issue 19): the configuration form too (CONFIGURATION;
         # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
-        self._polisher: list = []
         self._polisher_settings = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and not in_tolerance_box() and not operating_symbols_wanted()):
@@ -270,17 +270,15 @@ class PathNLP:
                 and not any(self.fixed[i] for i in PLACEMENT)):
             self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
 
-    @property
+    @functools.cached_property
     def polisher(self) -> ConfigurationNLP | None:
         """The configuration form that resumes and polishes: the starts' own (``configuration``) but for IPOPT's
         initial barrier parameter POLISH_MU_INIT; built on first use (once per PathNLP: per worker), from the
         settings captured when this NLP was built."""
         if self._polisher_settings is None:
             return self.configuration
-        if not self._polisher:
-            args, context = self._polisher_settings
-            self._polisher.append(context.run(ConfigurationNLP, *args))
-        return self._polisher[0]
+        args, context = self._polisher_settings
+        return context.run(ConfigurationNLP, *args)
 
     def _ipopt_options(self, spec) -> dict:
         out = {"ipopt.mu_strategy": spec.solver.mu_strategy, **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})}
