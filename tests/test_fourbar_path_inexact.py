@@ -290,6 +290,30 @@ def test_the_projected_nlp_is_the_full_nlp_with_the_placement_refitted(monkeypat
             moved[k] += step
             assert float(nlp.fit(moved, start.sign)) > fit_full
 
+def test_the_projection_serves_only_starts_already_placed_on_the_targets(monkeypatch):
+    """VARPRO (study switch, eleventh pass): a screened start is solved by the projected NLP first; a Latin-hypercube
+    start (the continuation's) never is, and comes out exactly as with the switch off; an open target arc with
+    grashof = "any" (every start in the configuration form) builds no projected NLP at all."""
+    spec = inexact_spec("egg16").model
+    off = PathNLP(spec, 0)
+    rows = latin_hypercube_starts(off.bounds, off.init, 64, 0)
+    hypercube_off = off.solve(2, rows[2])
+    monkeypatch.setattr(path_nlp, "VARPRO", True)
+    on = PathNLP(spec, 0)
+    assert on.varpro is not None
+    projected = []
+    solve = on.varpro.solve
+    monkeypatch.setattr(on.varpro, "solve", lambda index, *a, **k: projected.append(index) or solve(index, *a, **k))
+    assert on.start(2, rows[2]).timing_first and not on.start(3, rows[3]).timing_first
+    hypercube_on = on.solve(2, rows[2])
+    assert projected == []
+    assert (hypercube_on.iterations, hypercube_on.objective, hypercube_on.return_status) == \
+        (hypercube_off.iterations, hypercube_off.objective, hypercube_off.return_status)
+    screened = on.solve(3, rows[3])
+    assert projected == [3]
+    assert screened.return_status == "Solve_Succeeded" and math.isfinite(screened.objective)
+    assert PathNLP(inexact_spec("stroke_lift14").model, 0).varpro is None
+
 
 def test_the_best_known_designs_file_holds_the_cross_checks_new_bests():
     """The parametrised test below runs on the file's keys: an emptied file would collect nothing, so its content is

@@ -134,11 +134,18 @@ SEQUENCE_ROOM = 1e-6
 #: study switch: each start's details get its path error at every iteration (of its main run: not of a fixed-timing
 #: phase, whose iterations precede the trace's iteration 0, nor of a resume)
 TRACE = False
-#: free timing, >= SCREEN_MIN_TARGETS targets, placement free (issue 19): each start is first solved by variable
-#: projection -- the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly, so for
-#: given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed form
-#: (:func:`placement`), and IPOPT moves only r1..r4, theta0 and the crank angles -- then polished by the full NLP
-VARPRO = False            # study switch (INEXACT.md, third pass): measured, not kept on
+#: study switch (issue 19; INEXACT.md, third and eleventh passes; off): free timing, >= SCREEN_MIN_TARGETS targets,
+#: placement free -- a start already placed on the targets (the screened and pool starts, and start 0) is first solved
+#: by variable projection: the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly,
+#: so for given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed
+#: form (:func:`placement`), and IPOPT moves only r1..r4, theta0 and the crank angles; then, unless it converged with
+#: the placement inside its bounds, the full NLP polishes it.  Not the Latin-hypercube starts (the continuation's:
+#: TIMING_FIRST), whose long trajectories in the full NLP reach egg16's and d_shape22's best (projected too, d_shape22's
+#: best was lost on 2 of 3 seeds), nor an open target arc in the configuration form (CONFIGURATION; not built there).
+#: On seeds 0-5 it took 30 % fewer iterations (median of the medians 105.5 against 150) and reached the best known on
+#: 37 of 60 against 36, but each projected iteration costs ~1.5x (its Hessian is dense in the crank angles: 233 against
+#: 62 us on square24), so the median wall did not fall (5.04 s against 4.80-5.09 s on seed 0): not switched on
+VARPRO = False
 #: the entries of the design the coupler point is linear in (the projection's closed-form placement)
 PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
 #: the projected answer is kept without the full NLP's polish when its placement is this far inside its bounds
@@ -266,9 +273,14 @@ class PathNLP:
                      {**self._ipopt_options(spec), "ipopt.mu_init": POLISH_MU_INIT}, spec.solver.max_iter),
                     contextvars.copy_context())
         self.varpro = None
-        if (VARPRO and not elastic and self.starts.screening
+        if (VARPRO and not elastic and self.starts.screening and not self._open_in_configuration
                 and not any(self.fixed[i] for i in PLACEMENT)):
             self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
+
+    @property
+    def _open_in_configuration(self) -> bool:
+        """Whether every start is solved in the configuration form (an open target arc, grashof = "any")."""
+        return self.configuration is not None and not self.starts.closed
 
     @functools.cached_property
     def polisher(self) -> ConfigurationNLP | None:
@@ -383,7 +395,7 @@ class PathNLP:
         trace: list = []
         watch = self.watch(trace)
         pre = None
-        if self.varpro is not None:          # variable projection first, the full NLP only where it must
+        if self.varpro is not None and not sp.timing_first:    # projection first, the full NLP only where it must
             kept = list(self.KEPT)
             pre = self.varpro.solve(index, np.concatenate([z0[kept], sp.theta]), p=sp.sign, watch=watch)
             full = np.asarray(self.varpro_full(pre.x[: self.varpro.n_x], sp.sign), dtype=float).ravel()
@@ -401,7 +413,7 @@ class PathNLP:
         first = None
         # not for an open arc in the configuration form: there it found no more best designs on six seeds and cost
         # 150-420 iterations per start (dwell_arc15, stroke_lift14; INEXACT.md, seventh pass)
-        in_configuration = self.configuration is not None and not self.starts.closed
+        in_configuration = self._open_in_configuration
         if (sp.timing_first and self.continuation and pre is None and not in_configuration
                 and self._sequence_can_hold(sp) and not peer_method_active()):
             w0, first = self._fit_at_start_timing(index, w0, sp.sign)
