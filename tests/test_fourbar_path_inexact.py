@@ -290,6 +290,7 @@ def test_the_projected_nlp_is_the_full_nlp_with_the_placement_refitted(monkeypat
             moved[k] += step
             assert float(nlp.fit(moved, start.sign)) > fit_full
 
+
 def test_the_projection_serves_only_starts_without_a_fixed_timing_phase(monkeypatch):
     """VARPRO (study switch, eleventh pass): start 0 (the spec's design), a screened and a pool start are solved by
     the projected NLP first; a Latin-hypercube start (the continuation's fixed-timing phase first) never is; an open
@@ -311,7 +312,6 @@ def test_the_projection_serves_only_starts_without_a_fixed_timing_phase(monkeypa
     on.solve(0, rows[0])
     assert projected == [3, 1, 0]
     assert PathNLP(inexact_spec("stroke_lift14").model, 0).varpro is None
-
 
 def test_the_best_known_designs_file_holds_the_cross_checks_new_bests():
     """The parametrised test below runs on the file's keys: an emptied file would collect nothing, so its content is

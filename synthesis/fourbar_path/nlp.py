@@ -136,15 +136,16 @@ SEQUENCE_ROOM = 1e-6
 TRACE = False
 #: study switch (issue 19; INEXACT.md, third and eleventh passes; off): free timing, >= SCREEN_MIN_TARGETS targets,
 #: placement free -- a start without a fixed-timing phase (the screened and pool starts, placed on the targets by the
-#: screen, and start 0, the spec's design) is first solved by variable projection: the input pivot (x0, y0) and the coupler point (rcx, rcy) enter the coupler point linearly,
-#: so for given links, frame angle and crank angles their best values are a complex linear least-squares fit in closed
-#: form (:func:`placement`), and IPOPT moves only r1..r4, theta0 and the crank angles; then, unless it converged with
-#: the placement inside its bounds, the full NLP polishes it.  Not the Latin-hypercube starts (the continuation's:
-#: TIMING_FIRST), whose long trajectories in the full NLP reach egg16's and d_shape22's best (projected too, each
-#: was lost on 2 of seeds 0-2), nor an open target arc in the configuration form (CONFIGURATION; not built there).
-#: On seeds 0-5 it took 30 % fewer iterations (median of the medians 105.5 against 150) and reached the best known on
-#: 37 of 60 against 36, but each projected iteration costs ~1.5x (its Hessian is dense in the crank angles: 233 against
-#: 62 us on square24), so the median wall did not fall (5.04 s against 4.80-5.09 s on seed 0): not switched on
+#: screen, and start 0, the spec's design) is first solved by variable projection: the input pivot (x0, y0) and the
+#: coupler point (rcx, rcy) enter the coupler point linearly, so for given links, frame angle and crank angles their
+#: best values are a complex linear least-squares fit in closed form (:func:`placement`), and IPOPT moves only r1..r4,
+#: theta0 and the crank angles; then, unless it converged with the placement inside its bounds, the full NLP polishes
+#: it.  Not the Latin-hypercube starts (the continuation's: TIMING_FIRST), whose long trajectories in the full NLP reach
+#: egg16's and d_shape22's best (projected too, each was lost on 2 of seeds 0-2), nor an open target arc in the
+#: configuration form (CONFIGURATION; not built there). On seeds 0-5 it took 30 % fewer iterations (median of the
+#: medians 105.5 against 150) and reached the best known on 37 of 60 against 36, but where the iterations did not fall
+#: each costs 1.4-1.5x (the Hessian is dense in the crank angles: 233 against 62 us on square24), so the median wall did
+#: not fall (5.04 s against 4.80-5.09 s on seed 0): not switched on
 VARPRO = False
 #: the entries of the design the coupler point is linear in (the projection's closed-form placement)
 PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
