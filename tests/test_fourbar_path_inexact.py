@@ -313,6 +313,7 @@ def test_the_projection_serves_only_starts_without_a_fixed_timing_phase(monkeypa
     assert projected == [3, 1, 0]
     assert PathNLP(inexact_spec("stroke_lift14").model, 0).varpro is None
 
+
 def test_the_best_known_designs_file_holds_the_cross_checks_new_bests():
     """The parametrised test below runs on the file's keys: an emptied file would collect nothing, so its content is
     pinned here (the bests found below the earlier best known: by the 2,000-start cross-check, a fourth-pass run, the

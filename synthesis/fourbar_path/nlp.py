@@ -266,13 +266,13 @@ class PathNLP:
         self._polisher_settings = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and not in_tolerance_box() and not operating_symbols_wanted()):
-            self.configuration = ConfigurationNLP(spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
-                                                  self._ipopt_options(spec), spec.solver.max_iter)
+            options = self._ipopt_options(spec)
+            form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
+                                 opts, spec.solver.max_iter)
+            self.configuration = ConfigurationNLP(*form(options))
             if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
-                self._polisher_settings = (
-                    (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,
-                     {**self._ipopt_options(spec), "ipopt.mu_init": POLISH_MU_INIT}, spec.solver.max_iter),
-                    contextvars.copy_context())
+                self._polisher_settings = (form({**options, "ipopt.mu_init": POLISH_MU_INIT}),
+                                           contextvars.copy_context())
         self.varpro = None
         if (VARPRO and not elastic and self.starts.screening and not self._open_in_configuration
                 and not any(self.fixed[i] for i in PLACEMENT)):
