@@ -66,6 +66,26 @@ def test_the_pool_of_screened_starts_is_deterministic():
     assert np.array_equal(a(5, x).design, b(5, x).design) and np.array_equal(a(5, x).theta, b(5, x).theta)
 
 
+@pytest.mark.parametrize("name", ["egg16", "dwell_arc15"])
+def test_the_screened_list_is_the_same_for_any_thread_count(name, monkeypatch):
+    """The screen's blocks run on THREADS threads: the designs and residuals are the same to the bit for 1, 2 and 3
+    threads -- a closed crank-rocker loop (egg16) and an open "any" arc (dwell_arc15, whose rocking shapes have a
+    crank-angle row each)."""
+    from synthesis.fourbar_path.starts import SIGNS
+    spec = inexact_spec(name).model
+    maker = StartMaker(spec, 2)
+    args = (maker.targets, maker.bounds, maker.branch, spec.rules.grashof, SIGNS[spec.rules.direction],
+            maker.closed, arc_fractions(maker.targets, maker.closed), 2)
+    lists = []
+    for threads in (1, 2, 3):
+        monkeypatch.setattr(screen, "THREADS", threads)
+        lists.append(screen.screen(*args, shapes=3000))
+    designs, residuals = lists[0]
+    assert len(designs) > 1000 and np.all(np.isfinite(residuals))
+    for other_designs, other_residuals in lists[1:]:
+        assert np.array_equal(designs, other_designs) and np.array_equal(residuals, other_residuals)
+
+
 def test_the_screen_recovers_a_similarity_image_of_a_shape_curve():
     """Targets that are a shape's coupler curve at scattered crank angles (free timing, out of order), turned
     by 40 deg, scaled by 25 and shifted: the screen's trial correspondences and nearest-point rounds lay the

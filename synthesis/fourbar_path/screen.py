@@ -29,6 +29,8 @@ worker inherits the one its parent made when it built the NLP).
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -41,6 +43,12 @@ SPANS = (0.2, 0.35, 0.5, 0.7)   # open target arcs: trial fractions of the curve
 ICP_ROUNDS = 4         # nearest-point / similarity alternations on the coarse curves
 SEED_TAG = 1919        # the shapes' generator is seeded by [seed, SEED_TAG]
 CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x GRID)
+#: threads that screen the blocks (None: as many as the CPUs this process may use).  The screen runs in the main
+#: process before the workers start, so alone it held the run's other cores idle (0.55-1.5 s of the ten inexact
+#: problems' 2.3-7 s runs on 2 cores); numpy releases the GIL in its array loops, and each block is computed by the
+#: same operations on the same rows whatever thread runs it, so the list is the same for any thread count
+#: (tests/test_fourbar_path_screen.py)
+THREADS: int | None = None
 TWO_PI = 2.0 * math.pi
 
 
@@ -206,12 +214,30 @@ def open_trials(fractions: np.ndarray, signs: tuple) -> np.ndarray:
     return np.clip(np.array(rows), 0.0, 1.0)
 
 
+def _by_blocks(job, n: int) -> list:
+    """job(rows) for the row slices of CHUNK out of n, in order, run by THREADS threads (joined before returning:
+    no thread outlives the call, so a worker forked afterwards inherits none)."""
+    blocks = [slice(lo, lo + CHUNK) for lo in range(0, n, CHUNK)]
+    threads = THREADS or max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                             else (os.cpu_count() or 1))
+    if threads == 1 or len(blocks) < 2:
+        return [job(rows) for rows in blocks]
+    with ThreadPoolExecutor(min(threads, len(blocks)), thread_name_prefix="screen") as pool:
+        return list(pool.map(job, blocks))
+
+
 def shape_points(shapes: np.ndarray, theta: np.ndarray, branch: int) -> np.ndarray:
     """(S, K) complex coupler points of the shapes in their normalised frame (O = 0, O' = 1) at crank angles
     ``theta`` ((K,) for all, or (S, K) one row per shape); NaN where the loop does not close."""
-    d = {"r1": shapes[:, 0:1], "r2": shapes[:, 1:2], "r3": shapes[:, 2:3], "r4": shapes[:, 3:4],
-         "rcx": shapes[:, 4:5], "rcy": shapes[:, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
-    return joint_positions(d, np.atleast_2d(theta), branch)["P"]
+    theta = np.atleast_2d(theta)
+
+    def block(rows: slice) -> np.ndarray:
+        d = {"r1": shapes[rows, 0:1], "r2": shapes[rows, 1:2], "r3": shapes[rows, 2:3], "r4": shapes[rows, 3:4],
+             "rcx": shapes[rows, 4:5], "rcy": shapes[rows, 5:6], "x0": 0.0, "y0": 0.0, "theta0": 0.0}
+        return joint_positions(d, theta if len(theta) == 1 else theta[rows], branch)["P"]
+    if len(shapes) == 0:
+        return block(slice(0, 0))
+    return np.concatenate(_by_blocks(block, len(shapes)))
 
 
 def shape_curves(shapes: np.ndarray, branch: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
@@ -316,9 +342,10 @@ def _fit_family(shapes: np.ndarray, curves: np.ndarray, t: np.ndarray, trials: n
     a = np.empty(len(shapes), complex)
     b = np.empty(len(shapes), complex)
     res = np.empty(len(shapes))
-    for lo in range(0, len(shapes), CHUNK):
-        sl = slice(lo, lo + CHUNK)
-        a[sl], b[sl], res[sl] = _block(curves[sl], t, trials, s_lo[sl], s_hi[sl], closed_curve)
+
+    def block(rows: slice) -> None:
+        a[rows], b[rows], res[rows] = _block(curves[rows], t, trials, s_lo[rows], s_hi[rows], closed_curve)
+    _by_blocks(block, len(shapes))
     return shapes, a, b, res
 
 
