@@ -47,7 +47,7 @@ CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x 
 #: process before the workers start, so alone it held the run's other cores idle (0.55-1.5 s of the ten inexact
 #: problems' 2.3-7 s runs on 2 cores); numpy releases the GIL in its array loops, and each block is computed by the
 #: same operations on the same rows whatever thread runs it, so the list is the same for any thread count
-#: (tests/test_fourbar_path_screen.py)
+#: (tests/test_fourbar_path_inexact.py)
 THREADS: int | None = None
 TWO_PI = 2.0 * math.pi
 
