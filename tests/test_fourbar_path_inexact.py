@@ -22,7 +22,8 @@ from synthesis.fourbar_path import nlp as path_nlp
 from synthesis.fourbar_path import screen
 from synthesis.fourbar_path.nlp import PathNLP
 from synthesis.fourbar_path.rules import EXTREMES
-from synthesis.fourbar_path.starts import DISTINCT, StartMaker, arc_fractions, is_closed_loop, points_at, refit_placement
+from synthesis.fourbar_path.starts import (DISTINCT, SIGNS, StartMaker, arc_fractions, is_closed_loop, points_at,
+                                           refit_placement)
 from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import validate
@@ -70,8 +71,7 @@ def test_the_pool_of_screened_starts_is_deterministic():
 def test_the_screened_list_is_the_same_for_any_thread_count(name, monkeypatch):
     """The screen's blocks run on THREADS threads: the designs and residuals are the same to the bit for 1, 2 and 3
     threads -- a closed crank-rocker loop (egg16) and an open "any" arc (dwell_arc15, whose rocking shapes have a
-    crank-angle row each)."""
-    from synthesis.fourbar_path.starts import SIGNS
+    crank-angle row each); and the blocked coupler points are those of one call on every shape at once."""
     spec = inexact_spec(name).model
     maker = StartMaker(spec, 2)
     args = (maker.targets, maker.bounds, maker.branch, spec.rules.grashof, SIGNS[spec.rules.direction],
@@ -84,6 +84,14 @@ def test_the_screened_list_is_the_same_for_any_thread_count(name, monkeypatch):
     assert len(designs) > 1000 and np.all(np.isfinite(residuals))
     for other_designs, other_residuals in lists[1:]:
         assert np.array_equal(designs, other_designs) and np.array_equal(residuals, other_residuals)
+    shapes = np.random.default_rng(7).uniform([1.0, 0.2, 0.5, 0.5, -1.0, -1.0], [1.0, 0.6, 2.0, 2.0, 1.0, 1.0],
+                                               (3 * screen.CHUNK + 5, 6))
+    per_shape = np.random.default_rng(8).uniform(0.0, 2.0 * math.pi, (len(shapes), 40))
+    for theta in (per_shape, per_shape[0]):
+        whole = joint_positions({"r1": shapes[:, 0:1], "r2": shapes[:, 1:2], "r3": shapes[:, 2:3],
+                                 "r4": shapes[:, 3:4], "rcx": shapes[:, 4:5], "rcy": shapes[:, 5:6],
+                                 "x0": 0.0, "y0": 0.0, "theta0": 0.0}, np.atleast_2d(theta), 1)["P"]
+        assert np.isfinite(whole).any() and np.array_equal(screen.shape_points(shapes, theta, 1), whole, equal_nan=True)
 
 
 def test_the_screen_recovers_a_similarity_image_of_a_shape_curve():

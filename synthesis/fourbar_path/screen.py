@@ -29,6 +29,7 @@ worker inherits the one its parent made when it built the NLP).
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -43,12 +44,14 @@ SPANS = (0.2, 0.35, 0.5, 0.7)   # open target arcs: trial fractions of the curve
 ICP_ROUNDS = 4         # nearest-point / similarity alternations on the coarse curves
 SEED_TAG = 1919        # the shapes' generator is seeded by [seed, SEED_TAG]
 CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x GRID)
-#: threads that screen the blocks (None: as many as the CPUs this process may use).  The screen runs in the main
-#: process before the workers start, so alone it held the run's other cores idle (0.55-1.5 s of the ten inexact
-#: problems' 2.3-7 s runs on 2 cores); numpy releases the GIL in its array loops, and each block is computed by the
-#: same operations on the same rows whatever thread runs it, so the list is the same for any thread count
-#: (tests/test_fourbar_path_inexact.py)
+#: threads that screen the blocks (None: the CPUs this process may use, at most MAX_THREADS; 1 in a worker process,
+#: whose sibling workers hold the other cores).  The screen runs in the main process before the workers start, so
+#: alone it held the run's other cores idle (0.6-1.5 s of the ten inexact problems' 2.2-8 s runs on 2 cores); numpy
+#: releases the GIL in its array loops, and each block is computed by the same operations on the same rows whatever
+#: thread runs it, so the list is the same for any thread count (tests/test_fourbar_path_inexact.py).  Each thread
+#: holds one block (about 55 MB for kidney25's 25 targets): hence the cap
 THREADS: int | None = None
+MAX_THREADS = 4
 TWO_PI = 2.0 * math.pi
 
 
@@ -215,15 +218,24 @@ def open_trials(fractions: np.ndarray, signs: tuple) -> np.ndarray:
 
 
 def _by_blocks(job, n: int) -> list:
-    """job(rows) for the row slices of CHUNK out of n, in order, run by THREADS threads (joined before returning:
-    no thread outlives the call, so a worker forked afterwards inherits none)."""
+    """job(rows) for the row slices of CHUNK out of n, in order, run by up to THREADS threads (joined before returning:
+    no thread outlives the call, so a worker forked afterwards inherits none; on an error the blocks not begun are
+    dropped).  A job sets its own numpy error state: a thread does not inherit the caller's."""
     blocks = [slice(lo, lo + CHUNK) for lo in range(0, n, CHUNK)]
-    threads = THREADS or max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                             else (os.cpu_count() or 1))
+    if THREADS is not None:
+        threads = max(1, THREADS)
+    elif multiprocessing.parent_process() is not None:
+        threads = 1
+    else:
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        threads = min(cpus, MAX_THREADS)
     if threads == 1 or len(blocks) < 2:
         return [job(rows) for rows in blocks]
-    with ThreadPoolExecutor(min(threads, len(blocks)), thread_name_prefix="screen") as pool:
+    pool = ThreadPoolExecutor(min(threads, len(blocks)), thread_name_prefix="screen")
+    try:
         return list(pool.map(job, blocks))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def shape_points(shapes: np.ndarray, theta: np.ndarray, branch: int) -> np.ndarray:
