@@ -46,7 +46,7 @@ SEED_TAG = 1919        # the shapes' generator is seeded by [seed, SEED_TAG]
 CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x GRID)
 #: threads that screen the blocks (None: the CPUs this process may use, at most MAX_THREADS; 1 in a worker process,
 #: whose sibling workers hold the other cores).  The screen runs in the main process before the workers start, so
-#: alone it held the run's other cores idle (0.6-1.5 s of the ten inexact problems' 2.2-8 s runs on 2 cores); numpy
+#: alone it held the run's other cores idle (0.55-1.6 s of the ten inexact problems' 2.2-8 s runs on 2 cores); numpy
 #: releases the GIL in its array loops, and each block is computed by the same operations on the same rows whatever
 #: thread runs it, so the list is the same for any thread count (tests/test_fourbar_path_inexact.py).  Each thread
 #: holds one block (about 55 MB for kidney25's 25 targets): hence the cap
