@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import math
 import multiprocessing
-import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
+from synthesis.core.executor import default_workers
 from synthesis.fourbar_path.construction import joint_positions
 
 SHAPES = 12000         # candidate shapes screened per spec and seed
@@ -227,8 +227,7 @@ def _by_blocks(job, n: int) -> list:
     elif multiprocessing.parent_process() is not None:
         threads = 1
     else:
-        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-        threads = min(cpus, MAX_THREADS)
+        threads = min(default_workers(), MAX_THREADS)
     if threads == 1 or len(blocks) < 2:
         return [job(rows) for rows in blocks]
     pool = ThreadPoolExecutor(min(threads, len(blocks)), thread_name_prefix="screen")
