@@ -16,8 +16,8 @@ motion rule between the targets, |O'A| <= r3 + r4 or >= |r3 - r4|, is what holds
 (branch) is held by a sign row: B on the spec's side of the line O' -> A, the side the crank-angle form's
 ``branch`` picks (construction.joint_positions).  Only at a change point (all four
 links in line) does the closure's gradient in (theta2, psi) vanish; its gradient in the lengths is then parallel to
-the active motion row's (kidney25's, crank at 180 deg: both along (1, 1, -1, -1) in r1..r4, r1 + r2 = r3 + r4), so neither LICQ
-nor MFCQ holds there (the multipliers are neither unique nor bounded).  kidney25's best designs
+the active motion row's (kidney25's, crank at 180 deg: both along (1, 1, -1, -1) in r1..r4, r1 + r2 = r3 + r4), so
+neither LICQ nor MFCQ holds there (the multipliers are neither unique nor bounded).  kidney25's best designs
 sit so; from where the crank-angle form stopped on seeds 2 and 4 IPOPT converged on them only with a larger barrier
 parameter (nlp.POLISH_MU_INIT) than the starts'.
 

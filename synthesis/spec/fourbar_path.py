@@ -175,8 +175,8 @@ class SolverSection(MultistartSettings):
                                 "is at most this many mm^2 and that satisfies every rule; reported as "
                                 "starts needed")
     max_iter: int = max_iter_field(1000, " (free timing, >= 12 targets: a start stopped there within the best screened "
-                                           "start's path error is resumed once, for up to 150 more; 250 on an open target arc with "
-                                           "grashof = \"any\")")
+                                           "start's path error is resumed once, for up to 150 more; 250 on an open "
+                                           "target arc with grashof = \"any\")")
     mu_strategy: Literal["monotone", "adaptive"] = Field(
         "monotone", description="IPOPT's barrier update: monotone (default: more starts reach the optimum "
                                 "when the targets go round the whole coupler curve) or adaptive (with "
