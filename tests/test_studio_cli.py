@@ -19,6 +19,20 @@ from studio_fixtures import STUDIO_SPECS
 pytest.importorskip("starlette")
 
 
+def _from_a_terminal() -> None:
+    """The signal dispositions of a studio started from a terminal (SIGINT, SIGHUP by default).  A process
+    inherits ignored signals: a suite run in the background (`pytest &` ignores SIGINT, `nohup` SIGHUP) would
+    otherwise start the studio with them ignored."""
+    for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_DFL)
+
+
+def _studio(tmp_path, preexec=_from_a_terminal) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
+                             "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=preexec)
+
+
 def test_bad_input_is_one_line_and_exit_2(tmp_path):
     missing = cli_run("studio", str(tmp_path / "nowhere.toml"), cwd=tmp_path)
     assert missing.returncode == 2 and "nowhere.toml" in missing.stderr
@@ -46,9 +60,7 @@ def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
 
 
 def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
-                             "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _studio(tmp_path)
     try:
         url = None
         for _ in range(5):
@@ -102,9 +114,7 @@ def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(
 
     from solving import strict_json
 
-    proc = subprocess.Popen([sys.executable, "-m", "synthesis.cli", "studio", str(STUDIO_SPECS["crank_rocker"]),
-                             "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _studio(tmp_path)
     try:
         match = None
         for _ in range(5):
@@ -143,3 +153,42 @@ def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(
     (run,) = [p for p in (tmp_path / "studio").iterdir() if p.is_dir()]
     result = strict_json(run / "result.json")
     assert result["status"] == "interrupted" and 1 <= len((run / "starts.jsonl").read_text().splitlines()) < 256
+
+
+def test_under_nohup_a_closed_terminal_leaves_the_studio_serving(tmp_path):
+    """`nohup agrisynth studio ... &` ignores SIGHUP so that the studio outlives its terminal: a SIGHUP then
+    leaves it serving (it once stopped it), and SIGTERM still stops it."""
+    def nohup():
+        _from_a_terminal()
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    proc = _studio(tmp_path, nohup)
+    try:
+        url = None
+        for _ in range(5):
+            match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", proc.stdout.readline())
+            if match:
+                url = match.group(0)
+                break
+        assert url, "no address printed"
+
+        def page() -> str:
+            for _ in range(200):          # the address is printed just before the server listens
+                try:
+                    return urllib.request.urlopen(url, timeout=10).read().decode()
+                except urllib.error.URLError:
+                    time.sleep(0.05)
+            raise AssertionError("the studio never answered")
+
+        assert "agrisynth studio" in page()
+        proc.send_signal(signal.SIGHUP)
+        time.sleep(1.0)                   # a studio that took the signal has shut down by now (grace: none running)
+        assert proc.poll() is None, "SIGHUP under nohup stopped the studio"
+        assert "agrisynth studio" in page()
+        proc.send_signal(signal.SIGTERM)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == -signal.SIGTERM

@@ -301,21 +301,25 @@ class Studio:
 
     def serve(self) -> None:
         """Serve until Ctrl-C, SIGTERM or SIGHUP; a running solve is cancelled on the way out, then the signal
-        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it)."""
+        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  Started under
+        ``nohup`` (SIGHUP ignored), it keeps serving when its terminal closes."""
         server = self.server()
         # uvicorn shuts down gracefully on SIGINT and SIGTERM only; a closed terminal (SIGHUP) would otherwise
-        # end the studio at once and leave its worker running
+        # end the studio at once and leave its worker running.  An ignored SIGHUP is the user's choice (nohup:
+        # outlive the terminal), so it stays ignored
         hung_up = []
 
         def hang_up(sig, frame):
             hung_up.append(sig)
             server.should_exit = True
 
-        previous = signal.signal(signal.SIGHUP, hang_up)
+        on_hang_up = signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN
+        previous = signal.signal(signal.SIGHUP, hang_up) if on_hang_up else None
         try:
             server.run(sockets=[self.socket])
         finally:
             self.stop_job()
-            signal.signal(signal.SIGHUP, previous)
+            if on_hang_up:
+                signal.signal(signal.SIGHUP, signal.SIG_DFL if previous is None else previous)
         if hung_up:
             signal.raise_signal(signal.SIGHUP)
