@@ -290,6 +290,17 @@ class Studio:
         studio = self
 
         class Server(uvicorn.Server):
+            #: signals the studio was started with ignored (serve sets it): they stay ignored
+            ignored_signals: frozenset = frozenset()
+
+            def handle_exit(self, sig, frame) -> None:
+                # uvicorn takes SIGINT and SIGTERM even when the parent ignored them, then re-raises them under
+                # the restored (ignored) disposition: the process ended with exit 0 and no word instead of
+                # keeping on serving, as a process that ignores a signal does (`agrisynth studio spec &` from
+                # a script ignores SIGINT)
+                if sig not in self.ignored_signals:
+                    super().handle_exit(sig, frame)
+
             async def shutdown(self, sockets=None) -> None:
                 # here, not after run() returns: on SIGTERM uvicorn re-raises the signal as soon as it has shut
                 # down, which ends the process before any code after run() would cancel the solve
@@ -301,9 +312,12 @@ class Studio:
 
     def serve(self) -> None:
         """Serve until Ctrl-C, SIGTERM or SIGHUP; a running solve is cancelled on the way out, then the signal
-        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  Started under
-        ``nohup`` (SIGHUP ignored), it keeps serving when its terminal closes."""
+        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  A signal the
+        studio was started with ignored stays ignored: under ``nohup`` (SIGHUP ignored) it keeps serving when its
+        terminal closes."""
         server = self.server()
+        server.ignored_signals = frozenset(sig for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+                                           if signal.getsignal(sig) is signal.SIG_IGN)
         # uvicorn shuts down gracefully on SIGINT and SIGTERM only; a closed terminal (SIGHUP) would otherwise
         # end the studio at once and leave its worker running.  An ignored SIGHUP is the user's choice (nohup:
         # outlive the terminal), so it stays ignored
@@ -313,7 +327,7 @@ class Studio:
             hung_up.append(sig)
             server.should_exit = True
 
-        on_hang_up = signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN
+        on_hang_up = signal.SIGHUP not in server.ignored_signals
         previous = signal.signal(signal.SIGHUP, hang_up) if on_hang_up else None
         try:
             server.run(sockets=[self.socket])

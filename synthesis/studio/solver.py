@@ -7,7 +7,8 @@ Progress is read from the lines ``solve`` prints for each finished start when it
 cancelling sends SIGTERM, which ``solve`` answers by keeping the finished starts (exit 143); a worker
 still alive GRACE seconds later is killed (SIGKILL).  The worker runs in its own process group, so the
 studio, not the terminal, decides when it stops (Ctrl-C, SIGTERM or SIGHUP to the studio cancel it the
-same way) and the kill reaches anything it started.
+same way, unless the studio was started with that signal ignored, as nohup does SIGHUP) and the kill reaches
+anything it started.
 """
 
 from __future__ import annotations
