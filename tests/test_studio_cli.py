@@ -20,9 +20,9 @@ pytest.importorskip("starlette")
 
 
 def _from_a_terminal() -> None:
-    """The signal dispositions of a studio started from a terminal (SIGINT, SIGHUP by default).  A process
-    inherits ignored signals: a suite run in the background (`pytest &` ignores SIGINT, `nohup` SIGHUP) would
-    otherwise start the studio with them ignored."""
+    """The signal dispositions of a studio started from a terminal (SIGINT, SIGHUP, SIGTERM at their defaults).
+    A process inherits ignored signals: a suite run in the background (`pytest &` ignores SIGINT, `nohup`
+    SIGHUP) would otherwise start the studio with them ignored."""
     for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):
         signal.signal(sig, signal.SIG_DFL)
 
