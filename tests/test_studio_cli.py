@@ -33,6 +33,25 @@ def _studio(tmp_path, preexec=_from_a_terminal) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, preexec_fn=preexec)
 
 
+def _address(proc: subprocess.Popen) -> re.Match:
+    """The page's address the studio prints (port: group 1, token: group 2), from its first lines."""
+    for _ in range(5):
+        match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", proc.stdout.readline())
+        if match:
+            return match
+    raise AssertionError("no address printed")
+
+
+def _page(url: str) -> str:
+    """The page at ``url``, retried while the server is not yet listening (the address is printed just before)."""
+    for _ in range(200):
+        try:
+            return urllib.request.urlopen(url, timeout=10).read().decode()
+        except urllib.error.URLError:
+            time.sleep(0.05)
+    raise AssertionError("the studio never answered")
+
+
 def test_bad_input_is_one_line_and_exit_2(tmp_path):
     missing = cli_run("studio", str(tmp_path / "nowhere.toml"), cwd=tmp_path)
     assert missing.returncode == 2 and "nowhere.toml" in missing.stderr
@@ -62,21 +81,8 @@ def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
 def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
     proc = _studio(tmp_path)
     try:
-        url = None
-        for _ in range(5):
-            line = proc.stdout.readline()
-            match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", line)
-            if match:
-                url = match.group(0)
-                break
-        assert url, "no address printed"
-        for _ in range(200):          # the address is printed just before the server listens
-            try:
-                page = urllib.request.urlopen(url, timeout=10).read().decode()
-                break
-            except urllib.error.URLError:
-                time.sleep(0.05)
-        assert "agrisynth studio" in page
+        url = _address(proc).group(0)
+        assert "agrisynth studio" in _page(url)
         with pytest.raises(urllib.error.HTTPError) as refused:
             urllib.request.urlopen(url.split("?")[0], timeout=10)
         assert refused.value.code == 403
@@ -116,12 +122,7 @@ def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(
 
     proc = _studio(tmp_path)
     try:
-        match = None
-        for _ in range(5):
-            match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", proc.stdout.readline())
-            if match:
-                break
-        assert match, "no address printed"
+        match = _address(proc)
         base, token = f"http://127.0.0.1:{match.group(1)}", match.group(2)
 
         def call(path, body=None):
@@ -166,27 +167,12 @@ def test_a_signal_the_studio_was_started_ignoring_leaves_it_serving(tmp_path, si
 
     proc = _studio(tmp_path, ignoring)
     try:
-        url = None
-        for _ in range(5):
-            match = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{32})", proc.stdout.readline())
-            if match:
-                url = match.group(0)
-                break
-        assert url, "no address printed"
-
-        def page() -> str:
-            for _ in range(200):          # the address is printed just before the server listens
-                try:
-                    return urllib.request.urlopen(url, timeout=10).read().decode()
-                except urllib.error.URLError:
-                    time.sleep(0.05)
-            raise AssertionError("the studio never answered")
-
-        assert "agrisynth studio" in page()
+        url = _address(proc).group(0)
+        assert "agrisynth studio" in _page(url)
         proc.send_signal(sig)
         with pytest.raises(subprocess.TimeoutExpired):       # a studio that took the signal ends well within this
             proc.wait(timeout=3)
-        assert "agrisynth studio" in page()
+        assert "agrisynth studio" in _page(url)
         proc.send_signal(signal.SIGTERM)
         proc.communicate(timeout=60)
     finally:
