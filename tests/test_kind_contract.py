@@ -68,6 +68,35 @@ def test_a_toy_kind_with_conflicting_rules_is_infeasible_and_names_them(tmp_path
     assert "Rules that conflict" in str(exit_error(toy, result, reports))
 
 
+def test_a_design_the_elastic_re_solve_finds_without_slack_is_solved_from_and_kept(tmp_path, toy, monkeypatch):
+    """No start satisfies the rules (here: every start's solver gives up at a point outside the disc), but the
+    rules do not conflict: the elastic re-solve needs no slack.  Its design is a start the run missed: one more
+    start (index = starts) solves the spec's NLP from it, is re-checked like any other and, satisfying every
+    rule, is the result -- not status "failed" with a feasible design thrown away."""
+    import toy_kind
+    from synthesis.core.outcome import StartOutcome
+
+    solve = toy_kind.ToyNLP.solve
+
+    def gives_up(self, start, x0):
+        if self.compiled.elastic or start >= 3:
+            return solve(self, start, x0)
+        return StartOutcome(start, {"x": 19.0, "y": 19.0}, 41.0**2 + 21.0**2 - 20.0, "Infeasible_Problem_Detected",
+                            False, 7, 0.0, "")
+    monkeypatch.setattr(toy_kind.ToyNLP, "solve", gives_up)
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(radius=10.0, y_min=-5.0))
+    result, reports, _ = run_solve(toy, load_spec(path), workers=1)
+    assert result.status == "optimal" and result.solver["best_start"] == 3
+    assert result.design["x"] == pytest.approx(6.0, abs=1e-6) and result.design["y"] == pytest.approx(8.0, abs=1e-6)
+    rows = result.to_json()["starts"]
+    assert [row["start"] for row in rows] == [0, 1, 2, 3]
+    assert [row["satisfied_on_fine_grid"] for row in rows] == [False, False, False, True]
+    assert rows[3]["details"] == {"start_from": "elastic re-solve"}
+    assert result.elastic["converged"] and result.elastic["relaxed"] == []
+    assert "solved from the elastic re-solve's design" in result.solver["status_note"]
+
+
 def test_the_registry_is_the_only_list_of_kinds():
     """Every kind resolves to a Kind whose spec model's Literal kind is its name, whose objectives are
     exactly the spec's objective names, and whose figures/check/solving targets exist."""

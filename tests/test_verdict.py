@@ -199,6 +199,13 @@ def test_status_and_message_follow_the_elastic_verdict():
     assert "did not converge either (Maximum_Iterations_Exceeded)" in m and "Rules that conflict" not in m
     m = message(compatible, "failed", converged_once)
     assert "Violated between samples: gap" in m and "Raise [solver] samples" in m
+    # the violations named are the best start's: "between samples" only when that start converged
+    m = str(unsatisfied_error("failed", ["gap"], converged_once, compatible, samples_hint="[solver] samples",
+                              best=converged_once[0]))
+    assert m.startswith("IPOPT found no design") and "between samples" not in m
+    m = str(unsatisfied_error("failed", ["gap"], converged_once, compatible, samples_hint="[solver] samples",
+                              best=converged_once[2]))
+    assert "Violated between samples: gap" in m
 
 
 def test_a_satisfied_best_start_is_optimal_only_at_solve_succeeded():

@@ -39,6 +39,8 @@ class Run:
     workers: int | None
     scheduler: str | None
     wall_s: float
+    #: the NLP the driver built in this process (reused by a start from the elastic re-solve's design)
+    nlp: Any = None
 
 
 def _recheck(solving: Solving, setting: Setting, outcome):
@@ -119,7 +121,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     best = best_in_start_order(ordered, maximise)
     if failure_of(best.outcome) is not None:             # ranked last: every start failed to run
         raise SolverError(f"{kind.name}: no start could be solved: {_failures(ordered)}")
-    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall)
+    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp)
 
 
 def _failures(reports: list[StartReport], shown: int = 3) -> str:
@@ -146,6 +148,30 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
     return replace(diagnosis, design=design or None)
+
+
+def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticDiagnosis) -> Run:
+    """When no start satisfies every rule but the elastic re-solve converged needing no slack, its design meets
+    the rules at the solver's samples: a point the starts missed, not a conflict.  One more start (index
+    ``run.starts``, ``details.start_from = "elastic re-solve"``) solves the spec's own NLP from it and is re-checked
+    like any start; the run keeps it when it is better (it is the only one satisfying every rule, if it does).
+    Otherwise the run is returned unchanged."""
+    if not elastic.converged or elastic.relaxed or not elastic.design:
+        return run
+    solving = kind.solver_side()
+    nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
+    try:
+        x0 = (nlp.x_of(elastic.design) if hasattr(nlp, "x_of")
+              else np.array([elastic.design[n] for n in nlp.names], dtype=float))
+        outcome = nlp.solve(run.starts, np.asarray(x0, float))
+    except (AgrisynthError, ValueError, ArithmeticError, RuntimeError, KeyError):
+        # no start could be made from it: the run's verdict stands, and the starts table does not grow
+        return run
+    outcome.details = {**(outcome.details or {}), "start_from": "elastic re-solve"}
+    report = report_of(outcome, functools.partial(_recheck, solving, setting))
+    reports = run.reports + [report]
+    best = report if better(report, run.best, solving.maximise(setting)) else run.best
+    return replace(run, reports=reports, best=best)
 
 
 def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool) -> dict:
@@ -204,6 +230,9 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         raise Interrupted(exc.signum, (kept, exc.partial.reports, ipopt_log(exc.partial.reports))) from None
     best = run.best
     elastic = None if best.satisfied else elastic_diagnosis(kind, setting, run)
+    if elastic is not None and interrupt.pending() is None:
+        run = start_from_elastic(kind, setting, run, elastic)
+        best = run.best
     if interrupt.pending() is not None:       # stopped inside the elastic re-solve: every start is kept
         with interrupt.deferred(reraise=False):
             kept = _result(kind, loaded, setting, run, "interrupted", None)
@@ -250,6 +279,10 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
 
 
 def _note(status: str, best: StartReport, run: Run) -> str | None:
+    if best.satisfied and (best.outcome.details or {}).get("start_from") == "elastic re-solve":
+        return " ".join(filter(None, [
+            f"no start of {run.starts} satisfied every rule; the elastic re-solve needed no slack, and the design "
+            f"is start {best.outcome.start}, solved from the elastic re-solve's design", status_note(best)]))
     if status == "interrupted":
         return (f"interrupted after {len(run.reports)} of {run.starts} starts: the best of those "
                 f"(`agrisynth solve SPEC --resume RUN_DIR` finishes the run)")
@@ -273,8 +306,10 @@ def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> Solver
     if result.status == "failed" and elastic is None and note and "does not keep its promise" in note:
         error = SolverError(f"{note}. {solving.relax_hint}")
     else:
+        best_start = (result.solver or {}).get("best_start")
         error = unsatisfied_error(result.status, [r["name"] for r in result.violated()], reports, elastic,
-                                  samples_hint=solving.samples_hint, relax_hint=solving.relax_hint)
+                                  samples_hint=solving.samples_hint, relax_hint=solving.relax_hint,
+                                  best=next((r for r in reports if r.outcome.start == best_start), None))
     said_more = solving.explain_failure(result) if solving.explain_failure is not None else None
     return SolverError(f"{error} {said_more}") if said_more else error
 

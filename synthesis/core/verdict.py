@@ -11,6 +11,7 @@ promise about the returned design:
     infeasible  no start satisfies every rule, and an elastic re-solve (one slack per rule) *converged*
                 with slacks that name the rules giving way
     failed      anything else: nothing shows a conflict, IPOPT found no design (the message says what to try)
+                (an elastic re-solve that needs no slack is first solved from as one more start: core.solve)
 """
 
 from __future__ import annotations
@@ -211,8 +212,9 @@ def status_note(best: StartReport) -> str | None:
 def unsatisfied_error(status: str, violated: list[str], reports: list[StartReport],
                       elastic: ElasticDiagnosis | None, *, samples_hint: str,
                       relax_hint: str = "Loosen those requirements or widen the bounds of the design variables.",
-                      max_iter_hint: str = "[solver] max_iter") -> SolverError:
-    """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed)."""
+                      max_iter_hint: str = "[solver] max_iter", best: StartReport | None = None) -> SolverError:
+    """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed); ``best``: the
+    run's best start, whose violated rules ``violated`` names."""
     n = len(reports)
     bad = ", ".join(violated) or "none evaluated"
     unevaluable = next((r.why for r in reports if r.why), None)
@@ -235,7 +237,10 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     else:
         why = "and an elastic re-solve needs no slack, so the rules do not conflict"
     converged = [r for r in reports if r.outcome.success]
-    if converged and elastic is not None and elastic.converged:
+    # "between samples" only when the start whose violations are named converged: the rules then hold at its
+    # samples (a start that stopped infeasible misses them at the samples too)
+    best_converged = best.outcome.success if best is not None else bool(converged)
+    if best_converged and elastic is not None and elastic.converged:
         return SolverError(
             f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
             f"{why}: the rules hold at the solver's samples. Violated between samples: {bad}. Raise "
