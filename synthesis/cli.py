@@ -300,7 +300,7 @@ def _scheduler(ctx, param, value: str | None) -> str | None:
 @click.option("--starts", type=click.IntRange(min=1, max=MAX_STARTS), default=None,
               help=f"multistart starts, at most {MAX_STARTS} (default: the spec's [solver] starts); "
                    f"start 0 is the spec's design")
-@click.option("--seed", type=click.IntRange(min=0, max=2**63 - 1), default=None,
+@click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None,
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
 @click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
               help=f"parallel worker processes, at most {MAX_WORKERS} (default: all cores)")
@@ -480,12 +480,29 @@ def studio(spec: Path, out: Path, port: int, open_browser: bool) -> None:
     app.serve()
 
 
+class _HalfWidth(click.FloatRange):
+    """A tolerance half-width: a finite number >= 0 (click's FloatRange lets nan and inf through)."""
+
+    name = "half-width"
+
+    def convert(self, value, param, ctx):
+        import math
+
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
+HALF_WIDTH = _HalfWidth(min=0)
+
+
 @cli.command("tolerance")
 @click.argument("target", metavar="RESULT|SPEC", type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="writes OUT/<name>-tolerance/")
-@click.option("--length", type=click.FloatRange(min=0), default=None, help="half-width for every length, mm")
-@click.option("--angle", type=click.FloatRange(min=0), default=None, help="half-width for every angle, deg")
+@click.option("--length", type=HALF_WIDTH, default=None, help="half-width for every length, mm")
+@click.option("--angle", type=HALF_WIDTH, default=None, help="half-width for every angle, deg")
 @click.option("--tol", "tols", multiple=True, metavar="NAME=VALUE",
               help="half-width for one design variable, in its own unit (repeatable; over --length/--angle and the "
                    "spec's [tolerance] entry of that variable)")
@@ -503,7 +520,8 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     Derivatives w.r.t. the operating conditions (forward speed, crank speed, friction, ...) are always
     listed; with an operating range each Monte-Carlo sample is re-checked at every point of the range's
     re-check grid and passes only if every rule holds at all of them.
-    Exit 0 when every Monte-Carlo sample passes every rule, 1 otherwise.
+    Exit 0 when every Monte-Carlo sample passes every rule, 1 otherwise; with --samples 0 (sensitivities and the
+    linear stack-up only) exit 0 when the design passes every rule and every linear worst case holds, 1 otherwise.
     """
     from synthesis import kinds
     from synthesis.errors import SpecError
@@ -551,7 +569,12 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     folder, _ = write_folder(out / f"{name}-tolerance", artifacts(kind.name, name, loaded.sha256, facts), force=force)
     console.print(escape(table(facts)))
     console.print(f"wrote {escape(str(folder))}/")
-    if facts["monte_carlo"]["pass_rate"] != 1.0:
+    if facts["monte_carlo"]["samples"] == 0:      # no sample: the nominal rules and the linear worst cases decide
+        holds = (all(r["satisfied"] for r in facts["nominal_rules"])
+                 and all(row["linear_worst_margin"] >= 0 for row in facts["stack_up"]))
+        if not holds:
+            sys.exit(1)
+    elif facts["monte_carlo"]["pass_rate"] != 1.0:
         sys.exit(1)
 
 
@@ -783,11 +806,15 @@ def bench_table(results: list[dict], repeats: int) -> Table:
 
 def main() -> None:
     try:
-        cli.main(standalone_mode=False)
+        cli.main(standalone_mode=False, prog_name="agrisynth")
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.ClickException as exc:
-        exc.show()
+        # one line, like every other bad input (click's own form is three: Usage, Try, Error)
+        ctx = getattr(exc, "ctx", None)
+        hint = f" (see `{ctx.command_path} --help`)" if isinstance(exc, click.UsageError) and ctx is not None else ""
+        err_console.print(f"[bold red]error:[/] {escape(exc.format_message())}{escape(hint)}", markup=True,
+                          soft_wrap=True)
         sys.exit(2)
     except (click.exceptions.Abort, KeyboardInterrupt) as exc:
         from synthesis.core import interrupt

@@ -145,7 +145,10 @@ def load_result(path: str | Path) -> Result:
     try:
         data = json.loads(text, parse_constant=_no_constant, parse_float=_finite_float)
     except json.JSONDecodeError as exc:
-        # a cut-off write leaves an object that never closes; anything else is plain bad JSON
+        # a cut-off write leaves an object that opens and never closes; a file that does not even open one is not
+        # JSON at all (a report.html, a spec): say so, not "truncated"
+        if not text.lstrip().startswith(("{", "[")):
+            raise ResultError(f"{path}: not JSON, so not a result.json (give a run folder or its result.json)") from None
         what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
         raise ResultError(f"{path}: {what} ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
                           f"re-run the check or solve that wrote it") from None
@@ -196,8 +199,8 @@ def _shape_problem(data: dict) -> str | None:
         value = objective.get("value")
         if value is not None and not _number(value):
             return "objective value must be a number or null"
-        if not all(isinstance(objective.get(k), (str, type(None))) for k in ("name", "unit")):
-            return "objective name and unit must be strings"
+        if not isinstance(objective.get("name"), str) or not isinstance(objective.get("unit"), (str, type(None))):
+            return "objective needs a name (a string), and its unit must be a string"
     for name, value in (data.get("design") or {}).items():
         if isinstance(value, dict) or (isinstance(value, str) and len(value) > MAX_NAME):
             return f"design[{name[:60]!r}] must be a number, a short string or a list"

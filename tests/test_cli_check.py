@@ -118,6 +118,29 @@ def test_missing_file_and_unknown_kind(tmp_path):
     assert proc.returncode == 2 and "did you mean 'planting_fourbar'?" in proc.stderr
 
 
+@pytest.mark.parametrize("args, said", [
+    (("solve", "{spec}", "--starts", "0"), "error: Invalid value for '--starts': 0 is not in the range"),
+    (("solve", "{spec}", "--seed", str(2**53 + 1)), "error: Invalid value for '--seed'"),    # as [solver] seed
+    (("solve",), "error: Missing argument 'SPEC'. (see `agrisynth solve --help`)"),
+    (("frob",), "error: No such command 'frob'. (see `agrisynth --help`)"),
+])
+def test_a_usage_error_is_one_line_like_every_other_bad_input(tmp_path, args, said):
+    """click writes its usage errors in three lines (Usage, Try, Error); agrisynth says them in one, exit 2."""
+    spec = str(PLANTING / "redesign_from_example1.toml")
+    proc = run(*(a.format(spec=spec) for a in args), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert len(proc.stderr.strip().splitlines()) == 1 and proc.stderr.startswith(said), proc.stderr
+
+
+def test_compare_of_a_file_that_is_not_json_says_so(tmp_path):
+    """A report.html given to compare instead of its folder: "not JSON", not "truncated, re-run the check"."""
+    assert run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path).returncode == 1
+    page = tmp_path / "taiwan_example1" / "report.html"
+    proc = run("compare", str(page), "--out", str(tmp_path / "cmp"), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == f"error: {page}: not JSON, so not a result.json (give a run folder or its result.json)"
+
+
 def test_problems_lists_the_library(tmp_path):
     proc = run("problems", cwd=tmp_path)
     assert proc.returncode == 0

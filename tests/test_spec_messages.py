@@ -111,3 +111,27 @@ def test_a_precision_point_not_searched_says_which_point_was_missing_and_why():
     assert notes["p2_speed"] == p2
     for name in ("p1p3_distance", "p2p3_distance", "p1p2p3_collinearity"):     # each needs P1 (P1P2P3 frame)
         assert notes[name] == f"P1 not searched: {p2}"
+
+
+def test_a_pattern_in_a_message_keeps_its_case(tmp_path):
+    """pydantic's "should match pattern '^[A-Za-z0-9]...'" was lowered whole, which misstated the pattern."""
+    text = message(tmp_path, 'name = "redesign_from_example1"', 'name = "Ab c"')
+    assert text == "name: string should match pattern '^[A-Za-z0-9][A-Za-z0-9_.-]*$', got 'Ab c'"
+
+
+def test_fourbar_path_needs_three_distinct_targets(tmp_path):
+    """Four copies of one point are one target: bad input, not a synthesis that "satisfies every rule".  A point
+    may repeat (published sets repeat a loop's first point as its last), so three distinct ones are asked for."""
+    from conftest import LIBRARY
+
+    text = (LIBRARY / "fourbar_path" / "picking_arc.toml").read_text()
+    head, rest = text.split("points = [", 1)
+    tail = rest[rest.index("\n]\n") + 2:]
+    path = tmp_path / "dup.toml"
+    path.write_text(head + "points = [" + "[376.0, 123.7], " * 4 + "[205.0, 258.0]]" + tail)
+    with pytest.raises(SpecError) as exc:
+        load_spec(path)
+    assert str(exc.value) == (f"{path}: fourbar_path.targets: points: expected at least 3 distinct target points, "
+                              f"got 2 among the 5 given")
+    path.write_text(head + "points = [" + "[376.0, 123.7], " * 2 + "[300.0, 200.0], [205.0, 258.0]]" + tail)
+    assert len(load_spec(path).model.targets.points) == 4

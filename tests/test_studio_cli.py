@@ -59,7 +59,8 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
     (tmp_path / "a_file").write_text("x")
     out_is_file = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--out", str(tmp_path / "a_file"), cwd=tmp_path)
     assert out_is_file.returncode == 2 and "Traceback" not in out_is_file.stderr
-    assert out_is_file.stderr.strip().splitlines()[-1].startswith("Error: Invalid value for '--out'")   # click's usage error
+    assert out_is_file.stderr.strip().splitlines() == [out_is_file.stderr.strip()]      # one line
+    assert out_is_file.stderr.startswith("error: Invalid value for '--out'")   # click's usage error
     port = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", "70000", cwd=tmp_path)
     assert port.returncode == 2 and "--port" in port.stderr
 

@@ -57,6 +57,47 @@ def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, optio
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+@pytest.mark.parametrize("option, value", [("--length", "nan"), ("--length", "inf"), ("--angle", "nan"),
+                                           ("--angle", "-0.1")])
+def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_path, option, value):
+    """click's FloatRange(min=0) lets nan and inf through: the analysis then wrote nan margins and exited 1."""
+    run = cli_run("tolerance", str(STEERING), option, value, "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert run.stderr.strip().startswith(f"error: Invalid value for '{option}'") and "\n" not in run.stderr.strip()
+    assert not (tmp_path / "steering_redesign_27-tolerance").exists()
+
+
+def test_samples_0_exits_on_the_design_and_its_linear_worst_cases(tmp_path):
+    """--samples 0 runs no Monte-Carlo: the exit is the nominal rules' and the linear worst cases' verdict (the
+    library design passes every rule with nothing toleranced: 0), and the report says no sample was drawn rather
+    than "0.00 % pass"."""
+    run = cli_run("tolerance", str(STEERING), "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    facts = strict_json(tmp_path / "steering_redesign_27-tolerance" / "result.json")["facts"]["tolerance"]
+    assert facts["monte_carlo"]["samples"] == 0 and facts["monte_carlo"]["pass_rate"] is None
+    assert all(r["satisfied"] for r in facts["nominal_rules"])
+    assert all(row["linear_worst_margin"] >= 0 for row in facts["stack_up"])
+    assert "Monte-Carlo: none (--samples 0)" in run.stdout and "0.00 %" not in run.stdout
+
+
+def test_the_monte_carlo_counts_per_rule_the_samples_where_the_rule_could_not_be_evaluated(tmp_path):
+    """A sample whose design assembles but misses a precision point (P3 not found) has rules without a margin: their
+    worst_margin is null, and "unevaluable" (the samples the re-check could not evaluate at all) stayed 0, so the
+    file contradicted itself.  Each rule now counts its own; a null worst margin comes with a positive count."""
+    run = cli_run("tolerance", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--length", "4", "--angle", "3",
+                  "--samples", "40", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 1, run.stdout + run.stderr
+    mc = strict_json(tmp_path / "taiwan_example1-tolerance" / "result.json")["facts"]["tolerance"]["monte_carlo"]
+    assert mc["samples"] == 40 and mc["unevaluable"] == 0
+    counted = {name: r["unevaluable"] for name, r in mc["rules"].items() if r["unevaluable"]}
+    assert counted, "this box should hold samples that miss P3"
+    for name, r in mc["rules"].items():
+        assert (r["worst_margin"] is None) == (r["unevaluable"] > 0), name
+        assert round(r["pass_rate"] * 40) <= 40 - r["unevaluable"], name     # an unevaluated rule never passes
+    for name, n in counted.items():
+        assert f"| {name} |" in run.stdout and f"(not evaluable in {n} of 40 samples: counted as failing)" in run.stdout
+
+
 def test_tol_refuses_a_variable_given_twice(tmp_path):
     run = cli_run("tolerance", str(STEERING), "--tol", "arm_length=0.2", "--tol", "arm_length=0.3",
                   "--out", str(tmp_path), cwd=tmp_path)

@@ -219,7 +219,7 @@ def objective_text(objective: dict | None) -> str | None:
     value = objective.get("value")
     shown = "not measured" if value is None else f"{value:.6g}"
     unit = objective.get("unit")
-    return f"{objective['name']} = {shown}{f' {unit}' if unit and value is not None else ''}"
+    return f"{objective.get('name') or 'objective'} = {shown}{f' {unit}' if unit and value is not None else ''}"
 
 
 def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:

@@ -304,7 +304,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
         return f"{path}: expected {_TYPES[kind]}, got {shown(got)}"
     if kind == "literal_error":
         return f"{path}: expected {ctx.get('expected')}, got {shown(got)}"
-    return f"{path}: {err['msg'].lower()}, got {shown(got)}"
+    # pydantic's message as it is, only its first letter lowered (lowering all of it misstates a pattern: A-Z)
+    message = err["msg"]
+    return f"{path}: {message[:1].lower()}{message[1:]}, got {shown(got)}"
 
 
 def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseModel:

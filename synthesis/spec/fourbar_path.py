@@ -70,7 +70,7 @@ Finite = Annotated[float, BeforeValidator(lambda v: _number(v, "value"))]
 class TargetsSection(StrictModel):
     """The points the coupler point must pass through, and optionally when (the crank angles)."""
 
-    points: list[Point] = Field(description="target points [[x, y], ...], mm; 3 to 100")
+    points: list[Point] = Field(description="target points [[x, y], ...], mm; 3 to 100, at least 3 distinct")
     crank_deg: list[Angle] | None = Field(
         None, description="prescribed crank angle of each point (deg, from the frame line O -> O', "
                           "counter-clockwise); omit to leave the timing free")
@@ -90,6 +90,17 @@ class TargetsSection(StrictModel):
             raise ValueError(f"expected one angle per point ({len(points)}), got {len(angles)}")
         return angles
 
+    @model_validator(mode="after")
+    def _three_distinct_points(self) -> "TargetsSection":
+        """At least 3 distinct targets (at distinct crank angles, when the timing is prescribed): fewer leave the
+        synthesis nothing to fit.  A point may repeat: published sets repeat a closed loop's first point as its
+        last (literature.py's ellipse10), which weighs it twice, as their objectives do."""
+        distinct = {(float(p[0]), float(p[1])) + (() if self.crank_deg is None else (float(a) % 360.0,))
+                    for p, a in zip(self.points, self.crank_deg or [None] * len(self.points))}
+        if len(distinct) < 3:
+            raise ValueError(f"points: expected at least 3 distinct target points, got {len(distinct)} among the "
+                             f"{len(self.points)} given")
+        return self
 
 class LinkageSection(StrictModel):
     """The four-bar and its coupler point: a number fixes a variable, ``{init, bounds}`` frees it (mm, deg).

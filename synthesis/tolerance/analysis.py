@@ -247,6 +247,7 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
     offsets = rng.uniform(-1.0, 1.0, size=(samples, dmap.n)) * box
     passed: dict[str, int] = {}
     worst: dict[str, float] = {}
+    not_evaluated: dict[str, int] = {}       # per rule: samples where that rule could not be evaluated (no margin)
     all_pass = nominal_pass = unevaluable = 0
     verdicts: list[dict[str, bool]] = []     # per evaluated sample: rule name -> satisfied
     t0 = time.perf_counter()
@@ -262,8 +263,10 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         ok = at_nominal = True
         verdicts.append({r.name: bool(r.satisfied) for r in records})
         for r in records:
-            m = -math.inf if r.margin is None else r.margin
+            m = -math.inf if r.margin is None or not math.isfinite(r.margin) else r.margin
             worst[r.name] = min(worst.get(r.name, math.inf), m)
+            if m == -math.inf:
+                not_evaluated[r.name] = not_evaluated.get(r.name, 0) + 1
             ok = ok and bool(r.satisfied)
             if not r.name.endswith(SUFFIX):
                 at_nominal = at_nominal and bool(r.satisfied)
@@ -278,7 +281,10 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
             passed[name] = passed.get(name, 0) + int(bool(held))
     out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
            "pass_rate": all_pass / samples if samples else None, "unevaluable": unevaluable,
-           "rules": {n: {"pass_rate": passed[n] / samples, "worst_margin": worst[n] if math.isfinite(worst[n]) else None}
+           # a rule's worst_margin is null when it could not be evaluated in some sample (its "unevaluable" count;
+           # "unevaluable" above counts the samples the re-check could not evaluate at all)
+           "rules": {n: {"pass_rate": passed[n] / samples, "worst_margin": worst[n] if math.isfinite(worst[n]) else None,
+                         "unevaluable": not_evaluated.get(n, 0)}
                      for n in passed},
            "wall_s": time.perf_counter() - t0}
     if ranges:
@@ -314,6 +320,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
         row["recheck_margin"] = None if r is None else r.margin
         m = mc["rules"].get(row["name"], {})
         row["mc_pass_rate"], row["mc_worst_margin"] = m.get("pass_rate"), m.get("worst_margin")
+        row["mc_unevaluable"] = m.get("unevaluable", 0)
         base = row["recheck_margin"]
         if base is not None and row["mc_worst_margin"] is not None and row["linear_loss"] is not None:
             sampled_loss = base - row["mc_worst_margin"]

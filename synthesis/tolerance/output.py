@@ -19,10 +19,16 @@ def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
 
 def table(facts: dict) -> str:
     mc = facts["monte_carlo"]
-    lines = [f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
-             f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
-             + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the nominal "
-                "point alone)" if mc.get("envelope") else ""), *_envelope_lines(mc), "",
+
+    def unevaluated(row) -> str:
+        """Why a rule's sampled worst margin is missing: the samples where it could not be evaluated (failing)."""
+        n = row.get("mc_unevaluable") or 0
+        return f" (not evaluable in {n} of {mc['samples']} samples: counted as failing)" if n else ""
+    lines = [(f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
+              f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
+              + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the "
+                 "nominal point alone)" if mc.get("envelope") else "")) if mc["samples"] else
+             "Monte-Carlo: none (--samples 0): sensitivities and the linear stack-up only", *_envelope_lines(mc), "",
              "| rule | unit | margin | linear worst margin | drivers | MC pass | MC worst margin | linear / sampled loss "
              "| margin at the linear worst corner | linear vs sampled gap |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -32,7 +38,8 @@ def table(facts: dict) -> str:
             return "-" if v is None else fmt.format(v)
         drivers = ", ".join(f"{d['variable']} {d['contribution']:.3g}" for d in r["drivers"])
         lines.append(f"| {r['name']} | {r['unit']} | {f(r['recheck_margin'])} | {f(r['linear_worst_margin'])} | {drivers} "
-                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])} | {f(r['linear_over_sampled'], '{:.2f}')} "
+                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])}{unevaluated(r)} "
+                     f"| {f(r['linear_over_sampled'], '{:.2f}')} "
                      f"| {f(r.get('corner_margin'))} | {f(r.get('linear_vs_sampled_gap'), '{:.1%}')} |")
         if r.get("gap_explanation"):
             notes.append(f"* {r['name']}: {r['gap_explanation']}")
@@ -144,6 +151,8 @@ def monte_carlo_lines(mc: dict) -> list[str]:
         head += f"; {mc['unevaluable']} sample(s) could not be evaluated (counted as failing)"
     return [head] + [f"  {n}: {_pct(r.get('pass_rate'))} pass, worst sampled margin "
                      f"{'-' if r.get('worst_margin') is None else format(r['worst_margin'], '.4g')}"
+                     + (f" ({r['unevaluable']} sample(s) where it could not be evaluated: counted as failing)"
+                        if r.get("unevaluable") else "")
                      for n, r in (mc.get("rules") or {}).items()]
 
 
