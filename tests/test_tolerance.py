@@ -218,6 +218,10 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
     # the solve's own promise, in the result: every rule's linearised worst case in the box holds
     worst = {r["name"]: r for r in robust[0].rules if r["name"].endswith("@tolerance")}
     assert worst["pressure_angle_return@tolerance"]["satisfied"] and worst["no_undercut@tolerance"]["satisfied"]
+    # a row in the rule's own unit says nothing more; no_undercut is linearised as the NLP writes it (a curvature
+    # ratio, unit "1", not the re-check's mm), and its row says its size is not in mm
+    assert worst["pressure_angle_return@tolerance"]["unit"] == "deg" and worst["pressure_angle_return@tolerance"]["note"] is None
+    assert worst["no_undercut@tolerance"]["unit"] == "1" and "not in the re-check's mm" in worst["no_undercut@tolerance"]["note"]
     assert robust[0].extra["tolerance"]["monte_carlo"]["pass_rate"] == 1.0
 
 

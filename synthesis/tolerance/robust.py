@@ -167,13 +167,15 @@ class RobustFinish:
                                   "held_at": "linearised worst case of every rule row in the box"}
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
-            worst = _worst_case_records(self.kind, spec, design, box)
+            worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
             return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst)
         return dataclasses.replace(finished, facts=facts)
 
 
-def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray) -> list[dict]:
-    """One rule row per rule: its linearised worst-case margin in the tolerance box (>= 0 holds)."""
+def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: dict[str, str]) -> list[dict]:
+    """One rule row per rule: its linearised worst-case margin in the tolerance box (>= 0 holds).  ``units``: the
+    re-check's unit of each rule; a rule the NLP writes in other terms (a curvature for a radius: unit "1" for mm)
+    is linearised in the NLP's, and its row says so: same sign, not the same number."""
     from synthesis.tolerance.analysis import linearise, stack_up
 
     lin = linearise(kind, spec, design)
@@ -187,7 +189,11 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray) -> list
                      "unit": row["unit"], "satisfied": finite and margin >= -1e-9 * row["scale"],
                      "margin": margin if finite else None,
                      "normalised_margin": margin / row["scale"] if finite else None,
-                     "where": "linearised worst case in the tolerance box", "note": None})
+                     "where": "linearised worst case in the tolerance box",
+                     "note": (None if units.get(row["name"], row["unit"]) == row["unit"] else
+                              f"linearised in the solver's form of the rule (unit {row['unit']!r}), not in the "
+                              f"re-check's {units[row['name']]}: its sign is the verdict, its size is not in "
+                              f"{units[row['name']]}")})
     return rows
 
 
