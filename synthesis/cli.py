@@ -212,9 +212,17 @@ def _solved_spec(loaded, result) -> dict:
 
 
 def _described(result, loaded):
-    """The result, told what the spec says of each design variable (unit, bounds, free): reports show it."""
-    from synthesis import design_info
+    """The result, told what the spec says of each design variable (unit, bounds, free): reports show it.  A spec
+    that leaves part of its design to the kind (guide_way's convex fit of the control points) is described with
+    that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
+    solve moved is listed, free, with the box it moved in."""
+    from synthesis import design_info, kinds
 
+    if kinds.get(loaded.kind).explicit_design is not None:
+        from synthesis.spec.common import read_toml
+
+        data, _ = read_toml(loaded.path)
+        loaded, _ = kinds.explicit_design(loaded, data)
     return design_info.attach(result, loaded.model)
 
 

@@ -17,6 +17,7 @@ from synthesis import design_info, kinds
 from synthesis.core import solve as core
 from synthesis.solved_spec import FILENAME, solved_toml
 from synthesis.spec import load_spec
+from synthesis.spec.common import read_toml
 
 #: kinds whose `check` cannot reproduce a solve's rule table, and why (xfail strict: a fix turns them red)
 KNOWN: dict[str, str] = {}
@@ -53,6 +54,15 @@ def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
     described = design_info.describe(again.model)
     assert described and not any(v["free"] for v in described.values())      # everything fixed
     assert _table(kinds.checker(kind_name)(again).rules) == _table(result.rules)
+    # result.json's design_variables list the variables solved.toml fixes: every one the solve could move, free
+    # (guide_way's fitted control points were missing: its spec leaves them to the kind)
+    from synthesis.cli import _described
+
+    listed = _described(result, loaded).design_variables
+    assert set(listed) == set(described)
+    assert {n for n, v in listed.items() if v["free"]} == {n for n, v in design_info.describe(
+        kinds.explicit_design(loaded, read_toml(loaded.path)[0])[0].model).items() if v["free"]}
+    assert all(n in result.design for n, v in listed.items() if v["free"])
 
 
 def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_path):
