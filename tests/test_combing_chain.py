@@ -301,6 +301,25 @@ def test_rules_recheck_on_the_10x_grid_and_names_agree_on_floats_and_symbols():
     assert np.asarray(top.expr).size == 10 * 13 * 10 * 5
 
 
+def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tmp_path):
+    """The switch speed is free in the solve and a fixed number in solved.toml: the window rules at it were named
+    ..._Vsswitch in one and ..._Vs0.497996 in the other.  Now "switch" in both, the speed in the rule's `where`."""
+    from synthesis import kinds
+    from synthesis.core.solve import run_solve
+    from synthesis.solved_spec import solved_toml
+
+    loaded = load_spec(TWO_SPEED)
+    result, _, _ = run_solve(kinds.solving_kind("combing_chain"), loaded, starts=1, workers=1)
+    path = tmp_path / "solved.toml"
+    path.write_text(solved_toml(loaded, result))
+    checked = kinds.checker("combing_chain")(load_spec(path))
+    assert [r["name"] for r in checked.rules] == [r["name"] for r in result.rules]
+    assert "gear1_window_top_at_beta110_Vsswitch" in [r["name"] for r in checked.rules]
+    switch = result.design["switch_speed"]
+    top = next(r for r in checked.rules if r["name"] == "gear1_window_top_at_beta110_Vsswitch")
+    assert f"V_s switch {switch:g} m/s" in top["where"]
+
+
 def test_infeasible_window_exits_3_naming_the_corners(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(TOO_WIDE), "--out", str(tmp_path),
                            "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=300)

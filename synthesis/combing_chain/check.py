@@ -20,7 +20,6 @@ from synthesis.combing_chain import geometry as g
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.spec.combing_chain import CombingChainSpec
-from synthesis.spec.common import is_free
 
 #: samples of the check grid per dimension (the re-check of a solve uses FINE x the solver's samples)
 CHECK_BETA_SAMPLES = 181
@@ -64,7 +63,9 @@ def _labels(spec: CombingChainSpec, gear: int) -> tuple[str, str]:
     sw = spec.chain.switch_speed
     if sw is None or spec.gears == 1:
         return f"{vlo:g}", f"{vhi:g}"
-    sw_label = "switch" if is_free(sw) else f"{sw:g}"
+    # "switch" whether the switch speed is free or fixed: a rule keeps its name from the solve to the check of its
+    # solved.toml (where the solved switch speed is a fixed number); the rule's `where` gives the speed
+    sw_label = "switch"
     return (f"{vlo:g}", sw_label) if gear == 0 else (sw_label, f"{vhi:g}")
 
 
@@ -92,6 +93,11 @@ def trace(spec: CombingChainSpec, design: dict, beta_samples: int, speed_samples
     return Trace(betas, gears)
 
 
+def _speed(label: str, value) -> str:
+    """A range end in a rule's words: its number when it is one ("switch 0.498"), its label when it is a symbol."""
+    return label if not isinstance(value, (int, float)) else f"{value:g}" if label != "switch" else f"switch {value:g}"
+
+
 def rule_prefix(spec: CombingChainSpec, gear: int) -> str:
     return "" if spec.gears == 1 else f"gear{gear + 1}_"
 
@@ -107,7 +113,8 @@ def rules_of(spec: CombingChainSpec, tr: Trace) -> list[Rule]:
     rules: list[Rule] = []
     for gt in tr.gears:
         pre = rule_prefix(spec, gt.index)
-        span = f"V_s {gt.label_lo}-{gt.label_hi} m/s"
+        lo_text, hi_text = _speed(gt.label_lo, gt.machine_speeds[0]), _speed(gt.label_hi, gt.machine_speeds[-1])
+        span = f"V_s {lo_text}-{hi_text} m/s"
         rules.append(tine_reaches_plant_rule(f"{pre}tine_reaches_plant", [gt.chain_speed - vs * cos_t
                                                                           for vs in gt.machine_speeds],
                                              f"V_r - V_s cos(theta) at every {span}"))
@@ -116,9 +123,9 @@ def rules_of(spec: CombingChainSpec, tr: Trace) -> list[Rule]:
         flat = [d for row in gt.delta for d in row]
         where = f"every beta {b_lo:g}-{b_hi:g} deg at every {span}"
         rules.append(window_top_rule(f"{pre}window_top_at_beta{b_hi:g}_Vs{gt.label_hi}", flat, window[1],
-                                     f"{where}; largest at beta {b_hi:g} deg, V_s {gt.label_hi} m/s"))
+                                     f"{where}; largest at beta {b_hi:g} deg, V_s {hi_text} m/s"))
         rules.append(window_bottom_rule(f"{pre}window_bottom_at_beta{b_lo:g}_Vs{gt.label_lo}", flat, window[0],
-                                        f"{where}; smallest at beta {b_lo:g} deg, V_s {gt.label_lo} m/s"))
+                                        f"{where}; smallest at beta {b_lo:g} deg, V_s {lo_text} m/s"))
     return rules
 
 
