@@ -410,3 +410,19 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip().startswith("error: [spline] control, start 0: segment ED: the arm cannot reach the "
                                           "claw tip")
+
+
+def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_solve(tmp_path):
+    """C = [5000, 39] lies far outside the claw tip's annulus [R - d, R + d]: the convex fit was asked for a
+    spline through it and ended exit 3 "admit no spline (infeasible)" naming no point; now exit 2 naming it."""
+    text = (LIBRARY / "guide_way" / "smooth_redesign.toml").read_text()
+    assert "C = [179.0, 39.0]" in text
+    path = tmp_path / "far.toml"
+    path.write_text(text.replace("C = [179.0, 39.0]", "C = [5000.0, 39.0]"))
+    said = ("[spline] (the convex fit through its key points): points.C = [5000, 39]: the claw tip cannot reach it: "
+            "|OM| = 5000 mm lies outside [R - d, R + d] = [20.32, 259.7] mm (arm.radius, arm.claw)")
+    check = _run(["check", str(path), "--out", str(tmp_path / "c")])
+    assert check.returncode == 2 and check.stderr.strip() == f"error: {path}: {said}"
+    solve = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")])
+    assert solve.returncode == 2 and solve.stderr.strip() == f"error: {said}"
+    assert not (tmp_path / "s").exists()

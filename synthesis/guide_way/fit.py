@@ -17,12 +17,13 @@ cvxpy is imported here only.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cvxpy as cp
 import numpy as np
 
-from synthesis.errors import SolverError
+from synthesis.errors import SolverError, SpecError
 from synthesis.guide_way import spline as sp
 from synthesis.guide_way.scene import spline_path
 
@@ -39,6 +40,7 @@ def fit_path(spec) -> Fit:
     s = spec.spline
     n = s.control_points
     keys = spline_path(spec, None).keys
+    _reachable(spec, keys)
     v_min = s.min_speed * keys.length
     px, py = cp.Variable(n), cp.Variable(n)
     d3 = sp.third_differences(n)
@@ -70,6 +72,18 @@ def fit_path(spec) -> Fit:
     h = sp.energy_matrix(n)
     energy = float(control[:, 0] @ h @ control[:, 0] + control[:, 1] @ h @ control[:, 1])
     return Fit(control, energy, speeds, problem.status)
+
+
+def _reachable(spec, keys: sp.Keys) -> None:
+    """SpecError naming the first key point the claw tip cannot reach (|OM| outside [R - d, R + d]): the fit would
+    otherwise be asked for a spline through it and fail as an infeasible convex problem that names no point."""
+    arm = spec.arm
+    lo, hi = arm.radius - arm.claw, arm.radius + arm.claw
+    for name, (x, y) in zip(keys.names, keys.points):
+        r = math.hypot(float(x), float(y))
+        if not lo <= r <= hi:
+            raise SpecError(f"points.{name} = [{float(x):g}, {float(y):g}]: the claw tip cannot reach it: |OM| = "
+                            f"{r:.4g} mm lies outside [R - d, R + d] = [{lo:.4g}, {hi:.4g}] mm (arm.radius, arm.claw)")
 
 
 def _exact(keys: sp.Keys, n: int, control: np.ndarray, speeds: dict) -> np.ndarray:

@@ -12,9 +12,14 @@ def prepare(spec):
     """The convex fit of a spline path (None for the paper's conics: nothing to optimise)."""
     if spec.spline is None:
         return None
+    from synthesis.errors import SpecError
+    from synthesis.guide_way.check import whose_path
     from synthesis.guide_way.fit import fit_path
 
-    return fit_path(spec)
+    try:
+        return fit_path(spec)
+    except SpecError as exc:          # said as check says it: which part of the spec the fit could not use
+        raise SpecError(f"{whose_path(spec)}: {exc}") from None
 
 
 def build(setting: Setting, elastic: bool = False):
