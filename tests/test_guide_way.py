@@ -426,3 +426,20 @@ def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_s
     solve = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")])
     assert solve.returncode == 2 and solve.stderr.strip() == f"error: {said}"
     assert not (tmp_path / "s").exists()
+
+
+@pytest.mark.parametrize("old, new, field", [('fold = "D"', 'fold = "Z"', "spline.fold"),
+                                             ("tangents = { E =", "tangents = { Z =", "spline.tangents.Z"),
+                                             ('keys = ["E", "D"', 'keys = ["E", "Z"', "spline.keys[1]")])
+def test_an_unknown_point_name_says_which_spline_field_holds_it(tmp_path, old, new, field):
+    """fold, tangents and keys all said "guide_way.spline: point 'Z' ...": now the field that names it."""
+    from synthesis.errors import SpecError
+    from synthesis.spec import load_spec
+
+    text = (LIBRARY / "guide_way" / "smooth_redesign.toml").read_text()
+    assert old in text
+    path = tmp_path / "z.toml"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(SpecError) as err:
+        load_spec(path)
+    assert str(err.value) == f"{path}: guide_way.{field}: point 'Z' is not in [points] (A, B, C, D, E)"

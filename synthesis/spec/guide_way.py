@@ -178,9 +178,10 @@ class GuideWaySpec(ProblemSpec):
                 raise ValueError(f"fold: {self.fold!r} is not a joint between two segments")
         else:
             sp = self.spline
-            for key in [*sp.keys, *sp.tangents, sp.fold]:
+            named = [(f"keys[{i}]", k) for i, k in enumerate(sp.keys)] + [(f"tangents.{k}", k) for k in sp.tangents]
+            for field, key in named + [("fold", sp.fold)]:
                 if key not in names:
-                    raise ValueError(f"spline: point {key!r} is not in [points] ({', '.join(sorted(names))})")
+                    raise ValueError(f"spline.{field}: point {key!r} is not in [points] ({', '.join(sorted(names))})")
             if len(set(sp.keys)) != len(sp.keys):
                 raise ValueError("spline.keys: a key point is listed twice")
             if sp.fold not in sp.keys[1:-1]:
