@@ -15,8 +15,13 @@ from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
 
-def evaluate(scene: PlantingScene, limits, phase_samples: int = 400,
-             turn_samples: int = 3600) -> tuple[list[Rule], PrecisionPoints | None]:
+#: the grid `check` evaluates on: samples of each acceleration phase and of a crank turn
+CHECK_PHASE_SAMPLES = 400
+CHECK_TURN_SAMPLES = 3600
+
+
+def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMPLES,
+             turn_samples: int = CHECK_TURN_SAMPLES) -> tuple[list[Rule], PrecisionPoints | None]:
     """All rules of the scene; a crank that cannot complete a turn leaves the path rules unevaluated."""
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:

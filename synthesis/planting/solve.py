@@ -7,7 +7,8 @@ from __future__ import annotations
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.errors import AgrisynthError
-from synthesis.planting.check import evaluate, scene_facts, trajectory, unevaluated
+from synthesis.planting.check import (CHECK_PHASE_SAMPLES, CHECK_TURN_SAMPLES, evaluate, scene_facts, trajectory,
+                                      unevaluated)
 from synthesis.planting.nlp import PlantingNLP
 from synthesis.planting.scene import PlantingScene
 
@@ -25,11 +26,13 @@ def smallest_margin(report: StartReport) -> float:
 
 def recheck(setting: Setting, outcome) -> Recheck:
     """Every rule of a returned design, independently of the solver: root-found precision points,
-    phases and turn sampled 10x finer than the NLP (AssemblyError when it never assembles)."""
+    phases and turn sampled 10x finer than the NLP, and never coarser than `check` samples them (so the check of
+    solved.toml gives the solve's rule table to the last digit; AssemblyError when it never assembles)."""
     spec = setting.spec
     scene = PlantingScene.from_spec(spec, outcome.design)
-    rules, pts = evaluate(scene, spec.rules, phase_samples=FINE * spec.solver.samples_per_phase,
-                          turn_samples=FINE * spec.solver.samples_per_turn)
+    rules, pts = evaluate(scene, spec.rules,
+                          phase_samples=max(FINE * spec.solver.samples_per_phase, CHECK_PHASE_SAMPLES),
+                          turn_samples=max(FINE * spec.solver.samples_per_turn, CHECK_TURN_SAMPLES))
     return Recheck(rules, (scene, pts), smallest_margin if spec.objective.name == "robust" else None)
 
 
