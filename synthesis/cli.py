@@ -217,12 +217,17 @@ def _described(result, loaded):
     that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
     solve moved is listed, free, with the box it moved in."""
     from synthesis import design_info, kinds
+    from synthesis.errors import AgrisynthError
 
     if kinds.get(loaded.kind).explicit_design is not None:
         from synthesis.spec.common import read_toml
 
-        data, _ = read_toml(loaded.path)
-        loaded, _ = kinds.explicit_design(loaded, data)
+        try:
+            data, sha = read_toml(loaded.path)
+            if sha == loaded.sha256:          # the file the run read (edited since: described as loaded)
+                loaded, _ = kinds.explicit_design(loaded, data)
+        except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded
+            pass
     return design_info.attach(result, loaded.model)
 
 
@@ -431,6 +436,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     s = result.solver
     console.print(f"objective {objective_text(result.objective)}; IPOPT "
                   f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
+                  f"{'and one from the elastic re-solve ' if s.get('starts_run', 0) > s['starts'] else ''}"
                   f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
                   f"{f'the cluster at {escape(scheduler)}' if scheduler else f'{workers} worker(s)'}; "
                   f"status {result.status}")

@@ -426,6 +426,11 @@ def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_s
     solve = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")])
     assert solve.returncode == 2 and solve.stderr.strip() == f"error: {said}"
     assert not (tmp_path / "s").exists()
+    # the fold point is moved onto |OM| = R - d exactly, whose hypot can fall an ulp inside: still reachable
+    folded = tmp_path / "fold.toml"
+    folded.write_text(text.replace("D = [-14.49569, 14.49569]", "D = [-14.67, 15.81]"))
+    check = _run(["check", str(folded), "--out", str(tmp_path / "f")])
+    assert check.returncode == 1 and "cannot reach" not in check.stderr, check.stderr
 
 
 @pytest.mark.parametrize("old, new, field", [('fold = "D"', 'fold = "Z"', "spline.fold"),

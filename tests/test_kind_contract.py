@@ -97,6 +97,41 @@ def test_a_design_the_elastic_re_solve_finds_without_slack_is_solved_from_and_ke
     assert "solved from the elastic re-solve's design" in result.solver["status_note"]
 
 
+def test_a_start_from_the_elastic_design_that_misses_a_rule_or_is_interrupted_is_not_kept(tmp_path, toy, monkeypatch):
+    """The extra start is kept only when it satisfies every rule: otherwise the run is what it was (status failed,
+    three starts).  A signal during it discards it, as the multistart discards an interrupted start, and the run
+    ends interrupted with its three finished starts."""
+    import toy_kind
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+    from synthesis.core.outcome import StartOutcome
+
+    solve = toy_kind.ToyNLP.solve
+    stop_at_extra = {"on": False}
+
+    def gives_up(self, start, x0):
+        if self.compiled.elastic:
+            return solve(self, start, x0)
+        if start >= 3 and stop_at_extra["on"]:
+            interrupt.simulate()
+        return StartOutcome(start, {"x": 19.0, "y": 19.0}, 1000.0, "Infeasible_Problem_Detected", False, 7, 0.0, "")
+    monkeypatch.setattr(toy_kind.ToyNLP, "solve", gives_up)
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(radius=10.0, y_min=-5.0))
+    result, reports, _ = run_solve(toy, load_spec(path), workers=1)
+    assert result.status == "failed" and [r.outcome.start for r in reports] == [0, 1, 2]
+    assert result.solver["starts_run"] == 3 and result.elastic["converged"] and result.elastic["relaxed"] == []
+    stop_at_extra["on"] = True
+    try:
+        with pytest.raises(Interrupted) as stopped:
+            run_solve(toy, load_spec(path), workers=1)
+    finally:
+        interrupt.uninstall()
+    kept, kept_reports, _ = stopped.value.partial
+    assert kept.status == "interrupted" and [r.outcome.start for r in kept_reports] == [0, 1, 2]
+    assert kept.solver["best_start"] in (0, 1, 2) and "--resume" in kept.solver["status_note"]
+
+
 def test_the_registry_is_the_only_list_of_kinds():
     """Every kind resolves to a Kind whose spec model's Literal kind is its name, whose objectives are
     exactly the spec's objective names, and whose figures/check/solving targets exist."""

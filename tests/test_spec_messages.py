@@ -135,3 +135,14 @@ def test_fourbar_path_needs_three_distinct_targets(tmp_path):
                               f"got 2 among the 5 given")
     path.write_text(head + "points = [" + "[376.0, 123.7], " * 2 + "[300.0, 200.0], [205.0, 258.0]]" + tail)
     assert len(load_spec(path).model.targets.points) == 4
+
+
+@pytest.mark.parametrize("old, new, field", [
+    ("zeta = ", "zeta = 1000 #", "arm.zeta"),
+    ("phi = ", "phi = { init = 10, bounds = [-400, 20] } #", "arm.phi"),
+])
+def test_an_angle_beyond_a_turn_is_refused_not_taken_modulo_360(tmp_path, old, new, field):
+    """zeta = 1000 was evaluated as 280 in silence; picker_double_crank's phi3 / phi4, fourbar_path's theta0 and
+    clamp_cam's rise_start take the same [-360, 360] deg (common.within_a_turn)."""
+    bad = "1000" if "1000" in new else "-400"
+    assert message(tmp_path, old, new) == f"{field}: expected an angle within one turn, [-360, 360] deg, got {bad}"

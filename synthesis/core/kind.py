@@ -19,7 +19,8 @@ A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one 
                                (the :class:`~synthesis.core.ipopt.CompiledNLP` an elastic diagnosis reads)
                                and ``solve(start, x_design) -> StartOutcome``; built once per process;
                                optionally ``x_of(design) -> x_design`` when the result's design keys are
-                               not ``names``
+                               not ``names``, and ``builds_its_own_starts = True`` when ``solve`` may
+                               ignore ``x_design`` (no start is then solved from the elastic re-solve's design)
     recheck(setting, outcome)  the rules of a returned design on floats, 10x finer (a :class:`Recheck`)
     finish(setting, best)      the result's design, objective, trajectory and kind facts (:class:`Finished`)
     baseline_rules(setting)    the rule table of the spec's given design (or None if it cannot be evaluated)

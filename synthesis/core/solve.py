@@ -154,24 +154,27 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
     """When no start satisfies every rule but the elastic re-solve converged needing no slack, its design meets
     the rules at the solver's samples: a point the starts missed, not a conflict.  One more start (index
     ``run.starts``, ``details.start_from = "elastic re-solve"``) solves the spec's own NLP from it and is re-checked
-    like any start; the run keeps it when it is better (it is the only one satisfying every rule, if it does).
-    Otherwise the run is returned unchanged."""
-    if not elastic.converged or elastic.relaxed or not elastic.design:
-        return run
+    like any start.  The run keeps it only when it satisfies every rule (then it is the best: no other start does),
+    and says so in ``solver.status_note``; otherwise, and for an NLP that builds its own starts
+    (``builds_its_own_starts``: it may ignore the design given), the run is returned unchanged.  A start stopped by
+    a signal is discarded (``interrupt.pending()``), as the multistart discards one."""
     solving = kind.solver_side()
     nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
+    if not elastic.converged or elastic.relaxed or not elastic.design or getattr(nlp, "builds_its_own_starts", False):
+        return run
     try:
         x0 = (nlp.x_of(elastic.design) if hasattr(nlp, "x_of")
               else np.array([elastic.design[n] for n in nlp.names], dtype=float))
         outcome = nlp.solve(run.starts, np.asarray(x0, float))
     except (AgrisynthError, ValueError, ArithmeticError, RuntimeError, KeyError):
-        # no start could be made from it: the run's verdict stands, and the starts table does not grow
+        return run                # no start could be made from it: the run's verdict stands
+    if interrupt.pending() is not None:
         return run
     outcome.details = {**(outcome.details or {}), "start_from": "elastic re-solve"}
     report = report_of(outcome, functools.partial(_recheck, solving, setting))
-    reports = run.reports + [report]
-    best = report if better(report, run.best, solving.maximise(setting)) else run.best
-    return replace(run, reports=reports, best=best)
+    if not report.satisfied:
+        return run
+    return replace(run, reports=run.reports + [report], best=report)
 
 
 def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool) -> dict:
@@ -229,10 +232,15 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
             kept = _result(kind, loaded, setting, exc.partial, "interrupted", None)
         raise Interrupted(exc.signum, (kept, exc.partial.reports, ipopt_log(exc.partial.reports))) from None
     best = run.best
-    elastic = None if best.satisfied else elastic_diagnosis(kind, setting, run)
-    if elastic is not None and interrupt.pending() is None:
-        run = start_from_elastic(kind, setting, run, elastic)
-        best = run.best
+    elastic = None
+    try:
+        elastic = None if best.satisfied else elastic_diagnosis(kind, setting, run)
+        if elastic is not None and interrupt.pending() is None:
+            run = start_from_elastic(kind, setting, run, elastic)
+            best = run.best
+    except KeyboardInterrupt:     # a signal outside IPOPT (in Python code): recorded, handled as the one below
+        if interrupt.pending() is None:
+            raise
     if interrupt.pending() is not None:       # stopped inside the elastic re-solve: every start is kept
         with interrupt.deferred(reraise=False):
             kept = _result(kind, loaded, setting, run, "interrupted", None)
@@ -279,10 +287,11 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
 
 
 def _note(status: str, best: StartReport, run: Run) -> str | None:
-    if best.satisfied and (best.outcome.details or {}).get("start_from") == "elastic re-solve":
+    if status != "interrupted" and best.satisfied and (best.outcome.details or {}).get("start_from") == "elastic re-solve":
         return " ".join(filter(None, [
             f"no start of {run.starts} satisfied every rule; the elastic re-solve needed no slack, and the design "
-            f"is start {best.outcome.start}, solved from the elastic re-solve's design", status_note(best)]))
+            f"is start {best.outcome.start}, one more start solved from the elastic re-solve's design",
+            status_note(best)]))
     if status == "interrupted":
         return (f"interrupted after {len(run.reports)} of {run.starts} starts: the best of those "
                 f"(`agrisynth solve SPEC --resume RUN_DIR` finishes the run)")

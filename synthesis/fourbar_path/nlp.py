@@ -188,6 +188,10 @@ def placement(anchors: list, units: list, targets: np.ndarray) -> tuple:
 class PathNLP:
     """Built once per spec and seed; :meth:`solve` runs one IPOPT solve from a start design."""
 
+    #: solve(index, x) builds the start of most indices itself (screened shapes, the pool) and ignores x there, so
+    #: the core cannot solve it from a given design (core.solve.start_from_elastic skips such an NLP)
+    builds_its_own_starts = True
+
     def __init__(self, spec: FourbarPathSpec, seed: int = 0, elastic: bool = False):
         self.spec = spec
         self.names = list(VARIABLES)

@@ -79,10 +79,12 @@ def _reachable(spec, keys: sp.Keys) -> None:
     otherwise be asked for a spline through it and fail as an infeasible convex problem that names no point."""
     arm = spec.arm
     lo, hi = arm.radius - arm.claw, arm.radius + arm.claw
+    slack = 1e-9 * hi         # keys_of moves the fold point onto |OM| = R - d exactly: its hypot may be an ulp below
     for name, (x, y) in zip(keys.names, keys.points):
         r = math.hypot(float(x), float(y))
-        if not lo <= r <= hi:
-            raise SpecError(f"points.{name} = [{float(x):g}, {float(y):g}]: the claw tip cannot reach it: |OM| = "
+        if not lo - slack <= r <= hi + slack:
+            wx, wy = spec.points[name]       # as the user wrote it (the fold point may have been moved)
+            raise SpecError(f"points.{name} = [{float(wx):g}, {float(wy):g}]: the claw tip cannot reach it: |OM| = "
                             f"{r:.4g} mm lies outside [R - d, R + d] = [{lo:.4g}, {hi:.4g}] mm (arm.radius, arm.claw)")
 
 

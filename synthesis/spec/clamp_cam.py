@@ -13,7 +13,7 @@ from typing import Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (within_a_turn, 
     FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
     is_free, max_iter_field, starts_field, value_of,
 )
@@ -96,7 +96,8 @@ class MotionSection(StrictModel):
     law: Literal[LAWS] = Field("cycloidal", description="motion law of the rise and the return: " + ", ".join(LAWS))
     stroke: float = Field(gt=0, description="follower stroke: mm (translating) or deg of arm swing (oscillating)")
     rise_start: Variable = Field(0.0, description="crank angle at which the rise begins, deg on the picker's "
-                                                  "clock (0 = the pick)")
+                                                  "clock (0 = the pick; -360 to 360)")
+    _angles_within_a_turn = field_validator("rise_start")(within_a_turn)
     rise: Variable = Field(description="rise angle, deg")
     far_dwell: Variable = Field(description="far dwell angle, deg (follower held at the full stroke)")
     return_: Variable = Field(alias="return", description="return angle, deg")

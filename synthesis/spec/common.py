@@ -47,6 +47,16 @@ class FreeVariable(StrictModel):
 Variable = Union[float, FreeVariable]
 
 
+def within_a_turn(cls, v):
+    """A field validator for an angle variable (a number, or init and bounds): within one turn either way,
+    [-360, 360] deg.  An angle of 1000 deg is a typo more likely than a wish for 280: say so rather than take it
+    modulo a turn in silence.  Use: ``_turn = field_validator("zeta")(within_a_turn)``."""
+    for x in ([v] if isinstance(v, (int, float)) else [v.init, *v.bounds]):
+        if not -360.0 <= x <= 360.0:
+            raise ValueError(f"expected an angle within one turn, [-360, 360] deg, got {x:g}")
+    return v
+
+
 def value_of(v: Variable) -> float:
     """The value `check` evaluates: the number itself, or the start value of a free variable."""
     return v.init if isinstance(v, FreeVariable) else float(v)

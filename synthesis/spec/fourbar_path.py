@@ -29,7 +29,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.kinematics.coupler_point import VARIABLES
-from synthesis.spec.common import (
+from synthesis.spec.common import (within_a_turn, 
     FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
     require_positive, starts_field, value_of,
 )
@@ -115,7 +115,8 @@ class LinkageSection(StrictModel):
     x0: Variable = Field(description="input pivot O, x, mm")
     y0: Variable = Field(description="input pivot O, y, mm")
     theta0: Variable = Field(FreeVariable(init=180.0, bounds=(0.0, 360.0)),
-                             description="frame angle, direction of O -> O' from +x, deg")
+                             description="frame angle, direction of O -> O' from +x, deg (-360 to 360)")
+    _angles_within_a_turn = field_validator("theta0")(within_a_turn)
     branch: Literal[-1, 1] = Field(1, description="assembly: B left (+1, the open assembly) or right (-1, the "
                                                   "crossed one) of the line A -> O'")
 

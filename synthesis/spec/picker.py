@@ -10,10 +10,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
-from synthesis.spec.common import (
+from synthesis.spec.common import (within_a_turn, 
     MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of,
 )
 
@@ -51,8 +51,9 @@ class LinkageSection(StrictModel):
     l3: Variable = Field(description="follower CD, mm (printed as l4 = 186.7 in the paper's result list)")
     l4: Variable = Field(description="frame AD, the shortest link, mm (printed as l3 = 45.9)")
     l5: Variable = Field(description="clamp arm CM, mm")
-    phi3: Variable = Field(description="frame AD direction below the +x axis, deg")
-    phi4: Variable = Field(description="CM turned counter-clockwise from BC, deg")
+    phi3: Variable = Field(description="frame AD direction below the +x axis, deg (-360 to 360)")
+    phi4: Variable = Field(description="CM turned counter-clockwise from BC, deg (-360 to 360)")
+    _angles_within_a_turn = field_validator("phi3", "phi4")(within_a_turn)
     branch: Literal[-1, 1] = Field(1, description="assembly: C left (+1) or right (-1) of the line B -> D")
 
     @model_validator(mode="after")

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, PrivateAttr, model_validator
+from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
-from synthesis.spec.common import (
+from synthesis.spec.common import (within_a_turn, 
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
     value_of,
 )
@@ -32,8 +32,9 @@ class ArmSection(StrictModel):
     l3: Variable = Field(description="coupler AB, mm")
     l4: Variable = Field(description="rocker O'B, mm")
     l5: Variable = Field(description="claw arm AC (A to claw tip C), mm")
-    zeta: Variable = Field(description="frame angle: direction of O -> O' from the +X axis, deg")
-    phi: Variable = Field(description="claw angle: AC is AB turned clockwise by phi, deg")
+    zeta: Variable = Field(description="frame angle: direction of O -> O' from the +X axis, deg (-360 to 360)")
+    phi: Variable = Field(description="claw angle: AC is AB turned clockwise by phi, deg (-360 to 360)")
+    _angles_within_a_turn = field_validator("zeta", "phi")(within_a_turn)
     branch: Literal[-1, 1] = Field(-1, description="assembly: B right (-1) or left (+1) of the line A -> O'")
     tray_tilt: Literal["backward", "forward"] | None = Field(
         None, description="seedling-tray tilt of the machine (seed 000 Table 1, informational)")
