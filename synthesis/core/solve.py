@@ -293,7 +293,9 @@ def _note(status: str, best: StartReport, run: Run) -> str | None:
             f"is start {best.outcome.start}, one more start solved from the elastic re-solve's design",
             status_note(best)]))
     if status == "interrupted":
-        return (f"interrupted after {len(run.reports)} of {run.starts} starts: the best of those "
+        done = min(len(run.reports), run.starts)
+        extra = " and the start from the elastic re-solve" if len(run.reports) > run.starts else ""
+        return (f"interrupted after {done} of {run.starts} starts{extra}: the best of those "
                 f"(`agrisynth solve SPEC --resume RUN_DIR` finishes the run)")
     return status_note(best)
 
