@@ -220,12 +220,8 @@ def _described(result, loaded):
     from synthesis.errors import AgrisynthError
 
     if kinds.get(loaded.kind).explicit_design is not None:
-        from synthesis.spec.common import read_toml
-
         try:
-            data, sha = read_toml(loaded.path)
-            if sha == loaded.sha256:          # the file the run read (edited since: described as loaded)
-                loaded, _ = kinds.explicit_design(loaded, data)
+            loaded, _ = kinds.explicit_design(loaded, loaded.file_data())     # the file as the run read it
         except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded
             pass
     return design_info.attach(result, loaded.model)

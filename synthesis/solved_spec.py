@@ -44,7 +44,7 @@ def solved_data(loaded, result) -> dict[str, Any]:
     """The spec file's data with the solved design in place of every free variable."""
     from synthesis import kinds
 
-    data, _ = read_toml(loaded.path)
+    data = loaded.file_data()                              # as the run read it, not as the file is now
     loaded, data = kinds.explicit_design(loaded, data)     # a design the spec left to the kind, written out
     info = describe(loaded.model)
     if not info:

@@ -426,6 +426,12 @@ def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_s
     solve = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")])
     assert solve.returncode == 2 and solve.stderr.strip() == f"error: {said}"
     assert not (tmp_path / "s").exists()
+    # a fold point on the centre O has no direction to be moved along: bad input, not a ZeroDivisionError
+    centre = tmp_path / "centre.toml"
+    centre.write_text(text.replace("D = [-14.49569, 14.49569]", "D = [0.0, 0.0]"))
+    check = _run(["check", str(centre), "--out", str(tmp_path / "o")])
+    assert check.returncode == 2 and "points.D = [0, 0]: the fold point lies on the arm's centre O" in check.stderr
+    assert "Traceback" not in check.stderr
     # the fold point is moved onto |OM| = R - d exactly, whose hypot can fall an ulp inside: still reachable
     folded = tmp_path / "fold.toml"
     folded.write_text(text.replace("D = [-14.49569, 14.49569]", "D = [-14.67, 15.81]"))

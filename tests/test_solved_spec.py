@@ -7,6 +7,8 @@ is skipped with the import error as the reason.
 
 from __future__ import annotations
 
+import re
+
 import subprocess
 import sys
 
@@ -16,6 +18,7 @@ from conftest import LIBRARY
 from synthesis import design_info, kinds
 from synthesis.core import solve as core
 from synthesis.solved_spec import FILENAME, solved_toml
+from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 from synthesis.spec.common import read_toml
 
@@ -110,3 +113,34 @@ def test_check_of_a_planting_solved_toml_gives_the_solve_s_rule_values_to_the_la
     path = tmp_path / FILENAME
     path.write_text(solved_toml(loaded, result))
     assert _table(kinds.checker("planting_fourbar")(load_spec(path)).rules) == _table(result.rules)
+
+
+def test_solved_toml_is_written_from_the_spec_as_the_run_read_it(tmp_path):
+    """The spec file edited during a solve (l1 75 -> 90): solved.toml held the edited l1 under the first file's
+    sha256, a design never solved.  It is written from the data the run read."""
+    source = (LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text()
+    assert "\nl1 = 75" in source
+    path = tmp_path / "race.toml"
+    path.write_text(source)
+    loaded = load_spec(path)
+    result, _, _ = core.run_solve(kinds.solving_kind("planting_fourbar"), loaded, starts=1, workers=1)
+    path.write_text(source.replace("\nl1 = 75", "\nl1 = 90"))          # edited while the run went on
+    written = tmp_path / FILENAME
+    written.write_text(solved_toml(loaded, result))
+    again = load_spec(written)
+    assert again.model.design_values()["l1"] == 75.0 == result.design["l1"]
+    assert _table(kinds.checker("planting_fourbar")(again).rules) == _table(result.rules)
+
+
+def test_an_angle_a_bound_relaxation_left_a_hair_past_a_turn_still_loads(tmp_path):
+    """IPOPT relaxes bounds by 1e-8 relative: a solve whose zeta ends on a bound at -360 writes -360.0000036, and
+    check of its solved.toml must read it; 360.001 is still refused."""
+    source = (LIBRARY / "planting_arm" / "taiwan_example1.toml").read_text()
+    for zeta, loads in (("-360.0000035999994", True), ("360.001", False)):
+        path = tmp_path / "z.toml"
+        path.write_text(re.sub(r"(?m)^zeta = .*$", f"zeta = {zeta}", source))
+        if loads:
+            assert load_spec(path).model.arm.zeta == float(zeta)
+        else:
+            with pytest.raises(SpecError, match="got 360.001"):
+                load_spec(path)

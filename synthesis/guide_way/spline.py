@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from synthesis.errors import SpecError
+
 _BASIS = (
     (lambda s: (1 - s) ** 3 / 6, lambda s: -(1 - s) ** 2 / 2, lambda s: 1 - s),
     (lambda s: (3 * s**3 - 6 * s**2 + 4) / 6, lambda s: (9 * s**2 - 12 * s) / 6, lambda s: 3 * s - 2),
@@ -76,6 +78,9 @@ def keys_of(names, points: dict, tangents_deg: dict, fold: str, R: float, d: flo
         x, y = points[name]
         if name == fold:
             rho = math.hypot(x, y)
+            if rho == 0.0:          # no direction to move it along
+                raise SpecError(f"points.{name} = [{x:g}, {y:g}]: the fold point lies on the arm's centre O, so it "
+                                f"has no direction OM to be moved along onto |OM| = R - d; give it one")
             x, y = x * (R - d) / rho, y * (R - d) / rho
         pts.append((float(x), float(y)))
     tangents = {}

@@ -6,8 +6,9 @@ so a run never imports the code of mechanisms its scene does not use.
 
 from __future__ import annotations
 
+import copy
 import difflib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from pydantic import BaseModel
@@ -37,6 +38,19 @@ class LoadedSpec:
     model: BaseModel
     path: Path
     sha256: str
+    #: the file's data as it was read (what solved.toml rewrites; re-reading the file later could find it edited)
+    data: dict | None = field(default=None, compare=False, repr=False)
+
+    def file_data(self) -> dict:
+        """A copy of the spec file's data as the run read it; a spec built without it (in Python) is read again,
+        and refused if its file no longer holds the bytes whose sha256 the run records."""
+        if self.data is not None:
+            return copy.deepcopy(self.data)
+        data, sha = read_toml(self.path)
+        if sha != self.sha256:
+            raise SpecError(f"{self.path}: the file changed since it was read (sha256 {self.sha256[:12]}... then, "
+                            f"{sha[:12]}... now)")
+        return data
 
     @property
     def kind(self) -> str:
@@ -57,6 +71,7 @@ def load_spec(path: str | Path) -> LoadedSpec:
     """Read and validate a spec file; raises SpecError naming the file, field and value."""
     path = Path(path)
     data, sha = read_toml(path)
+    as_read = copy.deepcopy(data)          # the file as read, whatever validation does with `data`
     kind = data.get("kind")
     if kind is None:
         raise SpecError(f"{path}: missing required field 'kind' (one of: {', '.join(KINDS)})")
@@ -73,4 +88,4 @@ def load_spec(path: str | Path) -> LoadedSpec:
         model = validate(model_class(kind), data, prefix=kind)
     except SpecError as exc:
         raise SpecError(f"{path}: {exc}") from None
-    return LoadedSpec(model, path, sha)
+    return LoadedSpec(model, path, sha, as_read)

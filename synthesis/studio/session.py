@@ -199,7 +199,7 @@ class Session:
         data = self.spec_data(values)
         model = validate(type(self.loaded.model), data, prefix=self.kind)
         digest = hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
-        return LoadedSpec(model, self.loaded.path, digest)
+        return LoadedSpec(model, self.loaded.path, digest, copy.deepcopy(data))
 
     def spec_text(self, values: dict[str, float], name: str, note: str, folder: Path) -> str:
         """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
