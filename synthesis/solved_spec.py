@@ -20,7 +20,6 @@ from pydantic import BaseModel
 
 from synthesis.design_info import describe
 from synthesis.errors import SpecError
-from synthesis.spec.common import read_toml
 
 FILENAME = "solved.toml"
 _PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
