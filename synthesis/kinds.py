@@ -111,6 +111,9 @@ def explicit_design(loaded, data: dict) -> tuple:
     written = data if target is None else resolve(target)(loaded, data)
     if written is data:
         return loaded, data
+    import copy
+
     from synthesis.spec.common import validate
 
-    return type(loaded)(validate(type(loaded.model), written, prefix=loaded.kind), loaded.path, loaded.sha256), written
+    return (type(loaded)(validate(type(loaded.model), written, prefix=loaded.kind), loaded.path, loaded.sha256,
+                         copy.deepcopy(written)), written)

@@ -414,7 +414,9 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
 
 def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_solve(tmp_path):
     """C = [5000, 39] lies far outside the claw tip's annulus [R - d, R + d]: the convex fit was asked for a
-    spline through it and ended exit 3 "admit no spline (infeasible)" naming no point; now exit 2 naming it."""
+    spline through it and ended exit 3 "admit no spline (infeasible)" naming no point; now exit 2 naming it.  The
+    fold point's edges: on the centre O it is bad input (it was a ZeroDivisionError); moved onto |OM| = R - d, a
+    last-ulp rounding inside the annulus is still reachable."""
     text = (LIBRARY / "guide_way" / "smooth_redesign.toml").read_text()
     assert "C = [179.0, 39.0]" in text
     path = tmp_path / "far.toml"

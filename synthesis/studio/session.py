@@ -24,7 +24,7 @@ from synthesis.design_info import describe, walk_fields
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
-from synthesis.spec.common import read_toml, validate
+from synthesis.spec.common import validate
 from synthesis.spec.docmeta import units_in
 from synthesis.studio import drawing, grids
 
@@ -121,7 +121,7 @@ class Session:
     @classmethod
     def open(cls, spec_path: Path) -> "Session":
         loaded = load_spec(spec_path)
-        data, _ = read_toml(loaded.path)
+        data = loaded.file_data()           # the data of the file load_spec read (not read again: it may have moved on)
         loaded, data = kinds.explicit_design(loaded, data)     # a design the spec leaves to the kind, written out
         info = describe(loaded.model)
         given = loaded.model.design_values() if hasattr(loaded.model, "design_values") else {}
