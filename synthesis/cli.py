@@ -221,7 +221,7 @@ def _described(result, loaded):
 
     if kinds.get(loaded.kind).explicit_design is not None:
         try:
-            loaded, _ = kinds.explicit_design(loaded, loaded.file_data())     # the file as the run read it
+            loaded, _ = kinds.explicit_design(loaded)       # the file as the run read it
         except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded
             pass
     return design_info.attach(result, loaded.model)

@@ -104,9 +104,12 @@ def solving_kind_for(loaded) -> Kind:
     return robust_kind(kind, loaded.model)
 
 
-def explicit_design(loaded, data: dict) -> tuple:
+def explicit_design(loaded, data: dict | None = None) -> tuple:
     """(loaded spec, spec file data) with every design variable written out (see ``Kind.explicit_design``) and
-    the spec validated again from that data; both as given for a kind whose specs always hold their whole design."""
+    the spec validated again from that data; both as given for a kind whose specs always hold their whole design.
+    ``data``: the spec's data, by default the file's as the run read it (``LoadedSpec.file_data``)."""
+    if data is None:
+        data = loaded.file_data()
     target = get(loaded.kind).explicit_design
     written = data if target is None else resolve(target)(loaded, data)
     if written is data:

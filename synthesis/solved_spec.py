@@ -43,8 +43,8 @@ def solved_data(loaded, result) -> dict[str, Any]:
     """The spec file's data with the solved design in place of every free variable."""
     from synthesis import kinds
 
-    data = loaded.file_data()                              # as the run read it, not as the file is now
-    loaded, data = kinds.explicit_design(loaded, data)     # a design the spec left to the kind, written out
+    # the file's data as the run read it (not as the file is now), a design the spec left to the kind written out
+    loaded, data = kinds.explicit_design(loaded)
     info = describe(loaded.model)
     if not info:
         raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables()), so the "

@@ -95,7 +95,9 @@ def trace(spec: CombingChainSpec, design: dict, beta_samples: int, speed_samples
 
 def _speed(label: str, value) -> str:
     """A range end in a rule's words: its number when it is one ("switch 0.498"), its label when it is a symbol."""
-    return label if not isinstance(value, (int, float)) else f"{value:g}" if label != "switch" else f"switch {value:g}"
+    if not isinstance(value, (int, float)):
+        return label
+    return f"switch {value:g}" if label == "switch" else f"{value:g}"
 
 
 def rule_prefix(spec: CombingChainSpec, gear: int) -> str:

@@ -150,6 +150,10 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     return replace(diagnosis, design=design or None)
 
 
+#: ``details.start_from`` of the start solved from the elastic re-solve's design
+FROM_ELASTIC = "elastic re-solve"
+
+
 def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticDiagnosis) -> Run:
     """When no start satisfies every rule but the elastic re-solve converged needing no slack, its design meets
     the rules at the solver's samples: a point the starts missed, not a conflict.  One more start (index
@@ -158,9 +162,11 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
     and says so in ``solver.status_note``; otherwise, and for an NLP that builds its own starts
     (``builds_its_own_starts``: it may ignore the design given), the run is returned unchanged.  A start stopped by
     a signal is discarded (``interrupt.pending()``), as the multistart discards one."""
+    if not elastic.converged or elastic.relaxed or not elastic.design:
+        return run
     solving = kind.solver_side()
     nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
-    if not elastic.converged or elastic.relaxed or not elastic.design or getattr(nlp, "builds_its_own_starts", False):
+    if getattr(nlp, "builds_its_own_starts", False):
         return run
     try:
         x0 = (nlp.x_of(elastic.design) if hasattr(nlp, "x_of")
@@ -170,7 +176,7 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
         return run                # no start could be made from it: the run's verdict stands
     if interrupt.pending() is not None:
         return run
-    outcome.details = {**(outcome.details or {}), "start_from": "elastic re-solve"}
+    outcome.details = {**(outcome.details or {}), "start_from": FROM_ELASTIC}
     report = report_of(outcome, functools.partial(_recheck, solving, setting))
     if not report.satisfied:
         return run
@@ -287,7 +293,8 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
 
 
 def _note(status: str, best: StartReport, run: Run) -> str | None:
-    if status != "interrupted" and best.satisfied and (best.outcome.details or {}).get("start_from") == "elastic re-solve":
+    from_elastic = (best.outcome.details or {}).get("start_from") == FROM_ELASTIC
+    if status != "interrupted" and best.satisfied and from_elastic:
         return " ".join(filter(None, [
             f"no start of {run.starts} satisfied every rule; the elastic re-solve needed no slack, and the design "
             f"is start {best.outcome.start}, one more start solved from the elastic re-solve's design",

@@ -13,9 +13,9 @@ from typing import Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import (within_a_turn, 
-    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
-    is_free, max_iter_field, starts_field, value_of,
+from synthesis.spec.common import (
+    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
+    starts_field, value_of, within_a_turn,
 )
 
 KIND = "clamp_cam"

@@ -29,9 +29,9 @@ from typing import Annotated, Any, Literal
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.kinematics.coupler_point import VARIABLES
-from synthesis.spec.common import (within_a_turn, 
+from synthesis.spec.common import (
     FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
-    require_positive, starts_field, value_of,
+    require_positive, starts_field, value_of, within_a_turn,
 )
 
 KIND = "fourbar_path"
@@ -101,6 +101,7 @@ class TargetsSection(StrictModel):
             raise ValueError(f"points: expected at least 3 distinct target points, got {len(distinct)} among the "
                              f"{len(self.points)} given")
         return self
+
 
 class LinkageSection(StrictModel):
     """The four-bar and its coupler point: a number fixes a variable, ``{init, bounds}`` frees it (mm, deg).

@@ -13,8 +13,8 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
-from synthesis.spec.common import (within_a_turn, 
-    MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of,
+from synthesis.spec.common import (
+    MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of, within_a_turn,
 )
 
 

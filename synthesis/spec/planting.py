@@ -16,9 +16,9 @@ from typing import Annotated, Literal
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
-from synthesis.spec.common import (within_a_turn, 
+from synthesis.spec.common import (
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
-    value_of,
+    value_of, within_a_turn,
 )
 
 KIND = "planting_fourbar"

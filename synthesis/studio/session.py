@@ -121,8 +121,9 @@ class Session:
     @classmethod
     def open(cls, spec_path: Path) -> "Session":
         loaded = load_spec(spec_path)
-        data = loaded.file_data()           # the data of the file load_spec read (not read again: it may have moved on)
-        loaded, data = kinds.explicit_design(loaded, data)     # a design the spec leaves to the kind, written out
+        # the data of the file load_spec read (not read again: it may have moved on), a design the spec leaves to
+        # the kind written out
+        loaded, data = kinds.explicit_design(loaded)
         info = describe(loaded.model)
         given = loaded.model.design_values() if hasattr(loaded.model, "design_values") else {}
         variables = []

@@ -20,10 +20,6 @@ def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
 def table(facts: dict) -> str:
     mc = facts["monte_carlo"]
 
-    def unevaluated(row) -> str:
-        """Why a rule's sampled worst margin is missing: the samples where it could not be evaluated (failing)."""
-        n = row.get("mc_unevaluable") or 0
-        return f" (not evaluable in {n} of {mc['samples']} samples: counted as failing)" if n else ""
     lines = [(f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
               f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
               + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the "
@@ -38,7 +34,8 @@ def table(facts: dict) -> str:
             return "-" if v is None else fmt.format(v)
         drivers = ", ".join(f"{d['variable']} {d['contribution']:.3g}" for d in r["drivers"])
         lines.append(f"| {r['name']} | {r['unit']} | {f(r['recheck_margin'])} | {f(r['linear_worst_margin'])} | {drivers} "
-                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])}{unevaluated(r)} "
+                     f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])}"
+                     f"{_not_evaluable(r.get('mc_unevaluable'), mc['samples'])} "
                      f"| {f(r['linear_over_sampled'], '{:.2f}')} "
                      f"| {f(r.get('corner_margin'))} | {f(r.get('linear_vs_sampled_gap'), '{:.1%}')} |")
         if r.get("gap_explanation"):
@@ -143,6 +140,11 @@ def tornado(facts: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def _not_evaluable(count: int | None, samples: int) -> str:
+    """Why a rule's sampled worst margin is missing: the samples where it could not be evaluated (failing)."""
+    return f" (not evaluable in {count} of {samples} samples: counted as failing)" if count else ""
+
+
 def monte_carlo_lines(mc: dict) -> list[str]:
     """The Monte-Carlo check in words: N, seed, the pass rate of all rules, then of every rule."""
     head = (f"Monte-Carlo check: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
@@ -151,8 +153,7 @@ def monte_carlo_lines(mc: dict) -> list[str]:
         head += f"; {mc['unevaluable']} sample(s) could not be evaluated (counted as failing)"
     return [head] + [f"  {n}: {_pct(r.get('pass_rate'))} pass, worst sampled margin "
                      f"{'-' if r.get('worst_margin') is None else format(r['worst_margin'], '.4g')}"
-                     + (f" ({r['unevaluable']} sample(s) where it could not be evaluated: counted as failing)"
-                        if r.get("unevaluable") else "")
+                     + _not_evaluable(r.get("unevaluable"), mc["samples"])
                      for n, r in (mc.get("rules") or {}).items()]
 
 
