@@ -22,6 +22,7 @@ from scipy.optimize import brentq, minimize
 from conftest import LIBRARY
 from solving import run_solve
 from synthesis.comb_finger import geometry as g
+from synthesis.result import Result
 from synthesis.spec import load_spec
 
 FINGER = LIBRARY / "comb_finger"
@@ -121,6 +122,39 @@ def test_baseline_check_reports_the_printed_relations(tmp_path):
     assert f["combing_angle_theta_deg"] == pytest.approx(math.degrees(math.atan(180 / (400 / 3))), abs=1e-9)
     assert f["points_mm"]["F"] == pytest.approx([0.0, 180.0]) and f["points_mm"]["E"] == pytest.approx([0.0, 60.0])
     assert (folder / "comb_finger.png").stat().st_size > 10_000
+    _assert_trajectory_is_one_turn_at_the_combing_angle(data, load_spec(BASELINE).model)
+
+
+def _assert_trajectory_is_one_turn_at_the_combing_angle(data: dict, spec) -> None:
+    """The DESIGN.md trajectory of a comb_finger result, checked against the design, not against the facts' code:
+    one finger turn at omega from the tip's lowest point, the machine travelling V_s; the chord from that point to
+    the sample at F rises at the combing angle; the speeds and accelerations are the positions' time derivatives."""
+    tr, d = data["trajectory"], data["design"]
+    assert tr["frame"] == "ground" and tr["units"]["vx"] == "mm/s" and tr["units"]["ay"] == "mm/s^2"
+    t, x, y = (np.array(tr[k]) for k in ("t", "x", "y"))
+    w, vs = d["omega"] * 2 * math.pi / 60, 1000 * spec.operation.machine_speed
+    assert t[0] == 0.0 and t[-1] == pytest.approx(60.0 / d["omega"], rel=1e-12)
+    assert np.allclose(x, vs * t, rtol=1e-12)
+    a = math.radians(d["alpha"])
+    lowest = d["b"] - d["e"] * math.sin(a) - d["r"]            # the tip at the bottom of its circle
+    assert y[0] == pytest.approx(lowest, abs=1e-9) and y.min() == pytest.approx(lowest, abs=1e-9)
+    assert y.max() == pytest.approx(lowest + 2 * d["r"], abs=1e-6)
+    # F is where the tip circle meets the centre line x = 0 on its way up: the front view's x = 0 above the hub
+    front = tr["machine"]
+    k = int(np.flatnonzero(np.isclose(front["x"], 0.0, atol=1e-9) & (y > d["b"] - d["e"] * math.sin(a)))[0])
+    chord = math.degrees(math.atan2(y[k] - y[0], x[k] - x[0]))
+    assert chord == pytest.approx(data["facts"]["combing_angle_theta_deg"], abs=1e-9)
+    # time derivatives by central differences (361 samples a turn: O(h^2) error, about 5e-5 of the amplitude)
+    for pos, vel in ((y, tr["vy"]), (np.array(front["x"]), front["vx"]), (np.array(front["y"]), front["vy"])):
+        even = np.abs(np.diff(t) - t[1]) < 1e-12 * t[-1]        # away from the extra sample at F
+        inner = np.flatnonzero(even[:-1] & even[1:]) + 1
+        fd = (pos[inner + 1] - pos[inner - 1]) / (t[inner + 1] - t[inner - 1])
+        assert np.allclose(fd, np.array(vel)[inner], atol=2e-4 * d["r"] * w)
+    assert np.allclose(tr["vx"], vs) and np.allclose(tr["ax"], 0.0)
+    vy = np.array(tr["vy"])
+    fd = (vy[inner + 1] - vy[inner - 1]) / (t[inner + 1] - t[inner - 1])
+    assert np.allclose(fd, np.array(tr["ay"])[inner], atol=2e-4 * d["r"] * w * w)
+    assert np.hypot(front["vx"], front["vy"]) == pytest.approx(np.full(len(t), d["r"] * w), rel=1e-12)
 
 
 def _independent_optimum(spec, omega_rpm: float) -> float:
@@ -150,7 +184,7 @@ def _independent_optimum(spec, omega_rpm: float) -> float:
     return math.degrees(best)
 
 
-def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits():
+def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits(tmp_path):
     loaded = load_spec(REDESIGN)
     spec = loaded.model
     result, reports, _ = run_solve(loaded, workers=1)
@@ -159,6 +193,17 @@ def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits(
     assert result.objective["value"] == pytest.approx(_independent_optimum(spec, 60.0), abs=1e-6)
     assert set(result.extra["binding_rules"]) == {"finger_clear_of_other_unit", "unit_within_row", "finger_hides_in_drum"}
     assert result.extra["variables_at_bounds"] == ["omega"]
+    as_written = json.loads(json.dumps(result.to_json()))
+    _assert_trajectory_is_one_turn_at_the_combing_angle(as_written, spec)
+    assert as_written["facts"]["combing_angle_theta_deg"] == pytest.approx(result.objective["value"], abs=1e-9)
+    # compare's overlay of the candidates (baseline and redesign) is drawn from the results' trajectories
+    from synthesis.comb_finger.plots import compare_figure
+    from synthesis.comb_finger.check import run_check
+    folder = tmp_path / "compare"
+    folder.mkdir()
+    assert compare_figure([run_check(load_spec(BASELINE)), Result.from_json(as_written)], folder) == \
+        ["compare_comb_finger.png"]
+    assert (folder / "compare_comb_finger.png").stat().st_size > 20_000
     # re-check over the turn, independently and 20x finer than the solver: the tip keeps its clearance
     d = result.design
     a = math.radians(d["alpha"])

@@ -14,6 +14,7 @@ KIND = Kind(
     check="synthesis.comb_finger.check:run_check",
     figures={"comb_finger.png": "synthesis.comb_finger.plots:finger_figure",
              "comb_finger.svg": "synthesis.comb_finger.plots:finger_figure"},
+    compare="synthesis.comb_finger.plots:compare_figure",
     solving="synthesis.comb_finger.solve:SOLVING",
     bench="synthesis.comb_finger:bench_cases",
     objectives={"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"},

@@ -170,6 +170,38 @@ def geometry_facts(spec: CombFingerSpec, design: dict) -> dict:
     }
 
 
+#: turn angles of the trajectory over one finger turn (the combing turn's end F is added to them)
+TRAJECTORY_SAMPLES = 361
+
+
+def trajectory(spec: CombFingerSpec, design: dict) -> dict:
+    """One turn of the left finger's tip (DESIGN.md keys) from its lowest point (turn angle 0, where it picks the stem
+    up), in the ground frame's side view: x along the travel, V_s t from that point (the tip turns about a hub the
+    machine carries forward at V_s), y the tip's height above the ground line.  The chord from the first sample to F
+    (the sample at ``combing_turn_deg``) rises at the combing angle theta (eq 21).  ``machine``: the same samples in
+    the machine's front view (x across the row, as ``points_mm``), where the tip turns on its circle."""
+    r, e, b = design["r"], design["e"], design["b"]
+    alpha, omega = math.radians(design["alpha"]), design["omega"] * RPM
+    vs = 1000.0 * spec.operation.machine_speed
+    phi = np.union1d(np.linspace(0.0, 2.0 * math.pi, TRAJECTORY_SAMPLES), [g.combing_turn(r, e, alpha, b)])
+    t = phi / omega
+    tx, ty = g.tip(r, e, alpha, b, phi)
+    # the tip turns on a circle of radius r about the hub: d/dt (sin phi, -cos phi) r = r omega (cos phi, sin phi)
+    front_vx, front_vy = r * omega * np.cos(phi), r * omega * np.sin(phi)
+    return {
+        "frame": "ground",
+        "point": "left finger tip; side view: x along the travel from where the tip is lowest (turn angle 0), "
+                 "y up from the ground line",
+        "t": t.tolist(), "crank_deg": np.degrees(phi).tolist(),
+        "x": (vs * t).tolist(), "y": np.asarray(ty, dtype=float).tolist(),
+        "vx": np.full_like(phi, vs).tolist(), "vy": front_vy.tolist(),
+        "ax": np.zeros_like(phi).tolist(), "ay": (r * omega**2 * np.cos(phi)).tolist(),
+        "machine": {"view": "front: x across the row from its centre line, y up from the ground line",
+                    "x": np.asarray(tx, dtype=float).tolist(), "y": np.asarray(ty, dtype=float).tolist(),
+                    "vx": front_vx.tolist(), "vy": front_vy.tolist()},
+    }
+
+
 def facts(spec: CombFingerSpec, design: dict) -> dict:
     return {"source": spec.source, "row_spacing_mm": spec.operation.row_spacing, **geometry_facts(spec, design)}
 
@@ -179,4 +211,5 @@ def run_check(loaded: LoadedSpec) -> Result:
     design = spec.design_values()
     rules, _ = evaluate(spec, design)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
-                  rules=[r.record().to_json() for r in rules], extra=facts(spec, design))
+                  rules=[r.record().to_json() for r in rules], trajectory=trajectory(spec, design),
+                  extra=facts(spec, design))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from synthesis.comb_finger.check import evaluate, facts
+from synthesis.comb_finger.check import evaluate, facts, trajectory
 from synthesis.comb_finger.nlp import CombFingerNLP
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
@@ -28,6 +28,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     details = best.outcome.details
     return Finished(design=design,
                     objective={"name": "max_combing_angle", "value": best.outcome.objective, "unit": "deg"},
+                    trajectory=trajectory(spec, design),
                     facts={**facts(spec, design), "binding_rules": details.get("binding_rules", []),
                            "variables_at_bounds": details.get("variables_at_bounds", [])},
                     solver_settings={"turn_samples": spec.solver.turn_samples})
