@@ -18,10 +18,12 @@ from synthesis.errors import OutputError, ResultError
 
 STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated", "interrupted")
 #: version of the result.json layout; readers refuse a newer one rather than misread it
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
 #: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
-#: top level, mixed with the kind's facts); version 1 files are still read
+#: top level, mixed with the kind's facts); version 3: every ``design`` entry is a number (mm / deg) or a list of
+#: numbers, as DESIGN.md asks -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
+#: ``facts.branch`` holds (as it did in version 2).  Versions 1 and 2 are still read (:meth:`Result.from_json`)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
 
@@ -89,11 +91,17 @@ class Result:
         known = {"kind", "name", "spec_sha256", "status", "design", "rules", "objective", "trajectory",
                  "solver", "versions", "design_variables"}
         args = {k: data[k] for k in (*known, *RUN_KEYS) if k in data}
-        if data.get("schema_version", 1) >= 2:
+        version = data.get("schema_version", 1)
+        if version >= 2:
             args["extra"] = dict(data.get("facts") or {})
         else:       # version 1: the kind's facts and the run's tail side by side at the top level
             args["extra"] = {k: v for k, v in data.items()
                              if k not in known and k not in RUN_KEYS and k != "schema_version"}
+        design = args.get("design")
+        if version < 3 and isinstance(design, dict) and isinstance(design.get("branch"), str):
+            # fourbar_path before version 3: the assembly's name sat in the design too; facts.branch holds it now
+            args["design"] = {k: v for k, v in design.items() if k != "branch"}
+            args["extra"].setdefault("branch", design["branch"])
         return cls(**args)
 
 

@@ -280,7 +280,7 @@ def test_design_values_outside_the_linkage_are_refused_with_the_init_form():
 
 def test_the_new_spelling_reaches_the_kinematics_and_result_names():
     """branch = -1 is the crossed assembly, grashof = "double_crank" the double-crank rows; result.json keeps
-    the assembly's name and the class's hyphenated name (schema_version 2 unchanged)."""
+    the assembly's name (in facts.branch since schema version 3) and the class's hyphenated name."""
     data = truth_data(0, 6, timed=False)
     data["linkage"]["branch"] = -1
     data["rules"]["grashof"] = "double_crank"

@@ -98,6 +98,15 @@ STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-rob
            "guide_tube/uniform_spacing_mu_envelope.toml"}        # 21 mu x 80 spacings re-check per start, about 25 s
 
 
+def _assert_design_holds_numbers(result) -> None:
+    """DESIGN.md: result.json's design gives every design variable's value (mm / deg): a number, or a list of numbers
+    (fourbar_path's crank angle at each target, null where none was found); schema version 3."""
+    for name, value in result.to_json()["design"].items():
+        values = value if isinstance(value, list) else [value]
+        assert all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)) for v in values), (name, value)
+        assert isinstance(value, list) or value is not None, name
+
+
 def test_every_library_spec_is_recorded():
     assert sorted(EXPECTED) == SPECS
 
@@ -112,6 +121,7 @@ def test_library_spec(spec):
     kind = kinds.get(loaded.kind)
     result = kind.checker()(loaded)
     assert (1 if result.violated() else 0) == expected["check"]
+    _assert_design_holds_numbers(result)
     assert ("solve" in expected) == kind.solves
     if not kind.solves:
         return
@@ -123,4 +133,5 @@ def test_library_spec(spec):
         return
     solved, _, _ = solve_spec(loaded, workers=1)
     assert solved.status == status
+    _assert_design_holds_numbers(solved)
     assert solved.objective["value"] == pytest.approx(value, rel=RTOL)

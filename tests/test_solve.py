@@ -223,7 +223,7 @@ def test_infeasible_rule_set_exits_3_naming_the_conflict_cli(tmp_path):
     assert "Rules that conflict" in proc.stderr and "planting_depth" in proc.stderr
     data = json.loads((tmp_path / "infeasible_deep_planting" / "result.json").read_text())
     assert data["status"] == "infeasible"          # the run's result is kept, not lost
-    assert data["schema_version"] == 2 and "planting_depth" in data["elastic"]["conflicting"]
+    assert data["schema_version"] == 3 and "planting_depth" in data["elastic"]["conflicting"]
     assert "precision_points" in data["facts"]
 
 

@@ -125,7 +125,7 @@ class Setting:
 class Finished:
     """The kind's part of a solve's result, from the chosen start."""
 
-    design: dict[str, Any]               # result.json design (spec units; may add fixed choices, e.g. branch)
+    design: dict[str, Any]               # result.json design (spec units): numbers or lists of numbers (schema 3)
     objective: dict[str, Any]            # {name, value, unit}
     facts: dict[str, Any] = field(default_factory=dict)      # kind facts, result.json "facts"
     trajectory: dict[str, Any] | None = None

@@ -172,11 +172,10 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
     }
 
 
-def result_design(design: dict, crank_deg: list[float], spec: FourbarPathSpec) -> dict:
+def result_design(design: dict, crank_deg: list[float]) -> dict:
     out = {n: float(design[n]) if math.isfinite(design[n]) else None for n in VARIABLES}   # JSON has no NaN
     out["crank_deg"] = [float(a) if math.isfinite(a) else None for a in crank_deg]     # None: not found
-    out["branch"] = spec.branch
-    return out
+    return out            # the assembly (spec.branch) is a fact (path_facts), not a design value: schema version 3
 
 
 def run_check(loaded: LoadedSpec) -> Result:
@@ -189,6 +188,6 @@ def run_check(loaded: LoadedSpec) -> Result:
         open_at = [i for i, e in enumerate(ev.errors_mm) if not math.isfinite(e)]
         facts["note"] = f"the loop does not close at target(s) {open_at}: no coupler point there"
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
-                  design=result_design(design, ev.crank_deg, spec), rules=records,
+                  design=result_design(design, ev.crank_deg), rules=records,
                   trajectory=trajectory(spec, design, ev.crank_deg, _direction("either", ev.crank_deg)[0]),
                   extra=facts)

@@ -30,7 +30,7 @@ def write_linkage_dxf(result: Result, path: Path) -> None:
 
     tr = result.trajectory
     design = {n: result.design[n] for n in VARIABLES}
-    branch = BRANCHES[result.design.get("branch", "open")]
+    branch = BRANCHES[result.extra.get("branch", "open")]
     given = np.asarray(result.design.get("crank_deg", []) or [], dtype=float).ravel()
     crank = float(given[0]) if given.size else float(tr["crank_deg"][0])
     j = joint_positions(design, np.radians([crank]), branch)

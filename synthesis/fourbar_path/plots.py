@@ -27,7 +27,7 @@ LINK = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
 
 
 def _design(result: Result) -> tuple[dict, int]:
-    return {n: result.design[n] for n in VARIABLES}, BRANCHES[result.design.get("branch", "open")]
+    return {n: result.design[n] for n in VARIABLES}, BRANCHES[result.extra.get("branch", "open")]
 
 
 def _curve(result: Result) -> tuple[np.ndarray, np.ndarray]:
@@ -86,7 +86,7 @@ def _title(result: Result) -> str:
     err = result.extra.get("path_error", {}) or {}
     obj = result.objective["value"] if result.objective else err.get("sum_squared_mm2")
     tail = f", sum of squared errors {obj:.3g} mm$^2$" if obj is not None else ""
-    return f"{result.name} ({result.design.get('branch', 'open')} branch){tail}"
+    return f"{result.name} ({result.extra.get('branch', 'open')} branch){tail}"
 
 
 def coupler_curve_figure(result: Result, path: Path) -> None:

@@ -21,7 +21,7 @@ def frames(result, most: int) -> list[dict]:
         return []
     design = {n: float(result.design[n]) for n in VARIABLES}
     theta = np.radians(crank[::-(-len(crank) // most)])
-    joints = joint_positions(design, theta, BRANCHES[result.design.get("branch", "open")])
+    joints = joint_positions(design, theta, BRANCHES[result.extra.get("branch", "open")])
     poses = [{name: [pose_mm(z[k].real), pose_mm(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
     return [p for p in poses if all(None not in xy for xy in p.values())]
 

@@ -65,7 +65,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     if room is not None:
         facts["grashof_in_bounds"] = room
     return Finished(
-        design=result_design(out.design, crank, spec),
+        design=result_design(out.design, crank),
         objective={"name": OBJECTIVE, "value": out.objective, "unit": "mm^2"},
         facts=facts,
         trajectory=trajectory(spec, out.design, crank, -1.0 if direction == "cw" else 1.0),

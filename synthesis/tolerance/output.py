@@ -1,4 +1,4 @@
-"""The folder of ``agrisynth tolerance``: result.json (result-like, schema version 2, the analysis under
+"""The folder of ``agrisynth tolerance``: result.json (result-like, result.json's schema version, the analysis under
 ``facts``), report.md (the stack-up table, with tornado.png embedded) and tornado.png (a tornado of the linear
 stack-up of each of the worst rules)."""
 
@@ -8,12 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis.result import atomic_write_text, finite_json_text
+from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text
 
 
 def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
     rules = facts["nominal_rules"]
-    return {"schema_version": 2, "kind": kind, "name": f"{name}-tolerance", "spec_sha256": sha,
+    return {"schema_version": SCHEMA_VERSION, "kind": kind, "name": f"{name}-tolerance", "spec_sha256": sha,
             "status": "evaluated", "design": facts["design"], "rules": rules, "facts": {"tolerance": facts}}
 
 
