@@ -134,6 +134,7 @@ def _assert_trajectory_is_one_turn_at_the_combing_angle(data: dict, spec) -> Non
     t, x, y = (np.array(tr[k]) for k in ("t", "x", "y"))
     w, vs = d["omega"] * 2 * math.pi / 60, 1000 * spec.operation.machine_speed
     assert t[0] == 0.0 and t[-1] == pytest.approx(60.0 / d["omega"], rel=1e-12)
+    assert np.min(np.diff(t)) > 1e-6 * t[-1]           # F added to the grid, not beside a grid sample it falls on
     assert np.allclose(x, vs * t, rtol=1e-12)
     a = math.radians(d["alpha"])
     lowest = d["b"] - d["e"] * math.sin(a) - d["r"]            # the tip at the bottom of its circle
@@ -196,14 +197,27 @@ def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits(
     as_written = json.loads(json.dumps(result.to_json()))
     _assert_trajectory_is_one_turn_at_the_combing_angle(as_written, spec)
     assert as_written["facts"]["combing_angle_theta_deg"] == pytest.approx(result.objective["value"], abs=1e-9)
-    # compare's overlay of the candidates (baseline and redesign) is drawn from the results' trajectories
-    from synthesis.comb_finger.plots import compare_figure
+    # compare's overlay of the candidates (baseline, redesign): each one's tip circle and combing turn with its chord
+    import matplotlib.pyplot as plt
+
     from synthesis.comb_finger.check import run_check
-    folder = tmp_path / "compare"
-    folder.mkdir()
-    assert compare_figure([run_check(load_spec(BASELINE)), Result.from_json(as_written)], folder) == \
-        ["compare_comb_finger.png"]
-    assert (folder / "compare_comb_finger.png").stat().st_size > 20_000
+    from synthesis.comb_finger.plots import comparison
+    baseline = run_check(load_spec(BASELINE))
+    older = {**baseline.to_json(), "schema_version": 2}          # a version-2 file: no trajectory
+    del older["trajectory"]
+    candidates = [baseline, Result.from_json(as_written), Result.from_json(older)]
+    fig = comparison(candidates)
+    front, side = fig.axes
+    for k, c in enumerate(candidates):
+        circle, curve, chord = front.lines[k], side.lines[2 * k], side.lines[2 * k + 1]
+        x, y = circle.get_data()
+        hub = g.hub(c.design["r"], c.design["e"], math.radians(c.design["alpha"]), c.design["b"])
+        assert np.allclose(np.hypot(x - hub[0], y - hub[1]), c.design["r"])
+        (x0, x1), (y0, y1) = chord.get_data()
+        assert (x0, y0) == (0.0, 0.0) and (x1, y1) == (curve.get_xdata()[-1], curve.get_ydata()[-1])
+        assert math.degrees(math.atan2(y1, x1)) == pytest.approx(c.extra["combing_angle_theta_deg"], abs=1e-9)
+    assert len(side.get_legend().get_texts()) == 3
+    plt.close(fig)
     # re-check over the turn, independently and 20x finer than the solver: the tip keeps its clearance
     d = result.design
     a = math.radians(d["alpha"])

@@ -363,3 +363,41 @@ def test_a_design_that_is_not_a_number_is_reported_not_evaluated():
     assert all(r["value"] is None and r["note"] == report.why for r in finished.rules)
     assert finished.design["r3"] is None and finished.trajectory is None
     json.dumps(finished.design, allow_nan=False)
+
+
+def test_a_crossed_result_is_drawn_and_exported_on_its_own_assembly(tmp_path, monkeypatch):
+    """Since schema version 3 the assembly is facts.branch only: the figures, the studio's poses and the DXF read it
+    there.  A crossed design (branch = -1) checked and read back from result.json: its poses' joint B is the crossed
+    assembly's (the library design's coupler point is the crank pin, the same on both assemblies, so B tells them
+    apart: on the open assembly it lies elsewhere), and so are the DXF's joints."""
+    from synthesis import exports
+    from synthesis.fourbar_path import export, plots, poses
+    from synthesis.fourbar_path.check import run_check
+    from synthesis.result import Result
+
+    text = (PATH_LIBRARY / "picking_arc.toml").read_text()
+    assert "\nbranch = 1 " in text
+    path = tmp_path / "crossed.toml"
+    path.write_text(text.replace("\nbranch = 1 ", "\nbranch = -1 "))
+    result = Result.from_json(json.loads(json.dumps(run_check(load_spec(path)).to_json())))
+    assert "branch" not in result.design and result.extra["branch"] == "crossed"
+    tr = result.trajectory
+    frame = poses.frames(result, len(tr["crank_deg"]))[0]
+    design = {n: result.design[n] for n in VARIABLES}
+    at = np.radians([tr["crank_deg"][0]])
+    crossed_b, open_b = joint_positions(design, at, -1)["B"][0], joint_positions(design, at, 1)["B"][0]
+    assert frame["B"] == pytest.approx([crossed_b.real, crossed_b.imag], abs=1e-3)     # pose_mm rounds to 1e-3 mm
+    assert abs(crossed_b - open_b) > 1.0
+    assert plots._design(result)[1] == -1
+    captured = {}
+    monkeypatch.setattr(exports, "write_linkage_dxf", lambda path, joints, **kw: captured.update(joints))
+    export.write_linkage_dxf(result, tmp_path / "linkage.dxf")
+    crank = result.design["crank_deg"][0]
+    crossed = joint_positions(design, np.radians([crank]), -1)
+    assert captured["B"] == pytest.approx((crossed["B"][0].real, crossed["B"][0].imag), abs=1e-9)
+    # compare names the assembly (a fact, not a design value): two designs of the same dimensions differ in it
+    from synthesis.report.tables import candidates, design_rows
+    given = Result.from_json(json.loads(json.dumps(run_check(load_spec(PATH_LIBRARY / "picking_arc.toml")).to_json())))
+    rows = {row.name: row for row in design_rows(candidates([given, result]))}
+    assert rows["branch (assembly)"].values == ["open", "crossed"]
+    assert rows["branch (assembly)"].differs == [False, True] and not any(rows["r1"].differs)

@@ -183,7 +183,11 @@ def trajectory(spec: CombFingerSpec, design: dict) -> dict:
     r, e, b = design["r"], design["e"], design["b"]
     alpha, omega = math.radians(design["alpha"]), design["omega"] * RPM
     vs = 1000.0 * spec.operation.machine_speed
-    phi = np.union1d(np.linspace(0.0, 2.0 * math.pi, TRAJECTORY_SAMPLES), [g.combing_turn(r, e, alpha, b)])
+    f_turn = g.combing_turn(r, e, alpha, b)
+    grid = np.linspace(0.0, 2.0 * math.pi, TRAJECTORY_SAMPLES)
+    # F replaces a grid angle it falls on within rounding (alpha a whole degree puts it on the 1-degree grid): two
+    # samples 1e-16 s apart would make any difference quotient of the samples meaningless
+    phi = np.union1d(grid[np.abs(grid - f_turn) > 1e-9], [f_turn])
     t = phi / omega
     tx, ty = g.tip(r, e, alpha, b, phi)
     # the tip turns on a circle of radius r about the hub: d/dt (sin phi, -cos phi) r = r omega (cos phi, sin phi)
@@ -191,7 +195,7 @@ def trajectory(spec: CombFingerSpec, design: dict) -> dict:
     return {
         "frame": "ground",
         "point": "left finger tip; side view: x along the travel from where the tip is lowest (turn angle 0), "
-                 "y up from the ground line",
+                 "y up from the ground line (its motion across the row is the front view's, under machine)",
         "t": t.tolist(), "crank_deg": np.degrees(phi).tolist(),
         "x": (vs * t).tolist(), "y": np.asarray(ty, dtype=float).tolist(),
         "vx": np.full_like(phi, vs).tolist(), "vy": front_vy.tolist(),

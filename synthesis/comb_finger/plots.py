@@ -58,22 +58,23 @@ def finger_figure(result: Result, path: Path) -> None:
     plt.close(fig)
 
 
-def compare_figure(results: list[Result], folder: Path) -> list[str]:
-    """Every candidate's finger tip, baseline first: the front view (its circle, the row's centre line) and the side
-    view of one combing turn in the ground frame, from the tip's lowest point to F, with its eq 21 chord (the combing
-    angle theta).  Drawn from each result's ``trajectory``; a result without one (an older agrisynth) is left out."""
+
+def comparison(results: list[Result]):
+    """The figure of :func:`compare_figure`: every candidate's finger tip, baseline first -- the front view (its tip
+    circle) and the side view of its combing turn, from the tip's lowest point to F over the machine's travel, with
+    the eq 21 chord (the combing angle theta) dotted.  Drawn from each result's facts (``curves``), which results of
+    every schema version hold."""
     fig, (front, side) = plt.subplots(1, 2, figsize=(12.5, 5.0), gridspec_kw={"width_ratios": [1, 1.3]})
     for k, r in enumerate(results):
-        tr = r.trajectory
-        if not tr or "machine" not in tr:
-            continue
+        cv = r.extra["curves"]
         colour, style = f"C{k % 10}", "-" if k == 0 else "--"
-        front.plot(tr["machine"]["x"], tr["machine"]["y"], style, color=colour, lw=1.3, label=r.name)
-        turn = r.extra["combing_turn_deg"]
-        upto = [i for i, a in enumerate(tr["crank_deg"]) if a <= turn + 1e-9]
-        xs, ys = [tr["x"][i] for i in upto], [tr["y"][i] - tr["y"][0] for i in upto]
-        side.plot(xs, ys, style, color=colour, lw=1.4, label=f"{r.name}: theta {r.extra['combing_angle_theta_deg']:.3g} deg")
-        side.plot([xs[0], xs[-1]], [ys[0], ys[-1]], ":", color=colour, lw=1.0)
+        circle = cv["tip_circle"]
+        front.plot(circle["x"] + circle["x"][:1], circle["y"] + circle["y"][:1], style, color=colour, lw=1.3,
+                   label=r.name)
+        c = cv["combing"]
+        side.plot(c["travel_mm"], c["rise_mm"], style, color=colour, lw=1.4,
+                  label=f"{r.name}: theta {r.extra['combing_angle_theta_deg']:.3g} deg")
+        side.plot([0.0, c["travel_mm"][-1]], [0.0, c["rise_mm"][-1]], ":", color=colour, lw=1.0)
     front.axvline(0.0, color="grey", lw=0.8, ls="--")
     front.axhline(0.0, color="saddlebrown", lw=1.5)
     front.set_aspect("equal", adjustable="datalim")
@@ -82,14 +83,19 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     front.set_title("front view: the left finger's tip circle (machine frame)", fontsize=9)
     side.set_aspect("equal", adjustable="datalim")
     side.set_xlabel("machine travel V_s t from the tip's lowest point, mm")
-    side.set_ylabel("tip rise, mm")
+    side.set_ylabel("tip rise above its lowest point, mm")
     side.set_title("side view, ground frame: the combing turn to F (dotted: the eq 21 chord)", fontsize=9)
     for ax in (front, side):
         ax.grid(alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8)
+        ax.legend(fontsize=8)
     fig.tight_layout()
-    name = "compare_comb_finger.png"
-    fig.savefig(folder / name, dpi=110)
+    return fig
+
+
+def compare_figure(results: list[Result], folder: Path) -> list[tuple[str, str]]:
+    """compare_comb_finger.png (:func:`comparison`)."""
+    fig = comparison(results)
+    fig.savefig(folder / "compare_comb_finger.png", dpi=110)
     plt.close(fig)
-    return [name]
+    return [("compare_comb_finger.png", "the candidates' finger tips: front view, and the combing turn over the "
+                                        "machine's travel with its eq 21 chord (the combing angle)")]

@@ -28,7 +28,7 @@ from synthesis.kinematics import fourbar
 #: the design variables in result.json order (theta0 in deg there, in rad inside ``p``)
 VARIABLES = ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0", "theta0")
 
-#: the assembly's name (result.json ``design.branch``; the spec writes [linkage] branch = 1 | -1) -> its sign
+#: the assembly's name (result.json ``facts.branch``; the spec writes [linkage] branch = 1 | -1) -> its sign
 BRANCHES = {"open": 1, "crossed": -1}
 
 
