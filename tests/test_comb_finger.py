@@ -134,7 +134,8 @@ def _assert_trajectory_is_one_turn_at_the_combing_angle(data: dict, spec) -> Non
     t, x, y = (np.array(tr[k]) for k in ("t", "x", "y"))
     w, vs = d["omega"] * 2 * math.pi / 60, 1000 * spec.operation.machine_speed
     assert t[0] == 0.0 and t[-1] == pytest.approx(60.0 / d["omega"], rel=1e-12)
-    assert np.min(np.diff(t)) > 1e-6 * t[-1]           # F added to the grid, not beside a grid sample it falls on
+    # F replaces a grid sample it falls on (within 1e-9 rad), rather than sitting 1e-16 s beside it
+    assert np.min(np.diff(np.radians(tr["crank_deg"]))) > 1e-9
     assert np.allclose(x, vs * t, rtol=1e-12)
     a = math.radians(d["alpha"])
     lowest = d["b"] - d["e"] * math.sin(a) - d["r"]            # the tip at the bottom of its circle

@@ -185,3 +185,22 @@ def test_picker_comparison_overlays_the_clamp_trajectories(tmp_path):
     assert (page.parent / "trajectories.png").stat().st_size > 10_000
     # the figure is drawn from the trajectory the result carries: one cycle at 60 r/min
     assert result.trajectory["t"][-1] == pytest.approx(1.0)
+
+
+def test_the_design_table_names_a_crank_rockers_assembly_from_its_facts():
+    """crank_rocker holds its assembly (+1 / -1) in facts.branch, not in the design: two designs of the same
+    dimensions on the two assemblies differ only there, and the table's "branch (assembly)" row shows it."""
+    import dataclasses
+
+    from conftest import LIBRARY
+    from synthesis.crank_rocker.check import run_check
+    from synthesis.report.tables import candidates, design_rows
+    from synthesis.spec import load_spec
+
+    first = run_check(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml"))
+    assert "branch" not in first.design and first.extra["branch"] in (1, -1)
+    other = dataclasses.replace(first, name="other", extra={**first.extra, "branch": -first.extra["branch"]})
+    rows = {row.name: row for row in design_rows(candidates([first, other]))}
+    assert rows["branch (assembly)"].values == [first.extra["branch"], -first.extra["branch"]]
+    assert rows["branch (assembly)"].differs == [False, True]
+    assert not any(d for name, row in rows.items() if name != "branch (assembly)" for d in row.differs)

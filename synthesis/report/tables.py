@@ -80,10 +80,10 @@ def design_rows(cands: list[Candidate]) -> list[DesignRow]:
                               info.get("unit", ""), info.get("bounds"), info.get("free"),
                               [at_bound(v, i) for v, i in zip(values, infos)], given))
     # the assembly a linkage is solved on is a setting of its spec, not a design value (result.json holds it in
-    # facts.branch: fourbar_path, crank_rocker), yet two designs of the same dimensions on the two assemblies are
-    # different mechanisms: the table names it
+    # facts.branch: fourbar_path's name "open" / "crossed", crank_rocker's +1 / -1), yet two designs of the same
+    # dimensions on the two assemblies are different mechanisms: the table names it
     assemblies = [c.result.extra.get("branch") for c in cands]
-    if "branch" not in names and any(isinstance(a, str) for a in assemblies):
+    if "branch" not in names and any(isinstance(a, (str, int)) and not isinstance(a, bool) for a in assemblies):
         rows.append(DesignRow("branch (assembly)", assemblies,
                               [i > 0 and _differs(assemblies[0], a) for i, a in enumerate(assemblies)],
                               free=False, at_bound=[""] * len(cands),
