@@ -107,11 +107,15 @@ def _pt(p) -> list[float]:
     return [float(p[0]), float(p[1])]
 
 
+def working_units(spec: CombFingerSpec, design: dict) -> tuple[float, ...]:
+    """(r, e, alpha, b, omega, V_s) of a design on floats, in this module's working units (mm, rad, rad/s, mm/s)."""
+    return (design["r"], design["e"], math.radians(design["alpha"]), design["b"], design["omega"] * RPM,
+            1000.0 * spec.operation.machine_speed)
+
+
 def printed_relations(spec: CombFingerSpec, design: dict) -> list[dict]:
     """Eq 17, 19, 21, 22 as printed beside the same quantity from the reconstructed geometry."""
-    r, e, b = design["r"], design["e"], design["b"]
-    alpha, omega = math.radians(design["alpha"]), design["omega"] * RPM
-    vs = 1000.0 * spec.operation.machine_speed
+    r, e, alpha, b, omega, vs = working_units(spec, design)
     turn = g.combing_turn(r, e, alpha, b)
     t = g.combing_time(r, e, alpha, b, omega)
     tangent = abs(g.lowest_tip(r, e, alpha, b)) < 1e-9
@@ -131,9 +135,8 @@ def printed_relations(spec: CombFingerSpec, design: dict) -> list[dict]:
 
 
 def geometry_facts(spec: CombFingerSpec, design: dict) -> dict:
-    r, e, b, rho = design["r"], design["e"], design["b"], design["rho"]
-    alpha, omega = math.radians(design["alpha"]), design["omega"] * RPM
-    vs = 1000.0 * spec.operation.machine_speed
+    r, e, alpha, b, omega, vs = working_units(spec, design)
+    rho = design["rho"]
     s, hub = g.drum_axis(r, e, alpha, b), g.hub(r, e, alpha, b)
     pe, pf = g.centre_line_points(r, e, alpha, b)
     rd = math.hypot(*hub)
@@ -180,16 +183,14 @@ def trajectory(spec: CombFingerSpec, design: dict) -> dict:
     machine carries forward at V_s), y the tip's height above the ground line.  The chord from the first sample to F
     (the sample at ``combing_turn_deg``) rises at the combing angle theta (eq 21).  ``machine``: the same samples in
     the machine's front view (x across the row, as ``points_mm``), where the tip turns on its circle."""
-    r, e, b = design["r"], design["e"], design["b"]
-    alpha, omega = math.radians(design["alpha"]), design["omega"] * RPM
-    vs = 1000.0 * spec.operation.machine_speed
+    r, e, alpha, b, omega, vs = working_units(spec, design)
     f_turn = g.combing_turn(r, e, alpha, b)
     grid = np.linspace(0.0, 2.0 * math.pi, TRAJECTORY_SAMPLES)
     # F replaces a grid angle it falls on within rounding (alpha a whole degree puts it on the 1-degree grid): two
     # samples 1e-16 s apart would make any difference quotient of the samples meaningless
     phi = np.union1d(grid[np.abs(grid - f_turn) > 1e-9], [f_turn])
     t = phi / omega
-    tx, ty = g.tip(r, e, alpha, b, phi)
+    tx, ty = (np.asarray(c, dtype=float) for c in g.tip(r, e, alpha, b, phi))
     # the tip turns on a circle of radius r about the hub: d/dt (sin phi, -cos phi) r = r omega (cos phi, sin phi)
     front_vx, front_vy = r * omega * np.cos(phi), r * omega * np.sin(phi)
     return {
@@ -197,11 +198,11 @@ def trajectory(spec: CombFingerSpec, design: dict) -> dict:
         "point": "left finger tip; side view: x along the travel from where the tip is lowest (turn angle 0), "
                  "y up from the ground line (its motion across the row is the front view's, under machine)",
         "t": t.tolist(), "crank_deg": np.degrees(phi).tolist(),
-        "x": (vs * t).tolist(), "y": np.asarray(ty, dtype=float).tolist(),
+        "x": (vs * t).tolist(), "y": ty.tolist(),
         "vx": np.full_like(phi, vs).tolist(), "vy": front_vy.tolist(),
         "ax": np.zeros_like(phi).tolist(), "ay": (r * omega**2 * np.cos(phi)).tolist(),
         "machine": {"view": "front: x across the row from its centre line, y up from the ground line",
-                    "x": np.asarray(tx, dtype=float).tolist(), "y": np.asarray(ty, dtype=float).tolist(),
+                    "x": tx.tolist(), "y": ty.tolist(),
                     "vx": front_vx.tolist(), "vy": front_vy.tolist()},
     }
 

@@ -58,7 +58,6 @@ def finger_figure(result: Result, path: Path) -> None:
     plt.close(fig)
 
 
-
 def comparison(results: list[Result]):
     """The figure of :func:`compare_figure`: every candidate's finger tip, baseline first -- the front view (its tip
     circle) and the side view of its combing turn, from the tip's lowest point to F over the machine's travel, with

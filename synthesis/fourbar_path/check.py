@@ -172,6 +172,12 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
     }
 
 
+def result_branch(result: Result) -> int:
+    """The sign (+1 open, -1 crossed) of a result's assembly, ``facts.branch`` (schema version 3; a version-2 file
+    is read with it moved there); "open" where a hand-edited file gives none."""
+    return BRANCHES[result.extra.get("branch", "open")]
+
+
 def result_design(design: dict, crank_deg: list[float]) -> dict:
     out = {n: float(design[n]) if math.isfinite(design[n]) else None for n in VARIABLES}   # JSON has no NaN
     out["crank_deg"] = [float(a) if math.isfinite(a) else None for a in crank_deg]     # None: not found

@@ -25,12 +25,13 @@ def write_paths_csv(result: Result, path: Path) -> None:
 
 
 def write_linkage_dxf(result: Result, path: Path) -> None:
+    from synthesis.fourbar_path.check import result_branch
     from synthesis.fourbar_path.construction import joint_positions
-    from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
+    from synthesis.kinematics.coupler_point import VARIABLES
 
     tr = result.trajectory
     design = {n: result.design[n] for n in VARIABLES}
-    branch = BRANCHES[result.extra.get("branch", "open")]
+    branch = result_branch(result)
     given = np.asarray(result.design.get("crank_deg", []) or [], dtype=float).ravel()
     crank = float(given[0]) if given.size else float(tr["crank_deg"][0])
     j = joint_positions(design, np.radians([crank]), branch)

@@ -17,8 +17,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
+from synthesis.fourbar_path.check import result_branch  # noqa: E402
 from synthesis.fourbar_path.construction import joint_positions  # noqa: E402
-from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES  # noqa: E402
+from synthesis.kinematics.coupler_point import VARIABLES  # noqa: E402
 from synthesis.report.labels import candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
@@ -27,7 +28,7 @@ LINK = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
 
 
 def _design(result: Result) -> tuple[dict, int]:
-    return {n: result.design[n] for n in VARIABLES}, BRANCHES[result.extra.get("branch", "open")]
+    return {n: result.design[n] for n in VARIABLES}, result_branch(result)
 
 
 def _curve(result: Result) -> tuple[np.ndarray, np.ndarray]:

@@ -10,8 +10,9 @@ from synthesis.core.kind import Poses, pose_mm
 def frames(result, most: int) -> list[dict]:
     import numpy as np
 
+    from synthesis.fourbar_path.check import result_branch
     from synthesis.fourbar_path.construction import joint_positions
-    from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
+    from synthesis.kinematics.coupler_point import VARIABLES
 
     traj = result.trajectory
     crank = traj.get("crank_deg") if traj else None
@@ -21,7 +22,7 @@ def frames(result, most: int) -> list[dict]:
         return []
     design = {n: float(result.design[n]) for n in VARIABLES}
     theta = np.radians(crank[::-(-len(crank) // most)])
-    joints = joint_positions(design, theta, BRANCHES[result.extra.get("branch", "open")])
+    joints = joint_positions(design, theta, result_branch(result))
     poses = [{name: [pose_mm(z[k].real), pose_mm(z[k].imag)] for name, z in joints.items()} for k in range(theta.size)]
     return [p for p in poses if all(None not in xy for xy in p.values())]
 
