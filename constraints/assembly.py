@@ -9,18 +9,26 @@ smooth everywhere.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
-from constraints.base import Rule
+from constraints.base import Rule, stack
 
 
-def assembly_rule(d2: list, r3, r4, where: str) -> Rule:
-    """Closure at every crank angle whose squared diagonal |O'A|^2 is in ``d2`` (mm^2)."""
+def assembly_rule(d2, r3, r4, where: str) -> Rule:
+    """Closure at every crank angle whose squared diagonal |O'A|^2 is in ``d2`` (mm^2): a list of expressions, or
+    on numbers (check, the fine-grid re-check: thousands of samples) a numpy vector, evaluated at once -- the same
+    values in the same order, and one vector row per side."""
+    if isinstance(d2, np.ndarray):
+        d = np.sqrt(np.maximum(d2, 0.0))
+        values = np.column_stack([d - abs(r3 - r4), r3 + r4 - d]).ravel()
+        rows = ((d2 - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - d2, 0.0, None))
+        return Rule("assembly", values, 0.0, None, "mm", 1.0, where, nlp_rows=rows, row_unit="mm^2")
     values, rows = [], []
     for q in d2:
         d = ca.sqrt(ca.fmax(q, 0.0))        # d^2 >= (r1 - r2)^2 >= 0; fmax only guards the last digit
         values += [d - ca.fabs(r3 - r4), r3 + r4 - d]
         rows += [(q - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - q, 0.0, None)]
-    return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")
+    return Rule("assembly", stack(values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")
 
 
 def assembly_extremes_rule(d2_shortest: list, d2_longest: list, r3, r4, where: str) -> Rule:
@@ -34,4 +42,4 @@ def assembly_extremes_rule(d2_shortest: list, d2_longest: list, r3, r4, where: s
     for q in d2_longest:
         values.append(r3 + r4 - ca.sqrt(ca.fmax(q, 0.0)))
         rows.append(((r3 + r4) ** 2 - q, 0.0, None))
-    return Rule("assembly", ca.vertcat(*values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")
+    return Rule("assembly", stack(values), 0.0, None, "mm", 1.0, where, nlp_rows=tuple(rows), row_unit="mm^2")

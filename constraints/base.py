@@ -10,7 +10,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import casadi as ca
 import numpy as np
+
+
+def stack(values: list):
+    """The values of a sampled rule as one vector: ca.vertcat when any is a CasADi expression, else a numpy vector.
+    On numbers (``check``, the fine-grid re-check) vertcat builds a DM at about 2 us a value -- 56 ms for the 24,000
+    closure values of a dense re-check -- where numpy takes 0.4 ms; Rule.record reads either."""
+    if any(isinstance(v, (ca.SX, ca.MX, ca.DM)) for v in values):
+        return ca.vertcat(*values)
+    return np.array(values, dtype=float)
 
 
 @dataclass(frozen=True)

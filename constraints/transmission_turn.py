@@ -15,20 +15,26 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+import numpy as np
 
-from constraints.base import Rule, not_evaluated
+from constraints.base import Rule, not_evaluated, stack
 
 DEG = 180.0 / math.pi
 ROUNDING = 1e-12       # |cos mu| this far above 1 is the last digit of a closing loop, not an open one
 
 
-def _mu_deg(cs: list):
-    """mu (deg) at each cos mu; None (floats only) when the loop does not close at one of them."""
+def _mu_deg(cs):
+    """mu (deg) at each cos mu (a list, or a numpy vector of numbers); None (numbers only) when the loop does not
+    close at one of them."""
+    if isinstance(cs, np.ndarray):
+        if not np.all(np.abs(cs) <= 1.0 + ROUNDING):
+            return None
+        return np.asarray(ca.acos(np.clip(cs, -1.0, 1.0)), dtype=float).ravel() * DEG
     if not any(isinstance(c, (ca.SX, ca.MX)) for c in cs):
         if any(not abs(float(c)) <= 1.0 + ROUNDING for c in cs):
             return None
         cs = [min(1.0, max(-1.0, float(c))) for c in cs]
-    return ca.vertcat(*[ca.acos(c) * DEG for c in cs])
+    return stack([ca.acos(c) * DEG for c in cs])
 
 
 def _per_degree(limit_deg: float) -> float:
@@ -38,22 +44,27 @@ def _per_degree(limit_deg: float) -> float:
     return slope if slope > 1e-12 else 1.0
 
 
-def _min_rule(cs: list, lo: float, where: str, open_at: str) -> Rule:
+def _rows(margins) -> tuple:
+    """One row per cos mu of a list; one vector row for a numpy vector."""
+    return ((margins, 0.0, None),) if isinstance(margins, np.ndarray) else tuple((m, 0.0, None) for m in margins)
+
+
+def _min_rule(cs, lo: float, where: str, open_at: str) -> Rule:
     mu = _mu_deg(cs)
     if mu is None:
         return not_evaluated("transmission_angle_min", lo, None, "deg", where, f"the loop does not close {open_at}")
     c_lo, k = math.cos(math.radians(lo)), _per_degree(lo)
     return Rule("transmission_angle_min", mu, lo, None, "deg", 10.0, where,
-                nlp_rows=tuple(((c_lo - c) / k, 0.0, None) for c in cs))
+                nlp_rows=_rows((c_lo - cs) / k if isinstance(cs, np.ndarray) else [(c_lo - c) / k for c in cs]))
 
 
-def _max_rule(cs: list, hi: float, where: str, open_at: str) -> Rule:
+def _max_rule(cs, hi: float, where: str, open_at: str) -> Rule:
     mu = _mu_deg(cs)
     if mu is None:
         return not_evaluated("transmission_angle_max", None, hi, "deg", where, f"the loop does not close {open_at}")
     c_hi, k = math.cos(math.radians(hi)), _per_degree(hi)
     return Rule("transmission_angle_max", mu, None, hi, "deg", 10.0, where,
-                nlp_rows=tuple(((c - c_hi) / k, 0.0, None) for c in cs))
+                nlp_rows=_rows((cs - c_hi) / k if isinstance(cs, np.ndarray) else [(c - c_hi) / k for c in cs]))
 
 
 def transmission_turn_rules(cos_at_0, cos_at_pi, bounds: tuple) -> list[Rule]:
@@ -63,8 +74,9 @@ def transmission_turn_rules(cos_at_0, cos_at_pi, bounds: tuple) -> list[Rule]:
             _max_rule([cos_at_pi], hi, "over a turn (at theta2 = 180)", "at theta2 = 180 deg")]
 
 
-def transmission_sampled_rules(cos_mu: list, bounds: tuple) -> list[Rule]:
-    """When the crank does not turn fully: cos mu at every sampled crank angle of its motion."""
+def transmission_sampled_rules(cos_mu, bounds: tuple) -> list[Rule]:
+    """When the crank does not turn fully: cos mu at every sampled crank angle of its motion (a list, or a numpy
+    vector of numbers)."""
     return transmission_extremes_rules(cos_mu, cos_mu, bounds)
 
 
@@ -73,4 +85,5 @@ def transmission_extremes_rules(cos_largest: list, cos_smallest: list, bounds: t
     diagonal) and where it is smallest (mu largest): mu_min binds only at the first, mu_max only at the second."""
     lo, hi = bounds
     where, open_at = "over the crank's motion", "everywhere on the crank's motion"
-    return [_min_rule(list(cos_largest), lo, where, open_at), _max_rule(list(cos_smallest), hi, where, open_at)]
+    as_given = lambda cs: cs if isinstance(cs, np.ndarray) else list(cs)       # noqa: E731
+    return [_min_rule(as_given(cos_largest), lo, where, open_at), _max_rule(as_given(cos_smallest), hi, where, open_at)]

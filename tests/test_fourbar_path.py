@@ -137,6 +137,34 @@ def test_transmission_rows_are_degrees_at_the_limit():
     assert rmin.record().value == pytest.approx(41.0) and rmax.record().margin == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("open_somewhere", [False, True])
+def test_the_vectorised_numeric_rules_equal_the_per_sample_ones(open_somewhere):
+    """The re-check evaluates thousands of samples of closure and transmission as numpy vectors (rules.path_rules on
+    numbers); the per-sample form (a list, one expression per sample, as the NLP builds them) must give the same
+    records to the bit and the same row values, including a motion where the loop opens (transmission not
+    evaluated, closure violated)."""
+    from constraints.assembly import assembly_rule
+    from constraints.transmission_turn import transmission_sampled_rules
+
+    rng = np.random.default_rng(7)
+    r = (30.0, 12.0, 35.0, 10.0) if open_somewhere else (30.0, 8.0, 14.0, 31.0)     # r3 < r4, |r3 - r4| binds
+    angles = rng.uniform(-2.0 * math.pi, 4.0 * math.pi, 500)
+    d2 = [r[0] ** 2 + r[1] ** 2 - 2.0 * r[0] * r[1] * math.cos(a) for a in angles]
+    cs = [cos_transmission(a, *r) for a in angles]
+    pairs = [(assembly_rule(d2, r[2], r[3], "w"), assembly_rule(np.array(d2), r[2], r[3], "w"))]
+    pairs += zip(transmission_sampled_rules(cs, (35.0, 145.0)), transmission_sampled_rules(np.array(cs), (35.0, 145.0)))
+    def row_values(rule, interleaved=False):     # the list form has the two closure rows of a sample side by side
+        rows = [np.ravel(np.asarray(e, float)) for e, _, _ in rule.rows()]
+        return np.column_stack(rows).ravel() if interleaved else np.concatenate(rows)
+
+    for listed, vector in pairs:
+        assert listed.record() == vector.record()
+        assert [(lb, ub) for _, lb, ub in listed.rows()][:1] == [(lb, ub) for _, lb, ub in vector.rows()][:1]
+        assert np.array_equal(row_values(listed), row_values(vector, interleaved=listed.name == "assembly"),
+                              equal_nan=True)
+    closure = pairs[0][1].record()
+    assert (closure.margin < 0) == open_somewhere and (pairs[1][1].missing is not None) == open_somewhere
+
 def test_picking_arc_spec_holds_the_ten_arc_points():
     spec = load_spec(PATH_LIBRARY / "picking_arc.toml").model
     assert np.array(spec.targets.points) == pytest.approx(picking_arc(10), abs=1e-12)

@@ -89,6 +89,15 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
     and transmission are then evaluated over a turn and the sequence is not evaluated."""
     r1, r2, r3, r4 = (v[n] for n in ("r1", "r2", "r3", "r4"))
     lim = spec.rules
+    numeric = not any(isinstance(x, (ca.SX, ca.MX)) for x in (r1, r2, r3, r4, *(thetas or ())))
+
+    def over(f, angles, *lengths):
+        """f at each crank angle: on numbers one vectorised call (a numpy vector: the re-check samples thousands),
+        on symbols a list of expressions (one NLP row each)."""
+        if numeric:
+            return np.asarray(f(np.asarray(angles, dtype=float), *lengths), dtype=float).ravel()
+        return [f(th, *lengths) for th in angles]
+
     rules: list[Rule] = []
     if thetas is None:
         motion = list(np.linspace(0.0, 2.0 * math.pi, TURN_SAMPLES, endpoint=False))
@@ -114,10 +123,10 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
                                                  [cos_transmission(th, r1, r2, r3, r4) for th in farthest],
                                                  lim.transmission_angle)
     else:
-        rules.append(assembly_rule([diagonal_sq(th, r1, r2) for th in motion], r3, r4,
+        rules.append(assembly_rule(over(diagonal_sq, motion, r1, r2), r3, r4,
                                    where="at the targets and between them" if thetas is not None else "over a turn"))
         if lim.transmission_angle is not None:
-            rules += transmission_sampled_rules([cos_transmission(th, r1, r2, r3, r4) for th in motion],
+            rules += transmission_sampled_rules(over(cos_transmission, motion, r1, r2, r3, r4),
                                                 lim.transmission_angle)
     if not spec.timed and lim.order:
         direction = _direction_text(sign, lim.direction)
