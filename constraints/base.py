@@ -14,13 +14,19 @@ import casadi as ca
 import numpy as np
 
 
-def stack(values: list):
-    """The values of a sampled rule as one vector: ca.vertcat when any is a CasADi expression, else a numpy vector.
-    On numbers (``check``, the fine-grid re-check) vertcat builds a DM at about 2 us a value -- 56 ms for the 24,000
+def symbolic(values) -> bool:
+    """Whether any of the values is a CasADi symbol or expression (a rule built for the NLP)."""
+    return any(isinstance(v, (ca.SX, ca.MX)) for v in values)
+
+
+def stack(values):
+    """The values of a sampled rule as one vector: ca.vertcat of expressions, a numpy vector of numbers.  On numbers
+    (``check``, the fine-grid re-check) vertcat would build a DM at about 2 us a value -- 56 ms for the 24,000
     closure values of a dense re-check -- where numpy takes 0.4 ms; Rule.record reads either."""
-    if any(isinstance(v, (ca.SX, ca.MX, ca.DM)) for v in values):
+    values = list(values)
+    if symbolic(values) or any(isinstance(v, ca.DM) for v in values):
         return ca.vertcat(*values)
-    return np.array(values, dtype=float)
+    return np.asarray(values, dtype=float)
 
 
 @dataclass(frozen=True)

@@ -11,21 +11,11 @@ from __future__ import annotations
 from typing import Sequence
 
 import casadi as ca
-import numpy as np
 
-from constraints.base import Rule
+from constraints.base import Rule, stack, symbolic
 
 #: typical margin of a length rule, mm
 LENGTH_SCALE = 10.0
-
-
-def _symbolic(values: Sequence) -> bool:
-    return any(isinstance(v, (ca.SX, ca.MX)) for v in values)
-
-
-def _vector(values: Sequence):
-    values = list(values)
-    return ca.vertcat(*values) if _symbolic(values) else np.asarray(values, dtype=float)
 
 
 def root_clearance_rule(pd, minimum: float) -> Rule:
@@ -42,13 +32,13 @@ def finger_clear_rule(distances: Sequence, exact, minimum: float) -> Rule:
     """Distance of a finger tip from the other unit's drum surface >= minimum at every sampled turn angle, mm.
     The optimiser's row is the exact smallest distance over the turn, |R S'| - r - rho (the finger sweeps the
     disc of radius r about its hub R; S' the other drum's axis): no minimum falls between samples."""
-    return Rule("finger_clear_of_other_unit", _vector(distances), minimum, None, "mm", LENGTH_SCALE,
+    return Rule("finger_clear_of_other_unit", stack(distances), minimum, None, "mm", LENGTH_SCALE,
                 "tip to the other unit's drum, over a turn", nlp_rows=((exact, minimum, None),))
 
 
 def unit_within_row_rule(reaches: Sequence, half_spacing: float) -> Rule:
     """Outermost reach of the tip circle and of the drum from the row's centre line <= half the row spacing, mm."""
-    return Rule("unit_within_row", _vector(reaches), None, half_spacing, "mm", LENGTH_SCALE,
+    return Rule("unit_within_row", stack(reaches), None, half_spacing, "mm", LENGTH_SCALE,
                 "outermost tip and drum from the row centre line")
 
 
@@ -56,8 +46,8 @@ def finger_hides_rule(r, e, rho, hub_inset: float) -> Rule:
     """The finger's innermost tip point (r - e from the drum axis) lies inside the drum and its hub (e from the
     axis) at least ``hub_inset`` inside the drum wall: max(r - e, e + hub_inset) - rho <= 0, mm (smooth rows
     for the optimiser)."""
-    symbolic = _symbolic([r, e, rho])
-    worst = (ca.fmax(r - e, e + hub_inset) if symbolic else max(r - e, e + hub_inset)) - rho
+    on_symbols = symbolic([r, e, rho])
+    worst = (ca.fmax(r - e, e + hub_inset) if on_symbols else max(r - e, e + hub_inset)) - rho
     return Rule("finger_hides_in_drum", worst, None, 0.0, "mm", LENGTH_SCALE,
                 "innermost tip inside the drum, hub inset from its wall",
                 nlp_rows=((r - e - rho, None, 0.0), (e + hub_inset - rho, None, 0.0)))

@@ -9,10 +9,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-import casadi as ca
-import numpy as np
-
-from constraints.base import Rule
+from constraints.base import Rule, stack
 
 #: typical margin of an angle rule, deg (normalised margins, elastic slack units)
 ANGLE_SCALE = 1.0
@@ -20,24 +17,17 @@ ANGLE_SCALE = 1.0
 SPEED_SCALE = 0.1
 
 
-def _vector(values: Sequence):
-    values = list(values)
-    if any(isinstance(v, (ca.SX, ca.MX)) for v in values):
-        return ca.vertcat(*values)
-    return np.asarray(values, dtype=float)
-
-
 def window_top_rule(name: str, deltas: Sequence, upper: float, where: str) -> Rule:
     """Plant angle before the cut delta <= upper (deg) at every sample."""
-    return Rule(name, _vector(deltas), None, upper, "deg", ANGLE_SCALE, where)
+    return Rule(name, stack(deltas), None, upper, "deg", ANGLE_SCALE, where)
 
 
 def window_bottom_rule(name: str, deltas: Sequence, lower: float, where: str) -> Rule:
     """Plant angle before the cut delta >= lower (deg) at every sample."""
-    return Rule(name, _vector(deltas), lower, None, "deg", ANGLE_SCALE, where)
+    return Rule(name, stack(deltas), lower, None, "deg", ANGLE_SCALE, where)
 
 
 def tine_reaches_plant_rule(name: str, sweeps: Sequence, where: str) -> Rule:
     """V_r - V_s cos(theta) >= 0 (m/s) at every sampled machine speed: the tine moves up the chain relative
     to the crop (K > cos theta); otherwise it slides back from the plant and never reaches it."""
-    return Rule(name, _vector(sweeps), 0.0, None, "m/s", SPEED_SCALE, where)
+    return Rule(name, stack(sweeps), 0.0, None, "m/s", SPEED_SCALE, where)

@@ -9,17 +9,8 @@ from __future__ import annotations
 from typing import Sequence
 
 import casadi as ca
-import numpy as np
 
-from constraints.base import Rule
-
-
-def _symbolic(values: Sequence) -> bool:
-    return any(isinstance(v, (ca.SX, ca.MX)) for v in values)
-
-
-def _vector(values: Sequence):
-    return ca.vertcat(*values) if _symbolic(values) else np.asarray(values, dtype=float)
+from constraints.base import Rule, stack
 
 
 def _spread(times: Sequence):
@@ -48,7 +39,7 @@ def spacing_error_rule(times_by_spacing: Sequence[Sequence], spacings: Sequence[
     values = [forward_mm_s * _spread(times) for times in times_by_spacing]
     rows = tuple((forward_mm_s * (times[i] - times[j]), -limit, limit)
                  for times in times_by_spacing for i in range(len(times)) for j in range(i + 1, len(times)))
-    return Rule("spacing_error", _vector(values), None, limit, "mm", limit,
+    return Rule("spacing_error", stack(values), None, limit, "mm", limit,
                 f"over row spacings {min(spacings):g}-{max(spacings):g} mm", nlp_rows=rows)
 
 
@@ -56,11 +47,11 @@ def wall_exit_speed_rule(tube: str, exit_speed_sq: Sequence, minimum: float) -> 
     """Speed along the wall at its lower end (m/s) >= minimum: the seedling slides off, never sticks."""
     speeds = [ca.sqrt(ca.fmax(v, 0.0)) for v in exit_speed_sq]
     rows = tuple((v, minimum * minimum, None) for v in exit_speed_sq)
-    return Rule(f"wall_exit_speed_{tube}", _vector(speeds), minimum, None, "m/s", max(minimum, 0.1),
+    return Rule(f"wall_exit_speed_{tube}", stack(speeds), minimum, None, "m/s", max(minimum, 0.1),
                 "at the wall end, every sampled row spacing", nlp_rows=rows, row_unit="m^2/s^2")
 
 
 def free_fall_height_rule(tube: str, heights_mm: Sequence, minimum: float) -> Rule:
     """Free fall h1 from the drop point to the wall (mm) >= minimum (> 0 is required by the model)."""
-    return Rule(f"free_fall_height_{tube}", _vector(heights_mm), minimum, None, "mm", 10.0,
+    return Rule(f"free_fall_height_{tube}", stack(heights_mm), minimum, None, "mm", 10.0,
                 "drop point to the wall, every sampled row spacing")
