@@ -19,7 +19,7 @@ def assembly_rule(d2, r3, r4, where: str) -> Rule:
     on numbers (check, the fine-grid re-check: thousands of samples) a numpy vector, evaluated at once -- the same
     values in the same order, and one vector row per side."""
     if isinstance(d2, np.ndarray):
-        d = np.sqrt(np.maximum(d2, 0.0))
+        d = np.sqrt(np.fmax(d2, 0.0))        # fmax as ca.fmax: a NaN sample reads 0, as in the list form
         values = np.column_stack([d - abs(r3 - r4), r3 + r4 - d]).ravel()
         rows = ((d2 - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - d2, 0.0, None))
         return Rule("assembly", values, 0.0, None, "mm", 1.0, where, nlp_rows=rows, row_unit="mm^2")

@@ -229,6 +229,46 @@ def test_the_exact_motion_extremes_are_the_worst_of_a_dense_sampling():
     assert broken > 30        # closure broken somewhere on the motion, seen by both
 
 
+def test_the_numeric_re_check_equals_the_per_sample_expressions_at_the_same_design():
+    """On numbers path_rules evaluates the sampled closure and transmission of grashof = "any" as numpy vectors (the
+    fine-grid re-check of every start); on symbols it builds one expression per sample (the form the rules had on
+    numbers before).  Evaluated at the same design and crank angles, the symbolic form must give the same samples,
+    in the same number, to round-off; where the numeric form says the loop opens (transmission not evaluated), a
+    sample's |cos mu| exceeds 1 in the symbolic one."""
+    import casadi as ca
+
+    from synthesis.fourbar_path.rules import path_rules
+
+    data = truth_data(0, 4, timed=False)
+    data["rules"] = {"grashof": "any", "order": False, "transmission_angle": [30.0, 150.0]}
+    spec = validate(FourbarPathSpec, data, prefix="fourbar_path")
+    x, th = ca.SX.sym("x", 9), ca.SX.sym("theta", 4)
+    symbolic = {r.name: r for r in path_rules(spec, dict(zip(VARIABLES, ca.vertsplit(x))), ca.vertsplit(th), 1.0, 36)}
+    sampled = {name: ca.Function(name, [x, th], [rule.expr]) for name, rule in symbolic.items()}
+    cos_mu = ca.Function("cos_mu", [x, th], [ca.vertcat(*[e for e, _, _ in symbolic["transmission_angle_min"].rows()])])
+    rng = np.random.default_rng(3)
+    seen = {"evaluated": 0, "open": 0}
+    for k in range(60):
+        lengths = rng.uniform(5.0, 60.0, 4) if k % 2 else np.concatenate([rng.uniform(5.0, 20.0, 2),
+                                                                           rng.uniform(25.0, 60.0, 2)])
+        design = np.array([*lengths, 1.0, 2.0, 0.0, 0.0, 0.0])
+        thetas = np.cumsum(rng.uniform(-3.0 * math.pi, 3.0 * math.pi, 4))
+        numeric = {r.name: r for r in path_rules(spec, dict(zip(VARIABLES, design)), thetas, 1.0, 36)}
+        assert numeric.keys() == symbolic.keys()
+        for name, rule in numeric.items():
+            expected = np.ravel(np.asarray(sampled[name](design, thetas), dtype=float))
+            if rule.missing is not None:          # the loop opens somewhere on the motion: the symbolic acos is NaN
+                seen["open"] += 1
+                assert name.startswith("transmission")
+                assert np.max(np.abs(np.asarray(cos_mu(design, thetas), dtype=float))) > 1.0
+                continue
+            seen["evaluated"] += 1
+            values = np.ravel(np.asarray(rule.expr, dtype=float))
+            assert values.shape == expected.shape, name
+            np.testing.assert_allclose(values, expected, rtol=1e-12, atol=1e-9, err_msg=name)
+    assert seen["open"] >= 10 and seen["evaluated"] >= 80, seen
+
+
 def test_a_small_inexact_problem_solves_within_the_rules():
     """egg16 (16 points, crank-rocker, free unordered timing), 16 starts: every rule holding on the fine
     grid, the status saying how IPOPT stopped, no start below the best known objective, no start stopped

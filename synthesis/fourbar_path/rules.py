@@ -89,13 +89,13 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
     and transmission are then evaluated over a turn and the sequence is not evaluated."""
     r1, r2, r3, r4 = (v[n] for n in ("r1", "r2", "r3", "r4"))
     lim = spec.rules
-    numeric = not any(isinstance(x, (ca.SX, ca.MX)) for x in (r1, r2, r3, r4, *(thetas or ())))
+    numeric = not any(isinstance(x, (ca.SX, ca.MX)) for x in (r1, r2, r3, r4, *(() if thetas is None else thetas)))
 
     def over(f, angles, *lengths):
         """f at each crank angle: on numbers one vectorised call (a numpy vector: the re-check samples thousands),
         on symbols a list of expressions (one NLP row each)."""
         if numeric:
-            return np.asarray(f(np.asarray(angles, dtype=float), *lengths), dtype=float).ravel()
+            return np.asarray(f(np.asarray(angles, dtype=float).ravel(), *lengths), dtype=float).ravel()
         return [f(th, *lengths) for th in angles]
 
     rules: list[Rule] = []
