@@ -2,7 +2,7 @@
 
 coupler_curve.png   the coupler curve, the targets (numbered) with their error, the linkage at the
                     first target
-linkage.gif         the linkage over one cycle (matplotlib animation, PillowWriter)
+linkage.gif         the linkage over one cycle (report.gif: the still parts drawn once)
 coupler_curves.png  ``agrisynth compare``: several results' curves and targets overlaid, baseline first
 """
 
@@ -15,11 +15,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from synthesis.fourbar_path.check import result_branch  # noqa: E402
 from synthesis.fourbar_path.construction import joint_positions  # noqa: E402
 from synthesis.kinematics.coupler_point import VARIABLES  # noqa: E402
+from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.report.labels import candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
@@ -126,7 +126,7 @@ def linkage_animation(result: Result, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.4, 5.8))          # 640 x 580 px at dpi 100
     if not tr:     # nothing moves: a one-frame GIF that says why
         ax.text(0.5, 0.5, "the linkage does not assemble", ha="center", transform=ax.transAxes)
-        FuncAnimation(fig, lambda k: [], frames=[0]).save(str(path), writer=PillowWriter(fps=1), dpi=64)
+        save_gif(fig, lambda k: [], 1, path, fps=1, dpi=64)
         plt.close(fig)
         return
     crank = np.radians(np.asarray(tr["crank_deg"], dtype=float))
@@ -157,8 +157,7 @@ def linkage_animation(result: Result, path: Path) -> None:
         counter.set_text(f"frame {k + 1}/{GIF_FRAMES}, crank {np.degrees(crank[frames[k]]) % 360:.0f} deg")
         return chain, triangle, pins, point, counter
 
-    FuncAnimation(fig, draw, frames=range(GIF_FRAMES), blit=True).save(
-        str(path), writer=PillowWriter(fps=12), dpi=100)
+    save_gif(fig, draw, GIF_FRAMES, path, fps=12, dpi=100)
     plt.close(fig)
 
 

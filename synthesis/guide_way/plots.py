@@ -15,8 +15,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
+from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 ANIMATION_FRAMES = 72
@@ -141,7 +141,7 @@ def animation(result: Result, path: Path, frames: int = ANIMATION_FRAMES) -> Non
         text.set_text(f"frame {k + 1}/{frames}, theta = {th[i] % 360:.1f} deg")
         return arm_line, claw_line, crank_line, roller, text
 
-    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=10), dpi=100)
+    save_gif(fig, frame, frames, path, fps=10, dpi=100)
     plt.close(fig)
 
 

@@ -9,8 +9,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
+from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 DOUBLE_CRANK = (("A", "B"), ("B", "C"), ("C", "D"), ("A", "D"), ("C", "M"))
@@ -143,7 +143,7 @@ def picker_figure(result: Result, path: Path) -> None:
 
 
 def picker_animation(result: Result, path: Path) -> None:
-    """One cycle of the combined picker as an animated GIF (matplotlib PillowWriter)."""
+    """One cycle of the combined picker as an animated GIF (report.gif)."""
     tr, ex = result.trajectory, result.extra
     frames = ex["frames"]
     xs = [p[0] for f in frames for p in f["joints"].values()] + tr["x"]
@@ -169,7 +169,6 @@ def picker_animation(result: Result, path: Path) -> None:
         label.set_text(f"{result.name}: frame {k + 1}/{len(frames)}, t = {frames[k]['t']:.2f} s")
         return lines + [dot, label]
 
-    anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     fps = max(1, round(len(frames) / (2 * ex["operation"]["period_s"])))    # half speed: one cycle in 2 periods
-    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=110)     # 704 x 550 px
+    save_gif(fig, draw, len(frames), path, fps=fps, dpi=110)     # 704 x 550 px
     plt.close(fig)

@@ -14,10 +14,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 
 from synthesis.kinematics.planting_arm import ArmDesign, joint_positions  # noqa: E402
 from synthesis.planting.plots import COLOURS as POINT_COLOURS, style_plane  # noqa: E402
+from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.report.labels import baseline_note, candidate_label  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
@@ -207,7 +207,7 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
         counter.set_text(f"frame {k + 1}/{frames}, crank {np.degrees(theta[k]):.0f} deg")
         return drawn + [counter]
 
-    FuncAnimation(fig, frame, frames=frames, blit=False).save(path, writer=PillowWriter(fps=12), dpi=90)
+    save_gif(fig, frame, frames, path, fps=12, dpi=90)
     plt.close(fig)
 
 

@@ -1,0 +1,71 @@
+"""report.gif draws a figure's still parts once and each frame's moving artists on top: its GIF must be the one
+matplotlib's FuncAnimation + PillowWriter (a full redraw per frame) writes, pixel for pixel, including still artists
+above the moving ones (a legend, markers of a higher z-order) and frames that replace their artists."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
+from PIL import Image, ImageSequence  # noqa: E402
+
+from synthesis.report.gif import save_gif  # noqa: E402
+
+FRAMES = 8
+
+
+def _figure(replace_artists: bool):
+    """A linkage-like figure: a still curve, still pivots above the links (zorder 5), a legend over the links' way, a
+    counter; the moving link either updated in place or removed and drawn anew each frame (planting's way)."""
+    fig, ax = plt.subplots(figsize=(3.2, 2.6))
+    t = np.linspace(0.0, 2.0 * np.pi, 200)
+    ax.plot(np.cos(t), np.sin(t), color="tab:blue", lw=1.0, label="curve")
+    ax.plot([0.0, 0.9], [0.0, 0.6], "^", color="k", ms=9, zorder=5, label="pivots")
+    ax.set_xlim(-1.2, 1.2)
+    ax.set_ylim(-1.2, 1.2)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=7)
+    counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+    link, = ax.plot([], [], color="0.25", lw=3.0, zorder=4)
+    drawn: list = []
+
+    def frame(k: int):
+        a = 2.0 * np.pi * k / FRAMES
+        xs, ys = [0.0, np.cos(a), 0.9], [0.0, np.sin(a), 0.6]      # through both pivots and, at times, the legend
+        counter.set_text(f"frame {k + 1}/{FRAMES}")
+        if not replace_artists:
+            link.set_data(xs, ys)
+            return [link, counter]
+        for artist in drawn:
+            artist.remove()
+        drawn[:] = ax.plot(xs, ys, color="tab:red", lw=3.0, zorder=4) + [ax.text(np.cos(a), np.sin(a), "A")]
+        return drawn + [counter]
+
+    return fig, frame
+
+
+def _frames(path) -> list[np.ndarray]:
+    return [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(Image.open(path))]
+
+
+@pytest.mark.parametrize("replace_artists", [False, True])
+def test_the_gif_is_the_full_redraw_pixel_for_pixel(tmp_path, replace_artists):
+    fig, frame = _figure(replace_artists)
+    FuncAnimation(fig, frame, frames=FRAMES, blit=False).save(tmp_path / "full.gif", writer=PillowWriter(fps=5),
+                                                             dpi=80)
+    plt.close(fig)
+    fig, frame = _figure(replace_artists)
+    save_gif(fig, frame, FRAMES, tmp_path / "kept.gif", fps=5, dpi=80)
+    plt.close(fig)
+    full, kept = _frames(tmp_path / "full.gif"), _frames(tmp_path / "kept.gif")
+    assert len(full) == len(kept) == FRAMES
+    assert Image.open(tmp_path / "kept.gif").info["duration"] == Image.open(tmp_path / "full.gif").info["duration"]
+    assert Image.open(tmp_path / "kept.gif").info["loop"] == 0
+    for k, (a, b) in enumerate(zip(full, kept)):
+        assert a.shape == b.shape == (208, 256, 3)
+        assert np.array_equal(a, b), f"frame {k}: {int(np.sum(np.any(a != b, axis=2)))} pixels differ"
+    assert len({f.tobytes() for f in kept}) == FRAMES          # every frame shows its own pose
