@@ -124,20 +124,20 @@ def test_the_animation_is_large_enough_and_counts_its_frames(tmp_path):
 
     result = _checked("fourbar_path/picking_arc.toml")
     seen = []
-    orig = path_plots.FuncAnimation
+    orig = path_plots.save_gif
 
-    def spy(fig, draw, **kw):          # the text drawn on each frame
+    def spy(fig, draw, frames, path, **kw):          # the text drawn on each frame
         def wrapped(k):
             artists = draw(k)
             seen.append([a.get_text() for a in artists if hasattr(a, "get_text")])
             return artists
-        return orig(fig, wrapped, **kw)
+        return orig(fig, wrapped, frames, path, **kw)
 
-    path_plots.FuncAnimation = spy
+    path_plots.save_gif = spy
     try:
         path_plots.linkage_animation(result, tmp_path / "linkage.gif")
     finally:
-        path_plots.FuncAnimation = orig
+        path_plots.save_gif = orig
     gif = Image.open(tmp_path / "linkage.gif")
     assert gif.size[0] >= 600 and gif.size[1] >= 500 and gif.n_frames == path_plots.GIF_FRAMES
     counters = [t for texts in seen for t in texts if t.startswith("frame ")]
