@@ -20,7 +20,8 @@ FRAMES = 8
 
 def _figure(replace_artists: bool):
     """A linkage-like figure: a still curve, still pivots above the links (zorder 5), a legend over the links' way, a
-    counter; the moving link either updated in place or removed and drawn anew each frame (planting's way)."""
+    still line of the link's z-order added after it, a figure text across the link's way, a counter; the moving
+    link either updated in place or removed and drawn anew each frame (planting's way)."""
     fig, ax = plt.subplots(figsize=(3.2, 2.6))
     t = np.linspace(0.0, 2.0 * np.pi, 200)
     ax.plot(np.cos(t), np.sin(t), color="tab:blue", lw=1.0, label="curve")
@@ -29,8 +30,10 @@ def _figure(replace_artists: bool):
     ax.set_ylim(-1.2, 1.2)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=7)
-    counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+    counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8, zorder=9)   # the link lowest
     link, = ax.plot([], [], color="0.25", lw=3.0, zorder=4)
+    ax.plot([-1.0, 1.0], [0.2, 0.2], color="tab:green", lw=4.0, zorder=4)   # z-order equal, added after: above
+    fig.text(0.5, 0.45, "figure text", fontsize=14, ha="center")            # the figure's own: above every axes
     drawn: list = []
 
     def frame(k: int):
@@ -42,14 +45,20 @@ def _figure(replace_artists: bool):
             return [link, counter]
         for artist in drawn:
             artist.remove()
-        drawn[:] = ax.plot(xs, ys, color="tab:red", lw=3.0, zorder=4) + [ax.text(np.cos(a), np.sin(a), "A")]
+        drawn[:] = ax.plot(xs, ys, color="tab:red", lw=3.0, zorder=4) + [ax.text(np.cos(a), np.sin(a), "A", zorder=9)]
         return drawn + [counter]
 
     return fig, frame
 
 
 def _frames(path) -> list[np.ndarray]:
-    return [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(Image.open(path))]
+    with Image.open(path) as gif:
+        return [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(gif)]
+
+
+def _info(path) -> dict:
+    with Image.open(path) as gif:
+        return dict(gif.info)
 
 
 @pytest.mark.parametrize("replace_artists", [False, True])
@@ -63,9 +72,17 @@ def test_the_gif_is_the_full_redraw_pixel_for_pixel(tmp_path, replace_artists):
     plt.close(fig)
     full, kept = _frames(tmp_path / "full.gif"), _frames(tmp_path / "kept.gif")
     assert len(full) == len(kept) == FRAMES
-    assert Image.open(tmp_path / "kept.gif").info["duration"] == Image.open(tmp_path / "full.gif").info["duration"]
-    assert Image.open(tmp_path / "kept.gif").info["loop"] == 0
+    assert _info(tmp_path / "kept.gif")["duration"] == _info(tmp_path / "full.gif")["duration"] == 200
+    assert _info(tmp_path / "kept.gif")["loop"] == 0
     for k, (a, b) in enumerate(zip(full, kept)):
         assert a.shape == b.shape == (208, 256, 3)
         assert np.array_equal(a, b), f"frame {k}: {int(np.sum(np.any(a != b, axis=2)))} pixels differ"
     assert len({f.tobytes() for f in kept}) == FRAMES          # every frame shows its own pose
+
+
+def test_no_frame_is_refused(tmp_path):
+    fig, frame = _figure(False)
+    with pytest.raises(ValueError, match="at least one frame"):
+        save_gif(fig, frame, 0, tmp_path / "none.gif", fps=5, dpi=80)
+    plt.close(fig)
+    assert not (tmp_path / "none.gif").exists()

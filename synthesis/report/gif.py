@@ -4,20 +4,22 @@ matplotlib's ``Animation.save`` redraws the whole figure for every frame -- axes
 even with ``blit=True`` (blitting serves only the interactive backends).  A report's linkage animation is mostly
 still: planting's 36 frames took 4.1 of a 7 s ``agrisynth check``.  Here the figure is drawn once without the
 artists that move, that picture is kept, and each frame restores it and draws the frame's artists on top (the
-blitting of matplotlib's interactive backends, into images).  Still artists of an axes that lie above a moving one
-in z-order (a legend, pivots drawn over the links) are left out of the kept picture and drawn with each frame, in
-the axes' own order, so the layers are those of a full redraw; only the axes' grid, ticks and spines always stay
-below.  PIL assembles the frames as PillowWriter does (an opaque frame as RGB, one duration each, looping).
+blitting of matplotlib's interactive backends, into images).  Still artists that a full redraw puts above a moving
+one -- of the same axes, higher in z-order or equal and added later, and the figure's own legends and texts -- are
+left out of the kept picture and drawn with each frame in the full redraw's order.  What is not layered so: the
+axes' grid, ticks and spines (always below the moving artists), other axes overlapping the moving artists' axes
+(twins), and the still artists between a later frame's lower z-order and frame 0's.  PIL assembles the frames as
+PillowWriter does (an opaque frame as RGB, one duration each, looping).
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Callable, Iterable
 
 import numpy as np
 from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.axis import Axis
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -26,12 +28,22 @@ from PIL import Image
 
 
 def _still_above(fig: Figure, moving: list[Artist]) -> list[Artist]:
-    """The still artists of the figure's axes above the lowest moving artist in z-order (not grid, ticks, spines)."""
-    lowest = min((a.get_zorder() for a in moving), default=math.inf)
+    """The still artists a full redraw draws after a moving one: in an axes with moving artists, those higher in
+    z-order than its lowest moving artist, or equal and added after it (not the grid, ticks, spines); and the
+    figure's own artists (legends, texts, suptitle), drawn after every axes."""
     ids = {id(a) for a in moving}
-    return [a for ax in fig.axes for a in ax.get_children()
-            if id(a) not in ids and a is not ax.patch and not isinstance(a, (Axis, Spine)) and a.get_visible()
-            and a.get_zorder() > lowest]
+    above = []
+    for ax in fig.axes:
+        children = ax.get_children()
+        ranks = [(a.get_zorder(), i) for i, a in enumerate(children) if id(a) in ids]
+        if not ranks:
+            continue
+        lowest = min(ranks)
+        above += [a for i, a in enumerate(children)
+                  if id(a) not in ids and a is not ax.patch and not isinstance(a, (Axis, Spine)) and a.get_visible()
+                  and (a.get_zorder(), i) > lowest]
+    return above + [a for a in fig.get_children()
+                    if id(a) not in ids and a is not fig.patch and not isinstance(a, Axes) and a.get_visible()]
 
 
 def _in_drawing_order(fig: Figure, artists: list[Artist]) -> list[Artist]:
@@ -48,10 +60,14 @@ def _in_drawing_order(fig: Figure, artists: list[Artist]) -> list[Artist]:
 
 def save_gif(fig: Figure, draw_frame: Callable[[int], Iterable[Artist]], frames: int, path: Path | str,
              fps: float, dpi: float) -> None:
-    """Write ``frames`` frames of ``fig`` to ``path`` as a looping GIF at ``fps`` frames a second and ``dpi``.
+    """Write ``frames`` (>= 1) frames of ``fig`` to ``path`` as a looping GIF at ``fps`` frames a second and ``dpi``.
 
     ``draw_frame(k)`` puts frame k's moving artists on the figure (updating them, or removing the last frame's and
-    adding new ones) and returns them; the rest of the figure is drawn once."""
+    adding new ones) and returns every artist it changed: an artist changed but not returned stays as the kept
+    picture has it.  The axes' limits must be set (nothing is rescaled per frame, as a full redraw would)."""
+    if frames < 1:
+        raise ValueError(f"a GIF needs at least one frame, got frames = {frames}")
+    kept_dpi = fig.dpi
     fig.set_dpi(dpi)
     canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
     moving = list(draw_frame(0))
@@ -72,4 +88,7 @@ def save_gif(fig: Figure, draw_frame: Callable[[int], Iterable[Artist]], frames:
         image = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba.tobytes(), "raw", "RGBA", 0, 1)
         # as PillowWriter: an opaque frame goes to RGB, which PIL turns into a GIF palette better than RGBA
         images.append(image if image.getextrema()[3][0] < 255 else image.convert("RGB"))
+    for artist in moving + above:
+        artist.set_animated(False)
+    fig.set_dpi(kept_dpi)
     images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
