@@ -581,36 +581,11 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     assert interior >= 6            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
 
 
-def test_ordered_targets_in_the_crank_angle_form_start_from_the_screen_only():
-    """starts.ORDERED_SCREENED: an ordered target set solved in the crank-angle form (square24, s_curve12) starts
-    every start after 0 from a screened shape, none with the fixed-timing phase; unordered loops (egg16) and an
-    ordered open arc with grashof = "any" (dwell_arc15, the configuration form) keep the mix."""
-    from synthesis.fourbar_path import starts as path_starts
-
-    for name, expected in (("square24", "screen"), ("s_curve12", "screen"), ("egg16", "screen_mix"),
-                           ("dwell_arc15", "screen_mix")):
-        spec = inexact_spec(name).model
-        maker = StartMaker(spec, 0)
-        assert maker.strategy == expected, name
-    maker = StartMaker(inexact_spec("s_curve12").model, 0)
-    designs, _ = maker.screened
-    for index in (1, 2, 5):
-        sp = maker(index, np.zeros(9))
-        assert not sp.timing_first
-        assert np.allclose(sp.design, maker.finish(designs[index - 1], index)[1].design)
-    assert path_starts.ORDERED_SCREENED
-
-
-def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase(monkeypatch):
+def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase():
     """s_curve12 orders its targets ([rules] order): a random start whose nearest curve points give two neighbouring
     targets the same crank angle (a step of 0, which no design repairs: its fixed phase cannot converge) is solved as
-    it is; one with room is fitted first.  Decided by the same sequence slacks the rule uses.  (Production starts
-    an ordered set from the screen only, starts.ORDERED_SCREENED; the mix and its Latin-hypercube starts are tested
-    here with that switch off.)"""
+    it is; one with room is fitted first.  Decided by the same sequence slacks the rule uses."""
     from constraints.sequence import sequence_slacks
-    from synthesis.fourbar_path import starts as path_starts
-
-    monkeypatch.setattr(path_starts, "ORDERED_SCREENED", False)
     spec = inexact_spec("s_curve12").model
     nlp = PathNLP(spec, seed=0)
     rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)

@@ -76,14 +76,6 @@ ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into th
 STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
 #                        "screen" (every start after 0 one of the best distinct shapes of screen.py), "screen_mix"
 #                        (starts 3, 7, ... from screen.py, 1, 5, ... from the pool, even ones the hypercube's)
-#: ordered targets (``order = true``) solved in the crank-angle form (not an open arc with grashof = "any", which the
-#: configuration form solves): every start after 0 is a screened shape ("screen") instead of the mix.  The drawn order
-#: fixes the timing's sequence, and the screened shapes are laid onto it; the mix's Latin-hypercube starts and their
-#: continuation serve the unordered loops.  Six seeds (INEXACT.md, sixteenth pass): square24 at its best known on 6
-#: of 6 (the mix: 4), median iterations 34.5-41.5 (the mix: 92-94.5); s_curve12 6 of 6 either way, 109.5-125.5
-#: (126-177).  Not the open "any" arcs: dwell_arc15 gained no seed of three at 8x the iterations, and stroke_lift14's
-#: best start ended at max_iter on 3 of 6.  False: the mix for every target set
-ORDERED_SCREENED = True
 #: the screen (and the early cut, nlp.CUTS) serve target sets of at least this many points (issue 19's 12-25);
 #: smaller free-timing sets keep the pool starts ("mix") and no cut: the screen's 1 s CPU is more than their
 #: whole solve (10 synthetic 6-point problems: 1.4 s CPU with the pool, 6.1 s with the screen)
@@ -451,9 +443,6 @@ class StartMaker:
         self._ranked = None
         self._screened = None
         self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
-        configuration_form = spec.rules.grashof == "any" and not self.closed
-        self.strategy = ("screen" if STRATEGY == "screen_mix" and ORDERED_SCREENED and self.screening
-                         and spec.rules.order and not configuration_form else STRATEGY)
         self.refit = REFIT_ROUNDS > 0
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
@@ -471,14 +460,14 @@ class StartMaker:
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
-        if self.screening and self.strategy == "screen" and index > 0:
+        if self.screening and STRATEGY == "screen" and index > 0:
             return self.from_screen(index)
-        if self.screening and self.strategy == "screen_mix" and index % 4 == 3:
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 3:
             return self.from_screen((index + 1) // 4)
-        if self.screening and self.strategy == "screen_mix" and index % 4 == 1:
+        if self.screening and STRATEGY == "screen_mix" and index % 4 == 1:
             return self.placed(self.ranked[((index - 1) // 4) % len(self.ranked)], 0)[1]
-        pooled = self.strategy in ("mix", "pool") or (not self.screening and self.strategy == "screen_mix")
-        if self.timed_theta is None and pooled and (self.strategy == "pool" or index % 2 == 1):
+        if self.timed_theta is None and (STRATEGY in ("mix", "pool") or (not self.screening and STRATEGY == "screen_mix")) \
+                and (STRATEGY == "pool" or index % 2 == 1):
             return self.from_pool(index)
         if index % 2 == 0:
             start = self.as_it_is(design, index)
@@ -525,7 +514,7 @@ class StartMaker:
     @property
     def reference(self) -> float | None:
         """The path error (mm^2) of the best screened start (the early cut's yardstick); None: no screening."""
-        if self.strategy not in ("screen", "screen_mix") or not self.screening:
+        if STRATEGY not in ("screen", "screen_mix") or not self.screening:
             return None
         designs, _ = self.screened
         if len(designs) == 0:
@@ -578,7 +567,7 @@ class StartMaker:
 
     def from_pool(self, index: int) -> StartPoint:
         ranked = self.ranked
-        k = (index - 1) // (1 if self.strategy == "pool" else 2)
+        k = (index - 1) // (1 if STRATEGY == "pool" else 2)
         return self.placed(ranked[k % len(ranked)], 0)[1]
 
     def direction(self, index: int) -> str:
