@@ -44,9 +44,11 @@ def _per_degree(limit_deg: float) -> float:
     return slope if slope > 1e-12 else 1.0
 
 
-def _rows(margins) -> tuple:
-    """One row per cos mu of a list; one vector row for a numpy vector."""
-    return ((margins, 0.0, None),) if isinstance(margins, np.ndarray) else tuple((m, 0.0, None) for m in margins)
+def _rows(cs, margin) -> tuple:
+    """The rows ``margin(cos mu) >= 0``: one per cos mu of a list, one vector row for a numpy vector."""
+    if isinstance(cs, np.ndarray):
+        return ((margin(cs), 0.0, None),)
+    return tuple((margin(c), 0.0, None) for c in cs)
 
 
 def _min_rule(cs, lo: float, where: str, open_at: str) -> Rule:
@@ -55,7 +57,7 @@ def _min_rule(cs, lo: float, where: str, open_at: str) -> Rule:
         return not_evaluated("transmission_angle_min", lo, None, "deg", where, f"the loop does not close {open_at}")
     c_lo, k = math.cos(math.radians(lo)), _per_degree(lo)
     return Rule("transmission_angle_min", mu, lo, None, "deg", 10.0, where,
-                nlp_rows=_rows((c_lo - cs) / k if isinstance(cs, np.ndarray) else [(c_lo - c) / k for c in cs]))
+                nlp_rows=_rows(cs, lambda c: (c_lo - c) / k))
 
 
 def _max_rule(cs, hi: float, where: str, open_at: str) -> Rule:
@@ -64,7 +66,7 @@ def _max_rule(cs, hi: float, where: str, open_at: str) -> Rule:
         return not_evaluated("transmission_angle_max", None, hi, "deg", where, f"the loop does not close {open_at}")
     c_hi, k = math.cos(math.radians(hi)), _per_degree(hi)
     return Rule("transmission_angle_max", mu, None, hi, "deg", 10.0, where,
-                nlp_rows=_rows((cs - c_hi) / k if isinstance(cs, np.ndarray) else [(c - c_hi) / k for c in cs]))
+                nlp_rows=_rows(cs, lambda c: (c - c_hi) / k))
 
 
 def transmission_turn_rules(cos_at_0, cos_at_pi, bounds: tuple) -> list[Rule]:

@@ -107,7 +107,7 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
         motion = thetas
     if lim.grashof != "any":
         rules.append(grashof_class_rule(lim.grashof, r1, r2, r3, r4))
-        rules.append(assembly_rule([diagonal_sq(th, r1, r2) for th in motion], r3, r4,
+        rules.append(assembly_rule(over(diagonal_sq, motion, r1, r2), r3, r4,
                                    where="at every target" if thetas is not None else "over a turn"))
         if lim.transmission_angle is not None:
             rules += transmission_turn_rules(cos_transmission(0.0, r1, r2, r3, r4),

@@ -82,7 +82,6 @@ def save_gif(fig: Figure, draw_frame: Callable[[int], Iterable[Artist]], frames:
             moving = list(draw_frame(k))
         canvas.restore_region(still)
         for artist in _in_drawing_order(fig, moving + above):
-            artist.set_animated(True)
             fig.draw_artist(artist)
         rgba = np.asarray(canvas.buffer_rgba())
         image = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba.tobytes(), "raw", "RGBA", 0, 1)
