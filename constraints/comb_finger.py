@@ -20,7 +20,8 @@ LENGTH_SCALE = 10.0
 
 def root_clearance_rule(pd, minimum: float) -> Rule:
     """PD (eq 17) >= minimum, mm."""
-    return Rule("root_clearance", pd, minimum, None, "mm", LENGTH_SCALE, "root D to the tip circle along D -> R (eq 17)")
+    return Rule("root_clearance", pd, minimum, None, "mm", LENGTH_SCALE,
+                "root D to the tip circle along D -> R (eq 17)")
 
 
 def units_gap_rule(gap, minimum: float) -> Rule:

@@ -29,7 +29,6 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import annotated_types as at
 from pydantic import BaseModel
-from pydantic_core import PydanticUndefined
 
 from synthesis.spec.common import FreeVariable
 from synthesis.spec.docmeta import UNITS, SpecFile, TomlType, units_in

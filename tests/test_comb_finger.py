@@ -238,7 +238,6 @@ def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits(
 
 def test_with_a_tip_speed_limit_alpha_goes_to_its_stationary_point():
     loaded = load_spec(TIP_SPEED)
-    spec = loaded.model
     result, _, _ = run_solve(loaded, workers=1)
     assert result.status == "optimal"
     star = g.best_alpha_at_fixed_omega()

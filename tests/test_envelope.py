@@ -4,8 +4,6 @@ the range spec, and the planting envelope redesign re-checked at every 0.01 m/s,
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from pathlib import Path
 
 import casadi as ca

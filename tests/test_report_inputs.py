@@ -11,7 +11,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from synthesis import kinds
 from synthesis.core.solve import baseline_rules, solve_spec

@@ -89,8 +89,8 @@ def _shown_only(loaded: LoadedSpec) -> list[Variable]:
     and moves none.  Each value as the kind's check reports it, with the unit its own spec declares."""
     result = grids.evaluator(loaded.kind, "fine")(loaded)
     units: dict[str, str] = {}
-    for path, field, _ in walk_fields(loaded.model):            # the spec's own numbers: units from their fields
-        declared = units_in(field.description or "")
+    for path, info, _ in walk_fields(loaded.model):            # the spec's own numbers: units from their fields
+        declared = units_in(info.description or "")
         units[path.rsplit(".", 1)[-1]] = declared[0] if declared else ""
     part_path = getattr(loaded.model, "part_path", None)
     out = []
@@ -174,8 +174,8 @@ class Session:
         from synthesis.spec.docmeta import SpecFile
 
         return [(path, (self.loaded.path.parent / value).resolve())
-                for path, field, value in walk_fields(self.loaded.model)
-                if isinstance(value, str) and any(isinstance(m, SpecFile) for m in field.metadata)]
+                for path, info, value in walk_fields(self.loaded.model)
+                if isinstance(value, str) and any(isinstance(m, SpecFile) for m in info.metadata)]
 
     def spec_data(self, values: dict[str, float], name: str | None = None,
                   folder: Path | None = None) -> dict[str, Any]:
