@@ -64,8 +64,11 @@ class PlantingNLP:
         p = self._arm(v)
         tip = tip_derivatives(spec.arm.branch)
         states = {n: self._state(tip, theta[n], p) for n in POINTS}
-        # with a clearance, its row (the last of the structural rows about the top) is held at its linearised worst
-        # case in a tolerance box, like a rule: P1 stays a crossing for every design in the box, not the nominal only
+        # in a tolerance box the rows that make P1-P6 exist -- each crossing's direction, their order around the turn
+        # and, with a clearance, the loop top's height above the seedling-top line -- are held at their linearised
+        # worst case, like a rule's: the points stay crossings, in their order, for every design in the box, not at
+        # the nominal only (robust_redesign_from_example1 without them: P3 fell after P4, soil entry, in 2 of 2,000
+        # Monte-Carlo samples, and the five rules that read P1-P3 could not be evaluated there)
         structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
         self.problem = Problem(
             name="planting",
@@ -73,7 +76,7 @@ class PlantingNLP:
             lbx=np.concatenate([self.bounds[:, 0], np.full(th.numel(), THETA_BOUNDS[0])]),
             ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
             structural=structural,
-            robust_structural=(self._clearance_row,) if self.clearance > 0.0 else (),
+            robust_structural=self._existence_rows,
             rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
             objective=self._objective(x, v),
             backoff=scaled_backoff(spec.solver.backoff),
@@ -150,15 +153,20 @@ class PlantingNLP:
             rows.append((normal[0] * vel[n][0] + normal[1] * vel[n][1], None, 0.0))
         order = ("P5", "P6", "P1", "P2", "P3", "P4")
         gap = MIN_GAP if spec.solver.point_gap == 1.0 else math.radians(spec.solver.point_gap)
+        self.order_rows = {}                           # "P3-P4": the index of the row theta_P4 - theta_P3 >= gap
         for a, b in zip(order, order[1:]):
+            self.order_rows[f"{a}-{b}"] = len(rows)
             rows.append((theta[b] - theta[a], gap, None))
+        self.order_rows["P4-P5"] = len(rows)
         rows.append((theta["P5"] + TWO_PI - theta["P4"], gap, None))
+        existence = list(range(6, len(rows)))          # the crossings' directions and the points' order
         if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
             q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
             rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
                      (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
                      (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
-            self._clearance_row = len(rows) - 1
+            existence += [len(rows) - 3, len(rows) - 2, len(rows) - 1]
+        self._existence_rows = tuple(existence)
         n = spec.solver.samples_per_turn
         samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]
