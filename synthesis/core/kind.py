@@ -134,6 +134,8 @@ class Finished:
     baseline_design: dict[str, Any] | None = None
     #: the rule table when the chosen start could not be evaluated (each rule "not evaluated", with why)
     rules: list[dict] | None = None
+    #: what a user must know about the answer beyond its rules (result.json solver.status_note, the terminal's note)
+    note: str | None = None
 
 
 def _nothing(spec) -> None:

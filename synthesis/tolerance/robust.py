@@ -168,8 +168,23 @@ class RobustFinish:
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
             worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
-            return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst)
+            return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst,
+                                       note=_sampled_misses(mc))
         return dataclasses.replace(finished, facts=facts)
+
+
+def _sampled_misses(mc: dict) -> str | None:
+    """The note of a robust answer whose Monte-Carlo check found designs in the box that miss a rule: the solve holds
+    every rule at its linearised worst case, which a nonlinear model may still break (``agrisynth tolerance`` on the
+    answer exits 1); None when every sample passed or none was drawn."""
+    rate, samples = mc.get("pass_rate"), mc.get("samples") or 0
+    if rate is None or rate >= 1.0 or not samples:
+        return None
+    failing = round(samples * (1.0 - rate))
+    rules = [name for name, r in (mc.get("rules") or {}).items() if (r.get("pass_rate") or 0.0) < 1.0]
+    return (f"{failing} of {samples} Monte-Carlo samples in the tolerance box miss a rule ({', '.join(rules)}): "
+            f"every rule holds at its linearised worst case, but not in every sampled design "
+            f"(`agrisynth tolerance RESULT` exits 1 on this answer; its report names the samples' rules)")
 
 
 def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: dict[str, str]) -> list[dict]:
