@@ -516,6 +516,52 @@ def test_planting_point_order_is_held_at_its_worst_case_in_the_tolerance_box():
     assert math.degrees(g) == pytest.approx(angle, abs=1e-7)
 
 
+def test_tillage_entry_and_exit_are_held_at_their_worst_case_in_the_tolerance_box(tmp_path):
+    """tillage_redesign with a box of +-0.5 mm / +-0.5 deg: the rows that make soil entry and exit exist (their
+    crossing directions, entry < lowest point < exit) are held at their linearised worst case, as planting's points.
+    Checked at the spec's start against the kind's float motion (grid + brentq, check.motion): the crank angle from
+    entry to the lowest point and from there to the exit, their derivatives by central differences; each robust row
+    is that angle minus sum_j |d angle / d d_j| tol_j (epigraph variables at their start), its lower bound GAP."""
+    from synthesis.core.sensitivity import Sensitivity
+    from synthesis.tillage_linkage import check
+    from synthesis.tillage_linkage.nlp import EXISTENCE_ROWS, GAP
+    from synthesis.tolerance.design import without_ipopt
+
+    path = tmp_path / "robust.toml"
+    path.write_text((LIBRARY / "tillage/tillage_redesign.toml").read_text()
+                    + "\n[tolerance]\nlength = 0.5\nangle = 0.5\nsamples = 10\nseed = 0\n")
+    loaded = load_spec(path)
+    spec = loaded.model
+    kind = kinds.solving_kind_for(loaded)
+    solving = kind.solver_side()
+    with without_ipopt():
+        nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
+    names, t = list(nlp.names), nlp.compiled.t
+    n = len(names)
+    design = dict(zip(names, (float(v) for v in nlp.init)))
+    x = Sensitivity(nlp.problem, n).pin(np.concatenate([list(design.values()), nlp.angles_guess(design)]))
+    g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
+    assert tuple(nlp.problem.robust_structural) == EXISTENCE_ROWS
+    first = {}                                   # the g row of each structural entry (vector entries come first)
+    k = 0
+    for i, (expr, _, _) in enumerate(nlp.problem.structural):
+        first[i] = k
+        k += ca.SX(expr).numel()
+
+    def angles(d):
+        m = check.motion(spec, dict(zip(names, d)), spec.solver.samples, 2)
+        (w_in, w_out), = m.windows
+        return np.array([(m.omega_low - w_in) % (2 * math.pi), (w_out - m.omega_low) % (2 * math.pi)])
+
+    d = x[:n]
+    box = np.full(n, 0.5)                        # a, b, c, height_c +-0.5 mm; theta +-0.5 deg
+    slope = np.array([(angles(d + e) - angles(d - e)) / 2e-5 for e in np.eye(n) * 1e-5])     # (n, 2)
+    worst = angles(d) - (1.01 * np.abs(slope) + 1e-9).T @ box
+    for row, expected in zip((6, 7), worst):          # lowest - entry >= GAP, exit - lowest >= GAP
+        assert t.lbg[first[row]] == GAP and g[first[row]] == pytest.approx(expected, abs=1e-6)
+    assert np.all(worst < angles(d) - 0.01)        # the box moves them by more than 0.01 rad: a real difference
+
+
 @pytest.mark.parametrize("seconds", [False, True])
 def test_clamp_cam_crank_speed_sensitivities_equal_central_differences_and_the_analytic_ones(seconds):
     """clamp_cam declares its crank speed n (r/min) to the analysis.  On the library cam (degree clock, no cap) and

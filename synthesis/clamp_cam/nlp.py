@@ -70,7 +70,10 @@ class CamNLP:
                                structural_units=["deg", "mm^2"] if translating else ["deg", "mm", "mm^2", "rad"],
                                objective_unit="deg" if spec.objective.name == "pressure_angle" else "",
                                backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0),
-                               operating=self.operating)
+                               operating=self.operating,
+                               # in a tolerance box the follower geometry exists for every design in it: its rows
+                               # (all but the first, the turn's 360 deg) held at their linearised worst case
+                               robust_structural=tuple(range(1, len(structural))))
         self.compiled = CompiledNLP(self.problem, elastic)
         self.rules = self.problem.rules
 

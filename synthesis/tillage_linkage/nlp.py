@@ -34,6 +34,9 @@ SAMPLED = ("rearward_in_soil",)
 GAP = 0.02
 #: rows in mm are divided by this, so that IPOPT sees numbers of order one
 MM = 100.0
+#: the structural rows a tolerance box holds at their linearised worst case: the entry's and exit's crossing directions
+#: (dy <= 0, >= 0) and the order of entry, lowest point and exit (indices into the structural rows of TillageNLP)
+EXISTENCE_ROWS = (4, 5, 6, 7, 8)
 
 
 class TillageNLP:
@@ -59,7 +62,7 @@ class TillageNLP:
         _, y_out, _, dy_out, _, _ = at(w_out)
         grid = np.linspace(0.0, TWO_PI, s.samples, endpoint=False)
         y_grid = f.map(s.samples)(grid.reshape(1, -1), p)[1].T
-        structural = [
+        structural = [                                     # EXISTENCE_ROWS index the last five
             (ca.vertcat(dy_low, dy_top) / MM, 0.0, 0.0),
             (ca.vertcat(y_in - ground, y_out - ground) / MM, 0.0, 0.0),
             ((y_grid - y_low) / MM, 0.0, None),
@@ -105,7 +108,11 @@ class TillageNLP:
                                # and so is the objective c / MM -- declared "" once, which left them at mm size
                                # under a length-unit change (tests/extreme/test_scale.py), the angle gaps in rad
                                x_units=["mm", "mm", "mm", "deg", "mm"] + ["rad"] * 4,
-                               structural_units=["mm"] * 6 + ["rad"] * 3, objective_unit="mm", operating=self.operating)
+                               structural_units=["mm"] * 6 + ["rad"] * 3, objective_unit="mm", operating=self.operating,
+                               # in a tolerance box, what makes entry and exit exist -- the crossings' directions and
+                               # the order entry < lowest < exit -- is held at its linearised worst case like a rule,
+                               # so every design in the box has them (as planting's precision points)
+                               robust_structural=EXISTENCE_ROWS)
         self.compiled = CompiledNLP(self.problem, elastic)
 
     def angles_guess(self, design: dict[str, float]) -> np.ndarray:
