@@ -43,7 +43,8 @@ def test_robust_planting_redesign_passes_99_percent_of_the_samples(example):
 @pytest.mark.benchmark
 def test_robust_envelope_redesign_passes_99_percent_over_the_speed_range():
     """The tolerance box and the forward-speed range in one spec: 2,000 samples, each re-checked at 0.6 m/s and at
-    every 0.01 m/s of 0.50-0.75 (about 20 min on one core).  Measured: 100.00 %, objective 0.642082 (GEOMETRY.md)."""
+    every 0.01 m/s of 0.50-0.75 (about 20 min on one core).  Measured: 100.00 %, objective 0.642082 with point_gap = 5,
+    before the box held the points' order; now 0.643702 (GEOMETRY.md)."""
     from synthesis.core.solve import run_solve
     loaded = load_spec(LIBRARY / "robust_envelope_redesign_from_example1.toml")
     kind = robust_kind(kinds.get(loaded.kind), loaded.model)
@@ -56,4 +57,4 @@ def test_robust_envelope_redesign_passes_99_percent_over_the_speed_range():
           f"{result.objective['value']:.6f}")
     assert mc["envelope"]["points"] == 26
     assert mc["pass_rate"] >= 0.99
-    assert result.objective["value"] > 0.609157       # the price over the robust-only redesign of example 1
+    assert result.objective["value"] > 0.610599       # the price over the robust-only redesign of example 1
