@@ -163,10 +163,53 @@ def test_a_robust_answer_whose_monte_carlo_finds_misses_says_so(tmp_path, monkey
     missed = [name for name, r in mc["rules"].items() if r["pass_rate"] < 1.0]
     failing = round(40 * (1.0 - mc["pass_rate"]))
     assert data["status"] == "optimal" and 0 < failing < 40 and "steering_arm_length" in missed
-    note = (f"{failing} of 40 Monte-Carlo samples in the tolerance box miss a rule ({', '.join(missed)}): every rule "
-            f"holds at its linearised worst case, but not in every sampled design")
+    note = (f"{failing} of 40 Monte-Carlo samples in the tolerance box miss a rule ({', '.join(missed)}). The solve "
+            f"holds every rule at its linearised worst case in the box, which does not cover every sampled design")
     assert data["solver"]["status_note"].startswith(note)
     assert "note: " + note in " ".join(run.output.split())
+
+
+def test_a_robust_run_that_fails_its_linearised_worst_case_carries_no_monte_carlo_note(tmp_path):
+    """The library's robust clamp cam with an oscillating follower and every angle +-0.3 deg: the fixed timing rows
+    cannot hold at their worst case, so the run fails (exit 3) and its note says which rows miss; the Monte-Carlo's
+    misses are no news there, and a note saying the worst case holds would contradict it."""
+    text = (LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml").read_text()
+    for old, new in (('type = "translating"\noffset = { init = 0.0, bounds = [-20.0, 20.0] }',
+                      'type = "oscillating"\npivot_distance = { init = 120.0, bounds = [80.0, 200.0] }\n'
+                      'arm_length = { init = 100.0, bounds = [60.0, 160.0] }'),
+                     ("stroke = 10.0", "stroke = 15.0"),
+                     ("variables = { base_radius = 0.2, roller_radius = 0.05, offset = 0.2 }\nsamples = 2000",
+                      "length = 0.2\nangle = 0.3\nsamples = 50")):
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    spec = tmp_path / "oscillating.toml"
+    spec.write_text(text)
+    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 3, run.stdout + run.stderr
+    data = strict_json(tmp_path / "opening_cam_robust_redesign" / "result.json")
+    note = data["solver"]["status_note"]
+    assert data["status"] == "failed" and "@tolerance" in note and "does not keep its promise" in note
+    assert data["facts"]["tolerance"]["monte_carlo"]["pass_rate"] < 1.0 and "Monte-Carlo" not in note
+
+
+def test_the_monte_carlo_note_names_the_rules_missed_in_evaluated_samples_and_the_unevaluable_apart():
+    """A rule's pass rate counts a sample the re-check could not evaluate at all as a miss of every rule: the note
+    names only the rules missed where a sample was evaluated, says the unevaluable ones apart, and over an operating
+    range says where the samples are re-checked.  No note when every sample passed or none was drawn."""
+    from synthesis.tolerance.robust import _sampled_misses
+
+    # 10 samples: 1 unevaluable, 1 more missing rule a only -> a 0.8, b 0.9, all 0.8
+    mc = {"samples": 10, "pass_rate": 0.8, "unevaluable": 1,
+          "rules": {"a": {"pass_rate": 0.8}, "b": {"pass_rate": 0.9}}}
+    assert _sampled_misses(mc).startswith("2 of 10 Monte-Carlo samples in the tolerance box miss a rule (a); 1 of "
+                                          "them could not be evaluated at all. The solve holds")
+    only = {"samples": 4, "pass_rate": 0.75, "unevaluable": 1, "rules": {}}
+    assert _sampled_misses(only).startswith("1 of 4 Monte-Carlo samples in the tolerance box miss a rule: 1 of them "
+                                            "could not be evaluated at all.")
+    over = {**mc, "envelope": {"points": 26}}
+    assert ("miss a rule at the nominal operating point or at a point of the operating range's re-check grid (a)"
+            in _sampled_misses(over) and "in the box, at the operating points the NLP samples," in _sampled_misses(over))
+    assert _sampled_misses({**mc, "pass_rate": 1.0}) is None and _sampled_misses({"samples": 0, "pass_rate": None}) is None
 
 
 def test_a_tolerance_box_no_design_can_hold_names_the_rule_and_the_tolerance_that_breaks_it(tmp_path):

@@ -283,7 +283,7 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
                 "starts_run": len(run.reports), "stopped_early": status != "interrupted" and len(run.reports) < run.starts,
                 "seed": run.seed, "best_start": best.outcome.start, "workers": run.workers,
                 "scheduler": run.scheduler, "fine_grid_factor": FINE,
-                "status_note": " ".join(filter(None, [note or _note(status, best, run), finished.note])) or None,
+                "status_note": _sentences(note or _note(status, best, run), finished.note),
                 **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),
@@ -291,6 +291,15 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
         fine_grid_worst_violation=measured(best.worst_violation),
         extra=finished.facts,
     )
+
+
+def _sentences(*notes: str | None) -> str | None:
+    """The notes given in one text, each closed by a full stop when there are several; one note as it is; None
+    when there is none."""
+    said = [n for n in notes if n]
+    if len(said) < 2:
+        return said[0] if said else None
+    return " ".join(n if n.endswith(".") else n + "." for n in said)
 
 
 def _note(status: str, best: StartReport, run: Run) -> str | None:

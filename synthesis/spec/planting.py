@@ -147,9 +147,8 @@ class SolverSection(MultistartSettings):
                                                          "(dimensionless)")
     point_gap: float = Field(
         1.0, gt=0, le=30, description="smallest crank angle (deg) the NLP keeps between consecutive precision points "
-                                      "(P5, P6, P1, P2, P3, P4); with a [tolerance] table at the linearised worst "
-                                      "case of the box, so the points keep their order for every design in it; "
-                                      "more keeps them further apart")
+                                      "(P5, P6, P1, P2, P3, P4); with a [tolerance] table held at the linearised "
+                                      "worst case of the box, as the rules are; more keeps them further apart")
     seedling_clearance: float = Field(
         0.0, ge=0, le=100, description="the NLP makes the claw tip rise at least this far (mm) above the seedling-top "
                                        "line before it comes down through it at P1 (one more crank angle, the loop's "

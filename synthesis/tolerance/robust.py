@@ -168,23 +168,39 @@ class RobustFinish:
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
             worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
+            # the sampled misses are news only when the linearised worst case holds: where it does not, the run has
+            # failed and its note says so
+            note = _sampled_misses(mc) if all(w["satisfied"] for w in worst) else None
             return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst,
-                                       note=_sampled_misses(mc))
+                                       note=note)
         return dataclasses.replace(finished, facts=facts)
 
 
 def _sampled_misses(mc: dict) -> str | None:
-    """The note of a robust answer whose Monte-Carlo check found designs in the box that miss a rule: the solve holds
-    every rule at its linearised worst case, which a nonlinear model may still break (``agrisynth tolerance`` on the
-    answer exits 1); None when every sample passed or none was drawn."""
-    rate, samples = mc.get("pass_rate"), mc.get("samples") or 0
-    if rate is None or rate >= 1.0 or not samples:
+    """The note of a robust answer whose Monte-Carlo check found designs that miss a rule although every rule holds at
+    its linearised worst case (the model is not linear); None when every sample passed or none was drawn.  A rule's
+    pass rate counts the samples the re-check could not evaluate at all (``unevaluable``) as misses of every rule, so
+    the rules named are those missed in evaluated samples, and the unevaluable samples are said apart."""
+    samples = int(mc.get("samples") or 0)
+    rate = mc.get("pass_rate")
+    if rate is None or not samples:
         return None
-    failing = round(samples * (1.0 - rate))
-    rules = [name for name, r in (mc.get("rules") or {}).items() if (r.get("pass_rate") or 0.0) < 1.0]
-    return (f"{failing} of {samples} Monte-Carlo samples in the tolerance box miss a rule ({', '.join(rules)}): "
-            f"every rule holds at its linearised worst case, but not in every sampled design "
-            f"(`agrisynth tolerance RESULT` exits 1 on this answer; its report names the samples' rules)")
+    failing = samples - round(rate * samples)
+    if failing <= 0:
+        return None
+    unevaluable = int(mc.get("unevaluable") or 0)
+    missed = [name for name, r in (mc.get("rules") or {}).items()
+              if samples - round((r.get("pass_rate") or 0.0) * samples) - unevaluable > 0]
+    what = [f"{failing} of {samples} Monte-Carlo samples in the tolerance box miss a rule"]
+    if "envelope" in mc:
+        what.append(" at the nominal operating point or at a point of the operating range's re-check grid")
+    if missed:
+        what.append(f" ({', '.join(missed)})")
+    if unevaluable:
+        what.append(f"{';' if missed else ':'} {unevaluable} of them could not be evaluated at all")
+    held = "at the operating points the NLP samples, " if "envelope" in mc else ""
+    return ("".join(what) + f". The solve holds every rule at its linearised worst case in the box, {held}which does "
+            f"not cover every sampled design (`agrisynth tolerance RESULT` analyses this answer).")
 
 
 def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: dict[str, str]) -> list[dict]:
