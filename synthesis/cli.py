@@ -667,7 +667,14 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
       agrisynth compare results/taiwan_example1 results/redesign_from_example1
     """
     from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
+    from synthesis.errors import OutputError
 
+    target = out.resolve()
+    for given in results:                             # --force would replace a result being compared
+        read = given.resolve()
+        if read == target or target in read.parents or read in target.parents:
+            raise OutputError(f"--out {out} holds or is inside RESULT {given}: the page would replace what it "
+                              f"compares; write it to another folder")
     folder = open_output_folder(out, force)          # refused (exit 2) before anything is read
     try:
         bench = [res for p in results if is_bench(p) for res in load_bench(p)]

@@ -260,6 +260,30 @@ def is_run_folder(path: Path) -> bool:
     return isinstance(data, dict) and data.get("agrisynth_run") == 1
 
 
+def folder_contents(folder: Path) -> list[str]:
+    """Every file, folder and link under ``folder`` (relative POSIX paths, sorted; links not followed), but the
+    marker: what a run folder's marker lists at its commit, so a later run replaces only what agrisynth wrote."""
+    out = []
+    for root, dirs, files in os.walk(folder):
+        rel = Path(root).relative_to(folder)
+        out += [(rel / n).as_posix() for n in dirs + files]
+    return sorted(n for n in out if n != RUN_MARKER)
+
+
+def _foreign(final: Path) -> list[str]:
+    """The entries of the run folder ``final`` its marker does not list (all of them when it lists none: a folder
+    written before markers listed their contents, whose files agrisynth cannot prove it wrote)."""
+    try:
+        listed = json.loads((final / RUN_MARKER).read_text(encoding="utf-8")).get("contents")
+    except (OSError, ValueError, AttributeError):
+        listed = None
+    have = folder_contents(final)
+    if not isinstance(listed, list):
+        return have
+    known = set(listed)
+    return [n for n in have if n not in known]
+
+
 def _refusal(final: Path, spec: Path | None) -> str:
     """Why ``final`` (which exists and is not an agrisynth run) is not replaced."""
     what = "a file" if final.is_file() else ("a link" if final.is_symlink() else
@@ -303,6 +327,11 @@ class RunFolder:
             if not is_run_folder(self.final):
                 raise OutputError(_refusal(self.final, self.spec))
         if self.force or (self.replaceable is not None and _same(self.final, self.replaceable)):
+            foreign = _foreign(self.final)
+            if foreign:
+                shown = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
+                raise OutputError(f"{self.final} holds what agrisynth did not write there ({shown}): agrisynth "
+                                  f"never deletes it; move it out of the folder, or use another --out folder")
             return True
         raise OutputError(f"{self.final} holds an earlier agrisynth run; give --force to replace it, "
                           f"or --out another folder")
@@ -324,6 +353,10 @@ class RunFolder:
                 replace = self.permitted()
             except OutputError as exc:
                 raise OutputError(f"{exc} (this run is kept in {self.staging})") from None
+            # the marker lists what this run wrote: a later run may replace the folder only while it holds no more
+            marker = self.staging / RUN_MARKER
+            data = json.loads(marker.read_text(encoding="utf-8"))
+            atomic_write_text(marker, json.dumps({**data, "contents": folder_contents(self.staging)}) + "\n")
             if not replace:
                 os.rename(self.staging, self.final)
                 return False

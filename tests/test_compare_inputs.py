@@ -150,6 +150,27 @@ def test_compare_cli_refuses_a_fifo_and_non_utf8_in_one_line_and_writes_nothing(
     assert not (tmp_path / "cmp").exists()
 
 
+def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
+    """--out naming a RESULT folder (with --force, which replaces an agrisynth folder) or a folder inside it is refused
+    in one line (exit 2) before anything is written: the page would replace, or sit in, what it compares."""
+    from test_run_folders import cli_in_process
+
+    for name in ("a", "b"):
+        code, _ = cli_in_process("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path / name))
+        assert code == 1
+    a, b = tmp_path / "a" / "taiwan_example1", tmp_path / "b" / "taiwan_example1"
+    before = sorted(p.name for p in a.iterdir())
+    for out in (a, a / "cmp"):
+        code, err = cli_in_process("compare", str(a), str(b), "--out", str(out), "--force")
+        assert code == 2 and len(err.strip().splitlines()) == 1 and f"holds or is inside RESULT {a}" in err, err
+        assert sorted(p.name for p in a.iterdir()) == before
+    code, err = cli_in_process("compare", str(b), str(a / "result.json"), "--out", str(a), "--force")
+    assert code == 2 and "holds or is inside RESULT" in err
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(a), str(b), "--out",
+                           str(tmp_path / "cmp")], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and (tmp_path / "cmp" / "compare.html").is_file(), proc.stderr
+
+
 # --- the study: mutate a real result.json and run the whole compare (pytest -m fuzz) ---------------------
 
 @pytest.mark.fuzz

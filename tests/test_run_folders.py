@@ -33,6 +33,43 @@ def test_a_run_folder_carries_the_marker_and_is_replaced_only_with_force(tmp_pat
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]       # no staging or .old leftovers
 
 
+@pytest.mark.parametrize("added", ["notes.txt", "sub/data.csv", "myspec.toml"])
+def test_force_never_deletes_what_a_user_put_in_a_run_folder(tmp_path, added):
+    """DESIGN.md: agrisynth never deletes anything it cannot prove it wrote.  The marker lists what the run wrote at
+    its commit; --force replaces the folder only while it holds no more (exit 2 naming the entry otherwise), and a
+    folder whose marker lists nothing (an earlier version's) is never replaced either."""
+    final, _ = write_folder(tmp_path / "run", artifacts("a"))
+    assert json.loads((final / RUN_MARKER).read_text())["contents"] == ["report.html", "result.json"]
+    extra = final / added
+    extra.parent.mkdir(exist_ok=True)
+    extra.write_text("mine")
+    with pytest.raises(OutputError, match=f"holds what agrisynth did not write there \\({added.split('/')[0]}"):
+        write_folder(tmp_path / "run", artifacts("b"), force=True)
+    assert extra.read_text() == "mine" and json.loads((final / "result.json").read_text())["token"] == "a"
+    extra.unlink()
+    if extra.parent != final:
+        extra.parent.rmdir()
+    _, replaced = write_folder(tmp_path / "run", artifacts("b"), force=True)   # as written again: replaced
+    assert replaced and json.loads((final / "result.json").read_text())["token"] == "b"
+    marker = json.loads((final / RUN_MARKER).read_text())
+    (final / RUN_MARKER).write_text(json.dumps({k: v for k, v in marker.items() if k != "contents"}))
+    with pytest.raises(OutputError, match="holds what agrisynth did not write there \\(report.html, result.json\\)"):
+        write_folder(tmp_path / "run", artifacts("c"), force=True)
+    assert json.loads((final / "result.json").read_text())["token"] == "b"
+
+
+def test_force_through_the_cli_keeps_a_users_file_and_says_so(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(PLANTING / "taiwan_example1.toml"),
+                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    notes = tmp_path / "taiwan_example1" / "notes.txt"
+    notes.write_text("field trial, 2026")
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(PLANTING / "taiwan_example1.toml"),
+                           "--out", str(tmp_path), "--force"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "notes.txt" in proc.stderr and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and notes.read_text() == "field trial, 2026"
+
+
 @pytest.mark.parametrize("force", [False, True])
 def test_a_folder_agrisynth_did_not_write_is_never_replaced(tmp_path, force):
     precious = tmp_path / "precious"
