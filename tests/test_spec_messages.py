@@ -146,3 +146,26 @@ def test_an_angle_beyond_a_turn_is_refused_not_taken_modulo_360(tmp_path, old, n
     clamp_cam's rise_start take the same [-360, 360] deg (common.within_a_turn)."""
     bad = "1000" if "1000" in new else "-400"
     assert message(tmp_path, old, new) == f"{field}: expected an angle within one turn, [-360, 360] deg, got {bad}"
+
+
+@pytest.mark.parametrize("spec, old, field", [
+    ("planting_arm/taiwan_example1.toml", "branch = -1", "planting_fourbar.arm.branch"),
+    ("fourbar_path/picking_arc.toml", "branch = 1", "fourbar_path.linkage.branch"),
+    ("picker/cai2020_double_crank.toml", "branch = 1", "picker_double_crank."),
+    ("guide_way/liang_2z.toml", "branch = 1", "guide_way."),
+])
+@pytest.mark.parametrize("value", ["true", "false"])
+def test_a_boolean_is_no_sign(tmp_path, spec, old, field, value):
+    """A branch is -1 or +1: TOML's true was taken for +1 (pydantic's literal check: True == 1) while false was
+    refused; both are refused in one line naming the field."""
+    from conftest import ROOT
+
+    text = (ROOT / "problems" / spec).read_text()
+    assert old in text
+    path = tmp_path / "bad.toml"
+    path.write_text(text.replace(old, f"branch = {value}", 1))
+    with pytest.raises(SpecError) as exc:
+        load_spec(path)
+    said = str(exc.value)
+    assert len(said.splitlines()) == 1 and field in said and said.endswith(
+        f"branch: expected -1 or 1, got {value.capitalize()}"), said

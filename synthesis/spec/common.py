@@ -12,13 +12,26 @@ import json
 import math
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Union
+from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic_core import PydanticCustomError
 
 from synthesis.errors import SpecError
 from synthesis.files import read_regular, shown
+
+
+def _sign_not_a_bool(value: Any) -> Any:
+    """TOML's ``true`` is no sign: pydantic's literal check takes it for 1 (True == 1), so ``branch = true`` ran the
+    +1 assembly while ``false`` was refused; refused alike, with the literal's own message."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("literal_error", "Input should be -1 or 1", {"expected": "-1 or 1"})
+    return value
+
+
+#: a sign field (an assembly branch, a required sign): -1 or +1, and never a boolean
+Sign = Annotated[Literal[-1, 1], BeforeValidator(_sign_not_a_bool)]
 
 
 class StrictModel(BaseModel):

@@ -12,7 +12,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
+    Sign, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
     starts_field, value_of,
 )
 
@@ -72,7 +72,7 @@ class CrankRockerSpec(ProblemSpec):
     requirements: Requirements
     tolerances: Tolerances = Field(default_factory=Tolerances)
     links: LinkSection
-    branch: Literal[-1, 1] = Field(1, description="assembly: E left (+1) or right (-1) of the line F -> A "
+    branch: Sign = Field(1, description="assembly: E left (+1) or right (-1) of the line F -> A "
                                                   "(mirror images: same K, swing and transmission angles)")
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)

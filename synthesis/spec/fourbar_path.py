@@ -30,7 +30,7 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, mo
 
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import (
-    FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
+    Sign, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
     require_positive, starts_field, value_of, within_a_turn,
 )
 
@@ -118,7 +118,7 @@ class LinkageSection(StrictModel):
     theta0: Variable = Field(FreeVariable(init=180.0, bounds=(0.0, 360.0)),
                              description="frame angle, direction of O -> O' from +x, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("theta0")(within_a_turn)
-    branch: Literal[-1, 1] = Field(1, description="assembly: B left (+1, the open assembly) or right (-1, the "
+    branch: Sign = Field(1, description="assembly: B left (+1, the open assembly) or right (-1, the "
                                                   "crossed one) of the line A -> O'")
 
     @model_validator(mode="after")

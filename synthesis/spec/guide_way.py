@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, value_of
+from synthesis.spec.common import FreeVariable, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, value_of
 
 KIND = "guide_way"
 Point = tuple[float, float]
@@ -51,7 +51,7 @@ class ConicSegment(StrictModel):
     start: str = Field(alias="from", description="key point where the claw enters the segment")
     end: str = Field(alias="to", description="key point where it leaves it")
     coefficients: tuple[float, float, float, float, float] = Field(description="a1..a5 as printed (a1, a2 dimensionless; a3, a4 mm; a5 mm^2)")
-    branch: Literal[-1, 1] = Field(description="inverse kinematics: theta = gamma + branch * phi, i.e. -1: "
+    branch: Sign = Field(description="inverse kinematics: theta = gamma + branch * phi, i.e. -1: "
                                                "gamma - phi (the paper's eq 7), +1: gamma + phi")
     form: Literal["y+", "y-", "x+", "x-"] | None = Field(
         None, description="the paper's explicit form (§3(2)): y(x) or x(y) with the + or - root; checked")

@@ -14,7 +14,8 @@ from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
 from synthesis.spec.common import (
-    MultistartSettings, ProblemSpec, StrictModel, Variable, require_positive, starts_field, value_of, within_a_turn,
+    MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive, starts_field, value_of,
+    within_a_turn,
 )
 
 
@@ -54,7 +55,7 @@ class LinkageSection(StrictModel):
     phi3: Variable = Field(description="frame AD direction below the +x axis, deg (-360 to 360)")
     phi4: Variable = Field(description="CM turned counter-clockwise from BC, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("phi3", "phi4")(within_a_turn)
-    branch: Literal[-1, 1] = Field(1, description="assembly: C left (+1) or right (-1) of the line B -> D")
+    branch: Sign = Field(1, description="assembly: C left (+1) or right (-1) of the line B -> D")
 
     @model_validator(mode="after")
     def _lengths_positive(self) -> "LinkageSection":

@@ -17,8 +17,8 @@ from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
-    Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive, starts_field,
-    value_of, within_a_turn,
+    Interval, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, max_iter_field, require_positive,
+    starts_field, value_of, within_a_turn,
 )
 
 KIND = "planting_fourbar"
@@ -35,7 +35,7 @@ class ArmSection(StrictModel):
     zeta: Variable = Field(description="frame angle: direction of O -> O' from the +X axis, deg (-360 to 360)")
     phi: Variable = Field(description="claw angle: AC is AB turned clockwise by phi, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("zeta", "phi")(within_a_turn)
-    branch: Literal[-1, 1] = Field(-1, description="assembly: B right (-1) or left (+1) of the line A -> O'")
+    branch: Sign = Field(-1, description="assembly: B right (-1) or left (+1) of the line A -> O'")
     tray_tilt: Literal["backward", "forward"] | None = Field(
         None, description="seedling-tray tilt of the machine (seed 000 Table 1, informational)")
 
@@ -96,9 +96,9 @@ class AccelerationSigns(StrictModel):
     unattainable by any smooth path (see GEOMETRY.md); the default is the physical reading, +.
     """
 
-    hold: Literal[-1, 1] = Field(1, description="P3 (seedling taken) -> P4 (soil entry)")
-    throw: Literal[-1, 1] = Field(1, description="P4 (soil entry) -> P5 (lowest point)")
-    release: Literal[-1, 1] = Field(1, description="P5 (lowest point) -> P6 (soil exit)")
+    hold: Sign = Field(1, description="P3 (seedling taken) -> P4 (soil entry)")
+    throw: Sign = Field(1, description="P4 (soil entry) -> P5 (lowest point)")
+    release: Sign = Field(1, description="P5 (lowest point) -> P6 (soil exit)")
 
 
 class RulesSection(StrictModel):
