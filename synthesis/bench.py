@@ -116,9 +116,9 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list
     """The kind's bench cases: ``Kind.bench(specs: list[LoadedSpec] | None, seed)``; None = its default set.
 
     ``own_limit``: keep at most this many of the default cases of a kind with its own bench methods
-    (not the generic studies).  ``--quick``: the first case only, and a kind with its own methods and a
-    library example runs only the generic studies on that example (its own cases -- reference solve,
-    its peers -- are the slow part; the case note says so)."""
+    (not the generic studies).  ``--quick``: the first case of a default set only (specs a user names all run),
+    and a kind with its own methods and a library example runs only the generic studies on that example (its own
+    cases -- reference solve, its peers -- are the slow part; the case note says so)."""
     from synthesis import kinds
     from synthesis.core.kind import resolve
 
@@ -127,7 +127,7 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list
     left_out = 0
     if own and _quick.get() and kinds.get(kind).example:
         left_out, cases = len(cases), []
-    elif _quick.get():
+    elif _quick.get() and specs is None:        # the first of a default set; the specs a user names all run
         cases = cases[:1]
     elif own and own_limit is not None and len(cases) > own_limit:
         left_out, cases = len(cases) - own_limit, cases[:own_limit]

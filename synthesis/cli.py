@@ -739,7 +739,7 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
     items = [*problems, *(str(f) for f in spec_files)]
     for item in items or tuple(known):
         if item in known:
-            by_kind[item] = None
+            by_kind.setdefault(item, None)
         elif item in KINDS:
             raise click.BadParameter(f"kind {item!r} has no bench cases (kinds with a bench: {', '.join(known)})",
                                      param_hint="PROBLEM")
@@ -748,8 +748,8 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
             if loaded.kind not in known:
                 raise click.BadParameter(f"{item}: kind {loaded.kind!r} has no bench cases "
                                          f"(kinds with a bench: {', '.join(known)})", param_hint="PROBLEM")
-            if by_kind.get(loaded.kind, []) is not None:
-                by_kind.setdefault(loaded.kind, []).append(loaded)
+            # a spec file replaces its kind's default set, also when the kind is named too (before or after it)
+            by_kind[loaded.kind] = (by_kind.get(loaded.kind) or []) + [loaded]
         else:
             raise click.BadParameter(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
                                      param_hint="PROBLEM")

@@ -271,3 +271,27 @@ def test_a_run_that_misses_the_target_has_no_time_to_target():
     assert a["time_to_target_s"] == 1.5 and b["time_to_target_s"] is None
     assert b["time_to_target_text"] == "target not reached"
     assert b["time_ratio_text"].startswith("n/a (target not reached) by b")
+
+
+def test_quick_benches_every_spec_named_and_a_named_spec_replaces_its_kinds_default_set(tmp_path):
+    """`--problems SPEC` is "instead of its kind's default set": with the kind named too, and with --quick (which
+    keeps the first problem of a default set), every spec named is benched and nothing else -- the spec was dropped
+    (the kind's default set won) and --quick kept only the first of the specs named."""
+    import json
+    import subprocess
+    import sys
+
+    steering = LIBRARY / "steering"
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "bench", "steering_linkage", "--problems",
+                           str(steering / "steering_redesign_27.toml"), "--quick", "--no-extreme", "--out",
+                           str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((tmp_path / "bench" / "bench.json").read_text())["settings"]["problems"] == [
+        "steering_redesign_27"]
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "bench", "--problems",
+                           str(steering / "steering_redesign_40.toml"), "--problems",
+                           str(steering / "steering_redesign_27.toml"), "--quick", "--no-extreme", "--out",
+                           str(tmp_path), "--force"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((tmp_path / "bench" / "bench.json").read_text())["settings"]["problems"] == [
+        "steering_redesign_40", "steering_redesign_27"]
