@@ -121,6 +121,32 @@ def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     assert data["facts"]["tolerance"]["monte_carlo"]["samples"] == 10
 
 
+def test_the_tolerance_result_json_holds_the_rows_its_exit_code_reads(tmp_path):
+    """`agrisynth tolerance` exits 1 when a Monte-Carlo sample misses a rule (--samples 0: when a linearised worst case
+    misses); its result.json said every rule held (only the design's own rules), so `compare` showed the analysis as
+    passing.  Now it holds <rule>@monte_carlo rows (the pass rate, satisfied only at 100 %) or, with --samples 0,
+    <rule>@tolerance rows (the linear worst margin), and the exit code is 1 exactly when one of its rows fails."""
+    solve = cli_run("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
+                    cwd=tmp_path)
+    assert solve.returncode == 0, solve.stderr
+    run_dir = tmp_path / "runs" / "steering_redesign_27"      # its arm length at the rule's limit
+    for samples, suffix in (("100", "@monte_carlo"), ("0", "@tolerance")):
+        run = cli_run("tolerance", str(run_dir), "--length", "0.1", "--samples", samples, "--out",
+                      str(tmp_path / samples), cwd=tmp_path)
+        data = strict_json(tmp_path / samples / "steering_redesign_27-tolerance" / "result.json")
+        rows = {r["name"]: r for r in data["rules"]}
+        assert "versions" in data and f"steering_arm_length{suffix}" in rows
+        failing = [n for n, r in rows.items() if not r["satisfied"]]
+        assert run.returncode == (1 if failing else 0) and failing, (samples, run.stderr, failing)
+        mc = data["facts"]["tolerance"]["monte_carlo"]
+        if mc["samples"]:
+            assert rows["steering_arm_length@monte_carlo"]["value"] == mc["rules"]["steering_arm_length"]["pass_rate"]
+            assert mc["pass_rate"] < 1.0
+        page = cli_run("compare", str(run_dir), str(tmp_path / samples / "steering_redesign_27-tolerance"),
+                       "--out", str(tmp_path / f"cmp{samples}"), cwd=tmp_path)
+        assert page.returncode == 0 and f"{len(failing)} rule(s) violated" in page.stdout, page.stdout + page.stderr
+
+
 def test_robust_solve_states_the_monte_carlo_pass_rates_in_the_terminal_and_the_report(tmp_path):
     spec = tmp_path / "robust.toml"
     spec.write_text(STEERING.read_text() + "\n[tolerance]\nlength = 0.2\nangle = 0.3\nsamples = 40\nseed = 3\n")

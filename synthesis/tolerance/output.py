@@ -8,13 +8,42 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text
+from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text, versions
+
+
+def verdict_rows(facts: dict) -> list[dict]:
+    """The rows the analysis's exit code reads, in result.json's rule form, after the design's own rules: with a
+    Monte-Carlo, ``<rule>@monte_carlo`` per sampled rule (value its pass rate, satisfied when every sample holds it);
+    with none (--samples 0), ``<rule>@tolerance`` per rule (value its linearised worst-case margin, satisfied when
+    >= 0).  So a reader of result.json (``agrisynth compare``) sees what made the command exit 1."""
+    mc = facts["monte_carlo"]
+    rows = []
+    if mc["samples"]:
+        for name, r in mc["rules"].items():
+            rate = r.get("pass_rate")
+            rows.append({"name": f"{name}@monte_carlo", "value": rate, "limit": [1.0, None], "unit": "",
+                         "satisfied": rate is not None and rate >= 1.0, "margin": None if rate is None else rate - 1.0,
+                         "where": f"share of the {mc['samples']} Monte-Carlo samples (seed {mc['seed']}) in the "
+                                  f"tolerance box that hold the rule", "note": None})
+        if mc.get("unevaluable"):
+            rows.append({"name": "monte_carlo_evaluable", "value": 1.0 - mc["unevaluable"] / mc["samples"],
+                         "limit": [1.0, None], "unit": "", "satisfied": False,
+                         "margin": -mc["unevaluable"] / mc["samples"],
+                         "where": "share of the Monte-Carlo samples the kind's check could evaluate", "note": None})
+        return rows
+    for r in facts["stack_up"]:
+        m = r.get("linear_worst_margin")
+        rows.append({"name": f"{r['name']}@tolerance", "value": m, "limit": [0.0, None], "unit": r["unit"],
+                     "satisfied": m is not None and m >= 0, "margin": m,
+                     "where": "margin at the linearised worst case in the tolerance box", "note": None})
+    return rows
 
 
 def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
-    rules = facts["nominal_rules"]
+    rules = facts["nominal_rules"] + verdict_rows(facts)
     return {"schema_version": SCHEMA_VERSION, "kind": kind, "name": f"{name}-tolerance", "spec_sha256": sha,
-            "status": "evaluated", "design": facts["design"], "rules": rules, "facts": {"tolerance": facts}}
+            "status": "evaluated", "design": facts["design"], "rules": rules, "versions": versions(),
+            "facts": {"tolerance": facts}}
 
 
 def table(facts: dict) -> str:
