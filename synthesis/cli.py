@@ -377,12 +377,12 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed)
     finished = None
     replaceable = None
-    if resume is not None:
+    folder_name = loaded.name
+    if resume is not None:           # the result replaces RUN_DIR itself, whatever its name (a renamed run too)
         finished = startlog.read(resume, fingerprint)
-        out = resume.parent
-        replaceable = resume if resume.name == loaded.name else None
+        out, folder_name, replaceable = resume.resolve().parent, resume.resolve().name, resume
     out = Path("results") if out is None else out
-    run_folder = open_run_folder(out, loaded.name, force=force, spec=spec, replaceable=replaceable)
+    run_folder = open_run_folder(out, folder_name, force=force, spec=spec, replaceable=replaceable)
     committed = False
     try:
         log_file = startlog.StartLog(run_folder.staging / startlog.FILENAME, settings, fingerprint)

@@ -105,6 +105,7 @@ def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_unin
     assert not any("NonIpopt" in r["return_status"] for r in result["starts"])   # the cut-short start is not kept
     assert_given_design_kept(run)
 
+    run = run.rename(tmp_path / "a" / "renamed_run")     # the result replaces RUN_DIR, whatever its name now
     resumed = cli("solve", SPEC, "--resume", run, cwd=tmp_path)
     out, err = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, err
@@ -116,7 +117,7 @@ def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_unin
     b = json.loads((tmp_path / "b" / NAME / "result.json").read_text())
     assert comparable(a) == comparable(b)       # design bits, start table, verdict: identical
     assert len((run / "starts.jsonl").read_text().splitlines()) == 25
-    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == [NAME]
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["renamed_run"]
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGKILL, -9)])
