@@ -41,34 +41,39 @@ def fit_path(spec) -> Fit:
     n = s.control_points
     keys = spline_path(spec, None).keys
     _reachable(spec, keys)
-    v_min = s.min_speed * keys.length
-    px, py = cp.Variable(n), cp.Variable(n)
+    # the convex problem in units of the path length L (control points / L, speeds / L): in mm its numbers spanned
+    # 1e-3 (the energy / L^2) to 1e5 (v_min^2), and CLARABEL stopped short of the optimum ("InsufficientProgress")
+    # on smooth_redesign without the tangent at E, an optional field
+    scale = keys.length
+    v_min = s.min_speed
+    qx, qy = cp.Variable(n), cp.Variable(n)
     d3 = sp.third_differences(n)
     cons = []
     lam = {}
     for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
         b0 = sp.basis(n, u)[0]
-        cons += [b0 @ px == kx, b0 @ py == ky]
+        cons += [b0 @ qx == kx / scale, b0 @ qy == ky / scale]
         if name in keys.tangents:
             tx, ty = keys.tangents[name]
             b1 = sp.basis(n, u, 1)[0]
             lam[name] = cp.Variable()
-            cons += [b1 @ px == lam[name] * tx, b1 @ py == lam[name] * ty, lam[name] >= v_min]
+            cons += [b1 @ qx == lam[name] * tx, b1 @ qy == lam[name] * ty, lam[name] >= v_min]
     fold_u = keys.u[keys.index(keys.fold)]
     fx, fy = keys.points[keys.index(keys.fold)]
     b2 = sp.basis(n, fold_u, 2)[0]
-    cons.append(fx * (b2 @ px) + fy * (b2 @ py) >= -0.5 * v_min**2)
+    cons.append((fx / scale) * (b2 @ qx) + (fy / scale) * (b2 @ qy) >= -0.5 * v_min**2)
     # the energy n^5 sum |third differences|^2, divided by n^5 L^2 for the solver (same minimiser)
-    problem = cp.Problem(cp.Minimize((cp.sum_squares(d3 @ px) + cp.sum_squares(d3 @ py)) / keys.length**2), cons)
+    problem = cp.Problem(cp.Minimize(cp.sum_squares(d3 @ qx) + cp.sum_squares(d3 @ qy)), cons)
     try:
         problem.solve(solver=cp.CLARABEL)
     except cp.error.SolverError as exc:
-        raise SolverError(f"spline fit: the convex solver failed ({exc})") from None
-    if problem.status not in ("optimal", "optimal_inaccurate") or px.value is None:
+        raise SolverError(f"spline fit: the convex solver failed ({exc}); check [spline] keys and tangents, or "
+                          f"change control_points") from None
+    if problem.status not in ("optimal", "optimal_inaccurate") or qx.value is None:
         raise SolverError(f"spline fit: the key points and tangents admit no spline ({problem.status}); "
                           f"check [spline] keys and tangents, or raise control_points")
-    speeds = {k: float(v.value) for k, v in lam.items()}
-    control = _exact(keys, n, np.column_stack([px.value, py.value]), speeds)
+    speeds = {k: float(v.value) * scale for k, v in lam.items()}
+    control = _exact(keys, n, np.column_stack([qx.value, qy.value]) * scale, speeds)
     h = sp.energy_matrix(n)
     energy = float(control[:, 0] @ h @ control[:, 0] + control[:, 1] @ h @ control[:, 1])
     return Fit(control, energy, speeds, problem.status)

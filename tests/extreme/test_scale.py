@@ -54,7 +54,8 @@ DESIGN_TOLERANCE = 1e-6
 #: where a design differs by more, the mm design's own accuracy decides: solved again at tol 1e-11 (TIGHT) it
 #: moves by e; two solves each stopping within e of the optimum differ by up to 2 e, so "the same" is within
 #: 3 e.  guide_way smooth_redesign: its flat spline-energy optimum moves 1.1e-5 in mm itself from IPOPT's
-#: tol 1e-8 to 1e-11 (objective 0.98726475630 -> 0.98726475310), and at tol 1e-11 the three units agree
+#: tol 1e-8 to 1e-11 (objective 0.98726475630 -> 0.98726475310, measured before the fit was solved in units of
+#: the path length: its objective is relative to the fit's energy), and at tol 1e-11 the three units agree
 #: within 2.1e-9
 TIGHT = {"ipopt.tol": 1e-11, "ipopt.acceptable_tol": 1e-11}
 OWN_ERRORS = 3.0
