@@ -16,7 +16,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from constraints.base import limit_text
-from synthesis.errors import AgrisynthError
+from synthesis.errors import AgrisynthError, SpecError
 from synthesis.terminal import PIPED_WIDTH
 
 LIBRARY = Path(__file__).resolve().parent.parent / "problems"
@@ -61,7 +61,7 @@ def cli() -> None:
 
 
 @cli.command()
-@click.option("--dir", "library", type=click.Path(file_okay=False, path_type=Path), default=LIBRARY,
+@click.option("--dir", "library", type=click.Path(exists=True, file_okay=False, path_type=Path), default=LIBRARY,
               show_default=True, help="problem library folder")
 def problems(library: Path) -> None:
     """List the problem kinds (what each designs, whether it solves) and the problem library:
@@ -80,9 +80,16 @@ def problems(library: Path) -> None:
     table = add_columns(Table(title=f"problem library: {library}", title_justify="left"),
                         [(col, "left") for col in ("kind", "name", "file", "source")])
     for path in sorted(library.rglob("*.toml")):
-        data, _ = read_toml(path)
-        table.add_row(str(data.get("kind", "?")), str(data.get("name", "?")),
-                      str(path.relative_to(library)), str(data.get("source", "")))
+        if not path.is_file():          # a folder named x.toml is no spec
+            continue
+        try:
+            data, _ = read_toml(path)
+        except SpecError as exc:        # one unreadable file is a row saying so, not the end of the listing
+            table.add_row("?", "?", escape(str(path.relative_to(library))),
+                          escape(f"not read: {str(exc).removeprefix(f'{path}: ')}"))
+            continue
+        table.add_row(escape(str(data.get("kind", "?"))), escape(str(data.get("name", "?"))),
+                      escape(str(path.relative_to(library))), escape(str(data.get("source", ""))))
     console.print(table)
 
 

@@ -148,6 +148,20 @@ def test_problems_lists_the_library(tmp_path):
         assert f"taiwan_example{k}" in proc.stdout
 
 
+def test_problems_refuses_a_missing_folder_and_lists_past_a_bad_file(tmp_path):
+    """--dir naming no folder is bad input (exit 2: it listed an empty library, exit 0); in a library, a folder named
+    x.toml is no spec and an unreadable spec is a row saying why, not the end of the listing (it exited 2)."""
+    proc = run("problems", "--dir", str(tmp_path / "nowhere"), cwd=tmp_path)
+    assert proc.returncode == 2 and "does not exist" in proc.stderr and "Traceback" not in proc.stderr
+    library = tmp_path / "lib"
+    (library / "x.toml").mkdir(parents=True)
+    (library / "bad.toml").write_text('kind = "planting_fourbar"\nname = [1\n')
+    (library / "good.toml").write_text((PLANTING / "taiwan_example1.toml").read_text())
+    proc = run("problems", "--dir", str(library), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "taiwan_example1" in proc.stdout and "bad.toml" in proc.stdout and "not read: not valid TOML" in proc.stdout
+
+
 def test_help_teaches_every_command_and_every_kind_that_solves(tmp_path):
     from synthesis import kinds
 
