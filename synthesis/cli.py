@@ -511,15 +511,17 @@ class _HalfWidth(click.FloatRange):
         return number
 
 
-HALF_WIDTH = _HalfWidth(min=0)
+#: the spec's [tolerance] limits (spec.common.ToleranceSpec): the options take what a spec may say
+LENGTH_HALF_WIDTH = _HalfWidth(min=0, max=1e3)
+ANGLE_HALF_WIDTH = _HalfWidth(min=0, max=90)
 
 
 @cli.command("tolerance")
 @click.argument("target", metavar="RESULT|SPEC", type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="writes OUT/<name>-tolerance/")
-@click.option("--length", type=HALF_WIDTH, default=None, help="half-width for every length, mm")
-@click.option("--angle", type=HALF_WIDTH, default=None, help="half-width for every angle, deg")
+@click.option("--length", type=LENGTH_HALF_WIDTH, default=None, help="half-width for every length, mm (0 to 1000)")
+@click.option("--angle", type=ANGLE_HALF_WIDTH, default=None, help="half-width for every angle, deg (0 to 90)")
 @click.option("--tol", "tols", multiple=True, metavar="NAME=VALUE",
               help="half-width for one design variable, in its own unit (repeatable; over --length/--angle and the "
                    "spec's [tolerance] entry of that variable)")

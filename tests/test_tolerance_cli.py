@@ -58,9 +58,10 @@ def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, optio
 
 
 @pytest.mark.parametrize("option, value", [("--length", "nan"), ("--length", "inf"), ("--angle", "nan"),
-                                           ("--angle", "-0.1")])
+                                           ("--angle", "-0.1"), ("--length", "1e300"), ("--angle", "91")])
 def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_path, option, value):
-    """click's FloatRange(min=0) lets nan and inf through: the analysis then wrote nan margins and exited 1."""
+    """click's FloatRange(min=0) lets nan and inf through: the analysis then wrote nan margins and exited 1; and
+    the options take what a spec's [tolerance] may say (length <= 1000 mm, angle <= 90 deg), not 1e300."""
     run = cli_run("tolerance", str(STEERING), option, value, "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip().startswith(f"error: Invalid value for '{option}'") and "\n" not in run.stderr.strip()
