@@ -132,8 +132,8 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
 
 
 FORCE_HELP = ("replace OUT/<name>/ when it holds an earlier agrisynth run (without --force such a run is kept and "
-              "the command exits 2 before doing anything; a file or folder agrisynth did not write is never "
-              "replaced, with or without --force)")
+              "the command exits 2 before doing anything; a file or folder agrisynth did not write, also one put "
+              "inside such a run, is never replaced or deleted, with or without --force)")
 
 
 @cli.command()
@@ -528,7 +528,7 @@ ANGLE_HALF_WIDTH = _HalfWidth(min=0, max=90)
 @click.option("--samples", type=click.IntRange(min=0, max=1_000_000), default=None,
               help="Monte-Carlo samples (default the spec's [tolerance] samples, else 1000)")
 @click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None, help="Monte-Carlo seed (default 0)")
-@click.option("--force", is_flag=True, help=FORCE_HELP)
+@click.option("--force", is_flag=True, help=FORCE_HELP.replace("OUT/<name>/", "OUT/<name>-tolerance/"))
 def tolerance(target: Path, out: Path, length: float | None, angle: float | None, tols: tuple[str, ...],
               samples: int | None, seed: int | None, force: bool) -> None:
     """Exact sensitivities, linear tolerance stack-up and a seeded Monte-Carlo of a design.

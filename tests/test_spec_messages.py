@@ -169,3 +169,31 @@ def test_a_boolean_is_no_sign(tmp_path, spec, old, field, value):
     said = str(exc.value)
     assert len(said.splitlines()) == 1 and field in said and said.endswith(
         f"branch: expected -1 or 1, got {value.capitalize()}"), said
+
+
+def test_a_spec_saved_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """Editors that save "UTF-8 with BOM" put U+FEFF first; TOML's parser refused it as an invalid statement at line 1,
+    column 1.  The mark is no content: the spec reads as the same file without it; an empty spec is still refused;
+    a tilt beyond a turn is refused like zeta's."""
+    text = (PLANTING / "taiwan_example1.toml").read_text()
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load_spec(path).model == load_spec(PLANTING / "taiwan_example1.toml").model
+    path.write_bytes(b"\xef\xbb\xbf\n")
+    with pytest.raises(SpecError, match="empty file"):
+        load_spec(path)
+    path.write_text(text.replace("tilt = -34.1", "tilt = 1000", 1))
+    with pytest.raises(SpecError, match="seedbed.tilt: expected an angle within one turn"):
+        load_spec(path)
+
+
+def test_a_printed_figure_of_a_paper_is_positive(tmp_path):
+    """combing_chain's [[published]] values are an angle before the cut or a time: -1 s was taken as a figure to
+    compare with."""
+    from conftest import ROOT
+
+    text = (ROOT / "problems" / "combing_chain" / "hinomoto_ub550.toml").read_text()
+    path = tmp_path / "negative.toml"
+    path.write_text(text.replace("value = 0.85", "value = -1", 1))
+    with pytest.raises(SpecError, match=r"published\.0\.value: expected > 0, got -1"):
+        load_spec(path)

@@ -97,7 +97,7 @@ class PublishedEntry(StrictModel):
     beta: float = Field(gt=0, lt=180, description="initial plant angle of the printed row, deg")
     machine_speed: float = Field(gt=0, description="V_s we read the printed value at, m/s")
     chain_speed: float | None = Field(None, gt=0, description="V_r we read it at, m/s (delta only)")
-    value: float = Field(description="the printed value (deg or s)")
+    value: float = Field(gt=0, description="the printed value (deg or s; > 0: an angle before the cut, a time)")
     label: str = Field("", description="where it is printed, e.g. 'Table 13, delta (beta = 90), first'")
 
     @model_validator(mode="after")

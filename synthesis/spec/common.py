@@ -166,6 +166,9 @@ def read_toml(path: Path) -> tuple[dict[str, Any], str]:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise SpecError(f"{path}: not a UTF-8 text file (byte {exc.start})") from None
+    # a byte-order mark (Windows editors save "UTF-8 with BOM") is no content: TOML's parser refused it as "Invalid
+    # statement (at line 1, column 1)", which named nothing the user could see
+    text = text.removeprefix("\ufeff")
     if not text.strip():
         raise SpecError(f"{path}: empty file (a spec needs at least kind and name)")
     try:

@@ -56,6 +56,8 @@ class SeedbedSection(StrictModel):
     thickness: float = Field(22.0, gt=0, description="seedbed (mat) thickness P2-P3 level, mm (seed 000: 22)")
     seedling_height: float = Field(110.0, gt=0, description="seedling top above the seedbed bottom, mm (seed 000: 110)")
 
+    _tilt_within_a_turn = field_validator("tilt")(within_a_turn)
+
 
 class OperationSection(StrictModel):
     """Operating condition: forward speed and crank speed (the plant spacing follows).  Either may be given
