@@ -355,7 +355,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     from synthesis.errors import OutputError
     from synthesis.report import run_artifacts
     from synthesis.report.tables import objective_text
-    from synthesis.result import atomic_write_text, is_run_folder, open_run_folder, write_run
+    from synthesis.result import RUN_NAME, atomic_write_text, is_run_folder, open_run_folder, write_run
     from synthesis.spec import load_spec
 
     if scheduler is not None and workers is not None:
@@ -385,9 +385,13 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     finished = None
     replaceable = None
     folder_name = loaded.name
-    if resume is not None:           # the result replaces RUN_DIR itself, whatever its name (a renamed run too)
+    if resume is not None:
         finished = startlog.read(resume, fingerprint)
-        out, folder_name, replaceable = resume.resolve().parent, resume.resolve().name, resume
+        out = resume.resolve().parent
+        # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
+        # SIGKILL (.<name>.run-XXXX, README) is no folder name: its result goes to OUT/<spec name>, as before
+        if RUN_NAME.match(resume.resolve().name):
+            folder_name, replaceable = resume.resolve().name, resume
     out = Path("results") if out is None else out
     run_folder = open_run_folder(out, folder_name, force=force, spec=spec, replaceable=replaceable)
     committed = False
@@ -679,9 +683,13 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
     from synthesis.errors import OutputError
 
-    target = out.resolve()
+    import os
+
+    target = Path(os.path.realpath(out))              # realpath, not resolve(): a symlink loop is the loader's to name
     for given in results:                             # --force would replace a result being compared
-        read = given.resolve()
+        read = Path(os.path.realpath(given))
+        if read.name == "result.json" or read.is_file():
+            read = read.parent                        # a RESULT given as its result.json: its folder is the result
         if read == target or target in read.parents or read in target.parents:
             raise OutputError(f"--out {out} holds or is inside RESULT {given}: the page would replace what it "
                               f"compares; write it to another folder")

@@ -270,18 +270,42 @@ def folder_contents(folder: Path) -> list[str]:
     return sorted(n for n in out if n != RUN_MARKER)
 
 
-def _foreign(final: Path) -> list[str]:
-    """The entries of the run folder ``final`` its marker does not list (all of them when it lists none: a folder
-    written before markers listed their contents, whose files agrisynth cannot prove it wrote)."""
+#: files an operating system or a file browser leaves in any folder it shows: metadata, not a user's work; a run
+#: replacing its folder deletes them with it rather than refusing
+OS_CLUTTER = frozenset({".DS_Store", "Thumbs.db", "desktop.ini"})
+#: what a run folder written before its marker listed its contents may hold and still be replaced: the files
+#: agrisynth writes at a run folder's top level, by name, and its figures (any name: bench's samples_<problem>.png)
+LEGACY_FILES = frozenset({
+    "result.json", "report.html", "report.md", "ipopt.log", "warnings.log", "starts.jsonl", "solved.toml",
+    "compare.html", "bench.json", "bench.md", "paths.csv", "profile.csv", "centre_line.csv", "walls.csv",
+    "linkage.dxf", "profile.dxf", "guide_way.dxf"})
+LEGACY_FIGURES = (".png", ".svg", ".gif")
+
+
+def _listed(final: Path) -> list | None:
+    """The contents the marker of ``final`` lists (None: it lists none, a folder of an earlier version)."""
     try:
         listed = json.loads((final / RUN_MARKER).read_text(encoding="utf-8")).get("contents")
     except (OSError, ValueError, AttributeError):
-        listed = None
-    have = folder_contents(final)
-    if not isinstance(listed, list):
-        return have
-    known = set(listed)
-    return [n for n in have if n not in known]
+        return None
+    return listed if isinstance(listed, list) else None
+
+
+def _foreign(final: Path) -> list[str]:
+    """The entries of the run folder ``final`` agrisynth cannot prove it wrote: those its marker does not list; for a
+    marker that lists none (an earlier version's), anything but a top-level regular file named as agrisynth names its
+    outputs (LEGACY_FILES, LEGACY_FIGURES).  OS metadata files (OS_CLUTTER) are never counted."""
+    listed = _listed(final)
+    have = [n for n in folder_contents(final) if Path(n).name not in OS_CLUTTER]
+    if listed is not None:
+        known = set(listed)
+        return [n for n in have if n not in known]
+
+    def ours(name: str) -> bool:
+        path = final / name
+        return ("/" not in name and path.is_file() and not path.is_symlink()
+                and (name in LEGACY_FILES or name.endswith(LEGACY_FIGURES)))
+    return [n for n in have if not ours(n)]
 
 
 def _refusal(final: Path, spec: Path | None) -> str:
@@ -329,9 +353,11 @@ class RunFolder:
         if self.force or (self.replaceable is not None and _same(self.final, self.replaceable)):
             foreign = _foreign(self.final)
             if foreign:
-                shown = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
-                raise OutputError(f"{self.final} holds what agrisynth did not write there ({shown}): agrisynth "
-                                  f"never deletes it; move it out of the folder, or use another --out folder")
+                tops = list(dict.fromkeys(n.split("/")[0] + ("/" if (self.final / n.split("/")[0]).is_dir() else "")
+                                          for n in foreign))
+                shown = ", ".join(tops[:3]) + (f" and {len(tops) - 3} more" if len(tops) > 3 else "")
+                raise OutputError(f"{self.final} holds what agrisynth cannot prove it wrote there ({shown}): "
+                                  f"agrisynth never deletes it; move it out of that folder and run again")
             return True
         raise OutputError(f"{self.final} holds an earlier agrisynth run; give --force to replace it, "
                           f"or --out another folder")

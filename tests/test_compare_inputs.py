@@ -166,6 +166,13 @@ def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
         assert sorted(p.name for p in a.iterdir()) == before
     code, err = cli_in_process("compare", str(b), str(a / "result.json"), "--out", str(a), "--force")
     assert code == 2 and "holds or is inside RESULT" in err
+    code, err = cli_in_process("compare", str(a / "result.json"), str(b), "--out", str(a / "cmp"))
+    assert code == 2 and "holds or is inside RESULT" in err and not (a / "cmp").exists()
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)                          # a symlink loop is the loader's to name, in one line
+    for args in ((str(loop), str(b), "--out", str(tmp_path / "c1")), (str(a), str(b), "--out", str(loop))):
+        code, err = cli_in_process("compare", *args)
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(a), str(b), "--out",
                            str(tmp_path / "cmp")], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0 and (tmp_path / "cmp" / "compare.html").is_file(), proc.stderr

@@ -43,7 +43,7 @@ def test_force_never_deletes_what_a_user_put_in_a_run_folder(tmp_path, added):
     extra = final / added
     extra.parent.mkdir(exist_ok=True)
     extra.write_text("mine")
-    with pytest.raises(OutputError, match=f"holds what agrisynth did not write there \\({added.split('/')[0]}"):
+    with pytest.raises(OutputError, match=f"cannot prove it wrote there \\({added.split('/')[0]}"):
         write_folder(tmp_path / "run", artifacts("b"), force=True)
     assert extra.read_text() == "mine" and json.loads((final / "result.json").read_text())["token"] == "a"
     extra.unlink()
@@ -51,11 +51,51 @@ def test_force_never_deletes_what_a_user_put_in_a_run_folder(tmp_path, added):
         extra.parent.rmdir()
     _, replaced = write_folder(tmp_path / "run", artifacts("b"), force=True)   # as written again: replaced
     assert replaced and json.loads((final / "result.json").read_text())["token"] == "b"
+    (final / ".DS_Store").write_text("finder")       # OS metadata is not a user's work: replaced with the run
+    _, replaced = write_folder(tmp_path / "run", artifacts("c"), force=True)
+    assert replaced and not (final / ".DS_Store").exists()
+
+
+def test_a_run_folder_of_an_earlier_version_is_replaced_only_if_it_holds_agrisynths_file_names(tmp_path):
+    """A marker without a contents list (written before markers listed them): --force replaces the folder when it
+    holds only top-level files named as agrisynth names its outputs (and figures); a user's file or a subfolder is
+    refused, named in the one-line message."""
+    final, _ = write_folder(tmp_path / "run", artifacts("a"))
     marker = json.loads((final / RUN_MARKER).read_text())
     (final / RUN_MARKER).write_text(json.dumps({k: v for k, v in marker.items() if k != "contents"}))
-    with pytest.raises(OutputError, match="holds what agrisynth did not write there \\(report.html, result.json\\)"):
-        write_folder(tmp_path / "run", artifacts("c"), force=True)
-    assert json.loads((final / "result.json").read_text())["token"] == "b"
+    (final / "trajectory.png").write_text("figure")
+    _, replaced = write_folder(tmp_path / "run", artifacts("b"), force=True)
+    assert replaced and json.loads((final / "result.json").read_text())["token"] == "b"
+    for extra in ("notes.txt", "myspec.toml", "sub/x.png"):
+        (final / RUN_MARKER).write_text(json.dumps({k: v for k, v in marker.items() if k != "contents"}))
+        (final / extra).parent.mkdir(exist_ok=True)
+        (final / extra).write_text("mine")
+        top = extra.split("/")[0] + ("/" if "/" in extra else "")
+        with pytest.raises(OutputError, match=f"cannot prove it wrote there \\({top}\\)"):
+            write_folder(tmp_path / "run", artifacts("c"), force=True)
+        assert (final / extra).read_text() == "mine"
+        (final / extra).unlink()
+        if "/" in extra:
+            (final / extra).parent.rmdir()
+
+
+def test_resume_from_a_staging_folder_writes_the_spec_named_folder(tmp_path):
+    """README: after a SIGKILL or a power loss, resume from the staging folder (OUT/.<name>.run-XXXX, no folder name):
+    the result goes to OUT/<spec name>.  A finished run's folder stands in for the staging one (same marker and
+    starts.jsonl)."""
+    import shutil
+
+    spec = str(PLANTING.parent / "steering" / "steering_redesign_27.toml")
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", spec, "--starts", "2", "--workers", "1",
+                           "--out", str(tmp_path / "a")], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    staging = tmp_path / "b" / ".steering_redesign_27.run-abc123"
+    shutil.copytree(tmp_path / "a" / "steering_redesign_27", staging)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", spec, "--resume", str(staging)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "resumed: 2 finished start(s)" in proc.stdout
+    assert json.loads((tmp_path / "b" / "steering_redesign_27" / "result.json").read_text())["solver"]["starts"] == 2
 
 
 def test_force_through_the_cli_keeps_a_users_file_and_says_so(tmp_path):

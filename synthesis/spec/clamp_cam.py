@@ -15,7 +15,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.spec.common import (
     FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
-    starts_field, value_of, within_a_turn,
+    Sign, starts_field, value_of, within_a_turn,
 )
 
 KIND = "clamp_cam"
@@ -68,7 +68,7 @@ class FollowerSection(StrictModel):
                                                       "side that lowers the rise pressure angle (Table 1: 0)")
     pivot_distance: Variable | None = Field(None, description="oscillating: cam centre to arm pivot, mm")
     arm_length: Variable | None = Field(None, description="oscillating: arm pivot to roller centre, mm")
-    side: Literal[1, -1] = Field(1, description="oscillating: +1 roller on the +Y side of the line cam centre -> "
+    side: Sign = Field(1, description="oscillating: +1 roller on the +Y side of the line cam centre -> "
                                                 "pivot (follower along +X as in seed 001 eq 12), -1 the other")
 
     @model_validator(mode="after")
