@@ -682,14 +682,15 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     """
     from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
     from synthesis.errors import OutputError
+    from synthesis.result import is_run_folder
 
     import os
 
     target = Path(os.path.realpath(out))              # realpath, not resolve(): a symlink loop is the loader's to name
     for given in results:                             # --force would replace a result being compared
         read = Path(os.path.realpath(given))
-        if read.name == "result.json" or read.is_file():
-            read = read.parent                        # a RESULT given as its result.json: its folder is the result
+        if read.name == "result.json" and is_run_folder(read.parent):
+            read = read.parent                        # a run given as its result.json: the run folder is the result
         if read == target or target in read.parents or read in target.parents:
             raise OutputError(f"--out {out} holds or is inside RESULT {given}: the page would replace what it "
                               f"compares; write it to another folder")
