@@ -387,11 +387,12 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     folder_name = loaded.name
     if resume is not None:
         finished = startlog.read(resume, fingerprint)
-        out = resume.resolve().parent
+        where = resume.resolve()
+        out = where.parent
         # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
         # SIGKILL (.<name>.run-XXXX, README) is no folder name: its result goes to OUT/<spec name>, as before
-        if RUN_NAME.match(resume.resolve().name):
-            folder_name, replaceable = resume.resolve().name, resume
+        if RUN_NAME.match(where.name):
+            folder_name, replaceable = where.name, resume
     out = Path("results") if out is None else out
     run_folder = open_run_folder(out, folder_name, force=force, spec=spec, replaceable=replaceable)
     committed = False
@@ -680,11 +681,11 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
       agrisynth solve problems/planting_arm/redesign_from_example1.toml
       agrisynth compare results/taiwan_example1 results/redesign_from_example1
     """
+    import os
+
     from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
     from synthesis.errors import OutputError
     from synthesis.result import is_run_folder
-
-    import os
 
     target = Path(os.path.realpath(out))              # realpath, not resolve(): a symlink loop is the loader's to name
     for given in results:                             # --force would replace a result being compared

@@ -421,6 +421,23 @@ def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(sp
     assert again.iterations == iterations and again.objective == pytest.approx(objective, rel=1e-13)
 
 
+def _rows_at_start(kind, spec, aux_guess: str):
+    """(nlp, g, lbg, x): the kind's NLP for ``spec`` built without IPOPT, its auxiliaries pinned by the structural
+    equalities from the start design and ``nlp.<aux_guess>(design)``, and every row g (with its lower bounds) there,
+    the epigraph variables of a tolerance box at their start (1.01 |dg/dd| + 1e-9)."""
+    from synthesis.core.sensitivity import Sensitivity
+    from synthesis.tolerance.design import without_ipopt
+
+    solving = kind.solver_side()
+    with without_ipopt():
+        nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
+    t = nlp.compiled.t
+    design = dict(zip(nlp.names, (float(v) for v in nlp.init)))
+    x = Sensitivity(nlp.problem, len(nlp.names)).pin(np.concatenate([nlp.init, getattr(nlp, aux_guess)(design)]))
+    g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
+    return nlp, g, t.lbg, x
+
+
 def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_box():
     """robust_redesign_from_example3 (2 mm clearance, +-0.2 mm / +-0.3 deg): the robust NLP's clearance row is the
     loop top's height above the seedling-top line minus sum_j |d height / d d_j| tol_j, its lower bound the clearance.
@@ -428,22 +445,15 @@ def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_
     against an independent evaluation: the top found by a golden-section search of the claw tip's height over the
     crank angle (kinematics only), its derivatives by central differences of that maximum.  The nominal NLP's row
     is the plain height (held at the nominal design, as before)."""
-    from synthesis.core.sensitivity import Sensitivity
     from synthesis.kinematics.planting_arm import tip_derivatives
-    from synthesis.tolerance.design import without_ipopt
 
     loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example3.toml")
     spec = loaded.model
     rows = {}
     for label, kind in (("robust", kinds.solving_kind_for(loaded)), ("nominal", kinds.solving_kind(loaded.kind))):
-        solving = kind.solver_side()
-        with without_ipopt():
-            nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
-        n, t = len(nlp.names), nlp.compiled.t
+        nlp, g, lbg, x = _rows_at_start(kind, spec, "theta_guess")
         k = nlp.problem.robust_structural[-1]        # the clearance row: the last of the rows held in a box
-        x = Sensitivity(nlp.problem, n).pin(np.concatenate([nlp.init, nlp.theta_guess(dict(zip(nlp.names, nlp.init)))]))
-        g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
-        rows[label] = (g, t.lbg, x)
+        rows[label] = (g, lbg, x)
     x = rows["robust"][2]
     tip = tip_derivatives(spec.arm.branch)
     names = list(spec.variables())
@@ -482,22 +492,15 @@ def test_planting_point_order_is_held_at_its_worst_case_in_the_tolerance_box():
     (find_precision_points, a grid and brentq on the kinematics), its derivatives by central differences.  The robust
     row is that angle minus sum_j |d angle / d d_j| tol_j (the epigraph variables at their start, 1.01 |dg/dd| +
     1e-9), its lower bound the point gap; the nominal NLP's row is the angle itself."""
-    from synthesis.core.sensitivity import Sensitivity
     from synthesis.planting.scene import PlantingScene, find_precision_points
-    from synthesis.tolerance.design import without_ipopt
 
     loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example1.toml")
     spec = loaded.model
     rows = {}
     for label, kind in (("robust", kinds.solving_kind_for(loaded)), ("nominal", kinds.solving_kind(loaded.kind))):
-        solving = kind.solver_side()
-        with without_ipopt():
-            nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
-        n, t = len(nlp.names), nlp.compiled.t
+        nlp, g, lbg, x = _rows_at_start(kind, spec, "theta_guess")
         k = nlp.order_rows["P3-P4"]
-        x = Sensitivity(nlp.problem, n).pin(np.concatenate([nlp.init, nlp.theta_guess(dict(zip(nlp.names, nlp.init)))]))
-        g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
-        rows[label] = (g[k], t.lbg[k], k in nlp.problem.robust_structural, x[:n], list(nlp.names))
+        rows[label] = (g[k], lbg[k], k in nlp.problem.robust_structural, x[:len(nlp.names)], list(nlp.names))
     names = rows["robust"][4]
 
     def p3_to_p4(d):
@@ -522,25 +525,17 @@ def test_tillage_entry_and_exit_are_held_at_their_worst_case_in_the_tolerance_bo
     Checked at the spec's start against the kind's float motion (grid + brentq, check.motion): the crank angle from
     entry to the lowest point and from there to the exit, their derivatives by central differences; each robust row
     is that angle minus sum_j |d angle / d d_j| tol_j (epigraph variables at their start), its lower bound GAP."""
-    from synthesis.core.sensitivity import Sensitivity
     from synthesis.tillage_linkage import check
     from synthesis.tillage_linkage.nlp import EXISTENCE_ROWS, GAP
-    from synthesis.tolerance.design import without_ipopt
 
     path = tmp_path / "robust.toml"
     path.write_text((LIBRARY / "tillage/tillage_redesign.toml").read_text()
                     + "\n[tolerance]\nlength = 0.5\nangle = 0.5\nsamples = 10\nseed = 0\n")
     loaded = load_spec(path)
     spec = loaded.model
-    kind = kinds.solving_kind_for(loaded)
-    solving = kind.solver_side()
-    with without_ipopt():
-        nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
-    names, t = list(nlp.names), nlp.compiled.t
+    nlp, g, lbg, x = _rows_at_start(kinds.solving_kind_for(loaded), spec, "angles_guess")
+    names = list(nlp.names)
     n = len(names)
-    design = dict(zip(names, (float(v) for v in nlp.init)))
-    x = Sensitivity(nlp.problem, n).pin(np.concatenate([list(design.values()), nlp.angles_guess(design)]))
-    g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
     assert tuple(nlp.problem.robust_structural) == EXISTENCE_ROWS
     first = {}                                   # the g row of each structural entry (vector entries come first)
     k = 0
@@ -558,7 +553,7 @@ def test_tillage_entry_and_exit_are_held_at_their_worst_case_in_the_tolerance_bo
     slope = np.array([(angles(d + e) - angles(d - e)) / 2e-5 for e in np.eye(n) * 1e-5])     # (n, 2)
     worst = angles(d) - (1.01 * np.abs(slope) + 1e-9).T @ box
     for row, expected in zip((6, 7), worst):          # lowest - entry >= GAP, exit - lowest >= GAP
-        assert t.lbg[first[row]] == GAP and g[first[row]] == pytest.approx(expected, abs=1e-6)
+        assert lbg[first[row]] == GAP and g[first[row]] == pytest.approx(expected, abs=1e-6)
     assert np.all(worst < angles(d) - 0.01)        # the box moves them by more than 0.01 rad: a real difference
 
 

@@ -159,7 +159,8 @@ class PlantingNLP:
             rows.append((theta[b] - theta[a], gap, None))
         self.order_rows["P4-P5"] = len(rows)
         rows.append((theta["P5"] + TWO_PI - theta["P4"], gap, None))
-        existence = list(range(6, len(rows)))          # the crossings' directions and the points' order
+        # the crossings' directions and the points' order: every inequality row so far
+        existence = [i for i, (_, lb, ub) in enumerate(rows) if lb is None or ub is None or lb != ub]
         if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
             q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
             rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
