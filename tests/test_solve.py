@@ -166,17 +166,37 @@ def test_unreachable_p1p3_names_p1p3_among_the_conflicting_rules(tmp_path):
     assert "p1p3_distance" in elastic["conflicting"]
     error = exit_error(KIND, result, reports)
     assert isinstance(error, SolverError) and error.exit_code == 3
-    assert "Rules that conflict" in str(error) and "p1p3_distance (misses its limit by 12.9 mm)" in str(error)
+    # p1p3 200 mm is out of reach of the link bounds alone (7.36 mm short); the others give way to it
+    assert elastic["out_of_reach"] == ["p1p3_distance"]
+    assert elastic["alone"]["p1p3_distance"] == pytest.approx(7.363, abs=0.01)
+    assert "Rules that conflict" in str(error)
+    assert "p1p3_distance (misses its limit by 12.9 mm; by 7.36 mm even re-solved alone" in str(error)
 
 
-def test_infeasible_rule_set_names_the_conflict():
+def test_infeasible_rule_set_names_the_rules_out_of_reach():
     loaded = load_spec(PLANTING / "infeasible_deep_planting.toml")
     result, reports, _ = solve(loaded, workers=1)
     assert result.status == "infeasible"
-    assert result.elastic["relaxed"] == ["planting_depth", "transmission_angle_min"]
-    assert result.elastic["slacks"]["planting_depth"] == pytest.approx(15.0, abs=1e-5)    # 25 mm, limit 40
-    assert "grashof_crank_rocker" not in result.elastic["slacks"]          # kept hard: the crank must turn
-    assert "planting_depth (misses its limit by 15 mm)" in str(exit_error(KIND, result, reports))
+    elastic = result.elastic
+    assert elastic["relaxed"] == ["planting_depth", "transmission_angle_min"]
+    assert elastic["slacks"]["planting_depth"] == pytest.approx(15.0, abs=1e-5)    # 25 mm, limit 40
+    assert "grashof_crank_rocker" not in elastic["slacks"]          # kept hard: the crank must turn
+    # re-solved alone, every other rule relaxed: the depth is the spec's analysis depth, 25 mm, for every design;
+    # the smallest transmission angle of a crank-rocker is at the crank along the frame, cos mu = (l3^2 + l4^2 -
+    # (l1 - l2)^2) / (2 l3 l4), largest at the box corner l2, l3, l4 all at their lower bounds (each derivative of
+    # cos mu is positive there): 36.16 deg, 3.84 short of 40.  The entry angle costs the elastic design 0.03 deg more.
+    l1, l2, l3, l4 = 75.0, 31.5, 67.5, 72.0
+    mu = math.degrees(math.acos((l3 ** 2 + l4 ** 2 - (l1 - l2) ** 2) / (2 * l3 * l4)))
+    assert elastic["alone"]["planting_depth"] == pytest.approx(15.0, abs=1e-5)
+    assert elastic["alone"]["transmission_angle_min"] == pytest.approx(40.0 - mu, abs=1e-4)
+    assert elastic["slacks"]["transmission_angle_min"] - elastic["alone"]["transmission_angle_min"] > 0.01
+    assert elastic["out_of_reach"] == ["planting_depth", "transmission_angle_min"]
+    assert elastic["conflicting"] == ["planting_depth", "transmission_angle_min", "entry_angle"]
+    message = str(exit_error(KIND, result, reports))
+    assert "Rules out of reach" in message and "Rules that conflict" not in message
+    assert "planting_depth (misses its limit by 15 mm; by 15 mm even re-solved alone" in message
+    assert "transmission_angle_min (misses its limit by 3.87 deg; by 3.84 deg even re-solved alone" in message
+    assert "entry_angle hold them back too (binding there)" in message
 
 
 def test_no_start_converging_is_a_failed_run_not_a_conflict(tmp_path):
@@ -220,7 +240,7 @@ def test_infeasible_rule_set_exits_3_naming_the_conflict_cli(tmp_path):
     proc = cli("solve", str(PLANTING / "infeasible_deep_planting.toml"), "--out", str(tmp_path), "--workers", "1",
                cwd=tmp_path)
     assert proc.returncode == 3, proc.stdout + proc.stderr
-    assert "Rules that conflict" in proc.stderr and "planting_depth" in proc.stderr
+    assert "Rules out of reach" in proc.stderr and "planting_depth" in proc.stderr
     data = json.loads((tmp_path / "infeasible_deep_planting" / "result.json").read_text())
     assert data["status"] == "infeasible"          # the run's result is kept, not lost
     assert data["schema_version"] == 3 and "planting_depth" in data["elastic"]["conflicting"]

@@ -162,6 +162,7 @@ class NLPOutcome:
     wall_s: float
     log: str
     lam_g: np.ndarray = field(default_factory=lambda: np.zeros(0))   # constraint multipliers at return
+    p: np.ndarray = field(default_factory=lambda: np.zeros(0))       # the NLP parameters it was solved with
 
 
 class _Watch(ca.Callback):
@@ -273,11 +274,14 @@ class CompiledNLP:
         return self.t.n_x
 
     def solve(self, start: int, x0, extra0=None, p=None, watch: Callable[[int, float], bool] | None = None,
-              x_bounds: tuple[np.ndarray, np.ndarray] | None = None) -> NLPOutcome:
+              x_bounds: tuple[np.ndarray, np.ndarray] | None = None,
+              extra_bounds: tuple[np.ndarray, np.ndarray] | None = None) -> NLPOutcome:
         """One IPOPT run from x0 (the problem's x) and extra0 (extra variables; default the transcription's);
         ``watch(iteration, f)`` True stops it (a solver built ``watched=True``; module docstring); ``x_bounds``
         (lower, upper) replace the bounds of the problem's x for this run only (within them: an entry with equal
-        bounds is held fixed, e.g. a phase of a continuation).  A peer method (solved_with) has no such run."""
+        bounds is held fixed, e.g. a phase of a continuation); ``extra_bounds`` those of the extra variables
+        (any values, lower <= upper: e.g. elastic slacks held at a value).  A peer method (solved_with) has no
+        such run."""
         extra0 = self.t.extra_init if extra0 is None else np.asarray(extra0, float)
         p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
         lbw, ubw = self.t.lbw, self.t.ubw
@@ -289,12 +293,19 @@ class CompiledNLP:
                 raise ValueError(f"problem {self.problem.name}: x_bounds must be {n} lower and upper values within "
                                  f"the problem's bounds, lower <= upper")
             lbw, ubw = np.concatenate([lo, lbw[n:]]), np.concatenate([hi, ubw[n:]])
+        if extra_bounds is not None:
+            n, m = self.t.n_x, len(lbw) - self.t.n_x
+            lo, hi = (np.asarray(b, float) for b in extra_bounds)
+            if lo.shape != (m,) or hi.shape != (m,) or not np.all(lo <= hi):      # NaN fails too
+                raise ValueError(f"problem {self.problem.name}: extra_bounds must be {m} lower and upper values, "
+                                 f"lower <= upper")
+            lbw, ubw = np.concatenate([lbw[:n], lo]), np.concatenate([ubw[:n], hi])
         args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=lbw, ubx=ubw,
                     lbg=self.t.lbg, ubg=self.t.ubg)
         runner = _solve_with.get()
         if runner is not None:
-            if x_bounds is not None:
-                raise ValueError(f"problem {self.problem.name}: a run with its own x_bounds has no peer method")
+            if x_bounds is not None or extra_bounds is not None:
+                raise ValueError(f"problem {self.problem.name}: a run with its own bounds has no peer method")
             return runner(self, start, args["x0"], p)
         # into the unit IPOPT is given (all factors 1 in the kind's own units)
         u = self._unit
@@ -344,7 +355,7 @@ class CompiledNLP:
         # multipliers of the kind's rows: IPOPT's of f / sf and rows c * g / sg are sf * c / (sg c_f) of the kind's
         lam = np.asarray(sol["lam_g"]).ravel() * sf * self._row_unit / (sg * self._objective_unit)
         return NLPOutcome(start, x, f if math.isfinite(f) else math.inf, stats["return_status"],
-                          bool(stats["success"]), int(stats["iter_count"]), wall, log(), lam)
+                          bool(stats["success"]), int(stats["iter_count"]), wall, log(), lam, p)
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
         """Elastic form: each relaxable rule's slack at a returned decision vector, in the rule's unit."""

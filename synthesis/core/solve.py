@@ -147,7 +147,44 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     diagnosis = diagnosis_of(nlp.compiled, outcome.raw)
     design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
-    return replace(diagnosis, design=design or None)
+    return replace(diagnosis, design=design or None,
+                   alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks))
+
+
+#: "every other rule relaxed": their elastic slacks held at this many of their scales, far beyond any margin
+RELAXED_AWAY = 1e6
+
+
+def alone_slacks(compiled, raw, relaxed: list[str], slacks: dict[str, float]) -> dict[str, float | None]:
+    """Each rule the elastic re-solve gives up on, re-solved alone: from the elastic design, every other rule's
+    slack held at RELAXED_AWAY scales (the rule is out of the problem) and only its own minimised.  The slack it
+    still needs, in the rule's unit (None: that re-solve did not converge, nothing is known): positive, the
+    variable bounds or the mechanism itself keep the rule out of reach; below its elastic slack, the other rules
+    hold it back too.  The elastic design is a point of this relaxation, so the slack is at most the elastic one
+    (an interior-point re-solve may wander off to a worse local minimum: the elastic slack then stands).  A local
+    statement, from the elastic design, like the diagnosis."""
+    if not relaxed:
+        return {}
+    n = compiled.t.n_x
+    names = [r.name for r in compiled.rules]
+    free = [k for k, hard in enumerate(compiled.t.hard) if not hard]      # slack k is extra variable k
+    out: dict[str, float | None] = {}
+    for name in relaxed:
+        if interrupt.pending() is not None:
+            break
+        own = names.index(name)
+        lo, hi = compiled.t.lbw[n:].copy(), compiled.t.ubw[n:].copy()
+        extra0 = np.array(raw.x[n:], float)
+        for k in free:
+            if k != own:
+                lo[k] = hi[k] = extra0[k] = RELAXED_AWAY
+        try:
+            alone = compiled.solve(0, raw.x[:n], extra0, p=raw.p, extra_bounds=(lo, hi))
+        except (AgrisynthError, ValueError, ArithmeticError, RuntimeError):
+            out[name] = None
+            continue
+        out[name] = min(compiled.slack_values(alone.x)[name], slacks[name]) if alone.success else None
+    return out
 
 
 #: ``details.start_from`` of the start solved from the elastic re-solve's design

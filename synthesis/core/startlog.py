@@ -59,7 +59,7 @@ def _enc(v: Any) -> Any:
         return {k: _enc(x) for k, x in v.items()}
     if isinstance(v, NLPOutcome):
         return {"$nlp": {k: _enc(getattr(v, k)) for k in ("start", "x", "objective", "return_status", "success",
-                                                          "iterations", "wall_s", "lam_g")}}
+                                                          "iterations", "wall_s", "lam_g", "p")}}
     raise TypeError(f"cannot record a {type(v).__name__}")
 
 

@@ -146,6 +146,9 @@ class ElasticDiagnosis:
     tol: float = SLACK_TOL
     #: the elastic re-solve's design (variable -> value), where the relaxation's misses are measured; None unknown
     design: dict | None = None
+    #: relaxed rule -> the slack it still needs re-solved alone, every other rule relaxed away (core.solve.alone_slacks;
+    #: None: that re-solve did not converge)
+    alone: dict[str, float | None] = field(default_factory=dict)
 
     @property
     def relaxed(self) -> list[str]:
@@ -156,23 +159,42 @@ class ElasticDiagnosis:
                 if s > self.tol * self.scales[n]]
 
     @property
+    def out_of_reach(self) -> list[str]:
+        """The rules given up on that miss their limit even re-solved alone, every other rule relaxed away: the
+        variable bounds or the mechanism hold them back, not the other rules (in the order of ``relaxed``)."""
+        return [n for n in self.relaxed
+                if self.alone.get(n) is not None and self.alone[n] > self.tol * self.scales[n]]
+
+    @property
+    def held_back(self) -> list[str]:
+        """The rules given up on that the other rules hold back: re-solved alone they need less slack (or that
+        re-solve did not converge, and nothing says otherwise)."""
+        return [n for n in self.relaxed
+                if self.alone.get(n) is None or self.slacks[n] - self.alone[n] > self.tol * self.scales[n]]
+
+    @property
     def conflicting(self) -> list[str]:
-        """The rules in conflict: those given up on, then those holding against them (binding there)."""
+        """The rules in conflict: those given up on, then those holding against them (binding there).  The binding
+        rules are named only when they hold back a rule given up on: when every such rule needs as much slack
+        re-solved alone, they are bystanders (relaxing them would not bring it nearer its limit)."""
         relaxed = self.relaxed
-        return relaxed + [n for n in self.binding if n not in relaxed] if relaxed else []
+        if not relaxed:
+            return []
+        return relaxed + ([n for n in self.binding if n not in relaxed] if self.held_back else [])
 
     def to_json(self) -> dict:
         return {"return_status": self.return_status, "converged": self.converged,
                 "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
                 "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
-                "conflicting": self.conflicting,
+                "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
+                "out_of_reach": self.out_of_reach,
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
     def from_json(cls, data: dict) -> "ElasticDiagnosis":
         slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
-                   data.get("binding", []), design=data.get("design"))
+                   data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})))
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -220,15 +242,26 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     unevaluable = next((r.why for r in reports if r.why), None)
     cannot = f" A start's design could not be evaluated: {unevaluable}." if unevaluable else ""
     if status == "infeasible":
-        relaxed = elastic.relaxed
-        gives_up = ", ".join(f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]})"
-                             for name in relaxed)
+        relaxed, out = elastic.relaxed, elastic.out_of_reach
+
+        def misses(name: str) -> str:
+            text = f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]}"
+            if name in out:
+                text += (f"; by {elastic.alone[name]:.3g} {elastic.units[name]} even re-solved alone with every "
+                         f"other rule relaxed: the variable bounds or the mechanism itself keep it out of reach")
+            return text + ")"
+
         holding = [name for name in elastic.conflicting if name not in relaxed]
-        against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
+        if len(out) == len(relaxed):
+            which = "Rules out of reach"
+            against = f"; {', '.join(holding)} hold them back too (binding there)" if holding else ""
+        else:
+            which = "Rules that conflict"
+            against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
         return SolverError(
-            f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). Rules that conflict "
+            f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). {which} "
             f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
-            f"first): {gives_up}{against}. {relax_hint}{cannot}")
+            f"first): {', '.join(misses(name) for name in relaxed)}{against}. {relax_hint}{cannot}")
     if elastic is None:
         why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
     elif not elastic.converged:
