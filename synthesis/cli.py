@@ -683,7 +683,8 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     """
     import os
 
-    from synthesis.compare import is_bench, load_bench, load_candidates, open_output_folder, write_comparison
+    from synthesis.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
+                                   write_comparison)
     from synthesis.errors import OutputError
     from synthesis.result import is_run_folder
 
@@ -697,8 +698,8 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
                               f"compares; write it to another folder")
     folder = open_output_folder(out, force)          # refused (exit 2) before anything is read
     try:
-        bench = [res for p in results if is_bench(p) for res in load_bench(p)]
         cands = load_candidates([p for p in results if not is_bench(p)])
+        bench = [res for p in results if is_bench(p) for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
     except BaseException:
         folder.discard()
         raise

@@ -47,6 +47,18 @@ def load_bench(path: Path) -> list[dict]:
                           f"{str(exc)[:120]})") from None
 
 
+def bench_of_kind(path: Path, problems: list[dict], kind: str) -> list[dict]:
+    """The problems of a bench that are of the compared results' kind (a bench of every kind gives its rows for
+    this one); a bench with none of them is refused: its error-against-run-time figures are another mechanism's.
+    A problem whose kind the bench.json does not say is kept."""
+    kept = [p for p in problems if p.get("kind", kind) == kind]
+    if problems and not kept:
+        theirs = ", ".join(sorted({str(p.get("kind")) for p in problems}))
+        raise ResultError(f"{path}: a bench of {theirs} problems, not of {kind} like the results compared; give the "
+                          f"bench of a {kind} run (agrisynth bench {kind})")
+    return kept
+
+
 #: what the error-against-run-time plot and table read from each bench row
 BENCH_ROW_KEYS = ("problem", "method", "objective", "objectives", "objective_gap", "worst_violation",
                   "wall_s", "median_s", "trace")

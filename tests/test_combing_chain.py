@@ -252,7 +252,7 @@ def test_one_gear_solve_matches_the_closed_form_and_the_fine_grid():
     assert hi_vr == pytest.approx(0.4 * printed_K(d_lo, c.h, c.theta, c.e, b_lo), rel=1e-12)
     assert lo_vr < vr < hi_vr
     assert json.loads(json.dumps(result.to_json(), allow_nan=False))["facts"]["binding_rules"] == [
-        "window_top_at_beta110_Vs0.55", "window_bottom_at_beta70_Vs0.4"]
+        "window_top", "window_bottom"]
 
 
 def test_min_chain_speed_is_the_printed_inverse_of_eq12_at_the_upright_fast_corner(tmp_path):
@@ -268,7 +268,7 @@ def test_min_chain_speed_is_the_printed_inverse_of_eq12_at_the_upright_fast_corn
     assert result.design["chain_speed"] == pytest.approx(expected, rel=1e-7)
     assert result.objective["value"] == pytest.approx(expected, rel=1e-7)
     assert _fine_window_check(spec, result.design) >= -1e-9
-    assert result.extra["binding_rules"] == ["window_top_at_beta110_Vs0.55"]
+    assert result.extra["binding_rules"] == ["window_top"]
 
 
 def test_two_speed_solve_balances_both_gears():
@@ -297,13 +297,14 @@ def test_rules_recheck_on_the_10x_grid_and_names_agree_on_floats_and_symbols():
 
     nlp = CombingChainNLP(spec)
     assert [r.name for r in fine] == [r.name for r in nlp.problem.rules]
-    top = next(r for r in fine if r.name == "gear1_window_top_at_beta110_Vsswitch")
+    top = next(r for r in fine if r.name == "gear1_window_top")
     assert np.asarray(top.expr).size == 10 * 13 * 10 * 5
 
 
 def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tmp_path):
-    """The switch speed is free in the solve and a fixed number in solved.toml: the window rules at it were named
-    ..._Vsswitch in one and ..._Vs0.497996 in the other.  Now "switch" in both, the speed in the rule's `where`."""
+    """The switch speed is free in the solve and a fixed number in solved.toml: the window rules at it were once
+    named ..._Vsswitch in one and ..._Vs0.497996 in the other.  Now the requirement's name in both (gear1_window_top),
+    the speed in the rule's `where` ("V_s switch 0.497996 m/s")."""
     from synthesis import kinds
     from synthesis.core.solve import run_solve
     from synthesis.solved_spec import solved_toml
@@ -314,23 +315,26 @@ def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tm
     path.write_text(solved_toml(loaded, result))
     checked = kinds.checker("combing_chain")(load_spec(path))
     assert [r["name"] for r in checked.rules] == [r["name"] for r in result.rules]
-    assert "gear1_window_top_at_beta110_Vsswitch" in [r["name"] for r in checked.rules]
+    assert "gear1_window_top" in [r["name"] for r in checked.rules]
     switch = result.design["switch_speed"]
-    top = next(r for r in checked.rules if r["name"] == "gear1_window_top_at_beta110_Vsswitch")
+    top = next(r for r in checked.rules if r["name"] == "gear1_window_top")
     assert f"V_s switch {switch:g} m/s" in top["where"]
 
 
-def test_infeasible_window_exits_3_naming_the_corners(tmp_path):
+def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(TOO_WIDE), "--out", str(tmp_path),
                            "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     err = " ".join(proc.stderr.split())
     assert "Traceback" not in proc.stderr
-    assert "window_bottom_at_beta70_Vs0.4" in err and "window_top_at_beta110_Vs0.62" in err
+    assert "window_bottom" in err and "window_top" in err
     data = json.loads((tmp_path / "one_gear_too_wide" / "result.json").read_text(),
                       parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
     assert data["status"] == "infeasible"
-    assert set(data["elastic"]["conflicting"]) == {"window_bottom_at_beta70_Vs0.4", "window_top_at_beta110_Vs0.62"}
+    assert set(data["elastic"]["conflicting"]) == {"window_bottom", "window_top"}
+    where = {r["name"]: r["where"] for r in data["rules"]}
+    assert where["window_top"].endswith("largest at beta 110 deg, V_s 0.62 m/s")
+    assert where["window_bottom"].endswith("smallest at beta 70 deg, V_s 0.4 m/s")
     # the closed form agrees: 0.62 x K(110, 100) > 0.4 x K(70, 80)
     cf = data["facts"]["closed_form"]
     assert not cf["one_gear_feasible"] and cf["one_gear_chain_speed_interval"][0] > cf["one_gear_chain_speed_interval"][1]

@@ -195,6 +195,11 @@ def test_redesign_solves_smooth_without_undercut(baseline):
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
     result, _, _ = solve_spec(loaded, workers=1)
     assert result.status == "optimal" and result.all_satisfied
+    # every design variable is in the result (DESIGN.md), the fixed arm as well as the solved control points
+    arm = loaded.model.arm
+    assert {k: result.design[k] for k in ("R", "d", "r", "beta", "roller_radius")} == {
+        "R": arm.radius, "d": arm.claw, "r": arm.crank, "beta": arm.beta, "roller_radius": arm.roller_radius}
+    assert len(result.design) == 5 + 2 * loaded.model.spline.control_points
     f = result.extra
     for key in f["spline"]["keys"].values():
         assert key["miss_mm"] < 1e-6
@@ -488,3 +493,30 @@ def test_the_fit_needs_no_tangent_at_every_key_point(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
                           cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode in (0, 1) and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_the_compared_cycle_figure_draws_each_designs_own_limits_and_fold_window():
+    """liang_2z (pressure angle <= 45 deg, no roller margin) beside smooth_redesign (<= 85 deg, margin 2 mm): each
+    design's limits are drawn, not only the first's, and the fold window its pressure-angle rule skips is shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from synthesis import kinds
+    from synthesis.guide_way.plots import _cycle_axes, _fold_window
+
+    results = [kinds.checker("guide_way")(load_spec(LIBRARY / "guide_way" / f"{n}.toml"))
+               for n in ("liang_2z", "smooth_redesign")]
+    fig = _cycle_axes(results, "t")
+    curvature, pressure = fig.axes
+    flat = lambda ax: sorted({round(float(line.get_ydata()[0]), 9) for line in ax.lines  # noqa: E731
+                              if len(line.get_xdata()) == 2 and line.get_ydata()[0] == line.get_ydata()[1]})
+    assert flat(curvature) == [15.0, 17.0] and flat(pressure) == [45.0, 85.0]
+    spans = [p for p in pressure.patches]
+    assert len(spans) == 4                 # two windows per design (before and after the fold)
+    for res in results:
+        fold = res.extra["key_theta_deg"][res.extra["fold"]["point"]]
+        w = res.extra["fold_window_deg"]
+        assert _fold_window(res) == [(fold["arriving"] - w, fold["arriving"]), (fold["leaving"], fold["leaving"] + w)]
+    plt.close(fig)

@@ -204,3 +204,47 @@ def test_the_design_table_names_a_crank_rockers_assembly_from_its_facts():
     assert rows["branch (assembly)"].values == [first.extra["branch"], -first.extra["branch"]]
     assert rows["branch (assembly)"].differs == [False, True]
     assert not any(d for name, row in rows.items() if name != "branch (assembly)" for d in row.differs)
+
+
+def test_the_design_tables_bounds_are_each_designs_own_where_the_specs_disagree(runs, tmp_path):
+    """A published design (every variable fixed) beside a redesign of it (free within bounds): the bounds column
+    once showed the first design's "fixed" for both, beside the redesign's "at lower bound"."""
+    from synthesis.compare import write_comparison
+    from synthesis.spec import load_spec
+
+    folder, redesign = checked_run(PLANTING / "redesign_from_example1.toml", tmp_path / "runs")
+    published = runs[0][1]
+    rows = {row.name: row for row in design_rows(candidates([published, redesign]))}
+    bounds = list(load_spec(PLANTING / "redesign_from_example1.toml").model.arm.l2.bounds)
+    assert rows["l2"].per_candidate == [(False, None), (True, bounds)]
+    assert rows["l2"].free is None and rows["l2"].bounds is None
+    assert rows["l1"].per_candidate is None and rows["l1"].free is False          # fixed in both
+    same = {row.name: row for row in design_rows(candidates([redesign, redesign]))}
+    assert same["l2"].per_candidate is None and same["l2"].free is True and list(same["l2"].bounds) == bounds
+    page = write_comparison(load_candidates([runs[0][0], folder]), tmp_path / "cmp").read_text()
+    row = next(line for line in page.splitlines() if line.startswith("<tr><td>l2</td>"))
+    assert "taiwan_example1: fixed<br>redesign_from_example1: [" in row
+
+
+def test_run_facts_say_the_workers_and_how_many_starts_ran(runs):
+    import dataclasses
+
+    from synthesis.report.tables import run_facts
+
+    base = runs[0][1]
+    solver = {"name": "ipopt", "return_status": "Solve_Succeeded", "iterations": 9, "wall_s": 1.5, "starts": 40,
+              "seed": 0, "best_start": 3, "workers": 2}
+    ran = [dataclasses.replace(base, name=f"r{k}", solver=dict(solver, starts_run=n)) for k, n in enumerate((40, 37, 41))]
+    facts = dict(run_facts(candidates(ran)))
+    assert facts["starts"] == [40, "37 of 40 run", "40 + 1 from the elastic re-solve"]
+    assert facts["workers"] == [2, 2, 2] and facts["wall time (build and starts), s"] == [1.5] * 3
+
+
+def test_a_bench_of_another_kind_is_refused_and_a_bench_of_every_kind_gives_this_kinds_rows(tmp_path):
+    from synthesis.compare import bench_of_kind
+
+    crank = [{"problem": "a", "kind": "crank_rocker"}, {"problem": "b", "kind": "crank_rocker"}]
+    with pytest.raises(ResultError, match="a bench of crank_rocker problems, not of planting_fourbar"):
+        bench_of_kind(tmp_path / "bench.json", crank, "planting_fourbar")
+    mixed = crank + [{"problem": "c", "kind": "planting_fourbar"}, {"problem": "d"}]
+    assert [p["problem"] for p in bench_of_kind(tmp_path, mixed, "planting_fourbar")] == ["c", "d"]

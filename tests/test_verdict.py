@@ -76,7 +76,7 @@ UNREACHABLE = {
                   "no_undercut", 2),
     # one chain speed cannot serve 0.4-0.62 m/s: the corner (beta 110, V_s 0.62) conflicts with (beta 70, V_s 0.4)
     "combing_chain": ("combing_chain/redesign_window_80_100.toml",
-                      [("machine_speed = [0.4, 0.55]", "machine_speed = [0.4, 0.62]")], "window_top_at_beta110_Vs0.62", 2),
+                      [("machine_speed = [0.4, 0.55]", "machine_speed = [0.4, 0.62]")], "window_top", 2),
     "comb_finger": ("comb_finger/redesign_max_combing.toml", [("root_clearance = 30.0", "root_clearance = 300.0")],
                     "root_clearance", 2),
 }

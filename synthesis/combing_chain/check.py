@@ -38,7 +38,7 @@ class GearTrace:
     chain_speed: Any
     machine_speeds: list
     delta: list                  # rows over beta, columns over the gear's machine speeds
-    label_lo: str                # how the rule names call the ends of its machine-speed range
+    label_lo: str                # how the rules' `where` calls the ends of its machine-speed range
     label_hi: str
 
 
@@ -107,8 +107,10 @@ def rule_prefix(spec: CombingChainSpec, gear: int) -> str:
 def rules_of(spec: CombingChainSpec, tr: Trace) -> list[Rule]:
     """Every rule on a trace of floats or CasADi symbols.  delta falls with the chain travel
     s = V_r (e + h cot beta) / V_s, so over a gear's grid it is largest at the most upright-or-back plant and
-    the fastest machine (beta_hi, V_s hi) and smallest at (beta_lo, V_s lo): the window rules are named by
-    those corners (the re-check confirms where the worst sample lies)."""
+    the fastest machine (beta_hi, V_s hi) and smallest at (beta_lo, V_s lo): the window rules name
+    those corners in their ``where`` (the re-check confirms where the worst sample lies); their names are the
+    requirement's alone (window_top, window_bottom), the same whatever the spec's ranges, so that two designs
+    compare row by row."""
     c, window = spec.chain, spec.requirements.window
     b_lo, b_hi = spec.operation.plant_angle
     cos_t = math.cos(math.radians(c.theta))
@@ -124,9 +126,9 @@ def rules_of(spec: CombingChainSpec, tr: Trace) -> list[Rule]:
             continue
         flat = [d for row in gt.delta for d in row]
         where = f"every beta {b_lo:g}-{b_hi:g} deg at every {span}"
-        rules.append(window_top_rule(f"{pre}window_top_at_beta{b_hi:g}_Vs{gt.label_hi}", flat, window[1],
+        rules.append(window_top_rule(f"{pre}window_top", flat, window[1],
                                      f"{where}; largest at beta {b_hi:g} deg, V_s {hi_text} m/s"))
-        rules.append(window_bottom_rule(f"{pre}window_bottom_at_beta{b_lo:g}_Vs{gt.label_lo}", flat, window[0],
+        rules.append(window_bottom_rule(f"{pre}window_bottom", flat, window[0],
                                         f"{where}; smallest at beta {b_lo:g} deg, V_s {lo_text} m/s"))
     return rules
 

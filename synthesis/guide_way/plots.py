@@ -73,6 +73,57 @@ def guide_figure(result: Result, path: Path) -> None:
     plt.close(fig)
 
 
+def _rule_limit(result: Result, name: str, side: int):
+    return next((r["limit"][side] for r in result.rules if r["name"] == name), None)
+
+
+def _fold_window(result: Result) -> list[tuple[float, float]]:
+    """The arm angles (deg) where the pressure-angle rule is not held: within ``fold_window_deg`` of the fold's
+    arriving and leaving angles (synthesis.guide_way.scene.pressure_masks)."""
+    f = result.extra
+    w, fold = f.get("fold_window_deg") or 0.0, (f.get("fold") or {}).get("point")
+    at = (f.get("key_theta_deg") or {}).get(fold) or {}
+    if w <= 0 or "arriving" not in at or "leaving" not in at:
+        return []
+    return [(at["arriving"] - w, at["arriving"]), (at["leaving"], at["leaving"] + w)]
+
+
+def _draw_limits(axes, results: list[Result]) -> None:
+    """Each design's own limits (the rules it is checked against: they may differ between specs), in its colour
+    when several are drawn, and the fold window where its pressure-angle rule is not held."""
+    several = len(results) > 1
+    drawn: set = set()
+    for k, res in enumerate(results):
+        colour = f"C{k}" if several else "tab:red"
+        whose = f" ({res.name})" if several else ""
+        radius = _rule_limit(res, "no_undercut", 0)
+        if radius is not None and ("r", radius) not in drawn:
+            drawn.add(("r", radius))
+            roller = res.extra["arm"]["roller_radius"]
+            axes[0].axhline(radius, color=colour, ls="--", lw=0.9,
+                            label=f"smallest radius allowed {radius:g} mm{whose}: roller {roller:g} mm + margin "
+                                  f"{radius - roller:g} mm")
+        limit = _rule_limit(res, "pressure_angle", 1)
+        if limit is not None and ("p", limit) not in drawn:
+            drawn.add(("p", limit))
+            axes[1].axhline(limit, color=colour, ls="--", lw=0.9, label=f"limit {limit:g} deg{whose}")
+        for j, (lo, hi) in enumerate(_fold_window(res)):
+            key = ("w", round(lo % 360.0, 6), round(hi % 360.0, 6))
+            if key in drawn:
+                continue
+            drawn.add(key)
+            label = f"fold window{whose}: pressure angle not held" if j == 0 else None
+            for a, b in _wrapped(lo, hi):
+                axes[1].axvspan(a, b, color=colour if several else "0.5", alpha=0.12, label=label)
+                label = None
+
+
+def _wrapped(lo: float, hi: float) -> list[tuple[float, float]]:
+    """[lo, hi] deg as spans within [0, 360]."""
+    lo, hi = lo % 360.0, lo % 360.0 + (hi - lo)
+    return [(lo, min(hi, 360.0))] + ([(0.0, hi - 360.0)] if hi > 360.0 else [])
+
+
 def _cycle_axes(results: list[Result], title: str):
     fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for k, res in enumerate(results):
@@ -84,11 +135,7 @@ def _cycle_axes(results: list[Result], title: str):
             radius = 1.0 / np.maximum(np.abs(np.array(c["curvature_per_mm"])), 1e-9)
             axes[0].plot(th[order], np.minimum(radius, 300.0)[order], color=colour, lw=1.2, label=lab)
             axes[1].plot(th[order], np.array(c["pressure_angle_deg"])[order], color=colour, lw=1.2)
-    rr = results[0].extra["arm"]["roller_radius"]
-    axes[0].axhline(rr, color="tab:red", ls="--", lw=0.9, label=f"roller radius {rr:g} mm")
-    limit = next((r["limit"][1] for r in results[0].rules if r["name"] == "pressure_angle"), None)
-    if limit is not None:
-        axes[1].axhline(limit, color="tab:red", ls="--", lw=0.9, label=f"limit {limit:g} deg")
+    _draw_limits(axes, results)
     axes[0].set_ylabel("centre-line radius of curvature, mm (cut at 300)")
     axes[1].set_ylabel("pressure angle, deg")
     axes[1].set_xlabel("arm angle theta, deg")

@@ -75,12 +75,21 @@ def _header(cands: list[Candidate]) -> str:
                    for i, c in enumerate(cands))
 
 
-def _bounds_cell(row) -> str:
-    if row.free is None:
-        return "<td class='note'>&ndash;</td>"
-    if not row.free:
-        return "<td class='note'>fixed</td>"
-    return f"<td class='limit'>{_num(row.bounds)}</td>" if row.bounds else "<td class='note'>free</td>"
+def _bounds_text(free, bounds) -> str:
+    if free is None:
+        return "&ndash;"
+    if not free:
+        return "fixed"
+    return _num(bounds) if bounds else "free"
+
+
+def _bounds_cell(row, cands: list[Candidate]) -> str:
+    if row.per_candidate is not None:        # the specs disagree: each candidate's own, by its heading
+        lines = [f"{html.escape(c.label)}: {_bounds_text(free, bounds)}"
+                 for c, (free, bounds) in zip(cands, row.per_candidate)]
+        return f"<td class='note'>{'<br>'.join(lines)}</td>"
+    text = _bounds_text(row.free, row.bounds)
+    return f"<td class='{'limit' if row.free and row.bounds else 'note'}'>{text}</td>"
 
 
 _AT_BOUND = {"lower": "at lower bound", "upper": "at upper bound"}
@@ -96,7 +105,7 @@ def design_table(cands: list[Candidate]) -> str:
             flag = f"<span class='bound'>{_AT_BOUND[mark]}</span>" if mark else ""
             cells.append(f"<td class='num{' diff' if d else ''}'>{_num(v, 6)}{flag}</td>")
         start = f"<td class='num'>{_num(row.given, 6)}</td>" if given else ""
-        rows.append(f"<tr><td>{html.escape(row.name)}</td><td>{html.escape(row.unit)}</td>{_bounds_cell(row)}"
+        rows.append(f"<tr><td>{html.escape(row.name)}</td><td>{html.escape(row.unit)}</td>{_bounds_cell(row, cands)}"
                     f"{start}{''.join(cells)}</tr>")
     head = f"<th>{GIVEN_HEADING}</th>" if given else ""
     return (f"<table class='design'><tr><th>variable</th><th>unit</th><th>bounds</th>{head}{_header(cands)}</tr>\n"
@@ -107,7 +116,8 @@ def design_columns(cands: list[Candidate]) -> str:
     """What each column of the design table means, said once."""
     items = [("unit", "as written in the spec (mm, deg, m/s, r/min)."),
              ("bounds", "[lo, hi] within which <code>solve</code> may move a free variable; <i>fixed</i>: the spec "
-                        "gives a number, kept as it is; &ndash;: the result does not say.")]
+                        "gives a number, kept as it is; &ndash;: the result does not say.  Where the designs' specs "
+                        "disagree (a published design beside a redesign), each design's own is listed.")]
     if shows_given(cands):
         items.append(("given (start 0)", "the design written in the spec: the question; the next column is the answer."))
     items.append(("at lower / upper bound", "the value sits on that bound: the optimiser was held there, and "

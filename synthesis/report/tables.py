@@ -46,10 +46,17 @@ class DesignRow:
     values: list            # one per candidate; None where a candidate has no such variable
     differs: list[bool]     # per candidate: differs from the baseline (always False for the baseline)
     unit: str = ""          # from the spec's field description ("" when the result does not say)
-    bounds: list | None = None      # [lo, hi] of a free variable (the first candidate that says)
+    bounds: list | None = None      # [lo, hi] of a free variable (every candidate that says agrees)
     free: bool | None = None        # None: the result does not say (check-only kinds, older results)
     at_bound: list[str] = field(default_factory=list)   # per candidate: "lower", "upper" or ""
     given: object = None    # the spec's given design (start 0), for a single solve's report
+    #: per candidate (free, bounds) when the candidates' specs disagree (a published design's fixed value beside
+    #: a redesign's free one): then ``bounds`` and ``free`` are None and each candidate's is shown; None: they agree
+    per_candidate: list | None = None
+
+
+def _as_list(bounds):
+    return list(bounds) if isinstance(bounds, (list, tuple)) else bounds
 
 
 def _differs(a, b) -> bool:
@@ -76,9 +83,13 @@ def design_rows(cands: list[Candidate]) -> list[DesignRow]:
         infos = [(c.result.design_variables or {}).get(n) for c in cands]
         info = next((i for i in infos if i), None) or {}
         given = (cands[0].result.baseline_design or {}).get(n) if len(cands) == 1 else None
+        said = [(i.get("free"), _as_list(i.get("bounds"))) for i in infos if i]
+        agree = all(x == said[0] for x in said)
+        per = None if agree else [(i.get("free"), _as_list(i.get("bounds"))) if i else (None, None) for i in infos]
         rows.append(DesignRow(n, values, [i > 0 and _differs(values[0], v) for i, v in enumerate(values)],
-                              info.get("unit", ""), info.get("bounds"), info.get("free"),
-                              [at_bound(v, i) for v, i in zip(values, infos)], given))
+                              info.get("unit", ""), info.get("bounds") if agree else None,
+                              info.get("free") if agree else None,
+                              [at_bound(v, i) for v, i in zip(values, infos)], given, per))
     # the assembly a linkage is solved on is a setting of its spec, not a design value (result.json holds it in
     # facts.branch: fourbar_path's name "open" / "crossed", crank_rocker's +1 / -1), yet two designs of the same
     # dimensions on the two assemblies are different mechanisms: the table names it
@@ -231,6 +242,16 @@ def objective_text(objective: dict | None) -> str | None:
     return f"{objective.get('name') or 'objective'} = {shown}{f' {unit}' if unit and value is not None else ''}"
 
 
+def _starts_text(solver: dict | None):
+    """The starts asked for, or "37 of 40" when fewer ran (interrupted, or stopped early by the kind's rule)."""
+    if not solver or solver.get("starts") is None:
+        return None
+    ran, asked = solver.get("starts_run"), solver["starts"]
+    if ran is None or ran == asked:
+        return asked
+    return f"{asked} + 1 from the elastic re-solve" if ran > asked else f"{ran} of {asked} run"
+
+
 def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
     """What a reader needs to reproduce each candidate: status, solver, starts, seed, versions, spec hash."""
     def solver(c: Candidate, key: str):
@@ -241,8 +262,9 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
         ("objective", [objective_text(c.result.objective) for c in cands]),
         ("solver status", [solver(c, "return_status") for c in cands]),
         ("iterations", [solver(c, "iterations") for c in cands]),
-        ("wall time, s", [solver(c, "wall_s") for c in cands]),
-        ("starts", [solver(c, "starts") for c in cands]),
+        ("wall time (build and starts), s", [solver(c, "wall_s") for c in cands]),
+        ("workers", [solver(c, "workers") for c in cands]),
+        ("starts", [_starts_text(c.result.solver) for c in cands]),
         ("seed", [solver(c, "seed") for c in cands]),
         ("best start", [solver(c, "best_start") for c in cands]),
         ("fine-grid worst violation", [c.result.fine_grid_worst_violation for c in cands]),
