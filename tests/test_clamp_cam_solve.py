@@ -170,7 +170,7 @@ def _with(loaded: LoadedSpec, **sections) -> LoadedSpec:
     return LoadedSpec(spec.model_copy(update=updates), loaded.path, loaded.sha256)
 
 
-def test_infeasible_rule_set_names_the_conflicting_rule():
+def test_infeasible_rule_set_names_the_rules_out_of_reach_of_the_bounds():
     from synthesis.spec.common import FreeVariable
 
     loaded = load_spec(CAMS / "opening_cam_redesign.toml")
@@ -180,7 +180,27 @@ def test_infeasible_rule_set_names_the_conflicting_rule():
     assert result.status == "infeasible"
     err = diagnose_infeasible(small, result, reports)
     assert err.exit_code == 3
-    assert "Rules that conflict" in str(err) and "pressure_angle_return" in str(err)
+    # only the base radius is free, and a larger base circle only lowers the pressure angles: both rules are out of
+    # reach of the bound 55 mm, whatever the other rules ask.  Re-solved alone, each misses by what the float check
+    # of the cam at 55 mm (the design the elastic re-solve ends at) says it misses by
+    elastic = result.elastic
+    assert elastic["out_of_reach"] == ["pressure_angle_return", "no_undercut"]
+    assert elastic["design"]["base_radius"] == pytest.approx(55.0, abs=1e-5)
+    from synthesis import kinds
+
+    at_bound = kinds.checker("clamp_cam")(_with(loaded, cam={"base_radius": 55.0}, follower={"offset": 0.0}))
+    checked = {r["name"]: r for r in at_bound.rules if not r["satisfied"]}
+    assert set(checked) == {"pressure_angle_return", "no_undercut"}
+    assert elastic["alone"]["pressure_angle_return"] == pytest.approx(-checked["pressure_angle_return"]["margin"],
+                                                                      rel=0.02)
+    # the NLP holds the undercut as (roller + min working radius) x pitch curvature <= 1, a ratio (unit "1"): the
+    # check's smallest working radius 1.366 mm is a pitch radius of 1.366 + 3.5 mm against the 3.5 + 3 mm needed
+    need = small.model.cam.roller_radius + small.model.rules.min_working_radius
+    pitch = checked["no_undercut"]["value"] + small.model.cam.roller_radius
+    assert elastic["units"]["no_undercut"] == "1"
+    assert elastic["alone"]["no_undercut"] == pytest.approx(need / pitch - 1.0, rel=0.02)
+    assert "Rules out of reach" in str(err) and "pressure_angle_return" in str(err)
+    assert "even re-solved alone" in str(err) and "hold them back too" not in str(err)
 
 
 def test_peak_pressure_angle_objective_balances_rise_and_return():

@@ -157,7 +157,7 @@ def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
     lead = "Rules out of reach" if elastic["out_of_reach"] == elastic["relaxed"] else "Rules that conflict"
     assert lead in message and rule in message
     for name in elastic["out_of_reach"]:
-        assert f"by {elastic['alone'][name]:.3g} {elastic['units'][name]} even re-solved alone" in message
+        assert f"by {elastic['alone'][name]:.3g}" in message and "even re-solved alone" in message
 
 
 @pytest.mark.parametrize("kind", sorted(NOTHING_FREE))

@@ -244,11 +244,14 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     if status == "infeasible":
         relaxed, out = elastic.relaxed, elastic.out_of_reach
 
+        def unit(name: str) -> str:        # a rule the NLP holds as a ratio (unit "1") misses by a ratio
+            return " (a ratio of its NLP row)" if elastic.units[name] == "1" else f" {elastic.units[name]}"
+
         def misses(name: str) -> str:
-            text = f"{name} (misses its limit by {elastic.slacks[name]:.3g} {elastic.units[name]}"
+            text = f"{name} (misses its limit by {elastic.slacks[name]:.3g}{unit(name)}"
             if name in out:
-                text += (f"; by {elastic.alone[name]:.3g} {elastic.units[name]} even re-solved alone with every "
-                         f"other rule relaxed: the variable bounds or the mechanism itself keep it out of reach")
+                text += (f"; by {elastic.alone[name]:.3g}{unit(name)} even re-solved alone with every other rule "
+                         f"relaxed: the variable bounds or the mechanism itself keep it out of reach")
             return text + ")"
 
         holding = [name for name in elastic.conflicting if name not in relaxed]
