@@ -69,13 +69,14 @@ def test_a_toy_kind_with_conflicting_rules_is_infeasible_and_names_them(tmp_path
     assert result.elastic["out_of_reach"] == []
     assert all(abs(alone) < 1e-6 for alone in result.elastic["alone"].values()) and result.elastic["alone"]
     message = str(exit_error(toy, result, reports))
-    assert "Rules that conflict" in message and "even re-solved alone" not in message
+    assert "Rules that conflict" in message and "re-solved alone from there" not in message
 
 
 def test_a_toy_kind_rule_beyond_the_bounds_is_out_of_reach_not_in_conflict(tmp_path, toy):
-    """y >= 25 with y bounded by 20: no other rule is to blame, and the disc (radius 30) is not named."""
+    """y >= 25 with y bounded by 20: no other rule is to blame.  The disc (radius 20) touches the elastic design
+    (0, 20) and binds there, but relaxing it would not lift y past its bound: it is not named as conflicting."""
     path = tmp_path / "toy.toml"
-    path.write_text(TOY.format(radius=30.0, y_min=25.0))
+    path.write_text(TOY.format(radius=20.0, y_min=25.0))
     loaded = load_spec(path)
     result, reports, _ = run_solve(toy, loaded, workers=1)
     assert result.status == "infeasible"
@@ -83,9 +84,10 @@ def test_a_toy_kind_rule_beyond_the_bounds_is_out_of_reach_not_in_conflict(tmp_p
     assert elastic["relaxed"] == ["above_line"] and elastic["slacks"]["above_line"] == pytest.approx(5.0, abs=1e-6)
     assert elastic["alone"]["above_line"] == pytest.approx(5.0, abs=1e-6)
     assert elastic["out_of_reach"] == ["above_line"] and elastic["conflicting"] == ["above_line"]
+    assert "inside_disc" in elastic["binding"] and elastic["hard"] == []
     message = str(exit_error(toy, result, reports))
     assert "Rules out of reach" in message and "inside_disc" not in message
-    assert "above_line (misses its limit by 5 mm; by 5 mm even re-solved alone with every other rule relaxed" in message
+    assert "above_line (misses its limit by 5 mm; still by 5 mm re-solved alone from there, every other rule relaxed" in message
 
 
 def test_a_design_the_elastic_re_solve_finds_without_slack_is_solved_from_and_kept(tmp_path, toy, monkeypatch):

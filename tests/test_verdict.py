@@ -130,12 +130,14 @@ def test_no_start_converged_is_failed_not_infeasible(tmp_path, kind):
     assert "Rules that conflict" not in message
 
 
-#: the kinds whose UNREACHABLE rule the variable bounds (or the mechanism) keep out of reach even with every other
-#: rule relaxed; in the others it is reachable alone and another rule is what it conflicts with (fourbar_path: a
-#: transmission window [89.9, 90.1] deg, the minimum alone can be met; tillage: its bar-slot angle gives way for the
-#: rearward speed; combing_chain: one speed cannot serve both corners of the window)
-OUT_OF_REACH = {"clamp_cam", "comb_finger", "crank_rocker", "guide_tube", "guide_way", "picker_double_crank",
-                "planting_fourbar", "steering_linkage"}
+#: the kinds whose UNREACHABLE rule is still missed re-solved alone from the elastic design, every other rule relaxed;
+#: in the others it is met alone and another rule is what it conflicts with (fourbar_path: a transmission window
+#: [89.9, 90.1] deg, the minimum alone can be met; tillage: its bar-slot angle gives way for the rearward speed;
+#: combing_chain: one speed cannot serve both corners of the window) or nothing is known (guide_way: the re-solve
+#: alone wanders off to a worse local minimum, 29.4 against the elastic 4.71, and proves nothing)
+OUT_OF_REACH = {"clamp_cam", "comb_finger", "crank_rocker", "guide_tube", "picker_double_crank", "planting_fourbar",
+                "steering_linkage"}
+UNKNOWN_ALONE = {"guide_way"}
 
 
 @pytest.mark.parametrize("kind", sorted(UNREACHABLE))
@@ -147,17 +149,15 @@ def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
     elastic = result.elastic
     assert elastic["converged"] and elastic["relaxed"]
     assert any(name.startswith(rule) for name in elastic["conflicting"]), elastic
-    # every rule given up on is re-solved alone; the elastic design is a point of that relaxation, so the slack
-    # alone is never more than the elastic one
+    # every rule given up on is re-solved alone: known, or None where that re-solve proves nothing
     assert set(elastic["alone"]) == set(elastic["relaxed"])
-    for name, alone in elastic["alone"].items():
-        assert alone is not None and -1e-6 * elastic["scales"][name] <= alone <= elastic["slacks"][name]
+    assert (kind in UNKNOWN_ALONE) == any(alone is None for alone in elastic["alone"].values()), elastic
     assert (kind in OUT_OF_REACH) == any(name.startswith(rule) for name in elastic["out_of_reach"]), elastic
     message = str(diagnose_infeasible(loaded, result, reports))
     lead = "Rules out of reach" if elastic["out_of_reach"] == elastic["relaxed"] else "Rules that conflict"
     assert lead in message and rule in message
     for name in elastic["out_of_reach"]:
-        assert f"by {elastic['alone'][name]:.3g}" in message and "even re-solved alone" in message
+        assert f"still by {elastic['alone'][name]:.3g}" in message and "re-solved alone from there" in message
 
 
 @pytest.mark.parametrize("kind", sorted(NOTHING_FREE))

@@ -21,7 +21,7 @@ from synthesis.core import interrupt
 from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.kind import Kind, Setting, Solving
-from synthesis.core.verdict import (FINE, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
+from synthesis.core.verdict import (FINE, SLACK_TOL, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
                                     diagnosis_of, failure_of, measured, report_of, status_note, status_of,
                                     unsatisfied_error)
 from synthesis.errors import AgrisynthError, SolverError, SpecError
@@ -41,6 +41,8 @@ class Run:
     wall_s: float
     #: the NLP the driver built in this process (reused by a start from the elastic re-solve's design)
     nlp: Any = None
+    #: of ``wall_s``, building that NLP in this process (the workers' own builds are in the rest)
+    build_s: float = 0.0
 
 
 def _recheck(solving: Solving, setting: Setting, outcome):
@@ -76,6 +78,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     # the wall time includes building the NLP, here and in each worker alike: it compares across worker counts
     t0 = time.perf_counter()
     nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
+    build_s = time.perf_counter() - t0
     if not free_variables(nlp):
         raise SpecError(f"{kind.name}: solve needs at least one free design variable (give one bounds, e.g. "
                         f"{_written_at(setting.spec, nlp.names[0])} = {{init = ..., bounds = [lo, hi]}}); every one "
@@ -114,7 +117,8 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         wall = time.perf_counter() - t0
         kept = [reports[i] for i in sorted(reports)]
         best_kept = best_in_start_order(kept, maximise) if kept else None
-        partial = (Run(kept, best_kept, starts, setting.seed, None if scheduler else workers, scheduler, wall)
+        partial = (Run(kept, best_kept, starts, setting.seed, None if scheduler else workers, scheduler, wall,
+                       build_s=build_s)
                    if best_kept is not None and failure_of(best_kept.outcome) is None else None)
         raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
@@ -122,7 +126,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     best = best_in_start_order(ordered, maximise)
     if failure_of(best.outcome) is not None:             # ranked last: every start failed to run
         raise SolverError(f"{kind.name}: no start could be solved: {_failures(ordered)}")
-    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp)
+    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp, build_s)
 
 
 def _failures(reports: list[StartReport], shown: int = 3) -> str:
@@ -159,15 +163,16 @@ RELAXED_AWAY = 1e6
 def alone_slacks(compiled, raw, relaxed: list[str], slacks: dict[str, float]) -> dict[str, float | None]:
     """Each rule the elastic re-solve gives up on, re-solved alone: from the elastic design, every other rule's
     slack held at RELAXED_AWAY scales (the rule is out of the problem) and only its own minimised.  The slack it
-    still needs, in the rule's unit (None: that re-solve did not converge, nothing is known): positive, the
-    variable bounds or the mechanism itself keep the rule out of reach; below its elastic slack, the other rules
-    hold it back too.  The elastic design is a point of this relaxation, so the slack is at most the elastic one
-    (an interior-point re-solve may wander off to a worse local minimum: the elastic slack then stands).  A local
-    statement, from the elastic design, like the diagnosis."""
+    still needs, in the rule's unit: positive, near that design the variable bounds or the mechanism (and the rules
+    kept hard in the elastic form) hold the rule back, not the other rules; below its elastic slack, the other
+    rules hold it back too.  None: nothing is known -- the re-solve did not converge, or it wandered off to a worse
+    local minimum than the elastic design, which is a point of this relaxation.  A local statement, from the
+    elastic design, like the diagnosis: another region of the bounds may meet the rule."""
     if not relaxed:
         return {}
     n = compiled.t.n_x
     names = [r.name for r in compiled.rules]
+    scale_of = {r.name: r.scale for r in compiled.rules}
     free = [k for k, hard in enumerate(compiled.t.hard) if not hard]      # slack k is extra variable k
     out: dict[str, float | None] = {}
     for name in relaxed:
@@ -184,7 +189,9 @@ def alone_slacks(compiled, raw, relaxed: list[str], slacks: dict[str, float]) ->
         except (AgrisynthError, ValueError, ArithmeticError, RuntimeError):
             out[name] = None
             continue
-        out[name] = min(compiled.slack_values(alone.x)[name], slacks[name]) if alone.success else None
+        value = compiled.slack_values(alone.x)[name] if alone.success else None
+        worse = value is not None and value > slacks[name] + SLACK_TOL * scale_of[name]
+        out[name] = None if value is None or worse else min(value, slacks[name])
     return out
 
 

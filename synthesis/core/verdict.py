@@ -146,9 +146,11 @@ class ElasticDiagnosis:
     tol: float = SLACK_TOL
     #: the elastic re-solve's design (variable -> value), where the relaxation's misses are measured; None unknown
     design: dict | None = None
-    #: relaxed rule -> the slack it still needs re-solved alone, every other rule relaxed away (core.solve.alone_slacks;
-    #: None: that re-solve did not converge)
+    #: relaxed rule -> the slack it still needs re-solved alone from the elastic design, every other rule relaxed away
+    #: (core.solve.alone_slacks; None: nothing is known)
     alone: dict[str, float | None] = field(default_factory=dict)
+    #: the rules the elastic form keeps hard (no slack: without them the model is undefined), held in every re-solve
+    hard: list[str] = field(default_factory=list)
 
     @property
     def relaxed(self) -> list[str]:
@@ -160,8 +162,10 @@ class ElasticDiagnosis:
 
     @property
     def out_of_reach(self) -> list[str]:
-        """The rules given up on that miss their limit even re-solved alone, every other rule relaxed away: the
-        variable bounds or the mechanism hold them back, not the other rules (in the order of ``relaxed``)."""
+        """The rules given up on that miss their limit even re-solved alone from the elastic design, every other
+        rule relaxed away: near that design the variable bounds or the mechanism (and the rules kept hard) hold them
+        back, not the other rules (in the order of ``relaxed``).  Local, like the diagnosis: another region of the
+        bounds may meet them."""
         return [n for n in self.relaxed
                 if self.alone.get(n) is not None and self.alone[n] > self.tol * self.scales[n]]
 
@@ -187,14 +191,15 @@ class ElasticDiagnosis:
                 "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
                 "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
                 "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
-                "out_of_reach": self.out_of_reach,
+                "out_of_reach": self.out_of_reach, "hard": self.hard,
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
     def from_json(cls, data: dict) -> "ElasticDiagnosis":
         slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
-                   data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})))
+                   data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})),
+                   hard=list(data.get("hard", [])))
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -202,7 +207,8 @@ def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
     rules = [r for r, hard in zip(compiled.rules, compiled.t.hard) if not hard]
     return ElasticDiagnosis(raw.return_status, raw.success, compiled.slack_values(raw.x),
                             {r.name: r.unit for r in rules}, {r.name: r.scale for r in rules},
-                            compiled.active_rules(raw))
+                            compiled.active_rules(raw),
+                            hard=[r.name for r, hard in zip(compiled.rules, compiled.t.hard) if hard])
 
 
 def status_of(best: StartReport, elastic: ElasticDiagnosis | None) -> str:
@@ -250,8 +256,10 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         def misses(name: str) -> str:
             text = f"{name} (misses its limit by {elastic.slacks[name]:.3g}{unit(name)}"
             if name in out:
-                text += (f"; by {elastic.alone[name]:.3g}{unit(name)} even re-solved alone with every other rule "
-                         f"relaxed: the variable bounds or the mechanism itself keep it out of reach")
+                kept = f" but {', '.join(elastic.hard)}" if elastic.hard else ""
+                text += (f"; still by {elastic.alone[name]:.3g}{unit(name)} re-solved alone from there, every other "
+                         f"rule{kept} relaxed: near that design the variable bounds or the mechanism hold it back, "
+                         f"not the other rules")
             return text + ")"
 
         holding = [name for name in elastic.conflicting if name not in relaxed]

@@ -90,25 +90,35 @@ def _fold_window(result: Result) -> list[tuple[float, float]]:
 
 def _draw_limits(axes, results: list[Result]) -> None:
     """Each design's own limits (the rules it is checked against: they may differ between specs), in its colour
-    when several are drawn, and the fold window where its pressure-angle rule is not held."""
+    when several are drawn (a limit two designs share is drawn once, naming both), and the fold window where its
+    pressure-angle rule is not held."""
     several = len(results) > 1
+    radii: dict[float, list[int]] = {}
+    angles: dict[float, list[int]] = {}
+    for k, res in enumerate(results):
+        radius, limit = _rule_limit(res, "no_undercut", 0), _rule_limit(res, "pressure_angle", 1)
+        if radius is not None:
+            radii.setdefault(radius, []).append(k)
+        if limit is not None:
+            angles.setdefault(limit, []).append(k)
+
+    def style(ks: list[int]) -> tuple[str, str]:
+        return ("tab:red", "") if not several else (f"C{ks[0]}", f" ({', '.join(results[k].name for k in ks)})")
+
+    for radius, ks in radii.items():
+        colour, whose = style(ks)
+        rollers = sorted({results[k].extra["arm"]["roller_radius"] for k in ks})
+        roller = f"roller {rollers[0]:g} mm + margin {radius - rollers[0]:g} mm" if len(rollers) == 1 else "roller + margin"
+        axes[0].axhline(radius, color=colour, ls="--", lw=0.9, label=f"smallest radius allowed {radius:g} mm{whose}: "
+                                                                     f"{roller}")
+    for limit, ks in angles.items():
+        colour, whose = style(ks)
+        axes[1].axhline(limit, color=colour, ls="--", lw=0.9, label=f"limit {limit:g} deg{whose}")
     drawn: set = set()
     for k, res in enumerate(results):
-        colour = f"C{k}" if several else "tab:red"
-        whose = f" ({res.name})" if several else ""
-        radius = _rule_limit(res, "no_undercut", 0)
-        if radius is not None and ("r", radius) not in drawn:
-            drawn.add(("r", radius))
-            roller = res.extra["arm"]["roller_radius"]
-            axes[0].axhline(radius, color=colour, ls="--", lw=0.9,
-                            label=f"smallest radius allowed {radius:g} mm{whose}: roller {roller:g} mm + margin "
-                                  f"{radius - roller:g} mm")
-        limit = _rule_limit(res, "pressure_angle", 1)
-        if limit is not None and ("p", limit) not in drawn:
-            drawn.add(("p", limit))
-            axes[1].axhline(limit, color=colour, ls="--", lw=0.9, label=f"limit {limit:g} deg{whose}")
+        colour, whose = style([k])
         for j, (lo, hi) in enumerate(_fold_window(res)):
-            key = ("w", round(lo % 360.0, 6), round(hi % 360.0, 6))
+            key = (round(lo % 360.0, 6), round(hi % 360.0, 6))
             if key in drawn:
                 continue
             drawn.add(key)
