@@ -540,6 +540,17 @@ def _json_safe(x):
     return x
 
 
+def best_so_far(row: dict, best_known: float) -> list[tuple[float, float]]:
+    """The median run's best-so-far gap (floored at FLOOR) against time, drawn as steps: one point per
+    improvement, held to the median run's end (a trace whose one improvement came early is then a line, not a
+    lone point far from the run's marker)."""
+    trace = [(t, max(f - best_known, FLOOR)) for t, f in row["trace"] if f is not None and math.isfinite(f)]
+    end = row.get("median_s")
+    if trace and isinstance(end, (int, float)) and math.isfinite(end) and end > trace[-1][0]:
+        trace.append((end, trace[-1][1]))
+    return trace
+
+
 def plot_error_vs_time(results: list[dict], path: Path) -> None:
     """Log-log: objective gap and worst violation against wall time, per problem (colour) and method
     (marker); every repeat a point, the median run's best-so-far trace a line."""
@@ -559,11 +570,10 @@ def plot_error_vs_time(results: list[dict], path: Path) -> None:
             gaps = [max(o - res["best_known"], FLOOR) if o is not None and math.isfinite(o) else math.nan
                     for o in row["objectives"]]
             ax_gap.plot(row["wall_s"], gaps, m, color=colour, ms=6, mfc="none" if m != "o" else colour, alpha=0.8)
-            trace = [(t, max(f - res["best_known"], FLOOR)) for t, f in row["trace"]
-                     if f is not None and math.isfinite(f)]
+            trace = best_so_far(row, res["best_known"])
             if trace:
                 ax_gap.plot(*zip(*trace), "-" if methods.index(row["method"]) == 0 else "--", color=colour,
-                            lw=0.9, alpha=0.6)
+                            lw=0.9, alpha=0.6, drawstyle="steps-post")
             vio = max(row["worst_violation"], FLOOR) if math.isfinite(row["worst_violation"]) else math.nan
             ax_vio.plot([row["median_s"]], [vio], m, color=colour, ms=7, mfc="none" if m != "o" else colour)
         ax_gap.plot([], [], "-", color=colour, label=res["problem"])

@@ -297,3 +297,15 @@ def test_quick_benches_every_spec_named_and_a_named_spec_replaces_its_kinds_defa
     assert proc.returncode == 0, proc.stderr
     assert json.loads((tmp_path / "bench" / "bench.json").read_text())["settings"]["problems"] == [
         "steering_redesign_40", "steering_redesign_27"]
+
+
+def test_the_best_so_far_line_is_held_to_the_median_runs_end():
+    """A method whose one improvement came at 0.25 s in a 10.1 s median run was drawn as a lone point at 0.25 s (one
+    point makes no line); the trace is held to the run's end, and a gap below the floor is drawn at the floor."""
+    from synthesis.bench import FLOOR, best_so_far
+
+    row = {"trace": [(0.25, 0.7435)], "median_s": 10.1}
+    assert best_so_far(row, 0.5) == [(0.25, pytest.approx(0.2435)), (10.1, pytest.approx(0.2435))]
+    row = {"trace": [(0.1, 2.0), (0.5, None), (0.9, 1.0)], "median_s": 0.9}          # ends at its last improvement
+    assert best_so_far(row, 1.0) == [(0.1, 1.0), (0.9, FLOOR)]
+    assert best_so_far({"trace": [], "median_s": 3.0}, 0.0) == []

@@ -248,3 +248,18 @@ def test_a_bench_of_another_kind_is_refused_and_a_bench_of_every_kind_gives_this
         bench_of_kind(tmp_path / "bench.json", crank, "planting_fourbar")
     mixed = crank + [{"problem": "c", "kind": "planting_fourbar"}, {"problem": "d"}]
     assert [p["problem"] for p in bench_of_kind(tmp_path, mixed, "planting_fourbar")] == ["c", "d"]
+
+
+def test_operating_conditions_show_the_range_a_design_was_solved_over(runs):
+    """An envelope design (facts.envelope: forward speed 0.5-0.75 m/s) was listed at its nominal 0.6 m/s alone."""
+    import dataclasses
+
+    from synthesis.report.tables import operating_conditions
+
+    base = runs[0][1]
+    envelope = {"conditions": {"forward_speed": {"range": [0.5, 0.75], "nominal": 0.6, "section": "operation"}}}
+    ranged = dataclasses.replace(base, name="ranged", extra={**base.extra, "envelope": envelope})
+    rows = {(label, unit): values for label, unit, values in operating_conditions(candidates([base, ranged]))}
+    speed = base.extra["operation"]["forward_speed_m_s"]
+    assert rows[("forward speed", "m/s")] == [speed, f"{speed:g} (nominal; over 0.5-0.75)"]
+    assert rows[("crank speed", "r/min")][0] == rows[("crank speed", "r/min")][1]      # not a range: as it was

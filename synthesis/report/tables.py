@@ -195,8 +195,17 @@ def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
 
     for i, c in enumerate(cands):
         facts = c.result.extra or {}
+        # a design solved over an operating range (facts.envelope) holds over the range, not at its nominal value
+        ranges = {(cond.get("section"), name): cond.get("range")
+                  for name, cond in ((facts.get("envelope") or {}).get("conditions") or {}).items()
+                  if isinstance(cond, dict)}
         for section in ("operation", "vehicle"):
             for key, value in (facts.get(section) or {}).items():
+                span = next((r for (sec, name), r in ranges.items()
+                             if sec == section and (key == name or key.startswith(name + "_"))), None)
+                if (isinstance(span, list) and len(span) == 2 and isinstance(value, (int, float))
+                        and not isinstance(value, bool)):
+                    value = f"{value:g} (nominal; over {span[0]:g}-{span[1]:g})"
                 put(*_condition(key), i, value)
         cam = facts.get("cam") or {}
         if "crank_speed_rpm" in cam:
