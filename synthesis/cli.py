@@ -671,9 +671,11 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
                rule of each candidate on the first line
       design   every variable, one column per candidate, differences from the baseline marked
       figures  the kind's overlays (paths, speeds and accelerations, linkage, animation)
-      run      solver status, iterations, wall time, starts, seed, versions, spec hash
+      run      solver status, iterations, wall time (NLP build and starts), workers, starts,
+               seed, versions, spec hash
     A RESULT that is an `agrisynth bench` output (OUT/bench or its bench.json) adds the
-    error-against-run-time plot and table.  Nothing is re-solved: the page is built from
+    error-against-run-time plot and table of its problems of the results' kind (a bench of
+    another kind only is refused).  Nothing is re-solved: the page is built from
     the result files alone.
     \b
     Example:
