@@ -85,8 +85,10 @@ def test_a_toy_kind_rule_beyond_the_bounds_is_out_of_reach_not_in_conflict(tmp_p
     assert elastic["alone"]["above_line"] == pytest.approx(5.0, abs=1e-6)
     assert elastic["out_of_reach"] == ["above_line"] and elastic["conflicting"] == ["above_line"]
     assert "inside_disc" in elastic["binding"] and elastic["hard"] == []
+    assert elastic["at_bounds"] == [{"name": "y", "side": "upper", "bound": 20.0}]
     message = str(exit_error(toy, result, reports))
     assert "Rules out of reach" in message and "inside_disc" not in message
+    assert "At the elastic design y (20) sits at its upper bound." in message
     assert "above_line (misses its limit by 5 mm; still by 5 mm re-solved alone from there, every other rule relaxed" in message
 
 

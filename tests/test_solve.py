@@ -196,7 +196,12 @@ def test_infeasible_rule_set_names_the_rules_out_of_reach():
     assert "Rules out of reach" in message and "Rules that conflict" not in message
     assert "planting_depth (misses its limit by 15 mm; still by 15 mm re-solved alone from there" in message
     assert "transmission_angle_min (misses its limit by 3.87 deg; still by 3.84 deg re-solved alone" in message
-    assert "entry_angle hold them back too (binding there)" in message
+    assert "entry_angle holds them back too (binding there)" in message
+    # the links the transmission corner asks for sit at their lower bounds: where wider bounds may help
+    lower = {b["name"]: b["bound"] for b in elastic["at_bounds"] if b["side"] == "lower"}
+    assert lower["l2"] == 31.5 and lower["l3"] == 67.5
+    assert all(abs(elastic["design"][b["name"]] - b["bound"]) <= 1e-6 * 80 for b in elastic["at_bounds"])
+    assert "At the elastic design l2 (31.5), l3 (67.5)" in message
 
 
 def test_no_start_converging_is_a_failed_run_not_a_conflict(tmp_path):

@@ -153,7 +153,27 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
     return replace(diagnosis, design=design or None,
-                   alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks))
+                   alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks),
+                   at_bounds=at_bounds(nlp.names, nlp.bounds, design) if diagnosis.relaxed else [])
+
+
+#: a free variable sits at a bound within this fraction of its range (IPOPT stops a hair inside its bounds)
+AT_BOUND = 1e-6
+
+
+def at_bounds(names, bounds, design: dict) -> list[dict]:
+    """The free design variables of ``design`` at a bound: ``{"name", "side" ("lower"/"upper"), "bound"}`` in the
+    spec's units, in the variables' order."""
+    out = []
+    for name, (lo, hi) in zip(names, np.asarray(bounds, float)):
+        value = design.get(name)
+        if value is None or not hi > lo:
+            continue
+        tol = AT_BOUND * (hi - lo)
+        side = "lower" if value - lo <= tol else "upper" if hi - value <= tol else None
+        if side is not None:
+            out.append({"name": name, "side": side, "bound": float(lo if side == "lower" else hi)})
+    return out
 
 
 #: "every other rule relaxed": their elastic slacks held at this many of their scales, far beyond any margin

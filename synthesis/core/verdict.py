@@ -151,6 +151,8 @@ class ElasticDiagnosis:
     alone: dict[str, float | None] = field(default_factory=dict)
     #: the rules the elastic form keeps hard (no slack: without them the model is undefined), held in every re-solve
     hard: list[str] = field(default_factory=list)
+    #: the free design variables at a bound of the elastic design (core.solve.at_bounds): where wider bounds may help
+    at_bounds: list[dict] = field(default_factory=list)
 
     @property
     def relaxed(self) -> list[str]:
@@ -191,7 +193,7 @@ class ElasticDiagnosis:
                 "slacks": {n: measured(s) for n, s in self.slacks.items()}, "units": self.units,
                 "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
                 "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
-                "out_of_reach": self.out_of_reach, "hard": self.hard,
+                "out_of_reach": self.out_of_reach, "hard": self.hard, "at_bounds": self.at_bounds,
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
@@ -199,7 +201,7 @@ class ElasticDiagnosis:
         slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
                    data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})),
-                   hard=list(data.get("hard", [])))
+                   hard=list(data.get("hard", [])), at_bounds=list(data.get("at_bounds", [])))
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -237,6 +239,18 @@ def status_note(best: StartReport) -> str | None:
     return None
 
 
+def _bounds_text(at: list[dict]) -> str:
+    """" At the elastic design, l2 (31.5) and l3 (67.5) sit at their lower bounds and x (-140) at its upper bound."."""
+    parts = []
+    for side in ("lower", "upper"):
+        named = [f"{b['name']} ({b['bound']:g})" for b in at if b["side"] == side]
+        if named:
+            listed = named[0] if len(named) == 1 else f"{', '.join(named[:-1])} and {named[-1]}"
+            parts.append(f"{listed} {'sits at its' if len(named) == 1 else 'sit at their'} {side} "
+                         f"bound{'' if len(named) == 1 else 's'}")
+    return f" At the elastic design {' and '.join(parts)}." if parts else ""
+
+
 def unsatisfied_error(status: str, violated: list[str], reports: list[StartReport],
                       elastic: ElasticDiagnosis | None, *, samples_hint: str,
                       relax_hint: str = "Loosen those requirements or widen the bounds of the design variables.",
@@ -265,14 +279,16 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         holding = [name for name in elastic.conflicting if name not in relaxed]
         if len(out) == len(relaxed):
             which = "Rules out of reach"
-            against = f"; {', '.join(holding)} hold them back too (binding there)" if holding else ""
+            against = (f"; {', '.join(holding)} {'holds' if len(holding) == 1 else 'hold'} them back too (binding "
+                       f"there)" if holding else "")
         else:
             which = "Rules that conflict"
             against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
         return SolverError(
             f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). {which} "
             f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
-            f"first): {', '.join(misses(name) for name in relaxed)}{against}. {relax_hint}{cannot}")
+            f"first): {', '.join(misses(name) for name in relaxed)}{against}.{_bounds_text(elastic.at_bounds)} "
+            f"{relax_hint}{cannot}")
     if elastic is None:
         why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
     elif not elastic.converged:
