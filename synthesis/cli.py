@@ -182,11 +182,31 @@ def check(spec: Path, out: Path, force: bool) -> None:
     if ranged:     # check evaluates a range's nominal value only: say so rather than imply the range holds
         console.print(f"note: {', '.join(ranged)} given as a range: check evaluates the nominal value only; "
                       f"`agrisynth solve` re-checks every rule over the range (<rule>@envelope rows)")
+    published = published_figures_line(result.extra)
+    if published:        # the rules are the design's; the paper's figures are the reading's, said apart
+        console.print(escape(published))
     bad = result.violated()
     if bad:
         console.print(f"[bold red]{len(bad)} rule(s) violated{at}:[/] {', '.join(escape(r['name']) for r in bad)}")
         sys.exit(1)
     console.print(f"[green]every rule satisfied{at}[/]")
+
+
+def published_figures_line(facts: dict | None) -> str | None:
+    """"published figures: 3 of 6 reproduced; not: <label> (published 117, ours 104.2 deg), ..." for a result whose
+    facts compare it with a paper's printed figures (``facts.published``: rows with ``reproduced``); None otherwise."""
+    rows = [r for r in ((facts or {}).get("published") or []) if isinstance(r, dict) and "reproduced" in r]
+    if not rows:
+        return None
+    missed = [r for r in rows if not r["reproduced"]]
+    text = f"published figures: {len(rows) - len(missed)} of {len(rows)} reproduced (facts.published)"
+    if missed:
+        def figure(r: dict) -> str:
+            ours = r.get("ours")
+            ours_text = f"{ours:.4g}" if isinstance(ours, (int, float)) else "-"
+            return f"{r.get('label', '?')} (published {r.get('published')}, ours {ours_text} {r.get('unit', '')})"
+        text += "; not: " + "; ".join(figure(r) for r in missed)
+    return text
 
 
 def _start_line(report, best, done: int, total: int) -> None:

@@ -397,3 +397,19 @@ print("LOADED", sorted(other))
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert "LOADED []" in proc.stdout, proc.stdout + proc.stderr
     assert (tmp_path / "redesign_window_80_100" / "result.json").exists()
+
+
+def test_check_says_on_the_terminal_which_published_figures_do_not_reproduce(tmp_path):
+    """The HD650R's rules all hold, yet three of Table 13's six figures do not reproduce (CHAIN.md): `check` said
+    "every rule satisfied" and nothing else; the gap was in result.json's facts.published alone."""
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(HD650R), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = " ".join(proc.stdout.split())
+    published = json.loads((tmp_path / "iseki_hd650r" / "result.json").read_text())["facts"]["published"]
+    missed = [r for r in published if not r["reproduced"]]
+    assert len(published) == 6 and len(missed) == 3
+    assert "published figures: 3 of 6 reproduced (facts.published); not: " in out
+    for r in missed:
+        assert f"(published {r['published']}, ours {r['ours']:.4g} deg)" in out
+    assert out.endswith("every rule satisfied")
