@@ -413,3 +413,21 @@ def test_check_says_on_the_terminal_which_published_figures_do_not_reproduce(tmp
     for r in missed:
         assert f"(published {r['published']}, ours {r['ours']:.4g} deg)" in out
     assert out.endswith("every rule satisfied")
+
+
+def test_a_sample_grid_too_large_to_solve_is_refused_in_one_line_naming_both_fields(tmp_path):
+    """2000 x 2000 samples (each field's own limit) built an NLP that grew past 7.6 GB without finishing a start."""
+    text = (CHAIN / "redesign_window_80_100.toml").read_text().replace("[solver]", "[solver]\nbeta_samples = 2000\n"
+                                                                                 "speed_samples = 2000")
+    path = tmp_path / "huge.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert ("combing_chain.solver: beta_samples x speed_samples = 2000 x 2000 = 4000000 exceeds 10000"
+            in proc.stderr)
+    ok = tmp_path / "ok.toml"
+    ok.write_text(text.replace("beta_samples = 2000", "beta_samples = 100").replace("speed_samples = 2000",
+                                                                                     "speed_samples = 100"))
+    assert load_spec(ok).model.solver.beta_samples == 100            # 100 x 100 = 10,000: at the limit, accepted

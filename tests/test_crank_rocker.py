@@ -153,3 +153,29 @@ def test_a_crank_too_short_to_find_the_extremes_is_not_evaluated_not_a_crash(tmp
     for name in ("time_ratio", "rocker_swing", "min_transmission_angle"):
         assert records[name].value is None and not records[name].satisfied
         assert "extreme positions cannot be found" in records[name].note + records[name].where
+
+
+def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(tmp_path):
+    """The lengths' bounds are rows in the Grashof coordinates: a start IPOPT stops infeasible may leave them.  On
+    requirements no crank-rocker meets (K = 1, swing 0.01 deg, transmission >= 89.99 deg) every start ended with the
+    frame l10, fixed at 140 mm, at 161.37 mm, and the result showed that design's rules as if it were the spec's."""
+    from synthesis.core.coordinates import outside_bounds
+
+    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+    for old, new in (("time_ratio = 1.25", "time_ratio = 1.0"), ("rocker_swing = 50.0", "rocker_swing = 0.01"),
+                     ("min_transmission_angle = 40.0", "min_transmission_angle = 89.99")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "extreme.toml"
+    path.write_text(text)
+    result, reports, _ = run_solve(load_spec(path), starts=8, workers=1)
+    assert result.status in ("infeasible", "failed") and not any(r.satisfied for r in reports)
+    for r in reports:
+        moved = abs(r.outcome.design["l10"] - 140.0) > 1e-6 * 140.0
+        assert (r.why is not None and r.why.startswith("l10 = ") and "lies outside its fixed value 140" in r.why) \
+            == moved, (r.outcome.design, r.why)
+        assert moved or r.why is None
+    assert any(abs(r.outcome.design["l10"] - 140.0) > 1.0 for r in reports)      # the case this test is about
+    box = np.array([[5.0, 50.0], [5.0, 200.0], [5.0, 200.0], [140.0, 140.0]])
+    assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 5.0 - 1e-7, "l10": 140.0 + 1e-5}) is None
+    assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 4.99}).startswith("l7 = 4.99 lies outside its bounds")

@@ -59,3 +59,25 @@ class GrashofCoordinates:
     def length_rows(self, x, lbx: np.ndarray, ubx: np.ndarray) -> list[tuple]:
         """The bounds of the three replaced lengths as rows (expr, lb, ub) on the design expressions x."""
         return [(x[i], float(lbx[i]), float(ubx[i])) for i in (self.l1, self.l3, self.l4)]
+
+
+#: a length held as a row may miss its bounds by IPOPT's constraint tolerance; beyond this (relative to
+#: max(1, |bound|)) the design is outside them
+BOUND_TOLERANCE = 1e-6
+
+
+def outside_bounds(names, box: np.ndarray, design: dict) -> str | None:
+    """Why ``design`` is not a design of the spec: "l10 = 161.37 lies outside its bounds [140, 140] (...)" for the
+    first variable of ``names`` beyond its row of ``box`` (n x 2, spec units), else None.  With these coordinates
+    the lengths' bounds are rows, which a start IPOPT stops without meeting (infeasible, iteration limit) may leave:
+    its design has then moved even the lengths the spec fixes, and is no candidate."""
+    for name, (lo, hi) in zip(names, np.asarray(box, float)):
+        value = design.get(name)
+        if value is None:
+            continue
+        if value < lo - BOUND_TOLERANCE * max(1.0, abs(lo)) or value > hi + BOUND_TOLERANCE * max(1.0, abs(hi)):
+            where = f"its fixed value {lo:g}" if lo == hi else f"its bounds [{lo:g}, {hi:g}]"
+            return (f"{name} = {value:.6g} lies outside {where}: IPOPT stopped without meeting the rows that hold "
+                    f"the link lengths, so this is no design of the spec")
+    return None
+

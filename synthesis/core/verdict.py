@@ -60,6 +60,10 @@ class Recheck:
     rules: list
     context: Any = None
     objective: Callable[["StartReport"], float] | None = None
+    #: why the returned design is no design of the spec although its rules could be evaluated (e.g. a length the
+    #: spec fixes moved, where the kind holds lengths as rows IPOPT did not meet): never satisfied, ranked last
+    #: among the starts that ran, the reason kept (None: it is one)
+    invalid: str | None = None
 
 
 def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
@@ -79,6 +83,8 @@ def report_of(outcome, recheck: Callable[[Any], Recheck]) -> StartReport:
                            and math.isfinite(r.normalised_margin) else -math.inf)
                          for r in records if not r.satisfied])
     report = StartReport(outcome, all(r.satisfied for r in records), worst, records, rc.context)
+    if rc.invalid is not None:
+        report.satisfied, report.worst_violation, report.why = False, math.inf, rc.invalid
     if rc.objective is not None:
         outcome.objective = rc.objective(report)
     if not math.isfinite(outcome.objective):
@@ -259,8 +265,8 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     run's best start, whose violated rules ``violated`` names."""
     n = len(reports)
     bad = ", ".join(violated) or "none evaluated"
-    unevaluable = next((r.why for r in reports if r.why), None)
-    cannot = f" A start's design could not be evaluated: {unevaluable}." if unevaluable else ""
+    unevaluable = next((r for r in reports if r.why), None)
+    cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why}." if unevaluable else ""
     if status == "infeasible":
         relaxed, out = elastic.relaxed, elastic.out_of_reach
 

@@ -7,8 +7,9 @@ from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.crank_rocker.closed_form import solve_paper_equations
-from synthesis.crank_rocker.nlp import CrankRockerNLP
-from synthesis.spec.common import is_free
+from synthesis.core.coordinates import outside_bounds
+from synthesis.crank_rocker.nlp import NAMES, CrankRockerNLP
+from synthesis.spec.common import design_box, is_free
 
 OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg"}
 
@@ -20,9 +21,10 @@ def build(setting: Setting, elastic: bool = False) -> CrankRockerNLP:
 def recheck(setting: Setting, outcome) -> Recheck:
     """Rules of a returned design on a grid 10x finer than the solver's, extremes root-found anew."""
     spec = setting.spec
+    outside = outside_bounds(NAMES, design_box(spec.variables(), NAMES)[0], outcome.design)
     cr = mechanism(spec, outcome.design)
     rules, q = evaluate(spec, cr, samples=FINE * spec.solver.samples_per_turn)
-    return Recheck(rules, (cr, q))
+    return Recheck(rules, (cr, q), invalid=outside)
 
 
 def closed_form(spec) -> dict | None:

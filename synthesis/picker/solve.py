@@ -3,10 +3,12 @@ fine-grid re-check and the result facts."""
 
 from __future__ import annotations
 
+from synthesis.core.coordinates import outside_bounds
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.picker.check import evaluate, facts, linkage
-from synthesis.picker.nlp import PickerNLP
+from synthesis.picker.nlp import NAMES, PickerNLP
+from synthesis.spec.common import design_box
 
 OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2"}
 
@@ -18,8 +20,9 @@ def build(setting: Setting, elastic: bool = False) -> PickerNLP:
 def recheck(setting: Setting, outcome) -> Recheck:
     """Rules of a returned design from the float kinematics on a grid 10x finer than the solver's."""
     spec = setting.spec
+    outside = outside_bounds(NAMES, design_box(spec.variables(), NAMES)[0], outcome.design)
     dc = linkage(spec, outcome.design)
-    return Recheck(evaluate(spec, dc, samples=FINE * spec.solver.samples), dc)
+    return Recheck(evaluate(spec, dc, samples=FINE * spec.solver.samples), dc, invalid=outside)
 
 
 def finish(setting: Setting, best: StartReport) -> Finished:

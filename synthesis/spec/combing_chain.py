@@ -122,8 +122,23 @@ class SolverSection(MultistartSettings):
     beta_samples: int = Field(13, ge=2, le=2000, description="initial plant angles sampled over plant_angle "
                                                              "(the ends included)")
     speed_samples: int = Field(5, ge=2, le=2000, description="machine speeds sampled over each gear's range "
-                                                             "(the ends included)")
+                                                             "(the ends included); beta_samples x speed_samples "
+                                                             "at most 10,000")
     max_iter: int = max_iter_field(200)
+
+    @model_validator(mode="after")
+    def _grid_size(self) -> "SolverSection":
+        # the NLP holds a row per sample and gear, the re-check 100x as many (10x each way): 300 x 300 took 3 min and
+        # 2 GB for one start, 2000 x 2000 ran out of memory
+        if self.beta_samples * self.speed_samples > MAX_GRID:
+            raise ValueError(f"beta_samples x speed_samples = {self.beta_samples} x {self.speed_samples} = "
+                             f"{self.beta_samples * self.speed_samples} exceeds {MAX_GRID} (a row per sample and "
+                             f"gear in the NLP, 100x as many in the re-check)")
+        return self
+
+
+#: the largest beta_samples x speed_samples grid of a solve (the default is 13 x 5)
+MAX_GRID = 10_000
 
 
 class CombingChainSpec(ProblemSpec):

@@ -32,7 +32,8 @@ class DropSection(StrictModel):
     height: float = Field(600.0, gt=0, le=10000, description="drop point N1 above the paddy, mm (seed 001 §2.1.1: 600)")
     gravity: float = Field(9.8, gt=0, le=100, description="gravitational acceleration, m/s^2 (seed 001: 9.8)")
     terminal_speed: float = Field(17.5, gt=0, description="float (terminal) speed v_L of a pot seedling in air, "
-                                                          "m/s (seed 001: 17.5); inf = no air drag")
+                                                          "m/s (seed 001: 17.5); no air drag: a large value such as 1e6 "
+                                                          "(inf is refused: results hold finite numbers only)")
 
 
 class CalibrationSection(StrictModel):
