@@ -179,3 +179,4 @@ def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(
     box = np.array([[5.0, 50.0], [5.0, 200.0], [5.0, 200.0], [140.0, 140.0]])
     assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 5.0 - 1e-7, "l10": 140.0 + 1e-5}) is None
     assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 4.99}).startswith("l7 = 4.99 lies outside its bounds")
+

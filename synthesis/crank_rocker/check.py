@@ -53,8 +53,12 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
                 acute_transmission_rule(None, req.min_transmission_angle, "over a turn", missing=why)], None
 
     if not cr.crank_turns():
-        return not_evaluated("the crank cannot make a full turn (Grashof crank-rocker slacks "
-                             + ", ".join(f"{k} {v:.3g} mm" for k, v in cr.grashof_slacks().items()) + ")")
+        slacks = cr.grashof_slacks()
+        listed = ", ".join(f"{k} {v:.3g} mm" for k, v in slacks.items())
+        if min(slacks.values()) == 0.0:     # the rule holds (margin 0), yet the motion is not one linkage's
+            return not_evaluated(f"the linkage is at a change point (Grashof crank-rocker slacks {listed}): at its "
+                                 f"toggle it can go on either way, so a turn of it is not defined")
+        return not_evaluated(f"the crank cannot make a full turn (Grashof crank-rocker slacks {listed})")
     try:
         q = quick_return(cr)
     except ValueError as exc:     # e.g. a crank so short (5e-324 mm) that the rocker has no extremes to find

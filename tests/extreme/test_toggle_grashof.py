@@ -64,7 +64,8 @@ def test_near_toggle_transmission_angle_reported(tmp_path, record_property):
     """`check` of the change-point design with the rocker 1e-6 mm longer (the crank just turns): the
     minimum transmission angle is reported as a number below 0.2 deg (rule violated, no NaN); at the
     change point itself the Grashof rule holds with margin 0 and the turn rules say why they are not
-    evaluated (the crank cannot make a full turn) instead of a number."""
+    evaluated (a change point: at its toggle the linkage can go on either way) instead of a number, not that the
+    crank cannot turn, which the rule's margin 0 contradicts."""
     near = kinds.checker("crank_rocker")(load_spec(toggle_spec(tmp_path, TOGGLE[2] + 1e-6, fixed=True)))
     mu = next(r for r in near.rules if r["name"] == "min_transmission_angle")
     assert mu["value"] is not None and math.isfinite(mu["value"]) and 0.0 <= mu["value"] < 0.2
@@ -73,9 +74,10 @@ def test_near_toggle_transmission_angle_reported(tmp_path, record_property):
     rules = {r["name"]: r for r in at.rules}
     assert rules["grashof_crank_rocker"]["satisfied"] and rules["grashof_crank_rocker"]["margin"] == 0.0
     assert rules["min_transmission_angle"]["value"] is None
-    assert "cannot make a full turn" in rules["min_transmission_angle"]["note"]
+    assert "at a change point" in rules["min_transmission_angle"]["note"]
+    assert "cannot make a full turn" not in rules["min_transmission_angle"]["note"]
     record_property("figure", f"min transmission angle {mu['value']:.3g} deg at 1e-6 mm from the change point; "
-                              "at it: Grashof margin 0, turn rules not evaluated (note)")
+                              "at it: Grashof margin 0, turn rules not evaluated (a change point)")
 
 
 def test_solve_started_at_the_toggle(tmp_path, record_property):
