@@ -8,7 +8,6 @@ import math
 import numpy as np
 
 from constraints import Rule
-from constraints.base import not_evaluated
 from constraints.guide_tube import (free_fall_height_rule, landing_time_spread_rule, spacing_error_rule,
                                     wall_exit_speed_rule)
 from synthesis.guide_tube.drop import DropPhases, Physics, SeedlingSticks, landing
@@ -140,25 +139,7 @@ def run_check(loaded: LoadedSpec) -> Result:
     scene = GuideTubeScene.from_spec(spec)
     angles = spec.given_angles()
     samples = FINE * spec.solver.samples
-    try:
-        rules = rules_of(scene, angles, scene.spacing_grid(samples), spec.rules)
-        extra = scene_facts(spec, scene, angles, samples)
-    except SeedlingSticks as exc:     # a design whose seedling sticks is checked, and fails: its rules say why
-        rules, extra = stuck_rules(scene, spec.rules, str(exc)), {"source": spec.source, "sticks": str(exc)}
+    rules = rules_of(scene, angles, scene.spacing_grid(samples), spec.rules)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
-                  design=design_of(angles), rules=[r.record().to_json() for r in rules], extra=extra)
-
-
-def stuck_rules(scene: GuideTubeScene, limits, why: str) -> list[Rule]:
-    """The rules of :func:`rules_of`, in its order, none evaluated: a seedling sticks, so there is no drop to
-    measure (``why`` names the tube and where it stops)."""
-    rules = [not_evaluated("landing_time_spread", None, limits.max_time_spread, "s", "at the design row spacing", why)]
-    if limits.max_spacing_error is not None:
-        rules.append(not_evaluated("spacing_error", None, limits.max_spacing_error, "mm", "over the row spacings",
-                                   why))
-    for t in scene.tubes:
-        rules.append(not_evaluated(f"wall_exit_speed_{t.name}", limits.min_exit_speed, None, "m/s",
-                                   "at the wall end, every sampled row spacing", why))
-        rules.append(not_evaluated(f"free_fall_height_{t.name}", limits.min_free_fall, None, "mm",
-                                   "drop point to the wall, every sampled row spacing", why))
-    return rules
+                  design=design_of(angles), rules=[r.record().to_json() for r in rules],
+                  extra=scene_facts(spec, scene, angles, samples))
