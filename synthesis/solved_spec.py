@@ -88,15 +88,35 @@ def _given_design(loaded, result, data: dict) -> None:
         del data["design"]
 
 
+def _fixed_values_moved(model, design: dict) -> str:
+    """"l10 = 161.373 where the spec fixes 140" for the design variables the spec fixes that ``design`` moved ("" when
+    none did; a kind whose spec lists no variables says nothing)."""
+    from synthesis.spec.common import is_free
+
+    variables = model.variables() if hasattr(model, "variables") else {}
+    moved = []
+    for name, v in variables.items():
+        value = design.get(name)
+        if is_free(v) or not isinstance(value, (int, float)) or not isinstance(v, (int, float)):
+            continue
+        if abs(value - v) > 1e-6 * max(1.0, abs(v)):
+            moved.append(f"{name} = {value:.6g} where the spec fixes {v:g}")
+    return "; ".join(moved)
+
+
 def solved_toml(loaded, result) -> str:
     from synthesis.specref import write_toml
 
     data = solved_data(loaded, result)
     objective = result.objective or {}
     value = objective.get("value")
+    moved = _fixed_values_moved(loaded.model, result.design)
+    exactly = (f"#   agrisynth check {FILENAME}   evaluates exactly this design (the solve's rule table)." if not moved
+               else f"#   NOTE: the solve's design is no design of this spec ({moved}: a start IPOPT stopped without "
+                    f"meeting the rows that hold it); `agrisynth check {FILENAME}` evaluates the spec's values, not "
+                    f"the solve's rule table.")
     head = [f"# {result.name} as solved by `agrisynth solve` (status {result.status}"
             + (f", {objective.get('name')} = {value:.6g}" if isinstance(value, (int, float)) else "") + "):",
             f"# the spec {loaded.path.name} with every free design variable fixed at its solved value.",
-            f"#   agrisynth check {FILENAME}   evaluates exactly this design (the solve's rule table).",
-            f"# spec sha256 {loaded.sha256}", ""]
+            exactly, f"# spec sha256 {loaded.sha256}", ""]
     return "\n".join(head + write_toml(type(loaded.model), data, documented=False)) + "\n"

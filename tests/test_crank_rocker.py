@@ -176,6 +176,13 @@ def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(
             == moved, (r.outcome.design, r.why)
         assert moved or r.why is None
     assert any(abs(r.outcome.design["l10"] - 140.0) > 1.0 for r in reports)      # the case this test is about
+    # its solved.toml keeps the spec's l10 = 140: its header no longer promises the solve's rule table
+    from synthesis.solved_spec import solved_toml
+
+    header = solved_toml(load_spec(path), result).splitlines()[2]
+    assert abs(result.design["l10"] - 140.0) > 1.0              # every start drifted: so did the one reported
+    assert "NOTE: the solve's design is no design of this spec (l10 = " in header
+    assert "where the spec fixes 140" in header and "evaluates exactly" not in header
     box = np.array([[5.0, 50.0], [5.0, 200.0], [5.0, 200.0], [140.0, 140.0]])
     assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 5.0 - 1e-7, "l10": 140.0 + 1e-5}) is None
     assert outside_bounds(("l7", "l8", "l9", "l10"), box, {"l7": 4.99}).startswith("l7 = 4.99 lies outside its bounds")

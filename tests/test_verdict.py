@@ -374,3 +374,24 @@ def test_a_signal_while_the_answer_is_finished_keeps_every_start(tmp_path, monke
     assert caught.value.exit_code == 130 and len(reports) == 2 and len(calls) == 1
     assert kept.status == "interrupted"
     assert kept.to_json()["facts"]["tolerance"]["monte_carlo"]["samples"] == 0
+
+
+def test_at_bounds_names_the_free_variables_on_a_bound_by_their_result_names():
+    """The infeasible message's "sits at its lower bound" list: a free variable within 1e-6 of its range from a bound
+    (IPOPT stops a hair inside), a fixed one never; a kind whose result.json names its variables otherwise (guide_tube:
+    delta_<tube>) gives those names (NLP.design_names), else the list was silently empty."""
+    import numpy as np
+
+    from synthesis.core.kind import Setting
+    from synthesis.core.solve import at_bounds
+
+    box = [[0.0, 1.0], [0.0, 1.0], [2.0, 2.0], [-5.0, 5.0]]
+    design = {"a": 1e-7, "b": 0.5, "c": 2.0, "d": 5.0 - 1e-6}
+    assert at_bounds(["a", "b", "c", "d"], box, design) == [{"name": "a", "side": "lower", "bound": 0.0},
+                                                             {"name": "d", "side": "upper", "bound": 5.0}]
+    kind = kinds.solving_kind("guide_tube")
+    spec = load_spec(LIBRARY / "guide_tube" / "cai2020_delta2.toml").model
+    nlp = kind.solver_side().build(Setting(spec, 0, kind.solver_side().prepare(spec)), True)
+    design = nlp.design(np.asarray(nlp.bounds, float)[:, 0])          # every free angle at its lower bound
+    assert [b["name"] for b in at_bounds(nlp.design_names, nlp.bounds, design)] == list(nlp.design_names)
+    assert set(nlp.design_names) <= set(design)

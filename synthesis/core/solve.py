@@ -154,7 +154,8 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
     return replace(diagnosis, design=design or None,
                    alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks),
-                   at_bounds=at_bounds(nlp.names, nlp.bounds, design) if diagnosis.relaxed else [])
+                   at_bounds=at_bounds(getattr(nlp, "design_names", nlp.names), nlp.bounds, design)
+                   if diagnosis.relaxed else [])
 
 
 #: a free variable sits at a bound within this fraction of its range (IPOPT stops a hair inside its bounds)

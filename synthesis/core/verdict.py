@@ -264,7 +264,8 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed); ``best``: the
     run's best start, whose violated rules ``violated`` names."""
     n = len(reports)
-    bad = ", ".join(violated) or "none evaluated"
+    bad = ", ".join(violated) or ("none, but it is no design of the spec (below)" if best is not None and best.why
+                                  and best.records else "none evaluated")
     unevaluable = next((r for r in reports if r.why), None)
     cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why}." if unevaluable else ""
     if status == "infeasible":

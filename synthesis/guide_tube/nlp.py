@@ -64,6 +64,8 @@ class GuideTubeNLP:
         self.operating = ([Operating("mu", self.mu, nominal_mu, "-")] if symbolic else []) + (
             [Operating("forward_speed", forward, nominal_speed, "m/s")] if wanted else [])
         self.names = [t.name for t in free]
+        #: their result.json names, aligned with ``names`` (core.solve.at_bounds reads a design by them)
+        self.design_names = [f"delta_{name}" for name in self.names]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
         delta = ca.SX.sym("delta_deg", len(free))

@@ -113,7 +113,7 @@ class EnvelopeRecheck:
     def __call__(self, setting: Setting, outcome) -> Recheck:
         nominal, grid, rules_at = self.over_grid(setting, outcome)
         extra, _ = envelope_rules(grid, rules_at)
-        return Recheck(list(nominal.rules) + extra, nominal.context, nominal.objective)
+        return Recheck(list(nominal.rules) + extra, nominal.context, nominal.objective, nominal.invalid)
 
 
 @dataclasses.dataclass
