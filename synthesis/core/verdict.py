@@ -267,7 +267,7 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     bad = ", ".join(violated) or ("none, but it is no design of the spec (below)" if best is not None and best.why
                                   and best.records else "none evaluated")
     unevaluable = next((r for r in reports if r.why), None)
-    cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why}." if unevaluable else ""
+    cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why.rstrip('.')}." if unevaluable else ""
     if status == "infeasible":
         relaxed, out = elastic.relaxed, elastic.out_of_reach
 
