@@ -258,6 +258,16 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
 
     written = compare_figures([load_result(folder), load_result(folder)], tmp_path)
     assert (tmp_path / written[0]).stat().st_size > 10_000
+    # a run with no design the drop model could evaluate (every start stuck: no drop facts) is named, not drawn;
+    # the overlay raised KeyError: 'tubes' and compare blamed an older agrisynth or a hand edit
+    import dataclasses
+
+    stuck = dataclasses.replace(load_result(folder), name="stuck", status="failed", extra={})
+    (tmp_path / "with_stuck").mkdir()
+    written = compare_figures([load_result(folder), stuck], tmp_path / "with_stuck")
+    assert (tmp_path / "with_stuck" / written[0]).stat().st_size > 10_000
+    with pytest.raises(ValueError, match=r"no candidate has a design the drop model could evaluate \(stuck\)"):
+        compare_figures([stuck], tmp_path)
 
 
 FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.cam", "synthesis.clamp", "synthesis.fourbar",

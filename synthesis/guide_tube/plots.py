@@ -150,6 +150,12 @@ def sensitivity_figure(result: Result, path: Path) -> None:
 def compare_figures(results: list[Result], folder: Path) -> list[str]:
     """Candidates overlaid (baseline first): drop time per tube, plant-position error over row spacing."""
     name = "guide_tube_compare.png"
+    # a run whose design the drop model could not evaluate (every start sticks) has no drop facts: it is named, not
+    # drawn, and the others are
+    missing = [res.name for res in results if "tubes" not in res.extra]
+    results = [res for res in results if "tubes" in res.extra]
+    if not results:
+        raise ValueError(f"no candidate has a design the drop model could evaluate ({', '.join(missing)})")
     fig, (ax_t, ax_e) = plt.subplots(1, 2, figsize=(12, 4.6))
     width = 0.8 / len(results)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -172,7 +178,8 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     ax_e.set_ylim(bottom=0)
     ax_e.grid(alpha=0.3)
     ax_e.legend(fontsize=7)
-    fig.suptitle("guide tubes" + baseline_note(" compared (baseline first)", len(results)), fontsize=11)
+    not_drawn = f"; not drawn, no design the drop model could evaluate: {', '.join(missing)}" if missing else ""
+    fig.suptitle("guide tubes" + baseline_note(" compared (baseline first)", len(results)) + not_drawn, fontsize=11)
     fig.tight_layout()
     fig.savefig(folder / name, dpi=110)
     plt.close(fig)
