@@ -27,3 +27,8 @@ class SolverError(AgrisynthError, RuntimeError):
 
 class OutputError(AgrisynthError):
     """The output folder cannot be written, or holds something agrisynth will not replace."""
+
+
+class NothingToDraw(ValueError):
+    """A kind's comparison figure has nothing to draw (e.g. no candidate has a design its model could evaluate): the
+    message is the kind's own reason, shown on the page as it is."""

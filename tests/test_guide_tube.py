@@ -266,8 +266,17 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
     (tmp_path / "with_stuck").mkdir()
     written = compare_figures([load_result(folder), stuck], tmp_path / "with_stuck")
     assert (tmp_path / "with_stuck" / written[0]).stat().st_size > 10_000
-    with pytest.raises(ValueError, match=r"no candidate has a design the drop model could evaluate \(stuck\)"):
+    from synthesis.errors import NothingToDraw
+
+    with pytest.raises(NothingToDraw, match=r"no candidate has a design the drop model could evaluate \(stuck\)"):
         compare_figures([stuck], tmp_path)
+    # on the page: the kind's reason as it is, not a guess at an older agrisynth
+    from synthesis.report import comparison_figures
+    from synthesis.report.tables import candidates
+
+    figures, notes = comparison_figures(candidates([stuck]), tmp_path)
+    assert figures == [] and notes == ["comparison figures not drawn: NothingToDraw: no candidate has a design the "
+                                       "drop model could evaluate (stuck)"]
 
 
 FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.cam", "synthesis.clamp", "synthesis.fourbar",

@@ -264,9 +264,10 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     """The exit-3 message of a run where no start satisfies every rule (status infeasible or failed); ``best``: the
     run's best start, whose violated rules ``violated`` names."""
     n = len(reports)
-    bad = ", ".join(violated) or ("none, but it is no design of the spec (below)" if best is not None and best.why
-                                  and best.records else "none evaluated")
-    unevaluable = next((r for r in reports if r.why), None)
+    bad = ", ".join(violated) or (f"none, but {best.why.rstrip('.')}" if best is not None and best.why and best.records
+                                  else "none evaluated")
+    # the best start's own reason first (it is the one named above), else the first start that has one
+    unevaluable = best if best is not None and best.why else next((r for r in reports if r.why), None)
     cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why.rstrip('.')}." if unevaluable else ""
     if status == "infeasible":
         relaxed, out = elastic.relaxed, elastic.out_of_reach

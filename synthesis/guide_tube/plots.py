@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.errors import NothingToDraw  # noqa: E402
 from synthesis.report.labels import baseline_note  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
@@ -153,9 +154,10 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     # a run whose design the drop model could not evaluate (every start sticks) has no drop facts: it is named, not
     # drawn, and the others are
     missing = [res.name for res in results if "tubes" not in res.extra]
+    baseline_drawn = "tubes" in results[0].extra
     results = [res for res in results if "tubes" in res.extra]
     if not results:
-        raise ValueError(f"no candidate has a design the drop model could evaluate ({', '.join(missing)})")
+        raise NothingToDraw(f"no candidate has a design the drop model could evaluate ({', '.join(missing)})")
     fig, (ax_t, ax_e) = plt.subplots(1, 2, figsize=(12, 4.6))
     width = 0.8 / len(results)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -179,7 +181,8 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     ax_e.grid(alpha=0.3)
     ax_e.legend(fontsize=7)
     not_drawn = f"; not drawn, no design the drop model could evaluate: {', '.join(missing)}" if missing else ""
-    fig.suptitle("guide tubes" + baseline_note(" compared (baseline first)", len(results)) + not_drawn, fontsize=11)
+    first = " compared (baseline first)" if baseline_drawn else " compared"
+    fig.suptitle("guide tubes" + baseline_note(first, len(results)) + not_drawn, fontsize=11)
     fig.tight_layout()
     fig.savefig(folder / name, dpi=110)
     plt.close(fig)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from synthesis.errors import NothingToDraw
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
 from synthesis.result import Result, atomic_write_text
@@ -30,9 +31,9 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
         # figures name each candidate by its column label, which is unique even when spec names repeat
         written = writer([dataclasses.replace(c.result, name=c.label) for c in cands], folder)
     except Exception as exc:    # noqa: BLE001 - a figure is never worth losing the page: say why instead
-        # a ValueError is the kind's own word on why (e.g. no candidate has a design its model could evaluate);
+        # NothingToDraw is the kind's own word on why (e.g. no candidate has a design its model could evaluate);
         # anything else is data the figures need and did not find
-        guess = ("" if isinstance(exc, ValueError) else " (the results lack data the figures need, e.g. a result "
+        guess = ("" if isinstance(exc, NothingToDraw) else " (the results lack data the figures need, e.g. a result "
                  "from an older agrisynth or edited by hand)")
         return [], [f"comparison figures not drawn: {type(exc).__name__}: {exc}{guess}"]
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
