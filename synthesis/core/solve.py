@@ -158,21 +158,15 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
                    if diagnosis.relaxed else [])
 
 
-#: a free variable sits at a bound within this fraction of its range (IPOPT stops a hair inside its bounds)
-AT_BOUND = 1e-6
-
-
 def at_bounds(names, bounds, design: dict) -> list[dict]:
     """The free design variables of ``design`` at a bound: ``{"name", "side" ("lower"/"upper"), "bound"}`` in the
-    spec's units, in the variables' order."""
+    spec's units, in the variables' order; judged as the report's design table judges them (design_info.at_bound)."""
+    from synthesis.design_info import at_bound
+
     out = []
     for name, (lo, hi) in zip(names, np.asarray(bounds, float)):
-        value = design.get(name)
-        if value is None or not hi > lo:
-            continue
-        tol = AT_BOUND * (hi - lo)
-        side = "lower" if value - lo <= tol else "upper" if hi - value <= tol else None
-        if side is not None:
+        side = at_bound(design.get(name), {"free": bool(hi > lo), "bounds": (lo, hi)})
+        if side:
             out.append({"name": name, "side": side, "bound": float(lo if side == "lower" else hi)})
     return out
 
