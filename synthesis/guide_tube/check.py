@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
-from constraints import Rule
+from constraints import Rule, not_evaluated
 from constraints.guide_tube import (free_fall_height_rule, landing_time_spread_rule, spacing_error_rule,
                                     wall_exit_speed_rule)
-from synthesis.guide_tube.drop import DropPhases, Physics, SeedlingSticks, landing
+from synthesis.guide_tube.drop import DropPhases, Physics, SeedlingSticks, landing, slide
 from synthesis.guide_tube.ode import simulate
 from synthesis.guide_tube.scene import MM, GuideTubeScene
 from synthesis.guide_tube.slope import landing_time_slope
@@ -33,18 +33,56 @@ def drops(scene: GuideTubeScene, angles: dict[str, float], spacing: float,
 def rules_of(scene: GuideTubeScene, angles: dict, grid: list[float], limits, drop=landing,
              equalise: bool = True) -> list[Rule]:
     """Every rule of the wall ``angles`` (deg); the row-spacing rules on the spacings ``grid`` (mm).
-    ``drop(delta_deg, tube, physics)`` is ``landing`` (floats, check) or ``symbolic_drop`` (solve);
-    ``equalise`` asks the optimiser for exactly equal landing times at the design row spacing."""
+    ``drop(delta_deg, tube, physics)`` is ``landing`` (floats, raises if a seedling sticks) or ``symbolic_drop``
+    (solve); ``equalise`` asks the optimiser for exactly equal landing times at the design row spacing."""
     def at(spacing: float) -> list[DropPhases]:
         return [drop(angles[t.name], scene.tube(i, spacing), scene.physics) for i, t in enumerate(scene.tubes)]
 
-    design = at(scene.rows.design_spacing)
-    swept = [at(w) for w in grid]
-    rules = [landing_time_spread_rule([d.landing_time for d in design], limits.max_time_spread,
-                                      scene.rows.design_spacing, equalise)]
+    return _rules(scene, at(scene.rows.design_spacing), [at(w) for w in grid], grid, limits, equalise)
+
+
+def rules_even_if_stuck(scene: GuideTubeScene, angles: dict[str, float], grid: list[float],
+                        limits) -> tuple[list[Rule], str | None]:
+    """The rules of :func:`rules_of` on floats, for a design whose seedling may stick on a wall: the wall rules
+    (exit speed, free fall) are evaluated either way -- a seedling that stops leaves the wall at speed 0 -- and a
+    landing-time rule that needs a seedling that never lands is not evaluated, saying where it sticks.  Returns
+    the rules and the first sticking (None if every seedling lands)."""
+    stuck: dict[float, str] = {}
+
+    def at(spacing: float) -> list[DropPhases]:
+        drops = []
+        for i, t in enumerate(scene.tubes):
+            phases, sticks = slide(angles[t.name], scene.tube(i, spacing), scene.physics)
+            if sticks is not None:
+                stuck.setdefault(spacing, f"at row spacing {spacing:g} mm {sticks}")
+            drops.append(phases)
+        return drops
+
+    design_spacing = scene.rows.design_spacing
+    design, swept = at(design_spacing), [at(w) for w in grid]
+    on_grid = next((stuck[w] for w in grid if w in stuck), None)
+    rules = _rules(scene, design, swept, grid, limits, True, stuck.get(design_spacing), on_grid)
+    return rules, stuck.get(design_spacing, on_grid)
+
+
+def _rules(scene: GuideTubeScene, design: list[DropPhases], swept: list[list[DropPhases]], grid: list[float],
+           limits, equalise: bool, stuck_at_design: str | None = None, stuck_on_grid: str | None = None) -> list[Rule]:
+    """The rules of the drops ``design`` (at the design row spacing) and ``swept`` (at each spacing of ``grid``);
+    a ``stuck_*`` reason leaves the landing-time rule(s) of those drops not evaluated."""
+    spacing = scene.rows.design_spacing
+    if stuck_at_design is None:
+        rules = [landing_time_spread_rule([d.landing_time for d in design], limits.max_time_spread, spacing,
+                                          equalise)]
+    else:
+        rules = [not_evaluated("landing_time_spread", None, limits.max_time_spread, "s", f"at row spacing {spacing:g} mm",
+                               stuck_at_design)]
     if limits.max_spacing_error is not None:
-        rules.append(spacing_error_rule([[d.landing_time for d in ds] for ds in swept], grid,
-                                        scene.forward_mm_per_s, limits.max_spacing_error))
+        if stuck_on_grid is None:
+            rules.append(spacing_error_rule([[d.landing_time for d in ds] for ds in swept], grid,
+                                            scene.forward_mm_per_s, limits.max_spacing_error))
+        else:
+            rules.append(not_evaluated("spacing_error", None, limits.max_spacing_error, "mm",
+                                       f"over row spacings {min(grid):g}-{max(grid):g} mm", stuck_on_grid))
     at_all = [design] + swept
     for i, t in enumerate(scene.tubes):
         rules.append(wall_exit_speed_rule(t.name, [ds[i].exit_speed_sq for ds in at_all], limits.min_exit_speed))
@@ -106,9 +144,7 @@ def scene_facts(spec, scene: GuideTubeScene, angles: dict[str, float], samples: 
     cal = scene.calibration
     return {
         "source": spec.source,
-        "physics": {"drop_height_mm": base.height / MM, "gravity": base.gravity,
-                    "terminal_speed": None if math.isinf(base.terminal_speed) else base.terminal_speed,
-                    "mu": base.mu, "mu_source": "given" if cal is None else "calibrated"},
+        "physics": physics_facts(scene),
         "calibration": None if cal is None else {
             "tube": cal.tube, "delta_deg": cal.delta_deg, "landing_time": cal.target, "mu_range": list(cal.mu_range),
             "roots": cal.roots, "landing_time_range": list(cal.landing_time_range) if cal.landing_time_range else None},
@@ -135,11 +171,26 @@ def design_of(angles: dict[str, float]) -> dict[str, float]:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
+    """The given angles against every rule.  A design whose seedling sticks on a wall is checked too, and fails:
+    its wall rules are evaluated, its landing-time rules are not (no seedling lands), and its facts name where it
+    sticks instead of the drop phases."""
     spec = loaded.model
     scene = GuideTubeScene.from_spec(spec)
     angles = spec.given_angles()
     samples = FINE * spec.solver.samples
-    rules = rules_of(scene, angles, scene.spacing_grid(samples), spec.rules)
+    rules, sticks = rules_even_if_stuck(scene, angles, scene.spacing_grid(samples), spec.rules)
+    extra = scene_facts(spec, scene, angles, samples) if sticks is None else stuck_facts(spec, scene, sticks)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
-                  design=design_of(angles), rules=[r.record().to_json() for r in rules],
-                  extra=scene_facts(spec, scene, angles, samples))
+                  design=design_of(angles), rules=[r.record().to_json() for r in rules], extra=extra)
+
+
+def stuck_facts(spec, scene: GuideTubeScene, sticks: str) -> dict:
+    """The facts of a design whose seedling sticks: no drop to draw (no ``tubes``), the reason instead."""
+    return {"source": spec.source, "sticks": sticks, "physics": physics_facts(scene)}
+
+
+def physics_facts(scene: GuideTubeScene) -> dict:
+    base = scene.physics
+    return {"drop_height_mm": base.height / MM, "gravity": base.gravity,
+            "terminal_speed": None if math.isinf(base.terminal_speed) else base.terminal_speed,
+            "mu": base.mu, "mu_source": "given" if scene.calibration is None else "calibrated"}

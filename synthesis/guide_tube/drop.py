@@ -128,9 +128,11 @@ class WallAboveDropPoint(AssemblyError):
     """The inclined wall reaches above the drop point: no free fall before the impact (exit 2)."""
 
 
-def landing(delta_deg: float, tube: Tube, physics: Physics) -> DropPhases:
-    """Float drop through ``tube`` at wall angle ``delta_deg``; raises if the wall reaches above the
-    drop point (WallAboveDropPoint, exit 2) or the seedling sticks on it (SeedlingSticks, exit 3)."""
+def slide(delta_deg: float, tube: Tube, physics: Physics) -> tuple[DropPhases, SeedlingSticks | None]:
+    """Float drop through ``tube`` at wall angle ``delta_deg``, and whether the seedling sticks on the wall:
+    its phases up to the wall end (heights, impact and exit speeds, exit_speed_sq <= 0) are given either way,
+    its landing times mean nothing if it sticks.  Raises if the wall reaches above the drop point
+    (WallAboveDropPoint, exit 2)."""
     phases = drop_phases(math.radians(delta_deg), tube, physics)
     if phases.h1 <= 0:
         raise WallAboveDropPoint(
@@ -138,7 +140,17 @@ def landing(delta_deg: float, tube: Tube, physics: Physics) -> DropPhases:
             f"{1000 * phases.h2:.1f} mm above its lower end, {1000 * tube.below_wall:.0f} mm (h5 + h6) above the "
             f"paddy: it reaches {-1000 * phases.h1:.1f} mm above the drop point ({1000 * physics.height:.0f} mm); "
             f"flatten the wall or lower h5 + h6")
+    sticks = None
     if phases.exit_speed_sq <= 0:
         stop = stopping_distance(float(phases.v_wall), float(phases.slide_accel), physics.kappa)
-        raise SeedlingSticks(tube.name, delta_deg, physics.mu, 1000 * stop, 1000 * float(phases.s1))
-    return DropPhases(*(float(getattr(phases, f.name)) for f in fields(DropPhases)))
+        sticks = SeedlingSticks(tube.name, delta_deg, physics.mu, 1000 * stop, 1000 * float(phases.s1))
+    return DropPhases(*(float(getattr(phases, f.name)) for f in fields(DropPhases))), sticks
+
+
+def landing(delta_deg: float, tube: Tube, physics: Physics) -> DropPhases:
+    """Float drop through ``tube`` at wall angle ``delta_deg``; raises if the wall reaches above the
+    drop point (WallAboveDropPoint, exit 2) or the seedling sticks on it (SeedlingSticks, exit 3)."""
+    phases, sticks = slide(delta_deg, tube, physics)
+    if sticks is not None:
+        raise sticks
+    return phases

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -24,8 +25,10 @@ def _unavailable(result: Result, path: Path) -> bool:
         return False
     fig, ax = plt.subplots(figsize=(8, 2.5))
     ax.axis("off")
-    ax.text(0.5, 0.5, f"{result.name}: no design the drop model could evaluate ({result.status})",
-            ha="center", va="center", fontsize=10)
+    sticks = result.extra.get("sticks")       # a checked design whose seedling sticks: where, and what to change
+    text = (f"{result.name}: no drop to draw: " + sticks if isinstance(sticks, str)
+            else f"{result.name}: no design the drop model could evaluate ({result.status})")
+    ax.text(0.5, 0.5, "\n".join(textwrap.wrap(text, 100)), ha="center", va="center", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return True

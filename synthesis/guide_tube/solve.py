@@ -7,8 +7,7 @@ from constraints import not_evaluated
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.errors import AgrisynthError
-from synthesis.guide_tube.check import FINE, design_of, rules_of, scene_facts
-from synthesis.guide_tube.drop import SeedlingSticks
+from synthesis.guide_tube.check import FINE, design_of, rules_even_if_stuck, rules_of, scene_facts
 from synthesis.guide_tube.nlp import OBJECTIVE_UNITS, GuideTubeNLP
 from synthesis.guide_tube.scene import GuideTubeScene
 
@@ -70,10 +69,12 @@ def finish(setting: Setting, best: StartReport) -> Finished:
 def baseline_rules(setting: Setting) -> list[dict] | None:
     """The rule table of the spec's given angles, for the side-by-side table."""
     spec = setting.spec
-    try:
-        return [r.record().to_json() for r in fine_rules(spec, setting.data, design_of(spec.given_angles()))]
-    except (AgrisynthError, SeedlingSticks):
+    try:       # a given design whose seedling sticks has a table too: its wall rules fail, its landing times do not exist
+        rules, _ = rules_even_if_stuck(setting.data, spec.given_angles(),
+                                       setting.data.spacing_grid(FINE * spec.solver.samples), spec.rules)
+    except AgrisynthError:
         return None
+    return [r.record().to_json() for r in rules]
 
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,

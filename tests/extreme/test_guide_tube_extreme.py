@@ -4,6 +4,7 @@ A in [1e-10, 0.8] (one bench row per v_L), very long falls, and the drag-free li
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -130,7 +131,26 @@ def test_sticking_is_found_by_both_implementations_at_the_same_distance(record_p
                               f"wall (ODE: {ode.value.stops_after_mm:.4f} mm)")
 
 
-def test_check_of_a_sticking_wall_exits_3_naming_tube_angle_and_mu(tmp_path):
+def _exit_speed_sq(delta_deg: float, tube: Tube, physics: Physics) -> float:
+    """v3a^2 in closed form, written out here apart from drag.py: free fall from rest over h1 with drag,
+    v1^2 = (g / k)(1 - exp(-2 k h1)); the impact keeps v1 sin d; on the wall d(v^2)/ds = 2a - 2k v^2, so
+    v3^2 = a / k + (v2^2 - a / k) exp(-2 k s1) with a = g (sin d - mu cos d), s1 = L3 / cos d."""
+    d, g, k = math.radians(delta_deg), physics.gravity, physics.kappa
+    h1 = physics.height - tube.below_wall - tube.l3 * math.tan(d)
+    v2_sq = (g / k) * -math.expm1(-2 * k * h1) * math.sin(d) ** 2
+    a, s1 = g * (math.sin(d) - physics.mu * math.cos(d)), tube.l3 / math.cos(d)
+    return a / k + (v2_sq - a / k) * math.exp(-2 * k * s1)
+
+
+def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path):
+    """mu = 1.5, tube I at 15 deg (tan 15 deg < mu): the seedling stops on the wall.  `check` evaluates and fails the
+    design (exit 1, check's contract: it exited 3 and wrote nothing): tube I leaves its wall at speed 0, the landing
+    time spread does not exist and says where the seedling sticks, and tube II's rules (41 deg: a decelerating slide
+    that still ends on the wall's end) are evaluated, matching the closed form written out here."""
+    from synthesis.guide_tube.check import FINE
+    from synthesis.guide_tube.scene import GuideTubeScene
+    from synthesis.spec import load_spec
+
     text = BASELINE.read_text()
     i = text.index("[friction.calibrate]")
     j = text.index("[rows]")
@@ -140,10 +160,33 @@ def test_check_of_a_sticking_wall_exits_3_naming_tube_angle_and_mu(tmp_path):
     path.write_text(text)
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
                           cwd=tmp_path, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 3, proc.stdout + proc.stderr
-    message = " ".join(proc.stderr.split())
-    assert "sticks on the wall of tube I: at wall angle 15 deg with friction coefficient mu = 1.5" in message
+    assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
+    assert "violated: landing_time_spread, wall_exit_speed_I" in " ".join(proc.stdout.split())
+    data = json.loads((tmp_path / "cai2020_tubes" / "result.json").read_text(),
+                      parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
+    rules = {r["name"]: r for r in data["rules"]}
+    assert list(rules) == ["landing_time_spread", "wall_exit_speed_I", "free_fall_height_I", "wall_exit_speed_II",
+                           "free_fall_height_II"]
+    spread = rules["landing_time_spread"]
+    assert spread["value"] is None and not spread["satisfied"]
+    assert ("at row spacing 230 mm the seedling sticks on the wall of tube I: at wall angle 15 deg with friction "
+            "coefficient mu = 1.5") in spread["note"]
+    assert data["facts"]["sticks"] == spread["note"] and "tubes" not in data["facts"]
+    assert rules["wall_exit_speed_I"]["value"] == 0.0 and not rules["wall_exit_speed_I"]["satisfied"]
+    # the evaluated rules against the closed form above, over the design spacing and the 10x finer row-spacing grid
+    spec = load_spec(path).model
+    scene = GuideTubeScene.from_spec(spec)
+    spacings = [scene.rows.design_spacing] + scene.spacing_grid(FINE * spec.solver.samples)
+    tubes = [[scene.tube(k, w) for w in spacings] for k in range(2)]
+    assert min(_exit_speed_sq(15.0, t, scene.physics) for t in tubes[0]) < 0            # it sticks, at every spacing
+    v_exit = min(math.sqrt(_exit_speed_sq(41.0, t, scene.physics)) for t in tubes[1])
+    assert rules["wall_exit_speed_II"]["value"] == pytest.approx(v_exit, rel=1e-9)
+    assert rules["wall_exit_speed_II"]["satisfied"]
+    for k, delta in ((0, 15.0), (1, 41.0)):
+        h1 = min(600 - 1000 * (t.below_wall + t.l3 * math.tan(math.radians(delta))) for t in tubes[k])
+        assert rules[f"free_fall_height_{('I', 'II')[k]}"]["value"] == pytest.approx(h1, rel=1e-12)
+    assert (tmp_path / "cai2020_tubes" / "report.html").exists()
 
 
 # --- steep drag and long falls -----------------------------------------------------------------------------
