@@ -258,6 +258,27 @@ def test_a_trapezoid_through_its_dead_centre_is_a_rule_failure_naming_the_lock(t
     assert data["facts"]["dead_centre_inside_deg"] == pytest.approx(44.4575, abs=1e-3)
 
 
+def test_an_arm_swung_through_its_line_with_the_tie_rod_reads_past_180_not_as_a_negative_angle(tmp_path):
+    """arm 213.3 mm, base angle 38.12 deg: the inner arm's angle to the tie rod grows through 180 deg near lock 27 deg
+    (no dead centre of the outer side).  The signed angle wrapped to -178.7 .. -155.3 deg and the rule showed
+    -155.3; followed from lock 0 it is 204.75 deg at lock 40, the angle measured here from the drawn joints."""
+    path = spec_with(tmp_path, BASELINE, [("arm_length = 150.0 ", "arm_length = 213.29976392348243 "),
+                                           ("base_angle = 72.4 ", "base_angle = 38.1191626865916 ")])
+    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
+    rule = next(r for r in data["rules"] if r["name"] == "tie_rod_transmission_angle")
+    at40 = next(p for p in data["facts"]["positions"] if p["inside_deg"] == 40.0)
+    tl, tr, kl = (np.array(at40[k]) for k in ("T_L", "T_R", "K_L"))
+    a, b = tr - tl, kl - tl
+    unsigned = math.degrees(math.acos(a @ b / (np.linalg.norm(a) * np.linalg.norm(b))))     # in [0, 180]
+    assert rule["value"] == pytest.approx(360.0 - unsigned, rel=1e-9) and rule["value"] > 180.0
+    assert not rule["satisfied"] and rule["margin"] == pytest.approx(155.0 - rule["value"], rel=1e-12)
+    assert "samples lie outside 0-180 deg: there the tie rod has swung through its line" in rule["note"]
+    curve = data["facts"]["curve"]
+    assert 0.0 < curve["mu_inner_deg"][0] < 180.0 and np.all(np.diff(curve["mu_inner_deg"]) > 0)
+
+
 @pytest.mark.parametrize("old, new, message", [
     ("kingpin_spacing = 734.0 ", "kingpin_spacing = 1200.0 ",
      "steering_linkage.vehicle: kingpin_spacing: expected <= track = 1100 mm, got 1200"),

@@ -91,7 +91,10 @@ def trace(spec: SteeringSpec, design: dict[str, float], beta: np.ndarray) -> Tra
     alpha = outer_lock(b, w, r, gamma)
     mu_o, mu_i = transmission_angles(b, alpha, w, r, gamma)
     as_deg = lambda e: np.degrees(np.asarray(e, float).ravel())      # noqa: E731
-    return Trace(np.degrees(beta), as_deg(alpha), ack, as_deg(mu_o), as_deg(mu_i), None)
+    # the signed angles live in (-180, 180]: an arm whose angle to the tie rod grows through 180 deg would jump to
+    # -180 and read as the other assembly; followed continuously from lock 0 it reads 180.2, past the line
+    along = lambda e: np.unwrap(as_deg(e), period=360.0)             # noqa: E731
+    return Trace(np.degrees(beta), as_deg(alpha), ack, along(mu_o), along(mu_i), None)
 
 
 def dead_centre_why(spec: SteeringSpec, design: dict[str, float], at_deg: float) -> str:
