@@ -6,6 +6,7 @@ failure or infeasible rule set; 130 interrupted.
 
 from __future__ import annotations
 
+import contextlib
 import re
 import sys
 from pathlib import Path
@@ -164,13 +165,20 @@ def check(spec: Path, out: Path, force: bool) -> None:
         with captured_warnings() as said:        # scipy/CasADi warnings: into warnings.log, not the terminal
             result = _described(_in_file(loaded, kinds.checker(loaded.kind)), loaded)
         files = {"warnings.log": lambda path: atomic_write_text(path, said())} if said() else {}
-        folder, replaced = write_run(out, result, run_artifacts(result, files), folder=run_folder)
+        with interrupt.deferred(reraise=False):       # evaluated: a signal from here on is noted, the result written
+            folder, replaced = write_run(out, result, run_artifacts(result, files), folder=run_folder)
     except BaseException as exc:
         from synthesis.errors import OutputError
 
         if not isinstance(exc, OutputError):
             run_folder.discard()
         raise
+    with _after_the_result(folder):
+        _check_summary(loaded, result, folder, replaced)
+
+
+def _check_summary(loaded, result, folder: Path, replaced: bool) -> None:
+    """What check prints once its result is written, and its exit code (1: a rule violated)."""
     console.print(rule_table(result.rules, f"{result.name} ({result.kind}): {loaded.path}"))
     if replaced:
         console.print(f"replaced the previous run in {escape(str(folder))}/")
@@ -190,6 +198,25 @@ def check(spec: Path, out: Path, force: bool) -> None:
         console.print(f"[bold red]{len(bad)} rule(s) violated{at}:[/] {', '.join(escape(r['name']) for r in bad)}")
         sys.exit(1)
     console.print(f"[green]every rule satisfied{at}[/]")
+
+
+@contextlib.contextmanager
+def _after_the_result(folder: Path):
+    """The summary printed after a run's result is written.  The result is complete, so a Ctrl-C or SIGTERM from
+    here on is noted, not obeyed: the exit code stays the result's (0, 1 or 3) rather than 130 over a finished run
+    (the printing takes a moment, there is nothing left to stop)."""
+    from synthesis.core import interrupt
+
+    try:
+        with interrupt.deferred(reraise=False):
+            yield
+    finally:
+        signum = interrupt.pending()
+        if signum is not None:
+            import signal as _signal
+
+            err_console.print(f"{_signal.Signals(signum).name} arrived after the result was written: "
+                              f"{escape(str(folder))}/ is complete; the exit code is the result's")
 
 
 def published_figures_line(facts: dict | None) -> str | None:
@@ -374,7 +401,6 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     from synthesis.core.executor import default_workers
     from synthesis.errors import OutputError
     from synthesis.report import run_artifacts
-    from synthesis.report.tables import objective_text
     from synthesis.result import RUN_NAME, atomic_write_text, is_run_folder, open_run_folder, write_run
     from synthesis.spec import load_spec
 
@@ -449,7 +475,8 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         if verbose:
             console.print(log, markup=False)
         baseline = core.baseline_rules(kind, loaded)
-        with interrupt.deferred():
+        # every start is done: a signal from here on is noted and the finished result written all the same
+        with interrupt.deferred(reraise=False):
             artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log),
                                                **_solved_spec(loaded, result)}, given_rules=baseline)
             folder, replaced = write_run(out, result, artifacts, folder=run_folder)
@@ -458,6 +485,17 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         if not committed and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
+    with _after_the_result(folder):
+        _solve_summary(kind, result, reports, baseline, workers, scheduler, finished, resume, replaced, folder)
+
+
+def _solve_summary(kind, result, reports, baseline, workers: int, scheduler: str | None, finished, resume,
+                   replaced: bool, folder: Path) -> None:
+    """What a finished solve prints once its result is written, and its exit code (1: a rule violated; 3:
+    infeasible or failed, the diagnosis in the message)."""
+    from synthesis.core import solve as core
+    from synthesis.report.tables import objective_text
+
     console.print(comparison_table(result.rules, baseline, f"{result.name}: rules at the given design (start 0) "
                                                            f"and at the solved one"))
     _print_design(result)

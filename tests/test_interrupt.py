@@ -196,3 +196,29 @@ def test_resume_refuses_another_spec_or_other_settings(tmp_path):
     _, other = startlog.fingerprint("crank_rocker", NAME, "ab" * 32, 25, 0)
     with pytest.raises(OutputError, match="other settings or another spec file"):
         startlog.read(tmp_path, other)
+
+
+@pytest.mark.parametrize("command, printer, code", [
+    (("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "rule_table", 1),     # 3 rules violated
+    (("solve", SPEC, "--starts", 2, "--workers", 1), "comparison_table", 0),              # every rule satisfied
+])
+def test_a_signal_after_the_result_is_written_keeps_the_results_exit_code(tmp_path, command, printer, code):
+    """A Ctrl-C while the summary prints, after the result is in place: the run is complete, so the exit code is the
+    result's (it was 130, which the contract keeps for stopped runs) and the terminal says why."""
+    script = (
+        "import os, signal, sys\n"
+        f"sys.argv = ['agrisynth', *{[str(a) for a in command]!r}, '--out', {str(tmp_path)!r}]\n"
+        "import synthesis.cli as cli\n"
+        f"real = cli.{printer}\n"
+        "def printer(*args, **kwargs):\n"
+        "    os.kill(os.getpid(), signal.SIGINT)      # delivered here, between two bytecodes\n"
+        "    return real(*args, **kwargs)\n"
+        f"cli.{printer} = printer\n"
+        "cli.main()\n")
+    proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == code, proc.stdout + proc.stderr
+    assert "SIGINT arrived after the result was written" in " ".join(proc.stderr.split())
+    assert "Traceback" not in proc.stderr
+    result = json.loads(next(tmp_path.glob("*/result.json")).read_text())
+    assert result["status"] in ("evaluated", "optimal")
+    assert "rule(s) violated" in proc.stdout if code == 1 else "every rule satisfied" in proc.stdout
