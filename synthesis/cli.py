@@ -474,9 +474,9 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         log_file.close()
         if verbose:
             console.print(log, markup=False)
-        baseline = core.baseline_rules(kind, loaded)
         # every start is done: a signal from here on is noted and the finished result written all the same
         with interrupt.deferred(reraise=False):
+            baseline = core.baseline_rules(kind, loaded)
             artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log),
                                                **_solved_spec(loaded, result)}, given_rules=baseline)
             folder, replaced = write_run(out, result, artifacts, folder=run_folder)
