@@ -209,14 +209,18 @@ def _after_the_result(folder: Path):
 
     try:
         with interrupt.deferred(reraise=False):
-            yield
+            try:
+                yield
+            finally:
+                if _as_program:     # the process ends with this command: nothing is left for a signal to stop
+                    interrupt.ignore()
     finally:
         signum = interrupt.pending()
         if signum is not None:
             import signal as _signal
 
-            err_console.print(f"{_signal.Signals(signum).name} arrived after the result was written: "
-                              f"{escape(str(folder))}/ is complete; the exit code is the result's")
+            err_console.print(f"{_signal.Signals(signum).name} arrived once the result was complete: "
+                              f"{escape(str(folder))}/ holds it; the exit code is the result's")
 
 
 def published_figures_line(facts: dict | None) -> str | None:
@@ -444,38 +448,51 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     committed = False
     try:
         log_file = startlog.StartLog(run_folder.staging / startlog.FILENAME, settings, fingerprint)
-        with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                      TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
-                      transient=not sys.stdout.isatty()) as progress:
-            task = progress.add_task(f"solving {loaded.name}", total=n, best="")
+        from synthesis.library_log import captured_warnings
 
-            def on_start(report, best) -> None:
-                tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
-                progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
-                                                      f"objective {best.outcome.objective:.6g} ({tag})")
-                if not sys.stdout.isatty():         # piped: no live bar, so a line per finished start
-                    _start_line(report, best, progress.tasks[task].completed, n)
+        solved = None         # (result, reports, log) once every start has finished
+        stderr = sys.stderr   # the warnings capture swaps it; an exit cut short by a signal may not swap it back
+        try:
+            with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                          TextColumn("{task.fields[best]}"), TimeElapsedColumn(), console=console,
+                          transient=not sys.stdout.isatty()) as progress:
+                task = progress.add_task(f"solving {loaded.name}", total=n, best="")
 
-            try:
-                from synthesis.library_log import captured_warnings
+                def on_start(report, best) -> None:
+                    tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
+                    progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
+                                                          f"objective {best.outcome.objective:.6g} ({tag})")
+                    if not sys.stdout.isatty():         # piped: no live bar, so a line per finished start
+                        _start_line(report, best, progress.tasks[task].completed, n)
 
-                with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
-                    result, reports, log = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
-                                                          record=log_file.append, finished=finished)
-                if said():
-                    log += f"\n# library warnings outside the IPOPT runs\n{said()}"
-                _described(result, loaded)
-            except core.Interrupted as exc:
-                log_file.close()
-                if exc.partial is not None:
-                    _described(exc.partial[0], loaded)
-                committed = _keep_interrupted(exc, run_folder, spec, n, lambda: core.baseline_rules(kind, loaded))
-                sys.exit(exc.exit_code)
-        log_file.close()
-        if verbose:
-            console.print(log, markup=False)
+                try:
+                    with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
+                        solved = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
+                                                record=log_file.append, finished=finished)
+                except core.Interrupted as exc:
+                    log_file.close()
+                    if exc.partial is not None:
+                        _described(exc.partial[0], loaded)
+                    committed = _keep_interrupted(exc, run_folder, spec, n,
+                                                  lambda: core.baseline_rules(kind, loaded))
+                    sys.exit(exc.exit_code)
+        except KeyboardInterrupt:
+            # the signal came as the run returned (closing the warnings capture or the progress bar): the result
+            # is complete, so it is kept like any later signal (noted, the exit code the result's)
+            if solved is None:
+                raise
+            with interrupt.deferred(reraise=False):
+                sys.stderr = stderr
+                progress.stop()
         # every start is done: a signal from here on is noted and the finished result written all the same
         with interrupt.deferred(reraise=False):
+            result, reports, log = solved
+            if said():
+                log += f"\n# library warnings outside the IPOPT runs\n{said()}"
+            _described(result, loaded)
+            log_file.close()
+            if verbose:
+                console.print(log, markup=False)
             baseline = core.baseline_rules(kind, loaded)
             artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log),
                                                **_solved_spec(loaded, result)}, given_rules=baseline)
@@ -902,7 +919,13 @@ def bench_table(results: list[dict], repeats: int) -> Table:
     return table
 
 
+#: set by :func:`main`: agrisynth runs as a program (not a library call or an in-process test) and ends with the command
+_as_program = False
+
+
 def main() -> None:
+    global _as_program
+    _as_program = True
     try:
         cli.main(standalone_mode=False, prog_name="agrisynth")
     except click.exceptions.Exit as exc:

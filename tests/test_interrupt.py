@@ -198,26 +198,43 @@ def test_resume_refuses_another_spec_or_other_settings(tmp_path):
         startlog.read(tmp_path, other)
 
 
-@pytest.mark.parametrize("command, printer, code", [
-    (("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "rule_table", 1),     # 3 rules violated
-    (("solve", SPEC, "--starts", 2, "--workers", 1), "comparison_table", 0),              # every rule satisfied
+@pytest.mark.parametrize("command, where, code", [
+    (("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "synthesis.cli:rule_table", 1),   # 3 violated
+    (("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.cli:comparison_table", 0),   # every rule holds
+    # the signal as the solve returns, before the result is written (the log of the starts, the progress bar):
+    # the trial found the whole run discarded there, exit 130 and nothing written
+    (("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.core.solve:ipopt_log", 0),
+    (("solve", SPEC, "--starts", 2, "--workers", 1), "rich.progress:Progress:exit", 0),
 ])
-def test_a_signal_after_the_result_is_written_keeps_the_results_exit_code(tmp_path, command, printer, code):
-    """A Ctrl-C while the summary prints, after the result is in place: the run is complete, so the exit code is the
-    result's (it was 130, which the contract keeps for stopped runs) and the terminal says why."""
+def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_code(tmp_path, command, where, code):
+    """A Ctrl-C after the last start, while the answer is being written or its summary printed: the run is
+    complete, so it is written and the exit code is the result's (it was 130, which the contract keeps for
+    stopped runs, or the run was lost), and the terminal says why."""
+    module, name, *exit_ = where.split(":")
+    at_exit = exit_ == ["exit"]
     script = (
-        "import os, signal, sys\n"
+        "import importlib, os, signal, sys\n"
         f"sys.argv = ['agrisynth', *{[str(a) for a in command]!r}, '--out', {str(tmp_path)!r}]\n"
         "import synthesis.cli as cli\n"
-        f"real = cli.{printer}\n"
-        "def printer(*args, **kwargs):\n"
+        f"module = importlib.import_module({module!r})\n"
+        f"real = module.{name}\n"
+        "def signalled(*args, **kwargs):\n"
+        "    value = real(*args, **kwargs)\n"
         "    os.kill(os.getpid(), signal.SIGINT)      # delivered here, between two bytecodes\n"
-        "    return real(*args, **kwargs)\n"
-        f"cli.{printer} = printer\n"
+        "    return value\n"
+        f"if {at_exit!r}:                # a context manager's class: the signal as its block ends\n"
+        "    leave = real.__exit__\n"
+        "    def signalled(self, *args):\n"
+        "        value = leave(self, *args)\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        return value\n"
+        "    real.__exit__ = signalled\n"
+        "else:\n"
+        f"    setattr(module, {name!r}, signalled)\n"
         "cli.main()\n")
     proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == code, proc.stdout + proc.stderr
-    assert "SIGINT arrived after the result was written" in " ".join(proc.stderr.split())
+    assert "SIGINT arrived once the result was complete" in " ".join(proc.stderr.split())
     assert "Traceback" not in proc.stderr
     result = json.loads(next(tmp_path.glob("*/result.json")).read_text())
     assert result["status"] in ("evaluated", "optimal")

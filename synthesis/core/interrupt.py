@@ -60,6 +60,14 @@ def uninstall() -> None:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+def ignore() -> None:
+    """From now on SIGINT and SIGTERM do nothing (main thread only): for a command whose answer is written and
+    printed, the moments left before the process exits have nothing to stop."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
 def pending() -> int | None:
     """The signal received since :func:`install` (None: none)."""
     return _pending

@@ -313,11 +313,13 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         raise Interrupted(interrupt.pending(), (kept, run.reports, ipopt_log(run.reports)))
     try:
         result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
+        # the answer is complete: a signal from here on is only noted (interrupt.pending), for the caller to say
+        with interrupt.deferred(reraise=False):
+            return result, run.reports, ipopt_log(run.reports)
     except KeyboardInterrupt as exc:          # stopped while the kind finished the answer (a robust solve's
         with interrupt.deferred(reraise=False):   # Monte-Carlo check): every start is kept, as above
             kept = _result(kind, loaded, setting, run, "interrupted", None)
         raise Interrupted(interrupt.signal_of(exc), (kept, run.reports, ipopt_log(run.reports))) from None
-    return result, run.reports, ipopt_log(run.reports)
 
 
 def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic: ElasticDiagnosis | None) -> Result:
