@@ -77,7 +77,8 @@ def outside_bounds(names, box: np.ndarray, design: dict) -> str | None:
             continue
         if value < lo - BOUND_TOLERANCE * max(1.0, abs(lo)) or value > hi + BOUND_TOLERANCE * max(1.0, abs(hi)):
             where = f"its fixed value {lo:g}" if lo == hi else f"its bounds [{lo:g}, {hi:g}]"
-            return (f"{name} = {value:.6g} lies outside {where}: IPOPT stopped without meeting the rows that hold "
-                    f"the link lengths, so this is no design of the spec")
+            off = lo - value if value < lo else value - hi        # the digits that show it: 200.0003, not 200
+            return (f"{name} = {value:.10g} lies {off:.2g} outside {where}: IPOPT stopped without meeting the rows "
+                    f"that hold the link lengths, so this is no design of the spec")
     return None
 

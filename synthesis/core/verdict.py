@@ -313,8 +313,13 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
             f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
             f"{why}: the rules hold at the solver's samples. Violated between samples: {bad}. Raise "
             f"{samples_hint}, or try more --starts.{cannot}")
+    search = (f"more --starts, a higher {max_iter_hint}, or a given design (start 0) nearer one that meets the "
+              f"rules")
+    if elastic is not None and elastic.converged:       # no slack needed: the rules can be met together
+        verdict = f"This is a solver failure, not an infeasible rule set: try {search}."
+    else:       # nothing shows whether the rules can be met together: say so, and both ways out
+        verdict = (f"Whether the rules can be met together is not known: if they can, {search} may find a design; "
+                   f"if they cannot, loosen {'those rules' if violated else 'the rules'} or widen the bounds.")
     return SolverError(
         f"IPOPT found no design that satisfies every rule: {len(converged)} of the {n} starts converged "
-        f"(IPOPT said: {said(reports)}), {why}. Violated at the best start: {bad}. This is a solver failure, not "
-        f"an infeasible rule set: try more --starts, a higher {max_iter_hint}, or a given design (start 0) nearer "
-        f"one that meets the rules.{cannot}")
+        f"(IPOPT said: {said(reports)}), {why}. Violated at the best start: {bad}. {verdict}{cannot}")
