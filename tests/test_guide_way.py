@@ -43,8 +43,9 @@ def test_bc_reproduces_the_printed_coefficients_with_the_third_point_at_minus_85
     # as printed (184, -85.4): 1-2 % off in every coefficient, far beyond rounding
     off = np.abs(_bc(-85.4) / printed - 1)
     assert off.min() > 9e-3
-    # the printed BC conic passes through (184, -85.50) not (184, -85.4): F there is 40 (0.27 mm away)
+    # the printed BC conic passes through (184, -85.50) not (184, -85.4): F there is 40, 0.045 mm along the normal
     assert cn.value(BC, 184.0, -85.4) == pytest.approx(40.23, abs=0.01)
+    assert cn.distance(BC, 184.0, -85.4) == pytest.approx(0.0448, abs=1e-4)
     ys = np.roots([BC[1], BC[0] * 184 + BC[3], 184**2 + BC[2] * 184 + BC[4]])
     assert min(abs(ys + 85.5)) < 1e-4
     # with -85.5 every coefficient agrees to 1.4e-5 relative: the rounding of the printed AB tangent input
