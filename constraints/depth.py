@@ -1,4 +1,9 @@
-"""Planting depth (seed 000 §6.2 (2), CNS: 2-3 cm): Y(P4) - Y(P5) within [lo, hi] mm."""
+"""Planting depth, Y(P4) - Y(P5) within [lo, hi] mm (CNS: 2-3 cm, seed 000 §5.2 (3)).
+
+Our reading: seed 000 says P5, the lowest point, sets the depth (§2) and puts the ground 2.5 cm above the path's
+lowest point for its analysis; it does not define the depth as Y(P4) - Y(P5).  Where the ground is placed that way
+(a check at the analysis depth) the rule equals that depth by construction; it constrains a design only where the
+ground is given apart from the path."""
 
 from __future__ import annotations
 
