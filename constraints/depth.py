@@ -1,4 +1,4 @@
-"""Planting depth, Y(P4) - Y(P5) within [lo, hi] mm (CNS: 2-3 cm, seed 000 §5.2 (3)).
+"""Planting depth, Y(P4) - Y(P5) within [lo, hi] mm (CNS: 2-3 cm, seed 000 §4, the analysis assumptions (3)).
 
 Our reading: seed 000 says P5, the lowest point, sets the depth (§2) and puts the ground 2.5 cm above the path's
 lowest point for its analysis; it does not define the depth as Y(P4) - Y(P5).  Where the ground is placed that way
