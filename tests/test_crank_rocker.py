@@ -214,5 +214,14 @@ def test_requirements_no_crank_rocker_meets_are_diagnosed_as_the_transmission_ru
     assert result.status == "infeasible"
     assert result.elastic["relaxed"] == ["min_transmission_angle"]
     assert result.elastic["slacks"]["min_transmission_angle"] == pytest.approx(45.0 - gamma_star, abs=0.02)
-    message = " ".join(str(diagnose_infeasible(loaded, result, reports)).split())
+    error = str(diagnose_infeasible(loaded, result, reports))
+    message = " ".join(error.split())
     assert "Rules that conflict" in message and "min_transmission_angle (misses its limit by 9.8" in message
+    # the run keeps the message, and its report shows it under the verdict
+    assert result.solver["diagnosis"] == error
+    from synthesis.report import run_artifacts
+    from synthesis.result import write_run
+
+    folder, _ = write_run(tmp_path / "out", result, run_artifacts(result, {}))
+    page = (folder / "report.html").read_text()
+    assert "<p class='diagnosis'>no start satisfies every rule" in page and "misses its limit by 9.8" in page

@@ -352,6 +352,8 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         raise Interrupted(interrupt.pending(), (kept, run.reports, ipopt_log(run.reports)))
     try:
         result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
+        if result.status in ("infeasible", "failed"):     # the exit-3 message, kept with the run for its report
+            result.solver["diagnosis"] = str(exit_error(kind, result, run.reports))
         # the answer is complete: a signal from here on is only noted (interrupt.pending), for the caller to say
         with interrupt.deferred(reraise=False):
             return result, run.reports, ipopt_log(run.reports)

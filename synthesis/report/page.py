@@ -24,6 +24,7 @@ h1 { margin-bottom: .2em; } h2 { margin-top: 1.6em; border-bottom: 2px solid #e4
 .verdict { border-radius: 6px; padding: .5em .8em; background: #eaf6ea; border: 1px solid #b9dcb9; }
 .verdict.bad { background: #fdecec; border-color: #f0b4b4; }
 .verdict b { display: block; }
+.verdict p.diagnosis { margin: .4em 0 0; max-width: 60em; font-size: .92em; }
 table { border-collapse: collapse; margin: .8em 0; font-size: 14px; }
 th, td { border-bottom: 1px solid #e4e4e4; padding: 4px 10px; text-align: left; vertical-align: top; }
 th { background: #f5f5f7; position: sticky; top: 0; }
@@ -209,8 +210,11 @@ def _verdicts(cands: list[Candidate]) -> str:
     for c in cands:
         bad = [r["name"] for r in c.result.violated()]
         text = "every rule satisfied" if not bad else f"{len(bad)} rule(s) violated: {', '.join(bad)}"
+        # an infeasible or failed solve keeps its exit-3 message: which rules are out of reach, what to change
+        diagnosis = (c.result.solver or {}).get("diagnosis")
+        said = f"<p class='diagnosis'>{html.escape(diagnosis)}</p>" if isinstance(diagnosis, str) else ""
         out.append(f"<div class='verdict{' bad' if bad else ''}'><b>{html.escape(c.label)}</b>"
-                   f"{html.escape(c.result.status)}: {html.escape(text)}</div>")
+                   f"{html.escape(c.result.status)}: {html.escape(text)}{said}</div>")
     return f"<div class='verdicts'>{''.join(out)}</div>"
 
 
