@@ -240,10 +240,25 @@ def published_figures_line(facts: dict | None) -> str | None:
     return text
 
 
+def _violation_text(report) -> str:
+    """"worst violation 0.93", or for a design whose rules could not all be evaluated (an infinite violation) what
+    stands in the way: "no design: <why>" or "entry_angle not evaluated: <note>"."""
+    import math
+
+    if math.isfinite(report.worst_violation):
+        return f"worst violation {report.worst_violation:.3g}"
+    if report.why:
+        return f"no design: {report.why.rstrip('.')}"
+    missing = next((r for r in report.records if r.value is None), None)
+    if missing is not None:
+        return f"{missing.name} not evaluated" + (f": {missing.note.rstrip('.')}" if missing.note else "")
+    return "not evaluated"
+
+
 def _start_line(report, best, done: int, total: int) -> None:
     """One line for a finished start (piped runs): its outcome and the best so far."""
     o = report.outcome
-    own = "feasible" if report.satisfied else f"worst violation {report.worst_violation:.3g}"
+    own = "feasible" if report.satisfied else _violation_text(report)
     console.print(f"start {o.start} finished ({done}/{total}): objective {o.objective:.6g}, {own}, IPOPT "
                   f"{o.return_status} in {o.iterations} iterations, {o.wall_s:.2f} s; best so far: start "
                   f"{best.outcome.start}", markup=False, highlight=False)
@@ -459,7 +474,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                 task = progress.add_task(f"solving {loaded.name}", total=n, best="")
 
                 def on_start(report, best) -> None:
-                    tag = "feasible" if best.satisfied else f"worst violation {best.worst_violation:.3g}"
+                    tag = "feasible" if best.satisfied else _violation_text(best)
                     progress.update(task, advance=1, best=f"best: start {best.outcome.start}, "
                                                           f"objective {best.outcome.objective:.6g} ({tag})")
                     if not sys.stdout.isatty():         # piped: no live bar, so a line per finished start

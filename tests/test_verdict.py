@@ -8,6 +8,8 @@ free is bad input (exit 2).  result.json carries the elastic diagnosis the messa
 
 from __future__ import annotations
 
+import math
+
 import json
 import re
 import subprocess
@@ -396,3 +398,17 @@ def test_at_bounds_names_the_free_variables_on_a_bound_by_their_result_names():
     design = nlp.design(np.asarray(nlp.bounds, float)[:, 0])          # every free angle at its lower bound
     assert [b["name"] for b in at_bounds(nlp.design_names, nlp.bounds, design)] == list(nlp.design_names)
     assert set(nlp.design_names) <= set(design)
+
+
+def test_a_start_line_names_what_stands_in_the_way_of_an_infinite_violation():
+    """The terminal printed "worst violation inf" for a start with a rule not evaluated and no reason at all."""
+    from constraints import not_evaluated
+    from synthesis.cli import _violation_text
+
+    outcome = SimpleNamespace(start=11, return_status="Solve_Succeeded", success=True)
+    missing = not_evaluated("p1p3_distance", 100, 120, "mm", "machine frame", "P1 not found: the claw does not cross")
+    assert _violation_text(StartReport(outcome, False, 0.93)) == "worst violation 0.93"
+    assert (_violation_text(StartReport(outcome, False, math.inf, records=[missing.record()]))
+            == "p1p3_distance not evaluated: P1 not found: the claw does not cross")
+    assert (_violation_text(StartReport(outcome, False, math.inf, why="l10 = 161.37 lies 21 outside its fixed value"))
+            == "no design: l10 = 161.37 lies 21 outside its fixed value")
