@@ -8,9 +8,8 @@ free is bad input (exit 2).  result.json carries the elastic diagnosis the messa
 
 from __future__ import annotations
 
-import math
-
 import json
+import math
 import re
 import subprocess
 import sys
