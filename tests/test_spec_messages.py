@@ -113,10 +113,11 @@ def test_a_precision_point_not_searched_says_which_point_was_missing_and_why():
         assert notes[name] == f"P1 not searched: {p2}"
 
 
-def test_a_pattern_in_a_message_keeps_its_case(tmp_path):
-    """pydantic's "should match pattern '^[A-Za-z0-9]...'" was lowered whole, which misstated the pattern."""
+def test_a_name_that_cannot_name_a_folder_is_said_in_words(tmp_path):
+    """pydantic's "string should match pattern '^[A-Za-z0-9][A-Za-z0-9_.-]*$'" asked a user to read a regex."""
     text = message(tmp_path, 'name = "redesign_from_example1"', 'name = "Ab c"')
-    assert text == "name: string should match pattern '^[A-Za-z0-9][A-Za-z0-9_.-]*$', got 'Ab c'"
+    assert text == ("name: letters, digits, '_', '.' and '-' only, starting with a letter or digit (it names the "
+                    "result folder), got 'Ab c'")
 
 
 def test_fourbar_path_needs_three_distinct_targets(tmp_path):

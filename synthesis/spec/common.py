@@ -121,7 +121,8 @@ class ToleranceSpec(StrictModel):
 class ProblemSpec(StrictModel):
     """What every spec file has besides its ``kind`` and its own sections."""
 
-    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100, description="result folder name (at most 100 characters)")
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100,
+                      description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
     tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve (issue 20)")
 
@@ -331,6 +332,9 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
         return f"{path}: expected {_TYPES[kind]}, got {shown(got)}"
     if kind == "literal_error":
         return f"{path}: expected {ctx.get('expected')}, got {shown(got)}"
+    if kind == "string_pattern_mismatch" and ctx.get("pattern") == RUN_NAME_PATTERN:
+        return (f"{path}: letters, digits, '_', '.' and '-' only, starting with a letter or digit (it names the "
+                f"result folder), got {shown(got)}")
     # pydantic's message as it is, only its first letter lowered (lowering all of it misstates a pattern: A-Z)
     message = err["msg"]
     return f"{path}: {message[:1].lower()}{message[1:]}, got {shown(got)}"
