@@ -55,9 +55,11 @@ def cli() -> None:
       agrisynth bench KIND    compare methods: objective reached against wall time
       agrisynth problems      list the problem library
       agrisynth spec KIND     the spec reference of a kind (--template: a file to start from)
+      agrisynth tolerance SPEC  sensitivities, tolerance stack-up, Monte-Carlo check of a design
+      agrisynth studio SPEC   an interactive design page on 127.0.0.1 (the studio extra)
     Results go to results/<spec name>/ (result.json, report.html, plots).
     Exit codes: 0 all rules satisfied, 1 a rule violated, 2 bad input,
-    3 solver failure / infeasible, 130 interrupted.
+    3 solver failure / infeasible, 130 interrupted (Ctrl-C), 143 stopped (SIGTERM).
     """
 
 
