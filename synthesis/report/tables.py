@@ -276,7 +276,7 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
         ("starts", [_starts_text(c.result.solver) for c in cands]),
         ("seed", [solver(c, "seed") for c in cands]),
         ("best start", [solver(c, "best_start") for c in cands]),
-        ("fine-grid worst violation", [c.result.fine_grid_worst_violation for c in cands]),
+        ("fine-grid worst violation (violation / rule scale)", [c.result.fine_grid_worst_violation for c in cands]),
         ("spec sha256", [c.result.spec_sha256 for c in cands]),
         ("source", [c.result.extra.get("source") for c in cands]),
         ("result file", [None if c.source is None else str(c.source) for c in cands]),
