@@ -294,8 +294,8 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
             against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
         return SolverError(
             f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). {which} "
-            f"(the smallest relaxation, an elastic re-solve ({elastic.return_status}), gives up on them, largest "
-            f"first): {', '.join(misses(name) for name in relaxed)}{against}.{_bounds_text(elastic.at_bounds)} "
+            f"(the smallest relaxation an elastic re-solve found ({elastic.return_status}), a local one, gives up on "
+            f"them, largest first): {', '.join(misses(name) for name in relaxed)}{against}.{_bounds_text(elastic.at_bounds)} "
             f"{relax_hint}{cannot}")
     if elastic is None:
         why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
