@@ -159,6 +159,7 @@ def check(spec: Path, out: Path, force: bool) -> None:
 
     interrupt.install()
     loaded = load_spec(spec)
+    _unit_notes(loaded)
     run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
     try:
         from synthesis.library_log import captured_warnings
@@ -240,6 +241,14 @@ def published_figures_line(facts: dict | None) -> str | None:
             return f"{r.get('label', '?')} (published {r.get('published')}, ours {ours_text} {r.get('unit', '')})"
         text += "; not: " + "; ".join(figure(r) for r in missed)
     return text
+
+
+def _unit_notes(loaded) -> None:
+    """Numbers that look like metres for mm or radians for degrees: a note each, before the run (valid input)."""
+    from synthesis.spec.plausibility import unit_notes
+
+    for note in unit_notes(loaded.model):
+        console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
 
 
 def _violation_text(report) -> str:
@@ -432,6 +441,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
     interrupt.install()
     loaded = load_spec(spec)
+    _unit_notes(loaded)
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     if scheduler is not None:       # a peer that is no dask scheduler: exit 2 now, within the connect timeout
         try:

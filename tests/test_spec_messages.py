@@ -198,3 +198,31 @@ def test_a_printed_figure_of_a_paper_is_positive(tmp_path):
     path.write_text(text.replace("value = 0.85", "value = -1", 1))
     with pytest.raises(SpecError, match=r"published\.0\.value: expected > 0, got -1"):
         load_spec(path)
+
+
+def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(tmp_path):
+    """A practitioner's trial: a crank-rocker in metres (frame 0.2) and a tillage angle's bounds in radians
+    ([0.17, 1.05]) solved 'optimal' without a word.  They are valid input, so a note each, never an error."""
+    import glob
+
+    from conftest import LIBRARY
+    from synthesis.spec.plausibility import unit_notes
+
+    assert all(unit_notes(load_spec(f).model) == [] for f in sorted(glob.glob(str(LIBRARY / "*" / "*.toml"))))
+    text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
+    for old, new in (("{ init = 50.0, bounds = [5.0, 200.0] }", "{ init = 0.05, bounds = [0.005, 0.2] }"),
+                     ("{ init = 120.0, bounds = [5.0, 400.0] }", "{ init = 0.12, bounds = [0.005, 0.4] }"),
+                     ("l10 = 140.0", "l10 = 0.14")):
+        assert old in text
+        text = text.replace(old, new)
+    metres = tmp_path / "metres.toml"
+    metres.write_text(text)
+    assert unit_notes(load_spec(metres).model) == [
+        "every length is under 1 mm (the largest, links.l8, is 0.4 mm): lengths are in mm; were they given in metres?"]
+    text = (LIBRARY / "tillage" / "tillage_redesign.toml").read_text()
+    old = next(line for line in text.splitlines() if line.startswith("theta = {"))
+    radians = tmp_path / "radians.toml"
+    radians.write_text(text.replace(old, "theta = { init = 0.52, bounds = [0.17, 1.05] }"))
+    assert unit_notes(load_spec(radians).model) == [
+        "linkage.theta bounds [0.17, 1.05] deg span under 2 deg: angles are in degrees ([9.74, 60.16] if those were "
+        "radians)"]

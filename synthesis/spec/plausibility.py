@@ -1,0 +1,71 @@
+"""Notes on numbers that look like the wrong unit: a spec in metres where mm are meant, an angle's bounds in
+radians where degrees are meant.  They are valid input (a 0.2 mm linkage is a linkage), so they are notes printed
+beside the result, never errors: the unit of every field is fixed (mm, deg, ...) and written without a unit."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Iterator
+
+from pydantic import BaseModel
+
+from synthesis.spec.common import FreeVariable
+from synthesis.spec.docmeta import units_in
+
+#: every length of a spec under this (mm) reads as metres: no mechanism of the library is smaller than 10 mm
+TINY_LENGTHS = 1.0
+#: a free angle whose bounds span less than this (deg), all within one radian turn, reads as radians
+NARROW_ANGLE_SPAN = 2.0
+
+
+def _numbers(value: Any) -> Iterator[tuple[str, float]]:
+    """("", v) for a number, ("init"/"bounds", v) for a free variable's parts, items of lists and pairs."""
+    if isinstance(value, bool):
+        return
+    if isinstance(value, (int, float)):
+        yield "", float(value)
+    elif isinstance(value, FreeVariable):
+        yield "init", value.init
+        for b in value.bounds:
+            yield "bounds", b
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            yield from _numbers(item)
+
+
+def fields_with_units(model: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, Any]]:
+    """(dotted path, unit, value) of every field of ``model`` whose description names exactly one unit."""
+    for name, field in type(model).model_fields.items():
+        value = getattr(model, name, None)
+        path = f"{prefix}{name}"
+        if isinstance(value, BaseModel) and not isinstance(value, FreeVariable):
+            yield from fields_with_units(value, path + ".")
+        elif isinstance(value, dict):
+            for key, item in value.items():
+                if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
+                    yield from fields_with_units(item, f"{path}.{key}.")
+        elif isinstance(value, list) and value and all(isinstance(v, BaseModel) for v in value):
+            for k, item in enumerate(value):
+                yield from fields_with_units(item, f"{path}.{k}.")
+        else:
+            units = units_in(field.description)
+            if len(units) == 1:
+                yield path, units[0], value
+
+
+def unit_notes(model: BaseModel) -> list[str]:
+    """Notes on the spec's numbers that look like metres for mm or radians for degrees (empty when none do)."""
+    notes = []
+    fields = list(fields_with_units(model))
+    lengths = [(path, v) for path, unit, value in fields if unit == "mm" for _, v in _numbers(value) if v != 0]
+    if len(lengths) >= 2 and max(abs(v) for _, v in lengths) < TINY_LENGTHS:
+        path, v = max(lengths, key=lambda pv: abs(pv[1]))
+        notes.append(f"every length is under {TINY_LENGTHS:g} mm (the largest, {path}, is {v:g} mm): lengths are in mm; "
+                     f"were they given in metres?")
+    for path, unit, value in fields:
+        if unit == "deg" and isinstance(value, FreeVariable):
+            lo, hi = value.bounds
+            if 0 < hi - lo < NARROW_ANGLE_SPAN and max(abs(lo), abs(hi)) <= 2 * math.pi:
+                notes.append(f"{path} bounds [{lo:g}, {hi:g}] deg span under {NARROW_ANGLE_SPAN:g} deg: angles are in "
+                             f"degrees ([{math.degrees(lo):.4g}, {math.degrees(hi):.4g}] if those were radians)")
+    return notes
