@@ -43,32 +43,38 @@ def rules_of(scene: GuideTubeScene, angles: dict, grid: list[float], limits, dro
 
 def rules_even_if_stuck(scene: GuideTubeScene, angles: dict[str, float], grid: list[float],
                         limits) -> tuple[list[Rule], str | None]:
-    """The rules of :func:`rules_of` on floats, for a design whose seedling may stick on a wall: the wall rules
-    (exit speed, free fall) are evaluated either way -- a seedling that stops leaves the wall at speed 0 -- and a
-    landing-time rule that needs a seedling that never lands is not evaluated, saying where it sticks.  Returns
-    the rules and the first sticking (None if every seedling lands)."""
+    """The rules of :func:`rules_of` on floats, for a design whose seedling may stick on a wall.  A tube whose
+    seedling sticks at some row spacing fails its wall-exit rule as not evaluated (the seedling never reaches the
+    wall end: whatever min_exit_speed, even 0, it fails), a landing-time rule that needs a seedling that never lands
+    is not evaluated, and every other rule is evaluated (the free falls, the other tubes' walls), each saying where
+    it sticks.  Returns the rules and the first sticking (None if every seedling lands)."""
     stuck: dict[float, str] = {}
+    stuck_tubes: dict[str, str] = {}
 
     def at(spacing: float) -> list[DropPhases]:
         drops = []
         for i, t in enumerate(scene.tubes):
             phases, sticks = slide(angles[t.name], scene.tube(i, spacing), scene.physics)
             if sticks is not None:
-                stuck.setdefault(spacing, f"at row spacing {spacing:g} mm {sticks}")
+                why = f"at row spacing {spacing:g} mm {sticks}"
+                stuck.setdefault(spacing, why)
+                stuck_tubes.setdefault(t.name, why)
             drops.append(phases)
         return drops
 
     design_spacing = scene.rows.design_spacing
     design, swept = at(design_spacing), [at(w) for w in grid]
     on_grid = next((stuck[w] for w in grid if w in stuck), None)
-    rules = _rules(scene, design, swept, grid, limits, True, stuck.get(design_spacing), on_grid)
+    rules = _rules(scene, design, swept, grid, limits, True, stuck.get(design_spacing), on_grid, stuck_tubes)
     return rules, stuck.get(design_spacing, on_grid)
 
 
 def _rules(scene: GuideTubeScene, design: list[DropPhases], swept: list[list[DropPhases]], grid: list[float],
-           limits, equalise: bool, stuck_at_design: str | None = None, stuck_on_grid: str | None = None) -> list[Rule]:
+           limits, equalise: bool, stuck_at_design: str | None = None, stuck_on_grid: str | None = None,
+           stuck_tubes: dict[str, str] | None = None) -> list[Rule]:
     """The rules of the drops ``design`` (at the design row spacing) and ``swept`` (at each spacing of ``grid``);
-    a ``stuck_*`` reason leaves the landing-time rule(s) of those drops not evaluated."""
+    a ``stuck_*`` reason leaves the landing-time rule(s) of those drops, and the wall-exit rule of each tube in
+    ``stuck_tubes`` (name: reason), not evaluated."""
     spacing = scene.rows.design_spacing
     if stuck_at_design is None:
         rules = [landing_time_spread_rule([d.landing_time for d in design], limits.max_time_spread, spacing,
@@ -85,7 +91,12 @@ def _rules(scene: GuideTubeScene, design: list[DropPhases], swept: list[list[Dro
                                        f"over row spacings {min(grid):g}-{max(grid):g} mm", stuck_on_grid))
     at_all = [design] + swept
     for i, t in enumerate(scene.tubes):
-        rules.append(wall_exit_speed_rule(t.name, [ds[i].exit_speed_sq for ds in at_all], limits.min_exit_speed))
+        if t.name in (stuck_tubes or {}):
+            rules.append(not_evaluated(f"wall_exit_speed_{t.name}", limits.min_exit_speed, None, "m/s",
+                                       "at the wall end, every sampled row spacing",
+                                       f"{stuck_tubes[t.name]} (it never reaches the wall end)"))
+        else:
+            rules.append(wall_exit_speed_rule(t.name, [ds[i].exit_speed_sq for ds in at_all], limits.min_exit_speed))
         rules.append(free_fall_height_rule(t.name, [ds[i].h1 / MM for ds in at_all], limits.min_free_fall))
     return rules
 

@@ -144,8 +144,8 @@ def _exit_speed_sq(delta_deg: float, tube: Tube, physics: Physics) -> float:
 
 def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path):
     """mu = 1.5, tube I at 15 deg (tan 15 deg < mu): the seedling stops on the wall.  `check` evaluates and fails the
-    design (exit 1, check's contract: it exited 3 and wrote nothing): tube I leaves its wall at speed 0, the landing
-    time spread does not exist and says where the seedling sticks, and tube II's rules (41 deg: a decelerating slide
+    design (exit 1, check's contract: it exited 3 and wrote nothing): tube I never reaches its wall end, the landing
+    time spread does not exist, both say where the seedling sticks, and tube II's rules (41 deg: a decelerating slide
     that still ends on the wall's end) are evaluated, matching the closed form written out here."""
     from synthesis.guide_tube.check import FINE
     from synthesis.guide_tube.scene import GuideTubeScene
@@ -173,7 +173,8 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     assert ("at row spacing 230 mm the seedling sticks on the wall of tube I: at wall angle 15 deg with friction "
             "coefficient mu = 1.5") in spread["note"]
     assert data["facts"]["sticks"] == spread["note"] and "tubes" not in data["facts"]
-    assert rules["wall_exit_speed_I"]["value"] == 0.0 and not rules["wall_exit_speed_I"]["satisfied"]
+    wall = rules["wall_exit_speed_I"]          # it never reaches the wall end: failed, whatever the limit
+    assert wall["value"] is None and not wall["satisfied"] and "(it never reaches the wall end)" in wall["note"]
     # the evaluated rules against the closed form above, over the design spacing and the 10x finer row-spacing grid
     spec = load_spec(path).model
     scene = GuideTubeScene.from_spec(spec)
@@ -187,6 +188,30 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
         h1 = min(600 - 1000 * (t.below_wall + t.l3 * math.tan(math.radians(delta))) for t in tubes[k])
         assert rules[f"free_fall_height_{('I', 'II')[k]}"]["value"] == pytest.approx(h1, rel=1e-12)
     assert (tmp_path / "cai2020_tubes" / "report.html").exists()
+
+
+def test_a_seedling_stuck_off_the_design_spacing_fails_the_check_whatever_the_exit_speed_limit(tmp_path):
+    """An independent review's case: mu = 0.3, tube I at 15 deg, designed at 290 mm, min_exit_speed = 0 and a loose
+    time spread.  The seedling sticks at 230-250 mm and lands at 270-290 mm: the landing-time spread (at 290 mm) is
+    evaluated and holds, and the wall-exit rule read 0 m/s >= 0, so `check` said every rule satisfied (exit 0)."""
+    text = BASELINE.read_text()
+    i, j = text.index("[friction.calibrate]"), text.index("[rows]")
+    text = text[:i] + "[friction]\nmu = 0.3\n\n" + text[j:]
+    for old, new in (("\nangle = 45\n", "\nangle = 15\n"), ("design_spacing = 230 ", "design_spacing = 290 "),
+                     ("max_time_spread = 0.001 ", "max_time_spread = 1 "), ("min_exit_speed = 0.05 ", "min_exit_speed = 0 ")):
+        assert old in text
+        text = text.replace(old, new, 1)
+    path = tmp_path / "stuck_off_design.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    rules = {r["name"]: r for r in json.loads((tmp_path / "cai2020_tubes" / "result.json").read_text())["rules"]}
+    assert rules["landing_time_spread"]["satisfied"]                  # at 290 mm both seedlings land
+    wall = rules["wall_exit_speed_I"]
+    assert not wall["satisfied"] and wall["value"] is None
+    assert wall["note"].startswith("at row spacing 230 mm the seedling sticks on the wall of tube I")
+    assert rules["wall_exit_speed_II"]["satisfied"] and rules["wall_exit_speed_II"]["value"] > 0
 
 
 # --- steep drag and long falls -----------------------------------------------------------------------------
