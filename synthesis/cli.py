@@ -161,6 +161,7 @@ def check(spec: Path, out: Path, force: bool) -> None:
     loaded = load_spec(spec)
     _unit_notes(loaded)
     run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
+    written = False
     try:
         from synthesis.library_log import captured_warnings
         from synthesis.result import atomic_write_text
@@ -168,16 +169,21 @@ def check(spec: Path, out: Path, force: bool) -> None:
         with captured_warnings() as said:        # scipy/CasADi warnings: into warnings.log, not the terminal
             result = _described(_in_file(loaded, kinds.checker(loaded.kind)), loaded)
         files = {"warnings.log": lambda path: atomic_write_text(path, said())} if said() else {}
-        with interrupt.deferred(reraise=False):       # evaluated: a signal from here on is noted, the result written
+        # a signal CasADi swallowed inside a solve of the evaluation (a fit) cut it short: stop here, write nothing
+        interrupt.check()
+        # evaluated: from here a signal is noted, the result written and its summary printed (one deferral over
+        # both, so no moment between them obeys it)
+        with interrupt.deferred(reraise=False):
             folder, replaced = write_run(out, result, run_artifacts(result, files), folder=run_folder)
+            written = True
+            with _after_the_result(folder):
+                _check_summary(loaded, result, folder, replaced)
     except BaseException as exc:
         from synthesis.errors import OutputError
 
-        if not isinstance(exc, OutputError):
+        if not written and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
-    with _after_the_result(folder):
-        _check_summary(loaded, result, folder, replaced)
 
 
 def _check_summary(loaded, result, folder: Path, replaced: bool) -> None:
@@ -503,10 +509,10 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                     committed = _keep_interrupted(exc, run_folder, spec, n,
                                                   lambda: core.baseline_rules(kind, loaded))
                     sys.exit(exc.exit_code)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemError) as exc:
             # the signal came as the run returned (closing the warnings capture or the progress bar): the result
             # is complete, so it is kept like any later signal (noted, the exit code the result's)
-            if solved is None:
+            if solved is None or not interrupt.caused_by_signal(exc):
                 raise
             with interrupt.deferred(reraise=False):
                 sys.stderr = stderr
@@ -525,12 +531,13 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                                                **_solved_spec(loaded, result)}, given_rules=baseline)
             folder, replaced = write_run(out, result, artifacts, folder=run_folder)
             committed = True
+            with _after_the_result(folder):     # inside the same deferral: no moment between them obeys a signal
+                _solve_summary(kind, result, reports, baseline, workers, scheduler, finished, resume, replaced,
+                               folder)
     except BaseException as exc:
         if not committed and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
-    with _after_the_result(folder):
-        _solve_summary(kind, result, reports, baseline, workers, scheduler, finished, resume, replaced, folder)
 
 
 def _solve_summary(kind, result, reports, baseline, workers: int, scheduler: str | None, finished, resume,
@@ -946,13 +953,21 @@ def bench_table(results: list[dict], repeats: int) -> Table:
     return table
 
 
-#: set by :func:`main`: agrisynth runs as a program (not a library call or an in-process test) and ends with the command
+#: set by :func:`main` while it runs: agrisynth runs as a program that ends with the command (a caller of main in
+#: process -- a test -- restores the signal handlers itself: :func:`interrupt.ignore` left them ignored)
 _as_program = False
 
 
 def main() -> None:
     global _as_program
     _as_program = True
+    try:
+        _main()
+    finally:       # main called in-process (a test) returns to code that may need signals: only this run ignored them
+        _as_program = False
+
+
+def _main() -> None:
     try:
         cli.main(standalone_mode=False, prog_name="agrisynth")
     except click.exceptions.Exit as exc:
@@ -967,6 +982,13 @@ def main() -> None:
     except (click.exceptions.Abort, KeyboardInterrupt) as exc:
         from synthesis.core import interrupt
 
+        err_console.print("interrupted")
+        sys.exit(128 + interrupt.signal_of(exc))
+    except SystemError as exc:
+        from synthesis.core import interrupt
+
+        if not interrupt.caused_by_signal(exc):         # a signal that fired inside a C callback: an interruption
+            raise
         err_console.print("interrupted")
         sys.exit(128 + interrupt.signal_of(exc))
     except AgrisynthError as exc:

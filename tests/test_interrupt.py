@@ -239,3 +239,39 @@ def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_co
     result = json.loads(next(tmp_path.glob("*/result.json")).read_text())
     assert result["status"] in ("evaluated", "optimal")
     assert "rule(s) violated" in proc.stdout if code == 1 else "every rule satisfied" in proc.stdout
+
+
+def test_main_called_in_process_leaves_the_signals_to_its_caller(tmp_path):
+    """A review found main()'s 'ignore signals once the answer is printed' sticky: after an in-process check the test
+    process ignored SIGINT and SIGTERM (Ctrl-C, a CI timeout), and so did its children.  main() now forgets it is a
+    program when it returns, and the in-process helper restores the handlers it found."""
+    from synthesis import cli
+    from test_run_folders import cli_in_process
+
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    code, _ = cli_in_process("check", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--out", str(tmp_path))
+    assert code == 1 and (tmp_path / "taiwan_example1" / "result.json").exists()
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+    assert signal.SIG_IGN not in before and cli._as_program is False
+
+
+def test_a_signal_that_fired_inside_a_c_callback_is_an_interruption_not_a_traceback():
+    """A SIGINT as the kind drew its facts (numpy reading a CasADi DM) came back as SystemError "DM.__array__
+    returned a result with an exception set": a traceback and exit 1.  It is the handler's KeyboardInterrupt."""
+    def wrapped() -> SystemError:
+        try:
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as cause:
+                raise SystemError("<function DM.__array__> returned a result with an exception set") from cause
+        except SystemError as exc:
+            return exc
+
+    interrupt.install()
+    try:
+        assert not interrupt.caused_by_signal(wrapped())          # no signal recorded: a real SystemError
+        interrupt.simulate(signal.SIGINT)
+        assert interrupt.caused_by_signal(wrapped()) and interrupt.caused_by_signal(KeyboardInterrupt())
+        assert not interrupt.caused_by_signal(SystemError("unrelated"))
+    finally:
+        interrupt.uninstall()

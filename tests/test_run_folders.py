@@ -212,15 +212,21 @@ def cli_in_process(*args: str) -> tuple[int, str]:
 
     from synthesis import cli
 
+    import signal
+
     err = io.StringIO()
     old_argv, sys.argv = sys.argv, ["agrisynth", *args]
     old_file = cli.err_console.file
+    # a program run ignores SIGINT and SIGTERM once its answer is printed (nothing left to stop): not this process
+    handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     cli.err_console.file = err
     try:
         with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as done:
             cli.main()
     finally:
         sys.argv, cli.err_console.file = old_argv, old_file
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
     return done.value.code, err.getvalue()
 
 

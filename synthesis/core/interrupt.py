@@ -73,6 +73,16 @@ def pending() -> int | None:
     return _pending
 
 
+def caused_by_signal(exc: BaseException) -> bool:
+    """Whether ``exc`` is this module's KeyboardInterrupt: the exception itself, or the SystemError Python raises
+    when the handler's KeyboardInterrupt fires inside a C callback ("DM.__array__ returned a result with an
+    exception set", numpy reading a CasADi matrix), which names it as its cause."""
+    if isinstance(exc, KeyboardInterrupt):
+        return True
+    return (isinstance(exc, SystemError) and _pending is not None
+            and isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt))
+
+
 def signal_of(exc: BaseException) -> int:
     """The signal behind a KeyboardInterrupt (SIGINT when no handler recorded one)."""
     return _pending or signal.SIGINT

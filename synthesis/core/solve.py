@@ -114,7 +114,9 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler, finished=finished,
                               stop_when=None if stop is None else (lambda out: stop(reports[out.start])),
                               failure=failed)
-    except KeyboardInterrupt as exc:
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not interrupt.caused_by_signal(exc):
+            raise
         wall = time.perf_counter() - t0
         kept = [reports[i] for i in sorted(reports)]
         best_kept = best_in_start_order(kept, maximise) if kept else None
@@ -343,8 +345,8 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         if elastic is not None and interrupt.pending() is None:
             run = start_from_elastic(kind, setting, run, elastic)
             best = run.best
-    except KeyboardInterrupt:     # a signal outside IPOPT (in Python code): recorded, handled as the one below
-        if interrupt.pending() is None:
+    except (KeyboardInterrupt, SystemError) as exc:    # a signal outside IPOPT (in Python code): recorded, handled
+        if interrupt.pending() is None or not interrupt.caused_by_signal(exc):     # as the one below
             raise
     if interrupt.pending() is not None:       # stopped inside the elastic re-solve: every start is kept
         with interrupt.deferred(reraise=False):
@@ -357,8 +359,10 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         # the answer is complete: a signal from here on is only noted (interrupt.pending), for the caller to say
         with interrupt.deferred(reraise=False):
             return result, run.reports, ipopt_log(run.reports)
-    except KeyboardInterrupt as exc:          # stopped while the kind finished the answer (a robust solve's
-        with interrupt.deferred(reraise=False):   # Monte-Carlo check): every start is kept, as above
+    except (KeyboardInterrupt, SystemError) as exc:     # stopped while the kind finished the answer (a robust
+        if not interrupt.caused_by_signal(exc):         # solve's Monte-Carlo check): every start is kept, as above
+            raise
+        with interrupt.deferred(reraise=False):
             kept = _result(kind, loaded, setting, run, "interrupted", None)
         raise Interrupted(interrupt.signal_of(exc), (kept, run.reports, ipopt_log(run.reports))) from None
 
