@@ -411,3 +411,26 @@ def test_a_start_line_names_what_stands_in_the_way_of_an_infinite_violation():
             == "p1p3_distance not evaluated: P1 not found: the claw does not cross")
     assert (_violation_text(StartReport(outcome, False, math.inf, why="l10 = 161.37 lies 21 outside its fixed value"))
             == "no design: l10 = 161.37 lies 21 outside its fixed value")
+
+
+def test_the_elastic_points_are_the_kinds_choice_then_the_other_then_the_least_violated_each_once():
+    """A review found three identical elastic re-solves (starts that ended on one design) and the best start left
+    out for kinds that relax from the given design."""
+    import numpy as np
+
+    from synthesis.core.solve import elastic_points
+
+    def report(start: int, violation: float, design: dict, why=None) -> StartReport:
+        return StartReport(SimpleNamespace(start=start, design=design, details={}), False, violation, why=why)
+
+    same = {"a": 2.0, "b": 3.0}
+    reports = [report(0, 5.0, {"a": 9.0, "b": 9.0}), report(1, 0.5, same), report(2, 0.7, dict(same)),
+               report(3, 0.6, {"a": 4.0, "b": 4.0}), report(4, math.inf, {"a": 7.0, "b": 7.0}, why="no design"),
+               report(5, 0.8, {"a": 5.0, "b": 5.0})]
+    run = SimpleNamespace(reports=reports, best=reports[1])
+    nlp = SimpleNamespace(names=["a", "b"], init=[1.0, 1.0])
+    given = elastic_points(SimpleNamespace(elastic_from="given"), run, nlp)
+    assert [list(p) for p in given] == [[1.0, 1.0], [2.0, 3.0], [4.0, 4.0], [5.0, 5.0]]   # start 2 = start 1
+    best = elastic_points(SimpleNamespace(elastic_from="best"), run, nlp)
+    assert [list(p) for p in best] == [[2.0, 3.0], [1.0, 1.0], [4.0, 4.0], [5.0, 5.0]]
+    assert all(isinstance(p, np.ndarray) for p in best)

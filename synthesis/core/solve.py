@@ -138,27 +138,34 @@ def _failures(reports: list[StartReport], shown: int = 3) -> str:
     return text + (f"; and {len(reports) - shown} more" if len(reports) > shown else "")
 
 
-#: elastic re-solves from different points (the relaxation has local minima too)
+#: elastic re-solves from different points (the relaxation has local minima too): at most this many points ...
 ELASTIC_ATTEMPTS = 4
+#: ... and no more once this many have converged (the smallest of them is kept)
+ELASTIC_CONVERGED = 2
 
 
 def elastic_points(solving: Solving, run: Run, nlp) -> list[np.ndarray]:
     """Where the elastic re-solve starts, in order: the kind's choice (the best start's design, or the given one),
-    then the given design, then the other starts' designs, least violated first (deterministic).  A relaxation
-    started on a degenerate design can stop on an invalid number (a crank-rocker whose swing it shrank to
-    nothing); from another point the same problem converges."""
+    then the other of the two, then the other starts' designs, least violated first (deterministic), each point
+    once (starts that ended on one design are one point).  A relaxation started on a degenerate design can stop
+    on an invalid number (a crank-rocker whose swing it shrank to nothing); from another point the same problem
+    converges."""
     def x_of(design: dict) -> np.ndarray:
         return (nlp.x_of(design) if hasattr(nlp, "x_of") else np.array([design[n] for n in nlp.names], dtype=float))
 
     given = np.asarray(nlp.init, float)
-    best_first = solving.elastic_from == "best" and run.best.why is None
-    points = [x_of(run.best.outcome.design), given] if best_first else [given]
-    others = sorted((r for r in run.reports if r is not run.best and r.why is None and failure_of(r.outcome) is None
-                     and math.isfinite(r.worst_violation)), key=lambda r: (r.worst_violation, r.outcome.start))
-    for report in others:
+    valid = [r for r in run.reports if r.why is None and failure_of(r.outcome) is None
+             and math.isfinite(r.worst_violation)]
+    ranked = sorted(valid, key=lambda r: (r.worst_violation, r.outcome.start))
+    best = [x_of(run.best.outcome.design)] if any(r is run.best for r in valid) else []
+    candidates = ([*best, given] if solving.elastic_from == "best" else [given, *best])
+    candidates += [x_of(r.outcome.design) for r in ranked if r is not run.best]
+    points: list[np.ndarray] = []
+    for x in candidates:
         if len(points) >= ELASTIC_ATTEMPTS:
             break
-        points.append(x_of(report.outcome.design))
+        if not any(np.allclose(x, p, rtol=1e-6, atol=1e-9) for p in points):
+            points.append(x)
     return points
 
 
@@ -168,12 +175,14 @@ def relaxation(diagnosis: ElasticDiagnosis) -> float:
 
 
 def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosis:
-    """Re-solve with one slack per rule (minimise their sum) from each point of :func:`elastic_points`; of those
-    that converge the smallest relaxation is kept (each is a local minimum: a crank-rocker's transmission rule
-    missed by 24.6 deg from one point, by 9.86 from another, the least any design misses it)."""
+    """Re-solve with one slack per rule (minimise their sum) from the points of :func:`elastic_points` until
+    ELASTIC_CONVERGED of them converge; the smallest of those relaxations is kept (each is a local minimum: a
+    crank-rocker's transmission rule missed by 24.6 deg from one point, by 9.86 from another, the least any design
+    misses it)."""
     solving = kind.solver_side()
     nlp = solving.build(setting, True)
     first = kept = None
+    converged = 0
     for x0 in elastic_points(solving, run, nlp):
         if interrupt.pending() is not None:
             break
@@ -185,8 +194,12 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
             continue
         diagnosis = diagnosis_of(nlp.compiled, outcome.raw)
         first = first or (outcome, diagnosis)
-        if diagnosis.converged and (kept is None or relaxation(diagnosis) < relaxation(kept[1])):
-            kept = (outcome, diagnosis)
+        if diagnosis.converged:
+            converged += 1
+            if kept is None or relaxation(diagnosis) < relaxation(kept[1]):
+                kept = (outcome, diagnosis)
+            if converged >= ELASTIC_CONVERGED:
+                break
     # none converged: the first attempt's diagnosis is reported (what the kind's own choice of point gave)
     outcome, diagnosis = kept or first or (None, ElasticDiagnosis("not run: interrupted", False, {}, {}, {}))
     if outcome is None:
