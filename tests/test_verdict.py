@@ -432,5 +432,5 @@ def test_the_elastic_points_are_the_kinds_choice_then_the_other_then_the_least_v
     given = elastic_points(SimpleNamespace(elastic_from="given"), run, nlp)
     assert [list(p) for p in given] == [[1.0, 1.0], [2.0, 3.0], [4.0, 4.0], [5.0, 5.0]]   # start 2 = start 1
     best = elastic_points(SimpleNamespace(elastic_from="best"), run, nlp)
-    assert [list(p) for p in best] == [[2.0, 3.0], [1.0, 1.0], [4.0, 4.0], [5.0, 5.0]]
+    assert [list(p) for p in best] == [[2.0, 3.0], [4.0, 4.0], [5.0, 5.0], [9.0, 9.0]]          # given: 5th
     assert all(isinstance(p, np.ndarray) for p in best)

@@ -145,9 +145,9 @@ ELASTIC_CONVERGED = 2
 
 
 def elastic_points(solving: Solving, run: Run, nlp) -> list[np.ndarray]:
-    """Where the elastic re-solve starts, in order: the kind's choice (the best start's design, or the given one),
-    then the other of the two, then the other starts' designs, least violated first (deterministic), each point
-    once (starts that ended on one design are one point).  A relaxation started on a degenerate design can stop
+    """Where the elastic re-solve starts, in order: the best start's design, the other starts' designs least
+    violated first and the given design last; or for a kind that relaxes from the given design, that one first
+    (deterministic), each point once (starts that ended on one design are one point).  A relaxation started on a degenerate design can stop
     on an invalid number (a crank-rocker whose swing it shrank to nothing); from another point the same problem
     converges."""
     def x_of(design: dict) -> np.ndarray:
@@ -158,8 +158,8 @@ def elastic_points(solving: Solving, run: Run, nlp) -> list[np.ndarray]:
              and math.isfinite(r.worst_violation)]
     ranked = sorted(valid, key=lambda r: (r.worst_violation, r.outcome.start))
     best = [x_of(run.best.outcome.design)] if any(r is run.best for r in valid) else []
-    candidates = ([*best, given] if solving.elastic_from == "best" else [given, *best])
-    candidates += [x_of(r.outcome.design) for r in ranked if r is not run.best]
+    others = [x_of(r.outcome.design) for r in ranked if r is not run.best]
+    candidates = [*best, *others, given] if solving.elastic_from == "best" else [given, *best, *others]
     points: list[np.ndarray] = []
     for x in candidates:
         if len(points) >= ELASTIC_ATTEMPTS:
