@@ -147,9 +147,9 @@ ELASTIC_CONVERGED = 2
 def elastic_points(solving: Solving, run: Run, nlp) -> list[np.ndarray]:
     """Where the elastic re-solve starts, in order: the best start's design, the other starts' designs least
     violated first and the given design last; or for a kind that relaxes from the given design, that one first
-    (deterministic), each point once (starts that ended on one design are one point).  A relaxation started on a degenerate design can stop
-    on an invalid number (a crank-rocker whose swing it shrank to nothing); from another point the same problem
-    converges."""
+    (deterministic), each point once (starts that ended on one design are one point).  A relaxation started on a
+    degenerate design can stop on an invalid number (a crank-rocker whose swing it shrank to nothing); from
+    another point the same problem converges."""
     def x_of(design: dict) -> np.ndarray:
         return (nlp.x_of(design) if hasattr(nlp, "x_of") else np.array([design[n] for n in nlp.names], dtype=float))
 

@@ -80,8 +80,8 @@ def _rules(scene: GuideTubeScene, design: list[DropPhases], swept: list[list[Dro
         rules = [landing_time_spread_rule([d.landing_time for d in design], limits.max_time_spread, spacing,
                                           equalise)]
     else:
-        rules = [not_evaluated("landing_time_spread", None, limits.max_time_spread, "s", f"at row spacing {spacing:g} mm",
-                               stuck_at_design)]
+        rules = [not_evaluated("landing_time_spread", None, limits.max_time_spread, "s",
+                               f"at row spacing {spacing:g} mm", stuck_at_design)]
     if limits.max_spacing_error is not None:
         if stuck_on_grid is None:
             rules.append(spacing_error_rule([[d.landing_time for d in ds] for ds in swept], grid,

@@ -60,8 +60,8 @@ def unit_notes(model: BaseModel) -> list[str]:
     lengths = [(path, v) for path, unit, value in fields if unit == "mm" for _, v in _numbers(value) if v != 0]
     if len(lengths) >= 2 and max(abs(v) for _, v in lengths) < TINY_LENGTHS:
         path, v = max(lengths, key=lambda pv: abs(pv[1]))
-        notes.append(f"every length is under {TINY_LENGTHS:g} mm (the largest, {path}, is {v:g} mm): lengths are in mm; "
-                     f"were they given in metres?")
+        notes.append(f"every length is under {TINY_LENGTHS:g} mm (the largest, {path}, is {v:g} mm): lengths are in "
+                     f"mm; were they given in metres?")
     for path, unit, value in fields:
         if unit == "deg" and isinstance(value, FreeVariable):
             lo, hi = value.bounds
