@@ -273,5 +273,12 @@ def test_a_signal_that_fired_inside_a_c_callback_is_an_interruption_not_a_traceb
         interrupt.simulate(signal.SIGINT)
         assert interrupt.caused_by_signal(wrapped()) and interrupt.caused_by_signal(KeyboardInterrupt())
         assert not interrupt.caused_by_signal(SystemError("unrelated"))
+        try:                                                    # two callbacks deep
+            try:
+                raise wrapped()
+            except SystemError as inner:
+                raise SystemError("outer callback") from inner
+        except SystemError as outer:
+            assert interrupt.caused_by_signal(outer)
     finally:
         interrupt.uninstall()

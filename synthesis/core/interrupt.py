@@ -79,8 +79,16 @@ def caused_by_signal(exc: BaseException) -> bool:
     exception set", numpy reading a CasADi matrix), which names it as its cause."""
     if isinstance(exc, KeyboardInterrupt):
         return True
-    return (isinstance(exc, SystemError) and _pending is not None
-            and isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt))
+    if not isinstance(exc, SystemError) or _pending is None:
+        return False
+    seen = set()
+    cause = exc.__cause__ or exc.__context__
+    while cause is not None and id(cause) not in seen:      # nested callbacks: SystemError from SystemError ...
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 def signal_of(exc: BaseException) -> int:

@@ -198,7 +198,8 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
             converged += 1
             if kept is None or relaxation(diagnosis) < relaxation(kept[1]):
                 kept = (outcome, diagnosis)
-            if converged >= ELASTIC_CONVERGED:
+            # no rule needs slack: the rules can be met together, nothing smaller to find
+            if converged >= ELASTIC_CONVERGED or not diagnosis.relaxed:
                 break
     # none converged: the first attempt's diagnosis is reported (what the kind's own choice of point gave)
     outcome, diagnosis = kept or first or (None, ElasticDiagnosis("not run: interrupted", False, {}, {}, {}))
