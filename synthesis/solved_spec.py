@@ -91,6 +91,7 @@ def _given_design(loaded, result, data: dict) -> None:
 def _fixed_values_moved(model, design: dict) -> str:
     """"l10 = 161.373 where the spec fixes 140" for the design variables the spec fixes that ``design`` moved ("" when
     none did; a kind whose spec lists no variables says nothing)."""
+    from synthesis.core.coordinates import BOUND_TOLERANCE
     from synthesis.spec.common import is_free
 
     variables = model.variables() if hasattr(model, "variables") else {}
@@ -99,7 +100,7 @@ def _fixed_values_moved(model, design: dict) -> str:
         value = design.get(name)
         if is_free(v) or not isinstance(value, (int, float)) or not isinstance(v, (int, float)):
             continue
-        if abs(value - v) > 1e-6 * max(1.0, abs(v)):
+        if abs(value - v) > BOUND_TOLERANCE * max(1.0, abs(v)):     # outside_bounds' tolerance, not a second one
             moved.append(f"{name} = {value:.6g} where the spec fixes {v:g}")
     return "; ".join(moved)
 

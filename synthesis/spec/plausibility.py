@@ -18,16 +18,14 @@ TINY_LENGTHS = 1.0
 NARROW_ANGLE_SPAN = 2.0
 
 
-def _numbers(value: Any) -> Iterator[tuple[str, float]]:
-    """("", v) for a number, ("init"/"bounds", v) for a free variable's parts, items of lists and pairs."""
+def _numbers(value: Any) -> Iterator[float]:
+    """The numbers in a field's value: itself, a free variable's init and bounds, the items of lists and pairs."""
     if isinstance(value, bool):
         return
     if isinstance(value, (int, float)):
-        yield "", float(value)
+        yield float(value)
     elif isinstance(value, FreeVariable):
-        yield "init", value.init
-        for b in value.bounds:
-            yield "bounds", b
+        yield from (value.init, *value.bounds)
     elif isinstance(value, (list, tuple)):
         for item in value:
             yield from _numbers(item)
@@ -57,7 +55,7 @@ def unit_notes(model: BaseModel) -> list[str]:
     """Notes on the spec's numbers that look like metres for mm or radians for degrees (empty when none do)."""
     notes = []
     fields = list(fields_with_units(model))
-    lengths = [(path, v) for path, unit, value in fields if unit == "mm" for _, v in _numbers(value) if v != 0]
+    lengths = [(path, v) for path, unit, value in fields if unit == "mm" for v in _numbers(value) if v != 0]
     if len(lengths) >= 2 and max(abs(v) for _, v in lengths) < TINY_LENGTHS:
         path, v = max(lengths, key=lambda pv: abs(pv[1]))
         notes.append(f"every length is under {TINY_LENGTHS:g} mm (the largest, {path}, is {v:g} mm): lengths are in "
