@@ -23,7 +23,6 @@ import math
 import os
 import re
 import statistics
-import tempfile
 import time
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -284,7 +283,7 @@ def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[di
 
 
 def _write_bench_files(folder: Path, results: list[dict], settings: dict, extreme: list[dict] | None) -> None:
-    from synthesis.result import atomic_write_text, versions
+    from synthesis.result import atomic_write_drawn, atomic_write_text, versions
 
     rows = [row for res in results for row in res["rows"]]
     data = {"settings": settings, "versions": versions(), "machine": machine(), "problems": [
@@ -295,14 +294,7 @@ def _write_bench_files(folder: Path, results: list[dict], settings: dict, extrem
         if res.get("sweep") and res["sweep"]["rows"]:
             plots[sweep_plot_name(res["problem"])] = lambda path, sweep=res["sweep"]: plot_sample_sweep(sweep, path)
     for name, draw in plots.items():
-        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=".png", dir=folder)
-        os.close(fd)
-        try:
-            draw(Path(tmp))
-            os.replace(tmp, folder / name)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
+        atomic_write_drawn(folder / name, draw)
     data["plots"] = list(plots)
     data = _json_safe(data)
     atomic_write_text(folder / "bench.md", markdown(data))

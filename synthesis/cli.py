@@ -329,14 +329,14 @@ def _in_file(loaded, evaluate):
         raise AssemblyError(f"{loaded.path}: {loaded.kind}: {exc}") from None
 
 
-def comparison_table(best: list[dict], baseline: list[dict] | None, title: str) -> Table:
-    """A solve's rule table: each rule at the given design (start 0) and at the solved one."""
+def comparison_table(best: list[dict], baseline: list[dict] | None, title: str, solved: str = "solved") -> Table:
+    """A solve's rule table: each rule at the given design (start 0) and at the solved one (heading ``solved``)."""
     from synthesis.report.tables import GIVEN_HEADING
     from synthesis.terminal import add_columns
 
     table = Table(title=escape(title), title_justify="left")
     add_columns(table, (("rule", "left"), ("limit", "right"), (GIVEN_HEADING, "right"), ("", "left"),
-                        ("solved", "right"), ("", "left"), ("unit", "left")))
+                        (solved, "right"), ("", "left"), ("unit", "left")))
     base = {r["name"]: r for r in baseline or []}
 
     def cell(r):
@@ -545,10 +545,12 @@ def _solve_summary(kind, result, reports, baseline, workers: int, scheduler: str
     """What a finished solve prints once its result is written, and its exit code (1: a rule violated; 3:
     infeasible or failed, the diagnosis in the message)."""
     from synthesis.core import solve as core
-    from synthesis.report.tables import objective_text
+    from synthesis.report.tables import objective_text, solved_heading
 
+    answer = solved_heading(result)
     console.print(comparison_table(result.rules, baseline, f"{result.name}: rules at the given design (start 0) "
-                                                           f"and at the solved one"))
+                                                           f"and at the {'solved one' if answer == 'solved' else answer}",
+                                   answer))
     _print_design(result)
     s = result.solver
     console.print(f"objective {objective_text(result.objective)}; IPOPT "
@@ -666,9 +668,11 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     from synthesis.tolerance.output import artifacts, table
 
     given = _per_variable_tolerances(tols)
+    if target.is_file() and target.suffix == ".json":      # a run's result.json: its folder's solved design
+        target = target.parent
     if target.is_dir():
         if not (target / "solved.toml").is_file():
-            raise SpecError(f"{target}: no solved.toml in this folder (give a solve's run folder or a spec file)")
+            raise SpecError(_no_solved_design(target))
         target = target / "solved.toml"
     loaded = load_spec(target)
     kind = kinds.solving_kind(loaded.kind)
@@ -710,6 +714,22 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
 
     if not all(r["satisfied"] for r in facts["nominal_rules"] + verdict_rows(facts)):
         sys.exit(1)
+
+
+def _no_solved_design(folder: Path) -> str:
+    """Why a folder given to `tolerance` has no solved design, from its result.json where it has one."""
+    import json
+
+    try:
+        status = json.loads((folder / "result.json").read_text()).get("status")
+    except (OSError, ValueError, AttributeError):
+        status = None
+    if status == "interrupted":
+        return (f"{folder}: an interrupted run, with no solved design (solved.toml) yet: finish it with "
+                f"`agrisynth solve SPEC --resume {folder}`, then give this folder again")
+    if status == "evaluated":
+        return f"{folder}: a check's folder, with no solved design: give the spec file it checked"
+    return f"{folder}: no solved.toml in this folder (give a solve's run folder or a spec file)"
 
 
 def _per_variable_tolerances(tols: tuple[str, ...]) -> dict[str, float]:

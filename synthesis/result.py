@@ -539,10 +539,15 @@ def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]], *, f
 
 def atomic_write_text(path: Path, text: str) -> None:
     """Write a file via a temporary file and rename."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    atomic_write_drawn(path, lambda tmp: tmp.write_text(text))
+
+
+def atomic_write_drawn(path: Path, draw: Callable[[Path], None]) -> None:
+    """A file ``draw(path)`` makes (a text, a plot) written via a temporary file and rename, with the usual mode."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
+        draw(Path(tmp))
         os.chmod(tmp, 0o666 & ~_UMASK)       # mkstemp makes it private; give it the usual mode
         os.replace(tmp, path)
     except BaseException:

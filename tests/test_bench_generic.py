@@ -153,6 +153,13 @@ def test_bench_md_plot_link_of_a_name_with_spaces_and_brackets_and_plain_iterati
     links = _re.findall(r"!\[samples\]\(([^)]*)\)", text)
     assert links == ["samples_picking_arc_generic_studies.png"]
     assert (tmp_path / links[0]).is_file() and _re.fullmatch(r"[\w.-]+", links[0])
+    # the plots have the mode of every other file written (an independent trial: mkstemp left them 0600)
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    for name in (links[0], "error_vs_time.png", "bench.md"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~mask, name
     assert "e+0" not in text
     assert "| 1000 | 1580 |" in text                          # summary: AD, FD iterations
     assert "| 1 | 1000 | 0 |" in text and "| 2 | 18.5 | 0 |" in text   # the sweep's median iterations

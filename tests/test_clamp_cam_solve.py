@@ -203,6 +203,23 @@ def test_infeasible_rule_set_names_the_rules_out_of_reach_of_the_bounds():
     assert "re-solved alone from there" in str(err) and "hold them back too" not in str(err)
 
 
+def test_rules_that_no_free_variable_moves_are_never_named_as_holding_the_others_back():
+    """An independent trial: base radius in [20, 40] mm (the library's offset free).  The diagnosis named
+    timing_hold_near[0] and timing_hold_far[0] as binding ("hold them back too"): rows fixed at 0 by the given
+    timing, which no free variable moves, so IPOPT's multipliers on them are arbitrary.  A rule is named binding only
+    if one of its rows depends on a free variable."""
+    from synthesis.spec.common import FreeVariable
+
+    loaded = load_spec(CAMS / "opening_cam_redesign.toml")
+    small = _with(loaded, cam={"base_radius": FreeVariable(init=30.0, bounds=(20.0, 40.0))})
+    result, reports, _ = run_solve(small, starts=2, workers=1)
+    assert result.status == "infeasible"
+    elastic = result.elastic
+    assert elastic["binding"] and not any(n.startswith("timing_hold") for n in elastic["binding"])
+    assert not any(n.startswith("timing_hold") for n in elastic["conflicting"])
+    assert "timing_hold" not in str(diagnose_infeasible(small, result, reports))
+
+
 def test_peak_pressure_angle_objective_balances_rise_and_return():
     """A cam of fixed size with a free offset: the least peak angle is reached where rise and return tie."""
     from synthesis.spec.common import FreeVariable

@@ -424,16 +424,18 @@ def test_a_start_stopped_at_max_iter_is_resumed_once_and_kept_only_when_it_conve
         return PathNLP(spec, seed=0).solve(index, rows[index])   # built after the switches below are set
 
     resumed, kept_first = one(1), one(11)
-    assert resumed.return_status == "Solve_Succeeded" and resumed.iterations == 71
-    assert resumed.details["resumed"] == {"return_status": "Solve_Succeeded", "iterations": 11, "kept": True,
+    # (IPOPT's iteration counts move between machines: 11 resumed iterations on one, 9 on another)
+    again = resumed.details["resumed"]["iterations"]
+    assert resumed.return_status == "Solve_Succeeded" and resumed.iterations == 60 + again and 1 < again <= 20
+    assert resumed.details["resumed"] == {"return_status": "Solve_Succeeded", "iterations": again, "kept": True,
                                           "path_error_mm2": pytest.approx(resumed.objective, rel=1e-12)}
     assert "resumed from where it reached max_iter" in resumed.raw.log
     assert kept_first.return_status == "Maximum_Iterations_Exceeded" and kept_first.iterations == 120
     assert kept_first.details["resumed"]["kept"] is False and "not kept (did not converge)" in kept_first.raw.log
     # the resume's own limit: stopped after RESUME_ITERATIONS by the watch, not kept
-    monkeypatch.setattr(path_nlp, "RESUME_ITERATIONS", 10)
+    monkeypatch.setattr(path_nlp, "RESUME_ITERATIONS", again - 1)
     capped = one(1)
-    assert capped.return_status == "Maximum_Iterations_Exceeded" and capped.iterations == 70
+    assert capped.return_status == "Maximum_Iterations_Exceeded" and capped.iterations == 60 + again - 1
     assert capped.details["resumed"]["return_status"] == "User_Requested_Stop"
     # start 11 ends at 3.48 mm^2 against a reference of 4.33: within 1x, not within 0.5x
     monkeypatch.setattr(path_nlp, "RESUME_WITHIN", 0.5)

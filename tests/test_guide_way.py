@@ -323,7 +323,7 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
     fit = fit_path(spec)
     samples = spec.solver.samples_per_segment
-    at_fit = sc.pressure_masks(spec, sc.spline_scene(spec, samples, fit.control).arms)
+    at_fit = sc.spline_scene(spec, samples, fit.control, window_edges=False).pressure_masks
     assert [int((~m).sum()) for m in at_fit] == [11, 12, 0, 0]
     nlp = GuideNLP(spec, fit)
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_fit))
@@ -336,7 +336,7 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
                                    for point in moved])
     given = validate(type(spec), data, prefix="guide_way")
     nlp = GuideNLP(given, fit)
-    at_start = sc.pressure_masks(given, sc.spline_scene(given, samples, moved).arms)
+    at_start = sc.spline_scene(given, samples, moved, window_edges=False).pressure_masks
     assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
 
@@ -521,3 +521,68 @@ def test_the_compared_cycle_figure_draws_each_designs_own_limits_and_fold_window
         w = res.extra["fold_window_deg"]
         assert _fold_window(res) == [(fold["arriving"] - w, fold["arriving"]), (fold["leaving"], fold["leaving"] + w)]
     plt.close(fig)
+
+
+def test_the_fold_window_is_measured_from_the_fold_itself_and_its_edges_are_sampled():
+    """An independent trial's defect: the window was centred on the spline stretches' last samples, 1e-3 in u short
+    of the fold, where the arm turns fast (0.37 deg), and the pressure angle, which climbs towards 90 deg at the
+    fold, was missed at the window's edge.  Now the window is centred on the arm angle with the claw tip at the fold
+    (both branches: gamma, as |OD| = R - d), and the rule's value is the largest pressure angle outside the window,
+    which a dense re-sampling of the same path (20,000 samples a stretch, the edge's root found by bisection here)
+    reproduces."""
+    from synthesis.guide_way import scene as sc
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.guide_way.trace import evaluate
+
+    spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
+    fit = fit_path(spec)
+    scene = sc.spline_scene(spec, 10 * spec.solver.samples_per_segment, fit.control)
+    m = scene.fold["claw_tip"]
+    assert math.hypot(*m) == pytest.approx(spec.arm.radius - spec.arm.claw, abs=1e-9)
+    gamma = math.degrees(math.atan2(-m[0], -m[1]))
+    assert [math.degrees(t) for t in scene.fold_theta] == pytest.approx([gamma, gamma], abs=1e-5)
+    rule = next(r.record() for r in scene.rules if r.name == "pressure_angle")
+    w = spec.rules.fold_window
+    path, arm = scene.spline, sc.arm_of(spec)
+    worst = []
+    for k, st in enumerate(path.stretches(20000)):
+        a = evaluate(st, arm)
+        th = np.degrees(np.unwrap(a.theta))
+        centre = gamma + 360 * round((th[-1 if k == 0 else 0] - gamma) / 360)
+        keep = np.abs(th - centre) >= w if k in (0, 1) else np.ones(th.size, bool)
+        worst.append(a.pressure_angle_deg[keep].max())
+        if k in (0, 1):                  # the edge itself: bisection on theta(u) between the straddling samples
+            j = int(np.flatnonzero(np.diff(keep.astype(int)) != 0)[0])
+            lo, hi = st.u[j], st.u[j + 1]
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                t = math.degrees(evaluate(path.stretch_at("", st.branch, np.array([mid])), arm).theta[0])
+                t += 360 * round((th[j] - t) / 360)
+                if (abs(t - centre) >= w) == keep[j]:
+                    lo = mid
+                else:
+                    hi = mid
+            worst.append(float(evaluate(path.stretch_at("", st.branch, np.array([lo])), arm).pressure_angle_deg[0]))
+    assert rule.value == pytest.approx(max(worst), abs=1e-6)
+    facts = __import__("synthesis.guide_way.check", fromlist=["describe"]).describe(scene)
+    assert facts["key_theta_deg"][spec.spline.fold]["arriving"] == pytest.approx(gamma % 360, abs=1e-5)
+    at = facts["pressure_angle_max_outside_fold_window"]["theta_deg"]          # the worst lies on an edge
+    assert min(abs(abs(at - facts["key_theta_deg"][spec.spline.fold][side]) - w) for side in ("arriving", "leaving")) < 1e-9
+
+
+def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_path):
+    """A review's case: the window's edge samples re-sampled the conic found by the segment's name, and two
+    segments named alike made brentq raise (a traceback).  Pieces pair with their stretches by index: the same
+    rule values as with distinct names."""
+    text = (LIBRARY / "guide_way" / "liang_2z.toml").read_text()
+    assert 'name = "CD"' in text
+    dup = tmp_path / "dup.toml"
+    dup.write_text(text.replace('name = "CD"', 'name = "BC"', 1))
+    rules = {}
+    for path, out in ((LIBRARY / "guide_way" / "liang_2z.toml", tmp_path / "a"), (dup, tmp_path / "b")):
+        proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(out)],
+                              cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+        data = json.loads((out / "liang_2z" / "result.json").read_text())
+        rules[out.name] = {r["name"]: r["value"] for r in data["rules"]}
+    assert rules["b"]["pressure_angle"] == rules["a"]["pressure_angle"]

@@ -282,3 +282,27 @@ def test_a_signal_that_fired_inside_a_c_callback_is_an_interruption_not_a_traceb
             assert interrupt.caused_by_signal(outer)
     finally:
         interrupt.uninstall()
+
+
+def test_ctrl_c_while_the_program_imports_its_command_line_is_one_line_and_exit_130(tmp_path):
+    """An independent trial: a SIGINT in the first 0.2 s (importing casadi, before main could handle it) printed a
+    KeyboardInterrupt traceback.  The program's entry point imports the command line itself: here the import is made
+    to raise KeyboardInterrupt (an import finder), as a signal at that moment does."""
+    script = tmp_path / "interrupted_import.py"
+    script.write_text(
+        "import sys\n"
+        "class Interrupting:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'synthesis.cli':\n"
+        "            raise KeyboardInterrupt\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, Interrupting())\n"
+        "from synthesis.program import main\n"
+        "sys.argv = ['agrisynth', 'problems']\n"
+        "main()\n")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert proc.returncode == 130 and proc.stderr == "interrupted\n", proc.stderr
+    # the same program without the interruption runs the command
+    proc = subprocess.run([sys.executable, "-m", "synthesis.program", "problems"], capture_output=True, text=True,
+                          timeout=60, cwd=tmp_path)
+    assert proc.returncode == 0 and "taiwan_example1" in proc.stdout, proc.stderr

@@ -102,6 +102,26 @@ def test_the_result_carries_every_printed_relation_and_only_eq8_expanded_fails()
     assert len(rel["max_residual"]) == 17
 
 
+def test_a_crank_a_hair_shorter_than_b_is_checked_not_crashed(tmp_path):
+    """An independent trial: a = 249.9999999, b = 250 (the a >= b refusal is exact) crashed `check` with a
+    ZeroDivisionError in eq 3's sin(phi): at omega = theta + 180 deg the crank pin B lies 1e-7 mm from the rollers C
+    and a^2 + b^2 - 2ab rounds to 0.  The printed relations skip that crank angle and say so; the rules are
+    evaluated on the constructed geometry, which divides by |CB| = 1e-7 and not by the rounded square."""
+    design = {**load_spec(BASELINE).model.design_values(), "a": 249.9999999, "b": 250.0}
+    rel = printed_relations(design)
+    theta = design["theta"]
+    assert rel["not_evaluated_at_crank_deg"] == [pytest.approx(theta + 180.0)]
+    assert len(rel["max_residual"]) == 17
+    text = BASELINE.read_text()
+    assert "\na = 120.0" in text
+    path = tmp_path / "hair.toml"
+    path.write_text(text.replace("\na = 120.0", "\na = 249.9999999", 1))
+    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    data = strict_json(tmp_path / load_spec(path).model.name / "result.json")
+    assert data["facts"]["printed_relations"]["not_evaluated_at_crank_deg"] == [pytest.approx(theta + 180.0)]
+
+
 def test_the_tool_tip_runs_clockwise_and_moves_backwards_at_the_bottom():
     a, b, c, theta_deg = GEOMETRIES[0]
     x, y = (np.asarray(v, float).ravel() for v in tool_point(OMEGA, a, b, c, theta_deg * DEG))

@@ -120,6 +120,26 @@ def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     assert data["design"] == pytest.approx({k: solved[k] for k in data["design"]}, rel=1e-12)
     assert data["design"]["arm_length"] != pytest.approx(150.0)       # the solved design, not the spec's start
     assert data["facts"]["tolerance"]["monte_carlo"]["samples"] == 10
+    # its result.json names the same run (an independent trial: it was parsed as TOML, "not valid TOML")
+    again = cli_run("tolerance", str(run_dir / "result.json"), "--length", "0.2", "--angle", "0.3", "--samples", "10",
+                    "--out", str(tmp_path / "again"), cwd=tmp_path)
+    assert again.returncode == run.returncode, again.stderr
+    assert strict_json(tmp_path / "again" / "steering_redesign_27-tolerance" / "result.json")["design"] == data["design"]
+
+
+@pytest.mark.parametrize("status, said", [
+    ("interrupted", "an interrupted run, with no solved design (solved.toml) yet: finish it with `agrisynth solve "
+                    "SPEC --resume"),
+    ("evaluated", "a check's folder, with no solved design: give the spec file it checked"),
+    ("failed", "no solved.toml in this folder (give a solve's run folder or a spec file)")])
+def test_a_folder_without_a_solved_design_says_why_in_one_line(tmp_path, status, said):
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "result.json").write_text(json.dumps({"status": status}))
+    for target in (run_dir, run_dir / "result.json"):
+        run = cli_run("tolerance", str(target), "--length", "0.2", "--out", str(tmp_path), cwd=tmp_path)
+        assert run.returncode == 2 and "Traceback" not in run.stderr
+        assert said in " ".join(run.stderr.split())
 
 
 def test_the_tolerance_result_json_holds_the_rows_its_exit_code_reads(tmp_path):

@@ -363,9 +363,22 @@ class CompiledNLP:
                 for r, v, hard in zip(self.rules, x[self.n_x:], self.t.hard) if not hard}
 
     def active_rules(self, outcome: NLPOutcome, tol: float = 1e-6) -> list[str]:
-        """Rules with a row whose multiplier is non-zero at the outcome: the ones that bind."""
+        """Rules with a row whose multiplier is non-zero at the outcome: the ones that bind.  A row that depends on
+        no free variable (a clamp cam's timing hold, 0 by construction of the fixed timing) holds nothing back,
+        whatever multiplier IPOPT gives it at a degenerate point (its gradient is zero): it is not named."""
+        moving = self._rows_on_free_variables()
         names: list[str] = []
-        for k, lam in zip(self.t.owner, outcome.lam_g):
-            if k is not None and abs(lam) > tol and self.rules[k].name not in names:
+        for i, (k, lam) in enumerate(zip(self.t.owner, outcome.lam_g)):
+            if k is not None and abs(lam) > tol and moving[i] and self.rules[k].name not in names:
                 names.append(self.rules[k].name)
         return names
+
+    def _rows_on_free_variables(self) -> np.ndarray:
+        """Per row of g: does it depend (structurally) on a variable of x whose bounds leave it room?"""
+        x = self.problem.x
+        free = np.flatnonzero(np.asarray(self.problem.ubx, float) > np.asarray(self.problem.lbx, float))
+        rows, cols = ca.jacobian_sparsity(self.t.g, x).get_triplet()
+        moving = np.zeros(self.t.g.numel(), bool)
+        on_free = np.isin(np.asarray(cols, int), free)
+        moving[np.asarray(rows, int)[on_free]] = True
+        return moving

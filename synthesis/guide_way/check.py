@@ -9,6 +9,8 @@ centre line, both walls of the groove).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from synthesis.errors import SpecError
@@ -130,6 +132,9 @@ def key_angles(scene: sc.Scene) -> dict:
         th = _theta_deg(a)
         out.setdefault(keys[k], {})["leaving"] = float(th[0])
         out.setdefault(keys[k + 1], {})["arriving"] = float(th[-1])
+    if scene.fold_theta is not None:        # a spline's stretches stop short of the fold: its own angle
+        out[scene.fold["point"]] = {"arriving": math.degrees(scene.fold_theta[0]) % 360.0,
+                                    "leaving": math.degrees(scene.fold_theta[1]) % 360.0}
     return out
 
 
@@ -164,7 +169,7 @@ def describe(scene: sc.Scene) -> dict:
     angles = key_angles(scene)
     first, last = keys[0], keys[-1]
     theta_last, theta_first = angles[last]["arriving"], angles[first]["leaving"]
-    masks = sc.pressure_masks(spec, scene.arms)
+    masks = scene.pressure_masks
     pa = [a.pressure_angle_deg for a in scene.arms]
     facts = {
         "source": spec.source,

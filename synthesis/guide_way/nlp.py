@@ -57,7 +57,7 @@ def pressure_masks_at(spec, control: np.ndarray, samples: int) -> list[np.ndarra
     """The samples the NLP holds the pressure-angle rule at: those outside the fold window on the path of
     ``control`` (start 0, the design box's init: the spec's control points, else the convex fit), as the check
     finds them on its path."""
-    return sc.pressure_masks(spec, sc.spline_scene(spec, samples, control).arms)
+    return sc.spline_scene(spec, samples, control, window_edges=False).pressure_masks
 
 
 class FixedGuide:

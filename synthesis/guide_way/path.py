@@ -45,7 +45,10 @@ class ConicPiece:
 
     def stretch(self, n: int) -> Stretch:
         """Samples uniform in s in [0, 1], t = t0 + s (t1 - t0): derivatives by s follow the claw in time order."""
-        s = np.linspace(0.0, 1.0, n)
+        return self.stretch_at(np.linspace(0.0, 1.0, n))
+
+    def stretch_at(self, s: np.ndarray) -> Stretch:
+        """The samples at the parameters ``s`` in [0, 1] (time order)."""
         t, w = self.t0 + s * (self.t1 - self.t0), self.t1 - self.t0
         m = np.column_stack(self.conic.at(t, 0))
         m1 = np.column_stack(self.conic.at(t, 1)) * w
@@ -100,7 +103,7 @@ class SplinePath:
             if keys.names[i + 1] == keys.fold:
                 b -= FOLD_OFFSET
             u = np.linspace(a, b, samples)
-            out.append(self._stretch(f"{keys.names[i]}{keys.names[i + 1]}", BRANCH["minus" if passed else "plus"], u))
+            out.append(self.stretch_at(f"{keys.names[i]}{keys.names[i + 1]}", BRANCH["minus" if passed else "plus"], u))
         assert fold_u > 0
         return out
 
@@ -109,7 +112,7 @@ class SplinePath:
         u = np.linspace(self.keys.u[-1], 1.0, samples)
         return sp.basis(self.n, u) @ np.asarray(self.control, float)
 
-    def _stretch(self, name: str, branch: float, u: np.ndarray) -> Stretch:
+    def stretch_at(self, name: str, branch: float, u: np.ndarray) -> Stretch:
         ms = [sp.basis(self.n, u, k) for k in range(3)]
         c = self.control
         if isinstance(c, np.ndarray):
@@ -122,7 +125,7 @@ class SplinePath:
         """Two samples at u_fold -/+ delta, 2 delta (side -1: before the fold, +1: after) for one-sided limits."""
         fold_u = self.keys.u[self.keys.index(self.keys.fold)]
         u = fold_u + side * np.array([delta, 2 * delta])
-        return self._stretch("fold", BRANCH["plus" if side < 0 else "minus"], u)
+        return self.stretch_at("fold", BRANCH["plus" if side < 0 else "minus"], u)
 
 
 def key_parameters_ok(keys: sp.Keys) -> None:

@@ -18,6 +18,7 @@ from synthesis.errors import SpecError
 from synthesis.guide_way import path as pth
 from synthesis.guide_way import spline as sp
 from synthesis.guide_way.trace import Arm, arm_vector, evaluate
+from synthesis.kinematics import rotary_arm as ra
 
 
 def arm_of(spec) -> list[float]:
@@ -48,25 +49,85 @@ def fold_stretches(spec) -> tuple[int, int]:
     return k - 1, k
 
 
-def pressure_masks(spec, arms: list[Arm]) -> list[np.ndarray]:
+def pressure_masks(spec, arms: list[Arm], fold_theta: tuple[float, float] | None = None) -> list[np.ndarray]:
     """Per stretch (numeric arms): the samples the pressure-angle rule holds at, i.e. all but those within
-    ``rules.fold_window`` deg of arm angle of the fold (the dead point, where it is 90 deg by geometry)."""
+    ``rules.fold_window`` deg of arm angle of the fold (the dead point, where it is 90 deg by geometry).
+    ``fold_theta``: the arm angle (rad) at the fold itself, arriving and leaving (:attr:`Scene.fold_theta`); a
+    spline's stretches stop short of the fold, where the arm turns fast (0.37 deg in 1e-3 of u), so the window is
+    measured from the fold's own angle, not from the stretches' last samples (None: the path has no fold)."""
     w = spec.rules.fold_window
     masks = [np.ones(np.asarray(a.theta).size, bool) for a in arms]
     before, after = fold_stretches(spec)
     if w > 0 and before >= 0:
-        for k, i in ((before, -1), (after, 0)):
+        for side, (k, i) in enumerate(((before, -1), (after, 0))):
             th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
-            masks[k] = np.abs(th - th[i]) >= w
+            masks[k] = np.abs(th - _nearest_turn(math.degrees(fold_theta[side]), th[i])) >= w - EDGE_TOLERANCE
     return masks
 
 
-def rules_of(spec, arms: list[Arm], masks: list[np.ndarray] | None = None) -> list:
+#: a sample this close (deg) to the window's edge counts as outside: the edge samples :func:`with_window_edges`
+#: adds lie on it to the root finder's tolerance
+EDGE_TOLERANCE = 1e-9
+
+
+def with_window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
+                      remake) -> list[Arm]:
+    """The arms of the fold's stretches with one more sample at each exact edge of the fold window (numeric
+    paths).  The pressure angle climbs towards 90 deg at the fold, so its largest value outside the window is at
+    the window's edge: between two samples it is missed (81.76 deg at a sample 0.16 deg inside the allowed side
+    against 81.80 deg at the edge).  ``remake(k, params)`` samples stretch ``k`` at other parameters."""
+    w = spec.rules.fold_window
+    before, after = fold_stretches(spec)
+    if w <= 0 or before < 0 or fold_theta is None:
+        return arms
+    from scipy.optimize import brentq
+
+    arms, vector = list(arms), arm_of(spec)
+    for side, (k, i) in enumerate(((before, -1), (after, 0))):
+        st = stretches[k]
+        th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
+        centre = _nearest_turn(math.degrees(fold_theta[side]), th[i])
+        outside = np.abs(th - centre) - w
+        crossings = np.flatnonzero(np.sign(outside[:-1]) * np.sign(outside[1:]) < 0)
+        if not crossings.size:
+            continue
+
+        def beyond_edge(u: float, near: float) -> float:
+            theta = math.degrees(float(evaluate(remake(k, np.array([u])), vector).theta[0]))
+            return abs(_nearest_turn(theta, near) - centre) - w
+
+        edges = []
+        for j in crossings:
+            try:
+                edges.append(brentq(beyond_edge, st.u[j], st.u[j + 1], args=(th[j],), xtol=1e-15,
+                                    rtol=4 * np.finfo(float).eps))
+            except ValueError:    # a sample within rounding of the edge: one evaluation disagrees with the batch's
+                continue
+        if edges:
+            arms[k] = evaluate(remake(k, np.union1d(st.u, edges)), vector)
+    return arms
+
+
+def _nearest_turn(deg: float, near: float) -> float:
+    """``deg`` plus the whole turns that bring it nearest to ``near``."""
+    return deg + 360.0 * round((near - deg) / 360.0)
+
+
+def fold_arm_angles(m: tuple[float, float], R: float, d: float) -> tuple[float, float]:
+    """The arm angle (rad) with the claw tip at the fold point ``m``, on the branch arriving there and on the one
+    leaving (a spline's before and after the fold: plus, then minus; theta = gamma + branch * phi).  The fold point
+    lies on |OM| = R - d, where phi = 0 and both are gamma; its cos phi may round an ulp past 1, so it is clipped."""
+    x, y = m
+    gamma = math.atan2(-x, -y)
+    phi = math.acos(min(1.0, max(-1.0, ra.fold_cosine(R, d, x, y))))
+    return gamma + pth.BRANCH["plus"] * phi, gamma + pth.BRANCH["minus"] * phi
+
+
+def rules_of(spec, arms: list[Arm], masks: list[np.ndarray]) -> list:
     """The sampled rules over the controlled path (floats or symbols): reach, arm direction, undercut, pressure
-    angle (at the samples ``masks`` keep, default :func:`pressure_masks` of numeric arms)."""
+    angle (at the samples ``masks`` keep: :attr:`Scene.pressure_masks` of the numeric path)."""
     a, lim = spec.arm, spec.rules
     where = "controlled path " + "-".join(controlled_keys(spec))
-    masks = pressure_masks(spec, arms) if masks is None else masks
     along = []
     for s, keep in zip(arms, masks):
         idx = [int(i) for i in np.flatnonzero(keep)]
@@ -150,11 +211,17 @@ class Scene:
     spline: pth.SplinePath | None = None
     closing: np.ndarray | None = None    # spline path: the uncontrolled stretch's claw-tip points
     notes: list[str] = field(default_factory=list)
+    #: the arm angle (rad) at the fold, arriving and leaving (None without a fold)
+    fold_theta: tuple[float, float] | None = None
+
+    @property
+    def pressure_masks(self) -> list[np.ndarray]:
+        return pressure_masks(self.spec, self.arms, self.fold_theta)
 
     @property
     def rules(self) -> list:
         lim = self.spec.rules
-        rules = rules_of(self.spec, self.arms)
+        rules = rules_of(self.spec, self.arms, self.pressure_masks)
         for j in self.joints:
             rules += [gw.jump_rule(j.name, "position", j.position_jump, lim.joint_position),
                       gw.jump_rule(j.name, "tangent", j.tangent_jump, lim.joint_tangent),
@@ -216,9 +283,9 @@ def _fold_of(point: str, m: tuple[float, float], tangents_deg: list[float], R: f
 def conic_scene(spec, samples: int) -> Scene:
     pieces = pth.conic_pieces(spec)
     arm = arm_of(spec)
-    arms = []
-    for piece in pieces:
-        a = evaluate(piece.stretch(samples), arm)
+    arms, stretches = [], [piece.stretch(samples) for piece in pieces]
+    for piece, st in zip(pieces, stretches):
+        a = evaluate(st, arm)
         _unreachable(spec, piece.name, a)
         arms.append(a)
     joints = [Joint(p.end, _end(a, -1), _end(b, 0)) for p, a, b in zip(pieces, arms, arms[1:])]
@@ -228,7 +295,10 @@ def conic_scene(spec, samples: int) -> Scene:
         m = spec.points[spec.fold]
         tangents = [_end(arms[k], -1).m_tangent_deg, _end(arms[k + 1], 0).m_tangent_deg]
         fold = _fold_of(spec.fold, (float(m[0]), float(m[1])), tangents, spec.arm.radius, spec.arm.claw)
-    return Scene(spec, arms, joints, fold, pieces=pieces)
+    # a conic piece ends on its key point: the arm angles there are its end samples'
+    fold_theta = None if fold is None else (float(arms[k].theta[-1]), float(arms[k + 1].theta[0]))
+    arms = with_window_edges(spec, stretches, arms, fold_theta, lambda k, s: pieces[k].stretch_at(s))
+    return Scene(spec, arms, joints, fold, pieces=pieces, fold_theta=fold_theta)
 
 
 def spline_path(spec, control) -> pth.SplinePath:
@@ -238,11 +308,13 @@ def spline_path(spec, control) -> pth.SplinePath:
     return pth.SplinePath(keys, control, s.control_points)
 
 
-def spline_scene(spec, samples: int, control: np.ndarray) -> Scene:
+def spline_scene(spec, samples: int, control: np.ndarray, window_edges: bool = True) -> Scene:
+    """``window_edges``: the fold window's exact edges added to the samples (the check and re-check); the NLP's
+    masks need the uniform samples its symbolic path has."""
     path = spline_path(spec, np.asarray(control, float))
     arm = arm_of(spec)
-    arms = []
-    for st in path.stretches(samples):
+    arms, stretches = [], path.stretches(samples)
+    for st in stretches:
         a = evaluate(st, arm)
         _unreachable(spec, st.name, a)
         arms.append(a)
@@ -254,7 +326,11 @@ def spline_scene(spec, samples: int, control: np.ndarray) -> Scene:
     before = evaluate(path.near_fold(-1, pth.FOLD_OFFSET), arm)
     after = evaluate(path.near_fold(+1, pth.FOLD_OFFSET), arm)
     joints = [Joint(keys.fold, _extrapolated(before), _extrapolated(after))]
-    return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2))
+    fold_theta = fold_arm_angles(m, spec.arm.radius, spec.arm.claw)
+    if window_edges:
+        arms = with_window_edges(spec, stretches, arms, fold_theta,
+                                 lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u))
+    return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2), fold_theta=fold_theta)
 
 
 def symbolic_arms(spec, control: ca.SX, samples: int) -> list[Arm]:

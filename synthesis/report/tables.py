@@ -107,8 +107,14 @@ GIVEN_HEADING = "given (start 0)"
 
 
 def solved_heading(result: Result) -> str:
-    """The heading of a solve's answer column: "solved", or what an interrupted run's answer is."""
-    return "best so far (interrupted)" if result.status == "interrupted" else "solved"
+    """The heading of a solve's answer column: "solved", or what the answer is when no start met every rule: an
+    interrupted run's best so far, an infeasible or failed run's least violated start (IPOPT's last iterate there,
+    not a best compromise between the rules it misses)."""
+    if result.status == "interrupted":
+        return "best so far (interrupted)"
+    if result.status in ("infeasible", "failed"):
+        return f"least violated ({result.status})"
+    return "solved"
 
 
 def is_single_solve(cands: list[Candidate]) -> bool:

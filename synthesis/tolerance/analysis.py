@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from constraints import not_evaluated
+from constraints.base import RuleRecord
 from synthesis.core.kind import Kind, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import operating_as_symbols
@@ -297,6 +299,34 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
     return out
 
 
+def _nominal_rules(solving, setting: Setting, lin: Linearised) -> list[RuleRecord]:
+    """The design's rules by the kind's float re-check (10x grid).  A design the re-check cannot evaluate (a
+    guide_tube seedling that sticks on a wall: the NLP has no sticking, so its derivatives exist) is still a
+    design that fails its rules, not a solver failure: its table is the kind's table of the spec's given design
+    (the design analysed), which evaluates what can be and fails the rest as not evaluated, else every rule
+    not evaluated with the re-check's reason."""
+    try:
+        return [r.record() for r in solving.recheck(setting, StartOutcome(0, dict(lin.design), 0.0, "", True, 0,
+                                                                          0.0, "")).rules]
+    except (AgrisynthError, ValueError, ArithmeticError) as exc:
+        why = str(exc)
+    table = solving.baseline_rules(setting)
+    if table:
+        return [RuleRecord(**r) for r in table]
+    return [not_evaluated(rule.name, rule.lower, rule.upper, rule.unit, "", why).record() for rule in lin.rules]
+
+
+def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
+    """A rule the float re-check cannot evaluate at the design (a seedling that never reaches the wall end) has no
+    stack-up: the NLP's smooth model has numbers there (or NaN), but they describe a motion the design does not make."""
+    row.update(nominal_margin=None, linear_worst_margin=None, linear_loss=None, drivers=[], corner=None,
+               corner_margin=None, sensitivity={k: None for k in row["sensitivity"]},
+               contributions={k: None for k in row["contributions"]})
+    if "operating_sensitivity" in row:
+        row["operating_sensitivity"] = {k: None for k in row["operating_sensitivity"]}
+    row["gap_explanation"] = "not compared: the rule is not evaluated at the design" + (f" ({note})" if note else "")
+
+
 def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: float | None,
             per_variable: dict[str, float] | None = None, samples: int = 1000, seed: int = 0) -> dict:
     """The whole analysis as result.json ``facts`` (see the module docstring), with the nominal re-check."""
@@ -304,8 +334,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     box = box_of(lin.dmap, length, angle, per_variable or {})
     rows = stack_up(lin, box)
     solving = kind.solver_side()
-    nominal = [r.record() for r in solving.recheck(Setting(spec, seed, solving.prepare(spec)),
-                                                   StartOutcome(0, dict(lin.design), 0.0, "", True, 0, 0.0, "")).rules]
+    nominal = _nominal_rules(solving, Setting(spec, seed, solving.prepare(spec)), lin)
     mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed)
     corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)
     recheck = {r.name: r for r in nominal}
@@ -342,6 +371,10 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
             if loss > 1e-9 * max(1.0, abs(row["scale"] or 1.0)):
                 row["linear_vs_sampled_gap"] = abs(row["linear_loss"] - loss) / loss
     explain_gaps(kind, spec, lin.design, lin.dmap, rows, seed)
+    for row in rows:
+        r = recheck.get(row["name"])
+        if r is not None and r.value is None:
+            _not_evaluated_at_the_design(row, r.note)
     return {"design": lin.design, "nominal_rules": [r.to_json() for r in nominal],
             "tolerance": {key: {"half_width": float(b), "unit": u} for key, b, u in zip(lin.dmap.keys, box, lin.dmap.units)},
             "stack_up": rows, "monte_carlo": mc,

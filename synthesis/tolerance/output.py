@@ -77,7 +77,8 @@ def table(facts: dict) -> str:
                   "|---|---|" + "---|" * len(ops)]
         for r in facts["stack_up"]:
             sens = r.get("operating_sensitivity") or {}
-            lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(f"{sens.get(n, 0.0):.4g}" for n in ops) + " |")
+            cells = ("-" if (v := sens.get(n, 0.0)) is None else f"{v:.4g}" for n in ops)   # None: not evaluated
+            lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(cells) + " |")
         unused = [n for n, rules in (facts.get("operating_dependence") or {}).items() if not rules]
         if unused:
             lines += ["", f"No rule's value depends on {', '.join(unused)}: the derivative is exactly 0 for every rule "

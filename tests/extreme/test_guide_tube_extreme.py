@@ -151,13 +151,7 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     from synthesis.guide_tube.scene import GuideTubeScene
     from synthesis.spec import load_spec
 
-    text = BASELINE.read_text()
-    i = text.index("[friction.calibrate]")
-    j = text.index("[rows]")
-    text = text[:i] + "[friction]\nmu = 1.5\n\n" + text[j:]
-    text = text.replace("\nangle = 45\n", "\nangle = 15\n", 1)
-    path = tmp_path / "sticks.toml"
-    path.write_text(text)
+    path = _sticking_spec(tmp_path)
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
                           cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 1, proc.stdout + proc.stderr
@@ -188,6 +182,56 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
         h1 = min(600 - 1000 * (t.below_wall + t.l3 * math.tan(math.radians(delta))) for t in tubes[k])
         assert rules[f"free_fall_height_{('I', 'II')[k]}"]["value"] == pytest.approx(h1, rel=1e-12)
     assert (tmp_path / "cai2020_tubes" / "report.html").exists()
+
+
+def _sticking_spec(tmp_path: Path) -> Path:
+    """The baseline with mu = 1.5 and tube I at 15 deg: its seedling stops on the wall at every row spacing."""
+    text = BASELINE.read_text()
+    i, j = text.index("[friction.calibrate]"), text.index("[rows]")
+    text = (text[:i] + "[friction]\nmu = 1.5\n\n" + text[j:]).replace("\nangle = 45\n", "\nangle = 15\n", 1)
+    path = tmp_path / "sticks.toml"
+    path.write_text(text)
+    return path
+
+
+def test_tolerance_of_a_sticking_wall_fails_the_design_and_writes_the_result(tmp_path):
+    """`agrisynth tolerance` of the sticking design exited 3 ("solver failure") with nothing written: the NLP has no
+    sticking, so the derivatives existed, but the nominal float re-check raised.  Now it is a design that fails
+    its rules (exit 1): the nominal table is check's, the rules that cannot be evaluated have no stack-up (their
+    NLP numbers, a NaN among them, describe a motion the design does not make), and the evaluated ones do: the free
+    fall of tube I, h1 = 600 - 1000 (below_wall + l3 tan delta), loses 1000 l3 sec^2(delta) * 0.5 deg at its worst."""
+    from synthesis.guide_tube.check import FINE, rules_even_if_stuck
+    from synthesis.guide_tube.scene import GuideTubeScene
+    from synthesis.spec import load_spec
+
+    path = _sticking_spec(tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "tolerance", str(path), "--length", "0.1", "--angle",
+                           "0.5", "--samples", "20", "--out", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr
+    data = json.loads((tmp_path / "cai2020_tubes-tolerance" / "result.json").read_text(),
+                      parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
+    assert "not_finite" not in data
+    spec = load_spec(path).model
+    scene = GuideTubeScene.from_spec(spec)
+    grid = scene.spacing_grid(FINE * spec.solver.samples)
+    expected, _ = rules_even_if_stuck(scene, spec.given_angles(), grid, spec.rules)
+    nominal = {r["name"]: r for r in data["rules"] if "@" not in r["name"] and r["name"] != "monte_carlo_evaluable"}
+    assert [(r.name, r.value) for r in (q.record() for q in expected)] == [(n, r["value"]) for n, r in nominal.items()]
+    assert not nominal["landing_time_spread"]["satisfied"] and not nominal["wall_exit_speed_I"]["satisfied"]
+    rows = {r["name"]: r for r in data["facts"]["tolerance"]["stack_up"]}
+    for name in ("landing_time_spread", "wall_exit_speed_I"):
+        assert rows[name]["linear_worst_margin"] is None and rows[name]["drivers"] == []
+        assert rows[name]["gap_explanation"].startswith("not compared: the rule is not evaluated at the design (at row "
+                                                        "spacing 230 mm the seedling sticks on the wall of tube I")
+    spacings = [scene.rows.design_spacing] + grid
+    tubes = [scene.tube(0, w) for w in spacings]
+    delta = math.radians(15.0)
+    h1 = [600 - 1000 * (t.below_wall + t.l3 * math.tan(delta)) for t in tubes]
+    worst = int(np.argmin(h1))
+    loss = 1000 * tubes[worst].l3 / math.cos(delta) ** 2 * math.radians(0.5)
+    assert rows["free_fall_height_I"]["linear_worst_margin"] == pytest.approx(h1[worst] - loss, rel=1e-9)
 
 
 def test_a_seedling_stuck_off_the_design_spacing_fails_the_check_whatever_the_exit_speed_limit(tmp_path):
