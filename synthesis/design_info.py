@@ -65,9 +65,23 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
     return out
 
 
+def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str, Any]]:
+    """describe() of a spec another spec names (the combined picker's drive and linkage): each name prefixed
+    (``crank_rocker.l7``), each path one in that part's file, named under ``file``."""
+    return {f"{prefix}.{name}": {**entry, "file": file} for name, entry in describe(spec).items()}
+
+
+def describe_fixed(spec: BaseModel, paths: dict[str, str]) -> dict[str, dict[str, Any]]:
+    """design name -> entry of a fixed number the spec holds at a TOML path (the picker's installation angles),
+    its unit from that field's description."""
+    fields = {path: field for path, field, _ in walk_fields(spec)}
+    return {name: _entry(path, fields.get(path), None, False) for name, path in paths.items()}
+
+
 def attach(result, spec: BaseModel):
-    """``result`` told what its spec says of each design variable (result.json ``design_variables``)."""
-    result.design_variables = describe(spec) or None
+    """``result`` told what its spec says of each design variable (result.json ``design_variables``); a kind
+    whose spec declares none may have described its design itself (the combined picker, from its parts' specs)."""
+    result.design_variables = describe(spec) or result.design_variables or None
     return result
 
 

@@ -38,6 +38,22 @@ def test_published_designs_check_clean(tmp_path, spec, files):
     if spec == "cai2020_picker":
         assert data["trajectory"]["frame"] == "machine"
         assert data["facts"]["instants"]["dropping"]["published_t"] == 0.44
+        _parts_described(tmp_path, data)
+
+
+def _parts_described(tmp_path: Path, data: dict):
+    """The combined picker's design_variables: every design name, each part's variable as that part's own check
+    describes it (unit, path, fixed), with the part's file; the installation angles in deg at their own path."""
+    described = data["design_variables"]
+    assert set(described) == set(data["design"])
+    for part, source in (("crank_rocker", "cai2020_crank_rocker"), ("double_crank", "cai2020_double_crank")):
+        proc = run("check", str(PICKER / f"{source}.toml"), "--out", str(tmp_path / "parts"), cwd=tmp_path)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        own = json.loads((tmp_path / "parts" / source / "result.json").read_text())["design_variables"]
+        for name, entry in own.items():
+            assert described[f"{part}.{name}"] == {**entry, "file": str(PICKER / f"{source}.toml")}
+    for angle in ("theta1", "theta2"):
+        assert described[angle] == {"path": f"installation.{angle}", "unit": "deg", "bounds": None, "free": False}
 
 
 def test_solve_of_the_combined_picker_is_bad_input(tmp_path):

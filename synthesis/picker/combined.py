@@ -24,6 +24,7 @@ import numpy as np
 
 from constraints.base import Rule
 from synthesis.crank_rocker import check as crank_rocker_check
+from synthesis.design_info import describe_fixed, describe_part
 from synthesis.errors import AssemblyError, SpecError
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function
 from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_point, joint_positions
@@ -188,8 +189,12 @@ def run_check(loaded: LoadedSpec) -> Result:
     design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
     design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
     design.update({"theta1": inst.theta1, "theta2": inst.theta2})
+    described = describe_part("crank_rocker", cr_spec, str(cr_loaded.path))
+    described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
+    described.update(describe_fixed(spec, {"theta1": "installation.theta1", "theta2": "installation.theta2"}))
     return Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design, rules=rules,
+        design_variables=described,
         trajectory={"frame": "machine", "point": "clamp point M",
                     "note": "t = 0 at picking; crank_deg = angle turned by the crank GF since picking",
                     "t": t.tolist(), "crank_deg": np.degrees(drive.omega * t).tolist(),

@@ -25,7 +25,6 @@ from synthesis.errors import AgrisynthError, SpecError
 from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
-from synthesis.spec.docmeta import units_in
 from synthesis.studio import drawing, grids
 
 def _node(data: Any, path: str) -> Any:
@@ -86,25 +85,14 @@ class Variable:
 def _shown_only(loaded: LoadedSpec) -> list[Variable]:
     """The design a kind without variables of its own evaluates (the combined picker: its drive's and its linkage's,
     read from the spec files it names, and its installation angles), as fixed rows: the page shows them greyed
-    and moves none.  Each value as the kind's check reports it, with the unit its own spec declares."""
+    and moves none.  Each value and unit as the kind's check reports them (its design_variables)."""
     result = grids.evaluator(loaded.kind, "fine")(loaded)
-    units: dict[str, str] = {}
-    for path, info, _ in walk_fields(loaded.model):            # the spec's own numbers: units from their fields
-        declared = units_in(info.description or "")
-        units[path.rsplit(".", 1)[-1]] = declared[0] if declared else ""
-    part_path = getattr(loaded.model, "part_path", None)
+    described = result.design_variables or {}
     out = []
     for name, value in result.design.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             continue
-        unit = units.get(name, "")
-        if "." in name and callable(part_path):                 # "crank_rocker.l7": the part spec's own unit
-            part, sub = name.split(".", 1)
-            try:
-                info = describe(load_spec(part_path(loaded.path, part)).model)
-            except (AgrisynthError, AttributeError, OSError):
-                info = {}
-            unit = info.get(sub, {}).get("unit", "")
+        unit = (described.get(name) or {}).get("unit", "")
         note = "from the part's spec file (check only)" if "." in name else "fixed in the spec (check only)"
         out.append(Variable(name, float(value), unit, None, False, None, note))
     return out
