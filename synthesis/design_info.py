@@ -65,6 +65,17 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
     return out
 
 
+def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
+    """design name -> {path, unit, bounds (None), free} of the list-valued design values a spec declares
+    (``list_variables()``: name -> (TOML path, free); fourbar_path's crank_deg).  Apart from describe(): a list has
+    no single value for solved.toml's or the envelope's walk."""
+    lists = getattr(spec, "list_variables", None)
+    if not callable(lists):
+        return {}
+    fields = {path: field for path, field, _ in walk_fields(spec)}
+    return {name: _entry(path, fields.get(path), None, free) for name, (path, free) in lists().items()}
+
+
 def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str, Any]]:
     """describe() of a spec another spec names (the combined picker's drive and linkage): each name prefixed
     (``crank_rocker.l7``), each path one in that part's file, named under ``file``."""
@@ -81,7 +92,7 @@ def describe_fixed(spec: BaseModel, paths: dict[str, str]) -> dict[str, dict[str
 def attach(result, spec: BaseModel):
     """``result`` told what its spec says of each design variable (result.json ``design_variables``); a kind
     whose spec declares none may have described its design itself (the combined picker, from its parts' specs)."""
-    result.design_variables = describe(spec) or result.design_variables or None
+    result.design_variables = {**describe(spec), **describe_lists(spec)} or result.design_variables or None
     return result
 
 

@@ -214,6 +214,10 @@ def test_solve_cli_writes_the_contract_and_figures(tmp_path):
     # schema version 3: the design holds numbers only; the assembly's name is a fact
     assert len(data["design"]["crank_deg"]) == 10 and "branch" not in data["design"]
     assert data["facts"]["branch"] == "open"
+    # every design value is described: the solved crank angles (free timing) in deg, written to [design] crank_deg
+    assert set(data["design_variables"]) == set(data["design"])
+    assert data["design_variables"]["crank_deg"] == {"path": "design.crank_deg", "unit": "deg", "bounds": None,
+                                                     "free": True}
     assert data["objective"]["name"] == "sum_squared_distance" and data["objective"]["value"] >= 0
     assert set(data["solver"]) >= {"name", "return_status", "iterations", "wall_s", "starts", "seed", "best_start",
                                    "starts_run", "starts_needed", "starts_reaching_best", "stop_at_objective"}
@@ -253,6 +257,8 @@ def test_infeasible_transmission_window_exits_3_naming_the_rule(tmp_path):
     assert proc.returncode == 3, proc.stdout + proc.stderr
     out = json.loads((tmp_path / data["name"] / "result.json").read_text())
     assert out["status"] == "infeasible" and out["elastic"]["converged"]
+    assert out["design_variables"]["crank_deg"] == {"path": "targets.crank_deg", "unit": "deg", "bounds": None,
+                                                    "free": False}          # prescribed timing
     assert out["elastic"]["relaxed"] == ["transmission_angle_min"]
     # the slack is in degrees (the rows are cos mu scaled to degrees at the limit): cos mu_min must rise
     # from cos 89.9 deg to about 0.28, i.e. mu_min falls to about 73.6 deg, 16.1 deg to first order

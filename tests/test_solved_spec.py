@@ -40,6 +40,13 @@ def _solving_kinds() -> list:
     return out
 
 
+def again_value(model, path: str):
+    """The value a spec model holds at a TOML path (``design.crank_deg``), lists as lists of floats."""
+    for part in path.split("."):
+        model = getattr(model, part)
+    return [float(a) for a in model] if isinstance(model, (list, tuple)) else model
+
+
 def _table(rules: list[dict]) -> list[tuple]:
     return [(r["name"], r["value"], r["limit"], r["unit"], r["satisfied"], r["margin"]) for r in rules]
 
@@ -61,10 +68,14 @@ def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
     # (guide_way's fitted control points were missing: its spec leaves them to the kind)
     from synthesis.cli import _described
 
+    # (and the list-valued design values, each at its path: fourbar_path's crank angles, at [design] crank_deg)
     listed = _described(result, loaded).design_variables
-    assert set(listed) == set(described)
-    assert {n for n, v in listed.items() if v["free"]} == {n for n, v in design_info.describe(
-        kinds.explicit_design(loaded, read_toml(loaded.path)[0])[0].model).items() if v["free"]}
+    lists = design_info.describe_lists(again.model)
+    assert set(listed) == set(described) | set(lists)
+    assert all(again_value(again.model, v["path"]) == result.design[n] for n, v in lists.items())
+    explicit = kinds.explicit_design(loaded, read_toml(loaded.path)[0])[0].model
+    assert {n for n, v in listed.items() if v["free"]} == {n for n, v in {
+        **design_info.describe(explicit), **design_info.describe_lists(explicit)}.items() if v["free"]}
     assert all(n in result.design for n, v in listed.items() if v["free"])
 
 

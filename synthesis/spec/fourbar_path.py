@@ -241,6 +241,11 @@ class FourbarPathSpec(ProblemSpec):
         """The design variables by result.json name (r1 .. theta0): a number or a free variable."""
         return {n: getattr(self.linkage, n) for n in VARIABLES}
 
+    def list_variables(self) -> dict[str, tuple[str, bool]]:
+        """result.json design values that are lists, by name -> (TOML path, free): the crank angle of each target,
+        prescribed (targets.crank_deg, fixed) or, with free timing, solved (written to [design] crank_deg, free)."""
+        return {"crank_deg": ("targets.crank_deg", False) if self.timed else ("design.crank_deg", True)}
+
     def bounds_array(self) -> list[tuple[float, float]]:
         return [bounds_of(v) for v in self.variables().values()]
 
