@@ -311,8 +311,9 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
 def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0():
     """The fold window's samples come from start 0 (the spec's control points, else the fit), as the check finds
     them on the path it evaluates.  smooth_redesign (no control given): start 0 is the fit, the masks and start 0's
-    solve as before the change (objective 0.987279662651457 in 15 iterations; 0.9872647563039696 in 16 before the fit
-    was solved in units of the path length, whose more exact optimum lowered the fit's energy, the objective's
+    solve as before the change (objective 0.9872796597523327 in 16 iterations since the window's edges are variables
+    of the NLP, 0.987279662651457 in 15 before, 3e-9 apart: IPOPT's tolerance; 0.9872647563039696 in 16 before the
+    fit was solved in units of the path length, whose more exact optimum lowered the fit's energy, the objective's
     denominator, by 1.5e-5: the same design to 9e-6 mm).  Control point 6 of the fit 10 mm
     lower: the window leaves out 8 and 12 samples of E-D and D-C (the fit's: 11 and 12)."""
     from synthesis.guide_way import scene as sc
@@ -328,8 +329,8 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     nlp = GuideNLP(spec, fit)
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_fit))
     out = nlp.solve(0, nlp.init)
-    assert out.success and out.iterations == 15
-    assert out.objective == pytest.approx(0.987279662651457, rel=1e-9)
+    assert out.success and out.iterations == 16
+    assert out.objective == pytest.approx(0.9872796597523327, rel=1e-9)
     moved = fit.control.copy()
     moved[6, 1] -= 10.0
     data = _redesign_with_control([[{"init": float(v), "bounds": [float(v) - 40, float(v) + 40]} for v in point]
@@ -339,6 +340,39 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     at_start = sc.spline_scene(given, samples, moved, window_edges=False).pressure_masks
     assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
+
+
+def test_the_nlp_holds_the_pressure_angle_at_the_fold_windows_edges_which_move_with_the_design():
+    """Each edge of the fold window is a variable of the NLP (u_e with theta(M(u_e)) = the fold's arm angle -/+ the
+    window): the pressure angle's largest value outside the window is at an edge, which moves with the design.
+    smooth_redesign held to 82.15 deg: start 0 ends Solve_Succeeded with its u_e on the exact edges of its own path
+    (found by brentq, as the check finds them), and the check's pressure angle -- the value at an edge -- within the
+    limit.  Before, the NLP held start 0's samples alone: its answer met them and read 82.21 deg at the edge
+    (exit 3, "violated between samples", whatever samples_per_segment advised)."""
+    from synthesis.guide_way import scene as sc
+    from synthesis.guide_way.check import scene_for
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.guide_way.nlp import GuideNLP, control_of
+    from synthesis.spec.common import read_toml, validate
+
+    data, _ = read_toml(LIBRARY / "guide_way" / "smooth_redesign.toml")
+    data["rules"]["max_pressure_angle"] = 82.15
+    spec = validate(type(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model), data, prefix="guide_way")
+    fit = fit_path(spec)
+    nlp = GuideNLP(spec, fit)
+    assert [(e.k, e.sign) for e in nlp.edges] == [(0, -1.0), (1, 1.0)]     # E-D before the fold, D-C after
+    out = nlp.solve(0, nlp.init)
+    assert out.return_status == "Solve_Succeeded"
+    n = spec.spline.control_points
+    control = control_of(out.raw.x[: 2 * n], n)
+    _, edges = sc.spline_window_edges(spec, spec.solver.samples_per_segment, control)
+    assert [e.u for e in edges] == pytest.approx(list(out.raw.x[2 * n: 2 * n + 2]), abs=1e-9)
+    checked = {r.record().name: r.record() for r in scene_for(spec, control).rules}
+    assert checked["pressure_angle"].satisfied and checked["pressure_angle"].value <= 82.15
+    path = sc.spline_path(spec, control)
+    at_edges = [sc.evaluate(path.stretch_at("edge", nlp.stretches[e.k].branch, np.array([e.u])),
+                            sc.arm_of(spec)).pressure_angle_deg[0] for e in edges]
+    assert checked["pressure_angle"].value == pytest.approx(max(at_edges), abs=1e-9)
 
 
 def test_solve_with_a_tolerance_table_is_refused_with_one_line(tmp_path):
@@ -357,8 +391,8 @@ def test_solve_with_a_tolerance_table_is_refused_with_one_line(tmp_path):
 
 
 def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceback(tmp_path, monkeypatch):
-    """Without the refusal above, the robust transcription's PinningError (43 = 48 - 5 auxiliaries, 14 rows) comes
-    out as the same kind of one-line SpecError (exit 2), for any kind it happens to."""
+    """Without the refusal above, the robust transcription's PinningError (45 = 48 + 2 window edges - 5 auxiliaries,
+    16 rows) comes out as the same kind of one-line SpecError (exit 2), for any kind it happens to."""
     from synthesis.core.solve import solve_spec
     from synthesis.errors import SpecError
     from synthesis.tolerance import robust
@@ -369,7 +403,7 @@ def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceb
     with pytest.raises(SpecError) as err:
         solve_spec(load_spec(path), starts=1, workers=1)
     assert str(err.value) == ("guide_way: a [tolerance] table in `solve` is not supported for this kind yet (problem "
-                              "guide_way: 43 auxiliary variables but 14 structural equality rows pin them; "
+                              "guide_way: 45 auxiliary variables but 16 structural equality rows pin them; "
                               "sensitivities need one row per auxiliary); `agrisynth tolerance RESULT` analyses a "
                               "solved design")
 

@@ -2,15 +2,19 @@
 
 Decision variables: the control points P (n x 2): those the spec gives (``[spline] control``, start 0
 their init values, within their bounds), else each within ``[spline] move`` mm of the convex fit (start
-0 the fit).  Structural rows (exact, no back-off): every key point, every key tangent's direction
-(M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min) and |OM| having its minimum at the fold
-(|M'|^2 + M . M'' >= v_min^2 / 2 there).  Rules: the same sampled rules as the check
+0 the fit); then one parameter u_e per edge of the fold window (auxiliary, within its stretch).
+Structural rows (exact, no back-off): every key point, every key tangent's direction
+(M'(u_k) x t_k = 0, M'(u_k) . t_k >= v_min), |OM| having its minimum at the fold
+(|M'|^2 + M . M'' >= v_min^2 / 2 there) and each edge's arm angle, theta(M(u_e)) = the fold's
+-/+ the window.  Rules: the same sampled rules as the check
 (:func:`synthesis.guide_way.scene.rules_of` on the control points as CasADi symbols; the pressure-angle
-samples are those outside the fold window on the path of start 0).  Objective: the smoothness energy
+samples are those outside the fold window on the path of start 0, and the window's edges u_e).  Objective: the smoothness energy
 relative to the fit's, so 1 when the fit already meets every rule.
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 import numpy as np
@@ -53,11 +57,11 @@ def design_box(spec, fit) -> tuple[np.ndarray, np.ndarray]:
             np.array([bounds_of(v) for v in coordinates], float))
 
 
-def pressure_masks_at(spec, control: np.ndarray, samples: int) -> list[np.ndarray]:
-    """The samples the NLP holds the pressure-angle rule at: those outside the fold window on the path of
-    ``control`` (start 0, the design box's init: the spec's control points, else the convex fit), as the check
-    finds them on its path."""
-    return sc.spline_scene(spec, samples, control, window_edges=False).pressure_masks
+def start_scene(spec, control: np.ndarray, samples: int):
+    """(scene, window edges) of the path of ``control`` on the NLP's samples: the samples outside the fold window
+    that the NLP holds the pressure-angle rule at (start 0's: the design box's init, the spec's control points,
+    else the convex fit), as the check finds them on its path, and the window's exact edges."""
+    return sc.spline_window_edges(spec, samples, control)
 
 
 class FixedGuide:
@@ -81,20 +85,56 @@ class GuideNLP:
         control = control_of(x, n)
         samples = spec.solver.samples_per_segment
         try:
-            self.masks = masks = pressure_masks_at(spec, control_of(self.init, n), samples)
+            scene, self.edges = start_scene(spec, control_of(self.init, n), samples)
         except SpecError as exc:                        # start 0's path cannot be driven by the arm
             from synthesis.guide_way.check import whose_path
 
             raise SpecError(f"{whose_path(spec)}, start 0: {exc}") from None
-        rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks)
+        self.masks = masks = scene.pressure_masks
+        # each edge of the fold window an auxiliary variable u_e, pinned by theta(M(u_e)) = the edge's arm angle
+        # (a structural row) and held to the pressure-angle rule: the rule's largest value outside the window is
+        # at its edge, which moves with the design (start 0's samples alone missed it by 0.8 deg)
+        self.stretches = sc.spline_path(spec, control_of(self.init, n)).stretches(samples)
+        u_edge = ca.SX.sym("u_edge", len(self.edges))
+        edge_arms = [sc.symbolic_edge_arm(spec, control, self.stretches[e.k], u_edge[i])
+                     for i, e in enumerate(self.edges)]
+        rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks, edge_arms)
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
-        self.problem = Problem("guide_way", x, self.bounds[:, 0], self.bounds[:, 1], self._structural(control),
+        structural = self._structural(control) + self._edge_rows(edge_arms)
+        lbx = np.concatenate([self.bounds[:, 0], [self.stretches[e.k].u[0] for e in self.edges]])
+        ubx = np.concatenate([self.bounds[:, 1], [self.stretches[e.k].u[-1] for e in self.edges]])
+        self.problem = Problem("guide_way", ca.vertcat(x, u_edge), lbx, ubx, structural,
                                rules, ObjectiveParts(f=energy / fit.energy), hard_in_elastic=("reach",),
                                backoff=per_rule_backoff(lambda rule: BACKOFF.get(rule.name, 0.0)),
-                               ipopt="standard", max_iter=spec.solver.max_iter, x_units=["mm"] * (2 * n),
-                               structural_units=self._structural_units, objective_unit="")
+                               ipopt="standard", max_iter=spec.solver.max_iter,
+                               x_units=["mm"] * (2 * n) + [""] * len(self.edges),
+                               structural_units=self._structural_units + ["rad"] * len(self.edges),
+                               objective_unit="")
         self.compiled = CompiledNLP(self.problem, elastic)
+
+    def _edge_rows(self, edge_arms: list) -> list:
+        """theta(M(u_e)) - centre = sign x window (rad, the difference wrapped to (-pi, pi]), per edge."""
+        w = math.radians(self.spec.rules.fold_window)
+        rows = []
+        for e, arm in zip(self.edges, edge_arms):
+            d = arm.theta - math.radians(e.centre_deg)
+            rows.append((ca.atan2(ca.sin(d), ca.cos(d)) - e.sign * w, 0.0, 0.0))
+        return rows
+
+    def edges_of(self, x_design: np.ndarray) -> np.ndarray:
+        """The fold window's edges u_e on the path of a start's design (start 0's where that path has not the
+        same edges or the arm cannot drive it), within their bounds."""
+        u0 = np.array([e.u for e in self.edges], float)
+        if not self.edges:
+            return u0
+        try:
+            _, edges = start_scene(self.spec, control_of(x_design, self.n), self.spec.solver.samples_per_segment)
+        except SpecError:
+            return u0
+        found = {(e.k, e.sign): e.u for e in edges}
+        lo, hi = self.problem.lbx[2 * self.n:], self.problem.ubx[2 * self.n:]
+        return np.clip([found.get((e.k, e.sign), e.u) for e in self.edges], lo, hi)
 
     def _structural(self, control) -> list:
         keys = sc.spline_path(self.spec, None).keys
@@ -118,6 +158,7 @@ class GuideNLP:
         return rows
 
     def solve(self, start: int, x0) -> StartOutcome:
-        out = self.compiled.solve(start, np.asarray(x0, float))
+        x0 = np.asarray(x0, float)
+        out = self.compiled.solve(start, np.concatenate([x0, self.edges_of(x0)]))
         design = dict(zip(self.names, (float(v) for v in out.x[: 2 * self.n])))
         return StartOutcome.of(out, design, out.objective)

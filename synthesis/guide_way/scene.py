@@ -17,7 +17,7 @@ from constraints import guide_way as gw
 from synthesis.errors import SpecError
 from synthesis.guide_way import path as pth
 from synthesis.guide_way import spline as sp
-from synthesis.guide_way.trace import Arm, arm_vector, evaluate
+from synthesis.guide_way.trace import Arm, Stretch, arm_vector, evaluate
 from synthesis.kinematics import rotary_arm as ra
 
 
@@ -70,41 +70,63 @@ def pressure_masks(spec, arms: list[Arm], fold_theta: tuple[float, float] | None
 EDGE_TOLERANCE = 1e-9
 
 
-def with_window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
-                      remake) -> list[Arm]:
-    """The arms of the fold's stretches with one more sample at each exact edge of the fold window (numeric
-    paths).  The pressure angle climbs towards 90 deg at the fold, so its largest value outside the window is at
-    the window's edge: between two samples it is missed (81.76 deg at a sample 0.16 deg inside the allowed side
-    against 81.80 deg at the edge).  ``remake(k, params)`` samples stretch ``k`` at other parameters."""
+@dataclass(frozen=True)
+class WindowEdge:
+    """An exact edge of the fold window on stretch ``k``: the parameter ``u`` where the arm angle is ``centre_deg``
+    + ``sign`` x the window (deg; ``centre_deg`` the fold's own arm angle, the turn nearest the stretch's)."""
+
+    k: int
+    u: float
+    centre_deg: float
+    sign: float
+    bracket: tuple[float, float]          # the two samples of the stretch the edge lies between
+
+
+def window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
+                 remake) -> list[WindowEdge]:
+    """The exact edges of the fold window on the fold's stretches (numeric paths): the roots of |theta(u) - centre|
+    = window between the samples where that changes sign.  ``remake(k, params)`` samples stretch ``k`` at other
+    parameters."""
     w = spec.rules.fold_window
     before, after = fold_stretches(spec)
     if w <= 0 or before < 0 or fold_theta is None:
-        return arms
+        return []
     from scipy.optimize import brentq
 
-    arms, vector = list(arms), arm_of(spec)
+    vector = arm_of(spec)
+    edges = []
     for side, (k, i) in enumerate(((before, -1), (after, 0))):
         st = stretches[k]
         th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
         centre = _nearest_turn(math.degrees(fold_theta[side]), th[i])
         outside = np.abs(th - centre) - w
         crossings = np.flatnonzero(np.sign(outside[:-1]) * np.sign(outside[1:]) < 0)
-        if not crossings.size:
-            continue
 
         def beyond_edge(u: float, near: float) -> float:
             theta = math.degrees(float(evaluate(remake(k, np.array([u])), vector).theta[0]))
             return abs(_nearest_turn(theta, near) - centre) - w
 
-        edges = []
         for j in crossings:
             try:
-                edges.append(brentq(beyond_edge, st.u[j], st.u[j + 1], args=(th[j],), xtol=1e-15,
-                                    rtol=4 * np.finfo(float).eps))
+                u = brentq(beyond_edge, st.u[j], st.u[j + 1], args=(th[j],), xtol=1e-15,
+                           rtol=4 * np.finfo(float).eps)
             except ValueError:    # a sample within rounding of the edge: one evaluation disagrees with the batch's
                 continue
-        if edges:
-            arms[k] = evaluate(remake(k, np.union1d(st.u, edges)), vector)
+            edges.append(WindowEdge(k, float(u), centre, float(np.sign(th[j] - centre)),
+                                    (float(st.u[j]), float(st.u[j + 1]))))
+    return edges
+
+
+def with_window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
+                      remake) -> list[Arm]:
+    """The arms of the fold's stretches with one more sample at each exact edge of the fold window (numeric
+    paths).  The pressure angle climbs towards 90 deg at the fold, so its largest value outside the window is at
+    the window's edge: between two samples it is missed (81.76 deg at a sample 0.16 deg inside the allowed side
+    against 81.80 deg at the edge).  ``remake(k, params)`` samples stretch ``k`` at other parameters."""
+    edges = window_edges(spec, stretches, arms, fold_theta, remake)
+    arms, vector = list(arms), arm_of(spec)
+    for k in sorted({e.k for e in edges}):
+        arms[k] = evaluate(remake(k, np.union1d(stretches[k].u, [e.u for e in edges if e.k == k])), vector)
     return arms
 
 
@@ -123,12 +145,13 @@ def fold_arm_angles(m: tuple[float, float], R: float, d: float) -> tuple[float, 
     return gamma + pth.BRANCH["plus"] * phi, gamma + pth.BRANCH["minus"] * phi
 
 
-def rules_of(spec, arms: list[Arm], masks: list[np.ndarray]) -> list:
+def rules_of(spec, arms: list[Arm], masks: list[np.ndarray], edge_arms: list[Arm] = ()) -> list:
     """The sampled rules over the controlled path (floats or symbols): reach, arm direction, undercut, pressure
-    angle (at the samples ``masks`` keep: :attr:`Scene.pressure_masks` of the numeric path)."""
+    angle (at the samples ``masks`` keep: :attr:`Scene.pressure_masks` of the numeric path, and at the fold
+    window's edges ``edge_arms``: the NLP's, where the edge moves with the design)."""
     a, lim = spec.arm, spec.rules
     where = "controlled path " + "-".join(controlled_keys(spec))
-    along = []
+    along = [e.along_crank for e in edge_arms]
     for s, keep in zip(arms, masks):
         idx = [int(i) for i in np.flatnonzero(keep)]
         along.append(s.along_crank[idx] if isinstance(s.along_crank, (ca.SX, ca.MX)) else
@@ -331,6 +354,26 @@ def spline_scene(spec, samples: int, control: np.ndarray, window_edges: bool = T
         arms = with_window_edges(spec, stretches, arms, fold_theta,
                                  lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u))
     return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2), fold_theta=fold_theta)
+
+
+def spline_window_edges(spec, samples: int, control: np.ndarray) -> tuple[Scene, list[WindowEdge]]:
+    """The numeric scene on ``samples`` uniform samples per stretch (no edge samples added: the NLP's symbolic
+    path has these) and the exact edges of its fold window; SpecError when the arm cannot drive the path."""
+    scene = spline_scene(spec, samples, control, window_edges=False)
+    path = scene.spline
+    stretches = path.stretches(samples)
+    edges = window_edges(spec, stretches, scene.arms, scene.fold_theta,
+                         lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u))
+    return scene, edges
+
+
+def symbolic_edge_arm(spec, control: ca.SX, stretch, u: ca.SX) -> Arm:
+    """The arm at one symbolic parameter ``u`` of a (numeric) stretch of the spline path: the knot spans the
+    stretch covers give its basis (:func:`synthesis.guide_way.spline.basis_at`)."""
+    n = spec.spline.control_points
+    lo, hi = (min(int(math.floor(v * n)), n - 1) for v in (stretch.u[0], stretch.u[-1]))
+    m = [(sp.basis_at(n, u, order, range(lo, hi + 1)) @ control).T for order in range(3)]
+    return evaluate(Stretch(stretch.name, stretch.branch, np.zeros(1), *m), arm_of(spec))
 
 
 def symbolic_arms(spec, control: ca.SX, samples: int) -> list[Arm]:

@@ -40,6 +40,22 @@ def basis(n: int, u, order: int = 0) -> np.ndarray:
     return out
 
 
+def basis_at(n: int, u, order: int, spans):
+    """(1, n) CasADi row: the weights of the control points in d^order M / du^order at a symbolic ``u`` that lies
+    in one of the knot ``spans`` (j: u in [j/n, (j+1)/n)), chosen by ``if_else`` (the spline is C2, so the
+    weights meet smoothly from span to span up to order 2)."""
+    import casadi as ca
+
+    x = u * n
+    expr = None
+    for j in sorted(spans, reverse=True):
+        row = ca.SX.zeros(1, n)
+        for k in range(4):
+            row[(j + k) % n] += _BASIS[k][order](x - j) * n**order
+        expr = row if expr is None else ca.if_else(x < j + 1, row, expr)
+    return expr
+
+
 def third_differences(n: int) -> np.ndarray:
     """(n, n): row j gives M''' on span j divided by n^3."""
     d = np.zeros((n, n))
