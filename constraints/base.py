@@ -48,6 +48,10 @@ class Rule:
     note: str | None = field(default=None, compare=False)
     #: the unit of ``nlp_rows`` when it is not ``unit`` (e.g. squared speeds for a speed rule)
     row_unit: str | None = field(default=None, compare=False)
+    #: ``nlp_rows`` are the rule itself in its unit and limits, exactly (the smallest distance over a turn for its
+    #: samples, one row per branch of a max()), not a rescaled or squared form: a robust solve's promise is read on
+    #: them (synthesis.core.sensitivity.row_margins)
+    rows_are_the_rule: bool = field(default=False, compare=False)
 
     def rows(self) -> tuple:
         return self.nlp_rows or ((self.expr, self.lower, self.upper),)

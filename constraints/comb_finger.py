@@ -34,7 +34,8 @@ def finger_clear_rule(distances: Sequence, exact, minimum: float) -> Rule:
     The optimiser's row is the exact smallest distance over the turn, |R S'| - r - rho (the finger sweeps the
     disc of radius r about its hub R; S' the other drum's axis): no minimum falls between samples."""
     return Rule("finger_clear_of_other_unit", stack(distances), minimum, None, "mm", LENGTH_SCALE,
-                "tip to the other unit's drum, over a turn", nlp_rows=((exact, minimum, None),))
+                "tip to the other unit's drum, over a turn", nlp_rows=((exact, minimum, None),),
+                rows_are_the_rule=True)
 
 
 def unit_within_row_rule(reaches: Sequence, half_spacing: float) -> Rule:
@@ -51,7 +52,7 @@ def finger_hides_rule(r, e, rho, hub_inset: float) -> Rule:
     worst = (ca.fmax(r - e, e + hub_inset) if on_symbols else max(r - e, e + hub_inset)) - rho
     return Rule("finger_hides_in_drum", worst, None, 0.0, "mm", LENGTH_SCALE,
                 "innermost tip inside the drum, hub inset from its wall",
-                nlp_rows=((r - e - rho, None, 0.0), (e + hub_inset - rho, None, 0.0)))
+                nlp_rows=((r - e - rho, None, 0.0), (e + hub_inset - rho, None, 0.0)), rows_are_the_rule=True)
 
 
 def finger_protrudes_rule(reach, minimum: float) -> Rule:

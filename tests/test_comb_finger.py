@@ -295,3 +295,63 @@ print("LOADED", sorted(other))
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert "LOADED []" in proc.stdout, proc.stdout + proc.stderr
     assert (tmp_path / "redesign_max_combing" / "result.json").exists()
+
+
+def test_a_robust_redesign_keeps_its_promise_on_the_rows_the_nlp_held(tmp_path):
+    """redesign_max_combing in a 0.2 mm tolerance box (an independent trial: exit 3, "does not keep its promise").
+    The NLP holds finger_clear_of_other_unit on its exact row, the smallest distance over the turn |RS'| - r - rho,
+    and finger_hides_in_drum on one row per branch of its max(); the promise is read on those rows.  Read on the
+    720 turn samples instead, the linearised worst case was -9.5e-6 mm: at a sample off the exact minimum the
+    gradient is another one.  Each @tolerance margin equals its linear stack-up, recomputed here by central
+    differences of the closed forms; the Monte-Carlo passes every sample."""
+    from synthesis.comb_finger.check import trace
+
+    text = (FINGER / "redesign_max_combing.toml").read_text() + "\n[tolerance]\nlength = 0.2\nsamples = 200\n"
+    path = tmp_path / "robust.toml"
+    path.write_text(text)
+    loaded = load_spec(path)
+    result, _, _ = run_solve(loaded, starts=1, workers=1)
+    assert result.status == "optimal"
+    held = {r["name"]: r for r in result.rules if r["name"].endswith("@tolerance")}
+    assert all(r["satisfied"] for r in held.values())
+    spec, d = loaded.model, dict(result.design)
+    box = {"r": 0.2, "e": 0.2, "b": 0.2, "rho": 0.2}          # the mm variables; alpha (deg), omega (rpm) none
+
+    def exact(design):
+        return trace(spec, design, 36).clearance_exact
+
+    spread = 0.0
+    for name, width in box.items():
+        step = 1e-5
+        up, down = dict(d, **{name: d[name] + step}), dict(d, **{name: d[name] - step})
+        spread += abs((exact(up) - exact(down)) / (2 * step)) * width
+    clear = exact(d) - spec.requirements.finger_clearance - spread
+    assert held["finger_clear_of_other_unit@tolerance"]["margin"] == pytest.approx(clear, abs=1e-7)
+    assert 0.0 <= clear < 1e-4                    # binding: the NLP held it (at its back-off)
+    inset = spec.requirements.hub_inset
+    hides = min(-(d["r"] - d["e"] - d["rho"]) - 3 * 0.2, -(d["e"] + inset - d["rho"]) - 2 * 0.2)
+    assert held["finger_hides_in_drum@tolerance"]["margin"] == pytest.approx(hides, abs=1e-9)
+    assert result.to_json()["facts"]["tolerance"]["monte_carlo"]["pass_rate"] == 1.0
+
+
+def test_the_tolerance_stack_up_of_a_max_at_its_kink_reads_each_branch(tmp_path):
+    """finger_hides_in_drum is max(r - e - rho, e + hub_inset - rho) <= 0; with r = 120, e = 50, rho = 70.5 both
+    branches are -0.5 mm (an independent trial).  The derivative of the max() there averaged the branches and the
+    stack-up read +0.2 mm, exit 0 with --samples 0, although the corner r + 0.2, e - 0.2, rho - 0.2 puts the first
+    branch at +0.1 mm.  Read on the NLP's rows (one per branch) it is -0.1 mm: exit 1."""
+    text = (FINGER / "peanut_baseline.toml").read_text()
+    for old, new in (("e = 40.0 ", "e = 50.0 "), ("b = 140.0 ", "b = 150.0 "), ("rho = 80.0 ", "rho = 70.5 ")):
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "kink.toml"
+    path.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "tolerance", str(path), "--length", "0.2",
+                           "--samples", "0", "--out", str(tmp_path / "out")], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    data = json.loads((tmp_path / "out" / "peanut_baseline-tolerance" / "result.json").read_text())
+    rows = {r["name"]: r for r in data["rules"]}
+    assert rows["finger_hides_in_drum"]["value"] == pytest.approx(-0.5, abs=1e-12)
+    corner = (120.0 + 0.2) - (50.0 - 0.2) - (70.5 - 0.2)          # the first branch at the worst corner
+    held = rows["finger_hides_in_drum@tolerance"]
+    assert held["value"] == pytest.approx(-corner, abs=1e-9) and held["satisfied"] is False

@@ -50,11 +50,29 @@ def pinning_rows(problem: Problem, n_design: int, structural=None) -> ca.SX:
     return h
 
 
-def rule_vector(problem: Problem) -> tuple[ca.SX, list[slice]]:
-    """Every rule's value (``Rule.expr``, a vector for sampled rules) stacked, and each rule's slice."""
+def row_margins(rule) -> ca.SX:
+    """The margins (>= 0 holds) of a rule as the NLP holds it, in the rule's unit: of its ``nlp_rows`` where they are
+    the rule itself (``Rule.rows_are_the_rule``: the exact smallest distance over a turn for sampled distances, one
+    row per branch of a max()), each side of each inequality row (equality rows left out: a robust solve keeps them
+    as they are); else of its value (rows in other terms -- squared speeds, cos of an angle -- have margins of
+    another size)."""
+    def sides(e, lb, ub) -> list:
+        v = ca.vec(ca.SX(e))
+        return ([v - ca.DM(np.asarray(lb, float))] if lb is not None else []) + \
+               ([ca.DM(np.asarray(ub, float)) - v] if ub is not None else [])
+
+    inequalities = [] if not rule.rows_are_the_rule else [
+        (e, lb, ub) for e, lb, ub in rule.rows()
+        if not (lb is not None and ub is not None and np.array_equal(np.asarray(lb), np.asarray(ub)))]
+    return ca.vertcat(*([m for row in inequalities for m in sides(*row)] or sides(rule.expr, rule.lower, rule.upper)))
+
+
+def rule_vector(problem: Problem, margins: bool = False) -> tuple[ca.SX, list[slice]]:
+    """Every rule's value (``Rule.expr``, a vector for sampled rules) stacked, and each rule's slice; ``margins``:
+    instead the margins of the rows the NLP holds each rule by (:func:`row_margins`, limits 0 and none)."""
     parts, slices, at = [], [], 0
     for rule in problem.rules:
-        v = ca.vec(ca.SX(rule.expr))
+        v = row_margins(rule) if margins else ca.vec(ca.SX(rule.expr))
         parts.append(v)
         slices.append(slice(at, at + v.numel()))
         at += v.numel()
@@ -74,13 +92,15 @@ class Point:
 class Sensitivity:
     """Numeric rule values and implicit-function derivatives of a problem, at any design."""
 
-    def __init__(self, problem: Problem, n_design: int, design_jacobian: np.ndarray | None = None):
+    def __init__(self, problem: Problem, n_design: int, design_jacobian: np.ndarray | None = None,
+                 margins: bool = False):
         self.problem = problem
+        self.margins = margins          # rule_vector's form: the rules' values, or their NLP rows' margins
         self.n_design = n_design
         self.J = np.eye(n_design) if design_jacobian is None else np.asarray(design_jacobian, float)
         x, p = problem.x, problem.parameters
         self.h = pinning_rows(problem, n_design)
-        g, self.slices = rule_vector(problem)
+        g, self.slices = rule_vector(problem, margins)
         self._g = ca.Function("rules_and_jacobian", [x, p], [g, ca.jacobian(g, x)])
         self._h = ca.Function("pinning_and_jacobian", [x, p], [self.h, ca.jacobian(self.h, x)])
 

@@ -48,14 +48,21 @@ class Linearised:
     #: the values each rule was resolved at (nominal, or its scenario's); None without
     operating: tuple | None = None
     operating_points: list | None = None
+    #: the rows are the margins of the rows the NLP holds each rule by (linearise(margins=True)), not its values
+    margins: bool = False
+    #: with values: the margins form too ((values, jacobian, slices)) where a rule's NLP rows are the rule itself
+    #: (Rule.rows_are_the_rule: an exact minimum, a max()'s branches): its worst case is read there, not at a sample
+    #: off the exact minimum or on a max()'s kink, where the derivative of the value is another one
+    held: tuple | None = None
 
     def rule_jacobian(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         s = self.slices[k]
         return self.values[s], self.jacobian[s]
 
 
-def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
-    """Values and dg/dd of every rule of ``spec`` at ``design`` (result.json keys, spec units)."""
+def linearise(kind: Kind, spec, design: dict, seed: int = 0, margins: bool = False) -> Linearised:
+    """Values and dg/dd of every rule of ``spec`` at ``design`` (result.json keys, spec units); ``margins``: of the
+    margins of the rows the NLP holds each rule by instead (a robust solve's promise is on those rows)."""
     solving = kind.solver_side()
     aspec = fine(freed(spec))
     data = solving.prepare(aspec)
@@ -73,14 +80,20 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     x0[:dmap.n] = dmap.coordinates(d)
     if kind.name in ANSWER:            # the answer's own auxiliaries (fourbar_path's crank angles), where it has them
         x0, p = ANSWER[kind.name](design, x0, np.asarray(p, float), dmap.n)
-    sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
+    sens = Sensitivity(compiled.problem, dmap.n, dmap.J, margins)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)
+    held = None
+    if not margins and any(r.rows_are_the_rule for r in compiled.problem.rules):
+        rows = Sensitivity(compiled.problem, dmap.n, dmap.J, True)
+        at_rows = rows.at(x, p)
+        held = (at_rows.values, at_rows.jacobian, rows.slices)
     src = compiled.problem.operating_source
     ops = sens.operating(x, p)
     ops = None if ops is None else (*ops, dict(src.nominal))
     return Linearised(dmap, {k: float(v) for k, v in zip(dmap.keys, d)}, list(compiled.problem.rules), sens.slices,
-                      pt.values, pt.jacobian, ops, None if src is None else [dict(v) for _, v in src.rules])
+                      pt.values, pt.jacobian, ops, None if src is None else [dict(v) for _, v in src.rules],
+                      margins, held)
 
 
 def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
@@ -89,17 +102,24 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
     rows = []
     for k, rule in enumerate(lin.rules):
         values, J = lin.rule_jacobian(k)
-        nominal, worst = linear_worst(values, rule.lower, rule.upper, J, box)
-        i_nom, i_lin = int(np.argmin(nominal)), int(np.argmin(worst))
+        lower, upper = (0.0, None) if lin.margins else (rule.lower, rule.upper)
+        nominal, worst = linear_worst(values, lower, upper, J, box)
+        i_nom = int(np.argmin(nominal))
+        value, gradient = float(values[i_nom]), J[i_nom]          # the value at its worst sample, its derivative
+        if lin.held is not None and rule.rows_are_the_rule:        # the worst case on the rows the NLP holds
+            values, J = lin.held[0][lin.held[2][k]], lin.held[1][lin.held[2][k]]
+            lower, upper = 0.0, None
+            nominal, worst = linear_worst(values, lower, upper, J, box)
+        i_lin = int(np.argmin(worst))
         contrib = np.abs(J[i_lin]) * box
-        corner = _corner(values[i_lin], rule.lower, rule.upper, J[i_lin], box)
+        corner = _corner(values[i_lin], lower, upper, J[i_lin], box)
         order = [j for j in np.argsort(-contrib) if contrib[j] > 0][:drivers]
         rows.append({
             "name": rule.name, "unit": rule.unit, "scale": rule.scale,
-            "value": float(values[i_nom]), "nominal_margin": float(nominal[i_nom]),
+            "value": value, "nominal_margin": float(np.min(nominal)),
             "linear_worst_margin": float(worst[i_lin]),
             "linear_loss": float(nominal[i_lin] - worst[i_lin]) if math.isfinite(nominal[i_lin]) else None,
-            "sensitivity": {key: float(J[i_nom, j]) for j, key in enumerate(lin.dmap.keys)},
+            "sensitivity": {key: float(gradient[j]) for j, key in enumerate(lin.dmap.keys)},
             # the box's corner the linear stack-up puts this rule's worst at (sign of dg/dd at its worst sample,
             # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
             "corner": [float(c) for c in corner],
