@@ -46,15 +46,25 @@ class CamSection(StrictModel):
         "counter_clockwise", description="turning sense of the cam seen from the side the profile is drawn on; "
                                          "clockwise mirrors the exported profile (seed 001 eq 12 is counter-clockwise)")
 
+    @field_validator("base_radius")
+    @classmethod
+    def _base_positive(cls, base: Variable) -> Variable:
+        if _lo(base) <= 0:
+            raise ValueError(f"expected > 0, got {_fmt(base)} mm" + (" (its lower bound)" if is_free(base) else ""))
+        return base
+
     @field_validator("roller_radius")
     @classmethod
     def _roller_inside_base(cls, roller: Variable, info: ValidationInfo) -> Variable:
         if _lo(roller) <= 0:
-            raise ValueError(f"expected > 0, got {_fmt(roller)}")
+            raise ValueError(f"expected > 0, got {_fmt(roller)} mm" + (" (its lower bound)" if is_free(roller) else ""))
         base = info.data.get("base_radius")
         if base is not None and _hi(roller) >= _lo(base):
-            raise ValueError(f"expected < base_radius ({_fmt(base)} mm), got {_fmt(roller)} mm: the roller "
-                             "must be smaller than the base circle")
+            largest = f" (its upper bound {_hi(roller):g} mm)" if is_free(roller) else ""
+            smallest = (f"the smallest base_radius its bounds allow, {_lo(base):g} mm" if is_free(base)
+                        else f"base_radius, {_lo(base):g} mm")
+            raise ValueError(f"expected below {smallest}, got {_fmt(roller)} mm{largest}: the roller must be "
+                             "smaller than the base circle at every design the bounds allow")
         return roller
 
 
