@@ -302,3 +302,18 @@ def test_a_gap_at_an_unevaluable_corner_says_so_and_is_never_called_second_order
     assert "second order" not in why and "kink" not in why
     assert "0.0625 mm" in why and "below the worst sample" in why
     assert math.isclose(row["linear_vs_sampled_gap"], 0.6)
+
+
+def test_a_rule_the_nlp_writes_in_other_terms_shows_the_re_checks_unit_and_no_loss_ratio(tmp_path):
+    """opening_cam_redesign's no_undercut: the NLP holds a curvature (unit 1), the re-check reports the radius
+    margin in mm (an independent trial: the row read unit "1" above mm numbers, and a loss ratio of the two).  The
+    unit column is the re-check's, the linear worst margin's cell names the NLP's terms, no ratio is formed."""
+    run = cli_run("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam_redesign.toml"), "--length", "0.2",
+                  "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    facts = strict_json(tmp_path / "opening_cam_redesign-tolerance" / "result.json")["facts"]["tolerance"]
+    row = next(r for r in facts["stack_up"] if r["name"] == "no_undercut")
+    assert row["unit"] == "1" and row["recheck_unit"] == "mm" and not row["same_terms"]
+    assert row["linear_over_sampled"] is None
+    line = next(l for l in run.stdout.splitlines() if l.startswith("| no_undercut | mm |"))
+    assert f"{row['linear_worst_margin']:.4g} (NLP's terms, 1)" in line

@@ -216,7 +216,7 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
             if base is not None and row["linear_loss"] is not None and not row["same_terms"]:
                 row["gap_explanation"] = (f"not compared: the NLP writes this rule in other terms than the re-check "
                                           f"reports (nominal margin {row['nominal_margin']:.4g} in the NLP's, "
-                                          f"{base:.4g} {row['unit']} in the re-check's)")
+                                          f"{base:.4g} {row.get('recheck_unit', row['unit'])} in the re-check's)")
             elif base is None or row.get("sampled_worst_margin") is None or row["linear_loss"] is None:
                 row["gap_explanation"] = "not compared: " + (row.get("corner_note") or "the rule is not evaluated")
             else:
@@ -367,6 +367,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
                                                                                   0.0, "")).rules if q.name == name),
                      None)
         row["recheck_margin"] = None if r is None else r.margin
+        row["recheck_unit"] = row["unit"] if r is None else r.unit      # margin, MC and corner columns: the re-check's
         m = mc["rules"].get(row["name"], {})
         row["mc_pass_rate"], row["mc_worst_margin"] = m.get("pass_rate"), m.get("worst_margin")
         row["mc_unevaluable"] = m.get("unevaluable", 0)
@@ -386,6 +387,8 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
         # angle): then the two losses are in different units and are not compared
         row["same_terms"] = (base is not None and row["linear_loss"] is not None
                              and abs(row["nominal_margin"] - base) <= 0.1 * max(row["linear_loss"], 1e-9 * max(1.0, abs(base))))
+        if not row["same_terms"]:           # a ratio of losses in different units says nothing
+            row["linear_over_sampled"] = None
         if row["same_terms"] and worst:
             loss = base - min(worst)
             if loss > 1e-9 * max(1.0, abs(row["scale"] or 1.0)):

@@ -62,7 +62,12 @@ def table(facts: dict) -> str:
         def f(v, fmt="{:.4g}"):
             return "-" if v is None else fmt.format(v)
         drivers = ", ".join(f"{d['variable']} {d['contribution']:.3g}" for d in r["drivers"])
-        lines.append(f"| {r['name']} | {r['unit']} | {f(r['recheck_margin'])} | {f(r['linear_worst_margin'])} | {drivers} "
+        unit = r.get("recheck_unit") or r["unit"]
+        # the stack-up is in the NLP's terms of the rule; where those are not the re-check's (a curvature for a
+        # radius) its cell says so and the unit column is the re-check's (margin, MC and corner columns)
+        linear = f(r['linear_worst_margin']) + ("" if r.get("same_terms", True) or r["unit"] == unit else
+                                               f" (NLP's terms, {r['unit'] or '-'})")
+        lines.append(f"| {r['name']} | {unit} | {f(r['recheck_margin'])} | {linear} | {drivers} "
                      f"| {f(r['mc_pass_rate'], '{:.1%}')} | {f(r['mc_worst_margin'])}"
                      f"{_not_evaluable(r.get('mc_unevaluable'), mc['samples'])} "
                      f"| {f(r['linear_over_sampled'], '{:.2f}')} "
