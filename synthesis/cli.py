@@ -148,7 +148,8 @@ def check(spec: Path, out: Path, force: bool) -> None:
     """Evaluate SPEC's given design against its rules (no optimisation).
 
     Prints the rule table (value, limit, margin, pass/fail) and writes OUT/<name>/result.json,
-    report.html and the trajectory plot. Exit 0 when every rule holds, 1 when one is violated.
+    report.html and the kind's figures (a trajectory or path plot where the kind has one). Exit 0
+    when every rule holds, 1 when one is violated.
     OUT/<name>/ must not exist yet, or hold an earlier agrisynth run and --force be given.
     """
     from synthesis import kinds
@@ -418,7 +419,8 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     {objectives}
     Starts are a fixed-seed Latin hypercube (start 0 = the given design). Every start is
     re-checked on a 10x finer grid, independently of the solver; the best is the feasible one
-    with the best objective (ties: the lower start). Status: optimal (every rule holds and
+    with the best objective (objectives within 1e-9 relative tie: a start IPOPT finished at its
+    full tolerances wins, then the lower start). Status: optimal (every rule holds and
     IPOPT met its tolerances), feasible (every rule holds; IPOPT stopped otherwise: a note
     says how), infeasible (an elastic re-solve converged and names the rules that conflict),
     failed (anything else: the message says what to try), interrupted (Ctrl-C or SIGTERM:

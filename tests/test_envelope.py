@@ -316,6 +316,17 @@ def test_range_sizes_that_would_blow_up_or_merge_scenarios_are_refused(tmp_path,
     assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
 
 
+def test_a_malformed_range_of_a_field_that_takes_ranges_is_not_called_one_value(tmp_path):
+    """forward_speed takes a range: a range of one number is named as that, never "takes one value" (which a
+    clamp_cam crank_speed range is told: test_clamp_cam_cli)."""
+    from solving import cli_run, spec_with
+    bad = (FORWARD_RANGE, "forward_speed = { range = [0.5], samples = 3 }")
+    run = cli_run("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [bad])), "--out", str(tmp_path), cwd=tmp_path)
+    err = " ".join(run.stderr.split())
+    assert run.returncode == 2 and "forward_speed.range: expected [lo, hi] (two numbers), got [0.5]" in err, err
+    assert "takes one value" not in err
+
+
 def test_monte_carlo_of_an_envelope_design_checks_every_operating_point(example1_solved, tmp_path):
     """Issue 20: the Monte-Carlo of a spec with an operating range re-checks each sampled design (uniform in the
     tolerance box) at the nominal point and at every point of the re-check grid; a sample passes when every rule

@@ -328,6 +328,11 @@ def _describe(err: dict, model: type[BaseModel]) -> str:
     if kind in ("float_type", "float_parsing") and isinstance(got, str):
         # "0.8 m/s", "300 rpm": the unit of every field is fixed; say which
         return f"{path}: expected a number{_unit_hint(model, loc)}, written without a unit, got {shown(got)}"
+    if (kind in ("float_type", "float_parsing") and isinstance(got, dict) and "range" in got
+            and "OperatingRange" not in str(getattr(_field_at(model, loc), "annotation", ""))):
+        # an operating range where this kind takes one value (README: which conditions take a range)
+        return (f"{path}: expected a number{_unit_hint(model, loc)}, got {shown(got)}: this field takes one value, "
+                f"not an operating range {{range = [lo, hi], ...}}")
     if kind in _TYPES:
         return f"{path}: expected {_TYPES[kind]}, got {shown(got)}"
     if kind == "literal_error":
