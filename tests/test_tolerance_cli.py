@@ -317,3 +317,26 @@ def test_a_rule_the_nlp_writes_in_other_terms_shows_the_re_checks_unit_and_no_lo
     assert row["linear_over_sampled"] is None
     line = next(l for l in run.stdout.splitlines() if l.startswith("| no_undercut | mm |"))
     assert f"{row['linear_worst_margin']:.4g} (NLP's terms, 1)" in line
+
+
+def test_samples_outside_the_cams_domain_are_unevaluable_not_read_as_designs(tmp_path):
+    """opening_cam with base_radius +-100 mm: the box reaches radii below 0, which the formulas read as |r0| (an
+    independent trial: counted as evaluated, 0 unevaluable); with offset +-60 mm, |offset| >= r0 = 50 mm took a
+    sqrt of a negative number (a RuntimeWarning on the terminal, an infinite corner margin in report.md).  Such
+    samples are unevaluable, each counted, and the count equals the samples drawn outside the domain (the same
+    default_rng draws, recomputed here)."""
+    import numpy as np
+
+    for option, width, outside in (("base_radius=100", 100.0, lambda d: 50.0 + d <= 3.5),
+                                   ("offset=60", 60.0, lambda d: abs(0.0 + d) >= 50.0)):
+        out = tmp_path / option.split("=")[0]
+        run = cli_run("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam.toml"), "--tol", option, "--samples", "50",
+                      "--out", str(out), cwd=tmp_path)
+        assert run.returncode == 1 and "RuntimeWarning" not in run.stderr + run.stdout, run.stderr
+        facts = strict_json(out / "opening_cam-tolerance" / "result.json")["facts"]["tolerance"]
+        keys = list(facts["tolerance"])
+        j = keys.index(option.split("=")[0])
+        draws = np.random.default_rng(0).uniform(-1.0, 1.0, size=(50, len(keys)))[:, j] * width
+        assert facts["monte_carlo"]["unevaluable"] == sum(bool(outside(d)) for d in draws) > 0
+        cells = [c.strip() for c in (out / "opening_cam-tolerance" / "report.md").read_text().split("|")]
+        assert "inf" not in cells and "-inf" not in cells and "nan" not in cells

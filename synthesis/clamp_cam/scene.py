@@ -16,6 +16,7 @@ import numpy as np
 
 from constraints.base import Rule
 from constraints.cam import acceleration_rule, pressure_angle_rule, timing_rule, undercut_rule
+from synthesis.errors import AssemblyError
 from synthesis.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing
 from synthesis.kinematics import cam_follower as cf
 from synthesis.kinematics.motion_laws import law as closed_form_law
@@ -128,9 +129,13 @@ class CamScene:
 
     @classmethod
     def from_spec(cls, spec: ClampCamSpec, design: dict[str, float] | None = None, optimised=None) -> "CamScene":
+        """AssemblyError where the design lies outside the cam's domain (:func:`outside_domain`)."""
         values = dict(spec.design_values())
         if design:
             values.update({k: float(v) for k, v in design.items() if k in values})
+        why = outside_domain(spec, values)
+        if why is not None:
+            raise AssemblyError(f"the design lies outside the cam's domain: {why}")
         if spec.motion.law == "optimised":
             optimised = optimised or fit_law(spec)
             rise_law, return_law = optimised.rise, optimised.return_
@@ -146,6 +151,34 @@ class CamScene:
     @property
     def omega(self) -> float:
         return omega_of(self.spec)
+
+
+def outside_domain(spec: ClampCamSpec, v: dict[str, float]) -> str | None:
+    """Why design values ``v`` (numbers) lie where the cam's geometry is not defined, else None: a radius not
+    positive, the roller not inside the base circle, the follower line missing it (|offset| >= base radius: no
+    sqrt(r0^2 - e^2)), the arm not reaching it, a rise or return not positive.  The spec's validators hold these
+    (with margins) for the given design; a tolerance box's samples or a studio drag may step past them, where the
+    formulas would read |r0| or NaN as a design."""
+    r0, rr = v["base_radius"], v["roller_radius"]
+    if not r0 > 0:
+        return f"base_radius {r0:g} mm is not > 0"
+    if not rr > 0:
+        return f"roller_radius {rr:g} mm is not > 0"
+    if not rr < r0:
+        return f"roller_radius {rr:g} mm is not below base_radius {r0:g} mm"
+    if spec.follower.type == "translating":
+        e = v.get("offset", 0.0)
+        if not abs(e) < r0:
+            return f"|offset| {abs(e):g} mm is not below base_radius {r0:g} mm: the follower line misses the base circle"
+    else:
+        a, l = v["pivot_distance"], v["arm_length"]
+        if not abs(a - l) < r0 < a + l:
+            return (f"the arm cannot reach the base circle: |pivot_distance - arm_length| = {abs(a - l):g}, "
+                    f"base_radius {r0:g}, pivot_distance + arm_length = {a + l:g} mm")
+    for name in ("rise", "return"):
+        if not v[name] > 0:
+            return f"{name} {v[name]:g} deg is not > 0"
+    return None
 
 
 @dataclass(frozen=True)
