@@ -41,8 +41,9 @@ class Trapezoid(StrictModel):
     """The steering arms; a number fixes a value, ``{init, bounds}`` frees it."""
 
     arm_length: Variable = Field(description="steering-arm length r (kingpin to tie-rod joint), mm")
-    base_angle: Variable = Field(description="base angle gamma between arm and axle line, deg (arms point rearward "
-                                             "and inward; 90 = parallel arms, no Ackermann effect)")
+    base_angle: Variable = Field(description="base angle gamma between arm and axle line, deg, 0 < gamma < 90 (arms "
+                                             "point rearward and inward; towards 90 the arms grow parallel and the "
+                                             "Ackermann effect vanishes)")
 
     @model_validator(mode="after")
     def _ranges(self) -> "Trapezoid":
