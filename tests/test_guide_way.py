@@ -311,8 +311,8 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
 def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0():
     """The fold window's samples come from start 0 (the spec's control points, else the fit), as the check finds
     them on the path it evaluates.  smooth_redesign (no control given): start 0 is the fit, the masks and start 0's
-    solve as before the change (objective 0.9872796597523327 in 16 iterations since the window's edges are variables
-    of the NLP, 0.987279662651457 in 15 before, 3e-9 apart: IPOPT's tolerance; 0.9872647563039696 in 16 before the
+    solve as before the change (objective 0.9872796597523327 in 16 iterations here since the window's edges are
+    variables of the NLP, 0.987279662651457 in 15 before, 3e-9 apart: IPOPT's tolerance; 0.9872647563039696 in 16 before the
     fit was solved in units of the path length, whose more exact optimum lowered the fit's energy, the objective's
     denominator, by 1.5e-5: the same design to 9e-6 mm).  Control point 6 of the fit 10 mm
     lower: the window leaves out 8 and 12 samples of E-D and D-C (the fit's: 11 and 12)."""
@@ -329,8 +329,9 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     nlp = GuideNLP(spec, fit)
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_fit))
     out = nlp.solve(0, nlp.init)
-    assert out.success and out.iterations == 16
-    assert out.objective == pytest.approx(0.9872796597523327, rel=1e-9)
+    # not one machine's iteration count: the objective to IPOPT's tolerance (the 15- and 16-iteration runs: 3e-9)
+    assert out.success and out.iterations <= 30
+    assert out.objective == pytest.approx(0.9872796597523327, rel=1e-7)
     moved = fit.control.copy()
     moved[6, 1] -= 10.0
     data = _redesign_with_control([[{"init": float(v), "bounds": [float(v) - 40, float(v) + 40]} for v in point]
@@ -340,6 +341,12 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     at_start = sc.spline_scene(given, samples, moved, window_edges=False).pressure_masks
     assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
+    # this start's path misses the fold's key point (its own fold angle 134.9915 deg); the NLP's rows put the fold
+    # on the key point, so its window's edges are measured from the key point's arm angle, 135 deg (an independent
+    # review: they were start 0's, 0.0085 deg off the check's edges of any answer)
+    own = math.degrees(sc.spline_scene(given, samples, moved, window_edges=False).fold_theta[0])
+    assert abs(own - 135.0) > 1e-3
+    assert [e.centre_deg for e in nlp.edges] == pytest.approx([135.0, 135.0], abs=1e-9)
 
 
 def test_the_nlp_holds_the_pressure_angle_at_the_fold_windows_edges_which_move_with_the_design():

@@ -73,12 +73,13 @@ UNREACHABLE = {
                          [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
     "fourbar_path": ("fourbar_path/picking_arc.toml",
                      [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
-    # a 50 mm roller margin no smooth path here keeps (20 and 30 mm are met).  The cap is raised: the elastic re-solve's
-    # iterations differ between machines (the same build of IPOPT, other floating-point paths; a 300 mm margin took 668
-    # on one, under 500 on another), and the case tests the diagnosis, not the machine
-    "guide_way": ("guide_way/smooth_redesign.toml", [("roller_margin = 2.0", "roller_margin = 50.0"),
+    # a pressure angle of at most 40 deg outside the fold window no smooth path here keeps (60 deg is met: the NLP
+    # holds the rule at the window's edges).  The cap is raised: the elastic re-solve's iterations differ between
+    # machines (the same build of IPOPT, other floating-point paths), and the case tests the diagnosis, not the
+    # machine.  (A 50 or 300 mm roller margin took 170-185 s here with the window's edges in the NLP.)
+    "guide_way": ("guide_way/smooth_redesign.toml", [("max_pressure_angle = 85.0", "max_pressure_angle = 40.0"),
                                                     ("[solver]\n", "[solver]\nmax_iter = 2000\n")],
-                  "no_undercut", 2),
+                  "pressure_angle", 2),
     # one chain speed cannot serve 0.4-0.62 m/s: the corner (beta 110, V_s 0.62) conflicts with (beta 70, V_s 0.4)
     "combing_chain": ("combing_chain/redesign_window_80_100.toml",
                       [("machine_speed = [0.4, 0.55]", "machine_speed = [0.4, 0.62]")], "window_top", 2),
@@ -143,9 +144,9 @@ def test_no_start_converged_is_failed_not_infeasible(tmp_path, kind):
 OUT_OF_REACH = {"clamp_cam", "comb_finger", "crank_rocker", "guide_tube", "picker_double_crank", "planting_fourbar",
                 "steering_linkage"}
 UNKNOWN_ALONE: set[str] = set()
-#: guide_way's re-solve alone is machine-dependent: on one machine a 300 mm margin's wandered off to a worse local
-#: minimum and proved nothing (None), on another it stayed out of reach.  Either is a true statement of its run; the
-#: test holds whichever it is to its meaning
+#: guide_way's re-solve alone has been machine-dependent: on one machine a 300 mm roller margin's wandered off to a
+#: worse local minimum and proved nothing (None), on another it stayed out of reach.  Any is a true statement of its
+#: run; the test holds whichever it is to its meaning (still missed alone: named out of reach; met alone: not)
 EITHER_ALONE = {"guide_way"}
 
 
@@ -162,7 +163,7 @@ def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
     assert set(elastic["alone"]) == set(elastic["relaxed"])
     if kind in EITHER_ALONE:
         alone = elastic["alone"][rule]
-        assert alone is None or (alone > 0 and rule in elastic["out_of_reach"]), elastic
+        assert alone is None or (alone > 0) == (rule in elastic["out_of_reach"]), elastic
     else:
         assert (kind in UNKNOWN_ALONE) == any(alone is None for alone in elastic["alone"].values()), elastic
         assert (kind in OUT_OF_REACH) == any(name.startswith(rule) for name in elastic["out_of_reach"]), elastic

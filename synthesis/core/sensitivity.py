@@ -145,6 +145,8 @@ class Sensitivity:
         problem was written in (rows x conditions, their units), each rule at the values it was resolved at
         (its scenario's), the auxiliaries following by the implicit function theorem through the structural rows
         (dg/dw = dg/dw|_a - dg/da (dh/da)^-1 dh/dw); None for a problem without operating conditions."""
+        if self.margins:        # derivatives of the rules' values, not of their rows' margins: not in this form
+            return None
         src = self.problem.operating_source
         if src is None or not src.names:
             return None

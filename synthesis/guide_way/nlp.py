@@ -14,6 +14,7 @@ relative to the fit's, so 1 when the fit already meets every rule.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -91,6 +92,7 @@ class GuideNLP:
 
             raise SpecError(f"{whose_path(spec)}, start 0: {exc}") from None
         self.masks = masks = scene.pressure_masks
+        self.edges = self._about_the_key_point(self.edges)
         # each edge of the fold window an auxiliary variable u_e, pinned by theta(M(u_e)) = the edge's arm angle
         # (a structural row) and held to the pressure-angle rule: the rule's largest value outside the window is
         # at its edge, which moves with the design (start 0's samples alone missed it by 0.8 deg)
@@ -102,8 +104,9 @@ class GuideNLP:
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
         structural = self._structural(control) + self._edge_rows(edge_arms)
-        lbx = np.concatenate([self.bounds[:, 0], [self.stretches[e.k].u[0] for e in self.edges]])
-        ubx = np.concatenate([self.bounds[:, 1], [self.stretches[e.k].u[-1] for e in self.edges]])
+        edge_lo, edge_hi = self._edge_bounds()
+        lbx = np.concatenate([self.bounds[:, 0], edge_lo])
+        ubx = np.concatenate([self.bounds[:, 1], edge_hi])
         self.problem = Problem("guide_way", ca.vertcat(x, u_edge), lbx, ubx, structural,
                                rules, ObjectiveParts(f=energy / fit.energy), hard_in_elastic=("reach",),
                                backoff=per_rule_backoff(lambda rule: BACKOFF.get(rule.name, 0.0)),
@@ -112,6 +115,27 @@ class GuideNLP:
                                structural_units=self._structural_units + ["rad"] * len(self.edges),
                                objective_unit="")
         self.compiled = CompiledNLP(self.problem, elastic)
+
+    def _about_the_key_point(self, edges: list) -> list:
+        """Start 0's window edges measured from the arm angle at the fold's key point, where the NLP's rows put the
+        fold (start 0's own path may miss it: a spec's control points), the turn nearest start 0's centre."""
+        keys = sc.spline_path(self.spec, None).keys
+        centre = sc.fold_arm_angles(keys.points[keys.index(keys.fold)], self.spec.arm.radius, self.spec.arm.claw)
+        before, _ = sc.fold_stretches(self.spec)
+        return [dataclasses.replace(e, centre_deg=sc.nearest_turn(math.degrees(centre[0 if e.k == before else 1]),
+                                                                  e.centre_deg)) for e in edges]
+
+    def _edge_bounds(self) -> tuple[list, list]:
+        """Each u_e within its stretch and, where start 0 has several edges on one stretch, between the midpoints
+        of its neighbours (each edge keeps its own root: the wrapped row has one at every crossing)."""
+        lo, hi = [], []
+        for i, e in enumerate(self.edges):
+            st = self.stretches[e.k].u
+            same = sorted(f.u for f in self.edges if f.k == e.k)
+            at = same.index(e.u)
+            lo.append(st[0] if at == 0 else 0.5 * (same[at - 1] + e.u))
+            hi.append(st[-1] if at == len(same) - 1 else 0.5 * (e.u + same[at + 1]))
+        return lo, hi
 
     def _edge_rows(self, edge_arms: list) -> list:
         """theta(M(u_e)) - centre = sign x window (rad, the difference wrapped to (-pi, pi]), per edge."""
@@ -132,9 +156,12 @@ class GuideNLP:
             _, edges = start_scene(self.spec, control_of(x_design, self.n), self.spec.solver.samples_per_segment)
         except SpecError:
             return u0
-        found = {(e.k, e.sign): e.u for e in edges}
         lo, hi = self.problem.lbx[2 * self.n:], self.problem.ubx[2 * self.n:]
-        return np.clip([found.get((e.k, e.sign), e.u) for e in self.edges], lo, hi)
+        u = []
+        for e, a, b in zip(self.edges, lo, hi):       # the root of the same stretch and side within its bounds
+            roots = [f.u for f in edges if (f.k, f.sign) == (e.k, e.sign) and a <= f.u <= b]
+            u.append(min(roots, key=lambda r: abs(r - e.u)) if roots else e.u)
+        return np.clip(u, lo, hi)
 
     def _structural(self, control) -> list:
         keys = sc.spline_path(self.spec, None).keys

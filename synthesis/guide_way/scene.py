@@ -61,7 +61,7 @@ def pressure_masks(spec, arms: list[Arm], fold_theta: tuple[float, float] | None
     if w > 0 and before >= 0:
         for side, (k, i) in enumerate(((before, -1), (after, 0))):
             th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
-            masks[k] = np.abs(th - _nearest_turn(math.degrees(fold_theta[side]), th[i])) >= w - EDGE_TOLERANCE
+            masks[k] = np.abs(th - nearest_turn(math.degrees(fold_theta[side]), th[i])) >= w - EDGE_TOLERANCE
     return masks
 
 
@@ -98,13 +98,13 @@ def window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float
     for side, (k, i) in enumerate(((before, -1), (after, 0))):
         st = stretches[k]
         th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
-        centre = _nearest_turn(math.degrees(fold_theta[side]), th[i])
+        centre = nearest_turn(math.degrees(fold_theta[side]), th[i])
         outside = np.abs(th - centre) - w
         crossings = np.flatnonzero(np.sign(outside[:-1]) * np.sign(outside[1:]) < 0)
 
         def beyond_edge(u: float, near: float) -> float:
             theta = math.degrees(float(evaluate(remake(k, np.array([u])), vector).theta[0]))
-            return abs(_nearest_turn(theta, near) - centre) - w
+            return abs(nearest_turn(theta, near) - centre) - w
 
         for j in crossings:
             try:
@@ -112,7 +112,8 @@ def window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float
                            rtol=4 * np.finfo(float).eps)
             except ValueError:    # a sample within rounding of the edge: one evaluation disagrees with the batch's
                 continue
-            edges.append(WindowEdge(k, float(u), centre, float(np.sign(th[j] - centre)),
+            out = j if outside[j] > 0 else j + 1          # the sample of the pair outside the window: its side
+            edges.append(WindowEdge(k, float(u), centre, float(np.sign(th[out] - centre)),
                                     (float(st.u[j]), float(st.u[j + 1]))))
     return edges
 
@@ -130,7 +131,7 @@ def with_window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[
     return arms
 
 
-def _nearest_turn(deg: float, near: float) -> float:
+def nearest_turn(deg: float, near: float) -> float:
     """``deg`` plus the whole turns that bring it nearest to ``near``."""
     return deg + 360.0 * round((near - deg) / 360.0)
 
