@@ -8,8 +8,8 @@ Structural rows (exact, no back-off): every key point, every key tangent's direc
 (|M'|^2 + M . M'' >= v_min^2 / 2 there) and each edge's arm angle, theta(M(u_e)) = the fold's
 -/+ the window.  Rules: the same sampled rules as the check
 (:func:`synthesis.guide_way.scene.rules_of` on the control points as CasADi symbols; the pressure-angle
-samples are those outside the fold window on the path of start 0, and the window's edges u_e).  Objective: the smoothness energy
-relative to the fit's, so 1 when the fit already meets every rule.
+samples are those outside the fold window on the path of start 0, and the window's edges u_e).
+Objective: the smoothness energy relative to the fit's, so 1 when the fit already meets every rule.
 """
 
 from __future__ import annotations
@@ -129,7 +129,7 @@ class GuideNLP:
         """Each u_e within its stretch and, where start 0 has several edges on one stretch, between the midpoints
         of its neighbours (each edge keeps its own root: the wrapped row has one at every crossing)."""
         lo, hi = [], []
-        for i, e in enumerate(self.edges):
+        for e in self.edges:
             st = self.stretches[e.k].u
             same = sorted(f.u for f in self.edges if f.k == e.k)
             at = same.index(e.u)
