@@ -73,11 +73,11 @@ UNREACHABLE = {
                          [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
     "fourbar_path": ("fourbar_path/picking_arc.toml",
                      [("transmission_angle = [40, 140]", "transmission_angle = [89.9, 90.1]")], "transmission_angle_min", 2),
-    # a pressure angle of at most 40 deg outside the fold window no smooth path here keeps (60 deg is met: the NLP
+    # a pressure angle of at most 30 deg outside the fold window no smooth path here keeps (60 deg is met: the NLP
     # holds the rule at the window's edges).  The cap is raised: the elastic re-solve's iterations differ between
     # machines (the same build of IPOPT, other floating-point paths), and the case tests the diagnosis, not the
-    # machine.  (A 50 or 300 mm roller margin took 170-185 s here with the window's edges in the NLP.)
-    "guide_way": ("guide_way/smooth_redesign.toml", [("max_pressure_angle = 85.0", "max_pressure_angle = 40.0"),
+    # machine.  (Here: 43 s; 40 deg 70 s, 50 deg 92 s; a 50 or 300 mm roller margin 170-185 s.)
+    "guide_way": ("guide_way/smooth_redesign.toml", [("max_pressure_angle = 85.0", "max_pressure_angle = 30.0"),
                                                     ("[solver]\n", "[solver]\nmax_iter = 2000\n")],
                   "pressure_angle", 2),
     # one chain speed cannot serve 0.4-0.62 m/s: the corner (beta 110, V_s 0.62) conflicts with (beta 70, V_s 0.4)

@@ -31,6 +31,12 @@ from synthesis.guide_way import spline as sp
 #: it is met with equality at the fold by construction)
 BACKOFF = {"reach": 0.0, "arm_turns_forward": 0.01, "no_undercut": 0.01, "pressure_angle": 0.02}
 
+#: IPOPT's monotone barrier: with the window's edges held, the adaptive one raised mu to 10 within a few iterations
+#: from the fit at some pressure-angle limits and lost the path (smooth_redesign from start 0: 82, 81.5 and 70 deg
+#: reached max_iter; monotone: 82 and 81.5 converge, 70 still does not; 85 ... 60 deg otherwise converge either
+#: way to the same smoothness; GUIDE_WAY.md)
+MU_STRATEGY = {"ipopt.mu_strategy": "monotone"}
+
 
 def names_of(n: int) -> list[str]:
     return [f"P{j}_{c}" for c in ("x", "y") for j in range(n)]
@@ -110,7 +116,7 @@ class GuideNLP:
         self.problem = Problem("guide_way", ca.vertcat(x, u_edge), lbx, ubx, structural,
                                rules, ObjectiveParts(f=energy / fit.energy), hard_in_elastic=("reach",),
                                backoff=per_rule_backoff(lambda rule: BACKOFF.get(rule.name, 0.0)),
-                               ipopt="standard", max_iter=spec.solver.max_iter,
+                               ipopt="standard", ipopt_options=MU_STRATEGY, max_iter=spec.solver.max_iter,
                                x_units=["mm"] * (2 * n) + [""] * len(self.edges),
                                structural_units=self._structural_units + ["rad"] * len(self.edges),
                                objective_unit="")
