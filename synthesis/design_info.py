@@ -65,6 +65,11 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
     return out
 
 
+def _fields_by_path(spec: BaseModel) -> dict:
+    """TOML path -> FieldInfo of every value in the model (:func:`walk_fields`)."""
+    return {path: field for path, field, _ in walk_fields(spec)}
+
+
 def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
     """design name -> {path, unit, bounds (None), free} of the list-valued design values a spec declares
     (``list_variables()``: name -> (TOML path, free); fourbar_path's crank_deg).  Apart from describe(): a list has
@@ -72,7 +77,7 @@ def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
     lists = getattr(spec, "list_variables", None)
     if not callable(lists):
         return {}
-    fields = {path: field for path, field, _ in walk_fields(spec)}
+    fields = _fields_by_path(spec)
     return {name: _entry(path, fields.get(path), None, free) for name, (path, free) in lists().items()}
 
 
@@ -85,7 +90,7 @@ def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str
 def describe_fixed(spec: BaseModel, paths: dict[str, str]) -> dict[str, dict[str, Any]]:
     """design name -> entry of a fixed number the spec holds at a TOML path (the picker's installation angles),
     its unit from that field's description."""
-    fields = {path: field for path, field, _ in walk_fields(spec)}
+    fields = _fields_by_path(spec)
     return {name: _entry(path, fields.get(path), None, False) for name, path in paths.items()}
 
 

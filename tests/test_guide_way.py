@@ -324,7 +324,7 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
     fit = fit_path(spec)
     samples = spec.solver.samples_per_segment
-    at_fit = sc.spline_scene(spec, samples, fit.control, window_edges=False).pressure_masks
+    at_fit = sc.spline_scene(spec, samples, fit.control, edge_samples=False).pressure_masks
     assert [int((~m).sum()) for m in at_fit] == [11, 12, 0, 0]
     nlp = GuideNLP(spec, fit)
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_fit))
@@ -338,13 +338,13 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
                                    for point in moved])
     given = validate(type(spec), data, prefix="guide_way")
     nlp = GuideNLP(given, fit)
-    at_start = sc.spline_scene(given, samples, moved, window_edges=False).pressure_masks
+    at_start = sc.spline_scene(given, samples, moved, edge_samples=False).pressure_masks
     assert [int((~m).sum()) for m in nlp.masks] == [8, 12, 0, 0]
     assert all(np.array_equal(a, b) for a, b in zip(nlp.masks, at_start))
     # this start's path misses the fold's key point (its own fold angle 134.9915 deg); the NLP's rows put the fold
     # on the key point, so its window's edges are measured from the key point's arm angle, 135 deg (an independent
     # review: they were start 0's, 0.0085 deg off the check's edges of any answer)
-    own = math.degrees(sc.spline_scene(given, samples, moved, window_edges=False).fold_theta[0])
+    own = math.degrees(sc.spline_scene(given, samples, moved, edge_samples=False).fold_theta[0])
     assert abs(own - 135.0) > 1e-3
     assert [e.centre_deg for e in nlp.edges] == pytest.approx([135.0, 135.0], abs=1e-9)
 
@@ -372,7 +372,7 @@ def test_the_nlp_holds_the_pressure_angle_at_the_fold_windows_edges_which_move_w
     assert out.return_status == "Solve_Succeeded"
     n = spec.spline.control_points
     control = control_of(out.raw.x[: 2 * n], n)
-    _, edges = sc.spline_window_edges(spec, spec.solver.samples_per_segment, control)
+    edges = sc.spline_scene(spec, spec.solver.samples_per_segment, control, edge_samples=False).edges
     assert [e.u for e in edges] == pytest.approx(list(out.raw.x[2 * n: 2 * n + 2]), abs=1e-9)
     checked = {r.record().name: r.record() for r in scene_for(spec, control).rules}
     assert checked["pressure_angle"].satisfied and checked["pressure_angle"].value <= 82.15

@@ -16,8 +16,8 @@ import numpy as np
 
 from constraints.base import Rule
 from constraints.cam import acceleration_rule, pressure_angle_rule, timing_rule, undercut_rule
-from synthesis.errors import AssemblyError
 from synthesis.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing
+from synthesis.errors import AssemblyError
 from synthesis.kinematics import cam_follower as cf
 from synthesis.kinematics.motion_laws import law as closed_form_law
 from synthesis.spec.clamp_cam import ClampCamSpec

@@ -68,7 +68,8 @@ def start_scene(spec, control: np.ndarray, samples: int):
     """(scene, window edges) of the path of ``control`` on the NLP's samples: the samples outside the fold window
     that the NLP holds the pressure-angle rule at (start 0's: the design box's init, the spec's control points,
     else the convex fit), as the check finds them on its path, and the window's exact edges."""
-    return sc.spline_window_edges(spec, samples, control)
+    scene = sc.spline_scene(spec, samples, control, edge_samples=False)
+    return scene, scene.edges
 
 
 class FixedGuide:
@@ -102,7 +103,7 @@ class GuideNLP:
         # each edge of the fold window an auxiliary variable u_e, pinned by theta(M(u_e)) = the edge's arm angle
         # (a structural row) and held to the pressure-angle rule: the rule's largest value outside the window is
         # at its edge, which moves with the design (start 0's samples alone missed it by 0.8 deg)
-        self.stretches = sc.spline_path(spec, control_of(self.init, n)).stretches(samples)
+        self.stretches = scene.spline.stretches(samples)
         u_edge = ca.SX.sym("u_edge", len(self.edges))
         edge_arms = [sc.symbolic_edge_arm(spec, control, self.stretches[e.k], u_edge[i])
                      for i, e in enumerate(self.edges)]

@@ -65,7 +65,7 @@ def pressure_masks(spec, arms: list[Arm], fold_theta: tuple[float, float] | None
     return masks
 
 
-#: a sample this close (deg) to the window's edge counts as outside: the edge samples :func:`with_window_edges`
+#: a sample this close (deg) to the window's edge counts as outside: the edge samples :func:`with_edge_samples`
 #: adds lie on it to the root finder's tolerance
 EDGE_TOLERANCE = 1e-9
 
@@ -79,7 +79,6 @@ class WindowEdge:
     u: float
     centre_deg: float
     sign: float
-    bracket: tuple[float, float]          # the two samples of the stretch the edge lies between
 
 
 def window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
@@ -113,18 +112,15 @@ def window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float
             except ValueError:    # a sample within rounding of the edge: one evaluation disagrees with the batch's
                 continue
             out = j if outside[j] > 0 else j + 1          # the sample of the pair outside the window: its side
-            edges.append(WindowEdge(k, float(u), centre, float(np.sign(th[out] - centre)),
-                                    (float(st.u[j]), float(st.u[j + 1]))))
+            edges.append(WindowEdge(k, float(u), centre, float(np.sign(th[out] - centre))))
     return edges
 
 
-def with_window_edges(spec, stretches: list, arms: list[Arm], fold_theta: tuple[float, float] | None,
-                      remake) -> list[Arm]:
+def with_edge_samples(spec, stretches: list, arms: list[Arm], edges: list[WindowEdge], remake) -> list[Arm]:
     """The arms of the fold's stretches with one more sample at each exact edge of the fold window (numeric
-    paths).  The pressure angle climbs towards 90 deg at the fold, so its largest value outside the window is at
-    the window's edge: between two samples it is missed (81.76 deg at a sample 0.16 deg inside the allowed side
-    against 81.80 deg at the edge).  ``remake(k, params)`` samples stretch ``k`` at other parameters."""
-    edges = window_edges(spec, stretches, arms, fold_theta, remake)
+    paths; ``edges`` from :func:`window_edges`).  The pressure angle climbs towards 90 deg at the fold, so its
+    largest value outside the window is at the window's edge: between two samples it is missed (81.76 deg at a
+    sample 0.16 deg inside the allowed side against 81.80 deg at the edge)."""
     arms, vector = list(arms), arm_of(spec)
     for k in sorted({e.k for e in edges}):
         arms[k] = evaluate(remake(k, np.union1d(stretches[k].u, [e.u for e in edges if e.k == k])), vector)
@@ -237,6 +233,8 @@ class Scene:
     notes: list[str] = field(default_factory=list)
     #: the arm angle (rad) at the fold, arriving and leaving (None without a fold)
     fold_theta: tuple[float, float] | None = None
+    #: the fold window's exact edges on the path (:func:`window_edges`)
+    edges: list = field(default_factory=list)
 
     @property
     def pressure_masks(self) -> list[np.ndarray]:
@@ -321,8 +319,10 @@ def conic_scene(spec, samples: int) -> Scene:
         fold = _fold_of(spec.fold, (float(m[0]), float(m[1])), tangents, spec.arm.radius, spec.arm.claw)
     # a conic piece ends on its key point: the arm angles there are its end samples'
     fold_theta = None if fold is None else (float(arms[k].theta[-1]), float(arms[k + 1].theta[0]))
-    arms = with_window_edges(spec, stretches, arms, fold_theta, lambda k, s: pieces[k].stretch_at(s))
-    return Scene(spec, arms, joints, fold, pieces=pieces, fold_theta=fold_theta)
+    remake = lambda k, s: pieces[k].stretch_at(s)      # noqa: E731
+    edges = window_edges(spec, stretches, arms, fold_theta, remake)
+    arms = with_edge_samples(spec, stretches, arms, edges, remake)
+    return Scene(spec, arms, joints, fold, pieces=pieces, fold_theta=fold_theta, edges=edges)
 
 
 def spline_path(spec, control) -> pth.SplinePath:
@@ -332,9 +332,9 @@ def spline_path(spec, control) -> pth.SplinePath:
     return pth.SplinePath(keys, control, s.control_points)
 
 
-def spline_scene(spec, samples: int, control: np.ndarray, window_edges: bool = True) -> Scene:
-    """``window_edges``: the fold window's exact edges added to the samples (the check and re-check); the NLP's
-    masks need the uniform samples its symbolic path has."""
+def spline_scene(spec, samples: int, control: np.ndarray, edge_samples: bool = True) -> Scene:
+    """``edge_samples``: the fold window's exact edges (:attr:`Scene.edges`) added to the samples (the check and
+    re-check); the NLP's masks need the uniform samples its symbolic path has."""
     path = spline_path(spec, np.asarray(control, float))
     arm = arm_of(spec)
     arms, stretches = [], path.stretches(samples)
@@ -351,21 +351,12 @@ def spline_scene(spec, samples: int, control: np.ndarray, window_edges: bool = T
     after = evaluate(path.near_fold(+1, pth.FOLD_OFFSET), arm)
     joints = [Joint(keys.fold, _extrapolated(before), _extrapolated(after))]
     fold_theta = fold_arm_angles(m, spec.arm.radius, spec.arm.claw)
-    if window_edges:
-        arms = with_window_edges(spec, stretches, arms, fold_theta,
-                                 lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u))
-    return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2), fold_theta=fold_theta)
-
-
-def spline_window_edges(spec, samples: int, control: np.ndarray) -> tuple[Scene, list[WindowEdge]]:
-    """The numeric scene on ``samples`` uniform samples per stretch (no edge samples added: the NLP's symbolic
-    path has these) and the exact edges of its fold window; SpecError when the arm cannot drive the path."""
-    scene = spline_scene(spec, samples, control, window_edges=False)
-    path = scene.spline
-    stretches = path.stretches(samples)
-    edges = window_edges(spec, stretches, scene.arms, scene.fold_theta,
-                         lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u))
-    return scene, edges
+    remake = lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u)      # noqa: E731
+    edges = window_edges(spec, stretches, arms, fold_theta, remake)
+    if edge_samples:
+        arms = with_edge_samples(spec, stretches, arms, edges, remake)
+    return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2), fold_theta=fold_theta,
+                 edges=edges)
 
 
 def symbolic_edge_arm(spec, control: ca.SX, stretch, u: ca.SX) -> Arm:

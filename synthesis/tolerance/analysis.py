@@ -48,9 +48,7 @@ class Linearised:
     #: the values each rule was resolved at (nominal, or its scenario's); None without
     operating: tuple | None = None
     operating_points: list | None = None
-    #: the rows are the margins of the rows the NLP holds each rule by (linearise(margins=True)), not its values
-    margins: bool = False
-    #: with values: the margins form too ((values, jacobian, slices)) where a rule's NLP rows are the rule itself
+    #: the margins form too ((values, jacobian, slices)) where a rule's NLP rows are the rule itself
     #: (Rule.rows_are_the_rule: an exact minimum, a max()'s branches): its worst case is read there, not at a sample
     #: off the exact minimum or on a max()'s kink, where the derivative of the value is another one
     held: tuple | None = None
@@ -60,9 +58,9 @@ class Linearised:
         return self.values[s], self.jacobian[s]
 
 
-def linearise(kind: Kind, spec, design: dict, seed: int = 0, margins: bool = False) -> Linearised:
-    """Values and dg/dd of every rule of ``spec`` at ``design`` (result.json keys, spec units); ``margins``: of the
-    margins of the rows the NLP holds each rule by instead (a robust solve's promise is on those rows)."""
+def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
+    """Values and dg/dd of every rule of ``spec`` at ``design`` (result.json keys, spec units), and of the margins
+    of the NLP's rows of the rules whose rows are the rule itself (``Linearised.held``)."""
     solving = kind.solver_side()
     aspec = fine(freed(spec))
     data = solving.prepare(aspec)
@@ -80,11 +78,11 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0, margins: bool = Fal
     x0[:dmap.n] = dmap.coordinates(d)
     if kind.name in ANSWER:            # the answer's own auxiliaries (fourbar_path's crank angles), where it has them
         x0, p = ANSWER[kind.name](design, x0, np.asarray(p, float), dmap.n)
-    sens = Sensitivity(compiled.problem, dmap.n, dmap.J, margins)
+    sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)
     held = None
-    if not margins and any(r.rows_are_the_rule for r in compiled.problem.rules):
+    if any(r.rows_are_the_rule for r in compiled.problem.rules):
         rows = Sensitivity(compiled.problem, dmap.n, dmap.J, True)
         at_rows = rows.at(x, p)
         held = (at_rows.values, at_rows.jacobian, rows.slices)
@@ -93,7 +91,7 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0, margins: bool = Fal
     ops = None if ops is None else (*ops, dict(src.nominal))
     return Linearised(dmap, {k: float(v) for k, v in zip(dmap.keys, d)}, list(compiled.problem.rules), sens.slices,
                       pt.values, pt.jacobian, ops, None if src is None else [dict(v) for _, v in src.rules],
-                      margins, held)
+                      held)
 
 
 def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
@@ -102,7 +100,7 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
     rows = []
     for k, rule in enumerate(lin.rules):
         values, J = lin.rule_jacobian(k)
-        lower, upper = (0.0, None) if lin.margins else (rule.lower, rule.upper)
+        lower, upper = rule.lower, rule.upper
         nominal, worst = linear_worst(values, lower, upper, J, box)
         i_nom = int(np.argmin(nominal))
         value, gradient = float(values[i_nom]), J[i_nom]          # the value at its worst sample, its derivative

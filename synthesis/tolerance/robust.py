@@ -209,10 +209,11 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: 
     is linearised in the NLP's, and its row says so: same sign, not the same number."""
     from synthesis.tolerance.analysis import linearise, stack_up
 
-    # the rows the NLP held (an exact minimum over a turn, each branch of a max()), as it held them: the rule's
-    # sampled values linearise otherwise (comb_finger's finger_clear_of_other_unit: -9.5e-6 mm at its samples, +1e-6
-    # on its exact row, +1.2e-5 at the box's worst corner)
-    lin = linearise(kind, spec, design, margins=True)
+    # a rule whose NLP rows are the rule itself (an exact minimum over a turn, each branch of a max()) is read on
+    # them, as the NLP held it (stack_up, Linearised.held): its sampled values linearise otherwise
+    # (comb_finger's finger_clear_of_other_unit: -9.5e-6 mm at its samples, +1e-6 on its exact row, +1.2e-5 at the
+    # box's worst corner)
+    lin = linearise(kind, spec, design)
     if list(lin.dmap.keys) != list(describe(spec)):     # the box is in the spec's order (RobustBuild checks the NLP)
         raise SpecError(f"{kind.name}: the analysis variables {lin.dmap.keys} are not the spec's {list(describe(spec))}")
     rows = []
@@ -247,7 +248,7 @@ def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list
     from synthesis.tolerance.analysis import linearise, stack_up
 
     tol = spec.tolerance
-    lin = linearise(kind, spec, design, margins=True)       # as the promise is read (_worst_case_records)
+    lin = linearise(kind, spec, design)
     box = box_of(lin.dmap, tol.length, tol.angle, dict(tol.variables))
     units = dict(zip(lin.dmap.keys, lin.dmap.units))
     widths = dict(zip(lin.dmap.keys, box))
