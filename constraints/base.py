@@ -52,6 +52,9 @@ class Rule:
     #: samples, one row per branch of a max()), not a rescaled or squared form: a robust solve's promise is read on
     #: them (synthesis.core.sensitivity.row_margins)
     rows_are_the_rule: bool = field(default=False, compare=False)
+    #: the rule's rows in a tolerance box, where ``nlp_rows`` pin an equality (a design condition stricter than the
+    #: rule's limits) that no box can hold at every corner: inequalities within the rule's own limits
+    box_rows: tuple = field(default=(), compare=False)
 
     def rows(self) -> tuple:
         return self.nlp_rows or ((self.expr, self.lower, self.upper),)
@@ -102,7 +105,7 @@ class RuleRecord:
 
 def limit_text(limit, ge: str = ">=", le: str = "<=", none: str = "-") -> str:
     """[lo, hi] as "[lo, hi]", ">= lo", "<= hi" or ``none`` (symbols replaceable, e.g. for HTML)."""
-    lo, hi = limit
+    lo, hi = (None if v is None else v + 0.0 for v in limit)      # + 0.0: a limit of -0.0 reads "0", not "-0"
     if lo is not None and hi is not None:
         return f"[{lo:g}, {hi:g}]"
     if lo is None and hi is None:

@@ -22,14 +22,13 @@ def _spread(times: Sequence):
 
 def landing_time_spread_rule(times: Sequence, limit: float, spacing: float, equalise: bool = True) -> Rule:
     """Latest minus earliest landing time of the tubes (s) <= limit.  With ``equalise`` the optimiser
-    is asked for exactly equal times (t_k - t_0 = 0), the paper's design condition; without, for
-    pairwise differences within the limit."""
-    if equalise:
-        rows = tuple((t - times[0], 0.0, 0.0) for t in times[1:])
-    else:
-        rows = tuple((times[i] - times[j], -limit, limit) for i in range(len(times)) for j in range(i + 1, len(times)))
+    is asked for exactly equal times (t_k - t_0 = 0), the paper's design condition, except in a tolerance box
+    (``box_rows``); without, for pairwise differences within the limit."""
+    within = tuple((times[i] - times[j], -limit, limit) for i in range(len(times)) for j in range(i + 1, len(times)))
+    rows = tuple((t - times[0], 0.0, 0.0) for t in times[1:]) if equalise else within
+    # in a tolerance box equal times cannot hold at every corner: there the rule's own limit is held
     return Rule("landing_time_spread", _spread(times), None, limit, "s", limit,
-                f"at row spacing {spacing:g} mm", nlp_rows=rows)
+                f"at row spacing {spacing:g} mm", nlp_rows=rows, box_rows=within if equalise else ())
 
 
 def spacing_error_rule(times_by_spacing: Sequence[Sequence], spacings: Sequence[float], forward_mm_s: float,

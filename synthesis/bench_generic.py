@@ -120,6 +120,12 @@ class TargetWatch:
         self._nlp = self._start = self._x0 = None
         self._stages: dict[int, Any] = {}
         self._last: tuple | None = None      # (iterate, its answer): an unchanged iterate is not checked again
+        #: start -> the largest miss of the NLP's equality rows by a peer's answer (its last stage's)
+        self.equality_miss: dict[int, float] = {}
+
+    def holds_equalities(self, start: int) -> bool:
+        """Whether start's answer holds the NLP's equality rows (IPOPT's always do: no miss recorded)."""
+        return self.equality_miss.get(start, 0.0) <= EQUALITY_TOL
 
     def now(self) -> float:
         """Seconds since the run's start, the checks left out."""
@@ -168,6 +174,8 @@ class TargetWatch:
         from synthesis.core.verdict import report_of
         from synthesis.errors import AgrisynthError
 
+        if equality_miss(compiled, w, p) > EQUALITY_TOL:
+            return False
         try:
             f = float(compiled.f_function(w, p))
 
@@ -189,6 +197,23 @@ class TargetWatch:
             return False
         self.add(at, objective)
         return objective <= self.target
+
+
+#: a peer's answer holds the NLP's equality rows to this (relative to max(1, |row value|)), as IPOPT's do: the
+#: re-check's rules may allow a band about a pinned value (crank_rocker: |K - K_required| <= 0.005) that the NLP
+#: holds exactly, and an SLSQP iterate inside the band beat IPOPT's exact optimum (gap 0.063 deg, a trial)
+EQUALITY_TOL = 1e-6
+
+
+def equality_miss(compiled, w, p) -> float:
+    """The largest miss of ``compiled``'s equality rows at w, relative to max(1, |row value|) (0: none)."""
+    lbg, ubg = np.asarray(compiled.t.lbg, float), np.asarray(compiled.t.ubg, float)
+    eq = np.isfinite(lbg) & (lbg == ubg)
+    if not eq.any():
+        return 0.0
+    g = np.asarray(compiled.g_function(w, p), float).ravel()[eq]
+    miss = np.abs(g - lbg[eq]) / np.maximum(1.0, np.abs(lbg[eq]))
+    return float(np.max(np.nan_to_num(miss, nan=np.inf)))
 
 
 _watch: ContextVar[TargetWatch | None] = ContextVar("agrisynth_bench_target_watch", default=None)
@@ -232,7 +257,8 @@ class _WatchedKind:
                 return own
 
             def stop(report) -> bool:
-                at_target = (report.satisfied and math.isfinite(report.outcome.objective)
+                at_target = (report.satisfied and watch.holds_equalities(report.outcome.start)
+                             and math.isfinite(report.outcome.objective)
                              and watch.sign * report.outcome.objective <= watch.target)
                 return at_target or (own is not None and own(report))
             return stop
@@ -265,6 +291,8 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
         def recording(compiled, start, w0, p):
             out = runner(compiled, start, w0, p)
             watch.finished_stage(compiled, out)
+            # the start's answer is its last stage's (a kind solving several NLPs in turn)
+            watch.equality_miss[start] = equality_miss(compiled, out.x, p)
             return out
     token = _watch.set(watch)
     try:
@@ -272,11 +300,14 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
             setting = Setting(spec, seed, solving.prepare(spec))
             sign = -1.0 if solving.maximise(setting) else 1.0
             watch.sign = sign
+
+            def holds(report) -> bool:       # every rule, and (a peer's) the NLP's equality rows
+                return report.satisfied and watch.holds_equalities(report.outcome.start)
             watch.recheck = lambda outcome: _recheck(solving, setting, outcome)
 
             def on_start(report, best) -> None:
-                if best.satisfied:
-                    watch.add(watch.now(), sign * best.outcome.objective)
+                if holds(report):            # add keeps the best so far: the run's best-so-far trace
+                    watch.add(watch.now(), sign * report.outcome.objective)
 
             run = run_multistart(_WatchedKind(kind, watch, stop_at_target and runner is not None), setting,
                                  starts=starts, workers=1, on_start=on_start)
@@ -284,6 +315,13 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
         _watch.reset(token)
     total = time.perf_counter() - t0 - watch.check_s
     best = run.best
+    if not holds(best):              # a peer's answer off the NLP's equality rows is not its answer
+        from synthesis.core.verdict import better
+
+        for report in run.reports:
+            if holds(report) and (not holds(best) or better(report, best, sign < 0)):
+                best = report
+    unheld = not holds(best) and best.satisfied
     ipopt_s = sum(r.outcome.wall_s for r in run.reports)
     objective = sign * best.outcome.objective
     iterations = [r.outcome.iterations for r in run.reports]
@@ -300,7 +338,10 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
     }
     if runner is not None:
         details |= {"target_checks": watch.checks, "target_check_s": watch.check_s,
-                    "stopped_at_target": watch.hit_s is not None and stop_at_target}
+                    "stopped_at_target": watch.hit_s is not None and stop_at_target,
+                    "equality_miss": max(watch.equality_miss.values(), default=0.0)}
+    if unheld:       # no start held them: its rules may pass, but it did not solve the NLP the others did
+        objective = math.inf
     return MethodRun(objective if math.isfinite(objective) else math.inf, best.worst_violation, watch.trace, details,
                      trace_satisfied=True, excluded_s=watch.check_s)
 

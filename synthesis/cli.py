@@ -17,7 +17,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from constraints.base import limit_text
-from synthesis.errors import AgrisynthError, SpecError
+from synthesis.errors import AgrisynthError, AssemblyError, SpecError
 from synthesis.terminal import PIPED_WIDTH
 
 LIBRARY = Path(__file__).resolve().parent.parent / "problems"
@@ -160,6 +160,7 @@ def check(spec: Path, out: Path, force: bool) -> None:
 
     interrupt.install()
     loaded = load_spec(spec)
+    _tolerance_names_known(loaded)
     _unit_notes(loaded)
     run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
     written = False
@@ -185,6 +186,46 @@ def check(spec: Path, out: Path, force: bool) -> None:
         if not written and not isinstance(exc, OutputError):
             run_folder.discard()
         raise
+
+
+def _staging_hint(folder: Path) -> str:
+    """A run killed outright (SIGKILL, power loss) leaves its starts in the staging folder beside the one it was to
+    become (OUT/.<name>.run-XXXX/, starts.jsonl): name it, newest first, so --resume can be given it."""
+    from synthesis.result import is_run_folder
+
+    folder = Path(folder)
+    staged = []
+    for p in folder.parent.glob(f".{folder.name}.run-*"):
+        try:                    # a solve's (a check's holds no starts); one may vanish as it is read
+            if is_run_folder(p) and (p / "starts.jsonl").is_file():
+                staged.append((p.stat().st_mtime, p))
+        except OSError:
+            continue
+    if not staged:
+        return ""
+    staged.sort(reverse=True)
+    return (f"; a solve that did not finish (killed, or still running) left its starts in {staged[0][1]}: give that "
+            f"folder to --resume" + (f" ({len(staged) - 1} older one(s) beside it)" if len(staged) > 1 else ""))
+
+
+def _unknown_design_variables(model, names: list[str], where: str) -> None:
+    """SpecError naming those of ``names`` that are no design variable of the spec (a variable's name in the kind's
+    NLP is taken too, as the analysis maps it: spec_keys); nothing is said of a kind that declares none."""
+    from synthesis.design_info import describe
+    from synthesis.tolerance.design import spec_keys
+
+    info = describe(model)
+    unknown = [n for n, key in zip(names, spec_keys(names, info)) if key not in info]
+    if info and unknown:
+        raise SpecError(f"{where}: unknown design variable {', '.join(unknown)} (known: {', '.join(info)})")
+
+
+def _tolerance_names_known(loaded) -> None:
+    """A [tolerance] variables entry naming no design variable is bad input in check too (solve and tolerance
+    refuse it; check ignored it)."""
+    tol = getattr(loaded.model, "tolerance", None)
+    if tol is not None and tol.variables:
+        _unknown_design_variables(loaded.model, list(tol.variables), f"{loaded.path}: tolerance.variables")
 
 
 def _check_summary(loaded, result, folder: Path, replaced: bool) -> None:
@@ -320,8 +361,6 @@ def _described(result, loaded):
 
 def _in_file(loaded, evaluate):
     """``evaluate(loaded)``; a design that cannot be evaluated (AssemblyError) is named with its spec file."""
-    from synthesis.errors import AssemblyError
-
     try:
         return evaluate(loaded)
     except AssemblyError as exc:
@@ -363,6 +402,21 @@ def _objectives_help() -> str:
     return "\n    ".join(lines)
 
 
+class _WholeNumber(click.IntRange):
+    """An integer option: click's IntRange calls '1e9' "not a valid integer range", which reads as if a range were
+    asked for; this says what is wanted and within which limits."""
+
+    name = "whole number"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str):
+            try:
+                int(value)
+            except ValueError:
+                self.fail(f"{value!r} is not a whole number ({self._describe_range()})", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 class _SolveCommand(click.Command):
     """`solve --help` lists every kind's objectives from the registry, read only when help is asked for
     (so an ordinary run imports no other kind's package)."""
@@ -397,12 +451,12 @@ def _scheduler(ctx, param, value: str | None) -> str | None:
               help="finish an interrupted run: the starts in RUN_DIR/starts.jsonl are not solved again and the "
                    "result is exactly the uninterrupted one; SPEC must be the same file and --starts/--seed (default: "
                    "that run's) the same settings (checked by sha256); the result replaces RUN_DIR")
-@click.option("--starts", type=click.IntRange(min=1, max=MAX_STARTS), default=None,
+@click.option("--starts", type=_WholeNumber(min=1, max=MAX_STARTS), default=None,
               help=f"multistart starts, at most {MAX_STARTS} (default: the spec's [solver] starts); "
                    f"start 0 is the spec's design")
-@click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None,
+@click.option("--seed", type=_WholeNumber(min=0, max=2**53), default=None,
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
-@click.option("--workers", type=click.IntRange(min=1, max=MAX_WORKERS), default=None,
+@click.option("--workers", type=_WholeNumber(min=1, max=MAX_WORKERS), default=None,
               help=f"parallel worker processes, at most {MAX_WORKERS} (default: all cores)")
 @click.option("--scheduler", default=None, metavar="ADDR", callback=_scheduler,
               help="run the starts on a dask.distributed cluster at tcp://host:port (the workers need agrisynth "
@@ -449,6 +503,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
     interrupt.install()
     loaded = load_spec(spec)
+    _tolerance_names_known(loaded)
     _unit_notes(loaded)
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     if scheduler is not None:       # a peer that is no dask scheduler: exit 2 now, within the connect timeout
@@ -460,7 +515,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     workers = min(workers or default_workers(), MAX_WORKERS)
     if resume is not None:
         if not is_run_folder(resume):
-            raise OutputError(f"--resume {resume}: not an agrisynth run folder")
+            raise OutputError(f"--resume {resume}: not an agrisynth run folder{_staging_hint(resume)}")
         earlier = startlog.settings_of(resume)      # --starts and --seed default to the interrupted run's
         starts = earlier.get("starts") if starts is None and isinstance(earlier.get("starts"), int) else starts
         seed = earlier.get("seed") if seed is None and isinstance(earlier.get("seed"), int) else seed
@@ -504,6 +559,12 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                     with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
                         solved = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
                                                 record=log_file.append, finished=finished)
+                except (SpecError, AssemblyError) as exc:
+                    # a spec the run's set-up cannot use (e.g. a guide_way key point the arm cannot reach) is
+                    # said as check says it: the file first
+                    if str(loaded.path) in str(exc):
+                        raise
+                    raise type(exc)(f"{loaded.path}: {exc}") from None
                 except core.Interrupted as exc:
                     log_file.close()
                     if exc.partial is not None:
@@ -586,7 +647,7 @@ def _solve_summary(kind, result, reports, baseline, workers: int, scheduler: str
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/studio"),
               show_default=True, help="the one folder the page writes into (saved specs, solve runs)")
-@click.option("--port", type=click.IntRange(min=0, max=65535), default=0, show_default=True,
+@click.option("--port", type=_WholeNumber(min=0, max=65535), default=0, show_default=True,
               help="port on 127.0.0.1 (0: any free one)")
 @click.option("--open", "open_browser", is_flag=True, help="open the page in the default browser")
 def studio(spec: Path, out: Path, port: int, open_browser: bool) -> None:
@@ -643,9 +704,9 @@ ANGLE_HALF_WIDTH = _HalfWidth(min=0, max=90)
 @click.option("--tol", "tols", multiple=True, metavar="NAME=VALUE",
               help="half-width for one design variable, in its own unit (repeatable; over --length/--angle and the "
                    "spec's [tolerance] entry of that variable)")
-@click.option("--samples", type=click.IntRange(min=0, max=1_000_000), default=None,
+@click.option("--samples", type=_WholeNumber(min=0, max=1_000_000), default=None,
               help="Monte-Carlo samples (default the spec's [tolerance] samples, else 1000)")
-@click.option("--seed", type=click.IntRange(min=0, max=2**53), default=None, help="Monte-Carlo seed (default 0)")
+@click.option("--seed", type=_WholeNumber(min=0, max=2**53), default=None, help="Monte-Carlo seed (default 0)")
 @click.option("--force", is_flag=True, help=FORCE_HELP.replace("OUT/<name>/", "OUT/<name>-tolerance/"))
 def tolerance(target: Path, out: Path, length: float | None, angle: float | None, tols: tuple[str, ...],
               samples: int | None, seed: int | None, force: bool) -> None:
@@ -659,8 +720,11 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     re-check grid and passes only if every rule holds at all of them.
     Exit 0 when the design and every Monte-Carlo sample pass every rule, 1 otherwise; with --samples 0
     (sensitivities and the linear stack-up only) exit 0 when the design passes every rule and every linear worst
-    case holds, 1 otherwise.  result.json holds these verdicts as rule rows (<rule>@monte_carlo: the share of
-    samples holding the rule; <rule>@tolerance: the linear worst margin), so `agrisynth compare` shows them.
+    case holds, 1 otherwise.  Either way each rule is re-checked at its linear worst corner, a design in the box:
+    missed there, it fails.
+    result.json holds these verdicts as rule rows (<rule>@monte_carlo: the share of samples holding the rule;
+    <rule>@tolerance: the linear worst margin; <rule>@linear_worst_corner: the rule missed at that corner), so
+    `agrisynth compare` shows them; a failed run prints the rows that failed.
     """
     from synthesis import kinds
     from synthesis.errors import SpecError
@@ -677,6 +741,7 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
             raise SpecError(_no_solved_design(target))
         target = target / "solved.toml"
     loaded = load_spec(target)
+    _tolerance_names_known(loaded)
     kind = kinds.solving_kind(loaded.kind)
     spec = loaded.model
     tol = spec.tolerance
@@ -684,15 +749,7 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     angle = angle if angle is not None else (tol.angle if tol else None)
     per_variable = {**(dict(tol.variables) if tol else {}), **given}
     if given:               # an unknown name is bad input, said before any analysis
-        from synthesis.design_info import describe
-        from synthesis.tolerance.design import spec_keys
-
-        info = describe(spec)
-        known = list(info)
-        # (a variable's name in the kind's NLP is taken too, as the analysis maps it: spec_keys)
-        unknown = [n for n, key in zip(given, spec_keys(list(given), info)) if key not in info]
-        if known and unknown:
-            raise SpecError(f"--tol: unknown design variable {', '.join(unknown)} (known: {', '.join(known)})")
+        _unknown_design_variables(spec, list(given), "--tol")
     if not (length or angle or any(per_variable.values())) and samples != 0:
         raise SpecError("tolerance: give --length and/or --angle (or a [tolerance] table in the spec)")
     samples = samples if samples is not None else (tol.samples if tol else 1000)
@@ -714,7 +771,10 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     # Monte-Carlo sample holding it (--samples 0: its linearised worst case in the box)
     from synthesis.tolerance.output import verdict_rows
 
-    if not all(r["satisfied"] for r in facts["nominal_rules"] + verdict_rows(facts)):
+    failed = [r for r in facts["nominal_rules"] + verdict_rows(facts) if not r["satisfied"]]
+    if failed:      # say which rows decide it: a table of 100 % passes may still hold a corner that breaks a rule
+        console.print("failed: " + "; ".join(escape(f"{r['name']} ({r['note']})" if r.get("note") else r["name"])
+                                             for r in failed), soft_wrap=True)
         sys.exit(1)
 
 
@@ -850,7 +910,7 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
               metavar="SPEC", help="a spec file to bench (repeatable; instead of its kind's default set)")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
-@click.option("--repeats", type=click.IntRange(min=1), default=None,
+@click.option("--repeats", type=_WholeNumber(min=1), default=None,
               help="runs of each IPOPT method per problem (median wall time) [default: 3; --quick: 1]")
 @click.option("--quick", is_flag=True, help="1 start, 1 run, sample counts x 0.5 and x 1, no peers, no reference "
                                             "solve, no extreme matrix, the first problem of each kind (a kind with "

@@ -1,6 +1,6 @@
 """``agrisynth compare``: several results of one kind side by side in one page, from result.json alone.
 
-Among the inputs may be the output of ``agrisynth bench`` (a folder with bench.json, or the file):
+Among the inputs may be the output of ``agrisynth bench`` (its --out folder, the bench/ folder in it, or bench.json):
 its error-against-run-time plot and table are added to the page.
 """
 
@@ -18,9 +18,20 @@ from synthesis.report.tables import Candidate, candidates
 from synthesis.result import atomic_write_text, load_result, open_run_folder
 
 
+def bench_file(path: Path) -> Path | None:
+    """The bench.json ``path`` names: the file, a folder holding it, or the folder `agrisynth bench --out` was
+    given (it writes OUT/bench/bench.json); None when ``path`` is no bench."""
+    if path.name == "bench.json":
+        return path
+    if path.is_dir() and not (path / "result.json").exists():
+        for candidate in (path / "bench.json", path / "bench" / "bench.json"):
+            if candidate.exists():
+                return candidate
+    return None
+
+
 def is_bench(path: Path) -> bool:
-    return path.name == "bench.json" or (path.is_dir() and (path / "bench.json").exists()
-                                          and not (path / "result.json").exists())
+    return bench_file(path) is not None
 
 
 def load_bench(path: Path) -> list[dict]:
@@ -28,7 +39,7 @@ def load_bench(path: Path) -> list[dict]:
     from synthesis.files import read_regular
     from synthesis.result import MAX_RESULT_BYTES, _no_constant
 
-    path = path if path.name == "bench.json" else path / "bench.json"
+    path = bench_file(path) or path / "bench.json"
     raw = read_regular(path, MAX_RESULT_BYTES, "bench.json", ResultError)
     try:
         data = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
@@ -87,6 +98,17 @@ def load_candidates(paths: list[Path]) -> list[Candidate]:
     return candidates(results, files)
 
 
+def _different_targets(cands: list[Candidate]) -> list[str]:
+    """A note when the candidates trace different target points (facts.targets: fourbar_path): their objectives,
+    distances to their own targets, are then not comparable, and a page of them side by side should say so."""
+    targets = [c.result.extra.get("targets") if isinstance(c.result.extra, dict) else None for c in cands]
+    if len(cands) < 2 or any(not isinstance(t, list) for t in targets) or all(t == targets[0] for t in targets):
+        return []
+    sizes = ", ".join(f"{c.label}: {len(t)}" for c, t in zip(cands, targets))
+    return [f"the candidates trace different target points ({sizes} points): each objective measures the distance to "
+            f"its own targets, so they do not compare"]
+
+
 def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None = None, *, force: bool = False,
                      folder=None) -> Path:
     """Write the folder ``out`` (compare.html and its figures) as a run folder (``.agrisynth-run``
@@ -98,6 +120,7 @@ def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None
     staging = folder.staging
     try:
         figures, notes = comparison_figures(cands, staging)
+        notes = _different_targets(cands) + notes
         if bench:
             from synthesis.bench import plot_error_vs_time
 

@@ -208,10 +208,13 @@ def entries(model: type[BaseModel], prefix: str = "") -> list[Entry]:
             continue
         text, numeric = type_text(field.annotation, field.metadata)
         desc = _one_line(field.description)
-        unit = " or ".join(units_in(desc)) if numeric else ""
+        # "... by backoff x 10 deg (dimensionless)": a factor whose description names the unit it multiplies
+        unit = " or ".join(units_in(desc)) if numeric and not desc.endswith(f"({DIMENSIONLESS})") else ""
+        documented = (field.json_schema_extra or {}).get("range", "") if isinstance(field.json_schema_extra,
+                                                                                    dict) else ""
         values.append(Entry(path, False, False, text, unit, default,
                             _range_text(field.metadata + _number_arm_meta(field.annotation),
-                                        "characters" if field.annotation is str else "item(s)"),
+                                        "characters" if field.annotation is str else "item(s)") or documented,
                             field.is_required(), desc, numeric))
     return values + sections
 

@@ -23,6 +23,8 @@ STUDIO_SPECS = {
     "steering_linkage": LIBRARY / "steering/steering_redesign_40.toml",
     "comb_finger": LIBRARY / "comb_finger/redesign_max_combing.toml",
     "combing_chain": LIBRARY / "combing_chain/redesign_window_80_100.toml",
+    # the wall angles of both tube pairs free (a trial: the page showed them fixed, "nothing free to solve for")
+    "guide_tube": LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml",
     "picker": LIBRARY / "picker/cai2020_picker.toml",
 }
 

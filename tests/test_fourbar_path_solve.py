@@ -407,3 +407,29 @@ def test_a_crossed_result_is_drawn_and_exported_on_its_own_assembly(tmp_path, mo
     rows = {row.name: row for row in design_rows(candidates([given, result]))}
     assert rows["branch (assembly)"].values == ["open", "crossed"]
     assert rows["branch (assembly)"].differs == [False, True] and not any(rows["r1"].differs)
+
+
+def test_two_targets_sharing_one_crank_angle_are_noted_on_the_sequence_rule():
+    """A trial: an ordered open S-curve, crank-rocker; the answer gave targets 0 and 1 (18.1 mm apart) crank angles
+    5.4e-9 deg apart: "satisfied", one coupler pose standing for both.  The sequence rule's note says so; distinct
+    angles (or two targets on one point) get no note."""
+    from synthesis.fourbar_path.rules import path_rules
+
+    points = [[40.0, 120.0], [51.54, 133.94], [63.08, 144.69], [74.62, 149.78], [86.15, 148.05]]
+    spec = validate(FourbarPathSpec, {"kind": "fourbar_path", "name": "s", "targets": {"points": points},
+                                      "linkage": {"r1": 100, "r2": 40, "r3": 110, "r4": 100, "rcx": 40, "rcy": 40,
+                                                  "x0": 60, "y0": 40, "theta0": 0, "branch": 1}},
+                    prefix="fourbar_path")
+    v = {"r1": 100.0, "r2": 40.0, "r3": 110.0, "r4": 100.0, "rcx": 40.0, "rcy": 40.0, "x0": 60.0, "y0": 40.0,
+         "theta0": 0.0}
+
+    def note(degrees, satisfied=True):
+        rules = {r.name: r for r in path_rules(spec, v, [math.radians(t) for t in degrees], 1.0, 4)}
+        assert rules["sequence"].record().satisfied == satisfied
+        return rules["sequence"].note
+
+    assert note([10.0, 10.0 + 5.4e-9, 30.0, 50.0, 70.0]) == (
+        "targets 0 and 1 (from 0) share one crank angle: one coupler pose stands for both, the order holding only "
+        "at its limit")
+    assert note([10.0, 20.0, 30.0, 50.0, 70.0]) is None
+    assert note([20.0, 10.0, 30.0, 50.0, 70.0], satisfied=False) is None      # out of order: the failure says it

@@ -436,7 +436,7 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
 
     proc = _run(["solve", str(written("fixed", fixed)), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert proc.stderr.strip() == ("error: guide_way: solve needs at least one free design variable (give one bounds, "
+    assert proc.stderr.strip() == (f"error: {tmp_path / 'fixed.toml'}: guide_way: solve needs at least one free design variable (give one bounds, "
                                    "e.g. [spline] control[0][0] = {init = ..., bounds = [lo, hi]}); every one is "
                                    "fixed, so use `agrisynth check`")
     with pytest.raises(SpecError) as err:
@@ -454,11 +454,11 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     assert line.startswith(f"error: {path}: [spline] control: segment ED: the arm cannot reach the claw tip at ")
     assert "lies outside [R - d, R + d] = [20.32, 259.7] mm" in line and "\n" not in line
     free_low = [p if j != 7 else [p[0], {"init": p[1], "bounds": [p[1] - 5.0, p[1] + 5.0]}] for j, p in enumerate(low)]
-    proc = _run(["solve", str(written("free_low", free_low)), "--starts", "1", "--workers", "1",
-                 "--out", str(tmp_path)])
+    free = written("free_low", free_low)
+    proc = _run(["solve", str(free), "--starts", "1", "--workers", "1", "--out", str(tmp_path)])
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
-    assert proc.stderr.strip().startswith("error: [spline] control, start 0: segment ED: the arm cannot reach the "
-                                          "claw tip")
+    assert proc.stderr.strip().startswith(f"error: {free}: [spline] control, start 0: segment ED: the arm cannot "
+                                          "reach the claw tip")
 
 
 def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_solve(tmp_path):
@@ -475,7 +475,7 @@ def test_a_key_point_the_claw_cannot_reach_is_bad_input_naming_it_in_check_and_s
     check = _run(["check", str(path), "--out", str(tmp_path / "c")])
     assert check.returncode == 2 and check.stderr.strip() == f"error: {path}: {said}"
     solve = _run(["solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")])
-    assert solve.returncode == 2 and solve.stderr.strip() == f"error: {said}"
+    assert solve.returncode == 2 and solve.stderr.strip() == f"error: {path}: {said}"    # the file first, as check
     assert not (tmp_path / "s").exists()
     # in process from here (the CLI's path is shown above): a fold point on the centre O has no direction to be
     # moved along: bad input, not a ZeroDivisionError
@@ -627,3 +627,46 @@ def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_pat
         data = json.loads((out / "liang_2z" / "result.json").read_text())
         rules[out.name] = {r["name"]: r["value"] for r in data["rules"]}
     assert rules["b"]["pressure_angle"] == rules["a"]["pressure_angle"]
+
+
+def test_a_start_the_arm_cannot_drive_is_moved_onto_the_key_points_and_towards_the_fit():
+    """A Latin-hypercube start (each of the 48 coordinates within `move` = 40 mm of the fit) misses the fold point D
+    on |OM| = R - d and dips inside that circle: IPOPT stopped at its first evaluation (Invalid_Number_Detected, 0
+    iterations; 4 of 6 starts at a 70 deg limit, where start 0 ends infeasible and no start then converged).  Such a
+    start is moved onto the key rows (linear in the control points) and pulled towards the fit until the arm drives
+    it (with 6 starts the 70 deg limit is met: start 3, smoothness 1.00983, GUIDE_WAY.md).  Checked independently of
+    the method: each start the arm can drive, within its bounds, through every key point; start 0 unchanged."""
+    from synthesis.core.executor import latin_hypercube_starts
+    from synthesis.errors import SpecError
+    from synthesis.guide_way import scene as sc
+    from synthesis.guide_way import spline as spl
+    from synthesis.guide_way.fit import fit_path
+    from synthesis.guide_way.nlp import GuideNLP, control_of
+
+    spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
+    nlp = GuideNLP(spec, fit_path(spec))
+    samples = spec.solver.samples_per_segment
+    starts = latin_hypercube_starts(nlp.bounds, nlp.init, 8, 0)
+
+    def drivable(x) -> bool:
+        try:
+            sc.spline_scene(spec, samples, control_of(x, nlp.n), edge_samples=False)
+        except SpecError:
+            return False
+        return True
+
+    assert np.array_equal(nlp.drivable_start(starts[0]), starts[0])
+    repaired = 0
+    keys = sc.spline_path(spec, None).keys
+    for x0 in starts[1:]:
+        x = nlp.drivable_start(x0)
+        assert drivable(x)
+        assert np.all(x >= nlp.bounds[:, 0]) and np.all(x <= nlp.bounds[:, 1])
+        if not drivable(x0):
+            repaired += 1
+            control = control_of(x, nlp.n)
+            for u, point in zip(keys.u, keys.points):       # the path through every key point
+                assert np.allclose(spl.basis(nlp.n, u) @ control, point, atol=1e-9)
+        else:
+            assert np.array_equal(x, x0)
+    assert repaired >= 4            # most Latin-hypercube starts of this box are not drivable as drawn

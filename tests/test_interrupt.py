@@ -140,6 +140,14 @@ def test_two_workers_stop_with_the_run_and_none_outlives_it(tmp_path, sig, code)
         assert result["status"] == "interrupted" and result["solver"]["starts_run"] >= 2
     else:       # SIGKILL: nothing could run, but every finished start is in the staging folder's starts.jsonl
         assert logged_starts(tmp_path) >= 2
+        # --resume of the folder the run was to become names that staging folder (a trial: "not an agrisynth run
+        # folder", the staging folder beside it unmentioned)
+        staged, = tmp_path.glob(f".{NAME}.run-*")
+        again = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(SPEC), "--resume",
+                                str(tmp_path / NAME)], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert again.returncode == 2 and again.stderr.strip() == (
+            f"error: --resume {tmp_path / NAME}: not an agrisynth run folder; a solve that did not finish (killed, or "
+            f"still running) left its starts in {staged}: give that folder to --resume")
 
 
 def test_in_process_interrupt_and_resume_give_the_uninterrupted_result_bit_for_bit():

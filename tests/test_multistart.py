@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -61,6 +62,20 @@ def test_best_in_start_order_keeps_the_earlier_of_equals():
     assert best_in_start_order(reports, maximise=True).outcome.start == 3
     infeasible = [rep(0, False, 1.0, 0.5), rep(1, False, 0.0, 0.2), rep(2, False, 0.0, 0.2)]
     assert best_in_start_order(infeasible, maximise=False).outcome.start == 1
+    # a trial: three starts held at the same bound miss 3.735006024336 to float noise (4e-13); the least violated
+    # was the one 4e-13 lower, objective 214350 mm^2 against 14569: violations within 1e-9 relative tie, and the
+    # objective decides (then the start index); a violation beyond the tie still decides alone
+    noise = [rep(1, False, 15000.0, 3.735006024336), rep(2, False, 214350.0, 3.735006024336 - 4e-13),
+             rep(3, False, 14569.0, 3.735006024336 + 3e-13)]
+    assert best_in_start_order(noise, maximise=False).outcome.start == 3
+    assert best_in_start_order(noise, maximise=True).outcome.start == 2
+    noise[1] = rep(2, False, 214350.0, 3.735006024336 * (1 - 2e-9))
+    assert best_in_start_order(noise, maximise=False).outcome.start == 2
+    # a design the model cannot evaluate (violation inf) comes after any finite violation, whatever the order and
+    # the objectives (the review: inf's tie width was inf, so the objective decided)
+    unevaluable = [rep(0, False, 1.0, math.inf), rep(1, False, 5.0, 0.5)]
+    assert best_in_start_order(unevaluable, maximise=False).outcome.start == 1
+    assert best_in_start_order(unevaluable[::-1], maximise=False).outcome.start == 1
 
 
 def test_among_tied_objectives_a_converged_start_wins():

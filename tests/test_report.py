@@ -136,6 +136,8 @@ def test_objective_text_says_when_a_value_could_not_be_measured():
     assert objective_text({"name": "sum_of_distances", "value": 0.0978123, "unit": "mm"}) == "sum_of_distances = 0.0978123 mm"
     assert objective_text({"name": "sum_of_distances", "value": None, "unit": "mm"}) == "sum_of_distances = not measured"
     assert objective_text(None) is None
+    # a pure number (guide_way's smoothness, unit "-") reads without a trailing "-"
+    assert objective_text({"name": "smoothness", "value": 0.98728, "unit": "-"}) == "smoothness = 0.98728"
 
 
 @pytest.mark.parametrize("edit, complaint", [
@@ -263,3 +265,84 @@ def test_operating_conditions_show_the_range_a_design_was_solved_over(runs):
     speed = base.extra["operation"]["forward_speed_m_s"]
     assert rows[("forward speed", "m/s")] == [speed, f"{speed:g} (nominal; over 0.5-0.75)"]
     assert rows[("crank speed", "r/min")][0] == rows[("crank speed", "r/min")][1]      # not a range: as it was
+
+
+def test_a_not_evaluated_cell_says_its_own_limit_where_it_differs_from_the_rows():
+    """A trial: a compare of two planting results whose collinearity limits differ (5 and 0.5 deg), the second not
+    evaluated there: its cell read only "not evaluated", under the row's limit (the first candidate's, <= 5)."""
+    from synthesis.report.page import _rule_cell
+    from synthesis.report.tables import RuleCell
+
+    own = RuleCell(None, [None, 0.5], None, None, False, "P1 never found")
+    assert "(limit &le; 0.5)" in _rule_cell(own, [None, 5.0])
+    assert "(limit" not in _rule_cell(own, [None, 0.5])
+
+
+def test_steering_lock_ranges_and_comb_finger_operation_are_operating_conditions():
+    """Steering designs evaluated over inside locks 0-27 and 0-40 deg were compared side by side with no word of
+    it, and a comb_finger page had no operating conditions (its machine speed and row spacing are top-level facts)."""
+    from conftest import LIBRARY
+    from synthesis import kinds
+    from synthesis.report.tables import candidates, operating_conditions
+    from synthesis.spec import load_spec
+
+    def checked(path):
+        loaded = load_spec(LIBRARY / path)
+        return kinds.checker(loaded.kind)(loaded)
+
+    steering = [checked(f"steering/steering_redesign_{lock}.toml") for lock in (27, 40)]
+    rows = {(label, unit): values for label, unit, values in operating_conditions(candidates(steering))}
+    assert rows[("inside locks evaluated, 0 to", "deg")] == [27.0, 40.0]
+    finger = checked("comb_finger/peanut_baseline.toml")
+    rows = {(label, unit): values for label, unit, values in operating_conditions(candidates([finger]))}
+    spec = load_spec(LIBRARY / "comb_finger/peanut_baseline.toml").model
+    assert rows[("machine speed", "m/s")] == [spec.operation.machine_speed]
+    assert rows[("row spacing", "mm")] == [spec.operation.row_spacing]
+
+
+def test_a_bench_is_found_in_the_folder_bench_was_given(tmp_path):
+    """`agrisynth bench --out OUT` writes OUT/bench/bench.json; `compare RESULT OUT` said "OUT/result.json: no such
+    result file".  OUT, OUT/bench and the file all name the bench; a run folder is never one."""
+    from synthesis.compare import bench_file, is_bench
+
+    (tmp_path / "out" / "bench").mkdir(parents=True)
+    file = tmp_path / "out" / "bench" / "bench.json"
+    file.write_text("{}")
+    for given in (tmp_path / "out", tmp_path / "out" / "bench", file):
+        assert bench_file(given) == file
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "result.json").write_text("{}")
+    (run / "bench.json").write_text("{}")
+    assert not is_bench(run) and not is_bench(tmp_path / "elsewhere")
+
+
+def test_candidates_tracing_different_targets_are_said_not_to_compare():
+    """A trial: fourbar_path results of 14 and 16 target points side by side, objectives included, no word."""
+    from synthesis.compare import _different_targets
+    from synthesis.report.tables import Candidate
+    from synthesis.result import Result
+
+    def cand(label, targets):
+        result = Result("fourbar_path", label, "0" * 64, "evaluated", {}, [], extra={"targets": targets})
+        return Candidate(label=label, result=result)
+
+    a, b = [[0.0, 0.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]
+    assert _different_targets([cand("a", a), cand("b", a)]) == []
+    assert _different_targets([cand("a", a), cand("b", b)]) == [
+        "the candidates trace different target points (a: 2, b: 3 points): each objective measures the distance to "
+        "its own targets, so they do not compare"]
+
+
+def test_a_check_beside_a_solve_says_it_has_no_objective():
+    """Two trials: compare of a published design's check beside a redesign showed "-" for its objective, read as a
+    number gone missing.  It says a check evaluates the rules only; checks alone show no objective row."""
+    from synthesis.report.tables import candidates, run_facts
+    from synthesis.result import Result
+
+    check = Result("crank_rocker", "published", "0" * 64, "evaluated", {"l7": 1.0}, [])
+    solve = Result("crank_rocker", "redesign", "1" * 64, "optimal", {"l7": 1.0}, [],
+                   objective={"name": "min_total_length", "value": 435.13, "unit": "mm"}, solver={"starts": 1})
+    facts = dict(run_facts(candidates([check, solve])))
+    assert facts["objective"] == ["none: a check evaluates the rules only", "min_total_length = 435.13 mm"]
+    assert "objective" not in dict(run_facts(candidates([check, check])))

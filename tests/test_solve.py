@@ -62,7 +62,9 @@ def test_redesign_satisfies_every_rule_when_rechecked_independently(example):
     # and the published design it started from did not satisfy them all
     base_rules, _ = evaluate(PlantingScene.from_spec(loaded.model), loaded.model.rules)
     assert not all(r.record().satisfied for r in base_rules)
-    assert result.baseline_design == loaded.model.design_values()
+    # with the assembly branch, the spec's in both designs (the design table showed "-" for the given one)
+    assert result.baseline_design == {**loaded.model.design_values(), "branch": loaded.model.arm.branch}
+    assert result.design["branch"] == result.baseline_design["branch"] == -1
     assert [r["start"] for r in result.starts] == list(range(loaded.model.solver.starts))
     assert set(result.extra["precision_points"]) == {"P1", "P2", "P3", "P4", "P5", "P6"}
 
@@ -196,7 +198,9 @@ def test_infeasible_rule_set_names_the_rules_out_of_reach():
     assert "Rules out of reach" in message and "Rules that conflict" not in message
     assert "planting_depth (misses its limit by 15 mm; still by 15 mm re-solved alone from there" in message
     assert "transmission_angle_min (misses its limit by 3.87 deg; still by 3.84 deg re-solved alone" in message
-    assert "entry_angle holds them back too (binding there)" in message
+    # named with what it holds back and by how much (not "them": nothing holds the depth back)
+    held = elastic["slacks"]["transmission_angle_min"] - elastic["alone"]["transmission_angle_min"]
+    assert f"entry_angle holds back transmission_angle_min by {held:.3g} deg of its 3.87 (binding there)" in message
     # the links the transmission corner asks for sit at their lower bounds: where wider bounds may help
     lower = {b["name"]: b["bound"] for b in elastic["at_bounds"] if b["side"] == "lower"}
     assert lower["l2"] == 31.5 and lower["l3"] == 67.5

@@ -14,6 +14,7 @@ import tomllib
 import pytest
 from click.testing import CliRunner
 
+from conftest import LIBRARY
 from synthesis import kinds, specref
 from synthesis.cli import cli
 from synthesis.spec import load_spec
@@ -146,3 +147,45 @@ def test_piped_problems_table_never_cuts_a_file_name():
     for path in sorted(specref.LIBRARY.rglob("*.toml")):
         assert str(path.relative_to(specref.LIBRARY)) in proc.stdout
     assert "…" not in proc.stdout
+
+
+def _documented_ranges(model):
+    """(TOML path, range text) of every design variable whose range a validator enforces (json_schema_extra)."""
+    from synthesis.design_info import walk_fields
+
+    return [(path, field.json_schema_extra["range"]) for path, field, _ in walk_fields(model)
+            if isinstance(field.json_schema_extra, dict) and "range" in field.json_schema_extra]
+
+
+def test_a_documented_range_is_the_one_the_loader_enforces(kind_name):
+    """The range column names "> 0" or ">= lo, <= hi" for the design variables a validator checks (a trial:
+    tillage's theta and a crank-rocker's links showed no range though the loader refused values outside one).
+    Beyond each stated limit the kind's example spec is refused, naming the field."""
+    import copy
+
+    from synthesis.errors import SpecError
+    from synthesis.spec.common import validate
+
+    kind, model = _kind(kind_name)
+    if kind.example is None:
+        pytest.skip(f"{kind_name}: no example spec")
+    path = LIBRARY / kind.example
+    loaded = load_spec(path)
+    data = tomllib.loads(path.read_text())
+    def table_at(root, dotted: str):         # "tubes[0]" -> root["tubes"][0]
+        node = root
+        for part in dotted.split("."):
+            key, _, index = part.partition("[")
+            node = node[key] if not index else node[key][int(index.rstrip("]"))]
+        return node
+
+    documented = _documented_ranges(loaded.model)
+    for field_path, text in documented:
+        section, name = field_path.rsplit(".", 1)
+        for bound in text.split(", "):
+            symbol, number = bound.split(" ")
+            limit = float(number)
+            edited = copy.deepcopy(data)
+            table_at(edited, section)[name] = {">": limit, ">=": limit - 1.0, "<=": limit + 1.0, "<": limit}[symbol]
+            with pytest.raises(SpecError, match=re.escape(name)):
+                validate(model, edited, prefix=kind_name)

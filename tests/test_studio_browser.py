@@ -324,3 +324,23 @@ def test_the_cam_page_turns_the_cam_against_its_roller(tmp_path, sync_playwright
         page.wait_for_function(f"() => document.querySelector(\"{cam}\").getAttribute('points') !== '{before}'",
                                timeout=10_000)
     assert not seen["left"] and not seen["errors"]
+
+
+def test_an_operating_range_s_verdict_line_names_the_nominal_point(tmp_path, sync_playwright):
+    """On an envelope spec the page's verdict is the nominal point's, and it says so (a trial: "every rule
+    satisfied" for a design that misses the entry angle at the range's top speed)."""
+    from conftest import LIBRARY
+
+    with running_studio(LIBRARY / "planting_arm/envelope_redesign_from_example1.toml", tmp_path / "studio") as studio, \
+            studio_page(sync_playwright, studio) as (page, seen):
+        wait_for_evaluations(page, 0)
+        verdict = page.text_content("#verdict")
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(LIBRARY / "planting_arm/envelope_redesign_from_example1.toml")
+    bad = len(kinds.checker(loaded.kind)(loaded).violated())          # what check says at the nominal point
+    said = f"{bad} violated" if bad else "every rule satisfied"
+    assert verdict == (f"{said} at the nominal operating point (forward_speed given as a range: this page evaluates "
+                       "the nominal value only; solve re-checks every rule over the range)")
+    assert not seen["errors"]

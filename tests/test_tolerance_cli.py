@@ -57,6 +57,24 @@ def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, optio
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+def test_a_half_width_that_reaches_no_design_variable_is_refused(tmp_path):
+    """guide_tube's design variables are its two wall angles: `--length 1` toleranced nothing and the report
+    showed an empty box's zero losses without a word.  Refused (exit 2), naming the variables and their units;
+    with --angle the same spec is analysed (a box of 0.5 deg on each wall)."""
+    spec = LIBRARY / "guide_tube" / "cai2020_tubes.toml"
+    run = cli_run("tolerance", str(spec), "--length", "1", "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert run.stderr.strip() == ("error: tolerance: the half-width (length 1 mm) applies to no design variable, so "
+                                  "the tolerance box is empty; the design variables: delta_I (deg), delta_II (deg)")
+    assert not (tmp_path / "cai2020_tubes-tolerance").exists()
+    run = cli_run("tolerance", str(spec), "--length", "1", "--angle", "0.5", "--samples", "0", "--out",
+                  str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    facts = strict_json(tmp_path / "cai2020_tubes-tolerance" / "result.json")["facts"]["tolerance"]
+    assert facts["tolerance"] == {"delta_I": {"half_width": 0.5, "unit": "deg"},
+                                  "delta_II": {"half_width": 0.5, "unit": "deg"}}
+
+
 @pytest.mark.parametrize("option, value", [("--length", "nan"), ("--length", "inf"), ("--angle", "nan"),
                                            ("--angle", "-0.1"), ("--length", "1e300"), ("--angle", "91")])
 def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_path, option, value):
@@ -340,3 +358,189 @@ def test_samples_outside_the_cams_domain_are_unevaluable_not_read_as_designs(tmp
         assert facts["monte_carlo"]["unevaluable"] == sum(bool(outside(d)) for d in draws) > 0
         cells = [c.strip() for c in (out / "opening_cam-tolerance" / "report.md").read_text().split("|")]
         assert "inf" not in cells and "-inf" not in cells and "nan" not in cells
+
+
+def test_guide_tube_equal_times_in_a_tolerance_box_hold_the_spread_limit_at_every_corner(tmp_path):
+    """With objective nearest or fastest the NLP pins equal landing times (t_k = t_0), an equality no tolerance box
+    can hold at its corners: the robust solve kept it as it was, so the spread limit was never held in the box and
+    the solve ended "failed", exit 3, with no box-scale estimate (trial: nearest, +-0.2 deg, 1 ms).  In a box the
+    rule's own limit is held at its linearised worst case (Rule.box_rows).  Checked without the linearisation: the
+    solved angles at the box's four corners, each evaluated by check, keep the spread within max_time_spread."""
+    from itertools import product
+
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+    from solving import spec_with
+
+    spec = spec_with(tmp_path, LIBRARY / "guide_tube" / "fastest_equal_time.toml",
+                     [('name = "fastest"', 'name = "nearest"'),
+                      ("[solver]", "[tolerance]\nangle = 0.2\nsamples = 50\n\n[solver]")])
+    run = cli_run("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    result = strict_json(tmp_path / "fastest_equal_time" / "result.json")
+    assert result["status"] == "optimal"
+    rows = {r["name"]: r for r in result["rules"]}
+    assert rows["landing_time_spread@tolerance"]["satisfied"]
+    solved = (tmp_path / "fastest_equal_time" / "solved.toml").read_text()
+    delta = result["design"]
+    spreads = []
+    for s1, s2 in product((-1, 1), repeat=2):
+        corner = {"delta_I": delta["delta_I"] + 0.2 * s1, "delta_II": delta["delta_II"] + 0.2 * s2}
+        text = solved
+        for name, value in zip(("I", "II"), corner.values()):
+            text = re.sub(rf'(name = "{name}"\n(?:[^\[]*?\n)*?angle = )[^\n]+', rf"\g<1>{value!r}", text, count=1)
+        path = tmp_path / f"corner_{s1}_{s2}.toml"
+        path.write_text(text)
+        checked = kinds.checker("guide_tube")(load_spec(path))
+        assert checked.design == pytest.approx(corner, abs=1e-12)
+        spreads.append(next(r for r in checked.rules if r["name"] == "landing_time_spread")["value"])
+    assert max(spreads) <= 0.001
+    assert max(spreads) > 0.0005         # the box moves the times: the limit is what holds the corners
+
+
+LOOP_TOL = """kind = "fourbar_path"
+name = "loop_tol"
+
+[targets]
+points = [[160.0, 150.0], [157.67, 171.65], [150.45, 179.43], [137.12, 183.64], [100.0, 185.0], [62.88, 183.64],
+          [49.55, 179.43], [42.33, 171.65], [40.0, 150.0], [42.33, 128.35], [49.55, 120.57], [62.88, 116.36],
+          [100.0, 115.0], [137.12, 116.36], [150.45, 120.57], [157.67, 128.35]]
+
+[linkage]
+r1 = 125.03952502879295
+r2 = 53.165064514960584
+r3 = 95.07636315595138
+r4 = 95.38712860553508
+rcx = 10.733852264397997
+rcy = 43.28018865251051
+x0 = 70.61847979236988
+y0 = 124.09422657494432
+theta0 = -76.36942581854638
+branch = 1
+
+[design]
+crank_deg = [87.080414654136, 113.92300860711048, 125.52504029038143, 140.13408794791758, 179.8803978529792,
+             219.67028380883747, 234.30980651853142, 245.9357262160097, 272.82992424311857, 305.128717627224,
+             317.6320468522306, 331.5096831253782, 359.9836281270053, 388.42410126073617, 402.27834115549064,
+             414.76977283423474]
+
+[rules]
+grashof = "crank_rocker"
+transmission_angle = [40, 140]
+order = true
+"""
+
+
+def test_samples_0_fails_a_rule_its_linear_worst_corner_breaks(tmp_path):
+    """A trial's solved loop (a crank-rocker, transmission angle within [40, 140] deg), box +-0.2 mm / +-0.2 deg:
+    the linear stack-up leaves transmission_angle_max +0.0179 deg, the rule re-checked at that corner misses by
+    0.0058 deg, and --samples 0 said pass, exit 0.  A corner is a design in the box: now the row fails (exit 1)
+    and says why.  Independently of the analysis: a crank-rocker's largest transmission angle is at the crank
+    along the frame, cos mu = (r3^2 + r4^2 - (r1 + r2)^2) / (2 r3 r4): 140.0058 deg at r1, r2 + 0.2 and r3, r4 - 0.2."""
+    spec = tmp_path / "loop_tol.toml"
+    spec.write_text(LOOP_TOL)
+    run = cli_run("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "0", "--out",
+                  str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 1, run.stdout + run.stderr
+    result = strict_json(tmp_path / "loop_tol-tolerance" / "result.json")
+    rows = {r["name"]: r for r in result["rules"]}
+    assert all(rows[n]["satisfied"] for n in rows if "@" not in n)           # the design itself passes
+    row = rows["transmission_angle_max@tolerance"]
+    assert row["margin"] == pytest.approx(0.01787, abs=2e-4) and not row["satisfied"]
+    r1, r2, r3, r4 = 125.03952502879295, 53.165064514960584, 95.07636315595138, 95.38712860553508
+    a, b, diagonal = r3 - 0.2, r4 - 0.2, r1 + r2 + 0.4
+    corner = math.degrees(math.acos((a ** 2 + b ** 2 - diagonal ** 2) / (2 * a * b)))
+    assert corner - 140.0 == pytest.approx(0.005813, abs=2e-5)
+    assert row["note"] == f"re-checked at that corner of the box the rule misses by {corner - 140.0:.4g} deg: a design " \
+                          "in the box breaks it"
+    assert [n for n, r in rows.items() if not r["satisfied"]] == ["transmission_angle_max@tolerance"]
+
+
+def test_a_robust_answer_missing_a_rule_at_its_linear_worst_corner_says_so():
+    """A trial: combing chain redesign_window_80_100 with chain_speed +-0.01 m/s: window_top held at its linear worst
+    case (+1e-7 deg), status optimal, while at that corner (one variable: the box's end) the top of the window is
+    100.0029 deg > 100.  The promise stays the linear one; the row and the run's note now say the corner misses."""
+    from synthesis.tolerance.robust import _row_note, _sampled_misses
+
+    row = {"name": "window_top", "unit": "deg", "corner_margin": -0.002875}
+    note = _row_note(row, "deg", holds=True)
+    assert note == ("re-checked at that corner of the box the rule misses by 0.002875 deg: the linear worst case "
+                    "holds, the rule curves beyond it")
+    assert _row_note(row, "deg", holds=False) is None              # a failed row: the failure says it
+    assert _row_note({**row, "corner_margin": 0.001}, "deg", holds=True) is None
+    worst = [{"name": "window_top@tolerance", "note": note}, {"name": "window_bottom@tolerance", "note": None}]
+    mc = {"samples": 300, "pass_rate": 298 / 300, "rules": {"window_top": {"pass_rate": 298 / 300}}}
+    said = _sampled_misses(mc, worst)
+    assert said.startswith("2 of 300 Monte-Carlo samples in the tolerance box miss a rule (window_top).")
+    assert said.endswith("Re-checked at its linear worst corner of the box, window_top misses (the rows say by how "
+                         "much): the linear worst case is what the solve holds, and the rule curves beyond it.")
+    # every sample passing (or none drawn), the corner alone is news
+    assert _sampled_misses({"samples": 0, "pass_rate": None}, worst).startswith("Re-checked at its linear worst")
+
+
+def test_a_rule_with_no_linear_driver_is_explained_as_such(tmp_path):
+    """The loop's sequence rule (free timing): its NLP rows move with the crank angles only, which the analysis holds
+    and the re-check finds anew per sample.  It read "in other terms (11.62 in the NLP's, 11.62 deg in the
+    re-check's)", the same numbers; now it says there is no linear driver and what the samples lose."""
+    spec = tmp_path / "loop_tol.toml"
+    spec.write_text(LOOP_TOL)
+    run = cli_run("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "40", "--out",
+                  str(tmp_path), cwd=tmp_path)
+    result = strict_json(tmp_path / "loop_tol-tolerance" / "result.json")
+    rows = {r["name"]: r for r in result["facts"]["tolerance"]["stack_up"]}
+    row = rows["sequence"]
+    assert row["linear_loss"] == 0
+    lost = row["recheck_margin"] - row["sampled_worst_margin"]
+    assert lost > 0
+    assert row["gap_explanation"] == (
+        "not compared: no linear driver (the rule's first derivatives in the design variables are 0: its NLP rows "
+        "move only with the NLP's own variables, e.g. free crank angles, which the re-check finds anew for each "
+        f"design, or the design sits at the rule's extremum); the samples lose {lost:.3g} deg")
+    # the review: with samples, transmission_angle_max's linear worst corner (140.0058 deg, a design in the box)
+    # was ignored and the run exited 0 on the samples' pass rates alone; it fails either way
+    verdict = {r["name"]: r for r in result["rules"]}
+    corner = verdict["transmission_angle_max@linear_worst_corner"]
+    assert not corner["satisfied"] and corner["margin"] == pytest.approx(-0.005813, abs=2e-5)
+    assert verdict["transmission_angle_max@monte_carlo"]["satisfied"]       # no sample came near that corner
+    assert run.returncode == 1, run.stdout + run.stderr
+    # and it says why (a table of 100 % passes exited 1 without a word: the second review)
+    assert "failed: transmission_angle_max@linear_worst_corner (misses by 0.005813 deg)" in " ".join(run.stdout.split())
+
+
+@pytest.mark.parametrize("entry, said", [
+    ("l7 = -0.1", "crank_rocker.tolerance.variables.l7: expected > 0, got -0.1"),
+    ("l7 = 2000", "crank_rocker.tolerance.variables.l7: expected <= 1000, got 2000"),
+    ("l99 = 0.1", "tolerance.variables: unknown design variable l99 (known: l7, l8, l9, l10)"),
+])
+def test_a_spec_s_per_variable_half_width_is_checked_as_the_option_is(tmp_path, entry, said):
+    """A trial: [tolerance] variables = {l7 = -0.1} passed check, crashed solve (ValueError, exit 1) and gave
+    tolerance a linear worst case better than the nominal; {l99 = 0.1} passed check while solve refused it.  Each is
+    bad input in every command (exit 2), named with the file, as --tol NAME=VALUE is."""
+    spec = tmp_path / "cr.toml"
+    spec.write_text((LIBRARY / "picker" / "crank_rocker_max_transmission.toml").read_text()
+                    + f"\n[tolerance]\nvariables = {{{entry}}}\n")
+    for command in (["check", str(spec)], ["solve", str(spec), "--starts", "1", "--workers", "1"],
+                    ["tolerance", str(spec), "--samples", "0"]):
+        run = cli_run(*command, "--out", str(tmp_path / "out"), cwd=tmp_path)
+        assert run.returncode == 2, (command, run.stdout + run.stderr)
+        line = run.stderr.strip()
+        assert line.startswith(f"error: {spec}") and said in line and "\n" not in line, (command, line)
+    assert not (tmp_path / "out").exists()
+
+
+def test_equal_times_in_a_tolerance_box_over_a_friction_range_are_held_at_each_scenario(tmp_path):
+    """The review of Rule.box_rows: an operating range fills its scenarios' values into a rule's rows, and the box
+    form was left with the symbol mu in it: IPOPT refused to start ("variables [mu] are free"), a traceback and exit
+    1.  Now each scenario's box rows are its own: the run ends with the verdict on its answer (here the box at the
+    range's high friction breaks the spread, exit 3, with the box scale that would hold)."""
+    from solving import spec_with
+
+    spec = spec_with(tmp_path, LIBRARY / "guide_tube" / "uniform_spacing_mu_envelope.toml",
+                     [('name = "uniform"', 'name = "nearest"'),
+                      ("[solver]", "[tolerance]\nangle = 0.2\nsamples = 0\n\n[solver]")])
+    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 3 and "Traceback" not in run.stderr, run.stdout + run.stderr
+    result = strict_json(tmp_path / "uniform_spacing_mu_envelope" / "result.json")
+    rows = {r["name"]: r for r in result["rules"]}
+    assert {"landing_time_spread@mu=0.4848@tolerance", "landing_time_spread@mu=0.7271@tolerance"} <= set(rows)
+    assert "the largest uniform scale these rules can be held at" in " ".join(run.stderr.split())

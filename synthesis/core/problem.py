@@ -248,10 +248,11 @@ class Problem:
         self.structural = list(rows_at(self.structural, nominal))
         rules, hard, sources = [], list(self.hard_in_elastic), []
         for rule in self.rules:
-            varies = any(depends(e) for e, _, _ in rule.rows()) or depends(rule.expr)
+            varies = (any(depends(e) for e, _, _ in (*rule.rows(), *rule.box_rows)) or depends(rule.expr))
             if not varies:
                 rules.append(dataclasses.replace(rule, expr=at(rule.expr, nominal),
-                                                 nlp_rows=rows_at(rule.nlp_rows, nominal)))
+                                                 nlp_rows=rows_at(rule.nlp_rows, nominal),
+                                                 box_rows=rows_at(rule.box_rows, nominal)))
                 sources.append((rule.expr, dict(nominal)))
                 continue
             for scenario in envelope.scenarios():
@@ -263,6 +264,7 @@ class Problem:
                     continue                # the rule does not depend on this scenario's other conditions
                 rules.append(dataclasses.replace(rule, name=name, expr=at(rule.expr, values),
                                                  nlp_rows=rows_at(rule.nlp_rows, values),
+                                                 box_rows=rows_at(rule.box_rows, values),
                                                  where=f"{rule.where}, {label}" if rule.where else label))
                 sources.append((rule.expr, values))
                 if rule.name in self.hard_in_elastic:
@@ -287,7 +289,7 @@ class Problem:
 
 def depends_on_one(rule: Rule, symbol: ca.SX) -> bool:
     """Whether any row (or the value) of ``rule`` depends on ``symbol``."""
-    exprs = [_sx(e) for e, _, _ in rule.rows()] + [_sx(rule.expr)]
+    exprs = [_sx(e) for e, _, _ in (*rule.rows(), *rule.box_rows)] + [_sx(rule.expr)]
     return any(e.numel() > 0 and ca.depends_on(ca.vec(e), symbol) for e in exprs)
 
 

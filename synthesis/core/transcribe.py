@@ -176,9 +176,15 @@ class Transcription:
         return self.problem.x.numel()
 
 
-def _backed_off(problem: Problem, rule) -> list[Row]:
+def _rows_of(rule, robust: bool) -> tuple:
+    """The rule's NLP rows; in a tolerance box its box form where it has one (an equality it pins, e.g. equal
+    landing times, cannot hold at every corner of a box)."""
+    return rule.box_rows if robust and rule.box_rows else rule.rows()
+
+
+def _backed_off(problem: Problem, rule, robust: bool = False) -> list[Row]:
     rows = []
-    for expr, lb, ub in rule.rows():
+    for expr, lb, ub in _rows_of(rule, robust):
         if lb is not None and ub is not None and lb == ub:
             rows.append((expr, lb, ub))
         else:
@@ -187,13 +193,14 @@ def _backed_off(problem: Problem, rule) -> list[Row]:
     return rows
 
 
-def _max_min_margin(problem: Problem, objective: MaxMinMargin, hold=lambda rule, rows: rows) -> ObjectiveParts:
+def _max_min_margin(problem: Problem, objective: MaxMinMargin, hold=lambda rule, rows: rows,
+                    robust: bool = False) -> ObjectiveParts:
     """max tau s.t. every backed-off rule row is at least tau x its rule's scale inside its limits (in the
     robust form: its linearised worst case in the tolerance box, ``hold``)."""
     tau = ca.SX.sym("min_normalised_margin")
     rows: list[Row] = []
     for rule in problem.rules:
-        for expr, lb, ub in hold(rule, _backed_off(problem, rule)):
+        for expr, lb, ub in hold(rule, _backed_off(problem, rule, robust)):
             if lb is not None and ub is not None and lb == ub:
                 continue          # an equality has no margin to maximise
             if lb is not None:
@@ -209,20 +216,21 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
     if tol is None and _tolerance_of.get() is not None:
         tol = _tolerance_of.get()(problem)
     robust = None if tol is None else _Robust(problem, tol)
-    hold = (lambda rule, rows: rows) if robust is None else robust.hold
+    in_box = robust is not None
+    hold = robust.hold if in_box else (lambda rule, rows: rows)
     hard = [elastic and rule.name in problem.hard_in_elastic for rule in problem.rules]
     g = _Rows()
-    held = set(problem.robust_structural) if robust is not None else set()
+    held = set(problem.robust_structural) if in_box else set()
     for i, row in enumerate(problem.structural):       # in their order: a nominal NLP's rows are as they were
         g.add(robust.hold_rows(f"structural_{i}", [row]) if i in held else [row])
     if elastic:
         slack = ca.SX.sym("slack", len(problem.rules))
         for k, rule in enumerate(problem.rules):
             if hard[k]:
-                g.add(hold(rule, rule.rows()), k)
+                g.add(hold(rule, _rows_of(rule, in_box)), k)
                 continue
             relax = rule.scale * slack[k]
-            for expr, lb, ub in hold(rule, rule.rows()):
+            for expr, lb, ub in hold(rule, _rows_of(rule, in_box)):
                 if lb is not None:
                     g.add([(expr + relax, lb, None)], k)
                 if ub is not None:
@@ -233,10 +241,10 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
         f = ca.sum1(slack)
     else:
         for k, rule in enumerate(problem.rules):
-            g.add(hold(rule, _backed_off(problem, rule)), k)
+            g.add(hold(rule, _backed_off(problem, rule, in_box)), k)
         objective = problem.objective
         if isinstance(objective, MaxMinMargin):
-            objective = _max_min_margin(problem, objective, hold)
+            objective = _max_min_margin(problem, objective, hold, in_box)
         g.add(objective.rows)
         extra, extra_lb, extra_ub = objective.extra, list(objective.extra_lb), list(objective.extra_ub)
         extra_init = np.array(objective.extra_init, dtype=float)

@@ -103,13 +103,20 @@ def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
     """Feasible first; among feasible ones the objective (ties within TIE: a start IPOPT finished at its full
     tolerances before one it did not -- the same design, but only the first makes the run's "optimal" true --
     then the lower start index);
-    among infeasible ones the smaller worst violation (ties: the lower start index), a start that
-    could not be solved at all last."""
+    among infeasible ones the smaller worst violation (ties within TIE -- starts held at the same bound miss
+    it alike, to float noise -- the objective, then the lower start index), a start that could not be solved at
+    all last."""
     if a.satisfied != b.satisfied:
         return a.satisfied
     if not a.satisfied:
-        return ((failure_of(a.outcome) is not None, a.worst_violation, a.outcome.start)
-                < (failure_of(b.outcome) is not None, b.worst_violation, b.outcome.start))
+        failed_a, failed_b = failure_of(a.outcome) is not None, failure_of(b.outcome) is not None
+        if failed_a != failed_b:
+            return failed_b
+        va, vb = a.worst_violation, b.worst_violation
+        if math.isfinite(va) != math.isfinite(vb):      # a design the model cannot evaluate (inf) comes after
+            return math.isfinite(va)
+        if math.isfinite(va) and abs(va - vb) > TIE * max(1.0, abs(va), abs(vb)):
+            return va < vb
     fa, fb = a.outcome.objective, b.outcome.objective
     if maximise:
         fa, fb = -fa, -fb
@@ -287,8 +294,11 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         holding = [name for name in elastic.conflicting if name not in relaxed]
         if len(out) == len(relaxed):
             which = "Rules out of reach"
-            against = (f"; {', '.join(holding)} {'holds' if len(holding) == 1 else 'hold'} them back too (binding "
-                       f"there)" if holding else "")
+            # only those held back, by how much of their miss: the rest is the bounds' or the mechanism's
+            held = [f"{name} by {elastic.slacks[name] - elastic.alone[name]:.3g}{unit(name)} of its "
+                    f"{elastic.slacks[name]:.3g}" for name in elastic.held_back]
+            against = (f"; {', '.join(holding)} {'holds' if len(holding) == 1 else 'hold'} back {', '.join(held)} "
+                       f"(binding there)" if holding and held else "")
         else:
             which = "Rules that conflict"
             against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""

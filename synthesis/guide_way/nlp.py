@@ -82,6 +82,10 @@ class FixedGuide:
         self.bounds = np.column_stack([self.init, self.init])
 
 
+#: how many times a start the arm cannot drive is pulled half-way towards start 0 (GuideNLP.drivable_start)
+PULLS = 6
+
+
 class GuideNLP:
     def __init__(self, spec, fit, elastic: bool = False):
         s = spec.spline
@@ -89,6 +93,7 @@ class GuideNLP:
         self.spec, self.n, self.fit = spec, n, fit
         self.names = names_of(n)
         self.init, self.bounds = design_box(spec, fit)
+        self.keys = sc.spline_path(spec, None).keys       # key points, tangents, the fold: read by several rows
         x = ca.SX.sym("P", 2 * n)
         control = control_of(x, n)
         samples = spec.solver.samples_per_segment
@@ -110,7 +115,9 @@ class GuideNLP:
         rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks, edge_arms)
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
-        structural = self._structural(control) + self._edge_rows(edge_arms)
+        key_rows = self._structural(control)
+        self._key_projection(x, key_rows)
+        structural = key_rows + self._edge_rows(control, edge_arms)
         edge_lo, edge_hi = self._edge_bounds()
         lbx = np.concatenate([self.bounds[:, 0], edge_lo])
         ubx = np.concatenate([self.bounds[:, 1], edge_hi])
@@ -126,11 +133,9 @@ class GuideNLP:
     def _about_the_key_point(self, edges: list) -> list:
         """Start 0's window edges measured from the arm angle at the fold's key point, where the NLP's rows put the
         fold (start 0's own path may miss it: a spec's control points), the turn nearest start 0's centre."""
-        keys = sc.spline_path(self.spec, None).keys
-        centre = sc.fold_arm_angles(keys.points[keys.index(keys.fold)], self.spec.arm.radius, self.spec.arm.claw)
-        before, _ = sc.fold_stretches(self.spec)
-        return [dataclasses.replace(e, centre_deg=sc.nearest_turn(math.degrees(centre[0 if e.k == before else 1]),
-                                                                  e.centre_deg)) for e in edges]
+        keys = self.keys
+        centre = math.degrees(sc.fold_direction(keys.points[keys.index(keys.fold)]))
+        return [dataclasses.replace(e, centre_deg=sc.nearest_turn(centre, e.centre_deg)) for e in edges]
 
     def _edge_bounds(self) -> tuple[list, list]:
         """Each u_e within its stretch and, where start 0 has several edges on one stretch, between the midpoints
@@ -144,24 +149,32 @@ class GuideNLP:
             hi.append(st[-1] if at == len(same) - 1 else 0.5 * (e.u + same[at + 1]))
         return lo, hi
 
-    def _edge_rows(self, edge_arms: list) -> list:
-        """theta(M(u_e)) - centre = sign x window (rad, the difference wrapped to (-pi, pi]), per edge."""
+    def _edge_rows(self, control, edge_arms: list) -> list:
+        """theta(M(u_e)) - centre = sign x window (rad, the difference wrapped to (-pi, pi]), per edge; the centre
+        the direction of the path's fold point (sc.fold_direction, as the re-check measures it): the key point's
+        where the key rows hold, and moving with the design off them, as a tolerance analysis perturbs it."""
         w = math.radians(self.spec.rules.fold_window)
+        keys = self.keys
+        fold = ca.mtimes(ca.DM(sp.basis(self.n, keys.u[keys.index(keys.fold)])), control)
+        centre = sc.fold_direction(fold)
         rows = []
         for e, arm in zip(self.edges, edge_arms):
-            d = arm.theta - math.radians(e.centre_deg)
+            d = arm.theta - centre
             rows.append((ca.atan2(ca.sin(d), ca.cos(d)) - e.sign * w, 0.0, 0.0))
         return rows
 
-    def edges_of(self, x_design: np.ndarray) -> np.ndarray:
-        """The fold window's edges u_e on the path of a start's design (start 0's where that path has not the
-        same edges or the arm cannot drive it), within their bounds."""
-        u0 = np.array([e.u for e in self.edges], float)
-        if not self.edges:
-            return u0
+    def _edges_at(self, x_design: np.ndarray) -> list | None:
+        """The fold window's edges on the path of a design (start_scene), None where the arm cannot drive it."""
         try:
-            _, edges = start_scene(self.spec, control_of(x_design, self.n), self.spec.solver.samples_per_segment)
+            return start_scene(self.spec, control_of(x_design, self.n), self.spec.solver.samples_per_segment)[1]
         except SpecError:
+            return None
+
+    def edges_of(self, edges: list | None) -> np.ndarray:
+        """The edge variables u_e of a start from the edges of its path (:meth:`_edges_at`): start 0's where that
+        path has not the same edges or the arm cannot drive it (None), within their bounds."""
+        u0 = np.array([e.u for e in self.edges], float)
+        if not self.edges or edges is None:
             return u0
         lo, hi = self.problem.lbx[2 * self.n:], self.problem.ubx[2 * self.n:]
         u = []
@@ -171,7 +184,7 @@ class GuideNLP:
         return np.clip(u, lo, hi)
 
     def _structural(self, control) -> list:
-        keys = sc.spline_path(self.spec, None).keys
+        keys = self.keys
         v_min = self.spec.spline.min_speed * keys.length
         rows, units = [], []
         for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
@@ -191,8 +204,47 @@ class GuideNLP:
         self._structural_units = units + [""]
         return rows
 
-    def solve(self, start: int, x0) -> StartOutcome:
+    def _key_projection(self, x: ca.SX, rows: list) -> None:
+        """The key-point and tangent rows are linear in the control points, A x = b: kept for
+        :meth:`drivable_start` (the free coordinates' columns only: a fixed coordinate is not moved)."""
+        linear = [e for e, lb, ub in rows if lb is not None and lb == ub]
+        A = np.array(ca.DM(ca.Function("key_rows_jacobian", [x], [ca.jacobian(ca.vertcat(*linear), x)])(
+            np.zeros(x.numel()))))
+        residual = ca.Function("key_rows", [x], [ca.vertcat(*linear)])
+        self._key_rows = (A, lambda v: np.array(residual(v)).ravel())
+
+    def drivable_start(self, x0: np.ndarray) -> np.ndarray:
+        """``x0``, or where the arm cannot drive its path, a start it can drive with the key points and tangents
+        met: ``x0`` moved onto the key rows (the least change of its free coordinates), then, while its path leaves
+        the arm's reach or the bounds, pulled half-way towards start 0 (at most PULLS times; every pull keeps the key
+        rows where start 0 meets them, as the fit does), else ``x0`` as it is.  A Latin-hypercube point of the
+        2 x control_points coordinates, each within `move` of the fit, misses the fold point D on |OM| = R - d and
+        dips inside that circle: IPOPT then stopped at its first evaluation (Invalid_Number_Detected, 0 iterations;
+        4 of 6 starts at a 70 deg limit).  A function of x0 alone: deterministic for any worker count."""
+        return self._drivable(x0)[0]
+
+    def _drivable(self, x0) -> tuple[np.ndarray, list | None]:
+        """(:meth:`drivable_start`, the edges of its path, None where the arm cannot drive it): one scene a start."""
         x0 = np.asarray(x0, float)
-        out = self.compiled.solve(start, np.concatenate([x0, self.edges_of(x0)]))
+        edges = self._edges_at(x0)
+        if edges is not None:           # as it is, where the arm can drive it (start 0, the spec's or the fit)
+            return x0, edges
+        A, residual = self._key_rows
+        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+        free = hi > lo
+        on_keys = x0.copy()
+        on_keys[free] -= np.linalg.lstsq(A[:, free], residual(x0), rcond=None)[0]
+        for k in range(PULLS + 1):
+            x = self.init + 0.5 ** k * (on_keys - self.init)
+            if np.any(x < lo) or np.any(x > hi):
+                continue
+            edges = self._edges_at(x)
+            if edges is not None:
+                return x, edges
+        return x0, None
+
+    def solve(self, start: int, x0) -> StartOutcome:
+        x0, edges = self._drivable(x0)
+        out = self.compiled.solve(start, np.concatenate([x0, self.edges_of(edges)]))
         design = dict(zip(self.names, (float(v) for v in out.x[: 2 * self.n])))
         return StartOutcome.of(out, design, out.objective)

@@ -142,6 +142,16 @@ def fold_arm_angles(m: tuple[float, float], R: float, d: float) -> tuple[float, 
     return gamma + pth.BRANCH["plus"] * phi, gamma + pth.BRANCH["minus"] * phi
 
 
+def fold_direction(m) -> float:
+    """The arm angle (rad) with the claw tip at a spline's fold point ``m`` on |OM| = R - d, where the arriving and
+    leaving arm angles meet (phi = 0 in :func:`fold_arm_angles`): the fold window's centre.  Off that circle the
+    two part by +-phi, a square root of the distance to it, with no derivative on the circle where every drivable
+    fold lies (a tolerance analysis perturbs the fold off it); the direction of OM is smooth there, and on the
+    circle it is both angles.  Floats or CasADi symbols."""
+    x, y = m[0], m[1]
+    return ca.atan2(-x, -y) if isinstance(x, (ca.SX, ca.MX)) else math.atan2(-x, -y)
+
+
 def rules_of(spec, arms: list[Arm], masks: list[np.ndarray], edge_arms: list[Arm] = ()) -> list:
     """The sampled rules over the controlled path (floats or symbols): reach, arm direction, undercut, pressure
     angle (at the samples ``masks`` keep: :attr:`Scene.pressure_masks` of the numeric path, and at the fold
@@ -235,10 +245,13 @@ class Scene:
     fold_theta: tuple[float, float] | None = None
     #: the fold window's exact edges on the path (:func:`window_edges`)
     edges: list = field(default_factory=list)
+    #: the arm angle (rad) the fold window is measured from, before and after the fold, when not ``fold_theta``
+    #: (a spline: :func:`fold_direction`)
+    window_centre: tuple[float, float] | None = None
 
     @property
     def pressure_masks(self) -> list[np.ndarray]:
-        return pressure_masks(self.spec, self.arms, self.fold_theta)
+        return pressure_masks(self.spec, self.arms, self.window_centre or self.fold_theta)
 
     @property
     def rules(self) -> list:
@@ -351,12 +364,13 @@ def spline_scene(spec, samples: int, control: np.ndarray, edge_samples: bool = T
     after = evaluate(path.near_fold(+1, pth.FOLD_OFFSET), arm)
     joints = [Joint(keys.fold, _extrapolated(before), _extrapolated(after))]
     fold_theta = fold_arm_angles(m, spec.arm.radius, spec.arm.claw)
+    window = (fold_direction(m),) * 2
     remake = lambda k, u: path.stretch_at(stretches[k].name, stretches[k].branch, u)      # noqa: E731
-    edges = window_edges(spec, stretches, arms, fold_theta, remake)
+    edges = window_edges(spec, stretches, arms, window, remake)
     if edge_samples:
         arms = with_edge_samples(spec, stretches, arms, edges, remake)
     return Scene(spec, arms, joints, fold, spline=path, closing=path.closing(samples * 2), fold_theta=fold_theta,
-                 edges=edges)
+                 edges=edges, window_centre=window)
 
 
 def symbolic_edge_arm(spec, control: ca.SX, stretch, u: ca.SX) -> Arm:

@@ -52,7 +52,9 @@ def finish(setting: Setting, best: StartReport) -> Finished:
         trajectory=trajectory(scene, pts),
         solver_settings={"samples_per_phase": spec.solver.samples_per_phase,
                          "samples_per_turn": spec.solver.samples_per_turn, "backoff": spec.solver.backoff},
-        rules=rules)
+        rules=rules,
+        # the assembly branch is the spec's in both (the design table showed "-" for the given one)
+        baseline_design={**spec.design_values(), "branch": spec.arm.branch})
 
 
 def baseline_rules(setting: Setting) -> list[dict] | None:

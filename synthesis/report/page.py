@@ -153,8 +153,9 @@ def _rule_cell(cell: RuleCell | None, row_limit) -> str:
     if cell.satisfied:
         return (f"<td class='num pass' title='{html.escape(cell.note)}'>{_num(cell.value)} "
                 f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
-    if cell.value is None:
-        return f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}</span></td>"
+    if cell.value is None:        # its own limit still said: the row's is the first candidate's
+        return (f"<td class='fail'>not evaluated <span class='note'>{html.escape(cell.note)}{own_limit}</span>"
+                f"</td>")
     return (f"<td class='num fail' title='{html.escape(cell.note)}'>{_num(cell.value)} FAIL"
             f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
 

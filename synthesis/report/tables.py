@@ -189,6 +189,12 @@ def _condition(key: str) -> tuple[str, str]:
     return key.replace("_", " "), ""
 
 
+#: conditions a kind's facts hold at their top level (comb_finger's operation; the lock range a steering linkage is
+#: evaluated over): candidates solved for different ones are not comparable without seeing them
+TOP_LEVEL_CONDITIONS = {"machine_speed_m_s": ("machine speed", "m/s"), "row_spacing_mm": ("row spacing", "mm"),
+                        "max_inside_lock_deg": ("inside locks evaluated, 0 to", "deg")}
+
+
 def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
     """(condition, unit, one value per candidate): the speeds and sizes a design was evaluated at (crank and
     forward speed, plant spacing, the vehicle ...), from the result's facts: its ``operation`` and ``vehicle``
@@ -213,6 +219,9 @@ def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
                         and not isinstance(value, bool)):
                     value = f"{value:g} (nominal; over {span[0]:g}-{span[1]:g})"
                 put(*_condition(key), i, value)
+        for key, (label, unit) in TOP_LEVEL_CONDITIONS.items():
+            if key in facts:
+                put(label, unit, i, facts[key])
         cam = facts.get("cam") or {}
         if "crank_speed_rpm" in cam:
             put("crank speed", "r/min", i, cam["crank_speed_rpm"])
@@ -254,7 +263,8 @@ def objective_text(objective: dict | None) -> str | None:
     value = objective.get("value")
     shown = "not measured" if value is None else f"{value:.6g}"
     unit = objective.get("unit")
-    return f"{objective.get('name') or 'objective'} = {shown}{f' {unit}' if unit and value is not None else ''}"
+    shows_unit = unit and unit not in ("-", "1") and value is not None       # a pure number reads without "-"
+    return f"{objective.get('name') or 'objective'} = {shown}{f' {unit}' if shows_unit else ''}"
 
 
 def _starts_text(solver: dict | None):
@@ -267,6 +277,16 @@ def _starts_text(solver: dict | None):
     return f"{asked} + 1 from the elastic re-solve" if ran > asked else f"{ran} of {asked} run"
 
 
+def _objectives(cands: list[Candidate]) -> list:
+    """Each candidate's objective; beside a solve's, a check's says it has none (DESIGN.md: a check evaluates the
+    rules only) rather than a bare dash a reader takes for a missing number."""
+    texts = [objective_text(c.result.objective) for c in cands]
+    if not any(texts):
+        return texts
+    return [t if t is not None or c.result.status != "evaluated" else "none: a check evaluates the rules only"
+            for t, c in zip(texts, cands)]
+
+
 def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
     """What a reader needs to reproduce each candidate: status, solver, starts, seed, versions, spec hash."""
     def solver(c: Candidate, key: str):
@@ -274,7 +294,7 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
 
     facts = [
         ("status", [c.result.status for c in cands]),
-        ("objective", [objective_text(c.result.objective) for c in cands]),
+        ("objective", _objectives(cands)),
         ("solver status", [solver(c, "return_status") for c in cands]),
         ("iterations", [solver(c, "iterations") for c in cands]),
         ("wall time (build and starts), s", [solver(c, "wall_s") for c in cands]),

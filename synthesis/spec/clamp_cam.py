@@ -14,8 +14,8 @@ from typing import Literal
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.spec.common import (
-    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
-    Sign, starts_field, value_of, within_a_turn,
+    WITHIN_A_TURN, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
+    max_iter_field, Sign, starts_field, value_of, within_a_turn,
 )
 
 KIND = "clamp_cam"
@@ -105,7 +105,7 @@ class MotionSection(StrictModel):
 
     law: Literal[LAWS] = Field("cycloidal", description="motion law of the rise and the return: " + ", ".join(LAWS))
     stroke: float = Field(gt=0, description="follower stroke: mm (translating) or deg of arm swing (oscillating)")
-    rise_start: Variable = Field(0.0, description="crank angle at which the rise begins, deg on the picker's "
+    rise_start: Variable = Field(0.0, json_schema_extra=WITHIN_A_TURN, description="crank angle at which the rise begins, deg on the picker's "
                                                   "clock (0 = the pick; -360 to 360)")
     _angles_within_a_turn = field_validator("rise_start")(within_a_turn)
     rise: Variable = Field(description="rise angle, deg")

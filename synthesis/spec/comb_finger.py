@@ -13,8 +13,8 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, max_iter_field, require_positive,
-    starts_field, value_of,
+    ACUTE, POSITIVE, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, max_iter_field,
+    require_positive_fields, starts_field, value_of,
 )
 
 KIND = "comb_finger"
@@ -24,17 +24,16 @@ NAMES = ("r", "e", "alpha", "omega", "b", "rho")
 class FingerSection(StrictModel):
     """A number fixes a value, ``{init, bounds}`` frees it for solve."""
 
-    r: Variable = Field(description="effective finger length r (hub R to tip), mm")
-    e: Variable = Field(description="eccentricity e of the finger hub R from the drum axis S, mm")
-    alpha: Variable = Field(description="depression angle alpha of S -> R toward the row, deg (0 < alpha < 90)")
-    omega: Variable = Field(description="finger (drum) speed omega, r/min")
-    b: Variable = Field(description="height of the drum axis S above the ground line, mm (eq 15's b)")
-    rho: Variable = Field(description="drum (cone) radius at the fingers' station, mm")
+    r: Variable = Field(json_schema_extra=POSITIVE, description="effective finger length r (hub R to tip), mm")
+    e: Variable = Field(json_schema_extra=POSITIVE, description="eccentricity e of the finger hub R from the drum axis S, mm")
+    alpha: Variable = Field(json_schema_extra=ACUTE, description="depression angle alpha of S -> R toward the row, deg (0 < alpha < 90)")
+    omega: Variable = Field(json_schema_extra=POSITIVE, description="finger (drum) speed omega, r/min")
+    b: Variable = Field(json_schema_extra=POSITIVE, description="height of the drum axis S above the ground line, mm (eq 15's b)")
+    rho: Variable = Field(json_schema_extra=POSITIVE, description="drum (cone) radius at the fingers' station, mm")
 
     @model_validator(mode="after")
     def _valid(self) -> "FingerSection":
-        for name in ("r", "e", "omega", "b", "rho"):
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         lo, hi = bounds_of(self.alpha)
         if not (0.0 < lo and hi < 90.0):
             raise ValueError(f"alpha: expected 0 < alpha < 90 deg (the hub below the drum axis, toward the row), "

@@ -15,8 +15,8 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
-    starts_field, value_of,
+    Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field, starts_field,
+    value_of,
 )
 
 KIND = "combing_chain"

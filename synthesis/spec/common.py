@@ -92,11 +92,32 @@ def is_free(v: Variable) -> bool:
     return isinstance(v, FreeVariable)
 
 
+def documented_range(text: str) -> dict:
+    """``json_schema_extra`` of a design variable whose range a validator enforces (its value, or a free one's
+    bounds), for the spec reference's range column: a Field bound cannot say it of a number-or-{init, bounds} field."""
+    return {"range": text}
+
+
+#: a length (or speed) > 0: the mark is also what :func:`require_positive_fields` checks
+POSITIVE = documented_range("> 0")
+#: an angle variable :func:`within_a_turn` checks; an angle strictly between 0 and 90 deg (its own validator)
+WITHIN_A_TURN = documented_range(">= -360, <= 360")
+ACUTE = documented_range("> 0, < 90")
+
+
 def require_positive(name: str, v: Variable) -> None:
     """ValueError naming ``name`` unless the value (or a free variable's lower bound) is > 0."""
     lo = v.bounds[0] if isinstance(v, FreeVariable) else v
     if lo <= 0:
         raise ValueError(f"{name}: expected > 0, got {lo:g}" + (" (lower bound)" if isinstance(v, FreeVariable) else ""))
+
+
+def require_positive_fields(model: BaseModel) -> None:
+    """:func:`require_positive` of every field marked :data:`POSITIVE`, in field order: the reference's range column
+    and the check read one mark."""
+    for name, field in type(model).model_fields.items():
+        if field.json_schema_extra == POSITIVE:
+            require_positive(field.alias or name, getattr(model, name))
 
 
 Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
@@ -112,8 +133,10 @@ class ToleranceSpec(StrictModel):
 
     length: float | None = Field(None, ge=0, le=1e3, description="half-width for every length, mm")
     angle: float | None = Field(None, ge=0, le=90, description="half-width for every angle, deg")
-    variables: dict[str, float] = Field(default_factory=dict,
-                                        description="half-width per design variable, in its own unit (mm for lengths, deg for angles); overrides length/angle")
+    # each > 0, as --tol NAME=VALUE takes it: a negative half-width made the linear worst case better than the nominal
+    variables: dict[str, Annotated[float, Field(gt=0, le=1e3)]] = Field(
+        default_factory=dict, description="half-width per design variable, in its own unit (mm for lengths, deg for "
+                                          "angles), each > 0 and <= 1000; overrides length/angle")
     samples: int = Field(2000, ge=0, le=1_000_000, description="Monte-Carlo samples of the answer")
     seed: int = Field(0, ge=0, le=2**53, description="Monte-Carlo seed")
 

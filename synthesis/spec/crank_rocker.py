@@ -12,7 +12,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    Sign, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
+    POSITIVE, Sign, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive_fields,
     starts_field, value_of,
 )
 
@@ -37,15 +37,14 @@ class Tolerances(StrictModel):
 class LinkSection(StrictModel):
     """Link lengths, mm. A number fixes a length, ``{init, bounds}`` frees it."""
 
-    l7: Variable = Field(description="crank GF, mm")
-    l8: Variable = Field(description="coupler FE, mm")
-    l9: Variable = Field(description="rocker AE, mm")
-    l10: Variable = Field(description="frame AG (crank pivot G to rocker pivot A), mm")
+    l7: Variable = Field(json_schema_extra=POSITIVE, description="crank GF, mm")
+    l8: Variable = Field(json_schema_extra=POSITIVE, description="coupler FE, mm")
+    l9: Variable = Field(json_schema_extra=POSITIVE, description="rocker AE, mm")
+    l10: Variable = Field(json_schema_extra=POSITIVE, description="frame AG (crank pivot G to rocker pivot A), mm")
 
     @model_validator(mode="after")
     def _lengths_positive(self) -> "LinkSection":
-        for name in ("l7", "l8", "l9", "l10"):
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         return self
 
 

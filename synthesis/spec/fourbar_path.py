@@ -30,12 +30,11 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, mo
 
 from synthesis.kinematics.coupler_point import VARIABLES
 from synthesis.spec.common import (
-    Sign, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field,
-    require_positive, starts_field, value_of, within_a_turn,
+    POSITIVE, Sign, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, documented_range,
+    is_free, max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
 )
 
 KIND = "fourbar_path"
-LENGTHS = ("r1", "r2", "r3", "r4")
 MAX_POINTS = 100
 #: largest |coordinate|, |bound|, |design value| (mm or deg): beyond it the squared errors and closure
 #: polynomials overflow a float (1e300^2), and no machine of the field is a kilometre long
@@ -107,16 +106,16 @@ class LinkageSection(StrictModel):
     """The four-bar and its coupler point: a number fixes a variable, ``{init, bounds}`` frees it (mm, deg).
     ``init`` is the given design: what ``check`` evaluates and the first start of ``solve``."""
 
-    r1: Variable = Field(description="frame O -> O', mm")
-    r2: Variable = Field(description="input crank O -> A, mm")
-    r3: Variable = Field(description="coupler A -> B, mm")
-    r4: Variable = Field(description="output link O' -> B, mm")
+    r1: Variable = Field(json_schema_extra=POSITIVE, description="frame O -> O', mm")
+    r2: Variable = Field(json_schema_extra=POSITIVE, description="input crank O -> A, mm")
+    r3: Variable = Field(json_schema_extra=POSITIVE, description="coupler A -> B, mm")
+    r4: Variable = Field(json_schema_extra=POSITIVE, description="output link O' -> B, mm")
     rcx: Variable = Field(description="coupler point along A -> B, mm")
     rcy: Variable = Field(description="coupler point normal to A -> B (90 deg counter-clockwise), mm")
     x0: Variable = Field(description="input pivot O, x, mm")
     y0: Variable = Field(description="input pivot O, y, mm")
     theta0: Variable = Field(FreeVariable(init=180.0, bounds=(0.0, 360.0)),
-                             description="frame angle, direction of O -> O' from +x, deg (-360 to 360)")
+                             json_schema_extra=documented_range(">= -360, <= 360"), description="frame angle, direction of O -> O' from +x, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("theta0")(within_a_turn)
     branch: Sign = Field(1, description="assembly: B left (+1, the open assembly) or right (-1, the "
                                                   "crossed one) of the line A -> O'")
@@ -130,8 +129,7 @@ class LinkageSection(StrictModel):
                 if abs(x) > MAX_MAGNITUDE:
                     raise ValueError(f"{what}: expected a magnitude of at most {MAX_MAGNITUDE:g} (mm or deg), "
                                      f"got {x:g}")
-        for name in LENGTHS:
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         return self
 
 

@@ -18,8 +18,8 @@ from pydantic import Field, PrivateAttr, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
-    FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of,
-    is_free, max_iter_field, starts_field, value_of,
+    ACUTE, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
+    max_iter_field, starts_field, value_of,
 )
 
 KIND = "guide_tube"
@@ -104,7 +104,7 @@ class TubeSection(StrictModel):
     l3: float = Field(gt=0, description="drop point - tube centre horizontal distance at rows.design_spacing, mm")
     h5: float = Field(ge=0, description="straight section length, mm")
     h6: float = Field(ge=0, description="tube outlet above the paddy, mm")
-    angle: Variable = Field(description="wall inclination delta to the horizontal, deg; a number fixes it, "
+    angle: Variable = Field(json_schema_extra=ACUTE, description="wall inclination delta to the horizontal, deg; a number fixes it, "
                                         "{init, bounds} frees it for solve")
     wall_gap: float | None = Field(None, gt=0, description="horizontal distance from the wall end to the vertical "
                                                           "wall, mm (ODE only; does not change the drop time)")
@@ -194,6 +194,10 @@ class GuideTubeSpec(ProblemSpec):
     def variables(self) -> dict[str, Variable]:
         """Every design variable (spec units) by its result.json name: the wall angle of each tube."""
         return {f"delta_{t.name}": t.angle for t in self.tubes}
+
+    def design_values(self) -> dict[str, float]:
+        """Every design variable's given value (deg) by its result.json name (the studio's sliders read them)."""
+        return {name: value_of(v) for name, v in self.variables().items()}
 
     def given_angles(self) -> dict[str, float]:
         """tube name -> the wall angle `check` evaluates (deg)."""

@@ -14,8 +14,8 @@ from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
 from synthesis.spec.common import (
-    MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive, starts_field, value_of,
-    within_a_turn,
+    POSITIVE, WITHIN_A_TURN, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive_fields,
+    starts_field, value_of, within_a_turn,
 )
 
 
@@ -47,20 +47,19 @@ class LinkageSection(StrictModel):
 
     x_a: Variable = Field(description="x of the crank pivot A, mm")
     y_a: Variable = Field(description="y of the crank pivot A, mm")
-    l1: Variable = Field(description="crank AB, mm")
-    l2: Variable = Field(description="coupler BC, mm")
-    l3: Variable = Field(description="follower CD, mm (printed as l4 = 186.7 in the paper's result list)")
-    l4: Variable = Field(description="frame AD, the shortest link, mm (printed as l3 = 45.9)")
-    l5: Variable = Field(description="clamp arm CM, mm")
-    phi3: Variable = Field(description="frame AD direction below the +x axis, deg (-360 to 360)")
-    phi4: Variable = Field(description="CM turned counter-clockwise from BC, deg (-360 to 360)")
+    l1: Variable = Field(json_schema_extra=POSITIVE, description="crank AB, mm")
+    l2: Variable = Field(json_schema_extra=POSITIVE, description="coupler BC, mm")
+    l3: Variable = Field(json_schema_extra=POSITIVE, description="follower CD, mm (printed as l4 = 186.7 in the paper's result list)")
+    l4: Variable = Field(json_schema_extra=POSITIVE, description="frame AD, the shortest link, mm (printed as l3 = 45.9)")
+    l5: Variable = Field(json_schema_extra=POSITIVE, description="clamp arm CM, mm")
+    phi3: Variable = Field(json_schema_extra=WITHIN_A_TURN, description="frame AD direction below the +x axis, deg (-360 to 360)")
+    phi4: Variable = Field(json_schema_extra=WITHIN_A_TURN, description="CM turned counter-clockwise from BC, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("phi3", "phi4")(within_a_turn)
     branch: Sign = Field(1, description="assembly: C left (+1) or right (-1) of the line B -> D")
 
     @model_validator(mode="after")
     def _lengths_positive(self) -> "LinkageSection":
-        for name in ("l1", "l2", "l3", "l4", "l5"):
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         return self
 
 
@@ -85,7 +84,7 @@ class PickerSolver(MultistartSettings):
     samples: int = Field(26, ge=2, le=2000, description="crank angles over the working swing for the transmission angle")
     max_iter: int = Field(3000, ge=1, description="IPOPT iteration limit per start and stage")
     backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission limit by "
-                                                             "backoff x 10 deg, so it holds between samples too")
+                                                             "backoff x 10 deg, so it holds between samples too (dimensionless)")
 
 
 class PickerDoubleCrankSpec(ProblemSpec):

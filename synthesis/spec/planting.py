@@ -17,8 +17,8 @@ from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
-    Interval, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, max_iter_field, require_positive,
-    starts_field, value_of, within_a_turn,
+    POSITIVE, WITHIN_A_TURN, Interval, documented_range, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
+    max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
 )
 
 KIND = "planting_fourbar"
@@ -27,13 +27,13 @@ KIND = "planting_fourbar"
 class ArmSection(StrictModel):
     """Linkage (seed 000 Table 1 symbols). A number fixes a variable, {init, bounds} frees it."""
 
-    l1: Variable = Field(description="frame O'O, mm")
-    l2: Variable = Field(description="crank OA, mm")
-    l3: Variable = Field(description="coupler AB, mm")
-    l4: Variable = Field(description="rocker O'B, mm")
-    l5: Variable = Field(description="claw arm AC (A to claw tip C), mm")
-    zeta: Variable = Field(description="frame angle: direction of O -> O' from the +X axis, deg (-360 to 360)")
-    phi: Variable = Field(description="claw angle: AC is AB turned clockwise by phi, deg (-360 to 360)")
+    l1: Variable = Field(json_schema_extra=POSITIVE, description="frame O'O, mm")
+    l2: Variable = Field(json_schema_extra=POSITIVE, description="crank OA, mm")
+    l3: Variable = Field(json_schema_extra=POSITIVE, description="coupler AB, mm")
+    l4: Variable = Field(json_schema_extra=POSITIVE, description="rocker O'B, mm")
+    l5: Variable = Field(json_schema_extra=POSITIVE, description="claw arm AC (A to claw tip C), mm")
+    zeta: Variable = Field(json_schema_extra=documented_range(">= -360, <= 360"), description="frame angle: direction of O -> O' from the +X axis, deg (-360 to 360)")
+    phi: Variable = Field(json_schema_extra=documented_range(">= -360, <= 360"), description="claw angle: AC is AB turned clockwise by phi, deg (-360 to 360)")
     _angles_within_a_turn = field_validator("zeta", "phi")(within_a_turn)
     branch: Sign = Field(-1, description="assembly: B right (-1) or left (+1) of the line A -> O'")
     tray_tilt: Literal["backward", "forward"] | None = Field(
@@ -41,8 +41,7 @@ class ArmSection(StrictModel):
 
     @model_validator(mode="after")
     def _lengths_positive(self) -> "ArmSection":
-        for name in ("l1", "l2", "l3", "l4", "l5"):
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         return self
 
 
@@ -51,7 +50,7 @@ class SeedbedSection(StrictModel):
 
     x: Variable = Field(description="X of a point on the seedbed bottom (tray surface), mm from the crank pivot O")
     y: Variable = Field(description="Y of that point, mm")
-    tilt: Variable = Field(description="direction of the tray surface from the +X axis, deg; "
+    tilt: Variable = Field(json_schema_extra=WITHIN_A_TURN, description="direction of the tray surface from the +X axis, deg; "
                                        "the seedlings stand on its upper side")
     thickness: float = Field(22.0, gt=0, description="seedbed (mat) thickness P2-P3 level, mm (seed 000: 22)")
     seedling_height: float = Field(110.0, gt=0, description="seedling top above the seedbed bottom, mm (seed 000: 110)")

@@ -15,8 +15,8 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
-    starts_field, value_of,
+    ACUTE, POSITIVE, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
+    require_positive_fields, starts_field, value_of,
 )
 
 KIND = "steering_linkage"
@@ -40,14 +40,14 @@ class Vehicle(StrictModel):
 class Trapezoid(StrictModel):
     """The steering arms; a number fixes a value, ``{init, bounds}`` frees it."""
 
-    arm_length: Variable = Field(description="steering-arm length r (kingpin to tie-rod joint), mm")
-    base_angle: Variable = Field(description="base angle gamma between arm and axle line, deg, 0 < gamma < 90 (arms "
+    arm_length: Variable = Field(json_schema_extra=POSITIVE, description="steering-arm length r (kingpin to tie-rod joint), mm")
+    base_angle: Variable = Field(json_schema_extra=ACUTE, description="base angle gamma between arm and axle line, deg, 0 < gamma < 90 (arms "
                                              "point rearward and inward; towards 90 the arms grow parallel and the "
                                              "Ackermann effect vanishes)")
 
     @model_validator(mode="after")
     def _ranges(self) -> "Trapezoid":
-        require_positive("arm_length", self.arm_length)
+        require_positive_fields(self)
         for lo, hi in (_range(self.base_angle),):
             if not (0.0 < lo and hi < 90.0):
                 raise ValueError(f"base_angle: expected 0 < base_angle < 90 deg, got {_text(self.base_angle)}")
@@ -128,7 +128,7 @@ class SolverSection(MultistartSettings):
     samples: int = Field(40, ge=4, le=2000, description="inside locks sampled over 0 .. max_inside_lock (the "
                                                         "re-check uses 10x as many)")
     backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission-angle "
-                                                            "limits by backoff x 10 deg, so they hold between samples")
+                                                            "limits by backoff x 10 deg, so they hold between samples (dimensionless)")
     max_iter: int = max_iter_field(500)
 
 

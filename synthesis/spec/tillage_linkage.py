@@ -14,8 +14,8 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import (
-    FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive,
-    starts_field, value_of,
+    POSITIVE, FreeVariable, documented_range, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
+    require_positive_fields, starts_field, value_of,
 )
 
 KIND = "tillage_linkage"
@@ -29,16 +29,16 @@ def _range(v: Variable) -> tuple[float, float]:
 class Linkage(StrictModel):
     """The linkage (seed 002 eq 3-11). A number fixes a value, ``{init, bounds}`` frees it."""
 
-    a: Variable = Field(description="crank radius AB on the flywheel, mm")
-    b: Variable = Field(description="distance AC from the flywheel centre A to the roller pair C, mm")
-    c: Variable = Field(description="tillage bar length BD, mm")
-    theta: Variable = Field(description="depression angle of C seen from A, deg (A lies up and ahead of C)")
-    height_c: Variable = Field(description="height of the roller pair C above the ground, mm")
+    a: Variable = Field(json_schema_extra=POSITIVE, description="crank radius AB on the flywheel, mm")
+    b: Variable = Field(json_schema_extra=POSITIVE, description="distance AC from the flywheel centre A to the roller pair C, mm")
+    c: Variable = Field(json_schema_extra=POSITIVE, description="tillage bar length BD, mm")
+    theta: Variable = Field(json_schema_extra=documented_range(">= -30, <= 89"),
+                            description="depression angle of C seen from A, deg (A lies up and ahead of C)")
+    height_c: Variable = Field(json_schema_extra=POSITIVE, description="height of the roller pair C above the ground, mm")
 
     @model_validator(mode="after")
     def _ranges(self) -> "Linkage":
-        for name in ("a", "b", "c", "height_c"):
-            require_positive(name, getattr(self, name))
+        require_positive_fields(self)
         lo, hi = _range(self.theta)
         if not (-30.0 <= lo and hi <= 89.0):
             raise ValueError(f"theta: expected -30 <= theta <= 89 deg, got {lo:g}" + ("" if lo == hi else f" .. {hi:g}"))
@@ -93,7 +93,7 @@ class SolverSection(MultistartSettings):
     soil_samples: int = Field(24, ge=3, le=2000, description="crank angles sampled over the in-soil phase for "
                                                             "the rearward-motion rule (re-check: 10x)")
     backoff: float = Field(0.02, ge=0.0, le=1.0, description="the NLP tightens the sampled rearward-motion limit "
-                                                            "by backoff x 0.1 m/s, so it holds between samples")
+                                                            "by backoff x 0.1 m/s, so it holds between samples (dimensionless)")
     max_iter: int = max_iter_field(1000)
 
 

@@ -215,8 +215,19 @@ class Session:
         rules = [{k: r.get(k) for k in ("name", "value", "limit", "unit", "margin", "satisfied")}
                  | {"note": r.get("note") or r.get("where") or ""} for r in result.rules]
         return finite({"grid": grid, "grid_note": grids.note(self.kind, grid, self.loaded.model), "values": values, "error": None,
-                       "rules": rules, "drawing": drawing.drawing(result),
+                       "rules": rules, "drawing": drawing.drawing(result), "scope": self.scope(),
                        "ms": 1e3 * (time.perf_counter() - began)})
+
+    def scope(self) -> str:
+        """Where the verdict holds: "" everywhere the spec asks, else (an operating range) at its nominal point
+        only, as check says it -- a design may fail inside the range (solve re-checks it over the range)."""
+        from synthesis.spec.operating import ranges_of
+
+        ranged = sorted(ranges_of(self.loaded.model))
+        if not ranged:
+            return ""
+        return (f"at the nominal operating point ({', '.join(ranged)} given as a range: this page evaluates the "
+                f"nominal value only; solve re-checks every rule over the range)")
 
     def describe(self) -> dict[str, Any]:
         return finite({"kind": self.kind, "name": self.loaded.name, "spec": self.loaded.path.name,

@@ -210,8 +210,20 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
     for row in rows:
         row["gap_explanation"] = None
         gap, base = row.get("linear_vs_sampled_gap"), row.get("recheck_margin")
+        unit = row.get("recheck_unit") or row["unit"]
+        shown_unit = "" if unit in ("", "-", "1") else f" {unit}"
         if gap is None:
-            if base is not None and row["linear_loss"] is not None and not row["same_terms"]:
+            sampled = row.get("sampled_worst_margin")
+            if (row["linear_loss"] == 0 and base is not None and sampled is not None
+                    and base - sampled > 1e-9 * max(1.0, abs(base))):
+                # the rows move with the NLP's own variables only (free crank angles), which the re-check finds anew
+                # for each sampled design: the nominal margins agree, and "other terms" would be wrong
+                row["gap_explanation"] = (f"not compared: no linear driver (the rule's first derivatives in the "
+                                          f"design variables are 0: its NLP rows move only with the NLP's own "
+                                          f"variables, e.g. free crank angles, which the re-check finds anew for each "
+                                          f"design, or the design sits at the rule's extremum); the samples lose "
+                                          f"{base - sampled:.3g}{shown_unit}")
+            elif base is not None and row["linear_loss"] is not None and not row["same_terms"]:
                 row["gap_explanation"] = (f"not compared: the NLP writes this rule in other terms than the re-check "
                                           f"reports (nominal margin {row['nominal_margin']:.4g} in the NLP's, "
                                           f"{base:.4g} {row.get('recheck_unit', row['unit'])} in the re-check's)")
@@ -225,7 +237,7 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
         if gap <= GAP_LIMIT:
             continue
         diff = row["linear_worst_margin"] - row["sampled_worst_margin"]
-        share = f"{abs(diff):.3g} {row['unit']}" + (f" = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
+        share = f"{abs(diff):.3g}{shown_unit}" + (f" = {100 * abs(diff) / abs(base):.2g} % of the nominal margin"
                                                     if base != 0 else " (the nominal margin is 0: the design is on the limit)")
         if row.get("corner_margin") is None:
             # the linear worst corner could not be re-checked: the sampled worst case is the Monte-Carlo's alone, which

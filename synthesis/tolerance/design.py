@@ -169,6 +169,13 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
             box.append(float(angle))
         else:
             box.append(0.0)
+    if not any(box) and (length or angle):
+        # a half-width that reaches no design variable would leave the box empty without a word
+        given = " and ".join(f"{what} {w:g} {u}" for what, w, u in (("length", length, "mm"), ("angle", angle, "deg"))
+                             if w)
+        listed = ", ".join(f"{k} ({u})" if u else k for k, u in zip(dmap.keys, dmap.units))
+        raise SpecError(f"tolerance: the half-width ({given}) applies to no design variable, so the tolerance box "
+                        f"is empty; the design variables: {listed}")
     return np.array(box)
 
 

@@ -88,7 +88,7 @@ def envelope_rules(grid: list[dict], rules_at: list[list[Rule]]) -> tuple[list[R
         expr = None if missing else np.concatenate([np.atleast_1d(np.asarray(rules[k].expr, float)).ravel()
                                                      for rules in rules_at])
         span = ", ".join(f"{n} {min(g[n] for g in grid):g}-{max(g[n] for g in grid):g}" for n in grid[0])
-        out.append(dataclasses.replace(rule, name=rule.name + SUFFIX, expr=expr, nlp_rows=(), missing=missing,
+        out.append(dataclasses.replace(rule, name=rule.name + SUFFIX, expr=expr, nlp_rows=(), box_rows=(), missing=missing,
                                        where=f"over {span} ({len(grid)} points), worst at {label}"))
         table[rule.name] = {"unit": rule.unit, "limit": [rule.lower, rule.upper],
                             "values": [r.value for r in records], "margins": [r.margin for r in records],

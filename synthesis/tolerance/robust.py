@@ -170,24 +170,28 @@ class RobustFinish:
             worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
             # the sampled misses are news only when the linearised worst case holds: where it does not, the run has
             # failed and its note says so
-            note = _sampled_misses(mc) if all(w["satisfied"] for w in worst) else None
+            note = _sampled_misses(mc, worst) if all(w["satisfied"] for w in worst) else None
             return dataclasses.replace(finished, facts=facts, rules=[r.to_json() for r in best.records] + worst,
                                        note=note)
         return dataclasses.replace(finished, facts=facts)
 
 
-def _sampled_misses(mc: dict) -> str | None:
+def _sampled_misses(mc: dict, worst: list[dict] = ()) -> str | None:
     """The note of a robust answer whose Monte-Carlo check found designs that miss a rule although every rule holds at
     its linearised worst case (the model is not linear); None when every sample passed or none was drawn.  A rule's
     pass rate counts the samples the re-check could not evaluate at all (``unevaluable``) as misses of every rule, so
     the rules named are those missed in evaluated samples, and the unevaluable samples are said apart."""
+    corners = [w["name"].removesuffix("@tolerance") for w in worst if "the rule curves beyond it" in (w["note"] or "")]
+    at_corner = (f" Re-checked at its linear worst corner of the box, {', '.join(corners)} "
+                 f"{'misses' if len(corners) == 1 else 'miss'} (the rows say by how much): the linear worst case is "
+                 f"what the solve holds, and the rule curves beyond it." if corners else "")
     samples = int(mc.get("samples") or 0)
     rate = mc.get("pass_rate")
     if rate is None or not samples:
-        return None
+        return at_corner.strip() or None
     failing = samples - round(rate * samples)
     if failing <= 0:
-        return None
+        return at_corner.strip() or None
     unevaluable = int(mc.get("unevaluable") or 0)
     missed = [name for name, r in (mc.get("rules") or {}).items()
               if samples - round((r.get("pass_rate") or 0.0) * samples) - unevaluable > 0]
@@ -200,14 +204,14 @@ def _sampled_misses(mc: dict) -> str | None:
         what.append(f"{';' if missed else ':'} {unevaluable} of them could not be evaluated at all")
     held = "at the operating points the NLP samples, " if "envelope" in mc else ""
     return ("".join(what) + f". The solve holds every rule at its linearised worst case in the box, {held}which does "
-            f"not cover every sampled design (`agrisynth tolerance RESULT` analyses this answer).")
+            f"not cover every sampled design (`agrisynth tolerance RESULT` analyses this answer)." + at_corner)
 
 
 def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: dict[str, str]) -> list[dict]:
     """One rule row per rule: its linearised worst-case margin in the tolerance box (>= 0 holds).  ``units``: the
     re-check's unit of each rule; a rule the NLP writes in other terms (a curvature for a radius: unit "1" for mm)
     is linearised in the NLP's, and its row says so: same sign, not the same number."""
-    from synthesis.tolerance.analysis import linearise, stack_up
+    from synthesis.tolerance.analysis import corner_margins, linearise, stack_up
 
     # a rule whose NLP rows are the rule itself (an exact minimum over a turn, each branch of a max()) is read on
     # them, as the NLP held it (stack_up, Linearised.held): its sampled values linearise otherwise
@@ -217,7 +221,11 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: 
     if list(lin.dmap.keys) != list(describe(spec)):     # the box is in the spec's order (RobustBuild checks the NLP)
         raise SpecError(f"{kind.name}: the analysis variables {lin.dmap.keys} are not the spec's {list(describe(spec))}")
     rows = []
-    for row in stack_up(lin, np.asarray(box, float)):
+    stacked = stack_up(lin, np.asarray(box, float))
+    # each rule re-checked at its linear worst corner, a design in the box: where it misses there although its
+    # linear worst case holds, the row says so (the promise is the linear one; the rule curves over the box)
+    corner_margins(kind, spec, lin.design, lin.dmap, stacked)
+    for row in stacked:
         margin = row["linear_worst_margin"]
         finite = bool(np.isfinite(margin))
         rows.append({"name": f"{row['name']}@tolerance", "value": margin if finite else None, "limit": [0.0, None],
@@ -225,15 +233,25 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: 
                      "margin": margin if finite else None,
                      "normalised_margin": margin / row["scale"] if finite else None,
                      "where": "linearised worst case in the tolerance box",
-                     "note": (None if units.get(row["name"], row["unit"]) == row["unit"] else
-                              f"linearised in the solver's form of the rule (unit {row['unit']!r}), not in the "
-                              f"re-check's {units[row['name']]}: its sign is the verdict, its size is not in "
-                              f"{units[row['name']]}")})
+                     "note": _row_note(row, units.get(row["name"], row["unit"]), finite and margin >= 0)})
     return rows
 
 
+def _row_note(row: dict, recheck_unit: str, holds: bool) -> str | None:
+    """A worst-case row's caveats: linearised in the solver's terms; missed at its own linear worst corner."""
+    notes = []
+    if recheck_unit != row["unit"]:
+        notes.append(f"linearised in the solver's form of the rule (unit {row['unit']!r}), not in the re-check's "
+                     f"{recheck_unit}: its sign is the verdict, its size is not in {recheck_unit}")
+    corner = row.get("corner_margin")
+    if holds and corner is not None and corner < 0:
+        notes.append(f"re-checked at that corner of the box the rule misses by {-corner:.4g} {recheck_unit}: the "
+                     f"linear worst case holds, the rule curves beyond it")
+    return "; ".join(notes) or None
+
+
 def _equalities_only(rule) -> bool:
-    rows = list(rule.rows())
+    rows = list(rule.box_rows or rule.rows())      # in the box, the rows the robust transcription holds
     return bool(rows) and all(lb is not None and ub is not None and np.all(np.asarray(lb) == np.asarray(ub))
                               for _, lb, ub in rows)
 

@@ -195,7 +195,9 @@ function renderTable(data) {
     body.append(row);
   }
   const verdict = document.getElementById("verdict");
-  verdict.textContent = data.error ? "(not evaluated)" : bad ? `${bad} violated` : "every rule satisfied";
+  // an operating range: the verdict is the nominal point's (as check says), never the range's
+  const scope = data.scope ? ` ${data.scope}` : "";
+  verdict.textContent = data.error ? "(not evaluated)" : (bad ? `${bad} violated` : "every rule satisfied") + scope;
   verdict.className = bad || data.error ? "bad" : "good";
 }
 
