@@ -150,6 +150,43 @@ def test_two_workers_stop_with_the_run_and_none_outlives_it(tmp_path, sig, code)
             f"still running) left its starts in {staged}: give that folder to --resume")
 
 
+# A signal raised inside concurrent.futures.wait(), which takes the waited futures' locks one by one, left one
+# held; the pool's manager thread blocked cancelling that future and shutdown() waited for it for ever (CI: a
+# SIGTERM after two starts, no exit within 60 s).  This lands the signal exactly there, every time.
+SIGNAL_INSIDE_WAIT = """
+import os, signal, sys
+import concurrent.futures._base as base
+fired = False
+def enter(self):
+    global fired
+    for k, future in enumerate(self.futures):
+        future._condition.acquire()
+        if not fired and len(self.futures) <= 398 and k == 0:     # two starts finished: wait for the others
+            fired = True
+            os.kill(os.getpid(), signal.SIGTERM)
+base._AcquireFutures.__enter__ = enter
+from synthesis.program import main
+sys.argv = ["agrisynth", *sys.argv[1:]]
+main()
+"""
+
+
+def test_a_signal_inside_the_pools_wait_stops_the_run(tmp_path):
+    proc = subprocess.Popen([sys.executable, "-c", SIGNAL_INSIDE_WAIT, "solve", str(SPEC), "--out", str(tmp_path),
+                             "--starts", "400", "--workers", "2"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        _, err = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail("the run did not stop within 120 s of a SIGTERM inside the pool's wait()")
+    assert proc.returncode == 143, err
+    assert "interrupted by SIGTERM after" in err and "Traceback" not in err
+    result = json.loads((tmp_path / NAME / "result.json").read_text())
+    assert result["status"] == "interrupted" and result["solver"]["starts_run"] >= 2
+
+
 def test_in_process_interrupt_and_resume_give_the_uninterrupted_result_bit_for_bit():
     """The one multistart path of every kind: interrupted after k starts, resumed from the decoded
     starts.jsonl lines, equal to the uninterrupted run (designs compared as floats, exactly)."""

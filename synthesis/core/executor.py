@@ -236,50 +236,58 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
         futures: dict = {}
         procs: list = []
         broken: str | None = None
+        # While this thread is inside concurrent.futures a signal is only recorded, and raised at the loop's
+        # safe point: raised there, it can leave a future's lock held (wait() takes every waited future's
+        # lock one by one), and the pool's manager thread, cancelling that future, then blocks forever and
+        # shutdown() with it (a SIGTERM hung a run this way).
         try:
-            futures = {pool.submit(_solve_in_worker, i, starts[i]): i for i in indices}
+            with interrupt.deferred(reraise=False):
+                futures = {pool.submit(_solve_in_worker, i, starts[i]): i for i in indices}
             procs = list((getattr(pool, "_processes", None) or {}).values())
             by_start = {i: fut for fut, i in futures.items()}
             waiting = set(futures)
             cancelled_after = len(starts)
             while waiting and not settled():
-                done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
-                _drain(began_q, began)
-                interrupt.check()
-                for fut in sorted(done, key=futures.get):
-                    if fut.cancelled():      # a start after the early stop, cancelled before it ran
-                        continue
-                    try:
-                        out = fut.result()
-                    except BrokenProcessPool:
-                        broken = "its worker process died"
-                        continue
-                    except Exception as exc:        # raised inside the start: its failure, the run goes on
-                        out = failure(futures[fut], *_raised(exc))
-                    accept(out)
-                if stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
-                    for later in range(stop_at + 1, cancelled_after):
-                        if later in by_start:
-                            by_start[later].cancel()
-                    cancelled_after = stop_at + 1
+                with interrupt.deferred(reraise=False):
+                    done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
+                    _drain(began_q, began)
+                    for fut in sorted(done, key=futures.get):
+                        if fut.cancelled():      # a start after the early stop, cancelled before it ran
+                            continue
+                        try:
+                            out = fut.result()
+                        except BrokenProcessPool:
+                            broken = "its worker process died"
+                            continue
+                        except Exception as exc:        # raised inside the start: its failure, the run goes on
+                            out = failure(futures[fut], *_raised(exc))
+                        accept(out)
+                    if stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
+                        for later in range(stop_at + 1, cancelled_after):
+                            if later in by_start:
+                                by_start[later].cancel()
+                        cancelled_after = stop_at + 1
+                interrupt.check()       # the loop's safe point: the starts that finished are kept
                 if broken is not None:
                     codes = [p.exitcode for p in procs if p.exitcode not in (None, 0, -signal.SIGTERM)]
                     broken = _exit_text(codes[0]) if len(codes) == 1 else broken
                     break
         except BaseException:
-            for fut in futures:
-                fut.cancel()
-            _end_workers(pool)
-            pool.shutdown(wait=True, cancel_futures=True)
+            with interrupt.deferred(reraise=False):      # a second signal does not cut the clean-up short
+                for fut in futures:
+                    fut.cancel()
+                _end_workers(pool)
+                pool.shutdown(wait=True, cancel_futures=True)
             raise
-        if broken is not None:
-            _end_workers(pool)
-        pool.shutdown(wait=True, cancel_futures=True)
-        _drain(began_q, began)
-        if broken is not None:
-            for fut in sorted(futures, key=futures.get):     # starts that finished as the pool broke
-                if fut.done() and not fut.cancelled() and fut.exception() is None:
-                    accept(fut.result())
+        with interrupt.deferred():
+            if broken is not None:
+                _end_workers(pool)
+            pool.shutdown(wait=True, cancel_futures=True)
+            _drain(began_q, began)
+            if broken is not None:
+                for fut in sorted(futures, key=futures.get):     # starts that finished as the pool broke
+                    if fut.done() and not fut.cancelled() and fut.exception() is None:
+                        accept(fut.result())
         return sorted(i for i in began if i not in outcomes and i <= stop_at), broken
 
     def remaining() -> list[int]:
