@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -46,8 +45,9 @@ def write_spec(folder: Path, data: dict, name: str = "spec.toml") -> Path:
 
 
 def cli(*args: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout)
+    from solving import agrisynth
+
+    return agrisynth(*args, cwd=cwd, timeout=timeout)
 
 
 # ---------------------------------------------------------------------------- the independent oracle

@@ -2,11 +2,30 @@
 
 from __future__ import annotations
 
+import functools
 from types import SimpleNamespace
 
 from synthesis import kinds
 from synthesis.core.kind import Setting
-from synthesis.core.solve import solve_spec as run_solve  # noqa: F401 - re-exported for the tests
+from synthesis.core.solve import solve_spec as run_solve
+
+
+@functools.lru_cache(maxsize=None)
+def solved_library_spec(relative: str):
+    """``solve_spec(load_spec(problems/RELATIVE), workers=1)`` -- the spec's own starts and seed -- solved once per test
+    process for the tests that read the same library solve (give them one ``xdist_group``, :func:`same_solve`, so
+    that they share this process).  The answer is shared: read it, never change it."""
+    from conftest import LIBRARY
+    from synthesis.spec import load_spec
+
+    return run_solve(load_spec(LIBRARY / relative), workers=1)
+
+
+def same_solve(relative: str):
+    """The mark that keeps the tests reading :func:`solved_library_spec` (``relative``) in one test process."""
+    import pytest
+
+    return pytest.mark.xdist_group(f"library-solve:{relative}")
 
 
 def recheck_rules(spec, design: dict) -> list:
@@ -32,12 +51,124 @@ def baseline_rules(loaded):
 # --- through the CLI, as a user runs it -------------------------------------------------------------------
 
 def cli_run(*args: str, cwd):
-    """``python -m synthesis.cli ARGS`` in ``cwd``; stdout and stderr captured as text."""
+    """``python -m synthesis.cli ARGS`` in ``cwd``; stdout and stderr captured as text (in this process where a
+    separate one is not the point: :func:`agrisynth`)."""
+    return agrisynth(*args, cwd=cwd)
+
+
+def needs_own_process(args) -> bool:
+    """Whether ``agrisynth ARGS`` must run in a process of its own: a solve or bench on a pool of workers (it
+    would fork this test process and its threads), on a cluster, or the studio (a server)."""
+    args = [str(a) for a in args]
+    if not args or args[0] == "studio" or "--scheduler" in args:
+        return True
+    if args[0] in ("solve", "bench"):
+        for flag, value in zip(args, args[1:]):
+            if flag == "--workers":
+                return value != "1"
+        return not ({"-h", "--help"} & set(args))       # the default is one worker per core
+    return False
+
+
+class _TimedOut(BaseException):
+    """Raised by the alarm of an in-process :func:`agrisynth` run (a BaseException: the CLI catches no such thing)."""
+
+
+#: the warning filters of an interpreter started without -W or PYTHONWARNINGS (what a user's run shows)
+_FRESH_WARNING_FILTERS = (("default", DeprecationWarning, "__main__"), ("ignore", DeprecationWarning, ""),
+                          ("ignore", PendingDeprecationWarning, ""), ("ignore", ImportWarning, ""),
+                          ("ignore", ResourceWarning, ""))
+
+
+def agrisynth(*args, cwd=None, timeout: float = 300):
+    """The agrisynth command line as ``python -m synthesis.cli ARGS`` run in ``cwd`` (default: this one) gives it: a
+    ``subprocess.CompletedProcess`` with the exit code, and stdout and stderr as text -- what Python and native
+    code (IPOPT) write to the two file descriptors, the Python warnings a fresh interpreter would print, an uncaught
+    exception as its traceback and exit code 1; ``subprocess.TimeoutExpired`` after ``timeout`` seconds.
+
+    It runs in this process (a new interpreter's imports cost a test 1-3 s of CPU; the suite starts hundreds),
+    with the working directory, ``sys.argv``, the standard streams, the signal handlers and the interrupt state
+    restored after it, except where :func:`needs_own_process`.  What an interpreter prints while importing is
+    not seen here: the tests that a run imports only what it needs, and those of signals and exit codes of the
+    process itself, start their own process."""
+    import contextlib
+    import io
+    import os
+    import signal
     import subprocess
     import sys
+    import tempfile
+    import traceback
+    import warnings
 
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
+    args = [str(a) for a in args]
+    if needs_own_process(args):
+        return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
+                              timeout=timeout)
+    from synthesis.cli import main
+    from synthesis.core import interrupt
+
+    def alarm(signum, frame):
+        raise _TimedOut
+
+    here = os.getcwd()
+    os.chdir(here if cwd is None else cwd)          # a folder that is not there raises here, in the test
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = (sys.stdout, sys.stderr, sys.argv, os.dup(1), os.dup(2),
+             {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)})
+    timed_out = False
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        code = 0
+        try:
+            os.dup2(out.fileno(), 1)
+            os.dup2(err.fileno(), 2)
+            sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), encoding="utf-8", write_through=True)
+            sys.stderr = io.TextIOWrapper(io.FileIO(2, "w", closefd=False), encoding="utf-8", write_through=True)
+            sys.argv = ["agrisynth", *args]
+            signal.signal(signal.SIGALRM, alarm)
+            signal.setitimer(signal.ITIMER_REAL, timeout)
+            with warnings.catch_warnings(record=True) as said:     # pytest records warnings: say them as Python does
+                warnings.resetwarnings()
+                for action, category, module in reversed(_FRESH_WARNING_FILTERS):
+                    warnings.filterwarnings(action, category=category, module=module)
+                try:
+                    main()
+                finally:
+                    for w in said:
+                        sys.stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line))
+        except SystemExit as exc:
+            if exc.code is None or isinstance(exc.code, int):
+                code = exc.code or 0
+            else:                                   # sys.exit("message"): printed, exit code 1
+                print(exc.code, file=sys.stderr)
+                code = 1
+        except _TimedOut:
+            timed_out = True
+        except BaseException:                       # what the interpreter does with an uncaught exception
+            traceback.print_exc(file=sys.stderr)
+            code = 1
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    stream.flush()
+            os.dup2(saved[3], 1)
+            os.dup2(saved[4], 2)
+            os.close(saved[3])
+            os.close(saved[4])
+            sys.stdout, sys.stderr, sys.argv = saved[:3]
+            os.chdir(here)
+            interrupt.uninstall()                   # a signal noted by the run is the run's, not the next test's
+            for sig, handler in saved[5].items():
+                signal.signal(sig, handler)
+        texts = []
+        for f in (out, err):
+            f.seek(0)
+            texts.append(f.read().decode("utf-8", errors="replace"))
+    if timed_out:
+        raise subprocess.TimeoutExpired(["agrisynth", *args], timeout, *texts)
+    return subprocess.CompletedProcess(["agrisynth", *args], code, *texts)
 
 
 def spec_with(tmp_path, source, replacements: list[tuple[str, str]], name: str = "spec.toml"):

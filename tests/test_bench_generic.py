@@ -17,6 +17,7 @@ from synthesis.bench_generic import (QUICK, measure, sample_fields, scaled_sampl
 from synthesis.core import ipopt
 from synthesis.core.kind import Setting
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 STEERING = LIBRARY / "steering" / "steering_redesign_40.toml"
 #: the minimax steering error of this redesign (STEERING.md: 0.523 deg over 0-40 deg)
@@ -287,20 +288,16 @@ def test_quick_benches_every_spec_named_and_a_named_spec_replaces_its_kinds_defa
     keeps the first problem of a default set), every spec named is benched and nothing else -- the spec was dropped
     (the kind's default set won) and --quick kept only the first of the specs named."""
     import json
-    import subprocess
-    import sys
 
     steering = LIBRARY / "steering"
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "bench", "steering_linkage", "--problems",
-                           str(steering / "steering_redesign_27.toml"), "--quick", "--no-extreme", "--out",
-                           str(tmp_path)], capture_output=True, text=True, timeout=300)
+    proc = agrisynth("bench", "steering_linkage", "--problems", str(steering / "steering_redesign_27.toml"),
+                     "--quick", "--no-extreme", "--out", str(tmp_path), timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert json.loads((tmp_path / "bench" / "bench.json").read_text())["settings"]["problems"] == [
         "steering_redesign_27"]
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "bench", "--problems",
-                           str(steering / "steering_redesign_40.toml"), "--problems",
-                           str(steering / "steering_redesign_27.toml"), "--quick", "--no-extreme", "--out",
-                           str(tmp_path), "--force"], capture_output=True, text=True, timeout=300)
+    proc = agrisynth("bench", "--problems", str(steering / "steering_redesign_40.toml"), "--problems",
+                     str(steering / "steering_redesign_27.toml"), "--quick", "--no-extreme", "--out", str(tmp_path),
+                     "--force", timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert json.loads((tmp_path / "bench" / "bench.json").read_text())["settings"]["problems"] == [
         "steering_redesign_40", "steering_redesign_27"]

@@ -14,14 +14,14 @@ import pytest
 from conftest import LIBRARY, ROOT
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 CAMS = LIBRARY / "clamp_cam"
 OPENING = (CAMS / "opening_cam.toml").read_text()
 
 
 def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=180, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    return agrisynth(*args, cwd=cwd, timeout=180)
 
 
 def spec_with(tmp_path: Path, *edits: tuple[str, str], base: str = OPENING) -> Path:

@@ -5,19 +5,18 @@ from __future__ import annotations
 import json
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from conftest import PLANTING
+from solving import agrisynth
 
 BASE = (PLANTING / "taiwan_example1.toml").read_text()
 
 
 def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=120)
+    return agrisynth(*args, cwd=cwd, timeout=120)
 
 
 def spec_with(tmp_path: Path, old: str, new: str, name: str = "bad.toml") -> Path:

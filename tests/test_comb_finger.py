@@ -20,7 +20,7 @@ import pytest
 from scipy.optimize import brentq, minimize
 
 from conftest import LIBRARY
-from solving import run_solve
+from solving import agrisynth, run_solve
 from synthesis.comb_finger import geometry as g
 from synthesis.result import Result
 from synthesis.spec import load_spec
@@ -110,8 +110,7 @@ def test_theta_does_not_grow_with_alpha_beyond_43_56_deg_at_fixed_omega():
 
 
 def test_baseline_check_reports_the_printed_relations(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(BASELINE), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     folder = tmp_path / "peanut_baseline"
     data = json.loads((folder / "result.json").read_text(), parse_constant=lambda c: pytest.fail(c))
@@ -259,8 +258,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
     assert old in text
     path = tmp_path / "bad.toml"
     path.write_text(text.replace(old, new, 1))
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in " ".join(proc.stderr.split()), proc.stderr
     assert "Traceback" not in proc.stderr
@@ -269,8 +267,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
 def test_a_finger_that_misses_the_ground_fails_its_rule(tmp_path):
     path = tmp_path / "high.toml"
     path.write_text(BASELINE.read_text().replace("b = 140.0 ", "b = 170.0 ", 1))
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 1 and "tip_reaches_ground" in proc.stdout
 
 
@@ -345,9 +342,8 @@ def test_the_tolerance_stack_up_of_a_max_at_its_kink_reads_each_branch(tmp_path)
         text = text.replace(old, new)
     path = tmp_path / "kink.toml"
     path.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "tolerance", str(path), "--length", "0.2",
-                           "--samples", "0", "--out", str(tmp_path / "out")], capture_output=True, text=True,
-                          timeout=300)
+    proc = agrisynth("tolerance", str(path), "--length", "0.2", "--samples", "0", "--out", str(tmp_path / "out"),
+                     timeout=300)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     data = json.loads((tmp_path / "out" / "peanut_baseline-tolerance" / "result.json").read_text())
     rows = {r["name"]: r for r in data["rules"]}

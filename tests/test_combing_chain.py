@@ -20,7 +20,7 @@ import pytest
 from scipy.optimize import brentq
 
 from conftest import LIBRARY
-from solving import recheck_rules, run_solve
+from solving import agrisynth, recheck_rules, run_solve
 from synthesis.combing_chain import geometry as g
 from synthesis.spec import load_spec
 
@@ -116,8 +116,7 @@ def test_eq13_printed_second_form_does_not_follow():
 
 
 def _check(path: Path, tmp_path: Path) -> tuple[int, dict, str]:
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     data = json.loads((tmp_path / load_spec(path).name / "result.json").read_text(),
                       parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
     return proc.returncode, data, proc.stdout + proc.stderr
@@ -322,8 +321,7 @@ def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tm
 
 
 def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(TOO_WIDE), "--out", str(tmp_path),
-                           "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("solve", str(TOO_WIDE), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path, timeout=300)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     err = " ".join(proc.stderr.split())
     assert "Traceback" not in proc.stderr
@@ -369,8 +367,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, source, old, new, command,
     path = tmp_path / "bad.toml"
     path.write_text(text.replace(old, new, 1))
     extra = ["--workers", "1"] if command == "solve" else []
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", command, str(path), "--out", str(tmp_path), *extra],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth(command, str(path), "--out", str(tmp_path), *extra, cwd=tmp_path, timeout=300)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in " ".join(proc.stderr.split()), proc.stderr
     assert "Traceback" not in proc.stderr
@@ -402,8 +399,7 @@ print("LOADED", sorted(other))
 def test_check_says_on_the_terminal_which_published_figures_do_not_reproduce(tmp_path):
     """The HD650R's rules all hold, yet three of Table 13's six figures do not reproduce (CHAIN.md): `check` said
     "every rule satisfied" and nothing else; the gap was in result.json's facts.published alone."""
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(HD650R), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(HD650R), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     out = " ".join(proc.stdout.split())
     published = json.loads((tmp_path / "iseki_hd650r" / "result.json").read_text())["facts"]["published"]
@@ -421,8 +417,7 @@ def test_a_sample_grid_too_large_to_solve_is_refused_in_one_line_naming_both_fie
                                                                                  "speed_samples = 2000")
     path = tmp_path / "huge.toml"
     path.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("solve", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
     assert ("combing_chain.solver: beta_samples x speed_samples = 2000 x 2000 = 4000000 exceeds 10000"

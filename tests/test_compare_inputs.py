@@ -11,8 +11,6 @@ import copy
 import json
 import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -23,6 +21,7 @@ from synthesis.compare import load_candidates, write_comparison
 from synthesis.errors import AgrisynthError
 from synthesis.result import result_text
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 
 @pytest.fixture(scope="module")
@@ -140,8 +139,7 @@ def test_compare_cli_refuses_a_fifo_and_non_utf8_in_one_line_and_writes_nothing(
     fifo = _special("fifo", tmp_path)
     latin = tmp_path / "latin.json"
     latin.write_bytes(b'{"kind": "\xe9"}')
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(path), str(fifo),
-                           "--out", str(tmp_path / "cmp")], capture_output=True, text=True, timeout=60)
+    proc = agrisynth("compare", str(path), str(fifo), "--out", str(tmp_path / "cmp"), timeout=60)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and str(fifo) in proc.stderr
     from test_run_folders import cli_in_process
@@ -174,8 +172,7 @@ def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
     for args in ((str(loop), str(b), "--out", str(tmp_path / "c1")), (str(a), str(b), "--out", str(loop))):
         code, err = cli_in_process("compare", *args)
         assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(a), str(b), "--out",
-                           str(tmp_path / "cmp")], capture_output=True, text=True, timeout=120)
+    proc = agrisynth("compare", str(a), str(b), "--out", str(tmp_path / "cmp"), timeout=120)
     assert proc.returncode == 0 and (tmp_path / "cmp" / "compare.html").is_file(), proc.stderr
 
 

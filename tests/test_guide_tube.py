@@ -25,7 +25,7 @@ from synthesis.guide_tube.plots import compare_figures
 from synthesis.guide_tube.printed import printed_landing_time, printed_phase
 from synthesis.guide_tube.scene import GuideTubeScene, calibration_failure
 from synthesis.guide_tube.slope import landing_time_slope
-from solving import run_solve, spec_with
+from solving import agrisynth, run_solve, spec_with
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -231,8 +231,7 @@ def test_calibration_failures_name_the_field_and_the_candidates():
 # --- CLI, result contract, imports -------------------------------------------------------------------------
 
 def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
+    return agrisynth(*args, cwd=cwd, timeout=300)
 
 
 def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(tmp_path):

@@ -16,6 +16,7 @@ from conftest import LIBRARY, ROOT
 from synthesis.guide_way import conics as cn
 from synthesis.kinematics import rotary_arm as ra
 from synthesis.spec import load_spec
+from solving import agrisynth, same_solve, solved_library_spec
 
 AB = (-2.2758, 2.19137, -685.798, 1108.906, 145488.69)
 BC = (-1.60586, -3.56106, -1308.2454, 89.41237, 215274.7426)
@@ -148,8 +149,7 @@ def test_centre_line_invariants_on_a_finer_grid(baseline):
 
 
 def _run(args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=300)
+    return agrisynth(*args, cwd=cwd, timeout=300)
 
 
 def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
@@ -190,11 +190,10 @@ def test_bad_input_is_one_line_exit_2(tmp_path, edit, message):
     assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
 
 
+@same_solve("guide_way/smooth_redesign.toml")
 def test_redesign_solves_smooth_without_undercut(baseline):
-    from synthesis.core.solve import solve_spec
-
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
-    result, _, _ = solve_spec(loaded, workers=1)
+    result, _, _ = solved_library_spec("guide_way/smooth_redesign.toml")
     assert result.status == "optimal" and result.all_satisfied
     # every design variable is in the result (DESIGN.md), the fixed arm as well as the solved control points
     arm = loaded.model.arm
@@ -532,8 +531,7 @@ def test_the_fit_needs_no_tangent_at_every_key_point(tmp_path):
         assert np.asarray(sp.basis(n, u)[0] @ fit.control) == pytest.approx(np.asarray(point), abs=1e-9), name
     assert set(fit.speeds) == {"D", "C", "B", "A"}
     assert fit.energy <= fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).energy
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode in (0, 1) and "Traceback" not in proc.stderr, proc.stderr
 
 
@@ -621,8 +619,7 @@ def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_pat
     dup.write_text(text.replace('name = "CD"', 'name = "BC"', 1))
     rules = {}
     for path, out in ((LIBRARY / "guide_way" / "liang_2z.toml", tmp_path / "a"), (dup, tmp_path / "b")):
-        proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(out)],
-                              cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        proc = agrisynth("check", str(path), "--out", str(out), cwd=tmp_path, timeout=300)
         assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
         data = json.loads((out / "liang_2z" / "result.json").read_text())
         rules[out.name] = {r["name"]: r["value"] for r in data["rules"]}

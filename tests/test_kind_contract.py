@@ -15,6 +15,7 @@ from synthesis import kinds
 from synthesis.core.solve import exit_error, run_solve
 from synthesis.result import Result
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 TOY = """kind = "toy_disc"
 name = "toy"
@@ -191,8 +192,8 @@ def test_listing_kinds_imports_no_kind_code():
 
 
 def test_solve_of_a_check_only_kind_is_bad_input(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(LIBRARY / "picker" / "cai2020_picker.toml"),
-                           "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    proc = agrisynth("solve", str(LIBRARY / "picker" / "cai2020_picker.toml"), "--out", str(tmp_path), cwd=ROOT,
+                     timeout=120)
     assert proc.returncode == 2 and "has nothing to optimise" in proc.stderr and "Traceback" not in proc.stderr
 
 

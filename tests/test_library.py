@@ -18,6 +18,7 @@ from synthesis import kinds
 from synthesis.core.solve import solve_spec
 from synthesis.errors import AgrisynthError
 from synthesis.spec import load_spec
+from solving import same_solve, solved_library_spec
 
 RTOL = 1e-6
 
@@ -111,8 +112,15 @@ def test_every_library_spec_is_recorded():
     assert sorted(EXPECTED) == SPECS
 
 
-@pytest.mark.parametrize("spec", [pytest.param(s, marks=[pytest.mark.benchmark] if s in STUDIES else [])
-                                  for s in SPECS])
+#: library solves other tests read too (tests/solving.py: solved_library_spec), solved once in one test process
+SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3, 4))}
+
+
+def _marks(spec: str) -> list:
+    return [pytest.mark.benchmark] if spec in STUDIES else [same_solve(spec)] if spec in SHARED else []
+
+
+@pytest.mark.parametrize("spec", [pytest.param(s, marks=_marks(s)) for s in SPECS])
 def test_library_spec(spec):
     expected = EXPECTED.get(spec)
     if expected is None:
@@ -131,7 +139,7 @@ def test_library_spec(spec):
             solve_spec(loaded, workers=1)
         assert err.value.exit_code == value
         return
-    solved, _, _ = solve_spec(loaded, workers=1)
+    solved, _, _ = solved_library_spec(spec) if spec in SHARED else solve_spec(loaded, workers=1)
     assert solved.status == status
     _assert_design_holds_numbers(solved)
     assert solved.objective["value"] == pytest.approx(value, rel=RTOL)

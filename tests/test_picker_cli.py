@@ -11,13 +11,13 @@ from pathlib import Path
 import pytest
 
 from conftest import LIBRARY, ROOT
+from solving import agrisynth
 
 PICKER = LIBRARY / "picker"
 
 
 def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
+    return agrisynth(*args, cwd=cwd, timeout=300)
 
 
 @pytest.mark.parametrize("spec, files", [

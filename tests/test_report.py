@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 
 import pytest
 
@@ -15,6 +13,7 @@ from synthesis.compare import load_candidates, write_comparison
 from synthesis.errors import ResultError
 from synthesis.report.tables import candidates, design_rows, rule_rows, worst_margins
 from synthesis.result import SCHEMA_VERSION, load_result
+from solving import agrisynth
 
 
 @pytest.fixture(scope="module")
@@ -117,8 +116,7 @@ def test_compare_cli_exit_codes(runs, tmp_path):
     cut = _write(tmp_path / "cut.json", json.dumps(good)[:500])
 
     def run(*args):
-        return subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", *map(str, args),
-                               "--out", str(tmp_path / "out")], capture_output=True, text=True)
+        return agrisynth("compare", *map(str, args), "--out", str(tmp_path / "out"))
 
     p = run(runs[0][0], mixed)
     assert p.returncode == 2 and "one kind" in p.stderr and "clamp_cam" in p.stderr and "Traceback" not in p.stderr

@@ -12,12 +12,11 @@ from pathlib import Path
 
 import pytest
 
-import subprocess
-import sys
 
 from conftest import LIBRARY, PLANTING
 from report_fixtures import checked_run
 from synthesis.compare import load_candidates, write_comparison
+from solving import agrisynth
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 LAUNCH_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
@@ -121,8 +120,7 @@ def test_solve_report_in_headless_chromium(tmp_path, sync_playwright):
         text = text.replace(old, new)
     spec = tmp_path / "tight.toml"
     spec.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(spec), "--out", str(tmp_path),
-                           "--workers", "1"], capture_output=True, text=True, timeout=300)
+    proc = agrisynth("solve", str(spec), "--out", str(tmp_path), "--workers", "1", timeout=300)
     assert proc.returncode == 0, proc.stderr
     page_path = tmp_path / "tight" / "report.html"
     with sync_playwright() as pw:

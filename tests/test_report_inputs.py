@@ -18,6 +18,7 @@ from synthesis.report import run_artifacts, write_report
 from synthesis.report.tables import candidates, operating_conditions
 from synthesis.result import Result
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
@@ -170,15 +171,13 @@ def test_library_warnings_go_to_the_log_not_the_terminal(capfd):
 def test_warnings_while_drawing_go_to_the_runs_log_not_the_terminal(tmp_path):
     """A planting arm whose links cannot close (l4 = 2 mm) has no trajectory: matplotlib warns that its
     legends are empty.  `check` prints none of it: the run's warnings.log has it and the report links it."""
-    import subprocess
 
     text = (PROBLEMS / "planting_arm" / "redesign_from_example1.toml").read_text()
     old = "l4 = { init = 80, bounds = [64, 96] }"
     assert old in text
     spec = tmp_path / "open_arm.toml"
     spec.write_text(text.replace(old, "l4 = 2"))
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(spec), "--out", str(tmp_path)],
-                          capture_output=True, text=True, timeout=300)
+    proc = agrisynth("check", str(spec), "--out", str(tmp_path), timeout=300)
     assert proc.returncode == 1, proc.stderr
     assert proc.stderr == "" and "Warning" not in proc.stdout
     run = tmp_path / "redesign_from_example1"

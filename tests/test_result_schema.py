@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from synthesis.result import SCHEMA_VERSION, Result, load_result
+from solving import agrisynth
 
 V1 = {
     "kind": "crank_rocker", "name": "old_run", "spec_sha256": "0" * 64, "status": "optimal",
@@ -37,8 +38,6 @@ def test_a_version_1_file_is_read_into_the_version_2_shape(tmp_path):
 
 
 def test_compare_reads_a_version_1_file_beside_a_version_2_one(tmp_path):
-    import subprocess
-    import sys
 
     from conftest import ROOT
 
@@ -51,8 +50,7 @@ def test_compare_reads_a_version_1_file_beside_a_version_2_one(tmp_path):
                             "elastic": None, "baseline_design": {}, "fine_grid_worst_violation": 0.0})
     (tmp_path / "new").mkdir()
     (tmp_path / "new" / "result.json").write_text(json.dumps(new.to_json()))
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "compare", str(old), str(tmp_path / "new"),
-                           "--out", str(tmp_path / "cmp")], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    proc = agrisynth("compare", str(old), str(tmp_path / "new"), "--out", str(tmp_path / "cmp"), cwd=ROOT, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     page = (tmp_path / "cmp" / "compare.html").read_text()
     assert "old_run" in page and "new_run" in page

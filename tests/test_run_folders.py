@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +12,7 @@ import pytest
 from conftest import PLANTING
 from synthesis.errors import OutputError
 from synthesis.result import RUN_MARKER, is_run_folder, open_run_folder, write_folder
+from solving import agrisynth
 
 
 def artifacts(token: str) -> dict:
@@ -86,26 +85,22 @@ def test_resume_from_a_staging_folder_writes_the_spec_named_folder(tmp_path):
     import shutil
 
     spec = str(PLANTING.parent / "steering" / "steering_redesign_27.toml")
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", spec, "--starts", "2", "--workers", "1",
-                           "--out", str(tmp_path / "a")], capture_output=True, text=True, timeout=300)
+    proc = agrisynth("solve", spec, "--starts", "2", "--workers", "1", "--out", str(tmp_path / "a"), timeout=300)
     assert proc.returncode == 0, proc.stderr
     staging = tmp_path / "b" / ".steering_redesign_27.run-abc123"
     shutil.copytree(tmp_path / "a" / "steering_redesign_27", staging)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", spec, "--resume", str(staging)],
-                          capture_output=True, text=True, timeout=300)
+    proc = agrisynth("solve", spec, "--resume", str(staging), timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "resumed: 2 finished start(s)" in proc.stdout
     assert json.loads((tmp_path / "b" / "steering_redesign_27" / "result.json").read_text())["solver"]["starts"] == 2
 
 
 def test_force_through_the_cli_keeps_a_users_file_and_says_so(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(PLANTING / "taiwan_example1.toml"),
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), timeout=120)
     assert proc.returncode == 1, proc.stderr
     notes = tmp_path / "taiwan_example1" / "notes.txt"
     notes.write_text("field trial, 2026")
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(PLANTING / "taiwan_example1.toml"),
-                           "--out", str(tmp_path), "--force"], capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), "--force", timeout=120)
     assert proc.returncode == 2 and "notes.txt" in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and notes.read_text() == "field trial, 2026"
 
@@ -126,8 +121,7 @@ def test_the_spec_file_itself_is_never_replaced(tmp_path):
     spec.write_text((PLANTING / "taiwan_example1.toml").read_text().replace('name = "taiwan_example1"',
                                                                              'name = "myspec.toml"'))
     before = spec.read_text()
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", "myspec.toml", "--out", ".", "--force"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", "myspec.toml", "--out", ".", "--force", cwd=tmp_path, timeout=120)
     assert proc.returncode == 2, proc.stderr
     assert "myspec.toml is the spec file itself" in proc.stderr and "Traceback" not in proc.stderr
     assert spec.read_text() == before
@@ -207,27 +201,8 @@ def test_compare_output_follows_the_run_folder_rules(tmp_path):
 
 def cli_in_process(*args: str) -> tuple[int, str]:
     """``agrisynth ARGS`` in this process (no interpreter start-up): exit code and stderr."""
-    import contextlib
-    import io
-
-    from synthesis import cli
-
-    import signal
-
-    err = io.StringIO()
-    old_argv, sys.argv = sys.argv, ["agrisynth", *args]
-    old_file = cli.err_console.file
-    # a program run ignores SIGINT and SIGTERM once its answer is printed (nothing left to stop): not this process
-    handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
-    cli.err_console.file = err
-    try:
-        with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as done:
-            cli.main()
-    finally:
-        sys.argv, cli.err_console.file = old_argv, old_file
-        for sig, handler in handlers.items():
-            signal.signal(sig, handler)
-    return done.value.code, err.getvalue()
+    proc = agrisynth(*args)
+    return proc.returncode, proc.stderr
 
 
 def test_bench_output_follows_the_run_folder_rules(tmp_path):

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import re
 
-import subprocess
-import sys
 
 import pytest
 
@@ -21,6 +19,7 @@ from synthesis.solved_spec import FILENAME, solved_toml
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 from synthesis.spec.common import read_toml
+from solving import agrisynth
 
 #: kinds whose `check` cannot reproduce a solve's rule table, and why (xfail strict: a fix turns them red)
 KNOWN: dict[str, str] = {}
@@ -87,8 +86,7 @@ def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_pat
         text = text.replace(old, new)
     spec = tmp_path / "tight.toml"
     spec.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(spec), "--out", str(tmp_path / "out"),
-                           "--workers", "1", "--starts", "3"], capture_output=True, text=True, timeout=300)
+    proc = agrisynth("solve", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--starts", "3", timeout=300)
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     started = [ln for ln in lines if ln.startswith("start ") and " finished (" in ln]
@@ -102,8 +100,7 @@ def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_pat
     assert l10 == ["l10", "140", "140", "mm", "fixed", ""]
     # solved.toml beside the result, and `check` of it gives the solve's rule table
     folder = tmp_path / "out" / "tight"
-    check = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(folder / FILENAME), "--out",
-                            str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    check = agrisynth("check", str(folder / FILENAME), "--out", str(tmp_path / "out"), timeout=300)
     assert check.returncode == 0, check.stderr
     import json
 

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 
 import pytest
 
 from conftest import PLANTING
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
+from solving import agrisynth
 
 REDESIGN = (PLANTING / "redesign_from_example1.toml").read_text()
 L2 = "l2 = { init = 35, bounds = [28, 42] }"
@@ -68,8 +67,7 @@ def test_rule_key_named_as_in_the_output_suggests_the_spec_key(tmp_path):
 def test_linkage_that_cannot_assemble_names_the_file(tmp_path):
     path = tmp_path / "far.toml"
     path.write_text(REDESIGN.replace("l1 = 75", "l1 = 400", 1))
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path / "out")],
-                          capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path / "out"), timeout=120)
     assert proc.returncode == 2
     assert proc.stderr.startswith(f"error: {path}: planting_fourbar: linkage cannot assemble at any crank angle")
     assert len(proc.stderr.strip().splitlines()) == 1

@@ -7,8 +7,6 @@ the registry.  A kind whose package does not import is skipped with the import e
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 import tomllib
 
 import pytest
@@ -19,6 +17,7 @@ from synthesis import kinds, specref
 from synthesis.cli import cli
 from synthesis.spec import load_spec
 from synthesis.spec.common import read_toml
+from solving import agrisynth
 
 
 def _kind(name: str):
@@ -125,8 +124,7 @@ def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
 
 
 def test_spec_command_errors_are_one_line(tmp_path):
-    unknown = subprocess.run([sys.executable, "-m", "synthesis.cli", "spec", "planting_forbar"], capture_output=True,
-                             text=True, timeout=120)
+    unknown = agrisynth("spec", "planting_forbar", timeout=120)
     assert unknown.returncode == 2 and unknown.stdout == ""
     assert unknown.stderr.startswith("error: unknown kind 'planting_forbar' (known kinds: planting_fourbar, ")
     assert len(unknown.stderr.strip().splitlines()) == 1
@@ -141,8 +139,7 @@ def test_spec_command_errors_are_one_line(tmp_path):
 
 
 def test_piped_problems_table_never_cuts_a_file_name():
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "problems"], capture_output=True, text=True,
-                          timeout=120)
+    proc = agrisynth("problems", timeout=120)
     assert proc.returncode == 0, proc.stderr
     for path in sorted(specref.LIBRARY.rglob("*.toml")):
         assert str(path.relative_to(specref.LIBRARY)) in proc.stdout

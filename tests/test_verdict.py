@@ -11,15 +11,13 @@ from __future__ import annotations
 import json
 import math
 import re
-import subprocess
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
-from conftest import LIBRARY, ROOT
-from solving import diagnose_infeasible, run_solve
+from conftest import LIBRARY
+from solving import agrisynth, diagnose_infeasible, run_solve
 from synthesis import kinds
 from synthesis.core.verdict import ElasticDiagnosis, StartReport, status_of, unsatisfied_error
 from synthesis.errors import SpecError
@@ -186,9 +184,8 @@ def test_nothing_free_is_bad_input(kind):
 def test_failed_run_exits_3_with_result_and_message(tmp_path):
     source, replacements, starts = CAPPED["guide_tube"]
     path = edited_spec(tmp_path, source, replacements)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path / "out"),
-                           "--starts", str(starts), "--workers", "1"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    proc = agrisynth("solve", str(path), "--out", str(tmp_path / "out"), "--starts", str(starts), "--workers", "1",
+                     cwd=tmp_path, timeout=300)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     err = " ".join(proc.stderr.split())
@@ -279,9 +276,8 @@ def test_a_tolerance_box_no_design_can_hold_fails_instead_of_passing(tmp_path):
     text = (LIBRARY / "steering" / "steering_redesign_40.toml").read_text()
     path = tmp_path / "robust.toml"
     path.write_text(text + "\n[tolerance]\nlength = 60.0\nangle = 15.0\nsamples = 50\nseed = 0\n")
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path / "out"),
-                           "--starts", "2", "--workers", "1"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    proc = agrisynth("solve", str(path), "--out", str(tmp_path / "out"), "--starts", "2", "--workers", "1",
+                     cwd=tmp_path, timeout=300)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     err = " ".join(proc.stderr.split())
     assert "@tolerance" in err and "does not keep its promise" in err and "Traceback" not in proc.stderr

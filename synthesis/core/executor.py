@@ -272,15 +272,25 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
                     codes = [p.exitcode for p in procs if p.exitcode not in (None, 0, -signal.SIGTERM)]
                     broken = _exit_text(codes[0]) if len(codes) == 1 else broken
                     break
-        except BaseException:
+        except BaseException as exc:
             with interrupt.deferred(reraise=False):      # a second signal does not cut the clean-up short
+                if interrupt.caused_by_signal(exc):     # the starts that finished since the last look are kept
+                    with contextlib.suppress(Exception):    # (never at the cost of ending the workers below)
+                        for fut in sorted(futures, key=futures.get):
+                            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                                accept(fut.result())
                 for fut in futures:
                     fut.cancel()
                 _end_workers(pool)
                 pool.shutdown(wait=True, cancel_futures=True)
             raise
         with interrupt.deferred():
-            if broken is not None:
+            # after an early stop the starts still running are not needed: they are waited for (as shutdown
+            # would) only until a signal comes, then their workers are ended
+            running = [fut for fut in futures if not fut.done()] if broken is None else []
+            while running and interrupt.pending() is None:
+                running = list(wait(running, timeout=0.5)[1])
+            if broken is not None or running:
                 _end_workers(pool)
             pool.shutdown(wait=True, cancel_futures=True)
             _drain(began_q, began)

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -21,6 +19,7 @@ from synthesis.guide_tube.drag import Q_LONG, Q_SERIES, stopping_distance, trave
 from synthesis.guide_tube.drop import Physics, SeedlingSticks, Tube, drop_phases, landing
 from synthesis.guide_tube.ode import simulate
 from synthesis.guide_tube.slope import landing_time_slope
+from solving import agrisynth
 
 ROOT = Path(__file__).resolve().parents[2]
 BASELINE = ROOT / "problems" / "guide_tube" / "cai2020_tubes.toml"
@@ -152,8 +151,7 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     from synthesis.spec import load_spec
 
     path = _sticking_spec(tmp_path)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=120)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     assert "violated: landing_time_spread, wall_exit_speed_I" in " ".join(proc.stdout.split())
@@ -205,9 +203,8 @@ def test_tolerance_of_a_sticking_wall_fails_the_design_and_writes_the_result(tmp
     from synthesis.spec import load_spec
 
     path = _sticking_spec(tmp_path)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "tolerance", str(path), "--length", "0.1", "--angle",
-                           "0.5", "--samples", "20", "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("tolerance", str(path), "--length", "0.1", "--angle", "0.5", "--samples", "20", "--out",
+                     str(tmp_path), cwd=tmp_path, timeout=120)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     data = json.loads((tmp_path / "cai2020_tubes-tolerance" / "result.json").read_text(),
@@ -247,8 +244,7 @@ def test_a_seedling_stuck_off_the_design_spacing_fails_the_check_whatever_the_ex
         text = text.replace(old, new, 1)
     path = tmp_path / "stuck_off_design.toml"
     path.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "check", str(path), "--out", str(tmp_path)],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=120)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     rules = {r["name"]: r for r in json.loads((tmp_path / "cai2020_tubes" / "result.json").read_text())["rules"]}
     assert rules["landing_time_spread"]["satisfied"]                  # at 290 mm both seedlings land
@@ -360,8 +356,7 @@ def test_solve_whose_angle_range_only_sticks_exits_3_naming_tube_angle_and_mu(tm
     text = text.replace("angle = { init = 41, bounds = [25, 70] }", "angle = { init = 12, bounds = [10, 15] }")
     path = tmp_path / "sticks.toml"
     path.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(path), "--out", str(tmp_path),
-                           "--workers", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    proc = agrisynth("solve", str(path), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path, timeout=120)
     assert proc.returncode == 3, proc.stdout + proc.stderr
     message = " ".join(proc.stderr.split())
     assert "the seedling sticks on the wall of tube II: at wall angle" in message

@@ -6,14 +6,13 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
 from synthesis.crank_rocker.check import mechanism
-from solving import recheck_rules, run_solve
+from solving import agrisynth, recheck_rules, run_solve
 from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
 from synthesis.core.solve import starts_table
 from synthesis.core.verdict import measured, report_of
@@ -36,8 +35,7 @@ def spec_file(tmp_path: Path, time_ratio: str, swing: str, gamma: str, lower: st
 
 
 def cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "synthesis.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    return agrisynth(*args, cwd=cwd)
 
 
 def simulated(loaded, design):
