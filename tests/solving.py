@@ -108,65 +108,77 @@ def agrisynth(*args, cwd=None, timeout: float = 300):
     from synthesis.cli import main
     from synthesis.core import interrupt
 
+    timer = {"armed": False, "fired": False}
+
     def alarm(signum, frame):
-        raise _TimedOut
+        if timer["armed"]:
+            timer["fired"] = True
+            # inside IPOPT CasADi swallows the exception: the noted signal stops the solve at its next safe point
+            # (the timer repeats each second until the run is over)
+            interrupt.simulate(signal.SIGALRM)
+            raise _TimedOut
 
     here = os.getcwd()
     os.chdir(here if cwd is None else cwd)          # a folder that is not there raises here, in the test
+    saved_streams = (sys.stdout, sys.stderr, sys.argv)
+    saved_handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
     sys.stdout.flush()
     sys.stderr.flush()
-    saved = (sys.stdout, sys.stderr, sys.argv, os.dup(1), os.dup(2),
-             {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)})
-    timed_out = False
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
-        code = 0
-        try:
+    saved_fds: list[int] = []
+    texts = ["", ""]
+    code = 0
+    try:
+        saved_fds = [os.dup(1), os.dup(2)]
+        with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
             os.dup2(out.fileno(), 1)
             os.dup2(err.fileno(), 2)
-            sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), encoding="utf-8", write_through=True)
-            sys.stderr = io.TextIOWrapper(io.FileIO(2, "w", closefd=False), encoding="utf-8", write_through=True)
-            sys.argv = ["agrisynth", *args]
-            signal.signal(signal.SIGALRM, alarm)
-            signal.setitimer(signal.ITIMER_REAL, timeout)
-            with warnings.catch_warnings(record=True) as said:     # pytest records warnings: say them as Python does
-                warnings.resetwarnings()
-                for action, category, module in reversed(_FRESH_WARNING_FILTERS):
-                    warnings.filterwarnings(action, category=category, module=module)
-                try:
-                    main()
-                finally:
-                    for w in said:
-                        sys.stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line))
-        except SystemExit as exc:
-            if exc.code is None or isinstance(exc.code, int):
-                code = exc.code or 0
-            else:                                   # sys.exit("message"): printed, exit code 1
-                print(exc.code, file=sys.stderr)
+            stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), encoding="utf-8", write_through=True)
+            stderr = io.TextIOWrapper(io.FileIO(2, "w", closefd=False), encoding="utf-8", write_through=True)
+            sys.stdout, sys.stderr, sys.argv = stdout, stderr, ["agrisynth", *args]
+            try:
+                signal.signal(signal.SIGALRM, alarm)
+                timer["armed"] = True
+                signal.setitimer(signal.ITIMER_REAL, timeout, 1.0)
+                with warnings.catch_warnings(record=True) as said:    # pytest records them: say them as Python does
+                    warnings.resetwarnings()
+                    for action, category, module in reversed(_FRESH_WARNING_FILTERS):
+                        warnings.filterwarnings(action, category=category, module=module)
+                    try:
+                        main()
+                    finally:
+                        timer["armed"] = False
+                        signal.setitimer(signal.ITIMER_REAL, 0)
+                        for w in said:
+                            stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line))
+            except SystemExit as exc:
+                if exc.code is None or isinstance(exc.code, int):
+                    code = exc.code or 0
+                else:                                   # sys.exit("message"): printed, exit code 1
+                    print(exc.code, file=stderr)
+                    code = 1
+            except _TimedOut:
+                pass
+            except BaseException:                       # what the interpreter does with an uncaught exception
+                traceback.print_exc(file=stderr)
                 code = 1
-        except _TimedOut:
-            timed_out = True
-        except BaseException:                       # what the interpreter does with an uncaught exception
-            traceback.print_exc(file=sys.stderr)
-            code = 1
-        finally:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            for stream in (sys.stdout, sys.stderr):
+            for stream in (sys.stdout, sys.stderr, stdout, stderr):
                 with contextlib.suppress(Exception):
                     stream.flush()
-            os.dup2(saved[3], 1)
-            os.dup2(saved[4], 2)
-            os.close(saved[3])
-            os.close(saved[4])
-            sys.stdout, sys.stderr, sys.argv = saved[:3]
-            os.chdir(here)
-            interrupt.uninstall()                   # a signal noted by the run is the run's, not the next test's
-            for sig, handler in saved[5].items():
-                signal.signal(sig, handler)
-        texts = []
-        for f in (out, err):
-            f.seek(0)
-            texts.append(f.read().decode("utf-8", errors="replace"))
-    if timed_out:
+            for k, f in enumerate((out, err)):
+                f.seek(0)
+                texts[k] = f.read().decode("utf-8", errors="replace")
+    finally:
+        timer["armed"] = False
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        for fd, saved in zip((1, 2), saved_fds):
+            os.dup2(saved, fd)
+            os.close(saved)
+        sys.stdout, sys.stderr, sys.argv = saved_streams
+        os.chdir(here)
+        interrupt.uninstall()                   # a signal noted by the run is the run's, not the next test's
+        for sig, handler in saved_handlers.items():
+            signal.signal(sig, handler)
+    if timer["fired"]:
         raise subprocess.TimeoutExpired(["agrisynth", *args], timeout, *texts)
     return subprocess.CompletedProcess(["agrisynth", *args], code, *texts)
 
