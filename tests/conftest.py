@@ -33,3 +33,10 @@ def motion(forward_m_s: float = 0.6, rpm: float = 250.0) -> Motion:
 @pytest.fixture(params=sorted(TABLE1), ids=lambda k: f"example{k}")
 def example(request) -> int:
     return request.param
+
+
+def pytest_collection_modifyitems(items):
+    """The tests marked ``long`` first (in their order, the rest after in theirs): pytest-xdist hands tests out in
+    this order, and a 50 s test begun last kept one worker busy alone at the end of the run."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)
+

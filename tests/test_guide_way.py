@@ -191,6 +191,7 @@ def test_bad_input_is_one_line_exit_2(tmp_path, edit, message):
 
 
 @same_solve("guide_way/smooth_redesign.toml")
+@pytest.mark.long
 def test_redesign_solves_smooth_without_undercut(baseline):
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
     result, _, _ = solved_library_spec("guide_way/smooth_redesign.toml")

@@ -87,6 +87,7 @@ def assert_given_design_kept(run: Path) -> None:
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 
 
+@pytest.mark.long
 def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_uninterrupted_run(tmp_path):
     """--workers 1: IPOPT runs in this process and CasADi swallows the KeyboardInterrupt; it must still stop."""
     proc = cli("solve", SPEC, "--out", tmp_path / "a", "--starts", 24, "--workers", 1, cwd=tmp_path)

@@ -114,10 +114,14 @@ def test_every_library_spec_is_recorded():
 
 #: library solves other tests read too (tests/solving.py: solved_library_spec), solved once in one test process
 SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3, 4))}
+#: solves of 10 s or more (started first: tests/conftest.py)
+LONG = {"fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml"}
 
 
 def _marks(spec: str) -> list:
-    return [pytest.mark.benchmark] if spec in STUDIES else [same_solve(spec)] if spec in SHARED else []
+    if spec in STUDIES:
+        return [pytest.mark.benchmark]
+    return ([same_solve(spec)] if spec in SHARED else []) + ([pytest.mark.long] if spec in LONG else [])
 
 
 @pytest.mark.parametrize("spec", [pytest.param(s, marks=_marks(s)) for s in SPECS])

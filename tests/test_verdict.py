@@ -150,7 +150,8 @@ UNKNOWN_ALONE: set[str] = set()
 EITHER_ALONE = {"guide_way"}
 
 
-@pytest.mark.parametrize("kind", sorted(UNREACHABLE))
+@pytest.mark.parametrize("kind", [pytest.param(k, marks=[pytest.mark.long] if k == "guide_way" else [])
+                                  for k in sorted(UNREACHABLE)])
 def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
     source, replacements, rule, starts = UNREACHABLE[kind]
     loaded = load_spec(edited_spec(tmp_path, source, replacements))
