@@ -37,6 +37,6 @@ def example(request) -> int:
 
 def pytest_collection_modifyitems(items):
     """The tests marked ``long`` first (in their order, the rest after in theirs): pytest-xdist hands tests out in
-    this order, and a 50 s test begun last kept one worker busy alone at the end of the run."""
+    this order, and a 50 s test begun late keeps one worker busy alone at the end of the run."""
     items.sort(key=lambda item: item.get_closest_marker("long") is None)
 
