@@ -63,9 +63,9 @@ def needs_own_process(args) -> bool:
     if not args or args[0] == "studio" or "--scheduler" in args:
         return True
     if args[0] in ("solve", "bench"):
-        for flag, value in zip(args, args[1:]):
-            if flag == "--workers":
-                return value != "1"
+        given = [value for flag, value in zip(args, args[1:]) if flag == "--workers"]
+        if given:
+            return given[-1] != "1"                     # click keeps the last one given
         return not ({"-h", "--help"} & set(args))       # the default is one worker per core
     return False
 
