@@ -236,6 +236,13 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
         futures: dict = {}
         procs: list = []
         broken: str | None = None
+
+        def accept_finished() -> None:
+            """Keep every start whose future finished without raising and is not yet kept."""
+            for fut in sorted(futures, key=futures.get):
+                if fut.done() and not fut.cancelled() and fut.exception() is None:
+                    accept(fut.result())
+
         # While this thread is inside concurrent.futures a signal is only recorded, and raised at the loop's
         # safe point: raised there, it can leave a future's lock held (wait() takes every waited future's
         # lock one by one), and the pool's manager thread, cancelling that future, then blocks forever and
@@ -276,9 +283,7 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
             with interrupt.deferred(reraise=False):      # a second signal does not cut the clean-up short
                 if interrupt.caused_by_signal(exc):     # the starts that finished since the last look are kept
                     with contextlib.suppress(Exception):    # (never at the cost of ending the workers below)
-                        for fut in sorted(futures, key=futures.get):
-                            if fut.done() and not fut.cancelled() and fut.exception() is None:
-                                accept(fut.result())
+                        accept_finished()
                 for fut in futures:
                     fut.cancel()
                 _end_workers(pool)
@@ -295,9 +300,7 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
             pool.shutdown(wait=True, cancel_futures=True)
             _drain(began_q, began)
             if broken is not None:
-                for fut in sorted(futures, key=futures.get):     # starts that finished as the pool broke
-                    if fut.done() and not fut.cancelled() and fut.exception() is None:
-                        accept(fut.result())
+                accept_finished()           # starts that finished as the pool broke
         return sorted(i for i in began if i not in outcomes and i <= stop_at), broken
 
     def remaining() -> list[int]:
