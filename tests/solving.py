@@ -50,12 +50,6 @@ def baseline_rules(loaded):
 
 # --- through the CLI, as a user runs it -------------------------------------------------------------------
 
-def cli_run(*args: str, cwd):
-    """``python -m synthesis.cli ARGS`` in ``cwd``; stdout and stderr captured as text (in this process where a
-    separate one is not the point: :func:`agrisynth`)."""
-    return agrisynth(*args, cwd=cwd)
-
-
 def needs_own_process(args) -> bool:
     """Whether ``agrisynth ARGS`` must run in a process of its own: a solve or bench on a pool of workers (it
     would fork this test process and its threads), on a cluster, or the studio (a server)."""

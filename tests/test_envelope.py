@@ -212,10 +212,10 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
 def test_envelope_run_folder_through_the_cli(tmp_path):
     """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
     and the @envelope rows for the solution and the given design, envelope.png beside the report."""
-    from solving import cli_run, strict_json
+    from solving import agrisynth, strict_json
 
-    run = cli_run("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
-                  "--starts", "1", cwd=tmp_path)
+    run = agrisynth("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
+                    "--starts", "1", cwd=tmp_path)
     assert run.returncode == 0, run.stderr
     folder = tmp_path / "uniform_spacing_mu_envelope"
     assert (folder / "envelope.png").stat().st_size > 0 and "envelope.png" in (folder / "report.html").read_text()
@@ -292,12 +292,13 @@ FORWARD_RANGE = "forward_speed = { range = [0.50, 0.75], samples = 4, nominal = 
 def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path):
     """check reads a range's nominal value: it says so, and its verdict names the nominal point, instead of
     "every rule satisfied" for a design that may fail inside the range."""
-    from solving import cli_run
-    run = cli_run("check", str(ENVELOPE_SPEC), "--out", str(tmp_path), cwd=tmp_path)
+    from solving import agrisynth
+    run = agrisynth("check", str(ENVELOPE_SPEC), "--out", str(tmp_path), cwd=tmp_path)
     out = " ".join(run.stdout.split())
     assert "forward_speed given as a range: check evaluates the nominal value only" in out
     assert "violated at the nominal operating point" in out or "every rule satisfied at the nominal operating point" in out
-    plain = cli_run("check", str(LIBRARY / "planting_arm/redesign_from_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
+    plain = agrisynth("check", str(LIBRARY / "planting_arm/redesign_from_example1.toml"), "--out", str(tmp_path),
+                      cwd=tmp_path)
     assert "nominal operating point" not in plain.stdout and "given as a range" not in plain.stdout
 
 
@@ -310,8 +311,9 @@ def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path
      "forward_speed: samples = 4 over [0.6, 0.60001] are not distinct to 4 significant digits"),
 ])
 def test_range_sizes_that_would_blow_up_or_merge_scenarios_are_refused(tmp_path, replacement, message):
-    from solving import cli_run, spec_with
-    run = cli_run("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [replacement])), "--out", str(tmp_path), cwd=tmp_path)
+    from solving import agrisynth, spec_with
+    run = agrisynth("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [replacement])), "--out", str(tmp_path),
+                    cwd=tmp_path)
     assert run.returncode == 2 and message in " ".join(run.stderr.split()), run.stderr
     assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
 
@@ -319,9 +321,9 @@ def test_range_sizes_that_would_blow_up_or_merge_scenarios_are_refused(tmp_path,
 def test_a_malformed_range_of_a_field_that_takes_ranges_is_not_called_one_value(tmp_path):
     """forward_speed takes a range: a range of one number is named as that, never "takes one value" (which a
     clamp_cam crank_speed range is told: test_clamp_cam_cli)."""
-    from solving import cli_run, spec_with
+    from solving import agrisynth, spec_with
     bad = (FORWARD_RANGE, "forward_speed = { range = [0.5], samples = 3 }")
-    run = cli_run("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [bad])), "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("check", str(spec_with(tmp_path, ENVELOPE_SPEC, [bad])), "--out", str(tmp_path), cwd=tmp_path)
     err = " ".join(run.stderr.split())
     assert run.returncode == 2 and "forward_speed.range: expected [lo, hi] (two numbers), got [0.5]" in err, err
     assert "takes one value" not in err

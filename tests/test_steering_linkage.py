@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from solving import cli_run, modules_after_runs, run_solve, spec_with, strict_json
+from solving import agrisynth, modules_after_runs, run_solve, spec_with, strict_json
 from synthesis.kinematics.steering_trapezoid import (ackermann_kingpin_spacing, ackermann_outer, inner_tip,
                                                      loop_residual, outer_lock, outer_tip, tie_rod_length,
                                                      transmission_angles, turning_radii)
@@ -236,7 +236,7 @@ def test_redesign_over_the_machine_s_0_27_deg():
 
 
 def test_check_cli_writes_result_and_figure(tmp_path):
-    proc = cli_run("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
+    proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     folder = tmp_path / "hwang_model3_steering"
     data = strict_json(folder / "result.json")
@@ -248,7 +248,7 @@ def test_a_trapezoid_through_its_dead_centre_is_a_rule_failure_naming_the_lock(t
     path = spec_with(tmp_path, BASELINE, [("arm_length = 150.0 ", "arm_length = 200.0 "),
                                            ("base_angle = 72.4 ", "base_angle = 20.0 "),
                                            ("max_inside_lock = 40.0", "max_inside_lock = 45.0")])
-    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
@@ -264,7 +264,7 @@ def test_an_arm_swung_through_its_line_with_the_tie_rod_reads_past_180_not_as_a_
     -155.3; followed from lock 0 it is 204.75 deg at lock 40, the angle measured here from the drawn joints."""
     path = spec_with(tmp_path, BASELINE, [("arm_length = 150.0 ", "arm_length = 213.29976392348243 "),
                                            ("base_angle = 72.4 ", "base_angle = 38.1191626865916 ")])
-    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "tie_rod_transmission_angle")
@@ -302,7 +302,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
     else:
         path = spec_with(tmp_path, BASELINE, [(old, new)])
     for command in ("check", "solve"):
-        proc = cli_run(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
+        proc = agrisynth(command, str(path), "--out", str(tmp_path), cwd=tmp_path)
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert message in " ".join(proc.stderr.split()), proc.stderr
         assert "Traceback" not in proc.stderr

@@ -10,7 +10,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
-from solving import cli_run, strict_json
+from solving import agrisynth, strict_json
 from studio_fixtures import STUDIO_SPECS, running_studio
 from test_report_browser import CHROMIUM, LAUNCH_FLAGS, sync_playwright  # noqa: F401 - the fixture
 
@@ -205,7 +205,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
     assert values["l7"] != 42.5
     assert {r["name"] for r in table if r["red"]} == {r["name"] for r in theirs["rules"] if not r["satisfied"]}
     # "save spec" at the solution, then `agrisynth check` on it: the page's table, value for value
-    proc = cli_run("check", str(tmp_path / "studio" / saved), "--out", str(tmp_path / "checked"), cwd=tmp_path)
+    proc = agrisynth("check", str(tmp_path / "studio" / saved), "--out", str(tmp_path / "checked"), cwd=tmp_path)
     checked = strict_json(tmp_path / "checked" / saved.removesuffix(".toml") / "result.json")
     assert proc.returncode == (1 if any(r["red"] for r in table) else 0), proc.stderr
     assert {name: checked["design"][name] for name in values} == values

@@ -13,7 +13,7 @@ import urllib.request
 
 import pytest
 
-from solving import cli_run
+from solving import agrisynth
 from studio_fixtures import STUDIO_SPECS
 
 pytest.importorskip("starlette")
@@ -53,15 +53,16 @@ def _page(url: str) -> str:
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path):
-    missing = cli_run("studio", str(tmp_path / "nowhere.toml"), cwd=tmp_path)
+    missing = agrisynth("studio", str(tmp_path / "nowhere.toml"), cwd=tmp_path)
     assert missing.returncode == 2 and "nowhere.toml" in missing.stderr
     assert "Traceback" not in missing.stderr and len(missing.stderr.strip().splitlines()) == 1
     (tmp_path / "a_file").write_text("x")
-    out_is_file = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--out", str(tmp_path / "a_file"), cwd=tmp_path)
+    out_is_file = agrisynth("studio", str(STUDIO_SPECS["crank_rocker"]), "--out", str(tmp_path / "a_file"),
+                            cwd=tmp_path)
     assert out_is_file.returncode == 2 and "Traceback" not in out_is_file.stderr
     assert out_is_file.stderr.strip().splitlines() == [out_is_file.stderr.strip()]      # one line
     assert out_is_file.stderr.startswith("error: Invalid value for '--out'")   # click's usage error
-    port = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", "70000", cwd=tmp_path)
+    port = agrisynth("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", "70000", cwd=tmp_path)
     assert port.returncode == 2 and "--port" in port.stderr
 
 
@@ -72,8 +73,8 @@ def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         port = taken.getsockname()[1]
-        busy = cli_run("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", str(port), "--out",
-                       str(tmp_path / "new" / "studio"), cwd=tmp_path)
+        busy = agrisynth("studio", str(STUDIO_SPECS["crank_rocker"]), "--port", str(port), "--out",
+                         str(tmp_path / "new" / "studio"), cwd=tmp_path)
     assert busy.returncode == 2 and busy.stderr.strip().splitlines() == [busy.stderr.strip()], busy.stderr
     assert f"--port {port}: cannot listen on 127.0.0.1" in busy.stderr and "Traceback" not in busy.stderr
     assert not (tmp_path / "new").exists()

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from solving import cli_run, modules_after_runs, run_solve, spec_with, strict_json
+from solving import agrisynth, modules_after_runs, run_solve, spec_with, strict_json
 from synthesis.kinematics.tillage_linkage import bar_angle, joints, path_function, tool_point
 from synthesis.spec import load_spec
 from synthesis.tillage_linkage import printed as pr
@@ -116,7 +116,7 @@ def test_a_crank_a_hair_shorter_than_b_is_checked_not_crashed(tmp_path):
     assert "\na = 120.0" in text
     path = tmp_path / "hair.toml"
     path.write_text(text.replace("\na = 120.0", "\na = 249.9999999", 1))
-    proc = cli_run("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
     data = strict_json(tmp_path / load_spec(path).model.name / "result.json")
     assert data["facts"]["printed_relations"]["not_evaluated_at_crank_deg"] == [pytest.approx(theta + 180.0)]
@@ -207,7 +207,7 @@ def test_max_margin_reaches_the_depth_band_s_half_width(tmp_path):
 
 
 def test_check_cli_writes_result_trajectory_and_figure(tmp_path):
-    proc = cli_run("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     folder = tmp_path / "out" / "hwang_tillage_baseline"
     data = strict_json(folder / "result.json")
@@ -218,7 +218,7 @@ def test_check_cli_writes_result_trajectory_and_figure(tmp_path):
 def test_a_bar_that_leaves_the_roller_pair_is_a_rule_failure(tmp_path):
     """c = 300 < a + b = 370: at omega = theta the bar's end has passed the rollers (D between B and C)."""
     path = spec_with(tmp_path, BASELINE, [("c = 500.0 ", "c = 300.0 ")])
-    proc = cli_run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
@@ -228,7 +228,7 @@ def test_a_bar_that_leaves_the_roller_pair_is_a_rule_failure(tmp_path):
 
 def test_a_tool_that_never_reaches_the_soil_names_why(tmp_path):
     path = spec_with(tmp_path, BASELINE, [("height_c = 130.0 ", "height_c = 400.0 ")])
-    proc = cli_run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
     rules = {r["name"]: r for r in data["rules"]}
@@ -252,7 +252,7 @@ def test_a_tool_that_never_reaches_the_soil_names_why(tmp_path):
 def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
     path = spec_with(tmp_path, BASELINE, [(old, new)])
     for command in ("check", "solve"):
-        proc = cli_run(command, str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+        proc = agrisynth(command, str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert message in " ".join(proc.stderr.split()), proc.stderr
         assert "Traceback" not in proc.stderr
@@ -261,7 +261,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
 def test_free_bounds_that_let_the_crank_reach_the_rollers_are_bad_input(tmp_path):
     path = spec_with(tmp_path, REDESIGN, [("a = { init = 120.0, bounds = [40.0, 150.0] }",
                                             "a = { init = 120.0, bounds = [40.0, 170.0] }")])
-    proc = cli_run("solve", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    proc = agrisynth("solve", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 2 and "a = 170 mm >= b = 160 mm" in " ".join(proc.stderr.split()), proc.stderr
 
 

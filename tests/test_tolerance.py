@@ -308,10 +308,10 @@ def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
 def test_tolerance_cli_on_an_envelope_spec_reports_operating_sensitivities(tmp_path):
     """`agrisynth tolerance` of an envelope spec: result.json facts.tolerance.operating (mu, its nominal) and each
     stack-up row's operating_sensitivity and operating_point; report.md's table of d/d mu."""
-    from solving import cli_run, strict_json
+    from solving import agrisynth, strict_json
     repo = Path(__file__).resolve().parents[1]
-    run = cli_run("tolerance", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--length", "0.2",
-                  "--angle", "0.3", "--samples", "5", "--out", str(tmp_path), cwd=repo)
+    run = agrisynth("tolerance", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--length", "0.2",
+                    "--angle", "0.3", "--samples", "5", "--out", str(tmp_path), cwd=repo)
     assert run.returncode in (0, 1), run.stderr
     folder = tmp_path / "uniform_spacing_mu_envelope-tolerance"
     facts = strict_json(folder / "result.json")["facts"]["tolerance"]
@@ -342,9 +342,9 @@ def test_tolerance_at_a_design_on_a_rule_s_limit_writes_finite_json(tmp_path):
     """picking_arc's given design sits on the Grashof limit (r1 = r2 = r3 = r4, margin 0) and its transmission
     angle is undefined there: the analysis ends without a traceback, and result.json holds no NaN (null, listed
     under not_finite)."""
-    from solving import cli_run, strict_json
-    run = cli_run("tolerance", str(LIBRARY / "fourbar_path/picking_arc.toml"), "--length", "0.2", "--angle", "0.3",
-                  "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
+    from solving import agrisynth, strict_json
+    run = agrisynth("tolerance", str(LIBRARY / "fourbar_path/picking_arc.toml"), "--length", "0.2", "--angle", "0.3",
+                    "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode in (0, 1) and "Traceback" not in run.stderr, run.stderr
     data = strict_json(tmp_path / "picking_arc-tolerance" / "result.json")
     assert data["not_finite"] and all(p.startswith("facts.tolerance.") for p in data["not_finite"])

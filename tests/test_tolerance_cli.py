@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from solving import cli_run, strict_json
+from solving import agrisynth, strict_json
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ROOT / "problems"
@@ -24,8 +24,8 @@ def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
     is what the tornado's bars show, and the tornado draws the worst rules first."""
     from synthesis.tolerance.output import tornado_rules
 
-    run = cli_run("tolerance", str(STEERING), "--length", "0.2", "--angle", "0.3", "--tol", "arm_length=0.5",
-                  "--samples", "10", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(STEERING), "--length", "0.2", "--angle", "0.3", "--tol", "arm_length=0.5",
+                    "--samples", "10", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode in (0, 1), run.stderr
     folder = tmp_path / "steering_redesign_27-tolerance"
     assert (folder / "tornado.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -51,7 +51,7 @@ def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
     ("base_angle=inf", "--tol base_angle=inf: the half-width must be a finite number > 0"),
 ])
 def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, option, said):
-    run = cli_run("tolerance", str(STEERING), "--tol", option, "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(STEERING), "--tol", option, "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip() == f"error: {said}"
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
@@ -62,13 +62,13 @@ def test_a_half_width_that_reaches_no_design_variable_is_refused(tmp_path):
     showed an empty box's zero losses without a word.  Refused (exit 2), naming the variables and their units;
     with --angle the same spec is analysed (a box of 0.5 deg on each wall)."""
     spec = LIBRARY / "guide_tube" / "cai2020_tubes.toml"
-    run = cli_run("tolerance", str(spec), "--length", "1", "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(spec), "--length", "1", "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip() == ("error: tolerance: the half-width (length 1 mm) applies to no design variable, so "
                                   "the tolerance box is empty; the design variables: delta_I (deg), delta_II (deg)")
     assert not (tmp_path / "cai2020_tubes-tolerance").exists()
-    run = cli_run("tolerance", str(spec), "--length", "1", "--angle", "0.5", "--samples", "0", "--out",
-                  str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(spec), "--length", "1", "--angle", "0.5", "--samples", "0", "--out",
+                    str(tmp_path), cwd=tmp_path)
     assert run.returncode in (0, 1), run.stderr
     facts = strict_json(tmp_path / "cai2020_tubes-tolerance" / "result.json")["facts"]["tolerance"]
     assert facts["tolerance"] == {"delta_I": {"half_width": 0.5, "unit": "deg"},
@@ -80,7 +80,7 @@ def test_a_half_width_that_reaches_no_design_variable_is_refused(tmp_path):
 def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_path, option, value):
     """click's FloatRange(min=0) lets nan and inf through: the analysis then wrote nan margins and exited 1; and
     the options take what a spec's [tolerance] may say (length <= 1000 mm, angle <= 90 deg), not 1e300."""
-    run = cli_run("tolerance", str(STEERING), option, value, "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(STEERING), option, value, "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip().startswith(f"error: Invalid value for '{option}'") and "\n" not in run.stderr.strip()
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
@@ -90,7 +90,7 @@ def test_samples_0_exits_on_the_design_and_its_linear_worst_cases(tmp_path):
     """--samples 0 runs no Monte-Carlo: the exit is the nominal rules' and the linear worst cases' verdict (the
     library design passes every rule with nothing toleranced: 0), and the report says no sample was drawn rather
     than "0.00 % pass"."""
-    run = cli_run("tolerance", str(STEERING), "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(STEERING), "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     facts = strict_json(tmp_path / "steering_redesign_27-tolerance" / "result.json")["facts"]["tolerance"]
     assert facts["monte_carlo"]["samples"] == 0 and facts["monte_carlo"]["pass_rate"] is None
@@ -103,8 +103,8 @@ def test_the_monte_carlo_counts_per_rule_the_samples_where_the_rule_could_not_be
     """A sample whose design assembles but misses a precision point (P3 not found) has rules without a margin: their
     worst_margin is null, and "unevaluable" (the samples the re-check could not evaluate at all) stayed 0, so the
     file contradicted itself.  Each rule now counts its own; a null worst margin comes with a positive count."""
-    run = cli_run("tolerance", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--length", "4", "--angle", "3",
-                  "--samples", "40", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--length", "4", "--angle",
+                    "3", "--samples", "40", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 1, run.stdout + run.stderr
     mc = strict_json(tmp_path / "taiwan_example1-tolerance" / "result.json")["facts"]["tolerance"]["monte_carlo"]
     assert mc["samples"] == 40 and mc["unevaluable"] == 0
@@ -118,20 +118,20 @@ def test_the_monte_carlo_counts_per_rule_the_samples_where_the_rule_could_not_be
 
 
 def test_tol_refuses_a_variable_given_twice(tmp_path):
-    run = cli_run("tolerance", str(STEERING), "--tol", "arm_length=0.2", "--tol", "arm_length=0.3",
-                  "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(STEERING), "--tol", "arm_length=0.2", "--tol", "arm_length=0.3",
+                    "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2
     assert run.stderr.strip() == "error: --tol arm_length: given twice (0.2 and 0.3); give each variable once"
 
 
 def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
-    solve = cli_run("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
-                    cwd=tmp_path)
+    solve = agrisynth("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
+                      cwd=tmp_path)
     assert solve.returncode == 0, solve.stderr
     run_dir = tmp_path / "runs" / "steering_redesign_27"
     solved = json.loads((run_dir / "result.json").read_text())["design"]
-    run = cli_run("tolerance", str(run_dir), "--length", "0.2", "--angle", "0.3", "--samples", "10",
-                  "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(run_dir), "--length", "0.2", "--angle", "0.3", "--samples", "10",
+                    "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode in (0, 1), run.stderr
     data = strict_json(tmp_path / "steering_redesign_27-tolerance" / "result.json")
     assert data["name"] == "steering_redesign_27-tolerance"
@@ -139,8 +139,8 @@ def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     assert data["design"]["arm_length"] != pytest.approx(150.0)       # the solved design, not the spec's start
     assert data["facts"]["tolerance"]["monte_carlo"]["samples"] == 10
     # its result.json names the same run (an independent trial: it was parsed as TOML, "not valid TOML")
-    again = cli_run("tolerance", str(run_dir / "result.json"), "--length", "0.2", "--angle", "0.3", "--samples", "10",
-                    "--out", str(tmp_path / "again"), cwd=tmp_path)
+    again = agrisynth("tolerance", str(run_dir / "result.json"), "--length", "0.2", "--angle", "0.3", "--samples", "10",
+                      "--out", str(tmp_path / "again"), cwd=tmp_path)
     assert again.returncode == run.returncode, again.stderr
     assert strict_json(tmp_path / "again" / "steering_redesign_27-tolerance" / "result.json")["design"] == data["design"]
 
@@ -155,7 +155,7 @@ def test_a_folder_without_a_solved_design_says_why_in_one_line(tmp_path, status,
     run_dir.mkdir()
     (run_dir / "result.json").write_text(json.dumps({"status": status}))
     for target in (run_dir, run_dir / "result.json"):
-        run = cli_run("tolerance", str(target), "--length", "0.2", "--out", str(tmp_path), cwd=tmp_path)
+        run = agrisynth("tolerance", str(target), "--length", "0.2", "--out", str(tmp_path), cwd=tmp_path)
         assert run.returncode == 2 and "Traceback" not in run.stderr
         assert said in " ".join(run.stderr.split())
 
@@ -165,13 +165,13 @@ def test_the_tolerance_result_json_holds_the_rows_its_exit_code_reads(tmp_path):
     misses); its result.json said every rule held (only the design's own rules), so `compare` showed the analysis as
     passing.  Now it holds <rule>@monte_carlo rows (the pass rate, satisfied only at 100 %) or, with --samples 0,
     <rule>@tolerance rows (the linear worst margin), and the exit code is 1 exactly when one of its rows fails."""
-    solve = cli_run("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
-                    cwd=tmp_path)
+    solve = agrisynth("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
+                      cwd=tmp_path)
     assert solve.returncode == 0, solve.stderr
     run_dir = tmp_path / "runs" / "steering_redesign_27"      # its arm length at the rule's limit
     for samples, suffix in (("100", "@monte_carlo"), ("0", "@tolerance")):
-        run = cli_run("tolerance", str(run_dir), "--length", "0.1", "--samples", samples, "--out",
-                      str(tmp_path / samples), cwd=tmp_path)
+        run = agrisynth("tolerance", str(run_dir), "--length", "0.1", "--samples", samples, "--out",
+                        str(tmp_path / samples), cwd=tmp_path)
         data = strict_json(tmp_path / samples / "steering_redesign_27-tolerance" / "result.json")
         rows = {r["name"]: r for r in data["rules"]}
         assert "versions" in data and f"steering_arm_length{suffix}" in rows
@@ -181,15 +181,15 @@ def test_the_tolerance_result_json_holds_the_rows_its_exit_code_reads(tmp_path):
         if mc["samples"]:
             assert rows["steering_arm_length@monte_carlo"]["value"] == mc["rules"]["steering_arm_length"]["pass_rate"]
             assert mc["pass_rate"] < 1.0
-        page = cli_run("compare", str(run_dir), str(tmp_path / samples / "steering_redesign_27-tolerance"),
-                       "--out", str(tmp_path / f"cmp{samples}"), cwd=tmp_path)
+        page = agrisynth("compare", str(run_dir), str(tmp_path / samples / "steering_redesign_27-tolerance"),
+                         "--out", str(tmp_path / f"cmp{samples}"), cwd=tmp_path)
         assert page.returncode == 0 and f"{len(failing)} rule(s) violated" in page.stdout, page.stdout + page.stderr
 
 
 def test_robust_solve_states_the_monte_carlo_pass_rates_in_the_terminal_and_the_report(tmp_path):
     spec = tmp_path / "robust.toml"
     spec.write_text(STEERING.read_text() + "\n[tolerance]\nlength = 0.2\nangle = 0.3\nsamples = 40\nseed = 3\n")
-    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
+    run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     mc = json.loads((tmp_path / "out" / "steering_redesign_27" / "result.json").read_text())["facts"]["tolerance"][
         "monte_carlo"]
@@ -249,7 +249,7 @@ def test_a_robust_run_that_fails_its_linearised_worst_case_carries_no_monte_carl
         text = text.replace(old, new, 1)
     spec = tmp_path / "oscillating.toml"
     spec.write_text(text)
-    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 3, run.stdout + run.stderr
     data = strict_json(tmp_path / "opening_cam_robust_redesign" / "result.json")
     note = data["solver"]["status_note"]
@@ -284,7 +284,7 @@ def test_a_tolerance_box_no_design_can_hold_names_the_rule_and_the_tolerance_tha
     spec = tmp_path / "impossible.toml"
     spec.write_text((LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
                     + "\n[tolerance]\nlength = 5\nangle = 2\nsamples = 20\n")
-    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
+    run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert run.returncode == 3, run.stdout + run.stderr
     err = " ".join(run.stderr.split())
     assert "Traceback" not in err
@@ -326,8 +326,8 @@ def test_a_rule_the_nlp_writes_in_other_terms_shows_the_re_checks_unit_and_no_lo
     """opening_cam_redesign's no_undercut: the NLP holds a curvature (unit 1), the re-check reports the radius
     margin in mm (an independent trial: the row read unit "1" above mm numbers, and a loss ratio of the two).  The
     unit column is the re-check's, the linear worst margin's cell names the NLP's terms, no ratio is formed."""
-    run = cli_run("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam_redesign.toml"), "--length", "0.2",
-                  "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam_redesign.toml"), "--length", "0.2",
+                    "--samples", "20", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode in (0, 1), run.stderr
     facts = strict_json(tmp_path / "opening_cam_redesign-tolerance" / "result.json")["facts"]["tolerance"]
     row = next(r for r in facts["stack_up"] if r["name"] == "no_undercut")
@@ -348,8 +348,8 @@ def test_samples_outside_the_cams_domain_are_unevaluable_not_read_as_designs(tmp
     for option, width, outside in (("base_radius=100", 100.0, lambda d: 50.0 + d <= 3.5),
                                    ("offset=60", 60.0, lambda d: abs(0.0 + d) >= 50.0)):
         out = tmp_path / option.split("=")[0]
-        run = cli_run("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam.toml"), "--tol", option, "--samples", "50",
-                      "--out", str(out), cwd=tmp_path)
+        run = agrisynth("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam.toml"), "--tol", option, "--samples",
+                        "50", "--out", str(out), cwd=tmp_path)
         assert run.returncode == 1 and "RuntimeWarning" not in run.stderr + run.stdout, run.stderr
         facts = strict_json(out / "opening_cam-tolerance" / "result.json")["facts"]["tolerance"]
         keys = list(facts["tolerance"])
@@ -375,7 +375,7 @@ def test_guide_tube_equal_times_in_a_tolerance_box_hold_the_spread_limit_at_ever
     spec = spec_with(tmp_path, LIBRARY / "guide_tube" / "fastest_equal_time.toml",
                      [('name = "fastest"', 'name = "nearest"'),
                       ("[solver]", "[tolerance]\nangle = 0.2\nsamples = 50\n\n[solver]")])
-    run = cli_run("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     result = strict_json(tmp_path / "fastest_equal_time" / "result.json")
     assert result["status"] == "optimal"
@@ -439,8 +439,8 @@ def test_samples_0_fails_a_rule_its_linear_worst_corner_breaks(tmp_path):
     along the frame, cos mu = (r3^2 + r4^2 - (r1 + r2)^2) / (2 r3 r4): 140.0058 deg at r1, r2 + 0.2 and r3, r4 - 0.2."""
     spec = tmp_path / "loop_tol.toml"
     spec.write_text(LOOP_TOL)
-    run = cli_run("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "0", "--out",
-                  str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "0", "--out",
+                    str(tmp_path), cwd=tmp_path)
     assert run.returncode == 1, run.stdout + run.stderr
     result = strict_json(tmp_path / "loop_tol-tolerance" / "result.json")
     rows = {r["name"]: r for r in result["rules"]}
@@ -484,8 +484,8 @@ def test_a_rule_with_no_linear_driver_is_explained_as_such(tmp_path):
     re-check's)", the same numbers; now it says there is no linear driver and what the samples lose."""
     spec = tmp_path / "loop_tol.toml"
     spec.write_text(LOOP_TOL)
-    run = cli_run("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "40", "--out",
-                  str(tmp_path), cwd=tmp_path)
+    run = agrisynth("tolerance", str(spec), "--length", "0.2", "--angle", "0.2", "--samples", "40", "--out",
+                    str(tmp_path), cwd=tmp_path)
     result = strict_json(tmp_path / "loop_tol-tolerance" / "result.json")
     rows = {r["name"]: r for r in result["facts"]["tolerance"]["stack_up"]}
     row = rows["sequence"]
@@ -521,7 +521,7 @@ def test_a_spec_s_per_variable_half_width_is_checked_as_the_option_is(tmp_path, 
                     + f"\n[tolerance]\nvariables = {{{entry}}}\n")
     for command in (["check", str(spec)], ["solve", str(spec), "--starts", "1", "--workers", "1"],
                     ["tolerance", str(spec), "--samples", "0"]):
-        run = cli_run(*command, "--out", str(tmp_path / "out"), cwd=tmp_path)
+        run = agrisynth(*command, "--out", str(tmp_path / "out"), cwd=tmp_path)
         assert run.returncode == 2, (command, run.stdout + run.stderr)
         line = run.stderr.strip()
         assert line.startswith(f"error: {spec}") and said in line and "\n" not in line, (command, line)
@@ -538,7 +538,7 @@ def test_equal_times_in_a_tolerance_box_over_a_friction_range_are_held_at_each_s
     spec = spec_with(tmp_path, LIBRARY / "guide_tube" / "uniform_spacing_mu_envelope.toml",
                      [('name = "uniform"', 'name = "nearest"'),
                       ("[solver]", "[tolerance]\nangle = 0.2\nsamples = 0\n\n[solver]")])
-    run = cli_run("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 3 and "Traceback" not in run.stderr, run.stdout + run.stderr
     result = strict_json(tmp_path / "uniform_spacing_mu_envelope" / "result.json")
     rows = {r["name"]: r for r in result["rules"]}
