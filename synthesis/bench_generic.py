@@ -54,8 +54,9 @@ from typing import Any, Callable
 import numpy as np
 
 from synthesis.bench import BenchCase, MethodRun
+from synthesis.library import LIBRARY
 
-LIBRARY = Path(__file__).resolve().parents[1] / "problems"
+
 #: target = best known + max(ABS_TOLERANCE, REL_TOLERANCE x |best known|)
 REL_TOLERANCE = 1e-6
 ABS_TOLERANCE = 1e-9

@@ -18,9 +18,10 @@ from rich.table import Table
 
 from constraints.base import limit_text
 from synthesis.errors import AgrisynthError, AssemblyError, SpecError
+from synthesis.library import LIBRARY
 from synthesis.terminal import PIPED_WIDTH
 
-LIBRARY = Path(__file__).resolve().parent.parent / "problems"
+
 #: as wide as the terminal; piped, wide enough that no table cell is ever cut (synthesis.terminal)
 console = Console(highlight=False, width=None if sys.stdout.isatty() else PIPED_WIDTH)
 err_console = Console(stderr=True, highlight=False)

@@ -1,4 +1,4 @@
-"""Independent references for the clamp_cam tests, written without synthesis.kinematics.cam_follower.
+"""Independent references for the clamp_cam tests, written without synthesis.kinds.clamp_cam.kinematics.cam_follower.
 
 * ``sampled_roller_envelope``: the cam a cutter leaves when it removes every sampled roller disc;
   its polar radius along a ray is the first hit on any disc (no derivatives, no normals).

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from synthesis.kinematics.planting_arm import ArmDesign, Motion
+from synthesis.kinds.planting.kinematics import ArmDesign, Motion
 
 ROOT = Path(__file__).resolve().parent.parent
 LIBRARY = ROOT / "problems"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis.fourbar_path.construction import joint_positions, transmission_deg
+from synthesis.kinds.fourbar_path.construction import joint_positions, transmission_deg
 
 ROOT = Path(__file__).resolve().parent.parent
 PATH_LIBRARY = ROOT / "problems" / "fourbar_path"

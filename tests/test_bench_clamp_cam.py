@@ -8,7 +8,7 @@ import math
 import pytest
 
 from conftest import LIBRARY
-from synthesis.clamp_cam.nlp import CamNLP
+from synthesis.kinds.clamp_cam.nlp import CamNLP
 from solving import run_solve
 from synthesis.spec import load_spec
 
@@ -31,7 +31,7 @@ def test_bench_32_start_multistart(benchmark, workers):
 
 @pytest.mark.parametrize("spans", [16, 32, 64])
 def test_bench_optimised_law_fit(benchmark, spans):
-    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+    from synthesis.kinds.clamp_cam.bspline_law import fit_optimised_law
 
     law = benchmark(fit_optimised_law, 10.0, {"rise": 40.0, "return": 14.0}, 2 * math.pi, "acceleration", spans)
     benchmark.extra_info["ratio_to_cycloidal"] = law.ratio_to_cycloidal["rise"]

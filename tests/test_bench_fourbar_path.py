@@ -11,7 +11,7 @@ import pytest
 
 from fourbar_path_support import cli, write_spec
 from solving import run_solve
-from synthesis.fourbar_path.synthetic import POINT_COUNTS, SEEDS, truth_data, truth_spec
+from synthesis.kinds.fourbar_path.synthetic import POINT_COUNTS, SEEDS, truth_data, truth_spec
 
 
 def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
@@ -129,7 +129,7 @@ def test_differential_evolution_at_equal_budget_stops_at_the_multistart_cpu_seco
     """The equal-budget peer takes its budget from the multistart run of the same round (the list it appends
     to) and stops at the first generation past it: a budget of 0 s is one generation, unpolished, and the
     design it returns is re-checked like any other."""
-    from synthesis.fourbar_path.bench import DE_EQUAL_BUDGET, case_for, differential_evolution_method
+    from synthesis.kinds.fourbar_path.bench import DE_EQUAL_BUDGET, case_for, differential_evolution_method
 
     loaded = truth_spec(1, 6, False, {"seed": 0})
     with pytest.raises(RuntimeError, match="after the IPOPT multistart"):
@@ -138,7 +138,7 @@ def test_differential_evolution_at_equal_budget_stops_at_the_multistart_cpu_seco
     assert run.details["generations"] == 1 and run.details["budget_cpu_s"] == 0.0
     assert "callback" in run.details["message"]
     # the objective returned is the decoded design's, evaluated again by the kind's own check
-    from synthesis.fourbar_path.check import evaluate
+    from synthesis.kinds.fourbar_path.check import evaluate
 
     design, crank = run.details["design"], run.details["crank_deg"]
     assert len(crank) == 6 and run.objective > 1e-8          # one generation does not find the exact fit

@@ -7,7 +7,7 @@ import pytest
 from conftest import PLANTING
 from synthesis import kinds
 from synthesis.core.solve import run_solve
-from synthesis.planting.nlp import PlantingNLP
+from synthesis.kinds.planting.nlp import PlantingNLP
 from synthesis.spec import load_spec
 
 pytestmark = pytest.mark.benchmark

@@ -12,8 +12,8 @@ from scipy.optimize import minimize_scalar
 
 from cam_reference import sampled_roller_envelope, translating_pitch
 from conftest import LIBRARY
-from synthesis.clamp_cam.check import cam_facts, profile, run_check
-from synthesis.clamp_cam.scene import CamScene
+from synthesis.kinds.clamp_cam.check import cam_facts, profile, run_check
+from synthesis.kinds.clamp_cam.scene import CamScene
 from synthesis.spec import load_spec
 
 CAMS = LIBRARY / "clamp_cam"

@@ -82,9 +82,9 @@ loaded = sorted(m for m in sys.modules if m.startswith(("synthesis", "constraint
 print("MODULES", " ".join(loaded))
 """
 
-FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.guide_tube", "synthesis.kinematics.fourbar",
-             "synthesis.kinematics.planting_arm", "synthesis.kinematics.arc", "constraints.grashof",
-             "constraints.transmission", "constraints.precision_points")
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.guide_tube", "synthesis.kinematics.fourbar",
+             "synthesis.kinds.planting.kinematics", "synthesis.kinds.picker.kinematics.arc", "constraints.grashof",
+             "constraints.transmission", "synthesis.kinds.planting.rules.precision_points")
 
 
 def _modules(tmp_path, command: str, spec: Path, extra: list[str] = ()) -> set[str]:
@@ -98,14 +98,14 @@ def _modules(tmp_path, command: str, spec: Path, extra: list[str] = ()) -> set[s
 
 def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optimised_law(tmp_path):
     checked = _modules(tmp_path, "check", CAMS / "opening_cam.toml")
-    assert "synthesis.clamp_cam.check" in checked and "ezdxf" in checked       # the DXF was written
+    assert "synthesis.kinds.clamp_cam.check" in checked and "ezdxf" in checked       # the DXF was written
     assert not [m for m in checked if m.startswith(FORBIDDEN)]
     assert not [m for m in checked if m.startswith("cvxpy")]
     solved = _modules(tmp_path, "solve", CAMS / "opening_cam_redesign.toml", ["--workers", "1", "--starts", "1"])
-    assert "synthesis.clamp_cam.nlp" in solved
+    assert "synthesis.kinds.clamp_cam.nlp" in solved
     assert not [m for m in solved if m.startswith(FORBIDDEN) or m.startswith("cvxpy")]
     optimised = _modules(tmp_path, "check", CAMS / "opening_cam_optimised_law.toml")
-    assert "cvxpy" in optimised and "synthesis.clamp_cam.bspline_law" in optimised
+    assert "cvxpy" in optimised and "synthesis.kinds.clamp_cam.bspline_law" in optimised
     assert not [m for m in optimised if m.startswith(FORBIDDEN)]
 
 

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from cam_reference import pole_pressure_angle_oscillating, pole_pressure_angle_translating, three_point_radius
-from synthesis.kinematics import cam_follower as cf
-from synthesis.kinematics.motion_laws import CLOSED_FORM, cycloidal, law
+from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.kinds.clamp_cam.kinematics.motion_laws import CLOSED_FORM, cycloidal, law
 
 #: (C_v, C_a) of the normalised laws from the cam literature (e.g. Norton, Cam Design and
 #: Manufacturing Handbook, Table 3-2): an independent source for our piece constants
@@ -123,7 +123,7 @@ def test_oscillating_pressure_angle_closed_form_and_pole(side):
 
 
 def test_optimised_law_is_c2_and_beats_cycloidal_acceleration():
-    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+    from synthesis.kinds.clamp_cam.bspline_law import fit_optimised_law
 
     law_ = fit_optimised_law(10.0, {"rise": 40.0, "return": 14.0}, 2 * math.pi, "acceleration")
     for spl in (law_.rise, law_.return_):
@@ -145,7 +145,7 @@ def test_optimised_law_is_c2_and_beats_cycloidal_acceleration():
 
 
 def test_optimised_jerk_law_beats_cycloidal_jerk():
-    from synthesis.clamp_cam.bspline_law import fit_optimised_law
+    from synthesis.kinds.clamp_cam.bspline_law import fit_optimised_law
 
     law_ = fit_optimised_law(10.0, {"rise": 40.0, "return": 14.0}, 2 * math.pi, "jerk")
     # the ideal minimum-peak-jerk rise has C_j = 32 (constant-jerk law); cycloidal has 4 pi^2 = 39.48

@@ -12,8 +12,8 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 from conftest import LIBRARY
-from synthesis.clamp_cam.nlp import CamNLP
-from synthesis.clamp_cam.scene import CamScene, evaluate
+from synthesis.kinds.clamp_cam.nlp import CamNLP
+from synthesis.kinds.clamp_cam.scene import CamScene, evaluate
 from solving import diagnose_infeasible, run_solve
 from synthesis.spec import LoadedSpec, load_spec
 
@@ -259,7 +259,7 @@ def test_optimised_law_in_the_geometry_nlp():
 
 def test_compare_figure_overlays_cams(tmp_path, solved):
     from synthesis import kinds
-    from synthesis.clamp_cam.check import run_check
+    from synthesis.kinds.clamp_cam.check import run_check
 
     baseline = run_check(load_spec(CAMS / "opening_cam.toml"))
     files = kinds.compare_figures("clamp_cam")([baseline, solved["opening_cam_redesign"][1]], tmp_path)
@@ -269,7 +269,7 @@ def test_compare_figure_overlays_cams(tmp_path, solved):
 
 @pytest.mark.parametrize("path", sorted(CAMS.glob("*.toml")), ids=lambda p: p.stem)
 def test_every_library_cam_checks_and_its_free_variables_solve(path):
-    from synthesis.clamp_cam.check import run_check
+    from synthesis.kinds.clamp_cam.check import run_check
 
     loaded = load_spec(path)
     assert loaded.model.source.startswith(("seed 001", "redesign of seed 001"))
@@ -290,7 +290,7 @@ def test_modified_sine_gives_the_smallest_opening_cam():
 
 def test_a_solve_with_the_optimised_law_fits_it_once(monkeypatch):
     """solve, its starts, the elastic diagnosis and the baseline rule table share one cvxpy fit."""
-    from synthesis.clamp_cam import bspline_law, scene
+    from synthesis.kinds.clamp_cam import bspline_law, scene
     from solving import baseline_rules
     from synthesis.spec.common import FreeVariable
 
@@ -312,8 +312,8 @@ def test_an_inaccurately_solved_law_is_flagged_in_the_result_and_the_rules():
     warning and cam.optimised_law.accurate = false; an accurate fit has neither."""
     import dataclasses
 
-    from synthesis.clamp_cam.check import describe
-    from synthesis.clamp_cam.scene import CamScene, evaluate, fit_law
+    from synthesis.kinds.clamp_cam.check import describe
+    from synthesis.kinds.clamp_cam.scene import CamScene, evaluate, fit_law
 
     spec = load_spec(CAMS / "opening_cam_optimised_law.toml").model
     law = fit_law(spec)
@@ -336,7 +336,7 @@ def test_the_cutter_floor_sizes_the_opening_cam(solved):
     """rules.min_working_radius (default 3 mm): the published cam's 0.77 mm working radius fails it, the
     redesign's smallest working radius sits on it (up to the NLP's 1 % back-off), re-checked at 100x, and it
     costs 4.7 mm of base radius over the cam the pressure angles alone allow (working radius 2.04 mm)."""
-    from synthesis.clamp_cam.check import run_check
+    from synthesis.kinds.clamp_cam.check import run_check
 
     published = {r["name"]: r for r in run_check(load_spec(CAMS / "opening_cam.toml")).rules}["no_undercut"]
     assert not published["satisfied"] and published["value"] == pytest.approx(0.77187, abs=1e-4)

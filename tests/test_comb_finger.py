@@ -21,7 +21,7 @@ from scipy.optimize import brentq, minimize
 
 from conftest import LIBRARY
 from solving import agrisynth, run_solve
-from synthesis.comb_finger import geometry as g
+from synthesis.kinds.comb_finger import geometry as g
 from synthesis.result import Result
 from synthesis.spec import load_spec
 
@@ -200,8 +200,8 @@ def test_redesign_matches_an_independent_optimiser_and_names_the_binding_limits(
     # compare's overlay of the candidates (baseline, redesign): each one's tip circle and combing turn with its chord
     import matplotlib.pyplot as plt
 
-    from synthesis.comb_finger.check import run_check
-    from synthesis.comb_finger.plots import comparison
+    from synthesis.kinds.comb_finger.check import run_check
+    from synthesis.kinds.comb_finger.plots import comparison
     baseline = run_check(load_spec(BASELINE))
     older = {**baseline.to_json(), "schema_version": 2}          # a version-2 file: no trajectory
     del older["trajectory"]
@@ -271,9 +271,9 @@ def test_a_finger_that_misses_the_ground_fails_its_rule(tmp_path):
     assert proc.returncode == 1 and "tip_reaches_ground" in proc.stdout
 
 
-FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.clamp_cam", "synthesis.fourbar_path",
-             "synthesis.crank_rocker", "synthesis.guide_tube", "synthesis.kinematics", "synthesis.combing_chain",
-             "synthesis.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.clamp_cam", "synthesis.kinds.fourbar_path",
+             "synthesis.kinds.crank_rocker", "synthesis.kinds.guide_tube", "synthesis.kinematics", "synthesis.kinds.combing_chain",
+             "synthesis.kinds.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
 
 
 def test_a_comb_finger_run_imports_no_other_kind(tmp_path):
@@ -286,7 +286,7 @@ for args in (["check", {str(BASELINE)!r}], ["solve", {str(REDESIGN)!r}, "--worke
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "constraints.comb_finger"))]
+         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.comb_finger.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
@@ -301,7 +301,7 @@ def test_a_robust_redesign_keeps_its_promise_on_the_rows_the_nlp_held(tmp_path):
     720 turn samples instead, the linearised worst case was -9.5e-6 mm: at a sample off the exact minimum the
     gradient is another one.  Each @tolerance margin equals its linear stack-up, recomputed here by central
     differences of the closed forms; the Monte-Carlo passes every sample."""
-    from synthesis.comb_finger.check import trace
+    from synthesis.kinds.comb_finger.check import trace
 
     text = (FINGER / "redesign_max_combing.toml").read_text() + "\n[tolerance]\nlength = 0.2\nsamples = 200\n"
     path = tmp_path / "robust.toml"

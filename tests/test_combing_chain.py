@@ -21,7 +21,7 @@ from scipy.optimize import brentq
 
 from conftest import LIBRARY
 from solving import agrisynth, recheck_rules, run_solve
-from synthesis.combing_chain import geometry as g
+from synthesis.kinds.combing_chain import geometry as g
 from synthesis.spec import load_spec
 
 CHAIN = LIBRARY / "combing_chain"
@@ -292,7 +292,7 @@ def test_rules_recheck_on_the_10x_grid_and_names_agree_on_floats_and_symbols():
     spec = load_spec(TWO_SPEED).model
     design = spec.design_values()
     fine = recheck_rules(spec, design)
-    from synthesis.combing_chain.nlp import CombingChainNLP
+    from synthesis.kinds.combing_chain.nlp import CombingChainNLP
 
     nlp = CombingChainNLP(spec)
     assert [r.name for r in fine] == [r.name for r in nlp.problem.rules]
@@ -373,9 +373,9 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, source, old, new, command,
     assert "Traceback" not in proc.stderr
 
 
-FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.clamp_cam", "synthesis.fourbar_path",
-             "synthesis.crank_rocker", "synthesis.guide_tube", "synthesis.kinematics", "synthesis.comb_finger",
-             "synthesis.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.clamp_cam", "synthesis.kinds.fourbar_path",
+             "synthesis.kinds.crank_rocker", "synthesis.kinds.guide_tube", "synthesis.kinematics", "synthesis.kinds.comb_finger",
+             "synthesis.kinds.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
 
 
 def test_a_combing_chain_run_imports_no_other_kind(tmp_path):
@@ -388,7 +388,7 @@ for args in (["check", {str(HC500)!r}], ["solve", {str(ONE_GEAR)!r}, "--workers"
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "constraints.combing"))]
+         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.combing_chain.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)

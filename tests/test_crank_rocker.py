@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from synthesis.crank_rocker.check import evaluate, mechanism, run_check
-from synthesis.crank_rocker.closed_form import residuals, solve_paper_equations
+from synthesis.kinds.crank_rocker.check import evaluate, mechanism, run_check
+from synthesis.kinds.crank_rocker.closed_form import residuals, solve_paper_equations
 from solving import diagnose_infeasible, recheck_rules, run_solve
 from synthesis.kinematics.crank_rocker import (CrankRocker, acute, extreme_positions, quick_return, rocker_curve,
                                               transmission_angles_deg)

@@ -174,8 +174,8 @@ def test_planting_envelope_redesigns_of_examples_3_and_4(example, first_fail, en
 def _ode_spread_mm(design: dict, mu: float, spacing: float) -> float:
     """Plant-position error (0.5 m/s x landing-time spread of tubes I and II) by the ODE twin of the drop
     (scipy integration of the printed equations of motion, not the closed form the NLP and check use)."""
-    from synthesis.guide_tube.drop import Physics, Tube
-    from synthesis.guide_tube.ode import simulate
+    from synthesis.kinds.guide_tube.drop import Physics, Tube
+    from synthesis.kinds.guide_tube.ode import simulate
 
     physics = Physics(0.6, 9.8, 17.5, mu)
     scale = (300.0 - spacing) / 70.0                 # l3 shifts with the row spacing (GUIDE_TUBE.md)

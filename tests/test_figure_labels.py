@@ -57,7 +57,7 @@ def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monke
     numbers are the trajectory's converted (ground vx in m/s, ay unchanged)."""
     import numpy as np
 
-    from synthesis.planting.compare_plots import kinematics_figure
+    from synthesis.kinds.planting.compare_plots import kinematics_figure
 
     result = kinds.checker("planting_fourbar")(load_spec(LIBRARY / "planting_arm" / "taiwan_example1.toml"))
     units = {r["name"]: r["unit"] for r in result.rules}
@@ -75,7 +75,7 @@ def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monke
 def test_guide_tube_bars_start_at_zero_and_carry_their_values(tmp_path, monkeypatch):
     """Issue 17: the comparison bar chart's time axis started at 0.9 x the shortest time (0.40 s), which
     made a few ms look like a factor; the bars now start at 0 s and each is labelled with its t_z."""
-    from synthesis.guide_tube.plots import compare_figures
+    from synthesis.kinds.guide_tube.plots import compare_figures
 
     first = kinds.checker("guide_tube")(load_spec(LIBRARY / "guide_tube" / "cai2020_tubes.toml"))
     other = kinds.checker("guide_tube")(load_spec(LIBRARY / "guide_tube" / "cai2020_delta2.toml"))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from conftest import arm, motion
-from synthesis.planting.finite_difference import mean_relative_errors
+from synthesis.kinds.planting.finite_difference import mean_relative_errors
 
 
 def test_chord_scheme_is_second_order_and_underestimates_speed():

@@ -11,16 +11,16 @@ import pytest
 
 from fourbar_path_support import PATH_LIBRARY, cli, independent_check, toml_text
 from synthesis.errors import SpecError
-from synthesis.fourbar_path.check import evaluate
-from synthesis.fourbar_path.construction import joint_positions, transmission_deg
-from synthesis.fourbar_path.nlp import PathNLP
-from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
-from synthesis.kinematics.arc import picking_arc
-from synthesis.kinematics.coupler_point import (BRANCHES, coupler_function, cos_transmission, design_parameters,
+from synthesis.kinds.fourbar_path.check import evaluate
+from synthesis.kinds.fourbar_path.construction import joint_positions, transmission_deg
+from synthesis.kinds.fourbar_path.nlp import PathNLP
+from synthesis.kinds.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
+from synthesis.kinds.picker.kinematics.arc import picking_arc
+from synthesis.kinds.fourbar_path.kinematics import (BRANCHES, coupler_function, cos_transmission, design_parameters,
                                                 joints as symbolic_joints)
 from synthesis.spec import load_spec
 from synthesis.spec.common import FreeVariable, validate
-from synthesis.spec.fourbar_path import FourbarPathSpec
+from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
 THETA = np.linspace(0.0, 2 * math.pi, 37)
 
@@ -126,7 +126,7 @@ def test_transmission_rows_are_degrees_at_the_limit():
     """The NLP rows of the transmission rules are cos mu scaled to degrees at the limit, so a row's margin,
     its back-off and an elastic slack are in the rule's unit: one degree inside the limit is a row of 1
     (to first order: 1.0103 at 40 deg)."""
-    from constraints.transmission_turn import transmission_turn_rules
+    from synthesis.kinds.fourbar_path.rules.transmission_turn import transmission_turn_rules
 
     lo, hi = 40.0, 140.0
     rmin, rmax = transmission_turn_rules(math.cos(math.radians(41.0)), math.cos(math.radians(139.0)), (lo, hi))
@@ -143,8 +143,8 @@ def test_the_vectorised_numeric_rules_equal_the_per_sample_ones(open_somewhere):
     numbers); the per-sample form (a list, one expression per sample, as the NLP builds them) must give the same
     records to the bit and the same row values, including a motion where the loop opens (transmission not
     evaluated, closure violated)."""
-    from constraints.assembly import assembly_rule
-    from constraints.transmission_turn import transmission_sampled_rules
+    from synthesis.kinds.fourbar_path.rules.assembly import assembly_rule
+    from synthesis.kinds.fourbar_path.rules.transmission_turn import transmission_sampled_rules
 
     rng = np.random.default_rng(7)
     r = (30.0, 12.0, 35.0, 10.0) if open_somewhere else (30.0, 8.0, 14.0, 31.0)     # r3 < r4, |r3 - r4| binds

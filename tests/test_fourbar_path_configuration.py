@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from synthesis.core.executor import latin_hypercube_starts
-from synthesis.fourbar_path import screen
-from synthesis.fourbar_path.check import evaluate
-from synthesis.fourbar_path.construction import joint_positions
-from synthesis.fourbar_path.inexact import BEST_KNOWN, best_known_designs, inexact_spec
-from synthesis.fourbar_path.nlp import PathNLP
-from synthesis.fourbar_path.starts import arc_fractions, shape_of
-from synthesis.kinematics.coupler_point import BRANCHES, VARIABLES
+from synthesis.kinds.fourbar_path import screen
+from synthesis.kinds.fourbar_path.check import evaluate
+from synthesis.kinds.fourbar_path.construction import joint_positions
+from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, best_known_designs, inexact_spec
+from synthesis.kinds.fourbar_path.nlp import PathNLP
+from synthesis.kinds.fourbar_path.starts import arc_fractions, shape_of
+from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
 
 
 def _closes(shape: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -170,10 +170,10 @@ def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
     from types import SimpleNamespace
 
     from synthesis.core.kind import Setting
-    from synthesis.fourbar_path.solve import recheck
-    from synthesis.fourbar_path.inexact import inexact_data
+    from synthesis.kinds.fourbar_path.solve import recheck
+    from synthesis.kinds.fourbar_path.inexact import inexact_data
     from synthesis.spec.common import validate
-    from synthesis.spec.fourbar_path import FourbarPathSpec
+    from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
     rec = best_known_designs()["dwell_arc15"]
     for direction, holds in (("counter_clockwise", True), ("clockwise", False)):
@@ -189,7 +189,7 @@ def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
 def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form(monkeypatch):
     """kidney25 with max_iter 60 (seed 0): start 3 reaches max_iter near the reference and is resumed once in the
     crank-angle form (its details name no form), within RESUME_ITERATIONS; kept only if it converged no higher."""
-    from synthesis.fourbar_path import nlp as path_nlp
+    from synthesis.kinds.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("kidney25", {"max_iter": 60}).model
     nlp = PathNLP(spec, seed=0)
@@ -211,7 +211,7 @@ def test_a_polish_stopped_by_its_iteration_cap_keeps_the_starts_own_answer(monke
     not kept: the start's answer, status and objective are those of the crank-angle form alone (the same as with a
     polish of 0 iterations), far above the best known; the iterations count both runs.  (Written on these invariants,
     not on one IPOPT trajectory: the crank-angle form's last status differs between machines.)"""
-    from synthesis.fourbar_path import nlp as path_nlp
+    from synthesis.kinds.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("kidney25").model
     nlp = PathNLP(spec, seed=0)
@@ -237,7 +237,7 @@ def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(mon
     """kidney25, seed 2, start 35: the crank-angle form ends with a failed step on the change point (target 0 at crank
     180 deg, r1 + r2 = r3 + r4: the links in line).  The polish (POLISH_MU_INIT 1e-2) converges there, Solve_Succeeded
     at the best known; started with the starts' barrier parameter (1e-6) it leaves the point and is not kept."""
-    from synthesis.fourbar_path import nlp as path_nlp
+    from synthesis.kinds.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("kidney25").model
     out = _solved_start(spec, 2, 35)
@@ -257,7 +257,7 @@ def test_an_open_arcs_max_iter_start_resumes_in_the_configuration_form_for_its_o
     resume converges after more than RESUME_ITERATIONS (150, the crank-angle form's budget, which would have stopped
     it: the run is the same up to there) and within CONFIGURATION_RESUME_ITERATIONS, below the max_iter answer
     (0.259043 mm^2), Solve_Succeeded, every rule holding."""
-    from synthesis.fourbar_path import nlp as path_nlp
+    from synthesis.kinds.fourbar_path import nlp as path_nlp
 
     spec = inexact_spec("stroke_lift14").model
     out = _solved_start(spec, 1, 43)
@@ -273,10 +273,10 @@ def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spe
     """dwell_arc15's screened starts whose crank only rocks: with direction "either" each start's direction is the
     order of its crank angles within its interval of motion (not the cw / ccw alternation of the unscreened starts);
     with "clockwise" every one is clockwise."""
-    from synthesis.fourbar_path.inexact import inexact_data
-    from synthesis.fourbar_path.starts import StartMaker
+    from synthesis.kinds.fourbar_path.inexact import inexact_data
+    from synthesis.kinds.fourbar_path.starts import StartMaker
     from synthesis.spec.common import validate
-    from synthesis.spec.fourbar_path import FourbarPathSpec
+    from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
     for direction in ("either", "clockwise"):
         data = inexact_data("dwell_arc15")

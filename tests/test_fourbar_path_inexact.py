@@ -16,18 +16,18 @@ import pytest
 from fourbar_path_support import independent_path_error
 from solving import run_solve
 from synthesis.core.executor import latin_hypercube_starts
-from synthesis.fourbar_path.construction import joint_positions
-from synthesis.fourbar_path.inexact import BEST_KNOWN, NAMES, best_known_designs, inexact_data, inexact_spec
-from synthesis.fourbar_path import nlp as path_nlp
-from synthesis.fourbar_path import screen
-from synthesis.fourbar_path.nlp import PathNLP
-from synthesis.fourbar_path.rules import EXTREMES
-from synthesis.fourbar_path.starts import (DISTINCT, SIGNS, StartMaker, arc_fractions, is_closed_loop, points_at,
+from synthesis.kinds.fourbar_path.construction import joint_positions
+from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, NAMES, best_known_designs, inexact_data, inexact_spec
+from synthesis.kinds.fourbar_path import nlp as path_nlp
+from synthesis.kinds.fourbar_path import screen
+from synthesis.kinds.fourbar_path.nlp import PathNLP
+from synthesis.kinds.fourbar_path.rule_set import EXTREMES
+from synthesis.kinds.fourbar_path.starts import (DISTINCT, SIGNS, StartMaker, arc_fractions, is_closed_loop, points_at,
                                            refit_placement)
-from synthesis.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
-from synthesis.kinematics.coupler_point import VARIABLES
+from synthesis.kinds.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
+from synthesis.kinds.fourbar_path.kinematics import VARIABLES
 from synthesis.spec.common import validate
-from synthesis.spec.fourbar_path import FourbarPathSpec
+from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
 
 def test_the_set_is_ten_problems_of_12_to_25_points_closed_and_open():
@@ -199,7 +199,7 @@ def test_the_exact_motion_extremes_are_the_worst_of_a_dense_sampling():
     way: closure margins and transmission angles agree to 1e-3 mm / deg (samples 3e-3 rad apart miss a smooth
     extreme by O(h^2): up to ~1e-4 here), the exact margin is never above the sampled one, and a rule
     the samples see broken the exact form sees broken."""
-    from synthesis.fourbar_path.rules import path_rules
+    from synthesis.kinds.fourbar_path.rule_set import path_rules
 
     data = truth_data(0, 4, timed=False)
     data["rules"] = {"grashof": "any", "order": False, "transmission_angle": [30.0, 150.0]}
@@ -237,7 +237,7 @@ def test_the_numeric_re_check_equals_the_per_sample_expressions_at_the_same_desi
     sample's |cos mu| exceeds 1 in the symbolic one."""
     import casadi as ca
 
-    from synthesis.fourbar_path.rules import path_rules
+    from synthesis.kinds.fourbar_path.rule_set import path_rules
 
     data = truth_data(0, 4, timed=False)
     data["rules"] = {"grashof": "any", "order": False, "transmission_angle": [30.0, 150.0]}
@@ -394,7 +394,7 @@ def test_the_recorded_best_known_designs_hold_every_rule_and_reproduce_their_obj
     """BEST_KNOWN is a promise about a design, so the designs behind its new values are kept and re-checked
     independently of the solver: the kind's check (closed-form coupler point, rules on the fine grid, grashof "any"
     motion 10x more finely sampled than the NLP) gives the recorded objective and finds every rule holding."""
-    from synthesis.fourbar_path.check import evaluate
+    from synthesis.kinds.fourbar_path.check import evaluate
 
     rec = best_known_designs()[name]
     spec = inexact_spec(name).model
@@ -587,7 +587,7 @@ def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase()
     """s_curve12 orders its targets ([rules] order): a random start whose nearest curve points give two neighbouring
     targets the same crank angle (a step of 0, which no design repairs: its fixed phase cannot converge) is solved as
     it is; one with room is fitted first.  Decided by the same sequence slacks the rule uses."""
-    from constraints.sequence import sequence_slacks
+    from synthesis.kinds.fourbar_path.rules.sequence import sequence_slacks
     spec = inexact_spec("s_curve12").model
     nlp = PathNLP(spec, seed=0)
     rows = latin_hypercube_starts(nlp.bounds, nlp.init, 64, 0)

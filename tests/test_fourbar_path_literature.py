@@ -1,6 +1,6 @@
 """fourbar_path on the literature's target sets (issue 19): the transcribed published linkages, the source's
 convention against ours, the specs, a 16-start solve against the best published linkage, the bench's cases.
-Sources and readings: synthesis/fourbar_path/literature.py, problems/fourbar_path/LITERATURE.md."""
+Sources and readings: synthesis/kinds/fourbar_path/literature.py, problems/fourbar_path/LITERATURE.md."""
 
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from solving import run_solve
-from synthesis.fourbar_path.construction import joint_positions
-from synthesis.fourbar_path.literature import (BEST_KNOWN, LENGTH_FLOOR, NAMES, PROBLEMS, best_published,
+from synthesis.kinds.fourbar_path.construction import joint_positions
+from synthesis.kinds.fourbar_path.literature import (BEST_KNOWN, LENGTH_FLOOR, NAMES, PROBLEMS, best_published,
                                                evaluate_competitor, literature_data, literature_spec)
-from synthesis.kinematics.coupler_point import VARIABLES
+from synthesis.kinds.fourbar_path.kinematics import VARIABLES
 
 
 def _hcdj(name):
@@ -168,7 +168,7 @@ def test_16_starts_with_every_rule_reach_the_best_published_linkage():
 
 
 def test_the_bench_runs_the_published_linkage_beside_the_solvers():
-    from synthesis.fourbar_path.bench import DE_EQUAL_BUDGET, bench_cases, literature_cases
+    from synthesis.kinds.fourbar_path.bench import DE_EQUAL_BUDGET, bench_cases, literature_cases
 
     cases = literature_cases(0)
     assert [c.problem for c in cases] == [f"literature_{n}" for n in NAMES]

@@ -15,16 +15,16 @@ from fourbar_path_support import PATH_LIBRARY, cli, independent_check, independe
 from solving import diagnose_infeasible, modules_after_runs, recheck_rules, run_solve
 from synthesis.core.executor import latin_hypercube_starts
 from synthesis.errors import SpecError
-from synthesis.fourbar_path.check import evaluate
-from synthesis.fourbar_path.construction import joint_positions
-from synthesis.fourbar_path.nlp import PathNLP
-from synthesis.fourbar_path.plots import compare_coupler_curves
-from synthesis.fourbar_path.synthetic import BOUNDS, POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
-from synthesis.kinematics.coupler_point import VARIABLES
+from synthesis.kinds.fourbar_path.check import evaluate
+from synthesis.kinds.fourbar_path.construction import joint_positions
+from synthesis.kinds.fourbar_path.nlp import PathNLP
+from synthesis.kinds.fourbar_path.plots import compare_coupler_curves
+from synthesis.kinds.fourbar_path.synthetic import BOUNDS, POINT_COUNTS, SEEDS, random_crank_rocker, truth_data, truth_spec
+from synthesis.kinds.fourbar_path.kinematics import VARIABLES
 from synthesis.result import load_result
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
-from synthesis.spec.fourbar_path import FourbarPathSpec
+from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
 RECOVERED = 1e-8        # mm^2, the issue's threshold for "zero error recovered"
 
@@ -334,15 +334,15 @@ def test_nothing_free_is_bad_input(tmp_path):
     assert proc.returncode == 2 and "agrisynth check" in proc.stderr
 
 
-FORBIDDEN = ("synthesis.planting", "synthesis.kinematics.planting_arm", "synthesis.cam", "synthesis.clamp_cam",
-             "synthesis.guide_tube", "synthesis.picker", "cvxpy", "constraints.acceleration", "constraints.depth")
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.planting.kinematics", "synthesis.cam", "synthesis.kinds.clamp_cam",
+             "synthesis.kinds.guide_tube", "synthesis.kinds.picker", "cvxpy", "synthesis.kinds.planting.rules.acceleration", "synthesis.kinds.planting.rules.depth")
 
 
 def test_a_fourbar_path_run_imports_no_other_kind(tmp_path):
     arc = str(PATH_LIBRARY / "picking_arc.toml")
     modules = modules_after_runs(tmp_path, [["check", arc, "--out", str(tmp_path / "c")],
                                             ["solve", arc, "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s")]])
-    assert "synthesis.fourbar_path.solve" in modules
+    assert "synthesis.kinds.fourbar_path.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
 
 
@@ -353,7 +353,7 @@ def test_a_design_that_is_not_a_number_is_reported_not_evaluated():
 
     from synthesis.core.kind import Setting
     from synthesis.core.verdict import report_of
-    from synthesis.fourbar_path.solve import SOLVING
+    from synthesis.kinds.fourbar_path.solve import SOLVING
 
     loaded = load_spec(PATH_LIBRARY / "picking_arc.toml")
     setting = Setting(loaded.model, 0)
@@ -377,8 +377,8 @@ def test_a_crossed_result_is_drawn_and_exported_on_its_own_assembly(tmp_path, mo
     assembly's (the library design's coupler point is the crank pin, the same on both assemblies, so B tells them
     apart: on the open assembly it lies elsewhere), and so are the DXF's joints."""
     from synthesis import exports
-    from synthesis.fourbar_path import export, plots, poses
-    from synthesis.fourbar_path.check import run_check
+    from synthesis.kinds.fourbar_path import export, plots, poses
+    from synthesis.kinds.fourbar_path.check import run_check
     from synthesis.result import Result
 
     text = (PATH_LIBRARY / "picking_arc.toml").read_text()
@@ -413,7 +413,7 @@ def test_two_targets_sharing_one_crank_angle_are_noted_on_the_sequence_rule():
     """A trial: an ordered open S-curve, crank-rocker; the answer gave targets 0 and 1 (18.1 mm apart) crank angles
     5.4e-9 deg apart: "satisfied", one coupler pose standing for both.  The sequence rule's note says so; distinct
     angles (or two targets on one point) get no note."""
-    from synthesis.fourbar_path.rules import path_rules
+    from synthesis.kinds.fourbar_path.rule_set import path_rules
 
     points = [[40.0, 120.0], [51.54, 133.94], [63.08, 144.69], [74.62, 149.78], [86.15, 148.05]]
     spec = validate(FourbarPathSpec, {"kind": "fourbar_path", "name": "s", "targets": {"points": points},

@@ -16,15 +16,15 @@ import pytest
 from scipy.optimize import brentq
 
 from synthesis.errors import SpecError
-from synthesis.guide_tube.calibrate import MuCalibration, roots_in
-from synthesis.guide_tube.check import rules_of
-from synthesis.guide_tube.drag import traverse
-from synthesis.guide_tube.drop import Physics, Tube, drop_phases, landing
-from synthesis.guide_tube.ode import simulate
-from synthesis.guide_tube.plots import compare_figures
-from synthesis.guide_tube.printed import printed_landing_time, printed_phase
-from synthesis.guide_tube.scene import GuideTubeScene, calibration_failure
-from synthesis.guide_tube.slope import landing_time_slope
+from synthesis.kinds.guide_tube.calibrate import MuCalibration, roots_in
+from synthesis.kinds.guide_tube.check import rules_of
+from synthesis.kinds.guide_tube.drag import traverse
+from synthesis.kinds.guide_tube.drop import Physics, Tube, drop_phases, landing
+from synthesis.kinds.guide_tube.ode import simulate
+from synthesis.kinds.guide_tube.plots import compare_figures
+from synthesis.kinds.guide_tube.printed import printed_landing_time, printed_phase
+from synthesis.kinds.guide_tube.scene import GuideTubeScene, calibration_failure
+from synthesis.kinds.guide_tube.slope import landing_time_slope
 from solving import agrisynth, run_solve, spec_with
 from synthesis.spec import load_spec
 
@@ -206,7 +206,7 @@ def test_landing_speed_ranks_the_row_spacings_as_table2_inversion_rates_do(calib
 
 
 def test_no_reading_of_the_text_tried_gives_41_deg():
-    from synthesis.guide_tube.readings import readings
+    from synthesis.kinds.guide_tube.readings import readings
 
     for reading in readings():
         assert reading.delta2, reading.name
@@ -279,8 +279,8 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
                                        "drop model could evaluate (stuck)"]
 
 
-FORBIDDEN = ("synthesis.planting", "synthesis.picker", "synthesis.cam", "synthesis.clamp", "synthesis.fourbar",
-             "synthesis.crank_rocker", "synthesis.kinematics", "cvxpy", "ezdxf")
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.cam", "synthesis.clamp", "synthesis.fourbar",
+             "synthesis.kinds.crank_rocker", "synthesis.kinematics", "cvxpy", "ezdxf")
 
 
 def test_a_guide_tube_run_imports_no_linkage_cam_or_convex_code(tmp_path):
@@ -293,7 +293,7 @@ for args in (["check", {str(BASELINE)!r}], ["solve", {str(DELTA2)!r}, "--workers
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "constraints.guide_tube"))]
+         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.guide_tube.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
@@ -340,7 +340,7 @@ def test_rules_on_floats_and_symbols_have_the_same_names(calibrated):
     grid = calibrated.spacing_grid(4)
     floats = rules_of(calibrated, {"I": 45.0, "II": 35.0}, grid, spec.rules)
     d = ca.SX.sym("d")
-    from synthesis.guide_tube.nlp import symbolic_drop
+    from synthesis.kinds.guide_tube.nlp import symbolic_drop
 
     symbols = rules_of(calibrated, {"I": 45.0, "II": d}, grid, spec.rules, drop=symbolic_drop)
     assert [r.name for r in floats] == [r.name for r in symbols]

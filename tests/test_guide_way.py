@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY, ROOT
-from synthesis.guide_way import conics as cn
-from synthesis.kinematics import rotary_arm as ra
+from synthesis.kinds.guide_way import conics as cn
+from synthesis.kinds.guide_way import kinematics as ra
 from synthesis.spec import load_spec
 from solving import agrisynth, same_solve, solved_library_spec
 
@@ -84,7 +84,7 @@ def test_the_printed_d_and_d_disagree_and_how():
 
 def test_inverse_kinematics_round_trip_and_the_papers_rates():
     """M -> (theta, alpha) -> M again; AD rates against the paper's hand-derived dtheta/dx, dalpha/dx."""
-    from synthesis.guide_way.trace import arm_function, arm_vector
+    from synthesis.kinds.guide_way.trace import arm_function, arm_vector
 
     st = cn.CentralConic.of(BC)
     st = st.with_branch(st.branch_of(*C))
@@ -166,9 +166,9 @@ def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
     assert len(doc.modelspace().query('LWPOLYLINE[layer=="GROOVE"]')) == 4
     code = ("import sys; from synthesis.spec import load_spec; from synthesis import kinds; "
             f"kinds.checker('guide_way')(load_spec(r'{LIBRARY / 'guide_way' / 'liang_2z.toml'}')); "
-            "print([m for m in sys.modules if m.startswith(('synthesis.planting', 'synthesis.fourbar_path', "
-            "'synthesis.clamp_cam', 'synthesis.guide_tube', 'synthesis.crank_rocker', 'synthesis.picker', "
-            "'synthesis.kinematics.fourbar', 'synthesis.kinematics.motion_laws', 'synthesis.kinematics.cam_follower'))])")
+            "print([m for m in sys.modules if m.startswith(('synthesis.kinds.planting', 'synthesis.kinds.fourbar_path', "
+            "'synthesis.kinds.clamp_cam', 'synthesis.kinds.guide_tube', 'synthesis.kinds.crank_rocker', 'synthesis.kinds.picker', "
+            "'synthesis.kinematics.fourbar', 'synthesis.kinds.clamp_cam.kinematics.motion_laws', 'synthesis.kinds.clamp_cam.kinematics.cam_follower'))])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
@@ -233,7 +233,7 @@ def _redesign_with_control(control):
 def test_control_points_in_the_spec_are_checked_with_one_line_naming_the_field(control, message):
     from synthesis.errors import SpecError
     from synthesis.spec.common import validate
-    from synthesis.spec.guide_way import GuideWaySpec
+    from synthesis.kinds.guide_way.spec import GuideWaySpec
 
     with pytest.raises(SpecError) as err:
         validate(GuideWaySpec, _redesign_with_control(control), prefix="guide_way")
@@ -244,8 +244,8 @@ def test_a_spec_holding_the_fits_control_points_checks_and_solves_as_the_one_lea
     """Kind.explicit_design writes the convex fit out as {init, bounds = init -+ move}: the same rule table (the
     check evaluates the same floats) and the same NLP box and start 0 as the spec that leaves them out."""
     from synthesis import kinds
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.nlp import design_box, names_of
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.nlp import design_box, names_of
     from synthesis.spec.common import read_toml, validate
 
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
@@ -273,8 +273,8 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
     rules (key_points <= 0.01 mm, key_tangents <= 0.01 deg).  The convex fit meets them to 3e-14 mm and 0 deg;
     control point 21 moved 20 mm up pulls the path 5.75 mm off A and 2.53 mm and 7.0 deg off B.  (Roller radius
     5 mm here, so that the fit itself satisfies every rule and the exit code is the key points' alone.)"""
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.spec.guide_way import GuideWaySpec
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.spec import GuideWaySpec
     from synthesis.specref import write_toml
 
     fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
@@ -316,9 +316,9 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     fit was solved in units of the path length, whose more exact optimum lowered the fit's energy, the objective's
     denominator, by 1.5e-5: the same design to 9e-6 mm).  Control point 6 of the fit 10 mm
     lower: the window leaves out 8 and 12 samples of E-D and D-C (the fit's: 11 and 12)."""
-    from synthesis.guide_way import scene as sc
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.nlp import GuideNLP
+    from synthesis.kinds.guide_way import scene as sc
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.nlp import GuideNLP
     from synthesis.spec.common import validate
 
     spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
@@ -356,10 +356,10 @@ def test_the_nlp_holds_the_pressure_angle_at_the_fold_windows_edges_which_move_w
     (found by brentq, as the check finds them), and the check's pressure angle -- the value at an edge -- within the
     limit.  Before, the NLP held start 0's samples alone: its answer met them and read 82.21 deg at the edge
     (exit 3, "violated between samples", whatever samples_per_segment advised)."""
-    from synthesis.guide_way import scene as sc
-    from synthesis.guide_way.check import scene_for
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.nlp import GuideNLP, control_of
+    from synthesis.kinds.guide_way import scene as sc
+    from synthesis.kinds.guide_way.check import scene_for
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.nlp import GuideNLP, control_of
     from synthesis.spec.common import read_toml, validate
 
     data, _ = read_toml(LIBRARY / "guide_way" / "smooth_redesign.toml")
@@ -419,9 +419,9 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     """All fixed: solve names where to free one ([spline] control[0][0]); `move` with `control` is refused (it would
     be ignored); a control polygon the arm cannot follow names the file and [spline] control, in check and solve."""
     from synthesis.errors import SpecError
-    from synthesis.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.fit import fit_path
     from synthesis.spec.common import validate
-    from synthesis.spec.guide_way import GuideWaySpec
+    from synthesis.kinds.guide_way.spec import GuideWaySpec
     from synthesis.specref import write_toml
 
     fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
@@ -515,9 +515,9 @@ def test_the_fit_needs_no_tangent_at_every_key_point(tmp_path):
     solver short of the optimum (CLARABEL "InsufficientProgress", in mm its numbers spanned 1e-3 .. 1e5) and `check`
     exited 3 with the solver's own words.  Solved in units of the path length it is fitted: through every key point,
     with the given tangents, and an energy no higher than with E's tangent held (one constraint fewer)."""
-    from synthesis.guide_way import spline as sp
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.scene import spline_path
+    from synthesis.kinds.guide_way import spline as sp
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.scene import spline_path
 
     text = (LIBRARY / "guide_way" / "smooth_redesign.toml").read_text()
     old = "tangents = { E = 109.56364521913451, D = 45.0,"
@@ -545,7 +545,7 @@ def test_the_compared_cycle_figure_draws_each_designs_own_limits_and_fold_window
     import matplotlib.pyplot as plt
 
     from synthesis import kinds
-    from synthesis.guide_way.plots import _cycle_axes, _fold_window
+    from synthesis.kinds.guide_way.plots import _cycle_axes, _fold_window
 
     results = [kinds.checker("guide_way")(load_spec(LIBRARY / "guide_way" / f"{n}.toml"))
                for n in ("liang_2z", "smooth_redesign")]
@@ -570,9 +570,9 @@ def test_the_fold_window_is_measured_from_the_fold_itself_and_its_edges_are_samp
     (both branches: gamma, as |OD| = R - d), and the rule's value is the largest pressure angle outside the window,
     which a dense re-sampling of the same path (20,000 samples a stretch, the edge's root found by bisection here)
     reproduces."""
-    from synthesis.guide_way import scene as sc
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.trace import evaluate
+    from synthesis.kinds.guide_way import scene as sc
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.trace import evaluate
 
     spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
     fit = fit_path(spec)
@@ -604,7 +604,7 @@ def test_the_fold_window_is_measured_from_the_fold_itself_and_its_edges_are_samp
                     hi = mid
             worst.append(float(evaluate(path.stretch_at("", st.branch, np.array([lo])), arm).pressure_angle_deg[0]))
     assert rule.value == pytest.approx(max(worst), abs=1e-6)
-    facts = __import__("synthesis.guide_way.check", fromlist=["describe"]).describe(scene)
+    facts = __import__("synthesis.kinds.guide_way.check", fromlist=["describe"]).describe(scene)
     assert facts["key_theta_deg"][spec.spline.fold]["arriving"] == pytest.approx(gamma % 360, abs=1e-5)
     at = facts["pressure_angle_max_outside_fold_window"]["theta_deg"]          # the worst lies on an edge
     assert min(abs(abs(at - facts["key_theta_deg"][spec.spline.fold][side]) - w) for side in ("arriving", "leaving")) < 1e-9
@@ -636,10 +636,10 @@ def test_a_start_the_arm_cannot_drive_is_moved_onto_the_key_points_and_towards_t
     the method: each start the arm can drive, within its bounds, through every key point; start 0 unchanged."""
     from synthesis.core.executor import latin_hypercube_starts
     from synthesis.errors import SpecError
-    from synthesis.guide_way import scene as sc
-    from synthesis.guide_way import spline as spl
-    from synthesis.guide_way.fit import fit_path
-    from synthesis.guide_way.nlp import GuideNLP, control_of
+    from synthesis.kinds.guide_way import scene as sc
+    from synthesis.kinds.guide_way import spline as spl
+    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.nlp import GuideNLP, control_of
 
     spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model
     nlp = GuideNLP(spec, fit_path(spec))

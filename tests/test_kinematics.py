@@ -10,7 +10,7 @@ import numpy as np
 
 from conftest import arm, motion
 from synthesis.kinematics import fourbar
-from synthesis.kinematics.planting_arm import claw_tip, tip_derivatives, tip_state
+from synthesis.kinds.planting.kinematics import claw_tip, tip_derivatives, tip_state
 
 ANGLES = np.linspace(0.0, 2 * np.pi, 360, endpoint=False)
 

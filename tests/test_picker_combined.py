@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from synthesis.kinematics.picker_linkage import clamp_states
-from synthesis.picker.combined import run_check
+from synthesis.kinds.picker.kinematics.linkage import clamp_states
+from synthesis.kinds.picker.combined import run_check
 from synthesis.spec import load_spec
 
 PICKER = LIBRARY / "picker"
@@ -40,7 +40,7 @@ def test_instants_from_the_rocker_extremes(result):
 def test_clamp_at_the_instants_is_the_double_crank_at_its_swing_ends(result):
     inst = result.extra["instants"]
     dc_spec = load_spec(PICKER / "cai2020_double_crank.toml").model
-    from synthesis.picker.check import linkage
+    from synthesis.kinds.picker.check import linkage
     dc = linkage(dc_spec)
     ends = clamp_states(dc, [50.0, 50.0 + 49.95063727523979])["M"]
     assert [inst["picking"]["x"], inst["picking"]["y"]] == pytest.approx(ends[:, 0], abs=1e-9)

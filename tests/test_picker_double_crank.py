@@ -12,13 +12,13 @@ import pytest
 from scipy.optimize import brentq
 
 from conftest import LIBRARY
-from synthesis.kinematics.arc import arc_through, picking_arc
-from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_states, joints
-from synthesis.picker.check import arc_error, evaluate, linkage, run_check, swing_angles, target_angles
-from synthesis.picker.nlp import PickerNLP
+from synthesis.kinds.picker.kinematics.arc import arc_through, picking_arc
+from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_states, joints
+from synthesis.kinds.picker.check import arc_error, evaluate, linkage, run_check, swing_angles, target_angles
+from synthesis.kinds.picker.nlp import PickerNLP
 from synthesis.core.kind import Setting
 from synthesis.core.verdict import report_of, status_of
-from synthesis.picker.solve import recheck
+from synthesis.kinds.picker.solve import recheck
 from solving import run_solve
 from synthesis.spec import load_spec
 

@@ -10,9 +10,9 @@ import pytest
 
 from conftest import PLANTING, TABLE1, arm, motion
 from synthesis.kinematics.fourbar import crank_rotation_slacks
-from synthesis.planting.placement import suggest_seedbed
-from synthesis.planting.scene import PlantingScene, Seedbed, find_precision_points
-from synthesis.kinematics.planting_arm import tip_state
+from synthesis.kinds.planting.placement import suggest_seedbed
+from synthesis.kinds.planting.scene import PlantingScene, Seedbed, find_precision_points
+from synthesis.kinds.planting.kinematics import tip_state
 from synthesis.spec import load_spec
 
 TWO_PI = 2 * math.pi
@@ -83,7 +83,7 @@ def test_planting_check_imports_no_other_mechanism(tmp_path):
         "print('\\n'.join(sorted(sys.modules)))\n")
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
     modules = proc.stdout.split()
-    assert "synthesis.planting.check" in modules
-    foreign = ("synthesis.clamp_cam", "synthesis.guide_tube", "synthesis.picker", "synthesis.fourbar_path",
+    assert "synthesis.kinds.planting.check" in modules
+    foreign = ("synthesis.kinds.clamp_cam", "synthesis.kinds.guide_tube", "synthesis.kinds.picker", "synthesis.kinds.fourbar_path",
                "cvxpy", "distributed")     # ezdxf: the check writes linkage.dxf
     assert not [m for m in modules if m.startswith(foreign)]

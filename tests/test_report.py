@@ -166,7 +166,7 @@ def test_unknown_kind_and_broken_bench_are_refused(runs, tmp_path):
 
 
 def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
-    from synthesis.planting import plots
+    from synthesis.kinds.planting import plots
 
     def broken(result, path):
         raise RuntimeError("out of ink")
@@ -193,7 +193,7 @@ def test_the_design_table_names_a_crank_rockers_assembly_from_its_facts():
     import dataclasses
 
     from conftest import LIBRARY
-    from synthesis.crank_rocker.check import run_check
+    from synthesis.kinds.crank_rocker.check import run_check
     from synthesis.report.tables import candidates, design_rows
     from synthesis.spec import load_spec
 

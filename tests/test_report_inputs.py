@@ -90,11 +90,11 @@ def test_a_runs_report_holds_its_own_figures_an_svg_copy_and_the_exports(tmp_pat
 def test_linkage_drawings_carry_joint_letters_and_link_lengths():
     import matplotlib.pyplot as plt
 
-    from synthesis.fourbar_path import plots as path_plots
-    from synthesis.fourbar_path.construction import joint_positions
-    from synthesis.kinematics.planting_arm import ArmDesign
-    from synthesis.kinematics.planting_arm import joint_positions as arm_joints
-    from synthesis.planting.compare_plots import annotate_linkage
+    from synthesis.kinds.fourbar_path import plots as path_plots
+    from synthesis.kinds.fourbar_path.construction import joint_positions
+    from synthesis.kinds.planting.kinematics import ArmDesign
+    from synthesis.kinds.planting.kinematics import joint_positions as arm_joints
+    from synthesis.kinds.planting.compare_plots import annotate_linkage
 
     d = _checked("planting_arm/taiwan_example1.toml").design
     joints = arm_joints(ArmDesign(*(d[k] for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=d["branch"]),
@@ -120,7 +120,7 @@ def test_linkage_drawings_carry_joint_letters_and_link_lengths():
 def test_the_animation_is_large_enough_and_counts_its_frames(tmp_path):
     from PIL import Image
 
-    from synthesis.fourbar_path import plots as path_plots
+    from synthesis.kinds.fourbar_path import plots as path_plots
 
     result = _checked("fourbar_path/picking_arc.toml")
     seen = []

@@ -17,9 +17,9 @@ from solving import agrisynth, same_solve, solved_library_spec
 from synthesis import kinds
 from synthesis.core.solve import baseline_rules, exit_error, run_solve
 from synthesis.errors import SolverError, SpecError
-from synthesis.planting.check import evaluate
-from synthesis.planting.nlp import PlantingNLP
-from synthesis.planting.scene import PlantingScene
+from synthesis.kinds.planting.check import evaluate
+from synthesis.kinds.planting.nlp import PlantingNLP
+from synthesis.kinds.planting.scene import PlantingScene
 from synthesis.spec import LoadedSpec, load_spec
 
 KIND = kinds.get("planting_fourbar")

@@ -16,12 +16,12 @@ import pytest
 
 from conftest import LIBRARY
 from solving import agrisynth, modules_after_runs, run_solve, spec_with, strict_json
-from synthesis.kinematics.steering_trapezoid import (ackermann_kingpin_spacing, ackermann_outer, inner_tip,
+from synthesis.kinds.steering_linkage.kinematics import (ackermann_kingpin_spacing, ackermann_outer, inner_tip,
                                                      loop_residual, outer_lock, outer_tip, tie_rod_length,
                                                      transmission_angles, turning_radii)
 from synthesis.spec import load_spec
-from synthesis.steering_linkage.check import evaluate, trace
-from synthesis.steering_linkage.table12 import explain
+from synthesis.kinds.steering_linkage.check import evaluate, trace
+from synthesis.kinds.steering_linkage.table12 import explain
 
 STEERING = LIBRARY / "steering"
 BASELINE = STEERING / "hwang_model3_steering.toml"
@@ -172,7 +172,7 @@ def test_minimum_turning_radius_3_1_m_is_the_inner_front_kingpin_path(explained)
 
 def test_baseline_check_reproduces_the_fitted_trapezoid_and_passes_its_rules():
     loaded = load_spec(BASELINE)
-    from synthesis.steering_linkage.check import run_check
+    from synthesis.kinds.steering_linkage.check import run_check
 
     result = run_check(loaded)
     assert result.all_satisfied
@@ -308,17 +308,18 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
         assert "Traceback" not in proc.stderr
 
 
-FORBIDDEN = ("synthesis.tillage_linkage", "synthesis.kinematics.tillage_linkage", "constraints.tillage",
-             "synthesis.planting", "synthesis.picker", "synthesis.fourbar_path", "synthesis.crank_rocker",
-             "synthesis.clamp_cam", "synthesis.guide_tube", "synthesis.kinematics.planting_arm",
-             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.combing_chain",
-             "synthesis.comb_finger", "synthesis.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
+FORBIDDEN = ("synthesis.kinds.tillage_linkage", "synthesis.kinds.tillage_linkage.kinematics", "synthesis.kinds.tillage_linkage.rules",
+             "synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.fourbar_path", "synthesis.kinds.crank_rocker",
+             "synthesis.kinds.clamp_cam", "synthesis.kinds.guide_tube", "synthesis.kinds.planting.kinematics",
+             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.kinds.combing_chain",
+             "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 
 def test_a_steering_run_imports_no_other_kind(tmp_path):
     modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", str(tmp_path)],
                                             ["solve", str(REDESIGN_27), "--workers", "1", "--out", str(tmp_path)]])
-    assert "synthesis.steering_linkage.solve" in modules
+    assert "synthesis.kinds.steering_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
-    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base", "constraints.steering"]
+    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base"]
+    assert "synthesis.kinds.steering_linkage.rules" in modules
     assert (tmp_path / "steering_redesign_27" / "result.json").exists()

@@ -467,8 +467,8 @@ def test_planting_poses_send_none_for_a_joint_that_is_not_finite(monkeypatch):
     """An open loop gives NaN joints; the page gets null there (JSON has no NaN), as the studio's own rounding did."""
     import numpy as np
 
-    import synthesis.kinematics.planting_arm as arm
-    from synthesis.planting.poses import frames
+    import synthesis.kinds.planting.kinematics as arm
+    from synthesis.kinds.planting.poses import frames
 
     class Checked:
         trajectory = {"crank_deg": [0.0, 10.0, 20.0]}

@@ -16,10 +16,10 @@ import pytest
 
 from conftest import LIBRARY
 from solving import agrisynth, modules_after_runs, run_solve, spec_with, strict_json
-from synthesis.kinematics.tillage_linkage import bar_angle, joints, path_function, tool_point
+from synthesis.kinds.tillage_linkage.kinematics import bar_angle, joints, path_function, tool_point
 from synthesis.spec import load_spec
-from synthesis.tillage_linkage import printed as pr
-from synthesis.tillage_linkage.check import evaluate, motion, printed_relations, run_check
+from synthesis.kinds.tillage_linkage import printed as pr
+from synthesis.kinds.tillage_linkage.check import evaluate, motion, printed_relations, run_check
 
 TILLAGE = LIBRARY / "tillage"
 BASELINE = TILLAGE / "hwang_tillage_baseline.toml"
@@ -265,20 +265,21 @@ def test_free_bounds_that_let_the_crank_reach_the_rollers_are_bad_input(tmp_path
     assert proc.returncode == 2 and "a = 170 mm >= b = 160 mm" in " ".join(proc.stderr.split()), proc.stderr
 
 
-FORBIDDEN = ("synthesis.steering_linkage", "synthesis.kinematics.steering_trapezoid", "constraints.steering",
-             "synthesis.planting", "synthesis.picker", "synthesis.fourbar_path", "synthesis.crank_rocker",
-             "synthesis.clamp_cam", "synthesis.guide_tube", "synthesis.kinematics.planting_arm",
-             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.combing_chain",
-             "synthesis.comb_finger", "synthesis.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
+FORBIDDEN = ("synthesis.kinds.steering_linkage", "synthesis.kinds.steering_linkage.kinematics", "synthesis.kinds.steering_linkage.rules",
+             "synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.fourbar_path", "synthesis.kinds.crank_rocker",
+             "synthesis.kinds.clamp_cam", "synthesis.kinds.guide_tube", "synthesis.kinds.planting.kinematics",
+             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.kinds.combing_chain",
+             "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 
 def test_a_tillage_run_imports_no_other_kind(tmp_path):
     out = str(tmp_path / "out")
     modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", out],
                                             ["solve", str(REDESIGN), "--workers", "1", "--starts", "2", "--out", out]])
-    assert "synthesis.tillage_linkage.solve" in modules
+    assert "synthesis.kinds.tillage_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
-    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base", "constraints.tillage"]
+    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base"]
+    assert "synthesis.kinds.tillage_linkage.rules" in modules
     assert (tmp_path / "out" / "tillage_redesign" / "result.json").exists()
 
 

@@ -73,7 +73,7 @@ def _design(name, kind, loaded, solving, setting):
     if name in DESIGNS:
         return DESIGNS[name]
     if name == "guide_way":          # the redesign's design is the convex fit's control points (the spec gives none)
-        from synthesis.guide_way.solve import _fit_design
+        from synthesis.kinds.guide_way.solve import _fit_design
         return dict(zip(*_fit_design(loaded.model, setting.data)))
     return kind.checker()(loaded).design
 
@@ -445,7 +445,7 @@ def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_
     against an independent evaluation: the top found by a golden-section search of the claw tip's height over the
     crank angle (kinematics only), its derivatives by central differences of that maximum.  The nominal NLP's row
     is the plain height (held at the nominal design, as before)."""
-    from synthesis.kinematics.planting_arm import tip_derivatives
+    from synthesis.kinds.planting.kinematics import tip_derivatives
 
     loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example3.toml")
     spec = loaded.model
@@ -492,7 +492,7 @@ def test_planting_point_order_is_held_at_its_worst_case_in_the_tolerance_box():
     (find_precision_points, a grid and brentq on the kinematics), its derivatives by central differences.  The robust
     row is that angle minus sum_j |d angle / d d_j| tol_j (the epigraph variables at their start, 1.01 |dg/dd| +
     1e-9), its lower bound the point gap; the nominal NLP's row is the angle itself."""
-    from synthesis.planting.scene import PlantingScene, find_precision_points
+    from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
 
     loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example1.toml")
     spec = loaded.model
@@ -525,8 +525,8 @@ def test_tillage_entry_and_exit_are_held_at_their_worst_case_in_the_tolerance_bo
     Checked at the spec's start against the kind's float motion (grid + brentq, check.motion): the crank angle from
     entry to the lowest point and from there to the exit, their derivatives by central differences; each robust row
     is that angle minus sum_j |d angle / d d_j| tol_j (epigraph variables at their start), its lower bound GAP."""
-    from synthesis.tillage_linkage import check
-    from synthesis.tillage_linkage.nlp import EXISTENCE_ROWS, GAP
+    from synthesis.kinds.tillage_linkage import check
+    from synthesis.kinds.tillage_linkage.nlp import EXISTENCE_ROWS, GAP
 
     path = tmp_path / "robust.toml"
     path.write_text((LIBRARY / "tillage/tillage_redesign.toml").read_text()

@@ -38,8 +38,8 @@ def _nominal_units(nlp, n):
     if offset is None or scale is None:
         from synthesis.core.kind import resolve
 
-        if resolve("synthesis.fourbar_path.nlp:SCALED"):
-            offset, scale = resolve("synthesis.fourbar_path.nlp:nominal_scales")(
+        if resolve("synthesis.kinds.fourbar_path.nlp:SCALED"):
+            offset, scale = resolve("synthesis.kinds.fourbar_path.nlp:nominal_scales")(
                 np.array(nlp.spec.targets.points, dtype=float))
         else:
             offset, scale = np.zeros(n), np.ones(n)
@@ -64,8 +64,8 @@ def spec_keys(names, info) -> list[str]:
 #: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
 AFFINE = {
     "fourbar_path": _nominal_units,
-    "crank_rocker": _grashof("synthesis.crank_rocker.nlp:COORDINATES"),
-    "picker_double_crank": _grashof("synthesis.picker.nlp:COORDINATES"),
+    "crank_rocker": _grashof("synthesis.kinds.crank_rocker.nlp:COORDINATES"),
+    "picker_double_crank": _grashof("synthesis.kinds.picker.nlp:COORDINATES"),
 }
 
 

@@ -12,8 +12,8 @@ import pytest
 from scipy.optimize import brentq
 
 from cam_reference import sampled_roller_envelope, translating_pitch
-from synthesis.clamp_cam.check import cam_facts, profile, run_check
-from synthesis.clamp_cam.scene import CamScene, evaluate
+from synthesis.kinds.clamp_cam.check import cam_facts, profile, run_check
+from synthesis.kinds.clamp_cam.scene import CamScene, evaluate
 from solving import run_solve
 from synthesis.spec import LoadedSpec, load_spec
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fourbar_path_support import cli, write_spec
-from synthesis.fourbar_path.synthetic import truth_data
+from synthesis.kinds.fourbar_path.synthetic import truth_data
 
 
 def test_change_point_linkage_is_diagnosed_not_crashed(tmp_path, record_property):

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from synthesis.guide_tube import drag
-from synthesis.guide_tube.drag import Q_LONG, Q_SERIES, stopping_distance, traverse
-from synthesis.guide_tube.drop import Physics, SeedlingSticks, Tube, drop_phases, landing
-from synthesis.guide_tube.ode import simulate
-from synthesis.guide_tube.slope import landing_time_slope
+from synthesis.kinds.guide_tube import drag
+from synthesis.kinds.guide_tube.drag import Q_LONG, Q_SERIES, stopping_distance, traverse
+from synthesis.kinds.guide_tube.drop import Physics, SeedlingSticks, Tube, drop_phases, landing
+from synthesis.kinds.guide_tube.ode import simulate
+from synthesis.kinds.guide_tube.slope import landing_time_slope
 from solving import agrisynth
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -146,8 +146,8 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     design (exit 1, check's contract: it exited 3 and wrote nothing): tube I never reaches its wall end, the landing
     time spread does not exist, both say where the seedling sticks, and tube II's rules (41 deg: a decelerating slide
     that still ends on the wall's end) are evaluated, matching the closed form written out here."""
-    from synthesis.guide_tube.check import FINE
-    from synthesis.guide_tube.scene import GuideTubeScene
+    from synthesis.kinds.guide_tube.check import FINE
+    from synthesis.kinds.guide_tube.scene import GuideTubeScene
     from synthesis.spec import load_spec
 
     path = _sticking_spec(tmp_path)
@@ -198,8 +198,8 @@ def test_tolerance_of_a_sticking_wall_fails_the_design_and_writes_the_result(tmp
     its rules (exit 1): the nominal table is check's, the rules that cannot be evaluated have no stack-up (their
     NLP numbers, a NaN among them, describe a motion the design does not make), and the evaluated ones do: the free
     fall of tube I, h1 = 600 - 1000 (below_wall + l3 tan delta), loses 1000 l3 sec^2(delta) * 0.5 deg at its worst."""
-    from synthesis.guide_tube.check import FINE, rules_even_if_stuck
-    from synthesis.guide_tube.scene import GuideTubeScene
+    from synthesis.kinds.guide_tube.check import FINE, rules_even_if_stuck
+    from synthesis.kinds.guide_tube.scene import GuideTubeScene
     from synthesis.spec import load_spec
 
     path = _sticking_spec(tmp_path)

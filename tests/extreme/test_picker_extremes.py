@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from synthesis.crank_rocker.check import mechanism
+from synthesis.kinds.crank_rocker.check import mechanism
 from solving import agrisynth, recheck_rules, run_solve
 from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
 from synthesis.core.solve import starts_table
@@ -151,7 +151,7 @@ def test_a_given_design_that_is_no_crank_rocker_still_solves(tmp_path):
     path = tmp_path / "outside.toml"
     path.write_text(text)
     loaded = load_spec(path)
-    from synthesis.crank_rocker.check import run_check
+    from synthesis.kinds.crank_rocker.check import run_check
     checked = {r["name"]: r for r in run_check(loaded).rules}
     assert checked["grashof_crank_rocker"]["value"] < 0 and checked["time_ratio"]["value"] is None
     result, reports, _ = run_solve(loaded, starts=3, workers=1)

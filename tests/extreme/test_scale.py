@@ -242,7 +242,7 @@ def test_declared_units_match_the_physics(tmp_path, k):
     """Independent re-check of the declared units: the crank-rocker's spec with every length x k builds (by the
     kind's own code) the NLP a length unit change must give, so at any point its rows and objective equal the
     mm NLP's rows x factor**p of their declared units -- at 5 random points, to 1e-9 relative."""
-    from synthesis.crank_rocker.nlp import CrankRockerNLP
+    from synthesis.kinds.crank_rocker.nlp import CrankRockerNLP
 
     mm = CrankRockerNLP(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").model)
     scaled = CrankRockerNLP(_crank_rocker_spec(tmp_path, k).model)
@@ -305,7 +305,7 @@ BENCH_STARTS = 4
 KNOWN_FAILING: dict[str, str] = {}
 #: (tillage_redesign was one until 2026-11-24: its start 0 was chaotic at the last digit -- moved by 1e-15 relative
 #: in mm it ended at 393.27 mm instead of 373.06, and so did its metres round trip -- on a degenerate optimum;
-#: the kind now relaxes bounds by 1e-10 (synthesis/tillage_linkage/nlp.py) and every such start ends at 373.06)
+#: the kind now relaxes bounds by 1e-10 (synthesis/kinds/tillage_linkage/nlp.py) and every such start ends at 373.06)
 
 
 def _library_params():
@@ -386,7 +386,7 @@ def test_tillage_declared_units_match_its_kinematics(k):
     the mm one, so each structural row and the objective is factor**p of its mm value for its declared p --
     checked at 3 random designs to 1e-9 relative (they were declared plain numbers, which left them at mm size
     in another length unit: the x 1e3 row then ended start 0 at c = 393.3 instead of 373.1 mm)."""
-    from synthesis.tillage_linkage.nlp import TillageNLP
+    from synthesis.kinds.tillage_linkage.nlp import TillageNLP
 
     nlp = TillageNLP(load_spec(LIBRARY / "tillage" / "tillage_redesign.toml").model)
     declared = ipopt.CompiledNLP(nlp.problem, length_factor=k)

@@ -1,7 +1,7 @@
 """Toggle cases of the planting arm and the picker's double crank (issue 18's extreme matrix; the crank-rocker's
 are in test_toggle_grashof.py).  Each records its figure for bench.md (``record_property("figure", ...)``).
 
-Planting arm (seed 000's four-bar, synthesis.kinematics.planting_arm): frame l1 = OO', crank l2 = OA, coupler
+Planting arm (seed 000's four-bar, synthesis.kinds.planting.kinematics): frame l1 = OO', crank l2 = OA, coupler
 l3 = AB, rocker l4 = O'B, crank angle theta from OO'.  The diagonal d = |O'A| has d^2 = l1^2 + l2^2 -
 2 l1 l2 cos theta, largest at theta = pi: d = l1 + l2.  With l1 + l2 = l3 + l4 the triangle A-B-O' is flat
 there (B on the segment AO', assembly height h2 = 0): coupler and rocker in one line, transmission angle
@@ -9,7 +9,7 @@ there (B on the segment AO', assembly height h2 = 0): coupler and rocker in one 
 l1, l2, l3, l4 = 100, 30, 70, 60 mm (l5 = 150 mm, zeta = 0, phi = 20 deg, the library's branch -1); at its
 smallest, d = l1 - l2 = 70 >= |l3 - l4| = 10, so the loop closes over the whole turn.
 
-Picker double crank (seed 001, synthesis.kinematics.picker_linkage): crank l1 = AB, coupler l2 = BC, follower
+Picker double crank (seed 001, synthesis.kinds.picker.kinematics.linkage): crank l1 = AB, coupler l2 = BC, follower
 l3 = CD, frame l4 = AD (shortest), crank angle phi1 from AD.  |DB|^2 = l4^2 + l1^2 - 2 l4 l1 cos phi1, largest at
 phi1 = 180 deg: |DB| = l1 + l4.  With l1 + l4 = l2 + l3 the triangle B-C-D is flat there: transmission angle at
 C 180 deg (acute 0), the frame still the shortest link (Grashof's frame slack 0: a change-point double crank).
@@ -28,9 +28,9 @@ import numpy as np
 import pytest
 
 from synthesis.kinematics.crank_rocker import acute
-from synthesis.kinematics.picker_linkage import DoubleCrank, clamp_states, joint_positions as picker_joints
-from synthesis.kinematics.planting_arm import ArmDesign, joint_positions, link_angles
-from synthesis.planting.scene import transmission_angles_deg
+from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_states, joint_positions as picker_joints
+from synthesis.kinds.planting.kinematics import ArmDesign, joint_positions, link_angles
+from synthesis.kinds.planting.scene import transmission_angles_deg
 
 PLANTING = dict(l1=100.0, l2=30.0, l3=70.0, l4=60.0, l5=150.0, zeta=0.0, phi=20.0, branch=-1)
 PICKER = dict(x_a=0.0, y_a=0.0, l1=80.0, l2=60.0, l3=50.0, l4=30.0, l5=40.0, phi3=10.0, phi4=30.0, branch=1)
@@ -50,7 +50,7 @@ def test_planting_arm_through_its_toggle(record_property):
     """Change-point planting arm driven through its toggle (theta = pi, l1 + l2 = l3 + l4): every joint (A, B,
     the claw tip C) moves at most 500 mm/rad x the step (O(step): 1e-6 rad either side, and every 0.1 deg step
     of a turn), no NaN on the turn, the assembly height h2 = 0 and the transmission angle 180 deg at the toggle
-    (acute 0 within 1e-6 deg, the value `check`'s transmission rule reads: synthesis.planting.scene)."""
+    (acute 0 within 1e-6 deg, the value `check`'s transmission rule reads: synthesis.kinds.planting.scene)."""
     d = ArmDesign(**PLANTING)
     at = link_angles(d, math.pi)
     assert abs(float(at["h2"][0])) < 1e-9 and math.degrees(float(at["mu"][0])) == pytest.approx(180.0, abs=1e-6)
@@ -74,7 +74,7 @@ def test_picker_double_crank_through_its_toggle(record_property):
     """Change-point picker double crank driven through its toggle (phi1 = 180 deg, l1 + l4 = l2 + l3): B, C and
     the clamp point M move O(step) (at most 500 mm/rad x 1e-6 rad either side, and on every 0.1 deg step of a
     turn), no NaN, the transmission angle at C 180 deg at the toggle (acute 0 within 1e-6 deg: the mu `check`
-    reads, synthesis.kinematics.picker_linkage.clamp_states)."""
+    reads, synthesis.kinds.picker.kinematics.linkage.clamp_states)."""
     dc = DoubleCrank(**PICKER)
     slacks = dc.grashof_slacks()
     assert slacks[0] == 0.0 and np.all(slacks >= 0.0)                 # frame slack 0: the change point

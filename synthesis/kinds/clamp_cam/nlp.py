@@ -1,0 +1,167 @@
+"""The clamp-cam NLP: every rule of a clamp_cam spec as an IPOPT constraint (CasADi, exact AD).
+
+Decision variables: the design variables of the spec (fixed ones get lo = hi): base radius,
+roller radius, offset or pivot distance and arm length, where the rise starts and the four
+segment angles; plus tau, the peak |pressure angle|, for that objective.  The rise and the return
+are sampled at fixed fractions u of their length, so the normalised law values are numbers and
+the segment angles enter smoothly (ds/dphi = h v(u)/beta, d2s/dphi2 = h a(u)/beta^2).  Pressure
+angle and curvature are semi-infinite rules sampled here; solve re-checks them on a 10x finer grid
+without CasADi.  The NLP itself (rows, backoff, elastic slacks, IPOPT and its log) is the core's
+:class:`synthesis.core.problem.Problem`, transcribed by the core; this module declares the kind's variables, rows and objective.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from constraints.base import Rule
+from synthesis.kinds.clamp_cam.motion import Timing
+from synthesis.kinds.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, operating_symbols_wanted, per_rule_backoff
+from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
+from synthesis.kinds.clamp_cam.spec import ClampCamSpec
+from synthesis.design_info import units_of
+from synthesis.spec.common import bounds_of, value_of
+
+DEG = math.pi / 180.0
+#: sampled rules: tightened by the backoff so they hold between the samples too (timing rows are exact)
+SAMPLED = ("pressure_angle_rise", "pressure_angle_return", "no_undercut", "no_undercut_outer", "max_acceleration")
+#: unit of each objective's value in the result; nearest: the squared changes, each relative to its bounds' width
+OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
+
+
+class CamNLP:
+    """Built once per spec; :meth:`solve` runs one IPOPT solve from a start point."""
+
+    def __init__(self, spec: ClampCamSpec, optimised=None, elastic: bool = False):
+        self.spec, self.elastic = spec, elastic
+        variables = spec.variables()
+        self.names = list(variables)
+        self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
+        self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
+        x = ca.SX.sym("x", len(self.names))
+        v = {n: x[i] for i, n in enumerate(self.names)}
+        if spec.motion.law == "optimised":
+            rise_law, return_law = optimised.rise, optimised.return_
+        else:
+            rise_law = return_law = closed_form_law(spec.motion.law)
+        # the tolerance analysis's build only: the crank speed a symbol (resolved at its value by the core), for
+        # d rule / d crank speed (the acceleration's omega^2, windows timed in seconds).  Not with an optimised law
+        # under an acceleration cap: that law is refitted (cvxpy) at each speed, a change the NLP cannot see
+        self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min")]
+                          if operating_symbols_wanted() and not (spec.motion.law == "optimised"
+                                                                 and spec.rules.max_acceleration is not None) else [])
+        alpha, kappa, acc = self._sampled(v, rise_law, return_law)
+        self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
+        rules = self._rules(v, alpha, kappa, acc)
+        backoff = spec.solver.backoff
+        structural = self._structural(v)
+        translating = spec.follower.type == "translating"
+        objective = self._objective(x, v, alpha)
+        self.problem = Problem("clamp_cam", x, self.bounds[:, 0], self.bounds[:, 1], structural, rules,
+                               objective, max_iter=spec.solver.max_iter, ipopt="moderate",
+                               x_units=units_of(spec, self.names),
+                               structural_units=["deg", "mm^2"] if translating else ["deg", "mm", "mm^2", "rad"],
+                               objective_unit="deg" if spec.objective.name == "pressure_angle" else "",
+                               backoff=per_rule_backoff(lambda rule: backoff if rule.name in SAMPLED else 0.0),
+                               operating=self.operating,
+                               # in a tolerance box the follower geometry exists for every design in it: its rows
+                               # (all but the first, the turn's 360 deg) held at their linearised worst case
+                               robust_structural=tuple(range(1, len(structural))))
+        self.compiled = CompiledNLP(self.problem, elastic)
+        self.rules = self.problem.rules
+
+    # ------------------------------------------------------------------ model pieces
+
+    def _sampled(self, v, rise_law, return_law):
+        """Pressure angle (deg) per motion segment, pitch curvature and acceleration at the samples."""
+        spec = self.spec
+        n = spec.solver.samples_per_segment
+        u = np.linspace(0.0, 1.0, n)
+        h = stroke_of(spec)
+        follower = follower_of(spec, v)
+        alpha, kappa, acc = {}, [], []
+        for name, law, sign in (("rise", rise_law, 1.0), ("return", return_law, -1.0)):
+            beta = v[name] * DEG
+            s = h * (law.s(u) if sign > 0 else 1.0 - law.s(u))
+            ds = sign * h * ca.DM(law.v(u)) / beta
+            dds = sign * h * ca.DM(law.a(u)) / beta**2
+            c = cf.roller_centre(follower, ca.DM(s), ds, dds)
+            alpha[name] = cf.degrees(cf.pressure_angle(c))
+            kappa.append(cf.pitch_curvature(c))
+            acc.append(dds)
+        # the dwells (at rest and at full stroke) count with the rise: constant angle -atan(e / s0) there
+        rest = cf.roller_centre(follower, ca.DM([0.0, h]), ca.DM.zeros(2), ca.DM.zeros(2))
+        alpha["rise"] = ca.vertcat(alpha["rise"], cf.degrees(cf.pressure_angle(rest)))
+        return alpha, ca.vertcat(*kappa), ca.vertcat(*acc)
+
+    def _structural(self, v) -> list[Row]:
+        """The segments fill one turn; the follower geometry exists (real s0, the arm reaches the cam)."""
+        spec = self.spec
+        rows = [(v["rise"] + v["far_dwell"] + v["return"] + v["near_dwell"], 360.0, 360.0)]
+        r0 = v["base_radius"]
+        if spec.follower.type == "translating":
+            rows.append((v["offset"] ** 2 - (0.9 * r0) ** 2, None, 0.0))
+        else:
+            a, l = v["pivot_distance"], v["arm_length"]
+            rows += [(r0 - (a + l), None, -1e-3), ((a - l) ** 2 - r0**2, None, -1e-3)]
+            rest = cf.Oscillating(r0, a, l, spec.follower.side).rest_angle()
+            rows.append((rest + stroke_of(spec), None, 170.0 * DEG))       # the arm never folds past 170 deg
+        return rows
+
+    def _rules(self, v, alpha, kappa, acc) -> list[Rule]:
+        spec = self.spec
+        scale = 1.0 if spec.follower.type == "translating" else 180.0 / math.pi     # model -> report units
+        reference = Timing.from_design(dict(zip(self.names, self.init)))
+        if not self.operating:
+            return rules_of(spec, alpha["rise"], alpha["return"], kappa, v["roller_radius"], Timing.from_design(v),
+                            acc * (scale * omega_of(spec) ** 2), reference)
+        n = self.operating[0].symbol
+        omega = n * (2.0 * math.pi / 60.0)
+        return rules_of(spec, alpha["rise"], alpha["return"], kappa, v["roller_radius"], Timing.from_design(v),
+                        acc * (scale * omega**2), reference, crank_speed=n)
+
+    def _objective(self, x, v, alpha) -> ObjectiveParts:
+        """base_radius (relative to the given one), nearest (scaled squared change) or pressure_angle:
+        the peak |pressure angle| tau (deg) over rise and return, as an epigraph."""
+        name = self.spec.objective.name
+        if name == "base_radius":
+            return ObjectiveParts(f=v["base_radius"] / self.init[self.names.index("base_radius")])
+        if name == "nearest":
+            width = np.maximum(self.bounds[:, 1] - self.bounds[:, 0], 1e-9)
+            return ObjectiveParts(f=ca.sumsqr((x - self.init) / width))
+        tau = ca.SX.sym("tau")
+        both = ca.vertcat(alpha["rise"], alpha["return"])
+        return ObjectiveParts(f=tau / 10.0, extra=tau, extra_lb=[0.0], extra_ub=[90.0], extra_init=[0.0],
+                              rows=[(tau - both, 0.0, None), (tau + both, 0.0, None)], extra_units=["deg"],
+                              row_units=["deg", "deg"])
+
+    # ------------------------------------------------------------------ solving
+
+    def tau_start(self, x_design: np.ndarray) -> np.ndarray | None:
+        """Start value of tau (pressure_angle objective): the start design's peak |pressure angle|."""
+        if self.elastic or self.spec.objective.name != "pressure_angle":
+            return None
+        alpha = np.asarray(self.alpha_function(x_design)).ravel()
+        return np.array([float(np.max(np.abs(alpha)))])
+
+    def objective_value(self, design: dict[str, float], fvalue: float) -> float:
+        """The objective in report units: base radius mm, peak pressure angle deg, or the distance."""
+        name = self.spec.objective.name
+        if name == "base_radius":
+            return design["base_radius"]
+        if name == "pressure_angle":
+            return fvalue * 10.0
+        return fvalue
+
+    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
+        x_design = np.asarray(x_design, dtype=float)
+        out = self.compiled.solve(start, x_design, self.tau_start(x_design))
+        design = dict(zip(self.names, (float(v) for v in out.x[: len(self.names)])))
+        return StartOutcome.of(out, design, self.objective_value(design, out.objective))

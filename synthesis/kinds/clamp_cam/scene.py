@@ -1,0 +1,256 @@
+"""A clamp_cam spec made concrete: follower, motion over a turn, timing windows, and its rules.
+
+``CamScene`` holds numbers (a design); ``evaluate`` samples it and builds every rule on floats.
+The NLP (synthesis.kinds.clamp_cam.nlp) builds the same rules on CasADi symbols from the same pieces.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from constraints.base import Rule
+from synthesis.kinds.clamp_cam.rules import acceleration_rule, pressure_angle_rule, timing_rule, undercut_rule
+from synthesis.kinds.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing
+from synthesis.errors import AssemblyError
+from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
+from synthesis.kinds.clamp_cam.spec import ClampCamSpec
+
+TWO_PI = 2.0 * math.pi
+
+
+def omega_of(spec: ClampCamSpec) -> float:
+    """Cam speed, rad/s."""
+    return spec.operation.crank_speed * TWO_PI / 60.0
+
+
+def stroke_of(spec: ClampCamSpec) -> float:
+    """Stroke in model units: mm (translating) or rad (oscillating)."""
+    h = spec.motion.stroke
+    return h if spec.follower.type == "translating" else math.radians(h)
+
+
+def stroke_unit(spec: ClampCamSpec) -> str:
+    return "mm" if spec.follower.type == "translating" else "deg"
+
+
+def to_report_units(spec: ClampCamSpec, x):
+    """Model displacement units (mm or rad) -> report units (mm or deg)."""
+    return x if spec.follower.type == "translating" else np.degrees(x)
+
+
+def fit_law(spec: ClampCamSpec):
+    """The optimised B-spline law of the spec's segments (imports cvxpy), or None for a closed-form law."""
+    if spec.motion.law != "optimised":
+        return None
+    seg = spec.design_values()
+    cap = spec.rules.max_acceleration
+    if cap is not None and spec.follower.type == "oscillating":
+        cap = math.radians(cap)
+    b = spec.bspline
+    return _fitted_law(stroke_of(spec), seg["rise"], seg["return"], omega_of(spec), b.minimise, b.spans, b.degree,
+                       b.samples_per_span, cap)
+
+
+@lru_cache(maxsize=8)
+def _fitted_law(stroke: float, rise_deg: float, return_deg: float, omega: float, minimise: str, spans: int,
+                degree: int, samples_per_span: int, cap: float | None):
+    """One convex fit per set of inputs and process: a check or a solve, its diagnosis and its baseline
+    rule table all use the same law, fitted once (the law is immutable)."""
+    from synthesis.kinds.clamp_cam.bspline_law import fit_optimised_law
+
+    return fit_optimised_law(stroke, {"rise": rise_deg, "return": return_deg}, omega, minimise, spans, degree,
+                             samples_per_span, cap)
+
+
+def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
+    """The follower of design values ``v`` (floats or CasADi symbols), model units."""
+    if spec.follower.type == "translating":
+        return cf.Translating(v["base_radius"], v["offset"])
+    return cf.Oscillating(v["base_radius"], v["pivot_distance"], v["arm_length"], spec.follower.side)
+
+
+def window_degrees(spec: ClampCamSpec, crank_speed=None) -> dict[str, list[tuple]]:
+    """Timing windows in crank degrees (a clock in seconds is converted at the crank speed: the spec's, or
+    ``crank_speed``, a CasADi symbol of the tolerance analysis's build)."""
+    n = spec.operation.crank_speed if crank_speed is None else crank_speed
+    factor = 1.0 if spec.timing.clock == "deg" else 360.0 * n / 60.0
+    return {kind: [(lo * factor, hi * factor) for lo, hi in getattr(spec.timing, kind)]
+            for kind in ("hold_near", "hold_far")}
+
+
+def unwrap_window(window: tuple[float, float], dwell: tuple[float, float]) -> tuple[float, float]:
+    """Shift the window by whole turns so that its middle is nearest the dwell's middle."""
+    mid_w, mid_d = 0.5 * (window[0] + window[1]), 0.5 * (dwell[0] + dwell[1])
+    k = round((mid_d - mid_w) / 360.0)
+    return window[0] + 360.0 * k, window[1] + 360.0 * k
+
+
+def timing_rules(spec: ClampCamSpec, timing: Timing, reference: Timing | None = None,
+                 crank_speed=None) -> list[Rule]:
+    """One rule per window: the near (far) dwell must cover each hold_near (hold_far) window.
+
+    ``reference`` (numbers) decides the unwrapping, so that symbolic timings unwrap like their start;
+    ``crank_speed`` (a CasADi symbol, the tolerance analysis's) converts windows timed in seconds, unwrapped by
+    the whole turns their nominal values take (a turn count has no derivative).
+    """
+    ref = reference or timing
+    nominal = window_degrees(spec)
+    windows = nominal if crank_speed is None else window_degrees(spec, crank_speed)
+    rules = []
+    for kind, dwell in (("hold_near", "near_dwell"), ("hold_far", "far_dwell")):
+        lo, hi = timing.span(dwell)
+        ref_span = tuple(float(x) for x in ref.span(dwell))
+        for i, (w, w0) in enumerate(zip(windows[kind], nominal[kind])):
+            if crank_speed is None:
+                rules.append(timing_rule(kind, i, unwrap_window(w, ref_span), lo, hi))
+                continue
+            shown = unwrap_window(w0, ref_span)
+            turns = shown[0] - w0[0]
+            rules.append(timing_rule(kind, i, (w[0] + turns, w[1] + turns), lo, hi, shown=shown))
+    return rules
+
+
+@dataclass(frozen=True)
+class CamScene:
+    """One design of a spec: numbers only."""
+
+    spec: ClampCamSpec
+    design: dict[str, float]
+    follower: cf.Follower
+    motion: CamMotion
+    optimised: Any = None           # OptimisedLaw when motion.law = "optimised"
+
+    @classmethod
+    def from_spec(cls, spec: ClampCamSpec, design: dict[str, float] | None = None, optimised=None) -> "CamScene":
+        """AssemblyError where the design lies outside the cam's domain (:func:`outside_domain`)."""
+        values = dict(spec.design_values())
+        if design:
+            values.update({k: float(v) for k, v in design.items() if k in values})
+        why = outside_domain(spec, values)
+        if why is not None:
+            raise AssemblyError(f"the design lies outside the cam's domain: {why}")
+        if spec.motion.law == "optimised":
+            optimised = optimised or fit_law(spec)
+            rise_law, return_law = optimised.rise, optimised.return_
+        else:
+            rise_law = return_law = closed_form_law(spec.motion.law)
+        motion = CamMotion(stroke_of(spec), Timing.from_design(values), rise_law, return_law)
+        return cls(spec, values, follower_of(spec, values), motion, optimised)
+
+    @property
+    def roller_radius(self) -> float:
+        return self.design["roller_radius"]
+
+    @property
+    def omega(self) -> float:
+        return omega_of(self.spec)
+
+
+def outside_domain(spec: ClampCamSpec, v: dict[str, float]) -> str | None:
+    """Why design values ``v`` (numbers) lie where the cam's geometry is not defined, else None: a radius not
+    positive, the roller not inside the base circle, the follower line missing it (|offset| >= base radius: no
+    sqrt(r0^2 - e^2)), the arm not reaching it, a rise or return not positive.  The spec's validators hold these
+    (with margins) for the given design; a tolerance box's samples or a studio drag may step past them, where the
+    formulas would read |r0| or NaN as a design."""
+    r0, rr = v["base_radius"], v["roller_radius"]
+    if not r0 > 0:
+        return f"base_radius {r0:g} mm is not > 0"
+    if not rr > 0:
+        return f"roller_radius {rr:g} mm is not > 0"
+    if not rr < r0:
+        return f"roller_radius {rr:g} mm is not below base_radius {r0:g} mm"
+    if spec.follower.type == "translating":
+        e = v.get("offset", 0.0)
+        if not abs(e) < r0:
+            return f"|offset| {abs(e):g} mm is not below base_radius {r0:g} mm: the follower line misses the base circle"
+    else:
+        a, l = v["pivot_distance"], v["arm_length"]
+        if not abs(a - l) < r0 < a + l:
+            return (f"the arm cannot reach the base circle: |pivot_distance - arm_length| = {abs(a - l):g}, "
+                    f"base_radius {r0:g}, pivot_distance + arm_length = {a + l:g} mm")
+    for name in ("rise", "return"):
+        if not v[name] > 0:
+            return f"{name} {v[name]:g} deg is not > 0"
+    return None
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Samples of the follower motion and the cam geometry at the same cam angles."""
+
+    samples: Samples
+    centre: cf.RollerCentre
+    alpha_deg: np.ndarray
+    kappa: np.ndarray
+
+    def where(self, segment: str) -> np.ndarray:
+        return self.samples.segment == SEGMENT_NAMES.index(segment)
+
+
+def geometry(scene: CamScene, samples: Samples) -> Geometry:
+    c = cf.roller_centre(scene.follower, samples.s, samples.ds, samples.dds)
+    return Geometry(samples, c, np.degrees(cf.pressure_angle(c)), cf.pitch_curvature(c))
+
+
+def segment_grid(scene: CamScene, per_motion_segment: int, per_dwell: int = 8) -> Samples:
+    """Samples over the turn: ``per_motion_segment`` on the rise and on the return, fewer on the dwells."""
+    parts = [scene.motion.segment(name, np.linspace(0.0, 1.0, per_motion_segment if name in ("rise", "return")
+                                                    else per_dwell))
+             for name in SEGMENT_NAMES]
+    return Samples(*(np.concatenate([getattr(p, k) for p in parts])
+                     for k in ("phi_deg", "s", "ds", "dds", "ddds", "segment")))
+
+
+def law_warning(scene: CamScene) -> str | None:
+    """The caveat of an optimised law that cvxpy solved only inaccurately, else None."""
+    return None if scene.optimised is None else scene.optimised.warning
+
+
+def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
+    """Every rule of the spec, evaluated on the samples of ``g``; the rules that follow the motion law carry
+    its caveat as a note when the optimised law was solved inaccurately."""
+    rules = _cam_rules(scene, g)
+    note = law_warning(scene)
+    if note is None:
+        return rules
+    return [r if r.name.startswith("timing_") else dataclasses.replace(r, note=note) for r in rules]
+
+
+def rules_of(spec: ClampCamSpec, alpha_driven, alpha_return, kappa, roller_radius, timing: Timing, acceleration,
+             reference: Timing | None = None, crank_speed=None) -> list[Rule]:
+    """Every rule of the spec on a trace of floats or CasADi symbols: the pressure angles (deg) while the
+    cam drives (rise and dwells) and on the return, the pitch curvature, the roller radius, the timing,
+    and the follower acceleration while it moves (report units per s^2).  Used by check, the NLP and
+    the fine-grid re-check; ``reference`` (numbers) unwraps symbolic timing windows like their start;
+    ``crank_speed`` (a symbol, the tolerance analysis's) converts windows timed in seconds."""
+    lim = spec.rules
+    rules = [pressure_angle_rule("rise", alpha_driven, lim.pressure_angle_rise),
+             pressure_angle_rule("return", alpha_return, lim.pressure_angle_return),
+             undercut_rule(kappa, roller_radius, lim.min_working_radius)]
+    if lim.groove:
+        rules.append(undercut_rule(kappa, roller_radius, lim.min_working_radius, flank="outer"))
+    rules += timing_rules(spec, timing, reference, crank_speed)
+    if lim.max_acceleration is not None:
+        rules.append(acceleration_rule(acceleration, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
+    return rules
+
+
+def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
+    spec = scene.spec
+    driven = g.where("rise") | g.where("far_dwell") | g.where("near_dwell")
+    moving = g.where("rise") | g.where("return")
+    acc = to_report_units(spec, g.samples.dds[moving]) * scene.omega**2
+    return rules_of(spec, g.alpha_deg[driven], g.alpha_deg[g.where("return")], g.kappa, scene.roller_radius,
+                    scene.motion.timing, acc)
+
+
+def evaluate(scene: CamScene, per_motion_segment: int) -> tuple[list[Rule], Geometry]:
+    g = geometry(scene, segment_grid(scene, per_motion_segment))
+    return cam_rules(scene, g), g

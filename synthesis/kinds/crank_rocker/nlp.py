@@ -1,0 +1,122 @@
+"""The crank-rocker NLP: K, swing and transmission angle as constraints on the simulated mechanism.
+
+Decision variables: the four lengths (fixed ones get lo = hi) and the crank angles phi_a, phi_b of
+the rocker's two extreme positions; IPOPT sees the lengths in Grashof coordinates (the crank and the
+three Grashof slacks, bounded below by zero), so the crank turns and the kinematics are defined at
+every iterate, however far a start lies from a crank-rocker.  Structural rows make them extremes (d beta / d phi = 0, exact
+AD); the time-ratio row puts the quick stroke between them (phi_b - phi_a = 2 pi / (1 + K)), the
+swing row fixes the angle between the rocker positions, and the transmission angle is sampled over a
+turn on a grid that contains the crank along and against the frame, where its extremes are.
+"""
+
+from __future__ import annotations
+
+import math
+import casadi as ca
+import numpy as np
+
+from synthesis.core.coordinates import GrashofCoordinates
+from synthesis.kinds.crank_rocker.check import rules_of
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.core.starts import pull_inside
+from synthesis.kinematics import fourbar
+from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
+from synthesis.spec.common import design_box
+from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
+
+TWO_PI = 2.0 * math.pi
+NAMES = ("l7", "l8", "l9", "l10")
+#: starts are moved this far (mm) inside the Grashof crank-rocker region, so the crank turns at the start
+START_MARGIN = 1.0
+
+
+#: design (l7, l8, l9, l10, phi_a, phi_b) <-> coordinates (l7, three Grashof slacks, phi_a, phi_b)
+COORDINATES = GrashofCoordinates(l1=3, l2=0, l3=1, l4=2)
+
+
+def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
+    """The three crank-rocker slacks of (l7, l8, l9, l10): affine in the lengths."""
+    l7, l8, l9, l10 = lengths
+    return np.array(list(fourbar.crank_rotation_slacks(l10, l7, l8, l9).values()), dtype=float)
+
+
+class CrankRockerNLP:
+    """Built once per spec; :meth:`solve` runs IPOPT from one start (lengths only; extremes are guessed)."""
+
+    def __init__(self, spec: CrankRockerSpec, elastic: bool = False):
+        self.spec = spec
+        variables = spec.variables()
+        self.names = list(NAMES)
+        self.bounds, self.init = design_box(variables, NAMES)
+        # decision coordinates z: l7, the three Grashof slacks (>= 0: the crank always turns, so the
+        # kinematics are defined at every iterate), phi_a, phi_b; x: the lengths and angles they give
+        z = ca.SX.sym("z", 6)
+        x = COORDINATES.design(z)
+        p, phi_a, phi_b = x[:4], x[4], x[5]
+        f = rocker_function(spec.branch)
+        _, dbeta_a, _, _, tip_a = f(phi_a, p)
+        _, dbeta_b, _, _, tip_b = f(phi_b, p)
+        lbx = np.concatenate([self.bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
+        ubx = np.concatenate([self.bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
+        structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0), *COORDINATES.length_rows(x, lbx, ubx)]
+        n = spec.solver.samples_per_turn
+        mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
+        a = ca.vertcat(p[3], 0.0)
+        # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
+        rules = rules_of(spec, [p[i] for i in range(4)], phi_b - phi_a, tip_a - a, tip_b - a, mu)
+        objective = self._objective(p, mu)
+        # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
+        self.problem = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
+                               hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
+                               # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
+                               # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
+                               x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,
+                               objective_unit="mm" if spec.objective.name == "min_total_length" else "deg",
+                               max_iter=spec.solver.max_iter)
+        self.compiled = CompiledNLP(self.problem, elastic)
+
+    def _objective(self, p, mu) -> ObjectiveParts:
+        if self.spec.objective.name == "min_total_length":
+            return ObjectiveParts(f=ca.sum1(p) / 100.0)
+        t = ca.SX.sym("gamma_min")
+        # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
+        rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
+        return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
+                              extra_init=[self.spec.requirements.min_transmission_angle], rows=rows,
+                              extra_units=["deg"], row_units=["deg", "deg"])
+
+    def report_objective(self, design: dict[str, float], f: float) -> float:
+        """Total length (mm) of the design itself, or the smallest transmission angle (deg) the epigraph
+        variable reached."""
+        return sum(design.values()) if self.spec.objective.name == "min_total_length" else -f * 10.0
+
+    def extremes_guess(self, lengths: np.ndarray) -> np.ndarray:
+        """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
+        cr = CrankRocker(*lengths, branch=self.spec.branch)
+        if cr.crank_turns():
+            try:
+                q = quick_return(cr)
+            except ValueError:
+                q = None
+            if q is not None:
+                ex = q.extremes
+                if q.stroke_fold_to_ext <= q.stroke_ext_to_fold:
+                    return np.array([ex.phi_folded, ex.phi_folded + q.stroke_fold_to_ext])
+                return np.array([ex.phi_extended, ex.phi_extended + q.stroke_ext_to_fold])
+        return np.array([0.0, TWO_PI / (1.0 + self.spec.requirements.time_ratio)])
+
+    def prepared_start(self, lengths: np.ndarray) -> np.ndarray:
+        return pull_inside(np.asarray(lengths, float), self.init, grashof_slacks, START_MARGIN)
+
+    def solve(self, start: int, lengths: np.ndarray) -> StartOutcome:
+        """One IPOPT run from the lengths (moved inside the crank-rocker region), the extremes guessed
+        from their simulation; extremes (phi_a, phi_b, deg) in the start's details."""
+        lengths = self.prepared_start(lengths)
+        out = self.compiled.solve(start, COORDINATES.coordinates(np.concatenate([lengths,
+                                                                                 self.extremes_guess(lengths)])))
+        x = COORDINATES.design(out.x[:6])
+        design = {n: float(v) for n, v in zip(NAMES, x[:4])}
+        return StartOutcome.of(out, design, self.report_objective(design, out.objective),
+                               extremes_crank_deg=[math.degrees(float(x[4])), math.degrees(float(x[5]))])

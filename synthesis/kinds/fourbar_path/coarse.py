@@ -1,0 +1,19 @@
+"""The four-bar path's check on the studio's coarse grid: the check on the [solver] samples divided by 10.  Its
+rules read a sample count only for grashof "any" (between the targets); otherwise they are evaluated at the
+targets and in closed form, on one grid."""
+
+from __future__ import annotations
+
+from synthesis.core import coarse
+from synthesis.core.verdict import FINE
+
+
+def note(spec) -> str:
+    if spec.rules.grashof_class != "any":      # path_rules samples between targets only for grashof "any"
+        return (f"the check's one grid (grashof = \"{spec.rules.grashof_class}\": its rules are evaluated at the "
+                f"targets and in closed form, on no sample count)")
+    return (f"the check on {FINE * coarse.coarser(spec).solver.samples} samples per gap between targets (fine: "
+            f"{FINE * spec.solver.samples})")
+
+
+COARSE = coarse.by_solver_samples("synthesis.kinds.fourbar_path.check:run_check", note)

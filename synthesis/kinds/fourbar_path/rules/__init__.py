@@ -1,0 +1,1 @@
+"""The kind's own rule families (each imports only casadi, numpy and constraints.base)."""

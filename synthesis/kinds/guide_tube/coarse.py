@@ -1,0 +1,6 @@
+"""The guide tube's check on the studio's coarse grid: its grid is fixed in the kind (no [solver] sample count
+reaches it), so it is evaluated as it is."""
+
+from synthesis.core import coarse
+
+COARSE = coarse.one_grid("synthesis.kinds.guide_tube.check:run_check")

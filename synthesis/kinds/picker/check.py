@@ -1,0 +1,136 @@
+"""``agrisynth check`` for kind picker_double_crank: the arc error (eq 4) and the rules of eq 5-7.
+
+The target points lie evenly by arc length on the picking arc; the crank angles are evenly spaced over
+the working swing, the i-th point paired with the i-th angle (M1 at phi10).  Rules: Grashof double
+crank with the frame AD shortest (eq 5-6), x_A > 0 (eq 7) and the transmission angle at C over the
+working swing.  The arc error is the objective of ``solve``; ``check`` reports it in ``arc_error``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from constraints import Rule
+from constraints.grashof import grashof_double_crank_rule
+from synthesis.kinds.picker.rules import frame_point_rule
+from constraints.transmission import acute_transmission_rule
+from synthesis.errors import AssemblyError
+from synthesis.kinematics import fourbar
+from synthesis.kinds.picker.kinematics.arc import arc_through, points_on_arc
+from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, assembles, clamp_states, joint_positions
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec
+from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
+
+#: crank angles over the working swing in ``check`` (transmission angle)
+CHECK_SAMPLES = 2001
+
+
+def linkage(spec: PickerDoubleCrankSpec, values: dict[str, float] | None = None) -> DoubleCrank:
+    v = spec.design_values() if values is None else values
+    return DoubleCrank(v["x_a"], v["y_a"], v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["phi3"], v["phi4"],
+                       spec.linkage.branch)
+
+
+def target_points(spec: PickerDoubleCrankSpec) -> np.ndarray:
+    t = spec.target
+    return points_on_arc(t.m1, t.m2, t.tangent_from_vertical, t.points)
+
+
+def target_angles(spec: PickerDoubleCrankSpec) -> np.ndarray:
+    """Crank angles (deg) paired with the target points: phi10 + psi * i / (n - 1)."""
+    d = spec.drive
+    return d.start + d.swing * np.linspace(0.0, 1.0, spec.target.points)
+
+
+def swing_angles(spec: PickerDoubleCrankSpec, samples: int) -> np.ndarray:
+    d = spec.drive
+    return d.start + d.swing * np.linspace(0.0, 1.0, samples)
+
+
+def require_assembly(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> None:
+    angles = swing_angles(spec, 721)
+    if not assembles(dc, angles):
+        bad = [a for a in angles if fourbar.assembly_height_sq(math.radians(a), dc.l4, dc.l1, dc.l2, dc.l3) <= 0]
+        raise AssemblyError(
+            f"picker_double_crank.linkage: the double crank cannot assemble between crank angles {min(bad):.1f} "
+            f"and {max(bad):.1f} deg of its working swing (triangle BCD does not close with l1 = {dc.l1:g}, "
+            f"l2 = {dc.l2:g}, l3 = {dc.l3:g}, l4 = {dc.l4:g} mm)")
+
+
+def arc_error(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
+    """Eq (4) (sum of distances), RMS and max of |M(phi_i) - target_i|, and every pair."""
+    targets = target_points(spec)
+    angles = target_angles(spec)
+    m = clamp_states(dc, angles)["M"]
+    d = np.hypot(m[0] - targets[:, 0], m[1] - targets[:, 1])
+    t = spec.target
+    centre, radius, _, _ = arc_through(t.m1, t.m2, t.tangent_from_vertical)
+    path = clamp_states(dc, swing_angles(spec, 501))["M"]
+    off_arc = np.abs(np.hypot(path[0] - centre[0], path[1] - centre[1]) - radius)
+    return {"eq4_sum_mm": float(d.sum()), "rms_mm": float(np.sqrt(np.mean(d * d))), "max_mm": float(d.max()),
+            "sum_of_squares_mm2": float(np.sum(d * d)),
+            # the shape alone: how far the path over the swing strays from the arc's circle, ignoring timing
+            "path_off_circle_max_mm": float(off_arc.max()),
+            "points": [{"crank_deg": float(a), "x": float(mx), "y": float(my), "target_x": float(tx),
+                        "target_y": float(ty), "distance": float(di)}
+                       for a, mx, my, (tx, ty), di in zip(angles, m[0], m[1], targets, d)]}
+
+
+def evaluate(spec: PickerDoubleCrankSpec, dc: DoubleCrank, samples: int = CHECK_SAMPLES) -> list[Rule]:
+    """Every rule of the spec; raises AssemblyError when the loop breaks inside the working swing."""
+    require_assembly(spec, dc)
+    mu = clamp_states(dc, swing_angles(spec, samples))["mu"]
+    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu)
+
+
+def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu) -> list[Rule]:
+    """Every rule of the spec on a trace of floats or CasADi symbols: pivot A's x, the links l1..l4 (l4 the
+    frame AD) and the transmission angles at C (deg) over the working swing.  Used by check, the NLP
+    and the re-check."""
+    return [grashof_double_crank_rule(l4, l1, l2, l3),
+            frame_point_rule(x_a, spec.rules.x_a_min),
+            acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
+
+
+def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
+    """arc error, the path over the working swing and a full turn, linkage drawings, the target arc."""
+    t = spec.target
+    centre, radius, start, sweep = arc_through(t.m1, t.m2, t.tangent_from_vertical)
+    swing = swing_angles(spec, 201)
+    full = np.linspace(0.0, 360.0, 361)
+    m_swing = clamp_states(dc, swing)["M"]
+    full_ok = [a for a in full if assembles(dc, [a])]
+    m_full = clamp_states(dc, full_ok)["M"] if full_ok else np.zeros((2, 0))
+    mu = clamp_states(dc, swing)["mu"]
+    return {
+        "source": spec.source,
+        "branch": spec.linkage.branch,
+        "arc_error": arc_error(spec, dc),
+        "target_arc": {"m1": list(t.m1), "m2": list(t.m2), "tangent_from_vertical_deg": t.tangent_from_vertical,
+                       "centre": [float(centre[0]), float(centre[1])], "radius": float(radius),
+                       "start_deg": math.degrees(start), "sweep_deg": math.degrees(sweep)},
+        "drive": {"start_deg": spec.drive.start, "swing_deg": spec.drive.swing},
+        "grashof": {"slacks_mm": [float(s) for s in dc.grashof_slacks()],
+                    "frame_shortest": bool(dc.l4 <= min(dc.l1, dc.l2, dc.l3)),
+                    "double_crank": bool(min(dc.grashof_slacks()) >= 0.0)},
+        "path": {"crank_deg": swing.tolist(), "x": m_swing[0].tolist(), "y": m_swing[1].tolist(),
+                 "transmission_deg": mu.tolist()},
+        "coupler_curve": {"crank_deg": full_ok, "x": m_full[0].tolist(), "y": m_full[1].tolist()},
+        "positions": [{"crank_deg": float(a), "joints": joint_positions(dc, float(a))} for a in target_angles(spec)],
+    }
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    dc = linkage(spec)
+    try:
+        rules = evaluate(spec, dc)
+    except AssemblyError as exc:
+        raise AssemblyError(f"{loaded.path}: {exc}") from None
+    design = dict(spec.design_values())
+    design["branch"] = spec.linkage.branch
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
+                  rules=[r.record().to_json() for r in rules], extra=facts(spec, dc))

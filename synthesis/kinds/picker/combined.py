@@ -1,0 +1,226 @@
+"""Kind ``picker``: the crank-rocker AEFG driving the double crank ABCD (seed 001 Fig. 3), over one turn.
+
+The rocker AE is rigidly joined to the crank AB at the common pivot A, so AB turns by exactly what AE
+turns: phi1(t) = phi10 + m (beta(phi7(t)) - beta_pick), where beta is the rocker angle of the
+crank-rocker (its own frame), phi7 the crank angle of GF turning at the constant crank speed and
+m = +-1 the sense in which the rocker is mounted (read from which way AB must swing).  The clamp
+point M(t) = M_dc(phi1(t)); its velocity and acceleration are exact (AD through the chain).
+
+Readings (problems/picker/PICKER.md): t = 0 when the rocker is at its picking extreme
+(``installation.picking_extreme``); the crank turns in the sense that makes the picking -> dropping
+stroke the ``installation.holding_stroke`` one; theta1 is the angle G-A-E at the picking extreme (a
+property of the crank-rocker, checked against the published value) and theta2 the direction of the
+frame A -> G from the +x axis, which only places the crank-rocker in the drawing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from constraints.base import Rule
+from synthesis.kinds.crank_rocker import check as crank_rocker_check
+from synthesis.design_info import describe_fixed, describe_part
+from synthesis.errors import AssemblyError, SpecError
+from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function
+from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_point, joint_positions
+from synthesis.kinds.picker import check as double_crank_check
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec, load_spec
+
+TWO_PI = 2.0 * math.pi
+TRAJECTORY_SAMPLES = 361
+ANIMATION_FRAMES = 40
+
+
+@dataclass(frozen=True)
+class Drive:
+    """The combined mechanism, fixed numbers only (SI angles in rad, lengths mm, omega rad/s)."""
+
+    cr: CrankRocker
+    dc: DoubleCrank
+    phi10: float          # rad, AB from AD at the picking instant
+    omega: float          # crank GF speed, rad/s
+    phi_pick: float       # crank angle (crank-rocker frame) at picking
+    phi_drop: float
+    beta_pick: float      # rocker angle (crank-rocker frame) at picking
+    beta_drop: float
+    sense: int            # +1: phi7 increases with time
+    mount: int            # +1: AB turns the way beta does; -1: the crank-rocker is mounted mirrored
+    holding_angle: float  # crank angle of the picking -> dropping stroke, rad
+    theta2: float         # direction of A -> G in the machine frame, rad
+
+    @property
+    def period(self) -> float:
+        return TWO_PI / self.omega
+
+    @property
+    def swing(self) -> float:
+        return abs(self.beta_drop - self.beta_pick)
+
+
+def make_drive(spec, cr: CrankRocker, dc: DoubleCrank, phi10_deg: float) -> Drive:
+    inst = spec.installation
+    q = quick_return(cr)
+    ex = q.extremes
+    if inst.picking_extreme == "folded":
+        phi_pick, phi_drop, b_pick, b_drop = ex.phi_folded, ex.phi_extended, ex.beta_folded, ex.beta_extended
+    else:
+        phi_pick, phi_drop, b_pick, b_drop = ex.phi_extended, ex.phi_folded, ex.beta_extended, ex.beta_folded
+    b_drop = b_pick + math.remainder(b_drop - b_pick, TWO_PI)
+    ahead = (phi_drop - phi_pick) % TWO_PI            # crank angle to the drop turning with +phi
+    want_short = inst.holding_stroke == "quick"
+    sense = 1 if (ahead <= math.pi) == want_short else -1
+    holding = ahead if sense > 0 else TWO_PI - ahead
+    mount = 1 if b_drop > b_pick else -1              # AB must swing from phi10 towards phi10 + psi
+    return Drive(cr, dc, math.radians(phi10_deg), spec.operation.crank_speed * TWO_PI / 60.0, phi_pick, phi_drop,
+                 b_pick, b_drop, sense, mount, holding, math.radians(inst.theta2))
+
+
+def clamp_motion(drive: Drive) -> ca.Function:
+    """t -> (M, dM/dt, d2M/dt2, phi1, phi7): exact by AD through crank-rocker and double crank."""
+    t = ca.SX.sym("t")
+    phi7 = drive.phi_pick + drive.sense * drive.omega * t
+    beta = rocker_function(drive.cr.branch)(phi7, drive.cr.parameters())[0]
+    phi1 = drive.phi10 + drive.mount * (beta - drive.beta_pick)
+    m = ca.vertcat(*clamp_point(phi1, drive.dc.parameters(), drive.dc.branch))
+    v = ca.jacobian(m, t)
+    a = ca.jacobian(v, t)
+    return ca.Function("clamp_motion", [t], [m, v, a, phi1, phi7], ["t"], ["M", "V", "A", "phi1", "phi7"])
+
+
+def states(drive: Drive, t) -> dict[str, np.ndarray]:
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    m, v, a, phi1, phi7 = (np.asarray(x) for x in clamp_motion(drive).map(t.size)(t.reshape(1, -1)))
+    return {"M": m.reshape(2, -1), "V": v.reshape(2, -1), "A": a.reshape(2, -1), "phi1": phi1.ravel(),
+            "phi7": phi7.ravel()}
+
+
+def machine_joints(drive: Drive, phi1: float, phi7: float) -> dict[str, list[float]]:
+    """Every joint in the machine frame at crank angles phi1 (AB) and phi7 (GF), rad: A, B, C, D, M of
+    the double crank and G, F, E of the drive.
+
+    The crank-rocker's own frame (G origin, A on +x) is mirrored when ``mount`` = -1 and turned so that
+    A -> G points along theta2, then A is put on the double crank's pivot.
+    """
+    joints = joint_positions(drive.dc, math.degrees(phi1))
+    cr = crank_rocker_check.joints(drive.cr, phi7)
+    a_int = np.array(cr["A"])
+    rot = drive.theta2 - math.pi
+    c, sn = math.cos(rot), math.sin(rot)
+    a_m = np.array(joints["A"])
+    for name in ("G", "F", "E"):
+        dx, dy = np.array(cr[name]) - a_int
+        dy *= drive.mount
+        joints[name] = [float(a_m[0] + c * dx - sn * dy), float(a_m[1] + sn * dx + c * dy)]
+    return joints
+
+
+def _prefixed(prefix: str, rules: list[Rule]) -> list[dict]:
+    out = []
+    for r in rules:
+        rec = r.record()
+        out.append(dataclasses.replace(rec, name=f"{prefix}.{rec.name}").to_json())
+    return out
+
+
+def _load_part(loaded: LoadedSpec, field: str, kind: str) -> LoadedSpec:
+    path = loaded.model.part_path(loaded.path, field)
+    try:
+        part = load_spec(path)
+    except SpecError as exc:
+        raise SpecError(f"picker.{field}: {exc}") from None
+    if part.kind != kind:
+        raise SpecError(f"picker.{field}: {path} is a {part.kind!r} spec, expected kind {kind!r}")
+    return part
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    cr_loaded = _load_part(loaded, "crank_rocker", "crank_rocker")
+    dc_loaded = _load_part(loaded, "double_crank", "picker_double_crank")
+    cr_spec, dc_spec = cr_loaded.model, dc_loaded.model
+    cr = crank_rocker_check.mechanism(cr_spec)
+    dc = double_crank_check.linkage(dc_spec)
+    rules = _prefixed("crank_rocker", crank_rocker_check.evaluate(cr_spec, cr)[0])
+    try:
+        rules += _prefixed("double_crank", double_crank_check.evaluate(dc_spec, dc))
+    except AssemblyError as exc:
+        raise AssemblyError(f"picker.double_crank: {dc_loaded.path}: {exc}") from None
+    if not cr.crank_turns():
+        raise AssemblyError(f"picker.crank_rocker: {cr_loaded.path}: the crank cannot make a full turn, so the "
+                            f"picker has no cycle (Grashof slacks {cr.grashof_slacks()} mm)")
+    drive = make_drive(spec, cr, dc, dc_spec.drive.start)
+    inst = spec.installation
+    theta1 = math.degrees(abs(math.remainder(math.pi - drive.beta_pick, TWO_PI)))
+    rules.append(Rule("drive_swing", math.degrees(drive.swing), dc_spec.drive.swing - inst.swing_tolerance,
+                      dc_spec.drive.swing + inst.swing_tolerance, "deg", 1.0,
+                      "rocker AE swing = crank AB swing").record().to_json())
+    rules.append(Rule("installation_theta1", theta1, inst.theta1 - inst.theta1_tolerance,
+                      inst.theta1 + inst.theta1_tolerance, "deg", 1.0,
+                      f"angle G-A-E at the {inst.picking_extreme} extreme").record().to_json())
+
+    period = drive.period
+    t = np.linspace(0.0, period, TRAJECTORY_SAMPLES)
+    s = states(drive, t)
+    instants = {"picking": 0.0, "dropping": drive.holding_angle / drive.omega, "picking_again": period}
+    at = states(drive, list(instants.values()))
+    speed = np.hypot(*at["V"]) / 1000.0
+    targets = {"picking": dc_spec.target.m1, "dropping": dc_spec.target.m2, "picking_again": dc_spec.target.m1}
+    instant_table = {}
+    for k, (name, tt) in enumerate(instants.items()):
+        mx, my = at["M"][:, k]
+        tx, ty = targets[name]
+        instant_table[name] = {"t": tt, "speed_m_s": float(speed[k]), "x": float(mx), "y": float(my),
+                               "crank_ab_deg": math.degrees(float(at["phi1"][k])),
+                               "distance_to_target_mm": float(math.hypot(mx - tx, my - ty))}
+    if spec.published.instants is not None:
+        for name, tp in zip(instants, spec.published.instants):
+            instant_table[name]["published_t"] = tp
+    speeds = np.hypot(*s["V"]) / 1000.0
+    ab = np.degrees(s["phi1"])
+    frames_t = np.linspace(0.0, period, ANIMATION_FRAMES, endpoint=False)
+    frames = states(drive, frames_t)
+    ae_pick = math.degrees(drive.theta2) + math.degrees(drive.mount * (drive.beta_pick - math.pi))
+    design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
+    design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
+    design.update({"theta1": inst.theta1, "theta2": inst.theta2})
+    described = describe_part("crank_rocker", cr_spec, str(cr_loaded.path))
+    described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
+    described.update(describe_fixed(spec, {"theta1": "installation.theta1", "theta2": "installation.theta2"}))
+    return Result(
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design, rules=rules,
+        design_variables=described,
+        trajectory={"frame": "machine", "point": "clamp point M",
+                    "note": "t = 0 at picking; crank_deg = angle turned by the crank GF since picking",
+                    "t": t.tolist(), "crank_deg": np.degrees(drive.omega * t).tolist(),
+                    "x": s["M"][0].tolist(), "y": s["M"][1].tolist(), "vx": s["V"][0].tolist(),
+                    "vy": s["V"][1].tolist(), "ax": s["A"][0].tolist(), "ay": s["A"][1].tolist(),
+                    "crank_ab_deg": ab.tolist(), "speed_m_s": speeds.tolist()},
+        extra={
+            "source": spec.source,
+            "parts": {"crank_rocker": {"path": str(cr_loaded.path), "sha256": cr_loaded.sha256, "name": cr_spec.name},
+                      "double_crank": {"path": str(dc_loaded.path), "sha256": dc_loaded.sha256, "name": dc_spec.name}},
+            "operation": {"crank_speed_rpm": spec.operation.crank_speed, "period_s": period},
+            "instants": instant_table,
+            "holding": {"stroke": inst.holding_stroke, "crank_angle_deg": math.degrees(drive.holding_angle),
+                        "time_s": instants["dropping"], "return_time_s": period - instants["dropping"]},
+            "peak_speed_m_s": float(speeds.max()),
+            "peak_speed_t": float(t[int(np.argmax(speeds))]),
+            "crank_ab_range_deg": [float(ab.min()), float(ab.max())],
+            "installation": {"picking_extreme": inst.picking_extreme, "theta1_published_deg": inst.theta1,
+                             "theta1_computed_deg": theta1, "theta2_deg": inst.theta2,
+                             "crank_sense": "counter-clockwise" if drive.sense * drive.mount > 0 else "clockwise",
+                             "rocker_mounted_mirrored": drive.mount < 0,
+                             "rocker_ae_at_picking_deg": ae_pick % 360.0,
+                             "joint_angle_ab_minus_ae_deg": math.remainder(
+                                 dc_spec.drive.start - dc_spec.design_values()["phi3"] - ae_pick, 360.0)},
+            "target_arc": double_crank_check.facts(dc_spec, dc)["target_arc"],
+            "frames": [{"t": float(ft), "joints": machine_joints(drive, float(a), float(c))}
+                       for ft, a, c in zip(frames_t, frames["phi1"], frames["phi7"])],
+        },
+    )

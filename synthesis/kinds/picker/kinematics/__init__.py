@@ -1,0 +1,1 @@
+"""The kind's own kinematics (floats and CasADi symbols alike)."""

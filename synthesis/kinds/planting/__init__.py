@@ -1,0 +1,66 @@
+"""Kind planting_fourbar: the four-bar planting arm of seed 000, claw tip through P1-P6."""
+
+from synthesis.core.kind import Kind
+
+KIND = Kind(
+    name="planting_fourbar",
+    summary="four-bar planting arm, claw through P1-P6 (seed 000)",
+    spec_model="synthesis.kinds.planting.spec:PlantingFourbarSpec",
+    check="synthesis.kinds.planting.check:run_check",
+    figures={"trajectory.png": "synthesis.kinds.planting.plots:trajectory_figure",
+             "trajectory.svg": "synthesis.kinds.planting.plots:trajectory_figure",
+             "kinematics.png": "synthesis.kinds.planting.compare_plots:kinematics_of_one",
+             "linkage.png": "synthesis.kinds.planting.compare_plots:linkage_of_one",
+             "animation.gif": "synthesis.kinds.planting.compare_plots:animation_of_one",
+             "paths.csv": "synthesis.kinds.planting.export:write_paths_csv",
+             "linkage.dxf": "synthesis.kinds.planting.export:write_linkage_dxf"},
+    compare="synthesis.kinds.planting.compare_plots:overlay_figures",
+    solving="synthesis.kinds.planting.solve:SOLVING",
+    bench="synthesis.kinds.planting:bench_cases",
+    objectives={"nearest": "smallest change from the given design (squared, relative to the bounds)",
+                "robust": "largest smallest normalised rule margin (measured on the fine grid)",
+                "smooth": "smallest peak claw acceleration over a turn, mm/s^2"},
+    example="planting_arm/redesign_from_example1.toml",
+    coarse_check="synthesis.kinds.planting.coarse:COARSE",
+    poses="synthesis.kinds.planting.poses:POSES",
+)
+
+
+def bench_cases(specs, seed: int = 0) -> list:
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    given specs, by default on these library redesigns (``--quick``: the first)."""
+    from synthesis.bench_generic import library_cases
+
+    return library_cases(specs, seed, [
+            "planting_arm/redesign_from_example1.toml",
+            "planting_arm/redesign_from_example3.toml",
+    ],
+                         studies={"derivative_error": derivative_error_rows})
+
+
+#: seed 000 §5.1: mean errors of its central-difference scheme against the analytic values (speed, acceleration)
+PRINTED_DERIVATIVE_ERRORS = {1.0: (1.48, 4.94), 0.2: (0.64, 1.49)}
+
+
+def derivative_error_rows() -> list[dict]:
+    """Seed 000's central-difference scheme (eq. 8-14) against CasADi's exact derivatives, production
+    design of example 1 (Table 1), mean over 360 crank angles, at the paper's two steps; both the
+    literal tan^-1 directions and quadrant-correct ones (:mod:`synthesis.kinds.planting.finite_difference`)."""
+
+    from synthesis.kinds.planting.finite_difference import mean_relative_errors
+    from synthesis.kinds.planting.scene import PlantingScene
+    from synthesis.library import LIBRARY
+    from synthesis.spec import load_spec
+
+    spec = load_spec(LIBRARY / "planting_arm/taiwan_example1.toml").model
+    scene = PlantingScene.from_spec(spec)
+    rows = []
+    for step, (speed_printed, acc_printed) in PRINTED_DERIVATIVE_ERRORS.items():
+        for scheme in ("atan", "atan2"):
+            e = mean_relative_errors(scene.design, scene.motion, step, scheme=scheme)
+            rows.append({"design": "taiwan_example1", "step_deg": step, "scheme": scheme,
+                         "speed_error_pct": 100 * e["speed_magnitude"],
+                         "acceleration_magnitude_error_pct": 100 * e["acceleration_magnitude"],
+                         "acceleration_vector_error_pct": 100 * e["acceleration_vector"],
+                         "printed_speed_pct": speed_printed, "printed_acceleration_pct": acc_printed})
+    return rows

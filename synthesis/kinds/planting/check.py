@@ -1,0 +1,111 @@
+"""``agrisynth check`` for kind planting_fourbar: evaluate the given design against every rule."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from constraints import Rule
+from synthesis.kinds.planting.kinematics import tip_state
+from synthesis.kinds.planting.rule_set import planting_rules
+from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
+                                      find_precision_points, float_trace)
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec
+
+
+#: the grid `check` evaluates on: samples of each acceleration phase and of a crank turn
+CHECK_PHASE_SAMPLES = 400
+CHECK_TURN_SAMPLES = 3600
+
+
+def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMPLES,
+             turn_samples: int = CHECK_TURN_SAMPLES) -> tuple[list[Rule], PrecisionPoints | None]:
+    """All rules of the scene; a crank that cannot complete a turn leaves the path rules unevaluated."""
+    why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
+    if why is None:
+        pts = find_precision_points(scene)
+        return planting_rules(float_trace(scene, pts, phase_samples, turn_samples), limits), pts
+    return unevaluated(scene, limits, why), None
+
+
+def unevaluated(scene: PlantingScene, limits, why: str) -> list[Rule]:
+    """The rules of a design whose crank cannot turn: only those of the link lengths evaluated."""
+    nowhere = PrecisionPoints({n: None for n in POINTS}, None, {n: why for n in POINTS})
+    return planting_rules(float_trace(scene, nowhere, turn_missing=why), limits)
+
+
+def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:
+    """One cycle of claw-tip samples (DESIGN.md keys), ground frame, from soil exit P6 to the next P6."""
+    if pts is None:
+        return None
+    m = scene.motion
+    start = pts.theta["P6"] if pts.theta["P6"] is not None else 0.0
+    theta = start + np.linspace(0.0, TWO_PI, samples)
+    st = tip_state(scene.design, m, theta)
+    t = (theta - start) / m.omega
+    x_ground = st.pos[0] + m.forward * t
+    return {
+        "frame": "ground",
+        "t": t.tolist(),
+        "crank_deg": np.degrees(theta % TWO_PI).tolist(),
+        "x": x_ground.tolist(), "y": st.pos[1].tolist(),
+        "vx": (st.vel[0] + m.forward).tolist(), "vy": st.vel[1].tolist(),
+        "ax": st.acc[0].tolist(), "ay": st.acc[1].tolist(),
+        "machine": {"x": st.pos[0].tolist(), "y": st.pos[1].tolist(),
+                    "vx": st.vel[0].tolist(), "vy": st.vel[1].tolist()},
+    }
+
+
+def precision_point_table(scene: PlantingScene, pts: PrecisionPoints | None) -> dict:
+    """P1-P6 in both frames, on the trajectory's clock (t = 0 at the P6 that starts it)."""
+    if pts is None:
+        return {}
+    m = scene.motion
+    start = pts.theta["P6"] if pts.theta["P6"] is not None else 0.0
+    table = {}
+    for n in POINTS:
+        th = pts.theta[n]
+        if th is None:
+            table[n] = {"found": False, "why": pts.problems.get(n)}
+            continue
+        rel = (th - start) % TWO_PI
+        if n == "P6":
+            rel = TWO_PI   # the exit that ends this planting stroke
+        st = tip_state(scene.design, m, th)
+        table[n] = {"found": True, "crank_deg": math.degrees(th % TWO_PI), "t": rel / m.omega,
+                    "x": float(st.pos[0, 0]), "y": float(st.pos[1, 0]),
+                    "x_ground": float(st.pos[0, 0] + m.forward * rel / m.omega)}
+    return table
+
+
+def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict:
+    """The kind-specific part of result.json: operation, precision points, soil and seedbed."""
+    seedbed = scene.seedbed
+    return {
+        "source": spec.source,
+        "operation": {"forward_speed_m_s": spec.operation.forward_speed,
+                      "crank_speed_rpm": spec.operation.crank_speed,
+                      "plant_spacing_mm": scene.motion.forward * scene.motion.period},
+        "precision_points": precision_point_table(scene, pts),
+        "soil_level_mm": None if pts is None else pts.soil_level,
+        "seedbed": {"x": seedbed.point[0], "y": seedbed.point[1], "tilt_deg": math.degrees(seedbed.tilt),
+                    "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
+        # rule limits the spec did not write, and how they follow from its inputs
+        "rule_limits_from_inputs": spec.derived_limits(),
+    }
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    scene = PlantingScene.from_spec(spec)
+    rules, pts = evaluate(scene, spec.rules)
+    records = [r.record().to_json() for r in rules]
+    design = dict(spec.design_values())
+    design["branch"] = spec.arm.branch
+    return Result(
+        kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
+        design=design, rules=records, trajectory=trajectory(scene, pts),
+        extra=scene_facts(spec, scene, pts),
+    )

@@ -1,0 +1,247 @@
+"""The planting-arm problem: every rule of a planting_fourbar spec, declared for the solve core.
+
+Decision variables: the design variables (fixed ones get lo = hi) and the crank angles of P1-P6.
+The precision points are where the path meets the seedbed lines and the soil, written as
+structural equalities on their crank angles, so IPOPT sees smooth rows instead of min/max over
+samples.  The lowest point is stationary (vy = 0) and no sample of the turn lies lower.  The rules
+are :func:`synthesis.kinds.planting.rule_set.planting_rules` of the symbolic trace; back-off, the elastic
+form and the robust objective's epigraph are :mod:`synthesis.core.transcribe`'s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.outcome import StartOutcome
+from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+                                    scaled_backoff)
+from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
+from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
+from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
+from synthesis.design_info import units_of
+from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.operating import ranges_of
+from synthesis.kinds.planting.spec import PlantingFourbarSpec
+
+MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecutive precision points (default)
+THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
+#: the rules without which the kinematics is undefined stay hard in the elastic diagnosis
+HARD_IN_ELASTIC = ("grashof_crank_rocker",)
+
+
+class PlantingNLP:
+    """Built once per spec and process; :meth:`solve` runs one IPOPT solve from a design."""
+
+    def __init__(self, spec: PlantingFourbarSpec, elastic: bool = False):
+        self.spec = spec
+        self.elastic = elastic
+        variables = spec.variables()
+        self.names = list(variables)
+        self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
+        self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
+        self.omega = spec.operation.crank_speed * TWO_PI / 60.0
+        # an operating condition given as a range is a symbol (the core holds the rules that read it once per
+        # sampled value: an envelope); with any range, or when the sensitivity analysis asks, both conditions are
+        # symbols, resolved at their numbers where not sampled (so `agrisynth tolerance` has every rule's derivative
+        # w.r.t. both); otherwise, as a solve of a nominal spec sees them, both stay numbers
+        ranges = ranges_of(spec)
+        symbolic = bool(ranges) or operating_symbols_wanted()
+        self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
+                          for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if symbolic]
+        op = {o.name: o.symbol for o in self.operating}
+        self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
+        self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
+        x = ca.SX.sym("x", len(self.names))
+        # a seedling clearance adds the crank angle of the loop's top before P1 (see _structural)
+        self.clearance = float(spec.solver.seedling_clearance)
+        th = ca.SX.sym("theta", 7 if self.clearance > 0.0 else 6)
+        v = {n: x[i] for i, n in enumerate(self.names)}
+        theta = dict(zip(POINTS, (th[i] for i in range(6))))
+        p = self._arm(v)
+        tip = tip_derivatives(spec.arm.branch)
+        states = {n: self._state(tip, theta[n], p) for n in POINTS}
+        # in a tolerance box the rows that make P1-P6 exist -- each crossing's direction, their order around the turn
+        # and, with a clearance, the loop top's height above the seedling-top line -- are held at their linearised
+        # worst case, like a rule's: the points stay crossings, in their order, for every design in the box, not at
+        # the nominal only (robust_redesign_from_example1 without them: P3 fell after P4, soil entry, in 2 of 2,000
+        # Monte-Carlo samples, and the five rules that read P1-P3 could not be evaluated there)
+        structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
+        self.problem = Problem(
+            name="planting",
+            x=ca.vertcat(x, th),
+            lbx=np.concatenate([self.bounds[:, 0], np.full(th.numel(), THETA_BOUNDS[0])]),
+            ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
+            structural=structural,
+            robust_structural=self._existence_rows,
+            rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
+            objective=self._objective(x, v),
+            backoff=scaled_backoff(spec.solver.backoff),
+            hard_in_elastic=HARD_IN_ELASTIC,
+            ipopt="standard",
+            max_iter=spec.solver.max_iter,
+            operating=self.operating,
+            envelope=Envelope({n: r.solver_values() for n, (_, r) in ranges.items()}) if ranges else None,
+            x_units=[*units_of(spec, self.names), *["rad"] * th.numel()],
+            structural_units=self._structural_units(), objective_unit="",
+        )
+        self.compiled = CompiledNLP(self.problem, elastic)
+
+    # ------------------------------------------------------------------ the declaration
+
+    @staticmethod
+    def _arm(v):
+        """The kinematics' parameter vector (mm, rad) of the design variables."""
+        rad = math.pi / 180.0
+        return ca.vertcat(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"] * rad, v["phi"] * rad)
+
+    def _state(self, tip, theta, p) -> tuple:
+        """(position mm, velocity mm/s, velocity at the nominal crank speed mm/s) of the claw tip at crank
+        angle theta: one node each, shared by the rules and the structural rows (which read the velocity at the
+        nominal crank speed: the directions they fix are the same at any crank speed, and the rows stay free of
+        the crank-speed symbol an envelope samples)."""
+        pos, dpos, _ = tip(theta, p)
+        vel = dpos * self.omega_sym
+        return pos, vel, (vel if isinstance(self.omega_sym, float) else dpos * self.omega)
+
+    def _trace(self, v, p, theta, states) -> Trace:
+        """The rules' trace on decision variables, sampled as ``[solver]`` says."""
+        spec, omega = self.spec, self.omega_sym
+        n = spec.solver.samples_per_phase
+        s = np.linspace(0.0, 1.0, n)
+        tip = tip_derivatives(spec.arm.branch).map(n)
+        accel = {}
+        for phase in PHASES:
+            ta, tb = phase_bounds(theta, phase)
+            accel[phase] = ca.vec(tip(ca.horzcat(*[ta + si * (tb - ta) for si in s]), p)[2][1, :]) * omega**2
+        m = spec.solver.samples_per_turn
+        turn = np.linspace(0.0, TWO_PI, m, endpoint=False).reshape(1, -1)
+        mu = link_function(spec.arm.branch).map(m)(turn, p)[0]
+        return Trace(theta=theta, pos={k: (st[0][0], st[0][1]) for k, st in states.items()},
+                     vel={k: (st[1][0], st[1][1]) for k, st in states.items()},
+                     accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
+                     mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
+                     acc_scale=self.omega**2 * value_of(spec.arm.l2))
+
+    def _structural(self, v, p, theta, states, top=None) -> list:
+        """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
+        seedling clearance, the loop's top (crank angle ``top``: the height above the seedbed stationary there,
+        between P6 and P1) at least that far above the seedling-top line, so P1 is a crossing with a sign change
+        and not a touch."""
+        spec = self.spec
+        pos = {k: st[0] for k, st in states.items()}
+        vel = {k: st[2] for k, st in states.items()}          # at the nominal crank speed (see _state)
+        tilt = v["seedbed_tilt"] * math.pi / 180.0
+        normal = (-ca.sin(tilt), ca.cos(tilt))
+
+        def height(q):
+            return normal[0] * (q[0] - v["seedbed_x"]) + normal[1] * (q[1] - v["seedbed_y"])
+
+        soil = v["soil_level"] if spec.soil.level is not None else pos["P5"][1] + spec.soil.analysis_depth
+        rows = [
+            (pos["P4"][1] - soil, 0.0, 0.0), (pos["P6"][1] - soil, 0.0, 0.0),        # on the soil line
+            (vel["P5"][1], 0.0, 0.0),                                                  # lowest: vy = 0
+            (height(pos["P3"]), 0.0, 0.0),
+            (height(pos["P2"]) - spec.seedbed.thickness, 0.0, 0.0),
+            (height(pos["P1"]) - spec.seedbed.seedling_height, 0.0, 0.0),
+            (vel["P4"][1], None, 0.0), (vel["P6"][1], 0.0, None),                     # entering / leaving
+        ]
+        for n in ("P1", "P2", "P3"):                                                   # passing into the mat
+            rows.append((normal[0] * vel[n][0] + normal[1] * vel[n][1], None, 0.0))
+        order = ("P5", "P6", "P1", "P2", "P3", "P4")
+        gap = MIN_GAP if spec.solver.point_gap == 1.0 else math.radians(spec.solver.point_gap)
+        self.order_rows = {}                           # "P3-P4": the index of the row theta_P4 - theta_P3 >= gap
+        for a, b in zip(order, order[1:]):
+            self.order_rows[f"{a}-{b}"] = len(rows)
+            rows.append((theta[b] - theta[a], gap, None))
+        self.order_rows["P4-P5"] = len(rows)
+        rows.append((theta["P5"] + TWO_PI - theta["P4"], gap, None))
+        # the crossings' directions and the points' order: every inequality row so far
+        existence = [i for i, (_, lb, ub) in enumerate(rows) if lb is None or ub is None or lb != ub]
+        if top is not None:          # the top: height stationary (n.v = 0, pins it), between P6 and P1, clear
+            q, dq, _ = tip_derivatives(spec.arm.branch)(top, p)
+            rows += [(normal[0] * dq[0] + normal[1] * dq[1], 0.0, 0.0),
+                     (top - theta["P6"], MIN_GAP, None), (theta["P1"] - top, MIN_GAP, None),
+                     (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
+            existence += [len(rows) - 3, len(rows) - 2, len(rows) - 1]
+        self._existence_rows = tuple(existence)
+        n = spec.solver.samples_per_turn
+        samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
+        ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]
+        rows.append((ca.vec(ys) - pos["P5"][1], 0.0, None))
+        return rows
+
+    def _structural_units(self) -> list[str]:
+        """The unit of each row of :meth:`_structural`, in its order."""
+        units = ["mm", "mm", "mm/s", "mm", "mm", "mm", "mm/s", "mm/s"] + ["mm/s"] * 3 + ["rad"] * 6
+        if self.clearance > 0.0:
+            units += ["mm/rad", "rad", "rad", "mm"]
+        return units + ["mm"]
+
+    def _objective(self, x, v) -> ObjectiveParts | MaxMinMargin:
+        name = self.spec.objective.name
+        if name == "nearest":          # squared change, relative to each variable's bounds
+            width = np.maximum(self.bounds[:, 1] - self.bounds[:, 0], 1e-9)
+            return ObjectiveParts(f=ca.sumsqr((x - self.init) / width))
+        if name == "robust":
+            return MaxMinMargin()
+        # smooth: minimise the peak squared acceleration over the turn (an epigraph variable z)
+        m = self.spec.solver.samples_per_turn
+        grid = np.linspace(0.0, TWO_PI, m, endpoint=False).reshape(1, -1)
+        acc = tip_derivatives(self.spec.arm.branch).map(m)(grid, self._arm(v))[2] * self.omega**2
+        z = ca.SX.sym("peak_acc_sq")
+        # z: the peak squared acceleration in units of (omega^2 x 100 mm)^2, a plain number
+        return ObjectiveParts(f=z, extra=z, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[0.0],
+                              rows=[(z - ca.vec(ca.sum1(acc**2)) / self._smooth_scale(), 0.0, None)],
+                              extra_units=[""], row_units=[""])
+
+    def _smooth_scale(self) -> float:
+        return (self.omega**2 * 100.0) ** 2
+
+    # ------------------------------------------------------------------ solving
+
+    def theta_guess(self, values: dict[str, float]) -> np.ndarray:
+        """Crank angles of P1-P6 for a start: the numeric precision points where they exist."""
+        scene = PlantingScene.from_spec(self.spec, values)
+        try:
+            pts = find_precision_points(scene)
+            th5 = pts.theta["P5"]
+        except Exception:   # noqa: BLE001 - a start that does not assemble: spread the points over the turn
+            pts, th5 = None, 0.0
+        spread = {"P5": 0.0, "P6": 0.6, "P1": 2.5, "P2": 3.2, "P3": 3.6, "P4": 5.4}
+        out = []
+        for n in POINTS:
+            t = pts.theta[n] if pts is not None else None
+            out.append(th5 + spread[n] if t is None else t)
+        if self.clearance > 0.0:      # the loop's top: the highest sample above the seedbed between P6 and P2
+            lo, hi = out[POINTS.index("P6")], out[POINTS.index("P2")]
+            grid = np.linspace(lo, hi if hi > lo else lo + TWO_PI, 721)[1:-1]
+            pos = tip_derivatives(self.spec.arm.branch).map(len(grid))(grid.reshape(1, -1),
+                                                                       scene.design.parameters())[0]
+            out.append(float(grid[int(np.argmax(scene.seedbed.height(np.asarray(pos, float))))]))
+        return np.array(out)
+
+    def objective_value(self, f: float) -> float:
+        """The NLP's objective in report units: nearest as solved, robust as the smallest normalised
+        margin at the solver's samples (the fine-grid re-check replaces it), smooth as peak |a| in mm/s^2."""
+        if self.elastic:
+            return f
+        if self.spec.objective.name == "robust":
+            return -f
+        if self.spec.objective.name == "smooth":
+            return math.sqrt(max(f, 0.0)) * self.omega**2 * 100.0
+        return f
+
+    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
+        """One IPOPT run from a design, the crank angles of P1-P6 guessed from its numeric points."""
+        x_design = np.asarray(x_design, dtype=float)
+        theta0 = self.theta_guess(dict(zip(self.names, x_design)))
+        out = self.compiled.solve(start, np.concatenate([x_design, theta0]))
+        n = len(self.names)
+        design = dict(zip(self.names, (float(v) for v in out.x[:n])))
+        theta = {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])}
+        return StartOutcome.of(out, design, self.objective_value(out.objective), solver_crank_deg=theta,
+                               solver_objective=self.objective_value(out.objective))

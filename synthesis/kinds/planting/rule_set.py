@@ -1,0 +1,100 @@
+"""The rule set of kind planting_fourbar, wired once: a :class:`Trace` of the claw tip -> every rule.
+
+A trace holds what the rules read: the crank angle, position and velocity of P1-P6, the claw's
+Y acceleration sampled over the hold, throw and release phases, the link lengths and the
+transmission angle sampled over a turn.  ``check`` and the solver's fine-grid re-check build it on
+floats (root-found precision points, fine grids: :func:`synthesis.kinds.planting.scene.float_trace`),
+the NLP on CasADi symbols (the crank angles of P1-P6 are decision variables:
+:mod:`synthesis.kinds.planting.nlp`); :func:`planting_rules` turns either into the same named rules.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from constraints import Rule
+from synthesis.kinds.planting.rules.acceleration import acceleration_sign_rule
+from synthesis.kinds.planting.rules.angles import entry_angle_rule
+from synthesis.kinds.planting.rules.depth import depth_rule
+from constraints.grashof import grashof_rule
+from synthesis.kinds.planting.rules.precision_points import p4p6_rule, seedbed_rules
+from synthesis.kinds.planting.rules.speed import p2_speed_rule
+from constraints.transmission import transmission_rules
+
+TWO_PI = 2.0 * math.pi
+POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
+#: acceleration phases: name -> (from, to); the cycle runs from P5, so throw ends at P5 one turn on
+PHASES = {"hold": ("P3", "P4"), "throw": ("P4", "P5"), "release": ("P5", "P6")}
+
+
+@dataclass
+class Trace:
+    """The claw tip where the rules read it (machine frame unless said), floats or CasADi symbols.
+
+    ``theta``, ``pos`` and ``vel`` have an entry for every precision point found (crank angle in rad,
+    increasing through one cycle from P5; position mm; velocity mm/s); ``problems`` says why a point
+    is absent.  ``accel_y``: sampled a_y (mm/s^2) of each phase whose ends exist.  ``mu_deg``:
+    transmission angle over a turn (None when the crank cannot complete one, ``turn_missing`` says why).
+    ``acc_scale``: the typical |a_y| that normalises the acceleration margins, a number fixed per
+    spec (omega^2 x the given crank length), so solver and re-check normalise alike.
+    """
+
+    theta: dict[str, Any]
+    pos: dict[str, tuple]
+    vel: dict[str, tuple]
+    accel_y: dict[str, Any]
+    links: tuple                      # l1, l2, l3, l4, mm
+    mu_deg: Any
+    omega: float                      # crank speed, rad/s
+    forward: float                    # machine speed, mm/s
+    acc_scale: float
+    problems: dict[str, str] = field(default_factory=dict)
+    turn_missing: str | None = None
+
+    def missing(self, *names: str) -> str | None:
+        """Why any of ``names`` is absent (the first reason), or None when all exist."""
+        for n in names:
+            if n not in self.pos:
+                return self.problems.get(n, f"{n} not found")
+        return None
+
+    def ground(self, name: str, turns: int = 0) -> tuple:
+        """Ground-frame position of a point (X_g = X + v t, t = theta / omega), ``turns`` cycles later."""
+        theta = self.theta[name] + TWO_PI * turns if turns else self.theta[name]
+        t = theta / self.omega
+        return (self.pos[name][0] + self.forward * t, self.pos[name][1])
+
+
+def planting_rules(tr: Trace, limits) -> list[Rule]:
+    """Every rule of a planting_fourbar spec (``limits``: its ``[rules]``), in result.json order."""
+    pos, vel = tr.pos, tr.vel
+    rules = seedbed_rules(pos.get("P1"), pos.get("P2"), pos.get("P3"), limits.p1p3, limits.p2p3,
+                          limits.collinearity, tr.missing("P1", "P2", "P3"))
+    miss4 = tr.missing("P4")
+    rules.append(entry_angle_rule(None if miss4 else vel["P4"][0] + tr.forward, None if miss4 else vel["P4"][1],
+                                  limits.entry_angle_min, miss4))
+    miss45 = tr.missing("P4", "P5")
+    rules.append(depth_rule(None if miss45 else pos["P4"][1], None if miss45 else pos["P5"][1], limits.depth,
+                            miss45))
+    # the cycle is scanned from P5, so the planting stroke's P4 lies one turn before theta['P4']
+    miss46 = tr.missing("P4", "P6")
+    rules.append(p4p6_rule(None if miss46 else tr.ground("P4", turns=-1), None if miss46 else tr.ground("P6"),
+                           limits.p4p6_min, miss46))
+    miss2 = tr.missing("P2")
+    rules.append(p2_speed_rule(None if miss2 else vel["P2"][0], None if miss2 else vel["P2"][1],
+                               limits.p2_speed_min, miss2))
+    signs = limits.acceleration
+    for phase, (a, b) in PHASES.items():
+        rules.append(acceleration_sign_rule(phase, tr.accel_y.get(phase), getattr(signs, phase), tr.acc_scale,
+                                            tr.missing(a, b)))
+    rules.append(grashof_rule(*tr.links))
+    rules += transmission_rules(tr.mu_deg, limits.transmission_angle, tr.turn_missing)
+    return rules
+
+
+def phase_bounds(theta: dict[str, Any], phase: str) -> tuple:
+    """Crank angles at the start and end of an acceleration phase (the end one turn on for throw)."""
+    a, b = PHASES[phase]
+    return theta[a], theta[b] + (TWO_PI if b == "P5" else 0.0)

@@ -1,0 +1,234 @@
+"""Numeric scene of a planting-arm design: precision points P1-P6 and the rule inputs.
+
+This is the ``check`` side: every precision point is found by root finding (scipy ``brentq``) on
+the exact AD kinematics, and the semi-infinite rules are sampled on fine grids (:func:`float_trace`).
+The ``solve`` side traces the same points from decision variables instead
+(:mod:`synthesis.kinds.planting.nlp`); both hand their trace to :func:`synthesis.kinds.planting.rule_set.planting_rules`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from synthesis.errors import AssemblyError
+from synthesis.kinds.planting.kinematics import ArmDesign, Motion, link_angles, tip_derivatives, tip_state
+from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
+from synthesis.spec.common import value_of
+from synthesis.kinds.planting.spec import PlantingFourbarSpec
+
+
+@dataclass(frozen=True)
+class Seedbed:
+    """Seedbed-bottom line through ``point`` at ``tilt`` (rad); seedlings on the side of ``normal``."""
+
+    point: tuple[float, float]
+    tilt: float
+    thickness: float
+    seedling_height: float
+
+    @property
+    def normal(self) -> tuple[float, float]:
+        return (-math.sin(self.tilt), math.cos(self.tilt))
+
+    def height(self, pos) -> np.ndarray:
+        """Signed distance of pos (2, N) above the seedbed bottom, mm."""
+        n = self.normal
+        return n[0] * (pos[0] - self.point[0]) + n[1] * (pos[1] - self.point[1])
+
+
+@dataclass(frozen=True)
+class PlantingScene:
+    design: ArmDesign
+    motion: Motion
+    seedbed: Seedbed
+    soil_level: float | None       # Y of the soil surface, machine frame; None = analysis convention
+    analysis_depth: float | None   # soil this far above the lowest point
+    #: typical |a_y| normalising the acceleration margins (mm/s^2): omega^2 x the spec's *given* crank
+    #: length, the same number the NLP uses; None: omega^2 x this design's crank length
+    reference_acc: float | None = None
+
+    @property
+    def acc_scale(self) -> float:
+        return self.reference_acc if self.reference_acc is not None else self.motion.omega**2 * self.design.l2
+
+    @classmethod
+    def from_spec(cls, spec: PlantingFourbarSpec, values: dict[str, float] | None = None) -> "PlantingScene":
+        """The scene at the spec's given values, or at ``values`` (design-variable name -> value)."""
+        v = spec.design_values() if values is None else values
+        arm = ArmDesign(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"], v["phi"], spec.arm.branch)
+        motion = Motion(omega=spec.operation.crank_speed * TWO_PI / 60.0,
+                        forward=spec.operation.forward_speed * 1000.0)
+        bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
+                      spec.seedbed.thickness, spec.seedbed.seedling_height)
+        soil = v.get("soil_level") if spec.soil.level is not None else None
+        return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2))
+
+
+@dataclass
+class PrecisionPoints:
+    """Crank angles (rad, increasing through one cycle from P5) of P1-P6; None where not found."""
+
+    theta: dict[str, float | None]
+    soil_level: float | None
+    problems: dict[str, str] = field(default_factory=dict)
+
+    def missing(self, *names: str) -> str | None:
+        """Why any of ``names`` is absent (the first reason), or None when all exist."""
+        for n in names:
+            if self.theta.get(n) is None:
+                return self.problems.get(n, f"{n} not found")
+        return None
+
+
+# ----------------------------------------------------------------------------- assembly
+
+def assembly_status(d: ArmDesign) -> str | None:
+    """None if the loop closes over the whole turn; else why the crank cannot complete a turn.
+
+    Raises AssemblyError if it closes at no crank angle at all.  With the diagonal
+    d(theta) = |O'A| in [|l1 - l2|, l1 + l2], triangle O'AB closes iff |l3 - l4| <= d <= l3 + l4.
+    """
+    reach, gap = d.l3 + d.l4, abs(d.l3 - d.l4)
+    dmin, dmax = abs(d.l1 - d.l2), d.l1 + d.l2
+    if dmin > reach:
+        raise AssemblyError(
+            f"linkage cannot assemble at any crank angle: at crank angle 0 deg |O'A| = l1 - l2 = {dmin:g} mm "
+            f"> l3 + l4 = {reach:g} mm (triangle O'AB cannot close)")
+    if dmax < gap:
+        raise AssemblyError(
+            f"linkage cannot assemble at any crank angle: at crank angle 180 deg |O'A| = l1 + l2 = {dmax:g} mm "
+            f"< |l3 - l4| = {gap:g} mm (triangle O'AB cannot close)")
+    if dmax > reach:
+        bad = math.degrees(math.acos(max(-1.0, min(1.0, (d.l1**2 + d.l2**2 - reach**2) / (2 * d.l1 * d.l2)))))
+        return (f"crank cannot complete a turn: between crank angles {bad:.1f} and {360 - bad:.1f} deg "
+                f"|O'A| > l3 + l4 = {reach:g} mm (triangle O'AB cannot close)")
+    if dmin < gap:
+        bad = math.degrees(math.acos(max(-1.0, min(1.0, (d.l1**2 + d.l2**2 - gap**2) / (2 * d.l1 * d.l2)))))
+        return (f"crank cannot complete a turn: between crank angles -{bad:.1f} and {bad:.1f} deg "
+                f"|O'A| < |l3 - l4| = {gap:g} mm (triangle O'AB cannot close)")
+    return None
+
+
+# ----------------------------------------------------------------------------- precision points
+
+def _refine(fun, a: float, b: float) -> float:
+    """Root of fun in [a, b] (a sign change is known to lie there)."""
+    fa, fb = fun(a), fun(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    return brentq(fun, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps, maxiter=200)
+
+
+def _crossings(values: np.ndarray, level: float, downward: bool) -> np.ndarray:
+    """Indices k with values[k] and values[k+1] on opposite sides of level, in the given direction."""
+    above = values >= level
+    if downward:
+        return np.flatnonzero(above[:-1] & ~above[1:])
+    return np.flatnonzero(~above[:-1] & above[1:])
+
+
+def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPoints:
+    """P5 = lowest point (vy = 0), P4/P6 = soil crossings around it, P3/P2/P1 = seedbed crossings.
+
+    One cycle is scanned from P5: P5 < P6 < P1 < P2 < P3 < P4 < P5 + 360 deg.  P3 is the last
+    downward crossing of the seedbed bottom before P4, P2 the last of the seedbed top before P3,
+    P1 the last of the seedling-top line before P2.
+    """
+    d, m, bed = scene.design, scene.motion, scene.seedbed
+    f = tip_derivatives(d.branch)
+    p = d.parameters()
+
+    def y(th):
+        return float(f(th, p)[0][1])
+
+    def vy(th):
+        return float(f(th, p)[1][1])
+
+    coarse = np.linspace(0.0, TWO_PI, grid, endpoint=False)
+    ys = tip_state(d, m, coarse).pos[1]
+    k = int(np.argmin(ys))
+    h = coarse[1]
+    # the lowest point: vy changes sign from - to + around the grid minimum
+    th5 = _refine(vy, coarse[k] - h, coarse[k] + h) if vy(coarse[k] - h) < 0 < vy(coarse[k] + h) else coarse[k]
+    theta: dict[str, float | None] = {n: None for n in POINTS}
+    theta["P5"] = th5
+    problems: dict[str, str] = {}
+    y5 = y(th5)
+    soil = scene.soil_level if scene.soil_level is not None else y5 + scene.analysis_depth
+
+    cycle = th5 + np.linspace(0.0, TWO_PI, grid + 1)
+    state = tip_state(d, m, cycle)
+    ycyc = state.pos[1]
+    if soil <= y5:
+        why = f"the claw never reaches the soil: lowest point Y = {y5:.1f} mm is above the soil surface Y = {soil:.1f} mm"
+        problems.update({"P4": why, "P6": why})
+    elif soil >= ycyc.max():
+        why = f"the whole claw path (top Y = {ycyc.max():.1f} mm) lies below the soil surface Y = {soil:.1f} mm"
+        problems.update({"P4": why, "P6": why})
+    else:
+        up = _crossings(ycyc, soil, downward=False)
+        dn = _crossings(ycyc, soil, downward=True)
+        theta["P6"] = _refine(lambda t: y(t) - soil, cycle[up[0]], cycle[up[0] + 1])
+        theta["P4"] = _refine(lambda t: y(t) - soil, cycle[dn[-1]], cycle[dn[-1] + 1])
+
+    if theta["P4"] is not None:
+        s = bed.height(state.pos)
+        end = theta["P4"]
+        levels = (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height))
+        for k, (name, level) in enumerate(levels):
+            idx = [i for i in _crossings(s, level, downward=True)
+                   if theta["P6"] < cycle[i] and cycle[i + 1] <= end]
+            if not idx:
+                what = {"P1": "[seedbed] seedling_height", "P2": "[seedbed] thickness"}.get(name)
+                hint = (f" (that line is {what} = {level:g} mm: lower it, or give the arm a taller loop)"
+                        if what else "")
+                problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
+                                  f"seedbed bottom on its way down between soil exit and entry{hint}")
+                for later, _ in levels[k + 1:]:      # searched before `name` on the way down: its reason is theirs
+                    problems[later] = f"{later} not searched: {problems[name]}"
+                break
+            i = idx[-1]
+            theta[name] = _refine(lambda t, lv=level: float(bed.height(f(t, p)[0])) - lv, cycle[i], cycle[i + 1])
+            end = theta[name]
+    else:
+        for name in ("P1", "P2", "P3"):
+            problems[name] = problems["P4"]
+    return PrecisionPoints(theta, soil, problems)
+
+
+# ----------------------------------------------------------------------------- rules
+
+def phase_grid(a: float, b: float, n: int) -> np.ndarray:
+    """n crank angles evenly from a to b inclusive (b may exceed a by up to a turn)."""
+    return np.linspace(a, b, n)
+
+
+def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int = 400, turn_samples: int = 3600,
+                turn_missing: str | None = None) -> Trace:
+    """The rules' trace of a numeric design: the found precision points, phases and a turn sampled.
+
+    ``turn_missing`` says why the crank cannot complete a turn (then the turn rules are unevaluated).
+    """
+    d, m = scene.design, scene.motion
+    found = [n for n in POINTS if pts.theta[n] is not None]
+    theta = {n: pts.theta[n] for n in found}
+    at = {n: tip_state(d, m, theta[n]) for n in found}
+    accel = {}
+    for phase, (a, b) in PHASES.items():
+        if a in theta and b in theta:
+            accel[phase] = tip_state(d, m, phase_grid(*phase_bounds(theta, phase), phase_samples)).acc[1]
+    return Trace(theta=theta, pos={n: tuple(at[n].pos[:, 0]) for n in found},
+                 vel={n: tuple(at[n].vel[:, 0]) for n in found}, accel_y=accel, links=(d.l1, d.l2, d.l3, d.l4),
+                 mu_deg=None if turn_missing else transmission_angles_deg(d, turn_samples), omega=m.omega,
+                 forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
+                 turn_missing=turn_missing)
+
+
+def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:
+    return np.degrees(link_angles(d, np.linspace(0.0, TWO_PI, samples, endpoint=False))["mu"])
