@@ -326,7 +326,7 @@ def _row(res: dict, method: str) -> dict | None:
 
 
 def summary(results: list[dict]) -> list[dict]:
-    """One line per problem: the figures issue 18 asks for (sample count reaching the violation target
+    """One line per problem: the figures the performance study reports (sample count reaching the violation target
     and its time, exact against finite-difference derivatives, the peers' ratios, build against solve)."""
     out = []
     for res in results:

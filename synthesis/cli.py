@@ -1,7 +1,7 @@
 """agrisynth command line: parse, call, map the outcome to an exit code. No maths here.
 
-Exit codes (DESIGN.md): 0 every rule satisfied; 1 some rule violated; 2 bad input; 3 solver
-failure or infeasible rule set; 130 interrupted.
+Exit codes (docs/ARCHITECTURE.md, "Exit codes"): 0 every rule satisfied; 1 some rule violated; 2 bad input;
+3 solver failure or infeasible rule set; 130 interrupted by Ctrl-C, 143 by SIGTERM.
 """
 
 from __future__ import annotations

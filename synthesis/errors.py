@@ -1,4 +1,4 @@
-"""One exception class per failure domain; the CLI maps each to an exit code (DESIGN.md)."""
+"""One exception class per failure domain; the CLI maps each to an exit code (docs/ARCHITECTURE.md, "Exit codes")."""
 
 
 class AgrisynthError(Exception):

@@ -1,5 +1,5 @@
 """Library warnings (scipy's ``UserWarning``s, CasADi's ``WARNING(...)`` lines) kept out of the terminal and
-put into the run's log instead (issue 17).
+put into the run's log instead.
 
 CasADi writes its warnings to Python's ``sys.stderr`` object (not to file descriptor 2), scipy and numpy
 raise Python warnings; :func:`captured_warnings` swaps the one and records the other while a library call

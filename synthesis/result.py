@@ -1,4 +1,4 @@
-"""The Result of a run, its JSON form (DESIGN.md contract) and the atomic writing of a run folder."""
+"""The Result of a run, its JSON form (docs/ARCHITECTURE.md, "result.json") and the atomic writing of a run folder."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ SCHEMA_VERSION = 3
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
 #: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
 #: top level, mixed with the kind's facts); version 3: every ``design`` entry is a number (mm / deg) or a list of
-#: numbers, as DESIGN.md asks -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
+#: numbers (docs/ARCHITECTURE.md, "result.json") -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
 #: ``facts.branch`` holds (as it did in version 2).  Versions 1 and 2 are still read (:meth:`Result.from_json`)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
@@ -105,13 +105,13 @@ class Result:
         return cls(**args)
 
 
-#: the units of the DESIGN.md trajectory keys; a nested frame (``machine``) has the same
+#: the units of result.json's trajectory keys; a nested frame (``machine``) has the same
 TRAJECTORY_UNITS = {"t": "s", "crank_deg": "deg", "x": "mm", "y": "mm", "vx": "mm/s", "vy": "mm/s",
                     "ax": "mm/s^2", "ay": "mm/s^2"}
 
 
 def with_units(trajectory: dict[str, Any]) -> dict[str, Any]:
-    """The trajectory with ``units``: key -> unit of each DESIGN.md key it holds (an additive key of schema
+    """The trajectory with ``units``: key -> unit of each trajectory key it holds (an additive key of schema
     version 2: the keys and their units are unchanged, the file now says them)."""
     units = {k: u for k, u in TRAJECTORY_UNITS.items() if k in trajectory}
     return {**trajectory, "units": units} if units else trajectory

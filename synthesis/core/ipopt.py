@@ -11,7 +11,7 @@ out; :attr:`CompiledNLP.t`, ``f_function`` and ``g_function`` stay in the kind's
 units the problem declares, not guessed from numbers: solved with every length ``factor`` times its number in
 the kind's unit (:func:`length_unit`; 1e-3: metres for mm), a variable of length power p (mm, m/s: 1, mm^2: 2,
 deg, rad, ratios: 0) has s = factor**p and the objective is divided by factor**p of its unit alike, so IPOPT
-sees the kind's variables and objective whatever the length unit (issue 18's scale case,
+sees the kind's variables and objective whatever the length unit (the scale cases of the extreme-case matrix,
 tests/extreme/test_scale.py), and each row is divided by factor**p of its declared unit alike (g / s_g), so
 IPOPT's tolerances, restoration phase and multipliers are those of the kind's NLP in every unit.  (Until
 2026-11-24 the rows stayed in the new unit, 1000x smaller in metres: IPOPT then judged their violations in metres,
@@ -29,7 +29,7 @@ one build serves every start.
 A kind may watch the iterations of a solve (``CompiledNLP(..., watched=True)``, then ``solve(...,
 watch=rule)``): ``rule(iteration, f)`` is called at every IPOPT iteration with the objective in the problem's
 units and stops the solve (``User_Requested_Stop``) when it returns True -- a deterministic early cut of a
-hopeless start, decided by iterations and objective, not by time (fourbar_path, issue 19).
+hopeless start, decided by iterations and objective, not by time (fourbar_path's free-timing path synthesis).
 
 Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
@@ -37,7 +37,7 @@ context-local, so a solve outside them is untouched:
 * :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
   only -- IPOPT differences f and g itself (``gradient_approximation`` / ``jacobian_approximation =
   finite-difference-values``) and keeps a limited-memory Hessian -- instead of CasADi's exact derivatives
-  (the exact-against-approximate study; DESIGN.md: never in a solve);
+  (the exact-against-approximate study; never in a solve: docs/ARCHITECTURE.md, "Conventions");
 * :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
   w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts; a kind's own
   extra phase before a start, such as fourbar_path's fixed-timing fit of its random starts, is IPOPT's, so a peer

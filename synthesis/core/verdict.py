@@ -23,7 +23,7 @@ from typing import Any, Callable
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.ipopt_log import reached_optimum
 
-#: the fine re-check grid is this many times finer than the solver's samples (DESIGN.md)
+#: the fine re-check grid is this many times finer than the solver's samples (docs/ARCHITECTURE.md, "Verdicts")
 FINE = 10
 #: objectives within this relative distance (of max(1, |f|)) are a tie: a converged start, then the lower index wins
 TIE = 1e-9
@@ -227,7 +227,7 @@ def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
 
 
 def status_of(best: StartReport, elastic: ElasticDiagnosis | None) -> str:
-    """The DESIGN.md status of a multistart run (see the module docstring)."""
+    """The status of a multistart run (the module docstring; docs/ARCHITECTURE.md, "Verdicts")."""
     if best.satisfied:
         # success: the stage whose design was kept converged (a multi-stage kind may keep an earlier stage's)
         return "optimal" if best.outcome.success and reached_optimum(best.outcome.return_status) else "feasible"

@@ -71,7 +71,7 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
 
     writers = {**(files or {}), **kinds.figure_writers(result)}
     if isinstance((result.extra or {}).get("envelope"), dict):
-        # an operating envelope (issue 20): each rule that changes over the range, against the condition
+        # an operating envelope: each rule that changes over the range, against the condition
         from synthesis.tolerance.envelope import plot
 
         writers["envelope.png"] = lambda path: plot(result, path)

@@ -278,7 +278,7 @@ def _starts_text(solver: dict | None):
 
 
 def _objectives(cands: list[Candidate]) -> list:
-    """Each candidate's objective; beside a solve's, a check's says it has none (DESIGN.md: a check evaluates the
+    """Each candidate's objective; beside a solve's, a check's says it has none (a check evaluates the
     rules only) rather than a bare dash a reader takes for a missing number."""
     texts = [objective_text(c.result.objective) for c in cands]
     if not any(texts):

@@ -147,7 +147,7 @@ class ProblemSpec(StrictModel):
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100,
                       description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
-    tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve (issue 20)")
+    tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve")
 
 
 def starts_field(default: int):

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import re
 
-#: the units of specs (DESIGN.md), longest first so "m/s^2" is not read as "m/s"
+#: the units of specs (docs/ARCHITECTURE.md, "Units"), longest first so "m/s^2" is not read as "m/s"
 UNITS = ("mm/s^2", "m/s^2", "deg/s^2", "mm/s", "m/s", "r/min", "mm^2", "1/mm", "mm", "deg", "s")
 _UNIT = re.compile(r"(?<![\w/^.'-])(" + "|".join(re.escape(u) for u in UNITS) + r")(?![\w/^'-])")
 

@@ -1,4 +1,4 @@
-"""Operating conditions given as a range (issue 20, operating envelopes).
+"""Operating conditions given as a range (operating envelopes).
 
 An operating field of a spec (``forward_speed``, ``crank_speed``, a row spacing, a friction factor) takes a
 number or a table ``{range = [lo, hi], samples = 4}``: the solve holds every rule that depends on it at

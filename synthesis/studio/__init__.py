@@ -1,4 +1,4 @@
-"""``agrisynth studio``: a local interactive design page (issue 21).
+"""``agrisynth studio``: a local interactive design page.
 
 Move a design value, see the mechanism, its path and every rule margin of the kind's own ``check``
 redrawn; solve from there with the kind's NLP (``agrisynth solve``, in a worker process); save the

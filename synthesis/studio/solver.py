@@ -28,7 +28,7 @@ from synthesis.studio.session import finite
 
 #: "start 3 finished (2/16): ..." -- one line per finished start (synthesis.cli._start_line)
 _PROGRESS = re.compile(r"^start (\d+) finished \((\d+)/(\d+)\)")
-#: exit codes of `agrisynth solve` (DESIGN.md) in words
+#: exit codes of `agrisynth solve` (docs/ARCHITECTURE.md, "Exit codes") in words
 EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad input", 3: "infeasible or failed",
          130: "interrupted", 143: "cancelled (the finished starts are kept)"}
 #: last lines of the solve's output kept for the page
@@ -126,7 +126,7 @@ class SolveJob:
         return load_result(path).to_json()
 
     def _exit_words(self, result: dict[str, Any] | None) -> str:
-        """How the worker ended, in words the page shows as they are: the exit code in DESIGN.md's meaning only
+        """How the worker ended, in words the page shows as they are: the exit code in its documented meaning only
         when the run wrote its result (a crash exits 1 too)."""
         if self.exit_code is None:
             return ""

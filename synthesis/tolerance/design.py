@@ -32,7 +32,7 @@ def _grashof(target: str):
 
 
 def _nominal_units(nlp, n):
-    """fourbar_path's NLP works in nominal units (issue 19): design = offset + scale * z; read from the built NLP,
+    """fourbar_path's NLP works in nominal units: design = offset + scale * z; read from the built NLP,
     or, before it is built (the robust build sizes its box first), from the spec's targets as the NLP reads them."""
     offset, scale = getattr(nlp, "offset", None), getattr(nlp, "scale", None)
     if offset is None or scale is None:

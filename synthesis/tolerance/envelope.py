@@ -1,4 +1,4 @@
-"""``solve`` of a spec with an operating condition given as a range (issue 20, operating envelopes), for every
+"""``solve`` of a spec with an operating condition given as a range (an operating envelope), for every
 kind whose NLP declares its operating conditions (:class:`synthesis.core.problem.Operating`).
 
 The kind's NLP reads the ranges from the spec: the core holds every rule that depends on a sampled condition

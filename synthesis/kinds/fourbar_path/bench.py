@@ -29,7 +29,7 @@ re-checked as every solver start is (check.evaluate: the kind's rules on floats)
 
 Problems: the library specs given, or by default the picking arc, six synthetic-truth problems
 (mechanism 1 with 6, 10, 18 points, timing free and prescribed), the ten inexact-target problems of
-issue 19 (inexact.py) and the literature's target sets (literature.py).  Best known: 0 for the synthetic
+the free-timing study (inexact.py) and the literature's target sets (literature.py).  Best known: 0 for the synthetic
 problems (zero error by construction, tolerance 1e-8 mm^2); for a library spec the objective of
 an untimed reference multistart (all starts, no early stop) with a *different* seed (the spec's
 seed + REFERENCE_SEED_OFFSET), so the target does not come from the very IPOPT run being timed;
@@ -75,7 +75,7 @@ REFERENCE_SEED_OFFSET = 1000        # the reference solve's seed: the spec's see
 TURN = 360.0 * (1.0 - 1e-12)         # deg: the span the DE gap weights share
 SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 DE_EQUAL_BUDGET = "differential_evolution_equal_budget"   # its method name (a peer: one run per case)
-INEXACT_WORKERS = 2                 # issue 19's goal is stated for 2 cores (the answer is the same for any count)
+INEXACT_WORKERS = 2                 # the free-timing study's goals are stated for 2 cores (the answer is the same for any count)
 
 
 def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float]) -> float:
@@ -312,7 +312,7 @@ def case_for(loaded: LoadedSpec, best_known=None, tolerance=None, note: str = ""
 
 def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase]:
     """The given specs, or the default set: the library's fourbar_path specs, six synthetic problems,
-    the ten inexact-target problems of issue 19 (synthesis.kinds.fourbar_path.inexact) and the literature's target sets
+    the ten inexact-target problems (synthesis.kinds.fourbar_path.inexact) and the literature's target sets
     with their published linkages (synthesis.kinds.fourbar_path.literature)."""
     inexact = specs is None
     if specs is None:
@@ -330,11 +330,11 @@ def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase
 
 
 def inexact_cases(seed: int = 0, names=None) -> list[BenchCase]:
-    """Issue 19's set: targets no four-bar fits exactly (synthesis.kinds.fourbar_path.inexact), 64 starts on
+    """The inexact set: targets no four-bar fits exactly (synthesis.kinds.fourbar_path.inexact), 64 starts on
     INEXACT_WORKERS workers; best known = the best objective any recorded run found (inexact.BEST_KNOWN),
     else (not yet recorded) the untimed reference multistart of a library spec."""
     return [case_for(inexact_spec(n, {"seed": seed}), best_known=BEST_KNOWN.get(n),
-                     note="inexact target (issue 19): best known from the cross-check runs and searches "
+                     note="inexact target: best known from the cross-check runs and searches "
                           "(inexact.BEST_KNOWN); "
                           f"{DE_EQUAL_BUDGET}: DE given the CPU seconds (every worker's) of the multistart's run",
                      workers=INEXACT_WORKERS, equal_budget=True) for n in (names or NAMES)]

@@ -1,7 +1,7 @@
-"""Path-synthesis problems no four-bar fits exactly: shapes a designer would draw (issue 19).
+"""Path-synthesis problems no four-bar fits exactly: shapes a designer would draw.
 
 Ten target sets of 12-25 points, closed loops and open arcs, about 60 mm across, with the wide bounds
-of issue 19 (every link in [0.05, 6] x the loop's diameter D, coupler point within +-5 D of A, input
+of the free-timing study (every link in [0.05, 6] x the loop's diameter D, coupler point within +-5 D of A, input
 pivot within +-6 D of the loop's centre), free timing, grashof "any" or "crank_rocker".  Each shape
 is sampled evenly by arc length and, where it says "hand-drawn", every point is moved by a seeded
 random offset (a designer's hand, not a coupler curve): no target set here lies on a four-bar's
@@ -151,7 +151,7 @@ def inexact_data(name: str, solver: dict | None = None) -> dict:
               "theta0": [0, 360]}
     shape = "closed loop" if closed else "open arc"
     return {"kind": "fourbar_path", "name": f"inexact_{name}",
-            "source": f"issue 19 inexact target: {shape} of {len(points)} points, {d:.0f} mm across "
+            "source": f"inexact target: {shape} of {len(points)} points, {d:.0f} mm across "
                       f"(synthesis.kinds.fourbar_path.inexact)",
             "targets": {"points": points.tolist()},
             # every variable free in its box, started at the box's midpoint (the given design, start 0)
@@ -168,8 +168,8 @@ def inexact_spec(name: str, solver: dict | None = None) -> LoadedSpec:
 
 
 #: best objective known for each problem (mm^2): the lowest any run found with every rule holding on the fine grid --
-#: the runs of problems/fourbar_path/INEXACT.md (64 and 16 starts, seed 0, before and after the issue-19 changes, and
-#: of the earlier attempt, branch wip/issue-19) and the 2,000-start cross-check issue 19 asks for (seed 7, 2 workers;
+#: the runs of problems/fourbar_path/INEXACT.md (64 and 16 starts, seed 0, before and after the free-timing changes, and
+#: of an earlier attempt) and the 2,000-start cross-check the study asked for (seed 7, 2 workers;
 #: fourth and fifth pass), which ran on all ten: it found d_shape22's (start 1715), dwell_arc15's (start 1165) and
 #: stroke_lift14's (start 333) below every 64-start run, and agreed with the others.  Later passes lowered
 #: dwell_arc15's and stroke_lift14's again (the notes in the dict below), stroke_lift14's by basin hopping from its
@@ -182,7 +182,7 @@ BEST_KNOWN: dict[str, float] = {
     # self-crossing three-lobed coupler curve of a double-crank, and a rocking crank whose one sweep meets the targets
     # out of their drawn order, ending at its dead position (order = false allows both)
     "triangle18": 3.8932754809803853,
-    # kidney25: lowered on 2026-11-25 by a run of issue 19's fourth pass; d_shape22, dwell_arc15 and stroke_lift14 by
+    # kidney25: lowered on 2026-11-25 by a run of the study's fourth pass; d_shape22, dwell_arc15 and stroke_lift14 by
     # the 2,000-start cross-check (seed 7; d_shape22 start 1715, a change-point kite, crank 239 mm; dwell_arc15 start
     # 1165, a non-Grashof linkage, at IPOPT's max_iter; stroke_lift14 start 333); every rule holding on the fine grid
     # (INEXACT.md; the designs: BEST_DESIGNS).  dwell_arc15 lowered again (0.0591035 -> 0.0566724) by the

@@ -1,4 +1,4 @@
-"""Path-synthesis problems of the literature, with the published linkages as competitors (issue 19).
+"""Path-synthesis problems of the literature, with the published linkages as competitors.
 
 Three benchmark target sets of the four-bar path-synthesis literature, each with the linkages other
 papers published for it.  Where the numbers were read (nothing here is from memory; see

@@ -18,7 +18,7 @@ Target sets the screen serves (free timing, >= 12 points) are solved to IPOPT to
 seed, the same in every worker, so the cut is the same for any number of workers).  Continuation: a start not placed on
 the targets (a Latin-hypercube design with its curve's nearest crank angles; StartPoint.timing_first) is first fitted
 with those crank angles held fixed, then solved with free timing from that fit (TIMING_FIRST).  Why each of
-these, and what was tried instead, with the numbers: problems/fourbar_path/INEXACT.md (issue 19).
+these, and what was tried instead, with the numbers: problems/fourbar_path/INEXACT.md.
 
 P is the closed-form coupler point (kinematics.coupler_point, no inverse cosine).  The crank
 direction of the sequence rule is an NLP *parameter* (+1 / -1), so one built solver serves starts
@@ -81,7 +81,7 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
-#: the deterministic early cut of free-timing starts (issue 19): at IPOPT iteration k of each (k, factor) a start
+#: the deterministic early cut of free-timing starts: at IPOPT iteration k of each (k, factor) a start
 #: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
 #: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count.
 #: One cut at iteration 30, 400x: chosen on every start's uncut path-error trace of the ten inexact problems (seed 0)
@@ -122,7 +122,7 @@ POLISH_MU_INIT: float | None = 1e-2
 #: start on seed 1 (start 43) converges in 173 more (0.259043 -> 0.258968 mm^2, Solve_Succeeded), not in 150; 400 did
 #: not catch seed 5's (a study script's start, rounded differently, converged in 367: a crawl, not a margin to count on)
 CONFIGURATION_RESUME_ITERATIONS: int | None = 250
-#: continuation (issue 19): an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
+#: continuation: an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
 #: (prescribed timing: the design alone, at most this many iterations), then solved with free timing from that fit.
 #: Six seeds of the ten inexact problems: at the seventh pass's best known on 41 of 60 against 31 of 60 without (40
@@ -264,7 +264,7 @@ class PathNLP:
         self.compiled = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
-        # grashof = "any" on a screened free-timing target set (issue 19): the configuration form too (CONFIGURATION;
+        # grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION;
         # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
         self._polisher_settings = None

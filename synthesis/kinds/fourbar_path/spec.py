@@ -10,7 +10,7 @@
                order = true | false;  direction = "either" | "counter_clockwise" | "clockwise"
     [solver]   starts = 64, seed = 0, stop_at_objective, max_iter, mu_strategy, samples
 
-Issue 5 wrote the variables in a ``[bounds]`` table (``[lo, hi]`` frees, a number fixes, the given
+The kind's first spec form wrote the variables in a ``[bounds]`` table (``[lo, hi]`` frees, a number fixes, the given
 design in ``[design]``), the branch as "open"/"crossed", the Grashof classes with hyphens and the
 crank direction as "ccw"/"cw"; those forms are refused with a line each that spells the user's own
 values the new way (:func:`old_form_message`).  Internally, and in result.json, the branch keeps its assembly name
@@ -208,7 +208,7 @@ class FourbarPathSpec(ProblemSpec):
 
     @classmethod
     def old_forms(cls, data: dict) -> str:
-        """The forms of issue 5 ([bounds], [design] values, branch "open"/"crossed", hyphenated Grashof
+        """The first spec forms ([bounds], [design] values, branch "open"/"crossed", hyphenated Grashof
         classes), each with the new spelling of the user's own values; read by spec.common.validate
         before the model (a before-validator would cost the strict JSON validation its arrays)."""
         return old_form_message(data)
@@ -270,7 +270,7 @@ def _free_text(name: str, bound: Any, given: Any) -> str:
 
 
 def old_form_message(data: dict) -> str:
-    """A line per form of issue 5 in ``data``, naming it and its new spelling ("" when there is none)."""
+    """A line per first-spec form in ``data``, naming it and its new spelling ("" when there is none)."""
     fixes: list[str] = []
     bounds = data.get("bounds")
     design = data.get("design") if isinstance(data.get("design"), dict) else {}

@@ -8,7 +8,7 @@ every class slack >= 2 mm and a transmission angle within [35, 145] deg over the
 the rules [30, 150] of the problem with room); coupler point, input pivot uniform in [-50, 50] mm;
 frame angle uniform in [0, 360) deg; open branch.  The targets: n coupler points at crank angles
 evenly spaced over one counter-clockwise turn from a random phase.  The problem's bounds are those
-of the problem statement (issue 5): r in [5, 60], rcx, rcy, x0, y0 in [-60, 60], theta0 in [0, 360].
+of the kind's first problem statement: r in [5, 60], rcx, rcy, x0, y0 in [-60, 60], theta0 in [0, 360].
 """
 
 from __future__ import annotations

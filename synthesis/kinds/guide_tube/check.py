@@ -17,7 +17,7 @@ from synthesis.kinds.guide_tube.slope import landing_time_slope
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
-#: the check grid is this many times finer than the solver's row-spacing samples (DESIGN.md)
+#: the check grid is this many times finer than the solver's row-spacing samples (docs/ARCHITECTURE.md, "Verdicts")
 FINE = 10
 #: relative changes of mu and v_L in the sensitivity study
 SENSITIVITY = np.round(np.linspace(0.8, 1.2, 9), 10).tolist()

@@ -1,6 +1,6 @@
 """Spec model of kind ``guide_tube``: wall angles of the guide tubes of seed 001 §2.4.
 
-Units: lengths mm, angles deg, times s, speeds m/s (DESIGN.md); converted to SI in the scene.
+Units: lengths mm, angles deg, times s, speeds m/s (docs/ARCHITECTURE.md, "Units"); converted to SI in the scene.
 
 Each ``[[tubes]]`` entry is one tube, or a symmetric pair sharing geometry and wall angle
 (seed 001: tubes I and IV, II and III, delta1 = delta4, delta2 = delta3): name the twin in ``mirror``.

@@ -37,7 +37,7 @@ def unevaluated(scene: PlantingScene, limits, why: str) -> list[Rule]:
 
 
 def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:
-    """One cycle of claw-tip samples (DESIGN.md keys), ground frame, from soil exit P6 to the next P6."""
+    """One cycle of claw-tip samples (result.json's trajectory keys), ground frame, from soil exit P6 to the next P6."""
     if pts is None:
         return None
     m = scene.motion

@@ -1,6 +1,6 @@
 """Spec model of kind ``planting_fourbar``: the four-bar planting arm of seed 000.
 
-Units: lengths mm, angles deg, forward speed m/s, crank speed r/min (DESIGN.md).
+Units: lengths mm, angles deg, forward speed m/s, crank speed r/min (docs/ARCHITECTURE.md, "Units").
 
 Operating condition: we take the **crank speed** (r/min) as the input and derive the plant
 spacing (= forward speed x crank period).  Seed 000 varies the forward speed at a fixed crank speed
