@@ -22,7 +22,7 @@ SCHEMA_VERSION = 3
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
 #: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
 #: top level, mixed with the kind's facts); version 3: every ``design`` entry is a number (mm / deg) or a list of
-#: numbers (docs/ARCHITECTURE.md, "result.json") -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
+#: numbers -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
 #: ``facts.branch`` holds (as it did in version 2).  Versions 1 and 2 are still read (:meth:`Result.from_json`)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 

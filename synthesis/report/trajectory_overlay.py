@@ -1,4 +1,4 @@
-"""Candidates' traced points overlaid, for any kind whose results carry a ``trajectory`` (result.json's trajectory keys).
+"""Candidates' traced points overlaid, for any kind whose results carry a ``trajectory`` (trajectory keys).
 
 Drawn from result.json alone: the path in its frame and the speed over one cycle.
 """

@@ -178,7 +178,7 @@ TRAJECTORY_SAMPLES = 361
 
 
 def trajectory(spec: CombFingerSpec, design: dict) -> dict:
-    """One turn of the left finger's tip (result.json's trajectory keys) from its lowest point (turn angle 0, where it picks the stem
+    """One turn of the left finger's tip (trajectory keys) from its lowest point (turn angle 0, where it picks the stem
     up), in the ground frame's side view: x along the travel, V_s t from that point (the tip turns about a hub the
     machine carries forward at V_s), y the tip's height above the ground line.  The chord from the first sample to F
     (the sample at ``combing_turn_deg``) rises at the combing angle theta (eq 21).  ``machine``: the same samples in

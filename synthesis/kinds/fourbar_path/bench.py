@@ -75,7 +75,7 @@ REFERENCE_SEED_OFFSET = 1000        # the reference solve's seed: the spec's see
 TURN = 360.0 * (1.0 - 1e-12)         # deg: the span the DE gap weights share
 SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 DE_EQUAL_BUDGET = "differential_evolution_equal_budget"   # its method name (a peer: one run per case)
-INEXACT_WORKERS = 2                 # the free-timing study's goals are stated for 2 cores (the answer is the same for any count)
+INEXACT_WORKERS = 2                 # the inexact study's goal is for 2 cores (the answer is the same for any count)
 
 
 def worst_violation(spec: FourbarPathSpec, design: dict, crank_deg: list[float]) -> float:

@@ -49,7 +49,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     facts = describe(scene)
     facts["convex_fit"] = {"energy": setting.data.energy, "status": setting.data.status,
                            "tangent_speeds": setting.data.speeds}
-    # every design variable (result.json's design holds them all): the arm the path is solved for (fixed) as well as the control points
+    # every design variable: the arm the path is solved for (fixed) as well as the control points
     return Finished(design={**spec.design_values(), **best.outcome.design},
                     objective={"name": "smoothness", "value": best.outcome.objective, "unit": "-"},
                     facts=facts, solver_settings={"samples_per_segment": spec.solver.samples_per_segment},
