@@ -213,7 +213,7 @@ GUIDE_TUBE = LIBRARY / "guide_tube" / "uniform_spacing.toml"
 
 
 def test_differential_evolution_stops_at_a_loose_target_and_times_it():
-    """Issue 18 task 3: a peer is timed to the target.  DE given a loose target (twice the redesign's spread)
+    """A peer is timed to the target.  DE given a loose target (twice the redesign's spread)
     stops at the first generation whose best member meets it -- re-checked on the fine grid with the kind's
     own functions -- in fewer generations than the same run without a target, its time to target (the trace's
     first point at or below the target) inside its whole run, and the checks' time reported apart."""

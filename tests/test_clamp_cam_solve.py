@@ -117,7 +117,7 @@ def test_smallest_cam_agrees_with_root_finding(solved, name, stroke, rise, ret):
 
 
 def test_pinned_redesign_values(solved):
-    """What the optimiser proposes (closing note of issue 7)."""
+    """What the optimiser proposes."""
     d = solved["opening_cam_redesign"][1].design       # the 3 mm working radius and the return's 45 deg bind
     assert (d["base_radius"], d["offset"]) == pytest.approx((71.076, -6.305), abs=2e-3)
     d = solved["opening_cam_redesign_no_cutter_floor"][1].design    # the pressure angles alone (rise, return)

@@ -42,7 +42,7 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     tr = data["trajectory"]
     assert tr["frame"] == "ground"
     assert {len(tr[k]) for k in ("t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay")} == {361}
-    # the file says the units of its keys (DESIGN.md: mm, mm/s, mm/s^2): the ground frame's vx is the machine
+    # the file says the units of its keys (mm, mm/s, mm/s^2): the ground frame's vx is the machine
     # frame's plus the forward speed, 0.6 m/s = 600 mm/s
     assert [g - m for g, m in zip(tr["vx"], tr["machine"]["vx"])] == pytest.approx([600.0] * 361, abs=1e-9)
     assert tr["units"] == {"t": "s", "crank_deg": "deg", "x": "mm", "y": "mm", "vx": "mm/s", "vy": "mm/s",

@@ -53,7 +53,7 @@ def test_unreachable_scheduler_is_bad_input(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve", str(PLANTING / "redesign_from_example1.toml"),
                            "--out", str(tmp_path), "--scheduler", "nonsense://nowhere"], capture_output=True, text=True)
     assert proc.returncode == 2
-    # a scheme other than tcp:// is refused before anything starts (issue 22: tls/ucx gave a TypeError)
+    # a scheme other than tcp:// is refused before anything starts (tls/ucx gave a TypeError)
     assert "'nonsense://nowhere' is not a scheduler address: give tcp://host:port" in proc.stderr
     assert "Traceback" not in proc.stderr
 
@@ -118,7 +118,7 @@ HTTP = b"HTTP/1.1 400 Bad Request\r\nContent-Type: text/plain\r\nContent-Length:
     (b"SSH-2", True, "closed the connection without a dask handshake"),
 ])
 def test_a_peer_that_is_no_dask_scheduler_is_refused_within_the_timeout(greeting, hang_up, complaint):
-    """issue 22: a peer answering HTTP made dask allocate 3 EiB; a silent one hung for minutes."""
+    """A peer answering HTTP made dask allocate 3 EiB; a silent one hung for minutes."""
     import time
 
     from synthesis.core.cluster import probe_scheduler

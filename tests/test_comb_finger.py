@@ -1,4 +1,4 @@
-"""Kind comb_finger (issue 16): seed 002 §四.3 eq 17-22 against the reconstructed geometry of Fig. 28, and the
+"""Kind comb_finger: seed 002 §四.3 eq 17-22 against the reconstructed geometry of Fig. 28, and the
 combing-angle design question.
 
 Independent truths: the printed relations (written out here), their derivatives by hand, the geometry's
@@ -125,7 +125,7 @@ def test_baseline_check_reports_the_printed_relations(tmp_path):
 
 
 def _assert_trajectory_is_one_turn_at_the_combing_angle(data: dict, spec) -> None:
-    """The DESIGN.md trajectory of a comb_finger result, checked against the design, not against the facts' code:
+    """The trajectory of a comb_finger result, checked against the design, not against the facts' code:
     one finger turn at omega from the tip's lowest point, the machine travelling V_s; the chord from that point to
     the sample at F rises at the combing angle; the speeds and accelerations are the positions' time derivatives."""
     tr, d = data["trajectory"], data["design"]

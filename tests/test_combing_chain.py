@@ -1,4 +1,4 @@
-"""Kind combing_chain (issue 16): seed 002 §四.3 eq 12-13 and Table 13, and the chain-speed design question.
+"""Kind combing_chain: seed 002 §四.3 eq 12-13 and Table 13, and the chain-speed design question.
 
 Independent truths: the cut simulated in the ground frame (below, not the package's algebra); eq 12 as
 printed; Table 13 as printed (delta to the degree, t to 0.01 s: reproduced within 1.5 deg and 0.01 s, the

@@ -1,4 +1,4 @@
-"""`agrisynth compare` and result files no one should trust (issue 22): every malformed file is refused with
+"""`agrisynth compare` and result files no one should trust: every malformed file is refused with
 one line naming it (exit 2) before anything is drawn -- never a traceback, a hang or a page with NaN.
 
 The default suite runs the catalogue below (each refused at load, so it is fast); ``pytest -m fuzz`` adds a

@@ -1,4 +1,4 @@
-"""Issue 20 part 3, operating envelopes: the core's multi-scenario NLP on a problem with a closed-form answer,
+"""Operating envelopes: the core's multi-scenario NLP on a problem with a closed-form answer,
 the range spec, and the planting envelope redesign re-checked at every 0.01 m/s, independently of the solver
 (the kind's float ``check`` of the spec at each forward speed: root-found precision points, no NLP)."""
 
@@ -144,7 +144,7 @@ def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesig
 
 @pytest.mark.parametrize("example, first_fail, entry_at_075, p4p6_min", [(3, 0.69, 76.591, 29.421), (4, 0.66, 75.272, 26.359)])
 def test_planting_envelope_redesigns_of_examples_3_and_4(example, first_fail, entry_at_075, p4p6_min):
-    """Issue 20 part 4: the nominal redesign enters too flat from ``first_fail`` m/s on; the envelope design
+    """The nominal redesign enters too flat from ``first_fail`` m/s on; the envelope design
     passes every rule at every 0.01 m/s (start 0 is the best of the spec's 16 starts for both)."""
     speeds = [round(0.50 + 0.01 * k, 2) for k in range(26)]
     nominal_loaded = load_spec(LIBRARY / f"planting_arm/redesign_from_example{example}.toml")
@@ -330,7 +330,7 @@ def test_a_malformed_range_of_a_field_that_takes_ranges_is_not_called_one_value(
 
 
 def test_monte_carlo_of_an_envelope_design_checks_every_operating_point(example1_solved, tmp_path):
-    """Issue 20: the Monte-Carlo of a spec with an operating range re-checks each sampled design (uniform in the
+    """The Monte-Carlo of a spec with an operating range re-checks each sampled design (uniform in the
     tolerance box) at the nominal point and at every point of the re-check grid; a sample passes when every rule
     holds at all of them.  Re-done independently: the same samples (default_rng(seed)) through the kind's float
     check at each forward speed of the grid.  The nominal redesign (entry angle too flat above 0.70 m/s) passes at

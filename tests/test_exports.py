@@ -1,4 +1,4 @@
-"""Workshop exports of every kind with geometry (issue 17, build item 4): the CSV of every traced path and the
+"""Workshop exports of every kind with geometry: the CSV of every traced path and the
 DXF of the linkage with its traced curves, written by the kinds' figure writers from result data alone.
 
 Each library baseline is checked in-process (well under a second each) and its exports are read back: CSV

@@ -1,4 +1,4 @@
-"""Issue 17: a figure of one design never calls it "baseline"; beside other candidates the first one is.
+"""A figure of one design never calls it "baseline"; beside other candidates the first one is.
 
 Every kind's comparison overlay (``Kind.compare``) is drawn from the checked library example of the kind,
 once alone and once beside a renamed copy, and every text matplotlib would draw (legend entries, titles,
@@ -53,7 +53,7 @@ def test_one_design_is_never_the_baseline(kind_name, tmp_path, monkeypatch):
 
 
 def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monkeypatch):
-    """Issue 17: speeds in m/s as p2_speed, the vertical acceleration in mm/s^2 as accel_*; the plotted
+    """Speeds in m/s as p2_speed, the vertical acceleration in mm/s^2 as accel_*; the plotted
     numbers are the trajectory's converted (ground vx in m/s, ay unchanged)."""
     import numpy as np
 
@@ -73,7 +73,7 @@ def test_planting_kinematics_figure_speaks_the_rule_tables_units(tmp_path, monke
 
 
 def test_guide_tube_bars_start_at_zero_and_carry_their_values(tmp_path, monkeypatch):
-    """Issue 17: the comparison bar chart's time axis started at 0.9 x the shortest time (0.40 s), which
+    """The comparison bar chart's time axis started at 0.9 x the shortest time (0.40 s), which
     made a few ms look like a factor; the bars now start at 0 s and each is labelled with its t_z."""
     from synthesis.kinds.guide_tube.plots import compare_figures
 

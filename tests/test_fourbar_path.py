@@ -248,7 +248,7 @@ def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
         assert "Traceback" not in proc.stderr
 
 
-# ---------------------------------------------------------------------------- the forms of issue 5, refused
+# ---------------------------------------------------------------------------- the first spec forms, refused
 
 OLD_PICKING_ARC = """kind = "fourbar_path"
 name = "old_form"

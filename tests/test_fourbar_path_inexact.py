@@ -298,7 +298,7 @@ def test_an_inexact_problem_gives_the_same_answer_on_one_and_two_workers(name):
 
 @pytest.mark.benchmark
 def test_inexact_set_64_starts_two_workers():
-    """Issue 19's study: each problem, 64 starts, seed 0, 2 workers.  Prints wall time, median IPOPT
+    """The free-timing study: each problem, 64 starts, seed 0, 2 workers.  Prints wall time, median IPOPT
     iterations per start, the best objective against the best known and the status; asserts only
     correctness (the rules hold, nothing below the best known)."""
     lines = []

@@ -1,4 +1,4 @@
-"""fourbar_path on the literature's target sets (issue 19): the transcribed published linkages, the source's
+"""fourbar_path on the literature's target sets: the transcribed published linkages, the source's
 convention against ours, the specs, a 16-start solve against the best published linkage, the bench's cases.
 Sources and readings: synthesis/kinds/fourbar_path/literature.py, problems/fourbar_path/LITERATURE.md."""
 

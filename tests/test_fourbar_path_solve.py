@@ -187,7 +187,7 @@ def test_picking_arc_baseline_solves_within_the_rules():
     independently_rechecked_generic(loaded, result)
     # a seedling clamp needs the arc to a fraction of a millimetre: every point within 0.05 mm
     assert result.extra["path_error"]["max_mm"] == pytest.approx(0.0044, abs=1e-4)
-    assert result.objective["value"] == pytest.approx(1.02934e-4, rel=1e-5)     # before issue 13: 1.0293448e-4
+    assert result.objective["value"] == pytest.approx(1.02934e-4, rel=1e-5)     # formerly: 1.0293448e-4
     assert result.objective["value"] == pytest.approx(result.extra["path_error"]["sum_squared_mm2"], rel=1e-6)
     # both transmission limits are active (40 and 140 deg), held from inside
     rules = {r["name"]: r for r in result.rules}
@@ -278,7 +278,7 @@ def capped_picking_arc(tmp_path: Path) -> Path:
 
 
 def test_capped_iterations_are_failed_not_infeasible(tmp_path):
-    """Issue 13: with max_iter = 1 and 2 starts the run used to say "infeasible", naming all five rules on
+    """With max_iter = 1 and 2 starts the run used to say "infeasible", naming all five rules on
     the strength of an elastic re-solve that itself stopped at the iteration limit."""
     loaded = load_spec(capped_picking_arc(tmp_path))
     result, reports, _ = run_solve(loaded, starts=2, workers=1)

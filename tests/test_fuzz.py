@@ -1,4 +1,4 @@
-"""A loader no file can break (issue 22): hypothesis mutates each kind's library spec (fields missing, extra,
+"""A loader no file can break: hypothesis mutates each kind's library spec (fields missing, extra,
 wrongly typed, non-finite, huge, negative, empty, nested, unicode, whole files of random bytes) and runs
 ``check`` in-process.  Every document either is refused as bad input (an AgrisynthError: one message, exit 2)
 or checks to a result whose JSON has no NaN or infinity -- never any other exception (a traceback).

@@ -177,7 +177,7 @@ def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
 @pytest.mark.parametrize("edit, message", [
     (("claw = 119.6829", "claw = 60.0"), "segment DE: the arm cannot reach the claw tip"),
     (("C = [179.0, 39.0]", "C = [179.0, 41.0]"), "the conics do not meet at C"),
-    # issue 17: the branch is a sign in every kind; the earlier word is refused with its new spelling
+    # the branch is a sign in every kind; the earlier word is refused with its new spelling
     (("branch = 1 ", 'branch = "plus" '),
      'guide_way.conic.0.branch: "plus" is no longer read; write branch = 1 (theta = gamma + phi)'),
     (("branch = 1 ", "branch = 2 "), "guide_way.conic.0.branch: expected -1 or 1, got 2"),
@@ -196,7 +196,7 @@ def test_redesign_solves_smooth_without_undercut(baseline):
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
     result, _, _ = solved_library_spec("guide_way/smooth_redesign.toml")
     assert result.status == "optimal" and result.all_satisfied
-    # every design variable is in the result (DESIGN.md), the fixed arm as well as the solved control points
+    # every design variable is in the result's design, the fixed arm as well as the solved control points
     arm = loaded.model.arm
     assert {k: result.design[k] for k in ("R", "d", "r", "beta", "roller_radius")} == {
         "R": arm.radius, "d": arm.claw, "r": arm.crank, "beta": arm.beta, "roller_radius": arm.roller_radius}

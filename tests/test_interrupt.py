@@ -1,4 +1,4 @@
-"""Nothing lost (issue 22): Ctrl-C and SIGTERM stop a solve with the finished starts kept (starts.jsonl, a
+"""Nothing lost: Ctrl-C and SIGTERM stop a solve with the finished starts kept (starts.jsonl, a
 best-so-far result with status interrupted, exit 130 / 143), no worker outlives its run, and --resume ends
 with exactly the uninterrupted result."""
 
@@ -69,7 +69,7 @@ GIVEN = {"l7": 50.0, "l8": 120.0, "l9": 120.0, "l10": 140.0}        # the spec's
 
 
 def assert_given_design_kept(run: Path) -> None:
-    """Issue 17: an interrupted and a resumed run keep the question beside the answer: result.json's
+    """An interrupted and a resumed run keep the question beside the answer: result.json's
     baseline_design is the spec's given design, and report.html shows it (and its rule table) in a
     "given (start 0)" column of the design and rule tables."""
     result = json.loads((run / "result.json").read_text())

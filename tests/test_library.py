@@ -1,4 +1,4 @@
-"""The problem library, one test per spec file (issue 13): ``check`` gives the exit code recorded here,
+"""The problem library, one test per spec file: ``check`` gives the exit code recorded here,
 and a spec with free variables solves (its own [solver] starts and seed, one worker) to the recorded
 status and objective.
 
@@ -100,7 +100,7 @@ STUDIES = {"planting_arm/robust_redesign_from_example1.toml",    # tolerance-rob
 
 
 def _assert_design_holds_numbers(result) -> None:
-    """DESIGN.md: result.json's design gives every design variable's value (mm / deg): a number, or a list of numbers
+    """result.json's design gives every design variable's value (mm / deg): a number, or a list of numbers
     (fourbar_path's crank angle at each target, null where none was found); schema version 3."""
     for name, value in result.to_json()["design"].items():
         values = value if isinstance(value, list) else [value]

@@ -70,7 +70,7 @@ def test_compare_page_has_one_red_cell_per_violation_and_every_figure(runs, tmp_
 
 
 def test_single_run_report_shows_the_runs_own_figures_not_the_overlays(runs):
-    """One design's drawings (issue 17): its trajectory, speeds, linkage and animation; not the comparison
+    """One design's drawings: its trajectory, speeds, linkage and animation; not the comparison
     overlay of the same paths (paths.png), which belongs to `agrisynth compare`."""
     folder, _ = runs[0]
     text = (folder / "report.html").read_text()

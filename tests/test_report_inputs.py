@@ -1,4 +1,4 @@
-"""Issue 17, reports and figures: a solve report puts the given design's rule values beside the solution's,
+"""Reports and figures: a solve report puts the given design's rule values beside the solution's,
 the operating conditions are a table, a run's report holds its own figures only (no comparison overlay, no
 legend calling the one design "baseline"), SVG beside the main PNG, joint letters and link lengths on the
 linkage drawings, readable animations with a frame counter; library warnings go to the run's log."""

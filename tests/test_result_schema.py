@@ -1,4 +1,4 @@
-"""result.json schema 2 (issue 13): the kind's facts under "facts", one run tail for every kind; version-1
+"""result.json schema 2: the kind's facts under "facts", one run tail for every kind; version-1
 files (facts and tail flattened at the top level) are still read, and compare shows them."""
 
 from __future__ import annotations
@@ -57,8 +57,8 @@ def test_compare_reads_a_version_1_file_beside_a_version_2_one(tmp_path):
 
 
 def test_a_version_2_fourbar_path_file_keeps_its_branch_as_a_fact(tmp_path):
-    """Version 2 wrote fourbar_path's assembly name in the design too; version 3 keeps only numbers there (DESIGN.md:
-    design values in mm / deg).  A version-2 file is read with the name moved to facts.branch, so its figures draw the
+    """Version 2 wrote fourbar_path's assembly name in the design too; version 3 keeps only numbers there (design
+    values in mm / deg).  A version-2 file is read with the name moved to facts.branch, so its figures draw the
     assembly it was solved on, and written back as version 3."""
     crossed = {"kind": "fourbar_path", "name": "old_path", "spec_sha256": "0" * 64, "status": "evaluated",
                "schema_version": 2, "rules": [], "facts": {"source": "test"},

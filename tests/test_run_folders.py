@@ -1,4 +1,4 @@
-"""Output folders (issue 22): a run replaces only an earlier agrisynth run, and only with --force; anything
+"""Output folders: a run replaces only an earlier agrisynth run, and only with --force; anything
 else at OUT/<name> is kept (exit 2); two runs racing into one folder leave one whole run and no leftovers."""
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def test_a_run_folder_carries_the_marker_and_is_replaced_only_with_force(tmp_pat
 
 @pytest.mark.parametrize("added", ["notes.txt", "sub/data.csv", "myspec.toml"])
 def test_force_never_deletes_what_a_user_put_in_a_run_folder(tmp_path, added):
-    """DESIGN.md: agrisynth never deletes anything it cannot prove it wrote.  The marker lists what the run wrote at
+    """agrisynth never deletes anything it cannot prove it wrote.  The marker lists what the run wrote at
     its commit; --force replaces the folder only while it holds no more (exit 2 naming the entry otherwise), and a
     folder whose marker lists nothing (an earlier version's) is never replaced either."""
     final, _ = write_folder(tmp_path / "run", artifacts("a"))
@@ -172,7 +172,7 @@ def test_two_processes_racing_into_one_folder_leave_one_whole_run(tmp_path):
 
 def test_compare_output_follows_the_run_folder_rules(tmp_path):
     """`compare --out DIR` writes DIR as an agrisynth output (marker): a second compare there needs --force,
-    a folder agrisynth did not write is never touched (issue 22: compare wrote into any folder)."""
+    a folder agrisynth did not write is never touched (compare once wrote into any folder)."""
     from synthesis import kinds
     from synthesis.compare import load_candidates, open_output_folder, write_comparison
     from synthesis.result import result_text

@@ -1,4 +1,4 @@
-"""Bad input says what was expected in one line, in the user's terms (issue 17, "Messages")."""
+"""Bad input says what was expected in one line, in the user's terms."""
 
 from __future__ import annotations
 
@@ -74,7 +74,7 @@ def test_linkage_that_cannot_assemble_names_the_file(tmp_path):
 
 
 def test_planting_limits_follow_the_seedling_height_and_the_mat_thickness(tmp_path):
-    """Issue 17: P1P3 and P2P3 not written in the spec follow the inputs they stand for (the paper's
+    """P1P3 and P2P3 not written in the spec follow the inputs they stand for (the paper's
     [105, 115] mm for a 110 mm seedling, about 22 mm for a 22 mm mat); written ones are kept as written."""
     from conftest import PLANTING
     from synthesis.spec import load_spec
@@ -96,7 +96,7 @@ def test_planting_limits_follow_the_seedling_height_and_the_mat_thickness(tmp_pa
 
 
 def test_a_precision_point_not_searched_says_which_point_was_missing_and_why():
-    """Issue 17: on taiwan_example2 the claw never crosses the 22 mm mat line, so P2 is not found and P1
+    """On taiwan_example2 the claw never crosses the 22 mm mat line, so P2 is not found and P1
     (searched above it) never looked for; the P1 rules used to say only "P1 not found"."""
     from conftest import PLANTING
     from synthesis import kinds

@@ -109,7 +109,7 @@ HYPHENATED = re.compile(r"[a-z]-[a-z]")
 
 @pytest.mark.parametrize("kind_name", kinds.names())
 def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
-    """Issue 17: every design variable is a number (fixed) or {init, bounds} (free), never a [lo, hi] pair
+    """Every design variable is a number (fixed) or {init, bounds} (free), never a [lo, hi] pair
     of its own; every linkage assembly is branch = -1 | 1; every named choice is written with underscores."""
     entries = specref.kind_entries(kind_name)
     for e in entries:

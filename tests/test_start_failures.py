@@ -1,4 +1,4 @@
-"""A start that raises, or whose worker process dies, is that start's failure and the run goes on (issue 22).
+"""A start that raises, or whose worker process dies, is that start's failure and the run goes on.
 
 The executor records it as an outcome (return_status ``Start_Raised: <Error>`` / ``Worker_Crashed`` and the
 reason), the verdict ranks it below every start that ran, and a run whose every start failed is exit 3.

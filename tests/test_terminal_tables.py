@@ -1,4 +1,4 @@
-"""Issue 17: terminal tables adapt to the terminal's width by folding a long cell onto the next lines of
+"""Terminal tables adapt to the terminal's width by folding a long cell onto the next lines of
 that cell, never by cutting it ("opening_cam_optimised_l..." or a number losing its digits)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 20: exact sensitivities (AD through the implicit function theorem) against central differences of
+"""Exact sensitivities (AD through the implicit function theorem) against central differences of
 each kind's float re-check, the Monte-Carlo at zero tolerance, and the robust transcription on problems
 with a closed-form answer."""
 
@@ -234,7 +234,7 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", {"no_undercut": "other terms"}),
 ])
 def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explained(spec, explained):
-    """Issue 20: per rule, |linear loss - sampled loss| / sampled loss <= 10 %, the sampled worst case being the
+    """Per rule, |linear loss - sampled loss| / sampled loss <= 10 %, the sampled worst case being the
     Monte-Carlo's and the nonlinear re-check at the rule's linear worst corner of the box; else an explanation."""
     from synthesis.core.solve import solve_spec
     from synthesis.tolerance.analysis import analyse
@@ -271,7 +271,7 @@ OPERATING = {"planting_fourbar": {"forward_speed", "crank_speed"}, "guide_tube":
                                   "planting_arm/redesign_from_example1.toml", "guide_tube/uniform_spacing.toml",
                                   "tillage/tillage_redesign.toml"])
 def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
-    """Issue 20: on an envelope spec and on a nominal one (no range: the analysis declares the conditions as
+    """On an envelope spec and on a nominal one (no range: the analysis declares the conditions as
     symbols all the same), every rule's derivative w.r.t. every operating condition the kind reads (planting:
     forward and crank speed; guide tube: mu and forward speed; tillage: crank and forward speed), each rule at its
     scenario's values, equals central differences (1e-6 relative) of the kind's float re-check at that operating

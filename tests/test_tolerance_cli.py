@@ -1,4 +1,4 @@
-"""`agrisynth tolerance` and the tolerance-robust `solve` as a user meets them (issue 20): the report with its tornado,
+"""`agrisynth tolerance` and the tolerance-robust `solve` as a user meets them: the report with its tornado,
 --tol, a run folder as input, the Monte-Carlo pass rates of a robust solve, and the exit 3 of a box no design holds."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 20 study (``pytest -m benchmark``): the planting redesigns of examples 1 to 4, nominal vs
+"""The tolerance study (``pytest -m benchmark``): the planting redesigns of examples 1 to 4, nominal vs
 tolerance-robust, Monte-Carlo at +-0.2 mm / +-0.3 deg (seed 0)."""
 
 from __future__ import annotations

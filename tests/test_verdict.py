@@ -1,4 +1,4 @@
-"""One verdict for every kind that solves (issue 13): the same status semantics and exit-3 messages.
+"""One verdict for every kind that solves: the same status semantics and exit-3 messages.
 
 For each solving kind: a feasible rule set capped at one IPOPT iteration (no start converges, no
 returned design meets the rules) is ``failed``, never ``infeasible``; an unreachable rule set is
@@ -41,7 +41,7 @@ CAPPED = {
     "tillage_linkage": ("tillage/tillage_redesign.toml",
                         [("c = { init = 500.0", "c = { init = 300.0"), ("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "planting_fourbar": ("planting_arm/redesign_from_example1.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
-    # issue 13: this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
+    # this run used to end "infeasible", all five rules named on an unconverged elastic re-solve
     "fourbar_path": ("fourbar_path/picking_arc.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "guide_way": ("guide_way/smooth_redesign.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
     "combing_chain": ("combing_chain/redesign_window_80_100.toml", [("[solver]\n", "[solver]\nmax_iter = 1\n")], 2),
@@ -66,7 +66,7 @@ UNREACHABLE = {
                          "tie_rod_transmission_angle", 2),
     "tillage_linkage": ("tillage/tillage_redesign.toml", [("min_rearward_speed = 0.05", "min_rearward_speed = 3.0")],
                         "rearward_in_soil", 2),
-    # issue 13: an unreachable P1-P3 distance must be named among the conflicting rules
+    # an unreachable P1-P3 distance must be named among the conflicting rules
     "planting_fourbar": ("planting_arm/redesign_from_example1.toml",
                          [("[solver]\n", "[rules]\np1p3 = [200, 210]\n\n[solver]\n")], "p1p3_distance", 2),
     "fourbar_path": ("fourbar_path/picking_arc.toml",

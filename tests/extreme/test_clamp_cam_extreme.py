@@ -162,7 +162,7 @@ def test_clockwise_cam_is_the_mirror_image(tmp_path):
 
 
 def test_rotation_is_spelled_with_an_underscore_and_result_json_keeps_its_name(tmp_path):
-    """Issue 17: names are written with underscores in every kind; the hyphenated spelling is refused
+    """Names are written with underscores in every kind; the hyphenated spelling is refused
     naming the new one, and result.json's facts.profile.rotation is spelled as before (schema 2)."""
     from synthesis.errors import SpecError
 

@@ -270,7 +270,7 @@ def test_steep_drag_closed_form_matches_the_ode(tube, delta, terminal_speed, rec
                               f"{abs(closed.landing_time - ode.landing_time):.1e} s")
 
 
-#: issue 18's table: terminal speeds v_L (m/s, 0.5 = steep drag .. 1e4 = almost none) against slide
+#: the extreme-case table: terminal speeds v_L (m/s, 0.5 = steep drag .. 1e4 = almost none) against slide
 #: coefficients A = sqrt(sin d - mu cos d) at d = 40 deg, from near sticking to mu = 0 (A = sqrt(sin 40 deg)
 #: = 0.80, the largest a wall at 40 deg allows; A = 1 is the free fall of eq 19 and 21, part of every landing)
 TABLE_SPEEDS = [0.5, 2.0, 17.5, 1e2, 1e3, 1e4]

@@ -1,4 +1,4 @@
-"""Scale (issue 18's extreme matrix): every library problem with free variables solved with its lengths in
+"""Scale (the extreme-case matrix): every library problem with free variables solved with its lengths in
 metres (every length x 1e-3) and x 1e3 instead of mm, against the same problem in mm.
 
 The unit change is applied to the problem's NLP in the core (``ipopt.length_unit``, synthesis.core.units):
@@ -184,7 +184,7 @@ def same(row: dict, f: float) -> bool:
 
 
 def comparable_iterations(row: dict, f: float) -> bool:
-    """"Solves ... in a comparable number of iterations" (issue 18): IPOPT's iterations over the starts that
+    """"Solves ... in a comparable number of iterations" (the performance goal): IPOPT's iterations over the starts that
     converge in both units at most ITERATION_RATIO x the mm ones.  A start that does not solve in one unit is not
     a solve to compare: a start IPOPT gives up on as locally infeasible ends when its restoration phase gives up,
     which judges absolute row violations (1e-3 x smaller in metres), so the same infeasible start takes 76

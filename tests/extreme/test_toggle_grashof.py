@@ -1,4 +1,4 @@
-"""Toggle and Grashof-limit cases of the crank-rocker (issue 18's extreme matrix).
+"""Toggle and Grashof-limit cases of the crank-rocker (the extreme-case matrix).
 
 Change-point crank-rocker: crank 54, coupler 107.6, rocker 86.4, frame 140 mm, so crank + frame =
 coupler + rocker (s + l = p + q exactly, "frame" slack 0).  At crank angle pi the coupler and the

@@ -1,4 +1,4 @@
-"""Toggle cases of the planting arm and the picker's double crank (issue 18's extreme matrix; the crank-rocker's
+"""Toggle cases of the planting arm and the picker's double crank (the extreme-case matrix; the crank-rocker's
 are in test_toggle_grashof.py).  Each records its figure for bench.md (``record_property("figure", ...)``).
 
 Planting arm (seed 000's four-bar, synthesis.kinds.planting.kinematics): frame l1 = OO', crank l2 = OA, coupler
