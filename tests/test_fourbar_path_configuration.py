@@ -1,4 +1,4 @@
-"""fourbar_path, grashof = "any" (issue 19, sixth pass): linkages whose crank only rocks -- their intervals of
+"""fourbar_path, grashof = "any": linkages whose crank only rocks -- their intervals of
 motion, the screen laying open target arcs onto them, and the configuration form of the NLP (natural.py), regular
 where the crank is at a dead position.  The figures: problems/fourbar_path/INEXACT.md."""
 
@@ -112,7 +112,7 @@ def test_the_configuration_form_converges_where_the_crank_reaches_its_dead_posit
     (StartMaker.finish), the configuration form converges -- Solve_Succeeded in under 100 iterations -- to the best known
     objective, every rule holding on the kind's fine-grid check; the crank-angle form, whose coupler point has a
     square-root singularity there, does not converge from the same start (a failed step; max_iter from all 12 starts
-    of 0.5-2 % measured with IPOPT's default scaling: INEXACT.md, sixth pass)."""
+    of 0.5-2 % measured with IPOPT's default scaling: INEXACT.md)."""
     spec = inexact_spec("dwell_arc15").model
     nlp = PathNLP(spec, seed=0)
     rec = best_known_designs()["dwell_arc15"]

@@ -1,4 +1,4 @@
-"""fourbar_path on inexact targets (issue 19): the problem set, the start heuristics, the exact motion rows
+"""fourbar_path on inexact targets: the problem set, the start heuristics, the exact motion rows
 of grashof = "any", a small solve within the rules, the same answer for any
 number of workers.  The timed study over the set is a benchmark (`pytest -m benchmark`); the figures are
 in problems/fourbar_path/INEXACT.md."""
@@ -320,68 +320,6 @@ def test_inexact_set_64_starts_two_workers():
     print("\n".join(lines))
 
 
-def test_the_projected_placement_is_the_linear_least_squares_optimum():
-    """placement(): (x0, y0, rcx, rcy) of sum |O + A_i + rcx U_i + rcy J U_i - T_i|^2 in closed form equals numpy's
-    least squares of the same linear system (random crank pins, unit vectors and targets)."""
-    rng = np.random.default_rng(3)
-    anchors = [tuple(a) for a in rng.normal(0, 30, (14, 2))]
-    angles = rng.uniform(0, 2 * math.pi, 14)
-    units = [(math.cos(a), math.sin(a)) for a in angles]
-    targets = rng.normal(50, 20, (14, 2))
-    got = path_nlp.placement(anchors, units, targets)
-    rows, rhs = [], []
-    for (ax, ay), (ux, uy), (tx, ty) in zip(anchors, units, targets):
-        rows += [[1, 0, ux, -uy], [0, 1, uy, ux]]            # unknowns (x0, y0, rcx, rcy)
-        rhs += [tx - ax, ty - ay]
-    x0, y0, rcx, rcy = np.linalg.lstsq(np.array(rows, float), np.array(rhs), rcond=None)[0]
-    assert got == pytest.approx((x0, y0, rcx, rcy), rel=1e-12, abs=1e-9)
-
-
-def test_the_projected_nlp_is_the_full_nlp_with_the_placement_refitted(monkeypatch):
-    """VARPRO (study switch): the projected NLP's decision vector maps to the full NLP's with (x0, y0, rcx, rcy) its
-    least-squares placement: no worse than the start's own placement, and a minimum over the placement (moving any
-    placement coordinate either way raises the path error)."""
-    monkeypatch.setattr(path_nlp, "VARPRO", True)
-    spec = inexact_spec("egg16").model
-    nlp = PathNLP(spec, 0)
-    assert nlp.varpro is not None
-    start = nlp.start(3, np.array(spec.bounds_array(), float).mean(axis=1))
-    z = nlp.nominal(start.design)
-    wv = np.concatenate([z[list(nlp.KEPT)], start.theta])
-    full = np.asarray(nlp.varpro_full(wv, start.sign), float).ravel()
-    fit_full = float(nlp.fit(full, start.sign))
-    fit_start = float(nlp.fit(np.concatenate([z, start.theta]), start.sign))
-    assert fit_full <= fit_start + 1e-9 * max(1.0, fit_start)
-    for k in (4, 5, 6, 7):                  # moving any placement coordinate off the optimum makes it worse
-        for step in (-1e-3, 1e-3):
-            moved = full.copy()
-            moved[k] += step
-            assert float(nlp.fit(moved, start.sign)) > fit_full
-
-
-def test_the_projection_serves_only_starts_without_a_fixed_timing_phase(monkeypatch):
-    """VARPRO (study switch, eleventh pass): start 0 (the spec's design), a screened and a pool start are solved by
-    the projected NLP first; a Latin-hypercube start (the continuation's fixed-timing phase first) never is; an open
-    target arc with grashof = "any" (every start in the configuration form) builds no projected NLP at all."""
-    spec = inexact_spec("egg16").model
-    monkeypatch.setattr(path_nlp, "VARPRO", True)
-    on = PathNLP(spec, 0)
-    rows = latin_hypercube_starts(on.bounds, on.init, 64, 0)
-    assert on.varpro is not None
-    projected = []
-    solve = on.varpro.solve
-    monkeypatch.setattr(on.varpro, "solve", lambda index, *a, **k: projected.append(index) or solve(index, *a, **k))
-    assert on.start(2, rows[2]).timing_first and not any(on.start(i, rows[i]).timing_first for i in (0, 1, 3))
-    on.solve(2, rows[2])
-    assert projected == []
-    screened = on.solve(3, rows[3])
-    assert screened.return_status == "Solve_Succeeded" and math.isfinite(screened.objective)
-    on.solve(1, rows[1])
-    on.solve(0, rows[0])
-    assert projected == [3, 1, 0]
-    assert PathNLP(inexact_spec("stroke_lift14").model, 0).varpro is None
-
-
 def test_the_best_known_designs_file_holds_the_cross_checks_new_bests():
     """The parametrised test below runs on the file's keys: an emptied file would collect nothing, so its content is
     pinned here (the bests found below the earlier best known: by the 2,000-start cross-check, a fourth-pass run, the
@@ -614,15 +552,3 @@ def test_x_bounds_refuse_not_a_number():
     lo[0] = math.nan
     with pytest.raises(ValueError, match="x_bounds"):
         nlp.compiled.solve(0, np.clip(np.zeros(len(lo)), nlp.lbx, nlp.ubx), p=1.0, x_bounds=(lo, hi))
-
-
-def test_change_point_shapes_sit_at_the_grashof_limit_with_the_crank_shortest():
-    """screen.sample_change_point_shapes (a study switch, off): the crank is the shortest link and
-    s + l - p - q = -CHANGE_POINT_INSET * s (its crank drawn that far inside the limit)."""
-    shapes = screen.sample_change_point_shapes(np.random.default_rng(3), 500)
-    links = shapes[:, :4]
-    s, l = links.min(axis=1), links.max(axis=1)
-    assert np.array_equal(np.argmin(links, axis=1), np.ones(500, dtype=int))        # r2, the crank
-    slack = s + l - (links.sum(axis=1) - s - l)
-    crank_at_limit = s / (1.0 - screen.CHANGE_POINT_INSET)
-    np.testing.assert_allclose(slack, -screen.CHANGE_POINT_INSET * crank_at_limit, rtol=1e-9, atol=1e-15)

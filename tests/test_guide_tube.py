@@ -22,7 +22,6 @@ from synthesis.kinds.guide_tube.drag import traverse
 from synthesis.kinds.guide_tube.drop import Physics, Tube, drop_phases, landing
 from synthesis.kinds.guide_tube.ode import simulate
 from synthesis.kinds.guide_tube.plots import compare_figures
-from synthesis.kinds.guide_tube.printed import printed_landing_time, printed_phase
 from synthesis.kinds.guide_tube.scene import GuideTubeScene, calibration_failure
 from synthesis.kinds.guide_tube.slope import landing_time_slope
 from solving import agrisynth, run_solve, spec_with
@@ -70,9 +69,14 @@ def test_mu_is_calibrated_uniquely_and_the_ode_confirms_t_z_of_tube_I(calibrated
 
 
 def test_eq14_as_printed_is_the_closed_form_from_rest(calibrated):
+    """Eq 14 as printed: x(t) = (v_L^2 / g) ln cosh(g t / v_L), v = v_L tanh(g t / v_L); inverted for t at a height
+    h, t = (v_L / g) acosh(exp(g h / v_L^2)), written with expm1 / log1p to keep its digits at small h."""
+    g, vl = 9.8, calibrated.physics.terminal_speed
     for height in (0.05, 0.245, 0.6, 3.0):
-        t_printed, v_printed = printed_phase(0.0, 1.0, calibrated.physics, height)
-        t, v = traverse(0.0, 9.8, calibrated.physics.kappa, height)
+        u = math.expm1(g * height / vl ** 2)
+        t_printed = vl / g * math.log1p(u + math.sqrt(u * (2.0 + u)))
+        v_printed = vl * math.tanh(g * t_printed / vl)
+        t, v = traverse(0.0, g, calibrated.physics.kappa, height)
         assert t == pytest.approx(t_printed, rel=1e-12)
         assert v == pytest.approx(v_printed, rel=1e-12)
 
@@ -119,19 +123,6 @@ def test_solved_delta2_equalises_the_ode_times_and_is_not_the_published_41_deg(c
     # objective "nearest": the squared change of the free angle from the given 41 deg
     assert result.objective["unit"] == "deg^2"
     assert result.objective["value"] == pytest.approx((delta2 - PUBLISHED_DELTA2) ** 2, rel=1e-9)
-
-
-def test_the_printed_superposition_reading_does_not_give_41_deg_either(calibrated):
-    """eq 17/19/21 as printed (initial speed added to the from-rest solution): calibrate mu on
-    tube I again, solve delta2; the h3/h4 split it needs is unknown, so try both extremes."""
-    base = calibrated.physics
-    for h3 in (None, 0.040):         # one phase over h5 + h6, or the vertical wall met after h5
-        mu = brentq(lambda m: printed_landing_time(45.0, TUBE_I, base.with_(mu=m), h3) - PUBLISHED_TZ, 0.0, 0.99)
-        physics = base.with_(mu=mu)
-        lo = math.degrees(math.atan(mu)) + 0.01          # eq 17 needs tan d > mu
-        delta2 = brentq(lambda d: printed_landing_time(d, TUBE_II, physics, h3) - PUBLISHED_TZ, lo, 80.0)
-        assert abs(delta2 - PUBLISHED_DELTA2) > 5.0
-        assert printed_landing_time(PUBLISHED_DELTA2, TUBE_II, physics, h3) < PUBLISHED_TZ - 0.015
 
 
 def test_printed_eq17_is_not_a_solution_of_eq16_when_the_slide_starts_moving(calibrated):
@@ -205,14 +196,6 @@ def test_landing_speed_ranks_the_row_spacings_as_table2_inversion_rates_do(calib
         assert speeds[1] - speeds[0] < 0.02                    # m/s: 230 and 265 mm barely differ
 
 
-def test_no_reading_of_the_text_tried_gives_41_deg():
-    from synthesis.kinds.guide_tube.readings import readings
-
-    for reading in readings():
-        assert reading.delta2, reading.name
-        assert all(abs(d - PUBLISHED_DELTA2) > 2.0 for d in reading.delta2), reading
-
-
 # --- calibration corner cases -----------------------------------------------------------------------------
 
 def test_roots_in_finds_every_root_and_skips_undefined_gaps():
@@ -238,7 +221,7 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
     proc = run("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr
     assert "landing_time_spread" in proc.stdout and "FAIL" in proc.stdout
-    folder = tmp_path / "cai2020_tubes"
+    folder = tmp_path / "cai2020_tubes-check"
     data = json.loads((folder / "result.json").read_text())
     for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "versions", "facts"):
         assert key in data

@@ -68,7 +68,7 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     # derivatives w.r.t. forward speed, crank speed, friction, ... of a nominal spec too
     with without_ipopt(), operating_as_symbols():
         nlp = solving.build(Setting(aspec, seed, data), False)
-        whole_problem(nlp)         # every rule as the whole problem holds it (not the projected study NLP)
+        whole_problem(nlp)         # every rule as the whole problem holds it (not the configuration form)
     dmap = design_map(kind.name, nlp, spec)
     missing = [k for k in dmap.keys if k not in design]
     if missing:

@@ -38,11 +38,8 @@ def _nominal_units(nlp, n):
     if offset is None or scale is None:
         from synthesis.core.kind import resolve
 
-        if resolve("synthesis.kinds.fourbar_path.nlp:SCALED"):
-            offset, scale = resolve("synthesis.kinds.fourbar_path.nlp:nominal_scales")(
-                np.array(nlp.spec.targets.points, dtype=float))
-        else:
-            offset, scale = np.zeros(n), np.ones(n)
+        offset, scale = resolve("synthesis.kinds.fourbar_path.nlp:nominal_scales")(
+            np.array(nlp.spec.targets.points, dtype=float))
     d0, s = np.zeros(n), np.ones(n)
     d0[:len(offset)], s[:len(scale)] = offset, scale
     return d0, np.diag(s)
@@ -192,12 +189,9 @@ def without_ipopt():
 
 
 def whole_problem(nlp) -> None:
-    """The kind's NLP solves its whole problem from every start: fourbar_path's variable-projection study switch
-    and its configuration form (grashof "any", natural.py: two angles per target) are dropped, so a tolerance box
-    holds, and the analysis reads, every rule as the whole problem holds it (for grashof "any" the motion's rows
-    exactly) in the spec's design coordinates."""
-    if getattr(nlp, "varpro", None) is not None:
-        nlp.varpro = None
+    """The kind's NLP solves its whole problem from every start: fourbar_path's configuration form (grashof "any",
+    natural.py: two angles per target) is dropped, so a tolerance box holds, and the analysis reads, every rule as
+    the whole problem holds it (for grashof "any" the motion's rows exactly) in the spec's design coordinates."""
     if getattr(nlp, "configuration", None) is not None:     # fourbar_path: its crank-angle form is the whole problem
         nlp.configuration = None
 

@@ -119,7 +119,7 @@ class RobustBuild:
         with tolerance_box(_Resolver(self.kind_name, setting.spec)):
             try:
                 nlp = self.base(setting, elastic)
-                # the kind's whole problem, as built here in the box (fourbar_path: its projected study NLP dropped)
+                # the kind's whole problem, as built here in the box (fourbar_path: its configuration form dropped)
                 whole_problem(nlp)
                 solvers = [getattr(nlp, "compiled", None)]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables

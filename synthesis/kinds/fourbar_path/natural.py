@@ -5,7 +5,7 @@ theta2 (law of cosines, one assembly).  Where the crank cannot turn fully (grash
 only rocks) the best fit often puts a target at a *dead position* of the crank -- coupler and rocker in line,
 |O'A| = r3 + r4 or |r3 - r4| -- where that closed form has a square-root singularity: the coupler point moves
 as sqrt(theta_dead - theta2), its derivative is unbounded, and IPOPT crawls towards it for hundreds of
-iterations or stops with a failed step (dwell_arc15: problems/fourbar_path/INEXACT.md, sixth pass).
+iterations or stops with a failed step (dwell_arc15: problems/fourbar_path/INEXACT.md).
 
 Here each target has two angles, the crank's theta2 and the coupler's psi (direction A -> B in the linkage's
 frame), and the loop's closure is an equality row, |A + r3 e^{i psi} - O'|^2 = r4^2.  The configuration curve

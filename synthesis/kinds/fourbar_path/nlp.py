@@ -10,8 +10,8 @@
 The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees
 the objective divided by D^0.5 (OBJECTIVE_POWER).  The objective a start reports is the path error in mm^2.
-grashof = "any" holds its motion rows exactly (rules.motion_extremes; they replaced the second pass's coarse samples
-of the motion re-solved on the spec's samples: INEXACT.md, fourth pass; that path was removed in the fifth).
+grashof = "any" holds its motion rows exactly (rules.motion_extremes; they replaced coarse samples of the motion
+re-solved on the spec's samples: INEXACT.md).
 Target sets the screen serves (free timing, >= 12 points) are solved to IPOPT tol SCREEN_TOL.  Free timing: every start is watched
 (CompiledNLP(watched=True)) and cut at the iterations of CUTS when its path error is far above the
 *reference*, the best screened start's path error (StartMaker.reference: a function of the spec and the
@@ -29,7 +29,6 @@ that go either way.  The core transcribes it (back-off, elastic form) and runs I
 from __future__ import annotations
 
 import contextvars
-import dataclasses
 import functools
 import math
 
@@ -55,8 +54,7 @@ THETA_RANGE = (-4.0 * math.pi, 6.0 * math.pi)    # bounds of the free crank angl
 BACKOFF = 1e-9
 
 
-#: study switches (INEXACT.md): variables in nominal units; IPOPT's objective in mm^2 / D^OBJECTIVE_POWER
-SCALED = True
+#: IPOPT's objective is the path error in mm^2 / D^OBJECTIVE_POWER (D the targets' size; INEXACT.md)
 OBJECTIVE_POWER = 0.5
 
 
@@ -64,7 +62,7 @@ OBJECTIVE_POWER = 0.5
 #: targets' size (its x declares plain numbers, which the core's declared-unit rule leaves alone anyway; an
 #: earlier box-width rule read widths like 0.5 D as metres and multiplied them by 1000, and picking_arc's
 #: one-start solve then ended at max_iter, violating the transmission angle)
-OWN_UNITS = "none" if SCALED else None
+OWN_UNITS = "none"
 
 
 def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -85,13 +83,13 @@ MU_INIT = 1e-6
 #: whose path error is above factor x the best screened start's (StartMaker.reference, the same in every worker)
 #: is stopped (User_Requested_Stop); decided by iterations and objectives only, so the same for any worker count.
 #: One cut at iteration 30, 400x: chosen on every start's uncut path-error trace of the ten inexact problems (seed 0)
-#: and checked on seed 1 (INEXACT.md, fifth pass).  The second pass's ((30, 1e4), (200, 1.0), (400, 0.6)) ran most
+#: and checked on seed 1 (INEXACT.md).  An earlier schedule ((30, 1e4), (200, 1.0), (400, 0.6)) ran most
 #: starts to 200 iterations and there stopped starts that end at the uncut run's best (s_curve12, stroke_lift14 on
 #: seed 0, triangle18 on seed 1); 300x instead of 400x stops egg16's best start (396x at iteration 30).  The second
-#: cut, at iteration 200 above 1x, came with TIMING_FIRST (seventh pass): the starts fitted at their crank angles first
+#: cut, at iteration 200 above 1x, came with TIMING_FIRST: the starts fitted at their crank angles first
 #: pass the cut at iteration 30 within 400x and ran on to convergence or max_iter; replayed on their uncut traces
 #: (seeds 0 and 1) it keeps every best start (0.6x loses 2 of 20), and on six seeds it took 32 % fewer iterations and
-#: 21 % less CPU, at the seventh pass's best known on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
+#: 21 % less CPU, at the best known of the time on 40 of 60 against 41 without it (triangle18 on seed 2 lost)
 CUTS = ((30, 400.0), (200, 1.0))
 #: a start that reached max_iter with a path error at most this x the reference is resumed once (PathNLP._resumable;
 #: its details say how: "resumed"); 0: never
@@ -108,15 +106,14 @@ CONFIGURATION = True
 #: stopped, a regular point converges in a few dozen, the rest do not converge at all (with the starts' mu_init, 20 of
 #: kidney25's 21 polished starts on seed 0 still ran at 150 iterations).  With POLISH_MU_INIT kidney25's converging
 #: polishes take 34-57 iterations (seeds 0, 2, 4), so 60 left ~10 % margin: 100 gave the same best objectives and
-#: statuses on seeds 0-5 for the four closed "any" loops (INEXACT.md, tenth pass)
+#: statuses on seeds 0-5 for the four closed "any" loops (INEXACT.md)
 POLISH_ITERATIONS = 100
 #: IPOPT's initial barrier parameter of a resume or a polish in the configuration form (its own solver,
 #: PathNLP.polisher; None: MU_INIT, the starts' solver).  kidney25's best lies on a change point with a target at the
 #: links-in-line position; the crank-angle form ends there with a failed step (seeds 2 and 4: starts 35 and 59), and
 #: the polish from that point with the starts' 1e-6 left it (path error 9,029 / 285,587 mm^2 when stopped after 60
 #: iterations); with 1e-2 it converges, Solve_Succeeded, in 53 / 48 iterations at the best known.  Six seeds with this
-#: and CONFIGURATION_RESUME_ITERATIONS: the same hits, best start Solve_Succeeded on 59 of 60 against 56 (INEXACT.md,
-#: tenth pass)
+#: and CONFIGURATION_RESUME_ITERATIONS: the same hits, best start Solve_Succeeded on 59 of 60 against 56 (INEXACT.md)
 POLISH_MU_INIT: float | None = 1e-2
 #: the iterations of a resume in the configuration form from max_iter (None: RESUME_ITERATIONS): stroke_lift14's best
 #: start on seed 1 (start 43) converges in 173 more (0.259043 -> 0.258968 mm^2, Solve_Succeeded), not in 150; 400 did
@@ -125,64 +122,23 @@ CONFIGURATION_RESUME_ITERATIONS: int | None = 250
 #: continuation: an unplaced start of a screened set (StartPoint.timing_first: the Latin-hypercube starts,
 #: a random design with its coupler curve's nearest crank angles) is first fitted at those crank angles held fixed
 #: (prescribed timing: the design alone, at most this many iterations), then solved with free timing from that fit.
-#: Six seeds of the ten inexact problems: at the seventh pass's best known on 41 of 60 against 31 of 60 without (40
-#: with the second cut of CUTS; INEXACT.md, seventh pass); the screened and pool starts, already placed on the
+#: Six seeds of the ten inexact problems: at the best known of the time on 41 of 60 against 31 of 60 without (40
+#: with the second cut of CUTS; INEXACT.md); the screened and pool starts, already placed on the
 #: targets, lose by it, and the open arcs of the configuration form gain nothing (they skip it: PathNLP.solve); 0: off
 TIMING_FIRST = 40
 #: the smallest step (deg) of the sequence rule a start's fixed crank angles must leave for its fixed phase to run
 SEQUENCE_ROOM = 1e-6
-#: study switch: each start's details get its path error at every iteration (of its main run: not of a fixed-timing
-#: phase, whose iterations precede the trace's iteration 0, nor of a resume)
-TRACE = False
-#: study switch (issue 19; INEXACT.md, third and eleventh passes; off): free timing, >= SCREEN_MIN_TARGETS targets,
-#: placement free -- a start without a fixed-timing phase (the screened and pool starts, placed on the targets by the
-#: screen, and start 0, the spec's design) is first solved by variable projection: the input pivot (x0, y0) and the
-#: coupler point (rcx, rcy) enter the coupler point linearly, so for given links, frame angle and crank angles their
-#: best values are a complex linear least-squares fit in closed form (:func:`placement`), and IPOPT moves only r1..r4,
-#: theta0 and the crank angles; then, unless it converged with the placement inside its bounds, the full NLP polishes
-#: it.  Not the Latin-hypercube starts (the continuation's: TIMING_FIRST), whose long trajectories in the full NLP reach
-#: egg16's and d_shape22's best (projected too, each was lost on 2 of seeds 0-2), nor an open target arc in the
-#: configuration form (CONFIGURATION; not built there). On seeds 0-5 it took 30 % fewer iterations (median of the
-#: medians 105.5 against 150) and reached the best known on 37 of 60 against 36, but where the iterations did not fall
-#: each costs 1.4-1.5x (the Hessian is dense in the crank angles: 233 against 62 us on square24), so the median wall did
-#: not fall (5.04 s against 4.80-5.09 s on seed 0): not switched on
-VARPRO = False
-#: the entries of the design the coupler point is linear in (the projection's closed-form placement)
-PLACEMENT = tuple(VARIABLES.index(n) for n in ("rcx", "rcy", "x0", "y0"))
-#: the projected answer is kept without the full NLP's polish when its placement is this far inside its bounds
-#: (nominal units: target sizes)
-PLACEMENT_ROOM = 1e-6
 #: IPOPT's tolerances for the free-timing target sets of >= SCREEN_MIN_TARGETS points (None: the preset's 1e-12,
 #: below the round-off floor of the gradient of an objective of ~1 mm^2: the best starts then ended at IPOPT's
-#: acceptable level; 1e-9: 7 of 10 best starts Solve_Succeeded against 5 -- INEXACT.md, fourth pass)
+#: acceptable level; 1e-9: 7 of 10 best starts Solve_Succeeded against 5 -- INEXACT.md)
 SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 #: IPOPT's scaling of those sets: the gradient-based scaling divides f by |grad f(x0)|inf / max_gradient when that is
 #: above 1, so a start far from the targets (large residuals, large gradient) had its objective scaled down by up to
 #: 10^2-10^3 and its tolerance loosened by as much (egg16's best start stopped 4e-6 above the optimum of its own
 #: basin).  max_gradient 1000 (IPOPT's default 100): median iterations 79 -> 40.5 (seed 0), 77.25 -> 57.5 (seed 1),
 #: at the best known on 6 / 4 of 10 against 5 / 5 (egg16, s_curve12 gained, square24 lost on seed 0; triangle18 lost
-#: on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md, sixth pass)
+#: on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md)
 SCREEN_SCALING: dict | None = {"ipopt.nlp_scaling_max_gradient": 1000.0}
-
-
-def placement(anchors: list, units: list, targets: np.ndarray) -> tuple:
-    """(x0, y0, rcx, rcy) minimising sum_i |b + c U_i + A_i - T_i|^2 over complex b = x0 + i y0, c = rcx + i rcy,
-    for the crank pins A_i (from the input pivot) and the coupler's unit vectors U_i at the targets T_i: the coupler
-    point is P = O + A + rcx u + rcy (u turned +90 deg) = b + A + c U.  Closed form on the centred sums:
-    c = sum conj(U~_i) R~_i / sum |U~_i|^2 (R = T - A, ~: minus the mean), b = mean(R) - c mean(U).  Floats or
-    CasADi symbols; a coupler that does not turn between the targets (sum |U~|^2 = 0) has no unique c."""
-    n = len(targets)
-    rx = [float(t[0]) - a[0] for t, a in zip(targets, anchors)]
-    ry = [float(t[1]) - a[1] for t, a in zip(targets, anchors)]
-    mux, muy = sum(u[0] for u in units) / n, sum(u[1] for u in units) / n
-    mrx, mry = sum(rx) / n, sum(ry) / n
-    ux = [u[0] - mux for u in units]
-    uy = [u[1] - muy for u in units]
-    qx, qy = [r - mrx for r in rx], [r - mry for r in ry]
-    den = sum(a * a + b * b for a, b in zip(ux, uy))
-    cx = sum(a * c + b * d for a, b, c, d in zip(ux, uy, qx, qy)) / den
-    cy = sum(a * d - b * c for a, b, c, d in zip(ux, uy, qx, qy)) / den
-    return mrx - (cx * mux - cy * muy), mry - (cx * muy + cy * mux), cx, cy
 
 
 class PathNLP:
@@ -198,7 +154,7 @@ class PathNLP:
         self.bounds = np.array(spec.bounds_array(), dtype=float)
         self.init = np.array([spec.design_values()[n] for n in self.names], dtype=float)
         targets = np.array(spec.targets.points, dtype=float)
-        self.offset, self.scale = nominal_scales(targets) if SCALED else (np.zeros(9), np.ones(9))
+        self.offset, self.scale = nominal_scales(targets)
         x = ca.SX.sym("x", len(self.names))          # the design in nominal units: (design - offset) / scale
         # a number in the spec enters as that exact number; a free variable stays a decision entry even with
         # bounds [v, v] (the tolerance analysis frees every dimension so: its rules must depend on it)
@@ -222,7 +178,7 @@ class PathNLP:
         residuals = ca.vertcat(*res)
         f = ca.sumsqr(residuals)
         decision = ca.vertcat(x, theta)
-        f_unit = self.scale[0] ** OBJECTIVE_POWER if SCALED else 1.0      # the objective in (target size)^k
+        f_unit = self.scale[0] ** OBJECTIVE_POWER      # the objective in (target size)^k
         lbx = np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])])
         ubx = np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])])
 
@@ -254,7 +210,7 @@ class PathNLP:
         self.resumes = self.referenced and bool(RESUME_WITHIN)
         self._reference: list = []
         self.continuation = self.referenced and TIMING_FIRST > 0      # its fixed phase is stopped by a watch
-        self.watched = self.cut or self.resumes or self.continuation or TRACE
+        self.watched = self.cut or self.resumes or self.continuation
         if self.referenced:
             _ = self.reference
         self.lbx, self.ubx = lbx, ubx
@@ -277,10 +233,6 @@ class PathNLP:
             if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
                 self._polisher_settings = (form({**options, "ipopt.mu_init": POLISH_MU_INIT}),
                                            contextvars.copy_context())
-        self.varpro = None
-        if (VARPRO and not elastic and self.starts.screening and not self._open_in_configuration
-                and not any(self.fixed[i] for i in PLACEMENT)):
-            self._build_varpro(spec, targets, thetas, theta, sign, lbx, ubx, f_unit)
 
     @property
     def _open_in_configuration(self) -> bool:
@@ -305,54 +257,6 @@ class PathNLP:
             out.update(SCREEN_SCALING)
         return out
 
-    #: the decision entries the variable projection keeps (r1..r4, theta0); the rest are its closed form
-    KEPT = (0, 1, 2, 3, 8)
-
-    def _build_varpro(self, spec, targets, thetas, theta, sign, lbx, ubx, f_unit) -> None:
-        """The NLP in r1..r4, theta0 and the crank angles, (x0, y0, rcx, rcy) the closed-form placement
-        (:func:`placement`) held within their bounds as rows; ``varpro_full`` maps its decision vector to the full
-        NLP's (the start of the polish)."""
-        from synthesis.kinematics import fourbar
-
-        kept = list(self.KEPT)
-        xr = ca.SX.sym("xr", len(kept))
-        v = {}
-        for j, i in enumerate(kept):
-            v[self.names[i]] = float(self.bounds[i, 0]) if self.fixed[i] else self.offset[i] + self.scale[i] * xr[j]
-        th0 = v["theta0"] * (math.pi / 180.0)
-        anchors, units = [], []
-        for th in thetas:
-            (ax, ay), (bx, by) = fourbar.coupler_joint(th, v["r1"], v["r2"], v["r3"], v["r4"], th0,
-                                                       BRANCHES[spec.branch])
-            anchors.append((ax, ay))
-            units.append(((bx - ax) / v["r3"], (by - ay) / v["r3"]))
-        x0, y0, rcx, rcy = placement(anchors, units, targets)
-        v.update(x0=x0, y0=y0, rcx=rcx, rcy=rcy)
-        res = []
-        for (ax, ay), (ux, uy), (tx, ty) in zip(anchors, units, targets):
-            res += [x0 + ax + rcx * ux - rcy * uy - tx, y0 + ay + rcx * uy + rcy * ux - ty]
-        f = ca.sumsqr(ca.vertcat(*res))
-        linear = list(PLACEMENT)
-        z_lin = ca.vertcat(*((v[self.names[i]] - self.offset[i]) / self.scale[i] for i in linear))
-        rows = [(z_lin[k], float(lbx[i]), float(ubx[i])) for k, i in enumerate(linear)]   # placement in its bounds
-        decision = ca.vertcat(xr, theta)
-        samples = self.samples
-        problem = Problem(
-            "fourbar_path_varpro", decision,
-            np.concatenate([lbx[kept], lbx[9:]]), np.concatenate([ubx[kept], ubx[9:]]),
-            structural=rows, rules=path_rules(spec, v, thetas, sign, samples),
-            objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
-            ipopt="exact_fit", ipopt_options=self._ipopt_options(spec),
-            max_iter=spec.solver.max_iter, x_units=[""] * len(kept) + ["rad"] * self.n_theta,
-            structural_units=[""] * len(linear), objective_unit="")
-        self.varpro = CompiledNLP(problem, False, scaling=OWN_UNITS, watched=self.watched)
-        full = [None] * 9
-        for j, i in enumerate(kept):
-            full[i] = xr[j]
-        for i in linear:
-            full[i] = (v[self.names[i]] - self.offset[i]) / self.scale[i]
-        self.varpro_full = ca.Function("varpro_full", [decision, sign], [ca.vertcat(*full, theta)])
-
     @property
     def problem(self) -> Problem:
         return self.compiled.problem
@@ -376,17 +280,15 @@ class PathNLP:
             self._reference.append(self.starts.reference if self.referenced else None)
         return self._reference[0]
 
-    def watch(self, trace: list):
+    def watch(self):
         """The early cut of one start (None: no cut): stop at iteration k of CUTS when the path error (mm^2) is
-        above its factor x the reference; ``trace`` gets (iteration, mm^2) at every iteration (study)."""
+        above its factor x the reference."""
         if not self.watched:
             return None
         factors = dict(CUTS) if self.cut else {}
 
         def rule(iteration: int, f: float) -> bool:
             mm2 = f * self.f_unit
-            if TRACE:
-                trace.append((iteration, mm2))
             if iteration not in factors or self.reference is None:
                 return False
             return not mm2 <= factors[iteration] * self.reference
@@ -397,29 +299,12 @@ class PathNLP:
         sp = self.start(index, x_design)
         z0 = np.clip(self.nominal(sp.design), self.lbx[:9], self.ubx[:9])
         w0 = np.concatenate([z0, sp.theta])
-        trace: list = []
-        watch = self.watch(trace)
-        pre = None
-        if self.varpro is not None and not sp.timing_first:    # projection first, the full NLP only where it must
-            kept = list(self.KEPT)
-            pre = self.varpro.solve(index, np.concatenate([z0[kept], sp.theta]), p=sp.sign, watch=watch)
-            full = np.asarray(self.varpro_full(pre.x[: self.varpro.n_x], sp.sign), dtype=float).ravel()
-            if pre.return_status == "User_Requested_Stop" or not np.all(np.isfinite(full)):
-                return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
-            # a KKT point of the projected NLP whose placement is strictly inside its bounds is one of the full NLP
-            # (the placement is then its exact least-squares optimum: variable projection, Golub & Pereyra 1973)
-            lin = list(PLACEMENT)
-            inside = bool(np.all(full[lin] > self.lbx[lin] + PLACEMENT_ROOM)
-                          and np.all(full[lin] < self.ubx[lin] - PLACEMENT_ROOM))
-            w0 = np.concatenate([np.clip(full[:9], self.lbx[:9], self.ubx[:9]), full[9:]])
-            if pre.return_status == "Solve_Succeeded" and inside:
-                return self._outcome(dataclasses.replace(pre, x=full), sp, trace)
-            watch = self.watch(trace)
+        watch = self.watch()
         first = None
         # not for an open arc in the configuration form: there it found no more best designs on six seeds and cost
-        # 150-420 iterations per start (dwell_arc15, stroke_lift14; INEXACT.md, seventh pass)
+        # 150-420 iterations per start (dwell_arc15, stroke_lift14; INEXACT.md)
         in_configuration = self._open_in_configuration
-        if (sp.timing_first and self.continuation and pre is None and not in_configuration
+        if (sp.timing_first and self.continuation and not in_configuration
                 and self._sequence_can_hold(sp) and not peer_method_active()):
             w0, first = self._fit_at_start_timing(index, w0, sp.sign)
         resumed = None
@@ -433,11 +318,9 @@ class PathNLP:
                 out, resumed = self._resume(index, out, sp.sign, "configuration")
             elif self._resumable(out, sp.sign):
                 out, resumed = self._resume(index, out, sp.sign)
-        if pre is not None:
-            out = self._then(pre, out, "polished by the full NLP")
         if first is not None:
             out = self._then(first[0], out, "free timing from the fit at the start's crank angles")
-        return self._outcome(out, sp, trace, resumed, first[1] if first is not None else None)
+        return self._outcome(out, sp, resumed, first[1] if first is not None else None)
 
     def _sequence_can_hold(self, sp: StartPoint) -> bool:
         """Whether the start's crank angles, held fixed, leave the sequence rule (the spec's [rules] order) room: a
@@ -470,7 +353,7 @@ class PathNLP:
     def _resumable(self, out, sign: float) -> bool:
         """A start that reached max_iter within RESUME_WITHIN x the reference is run once more from where it stopped, by
         a fresh IPOPT (barrier, filter and Hessian regularisation reset).  Few converge so (seed 0: 2 of 49 resumed
-        starts; INEXACT.md, fifth pass), but those are starts that crawled along a flat valley to max_iter, as
+        starts; INEXACT.md), but those are starts that crawled along a flat valley to max_iter, as
         stroke_lift14's best did; so a start may run max_iter + RESUME_ITERATIONS (in the configuration form
         CONFIGURATION_RESUME_ITERATIONS) iterations."""
         return out.return_status == "Maximum_Iterations_Exceeded" and self._near_reference(out, sign)
@@ -535,7 +418,7 @@ class PathNLP:
         second.log = first.log + f"\n===== {why}\n" + second.log
         return second
 
-    def _outcome(self, out, sp: StartPoint, trace: list, resumed: dict | None = None,
+    def _outcome(self, out, sp: StartPoint, resumed: dict | None = None,
                  timing_first: dict | None = None) -> StartOutcome:
         xs = out.x[: len(self.lbx)]
         design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
@@ -549,7 +432,7 @@ class PathNLP:
             direction = "ccw" if sp.sign > 0 else "cw"
         objective = float(self.fit(xs, sp.sign))          # mm^2, at the returned point
         objective = objective if math.isfinite(objective) else math.inf
-        extra = {"trace": trace} if TRACE else {}
+        extra = {}
         if resumed is not None:
             extra["resumed"] = resumed
         if timing_first is not None:

@@ -1,4 +1,4 @@
-"""Screening of candidate linkage shapes for free-timing path synthesis (issue 19).
+"""Screening of candidate linkage shapes for free-timing path synthesis.
 
 The fastest published path-synthesis methods do not start a local optimiser from random designs: they
 screen many cheap candidate *shapes* and start it only from the best few.  A shape is a four-bar in a
@@ -127,29 +127,6 @@ def sample_long_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
     rad = _log_uniform(rng, 0.3, LONG, n)
     ang = rng.uniform(0.0, TWO_PI, n)
     return np.column_stack([np.ones(n), 1.0 / r1, r3 / r1, r4 / r1, rad * np.cos(ang) / r1, rad * np.sin(ang) / r1])
-
-
-#: the share of the shapes drawn at the Grashof limit (sample_change_point_shapes)
-CHANGE_POINT_SHARE = 0.0
-#: how far inside the limit they are drawn (relative, on the crank): at the limit the coupler curve has a singular point
-CHANGE_POINT_INSET = 1e-3
-
-
-def sample_change_point_shapes(rng: np.random.Generator, n: int) -> np.ndarray:
-    """(n, 6) crank-rockers at the Grashof limit s + l = p + q (a change point: all four links fall in line once a
-    turn), the crank s drawn CHANGE_POINT_INSET inside it.  Two of the inexact set's best designs are such linkages
-    (kidney25, d_shape22: slack 7e-14 and 2e-9 relative), which the other families, drawn with Grashof room, never
-    propose.  In units of the longest link l = 1: s / l log-uniform in [0.02, 0.98], p uniform in [s, l],
-    q = s + l - p; l, p, q dealt to frame, coupler and rocker in a random order; the coupler point as in sample_shapes.
-    A study switch (CHANGE_POINT_SHARE, off: INEXACT.md, seventh pass)."""
-    s = _log_uniform(rng, 0.02, 0.98, n)
-    p = s + rng.random(n) * (1.0 - s)
-    links = np.column_stack([np.ones(n), p, s + 1.0 - p])
-    order = np.argsort(rng.random((n, 3)), axis=1)
-    r1, r3, r4 = np.take_along_axis(links, order, axis=1).T
-    out = np.column_stack([np.ones(n), s * (1.0 - CHANGE_POINT_INSET) / r1, r3 / r1, r4 / r1, np.zeros(n), np.zeros(n)])
-    _draw_coupler_points(rng, out)
-    return out
 
 
 #: open target arcs with grashof = "any": shapes whose crank only rocks, screened on the crank's range of motion
@@ -366,9 +343,8 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
     the bounds (see the module docstring)."""
     rng = np.random.default_rng([seed, SEED_TAG])
     long = int(round(LONG_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
-    limit = int(round(CHANGE_POINT_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
     cand = []
-    for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long - limit),
+    for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long),
                            (lambda k: sample_long_shapes(rng, k), long)):
         blocks, count = [], 0
         for _ in range(40):                  # draw until `wanted` valid ones (a bounded number of draws)
@@ -377,8 +353,6 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
             blocks.append(family(wanted))
             count += len(blocks[-1])
         cand += [np.concatenate(blocks)[:wanted]] if blocks else []
-    if limit:                    # (on, it takes its share from the first family: the draws of every family change)
-        cand.append(sample_change_point_shapes(rng, limit))
     cand = np.concatenate(cand)
     t = targets[:, 0] + 1j * targets[:, 1]
     cand, a, b, res = _fit_family(cand, shape_curves(cand, branch, GRID)[1], t,

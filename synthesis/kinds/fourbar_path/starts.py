@@ -7,44 +7,45 @@ becomes an IPOPT start as follows.
    even close at some crank angles.  The lengths are pulled along the straight line towards the
    anchor, the design of the box with the largest Grashof slack (a linear programme, solved once),
    just far enough that every slack is >= 5 % of the anchor's.  The class is a convex polytope, so
-   the pulled start stays in the bounds and keeps as much of its randomness as it can.
-2. *Placement.*  Start 0 (the given design) and the even starts keep their design as it is, which
-   keeps the spread of the hypercube.  The odd starts are *screened*.  Prescribed timing: the row
-   and SCREENED - 1 more random designs (seeded by the multistart seed and the start index) each
-   have their coupler curve laid onto the targets by the best similarity (scale, turn, shift;
-   Umeyama's closed form with nearest-point refinement), and the one that then fits the targets
-   best is the start.  Free timing (issue 19): a *pool* of POOL random designs (seeded by the
-   multistart seed only, so every worker builds the same pool) is screened once, vectorised: each
-   coupler curve against the targets at trial arc-length correspondences (POOL_PHASES phases, both
-   directions, for an open arc SPANS of the curve) with the best similarity whose scale keeps the
-   lengths in their bounds; odd start 2k + 1 is the k-th best of the pool, placed as above.  Then
-   (every screened start) REFIT_ROUNDS alternations of a linear least-squares refit of (x0, y0, rcx,
-   rcy) -- the coupler point is linear in them once the links, frame angle and crank angles are
-   fixed -- and the nearest-point crank angles, while the residual falls.
-3. *Crank angles (free timing).*  Each target's angle starts at the nearest point of the start's
-   coupler curve, unwrapped in the crank direction.  With direction "either", start 0 takes the
-   direction whose unwrapped angles span less, the screened starts the direction that fits best,
-   and the other even starts alternate counter-clockwise / clockwise.  If the angles do not fit in
-   one turn, they are spread over the turn in proportion to the arc length between the targets.
+   the pulled start stays in the bounds and keeps as much of its randomness as it can.  With
+   grashof = "any" the rows are pulled into the crank-rockers: a random linkage of a wide box mostly
+   closes the loop at none of its start angles, and IPOPT stops at iteration 0 on NaN.
+2. *Which start is what.*  Start 0 is the given design (with its crank angles, if the spec gives them).
 
-Measured on the 30 free-timing synthetic-truth problems of the tests (64 starts, seed 0; number of
-starts that reach the zero-error optimum): all even starts unscreened with the span heuristic:
-mean 22, worst problem 3; screening the odd starts: mean 32, worst 1; screening plus alternating
-the direction of the even starts (this module): mean 30, worst 2 (mechanism 0, 10 points), and
-every problem reached by start 44 (tests/test_bench_fourbar_path.py, ``pytest -m benchmark``).
-Since issue 19's second pass (STRATEGY "screen_mix") starts 3, 7, 11, ... of free timing come from screen.py
-(starts 1, 5, 9, ... stay the pool's, in order):
-thousands of normalised linkage shapes traced vectorised and laid onto the targets by a similarity and
-nearest-point rounds, the best *distinct* ones (DISTINCT apart) in order, each finished here (nearest-point
-crank angles on the fine curve, the linear refit); the even starts stay the hypercube's, whose long IPOPT
-trajectories reach global optima the screened shapes miss (egg16, d_shape22: INEXACT.md).
-The pool and the refit were measured on the inexact set of issue 19 (problems/fourbar_path/INEXACT.md):
-STRATEGY "pool" (every start from the pool) needs the fewest iterations but reaches the best known
-from fewer starts than "mix" (this module), which keeps the even starts' spread.  With grashof = "any"
-every start is pulled into the crank-rockers (ANY_STARTS_ROTATE): a random linkage of a wide box
-mostly closes the loop at none of its start angles, and IPOPT stops at iteration 0 on NaN.  The exception is a
-screened shape whose crank only rocks (an open arc with grashof = "any": screen.py): its crank angles are the
-nearest points within one interval of its motion (``nearest_in_run``), never across a dead position.
+   ============================  ==================================================================
+   timing and targets            start index
+   ============================  ==================================================================
+   prescribed                    even: the row as it is; odd: the best placed of the row and
+                                 SCREENED - 1 random designs (seeded by the seed and the index)
+   free, < SCREEN_MIN_TARGETS    even: the row as it is; 2k + 1: the k-th best of the pool
+   free, >= SCREEN_MIN_TARGETS   4k + 3: the k-th best distinct shape of screen.py; 4k + 1: the k-th
+                                 best of the pool; even: the row as it is, its design first fitted
+                                 at its own crank angles (StartPoint.timing_first)
+   ============================  ==================================================================
+
+   *Placed*: the coupler curve laid onto the targets by the best similarity (scale, turn, shift;
+   Umeyama's closed form with nearest-point refinement).  The *pool*: POOL random designs (seeded by
+   the seed only, so every worker builds the same pool) screened once, vectorised: each coupler curve
+   against the targets at trial arc-length correspondences (POOL_PHASES phases, both directions, for
+   an open arc SPANS of the curve) with the best similarity whose scale keeps the lengths in their
+   bounds, then placed.  The *screen* (screen.py): thousands of normalised linkage shapes traced
+   vectorised and laid onto the targets, the best ones DISTINCT apart, each finished here
+   (``finish``: nearest-point crank angles on the fine curve).  Every placed or screened start of
+   free timing then gets REFIT_ROUNDS alternations of a linear least-squares refit of (x0, y0, rcx,
+   rcy) -- the coupler point is linear in them once the links, frame angle and crank angles are
+   fixed -- and the nearest-point crank angles, while the residual falls.  The even starts keep the
+   hypercube's spread: their long IPOPT trajectories reach optima the screened shapes miss (egg16,
+   d_shape22: problems/fourbar_path/INEXACT.md).
+3. *Crank angles (free timing).*  Each target's angle starts at the nearest point of the start's
+   coupler curve, unwrapped in the crank direction.  With direction "either", start 0 and the pool
+   starts take the direction whose unwrapped angles span less; the other even starts alternate
+   counter-clockwise / clockwise, and so does every second screened shape (``finish``).  If the angles do not fit in one turn, they are spread over the turn in proportion to the arc
+   length between the targets.  A screened shape whose crank only rocks (an open arc with
+   grashof = "any": screen.py) takes the nearest points within one interval of its motion
+   (``nearest_in_run``), never across a dead position.
+
+Measured: problems/fourbar_path/PATH.md (the synthetic-truth problems) and INEXACT.md (the
+inexact set; the start mixes tried instead of this one).
 """
 
 from __future__ import annotations
@@ -72,12 +73,8 @@ SIGNS = {"ccw": (1.0,), "cw": (-1.0,), "either": (1.0, -1.0)}
 POOL = 1024            # candidate linkage shapes screened once per spec and seed (free timing)
 POOL_PHASES = 24       # trial phases of the arc-length correspondence in the pool screening
 SPANS = (0.25, 0.45, 0.7)   # open target arcs: trial fractions of the curve they cover
-ANY_STARTS_ROTATE = True   # study switch: grashof = "any" starts pulled into the crank-rockers
-STRATEGY = "screen_mix"  # study switch: "old" (per-start screening), "mix" (odd starts from the pool), "pool",
-#                        "screen" (every start after 0 one of the best distinct shapes of screen.py), "screen_mix"
-#                        (starts 3, 7, ... from screen.py, 1, 5, ... from the pool, even ones the hypercube's)
-#: the screen (and the early cut, nlp.CUTS) serve target sets of at least this many points (issue 19's 12-25);
-#: smaller free-timing sets keep the pool starts ("mix") and no cut: the screen's 1 s CPU is more than their
+#: the screen (and the early cut, nlp.CUTS) serve target sets of at least this many points (the inexact set's 12-25);
+#: smaller free-timing sets keep the pool starts and no cut: the screen's 1 s CPU is more than their
 #: whole solve (10 synthetic 6-point problems: 1.4 s CPU with the pool, 6.1 s with the screen)
 SCREEN_MIN_TARGETS = 12
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
@@ -443,13 +440,12 @@ class StartMaker:
         self._ranked = None
         self._screened = None
         self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
-        self.refit = REFIT_ROUNDS > 0
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
         out = np.array(design, dtype=float)
         if self.anchor is not None and self.anchor[1] > 0:
             out[:4] = pull_into_class(out[:4], self.anchor[0], KEEP_SLACK * self.anchor[1], self.spec.rules.grashof)
-        elif ANY_STARTS_ROTATE and self.anchor is None and self.pool_anchor is not None and self.pool_anchor[1] > 0:
+        elif self.anchor is None and self.pool_anchor is not None and self.pool_anchor[1] > 0:
             # grashof = "any": a crank-rocker start closes the loop at every crank angle (a random one
             # often closes at none of the start angles, and IPOPT stops at iteration 0 on NaN)
             out[:4] = pull_into_class(out[:4], self.pool_anchor[0], KEEP_SLACK * self.pool_anchor[1], self.pool_grashof)
@@ -460,14 +456,11 @@ class StartMaker:
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)
             return StartPoint(design, given, 1.0 if given[-1] >= given[0] else -1.0)
-        if self.screening and STRATEGY == "screen" and index > 0:
-            return self.from_screen(index)
-        if self.screening and STRATEGY == "screen_mix" and index % 4 == 3:
+        if self.screening and index % 4 == 3:          # 3, 7, 11, ...: the screened shapes, best first
             return self.from_screen((index + 1) // 4)
-        if self.screening and STRATEGY == "screen_mix" and index % 4 == 1:
+        if self.screening and index % 4 == 1:          # 1, 5, 9, ...: the pool, best first
             return self.placed(self.ranked[((index - 1) // 4) % len(self.ranked)], 0)[1]
-        if self.timed_theta is None and (STRATEGY in ("mix", "pool") or (not self.screening and STRATEGY == "screen_mix")) \
-                and (STRATEGY == "pool" or index % 2 == 1):
+        if self.timed_theta is None and not self.screening and index % 2 == 1:
             return self.from_pool(index)
         if index % 2 == 0:
             start = self.as_it_is(design, index)
@@ -514,7 +507,7 @@ class StartMaker:
     @property
     def reference(self) -> float | None:
         """The path error (mm^2) of the best screened start (the early cut's yardstick); None: no screening."""
-        if STRATEGY not in ("screen", "screen_mix") or not self.screening:
+        if not self.screening:
             return None
         designs, _ = self.screened
         if len(designs) == 0:
@@ -535,14 +528,14 @@ class StartMaker:
         REFIT_ROUNDS linear refits of (x0, y0, rcx, rcy) while the residual falls.  ``index`` is the screened
         shape's rank + 1 (from_screen): with direction "either" an even rank unwraps its angles in the direction
         ``direction(index)`` gives, counter-clockwise and clockwise in turn, as the unscreened starts do -- a spread
-        measured to reach the best known more often than the best-fitting direction for every shape (INEXACT.md,
-        sixth pass) --, except a shape whose crank only rocks: the order of its angles within its one interval of
+        measured to reach the best known more often than the best-fitting direction for every shape (INEXACT.md)
+        --, except a shape whose crank only rocks: the order of its angles within its one interval of
         motion is its direction (forced to the spec's when the spec fixes one)."""
         moved = np.clip(design, self.bounds[:, 0], self.bounds[:, 1])
         rocking = len(screen.rocking_runs(shape_of(moved))[0]) > 0
         nearest_of = nearest_in_run if rocking else nearest_angles
         nearest, d2 = nearest_of(moved, self.targets, self.branch)
-        for _ in range(REFIT_ROUNDS if self.refit else 0):
+        for _ in range(REFIT_ROUNDS):
             refit = refit_placement(moved, nearest, self.targets, self.bounds, self.branch)
             near2, e2 = nearest_of(refit, self.targets, self.branch)
             if not np.sum(e2) < np.sum(d2):
@@ -567,7 +560,7 @@ class StartMaker:
 
     def from_pool(self, index: int) -> StartPoint:
         ranked = self.ranked
-        k = (index - 1) // (1 if STRATEGY == "pool" else 2)
+        k = (index - 1) // 2
         return self.placed(ranked[k % len(ranked)], 0)[1]
 
     def direction(self, index: int) -> str:
@@ -603,7 +596,7 @@ class StartMaker:
             start = StartPoint(moved, np.zeros(0), 1.0)
         else:
             nearest, d2 = nearest_angles(moved, self.targets, self.branch)
-            for _ in range(REFIT_ROUNDS if self.refit else 0):
+            for _ in range(REFIT_ROUNDS):
                 refit = refit_placement(moved, nearest, self.targets, self.bounds, self.branch)
                 near2, e2 = nearest_angles(refit, self.targets, self.branch)
                 if not np.sum(e2) < np.sum(d2):
