@@ -49,7 +49,7 @@ def cli() -> None:
     """Design transplanting and harvesting mechanisms by optimisation.
 
     \b
-    Write a spec file (TOML; see problems/ for examples), then:
+    Write a spec file (TOML; agrisynth problems lists the library, --copy NAME copies one), then:
       agrisynth check SPEC    evaluate the spec's design against every rule
       agrisynth solve SPEC    optimise the spec's free variables (multistart IPOPT)
       agrisynth compare RUN.. compare result folders side by side in one HTML page
@@ -58,7 +58,8 @@ def cli() -> None:
       agrisynth spec KIND     the spec reference of a kind (--template: a file to start from)
       agrisynth tolerance SPEC  sensitivities, tolerance stack-up, Monte-Carlo check of a design
       agrisynth studio SPEC   an interactive design page on 127.0.0.1 (the studio extra)
-    Results go to results/<spec name>/ (result.json, report.html, plots).
+    Results go to results/<spec name>/ for solve, results/<spec name>-check/ for check
+    (result.json, report.html, plots): check, solve, compare, check solved.toml need no --force.
     Exit codes: 0 all rules satisfied, 1 a rule violated, 2 bad input,
     3 solver failure / infeasible, 130 interrupted (Ctrl-C), 143 stopped (SIGTERM).
     """
@@ -67,9 +68,42 @@ def cli() -> None:
 @cli.command()
 @click.option("--dir", "library", type=click.Path(exists=True, file_okay=False, path_type=Path), default=LIBRARY,
               show_default=True, help="problem library folder")
-def problems(library: Path) -> None:
+@click.option("--copy", "name", metavar="NAME", default=None,
+              help="copy the library spec NAME (its file as listed, e.g. planting_arm/taiwan_example1.toml, or its "
+                   "file name alone) into the working folder to edit it, with the spec files it names")
+@click.option("--out", "target", type=click.Path(path_type=Path), default=None,
+              help="with --copy: the file (or folder) to write [default: the spec's file name, here]")
+@click.option("--force", is_flag=True, help="with --copy: replace a file of that name (without it an existing "
+                                            "file is kept and the command exits 2)")
+def problems(library: Path, name: str | None, target: Path | None, force: bool) -> None:
     """List the problem kinds (what each designs, whether it solves) and the problem library:
-    kind, name, source of every spec file."""
+    kind, name, source of every spec file.  `check` and `solve` take a library spec by its file as
+    listed (planting_arm/taiwan_example1.toml) where the working folder has no such file.
+
+    \b
+    Examples:
+      agrisynth problems --copy planting_arm/redesign_from_example1.toml
+      agrisynth problems --copy taiwan_example1 --out my_arm.toml && agrisynth check my_arm.toml
+    """
+    if name is None:
+        for option, given in (("--out", target is not None), ("--force", force)):
+            if given:
+                raise click.UsageError(f"{option} goes with --copy NAME")
+        _list_library(library)
+        return
+    from synthesis.library import copy_out, library_spec, unknown_name_text
+
+    source = library_spec(name, library)
+    if source is None:
+        raise SpecError(unknown_name_text(name, library))
+    written = copy_out(source, Path(source.name) if target is None else target, force=force)
+    also = f" (and {', '.join(escape(str(p)) for p in written[1:])}, the spec files it names)" if written[1:] else ""
+    console.print(f"wrote {escape(str(written[0]))}{also}: a copy of the library's "
+                  f"{escape(source.relative_to(library).as_posix())} to edit; check it with  agrisynth check "
+                  f"{escape(str(written[0]))}", soft_wrap=True)
+
+
+def _list_library(library: Path) -> None:
     from synthesis import kinds
     from synthesis.spec.common import read_toml
 
@@ -95,6 +129,24 @@ def problems(library: Path) -> None:
         table.add_row(escape(str(data.get("kind", "?"))), escape(str(data.get("name", "?"))),
                       escape(str(path.relative_to(library))), escape(str(data.get("source", ""))))
     console.print(table)
+
+
+def _spec_file(spec: Path) -> Path:
+    """SPEC as given, when there is such a file (or the library has no spec of that name either: reading it says
+    so); otherwise the library spec it names (planting_arm/taiwan_example1.toml, problems/... as the README
+    writes it, or a file name the library has once), said on the terminal with its full path."""
+    import os
+
+    from synthesis.library import library_spec
+
+    if os.path.lexists(spec):
+        return spec
+    found = library_spec(spec)
+    if found is None:
+        return spec
+    console.print(f"note: no file {escape(str(spec))} here: using the library's "
+                  f"{escape(found.relative_to(LIBRARY).as_posix())} ({escape(str(found))})", soft_wrap=True)
+    return found
 
 
 @cli.command("spec")
@@ -143,27 +195,30 @@ FORCE_HELP = ("replace OUT/<name>/ when it holds an earlier agrisynth run (witho
 @cli.command()
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
-              show_default=True, help="output folder; the run writes OUT/<spec name>/")
-@click.option("--force", is_flag=True, help=FORCE_HELP)
+              show_default=True, help="output folder; the run writes OUT/<spec name>-check/")
+@click.option("--force", is_flag=True, help=FORCE_HELP.replace("OUT/<name>/", "OUT/<name>-check/"))
 def check(spec: Path, out: Path, force: bool) -> None:
     """Evaluate SPEC's given design against its rules (no optimisation).
 
-    Prints the rule table (value, limit, margin, pass/fail) and writes OUT/<name>/result.json,
+    Prints the rule table (value, limit, margin, pass/fail) and writes OUT/<name>-check/result.json,
     report.html and the kind's figures (a trajectory or path plot where the kind has one). Exit 0
-    when every rule holds, 1 when one is violated.
-    OUT/<name>/ must not exist yet, or hold an earlier agrisynth run and --force be given.
+    when every rule holds, 1 when one is violated.  SPEC may be a library spec as `agrisynth problems`
+    lists it (planting_arm/taiwan_example1.toml) where the working folder has no such file.
+    OUT/<name>-check/ (a solve of the same spec writes OUT/<name>/) must not exist yet, or hold an
+    earlier agrisynth run and --force be given.
     """
     from synthesis import kinds
     from synthesis.core import interrupt
     from synthesis.report import run_artifacts
-    from synthesis.result import open_run_folder, write_run
+    from synthesis.result import CHECK_SUFFIX, open_run_folder, write_run
     from synthesis.spec import load_spec
 
     interrupt.install()
+    spec = _spec_file(spec)
     loaded = load_spec(spec)
     _tolerance_names_known(loaded)
     _unit_notes(loaded)
-    run_folder = open_run_folder(out, loaded.name, force=force, spec=spec)
+    run_folder = open_run_folder(out, loaded.name, force=force, spec=spec, suffix=CHECK_SUFFIX)
     written = False
     try:
         from synthesis.library_log import captured_warnings
@@ -480,9 +535,10 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     says how), infeasible (an elastic re-solve converged and names the rules that conflict),
     failed (anything else: the message says what to try), interrupted (Ctrl-C or SIGTERM:
     the best of the finished starts). Writes OUT/<name>/result.json, report.html, ipopt.log,
-    starts.jsonl (every finished start, appended as it finishes) and plots. OUT/<name>/ must
-    not exist yet, or hold an earlier agrisynth run and --force be given (checked before
-    solving). Exit 0 all rules hold; 1 a rule violated; 3 infeasible or failed; 2 bad input
+    starts.jsonl (every finished start, appended as it finishes) and plots. OUT/<name>/ (a check
+    of the same spec writes OUT/<name>-check/) must not exist yet, or hold an earlier agrisynth
+    run and --force be given (checked before solving).  SPEC may be a library spec as `agrisynth
+    problems` lists it where the working folder has no such file. Exit 0 all rules hold; 1 a rule violated; 3 infeasible or failed; 2 bad input
     (also: nothing free to optimise, or a check-only kind); 130 interrupted by Ctrl-C
     (SIGINT), 143 by SIGTERM: the finished starts are kept, --resume RUN_DIR finishes the run.
     """
@@ -503,6 +559,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     if resume is not None and out is not None:
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
     interrupt.install()
+    spec = _spec_file(spec)
     loaded = load_spec(spec)
     _tolerance_names_known(loaded)
     _unit_notes(loaded)
@@ -664,6 +721,7 @@ def studio(spec: Path, out: Path, port: int, open_browser: bool) -> None:
     except ImportError as exc:
         raise AgrisynthError(f"agrisynth studio needs the studio extra ({exc.name} is missing): "
                              f"pip install -e '.[studio]'") from None
+    spec = _spec_file(spec)
     try:
         app = Studio(spec, out, port)
     except OSError as exc:
@@ -735,6 +793,7 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
     from synthesis.tolerance.output import artifacts, table
 
     given = _per_variable_tolerances(tols)
+    target = _spec_file(target)
     if target.is_file() and target.suffix == ".json":      # a run's result.json: its folder's solved design
         target = target.parent
     if target.is_dir():
@@ -780,12 +839,13 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
 
 
 def _no_solved_design(folder: Path) -> str:
-    """Why a folder given to `tolerance` has no solved design, from its result.json where it has one."""
-    import json
+    """Why a folder given to `tolerance` has no solved design, from its result.json where it has one (read as
+    `compare` reads one: a FIFO, a device or a hostile file there is no status, never a hang or a traceback)."""
+    from synthesis.result import load_result
 
     try:
-        status = json.loads((folder / "result.json").read_text()).get("status")
-    except (OSError, ValueError, AttributeError):
+        status = load_result(folder / "result.json").status
+    except AgrisynthError:
         status = None
     if status == "interrupted":
         return (f"{folder}: an interrupted run, with no solved design (solved.toml) yet: finish it with "
@@ -873,7 +933,7 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     Example:
       agrisynth check problems/planting_arm/taiwan_example1.toml
       agrisynth solve problems/planting_arm/redesign_from_example1.toml
-      agrisynth compare results/taiwan_example1 results/redesign_from_example1
+      agrisynth compare results/taiwan_example1-check results/redesign_from_example1
     """
     import os
 

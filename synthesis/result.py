@@ -244,6 +244,10 @@ def _number(v: Any) -> bool:
 RUN_MARKER = ".agrisynth-run"
 #: a run folder's name: the spec's ``name``, a file-name-safe slug
 RUN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
+#: one run folder per spec and command, so that the natural order (check, solve, compare, check solved.toml)
+#: never meets an earlier run and none replaces another: solve writes OUT/<name>/, check OUT/<name>-check/
+#: (tolerance OUT/<name>-tolerance/); running the same command of the same spec again still needs --force
+CHECK_SUFFIX = "-check"
 
 
 def is_run_folder(path: Path) -> bool:
@@ -429,14 +433,16 @@ def _locked(folder: Path):
 
 
 def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Path | None = None,
-                    replaceable: Path | None = None) -> RunFolder:
-    """Check that ``out_root/name`` may be written and make the run's staging folder (with its marker).
+                    replaceable: Path | None = None, suffix: str = "") -> RunFolder:
+    """Check that ``out_root/<name><suffix>`` may be written and make the run's staging folder (with its marker).
+    ``suffix``: the command's part of the folder name (:data:`CHECK_SUFFIX`), after the spec's ``name``.
 
     OutputError (exit 2), before any work is done, when ``name`` is not a slug, ``out_root`` cannot be
-    created or written, or ``out_root/name`` holds something that must be kept."""
+    created or written, or ``out_root/<name><suffix>`` holds something that must be kept."""
     if not isinstance(name, str) or not RUN_NAME.match(name):
         raise OutputError(f"name {str(name)[:60]!r} is not a folder name (letters, digits and _ . - only, "
                           f"at most 100 characters, starting with a letter or digit)")
+    name += suffix
     out_root = Path(out_root)
     created = []
     missing = out_root

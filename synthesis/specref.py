@@ -30,12 +30,12 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 import annotated_types as at
 from pydantic import BaseModel
 
+from synthesis.library import IMPORT_ROOT, LIBRARY, checkout
 from synthesis.spec.common import FreeVariable
 from synthesis.spec.docmeta import UNITS, SpecFile, TomlType, units_in
 
-ROOT = Path(__file__).resolve().parent.parent
-LIBRARY = ROOT / "problems"
-DOCS = ROOT / "docs" / "specs.md"
+#: the reference of every kind, generated into the source checkout's docs (an installed copy has no docs folder)
+DOCS = IMPORT_ROOT / "docs" / "specs.md"
 REGENERATE = "python -m synthesis.specref"
 
 DIMENSIONLESS = "dimensionless"
@@ -449,6 +449,10 @@ def markdown(kind_names: list[str] | None = None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if checkout() is None:
+        print(f"{DOCS.relative_to(IMPORT_ROOT)} belongs to agrisynth's source checkout; this agrisynth is installed "
+              f"from {IMPORT_ROOT}: run `{REGENERATE}` in a checkout")
+        return 2
     text = markdown()
     if argv == ["--check"]:
         current = DOCS.read_text() if DOCS.exists() else ""

@@ -40,7 +40,7 @@ def test_check_writes_result_plots_and_workshop_files(tmp_path):
     proc = run("check", str(CAMS / "opening_cam.toml"), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr               # the return's pressure angle (see the baselines)
     assert "pressure_angle_return" in proc.stdout and "FAIL" in proc.stdout
-    folder = tmp_path / "opening_cam"
+    folder = tmp_path / "opening_cam-check"
     data = json.loads((folder / "result.json").read_text())
     for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "trajectory", "versions", "facts"):
         assert key in data
@@ -164,7 +164,7 @@ def test_timing_window_the_cam_misses_is_a_violated_rule_in_check(tmp_path):
                      ("hold_far = [[186.0, 346.0]]", "hold_far = []"))
     proc = run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1
-    data = json.loads((tmp_path / "out" / "opening_cam" / "result.json").read_text())
+    data = json.loads((tmp_path / "out" / "opening_cam-check" / "result.json").read_text())
     rule = {r["name"]: r for r in data["rules"]}["timing_hold_near[0]"]
     assert not rule["satisfied"] and rule["value"] == pytest.approx(-12.4, abs=1e-9)
 

@@ -30,7 +30,7 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     proc = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr        # example 1 violates some rules (see the closing note)
     assert "entry_angle" in proc.stdout and "FAIL" in proc.stdout
-    folder = tmp_path / "taiwan_example1"
+    folder = tmp_path / "taiwan_example1-check"
     data = json.loads((folder / "result.json").read_text())
     for key in ("kind", "name", "spec_sha256", "status", "design", "rules", "trajectory", "versions"):
         assert key in data
@@ -55,7 +55,7 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     assert again.returncode == 2 and "holds an earlier agrisynth run; give --force" in again.stderr
     forced = run("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), "--force", cwd=tmp_path)
     assert forced.returncode == 1 and "replaced the previous run" in forced.stdout
-    assert [p.name for p in tmp_path.iterdir()] == ["taiwan_example1"]
+    assert [p.name for p in tmp_path.iterdir()] == ["taiwan_example1-check"]
 
 
 def test_missing_field(tmp_path):
@@ -93,7 +93,7 @@ def test_non_grashof_design_is_a_violated_rule(tmp_path):
     path.write_text(path.read_text().replace("l4 = 80 ", "l4 = 45 "))
     proc = run("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr
-    data = json.loads((tmp_path / "out" / "taiwan_example1" / "result.json").read_text())
+    data = json.loads((tmp_path / "out" / "taiwan_example1-check" / "result.json").read_text())
     rules = {r["name"]: r for r in data["rules"]}
     assert rules["grashof_crank_rocker"]["satisfied"] is False
     assert rules["grashof_crank_rocker"]["value"] == pytest.approx(-25.0)   # l3 + l4 - l2 - l1

@@ -112,7 +112,7 @@ def test_theta_does_not_grow_with_alpha_beyond_43_56_deg_at_fixed_omega():
 def test_baseline_check_reports_the_printed_relations(tmp_path):
     proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    folder = tmp_path / "peanut_baseline"
+    folder = tmp_path / "peanut_baseline-check"
     data = json.loads((folder / "result.json").read_text(), parse_constant=lambda c: pytest.fail(c))
     f = data["facts"]
     for row in f["printed_relations"]:

@@ -117,7 +117,7 @@ def test_eq13_printed_second_form_does_not_follow():
 
 def _check(path: Path, tmp_path: Path) -> tuple[int, dict, str]:
     proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
-    data = json.loads((tmp_path / load_spec(path).name / "result.json").read_text(),
+    data = json.loads((tmp_path / f"{load_spec(path).name}-check" / "result.json").read_text(),
                       parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
     return proc.returncode, data, proc.stdout + proc.stderr
 
@@ -183,7 +183,7 @@ def test_baseline_checks_report_table13_published_ours_difference(tmp_path):
             notes = {r["label"]: r["note"] for r in rows}
             assert "outside what this machine attains" in notes[sorted(expected_bad)[1]]
             assert "V_s 0.67 m/s with V_r 0.63 m/s" in notes[sorted(expected_bad)[2]]
-        assert (tmp_path / data["name"] / "delta_over_beta.png").stat().st_size > 10_000
+        assert (tmp_path / f"{data['name']}-check" / "delta_over_beta.png").stat().st_size > 10_000
 
 
 def test_beta_and_delta_extremes_lie_at_the_named_corners(tmp_path):
@@ -402,7 +402,7 @@ def test_check_says_on_the_terminal_which_published_figures_do_not_reproduce(tmp
     proc = agrisynth("check", str(HD650R), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     out = " ".join(proc.stdout.split())
-    published = json.loads((tmp_path / "iseki_hd650r" / "result.json").read_text())["facts"]["published"]
+    published = json.loads((tmp_path / "iseki_hd650r-check" / "result.json").read_text())["facts"]["published"]
     missed = [r for r in published if not r["reproduced"]]
     assert len(published) == 6 and len(missed) == 3
     assert "published figures: 3 of 6 reproduced (facts.published); not: " in out

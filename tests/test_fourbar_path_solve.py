@@ -241,7 +241,7 @@ def test_check_cli_evaluates_a_given_design(tmp_path):
     data["linkage"].update({n: {"init": v, "bounds": BOUNDS[n]} for n, v in truth.items()})
     proc = cli("check", str(write_spec(tmp_path, data)), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    out = json.loads((tmp_path / data["name"] / "result.json").read_text())
+    out = json.loads((tmp_path / f"{data['name']}-check" / "result.json").read_text())
     assert out["status"] == "evaluated" and "objective" not in out
     assert out["facts"]["timing"] == "nearest" and out["facts"]["path_error"]["max_mm"] < 1e-6
     assert all(r["satisfied"] for r in out["rules"])

@@ -155,7 +155,7 @@ def _run(args, cwd=ROOT):
 def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
     proc = _run(["check", str(LIBRARY / "guide_way" / "liang_2z.toml"), "--out", str(tmp_path)])
     assert proc.returncode == 1, proc.stderr
-    folder = tmp_path / "liang_2z"
+    folder = tmp_path / "liang_2z-check"
     for name in ("result.json", "guide_way.png", "cycle.png", "animation.gif", "centre_line.csv", "walls.csv",
                  "guide_way.dxf"):
         assert (folder / name).exists(), name
@@ -286,7 +286,7 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
         path = tmp_path / f"{name}.toml"
         path.write_text("\n".join(write_toml(GuideWaySpec, data, documented=False)) + "\n")
         proc = _run(["check", str(path), "--out", str(tmp_path)])
-        rules = {r["name"]: r for r in json.loads((tmp_path / name / "result.json").read_text())["rules"]}
+        rules = {r["name"]: r for r in json.loads((tmp_path / f"{name}-check" / "result.json").read_text())["rules"]}
         results[name] = proc, rules
     proc, rules = results["at_fit"]
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -300,7 +300,7 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
     assert rules["key_points"]["where"].endswith("largest at A")
     assert rules["key_tangents"]["value"] == pytest.approx(7.0, abs=0.05) and not rules["key_tangents"]["satisfied"]
     assert rules["key_tangents"]["where"].endswith("largest at B")
-    keys = json.loads((tmp_path / "moved" / "result.json").read_text())["facts"]["spline"]["keys"]
+    keys = json.loads((tmp_path / "moved-check" / "result.json").read_text())["facts"]["spline"]["keys"]
     # the key point is drawn at its target, and where the path passes beside it when it misses
     assert (keys["A"]["x"], keys["A"]["y"]) == tuple(keys["A"]["target"])
     assert math.dist(keys["A"]["target"], (keys["A"]["path_at_A"]["x"], keys["A"]["path_at_A"]["y"])) == \
@@ -622,7 +622,7 @@ def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_pat
     for path, out in ((LIBRARY / "guide_way" / "liang_2z.toml", tmp_path / "a"), (dup, tmp_path / "b")):
         proc = agrisynth("check", str(path), "--out", str(out), cwd=tmp_path, timeout=300)
         assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
-        data = json.loads((out / "liang_2z" / "result.json").read_text())
+        data = json.loads((out / "liang_2z-check" / "result.json").read_text())
         rules[out.name] = {r["name"]: r["value"] for r in data["rules"]}
     assert rules["b"]["pressure_angle"] == rules["a"]["pressure_angle"]
 

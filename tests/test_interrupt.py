@@ -296,7 +296,7 @@ def test_main_called_in_process_leaves_the_signals_to_its_caller(tmp_path):
 
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     code, _ = cli_in_process("check", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--out", str(tmp_path))
-    assert code == 1 and (tmp_path / "taiwan_example1" / "result.json").exists()
+    assert code == 1 and (tmp_path / "taiwan_example1-check" / "result.json").exists()
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
     assert signal.SIG_IGN not in before and cli._as_program is False
 

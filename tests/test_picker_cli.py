@@ -28,7 +28,7 @@ def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 def test_published_designs_check_clean(tmp_path, spec, files):
     proc = run("check", str(PICKER / f"{spec}.toml"), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    folder = tmp_path / spec
+    folder = tmp_path / f"{spec}-check"
     data = json.loads((folder / "result.json").read_text())
     assert data["status"] == "evaluated" and "objective" not in data
     for rule in data["rules"]:
@@ -49,7 +49,7 @@ def _parts_described(tmp_path: Path, data: dict):
     for part, source in (("crank_rocker", "cai2020_crank_rocker"), ("double_crank", "cai2020_double_crank")):
         proc = run("check", str(PICKER / f"{source}.toml"), "--out", str(tmp_path / "parts"), cwd=tmp_path)
         assert proc.returncode == 0, proc.stdout + proc.stderr
-        own = json.loads((tmp_path / "parts" / source / "result.json").read_text())["design_variables"]
+        own = json.loads((tmp_path / "parts" / f"{source}-check" / "result.json").read_text())["design_variables"]
         for name, entry in own.items():
             assert described[f"{part}.{name}"] == {**entry, "file": str(PICKER / f"{source}.toml")}
     for angle in ("theta1", "theta2"):

@@ -180,7 +180,7 @@ def test_warnings_while_drawing_go_to_the_runs_log_not_the_terminal(tmp_path):
     proc = agrisynth("check", str(spec), "--out", str(tmp_path), timeout=300)
     assert proc.returncode == 1, proc.stderr
     assert proc.stderr == "" and "Warning" not in proc.stdout
-    run = tmp_path / "redesign_from_example1"
+    run = tmp_path / "redesign_from_example1-check"
     log = (run / "warnings.log").read_text()
     assert "warning: UserWarning: No artists with labels found to put in legend" in log
     assert "<a href='warnings.log'>warnings.log</a>" in (run / "report.html").read_text()

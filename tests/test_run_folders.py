@@ -98,7 +98,7 @@ def test_resume_from_a_staging_folder_writes_the_spec_named_folder(tmp_path):
 def test_force_through_the_cli_keeps_a_users_file_and_says_so(tmp_path):
     proc = agrisynth("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), timeout=120)
     assert proc.returncode == 1, proc.stderr
-    notes = tmp_path / "taiwan_example1" / "notes.txt"
+    notes = tmp_path / "taiwan_example1-check" / "notes.txt"
     notes.write_text("field trial, 2026")
     proc = agrisynth("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), "--force", timeout=120)
     assert proc.returncode == 2 and "notes.txt" in proc.stderr and "Traceback" not in proc.stderr
@@ -116,16 +116,19 @@ def test_a_folder_agrisynth_did_not_write_is_never_replaced(tmp_path, force):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["precious"]
 
 
-def test_the_spec_file_itself_is_never_replaced(tmp_path):
-    spec = tmp_path / "myspec.toml"
-    spec.write_text((PLANTING / "taiwan_example1.toml").read_text().replace('name = "taiwan_example1"',
-                                                                             'name = "myspec.toml"'))
+@pytest.mark.parametrize("command, file, name", [("check", "myspec-check", "myspec"),
+                                                  ("solve", "myspec.toml", "myspec.toml")])
+def test_the_spec_file_itself_is_never_replaced(tmp_path, command, file, name):
+    """A spec whose run folder would be its own file (check writes OUT/<name>-check/, solve OUT/<name>/)."""
+    spec = tmp_path / file
+    spec.write_text((PLANTING.parent / "steering" / "steering_redesign_27.toml").read_text()
+                    .replace('name = "steering_redesign_27"', f'name = "{name}"'))
     before = spec.read_text()
-    proc = agrisynth("check", "myspec.toml", "--out", ".", "--force", cwd=tmp_path, timeout=120)
+    proc = agrisynth(command, file, "--out", ".", "--force", cwd=tmp_path, timeout=120)
     assert proc.returncode == 2, proc.stderr
-    assert "myspec.toml is the spec file itself" in proc.stderr and "Traceback" not in proc.stderr
+    assert f"{file} is the spec file itself" in proc.stderr and "Traceback" not in proc.stderr
     assert spec.read_text() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["myspec.toml"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [file]
 
 
 @pytest.mark.parametrize("where", ["file/sub", "name-not-a-folder"])
@@ -220,3 +223,46 @@ def test_bench_output_follows_the_run_folder_rules(tmp_path):
     code, err = cli_in_process("bench", "guide_tube", "--out", str(mine), "--force")
     assert code == 2 and "a folder agrisynth did not write" in err, err
     assert [p.name for p in mine.iterdir()] == ["bench"] and list((mine / "bench").iterdir()) == []
+
+
+def test_check_solve_compare_and_check_of_solved_toml_need_no_flag_and_keep_every_result(tmp_path):
+    """The natural order of work on one spec, in a folder holding only that spec: check it, solve it, compare the two,
+    check the solved design.  Each command writes its own run folder (check OUT/<name>-check/, solve OUT/<name>/,
+    compare OUT/compare/; solved.toml is named <name>_solved), so none needs --force and none replaces another's
+    result.  Running the same command of the same spec again still keeps the earlier run (exit 2 before any work)."""
+    spec = tmp_path / "arm.toml"
+    spec.write_text((PLANTING.parent / "steering" / "steering_redesign_27.toml").read_text()
+                    .replace('name = "steering_redesign_27"', 'name = "arm"'))
+    results = tmp_path / "results"
+
+    proc = agrisynth("check", "arm.toml", cwd=tmp_path, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    checked_text = (results / "arm-check" / "result.json").read_text()
+    checked = json.loads(checked_text)
+    assert checked["status"] == "evaluated" and checked["design"]["arm_length"] == 150.0
+
+    proc = agrisynth("solve", "arm.toml", "--starts", "2", "--workers", "1", cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    solved = json.loads((results / "arm" / "result.json").read_text())
+    assert solved["status"] == "optimal" and solved["objective"]["value"] == pytest.approx(0.1365449746, rel=1e-6)
+    assert (results / "arm-check" / "result.json").read_text() == checked_text      # the check's run is kept
+
+    proc = agrisynth("compare", "results/arm-check", "results/arm", cwd=tmp_path, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    page = (results / "compare" / "compare.html").read_text()
+    assert "arm (arm-check)" in page and "arm (arm)" in page        # the two runs of one name told apart
+
+    proc = agrisynth("check", "results/arm/solved.toml", cwd=tmp_path, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    again = json.loads((results / "arm_solved-check" / "result.json").read_text())
+    assert again["design"] == solved["design"]
+    assert [(r["name"], r["satisfied"]) for r in again["rules"]] == [(r["name"], r["satisfied"]) for r in solved["rules"]]
+    assert sorted(p.name for p in results.iterdir()) == ["arm", "arm-check", "arm_solved-check", "compare"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.toml", "results"]
+
+    kept = {p: p.read_bytes() for p in results.rglob("*") if p.is_file()}
+    for command in (["check", "arm.toml"], ["solve", "arm.toml", "--starts", "2", "--workers", "1"]):
+        proc = agrisynth(*command, cwd=tmp_path, timeout=120)
+        assert proc.returncode == 2 and "holds an earlier agrisynth run; give --force" in proc.stderr, proc.stderr
+        assert len(proc.stderr.strip().splitlines()) == 1
+    assert {p: p.read_bytes() for p in results.rglob("*") if p.is_file()} == kept

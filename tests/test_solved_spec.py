@@ -105,7 +105,7 @@ def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_pat
     import json
 
     solved = json.loads((folder / "result.json").read_text())
-    checked = json.loads((tmp_path / "out" / "tight_solved" / "result.json").read_text())
+    checked = json.loads((tmp_path / "out" / "tight_solved-check" / "result.json").read_text())
     assert _table(checked["rules"]) == _table(solved["rules"])
     assert checked["design"] == solved["design"]
     assert solved["design_variables"]["l7"] == {"path": "links.l7", "unit": "mm", "bounds": [5.0, 52.0], "free": True}

@@ -238,7 +238,7 @@ def test_redesign_over_the_machine_s_0_27_deg():
 def test_check_cli_writes_result_and_figure(tmp_path):
     proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    folder = tmp_path / "hwang_model3_steering"
+    folder = tmp_path / "hwang_model3_steering-check"
     data = strict_json(folder / "result.json")
     assert data["facts"]["table12"]["kingpin_spacing"]["inconsistent_rows_inside_deg"] == [40.0]
     assert (folder / "steering.png").stat().st_size > 10_000
@@ -251,7 +251,7 @@ def test_a_trapezoid_through_its_dead_centre_is_a_rule_failure_naming_the_lock(t
     proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
-    data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
+    data = strict_json(tmp_path / "hwang_model3_steering-check" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "tie_rod_transmission_angle")
     assert not rule["satisfied"] and rule["value"] is None
     assert "dead centre at inside lock 44.46 deg" in rule["note"] and "base_angle 20 deg" in rule["note"]
@@ -266,7 +266,7 @@ def test_an_arm_swung_through_its_line_with_the_tie_rod_reads_past_180_not_as_a_
                                            ("base_angle = 72.4 ", "base_angle = 38.1191626865916 ")])
     proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    data = strict_json(tmp_path / "hwang_model3_steering" / "result.json")
+    data = strict_json(tmp_path / "hwang_model3_steering-check" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "tie_rod_transmission_angle")
     at40 = next(p for p in data["facts"]["positions"] if p["inside_deg"] == 40.0)
     tl, tr, kl = (np.array(at40[k]) for k in ("T_L", "T_R", "K_L"))

@@ -206,7 +206,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
     assert {r["name"] for r in table if r["red"]} == {r["name"] for r in theirs["rules"] if not r["satisfied"]}
     # "save spec" at the solution, then `agrisynth check` on it: the page's table, value for value
     proc = agrisynth("check", str(tmp_path / "studio" / saved), "--out", str(tmp_path / "checked"), cwd=tmp_path)
-    checked = strict_json(tmp_path / "checked" / saved.removesuffix(".toml") / "result.json")
+    checked = strict_json(tmp_path / "checked" / f"{saved.removesuffix('.toml')}-check" / "result.json")
     assert proc.returncode == (1 if any(r["red"] for r in table) else 0), proc.stderr
     assert {name: checked["design"][name] for name in values} == values
     assert [(r["name"], r["value"], r["red"]) for r in table] == [

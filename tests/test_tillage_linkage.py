@@ -118,7 +118,7 @@ def test_a_crank_a_hair_shorter_than_b_is_checked_not_crashed(tmp_path):
     path.write_text(text.replace("\na = 120.0", "\na = 249.9999999", 1))
     proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
-    data = strict_json(tmp_path / load_spec(path).model.name / "result.json")
+    data = strict_json(tmp_path / f"{load_spec(path).model.name}-check" / "result.json")
     assert data["facts"]["printed_relations"]["not_evaluated_at_crank_deg"] == [pytest.approx(theta + 180.0)]
 
 
@@ -209,7 +209,7 @@ def test_max_margin_reaches_the_depth_band_s_half_width(tmp_path):
 def test_check_cli_writes_result_trajectory_and_figure(tmp_path):
     proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    folder = tmp_path / "out" / "hwang_tillage_baseline"
+    folder = tmp_path / "out" / "hwang_tillage_baseline-check"
     data = strict_json(folder / "result.json")
     assert set(data["trajectory"]) >= {"t", "crank_deg", "x", "y", "vx", "vy", "ax", "ay", "frame"}
     assert (folder / "tillage.png").stat().st_size > 10_000
@@ -221,7 +221,7 @@ def test_a_bar_that_leaves_the_roller_pair_is_a_rule_failure(tmp_path):
     proc = agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
-    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
+    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline-check" / "result.json")
     rule = next(r for r in data["rules"] if r["name"] == "bar_engagement")
     assert rule["value"] == -70.0 and not rule["satisfied"]
 
@@ -230,7 +230,7 @@ def test_a_tool_that_never_reaches_the_soil_names_why(tmp_path):
     path = spec_with(tmp_path, BASELINE, [("height_c = 130.0 ", "height_c = 400.0 ")])
     proc = agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline" / "result.json")
+    data = strict_json(tmp_path / "out" / "hwang_tillage_baseline-check" / "result.json")
     rules = {r["name"]: r for r in data["rules"]}
     assert rules["rearward_in_soil"]["value"] is None
     assert "never enters the soil" in rules["rearward_in_soil"]["note"]

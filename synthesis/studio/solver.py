@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import synthesis
+from synthesis.library import IMPORT_ROOT
 from synthesis.studio.session import finite
 
 #: "start 3 finished (2/16): ..." -- one line per finished start (synthesis.cli._start_line)
@@ -35,15 +35,14 @@ EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad inp
 TAIL = 12
 #: seconds a cancelled worker has to write its finished starts before it is killed
 GRACE = 10.0
-#: the folder holding the ``synthesis`` package this studio runs: the worker imports the same one, whatever
-#: its working directory (the studio's folder) and however the studio found it (a relative PYTHONPATH, say)
-PACKAGE_ROOT = Path(synthesis.__file__).resolve().parent.parent
 
 
 def worker_env() -> dict[str, str]:
-    """The environment of the worker: this one, with the package root first on PYTHONPATH."""
+    """The environment of the worker: this one, with the folder this studio's ``synthesis`` was imported from
+    first on PYTHONPATH, so the worker imports the same one whatever its working directory (the studio's folder)
+    and however the studio found it (a relative PYTHONPATH, say)."""
     given = os.environ.get("PYTHONPATH", "")
-    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(PACKAGE_ROOT)] + ([given] if given else [])))
+    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(IMPORT_ROOT)] + ([given] if given else [])))
 
 
 @dataclass

@@ -76,7 +76,7 @@ def test_check_of_a_linkage_that_never_closes_reports_it_without_nan(tmp_path, r
     proc = cli("check", str(write_spec(tmp_path, data)), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
-    out = json.loads((tmp_path / data["name"] / "result.json").read_text(),
+    out = json.loads((tmp_path / f"{data['name']}-check" / "result.json").read_text(),
                      parse_constant=lambda c: pytest.fail(f"result.json holds {c}"))
     rules = {r["name"]: r for r in out["rules"]}
     assert rules["assembly"]["value"] < -400 and not rules["assembly"]["satisfied"]

@@ -155,7 +155,7 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr
     assert "violated: landing_time_spread, wall_exit_speed_I" in " ".join(proc.stdout.split())
-    data = json.loads((tmp_path / "cai2020_tubes" / "result.json").read_text(),
+    data = json.loads((tmp_path / "cai2020_tubes-check" / "result.json").read_text(),
                       parse_constant=lambda c: pytest.fail(f"{c} in result.json"))
     rules = {r["name"]: r for r in data["rules"]}
     assert list(rules) == ["landing_time_spread", "wall_exit_speed_I", "free_fall_height_I", "wall_exit_speed_II",
@@ -179,7 +179,7 @@ def test_check_of_a_sticking_wall_fails_its_rules_and_writes_the_result(tmp_path
     for k, delta in ((0, 15.0), (1, 41.0)):
         h1 = min(600 - 1000 * (t.below_wall + t.l3 * math.tan(math.radians(delta))) for t in tubes[k])
         assert rules[f"free_fall_height_{('I', 'II')[k]}"]["value"] == pytest.approx(h1, rel=1e-12)
-    assert (tmp_path / "cai2020_tubes" / "report.html").exists()
+    assert (tmp_path / "cai2020_tubes-check" / "report.html").exists()
 
 
 def _sticking_spec(tmp_path: Path) -> Path:
@@ -246,7 +246,7 @@ def test_a_seedling_stuck_off_the_design_spacing_fails_the_check_whatever_the_ex
     path.write_text(text)
     proc = agrisynth("check", str(path), "--out", str(tmp_path), cwd=tmp_path, timeout=120)
     assert proc.returncode == 1, proc.stdout + proc.stderr
-    rules = {r["name"]: r for r in json.loads((tmp_path / "cai2020_tubes" / "result.json").read_text())["rules"]}
+    rules = {r["name"]: r for r in json.loads((tmp_path / "cai2020_tubes-check" / "result.json").read_text())["rules"]}
     assert rules["landing_time_spread"]["satisfied"]                  # at 290 mm both seedlings land
     wall = rules["wall_exit_speed_I"]
     assert not wall["satisfied"] and wall["value"] is None
