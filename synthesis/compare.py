@@ -6,7 +6,6 @@ its error-against-run-time plot and table are added to the page.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from pathlib import Path
@@ -36,13 +35,12 @@ def is_bench(path: Path) -> bool:
 
 def load_bench(path: Path) -> list[dict]:
     """The per-problem results of a bench.json, shaped as ``synthesis.bench.run_case`` returns them."""
-    from synthesis.files import read_regular
-    from synthesis.result import MAX_RESULT_BYTES, _no_constant
+    from synthesis.files import read_json
+    from synthesis.result import MAX_RESULT_BYTES
 
     path = bench_file(path) or path / "bench.json"
-    raw = read_regular(path, MAX_RESULT_BYTES, "bench.json", ResultError)
+    data = read_json(path, MAX_RESULT_BYTES, "bench.json", ResultError, "a bench.json")
     try:
-        data = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
         rows, problems = data["rows"], data["problems"]
         for row in rows:
             missing = [key for key in BENCH_ROW_KEYS if key not in row]
@@ -51,9 +49,7 @@ def load_bench(path: Path) -> list[dict]:
             row["worst_violation"] = _number(row["worst_violation"])
         return [dict(p, rows=[r for r in rows if r["problem"] == p["problem"]], best_known=_number(p["best_known"]))
                 for p in problems]
-    except RecursionError:
-        raise ResultError(f"{path}: nested too deeply; not a bench.json agrisynth wrote") from None
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ResultError(f"{path}: not a readable agrisynth bench.json ({type(exc).__name__}: "
                           f"{str(exc)[:120]})") from None
 

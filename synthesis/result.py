@@ -122,49 +122,20 @@ REQUIRED_KEYS = ("kind", "name", "spec_sha256", "status", "design", "rules")
 MAX_RESULT_BYTES = 512 * 1024**2
 
 
-def _no_constant(name: str):
-    raise ValueError(f"{name} is not a JSON number (JSON has no NaN or infinity)")
-
-
-def _finite_float(text: str) -> float:
-    """A JSON number as a float; one too large for a float (1e400 would read as infinity) is refused."""
-    value = float(text)
-    if not math.isfinite(value):
-        raise ValueError(f"{text[:40]} is too large a number (no float holds it)")
-    return value
-
-
 #: longest name (the result's, a rule's) or string design value a result may hold (a run name is <= 100)
 MAX_NAME = 200
 
 
 def load_result(path: str | Path) -> Result:
     """Read a run folder's result.json (or the file itself); ResultError (exit 2) says what is wrong."""
-    from synthesis.files import read_regular
+    from synthesis.files import read_json
 
     path = Path(path)
     if path.is_dir():
         path = path / "result.json"
-    raw = read_regular(path, MAX_RESULT_BYTES, "result file (give a run folder or its result.json)", ResultError)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ResultError(f"{path}: not a UTF-8 text file (byte {exc.start}); not a result.json agrisynth wrote") from None
-    try:
-        data = json.loads(text, parse_constant=_no_constant, parse_float=_finite_float)
-    except json.JSONDecodeError as exc:
-        # a cut-off write leaves an object that opens and never closes; a file that does not even open one is not
-        # JSON at all (a report.html, a spec): say so, not "truncated"
-        if not text.lstrip().startswith(("{", "[")):
-            raise ResultError(f"{path}: not JSON, so not a result.json (give a run folder or its result.json)") from None
-        what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
-        raise ResultError(f"{path}: {what} ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
-                          f"re-run the check or solve that wrote it") from None
-    except RecursionError:
-        raise ResultError(f"{path}: nested too deeply; not a result.json agrisynth wrote") from None
-    except ValueError as exc:       # NaN / Infinity, or an integer of thousands of digits
-        what = "a number of thousands of digits" if "integer string conversion" in str(exc) else str(exc)[:120]
-        raise ResultError(f"{path}: {what}; not a result.json agrisynth wrote") from None
+    data = read_json(path, MAX_RESULT_BYTES, "result file (give a run folder or its result.json)", ResultError,
+                     "a result.json", hint=" (give a run folder or its result.json)",
+                     redo="re-run the check or solve that wrote it")
     if not isinstance(data, dict):
         raise ResultError(f"{path}: expected a JSON object, got {type(data).__name__}")
     version = data.get("schema_version", 1)     # results written before the key existed are version 1
@@ -250,16 +221,25 @@ RUN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 CHECK_SUFFIX = "-check"
 
 
+#: a marker larger than this is no agrisynth marker (it names the run and lists the folder's contents: a run of
+#: a thousand files of 200-character names is 200 KB)
+MAX_MARKER_BYTES = 1024**2
+
+
+def _marker(folder: Path) -> Any:
+    """The parsed marker of ``folder`` (ResultError when it is not a regular file, too large, not JSON ...)."""
+    from synthesis.files import read_json
+
+    return read_json(folder / RUN_MARKER, MAX_MARKER_BYTES, "run folder marker", ResultError, "a run folder marker")
+
+
 def is_run_folder(path: Path) -> bool:
     """Is ``path`` a folder agrisynth wrote (a real directory, not a link, holding a valid marker)?"""
     try:
-        if path.is_symlink() or not path.is_dir():
+        if path.is_symlink() or not path.is_dir() or (path / RUN_MARKER).is_symlink():
             return False
-        marker = path / RUN_MARKER
-        if marker.is_symlink() or not marker.is_file() or marker.stat().st_size > 4096:
-            return False
-        data = json.loads(marker.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
+        data = _marker(path)
+    except (OSError, ResultError):
         return False
     return isinstance(data, dict) and data.get("agrisynth_run") == 1
 
@@ -289,8 +269,8 @@ LEGACY_FIGURES = (".png", ".svg", ".gif")
 def _listed(final: Path) -> list | None:
     """The contents the marker of ``final`` lists (None: it lists none, a folder of an earlier version)."""
     try:
-        listed = json.loads((final / RUN_MARKER).read_text(encoding="utf-8")).get("contents")
-    except (OSError, ValueError, AttributeError):
+        listed = _marker(final).get("contents")
+    except (OSError, ResultError, AttributeError):
         return None
     return listed if isinstance(listed, list) else None
 
@@ -385,7 +365,7 @@ class RunFolder:
                 raise OutputError(f"{exc} (this run is kept in {self.staging})") from None
             # the marker lists what this run wrote: a later run may replace the folder only while it holds no more
             marker = self.staging / RUN_MARKER
-            data = json.loads(marker.read_text(encoding="utf-8"))
+            data = _marker(self.staging)
             atomic_write_text(marker, json.dumps({**data, "contents": folder_contents(self.staging)}) + "\n")
             if not replace:
                 os.rename(self.staging, self.final)

@@ -16,7 +16,7 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -28,6 +28,9 @@ FILENAME = "starts.jsonl"
 FORMAT = 1
 #: a starts.jsonl larger than this is refused rather than read
 MAX_BYTES = 2 * 1024**3
+#: a line longer than this is not read (its start is solved again): a start's line holds its IPOPT log and
+#: decision vector, tens of kilobytes
+MAX_LINE_BYTES = 64 * 1024**2
 
 
 def fingerprint(kind: str, name: str, spec_sha256: str, starts: int, seed: int) -> tuple[dict, str]:
@@ -122,40 +125,51 @@ class StartLog:
 
 def settings_of(folder: Path) -> dict:
     """The settings in the header line of ``folder/starts.jsonl`` ({} when there is none to read)."""
-    if not (Path(folder) / FILENAME).is_file():
-        return {}
+    from synthesis.files import open_regular, parse_json
+
+    path = Path(folder) / FILENAME
     try:
-        with open(Path(folder) / FILENAME, encoding="utf-8", errors="replace") as fh:
-            line = json.loads(fh.readline(1_000_000))
-    except (OSError, ValueError, RecursionError):
+        with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
+            line = parse_json(fh.readline(MAX_LINE_BYTES), path, OutputError)
+    except (OSError, OutputError):
         return {}
     settings = line.get("settings") if isinstance(line, dict) else None
     return settings if isinstance(settings, dict) else {}
+
+
+def _lines(fh) -> Iterator[bytes | None]:
+    """The lines of ``fh``, None for one longer than MAX_LINE_BYTES (read past, never held whole)."""
+    while True:
+        line = fh.readline(MAX_LINE_BYTES + 1)
+        if not line:
+            return
+        if len(line) <= MAX_LINE_BYTES or line.endswith(b"\n"):
+            yield line
+            continue
+        while line and not line.endswith(b"\n"):      # the rest of an over-long line
+            line = fh.readline(MAX_LINE_BYTES)
+        yield None
 
 
 def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
     """The finished starts recorded in ``folder/starts.jsonl`` of a run with fingerprint ``print_``.
 
     OutputError (exit 2) when there is no such file or it belongs to a run with other settings."""
-    path = Path(folder) / FILENAME
-    try:
-        st = os.stat(path)
-    except OSError:
-        raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)") from None
-    import stat
+    from synthesis.files import open_regular, parse_json
 
-    if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_BYTES:
-        raise OutputError(f"--resume {folder}: {FILENAME} is not a regular file of at most {MAX_BYTES} bytes")
+    path = Path(folder) / FILENAME
+    if not os.path.lexists(path):
+        raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)")
     finished: dict[int, StartOutcome] = {}
-    with open(path, encoding="utf-8", errors="replace") as fh:
+    with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
         header = None
-        for n, text in enumerate(fh):
+        for text in _lines(fh):
             try:
-                line = json.loads(text)
-            except (ValueError, RecursionError):
-                continue          # cut off by a crash: that start is solved again
+                line = None if text is None else parse_json(text, path, OutputError)
+            except OutputError:
+                line = None
             if not isinstance(line, dict):
-                continue
+                continue          # cut off by a crash (or not a start's line): that start is solved again
             if "agrisynth_starts" in line:
                 if header is None:
                     header = line

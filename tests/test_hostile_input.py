@@ -1,0 +1,104 @@
+"""Hostile input that once hung agrisynth or ended it in a traceback, each with its reproducer: a FIFO, a device
+or deeply nested JSON where a file is read; a peer that is no dask scheduler; a spec with thousands of bad entries;
+a studio client that sends nested JSON or never sends its body; targets that coincide.  Every one now ends in one
+line and an exit code, within a deadline."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import LIBRARY
+from solving import agrisynth
+
+
+def _one_line_error(proc, code: int = 2) -> str:
+    assert proc.returncode == code, (proc.returncode, proc.stdout[-800:], proc.stderr[-800:])
+    assert "Traceback" not in proc.stderr and "Traceback" not in proc.stdout, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    return lines[0]
+
+
+# --- every file read through the one guarded reader --------------------------------------------------------------
+
+def _hostile_result_json(folder: Path, what: str) -> Path:
+    """``folder/result.json`` as a FIFO (open() blocks for ever), a link to /dev/zero (read() never ends) or JSON
+    nested 100,000 deep (json's parser recursion)."""
+    folder.mkdir()
+    path = folder / "result.json"
+    if what == "fifo":
+        os.mkfifo(path)
+    elif what == "dev_zero":
+        path.symlink_to("/dev/zero")
+    else:
+        path.write_text("[" * 100_000 + "]" * 100_000)
+    return path
+
+
+@pytest.mark.parametrize("what", ["fifo", "dev_zero", "nested"])
+def test_tolerance_of_a_folder_with_a_hostile_result_json_says_there_is_no_solved_design(tmp_path, what):
+    """`agrisynth tolerance DIR` without DIR/solved.toml reads DIR/result.json to say why: it read it unguarded (a
+    FIFO hung it for over 120 s, /dev/zero ate memory until MemoryError, the nested file was a RecursionError
+    traceback); now through the reader `compare` uses: exit 2, one line, at once, nothing written."""
+    folder = tmp_path / "run"
+    _hostile_result_json(folder, what)
+    t0 = time.perf_counter()
+    proc = agrisynth("tolerance", folder, "--length", "0.1", "--out", tmp_path / "out", timeout=30)
+    assert time.perf_counter() - t0 < 10
+    assert _one_line_error(proc) == f"error: {folder}: no solved.toml in this folder (give a solve's run folder or a " \
+                                    f"spec file)"
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("what", ["fifo", "dev_zero", "nested"])
+def test_the_guarded_reader_refuses_each_in_one_line(tmp_path, what):
+    from synthesis.errors import ResultError
+    from synthesis.result import load_result
+
+    path = _hostile_result_json(tmp_path / "run", what)
+    with pytest.raises(ResultError) as err:
+        load_result(path.parent)
+    expected = {"fifo": "not a regular file (a pipe, socket or device", "dev_zero": "not a regular file",
+                "nested": "nested too deeply"}[what]
+    assert str(err.value).startswith(f"{path}: {expected}") and "\n" not in str(err.value)
+
+
+def test_json_nested_deeper_than_agrisynth_writes_is_refused_before_any_reader_recurses(tmp_path):
+    """200 levels parse (Python's parser allows about 1000), but the readers of a parsed file recurse over it."""
+    from synthesis.errors import ResultError
+    from synthesis.files import MAX_JSON_DEPTH, parse_json
+
+    assert parse_json(b'{"a": ' + b"[" * (MAX_JSON_DEPTH - 1) + b"]" * (MAX_JSON_DEPTH - 1) + b"}", "f", ResultError)
+    with pytest.raises(ResultError, match=rf"^f: nested more than {MAX_JSON_DEPTH} levels deep; not a x agrisynth"):
+        parse_json(b"[" * 200 + b"]" * 200, "f", ResultError, "a x")
+
+
+@pytest.mark.parametrize("what", ["fifo", "dev_zero"])
+def test_a_run_folder_whose_marker_or_start_log_is_a_fifo_or_device(tmp_path, what):
+    """The marker (is this agrisynth's folder?) and starts.jsonl (--resume) are read by the same reader: a FIFO or
+    a device there is no marker / an unreadable start log (exit 2, one line), never a hang."""
+    from synthesis.core import startlog
+    from synthesis.errors import OutputError
+    from synthesis.result import RUN_MARKER, is_run_folder
+
+    def hostile(path: Path) -> None:
+        os.mkfifo(path) if what == "fifo" else path.symlink_to("/dev/zero")
+
+    marked = tmp_path / "marker"
+    marked.mkdir()
+    hostile(marked / RUN_MARKER)
+    t0 = time.perf_counter()
+    assert not is_run_folder(marked)
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / RUN_MARKER).write_text(json.dumps({"agrisynth_run": 1}))
+    hostile(run / startlog.FILENAME)
+    assert startlog.settings_of(run) == {}
+    with pytest.raises(OutputError, match=r"starts\.jsonl: not a regular file"):
+        startlog.read(run, "fingerprint")
+    assert time.perf_counter() - t0 < 5
