@@ -266,3 +266,18 @@ def test_check_solve_compare_and_check_of_solved_toml_need_no_flag_and_keep_ever
         assert proc.returncode == 2 and "holds an earlier agrisynth run; give --force" in proc.stderr, proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1
     assert {p: p.read_bytes() for p in results.rglob("*") if p.is_file()} == kept
+
+
+@pytest.mark.parametrize("command", [["check"], ["solve", "--starts", "1", "--workers", "1"]])
+@pytest.mark.parametrize("force", [[], ["--force"]])
+def test_a_users_folder_where_a_command_would_write_is_kept_with_or_without_force(tmp_path, command, force):
+    """Each command's own folder name (OUT/<name>-check/ for check, OUT/<name>/ for solve) is refused, as any
+    OUT/<name>/ was, when agrisynth did not write what is there: exit 2 before any work, nothing touched."""
+    spec = PLANTING.parent / "steering" / "steering_redesign_27.toml"
+    mine = tmp_path / ("steering_redesign_27-check" if command[0] == "check" else "steering_redesign_27")
+    mine.mkdir()
+    (mine / "notes.txt").write_text("field trial, 2026")
+    proc = agrisynth(command[0], str(spec), *command[1:], "--out", str(tmp_path), *force, timeout=120)
+    assert proc.returncode == 2 and "a folder agrisynth did not write" in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert [p.name for p in tmp_path.iterdir()] == [mine.name] and [p.name for p in mine.iterdir()] == ["notes.txt"]
