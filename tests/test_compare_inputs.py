@@ -157,7 +157,7 @@ def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
     for name in ("a", "b"):
         code, _ = cli_in_process("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path / name))
         assert code == 1
-    a, b = tmp_path / "a" / "taiwan_example1", tmp_path / "b" / "taiwan_example1"
+    a, b = tmp_path / "a" / "taiwan_example1-check", tmp_path / "b" / "taiwan_example1-check"
     before = sorted(p.name for p in a.iterdir())
     for out in (a, a / "cmp"):
         code, err = cli_in_process("compare", str(a), str(b), "--out", str(out), "--force")
