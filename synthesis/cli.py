@@ -129,6 +129,8 @@ def _list_library(library: Path) -> None:
         table.add_row(escape(str(data.get("kind", "?"))), escape(str(data.get("name", "?"))),
                       escape(str(path.relative_to(library))), escape(str(data.get("source", ""))))
     console.print(table)
+    console.print("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
+                  "copy one to edit: agrisynth problems --copy FILE", soft_wrap=True)
 
 
 def _spec_file(spec: Path) -> Path:
