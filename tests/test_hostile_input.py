@@ -102,3 +102,81 @@ def test_a_run_folder_whose_marker_or_start_log_is_a_fifo_or_device(tmp_path, wh
     with pytest.raises(OutputError, match=r"starts\.jsonl: not a regular file"):
         startlog.read(run, "fingerprint")
     assert time.perf_counter() - t0 < 5
+
+
+# --- validation linear in the number of bad entries --------------------------------------------------------------
+
+def _many_bad_hold_near(tmp_path: Path, n: int) -> Path:
+    """problems/clamp_cam/opening_cam.toml with hold_near = n copies of [{value = 0.0}, 146.0] (n = 8,000: 190 KB)."""
+    text = (LIBRARY / "clamp_cam" / "opening_cam.toml").read_text()
+    assert "hold_near = [[0.0, 146.0]]" in text
+    spec = tmp_path / f"bad_{n}.toml"
+    spec.write_text(text.replace("hold_near = [[0.0, 146.0]]",
+                                 "hold_near = [" + ", ".join(["[{value = 0.0}, 146.0]"] * n) + "]"))
+    return spec
+
+
+def test_a_spec_with_8000_bad_list_entries_is_refused_in_seconds(tmp_path):
+    """Refusing it took 137 s (the union-noise pruning compared every error line with every other); now about
+    1.5 s on the 2-core CI machine.  The timeout is generous (60 s) rather than tight: the linearity itself is the
+    deterministic count of the next test."""
+    spec = _many_bad_hold_near(tmp_path, 8000)
+    t0 = time.perf_counter()
+    proc = agrisynth("check", spec, "--out", tmp_path / "out", timeout=60)
+    took = time.perf_counter() - t0
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    lines = proc.stderr.strip().splitlines()
+    assert lines[0] == f"error: {spec}: clamp_cam.timing.hold_near.0.0: expected a number, got {{'value': 0.0}}"
+    assert lines[-1] == "... and 7996 more problem(s) in the spec (fix these first)" and len(lines) == 5
+    assert took < 60
+
+
+def _python_lines_run(function, *args) -> int:
+    """How many lines of Python ``function(*args)`` executes (its own and every function it calls): a measure of
+    its work that does not depend on the machine or its load."""
+    import sys
+    import threading
+
+    count = 0
+
+    def trace(frame, event, arg):
+        nonlocal count
+        if event == "line":
+            count += 1
+        return trace
+
+    assert threading.current_thread() is threading.main_thread()
+    previous = sys.gettrace()
+    sys.settrace(trace)
+    try:
+        function(*args)
+    finally:
+        sys.settrace(previous)
+    return count
+
+
+def test_pruning_the_error_lines_is_linear_in_their_number():
+    """The lines a "number | table" union yields for n bad entries (each entry's number branch, given a table,
+    and the table's own complaints; half of them with the table branch too): 4 times the lines, about 4 times the
+    work -- the pairwise search did 16 times (it ran about 3 lines of Python per pair)."""
+    from synthesis.spec.common import _prune_union_noise
+
+    def lines(n: int) -> list[str]:
+        out = []
+        for i in range(n):
+            out += [f"s.hold_near.{i}.0: expected a number, got {{'value': 0.0}}",
+                    f"s.hold_near.{i}.0.value: unknown field"]
+            if i % 2:
+                out += [f"s.hold_near.{i}.1: expected a number in mm, written without a unit, got 'x'",
+                        f"s.hold_near.{i}.1: expected a table, got 'x'"]
+        return out
+
+    small, large = (_python_lines_run(_prune_union_noise, lines(n)) for n in (500, 2000))
+    assert 3.5 < large / small < 4.5, (small, large)
+    pruned = _prune_union_noise(lines(4))
+    assert pruned == ["s.hold_near.0.0.value: unknown field",
+                      "s.hold_near.1.0.value: unknown field",
+                      "s.hold_near.1.1: expected a number in mm, written without a unit, got 'x'",
+                      "s.hold_near.2.0.value: unknown field",
+                      "s.hold_near.3.0.value: unknown field",
+                      "s.hold_near.3.1: expected a number in mm, written without a unit, got 'x'"]

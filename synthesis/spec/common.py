@@ -387,12 +387,10 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         # integer field integers only; arrays still fill tuples
         return model.model_validate(data) if text is None else model.model_validate_json(text, strict=True)
     except ValidationError as exc:
-        seen: list[str] = []
         order = _file_order(data)
-        for err in sorted(exc.errors(), key=lambda e: _position(order, e["loc"])):      # in file order
-            line = f"{prefix}.{_describe(err, model)}"
-            if line not in seen:
-                seen.append(line)
+        # in file order, each line once (a dict keeps the first: a list's `in` made thousands of errors quadratic)
+        seen = list(dict.fromkeys(f"{prefix}.{_describe(err, model)}"
+                                  for err in sorted(exc.errors(), key=lambda e: _position(order, e["loc"]))))
         # a union of "number | table" yields one error per branch: keep the most specific ones
         raise SpecError("\n".join(capped(_prune_union_noise(seen)))) from None
 
@@ -428,35 +426,97 @@ def capped(lines: list[str], most: int = MAX_PROBLEM_LINES) -> list[str]:
     return [*lines[:most - 1], f"... and {len(lines) - most + 1} more problem(s) in the spec (fix these first)"]
 
 
+_NUMBER = ": expected a number, got "
+_TABLE = ": expected a table, got "
+
+
+class _Prefixes:
+    """Which lines of a list start with a given path followed by a given separator, found in time linear in the
+    lines' total length: each line is indexed at the positions where a separator follows the length of some path
+    asked about (the error lines of a spec with thousands of bad list entries made the pairwise search quadratic:
+    8,000 entries took over two minutes)."""
+
+    def __init__(self, lines: list[str], paths: set[str], separators: tuple[str, ...]):
+        lengths = {len(p) for p in paths}
+        #: (path, separator) -> up to two distinct lines starting with them (enough to find "another one")
+        self.owners: dict[tuple[str, str], list[str]] = {}
+        for ln in lines:
+            for sep in separators:
+                at = ln.find(sep)
+                while at >= 0:
+                    if at in lengths and ln[:at] in paths:
+                        found = self.owners.setdefault((ln[:at], sep), [])
+                        if ln not in found and len(found) < 2:
+                            found.append(ln)
+                    at = ln.find(sep, at + 1)
+
+    def other_than(self, line: str, path: str, *separators: str) -> bool:
+        """Whether a line other than ``line`` starts with ``path`` and one of ``separators``."""
+        return any(o != line for sep in separators for o in self.owners.get((path, sep), ()))
+
+
 def _prune_union_noise(lines: list[str]) -> list[str]:
-    """Merge a "number | table" union's two complaints about one field into one line."""
+    """Merge a "number | table" union's two complaints about one field into one line (linear in the lines)."""
+    given = set(lines)
     out: list[str] = []
     for ln in lines:
-        path, _, rest = ln.partition(": expected a number, got ")
-        table = f"{path}: expected a table, got {rest}"
-        if rest and table in lines:
+        path, _, rest = ln.partition(_NUMBER)
+        table_path, _, table_rest = ln.partition(_TABLE)
+        if rest and f"{path}{_TABLE}{rest}" in given:
             out.append(f"{path}: expected a number (or a table {{init = ..., bounds = [lo, hi]}}), got {rest}")
-        elif ln.partition(": expected a table, got ")[2] and \
-                f"{ln.partition(': expected a table, got ')[0]}: expected a number, got " \
-                f"{ln.partition(': expected a table, got ')[2]}" in lines:
+        elif table_rest and f"{table_path}{_NUMBER}{table_rest}" in given:
             continue
         else:
             out.append(ln)
     # "expected a number in mm, written without a unit" already says what to write: drop the table branch
-    out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
-        o.startswith(ln.partition(": expected a table, got ")[0] + ": expected a number") for o in out))]
+    tables = {ln.partition(_TABLE)[0] for ln in out if ln.partition(_TABLE)[2]}
+    numbers = _Prefixes(out, tables, (": expected a number",))
+    out = [ln for ln in out if not (ln.partition(_TABLE)[2] and numbers.owners.get((ln.partition(_TABLE)[0],
+                                                                                    ": expected a number")))]
     # a table given for a "number | table" field: the table's own complaints say what is wrong with it
     # (its fields' complaints, or its own: e.g. "init 500 lies outside its bounds [28, 42]")
-    out = [ln for ln in out if not (": expected a number, got {" in ln and any(
-        o != ln and o.startswith(tuple(ln.partition(": expected a number, got ")[0] + end for end in (".", ": ")))
-        for o in out))]
+    given_tables = {ln.partition(_NUMBER)[0] for ln in out if ": expected a number, got {" in ln}
+    inside = _Prefixes(out, given_tables, (".", ": "))
+    out = [ln for ln in out if not (": expected a number, got {" in ln
+                                    and inside.other_than(ln, ln.partition(_NUMBER)[0], ".", ": "))]
     # a number given for a "number | range table" field: the number's own complaint says what is wrong with it
-    out = [ln for ln in out if not (ln.partition(": expected a table, got ")[2] and any(
-        o != ln and o.startswith(ln.partition(": expected a table, got ")[0] + ": expected ")
-        and o.endswith(", got " + ln.partition(": expected a table, got ")[2]) for o in out))]
+    out = _without_range_table_branch(out)
     out = [_free_hint(ln) for ln in out]
     specific = [ln for ln in out if "input should be a valid" not in ln and "dictionary" not in ln]
     return specific or out
+
+
+def _without_range_table_branch(lines: list[str]) -> list[str]:
+    """``lines`` without each "<path>: expected a table, got <v>" for which another line reads "<path>: expected
+    ..., got <v>" (the number branch's own complaint about the same value)."""
+    asked = {}
+    for ln in lines:
+        path, _, rest = ln.partition(_TABLE)
+        if rest:
+            asked.setdefault(path, set()).add(rest)
+    owners: dict[tuple[str, str], list[str]] = {}      # (path, value) -> up to two distinct lines saying so
+    lengths = {len(p) for p in asked}
+    for ln in lines:
+        at = ln.find(": expected ")
+        while at >= 0:
+            if at in lengths and ln[:at] in asked:
+                values = asked[ln[:at]]
+                tail = ln.find(", got ")
+                while tail >= 0:
+                    value = ln[tail + len(", got "):]
+                    if value in values:
+                        found = owners.setdefault((ln[:at], value), [])
+                        if ln not in found and len(found) < 2:
+                            found.append(ln)
+                    tail = ln.find(", got ", tail + 1)
+            at = ln.find(": expected ", at + 1)
+    kept = []
+    for ln in lines:
+        path, _, rest = ln.partition(_TABLE)
+        if rest and any(o != ln for o in owners.get((path, rest), ())):
+            continue
+        kept.append(ln)
+    return kept
 
 
 def _free_hint(line: str) -> str:
