@@ -41,7 +41,7 @@ def answers(spec_path: Path, solve: bool) -> dict:
 
     loaded = load_spec(spec_path)
     kind = kinds.get(loaded.kind)
-    out = {"check": _stable(kind.checker()(loaded).to_json())}
+    out = {"check": _stable(kind.check(loaded).to_json())}
     if kind.solves and solve:
         try:
             solved = solve_spec(loaded, workers=1)[0]

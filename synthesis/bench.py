@@ -103,7 +103,7 @@ def current_settings():
 def kinds_with_bench() -> list[str]:
     from synthesis import kinds
 
-    return [k.name for k in kinds.all_kinds() if k.bench is not None]
+    return [k.name for k in kinds.all_kinds() if k.benches]
 
 
 #: an every-kind run (``agrisynth bench`` with no KIND) takes at most this many of a kind's own
@@ -119,9 +119,8 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list
     and a kind with its own methods and a library example runs only the generic studies on that example (its own
     cases -- reference solve, its peers -- are the slow part; the case note says so)."""
     from synthesis import kinds
-    from synthesis.core.kind import resolve
 
-    cases = resolve(kinds.get(kind).bench)(specs, seed)
+    cases = kinds.get(kind).bench_cases(specs, seed)
     own = specs is None and kinds.get(kind).solves and not any(c.loaded is not None for c in cases)
     left_out = 0
     if own and _quick.get() and kinds.get(kind).example:

@@ -48,7 +48,6 @@ import math
 import statistics
 import time
 from contextvars import ContextVar
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -234,36 +233,27 @@ class _AnnouncedNLP:
         return self._nlp.solve(start, x0, *args, **kwargs)
 
 
-class _WatchedKind:
+def watched_kind(kind, watch: TargetWatch, stop: bool):
     """The kind with its NLP announced to ``watch`` and, with ``stop``, its multistart ended at the first
     start whose re-checked design meets the target (besides the kind's own early stop)."""
+    solving = kind.solving()
 
-    def __init__(self, kind, watch: TargetWatch, stop: bool):
-        self.name, self._kind, self._watch, self._stop = kind.name, kind, watch, stop
+    def build(setting, elastic):
+        nlp = solving.build(setting, elastic)
+        return nlp if elastic else _AnnouncedNLP(nlp, watch)
 
-    def __getattr__(self, name):
-        return getattr(self._kind, name)
+    def stop_when(setting):
+        own = solving.stop_when(setting)
+        if not stop:
+            return own
 
-    def solver_side(self):
-        solving = self._kind.solver_side()
-        watch = self._watch
-
-        def build(setting, elastic):
-            nlp = solving.build(setting, elastic)
-            return nlp if elastic else _AnnouncedNLP(nlp, watch)
-
-        def stop_when(setting):
-            own = solving.stop_when(setting)
-            if not self._stop:
-                return own
-
-            def stop(report) -> bool:
-                at_target = (report.satisfied and watch.holds_equalities(report.outcome.start)
-                             and math.isfinite(report.outcome.objective)
-                             and watch.sign * report.outcome.objective <= watch.target)
-                return at_target or (own is not None and own(report))
-            return stop
-        return dataclasses.replace(solving, build=build, stop_when=stop_when)
+        def stop_at_target(report) -> bool:
+            at_target = (report.satisfied and watch.holds_equalities(report.outcome.start)
+                         and math.isfinite(report.outcome.objective)
+                         and watch.sign * report.outcome.objective <= watch.target)
+            return at_target or (own is not None and own(report))
+        return stop_at_target
+    return kind.solving_with(dataclasses.replace(solving, build=build, stop_when=stop_when))
 
 
 def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: Callable | None = None,
@@ -283,7 +273,7 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
     from synthesis.core.solve import _recheck, run_multistart
 
     kind = kinds.get(loaded.kind)
-    solving = kind.solver_side()
+    solving = kind.solving()
     spec = loaded.model
     t0 = time.perf_counter()
     watch = TargetWatch(target if runner is not None else math.inf, None, t0)
@@ -310,7 +300,7 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
                 if holds(report):            # add keeps the best so far: the run's best-so-far trace
                     watch.add(watch.now(), sign * report.outcome.objective)
 
-            run = run_multistart(_WatchedKind(kind, watch, stop_at_target and runner is not None), setting,
+            run = run_multistart(watched_kind(kind, watch, stop_at_target and runner is not None), setting,
                                  starts=starts, workers=1, on_start=on_start)
     finally:
         _watch.reset(token)

@@ -409,7 +409,7 @@ def _described(result, loaded):
     from synthesis import design_info, kinds
     from synthesis.errors import AgrisynthError
 
-    if kinds.get(loaded.kind).explicit_design is not None:
+    if kinds.get(loaded.kind).writes_explicit_design:
         try:
             loaded, _ = kinds.explicit_design(loaded)       # the file as the run read it
         except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded

@@ -375,7 +375,7 @@ def _item_rewrite(rewrite: dict, list_path: str, index: int) -> dict:
 def kind_entries(kind_name: str) -> list[Entry]:
     from synthesis import kinds
 
-    return entries(kinds.get(kind_name).model_class())
+    return entries(kinds.get(kind_name).spec_model())
 
 
 FREE_VARIABLE_NOTE = ("A design variable (type `number, or {init, bounds} (free)`) is fixed by a number and "
@@ -392,7 +392,7 @@ def template(kind_name: str, directory: Path | None = None) -> str:
     from synthesis.spec.common import read_toml
 
     kind = kinds.get(kind_name)
-    model = kind.model_class()
+    model = kind.spec_model()
     if not kind.example:
         raise ValueError(f"kind {kind_name!r} names no library example (Kind.example) to start a template from")
     example = LIBRARY / kind.example
@@ -433,7 +433,7 @@ def markdown(kind_names: list[str] | None = None) -> str:
         out += [f"## {name}", ""]
         try:
             kind = kinds.get(name)
-            rows = entries(kind.model_class())
+            rows = entries(kind.spec_model())
         except Exception as exc:    # noqa: BLE001 - a kind being written by someone else: say so, keep the rest
             out += [f"Not documented: its package does not import ({type(exc).__name__}: {exc}).", ""]
             continue

@@ -30,7 +30,7 @@ def same_solve(relative: str):
 
 def recheck_rules(spec, design: dict) -> list:
     """The rules (floats) of ``design`` as the multistart's fine-grid re-check evaluates them."""
-    solving = kinds.get(spec.kind).solver_side()
+    solving = kinds.get(spec.kind).solving()
     setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
     return solving.recheck(setting, SimpleNamespace(design=design, details={})).rules
 

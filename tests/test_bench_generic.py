@@ -25,7 +25,7 @@ BEST = 0.52278
 
 
 def _nlp(loaded):
-    solving = kinds.get(loaded.kind).solver_side()
+    solving = kinds.get(loaded.kind).solving()
     return solving.build(Setting(loaded.model, 0, solving.prepare(loaded.model)), False)
 
 

@@ -91,7 +91,7 @@ def _check_at(loaded, design: dict, **operating: float) -> dict:
     seedbed = {k: design[f"seedbed_{k}"] for k in ("x", "y", "tilt")}
     spec = spec.model_copy(update={"arm": spec.arm.model_copy(update=arm),
                                    "seedbed": spec.seedbed.model_copy(update=seedbed)})
-    result = kinds.get("planting_fourbar").checker()(LoadedSpec(spec, loaded.path, loaded.sha256))
+    result = kinds.get("planting_fourbar").check(LoadedSpec(spec, loaded.path, loaded.sha256))
     return {r["name"]: r for r in result.rules}
 
 

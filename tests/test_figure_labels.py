@@ -1,6 +1,6 @@
 """A figure of one design never calls it "baseline"; beside other candidates the first one is.
 
-Every kind's comparison overlay (``Kind.compare``) is drawn from the checked library example of the kind,
+Every kind's comparison overlay (``Kind.compare_figures``) is drawn from the checked library example of the kind,
 once alone and once beside a renamed copy, and every text matplotlib would draw (legend entries, titles,
 axis labels) is read off the figures before they are saved."""
 
@@ -18,7 +18,7 @@ from conftest import LIBRARY  # noqa: E402
 from synthesis import kinds  # noqa: E402
 from synthesis.spec import load_spec  # noqa: E402
 
-OVERLAID = [k for k in kinds.names() if kinds.get(k).compare is not None and kinds.get(k).example]
+OVERLAID = [k for k in kinds.names() if kinds.get(k).compare_figures() is not None and kinds.get(k).example]
 
 
 def drawn_texts(monkeypatch, writer, results, folder) -> list[str]:

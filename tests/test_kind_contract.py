@@ -45,7 +45,7 @@ def test_a_toy_kind_checks_and_solves_to_its_known_optimum(tmp_path, toy):
     path = tmp_path / "toy.toml"
     path.write_text(TOY.format(radius=10.0, y_min=-5.0))
     loaded = load_spec(path)
-    checked = toy.checker()(loaded)
+    checked = toy.check(loaded)
     assert checked.all_satisfied and checked.status == "evaluated"
     result, reports, log = run_solve(toy, loaded, workers=1)
     # the target (30, 40) lies outside the disc of radius 10: the nearest point is 10 x (0.6, 0.8)
@@ -158,18 +158,18 @@ def test_a_start_from_the_elastic_design_that_misses_a_rule_or_is_interrupted_is
 
 
 def test_the_registry_is_the_only_list_of_kinds():
-    """Every kind resolves to a Kind whose spec model's Literal kind is its name, whose objectives are
-    exactly the spec's objective names, and whose figures/check/solving targets exist."""
-    from synthesis.core.kind import resolve
+    """Every kind is a Kind whose spec model's Literal kind is its name, whose objectives are exactly the spec's
+    objective names, and whose figures, check and solve side exist."""
+    from synthesis.core.kind import Kind, Solving
 
     for kind in kinds.all_kinds():
-        model = kind.model_class()
+        assert isinstance(kind, Kind), kind
+        model = kind.spec_model()
         assert typing.get_args(model.model_fields["kind"].annotation) == (kind.name,)
-        resolve(kind.check)
-        for target in kind.figures.values():
-            resolve(target)
+        assert callable(kind.check)
+        assert kind.figures() and all(callable(writer) for writer in kind.figures().values()), kind.name
         if kind.solves:
-            resolve(kind.solving)
+            assert isinstance(kind.solving(), Solving), kind.name
             assert kind.objectives, kind.name
             if "objective" in model.model_fields:
                 objective = model.model_fields["objective"].annotation
@@ -204,14 +204,16 @@ def test_every_kind_with_a_studio_page_evaluates_its_own_coarse_grid():
     import re
 
     from synthesis.core.coarse import of_kind
-    from synthesis.core.kind import CoarseCheck, Poses, resolve
+    from synthesis.core.kind import CoarseCheck, Poses
     from synthesis.spec import load_spec
 
     for kind in kinds.all_kinds():
-        assert kind.coarse_check is not None, kind.name          # the library's kinds each give their own
-        assert kind.coarse_check.startswith(f"{kind.check.split('.')[0]}.{kind.check.split('.')[1]}."), kind.name
+        own = kind.coarse_check()
+        assert own is not None, kind.name          # the library's kinds each give their own, in their own package
+        assert own.evaluate.__module__.startswith(type(kind).__module__) or \
+            own.evaluate.__module__ == "synthesis.core.coarse", kind.name
         coarse = of_kind(kind)
-        assert coarse is resolve(kind.coarse_check), kind.name
+        assert coarse is own, kind.name
         assert isinstance(coarse, CoarseCheck), kind.name
         spec = load_spec(LIBRARY / kind.example).model
         for note in (coarse.note(spec), coarse.fine_note(spec)):
@@ -221,19 +223,20 @@ def test_every_kind_with_a_studio_page_evaluates_its_own_coarse_grid():
     for path in sorted((ROOT / "synthesis" / "studio").glob("*.py")):
         assert not re.search(rf"[\"']({names})[\"']", path.read_text()), f"studio/{path.name} names a kind"
     for kind in kinds.all_kinds():
-        if kind.poses is not None:
-            assert isinstance(resolve(kind.poses), Poses), kind.name
+        if kind.poses() is not None:
+            assert isinstance(kind.poses(), Poses), kind.name
 
 
 def test_a_kind_without_its_own_coarse_grid_gets_its_check_on_a_tenth_of_the_solver_samples(monkeypatch):
     """Kind.coarse_check None (allowed): the studio's coarse grid is the check with every [solver] sample count
     divided by 10, not below the model's least (guide_way's smooth_redesign: samples_per_segment 40 -> 5)."""
-    import dataclasses
-
     from synthesis.spec import LoadedSpec, load_spec
     from synthesis.studio import grids
 
-    bare = dataclasses.replace(kinds.get("guide_way"), coarse_check=None)
+    class WithoutCoarseGrid(type(kinds.get("guide_way"))):
+        def coarse_check(self):
+            return None
+    bare = WithoutCoarseGrid()
     real_get = kinds.get
     monkeypatch.setattr(kinds, "get", lambda name: bare if name == "guide_way" else real_get(name))
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
@@ -246,3 +249,50 @@ def test_a_kind_without_its_own_coarse_grid_gets_its_check_on_a_tenth_of_the_sol
     fine = grids.evaluator("guide_way", "fine")(loaded)
     assert [(r["name"], r["value"]) for r in coarse.rules] == [(r["name"], r["value"]) for r in at_5.rules]
     assert [r["value"] for r in coarse.rules] != [r["value"] for r in fine.rules]
+
+
+def test_another_package_adds_a_kind_through_the_entry_point_group(tmp_path, monkeypatch):
+    """A package installed beside agrisynth adds a kind by naming it in the ``agrisynth.kinds`` entry-point group:
+    the registry lists it, and it checks and solves like a built-in one.  The package here is the toy kind with the
+    metadata pip would write for it (a dist-info folder on the path)."""
+    import shutil
+
+    package = tmp_path / "site"
+    package.mkdir()
+    shutil.copy(ROOT / "tests" / "toy_kind.py", package / "toy_kind_plugin.py")
+    info = package / "toy_kind_plugin-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: toy-kind-plugin\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text("[agrisynth.kinds]\ntoy_disc = toy_kind_plugin:KIND\n")
+    monkeypatch.syspath_prepend(str(package))
+    kinds._installed.cache_clear()
+    try:
+        assert "toy_disc" in kinds.names() and "planting_fourbar" in kinds.names()
+        toy = kinds.get("toy_disc")
+        assert type(toy).__module__ == "toy_kind_plugin"
+        path = tmp_path / "toy.toml"
+        path.write_text(TOY.format(radius=10.0, y_min=-5.0))
+        loaded = load_spec(path)
+        result, _, _ = run_solve(toy, loaded, workers=1)
+        assert result.status == "optimal" and result.design["x"] == pytest.approx(6.0, abs=1e-6)
+    finally:
+        monkeypatch.undo()
+        kinds._installed.cache_clear()
+    assert "toy_disc" not in kinds.names()
+
+
+def test_a_plugin_that_cannot_load_is_left_out_with_a_warning_naming_it(tmp_path, monkeypatch):
+    package = tmp_path / "site"
+    info = package / "broken_kind-1.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken-kind\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text("[agrisynth.kinds]\nbroken = no_such_module_here:KIND\n")
+    monkeypatch.syspath_prepend(str(package))
+    kinds._installed.cache_clear()
+    try:
+        with pytest.warns(UserWarning, match="plugin 'broken' .*no_such_module_here"):
+            listed = kinds.names()
+        assert "broken" not in listed and "planting_fourbar" in listed
+    finally:
+        monkeypatch.undo()
+        kinds._installed.cache_clear()

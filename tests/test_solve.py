@@ -341,5 +341,5 @@ def test_the_wall_time_includes_building_the_nlp_on_one_worker_as_on_several():
 
     spec = load_spec(PLANTING / "redesign_from_example4.toml").model
     kind = kinds.solving_kind("planting_fourbar")
-    run = run_multistart(kind, Setting(spec, 0, kind.solver_side().prepare(spec)), starts=1, workers=1)
+    run = run_multistart(kind, Setting(spec, 0, kind.solving().prepare(spec)), starts=1, workers=1)
     assert run.wall_s >= run.nlp.compiled.build_s > 0

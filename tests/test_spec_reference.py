@@ -23,7 +23,7 @@ from solving import agrisynth
 def _kind(name: str):
     try:
         kind = kinds.get(name)
-        return kind, kind.model_class()
+        return kind, kind.spec_model()
     except Exception as exc:    # noqa: BLE001 - a kind another session is still writing
         pytest.skip(f"kind {name}: its package does not import ({type(exc).__name__}: {exc})")
 
@@ -118,7 +118,7 @@ def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
             assert e.type == "-1 | 1", (e.path, e.type)
         for choice in re.findall(r'"([^"]*)"', e.type):
             assert not HYPHENATED.search(choice), (e.path, choice)
-    variables = getattr(kinds.get(kind_name).model_class(), "variables", None)
+    variables = getattr(kinds.get(kind_name).spec_model(), "variables", None)
     if kinds.get(kind_name).solves and kind_name != "guide_way":     # guide_way frees its path's control points
         assert callable(variables), f"{kind_name}: the spec model lists its design variables (variables())"
 
@@ -126,7 +126,7 @@ def test_one_way_to_write_a_variable_and_one_spelling_of_names(kind_name):
 def test_spec_command_errors_are_one_line(tmp_path):
     unknown = agrisynth("spec", "planting_forbar", timeout=120)
     assert unknown.returncode == 2 and unknown.stdout == ""
-    assert unknown.stderr.startswith("error: unknown kind 'planting_forbar' (known kinds: planting_fourbar, ")
+    assert unknown.stderr.startswith("error: unknown kind 'planting_forbar' (did you mean planting_fourbar? known kinds: ")
     assert len(unknown.stderr.strip().splitlines()) == 1
     runner = CliRunner()
     existing = tmp_path / "mine.toml"

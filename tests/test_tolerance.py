@@ -75,14 +75,14 @@ def _design(name, kind, loaded, solving, setting):
     if name == "guide_way":          # the redesign's design is the convex fit's control points (the spec gives none)
         from synthesis.kinds.guide_way.solve import _fit_design
         return dict(zip(*_fit_design(loaded.model, setting.data)))
-    return kind.checker()(loaded).design
+    return kind.check(loaded).design
 
 
 @pytest.mark.parametrize("name", KINDS)
 def test_ad_sensitivities_equal_central_differences_of_the_recheck(name):
     kind = kinds.get(name)
     loaded = load_spec(LIBRARY / kind.example)
-    solving = kind.solver_side()
+    solving = kind.solving()
     setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
     lin = linearise(kind, loaded.model, _design(name, kind, loaded, solving, setting))
     rows = {r["name"]: r for r in stack_up(lin, np.zeros(lin.dmap.n))}
@@ -127,7 +127,7 @@ def test_ad_sensitivities_equal_central_differences_of_the_recheck(name):
 def test_monte_carlo_at_zero_tolerance_passes_iff_the_design_passes(spec):
     loaded = load_spec(LIBRARY / spec)
     kind = kinds.get(loaded.kind)
-    result = kind.checker()(loaded)
+    result = kind.check(loaded)
     lin = linearise(kind, loaded.model, result.design)
     mc = monte_carlo(kind, loaded.model, lin.design, lin.dmap, np.zeros(lin.dmap.n), 3, seed=1)
     assert mc["pass_rate"] == (1.0 if result.all_satisfied else 0.0)
@@ -190,7 +190,7 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
     from synthesis.tolerance.design import box_of
 
     kind = kinds.get("clamp_cam")
-    solving = kind.solver_side()
+    solving = kind.solving()
     out = {}
     for name in ("opening_cam_redesign", "opening_cam_robust_redesign"):
         loaded = load_spec(LIBRARY / "clamp_cam" / f"{name}.toml")
@@ -279,7 +279,7 @@ def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     from synthesis.spec.operating import at_operating
     loaded = load_spec(LIBRARY / spec)
     kind = kinds.solving_kind(loaded.kind)
-    solving = kind.solver_side()
+    solving = kind.solving()
     lin = linearise(kind, loaded.model, kinds.checker(loaded.kind)(loaded).design)
     rows = stack_up(lin, np.zeros(lin.dmap.n))
     names = lin.operating[0]
@@ -409,7 +409,7 @@ def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(sp
     from synthesis.core.problem import operating_as_symbols
     loaded = load_spec(LIBRARY / spec)
     model = loaded.model if variant is None else variant(loaded.model)
-    solving = kinds.solving_kind(loaded.kind).solver_side()
+    solving = kinds.solving_kind(loaded.kind).solving()
     setting = Setting(model, 0, solving.prepare(model))
     nominal = solving.build(setting, False)
     assert nominal.problem.operating_source is None
@@ -428,7 +428,7 @@ def _rows_at_start(kind, spec, aux_guess: str):
     from synthesis.core.sensitivity import Sensitivity
     from synthesis.tolerance.design import without_ipopt
 
-    solving = kind.solver_side()
+    solving = kind.solving()
     with without_ipopt():
         nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
     t = nlp.compiled.t
@@ -570,8 +570,8 @@ def test_clamp_cam_crank_speed_sensitivities_equal_central_differences_and_the_a
     loaded = load_spec(LIBRARY / "clamp_cam/opening_cam_redesign_modified_sine.toml")
     spec = _cam_in_seconds_with_a_cap(loaded.model) if seconds else loaded.model
     kind = kinds.get("clamp_cam")
-    solving = kind.solver_side()
-    lin = linearise(kind, spec, kind.checker()(loaded).design)
+    solving = kind.solving()
+    lin = linearise(kind, spec, kind.check(loaded).design)
     names, units, W, nominal = lin.operating
     assert (names, units, nominal) == (("crank_speed",), ("r/min",), {"crank_speed": 60.0})
     n0 = 60.0
@@ -622,8 +622,8 @@ def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
     from synthesis.tolerance.output import table
     loaded = load_spec(LIBRARY / "comb_finger/redesign_max_combing.toml")
     kind = kinds.get("comb_finger")
-    solving = kind.solver_side()
-    design = kind.checker()(loaded).design
+    solving = kind.solving()
+    design = kind.check(loaded).design
     facts = analyse(kind, loaded.model, design, length=0.2, angle=0.3, samples=3, seed=0)
     assert facts["operating"] == {"machine_speed": {"unit": "m/s", "nominal": 0.4},
                                   "row_spacing": {"unit": "mm", "nominal": 450.0}}
@@ -653,8 +653,8 @@ def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the
     loaded = load_spec(LIBRARY / spec)
     model = loaded.model
     kind = kinds.get("combing_chain")
-    solving = kind.solver_side()
-    lin = linearise(kind, model, kind.checker()(loaded).design)
+    solving = kind.solving()
+    lin = linearise(kind, model, kind.check(loaded).design)
     names = lin.operating[0]
     assert names == ("machine_speed_lo", "machine_speed_hi", "plant_angle_lo", "plant_angle_hi")
     rows = stack_up(lin, np.zeros(lin.dmap.n))
@@ -684,7 +684,7 @@ def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the
     cos_theta = math.cos(math.radians(model.chain.theta))
     vr = {k: v for k, v in lin.design.items() if k.startswith("chain_speed")}
     last = sorted(vr)[-1]                   # the gear that runs up to V_s hi
-    where = {r["name"]: r["where"] for r in kind.checker()(loaded).rules}
+    where = {r["name"]: r["where"] for r in kind.check(loaded).rules}
     for row in rows:
         sens = row["operating_sensitivity"]
         if row["name"].endswith("tine_reaches_plant"):
@@ -714,7 +714,7 @@ def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve
     from synthesis.tolerance.analysis import operating_dependence
     kind = kinds.get("fourbar_path")
     loaded = load_spec(LIBRARY / kind.example)
-    solving = kind.solver_side()
+    solving = kind.solving()
     lin = linearise(kind, loaded.model, DESIGNS["fourbar_path"])
     assert lin.operating[0] == ("crank_speed",) and lin.operating[3] == {"crank_speed": 60.0}
     assert operating_dependence(lin) == {"crank_speed": []}

@@ -404,7 +404,7 @@ def test_at_bounds_names_the_free_variables_on_a_bound_by_their_result_names():
                                                              {"name": "d", "side": "upper", "bound": 5.0}]
     kind = kinds.solving_kind("guide_tube")
     spec = load_spec(LIBRARY / "guide_tube" / "cai2020_delta2.toml").model
-    nlp = kind.solver_side().build(Setting(spec, 0, kind.solver_side().prepare(spec)), True)
+    nlp = kind.solving().build(Setting(spec, 0, kind.solving().prepare(spec)), True)
     design = nlp.design(np.asarray(nlp.bounds, float)[:, 0])          # every free angle at its lower bound
     assert [b["name"] for b in at_bounds(nlp.design_names, nlp.bounds, design)] == list(nlp.design_names)
     assert set(nlp.design_names) <= set(design)

@@ -104,6 +104,22 @@ def baseline_rules(setting: Setting):
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules)
 
-KIND = Kind(name="toy_disc", summary="a point in a disc nearest a target (test kind)",
-            spec_model="toy_kind:ToySpec", check="toy_kind:run_check", solving="toy_kind:SOLVING",
-            objectives={"nearest_target": "squared distance to the target, mm^2"})
+class ToyDisc(Kind):
+    name = "toy_disc"
+    summary = "a point in a disc nearest a target (test kind)"
+    objectives = {"nearest_target": "squared distance to the target, mm^2"}
+
+    def spec_model(self) -> type[ToySpec]:
+        return ToySpec
+
+    def check(self, loaded) -> Result:
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        return SOLVING
+
+    def figures(self) -> dict:
+        return {}
+
+
+KIND = ToyDisc()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from synthesis.core.kind import CoarseCheck, resolve
+from synthesis.core.kind import CoarseCheck
 
 #: sample counts of the check divided by this while dragging (the check's fine grid is 10x the solver's)
 COARSENING = 10
@@ -54,26 +54,25 @@ def solver_samples_note(spec) -> str:
     return "the check with " + ", ".join(f"[solver] {n} {v} -> {getattr(coarse, n)}" for n, (v, _, _) in fields.items())
 
 
-def by_solver_samples(check: str, note: Callable[[Any], str] = solver_samples_note) -> CoarseCheck:
+def by_solver_samples(check: Callable[[Any], Any], note: Callable[[Any], str] = solver_samples_note) -> CoarseCheck:
     """The coarse grid of a check that samples on 10x the [solver] counts: the same check on the coarser spec.
-    ``check``: the kind's ``"module:function"`` (resolved on first use)."""
+    ``check``: the kind's check (loaded spec -> Result)."""
     from synthesis.spec import LoadedSpec
 
     def evaluate(loaded):
         if not sample_fields(loaded.model):
-            return resolve(check)(loaded)
-        return resolve(check)(LoadedSpec(coarser(loaded.model), loaded.path, loaded.sha256))
+            return check(loaded)
+        return check(LoadedSpec(coarser(loaded.model), loaded.path, loaded.sha256))
     return CoarseCheck(evaluate=evaluate, note=note)
 
 
-def one_grid(check: str) -> CoarseCheck:
+def one_grid(check: Callable[[Any], Any]) -> CoarseCheck:
     """A check whose grid is fixed in the kind (no [solver] sample count reaches it): evaluated as it is."""
-    return CoarseCheck(evaluate=lambda loaded: resolve(check)(loaded), note=lambda spec: ONE_GRID_NOTE)
+    return CoarseCheck(evaluate=check, note=lambda spec: ONE_GRID_NOTE)
 
 
 def of_kind(kind) -> CoarseCheck:
     """The kind's coarse grid: its own (``Kind.coarse_check``), else its check with every [solver] sample count
     divided by :data:`COARSENING` (:func:`by_solver_samples`; one grid when the spec has no sample count)."""
-    if kind.coarse_check is not None:
-        return resolve(kind.coarse_check)
-    return by_solver_samples(kind.check)
+    own = kind.coarse_check()
+    return own if own is not None else by_solver_samples(kind.check)

@@ -1,9 +1,11 @@
-"""The kind contract: what a kind package exports, and what its solve side declares.
+"""The kind contract: what a kind is (:class:`Kind`), and what its solve side declares (:class:`Solving`).
 
-A kind is one package exporting one :class:`Kind` (``KIND``).  Everything in it is a
-``"module:attribute"`` string resolved on use, so reading the registry (``agrisynth problems``,
-``solve --help``, the bench) imports no kind's code, and a run imports only its own kind.
-The registry of kinds is :mod:`synthesis.kinds`.
+A kind is one folder, ``synthesis/kinds/<kind>/``, whose package defines a subclass of :class:`Kind` and exports an
+instance (``KIND``; a folder holding two kinds exports ``KINDS``).  The registry (:mod:`synthesis.kinds`) finds the
+built-in kinds by their folders and other packages' kinds through the ``agrisynth.kinds`` entry-point group.  The
+class holds the kind's name, summary and objectives; its methods import the kind's heavy modules when called, so
+listing kinds imports none of them and a run imports only its own kind.  docs/ARCHITECTURE.md walks through adding
+a kind.
 
 For ``agrisynth studio`` a kind gives its check on a coarser grid (``coarse_check``: a :class:`CoarseCheck`, what
 the page evaluates while a slider moves; default: the check on its [solver] sample counts / 10), the mechanism's
@@ -11,16 +13,14 @@ poses where its check's facts hold none (``poses``: a :class:`Poses`), and, when
 design to the kind (guide_way's convex fit), that design written out as free variables (``explicit_design``;
 ``solved.toml`` uses it too).  The studio itself names no kind.
 
-A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one multistart driver
+A kind that solves returns a :class:`Solving` from ``solving()``: the pieces the one multistart driver
 (:mod:`synthesis.core.solve`) needs, none of which names a solver:
 
     prepare(spec)              anything worked out once per run (a fitted law, a scene), picklable
-    build(setting, elastic)    the kind's NLP: ``names``, ``bounds`` (n x 2), ``init``, ``compiled``
-                               (the :class:`~synthesis.core.ipopt.CompiledNLP` an elastic diagnosis reads)
-                               and ``solve(start, x_design) -> StartOutcome``; built once per process;
-                               optionally ``x_of(design) -> x_design`` when the result's design keys are
-                               not ``names``, and ``builds_its_own_starts = True`` when ``solve`` may
-                               ignore ``x_design`` (no start is then solved from the elastic re-solve's design)
+    build(setting, elastic)    the kind's NLP (a :class:`~synthesis.core.nlp.KindNLP`): ``names``, ``bounds``
+                               (n x 2), ``init``, ``compiled`` (the :class:`~synthesis.core.ipopt.CompiledNLP` an
+                               elastic diagnosis reads) and ``solve(start, x_design) -> StartOutcome``; built once
+                               per process
     recheck(setting, outcome)  the rules of a returned design on floats, 10x finer (a :class:`Recheck`)
     finish(setting, best)      the result's design, objective, trajectory and kind facts (:class:`Finished`)
     baseline_rules(setting)    the rule table of the spec's given design (or None if it cannot be evaluated)
@@ -28,11 +28,23 @@ A kind that solves points ``solving`` at a :class:`Solving`: the pieces the one 
 
 from __future__ import annotations
 
-import math
-
 import importlib
+import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel as SpecModel
+
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
+
+#: (result of one run, path) -> writes one figure or export of the kind
+FigureWriter = Callable[["Result", Path], None]
+#: (results compared, output folder) -> the file names written: the kind's overlay figures
+CompareWriter = Callable[[list, Path], list]
 
 
 def resolve(target: str) -> Any:
@@ -41,43 +53,125 @@ def resolve(target: str) -> Any:
     return getattr(importlib.import_module(module), name)
 
 
-@dataclass(frozen=True)
-class Kind:
-    """Everything agrisynth knows about one problem kind."""
+class Kind(ABC):
+    """One problem kind: what agrisynth knows about a mechanism (docs/ARCHITECTURE.md, "The kind contract").
 
+    A kind is a subclass with its name, summary, objectives and example as class attributes, and methods that
+    return its parts.  A kind's package defines the subclass in its ``__init__`` and imports its heavy modules
+    (check, NLP, plots) inside the methods, so that listing kinds imports none of them and a run imports only its
+    own kind.  ``check`` and ``spec_model`` are required; the rest have defaults meaning "the kind has none".
+    """
+
+    #: the spec's ``kind = "..."``
     name: str
-    summary: str                          # one line: the mechanism and its seed paper
-    spec_model: str                       # "module:Class" of the pydantic spec model
-    check: str                            # "module:function"(loaded spec) -> Result (status "evaluated")
-    figures: dict[str, str] = field(default_factory=dict)   # file name -> "module:writer"(result, path)
-    compare: str | None = None            # "module:function"(results, folder) -> [file names]: overlays
-    solving: str | None = None            # "module:object" of a Solving; None: the kind is check-only
-    objectives: dict[str, str] = field(default_factory=dict)  # objective -> one-line meaning (first = default)
-    bench: str | None = None              # "module:function"(specs | None, seed) -> bench cases
-    example: str | None = None            # a library spec to try, relative to problems/
-    #: "module:object" of a CoarseCheck: the check on a coarser grid (the studio's, while a slider moves);
-    #: None: the check with every [solver] sample count divided by 10 (:func:`synthesis.core.coarse.of_kind`)
-    coarse_check: str | None = None
-    #: "module:object" of a Poses: the mechanism's poses where the check's facts give none (the studio draws them)
-    poses: str | None = None
-    #: "module:function"(loaded spec, spec file data) -> that data with a design the spec may leave to the kind
-    #: (guide_way: the convex fit's control points) written out as free variables, so it solves and checks the
-    #: same and every variable has a place in the file (the studio's sliders, solved.toml); None: specs always
-    #: hold their whole design
-    explicit_design: str | None = None
+    #: one line: the mechanism and its seed paper
+    summary: str
+    #: objective name -> one-line meaning (the first is the default); empty for a kind that only checks
+    objectives: dict[str, str] = {}
+    #: a library spec to try, relative to the problem library (None: none)
+    example: str | None = None
+
+    @abstractmethod
+    def spec_model(self) -> type[SpecModel]:
+        """The pydantic model a spec of this kind validates against."""
+
+    @abstractmethod
+    def check(self, loaded: LoadedSpec) -> Result:
+        """Evaluate the spec's given design against every rule (a Result with status "evaluated")."""
+
+    def solving(self) -> Solving | None:
+        """The solve side (:class:`Solving`); None for a kind that only checks."""
+        return None
+
+    def figures(self) -> dict[str, FigureWriter]:
+        """File name -> writer(result, path) of the kind's figures and exports for one run."""
+        return {}
+
+    def compare_figures(self) -> CompareWriter | None:
+        """The overlay-figure writer of ``agrisynth compare``: (results, folder) -> the file names written."""
+        return None
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
+        """The bench's cases on the given specs (None: the kind's default set); None for a kind with no bench."""
+        return None
+
+    def coarse_check(self) -> CoarseCheck | None:
+        """The check on a coarser grid for the studio while a slider moves; None: the check with every [solver]
+        sample count divided by 10 (:func:`synthesis.core.coarse.of_kind`)."""
+        return None
+
+    def poses(self) -> Poses | None:
+        """The mechanism's poses for the studio's drawing where the check's facts hold none; None: not needed."""
+        return None
+
+    def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
+        """The spec file data with a design the spec may leave to the kind (guide_way's convex fit) written out as
+        free variables, so it solves and checks the same and every variable has a place in the file (the studio's
+        sliders, solved.toml); the data itself (the same object) when specs always hold their whole design."""
+        return data
 
     @property
     def solves(self) -> bool:
-        return self.solving is not None
+        """Whether the kind has a solve side, read without importing it (it overrides :meth:`solving`)."""
+        return type(self).solving is not Kind.solving
 
-    def model_class(self):
-        return resolve(self.spec_model)
+    @property
+    def benches(self) -> bool:
+        """Whether the kind has bench cases, read without importing them (it overrides :meth:`bench_cases`)."""
+        return type(self).bench_cases is not Kind.bench_cases
 
-    def checker(self) -> Callable:
-        return resolve(self.check)
+    @property
+    def writes_explicit_design(self) -> bool:
+        """Whether a spec may leave part of the design to the kind (it overrides :meth:`explicit_design`)."""
+        return type(self).explicit_design is not Kind.explicit_design
 
-    def solver_side(self) -> "Solving":
-        return resolve(self.solving)
+    def solving_with(self, solving: Solving) -> Kind:
+        """The same kind solving with another solve side (a transform of this kind's: the tolerance-robust box,
+        the operating envelope); everything else is this kind's."""
+        return SolvingReplaced(self, solving)
+
+
+class SolvingReplaced(Kind):
+    """A kind whose solve side a transform replaced (:meth:`Kind.solving_with`); the rest is the base kind's."""
+
+    def __init__(self, base: Kind, solving: Solving):
+        self.base, self._solving = base, solving
+        self.name, self.summary, self.objectives, self.example = base.name, base.summary, base.objectives, base.example
+
+    def spec_model(self) -> type[SpecModel]:
+        return self.base.spec_model()
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        return self.base.check(loaded)
+
+    def solving(self) -> Solving:
+        return self._solving
+
+    def figures(self) -> dict[str, FigureWriter]:
+        return self.base.figures()
+
+    def compare_figures(self) -> CompareWriter | None:
+        return self.base.compare_figures()
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
+        return self.base.bench_cases(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck | None:
+        return self.base.coarse_check()
+
+    def poses(self) -> Poses | None:
+        return self.base.poses()
+
+    def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
+        return self.base.explicit_design(loaded, data)
+
+    @property
+    def benches(self) -> bool:
+        return self.base.benches
+
+    @property
+    def writes_explicit_design(self) -> bool:
+        return self.base.writes_explicit_design
 
 
 def _the_check(spec) -> str:

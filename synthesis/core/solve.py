@@ -75,7 +75,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
 
     A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
     the :class:`Run` of the starts finished so far (None when none has)."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     # the wall time includes building the NLP, here and in each worker alike: it compares across worker counts
     t0 = time.perf_counter()
     nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
@@ -179,7 +179,7 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     ELASTIC_CONVERGED of them converge; the smallest of those relaxations is kept (each is a local minimum: a
     crank-rocker's transmission rule missed by 24.6 deg from one point, by 9.86 from another, the least any design
     misses it)."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     nlp = solving.build(setting, True)
     first = kept = None
     converged = 0
@@ -279,7 +279,7 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
     a signal is discarded (``interrupt.pending()``), as the multistart discards one."""
     if not elastic.converged or elastic.relaxed or not elastic.design:
         return run
-    solving = kind.solver_side()
+    solving = kind.solving()
     nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
     if getattr(nlp, "builds_its_own_starts", False):
         return run
@@ -339,7 +339,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
     (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
     no start had finished."""
     spec = loaded.model
-    solving = kind.solver_side()
+    solving = kind.solving()
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
     setting = Setting(spec, seed, solving.prepare(spec))
@@ -383,7 +383,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
 
 def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic: ElasticDiagnosis | None) -> Result:
     spec = loaded.model
-    solving = kind.solver_side()
+    solving = kind.solving()
     best = run.best
     finished = solving.finish(setting, best)
     extra_failed = [] if finished.rules is None or not best.satisfied else [
@@ -449,7 +449,7 @@ def solve_spec(loaded, starts: int | None = None, seed: int | None = None, worke
 
 def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> SolverError:
     """The exit-3 error of a run with status infeasible or failed, from what the result says."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     elastic = None if result.elastic is None else ElasticDiagnosis.from_json(result.elastic)
     note = (result.solver or {}).get("status_note")
     if result.status == "failed" and elastic is None and note and "does not keep its promise" in note:
@@ -465,7 +465,7 @@ def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> Solver
 
 def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
     """The rule table of the spec's given design, for the side-by-side table (None: it cannot be evaluated)."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     spec = loaded.model
     setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
     try:

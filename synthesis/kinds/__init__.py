@@ -1,51 +1,86 @@
-"""The registry: the one list of problem kinds.  Each entry points at the ``KIND`` object its package
-exports (:class:`synthesis.core.kind.Kind`); nothing of a kind is imported until it is asked for, and
-a kind's object holds only ``"module:attribute"`` strings, so listing kinds imports no kind's code.
+"""The registry of problem kinds: one folder each under ``synthesis/kinds/``, and any other package's kinds.
 
-Adding a kind: write its package (spec model, check, and for a kind that solves its
-:class:`~synthesis.core.kind.Solving`), export ``KIND`` from the package, add one line here.
-Tests and tools may add kinds at run time with :func:`register`.
+A built-in kind is a folder here whose package exports ``KIND`` (or ``KINDS``, a folder holding two): instances of
+:class:`synthesis.core.kind.Kind`.  The folders are the list -- adding a kind adds a folder and touches nothing else.
+Another installed package adds kinds through the ``agrisynth.kinds`` entry-point group (each entry a Kind instance,
+named by its kind).  Listing kinds imports each kind's package ``__init__`` (its class and names) and nothing more:
+a kind's check, NLP and figures are imported by its methods when called.  Tests may add kinds at run time with
+:func:`register`.
 """
 
 from __future__ import annotations
 
+import difflib
+import functools
+import importlib
+import pkgutil
+import warnings
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Callable
 
-from synthesis.core.kind import Kind, resolve
+from synthesis.core.kind import Kind
 from synthesis.errors import SpecError
 from synthesis.result import Result
 
-#: kind name -> "package:KIND"
-_REGISTRY: dict[str, str] = {
-    "planting_fourbar": "synthesis.kinds.planting:KIND",
-    "fourbar_path": "synthesis.kinds.fourbar_path:KIND",
-    "crank_rocker": "synthesis.kinds.crank_rocker:KIND",
-    "picker_double_crank": "synthesis.kinds.picker:DOUBLE_CRANK",
-    "picker": "synthesis.kinds.picker:PICKER",
-    "clamp_cam": "synthesis.kinds.clamp_cam:KIND",
-    "guide_tube": "synthesis.kinds.guide_tube:KIND",
-    "combing_chain": "synthesis.kinds.combing_chain:KIND",
-    "comb_finger": "synthesis.kinds.comb_finger:KIND",
-    "guide_way": "synthesis.kinds.guide_way:KIND",
-    "steering_linkage": "synthesis.kinds.steering_linkage:KIND",
-    "tillage_linkage": "synthesis.kinds.tillage_linkage:KIND",
-}
+#: the entry-point group through which other packages add kinds
+ENTRY_POINT_GROUP = "agrisynth.kinds"
 _RUNTIME: dict[str, Kind] = {}
 
 
+def _exported(module) -> tuple[Kind, ...]:
+    kinds = getattr(module, "KINDS", None) or (getattr(module, "KIND", None),)
+    if not all(isinstance(k, Kind) for k in kinds):
+        raise TypeError(f"{module.__name__} exports no Kind instance as KIND or KINDS")
+    return tuple(kinds)
+
+
+@functools.cache
+def _built_in() -> dict[str, Kind]:
+    """The kinds of the folders under synthesis/kinds/, in folder order."""
+    found: dict[str, Kind] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+        if info.ispkg:
+            for kind in _exported(importlib.import_module(f"{__name__}.{info.name}")):
+                assert kind.name not in found, f"two built-in kinds named {kind.name!r}"
+                found[kind.name] = kind
+    return found
+
+
+@functools.cache
+def _installed() -> dict[str, Kind]:
+    """The kinds other installed packages add through the entry-point group.  A plugin that cannot be loaded or that
+    reuses a built-in kind's name is left out with a warning naming it: one broken plugin does not stop the tool."""
+    found: dict[str, Kind] = {}
+    for point in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            kind = point.load()
+            kind = kind() if isinstance(kind, type) and issubclass(kind, Kind) else kind
+            if not isinstance(kind, Kind) or kind.name != point.name:
+                raise TypeError(f"{point.value} is not a Kind named {point.name!r}")
+        except Exception as exc:            # a plugin's own error, whatever it is: reported, not raised
+            warnings.warn(f"agrisynth kind plugin {point.name!r} ({point.value}) not loaded: {exc}", stacklevel=2)
+            continue
+        if kind.name in _built_in():
+            warnings.warn(f"agrisynth kind plugin {point.value} not loaded: {kind.name!r} is a built-in kind",
+                          stacklevel=2)
+            continue
+        found[kind.name] = kind
+    return found
+
+
 def names() -> list[str]:
-    return [*_REGISTRY, *(n for n in _RUNTIME if n not in _REGISTRY)]
+    everything = {**_built_in(), **_installed()}
+    return [*everything, *(n for n in _RUNTIME if n not in everything)]
 
 
 def get(name: str) -> Kind:
-    """The kind's description; SpecError (exit 2) for a name that is not a kind."""
-    if name in _RUNTIME:
-        return _RUNTIME[name]
-    if name not in _REGISTRY:
-        raise SpecError(f"unknown kind {name!r} (known kinds: {', '.join(names())})")
-    kind = resolve(_REGISTRY[name])
-    assert kind.name == name, f"{_REGISTRY[name]} describes {kind.name!r}, registered as {name!r}"
+    """The kind; SpecError (exit 2) for a name that is not a kind."""
+    kind = _RUNTIME.get(name) or _built_in().get(name) or _installed().get(name)
+    if kind is None:
+        near = difflib.get_close_matches(str(name), names(), n=1)
+        hint = f"did you mean {near[0]}? " if near else ""
+        raise SpecError(f"unknown kind {name!r} ({hint}known kinds: {', '.join(names())})")
     return kind
 
 
@@ -63,18 +98,17 @@ def unregister(name: str) -> None:
 
 
 def checker(kind: str) -> Callable:
-    return get(kind).checker()
+    return get(kind).check
 
 
 def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:
     """filename -> writer(path) for the kind's figures and exports of one run."""
-    return {fn: (lambda path, f=resolve(t): f(result, path)) for fn, t in get(result.kind).figures.items()}
+    return {fn: (lambda path, f=writer: f(result, path)) for fn, writer in get(result.kind).figures().items()}
 
 
 def compare_figures(kind: str) -> Callable | None:
     """The kind's overlay-figure writer for ``agrisynth compare``, or None if it has none."""
-    target = get(kind).compare
-    return None if target is None else resolve(target)
+    return get(kind).compare_figures()
 
 
 def solving_kind(name: str) -> Kind:
@@ -110,8 +144,7 @@ def explicit_design(loaded, data: dict | None = None) -> tuple:
     ``data``: the spec's data, by default the file's as the run read it (``LoadedSpec.file_data``)."""
     if data is None:
         data = loaded.file_data()
-    target = get(loaded.kind).explicit_design
-    written = data if target is None else resolve(target)(loaded, data)
+    written = get(loaded.kind).explicit_design(loaded, data)
     if written is data:
         return loaded, data
     import copy

@@ -64,7 +64,7 @@ class LoadedSpec:
 def model_class(kind: str) -> type[BaseModel]:
     from synthesis import kinds
 
-    return kinds.get(kind).model_class()
+    return kinds.get(kind).spec_model()
 
 
 def load_spec(path: str | Path) -> LoadedSpec:

@@ -158,7 +158,5 @@ def drawing(result: Result) -> dict[str, Any]:
 def _kind_poses(kind: str):
     """The kind's own poses (``Kind.poses``) where its check's facts give none, else None."""
     from synthesis import kinds
-    from synthesis.core.kind import resolve
 
-    target = kinds.get(kind).poses
-    return None if target is None else resolve(target)
+    return kinds.get(kind).poses()

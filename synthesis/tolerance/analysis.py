@@ -61,7 +61,7 @@ class Linearised:
 def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     """Values and dg/dd of every rule of ``spec`` at ``design`` (result.json keys, spec units), and of the margins
     of the NLP's rows of the rules whose rows are the rule itself (``Linearised.held``)."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     aspec = fine(freed(spec))
     data = solving.prepare(aspec)
     # every operating condition a symbol (resolved at its nominal value, the rules' values unchanged): the
@@ -190,7 +190,7 @@ def _margin_at(solving, setting, design: dict, dmap: DesignMap, offsets, name: s
 def corner_margins(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dict], seed: int = 0) -> None:
     """Each stack-up row's nonlinear margin at its linear worst corner (``corner_margin``, the kind's float
     re-check; None with the reason in ``corner_note`` when that design cannot be evaluated)."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     settings = _Settings(solving, spec, seed)
     for row in rows:
         setting, name = settings(row)
@@ -205,7 +205,7 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
     of the offset, so its relative gap about halves ("second order"); a gap that does not shrink so is a kink
     (the worst sample switching, a max/min of the rule, an active bound).  The absolute difference is stated
     against the nominal margin, which is what the robust transcription's linear worst case gives away."""
-    solving = kind.solver_side()
+    solving = kind.solving()
     settings = _Settings(solving, spec, seed)
     for row in rows:
         row["gap_explanation"] = None
@@ -273,7 +273,7 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
     the pass rate reads "share of machines built within the tolerances that work over the whole range";
     ``pass_rate_at_nominal`` is the same samples at the nominal operating point only."""
     ranges = ranges_of(spec)
-    solving = envelope_kind(kind, spec).solver_side()
+    solving = envelope_kind(kind, spec).solving()
     setting = Setting(spec, setting_seed, solving.prepare(spec))
     rng = np.random.default_rng(seed)
     offsets = rng.uniform(-1.0, 1.0, size=(samples, dmap.n)) * box
@@ -363,7 +363,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     lin = linearise(kind, spec, design, seed)
     box = box_of(lin.dmap, length, angle, per_variable or {})
     rows = stack_up(lin, box)
-    solving = kind.solver_side()
+    solving = kind.solving()
     nominal = _nominal_rules(solving, Setting(spec, seed, solving.prepare(spec)), lin)
     mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed)
     corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)

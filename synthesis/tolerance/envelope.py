@@ -175,7 +175,7 @@ def envelope_kind(kind: Kind, spec) -> Kind:
     """The kind, re-checking over the spec's operating ranges (the kind itself when the spec has none)."""
     if not ranges_of(spec):
         return kind
-    base = kind.solver_side()
+    base = kind.solving()
     if isinstance(base.recheck, EnvelopeRecheck):       # wrapped already (a robust solve's kind, re-wrapped)
         return kind
     recheck = EnvelopeRecheck(base.recheck, _Points(base))
@@ -185,10 +185,7 @@ def envelope_kind(kind: Kind, spec) -> Kind:
                                   baseline_rules=EnvelopeBaseline(base.baseline_rules, recheck),
                                   relax_hint=hint + base.relax_hint)
 
-    class _Kind(Kind):
-        def solver_side(self) -> Solving:      # noqa: D102
-            return solving
-    return _Kind(**{f.name: getattr(kind, f.name) for f in dataclasses.fields(kind)})
+    return kind.solving_with(solving)
 
 
 def plot(result, path) -> None:

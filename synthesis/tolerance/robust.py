@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core import interrupt
-from synthesis.core.kind import Finished, Kind, Setting, Solving
+from synthesis.core.kind import Finished, Kind, Setting
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
@@ -357,13 +357,10 @@ def robust_kind(kind: Kind, spec) -> Kind:
         raise SpecError(f"tolerance: a [tolerance] table in `solve` is not supported for kind {kind.name} "
                         f"({NOT_ROBUST[kind.name]}); leave it out to solve, and analyse the solved design with "
                         f"`agrisynth tolerance RESULT`")
-    base = kind.solver_side()
+    base = kind.solving()
     hint = (f"The rules are held at their linearised worst case in the tolerance box ({_box_text(spec)}): "
             f"loosen the tolerances of the [tolerance] table, or those rules. ")
     solving = dataclasses.replace(base, build=RobustBuild(base.build, kind.name), finish=RobustFinish(base.finish, kind),
                                   relax_hint=hint + base.relax_hint, explain_failure=ExplainBreak(kind, spec))
 
-    class _Kind(Kind):
-        def solver_side(self) -> Solving:      # noqa: D102
-            return solving
-    return _Kind(**{f.name: getattr(kind, f.name) for f in dataclasses.fields(kind)})
+    return kind.solving_with(solving)

@@ -93,7 +93,7 @@ def library_problems() -> list[str]:
 def solve_in(loaded, factor: float, starts: int):
     """The kind's multistart (one worker, the spec's seed) with every length factor x its mm number."""
     kind = kinds.solving_kind_for(loaded)
-    solving = kind.solver_side()
+    solving = kind.solving()
     spec = loaded.model
     # prepare (fits to published tables, laws) is data for the problem, in mm: not the NLP a unit change is about
     setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
@@ -148,7 +148,7 @@ def own_accuracy(loaded, best, starts: int) -> float | None:
 
     from synthesis.core.executor import latin_hypercube_starts
 
-    solving = kinds.solving_kind_for(loaded).solver_side()
+    solving = kinds.solving_kind_for(loaded).solving()
     setting = Setting(loaded.model, loaded.model.solver.seed, solving.prepare(loaded.model))
     nlp = solving.build(setting, False)
     problem = getattr(nlp, "problem", None)

@@ -4,27 +4,68 @@ geometry.py  the front view of Fig. 28b reconstructed, eq 17-22 derived and as p
 check.py, nlp.py, solve.py, plots.py: the kind of the CLI
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="comb_finger",
-    summary="eccentric rotating comb fingers: largest combing angle with root-zone and unit clearances "
-            "(seed 002 §四.3 eq 17-22)",
-    spec_model="synthesis.kinds.comb_finger.spec:CombFingerSpec",
-    check="synthesis.kinds.comb_finger.check:run_check",
-    figures={"comb_finger.png": "synthesis.kinds.comb_finger.plots:finger_figure",
-             "comb_finger.svg": "synthesis.kinds.comb_finger.plots:finger_figure"},
-    compare="synthesis.kinds.comb_finger.plots:compare_figure",
-    solving="synthesis.kinds.comb_finger.solve:SOLVING",
-    bench="synthesis.kinds.comb_finger:bench_cases",
-    objectives={"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"},
-    example="comb_finger/redesign_max_combing.toml",
-    coarse_check="synthesis.kinds.comb_finger.coarse:COARSE",
-    poses="synthesis.kinds.comb_finger.poses:POSES",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class CombFinger(Kind):
+    name = "comb_finger"
+    summary = "eccentric rotating comb fingers: largest combing angle with root-zone and unit clearances (seed 002 §四.3 eq 17-22)"
+    objectives = {"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"}
+    example = "comb_finger/redesign_max_combing.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.comb_finger.spec import CombFingerSpec
+
+        return CombFingerSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.comb_finger.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.comb_finger.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.comb_finger.plots import finger_figure
+
+        return {"comb_finger.png": finger_figure,
+                "comb_finger.svg": finger_figure}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.comb_finger.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.comb_finger.coarse import COARSE
+
+        return COARSE
+
+    def poses(self) -> Poses:
+        from synthesis.kinds.comb_finger.poses import POSES
+
+        return POSES
+
+
+KIND = CombFinger()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

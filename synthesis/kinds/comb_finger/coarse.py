@@ -4,6 +4,7 @@ which is its one grid while 10x those samples stay below the check's least 3600 
 from __future__ import annotations
 
 from synthesis.core import coarse
+from synthesis.kinds.comb_finger.check import run_check
 
 
 def note(spec) -> str:
@@ -16,4 +17,4 @@ def note(spec) -> str:
     return f"the check on {ours} finger turn angles (fine: {theirs})"
 
 
-COARSE = coarse.by_solver_samples("synthesis.kinds.comb_finger.check:run_check", note)
+COARSE = coarse.by_solver_samples(run_check, note)

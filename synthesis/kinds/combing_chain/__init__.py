@@ -4,27 +4,64 @@ geometry.py  eq 12-13 derived (floats and CasADi symbols) and as printed
 check.py, nlp.py, solve.py, plots.py: the kind of the CLI
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="combing_chain",
-    summary="stem-combing chain: chain speed(s) so every plant is combed into a window before the cut "
-            "(seed 002 §四.3 eq 12-13)",
-    spec_model="synthesis.kinds.combing_chain.spec:CombingChainSpec",
-    check="synthesis.kinds.combing_chain.check:run_check",
-    figures={"delta_over_beta.png": "synthesis.kinds.combing_chain.plots:delta_figure",
-             "delta_over_beta.svg": "synthesis.kinds.combing_chain.plots:delta_figure"},
-    compare="synthesis.kinds.combing_chain.plots:compare_figure",
-    solving="synthesis.kinds.combing_chain.solve:SOLVING",
-    bench="synthesis.kinds.combing_chain:bench_cases",
-    objectives={"max_window_margin": "largest smallest margin of the plant angle before the cut to the window, deg",
-                "min_chain_speed": "slowest chain(s) keeping every plant in the window: sum of gear speeds, m/s"},
-    example="combing_chain/redesign_window_80_100.toml",
-    coarse_check="synthesis.kinds.combing_chain.coarse:COARSE",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class CombingChain(Kind):
+    name = "combing_chain"
+    summary = "stem-combing chain: chain speed(s) so every plant is combed into a window before the cut (seed 002 §四.3 eq 12-13)"
+    objectives = {"max_window_margin": "largest smallest margin of the plant angle before the cut to the window, deg",
+                  "min_chain_speed": "slowest chain(s) keeping every plant in the window: sum of gear speeds, m/s"}
+    example = "combing_chain/redesign_window_80_100.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.combing_chain.spec import CombingChainSpec
+
+        return CombingChainSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.combing_chain.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.combing_chain.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.combing_chain.plots import delta_figure
+
+        return {"delta_over_beta.png": delta_figure,
+                "delta_over_beta.svg": delta_figure}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.combing_chain.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.combing_chain.coarse import COARSE
+
+        return COARSE
+
+
+KIND = CombingChain()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

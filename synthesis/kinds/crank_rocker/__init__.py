@@ -1,28 +1,71 @@
 """Kind crank_rocker: synthesis of a crank-rocker from K, rocker swing and minimum transmission angle."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="crank_rocker",
-    summary="crank-rocker from time ratio K, swing and minimum transmission angle (seed 001 §2.1.3)",
-    spec_model="synthesis.kinds.crank_rocker.spec:CrankRockerSpec",
-    check="synthesis.kinds.crank_rocker.check:run_check",
-    figures={"extremes.png": "synthesis.kinds.crank_rocker.plots:extremes_figure",
-             "extremes.svg": "synthesis.kinds.crank_rocker.plots:extremes_figure",
-             "paths.csv": "synthesis.kinds.crank_rocker.export:write_paths_csv",
-             "linkage.dxf": "synthesis.kinds.crank_rocker.export:write_linkage_dxf"},
-    compare="synthesis.kinds.crank_rocker.plots:compare_figure",
-    solving="synthesis.kinds.crank_rocker.solve:SOLVING",
-    bench="synthesis.kinds.crank_rocker:bench_cases",
-    objectives={"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
-                "max_transmission_angle": "largest smallest transmission angle over a turn, deg"},
-    example="picker/cai2020_crank_rocker_synthesis.toml",
-    coarse_check="synthesis.kinds.crank_rocker.coarse:COARSE",
-    poses="synthesis.kinds.crank_rocker.poses:POSES",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class CrankRocker(Kind):
+    name = "crank_rocker"
+    summary = "crank-rocker from time ratio K, swing and minimum transmission angle (seed 001 §2.1.3)"
+    objectives = {"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
+                  "max_transmission_angle": "largest smallest transmission angle over a turn, deg"}
+    example = "picker/cai2020_crank_rocker_synthesis.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
+
+        return CrankRockerSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.crank_rocker.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.crank_rocker.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.crank_rocker.export import write_linkage_dxf, write_paths_csv
+        from synthesis.kinds.crank_rocker.plots import extremes_figure
+
+        return {"extremes.png": extremes_figure,
+                "extremes.svg": extremes_figure,
+                "paths.csv": write_paths_csv,
+                "linkage.dxf": write_linkage_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.crank_rocker.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.crank_rocker.coarse import COARSE
+
+        return COARSE
+
+    def poses(self) -> Poses:
+        from synthesis.kinds.crank_rocker.poses import POSES
+
+        return POSES
+
+
+KIND = CrankRocker()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

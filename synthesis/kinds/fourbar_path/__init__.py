@@ -1,24 +1,67 @@
 """Kind fourbar_path: any four-bar coupler point through N target points, timing prescribed or free."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="fourbar_path",
-    summary="any four-bar coupler point through N target points, timing prescribed or free",
-    spec_model="synthesis.kinds.fourbar_path.spec:FourbarPathSpec",
-    check="synthesis.kinds.fourbar_path.check:run_check",
-    figures={"coupler_curve.png": "synthesis.kinds.fourbar_path.plots:coupler_curve_figure",
-             "coupler_curve.svg": "synthesis.kinds.fourbar_path.plots:coupler_curve_figure",
-             "linkage.gif": "synthesis.kinds.fourbar_path.plots:linkage_animation",
-             "paths.csv": "synthesis.kinds.fourbar_path.export:write_paths_csv",
-             "linkage.dxf": "synthesis.kinds.fourbar_path.export:write_linkage_dxf"},
-    compare="synthesis.kinds.fourbar_path.plots:compare_coupler_curves",
-    solving="synthesis.kinds.fourbar_path.solve:SOLVING",
-    objectives={"sum_squared_distance": "sum of squared distances of the coupler point to the targets, mm^2 "
-                                        "([solver] stop_at_objective ends the multistart at the first start, "
-                                        "in start order, that reaches it)"},
-    bench="synthesis.kinds.fourbar_path.bench:bench_cases",
-    example="fourbar_path/picking_arc.toml",
-    coarse_check="synthesis.kinds.fourbar_path.coarse:COARSE",
-    poses="synthesis.kinds.fourbar_path.poses:POSES",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
+
+
+class FourbarPath(Kind):
+    name = "fourbar_path"
+    summary = "any four-bar coupler point through N target points, timing prescribed or free"
+    objectives = {"sum_squared_distance": "sum of squared distances of the coupler point to the targets, mm^2 ([solver] stop_at_objective ends the multistart at the first start, in start order, that reaches it)"}
+    example = "fourbar_path/picking_arc.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
+
+        return FourbarPathSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.fourbar_path.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.fourbar_path.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.fourbar_path.export import write_linkage_dxf, write_paths_csv
+        from synthesis.kinds.fourbar_path.plots import coupler_curve_figure, linkage_animation
+
+        return {"coupler_curve.png": coupler_curve_figure,
+                "coupler_curve.svg": coupler_curve_figure,
+                "linkage.gif": linkage_animation,
+                "paths.csv": write_paths_csv,
+                "linkage.dxf": write_linkage_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.fourbar_path.plots import compare_coupler_curves
+
+        return compare_coupler_curves
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        from synthesis.kinds.fourbar_path.bench import bench_cases
+
+        return bench_cases(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.fourbar_path.coarse import COARSE
+
+        return COARSE
+
+    def poses(self) -> Poses:
+        from synthesis.kinds.fourbar_path.poses import POSES
+
+        return POSES
+
+
+KIND = FourbarPath()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from synthesis.core import coarse
 from synthesis.core.verdict import FINE
+from synthesis.kinds.fourbar_path.check import run_check
 
 
 def note(spec) -> str:
@@ -16,4 +17,4 @@ def note(spec) -> str:
             f"{FINE * spec.solver.samples})")
 
 
-COARSE = coarse.by_solver_samples("synthesis.kinds.fourbar_path.check:run_check", note)
+COARSE = coarse.by_solver_samples(run_check, note)

@@ -9,29 +9,67 @@ calibrate.py friction coefficient from a measured landing time
 scene.py, check.py, nlp.py, solve.py, plots.py: the guide_tube kind of the CLI
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="guide_tube",
-    summary="guide-tube wall angles for equal landing times (seed 001 §2.4)",
-    spec_model="synthesis.kinds.guide_tube.spec:GuideTubeSpec",
-    check="synthesis.kinds.guide_tube.check:run_check",
-    figures={"drop_times.png": "synthesis.kinds.guide_tube.plots:drop_times_figure",
-             "drop_times.svg": "synthesis.kinds.guide_tube.plots:drop_times_figure",
-             "drop_profiles.png": "synthesis.kinds.guide_tube.plots:drop_profile_figure",
-             "sensitivity.png": "synthesis.kinds.guide_tube.plots:sensitivity_figure"},
-    compare="synthesis.kinds.guide_tube.plots:compare_figures",
-    solving="synthesis.kinds.guide_tube.solve:SOLVING",
-    bench="synthesis.kinds.guide_tube:bench_cases",
-    objectives={"nearest": "smallest change of the free wall angles, deg^2",
-                "fastest": "earliest landing of tube 1, ms",
-                "uniform": "smallest worst plant-position error over the row spacings, mm"},
-    example="guide_tube/cai2020_delta2.toml",
-    coarse_check="synthesis.kinds.guide_tube.coarse:COARSE",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class GuideTube(Kind):
+    name = "guide_tube"
+    summary = "guide-tube wall angles for equal landing times (seed 001 §2.4)"
+    objectives = {"nearest": "smallest change of the free wall angles, deg^2",
+                  "fastest": "earliest landing of tube 1, ms",
+                  "uniform": "smallest worst plant-position error over the row spacings, mm"}
+    example = "guide_tube/cai2020_delta2.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.guide_tube.spec import GuideTubeSpec
+
+        return GuideTubeSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.guide_tube.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.guide_tube.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.guide_tube.plots import drop_profile_figure, drop_times_figure, sensitivity_figure
+
+        return {"drop_times.png": drop_times_figure,
+                "drop_times.svg": drop_times_figure,
+                "drop_profiles.png": drop_profile_figure,
+                "sensitivity.png": sensitivity_figure}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.guide_tube.plots import compare_figures
+
+        return compare_figures
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.guide_tube.coarse import COARSE
+
+        return COARSE
+
+
+KIND = GuideTube()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

@@ -2,5 +2,6 @@
 reaches it), so it is evaluated as it is."""
 
 from synthesis.core import coarse
+from synthesis.kinds.guide_tube.check import run_check
 
-COARSE = coarse.one_grid("synthesis.kinds.guide_tube.check:run_check")
+COARSE = coarse.one_grid(run_check)

@@ -1,31 +1,74 @@
 """Kind guide_way: the rotary-arm slide guide way of seed 003 (Liang et al.): claw path -> roller-centre line ->
 the two walls of the groove, reproduced from the paper's conics and redesigned as a smooth spline."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="guide_way",
-    summary="rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)",
-    spec_model="synthesis.kinds.guide_way.spec:GuideWaySpec",
-    check="synthesis.kinds.guide_way.check:run_check",
-    figures={"guide_way.png": "synthesis.kinds.guide_way.plots:guide_figure",
-             "guide_way.svg": "synthesis.kinds.guide_way.plots:guide_figure",
-             "cycle.png": "synthesis.kinds.guide_way.plots:cycle_figure",
-             "animation.gif": "synthesis.kinds.guide_way.plots:animation",
-             "centre_line.csv": "synthesis.kinds.guide_way.export:write_centre_csv",
-             "walls.csv": "synthesis.kinds.guide_way.export:write_walls_csv",
-             "guide_way.dxf": "synthesis.kinds.guide_way.export:write_dxf"},
-    compare="synthesis.kinds.guide_way.plots:compare_figures",
-    solving="synthesis.kinds.guide_way.solve:SOLVING",
-    bench="synthesis.kinds.guide_way:bench_cases",
-    objectives={"smoothness": "the claw path's squared third derivative, relative to the convex fit's"},
-    example="guide_way/smooth_redesign.toml",
-    explicit_design="synthesis.kinds.guide_way.check:explicit_design",
-    coarse_check="synthesis.kinds.guide_way.coarse:COARSE",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class GuideWay(Kind):
+    name = "guide_way"
+    summary = "rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)"
+    objectives = {"smoothness": "the claw path's squared third derivative, relative to the convex fit's"}
+    example = "guide_way/smooth_redesign.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.guide_way.spec import GuideWaySpec
+
+        return GuideWaySpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.guide_way.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.guide_way.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.guide_way.export import write_centre_csv, write_dxf, write_walls_csv
+        from synthesis.kinds.guide_way.plots import animation, cycle_figure, guide_figure
+
+        return {"guide_way.png": guide_figure,
+                "guide_way.svg": guide_figure,
+                "cycle.png": cycle_figure,
+                "animation.gif": animation,
+                "centre_line.csv": write_centre_csv,
+                "walls.csv": write_walls_csv,
+                "guide_way.dxf": write_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.guide_way.plots import compare_figures
+
+        return compare_figures
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.guide_way.coarse import COARSE
+
+        return COARSE
+
+    def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
+        from synthesis.kinds.guide_way.check import explicit_design
+
+        return explicit_design(loaded, data)
+
+
+KIND = GuideWay()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from synthesis.core import coarse
 from synthesis.kinds.guide_way.check import FINE
+from synthesis.kinds.guide_way.check import run_check
 
 
 def note(spec) -> str:
@@ -12,4 +13,4 @@ def note(spec) -> str:
             f"{FINE * spec.solver.samples_per_segment})")
 
 
-COARSE = coarse.by_solver_samples("synthesis.kinds.guide_way.check:run_check", note)
+COARSE = coarse.by_solver_samples(run_check, note)

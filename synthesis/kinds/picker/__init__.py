@@ -1,42 +1,108 @@
 """Kinds picker_double_crank and picker: the seed-001 seedling picker (double crank + crank-rocker)."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-DOUBLE_CRANK = Kind(
-    name="picker_double_crank",
-    summary="double crank whose clamp point follows the picking arc (seed 001 §2.1.2)",
-    spec_model="synthesis.kinds.picker.spec:PickerDoubleCrankSpec",
-    check="synthesis.kinds.picker.check:run_check",
-    figures={"path.png": "synthesis.kinds.picker.plots:path_figure",
-             "path.svg": "synthesis.kinds.picker.plots:path_figure",
-             "paths.csv": "synthesis.kinds.picker.export:write_double_crank_csv",
-             "linkage.dxf": "synthesis.kinds.picker.export:write_double_crank_dxf"},
-    compare="synthesis.kinds.picker.plots:compare_figure",
-    solving="synthesis.kinds.picker.solve:SOLVING",
-    bench="synthesis.kinds.picker:double_crank_bench_cases",
-    objectives={"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
-                "sum_of_squares": "sum of squared distances, mm^2"},
-    example="picker/picker_double_crank_redesign.toml",
-    coarse_check="synthesis.kinds.picker.coarse:DOUBLE_CRANK",
-)
-
-PICKER = Kind(        # evaluated only: the combined mechanism of two solved designs
-    name="picker",
-    summary="double crank and crank-rocker together at 60 r/min: clamp trajectory, pick/drop instants",
-    spec_model="synthesis.kinds.picker.spec:PickerSpec",
-    check="synthesis.kinds.picker.combined:run_check",
-    figures={"trajectory.png": "synthesis.kinds.picker.plots:picker_figure",
-             "trajectory.svg": "synthesis.kinds.picker.plots:picker_figure",
-             "animation.gif": "synthesis.kinds.picker.plots:picker_animation",
-             "paths.csv": "synthesis.kinds.picker.export:write_picker_csv",
-             "linkage.dxf": "synthesis.kinds.picker.export:write_picker_dxf"},
-    compare="synthesis.report.trajectory_overlay:trajectory_overlay",
-    example="picker/cai2020_picker.toml",
-    coarse_check="synthesis.kinds.picker.coarse:PICKER",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def double_crank_bench_cases(specs, seed: int = 0) -> list:
+class PickerDoubleCrank(Kind):
+    name = "picker_double_crank"
+    summary = "double crank whose clamp point follows the picking arc (seed 001 §2.1.2)"
+    objectives = {"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
+                  "sum_of_squares": "sum of squared distances, mm^2"}
+    example = "picker/picker_double_crank_redesign.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
+
+        return PickerDoubleCrankSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.picker.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.picker.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.picker.export import write_double_crank_csv, write_double_crank_dxf
+        from synthesis.kinds.picker.plots import path_figure
+
+        return {"path.png": path_figure,
+                "path.svg": path_figure,
+                "paths.csv": write_double_crank_csv,
+                "linkage.dxf": write_double_crank_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.picker.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.picker.coarse import DOUBLE_CRANK
+
+        return DOUBLE_CRANK
+
+
+DOUBLE_CRANK = PickerDoubleCrank()
+
+
+class Picker(Kind):
+    name = "picker"
+    summary = "double crank and crank-rocker together at 60 r/min: clamp trajectory, pick/drop instants"
+    example = "picker/cai2020_picker.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.picker.spec import PickerSpec
+
+        return PickerSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.picker.combined import run_check
+
+        return run_check(loaded)
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.picker.export import write_picker_csv, write_picker_dxf
+        from synthesis.kinds.picker.plots import picker_animation, picker_figure
+
+        return {"trajectory.png": picker_figure,
+                "trajectory.svg": picker_figure,
+                "animation.gif": picker_animation,
+                "paths.csv": write_picker_csv,
+                "linkage.dxf": write_picker_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.report.trajectory_overlay import trajectory_overlay
+
+        return trajectory_overlay
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.picker.coarse import PICKER
+
+        return PICKER
+
+
+PICKER = Picker()        # evaluated only: the combined mechanism of two solved designs
+
+#: the folder's two kinds, in the order they are listed
+KINDS = (DOUBLE_CRANK, PICKER)
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

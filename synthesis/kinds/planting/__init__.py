@@ -1,32 +1,76 @@
 """Kind planting_fourbar: the four-bar planting arm of seed 000, claw tip through P1-P6."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="planting_fourbar",
-    summary="four-bar planting arm, claw through P1-P6 (seed 000)",
-    spec_model="synthesis.kinds.planting.spec:PlantingFourbarSpec",
-    check="synthesis.kinds.planting.check:run_check",
-    figures={"trajectory.png": "synthesis.kinds.planting.plots:trajectory_figure",
-             "trajectory.svg": "synthesis.kinds.planting.plots:trajectory_figure",
-             "kinematics.png": "synthesis.kinds.planting.compare_plots:kinematics_of_one",
-             "linkage.png": "synthesis.kinds.planting.compare_plots:linkage_of_one",
-             "animation.gif": "synthesis.kinds.planting.compare_plots:animation_of_one",
-             "paths.csv": "synthesis.kinds.planting.export:write_paths_csv",
-             "linkage.dxf": "synthesis.kinds.planting.export:write_linkage_dxf"},
-    compare="synthesis.kinds.planting.compare_plots:overlay_figures",
-    solving="synthesis.kinds.planting.solve:SOLVING",
-    bench="synthesis.kinds.planting:bench_cases",
-    objectives={"nearest": "smallest change from the given design (squared, relative to the bounds)",
-                "robust": "largest smallest normalised rule margin (measured on the fine grid)",
-                "smooth": "smallest peak claw acceleration over a turn, mm/s^2"},
-    example="planting_arm/redesign_from_example1.toml",
-    coarse_check="synthesis.kinds.planting.coarse:COARSE",
-    poses="synthesis.kinds.planting.poses:POSES",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class PlantingFourbar(Kind):
+    name = "planting_fourbar"
+    summary = "four-bar planting arm, claw through P1-P6 (seed 000)"
+    objectives = {"nearest": "smallest change from the given design (squared, relative to the bounds)",
+                  "robust": "largest smallest normalised rule margin (measured on the fine grid)",
+                  "smooth": "smallest peak claw acceleration over a turn, mm/s^2"}
+    example = "planting_arm/redesign_from_example1.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.planting.spec import PlantingFourbarSpec
+
+        return PlantingFourbarSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.planting.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.planting.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.planting.compare_plots import animation_of_one, kinematics_of_one, linkage_of_one
+        from synthesis.kinds.planting.export import write_linkage_dxf, write_paths_csv
+        from synthesis.kinds.planting.plots import trajectory_figure
+
+        return {"trajectory.png": trajectory_figure,
+                "trajectory.svg": trajectory_figure,
+                "kinematics.png": kinematics_of_one,
+                "linkage.png": linkage_of_one,
+                "animation.gif": animation_of_one,
+                "paths.csv": write_paths_csv,
+                "linkage.dxf": write_linkage_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.planting.compare_plots import overlay_figures
+
+        return overlay_figures
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.planting.coarse import COARSE
+
+        return COARSE
+
+    def poses(self) -> Poses:
+        from synthesis.kinds.planting.poses import POSES
+
+        return POSES
+
+
+KIND = PlantingFourbar()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

@@ -6,27 +6,66 @@ nlp.py      minimax steering error as a smooth epigraph, outer locks as variable
 solve.py    the solve side (SOLVING); plots.py the figures (from result data only)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="steering_linkage",
-    summary="Ackermann steering trapezoid: Table 12 explained, minimax steering error (seed 002 Table 12)",
-    spec_model="synthesis.kinds.steering_linkage.spec:SteeringSpec",
-    check="synthesis.kinds.steering_linkage.check:run_check",
-    figures={"steering.png": "synthesis.kinds.steering_linkage.plots:steering_figure",
-             "steering.svg": "synthesis.kinds.steering_linkage.plots:steering_figure",
-             "paths.csv": "synthesis.kinds.steering_linkage.export:write_paths_csv",
-             "linkage.dxf": "synthesis.kinds.steering_linkage.export:write_linkage_dxf"},
-    compare="synthesis.kinds.steering_linkage.plots:compare_figure",
-    solving="synthesis.kinds.steering_linkage.solve:SOLVING",
-    bench="synthesis.kinds.steering_linkage:bench_cases",
-    objectives={"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"},
-    example="steering/steering_redesign_40.toml",
-    coarse_check="synthesis.kinds.steering_linkage.coarse:COARSE",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class SteeringLinkage(Kind):
+    name = "steering_linkage"
+    summary = "Ackermann steering trapezoid: Table 12 explained, minimax steering error (seed 002 Table 12)"
+    objectives = {"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"}
+    example = "steering/steering_redesign_40.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.steering_linkage.spec import SteeringSpec
+
+        return SteeringSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.steering_linkage.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.steering_linkage.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.steering_linkage.export import write_linkage_dxf, write_paths_csv
+        from synthesis.kinds.steering_linkage.plots import steering_figure
+
+        return {"steering.png": steering_figure,
+                "steering.svg": steering_figure,
+                "paths.csv": write_paths_csv,
+                "linkage.dxf": write_linkage_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.steering_linkage.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.steering_linkage.coarse import COARSE
+
+        return COARSE
+
+
+KIND = SteeringLinkage()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases

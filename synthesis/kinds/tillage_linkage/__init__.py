@@ -6,28 +6,67 @@ nlp.py      extremes and soil entry/exit as NLP variables with exact structural 
 solve.py    the solve side (SOLVING); plots.py the figures (from result data only)
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from synthesis.core.kind import Kind
 
-KIND = Kind(
-    name="tillage_linkage",
-    summary="distorted rotary tillage linkage: crank, bar through a roller pair, tool path (seed 002 eq 3-11)",
-    spec_model="synthesis.kinds.tillage_linkage.spec:TillageSpec",
-    check="synthesis.kinds.tillage_linkage.check:run_check",
-    figures={"tillage.png": "synthesis.kinds.tillage_linkage.plots:tillage_figure",
-             "tillage.svg": "synthesis.kinds.tillage_linkage.plots:tillage_figure",
-             "paths.csv": "synthesis.kinds.tillage_linkage.export:write_paths_csv",
-             "linkage.dxf": "synthesis.kinds.tillage_linkage.export:write_linkage_dxf"},
-    compare="synthesis.kinds.tillage_linkage.plots:compare_figure",
-    solving="synthesis.kinds.tillage_linkage.solve:SOLVING",
-    bench="synthesis.kinds.tillage_linkage:bench_cases",
-    objectives={"min_bar_length": "shortest tillage bar c meeting every rule, mm",
-                "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"},
-    example="tillage/tillage_redesign.toml",
-    coarse_check="synthesis.kinds.tillage_linkage.coarse:COARSE",
-)
+if TYPE_CHECKING:
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
 
 
-def bench_cases(specs, seed: int = 0) -> list:
+class TillageLinkage(Kind):
+    name = "tillage_linkage"
+    summary = "distorted rotary tillage linkage: crank, bar through a roller pair, tool path (seed 002 eq 3-11)"
+    objectives = {"min_bar_length": "shortest tillage bar c meeting every rule, mm",
+                  "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"}
+    example = "tillage/tillage_redesign.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.tillage_linkage.spec import TillageSpec
+
+        return TillageSpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.tillage_linkage.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.tillage_linkage.solve import SOLVING
+
+        return SOLVING
+
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.tillage_linkage.export import write_linkage_dxf, write_paths_csv
+        from synthesis.kinds.tillage_linkage.plots import tillage_figure
+
+        return {"tillage.png": tillage_figure,
+                "tillage.svg": tillage_figure,
+                "paths.csv": write_paths_csv,
+                "linkage.dxf": write_linkage_dxf}
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.tillage_linkage.plots import compare_figure
+
+        return compare_figure
+
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+        return bench_set(specs, seed)
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.tillage_linkage.coarse import COARSE
+
+        return COARSE
+
+
+KIND = TillageLinkage()
+
+
+def bench_set(specs, seed: int = 0) -> list:
     """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
     from synthesis.bench_generic import library_cases
