@@ -180,3 +180,105 @@ def test_pruning_the_error_lines_is_linear_in_their_number():
                       "s.hold_near.2.0.value: unknown field",
                       "s.hold_near.3.0.value: unknown field",
                       "s.hold_near.3.1: expected a number in mm, written without a unit, got 'x'"]
+
+
+# --- a deadline on every read of the scheduler's handshake -------------------------------------------------------
+
+#: the handshake a dask scheduler (distributed 2026.8) sends first: its length, then one frame, msgpack of
+#: {"compression": None, "python": [3, 11, 7], "pickle-protocol": 5}
+DASK_HANDSHAKE = (bytes.fromhex("3a00000000000000") + bytes.fromhex("0100000000000000") + bytes.fromhex("2a00000000000000")
+                  + b"\x83\xabcompression\xc0\xa6python\x93\x03\x0b\x07\xafpickle-protocol\x05")
+
+
+class _Peer:
+    """A TCP server on a free loopback port sending ``greetings[i]`` on its i-th connection (the last one for every
+    later connection), then holding the connection open and silent."""
+
+    def __init__(self, *greetings: bytes):
+        import socket
+        import threading
+
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.greetings, self.held = greetings, []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            conn.sendall(self.greetings[min(len(self.held), len(self.greetings) - 1)])
+            self.held.append(conn)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for conn in self.held:
+            conn.close()
+        self.sock.close()
+
+
+@pytest.mark.parametrize("greeting, complaint", [
+    (DASK_HANDSHAKE[:8], "announced a 58-byte message and did not send it within 0.5 s"),
+    (DASK_HANDSHAKE[:8] + b"\xff" * 58, "does not speak the dask protocol (its first message announces "
+                                        "18446744073709551615 frames)"),
+    (DASK_HANDSHAKE[:8] + DASK_HANDSHAKE[8:24] + b"\xc1" * 42, "does not speak the dask protocol (its first frame is "
+                                                               "not msgpack"),
+    (DASK_HANDSHAKE[:8] + DASK_HANDSHAKE[8:20], "announced a 58-byte message and did not send it"),
+])
+def test_a_peer_sending_a_plausible_length_then_silence_or_garbage_is_refused_by_the_deadline(greeting, complaint):
+    """A plausible 8-byte length passed the probe: dask then waited for ever for the rest (over 120 s), or unpacked
+    the garbage into a struct.error traceback.  Now the probe reads and checks the whole handshake by its deadline."""
+    from synthesis.core.cluster import probe_scheduler
+    from synthesis.errors import AgrisynthError
+
+    with _Peer(greeting) as peer:
+        t0 = time.perf_counter()
+        with pytest.raises(AgrisynthError) as err:
+            probe_scheduler(peer.address, timeout=0.5)
+        assert time.perf_counter() - t0 < 2.0
+    message = str(err.value)
+    assert err.value.exit_code == 2 and complaint in message and "\n" not in message, message
+
+
+def test_a_real_dask_handshake_passes_the_probe():
+    from synthesis.core.cluster import handshake_problem, probe_scheduler
+
+    assert handshake_problem(DASK_HANDSHAKE[8:]) is None
+    with _Peer(DASK_HANDSHAKE) as peer:
+        probe_scheduler(peer.address, timeout=0.5)
+
+
+@pytest.mark.parametrize("second", [DASK_HANDSHAKE[:8], DASK_HANDSHAKE])
+def test_a_peer_that_passes_the_probe_then_stops_answering_dask_is_refused_by_the_deadline(second):
+    """dask's own connection reads the scheduler's handshake with no deadline: a peer that greets the probe and then
+    sends a length and nothing more would hold Client() for ever; one that greets and then never answers is dask's
+    own timeout.  Both: exit 2, one line, within twice the connect timeout."""
+    pytest.importorskip("distributed")
+    from synthesis.core.cluster import _connected_client, probe_scheduler
+    from synthesis.errors import AgrisynthError
+
+    with _Peer(DASK_HANDSHAKE, second) as peer:
+        probe_scheduler(peer.address, timeout=1.0)
+        t0 = time.perf_counter()
+        with pytest.raises(AgrisynthError) as err:
+            _connected_client(peer.address, timeout=1.0)
+        assert time.perf_counter() - t0 < 4.0
+    message = str(err.value)
+    assert err.value.exit_code == 2 and "\n" not in message and message.startswith(f"--scheduler {peer.address}: ")
+    assert ("no dask handshake within 2 s" if second == DASK_HANDSHAKE[:8] else "cannot reach a dask scheduler") \
+        in message, message
+
+
+def test_solve_with_a_scheduler_sending_a_length_then_garbage_exits_2_in_one_line(tmp_path):
+    with _Peer(DASK_HANDSHAKE[:8] + b"\xff" * 58) as peer:
+        proc = agrisynth("solve", LIBRARY / "planting_arm" / "redesign_from_example1.toml", "--starts", "2",
+                         "--out", tmp_path, "--scheduler", peer.address, timeout=60)
+    line = _one_line_error(proc)
+    assert line.startswith(f"error: --scheduler {peer.address}: the peer does not speak the dask protocol")
+    assert list(tmp_path.iterdir()) == []

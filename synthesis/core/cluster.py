@@ -86,31 +86,109 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
     except OSError as exc:
         raise AgrisynthError(f"--scheduler {address}: cannot reach a dask scheduler there "
                              f"({exc.strerror or exc})") from None
-    head = b""
-    try:
-        with sock:
-            while len(head) < 8:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise socket.timeout
-                sock.settimeout(left)
-                chunk = sock.recv(8 - len(head))
-                if not chunk:
-                    break
-                head += chunk
-    except socket.timeout:
-        raise AgrisynthError(f"--scheduler {address}: the peer accepted the connection but sent nothing "
-                             f"within {timeout:g} s; a dask scheduler greets at once, so this is not one") from None
-    except OSError as exc:
-        raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
-    if len(head) < 8:
-        raise AgrisynthError(f"--scheduler {address}: the peer closed the connection without a dask handshake; "
+    def receive(count: int) -> bytes:
+        """Up to ``count`` bytes (fewer: the peer closed), all by the deadline (socket.timeout otherwise)."""
+        got = bytearray()
+        while len(got) < count:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise socket.timeout
+            sock.settimeout(left)
+            chunk = sock.recv(min(count - len(got), 65536))
+            if not chunk:
+                break
+            got += chunk
+        return bytes(got)
+
+    with sock:
+        try:
+            head = receive(8)
+        except socket.timeout:
+            raise AgrisynthError(f"--scheduler {address}: the peer accepted the connection but sent nothing "
+                                 f"within {timeout:g} s; a dask scheduler greets at once, so this is not one") from None
+        except OSError as exc:
+            raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+        if len(head) < 8:
+            raise AgrisynthError(f"--scheduler {address}: the peer closed the connection without a dask handshake; "
+                                 f"not a dask scheduler")
+        (length,) = struct.unpack("<Q", head)
+        if not 8 <= length <= MAX_HANDSHAKE_BYTES:
+            what = " (it speaks HTTP: a web server or the dashboard port?)" if head.startswith(b"HTTP") else ""
+            raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol{what}; "
+                                 f"it began with {head!r}")
+        # the length alone proves little (8 bytes may read as a plausible one): read the whole first message by the
+        # same deadline and check that it is dask's handshake -- dask reads it with no deadline and unpacks whatever
+        # arrives (a peer silent after the length hung agrisynth for good; garbage after it was a struct.error)
+        try:
+            body = receive(length)
+        except socket.timeout:
+            raise AgrisynthError(f"--scheduler {address}: the peer announced a {length}-byte message and did not "
+                                 f"send it within {timeout:g} s; a dask scheduler sends its handshake at once, so "
+                                 f"this is not one") from None
+        except OSError as exc:
+            raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+    if len(body) < length:
+        raise AgrisynthError(f"--scheduler {address}: the peer closed the connection within its first message; "
                              f"not a dask scheduler")
-    (length,) = struct.unpack("<Q", head)
-    if not 8 <= length <= MAX_HANDSHAKE_BYTES:
-        what = " (it speaks HTTP: a web server or the dashboard port?)" if head.startswith(b"HTTP") else ""
-        raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol{what}; "
-                             f"it began with {head!r}")
+    problem = handshake_problem(body)
+    if problem:
+        raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol ({problem})")
+
+
+def handshake_problem(message: bytes) -> str | None:
+    """What keeps ``message`` (a first message's bytes after its length) from being a dask scheduler's handshake, or
+    None: a count of frames, their lengths (8 bytes each, little-endian) and the frames, the first of them a msgpack
+    map naming the peer's ``python`` and ``compression`` (distributed.comm.core's handshake_info).  Read here with
+    struct and msgpack alone: dask's own reader would unpickle what it is sent."""
+    import struct
+
+    import msgpack
+
+    if len(message) < 8:
+        return "its first message is too short to hold a frame count"
+    (count,) = struct.unpack_from("<Q", message)
+    if not 1 <= count <= 64 or len(message) < 8 * (1 + count):
+        return f"its first message announces {count} frames"
+    lengths = struct.unpack_from(f"<{count}Q", message, 8)
+    if 8 * (1 + count) + sum(lengths) != len(message):
+        return "its first message's frames do not add up to its length"
+    start = 8 * (1 + count)
+    try:
+        info = msgpack.unpackb(message[start:start + lengths[0]], raw=False, strict_map_key=False)
+    except Exception as exc:            # noqa: BLE001 - any failure to unpack says the same: not dask's handshake
+        return f"its first frame is not msgpack: {type(exc).__name__}"
+    if not isinstance(info, dict) or "python" not in info or "compression" not in info:
+        return "its first message is not a dask handshake"
+    return None
+
+
+def _connected_client(scheduler: str, timeout: float = CONNECT_TIMEOUT_S):
+    """``Client(scheduler)`` within ``timeout`` seconds (twice it for the whole: the connection, dask's handshake and
+    the first exchange), or AgrisynthError (exit 2).  dask reads the scheduler's handshake with no deadline: a peer
+    that answered the probe and then stays silent would hold ``Client()`` for ever, so it is made in a daemon thread
+    that is left behind (the run ends with the error) when it does not return in time."""
+    made: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            made["client"] = Client(scheduler, timeout=f"{timeout:g}s")
+        except BaseException as exc:       # noqa: BLE001 - carried to the caller, who says it in one line
+            made["error"] = exc
+
+    thread = threading.Thread(target=connect, name="agrisynth-dask-connect", daemon=True)
+    thread.start()
+    thread.join(2 * timeout)
+    if thread.is_alive():
+        raise AgrisynthError(f"--scheduler {scheduler}: no dask handshake within {2 * timeout:g} s (the peer "
+                             f"accepted the connection and then stopped answering); not a usable dask scheduler")
+    if "error" in made:
+        exc = made["error"]
+        if not isinstance(exc, Exception):
+            raise exc
+        said = f": {str(exc)[:160]}" if str(exc) else ""
+        raise AgrisynthError(f"--scheduler {scheduler}: cannot reach a dask scheduler there "
+                             f"({type(exc).__name__}{said})") from None
+    return made["client"]
 
 
 def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
@@ -128,10 +206,7 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
     indices = list(range(len(starts))) if indices is None else list(indices)
     outcomes: dict[int, Any] = {}
     probe_scheduler(scheduler)
-    try:
-        client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
-    except (OSError, ValueError, TimeoutError) as exc:
-        raise AgrisynthError(f"--scheduler {scheduler}: cannot reach a dask scheduler there ({exc})") from None
+    client = _connected_client(scheduler)
     with client:
         name = f"agrisynth-solver-{uuid.uuid4().hex}"
         try:
