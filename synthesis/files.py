@@ -1,7 +1,8 @@
 """Reading files a user names (spec files, result files, run folders' markers and start logs) without ever hanging
 or exhausting memory: every file agrisynth reads from a path it was given goes through :func:`open_regular`
 (a regular file of bounded size, never a FIFO or a device), and every JSON one through :func:`parse_json`
-(UTF-8, bounded nesting, finite numbers), each refusal one line naming the file."""
+(UTF-8, bounded nesting, finite numbers), each refusal one line naming the file.  :func:`loads` is that JSON
+parser alone, for JSON that is no file (the studio's request bodies)."""
 
 from __future__ import annotations
 
@@ -105,7 +106,7 @@ def parse_json(raw: bytes, path: Path | str, error: type[Exception], name: str =
     except UnicodeDecodeError as exc:
         raise error(f"{path}: not a UTF-8 text file (byte {exc.start}); {not_ours}") from None
     try:
-        data = json.loads(text, parse_constant=_no_constant, parse_float=_finite_float)
+        return loads(text)
     except json.JSONDecodeError as exc:
         # a cut-off write leaves an object that opens and never closes; a file that does not even open one is not
         # JSON at all (a report.html, a spec): say so, not "truncated"
@@ -114,13 +115,21 @@ def parse_json(raw: bytes, path: Path | str, error: type[Exception], name: str =
         what = "truncated" if not text.rstrip().endswith(("}", "]")) else "not valid JSON"
         raise error(f"{path}: {what} ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
                     f"{redo or not_ours}") from None
-    except RecursionError:
-        raise error(f"{path}: nested too deeply; {not_ours}") from None
-    except ValueError as exc:       # NaN / Infinity, or an integer of thousands of digits
+    except ValueError as exc:       # nested too deeply, NaN / Infinity, or an integer of thousands of digits
         what = "a number of thousands of digits" if "integer string conversion" in str(exc) else str(exc)[:120]
         raise error(f"{path}: {what}; {not_ours}") from None
+
+
+def loads(text: str | bytes) -> Any:
+    """``json.loads(text)`` refusing (ValueError, one line) what no agrisynth input holds: NaN and infinity, a number
+    no float holds, nesting deeper than :data:`MAX_JSON_DEPTH` (or than the parser's recursion allows).  The one
+    JSON parser of input: files (:func:`parse_json`) and the studio's request bodies."""
+    try:
+        data = json.loads(text, parse_constant=_no_constant, parse_float=_finite_float)
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
     if _too_deep(data, MAX_JSON_DEPTH):
-        raise error(f"{path}: nested more than {MAX_JSON_DEPTH} levels deep; {not_ours}")
+        raise ValueError(f"nested more than {MAX_JSON_DEPTH} levels deep")
     return data
 
 

@@ -282,3 +282,53 @@ def test_solve_with_a_scheduler_sending_a_length_then_garbage_exits_2_in_one_lin
     line = _one_line_error(proc)
     assert line.startswith(f"error: --scheduler {peer.address}: the peer does not speak the dask protocol")
     assert list(tmp_path.iterdir()) == []
+
+
+# --- the studio: nested JSON is bad input, a body that never comes has a deadline -----------------------------------
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory):
+    pytest.importorskip("starlette")
+    from studio_fixtures import STUDIO_SPECS, running_studio
+
+    with running_studio(STUDIO_SPECS["crank_rocker"], tmp_path_factory.mktemp("studio")) as studio:
+        yield studio
+
+
+@pytest.mark.parametrize("body, reason", [
+    (b"[" * 30000 + b"]" * 30000, "nested too deeply"),                 # the parser's recursion: was a 500
+    (b'{"values": ' + b"[" * 100 + b"]" * 100 + b"}", "nested more than 64 levels deep"),
+])
+def test_the_studio_answers_deeply_nested_json_400(studio, body, reason):
+    from studio_fixtures import request
+
+    status, _, raw = request(studio, "POST", "/api/evaluate", body)
+    assert (status, json.loads(raw)) == (400, {"error": f"request: not JSON ({reason})"})
+
+
+def test_the_studio_answers_a_body_that_never_comes_within_its_deadline(studio):
+    """A client that declares 100 bytes and sends none was held with no answer for over 70 s: now 408 at the
+    deadline (0.5 s here, 10 s by default) and the connection closed."""
+    import socket
+
+    studio.body_seconds = 0.5
+    try:
+        with socket.create_connection(("127.0.0.1", studio.port), timeout=10) as conn:
+            conn.sendall(f"POST /api/evaluate HTTP/1.1\r\nHost: 127.0.0.1:{studio.port}\r\nX-Studio-Token: "
+                         f"{studio.token}\r\nContent-Type: application/json\r\nContent-Length: 100\r\n\r\n".encode())
+            t0 = time.perf_counter()
+            answer = b""
+            while chunk := conn.recv(65536):          # until the server closes the connection
+                answer += chunk
+            took = time.perf_counter() - t0
+    finally:
+        from synthesis.studio.server import BODY_SECONDS
+
+        studio.body_seconds = BODY_SECONDS
+    head, _, body = answer.partition(b"\r\n\r\n")
+    assert head.startswith(b"HTTP/1.1 408 ") and b"connection: close" in head.lower(), head
+    assert json.loads(body) == {"error": "request: the body did not arrive within 0.5 s"}
+    assert 0.4 < took < 5, took
+    from studio_fixtures import api
+
+    assert api(studio, "/api/session")["kind"] == "crank_rocker"        # the studio serves on

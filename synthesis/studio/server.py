@@ -9,7 +9,6 @@ the server names every file it writes, inside the folder chosen at start-up.
 
 from __future__ import annotations
 
-import json
 import re
 import asyncio
 import secrets
@@ -44,6 +43,9 @@ SECURITY_HEADERS = {
 MAX_BODY = 64 * 1024
 #: most starts a solve from the page may ask for
 MAX_STARTS = 256
+#: seconds a request's body may take to arrive (a few hundred bytes from this machine take a millisecond): a client
+#: that declares a body and never sends it is answered 408 and its connection closed, not held for ever
+BODY_SECONDS = 10.0
 
 
 class Refused(Exception):
@@ -53,11 +55,6 @@ class Refused(Exception):
     def __init__(self, status: int, message: str):
         super().__init__(message)
         self.status = status
-
-
-def _refuse_constant(name: str):
-    """json.loads's hook for NaN, Infinity and -Infinity, which Python reads but JSON does not have."""
-    raise ValueError(f"{name} is not JSON")
 
 
 class Studio:
@@ -86,6 +83,7 @@ class Studio:
             raise OutputError(f"--out {out}: cannot create the studio's folder ({exc.strerror})") from None
         self.job: SolveJob | None = None
         self.grace = GRACE                        # seconds a cancelled worker gets before it is killed
+        self.body_seconds = BODY_SECONDS          # seconds a request's body may take to arrive
         self._solving = threading.Lock()          # "is a solve running?" and starting one are one step
         self._evaluating = threading.Lock()       # one evaluation at a time (two cores; CasADi calls)
         self._writing = threading.Lock()          # file names are picked and written one at a time
@@ -156,16 +154,21 @@ class Studio:
     def _answer(data: Any, status: int = 200) -> JSONResponse:
         return JSONResponse(data, status_code=status, headers=SECURITY_HEADERS)
 
-    @staticmethod
-    async def _body(request: Request, keys: frozenset[str]) -> dict:
+    async def _body(self, request: Request, keys: frozenset[str]) -> dict:
+        from synthesis.files import loads
+
         if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
             raise AgrisynthError("request: expected Content-Type application/json")
-        raw = await request.body()
-        if len(raw) > MAX_BODY:
-            raise AgrisynthError(f"request: body of {len(raw)} bytes is larger than {MAX_BODY}")
+        declared = request.headers.get("content-length", "")
+        if declared.isdigit() and int(declared) > MAX_BODY:
+            raise AgrisynthError(f"request: body of {declared} bytes is larger than {MAX_BODY}")
         try:
-            data = json.loads(raw, parse_constant=_refuse_constant)
-        except ValueError as exc:
+            raw = await asyncio.wait_for(self._received(request), self.body_seconds)
+        except asyncio.TimeoutError:
+            raise Refused(408, f"request: the body did not arrive within {self.body_seconds:g} s") from None
+        try:
+            data = loads(raw)
+        except ValueError as exc:       # not JSON, NaN, nested too deeply (a RecursionError was a 500)
             raise AgrisynthError(f"request: not JSON ({str(exc)[:60]})") from None
         if not isinstance(data, dict):
             raise AgrisynthError("request: expected a JSON object")
@@ -173,6 +176,16 @@ class Studio:
         if unknown:
             raise AgrisynthError(f"request: unknown key {unknown[0]!r} (expected: {', '.join(sorted(keys)) or 'none'})")
         return data
+
+    @staticmethod
+    async def _received(request: Request) -> bytes:
+        """The request's body, read only up to MAX_BODY + 1 bytes (a larger one is refused, not held)."""
+        raw = bytearray()
+        async for chunk in request.stream():
+            raw += chunk
+            if len(raw) > MAX_BODY:
+                raise AgrisynthError(f"request: body of more than {MAX_BODY} bytes (at most {MAX_BODY})")
+        return bytes(raw)
 
     async def _handle(self, request: Request, work, keys: frozenset[str] = frozenset()) -> JSONResponse:
         """Run ``work(body)`` off the event loop; ``keys``: the only keys a POST body may have."""
@@ -182,7 +195,10 @@ class Studio:
             body = await self._body(request, keys) if request.method == "POST" else {}
             return self._answer(await run_in_threadpool(work, body))
         except Refused as exc:
-            return self._answer({"error": str(exc)}, exc.status)
+            response = self._answer({"error": str(exc)}, exc.status)
+            if exc.status == 408:       # the rest of the body may still come: the connection is not reused
+                response.headers["connection"] = "close"
+            return response
         except AgrisynthError as exc:
             return self._answer({"error": str(exc)}, 400)
         except Exception as exc:          # a bug, not bad input: one line to the page, never a traceback
