@@ -10,10 +10,17 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis.kinds.fourbar_path.construction import joint_positions, transmission_deg
+from synthesis.kinds.fourbar_path.construction import joint_positions
 
 ROOT = Path(__file__).resolve().parent.parent
 PATH_LIBRARY = ROOT / "problems" / "fourbar_path"
+
+
+def transmission_deg(joints: dict) -> np.ndarray:
+    """The transmission angle: the angle at B between B -> A and B -> O' (deg, in [0, 180]), measured between the
+    joint positions (the oracle's, not the rules' closed form)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.degrees(np.abs(np.angle((joints["A"] - joints["B"]) / (joints["O'"] - joints["B"]))))
 
 
 def _value(v) -> str:

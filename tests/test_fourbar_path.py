@@ -9,10 +9,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from fourbar_path_support import PATH_LIBRARY, cli, independent_check, toml_text
+from fourbar_path_support import PATH_LIBRARY, cli, independent_check, toml_text, transmission_deg
 from synthesis.errors import SpecError
 from synthesis.kinds.fourbar_path.check import evaluate
-from synthesis.kinds.fourbar_path.construction import joint_positions, transmission_deg
+from synthesis.kinds.fourbar_path.construction import joint_positions
 from synthesis.kinds.fourbar_path.nlp import PathNLP
 from synthesis.kinds.fourbar_path.synthetic import random_crank_rocker, truth_data, truth_spec
 from synthesis.kinds.picker.kinematics.arc import picking_arc

@@ -36,9 +36,3 @@ def joint_positions(design: dict, theta, branch: int) -> dict[str, np.ndarray]:
         shift = design["x0"] + 1j * np.asarray(design["y0"])
         place = lambda z: shift + turn * z   # noqa: E731
     return {"O": place(np.zeros_like(a)), "A": place(a), "B": place(b), "O'": place(r1 + 0 * a), "P": place(p)}
-
-
-def transmission_deg(joints: dict) -> np.ndarray:
-    """Angle at B between B -> A and B -> O' (deg, in [0, 180]), measured between the joint positions."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.degrees(np.abs(np.angle((joints["A"] - joints["B"]) / (joints["O'"] - joints["B"]))))

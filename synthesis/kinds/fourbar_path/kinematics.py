@@ -61,15 +61,6 @@ def cos_transmission(theta2, r1, r2, r3, r4):
     return (r3 * r3 + r4 * r4 - d2) / (2.0 * r3 * r4)
 
 
-def closure_slacks(theta2, r1, r2, r3, r4) -> tuple:
-    """(d^2 - (r3 - r4)^2, (r3 + r4)^2 - d^2): both >= 0 iff the loop closes at theta2 (mm^2).
-
-    Smooth (polynomial) rows for the optimiser, equivalent to fourbar.assembly_height_sq >= 0.
-    """
-    d2 = fourbar.diagonal_sq(theta2, r1, r2)
-    return (d2 - (r3 - r4) ** 2, (r3 + r4) ** 2 - d2)
-
-
 def design_parameters(values: dict) -> list:
     """p for :func:`coupler_point` from result.json/spec values (theta0 deg -> rad)."""
     return [values[n] for n in VARIABLES[:-1]] + [values["theta0"] * (ca.pi / 180.0)]

@@ -18,7 +18,7 @@ from pydantic import Field, PrivateAttr, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
-    ACUTE, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
+    ACUTE, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, starts_field, value_of,
 )
 
@@ -202,6 +202,3 @@ class GuideTubeSpec(ProblemSpec):
     def given_angles(self) -> dict[str, float]:
         """tube name -> the wall angle `check` evaluates (deg)."""
         return {t.name: value_of(t.angle) for t in self.tubes}
-
-    def free_tubes(self) -> list[TubeSection]:
-        return [t for t in self.tubes if isinstance(t.angle, FreeVariable)]
