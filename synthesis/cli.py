@@ -1129,10 +1129,12 @@ def _main() -> None:
 
         err_console.print("interrupted")
         sys.exit(128 + interrupt.signal_of(exc))
-    except SystemError as exc:
+    except (SystemError, ImportError) as exc:
         from synthesis.core import interrupt
 
-        if not interrupt.caused_by_signal(exc):         # a signal that fired inside a C callback: an interruption
+        # a signal that fired inside a C callback (SystemError) or a C extension's initialisation (an import the
+        # command makes: ImportError "initialization failed"): an interruption
+        if not (interrupt.caused_by_signal(exc) or isinstance(exc, ImportError) and interrupt.pending() is not None):
             raise
         err_console.print("interrupted")
         sys.exit(128 + interrupt.signal_of(exc))

@@ -332,3 +332,80 @@ def test_the_studio_answers_a_body_that_never_comes_within_its_deadline(studio):
     from studio_fixtures import api
 
     assert api(studio, "/api/session")["kind"] == "crank_rocker"        # the studio serves on
+
+
+# --- a signal in the first moments of start-up -------------------------------------------------------------------
+
+def _signalled_at_import(tmp_path: Path, module: str, signum: int, *args: str):
+    """``agrisynth ARGS`` through the program's entry point, with ``signum`` sent to itself the moment ``module`` is
+    first imported (an import finder): a signal landing exactly there, every time."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "signalled_import.py"
+    script.write_text(
+        "import os, sys\n"
+        "class Signalling:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        f"        if name == {module!r}:\n"
+        "            sys.meta_path.remove(self)\n"
+        f"            os.kill(os.getpid(), {int(signum)})\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, Signalling())\n"
+        "from synthesis.program import main\n"
+        f"sys.argv = ['agrisynth', *{list(args)!r}]\n"
+        "main()\n")
+    return subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+
+
+@pytest.mark.parametrize("module", ["synthesis.cli", "casadi", "synthesis.kinds"])
+def test_a_sigterm_during_start_up_is_exit_143_and_one_line(tmp_path, module):
+    """A SIGTERM before the command's handlers existed ended the run silently (killed by the signal, no word, exit
+    -15): at the command line's import (0.1 s in), at casadi's (the rules'), at the kind registry's (the check
+    command's own imports, before it installs its handlers).  The entry point now installs them first."""
+    import signal
+
+    proc = _signalled_at_import(tmp_path, module, signal.SIGTERM, "check",
+                                str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--out", str(tmp_path / "out"))
+    assert proc.returncode == 143 and proc.stderr.strip() == "interrupted", (proc.returncode, proc.stderr[-2000:])
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_studio_through_the_entry_point_keeps_its_signals(tmp_path):
+    """The start-up handlers give way when the studio serves: started ignoring SIGINT (a script's `&`), SIGINT leaves
+    it serving, and SIGTERM ends it by the signal, as `agrisynth studio` documents."""
+    import signal
+    import subprocess
+    import sys
+    import urllib.request
+
+    from studio_fixtures import STUDIO_SPECS
+
+    def ignoring_sigint():
+        for sig in (signal.SIGHUP, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_DFL)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    pytest.importorskip("starlette")
+    proc = subprocess.Popen([sys.executable, "-m", "synthesis.program", "studio", str(STUDIO_SPECS["crank_rocker"]),
+                             "--out", str(tmp_path / "studio")], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=ignoring_sigint)
+    try:
+        url = next(word for _ in range(5) for word in proc.stdout.readline().split() if word.startswith("http://"))
+        for _ in range(200):
+            try:
+                assert b"agrisynth studio" in urllib.request.urlopen(url, timeout=10).read()
+                break
+            except OSError:
+                time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        with pytest.raises(subprocess.TimeoutExpired):
+            proc.wait(timeout=2)
+        assert b"agrisynth studio" in urllib.request.urlopen(url, timeout=10).read()
+        proc.send_signal(signal.SIGTERM)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == -signal.SIGTERM

@@ -19,6 +19,7 @@ import threading
 
 _pending: int | None = None      # the first signal received since install()
 _defer_depth = 0
+_replaced: dict = {}             # signal -> the disposition install() replaced (restore() puts it back)
 
 
 class Interrupted(Exception):
@@ -42,19 +43,39 @@ def _handler(signum, frame) -> None:
         raise KeyboardInterrupt
 
 
-def install() -> None:
-    """Handle SIGINT and SIGTERM in this (main) process as described above (a no-op off the main thread)."""
+def install(keep_ignored: bool = False) -> None:
+    """Handle SIGINT and SIGTERM in this (main) process as described above (a no-op off the main thread).
+    ``keep_ignored``: a signal the process was started ignoring stays ignored (the program's entry point, which
+    installs the handlers before anything else, for every command: a studio started with ``&`` keeps ignoring
+    SIGINT).  The dispositions replaced are kept for :func:`restore`."""
     global _pending
     _pending = None
     if threading.current_thread() is not threading.main_thread():
         return
-    signal.signal(signal.SIGINT, _handler)
-    signal.signal(signal.SIGTERM, _handler)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        current = signal.getsignal(sig)
+        if keep_ignored and current is signal.SIG_IGN:
+            continue
+        if current is not _handler:
+            _replaced.setdefault(sig, current)
+        signal.signal(sig, _handler)
+
+
+def restore() -> None:
+    """Give SIGINT and SIGTERM back the dispositions :func:`install` replaced (for a command whose signals act as the
+    process was started with: the studio, which ends by SIGTERM)."""
+    global _pending
+    _pending = None
+    if threading.current_thread() is threading.main_thread():
+        for sig, disposition in _replaced.items():
+            signal.signal(sig, disposition)
+        _replaced.clear()
 
 
 def uninstall() -> None:
     global _pending
     _pending = None
+    _replaced.clear()
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.default_int_handler)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)

@@ -331,6 +331,11 @@ class Studio:
         has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  A signal the
         studio was started with ignored stays ignored: under ``nohup`` (SIGHUP ignored) it keeps serving when its
         terminal closes."""
+        from synthesis.core import interrupt
+
+        # the program's start-up handlers give way: the studio's signals act as the process was started with (uvicorn
+        # takes SIGINT and SIGTERM while it serves and re-raises them under these dispositions)
+        interrupt.restore()
         server = self.server()
         server.ignored_signals = frozenset(sig for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
                                            if signal.getsignal(sig) is signal.SIG_IGN)
