@@ -53,6 +53,7 @@ from typing import Any, Callable
 import numpy as np
 
 from synthesis.bench import BenchCase, MethodRun
+from synthesis.core.kind import KindNLP
 from synthesis.library import LIBRARY
 
 
@@ -219,18 +220,26 @@ def equality_miss(compiled, w, p) -> float:
 _watch: ContextVar[TargetWatch | None] = ContextVar("agrisynth_bench_target_watch", default=None)
 
 
-class _AnnouncedNLP:
-    """The kind's NLP as the multistart sees it, each start's solve announced to the watch first."""
+class _AnnouncedNLP(KindNLP):
+    """The kind's NLP as the multistart sees it, each start's solve announced to the watch first; everything the
+    contract reads is the kind's own NLP's."""
 
-    def __init__(self, nlp, watch: TargetWatch):
+    def __init__(self, nlp: KindNLP, watch: TargetWatch):
         self._nlp, self._watch = nlp, watch
+        self.names, self.bounds, self.init, self.compiled = nlp.names, nlp.bounds, nlp.init, nlp.compiled
+        self.builds_its_own_starts, self.stages, self.configuration = (nlp.builds_its_own_starts, nlp.stages,
+                                                                       nlp.configuration)
 
-    def __getattr__(self, name):
-        return getattr(self._nlp, name)
+    @property
+    def design_names(self) -> list[str]:
+        return self._nlp.design_names
 
-    def solve(self, start, x0, *args, **kwargs):
+    def x_of(self, design: dict) -> np.ndarray:
+        return self._nlp.x_of(design)
+
+    def solve(self, start, x0):
         self._watch.begin(self._nlp, start, x0)
-        return self._nlp.solve(start, x0, *args, **kwargs)
+        return self._nlp.solve(start, x0)
 
 
 def watched_kind(kind, watch: TargetWatch, stop: bool):

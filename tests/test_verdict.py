@@ -429,6 +429,7 @@ def test_the_elastic_points_are_the_kinds_choice_then_the_other_then_the_least_v
     out for kinds that relax from the given design."""
     import numpy as np
 
+    from synthesis.core.kind import KindNLP
     from synthesis.core.solve import elastic_points
 
     def report(start: int, violation: float, design: dict, why=None) -> StartReport:
@@ -439,7 +440,12 @@ def test_the_elastic_points_are_the_kinds_choice_then_the_other_then_the_least_v
                report(3, 0.6, {"a": 4.0, "b": 4.0}), report(4, math.inf, {"a": 7.0, "b": 7.0}, why="no design"),
                report(5, 0.8, {"a": 5.0, "b": 5.0})]
     run = SimpleNamespace(reports=reports, best=reports[1])
-    nlp = SimpleNamespace(names=["a", "b"], init=[1.0, 1.0])
+    class TwoVariables(KindNLP):
+        names, init, bounds = ["a", "b"], np.array([1.0, 1.0]), np.array([[0.0, 10.0], [0.0, 10.0]])
+
+        def solve(self, start, x_design):
+            raise AssertionError("the elastic points are chosen without a solve")
+    nlp = TwoVariables()
     given = elastic_points(SimpleNamespace(elastic_from="given"), run, nlp)
     assert [list(p) for p in given] == [[1.0, 1.0], [2.0, 3.0], [4.0, 4.0], [5.0, 5.0]]   # start 2 = start 1
     best = elastic_points(SimpleNamespace(elastic_from="best"), run, nlp)

@@ -17,7 +17,7 @@ from pydantic import Field
 
 from constraints.base import Rule
 from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import Finished, Kind, Setting, Solving
+from synthesis.core.kind import Finished, Kind, KindNLP, Setting, Solving
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.core.verdict import Recheck
@@ -64,7 +64,7 @@ def run_check(loaded) -> Result:
                   rules=[r.record().to_json() for r in rules_of(spec, d["x"], d["y"])], extra={"source": spec.source})
 
 
-class ToyNLP:
+class ToyNLP(KindNLP):
     def __init__(self, spec: ToySpec, elastic: bool):
         self.names = ["x", "y"]
         self.bounds = np.array([bounds_of(spec.point.x), bounds_of(spec.point.y)], dtype=float)

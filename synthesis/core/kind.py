@@ -17,7 +17,7 @@ A kind that solves returns a :class:`Solving` from ``solving()``: the pieces the
 (:mod:`synthesis.core.solve`) needs, none of which names a solver:
 
     prepare(spec)              anything worked out once per run (a fitted law, a scene), picklable
-    build(setting, elastic)    the kind's NLP (a :class:`~synthesis.core.nlp.KindNLP`): ``names``, ``bounds``
+    build(setting, elastic)    the kind's NLP (a :class:`KindNLP`): ``names``, ``bounds``
                                (n x 2), ``init``, ``compiled`` (the :class:`~synthesis.core.ipopt.CompiledNLP` an
                                elastic diagnosis reads) and ``solve(start, x_design) -> StartOutcome``; built once
                                per process
@@ -33,7 +33,9 @@ import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Sequence
+
+import numpy as np
 
 if TYPE_CHECKING:
     from pydantic import BaseModel as SpecModel
@@ -204,6 +206,45 @@ class Poses:
     #: (Result) -> {name: [[x, y], ...] mm}: rigid outlines in their body's own frame (a cam's profile, a roller),
     #: sent once; a frame places one as {"shape": name, "at": [x, y], "turn_deg": a} (turned about the body's origin)
     shapes: Callable[[Any], dict] | None = None
+
+
+class KindNLP(ABC):
+    """What a kind's ``Solving.build`` returns: its NLP, built once per process and solved once per start.
+
+    The attributes every kind sets: ``names`` (the decision variables a start is drawn in), ``bounds`` (n x 2),
+    ``init`` (the spec's given design in those variables) and ``compiled`` (the
+    :class:`~synthesis.core.ipopt.CompiledNLP` an elastic diagnosis reads; None for a spec with nothing to
+    optimise).  The rest have defaults a kind overrides where it differs."""
+
+    names: list[str]
+    bounds: np.ndarray
+    init: np.ndarray
+    compiled: Any = None
+    #: True when ``solve`` may ignore the design it is given (the kind draws its own starts): no start is then
+    #: solved from the elastic re-solve's design
+    builds_its_own_starts: bool = False
+    #: IPOPT problems solved in turn after ``compiled`` (a kind fitting in stages); each is built like it
+    stages: Sequence[Any] = ()
+    #: a second, reduced form of the problem the kind solves first where it applies (None: none); a transform
+    #: that needs the whole problem (the tolerance box) drops it with :meth:`whole_problem_only`
+    configuration: Any = None
+
+    @property
+    def design_names(self) -> list[str]:
+        """The result design's key of each of ``names`` (the same names unless the kind's differ)."""
+        return self.names
+
+    def x_of(self, design: dict) -> np.ndarray:
+        """The decision variables of a result design (its keys: :attr:`design_names`)."""
+        return np.array([design[n] for n in self.design_names], dtype=float)
+
+    def whole_problem_only(self) -> None:
+        """Solve the whole problem from every start: drop the reduced form (:attr:`configuration`)."""
+        self.configuration = None
+
+    @abstractmethod
+    def solve(self, start: int, x_design: np.ndarray) -> Any:
+        """One start from ``x_design`` (in ``names``): a :class:`~synthesis.core.outcome.StartOutcome`."""
 
 
 @dataclass(frozen=True)

@@ -150,15 +150,12 @@ def elastic_points(solving: Solving, run: Run, nlp) -> list[np.ndarray]:
     (deterministic), each point once (starts that ended on one design are one point).  A relaxation started on a
     degenerate design can stop on an invalid number (a crank-rocker whose swing it shrank to nothing); from
     another point the same problem converges."""
-    def x_of(design: dict) -> np.ndarray:
-        return (nlp.x_of(design) if hasattr(nlp, "x_of") else np.array([design[n] for n in nlp.names], dtype=float))
-
     given = np.asarray(nlp.init, float)
     valid = [r for r in run.reports if r.why is None and failure_of(r.outcome) is None
              and math.isfinite(r.worst_violation)]
     ranked = sorted(valid, key=lambda r: (r.worst_violation, r.outcome.start))
-    best = [x_of(run.best.outcome.design)] if any(r is run.best for r in valid) else []
-    others = [x_of(r.outcome.design) for r in ranked if r is not run.best]
+    best = [nlp.x_of(run.best.outcome.design)] if any(r is run.best for r in valid) else []
+    others = [nlp.x_of(r.outcome.design) for r in ranked if r is not run.best]
     candidates = [*best, *others, given] if solving.elastic_from == "best" else [given, *best, *others]
     points: list[np.ndarray] = []
     for x in candidates:
@@ -209,7 +206,7 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
     return replace(diagnosis, design=design or None,
                    alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks),
-                   at_bounds=at_bounds(getattr(nlp, "design_names", nlp.names), nlp.bounds, design)
+                   at_bounds=at_bounds(nlp.design_names, nlp.bounds, design)
                    if diagnosis.relaxed else [])
 
 
@@ -281,11 +278,10 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
         return run
     solving = kind.solving()
     nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
-    if getattr(nlp, "builds_its_own_starts", False):
+    if nlp.builds_its_own_starts:
         return run
     try:
-        x0 = (nlp.x_of(elastic.design) if hasattr(nlp, "x_of")
-              else np.array([elastic.design[n] for n in nlp.names], dtype=float))
+        x0 = nlp.x_of(elastic.design)
         outcome = nlp.solve(run.starts, np.asarray(x0, float))
     except (AgrisynthError, ValueError, ArithmeticError, RuntimeError, KeyError):
         return run                # no start could be made from it: the run's verdict stands

@@ -1,7 +1,8 @@
 """The registry of problem kinds: one folder each under ``synthesis/kinds/``, and any other package's kinds.
 
 A built-in kind is a folder here whose package exports ``KIND`` (or ``KINDS``, a folder holding two): instances of
-:class:`synthesis.core.kind.Kind`.  The folders are the list -- adding a kind adds a folder and touches nothing else.
+:class:`synthesis.core.kind.Kind`; a kind's name starts with its folder's name (``planting_fourbar`` in
+``planting/``), so that asking for one kind imports no other's package.  The folders are the list -- adding a kind adds a folder and touches nothing else.
 Another installed package adds kinds through the ``agrisynth.kinds`` entry-point group (each entry a Kind instance,
 named by its kind).  Listing kinds imports each kind's package ``__init__`` (its class and names) and nothing more:
 a kind's check, NLP and figures are imported by its methods when called.  Tests may add kinds at run time with
@@ -35,16 +36,36 @@ def _exported(module) -> tuple[Kind, ...]:
     return tuple(kinds)
 
 
+def _folders() -> list[str]:
+    """The kind folders under synthesis/kinds/, by name (nothing imported)."""
+    return sorted(info.name for info in pkgutil.iter_modules(__path__) if info.ispkg)
+
+
+@functools.cache
+def _folder(folder: str) -> dict[str, Kind]:
+    """The kinds one folder's package exports."""
+    return {kind.name: kind for kind in _exported(importlib.import_module(f"{__name__}.{folder}"))}
+
+
 @functools.cache
 def _built_in() -> dict[str, Kind]:
-    """The kinds of the folders under synthesis/kinds/, in folder order."""
+    """The kinds of every folder under synthesis/kinds/, in folder order."""
     found: dict[str, Kind] = {}
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
-        if info.ispkg:
-            for kind in _exported(importlib.import_module(f"{__name__}.{info.name}")):
-                assert kind.name not in found, f"two built-in kinds named {kind.name!r}"
-                found[kind.name] = kind
+    for folder in _folders():
+        for name, kind in _folder(folder).items():
+            assert name not in found, f"two built-in kinds named {name!r}"
+            found[name] = kind
     return found
+
+
+def _own_folder(name: str) -> Kind | None:
+    """The kind from the folder its name starts with (planting_fourbar in planting/), importing no other kind's
+    package: a run of one kind imports nothing of another.  None when no such folder holds it."""
+    for folder in sorted((f for f in _folders() if name == f or name.startswith(f + "_")), key=len, reverse=True):
+        kind = _folder(folder).get(name)
+        if kind is not None:
+            return kind
+    return None
 
 
 @functools.cache
@@ -76,7 +97,7 @@ def names() -> list[str]:
 
 def get(name: str) -> Kind:
     """The kind; SpecError (exit 2) for a name that is not a kind."""
-    kind = _RUNTIME.get(name) or _built_in().get(name) or _installed().get(name)
+    kind = _RUNTIME.get(name) or _own_folder(str(name)) or _built_in().get(name) or _installed().get(name)
     if kind is None:
         near = difflib.get_close_matches(str(name), names(), n=1)
         hint = f"did you mean {near[0]}? " if near else ""

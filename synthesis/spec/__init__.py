@@ -22,7 +22,11 @@ class _Kinds:
     def __contains__(self, name) -> bool:
         from synthesis import kinds
 
-        return name in kinds.names()
+        try:
+            kinds.get(name)         # the kind's own folder first: no other kind's package is imported
+        except SpecError:
+            return False
+        return True
 
     def __iter__(self):
         from synthesis import kinds

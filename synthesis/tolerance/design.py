@@ -192,8 +192,7 @@ def whole_problem(nlp) -> None:
     """The kind's NLP solves its whole problem from every start: fourbar_path's configuration form (grashof "any",
     natural.py: two angles per target) is dropped, so a tolerance box holds, and the analysis reads, every rule as
     the whole problem holds it (for grashof "any" the motion's rows exactly) in the spec's design coordinates."""
-    if getattr(nlp, "configuration", None) is not None:     # fourbar_path: its crank-angle form is the whole problem
-        nlp.configuration = None
+    nlp.whole_problem_only()
 
 
 def kind_start(nlp, x_design: np.ndarray):

@@ -121,17 +121,17 @@ class RobustBuild:
                 nlp = self.base(setting, elastic)
                 # the kind's whole problem, as built here in the box (fourbar_path: its configuration form dropped)
                 whole_problem(nlp)
-                solvers = [getattr(nlp, "compiled", None)]
+                solvers = [nlp.compiled]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
                 raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
-        if spec_keys(list(getattr(nlp, "names", [])), describe(setting.spec)) != expected:
+        if spec_keys(list(nlp.names), describe(setting.spec)) != expected:
             # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
             # variables (a subset, nominal units) cannot take it yet
             raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind yet "
-                            f"(its NLP variables {list(getattr(nlp, 'names', []))} are not the spec's {expected}); "
+                            f"(its NLP variables {list(nlp.names)} are not the spec's {expected}); "
                             f"`agrisynth tolerance RESULT` analyses a solved design")
-        for compiled in [*solvers, *getattr(nlp, "stages", [])]:
+        for compiled in [*solvers, *nlp.stages]:
             if compiled is not None and compiled.t.robust is not None:
                 compiled.solve = _padded(compiled)
         return nlp

@@ -21,6 +21,7 @@ from constraints.base import Rule
 from synthesis.kinds.clamp_cam.motion import Timing
 from synthesis.kinds.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, operating_symbols_wanted, per_rule_backoff
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
@@ -36,7 +37,7 @@ SAMPLED = ("pressure_angle_rise", "pressure_angle_return", "no_undercut", "no_un
 OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
 
 
-class CamNLP:
+class CamNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs one IPOPT solve from a start point."""
 
     def __init__(self, spec: ClampCamSpec, optimised=None, elastic: bool = False):

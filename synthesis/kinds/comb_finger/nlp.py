@@ -10,6 +10,7 @@ import casadi as ca
 
 from synthesis.kinds.comb_finger.check import rules_of, trace
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
 from synthesis.design_info import units_of
@@ -20,7 +21,7 @@ from synthesis.spec.common import design_box
 THETA_SCALE = 10.0
 
 
-class CombFingerNLP:
+class CombFingerNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs IPOPT from one start."""
 
     def __init__(self, spec: CombFingerSpec, elastic: bool = False):

@@ -13,6 +13,7 @@ import numpy as np
 from synthesis.kinds.combing_chain import geometry as g
 from synthesis.kinds.combing_chain.check import rules_of, trace
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
 from synthesis.errors import SpecError
@@ -41,7 +42,7 @@ def require_window(spec: CombingChainSpec) -> tuple[float, float] | None:
     return lo, hi
 
 
-class CombingChainNLP:
+class CombingChainNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs IPOPT from one start (chain speeds, switch speed)."""
 
     def __init__(self, spec: CombingChainSpec, elastic: bool = False):

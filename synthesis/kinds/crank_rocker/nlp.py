@@ -18,6 +18,7 @@ import numpy as np
 from synthesis.core.coordinates import GrashofCoordinates
 from synthesis.kinds.crank_rocker.check import rules_of
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.core.starts import pull_inside
@@ -42,7 +43,7 @@ def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
     return np.array(list(fourbar.crank_rotation_slacks(l10, l7, l8, l9).values()), dtype=float)
 
 
-class CrankRockerNLP:
+class CrankRockerNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs IPOPT from one start (lengths only; extremes are guessed)."""
 
     def __init__(self, spec: CrankRockerSpec, elastic: bool = False):

@@ -43,7 +43,6 @@ import math
 import multiprocessing
 import time
 import warnings
-from pathlib import Path
 
 try:
     import resource

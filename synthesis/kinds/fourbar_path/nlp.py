@@ -37,6 +37,7 @@ import numpy as np
 
 from synthesis.kinds.fourbar_path.rules.sequence import sequence_slacks
 from synthesis.core.ipopt import CompiledNLP, peer_method_active
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
 from synthesis.core.transcribe import in_tolerance_box
@@ -141,7 +142,7 @@ SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 SCREEN_SCALING: dict | None = {"ipopt.nlp_scaling_max_gradient": 1000.0}
 
 
-class PathNLP:
+class PathNLP(KindNLP):
     """Built once per spec and seed; :meth:`solve` runs one IPOPT solve from a start design."""
 
     #: solve(index, x) builds the start of most indices itself (screened shapes, the pool) and ignores x there, so

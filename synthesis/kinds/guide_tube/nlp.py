@@ -24,6 +24,7 @@ from synthesis.kinds.guide_tube.check import rules_of
 from synthesis.kinds.guide_tube.drop import DropPhases, Physics, Tube, drop_phases
 from synthesis.kinds.guide_tube.scene import GuideTubeScene
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import (Envelope, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
                                     scaled_backoff)
@@ -39,7 +40,7 @@ def symbolic_drop(delta_deg, tube: Tube, physics: Physics) -> DropPhases:
     return drop_phases(delta_deg * (math.pi / 180), tube, physics)
 
 
-class GuideTubeNLP:
+class GuideTubeNLP(KindNLP):
     """Built once (CasADi functions and the compiled NLP), solved from many starts."""
 
     def __init__(self, spec: GuideTubeSpec, scene: GuideTubeScene, elastic: bool = False):
@@ -65,7 +66,7 @@ class GuideTubeNLP:
             [Operating("forward_speed", forward, nominal_speed, "m/s")] if wanted else [])
         self.names = [t.name for t in free]
         #: their result.json names, aligned with ``names`` (core.solve.at_bounds reads a design by them)
-        self.design_names = [f"delta_{name}" for name in self.names]
+        self.result_names = [f"delta_{name}" for name in self.names]
         self.tube_names = [t.name for t in spec.tubes]
         uniform = spec.objective.name == "uniform"
         delta = ca.SX.sym("delta_deg", len(free))
@@ -122,9 +123,10 @@ class GuideTubeNLP:
         return {f"delta_{name}": values.get(name, value_of(t.angle))
                 for name, t in zip(self.tube_names, self.spec.tubes)}
 
-    def x_of(self, design: dict[str, float]) -> np.ndarray:
-        """The free angles of a result design (keys delta_<tube>)."""
-        return np.array([design[f"delta_{name}"] for name in self.names], dtype=float)
+    @property
+    def design_names(self) -> list[str]:
+        """The free angles' keys in a result design: delta_<tube>."""
+        return self.result_names
 
     def solve(self, index: int, delta0: np.ndarray) -> StartOutcome:
         delta0 = np.asarray(delta0, dtype=float)

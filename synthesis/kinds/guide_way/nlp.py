@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
 from synthesis.errors import SpecError
@@ -72,7 +73,7 @@ def start_scene(spec, control: np.ndarray, samples: int):
     return scene, scene.edges
 
 
-class FixedGuide:
+class FixedGuide(KindNLP):
     """A conic (published) guide way: nothing to optimise; the driver refuses it as bad input (exit 2)."""
 
     def __init__(self, spec):
@@ -81,12 +82,16 @@ class FixedGuide:
         self.init = np.array(list(values.values()), float)
         self.bounds = np.column_stack([self.init, self.init])
 
+    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
+        raise SpecError("guide_way: a guide way of published conics has nothing to optimise (`agrisynth check` "
+                        "evaluates it)")
+
 
 #: how many times a start the arm cannot drive is pulled half-way towards start 0 (GuideNLP.drivable_start)
 PULLS = 6
 
 
-class GuideNLP:
+class GuideNLP(KindNLP):
     def __init__(self, spec, fit, elastic: bool = False):
         s = spec.spline
         n = s.control_points

@@ -22,6 +22,7 @@ import numpy as np
 
 from synthesis.core.coordinates import GrashofCoordinates
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
@@ -46,7 +47,7 @@ def grashof_slacks(x: np.ndarray) -> np.ndarray:
     return DoubleCrank(*x[:9]).grashof_slacks()
 
 
-class PickerNLP:
+class PickerNLP(KindNLP):
     """Built once per spec (least-squares stage and, for eq 4, the exact epigraph stage); reused for every start."""
 
     def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False):

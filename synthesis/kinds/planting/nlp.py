@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
                                     scaled_backoff)
@@ -33,7 +34,7 @@ THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
 HARD_IN_ELASTIC = ("grashof_crank_rocker",)
 
 
-class PlantingNLP:
+class PlantingNLP(KindNLP):
     """Built once per spec and process; :meth:`solve` runs one IPOPT solve from a design."""
 
     def __init__(self, spec: PlantingFourbarSpec, elastic: bool = False):

@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
 from synthesis.kinds.steering_linkage.kinematics import ackermann_outer, loop_residual, outer_lock, transmission_angles
@@ -31,7 +32,7 @@ NAMES = ("arm_length", "base_angle")
 SAMPLED = ("tie_rod_transmission_angle",)
 
 
-class SteeringNLP:
+class SteeringNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs IPOPT from one start (arm length, base angle)."""
 
     def __init__(self, spec: SteeringSpec, elastic: bool = False):

@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import (MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
                                     per_rule_backoff)
@@ -39,7 +40,7 @@ MM = 100.0
 EXISTENCE_ROWS = (4, 5, 6, 7, 8)
 
 
-class TillageNLP:
+class TillageNLP(KindNLP):
     def __init__(self, spec: TillageSpec, elastic: bool = False):
         self.spec = spec
         variables = spec.variables()
