@@ -296,3 +296,13 @@ def test_a_plugin_that_cannot_load_is_left_out_with_a_warning_naming_it(tmp_path
     finally:
         monkeypatch.undo()
         kinds._installed.cache_clear()
+
+
+def test_the_kind_contract_type_checks():
+    """mypy checks every kind's class against synthesis.core.kind.Kind (a method's signature or return type that
+    breaks the contract fails here, before any run), the registry and the toy kind; files and options:
+    pyproject.toml [tool.mypy]."""
+    proc = subprocess.run([sys.executable, "-m", "mypy", "--no-incremental"], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.stdout.startswith("Success: no issues found")

@@ -124,7 +124,7 @@ def checker(kind: str) -> Callable:
 
 def figure_writers(result: Result) -> dict[str, Callable[[Path], None]]:
     """filename -> writer(path) for the kind's figures and exports of one run."""
-    return {fn: (lambda path, f=writer: f(result, path)) for fn, writer in get(result.kind).figures().items()}
+    return {fn: functools.partial(writer, result) for fn, writer in get(result.kind).figures().items()}
 
 
 def compare_figures(kind: str) -> Callable | None:

@@ -93,10 +93,12 @@ def derivative_error_rows() -> list[dict]:
 
     from synthesis.kinds.planting.finite_difference import mean_relative_errors
     from synthesis.kinds.planting.scene import PlantingScene
+    from synthesis.kinds.planting.spec import PlantingFourbarSpec
     from synthesis.library import LIBRARY
     from synthesis.spec import load_spec
 
     spec = load_spec(LIBRARY / "planting_arm/taiwan_example1.toml").model
+    assert isinstance(spec, PlantingFourbarSpec)
     scene = PlantingScene.from_spec(spec)
     rows = []
     for step, (speed_printed, acc_printed) in PRINTED_DERIVATIVE_ERRORS.items():
