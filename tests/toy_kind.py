@@ -118,8 +118,5 @@ class ToyDisc(Kind):
     def solving(self) -> Solving:
         return SOLVING
 
-    def figures(self) -> dict:
-        return {}
-
 
 KIND = ToyDisc()
