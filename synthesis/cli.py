@@ -594,7 +594,8 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
         if RUN_NAME.match(where.name):
             folder_name, replaceable = where.name, resume
     out = Path("results") if out is None else out
-    run_folder = open_run_folder(out, folder_name, force=force, spec=spec, replaceable=replaceable)
+    run_folder = open_run_folder(out, folder_name, force=force, spec=spec, replaceable=replaceable,
+                                 resumed_from=resume)      # a killed run's staging folder: removed once complete
     committed = False
     try:
         log_file = startlog.StartLog(run_folder.staging / startlog.FILENAME, settings, fingerprint)
@@ -843,12 +844,15 @@ def tolerance(target: Path, out: Path, length: float | None, angle: float | None
 def _no_solved_design(folder: Path) -> str:
     """Why a folder given to `tolerance` has no solved design, from its result.json where it has one (read as
     `compare` reads one: a FIFO, a device or a hostile file there is no status, never a hang or a traceback)."""
-    from synthesis.result import load_result
+    from synthesis.errors import ResultError
+    from synthesis.files import read_json
+    from synthesis.result import MAX_RESULT_BYTES
 
     try:
-        status = load_result(folder / "result.json").status
-    except AgrisynthError:
-        status = None
+        data = read_json(folder / "result.json", MAX_RESULT_BYTES, "result.json", ResultError)
+    except ResultError:
+        data = None
+    status = data.get("status") if isinstance(data, dict) else None
     if status == "interrupted":
         return (f"{folder}: an interrupted run, with no solved design (solved.toml) yet: finish it with "
                 f"`agrisynth solve SPEC --resume {folder}`, then give this folder again")
@@ -899,8 +903,9 @@ def _keep_interrupted(exc, run_folder, spec: Path, n: int, given_rules) -> bool:
         return False
     result, reports, log = exc.partial
     with interrupt.deferred(reraise=False):
+        # no figures: the run ends within seconds of the signal (--resume draws them)
         artifacts = run_artifacts(result, {"ipopt.log": lambda path: atomic_write_text(path, log)},
-                                  given_rules=given_rules())
+                                  given_rules=given_rules(), figures=False)
         folder, _ = write_run(run_folder.final.parent, result, artifacts, folder=run_folder)
     err_console.print(f"interrupted by {name} after {len(reports)} of {n} starts: kept them and their best "
                       f"(status interrupted) in {escape(str(folder))}/; finish the run with\n"

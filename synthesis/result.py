@@ -322,6 +322,9 @@ class RunFolder:
     replaceable: Path | None = None
     spec: Path | None = None
     created: list[Path] = field(default_factory=list)     # folders of OUT this run made (deepest first)
+    #: the folder a ``--resume`` read its starts from; when that is a killed run's staging folder, it is removed
+    #: once this run's complete result is in place (:meth:`commit` with ``retire``)
+    resumed_from: Path | None = None
 
     def permitted(self) -> bool:
         """May ``final`` be written now?  Raises OutputError when something there must be kept."""
@@ -350,8 +353,10 @@ class RunFolder:
         for filename, writer in artifacts.items():
             writer(self.staging / filename)
 
-    def commit(self) -> bool:
-        """Move the staging folder to ``final``; returns whether an earlier run was replaced.
+    def commit(self, retire: bool = False) -> bool:
+        """Move the staging folder to ``final``; returns whether an earlier run was replaced.  ``retire`` (a
+        complete result): remove the killed run's staging folder a ``--resume`` read its starts from
+        (:func:`_retire_staging`), now that this folder holds them and the answer.
 
         Under an exclusive lock on the output folder and with SIGINT/SIGTERM deferred, so two runs racing
         into one folder take turns (the folder is always one run's, whole) and no half-moved folder or
@@ -369,12 +374,14 @@ class RunFolder:
             atomic_write_text(marker, json.dumps({**data, "contents": folder_contents(self.staging)}) + "\n")
             if not replace:
                 os.rename(self.staging, self.final)
-                return False
-            old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-", dir=self.final.parent))
-            os.rename(self.final, old / "run")
-            os.rename(self.staging, self.final)
-            shutil.rmtree(old, ignore_errors=True)
-            return True
+            else:
+                old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-", dir=self.final.parent))
+                os.rename(self.final, old / "run")
+                os.rename(self.staging, self.final)
+                shutil.rmtree(old, ignore_errors=True)
+            if retire and self.resumed_from is not None:
+                _retire_staging(Path(self.resumed_from), self.final)
+            return replace
 
     def discard(self) -> None:
         """Remove the staging folder (only ever one this process made), and the output folders this run
@@ -384,6 +391,50 @@ class RunFolder:
         for folder in self.created:
             with contextlib.suppress(OSError):
                 folder.rmdir()
+
+
+#: the staging folder of a run (``OUT/.<name>.run-XXXX``, tempfile.mkdtemp's suffix), left behind by a SIGKILL
+STAGING_NAME = re.compile(r"^\.[A-Za-z0-9][A-Za-z0-9_.-]{0,99}\.run-[A-Za-z0-9_]+$")
+
+
+def _retire_staging(staging: Path, final: Path) -> bool:
+    """Remove ``staging``, a killed run's staging folder whose starts a resumed run read and whose answer is now in
+    ``final`` (beside it), when everything says it is that and nothing else: a folder (not a link) named as staging
+    folders are, in the same output folder, holding agrisynth's marker and only files agrisynth writes (its outputs
+    and their temporary files, no folder, no link), of a process that is not running any more (the marker's pid: a
+    run still writing there is left alone).  Returns whether it was removed; anything else is kept, untouched."""
+    try:
+        if (not STAGING_NAME.match(staging.name) or staging.is_symlink() or not staging.is_dir()
+                or not _same(staging.parent, final.parent) or _same(staging, final) or not is_run_folder(staging)):
+            return False
+        pid = _marker(staging).get("pid")
+        if isinstance(pid, int) and pid != os.getpid() and _running(pid):
+            return False
+        for entry in os.scandir(staging):
+            if not entry.is_file(follow_symlinks=False) or not _agrisynths_file(entry.name):
+                return False
+    except (OSError, ResultError, AttributeError):
+        return False
+    shutil.rmtree(staging, ignore_errors=True)
+    return not os.path.lexists(staging)
+
+
+def _agrisynths_file(name: str) -> bool:
+    """A file name agrisynth writes into a run folder: the marker, an output, or an output's temporary file
+    (``.<name>.XXXXXXXX<suffix>``, left when a write was cut off)."""
+    if name == RUN_MARKER or name in LEGACY_FILES or name.endswith(LEGACY_FIGURES):
+        return True
+    return name.startswith(".") and any(name.startswith(f".{known}.") for known in (*LEGACY_FILES, RUN_MARKER))
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:             # it exists (another user's): running
+        return True
+    return True
 
 
 def _same(a: Path, b: Path) -> bool:
@@ -413,9 +464,10 @@ def _locked(folder: Path):
 
 
 def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Path | None = None,
-                    replaceable: Path | None = None, suffix: str = "") -> RunFolder:
+                    replaceable: Path | None = None, suffix: str = "", resumed_from: Path | None = None) -> RunFolder:
     """Check that ``out_root/<name><suffix>`` may be written and make the run's staging folder (with its marker).
     ``suffix``: the command's part of the folder name (:data:`CHECK_SUFFIX`), after the spec's ``name``.
+    ``resumed_from``: the RUN_DIR of a ``--resume`` (:attr:`RunFolder.resumed_from`).
 
     OutputError (exit 2), before any work is done, when ``name`` is not a slug, ``out_root`` cannot be
     created or written, or ``out_root/<name><suffix>`` holds something that must be kept."""
@@ -437,7 +489,7 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
         raise OutputError(f"--out {out_root}: cannot create the output folder ({exc.strerror})") from None
     if not out_root.is_dir():
         raise OutputError(f"--out {out_root}: not a folder")
-    folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created)
+    folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created, resumed_from)
     try:
         folder.permitted()
     except OutputError:
@@ -500,7 +552,7 @@ def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Pat
         return write_folder(Path(out_root) / result.name, {"result.json": result_json, **artifacts}, force=force)
     try:
         folder.write({"result.json": result_json, **artifacts})
-        return folder.final, folder.commit()
+        return folder.final, folder.commit(retire=result.status != "interrupted")
     except OutputError:
         raise
     except BaseException:

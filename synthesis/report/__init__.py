@@ -39,10 +39,13 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     return [w if isinstance(w, tuple) else (w, _caption(w)) for w in written], []
 
 
-def run_artifacts(result: Result, files: dict | None = None, given_rules: list | None = None) -> dict:
+def run_artifacts(result: Result, files: dict | None = None, given_rules: list | None = None, *,
+                  figures: bool = True) -> dict:
     """What a check or solve writes beside result.json: ``files`` (e.g. ipopt.log), the kind's figures,
     then report.html, which shows the figures and links the other files; ``given_rules`` (a solve) the rule
-    table of the spec's given design, shown beside the solution's.
+    table of the spec's given design, shown beside the solution's.  ``figures=False`` (an interrupted run, which
+    must be kept and ended within seconds of the signal: the figures take 3 to 7 s, an animation most of it): no
+    figure, and the page says why.
 
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
@@ -69,6 +72,10 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         _log_drawing_warnings(path.parent, "".join(said), written)
         write_report(result, path, written, failed, given_rules)
 
+    if not figures:
+        failed.append("no figures: the run was interrupted; `agrisynth solve SPEC --resume RUN_DIR` finishes it and "
+                      "draws them")
+        return {**{name: guarded(name, w) for name, w in (files or {}).items()}, "report.html": report}
     writers = {**(files or {}), **kinds.figure_writers(result)}
     if isinstance((result.extra or {}).get("envelope"), dict):
         # an operating envelope: each rule that changes over the range, against the condition

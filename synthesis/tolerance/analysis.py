@@ -22,6 +22,7 @@ import numpy as np
 
 from constraints import not_evaluated
 from constraints.base import RuleRecord
+from synthesis.core import interrupt
 from synthesis.core.kind import Kind, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import operating_as_symbols
@@ -193,8 +194,9 @@ def corner_margins(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[d
     solving = kind.solving()
     settings = _Settings(solving, spec, seed)
     for row in rows:
-        setting, name = settings(row)
-        row["corner_margin"], note = _margin_at(solving, setting, design, dmap, row["corner"], name)
+        with interrupt.deferred():          # obeyed between rows, as between Monte-Carlo samples
+            setting, name = settings(row)
+            row["corner_margin"], note = _margin_at(solving, setting, design, dmap, row["corner"], name)
         row["corner_note"] = None if note is None else f"at the linear worst corner: {note}"
 
 
@@ -249,8 +251,9 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
                                       f"linear worst case is {'above' if diff > 0 else 'below'} the worst sample by "
                                       f"{share}")
             continue
-        setting, name = settings(row)
-        half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), name)
+        with interrupt.deferred():          # obeyed between rows, as between Monte-Carlo samples
+            setting, name = settings(row)
+            half, note = _margin_at(solving, setting, design, dmap, 0.5 * np.asarray(row["corner"]), name)
         lin_half = base - 0.5 * row["linear_loss"]
         if half is None or base - half <= 0:
             row["gap_explanation"] = f"gap {gap:.1%}: {share}; at half the tolerance {note or 'no loss'}"
@@ -288,7 +291,12 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         for j, key in enumerate(dmap.keys):
             trial[key] = design[key] + float(offsets[i, j])
         try:
-            records = [r.record() for r in solving.recheck(setting, StartOutcome(i, trial, 0.0, "", True, 0, 0.0, "")).rules]
+            # a signal is obeyed between samples (raised as KeyboardInterrupt once the sample is done), never inside
+            # one: raised inside a CasADi call it came out as a NotImplementedError traceback, or was swallowed and
+            # the remaining thousands of samples run on
+            with interrupt.deferred():
+                records = [r.record() for r in
+                           solving.recheck(setting, StartOutcome(i, trial, 0.0, "", True, 0, 0.0, "")).rules]
         except (AgrisynthError, ValueError, ArithmeticError):
             unevaluable += 1
             continue

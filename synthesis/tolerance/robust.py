@@ -144,7 +144,11 @@ class RobustFinish:
 
     def __call__(self, setting: Setting, best) -> Finished:
         from synthesis.tolerance.analysis import monte_carlo
-        finished = self.base(setting, best)
+
+        # a signal inside the kind's finish or the linearisation below is obeyed once it is done: raised inside a
+        # CasADi call it came out as a NotImplementedError traceback ("wrong number or type of arguments")
+        with interrupt.deferred():
+            finished = self.base(setting, best)
         spec, tol = setting.spec, setting.spec.tolerance
         facts = dict(finished.facts)
         if best.satisfied:
@@ -155,11 +159,19 @@ class RobustFinish:
                              np.zeros(n), np.eye(n))
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
-            if interrupt.pending() is not None:     # an interrupted run keeps its starts now, not after a check
+            # a signal noted since the starts finished (swallowed inside a CasADi call) stops the run here, before
+            # the check of its answer, as one arriving in the check does (monte_carlo obeys it between samples)
+            interrupt.check()
+            if interrupt.pending() is not None:
+                # the interrupted run's result (written under a deferral): it keeps its starts now, within seconds of
+                # the signal, without the Monte-Carlo or the worst-case rows (a linearisation); the resumed run
+                # checks its answer in full
                 mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted "
                       "(agrisynth tolerance RESULT runs it)", "pass_rate": None, "rules": {}}
-            else:
-                mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
+                facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
+                                      "held_at": "not checked: the solve was interrupted"}
+                return dataclasses.replace(finished, facts=facts)
+            mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
             # auxiliaries are (fourbar_path's crank angles, design.ANSWER)
             design = {**best.outcome.details, **best.outcome.design, **design}
@@ -167,7 +179,8 @@ class RobustFinish:
                                   "held_at": "linearised worst case of every rule row in the box"}
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
-            worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
+            with interrupt.deferred():
+                worst = _worst_case_records(self.kind, spec, design, box, {r.name: r.unit for r in best.records})
             # the sampled misses are news only when the linearised worst case holds: where it does not, the run has
             # failed and its note says so
             note = _sampled_misses(mc, worst) if all(w["satisfied"] for w in worst) else None
