@@ -302,6 +302,9 @@ def _check_summary(loaded, result, folder: Path, replaced: bool) -> None:
     published = published_figures_line(result.extra)
     if published:        # the rules are the design's; the paper's figures are the reading's, said apart
         console.print(escape(published))
+    note = result.extra.get("note") if isinstance(result.extra, dict) else None
+    if isinstance(note, str) and note:      # the kind's word on the design beyond its rules (targets that are one)
+        console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
     bad = result.violated()
     if bad:
         console.print(f"[bold red]{len(bad)} rule(s) violated{at}:[/] {', '.join(escape(r['name']) for r in bad)}")

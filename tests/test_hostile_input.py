@@ -574,3 +574,57 @@ def test_a_staging_folder_that_may_still_be_in_use_or_holds_anything_else_is_kep
     assert proc.returncode == 0, proc.stderr
     assert sorted(p.name for p in staging.iterdir()) == before
     assert (out / "cai2020_crank_rocker_synthesis" / "result.json").is_file()
+
+
+# --- fourbar_path targets closer than a tolerance are one target -------------------------------------------------
+
+def _picking_arc_with(tmp_path: Path, name: str, points: list[list[float]], starts: int = 2) -> Path:
+    import re
+
+    text = (LIBRARY / "fourbar_path" / "picking_arc.toml").read_text()
+    text = re.sub(r"points = \[.*?\n\]", "points = " + json.dumps(points), text, count=1, flags=re.S)
+    text = text.replace('name = "picking_arc"', f'name = "{name}"').replace("starts = 64", f"starts = {starts}")
+    spec = tmp_path / f"{name}.toml"
+    spec.write_text(text)
+    return spec
+
+
+def test_three_targets_two_of_them_1e9_mm_apart_are_refused_as_two(tmp_path):
+    """They counted as three distinct targets and the degenerate set solved "optimal" with no word."""
+    spec = _picking_arc_with(tmp_path, "degenerate", [[376.0, 123.7], [205.0, 258.0], [205.0, 258.000000001]])
+    proc = agrisynth("check", spec, "--out", tmp_path / "out")
+    assert _one_line_error(proc) == (
+        f"error: {spec}: fourbar_path.targets: points: expected at least 3 distinct target points, got 2 among the 3 "
+        f"given (points closer than 1e-06 of the set's size, 0.000217 mm here, are one target)")
+
+
+def test_targets_1e7_mm_apart_are_one_target_and_the_run_says_so(tmp_path):
+    """Four targets, the last two 1e-7 mm apart (the set 217 mm across: under its 2.17e-4 mm): check and solve name
+    them one target in result.json (facts.same_targets, the note) and on the terminal; the solve is still optimal."""
+    spec = _picking_arc_with(tmp_path, "near_duplicate", [[376.0, 123.7], [294.7298981903177, 216.36242801169448],
+                                                          [205.0, 258.0], [205.0, 258.0000001]])
+    said = ("targets 2 and 3 (1e-07 mm apart) (numbered from 0) are closer than 1e-06 of the target set's size "
+            "(0.000217 mm), so each pair is one target: one point of the path, weighed in the objective as often as "
+            "it is given")
+    check = agrisynth("check", spec, "--out", tmp_path / "out")
+    assert check.returncode in (0, 1) and f"note: {said}" in " ".join(check.stdout.split()), check.stdout
+    facts = json.loads((tmp_path / "out" / "near_duplicate-check" / "result.json").read_text())["facts"]
+    assert facts["same_targets"] == [[2, 3]] and facts["note"] == said
+    solve = agrisynth("solve", spec, "--out", tmp_path / "out", "--workers", "1")
+    assert solve.returncode == 0 and f"note: {said}" in " ".join(solve.stdout.split()), solve.stdout + solve.stderr
+    result = json.loads((tmp_path / "out" / "near_duplicate" / "result.json").read_text())
+    assert result["status"] == "optimal" and result["solver"]["status_note"] == said
+    assert result["facts"]["same_targets"] == [[2, 3]]
+
+
+def test_which_targets_are_one():
+    from synthesis.kinds.fourbar_path.spec import SAME_TARGET, same_target_mm, same_targets
+
+    arc = [[0.0, 0.0], [30.0, 40.0], [60.0, 80.0]]          # 100 mm across: one target within 1e-4 mm
+    assert same_target_mm(arc) == pytest.approx(100 * SAME_TARGET)
+    assert same_targets(arc + [[0.0, 0.99e-4]]) == [(0, 3, pytest.approx(0.99e-4))]
+    assert same_targets(arc + [[0.0, 1.01e-4]]) == []
+    assert same_targets(arc + [[0.0, 0.0]]) == [(0, 3, 0.0)]                     # a repeated point: one target
+    # prescribed timing: the same point at another crank angle is another target (a double point of the curve)
+    assert same_targets(arc + [[0.0, 0.0]], [0.0, 90.0, 180.0, 270.0]) == []
+    assert same_targets(arc + [[0.0, 0.0]], [0.0, 90.0, 180.0, 360.0]) == [(0, 3, 0.0)]

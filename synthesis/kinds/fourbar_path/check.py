@@ -29,7 +29,7 @@ from synthesis.kinds.fourbar_path.rule_set import path_rules
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES, coupler_function, design_parameters
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
-from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
+from synthesis.kinds.fourbar_path.spec import FourbarPathSpec, same_targets
 
 TWO_PI = 2.0 * math.pi
 TURN_SAMPLES = 3600          # the grid of the nearest-point search over a full turn (0.1 deg)
@@ -159,7 +159,7 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
     """The kind-specific part of result.json."""
     errors = ev.errors_mm
     finite = bool(np.all(np.isfinite(errors)))
-    return {
+    facts = {
         "source": spec.source,
         "branch": spec.branch,
         "grashof": spec.rules.grashof,
@@ -170,6 +170,11 @@ def path_facts(spec: FourbarPathSpec, ev: Evaluation) -> dict:
                        "rms_mm": float(np.sqrt(np.mean(errors ** 2))) if finite else None,
                        "max_mm": float(np.max(errors)) if finite else None},
     }
+    # the pairs of targets closer than SAME_TARGET of the set's size: one point of the path each (spec.same_targets)
+    same = [[i, j] for i, j, _ in same_targets(spec.targets.points, spec.targets.crank_deg)]
+    if same:
+        facts["same_targets"] = same
+    return facts
 
 
 def result_branch(result: Result) -> int:
@@ -190,9 +195,12 @@ def run_check(loaded: LoadedSpec) -> Result:
     ev = evaluate(spec, design, spec.design.crank_deg)
     records = [r.record().to_json() for r in ev.rules]
     facts = path_facts(spec, ev)
+    notes = [spec.targets.same_targets_note()]
     if not all(np.isfinite(ev.errors_mm)):
         open_at = [i for i, e in enumerate(ev.errors_mm) if not math.isfinite(e)]
-        facts["note"] = f"the loop does not close at target(s) {open_at}: no coupler point there"
+        notes.append(f"the loop does not close at target(s) {open_at}: no coupler point there")
+    if any(notes):
+        facts["note"] = "; ".join(n for n in notes if n)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=result_design(design, ev.crank_deg), rules=records,
                   trajectory=trajectory(spec, design, ev.crank_deg, _direction("either", ev.crank_deg)[0]),

@@ -35,7 +35,7 @@ from synthesis.kinds.fourbar_path.rules.transmission_turn import (transmission_e
                                            transmission_turn_rules)
 from synthesis.kinds.fourbar_path.kinematics import cos_transmission
 from synthesis.kinematics.fourbar import diagonal_sq
-from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
+from synthesis.kinds.fourbar_path.spec import FourbarPathSpec, same_target_mm
 
 DEG = 180.0 / math.pi
 TURN_SAMPLES = 360        # floats only: where the loop is sought when the targets have no crank angle
@@ -151,8 +151,9 @@ def _shared_angle(spec: FourbarPathSpec, thetas, sign) -> str | None:
     "satisfied" would not guess (a trial: targets 0 and 1, 18.1 mm apart, 5.4e-9 deg apart)."""
     angles = [float(t) * DEG for t in thetas]
     points = np.asarray(spec.targets.points, dtype=float)
+    one = same_target_mm(points)        # closer together they are one target (spec.same_targets), said apart
     shared = [i for i, gap in enumerate(sequence_slacks(angles, sign)[:-1])
-              if abs(gap) < SHARED_ANGLE and np.hypot(*(points[i + 1] - points[i])) > 0]      # not out of order
+              if abs(gap) < SHARED_ANGLE and np.hypot(*(points[i + 1] - points[i])) > one]      # not out of order
     if not shared:
         return None
     pairs = ", ".join(f"{i} and {i + 1}" for i in shared)

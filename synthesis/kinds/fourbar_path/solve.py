@@ -71,7 +71,8 @@ def finish(setting: Setting, best: StartReport) -> Finished:
         trajectory=trajectory(spec, out.design, crank, -1.0 if direction == "cw" else 1.0),
         solver_settings={"stop_at_objective": spec.solver.stop_at_objective, "samples": spec.solver.samples,
                          "mu_strategy": spec.solver.mu_strategy},
-        rules=None if ev is not None else unevaluated(spec, best.why))
+        rules=None if ev is not None else unevaluated(spec, best.why),
+        note=spec.targets.same_targets_note())
 
 
 def unevaluated(spec: FourbarPathSpec, why: str | None) -> list[dict]:

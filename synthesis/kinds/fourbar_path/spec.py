@@ -92,14 +92,86 @@ class TargetsSection(StrictModel):
     @model_validator(mode="after")
     def _three_distinct_points(self) -> "TargetsSection":
         """At least 3 distinct targets (at distinct crank angles, when the timing is prescribed): fewer leave the
-        synthesis nothing to fit.  A point may repeat: published sets repeat a closed loop's first point as its
+        synthesis nothing to fit.  Targets closer than :data:`SAME_TARGET` of the set's size are one
+        (:func:`same_targets`).  A point may repeat: published sets repeat a closed loop's first point as its
         last (literature.py's ellipse10), which weighs it twice, as their objectives do."""
-        distinct = {(float(p[0]), float(p[1])) + (() if self.crank_deg is None else (float(a) % 360.0,))
-                    for p, a in zip(self.points, self.crank_deg or [None] * len(self.points))}
-        if len(distinct) < 3:
-            raise ValueError(f"points: expected at least 3 distinct target points, got {len(distinct)} among the "
-                             f"{len(self.points)} given")
+        distinct = len(self.points) - len(_merged(self.points, self.crank_deg))
+        if distinct < 3:
+            raise ValueError(f"points: expected at least 3 distinct target points, got {distinct} among the "
+                             f"{len(self.points)} given (points closer than {SAME_TARGET:g} of the set's size, "
+                             f"{same_target_mm(self.points):.3g} mm here, are one target)")
         return self
+
+    def same_targets_note(self) -> str | None:
+        """What a run says of targets that are one (:func:`same_targets`), or None when every target is its own."""
+        return same_targets_note(self.points, self.crank_deg)
+
+
+#: targets closer together than this share of the target set's size (the diagonal of the box around the points)
+#: are one target.  1e-6 of a 100 mm set is 0.1 um: a thousand times finer than a workshop tolerance (the library's
+#: tolerance boxes are 0.1-0.2 mm) and than the accuracy to which an answer passes through its targets (the
+#: literature's exact syntheses leave about 1e-4 mm, arc5_timed's best sum of squares 7.4e-7 mm^2 over 5 points),
+#: so no answer can pass through one and not the other -- yet a billion times coarser than float rounding (about
+#: 1e-14 mm at 100 mm), so a point typed twice with other digits, or converted twice, is caught.  Two such targets
+#: fitted as two gave a degenerate set (3 targets, 2 of them 1e-9 mm apart) "optimal" with no word.
+SAME_TARGET = 1e-6
+#: prescribed crank angles closer than this (deg, around the turn) are one (the sequence rule's shared angle)
+SAME_ANGLE_DEG = 1e-6
+
+
+def same_target_mm(points) -> float:
+    """The distance (mm) under which two of ``points`` are one target: :data:`SAME_TARGET` of the diagonal of the
+    box around them."""
+    xs, ys = [float(p[0]) for p in points], [float(p[1]) for p in points]
+    return SAME_TARGET * math.hypot(max(xs) - min(xs), max(ys) - min(ys)) if len(xs) else 0.0
+
+
+def same_targets(points, crank_deg=None) -> list[tuple[int, int, float]]:
+    """(i, j, distance in mm), i < j, of every two targets that are one: at most :func:`same_target_mm` apart and,
+    when the timing is prescribed, at one crank angle (within :data:`SAME_ANGLE_DEG`); at most 100 points, so
+    every pair is looked at."""
+    limit = same_target_mm(points)
+    out = []
+    for i in range(len(points)):
+        for j in range(i + 1, len(points)):
+            d = math.hypot(float(points[i][0]) - float(points[j][0]), float(points[i][1]) - float(points[j][1]))
+            if d > limit:
+                continue
+            if crank_deg is not None:
+                turn = abs(float(crank_deg[i]) - float(crank_deg[j])) % 360.0
+                if min(turn, 360.0 - turn) > SAME_ANGLE_DEG:
+                    continue
+            out.append((i, j, d))
+    return out
+
+
+def _merged(points, crank_deg=None) -> set[int]:
+    """The targets that are one with an earlier one (the later of each group, through chains of pairs)."""
+    first = list(range(len(points)))
+
+    def root(k: int) -> int:
+        while first[k] != k:
+            k = first[k]
+        return k
+
+    for i, j, _ in same_targets(points, crank_deg):
+        a, b = root(i), root(j)
+        if a != b:
+            first[max(a, b)] = min(a, b)
+    return {k for k in range(len(points)) if root(k) != k}
+
+
+def same_targets_note(points, crank_deg=None, shown: int = 3) -> str | None:
+    """The note a run gives a target set with targets that are one (:func:`same_targets`, the first ``shown``
+    pairs named), or None when every target is its own."""
+    pairs = same_targets(points, crank_deg)
+    if not pairs:
+        return None
+    said = ", ".join(f"{i} and {j} ({d:.3g} mm apart)" for i, j, d in pairs[:shown])
+    more = f" and {len(pairs) - shown} more pair(s)" if len(pairs) > shown else ""
+    return (f"targets {said}{more} (numbered from 0) are closer than {SAME_TARGET:g} of the target set's size "
+            f"({same_target_mm(points):.3g} mm), so each pair is one target: one point of the path, weighed in the "
+            f"objective as often as it is given")
 
 
 class LinkageSection(StrictModel):
