@@ -108,11 +108,11 @@ class TargetsSection(StrictModel):
 
 
 #: targets closer together than this share of the target set's size (the diagonal of the box around the points)
-#: are one target.  1e-6 of a 100 mm set is 0.1 um: a thousand times finer than a workshop tolerance (the library's
-#: tolerance boxes are 0.1-0.2 mm) and than the accuracy to which an answer passes through its targets (the
-#: literature's exact syntheses leave about 1e-4 mm, arc5_timed's best sum of squares 7.4e-7 mm^2 over 5 points),
-#: so no answer can pass through one and not the other -- yet a billion times coarser than float rounding (about
-#: 1e-14 mm at 100 mm), so a point typed twice with other digits, or converted twice, is caught.  Two such targets
+#: are one target.  1e-6 of a 100 mm set is 0.1 um = 1e-4 mm: a thousand times finer than a workshop tolerance (the
+#: library's tolerance boxes are 0.1-0.2 mm) and no coarser than the accuracy to which an answer passes through its
+#: targets (arc5_timed's best sum of squares, 7.4e-7 mm^2 over 5 points, is 3.8e-4 mm RMS), so no answer can pass
+#: through one and not the other -- yet billions of times coarser than float rounding (about 2e-14 mm at 100 mm),
+#: so a point typed twice with other digits, or converted twice, is caught.  Two such targets
 #: fitted as two gave a degenerate set (3 targets, 2 of them 1e-9 mm apart) "optimal" with no word.
 SAME_TARGET = 1e-6
 #: prescribed crank angles closer than this (deg, around the turn) are one (the sequence rule's shared angle)
