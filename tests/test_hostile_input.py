@@ -186,7 +186,9 @@ def test_pruning_the_error_lines_is_linear_in_their_number():
 
 #: the handshake a dask scheduler (distributed 2026.8) sends first: its length, then one frame, msgpack of
 #: {"compression": None, "python": [3, 11, 7], "pickle-protocol": 5}
-DASK_HANDSHAKE = (bytes.fromhex("3a00000000000000") + bytes.fromhex("0100000000000000") + bytes.fromhex("2a00000000000000")
+DASK_HANDSHAKE = (bytes.fromhex("3a00000000000000")          # 58 bytes follow
+                  + bytes.fromhex("0100000000000000")        # one frame
+                  + bytes.fromhex("2a00000000000000")        # of 42 bytes
                   + b"\x83\xabcompression\xc0\xa6python\x93\x03\x0b\x07\xafpickle-protocol\x05")
 
 
@@ -230,7 +232,7 @@ class _Peer:
     (DASK_HANDSHAKE[:8] + DASK_HANDSHAKE[8:24] + b"\xc1" * 42, "does not speak the dask protocol (its first frame is "
                                                                "not msgpack"),
     (DASK_HANDSHAKE[:8] + DASK_HANDSHAKE[8:20], "announced a 58-byte message and did not send it"),
-])
+], ids=["length_then_silence", "length_then_garbage", "frames_then_not_msgpack", "part_then_silence"])
 def test_a_peer_sending_a_plausible_length_then_silence_or_garbage_is_refused_by_the_deadline(greeting, complaint):
     """A plausible 8-byte length passed the probe: dask then waited for ever for the rest (over 120 s), or unpacked
     the garbage into a struct.error traceback.  Now the probe reads and checks the whole handshake by its deadline."""
@@ -254,7 +256,7 @@ def test_a_real_dask_handshake_passes_the_probe():
         probe_scheduler(peer.address, timeout=0.5)
 
 
-@pytest.mark.parametrize("second", [DASK_HANDSHAKE[:8], DASK_HANDSHAKE])
+@pytest.mark.parametrize("second", [DASK_HANDSHAKE[:8], DASK_HANDSHAKE], ids=["length_only", "handshake_then_silence"])
 def test_a_peer_that_passes_the_probe_then_stops_answering_dask_is_refused_by_the_deadline(second):
     """dask's own connection reads the scheduler's handshake with no deadline: a peer that greets the probe and then
     sends a length and nothing more would hold Client() for ever; one that greets and then never answers is dask's
@@ -298,7 +300,7 @@ def studio(tmp_path_factory):
 @pytest.mark.parametrize("body, reason", [
     (b"[" * 30000 + b"]" * 30000, "nested too deeply"),                 # the parser's recursion: was a 500
     (b'{"values": ' + b"[" * 100 + b"]" * 100 + b"}", "nested more than 64 levels deep"),
-])
+], ids=["30000_deep", "100_deep"])
 def test_the_studio_answers_deeply_nested_json_400(studio, body, reason):
     from studio_fixtures import request
 
