@@ -1149,6 +1149,15 @@ def _main() -> None:
     except AgrisynthError as exc:
         err_console.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True, soft_wrap=True)
         sys.exit(exc.exit_code)
+    except Exception:
+        from synthesis.core import interrupt
+
+        # a signal's KeyboardInterrupt raised inside a CasADi call comes out as another exception (NotImplementedError:
+        # "wrong number or type of arguments"): with a signal noted, the run was interrupted, not broken
+        if interrupt.pending() is None:
+            raise
+        err_console.print("interrupted")
+        sys.exit(128 + interrupt.pending())
 
 
 if __name__ == "__main__":

@@ -630,3 +630,32 @@ def test_which_targets_are_one():
     # prescribed timing: the same point at another crank angle is another target (a double point of the curve)
     assert same_targets(arc + [[0.0, 0.0]], [0.0, 90.0, 180.0, 270.0]) == []
     assert same_targets(arc + [[0.0, 0.0]], [0.0, 90.0, 180.0, 360.0]) == [(0, 3, 0.0)]
+
+
+def test_a_signal_inside_a_casadi_call_of_any_command_is_interrupted_not_a_traceback(tmp_path):
+    """With the handlers installed at start-up a signal reaches every command; inside a CasADi call its
+    KeyboardInterrupt comes out as NotImplementedError.  Here it lands in `agrisynth tolerance`'s linearisation:
+    "interrupted", exit 143, nothing written -- not a NotImplementedError traceback (exit 1)."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "signalled_in_casadi.py"
+    script.write_text(
+        "import os, signal, sys\n"
+        "import casadi as ca\n"
+        "import synthesis.tolerance.analysis as analysis\n"
+        "def linearise(*args, **kwargs):\n"
+        "    x = ca.SX.sym('x')\n"
+        "    class Signalled:\n"
+        "        def __DM__(self):\n"
+        "            os.kill(os.getpid(), signal.SIGTERM)\n"
+        "            return ca.DM(1.0)\n"
+        "    ca.Function('f', [x], [x])(Signalled())\n"
+        "analysis.linearise = linearise\n"
+        "from synthesis.program import main\n"
+        f"sys.argv = ['agrisynth', 'tolerance', {str(LIBRARY / 'planting_arm' / 'taiwan_example1.toml')!r}, "
+        f"'--length', '0.1', '--samples', '10', '--out', {str(tmp_path / 'out')!r}]\n"
+        "main()\n")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 143 and proc.stderr.strip() == "interrupted", (proc.returncode, proc.stderr[-2000:])
+    assert not (tmp_path / "out").exists()
