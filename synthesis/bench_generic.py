@@ -201,7 +201,7 @@ class TargetWatch:
 
 
 #: a peer's answer holds the NLP's equality rows to this (relative to max(1, |row value|)), as IPOPT's do: the
-#: re-check's rules may allow a band about a pinned value (crank_rocker: |K - K_required| <= 0.005) that the NLP
+#: re-check's rules may allow a band about a pinned value (a crank-rocker's |K - K_required| <= 0.005) that the NLP
 #: holds exactly, and an SLSQP iterate inside the band beat IPOPT's exact optimum (gap 0.063 deg, a trial)
 EQUALITY_TOL = 1e-6
 
@@ -236,6 +236,9 @@ class _AnnouncedNLP(KindNLP):
 
     def x_of(self, design: dict) -> np.ndarray:
         return self._nlp.x_of(design)
+
+    def answer_start(self, design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return self._nlp.answer_start(design, x0, p, n)
 
     def solve(self, start, x0):
         self._watch.begin(self._nlp, start, x0)

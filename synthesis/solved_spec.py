@@ -2,12 +2,12 @@
 
 The spec file as the user wrote it, with each free variable (``{init, bounds}``) replaced by its solved
 value (floats written by repr, so they read back bit-identical), a ``[design]`` table's values (the
-given design some kinds read, e.g. fourbar_path's free-timing crank angles) set to the solution,
+given design some kinds read, e.g. a path's free-timing crank angles) set to the solution,
 and the name ``<name>_solved`` (so checking it never touches the solve's own folder).
 ``agrisynth check results/<name>/solved.toml`` then evaluates exactly the solved design.
 
 Generic over kinds: where each variable is written comes from :mod:`synthesis.design_info`; a kind whose
-spec may leave part of its design to the kind (guide_way's control points, the convex fit by default) first
+spec may leave part of its design to the kind (a path's control points, the convex fit by default) first
 writes it out (``Kind.explicit_design``), so the solved values have a place.
 """
 
@@ -62,7 +62,7 @@ def solved_data(loaded, result) -> dict[str, Any]:
 
 
 def _given_design(loaded, result, data: dict) -> None:
-    """A ``[design]`` table (the given design a kind reads, e.g. fourbar_path's, with free timing its crank
+    """A ``[design]`` table (the given design a kind reads, e.g. a path synthesis', with free timing its crank
     angles too): each of its fields the result has is set to the solution, where the spec allows it (a
     field the spec already prescribes elsewhere, e.g. timed targets' crank angles, is left out)."""
     from synthesis.spec.common import validate
@@ -91,6 +91,7 @@ def _given_design(loaded, result, data: dict) -> None:
 def _fixed_values_moved(model, design: dict) -> str:
     """"l10 = 161.373 where the spec fixes 140" for the design variables the spec fixes that ``design`` moved ("" when
     none did; a kind whose spec lists no variables says nothing)."""
+    from synthesis.core.coordinates import BOUND_TOLERANCE
     from synthesis.spec.common import is_free
 
     variables = model.variables() if hasattr(model, "variables") else {}
@@ -99,9 +100,7 @@ def _fixed_values_moved(model, design: dict) -> str:
         value = design.get(name)
         if is_free(v) or not isinstance(value, (int, float)) or not isinstance(v, (int, float)):
             continue
-        # core.coordinates.BOUND_TOLERANCE, written here: importing that module loads the Grashof rules into
-        # every kind's run, which a run of a kind without a linkage must not
-        if abs(value - v) > 1e-6 * max(1.0, abs(v)):
+        if abs(value - v) > BOUND_TOLERANCE * max(1.0, abs(v)):
             moved.append(f"{name} = {value:.6g} where the spec fixes {v:g}")
     return "; ".join(moved)
 

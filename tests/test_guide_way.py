@@ -400,11 +400,11 @@ def test_solve_with_a_tolerance_table_is_refused_with_one_line(tmp_path):
 def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceback(tmp_path, monkeypatch):
     """Without the refusal above, the robust transcription's PinningError (45 = 48 + 2 window edges - 5 auxiliaries,
     16 rows) comes out as the same kind of one-line SpecError (exit 2), for any kind it happens to."""
+    from synthesis import kinds
     from synthesis.core.solve import solve_spec
     from synthesis.errors import SpecError
-    from synthesis.tolerance import robust
 
-    monkeypatch.setattr(robust, "NOT_ROBUST", {})
+    monkeypatch.setattr(type(kinds.get("guide_way")), "robust_refusal", None)
     path = tmp_path / "tol.toml"
     path.write_text((LIBRARY / "guide_way" / "smooth_redesign.toml").read_text() + "\n[tolerance]\nlength = 0.05\n")
     with pytest.raises(SpecError) as err:

@@ -10,8 +10,8 @@ a kind.
 For ``agrisynth studio`` a kind gives its check on a coarser grid (``coarse_check``: a :class:`CoarseCheck`, what
 the page evaluates while a slider moves; default: the check on its [solver] sample counts / 10), the mechanism's
 poses where its check's facts hold none (``poses``: a :class:`Poses`), and, when its spec may leave part of the
-design to the kind (guide_way's convex fit), that design written out as free variables (``explicit_design``;
-``solved.toml`` uses it too).  The studio itself names no kind.
+design to the kind (a convex fit of its path's control points), that design written out as free variables
+(``explicit_design``; ``solved.toml`` uses it too).  The studio itself names no kind.
 
 A kind that solves returns a :class:`Solving` from ``solving()``: the pieces the one multistart driver
 (:mod:`synthesis.core.solve`) needs, none of which names a solver:
@@ -72,6 +72,11 @@ class Kind(ABC):
     objectives: dict[str, str] = {}
     #: a library spec to try, relative to the problem library (None: none)
     example: str | None = None
+    #: the unit of design variables the spec model gives none (a path's control points: "mm"); "" for none
+    design_unit: str = ""
+    #: why a ``[tolerance]`` table in ``solve`` is refused for this kind (one clause, said before anything is built);
+    #: None: the robust transcription takes it
+    robust_refusal: str | None = None
 
     @abstractmethod
     def spec_model(self) -> type[SpecModel]:
@@ -107,10 +112,19 @@ class Kind(ABC):
         return None
 
     def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
-        """The spec file data with a design the spec may leave to the kind (guide_way's convex fit) written out as
-        free variables, so it solves and checks the same and every variable has a place in the file (the studio's
-        sliders, solved.toml); the data itself (the same object) when specs always hold their whole design."""
+        """The spec file data with a design the spec may leave to the kind (a convex fit of its path's control
+        points) written out as free variables, so it solves and checks the same and every variable has a place in
+        the file (the studio's sliders, solved.toml); the data itself (the same object) when specs always hold their
+        whole design."""
         return data
+
+    def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(d0, J): the design is d0 + J z for the NLP's first ``n`` decision entries z; the identity by default."""
+        return np.zeros(n), np.eye(n)
+
+    def answer_details(self, result: Result) -> dict:
+        """What a result holds of its answer beyond ``design`` that :meth:`KindNLP.answer_start` reads; none here."""
+        return {}
 
     @property
     def solves(self) -> bool:
@@ -139,6 +153,7 @@ class SolvingReplaced(Kind):
     def __init__(self, base: Kind, solving: Solving):
         self.base, self._solving = base, solving
         self.name, self.summary, self.objectives, self.example = base.name, base.summary, base.objectives, base.example
+        self.design_unit, self.robust_refusal = base.design_unit, base.robust_refusal
 
     def spec_model(self) -> type[SpecModel]:
         return self.base.spec_model()
@@ -166,6 +181,12 @@ class SolvingReplaced(Kind):
 
     def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
         return self.base.explicit_design(loaded, data)
+
+    def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return self.base.design_affine(spec, n)
+
+    def answer_details(self, result: Result) -> dict:
+        return self.base.answer_details(result)
 
     @property
     def benches(self) -> bool:
@@ -241,6 +262,11 @@ class KindNLP(ABC):
     def whole_problem_only(self) -> None:
         """Solve the whole problem from every start: drop the reduced form (:attr:`configuration`)."""
         self.configuration = None
+
+    def answer_start(self, design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(x0, p) with the auxiliaries an answer holds (``design`` beyond the ``n`` design entries) put in place
+        of the start's guesses, so its rules are read at the answer; the start unchanged by default."""
+        return x0, p
 
     @abstractmethod
     def solve(self, start: int, x_design: np.ndarray) -> Any:

@@ -30,8 +30,8 @@ from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
-from synthesis.tolerance.design import (ANSWER, DesignMap, box_of, design_map, fine, freed, kind_start,
-                                        whole_problem, without_ipopt)
+from synthesis.tolerance.design import (DesignMap, box_of, design_map, fine, freed, kind_start, whole_problem,
+                                        without_ipopt)
 from synthesis.tolerance.envelope import SUFFIX, envelope_kind, grid_of
 
 
@@ -70,15 +70,15 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     with without_ipopt(), operating_as_symbols():
         nlp = solving.build(Setting(aspec, seed, data), False)
         whole_problem(nlp)         # every rule as the whole problem holds it (not the configuration form)
-    dmap = design_map(kind.name, nlp, spec)
+    dmap = design_map(kind, nlp, spec)
     missing = [k for k in dmap.keys if k not in design]
     if missing:
         raise SpecError(f"{kind.name}: the design has no value for {', '.join(missing)}")
     d = np.array([value_of(design[k]) for k in dmap.keys])
     compiled, x0, p = kind_start(nlp, d)
     x0[:dmap.n] = dmap.coordinates(d)
-    if kind.name in ANSWER:            # the answer's own auxiliaries (fourbar_path's crank angles), where it has them
-        x0, p = ANSWER[kind.name](design, x0, np.asarray(p, float), dmap.n)
+    # the answer's own auxiliaries (the crank angles of its targets, say), where the kind's answer holds them
+    x0, p = nlp.answer_start(design, x0, np.asarray(p, float), dmap.n)
     sens = Sensitivity(compiled.problem, dmap.n, dmap.J)
     x = sens.pin(x0, p)
     pt = sens.at(x, p)
@@ -339,7 +339,7 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
 
 def _nominal_rules(solving, setting: Setting, lin: Linearised) -> list[RuleRecord]:
     """The design's rules by the kind's float re-check (10x grid).  A design the re-check cannot evaluate (a
-    guide_tube seedling that sticks on a wall: the NLP has no sticking, so its derivatives exist) is still a
+    seedling that sticks on a guide tube's wall: the NLP has no sticking, so its derivatives exist) is still a
     design that fails its rules, not a solver failure: its table is the kind's table of the spec's given design
     (the design analysed), which evaluates what can be and fails the rest as not evaluated, else every rule
     not evaluated with the re-check's reason."""

@@ -1,6 +1,7 @@
 """A kind's NLP seen as a design: which decision entries are design coordinates, their affine map to the
-design variables, the variables' units and the tolerance box.  Kind-agnostic except for the small table
-of kinds whose NLP works in other coordinates than the design itself."""
+design variables, the variables' units and the tolerance box.  Kind-agnostic: a kind whose NLP works in other
+coordinates than the design itself declares their map (``Kind.design_affine``), a kind whose spec gives its design
+variables no unit declares theirs (``Kind.design_unit``)."""
 
 from __future__ import annotations
 
@@ -12,42 +13,16 @@ import numpy as np
 from pydantic import BaseModel
 
 from synthesis.core.ipopt import NLPOutcome, solved_with
+from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
 from synthesis.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.spec.common import FreeVariable
 
 
-def _grashof(target: str):
-    def affine(nlp, n):
-        from synthesis.core.kind import resolve
-
-        coords = resolve(target)
-        z = ca.SX.sym("z", n)
-        d = coords.design(z)
-        f = ca.Function("design", [z], [d, ca.jacobian(d, z)])
-        d0, J = f(np.zeros(n))
-        return np.asarray(d0, float).ravel(), np.asarray(J, float)
-    return affine
-
-
-def _nominal_units(nlp, n):
-    """fourbar_path's NLP works in nominal units: design = offset + scale * z; read from the built NLP,
-    or, before it is built (the robust build sizes its box first), from the spec's targets as the NLP reads them."""
-    offset, scale = getattr(nlp, "offset", None), getattr(nlp, "scale", None)
-    if offset is None or scale is None:
-        from synthesis.core.kind import resolve
-
-        offset, scale = resolve("synthesis.kinds.fourbar_path.nlp:nominal_scales")(
-            np.array(nlp.spec.targets.points, dtype=float))
-    d0, s = np.zeros(n), np.ones(n)
-    d0[:len(offset)], s[:len(scale)] = offset, scale
-    return d0, np.diag(s)
-
-
 def spec_keys(names, info) -> list[str]:
     """The spec's design variable of each NLP variable name: the same name, or the one spec name ending in
-    ``_<name>`` (guide_tube's NLP names its angles I, II; the spec delta_I, delta_II)."""
+    ``_<name>`` (an NLP that names an angle ``I`` where its spec says ``delta_I``)."""
     keys = []
     for n in names:
         if n in info:
@@ -56,38 +31,6 @@ def spec_keys(names, info) -> list[str]:
             match = [k for k in info if k.endswith("_" + n)]
             keys.append(match[0] if len(match) == 1 else n)
     return keys
-
-
-#: kinds whose NLP's design coordinates are not the design variables themselves: (nlp, n) -> (d0, J), d = d0 + J z
-AFFINE = {
-    "fourbar_path": _nominal_units,
-    "crank_rocker": _grashof("synthesis.kinds.crank_rocker.nlp:COORDINATES"),
-    "picker_double_crank": _grashof("synthesis.kinds.picker.nlp:COORDINATES"),
-}
-
-
-def _fourbar_path_answer(design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """fourbar_path with free timing: the crank angle of each target and the crank direction are the answer's
-    (result.json ``design.crank_deg`` / ``direction``), not the start's guesses -- its rules are read there."""
-    crank, direction = design.get("crank_deg"), design.get("direction")
-    if isinstance(crank, list) and len(crank) == x0.size - n and all(
-            isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank):
-        x0 = x0.copy()
-        x0[n:] = np.radians(np.asarray(crank, float))
-    if direction not in ("ccw", "cw") and isinstance(crank, list) and len(crank) > 1:     # result.json: no direction
-        direction = "ccw" if crank[-1] >= crank[0] else "cw"      # the angles run in the crank's turning sense
-    if direction in ("ccw", "cw") and p.size == 1:
-        p = np.array([1.0 if direction == "ccw" else -1.0])
-    return x0, p
-
-
-#: kinds whose answer holds auxiliaries of its NLP (crank angles) the analysis must use instead of a start's guesses:
-#: (design, x0, p, n_design) -> (x0, p)
-ANSWER = {"fourbar_path": _fourbar_path_answer}
-
-
-#: unit of the design variables of kinds whose spec lists none (guide_way: control points of the path, mm)
-UNITS = {"guide_way": "mm"}
 
 
 def freed(spec: BaseModel) -> BaseModel:
@@ -140,13 +83,13 @@ class DesignMap:
         return np.linalg.solve(self.J, np.asarray(d, float) - self.d0)
 
 
-def design_map(kind: str, nlp, spec) -> DesignMap:
+def design_map(kind: Kind, nlp, spec) -> DesignMap:
+    """The design variables of the kind's built NLP, their result keys and units, and the map d = d0 + J x[:n]."""
     names = list(nlp.names)
     info = describe(spec)
     keys = spec_keys(names, info)
-    units = [info[k]["unit"] if k in info else UNITS.get(kind, "") for k in keys]
-    affine = AFFINE.get(kind)
-    d0, J = affine(nlp, len(names)) if affine else (np.zeros(len(names)), np.eye(len(names)))
+    units = [info[k]["unit"] if k in info else kind.design_unit for k in keys]
+    d0, J = kind.design_affine(spec, len(names))
     return DesignMap(names, keys, units, d0, J)
 
 
@@ -189,9 +132,9 @@ def without_ipopt():
 
 
 def whole_problem(nlp) -> None:
-    """The kind's NLP solves its whole problem from every start: fourbar_path's configuration form (grashof "any",
-    natural.py: two angles per target) is dropped, so a tolerance box holds, and the analysis reads, every rule as
-    the whole problem holds it (for grashof "any" the motion's rows exactly) in the spec's design coordinates."""
+    """The kind's NLP solves its whole problem from every start: a second, reduced form it may solve first
+    (``KindNLP.configuration``) is dropped, so a tolerance box holds, and the analysis reads, every rule as the
+    whole problem holds it in the spec's design coordinates."""
     nlp.whole_problem_only()
 
 

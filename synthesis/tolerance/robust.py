@@ -19,16 +19,9 @@ from synthesis.core.kind import Finished, Kind, Setting
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
-from synthesis.design_info import describe
+from synthesis.design_info import describe, describe_lists
 from synthesis.errors import SpecError
-from synthesis.tolerance.design import AFFINE, UNITS, DesignMap, box_of, spec_keys, whole_problem
-
-
-#: kinds the robust transcription cannot take, and why: refused with one line before anything is prepared or built
-NOT_ROBUST = {
-    "guide_way": "its NLP works in the spline's 2 x control_points coordinates, held to the key points by equality "
-                 "rows on them, not in the spec's design variables",
-}
+from synthesis.tolerance.design import DesignMap, box_of, spec_keys, whole_problem
 
 
 def _box_text(spec, scale: float | None = None, units: set | None = None) -> str:
@@ -48,8 +41,8 @@ def _box_text(spec, scale: float | None = None, units: set | None = None) -> str
 class _Resolver:
     """Problem -> its Tolerance, from the spec (names in the NLP's order are the spec's variables)."""
 
-    def __init__(self, kind_name: str, spec):
-        self.kind_name, self.spec = kind_name, spec
+    def __init__(self, kind: Kind, spec):
+        self.kind, self.kind_name, self.spec = kind, kind.name, spec
 
     def __call__(self, problem: Problem) -> Tolerance | None:
         info = describe(self.spec)
@@ -58,20 +51,19 @@ class _Resolver:
         unsupported = SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet (its NLP does not work in the spec's design variables {names}); "
                                 f"`agrisynth tolerance RESULT` analyses a solved design")
-        if problem.x.numel() < n:       # e.g. guide_tube: a fixed wall angle enters its NLP as a number
+        if problem.x.numel() < n:       # e.g. a fixed wall angle that enters the NLP as a number
             raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` needs every design variable of the "
                             f"spec ({', '.join(names)}) in the NLP, and this kind's NLP takes a fixed one as a number "
                             f"({problem.x.numel()} decision entries); `agrisynth tolerance RESULT` analyses a solved "
                             f"design with the fixed ones toleranced too")
-        affine = AFFINE.get(self.kind_name)
         try:
-            d0, J = (np.zeros(n), np.eye(n)) if affine is None else affine(_Stub(self.spec), n)
-        except AttributeError:        # the map needs the built NLP (e.g. nominal units): not from the spec alone
+            d0, J = self.kind.design_affine(self.spec, n)
+        except AttributeError:        # a map the kind cannot give from the spec alone
             raise unsupported from None
-        dmap = DesignMap(names, names, [info[k]["unit"] or UNITS.get(self.kind_name, "") for k in names], d0, J)
+        dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names], d0, J)
         tol = self.spec.tolerance
         box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
-        # a design entry nothing in the NLP reads (fourbar_path keeps a fixed variable's entry but computes with its
+        # a design entry nothing in the NLP reads (an NLP may keep a fixed variable's entry but compute with its
         # number) would take its tolerance silently nowhere: refused, naming it.  (An entry the objective reads but no
         # rule does is held trivially: no rule's worst case moves with it.)
         objective = [ca.vec(ca.SX(problem.objective.f))] if isinstance(getattr(problem.objective, "f", None),
@@ -80,7 +72,7 @@ class _Resolver:
         rows = ca.vertcat(*(ca.vec(ca.SX(e)) for rule in problem.rules for e, _, _ in rule.rows()),
                           *(ca.vec(ca.SX(e)) for e, _, _ in problem.structural), *objective)
         # design variable k is read when a coordinate the NLP reads moves with it: (J^-1)[j, k] != 0 for such a j
-        # (the Grashof coordinates of crank_rocker and the picker mix the lengths)
+        # (Grashof coordinates mix the lengths)
         read = [bool(ca.depends_on(rows, problem.x[j])) for j in range(n)]
         inverse = np.linalg.pinv(np.asarray(J, float))
         ignored = [names[k] for k in range(n)
@@ -91,13 +83,6 @@ class _Resolver:
                             f"{{init = v, bounds = [v, v]}} to tolerance it (`agrisynth tolerance RESULT` analyses "
                             f"fixed dimensions as they are)")
         return Tolerance(n, box, J)
-
-
-class _Stub:
-    """What an AFFINE entry reads of an NLP, for kinds whose map does not depend on it."""
-
-    def __init__(self, spec):
-        self.spec = spec
 
 
 def _padded(compiled):
@@ -112,23 +97,23 @@ def _padded(compiled):
 @dataclasses.dataclass(frozen=True)
 class RobustBuild:
     base: object
-    kind_name: str
+    kind: Kind
 
     def __call__(self, setting: Setting, elastic: bool = False):
         expected = list(describe(setting.spec))
-        with tolerance_box(_Resolver(self.kind_name, setting.spec)):
+        with tolerance_box(_Resolver(self.kind, setting.spec)):
             try:
                 nlp = self.base(setting, elastic)
-                # the kind's whole problem, as built here in the box (fourbar_path: its configuration form dropped)
+                # the kind's whole problem, as built here in the box (a reduced form it solves first dropped)
                 whole_problem(nlp)
                 solvers = [nlp.compiled]
             except PinningError as exc:     # structural rows that do not pin the NLP's other variables
-                raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind "
+                raise SpecError(f"{self.kind.name}: a [tolerance] table in `solve` is not supported for this kind "
                                 f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
         if spec_keys(list(nlp.names), describe(setting.spec)) != expected:
             # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
             # variables (a subset, nominal units) cannot take it yet
-            raise SpecError(f"{self.kind_name}: a [tolerance] table in `solve` is not supported for this kind yet "
+            raise SpecError(f"{self.kind.name}: a [tolerance] table in `solve` is not supported for this kind yet "
                             f"(its NLP variables {list(nlp.names)} are not the spec's {expected}); "
                             f"`agrisynth tolerance RESULT` analyses a solved design")
         for compiled in [*solvers, *nlp.stages]:
@@ -155,7 +140,7 @@ class RobustFinish:
             info = describe(spec)
             names = list(info)
             n = len(names)
-            dmap = DesignMap(names, names, [info[k]["unit"] or UNITS.get(self.kind.name, "") for k in names],
+            dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names],
                              np.zeros(n), np.eye(n))
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
@@ -173,7 +158,7 @@ class RobustFinish:
                 return dataclasses.replace(finished, facts=facts)
             mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
-            # auxiliaries are (fourbar_path's crank angles, design.ANSWER)
+            # auxiliaries are (the crank angles of its targets, say: KindNLP.answer_start)
             design = {**best.outcome.details, **best.outcome.design, **design}
             facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
                                   "held_at": "linearised worst case of every rule row in the box"}
@@ -228,7 +213,7 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: 
 
     # a rule whose NLP rows are the rule itself (an exact minimum over a turn, each branch of a max()) is read on
     # them, as the NLP held it (stack_up, Linearised.held): its sampled values linearise otherwise
-    # (comb_finger's finger_clear_of_other_unit: -9.5e-6 mm at its samples, +1e-6 on its exact row, +1.2e-5 at the
+    # (a finger's clearance from the other unit's: -9.5e-6 mm at its samples, +1e-6 on its exact row, +1.2e-5 at the
     # box's worst corner)
     lin = linearise(kind, spec, design)
     if list(lin.dmap.keys) != list(describe(spec)):     # the box is in the spec's order (RobustBuild checks the NLP)
@@ -283,7 +268,7 @@ def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list
     box = box_of(lin.dmap, tol.length, tol.angle, dict(tol.variables))
     units = dict(zip(lin.dmap.keys, lin.dmap.units))
     widths = dict(zip(lin.dmap.keys, box))
-    # a rule whose NLP rows are all equalities (crank_rocker's time ratio and rocker swing) is held at the nominal
+    # a rule whose NLP rows are all equalities (a crank-rocker's time ratio and rocker swing) is held at the nominal
     # design only: the robust transcription cannot hold an equality at a worst case, so it breaks nothing there
     nominal_only = {r.name for r in lin.rules if _equalities_only(r)}
     out = []
@@ -348,10 +333,11 @@ class ExplainBreak:
         elastic = result.elastic or {}
         names = list(describe(self.spec))
         use_elastic = bool(elastic.get("converged")) and isinstance(elastic.get("design"), dict)
-        # the answer's auxiliaries too (fourbar_path's crank angles and direction: design.ANSWER)
-        source = {"direction": (result.extra or {}).get("crank_direction"), **dict(result.design or {})}
-        if use_elastic:         # the elastic design's own dimensions; the best start's crank angles are not its
-            source.pop("crank_deg", None)
+        # the answer's auxiliaries too, as KindNLP.answer_start reads them (the crank angles of its targets, say)
+        source = {**self.kind.answer_details(result), **dict(result.design or {})}
+        if use_elastic:         # the elastic design's own dimensions; the best start's list values are not its
+            for name in describe_lists(self.spec):
+                source.pop(name, None)
             source.update({k: v for k, v in elastic["design"].items() if v is not None})
         try:
             design = {**source, **{k: float(source[k]) for k in names}}
@@ -366,14 +352,14 @@ def robust_kind(kind: Kind, spec) -> Kind:
     """The kind, solving with the spec's ``[tolerance]`` box (the kind itself when the spec has none)."""
     if getattr(spec, "tolerance", None) is None:
         return kind
-    if kind.name in NOT_ROBUST:
+    if kind.robust_refusal is not None:
         raise SpecError(f"tolerance: a [tolerance] table in `solve` is not supported for kind {kind.name} "
-                        f"({NOT_ROBUST[kind.name]}); leave it out to solve, and analyse the solved design with "
+                        f"({kind.robust_refusal}); leave it out to solve, and analyse the solved design with "
                         f"`agrisynth tolerance RESULT`")
     base = kind.solving()
     hint = (f"The rules are held at their linearised worst case in the tolerance box ({_box_text(spec)}): "
             f"loosen the tolerances of the [tolerance] table, or those rules. ")
-    solving = dataclasses.replace(base, build=RobustBuild(base.build, kind.name), finish=RobustFinish(base.finish, kind),
+    solving = dataclasses.replace(base, build=RobustBuild(base.build, kind), finish=RobustFinish(base.finish, kind),
                                   relax_hint=hint + base.relax_hint, explain_failure=ExplainBreak(kind, spec))
 
     return kind.solving_with(solving)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from synthesis.core.kind import Kind
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
@@ -60,6 +62,12 @@ class CrankRocker(Kind):
         from synthesis.kinds.crank_rocker.poses import POSES
 
         return POSES
+
+    def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The NLP works in Grashof coordinates (three lengths replaced by the slacks of the Grashof rows)."""
+        from synthesis.kinds.crank_rocker.nlp import COORDINATES
+
+        return COORDINATES.affine(n)
 
 
 KIND = CrankRocker()

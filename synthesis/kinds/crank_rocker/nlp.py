@@ -15,7 +15,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.coordinates import GrashofCoordinates
+from synthesis.kinematics.grashof import GrashofCoordinates
 from synthesis.kinds.crank_rocker.check import rules_of
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.kind import KindNLP

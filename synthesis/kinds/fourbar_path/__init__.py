@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from synthesis.core.kind import Kind
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
@@ -62,6 +64,16 @@ class FourbarPath(Kind):
         from synthesis.kinds.fourbar_path.poses import POSES
 
         return POSES
+
+    def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The NLP works in nominal units of the targets' size: design = offset + scale * z."""
+        from synthesis.kinds.fourbar_path.nlp import nominal_affine
+
+        return nominal_affine(spec, n)
+
+    def answer_details(self, result: Result) -> dict:
+        """The crank's direction, which result.json keeps in ``facts`` and a start in its details."""
+        return {"direction": (result.extra or {}).get("crank_direction")}
 
 
 KIND = FourbarPath()

@@ -78,6 +78,15 @@ def nominal_scales(targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return offset, scale
 
 
+def nominal_affine(spec: FourbarPathSpec, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(d0, J) of the first ``n`` decision entries in nominal units: design = offset + scale * z (read from the
+    spec's targets as the NLP reads them, so a tolerance box can be sized before the NLP is built)."""
+    offset, scale = nominal_scales(np.array(spec.targets.points, dtype=float))
+    d0, s = np.zeros(n), np.ones(n)
+    d0[:len(offset)], s[:len(scale)] = offset, scale
+    return d0, np.diag(s)
+
+
 #: IPOPT's initial barrier parameter (its default 0.1 pulls a screened start towards the middle of the box)
 MU_INIT = 1e-6
 #: the deterministic early cut of free-timing starts: at IPOPT iteration k of each (k, factor) a start
@@ -269,6 +278,20 @@ class PathNLP(KindNLP):
     def design_of(self, z: np.ndarray) -> np.ndarray:
         """The NLP's nominal units -> design values (spec units); a fixed variable is its bound exactly."""
         return np.where(self.fixed, self.bounds[:, 0], self.offset + self.scale * np.asarray(z, float))
+
+    def answer_start(self, design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """With free timing, the crank angle of each target and the crank direction are the answer's (result.json
+        ``design.crank_deg``, a start's ``direction``), not the start's guesses: its rules are read there."""
+        crank, direction = design.get("crank_deg"), design.get("direction")
+        if isinstance(crank, list) and len(crank) == x0.size - n and all(
+                isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank):
+            x0 = x0.copy()
+            x0[n:] = np.radians(np.asarray(crank, float))
+        if direction not in ("ccw", "cw") and isinstance(crank, list) and len(crank) > 1:   # result.json: no direction
+            direction = "ccw" if crank[-1] >= crank[0] else "cw"      # the angles run in the crank's turning sense
+        if direction in ("ccw", "cw") and p.size == 1:
+            p = np.array([1.0 if direction == "ccw" else -1.0])
+        return x0, p
 
     def start(self, index: int, x_design: np.ndarray) -> StartPoint:
         """The repaired start design and crank angles IPOPT starts from (see starts.py)."""

@@ -18,6 +18,9 @@ class GuideWay(Kind):
     summary = "rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)"
     objectives = {"smoothness": "the claw path's squared third derivative, relative to the convex fit's"}
     example = "guide_way/smooth_redesign.toml"
+    design_unit = "mm"          # the path's control points, which the spec lists without a unit
+    robust_refusal = ("its NLP works in the spline's 2 x control_points coordinates, held to the key points by "
+                      "equality rows on them, not in the spec's design variables")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.guide_way.spec import GuideWaySpec

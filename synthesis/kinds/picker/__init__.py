@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from synthesis.core.kind import Kind
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
@@ -55,6 +57,12 @@ class PickerDoubleCrank(Kind):
         from synthesis.kinds.picker.coarse import DOUBLE_CRANK
 
         return DOUBLE_CRANK
+
+    def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The NLP works in Grashof coordinates (three lengths replaced by the slacks of the Grashof rows)."""
+        from synthesis.kinds.picker.nlp import COORDINATES
+
+        return COORDINATES.affine(n)
 
 
 DOUBLE_CRANK = PickerDoubleCrank()

@@ -20,7 +20,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.coordinates import GrashofCoordinates
+from synthesis.kinematics.grashof import GrashofCoordinates
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
