@@ -406,7 +406,7 @@ def _solved_spec(loaded, result) -> dict:
 
 def _described(result, loaded):
     """The result, told what the spec says of each design variable (unit, bounds, free): reports show it.  A spec
-    that leaves part of its design to the kind (guide_way's convex fit of the control points) is described with
+    that leaves part of its design to the kind (a convex fit of its path's control points) is described with
     that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
     solve moved is listed, free, with the box it moved in."""
     from synthesis import design_info, kinds
@@ -624,7 +624,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                         solved = core.run_solve(kind, loaded, starts, seed, workers, on_start, scheduler,
                                                 record=log_file.append, finished=finished)
                 except (SpecError, AssemblyError) as exc:
-                    # a spec the run's set-up cannot use (e.g. a guide_way key point the arm cannot reach) is
+                    # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is
                     # said as check says it: the file first
                     if str(loaded.path) in str(exc):
                         raise

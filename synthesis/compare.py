@@ -95,7 +95,7 @@ def load_candidates(paths: list[Path]) -> list[Candidate]:
 
 
 def _different_targets(cands: list[Candidate]) -> list[str]:
-    """A note when the candidates trace different target points (facts.targets: fourbar_path): their objectives,
+    """A note when the candidates trace different target points (facts.targets, a path's): their objectives,
     distances to their own targets, are then not comparable, and a page of them side by side should say so."""
     targets = [c.result.extra.get("targets") if isinstance(c.result.extra, dict) else None for c in cands]
     if len(cands) < 2 or any(not isinstance(t, list) for t in targets) or all(t == targets[0] for t in targets):

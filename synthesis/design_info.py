@@ -35,7 +35,7 @@ def walk_fields(model: BaseModel, prefix: str = ""):
 
 
 def _walk_items(items, path: str, field):
-    """The items of a list (and of lists in it, e.g. guide_way's control points ``spline.control[3][0]``)."""
+    """The items of a list (and of lists in it, e.g. a path's control points ``spline.control[3][0]``)."""
     for i, item in enumerate(items):
         yield f"{path}[{i}]", field, item
         if isinstance(item, BaseModel) and not isinstance(item, FreeVariable):
@@ -72,8 +72,8 @@ def _fields_by_path(spec: BaseModel) -> dict:
 
 def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
     """design name -> {path, unit, bounds (None), free} of the list-valued design values a spec declares
-    (``list_variables()``: name -> (TOML path, free); fourbar_path's crank_deg).  Apart from describe(): a list has
-    no single value for solved.toml's or the envelope's walk."""
+    (``list_variables()``: name -> (TOML path, free); the crank angle of each target).  Apart from describe(): a
+    list has no single value for solved.toml's or the envelope's walk."""
     lists = getattr(spec, "list_variables", None)
     if not callable(lists):
         return {}
@@ -83,7 +83,7 @@ def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
 
 def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str, Any]]:
     """describe() of a spec another spec names (the combined picker's drive and linkage): each name prefixed
-    (``crank_rocker.l7``), each path one in that part's file, named under ``file``."""
+    (``<prefix>.l7``), each path one in that part's file, named under ``file``."""
     return {f"{prefix}.{name}": {**entry, "file": file} for name, entry in describe(spec).items()}
 
 

@@ -22,7 +22,7 @@ SCHEMA_VERSION = 3
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
 #: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
 #: top level, mixed with the kind's facts); version 3: every ``design`` entry is a number (mm / deg) or a list of
-#: numbers -- fourbar_path's design no longer holds ``branch``, the assembly's name, which its
+#: numbers -- a design no longer holds ``branch`` as the assembly's name (a string), which its
 #: ``facts.branch`` holds (as it did in version 2).  Versions 1 and 2 are still read (:meth:`Result.from_json`)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
@@ -99,7 +99,7 @@ class Result:
                              if k not in known and k not in RUN_KEYS and k != "schema_version"}
         design = args.get("design")
         if version < 3 and isinstance(design, dict) and isinstance(design.get("branch"), str):
-            # fourbar_path before version 3: the assembly's name sat in the design too; facts.branch holds it now
+            # before version 3 the assembly's name could sit in the design too; facts.branch holds it now
             args["design"] = {k: v for k, v in design.items() if k != "branch"}
             args["extra"].setdefault("branch", design["branch"])
         return cls(**args)

@@ -281,7 +281,7 @@ LONG_LIST = 100
 
 
 def _assignment(key: str, value: Any, lead: str) -> list[str]:
-    """``key = value`` as lines: a long list of lists (e.g. guide_way's control points) one item a line."""
+    """``key = value`` as lines: a long list of lists (e.g. a path's control points) one item a line."""
     inline = toml_value(value)
     if len(inline) <= LONG_LIST or not isinstance(value, (list, tuple)) or not all(isinstance(v, (list, tuple))
                                                                                   for v in value):

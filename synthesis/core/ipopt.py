@@ -19,7 +19,7 @@ gave up on locally infeasible starts later or stopped early on a degenerate opti
 -- tillage_redesign, planting redesign_from_example2: tests/extreme/test_scale.py.)  In the kind's own units every s
 is 1 and IPOPT sees the kind's NLP unchanged.
 An earlier rule read the unit from each variable's box (the power of 1000 bringing its width into [1, 1000)),
-and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3 (combing_chain's
+and so took a chain speed bounded [0.4, 0.62] m/s for a length in metres and scaled it by 1e-3 (the combing chain's
 finite-difference solve went from 13 to 140 iterations), and an unboxed start over 1000 for kilometres (the robust
 sensitivity variables of planting's tolerance-box redesigns).  A narrow box is not a unit choice; a declared
 unit is.
@@ -29,7 +29,7 @@ one build serves every start.
 A kind may watch the iterations of a solve (``CompiledNLP(..., watched=True)``, then ``solve(...,
 watch=rule)``): ``rule(iteration, f)`` is called at every IPOPT iteration with the objective in the problem's
 units and stops the solve (``User_Requested_Stop``) when it returns True -- a deterministic early cut of a
-hopeless start, decided by iterations and objective, not by time (fourbar_path's free-timing path synthesis).
+hopeless start, decided by iterations and objective, not by time (a free-timing path synthesis).
 
 Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
@@ -40,7 +40,7 @@ context-local, so a solve outside them is untouched:
   (the exact-against-approximate study; never in a solve: docs/ARCHITECTURE.md, "Conventions");
 * :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
   w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts; a kind's own
-  extra phase before a start, such as fourbar_path's fixed-timing fit of its random starts, is IPOPT's, so a peer
+  extra phase before a start, such as a path synthesis' fixed-timing fit of its random starts, is IPOPT's, so a peer
   starts those from the start as drawn);
 * :func:`variable_scaling` ``("none")``: CompiledNLPs built inside give IPOPT the raw variables (s = 1),
   to measure what the nominal scaling does;
@@ -312,8 +312,8 @@ class CompiledNLP:
         c = self._row_unit
         args.update(x0=args["x0"] * u, lbx=lbw * u, ubx=ubw * u, lbg=self.t.lbg * c, ubg=self.t.ubg * c)
         # nominal scaling: IPOPT's z is the kind's unit again, and so are its rows (module docstring); a kind that
-        # keeps its own variables (scaling "none": fourbar_path's are already in units of its targets' size) still
-        # has its rows divided back into its units
+        # keeps its own variables (scaling "none": a path synthesis' variables, already in units of its targets'
+        # size) still has its rows divided back into its units
         unit_changed = not (np.all(u == 1.0) and self._objective_unit == 1.0 and np.all(c == 1.0))
         nominal = self.scaling == "nominal"
         s = (u if nominal else np.ones_like(u)) if unit_changed else None

@@ -45,7 +45,7 @@ def tolerance_box(resolver: Callable[[Problem], Tolerance | None] | None) -> Ite
 
 def in_tolerance_box() -> bool:
     """Whether problems built now are transcribed in a tolerance box (a robust solve): a kind keeps then to the
-    one form whose auxiliaries its rows pin (fourbar_path: the crank-angle form, not its configuration form)."""
+    one form whose auxiliaries its rows pin (its whole problem, not a reduced form: ``KindNLP.configuration``)."""
     return _tolerance_of.get() is not None
 
 

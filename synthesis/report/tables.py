@@ -91,7 +91,7 @@ def design_rows(cands: list[Candidate]) -> list[DesignRow]:
                               info.get("free") if agree else None,
                               [at_bound(v, i) for v, i in zip(values, infos)], given, per))
     # the assembly a linkage is solved on is a setting of its spec, not a design value (result.json holds it in
-    # facts.branch: fourbar_path's name "open" / "crossed", crank_rocker's +1 / -1), yet two designs of the same
+    # facts.branch: a name, "open" / "crossed", or a sign, +1 / -1), yet two designs of the same
     # dimensions on the two assemblies are different mechanisms: the table names it
     assemblies = [c.result.extra.get("branch") for c in cands]
     if "branch" not in names and any(isinstance(a, (str, int)) and not isinstance(a, bool) for a in assemblies):
@@ -189,7 +189,7 @@ def _condition(key: str) -> tuple[str, str]:
     return key.replace("_", " "), ""
 
 
-#: conditions a kind's facts hold at their top level (comb_finger's operation; the lock range a steering linkage is
+#: conditions a kind's facts hold at their top level (a comb's operation; the lock range a steering linkage is
 #: evaluated over): candidates solved for different ones are not comparable without seeing them
 TOP_LEVEL_CONDITIONS = {"machine_speed_m_s": ("machine speed", "m/s"), "row_spacing_mm": ("row spacing", "mm"),
                         "max_inside_lock_deg": ("inside locks evaluated, 0 to", "deg")}

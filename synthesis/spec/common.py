@@ -1,7 +1,7 @@
 """Shared pieces of every spec model: strict base model, design variables, TOML reading, errors.
 
 Errors name the TOML path, the bad value and what was expected, e.g.
-``planting_fourbar.design.l2: expected > 0, got -3``, and suggest the fix where one is obvious.
+``<kind>.design.l2: expected > 0, got -3``, and suggest the fix where one is obvious.
 """
 
 from __future__ import annotations

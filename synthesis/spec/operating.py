@@ -134,7 +134,7 @@ def at_operating(spec: BaseModel, values: dict[str, float]) -> BaseModel:
     top = {}
     for name, v in values.items():
         if name not in ranges and name in type(spec).model_fields:
-            top[name] = float(v)            # a condition the spec holds outside any section (fourbar_path's crank_speed)
+            top[name] = float(v)            # a condition the spec holds outside any section (a crank_speed)
             continue
         field = ranges[name][0] if name in ranges else _section_of(spec, name)
         update.setdefault(field, {})[name] = float(v)
