@@ -309,7 +309,7 @@ def test_a_gap_at_an_unevaluable_corner_says_so_and_is_never_called_second_order
     only, and the explanation must say that (not classify it as second order or a kink)."""
     from synthesis.tolerance.analysis import explain_gaps
 
-    kind = SimpleNamespace(solver_side=lambda: None)          # never re-checked: nothing to evaluate at a corner
+    kind = SimpleNamespace(solving=lambda: None)          # never re-checked: nothing to evaluate at a corner
     row = {"name": "p2p3_distance", "unit": "mm", "scale": 1.0, "recheck_margin": 0.6, "nominal_margin": 0.6,
            "linear_worst_margin": 0.5, "linear_loss": 0.1, "same_terms": True, "linear_vs_sampled_gap": 0.6,
            "mc_worst_margin": 0.5625, "sampled_worst_margin": 0.5625, "corner": [0.2, -0.3], "corner_margin": None,
