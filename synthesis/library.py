@@ -98,7 +98,7 @@ def copy_out(source: Path, target: Path, *, force: bool = False) -> list[Path]:
     first."""
     import os
 
-    from synthesis.design_info import walk_fields
+    from synthesis.spec.design_info import walk_fields
     from synthesis.errors import OutputError, SpecError
     from synthesis.result import atomic_write_drawn
     from synthesis.spec import load_spec

@@ -53,7 +53,7 @@ class Result:
     fine_grid_worst_violation: float | None = None       # solve: of the returned design
     extra: dict[str, Any] = field(default_factory=dict)   # the kind's facts (precision points, ...): "facts"
     #: design name -> {path (TOML), unit, bounds [lo, hi] or null, free}: what the spec said of each variable
-    #: (synthesis.design_info); reports show units, bounds, free/fixed and at-bound marks from it
+    #: (synthesis.spec.design_info); reports show units, bounds, free/fixed and at-bound marks from it
     design_variables: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:

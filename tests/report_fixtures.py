@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from synthesis import design_info, kinds
+from synthesis import kinds
+from synthesis.spec import design_info
 from synthesis.report import run_artifacts
 from synthesis.result import Result, write_run
 from synthesis.spec import load_spec

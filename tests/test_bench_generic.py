@@ -1,4 +1,4 @@
-"""The generic bench studies (synthesis.bench_generic) on the smallest library problem, and the two
+"""The generic bench studies (synthesis.bench.generic) on the smallest library problem, and the two
 bench hooks of the solve core.  Correctness only: speed is the bench's, never a pass/fail here."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import pytest
 from conftest import LIBRARY
 from synthesis import kinds
 from synthesis.bench import BenchCase, markdown, run_case, summary
-from synthesis.bench_generic import (QUICK, measure, sample_fields, scaled_samples, slsqp_runner, tolerance)
+from synthesis.bench.generic import (QUICK, measure, sample_fields, scaled_samples, slsqp_runner, tolerance)
 from synthesis.core import ipopt
 from synthesis.core.kind import Setting
 from synthesis.spec import load_spec
@@ -89,7 +89,7 @@ def test_a_case_without_best_known_takes_the_best_run_and_ratios_only_at_one_tar
 
 
 def test_quick_case_runs_every_study_and_writes_the_summary():
-    from synthesis.bench_generic import case_for
+    from synthesis.bench.generic import case_for
 
     loaded = load_spec(STEERING)
     case = case_for(loaded, QUICK)
@@ -169,7 +169,7 @@ def test_bench_md_plot_link_of_a_name_with_spaces_and_brackets_and_plain_iterati
 def test_de_bounds_close_an_infinite_bound_around_the_start():
     """de_bounds: a variable with an infinite bound gets one decade around its start (its finite bound kept),
     a bounded one keeps its box."""
-    from synthesis.bench_generic import de_bounds
+    from synthesis.bench.generic import de_bounds
 
     lo, hi, n = de_bounds(np.array([5.0, 1e-6, -np.inf, 0.0]), np.array([200.0, np.inf, np.inf, 1.0]),
                           np.array([50.0, 120.0, -3.0, 0.5]))
@@ -181,7 +181,7 @@ def test_de_bounds_close_an_infinite_bound_around_the_start():
 def test_de_runs_on_a_problem_with_unbounded_lengths():
     """crank_rocker's NLP leaves three lengths unbounded above: differential_evolution used to be "not run"
     there; with the derived box it runs (1 s budget) from the spec's start and returns a finite objective."""
-    from synthesis.bench_generic import de_runner
+    from synthesis.bench.generic import de_runner
 
     loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml")
     out = measure(loaded, 1, 0, runner=de_runner(1.0, 0))
@@ -195,7 +195,7 @@ def test_extreme_matrix_row_of_a_known_failure():
     cause, and bench.md's heading counts it apart from the passed rows."""
     from types import SimpleNamespace
 
-    from synthesis import bench_extreme
+    from synthesis.bench import extreme as bench_extreme
 
     bench_extreme._ROWS.clear()
     bench_extreme.pytest_runtest_logreport(SimpleNamespace(
@@ -218,7 +218,7 @@ def test_differential_evolution_stops_at_a_loose_target_and_times_it():
     own functions -- in fewer generations than the same run without a target, its time to target (the trace's
     first point at or below the target) inside its whole run, and the checks' time reported apart."""
     from synthesis.bench import time_to_target
-    from synthesis.bench_generic import de_runner
+    from synthesis.bench.generic import de_runner
 
     loaded = load_spec(GUIDE_TUBE)
     measure(loaded, 1, 0)                    # imports and CasADi's first build, untimed
@@ -244,7 +244,7 @@ def test_differential_evolution_stops_at_a_loose_target_and_times_it():
 def test_the_ratio_is_of_times_to_target():
     """run_case's time ratio and bench.md's columns are the methods' times to the target, not their whole
     runs: IPOPT (AD) and DE on the guide tube with a loose best known."""
-    from synthesis.bench_generic import _method, de_runner
+    from synthesis.bench.generic import _method, de_runner
 
     loaded = load_spec(GUIDE_TUBE)
     case = BenchCase(loaded.name, loaded.kind, {"ipopt_multistart": _method(loaded, 2, 0),
@@ -321,7 +321,7 @@ def test_a_peer_is_held_to_the_nlp_s_equality_rows_as_ipopt_is(tmp_path):
     band (32.69 deg) beat IPOPT's exact optimum (32.632 deg) and became the bench's best known, so IPOPT showed a
     gap of 0.063.  A peer's answers and iterates now count only where they hold the NLP's equality rows
     (EQUALITY_TOL): SLSQP's best is IPOPT's optimum to 1e-4 deg, its equality rows held."""
-    from synthesis.bench_generic import EQUALITY_TOL, slsqp_with_budget
+    from synthesis.bench.generic import EQUALITY_TOL, slsqp_with_budget
 
     spec = tmp_path / "cr.toml"
     spec.write_text('kind = "crank_rocker"\nname = "cr_band"\n\n[requirements]\ntime_ratio = 1.4\nrocker_swing = 60\n'

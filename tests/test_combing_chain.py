@@ -306,7 +306,7 @@ def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tm
     the speed in the rule's `where` ("V_s switch 0.497996 m/s")."""
     from synthesis import kinds
     from synthesis.core.solve import run_solve
-    from synthesis.solved_spec import solved_toml
+    from synthesis.spec.solved import solved_toml
 
     loaded = load_spec(TWO_SPEED)
     result, _, _ = run_solve(kinds.solving_kind("combing_chain"), loaded, starts=1, workers=1)

@@ -17,7 +17,7 @@ import pytest
 
 from conftest import PLANTING
 from synthesis import kinds
-from synthesis.compare import load_candidates, write_comparison
+from synthesis.report.compare import load_candidates, write_comparison
 from synthesis.errors import AgrisynthError
 from synthesis.result import result_text
 from synthesis.spec import load_spec

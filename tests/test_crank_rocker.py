@@ -177,7 +177,7 @@ def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(
         assert moved or r.why is None
     assert any(abs(r.outcome.design["l10"] - 140.0) > 1.0 for r in reports)      # the case this test is about
     # its solved.toml keeps the spec's l10 = 140: its header no longer promises the solve's rule table
-    from synthesis.solved_spec import solved_toml
+    from synthesis.spec.solved import solved_toml
 
     header = solved_toml(load_spec(path), result).splitlines()[2]
     assert abs(result.design["l10"] - 140.0) > 1.0              # every start drifted: so did the one reported

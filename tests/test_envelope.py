@@ -337,7 +337,7 @@ def test_monte_carlo_of_an_envelope_design_checks_every_operating_point(example1
     0.6 m/s as often as the envelope redesign but never over 0.50-0.75 m/s; the envelope redesign does.  The grid is
     coarsened to 0.05 m/s (6 points) to keep the test short."""
     from solving import spec_with
-    from synthesis.design_info import describe
+    from synthesis.spec.design_info import describe
     from synthesis.tolerance.analysis import monte_carlo
     from synthesis.tolerance.design import DesignMap, box_of
 

@@ -376,7 +376,7 @@ def test_a_crossed_result_is_drawn_and_exported_on_its_own_assembly(tmp_path, mo
     there.  A crossed design (branch = -1) checked and read back from result.json: its poses' joint B is the crossed
     assembly's (the library design's coupler point is the crank pin, the same on both assemblies, so B tells them
     apart: on the open assembly it lies elsewhere), and so are the DXF's joints."""
-    from synthesis import exports
+    from synthesis.report import exports
     from synthesis.kinds.fourbar_path import export, plots, poses
     from synthesis.kinds.fourbar_path.check import run_check
     from synthesis.result import Result

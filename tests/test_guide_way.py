@@ -275,7 +275,7 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
     5 mm here, so that the fit itself satisfies every rule and the exit code is the key points' alone.)"""
     from synthesis.kinds.guide_way.fit import fit_path
     from synthesis.kinds.guide_way.spec import GuideWaySpec
-    from synthesis.specref import write_toml
+    from synthesis.spec.reference import write_toml
 
     fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
     results = {}
@@ -422,7 +422,7 @@ def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path
     from synthesis.kinds.guide_way.fit import fit_path
     from synthesis.spec.common import validate
     from synthesis.kinds.guide_way.spec import GuideWaySpec
-    from synthesis.specref import write_toml
+    from synthesis.spec.reference import write_toml
 
     fit = fit_path(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml").model).control
     fixed = [[float(x), float(y)] for x, y in fit]

@@ -135,7 +135,7 @@ def test_check_and_solve_take_a_library_name_where_no_such_file_is_here_and_say_
 
 def test_the_studio_worker_and_the_extreme_matrix_find_this_agrisynth():
     """The studio's solve worker imports the synthesis this process runs; the extreme matrix is the checkout's."""
-    from synthesis import bench_extreme
+    from synthesis.bench import extreme as bench_extreme
     from synthesis.library import checkout
     from synthesis.studio.solver import worker_env
 

@@ -9,7 +9,7 @@ import pytest
 
 from conftest import PLANTING
 from report_fixtures import checked_run
-from synthesis.compare import load_candidates, write_comparison
+from synthesis.report.compare import load_candidates, write_comparison
 from synthesis.errors import ResultError
 from synthesis.report.tables import candidates, design_rows, rule_rows, worst_margins
 from synthesis.result import SCHEMA_VERSION, load_result
@@ -157,7 +157,7 @@ def test_unknown_kind_and_broken_bench_are_refused(runs, tmp_path):
     data = json.loads((runs[0][0] / "result.json").read_text())
     with pytest.raises(ResultError, match="kind 'steam_engine' is not one this agrisynth knows"):
         load_candidates([_write(tmp_path / "odd.json", json.dumps(dict(data, kind="steam_engine")))])
-    from synthesis.compare import load_bench
+    from synthesis.report.compare import load_bench
 
     bench = _write(tmp_path / "bench.json", json.dumps({"problems": [{"problem": "p", "best_known": 0}],
                                                         "rows": [{"problem": "p", "method": "m"}]}))
@@ -209,7 +209,7 @@ def test_the_design_table_names_a_crank_rockers_assembly_from_its_facts():
 def test_the_design_tables_bounds_are_each_designs_own_where_the_specs_disagree(runs, tmp_path):
     """A published design (every variable fixed) beside a redesign of it (free within bounds): the bounds column
     once showed the first design's "fixed" for both, beside the redesign's "at lower bound"."""
-    from synthesis.compare import write_comparison
+    from synthesis.report.compare import write_comparison
     from synthesis.spec import load_spec
 
     folder, redesign = checked_run(PLANTING / "redesign_from_example1.toml", tmp_path / "runs")
@@ -241,7 +241,7 @@ def test_run_facts_say_the_workers_and_how_many_starts_ran(runs):
 
 
 def test_a_bench_of_another_kind_is_refused_and_a_bench_of_every_kind_gives_this_kinds_rows(tmp_path):
-    from synthesis.compare import bench_of_kind
+    from synthesis.report.compare import bench_of_kind
 
     crank = [{"problem": "a", "kind": "crank_rocker"}, {"problem": "b", "kind": "crank_rocker"}]
     with pytest.raises(ResultError, match="a bench of crank_rocker problems, not of planting_fourbar"):
@@ -301,7 +301,7 @@ def test_steering_lock_ranges_and_comb_finger_operation_are_operating_conditions
 def test_a_bench_is_found_in_the_folder_bench_was_given(tmp_path):
     """`agrisynth bench --out OUT` writes OUT/bench/bench.json; `compare RESULT OUT` said "OUT/result.json: no such
     result file".  OUT, OUT/bench and the file all name the bench; a run folder is never one."""
-    from synthesis.compare import bench_file, is_bench
+    from synthesis.report.compare import bench_file, is_bench
 
     (tmp_path / "out" / "bench").mkdir(parents=True)
     file = tmp_path / "out" / "bench" / "bench.json"
@@ -317,7 +317,7 @@ def test_a_bench_is_found_in_the_folder_bench_was_given(tmp_path):
 
 def test_candidates_tracing_different_targets_are_said_not_to_compare():
     """A trial: fourbar_path results of 14 and 16 target points side by side, objectives included, no word."""
-    from synthesis.compare import _different_targets
+    from synthesis.report.compare import _different_targets
     from synthesis.report.tables import Candidate
     from synthesis.result import Result
 

@@ -15,7 +15,7 @@ import pytest
 
 from conftest import LIBRARY, PLANTING
 from report_fixtures import checked_run
-from synthesis.compare import load_candidates, write_comparison
+from synthesis.report.compare import load_candidates, write_comparison
 from solving import agrisynth
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"

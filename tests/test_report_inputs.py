@@ -148,8 +148,8 @@ def test_the_animation_is_large_enough_and_counts_its_frames(tmp_path):
 def test_library_warnings_go_to_the_log_not_the_terminal(capfd):
     import casadi as ca
 
-    from synthesis.ipopt_log import captured_stdout
-    from synthesis.library_log import captured_warnings
+    from synthesis.core.ipopt_log import captured_stdout
+    from synthesis.core.library_log import captured_warnings
 
     x = ca.MX.sym("x")
     solver = ca.nlpsol("s", "ipopt", {"x": x, "f": x**2, "g": ca.sqrt(x)},

@@ -177,7 +177,7 @@ def test_compare_output_follows_the_run_folder_rules(tmp_path):
     """`compare --out DIR` writes DIR as an agrisynth output (marker): a second compare there needs --force,
     a folder agrisynth did not write is never touched (compare once wrote into any folder)."""
     from synthesis import kinds
-    from synthesis.compare import load_candidates, open_output_folder, write_comparison
+    from synthesis.report.compare import load_candidates, open_output_folder, write_comparison
     from synthesis.result import result_text
     from synthesis.spec import load_spec
 

@@ -13,9 +13,10 @@ import re
 import pytest
 
 from conftest import LIBRARY
-from synthesis import design_info, kinds
+from synthesis import kinds
+from synthesis.spec import design_info
 from synthesis.core import solve as core
-from synthesis.solved_spec import FILENAME, solved_toml
+from synthesis.spec.solved import FILENAME, solved_toml
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 from synthesis.spec.common import read_toml

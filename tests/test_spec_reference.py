@@ -13,7 +13,8 @@ import pytest
 from click.testing import CliRunner
 
 from conftest import LIBRARY
-from synthesis import kinds, specref
+from synthesis import kinds
+from synthesis.spec import reference as specref
 from synthesis.cli import cli
 from synthesis.spec import load_spec
 from synthesis.spec.common import read_toml
@@ -82,7 +83,7 @@ def test_reference_lists_every_field(kind_name):
 
 
 def test_docs_specs_md_is_current():
-    """docs/specs.md is generated; regenerate it with `python -m synthesis.specref` when a model changes."""
+    """docs/specs.md is generated; regenerate it with `python -m synthesis.spec.reference` when a model changes."""
     current = specref.DOCS.read_text() if specref.DOCS.exists() else ""
     assert current == specref.markdown(), f"docs/specs.md is stale: run `{specref.REGENERATE}`"
     for name in kinds.names():
@@ -148,7 +149,7 @@ def test_piped_problems_table_never_cuts_a_file_name():
 
 def _documented_ranges(model):
     """(TOML path, range text) of every design variable whose range a validator enforces (json_schema_extra)."""
-    from synthesis.design_info import walk_fields
+    from synthesis.spec.design_info import walk_fields
 
     return [(path, field.json_schema_extra["range"]) for path, field, _ in walk_fields(model)
             if isinstance(field.json_schema_extra, dict) and "range" in field.json_schema_extra]

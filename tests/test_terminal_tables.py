@@ -8,7 +8,7 @@ import io
 import pytest
 from rich.console import Console
 
-from synthesis import terminal
+from synthesis.cli import terminal
 from synthesis.cli import bench_table, comparison_table, rule_table
 from synthesis.report.tables import DesignRow
 

@@ -2,7 +2,7 @@
 
 A :class:`CompiledNLP` is built once per problem and process (the expression graph and IPOPT's
 setup are the expensive part) and solves from as many starts as it is given.  IPOPT's output of
-each solve is captured from file descriptor 1 (:mod:`synthesis.ipopt_log`), so no log file is left
+each solve is captured from file descriptor 1 (:mod:`synthesis.core.ipopt_log`), so no log file is left
 behind, in workers or not.
 
 IPOPT sees every variable at its *nominal scale*, the kind's own unit: w = s * z elementwise, IPOPT works on z,
@@ -31,7 +31,7 @@ watch=rule)``): ``rule(iteration, f)`` is called at every IPOPT iteration with t
 units and stops the solve (``User_Requested_Stop``) when it returns True -- a deterministic early cut of a
 hopeless start, decided by iterations and objective, not by time (a free-timing path synthesis).
 
-Four hooks serve the bench (:mod:`synthesis.bench_generic`) and the tests and nothing else; all are
+Four hooks serve the bench (:mod:`synthesis.bench.generic`) and the tests and nothing else; all are
 context-local, so a solve outside them is untouched:
 
 * :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
@@ -65,7 +65,7 @@ import numpy as np
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
-from synthesis.ipopt_log import captured_stdout
+from synthesis.core.ipopt_log import captured_stdout
 
 #: named option presets; a problem picks one by name and may override single options
 PRESETS: dict[str, dict] = {

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from synthesis.errors import AgrisynthError, SolverError
-from synthesis.ipopt_log import reached_optimum
+from synthesis.core.ipopt_log import reached_optimum
 
 #: the fine re-check grid is this many times finer than the solver's samples (docs/ARCHITECTURE.md, "Verdicts")
 FINE = 10

@@ -50,7 +50,7 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
     from synthesis import kinds
-    from synthesis.library_log import captured_warnings
+    from synthesis.core.library_log import captured_warnings
 
     written: list[str] = []
     failed: list[str] = []

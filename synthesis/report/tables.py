@@ -72,7 +72,7 @@ def _differs(a, b) -> bool:
 def design_rows(cands: list[Candidate]) -> list[DesignRow]:
     """Every design variable (baseline's order, then any others), one value per candidate, with what the
     spec says of it (unit, bounds, free or fixed) and whether each candidate's value sits on a bound."""
-    from synthesis.design_info import at_bound
+    from synthesis.spec.design_info import at_bound
 
     names: list[str] = []
     for c in cands:

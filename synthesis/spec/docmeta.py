@@ -1,4 +1,4 @@
-"""Markers a spec model may attach to a field for the spec reference (:mod:`synthesis.specref`).
+"""Markers a spec model may attach to a field for the spec reference (:mod:`synthesis.spec.reference`).
 
 They change nothing in validation; pydantic keeps them in ``FieldInfo.metadata``.
 """

@@ -1,7 +1,7 @@
 """One studio session: a spec, its design variables, and the evaluation of any values of them.
 
 The page sends design values by name only; the session writes them into a copy of the spec file's
-data where :mod:`synthesis.design_info` says each variable lives (a free variable's ``init``, or the
+data where :mod:`synthesis.spec.design_info` says each variable lives (a free variable's ``init``, or the
 ``[design]`` table of a kind whose free variables are a ``[bounds]`` table), validates that data with
 the kind's spec model and runs the kind's own ``check`` on it: the rule table the page shows is the
 one ``agrisynth check`` prints for a spec holding those values.
@@ -20,9 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from synthesis import kinds
-from synthesis.design_info import describe, walk_fields
+from synthesis.spec.design_info import describe, walk_fields
 from synthesis.errors import AgrisynthError, SpecError
-from synthesis.solved_spec import path_parts, set_at_path     # TOML paths as solved.toml writes them
+from synthesis.spec.solved import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
 from synthesis.studio import drawing, grids
@@ -192,7 +192,7 @@ class Session:
 
     def spec_text(self, values: dict[str, float], name: str, note: str, folder: Path) -> str:
         """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
-        from synthesis.specref import write_toml
+        from synthesis.spec.reference import write_toml
 
         data = self.spec_data(values, name, folder)
         validate(type(self.loaded.model), data, prefix=self.kind)       # never write a spec check refuses

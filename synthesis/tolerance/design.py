@@ -15,7 +15,7 @@ from pydantic import BaseModel
 from synthesis.core.ipopt import NLPOutcome, solved_with
 from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
-from synthesis.design_info import describe
+from synthesis.spec.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.spec.common import FreeVariable
 

@@ -25,7 +25,7 @@ from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import scenario_label
 from synthesis.core.verdict import Recheck
-from synthesis.design_info import describe
+from synthesis.spec.design_info import describe
 from synthesis.errors import AgrisynthError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of

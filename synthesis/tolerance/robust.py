@@ -19,7 +19,7 @@ from synthesis.core.kind import Finished, Kind, Setting
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
 from synthesis.core.transcribe import tolerance_box
-from synthesis.design_info import describe, describe_lists
+from synthesis.spec.design_info import describe, describe_lists
 from synthesis.errors import SpecError
 from synthesis.tolerance.design import DesignMap, box_of, spec_keys, whole_problem
 

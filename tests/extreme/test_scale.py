@@ -26,7 +26,7 @@ from synthesis import kinds
 from synthesis.core import ipopt, units
 from synthesis.core.kind import Setting
 from synthesis.core.solve import run_multistart
-from synthesis.design_info import describe
+from synthesis.spec.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 
@@ -295,7 +295,7 @@ def test_start_0_in_metres_and_x1e3_reaches_the_mm_design(relative, record_prope
 
 # ------------------------------------------------------------------- every library problem (benchmark)
 
-#: the bench's start count (synthesis.bench_generic.FULL.starts): one row per library problem in bench.md's
+#: the bench's start count (synthesis.bench.generic.FULL.starts): one row per library problem in bench.md's
 #: extreme matrix compares the best of a problem's first 4 starts (its own seed) in each unit; the full study
 #: below takes every start
 BENCH_STARTS = 4

@@ -26,7 +26,7 @@ def _closed(xy: dict) -> np.ndarray:
 
 
 def write_csv(result: Result, path: Path) -> None:
-    from synthesis.exports import write_csv as write_columns
+    from synthesis.report.exports import write_csv as write_columns
 
     prof = result.extra["profile"]
     rr = float(prof["roller_radius"])

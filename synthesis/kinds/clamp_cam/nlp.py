@@ -27,7 +27,7 @@ from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, oper
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
 from synthesis.kinds.clamp_cam.spec import ClampCamSpec
-from synthesis.design_info import units_of
+from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
 
 DEG = math.pi / 180.0

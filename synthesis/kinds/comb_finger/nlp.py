@@ -13,7 +13,7 @@ from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.kind import KindNLP
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
-from synthesis.design_info import units_of
+from synthesis.spec.design_info import units_of
 from synthesis.kinds.comb_finger.spec import NAMES, CombFingerSpec
 from synthesis.spec.common import design_box
 

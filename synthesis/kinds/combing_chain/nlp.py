@@ -18,7 +18,7 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
 from synthesis.errors import SpecError
 from synthesis.kinds.combing_chain.spec import CombingChainSpec
-from synthesis.design_info import units_of
+from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, is_free, value_of
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis import exports
+from synthesis.report import exports
 from synthesis.result import Result
 
 LINKS = (("G", "A"), ("G", "F"), ("F", "E"), ("A", "E"))

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from synthesis import exports
+from synthesis.report import exports
 from synthesis.result import Result
 
 LINKS = (("O", "O'"), ("O", "A"), ("O'", "B"), ("A", "B"), ("A", "P"), ("B", "P"))

@@ -24,7 +24,7 @@ import numpy as np
 
 from constraints.base import Rule
 from synthesis.kinds.crank_rocker import check as crank_rocker_check
-from synthesis.design_info import describe_fixed, describe_part
+from synthesis.spec.design_info import describe_fixed, describe_part
 from synthesis.errors import AssemblyError, SpecError
 from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_point, joint_positions

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from synthesis import exports
+from synthesis.report import exports
 from synthesis.result import Result
 
 DOUBLE_CRANK = (("A", "D"), ("A", "B"), ("B", "C"), ("C", "D"), ("C", "M"), ("B", "M"))

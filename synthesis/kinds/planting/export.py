@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from synthesis import exports
+from synthesis.report import exports
 from synthesis.result import Result
 
 LINKS = (("O", "O'"), ("O", "A"), ("O'", "B"), ("A", "B"), ("A", "C"), ("B", "C"))

@@ -23,7 +23,7 @@ from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Oper
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
-from synthesis.design_info import units_of
+from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.operating import ranges_of
 from synthesis.kinds.planting.spec import PlantingFourbarSpec

@@ -66,9 +66,9 @@ KIND = SteeringLinkage()
 
 
 def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench_generic`) on the
+    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
     given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench_generic import library_cases
+    from synthesis.bench.generic import library_cases
 
     return library_cases(specs, seed, [
             "steering/steering_redesign_40.toml",

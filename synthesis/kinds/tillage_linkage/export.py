@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from synthesis import exports
+from synthesis.report import exports
 from synthesis.result import Result
 
 

@@ -2,7 +2,7 @@
 
 :func:`extreme_matrix` runs ``pytest tests/extreme`` (its benchmark-marked cases too, all but the full scale
 study) in a subprocess with this module as a plugin
-(``-p synthesis.bench_extreme``), which writes one JSON row per test: the file (its kind), the case
+(``-p synthesis.bench.extreme``), which writes one JSON row per test: the file (its kind), the case
 (test name and parameters), what was tried (the docstring, or the name), passed/failed/skipped, the
 time, and any figure the test records (``record_property("figure", ...)``).  Without a tests/extreme
 folder (an installed copy) the matrix is empty and bench.md says so.
@@ -70,7 +70,7 @@ def extreme_matrix(timeout_s: float = 1200.0) -> list[dict]:
     try:
         env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
         subprocess.run([sys.executable, "-m", "pytest", str(EXTREME), "-q", "-p", "no:cacheprovider",
-                        "-p", "synthesis.bench_extreme", f"--extreme-json={out}", "-W", "ignore",
+                        "-p", "synthesis.bench.extreme", f"--extreme-json={out}", "-W", "ignore",
                         # the benchmark-marked cases too (the scale case's row per library problem), but not
                         # the full scale study (every start of every problem: minutes; pytest -m benchmark)
                         "-m", "not fuzz", "--deselect", f"tests/extreme/test_scale.py::{FULL_STUDY}"],

@@ -4,8 +4,8 @@
 range, description), ``agrisynth spec KIND --template`` writes a commented starting file, and
 ``docs/specs.md`` is the same reference for every kind::
 
-    python -m synthesis.specref            # regenerate docs/specs.md
-    python -m synthesis.specref --check    # exit 1 when docs/specs.md is stale
+    python -m synthesis.spec.reference            # regenerate docs/specs.md
+    python -m synthesis.spec.reference --check    # exit 1 when docs/specs.md is stale
 
 Units are read from the field descriptions (``"crank OA, mm"``); a numeric field without a unit says
 ``dimensionless``.  A template is the kind's library example (``Kind.example``) written field by field
@@ -36,7 +36,7 @@ from synthesis.spec.docmeta import UNITS, SpecFile, TomlType, units_in
 
 #: the reference of every kind, generated into the source checkout's docs (an installed copy has no docs folder)
 DOCS = IMPORT_ROOT / "docs" / "specs.md"
-REGENERATE = "python -m synthesis.specref"
+REGENERATE = "python -m synthesis.spec.reference"
 
 DIMENSIONLESS = "dimensionless"
 

@@ -19,16 +19,16 @@ from rich.table import Table
 from constraints.base import limit_text
 from synthesis.errors import AgrisynthError, AssemblyError, SpecError
 from synthesis.library import LIBRARY
-from synthesis.terminal import PIPED_WIDTH
+from synthesis.cli.terminal import PIPED_WIDTH
 
 
-#: as wide as the terminal; piped, wide enough that no table cell is ever cut (synthesis.terminal)
+#: as wide as the terminal; piped, wide enough that no table cell is ever cut (synthesis.cli.terminal)
 console = Console(highlight=False, width=None if sys.stdout.isatty() else PIPED_WIDTH)
 err_console = Console(stderr=True, highlight=False)
 
 
 def rule_table(rules: list[dict], title: str) -> Table:
-    from synthesis.terminal import add_columns
+    from synthesis.cli.terminal import add_columns
 
     table = Table(title=escape(title), title_justify="left")
     add_columns(table, (("rule", "left"), ("value", "right"), ("limit", "right"), ("unit", "left"),
@@ -107,7 +107,7 @@ def _list_library(library: Path) -> None:
     from synthesis import kinds
     from synthesis.spec.common import read_toml
 
-    from synthesis.terminal import add_columns
+    from synthesis.cli.terminal import add_columns
 
     kinds_table = add_columns(Table(title="kinds", title_justify="left"),
                               [(col, "left") for col in ("kind", "mechanism", "commands", "try")])
@@ -166,7 +166,9 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
       agrisynth spec planting_fourbar
       agrisynth spec clamp_cam --template --out my_cam.toml && agrisynth check my_cam.toml
     """
-    from synthesis import kinds, specref, terminal
+    from synthesis import kinds
+    from synthesis.cli import terminal
+    from synthesis.spec import reference as specref
 
     description = kinds.get(kind)           # SpecError (exit 2) naming the known kinds
     if target is not None and not template:
@@ -223,7 +225,7 @@ def check(spec: Path, out: Path, force: bool) -> None:
     run_folder = open_run_folder(out, loaded.name, force=force, spec=spec, suffix=CHECK_SUFFIX)
     written = False
     try:
-        from synthesis.library_log import captured_warnings
+        from synthesis.core.library_log import captured_warnings
         from synthesis.result import atomic_write_text
 
         with captured_warnings() as said:        # scipy/CasADi warnings: into warnings.log, not the terminal
@@ -269,7 +271,7 @@ def _staging_hint(folder: Path) -> str:
 def _unknown_design_variables(model, names: list[str], where: str) -> None:
     """SpecError naming those of ``names`` that are no design variable of the spec (a variable's name in the kind's
     NLP is taken too, as the analysis maps it: spec_keys); nothing is said of a kind that declares none."""
-    from synthesis.design_info import describe
+    from synthesis.spec.design_info import describe
     from synthesis.tolerance.design import spec_keys
 
     info = describe(model)
@@ -387,7 +389,7 @@ def _start_line(report, best, done: int, total: int) -> None:
 
 def _print_design(result) -> None:
     """The solved design beside the given one: value, unit, bounds, at-bound marks."""
-    from synthesis import terminal
+    from synthesis.cli import terminal
     from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, solved_heading
 
     rows = design_rows(candidates([result]))
@@ -399,7 +401,7 @@ def _print_design(result) -> None:
 def _solved_spec(loaded, result) -> dict:
     """solved.toml: the solved design as a spec with everything fixed (``agrisynth check`` reproduces it)."""
     from synthesis.result import atomic_write_text
-    from synthesis.solved_spec import FILENAME, solved_toml
+    from synthesis.spec.solved import FILENAME, solved_toml
 
     return {FILENAME: lambda path: atomic_write_text(path, solved_toml(loaded, result))}
 
@@ -409,7 +411,8 @@ def _described(result, loaded):
     that leaves part of its design to the kind (a convex fit of its path's control points) is described with
     that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
     solve moved is listed, free, with the box it moved in."""
-    from synthesis import design_info, kinds
+    from synthesis import kinds
+    from synthesis.spec import design_info
     from synthesis.errors import AgrisynthError
 
     if kinds.get(loaded.kind).writes_explicit_design:
@@ -433,7 +436,7 @@ def _in_file(loaded, evaluate):
 def comparison_table(best: list[dict], baseline: list[dict] | None, title: str, solved: str = "solved") -> Table:
     """A solve's rule table: each rule at the given design (start 0) and at the solved one (heading ``solved``)."""
     from synthesis.report.tables import GIVEN_HEADING
-    from synthesis.terminal import add_columns
+    from synthesis.cli.terminal import add_columns
 
     table = Table(title=escape(title), title_justify="left")
     add_columns(table, (("rule", "left"), ("limit", "right"), (GIVEN_HEADING, "right"), ("", "left"),
@@ -602,7 +605,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
     committed = False
     try:
         log_file = startlog.StartLog(run_folder.staging / startlog.FILENAME, settings, fingerprint)
-        from synthesis.library_log import captured_warnings
+        from synthesis.core.library_log import captured_warnings
 
         solved = None         # (result, reports, log) once every start has finished
         stderr = sys.stderr   # the warnings capture swaps it; an exit cut short by a signal may not swap it back
@@ -947,7 +950,7 @@ def compare(results: tuple[Path, ...], out: Path, force: bool) -> None:
     """
     import os
 
-    from synthesis.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
+    from synthesis.report.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
                                    write_comparison)
     from synthesis.errors import OutputError
     from synthesis.result import is_run_folder
@@ -1071,7 +1074,7 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
         for case in cases:
             results.append(benchmod.run_case(case, repeats, tick))
         if extreme_on:
-            from synthesis.bench_extreme import extreme_matrix
+            from synthesis.bench.extreme import extreme_matrix
 
             tick("extreme-case matrix (tests/extreme/)")
             extreme = extreme_matrix()
@@ -1088,7 +1091,7 @@ def bench(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, re
 
 
 def bench_table(results: list[dict], repeats: int) -> Table:
-    from synthesis.terminal import add_columns
+    from synthesis.cli.terminal import add_columns
 
     table = Table(title=f"bench: objective reached, median wall time and time to target (IPOPT methods: {repeats} runs)",
                   title_justify="left")
@@ -1159,6 +1162,3 @@ def _main() -> None:
         err_console.print("interrupted")
         sys.exit(128 + interrupt.pending())
 
-
-if __name__ == "__main__":
-    main()

@@ -66,7 +66,7 @@ class BenchCase:
     best_known: float | Callable[[], float] | None
     tolerance: Callable[[float], float]  # best known -> allowed gap of the target
     note: str = ""
-    loaded: Any = None                   # the LoadedSpec of a generic case (synthesis.bench_generic)
+    loaded: Any = None                   # the LoadedSpec of a generic case (synthesis.bench.generic)
     single_runs: set = field(default_factory=set)   # methods run once whatever ``repeats`` says
     #: the sample-count study of the case: sweep(tick) -> its table, and how many runs it ticks
     sweep: Callable[[Callable], dict] | None = None
@@ -86,7 +86,7 @@ _quick: ContextVar[bool] = ContextVar("agrisynth_bench_quick", default=False)
 
 @contextmanager
 def quick_mode(on: bool):
-    """Bench cases made inside use the ``--quick`` study settings (:data:`synthesis.bench_generic.QUICK`)."""
+    """Bench cases made inside use the ``--quick`` study settings (:data:`synthesis.bench.generic.QUICK`)."""
     token = _quick.set(on)
     try:
         yield
@@ -95,7 +95,7 @@ def quick_mode(on: bool):
 
 
 def current_settings():
-    from synthesis.bench_generic import FULL, QUICK
+    from synthesis.bench.generic import FULL, QUICK
 
     return QUICK if _quick.get() else FULL
 
@@ -133,7 +133,7 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list
         for case in cases:      # peers (not IPOPT) run once in every case, as in the generic studies
             case.single_runs = set(case.single_runs) | (set(case.methods) & PEERS)
         # a kind with its own bench methods: the generic studies too, on its library example
-        from synthesis.bench_generic import LIBRARY, case_for
+        from synthesis.bench.generic import LIBRARY, case_for
         from synthesis.spec import load_spec
 
         example = kinds.get(kind).example

@@ -6,7 +6,7 @@ given design some kinds read, e.g. a path's free-timing crank angles) set to the
 and the name ``<name>_solved`` (so checking it never touches the solve's own folder).
 ``agrisynth check results/<name>/solved.toml`` then evaluates exactly the solved design.
 
-Generic over kinds: where each variable is written comes from :mod:`synthesis.design_info`; a kind whose
+Generic over kinds: where each variable is written comes from :mod:`synthesis.spec.design_info`; a kind whose
 spec may leave part of its design to the kind (a path's control points, the convex fit by default) first
 writes it out (``Kind.explicit_design``), so the solved values have a place.
 """
@@ -18,7 +18,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from synthesis.design_info import describe
+from synthesis.spec.design_info import describe
 from synthesis.errors import SpecError
 
 FILENAME = "solved.toml"
@@ -106,7 +106,7 @@ def _fixed_values_moved(model, design: dict) -> str:
 
 
 def solved_toml(loaded, result) -> str:
-    from synthesis.specref import write_toml
+    from synthesis.spec.reference import write_toml
 
     data = solved_data(loaded, result)
     objective = result.objective or {}
