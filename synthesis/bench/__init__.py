@@ -112,7 +112,8 @@ OWN_CASES_IN_EVERY_KIND_RUN = 1
 
 
 def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list[BenchCase]:
-    """The kind's bench cases: ``Kind.bench(specs: list[LoadedSpec] | None, seed)``; None = its default set.
+    """The kind's bench cases on ``specs`` (None: its default set): its own (``Kind.bench_cases``), else the generic
+    studies on the specs or its ``Kind.bench_specs``.
 
     ``own_limit``: keep at most this many of the default cases of a kind with its own bench methods
     (not the generic studies).  ``--quick``: the first case of a default set only (specs a user names all run),
@@ -120,7 +121,13 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None) -> list
     cases -- reference solve, its peers -- are the slow part; the case note says so)."""
     from synthesis import kinds
 
-    cases = kinds.get(kind).bench_cases(specs, seed)
+    own_cases = kinds.get(kind).bench_cases(specs, seed)
+    if own_cases is None:
+        from synthesis.bench.generic import library_cases
+
+        own_cases = library_cases(specs, seed, list(kinds.get(kind).bench_specs),
+                                  studies=kinds.get(kind).bench_studies() or None)
+    cases = own_cases
     own = specs is None and kinds.get(kind).solves and not any(c.loaded is not None for c in cases)
     left_out = 0
     if own and _quick.get() and kinds.get(kind).example:

@@ -72,6 +72,9 @@ class Kind(ABC):
     objectives: dict[str, str] = {}
     #: a library spec to try, relative to the problem library (None: none)
     example: str | None = None
+    #: the library specs (relative to the problem library) the bench's generic studies run on by default
+    #: (``--quick``: the first); empty, with no bench methods of its own, when the kind has no bench
+    bench_specs: tuple[str, ...] = ()
     #: the unit of design variables the spec model gives none (a path's control points: "mm"); "" for none
     design_unit: str = ""
     #: why a ``[tolerance]`` table in ``solve`` is refused for this kind (one clause, said before anything is built);
@@ -99,8 +102,13 @@ class Kind(ABC):
         return None
 
     def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
-        """The bench's cases on the given specs (None: the kind's default set); None for a kind with no bench."""
+        """A kind with bench methods of its own: its cases on the given specs (None: its default set).  None (the
+        default): the bench's generic studies on the given specs or on :attr:`bench_specs`."""
         return None
+
+    def bench_studies(self) -> dict[str, Callable[[], list[dict]]]:
+        """Extra rows of the kind's first generic bench case: study name -> rows (planting's derivative errors)."""
+        return {}
 
     def coarse_check(self) -> CoarseCheck | None:
         """The check on a coarser grid for the studio while a slider moves; None: the check with every [solver]
@@ -133,8 +141,8 @@ class Kind(ABC):
 
     @property
     def benches(self) -> bool:
-        """Whether the kind has bench cases, read without importing them (it overrides :meth:`bench_cases`)."""
-        return type(self).bench_cases is not Kind.bench_cases
+        """Whether the kind has bench cases, read without importing them (its bench specs or methods)."""
+        return bool(self.bench_specs) or type(self).bench_cases is not Kind.bench_cases
 
     @property
     def writes_explicit_design(self) -> bool:
@@ -153,6 +161,7 @@ class SolvingReplaced(Kind):
     def __init__(self, base: Kind, solving: Solving):
         self.base, self._solving = base, solving
         self.name, self.summary, self.objectives, self.example = base.name, base.summary, base.objectives, base.example
+        self.bench_specs = base.bench_specs
         self.design_unit, self.robust_refusal = base.design_unit, base.robust_refusal
 
     def spec_model(self) -> type[SpecModel]:
@@ -172,6 +181,9 @@ class SolvingReplaced(Kind):
 
     def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
         return self.base.bench_cases(specs, seed)
+
+    def bench_studies(self) -> dict[str, Callable[[], list[dict]]]:
+        return self.base.bench_studies()
 
     def coarse_check(self) -> CoarseCheck | None:
         return self.base.coarse_check()

@@ -19,6 +19,7 @@ class ClampCam(Kind):
                   "pressure_angle": "smallest peak pressure angle (measured on the fine grid), deg",
                   "nearest": "smallest change from the given cam"}
     example = "clamp_cam/opening_cam_redesign_modified_sine.toml"
+    bench_specs = ("clamp_cam/opening_cam_redesign.toml", "clamp_cam/rotating_cam_redesign.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.clamp_cam.spec import ClampCamSpec
@@ -50,8 +51,6 @@ class ClampCam(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.clamp_cam.coarse import COARSE
@@ -66,13 +65,3 @@ class ClampCam(Kind):
 
 KIND = ClampCam()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "clamp_cam/opening_cam_redesign.toml",
-            "clamp_cam/rotating_cam_redesign.toml",
-    ])

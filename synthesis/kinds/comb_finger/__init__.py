@@ -21,6 +21,7 @@ class CombFinger(Kind):
     summary = "eccentric rotating comb fingers: largest combing angle with root-zone and unit clearances (seed 002 §四.3 eq 17-22)"
     objectives = {"max_combing_angle": "largest combing angle theta at the machine speed (eq 21), deg"}
     example = "comb_finger/redesign_max_combing.toml"
+    bench_specs = ("comb_finger/redesign_max_combing.toml", "comb_finger/redesign_tip_speed.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.comb_finger.spec import CombFingerSpec
@@ -48,8 +49,6 @@ class CombFinger(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.comb_finger.coarse import COARSE
@@ -64,13 +63,3 @@ class CombFinger(Kind):
 
 KIND = CombFinger()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "comb_finger/redesign_max_combing.toml",
-            "comb_finger/redesign_tip_speed.toml",
-    ])

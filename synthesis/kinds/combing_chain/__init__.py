@@ -22,6 +22,7 @@ class CombingChain(Kind):
     objectives = {"max_window_margin": "largest smallest margin of the plant angle before the cut to the window, deg",
                   "min_chain_speed": "slowest chain(s) keeping every plant in the window: sum of gear speeds, m/s"}
     example = "combing_chain/redesign_window_80_100.toml"
+    bench_specs = ("combing_chain/redesign_window_80_100.toml", "combing_chain/redesign_two_speed.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.combing_chain.spec import CombingChainSpec
@@ -49,8 +50,6 @@ class CombingChain(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.combing_chain.coarse import COARSE
@@ -60,13 +59,3 @@ class CombingChain(Kind):
 
 KIND = CombingChain()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "combing_chain/redesign_window_80_100.toml",
-            "combing_chain/redesign_two_speed.toml",
-    ])

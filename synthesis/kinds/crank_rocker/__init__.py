@@ -20,6 +20,7 @@ class CrankRocker(Kind):
     objectives = {"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
                   "max_transmission_angle": "largest smallest transmission angle over a turn, deg"}
     example = "picker/cai2020_crank_rocker_synthesis.toml"
+    bench_specs = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/crank_rocker_max_transmission.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
@@ -50,8 +51,6 @@ class CrankRocker(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.crank_rocker.coarse import COARSE
@@ -72,13 +71,3 @@ class CrankRocker(Kind):
 
 KIND = CrankRocker()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "picker/cai2020_crank_rocker_synthesis.toml",
-            "picker/crank_rocker_max_transmission.toml",
-    ])

@@ -27,6 +27,7 @@ class GuideTube(Kind):
                   "fastest": "earliest landing of tube 1, ms",
                   "uniform": "smallest worst plant-position error over the row spacings, mm"}
     example = "guide_tube/cai2020_delta2.toml"
+    bench_specs = ("guide_tube/cai2020_delta2.toml", "guide_tube/fastest_equal_time.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.guide_tube.spec import GuideTubeSpec
@@ -56,8 +57,6 @@ class GuideTube(Kind):
 
         return compare_figures
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.guide_tube.coarse import COARSE
@@ -67,13 +66,3 @@ class GuideTube(Kind):
 
 KIND = GuideTube()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "guide_tube/cai2020_delta2.toml",
-            "guide_tube/fastest_equal_time.toml",
-    ])

@@ -18,6 +18,7 @@ class GuideWay(Kind):
     summary = "rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)"
     objectives = {"smoothness": "the claw path's squared third derivative, relative to the convex fit's"}
     example = "guide_way/smooth_redesign.toml"
+    bench_specs = ("guide_way/smooth_redesign.toml",)
     design_unit = "mm"          # the path's control points, which the spec lists without a unit
     robust_refusal = ("its NLP works in the spline's 2 x control_points coordinates, held to the key points by "
                       "equality rows on them, not in the spec's design variables")
@@ -54,8 +55,6 @@ class GuideWay(Kind):
 
         return compare_figures
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.guide_way.coarse import COARSE
@@ -70,12 +69,3 @@ class GuideWay(Kind):
 
 KIND = GuideWay()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "guide_way/smooth_redesign.toml",
-    ])

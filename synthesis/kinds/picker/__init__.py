@@ -20,6 +20,7 @@ class PickerDoubleCrank(Kind):
     objectives = {"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
                   "sum_of_squares": "sum of squared distances, mm^2"}
     example = "picker/picker_double_crank_redesign.toml"
+    bench_specs = ("picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_retrofit.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
@@ -50,8 +51,6 @@ class PickerDoubleCrank(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.picker.coarse import DOUBLE_CRANK
@@ -109,13 +108,3 @@ PICKER = Picker()        # evaluated only: the combined mechanism of two solved 
 #: the folder's two kinds, in the order they are listed
 KINDS = (DOUBLE_CRANK, PICKER)
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "picker/picker_double_crank_redesign.toml",
-            "picker/picker_double_crank_retrofit.toml",
-    ])

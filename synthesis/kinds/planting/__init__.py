@@ -19,6 +19,7 @@ class PlantingFourbar(Kind):
                   "robust": "largest smallest normalised rule margin (measured on the fine grid)",
                   "smooth": "smallest peak claw acceleration over a turn, mm/s^2"}
     example = "planting_arm/redesign_from_example1.toml"
+    bench_specs = ("planting_arm/redesign_from_example1.toml", "planting_arm/redesign_from_example3.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -53,8 +54,8 @@ class PlantingFourbar(Kind):
 
         return overlay_figures
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
+    def bench_studies(self) -> dict:
+        return {"derivative_error": derivative_error_rows}
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.planting.coarse import COARSE
@@ -69,17 +70,6 @@ class PlantingFourbar(Kind):
 
 KIND = PlantingFourbar()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "planting_arm/redesign_from_example1.toml",
-            "planting_arm/redesign_from_example3.toml",
-    ],
-                         studies={"derivative_error": derivative_error_rows})
 
 
 #: seed 000 §5.1: mean errors of its central-difference scheme against the analytic values (speed, acceleration)

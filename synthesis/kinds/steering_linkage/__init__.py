@@ -23,6 +23,7 @@ class SteeringLinkage(Kind):
     summary = "Ackermann steering trapezoid: Table 12 explained, minimax steering error (seed 002 Table 12)"
     objectives = {"min_max_error": "smallest largest |outside lock - Ackermann| over 0 .. the maximum inside lock, deg"}
     example = "steering/steering_redesign_40.toml"
+    bench_specs = ("steering/steering_redesign_40.toml", "steering/steering_redesign_27.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.steering_linkage.spec import SteeringSpec
@@ -53,8 +54,6 @@ class SteeringLinkage(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.steering_linkage.coarse import COARSE
@@ -64,13 +63,3 @@ class SteeringLinkage(Kind):
 
 KIND = SteeringLinkage()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "steering/steering_redesign_40.toml",
-            "steering/steering_redesign_27.toml",
-    ])

@@ -24,6 +24,7 @@ class TillageLinkage(Kind):
     objectives = {"min_bar_length": "shortest tillage bar c meeting every rule, mm",
                   "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"}
     example = "tillage/tillage_redesign.toml"
+    bench_specs = ("tillage/tillage_redesign.toml",)
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.tillage_linkage.spec import TillageSpec
@@ -54,8 +55,6 @@ class TillageLinkage(Kind):
 
         return compare_figure
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
-        return bench_set(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.tillage_linkage.coarse import COARSE
@@ -65,12 +64,3 @@ class TillageLinkage(Kind):
 
 KIND = TillageLinkage()
 
-
-def bench_set(specs, seed: int = 0) -> list:
-    """The bench set (``agrisynth bench``): the generic studies (:mod:`synthesis.bench.generic`) on the
-    given specs, by default on these library redesigns (``--quick``: the first)."""
-    from synthesis.bench.generic import library_cases
-
-    return library_cases(specs, seed, [
-            "tillage/tillage_redesign.toml",
-    ])
