@@ -142,6 +142,9 @@ def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optim
     ((("type = \"translating\"", "type = \"oscillating\"\npivot_distance = 90"), ("offset = 0.0", "")),
      "clamp_cam.follower: arm_length: missing required field for type = \"oscillating\""),
     ((("rise_start = 146.0", "rise_start = 146.0\nstroke = 5"),), "not valid TOML: Cannot overwrite a value (at line 20, column 11)"),
+    # the fuzz campaign's find: a cubic has no 4th derivative for the jerk fit's tie-break (a scipy traceback)
+    ((("law = \"cycloidal\"", "law = \"optimised\""), ("[motion]", "[bspline]\nminimise = \"jerk\"\ndegree = 3\n\n[motion]")),
+     "clamp_cam.bspline: minimise = 'jerk' needs degree >= 4 (a degree-3 spline's jerk is piecewise constant"),
 ])
 def test_bad_specs_name_the_field(tmp_path, edits, message):
     with pytest.raises(SpecError) as err:

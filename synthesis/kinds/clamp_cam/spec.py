@@ -149,6 +149,15 @@ class BSplineSection(StrictModel):
     degree: int = Field(5, ge=3, le=7, description="spline degree (>= 3: continuity to the acceleration, C2)")
     samples_per_span: int = Field(8, ge=2, le=50, description="points per span where the peak is bounded")
 
+    @model_validator(mode="after")
+    def _degree_above_the_minimised_derivative(self) -> "BSplineSection":
+        # the fit's tie-break smooths the derivative after the minimised one (the 4th for jerk), which a cubic
+        # does not have: refused here, once, instead of a traceback out of the fit
+        if self.minimise == "jerk" and self.degree < 4:
+            raise ValueError(f"minimise = 'jerk' needs degree >= 4 (a degree-{self.degree} spline's jerk is "
+                             "piecewise constant, with no derivative to smooth); give degree = 4 or more")
+        return self
+
 
 class TimingSection(StrictModel):
     """Windows the follower must dwell through, on the picker's clock (0 = the pick)."""
