@@ -3,7 +3,9 @@ wrongly typed, non-finite, huge, negative, empty, nested, unicode, whole files o
 ``check`` in-process.  Every document either is refused as bad input (an AgrisynthError: one message, exit 2)
 or checks to a result whose JSON has no NaN or infinity -- never any other exception (a traceback).
 
-100 documents per kind in the default suite; ``pytest -m fuzz`` runs 1,000 per kind.
+100 documents per kind in the default suite; ``pytest -m fuzz`` runs 300 per kind, with the rest of the fuzz
+campaign (tests/test_fuzz_campaign.py, tests/test_soak.py).  Both are derandomized: CI sees the same documents
+every run, so a failure there reproduces.
 Also: spec files are data -- no eval/exec/pickle/yaml.load/shell=True/os.system in the source.
 """
 
@@ -149,14 +151,14 @@ def fuzz(kind: str, examples: int, tmp_path: Path, derandomize: bool = False) ->
 
 @pytest.mark.parametrize("kind", library_kinds())
 def test_no_spec_document_crashes_check(kind, tmp_path):
-    # the default suite sees the same 100 documents every run (deterministic CI); the study explores anew
+    # the default suite sees the same 100 documents every run (deterministic CI)
     fuzz(kind, 100, tmp_path, derandomize=True)
 
 
 @pytest.mark.fuzz
 @pytest.mark.parametrize("kind", library_kinds())
 def test_no_spec_document_crashes_check_study(kind, tmp_path):
-    fuzz(kind, 1000, tmp_path)
+    fuzz(kind, 300, tmp_path, derandomize=True)
 
 
 FORBIDDEN = re.compile(r"\b(eval|exec)\s*\(|\bpickle\b|yaml\.load\b|shell\s*=\s*True|os\.system\b|"
