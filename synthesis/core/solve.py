@@ -381,7 +381,15 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
     spec = loaded.model
     solving = kind.solving()
     best = run.best
-    finished = solving.finish(setting, best)
+    try:
+        finished = solving.finish(setting, best)
+    except Exception:
+        # a signal raised inside a CasADi call comes out as another exception (NotImplementedError): it is the
+        # interruption, and the run keeps its finished starts as for any other (a robust finish checks for
+        # signals between its samples itself, so the finish is not deferred as a whole)
+        if interrupt.pending() is not None:
+            raise KeyboardInterrupt from None
+        raise
     extra_failed = [] if finished.rules is None or not best.satisfied else [
         r["name"] for r in finished.rules if not r["satisfied"]]
     if extra_failed and status in ("optimal", "feasible"):
