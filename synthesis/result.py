@@ -199,8 +199,9 @@ def _shape_problem(data: dict) -> str | None:
             v = rule.get(key)
             if v is not None and not _number(v):
                 return f"rules[{i}] ({rule['name'][:60]}): {key} must be a number or null"
-        if not isinstance(rule.get("unit"), (str, type(None))):
-            return f"rules[{i}] ({rule['name'][:60]}): unit must be a string"
+        for key in ("unit", "where", "note"):
+            if not isinstance(rule.get(key), (str, type(None))):
+                return f"rules[{i}] ({rule['name'][:60]}): {key} must be a string"
         limit = rule.get("limit")
         if not (isinstance(limit, list) and len(limit) == 2 and all(v is None or _number(v) for v in limit)):
             return f"rules[{i}] ({rule['name'][:60]}): limit must be [lower, upper] with numbers or null"

@@ -74,6 +74,8 @@ def malformed(base: dict) -> dict[str, bytes]:
         "boolean_limit": _edit(base, _rule("limit", [True, None])),
         "scalar_limit": _edit(base, _rule("limit", 3.0)),
         "numeric_unit": _edit(base, _rule("unit", 5)),
+        "list_where": _edit(base, _rule("where", ["P1", "P6"])),        # found by the fuzz campaign
+        "object_note": _edit(base, _rule("note", {"why": 1})),
         "string_satisfied": _edit(base, _rule("satisfied", "true")),
         "numeric_rule_name": _edit(base, _rule("name", 7)),
         "huge_rule_name": _edit(base, _rule("name", "r" * 200_000)),
