@@ -28,7 +28,6 @@ A kind that solves returns a :class:`Solving` from ``solving()``: the pieces the
 
 from __future__ import annotations
 
-import importlib
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
@@ -47,12 +46,6 @@ if TYPE_CHECKING:
 FigureWriter = Callable[["Result", Path], None]
 #: (results compared, output folder) -> the file names written: the kind's overlay figures
 CompareWriter = Callable[[list, Path], list]
-
-
-def resolve(target: str) -> Any:
-    """``"package.module:attribute"`` -> the attribute (imports the module)."""
-    module, name = target.split(":")
-    return getattr(importlib.import_module(module), name)
 
 
 class Kind(ABC):
