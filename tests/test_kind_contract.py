@@ -1,4 +1,4 @@
-"""The kind contract (issue 13): a kind registered through the public contract alone checks and solves
+"""The kind contract: a kind registered through the public contract alone checks and solves
 with the same driver, verdict and result tail as the built-in ones; the registry is the only list."""
 
 from __future__ import annotations
