@@ -13,6 +13,7 @@ running package was imported from, and the source checkout when there is one (it
 from __future__ import annotations
 
 import difflib
+import glob
 from importlib.resources import files
 from pathlib import Path, PurePosixPath
 
@@ -71,7 +72,7 @@ def library_spec(name: str | Path, library: Path = LIBRARY) -> Path | None:
     if candidate.is_file():
         return candidate
     if len(relative.parts) == 1:            # a bare name: the one spec of that file name anywhere in the library
-        found = [p for p in library.rglob(relative.name) if p.is_file()]
+        found = [p for p in library.rglob(glob.escape(relative.name)) if p.is_file()]
         if len(found) == 1:
             return found[0]
     return None

@@ -273,7 +273,7 @@ def test_a_finger_that_misses_the_ground_fails_its_rule(tmp_path):
 
 FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.clamp_cam", "synthesis.kinds.fourbar_path",
              "synthesis.kinds.crank_rocker", "synthesis.kinds.guide_tube", "synthesis.kinematics", "synthesis.kinds.combing_chain",
-             "synthesis.kinds.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
+             "synthesis.kinds.guide_way", "synthesis.kinds.steering_linkage", "synthesis.kinds.tillage_linkage", "cvxpy", "ezdxf")
 
 
 def test_a_comb_finger_run_imports_no_other_kind(tmp_path):

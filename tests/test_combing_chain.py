@@ -375,7 +375,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, source, old, new, command,
 
 FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.clamp_cam", "synthesis.kinds.fourbar_path",
              "synthesis.kinds.crank_rocker", "synthesis.kinds.guide_tube", "synthesis.kinematics", "synthesis.kinds.comb_finger",
-             "synthesis.kinds.guide_way", "synthesis.steering", "synthesis.tillage", "cvxpy", "ezdxf")
+             "synthesis.kinds.guide_way", "synthesis.kinds.steering_linkage", "synthesis.kinds.tillage_linkage", "cvxpy", "ezdxf")
 
 
 def test_a_combing_chain_run_imports_no_other_kind(tmp_path):

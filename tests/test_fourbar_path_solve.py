@@ -334,7 +334,7 @@ def test_nothing_free_is_bad_input(tmp_path):
     assert proc.returncode == 2 and "agrisynth check" in proc.stderr
 
 
-FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.planting.kinematics", "synthesis.cam", "synthesis.kinds.clamp_cam",
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.planting.kinematics", "synthesis.kinds.clamp_cam",
              "synthesis.kinds.guide_tube", "synthesis.kinds.picker", "cvxpy", "synthesis.kinds.planting.rules.acceleration", "synthesis.kinds.planting.rules.depth")
 
 

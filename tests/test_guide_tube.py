@@ -262,7 +262,7 @@ def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(
                                        "drop model could evaluate (stuck)"]
 
 
-FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.cam", "synthesis.clamp", "synthesis.fourbar",
+FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.clamp_cam", "synthesis.kinds.fourbar_path",
              "synthesis.kinds.crank_rocker", "synthesis.kinematics", "cvxpy", "ezdxf")
 
 

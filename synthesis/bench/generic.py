@@ -237,6 +237,10 @@ class _AnnouncedNLP(KindNLP):
     def x_of(self, design: dict) -> np.ndarray:
         return self._nlp.x_of(design)
 
+    def whole_problem_only(self) -> None:
+        self._nlp.whole_problem_only()
+        self.configuration = None
+
     def answer_start(self, design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
         return self._nlp.answer_start(design, x0, p, n)
 

@@ -217,7 +217,7 @@ def check(spec: Path, out: Path, force: bool) -> None:
     from synthesis.result import CHECK_SUFFIX, open_run_folder, write_run
     from synthesis.spec import load_spec
 
-    interrupt.install()
+    interrupt.install(keep_ignored=True)     # a signal the process was started ignoring stays ignored
     spec = _spec_file(spec)
     loaded = load_spec(spec)
     _tolerance_names_known(loaded)
@@ -566,7 +566,7 @@ def solve(spec: Path, out: Path | None, force: bool, resume: Path | None, starts
                                  "not both", param_hint="--workers/--scheduler")
     if resume is not None and out is not None:
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
-    interrupt.install()
+    interrupt.install(keep_ignored=True)     # a signal the process was started ignoring stays ignored
     spec = _spec_file(spec)
     loaded = load_spec(spec)
     _tolerance_names_known(loaded)

@@ -49,9 +49,13 @@ def install(keep_ignored: bool = False) -> None:
     installs the handlers before anything else, for every command: a studio started with ``&`` keeps ignoring
     SIGINT).  The dispositions replaced are kept for :func:`restore`."""
     global _pending
-    _pending = None
     if threading.current_thread() is not threading.main_thread():
+        _pending = None
         return
+    # a second install (a command's, after the entry point's) keeps a signal already noted: it arrived during the
+    # command's own imports and must still stop the run
+    if not any(signal.getsignal(sig) is _handler for sig in (signal.SIGINT, signal.SIGTERM)):
+        _pending = None
     for sig in (signal.SIGINT, signal.SIGTERM):
         current = signal.getsignal(sig)
         if keep_ignored and current is signal.SIG_IGN:
@@ -135,6 +139,11 @@ def deferred(reraise: bool = True):
         _defer_depth -= 1
     if reraise:
         check()
+
+
+def deferring() -> bool:
+    """Whether a :func:`deferred` block is running (a signal then waits for its end instead of being raised)."""
+    return _defer_depth > 0
 
 
 def simulate(signum: int = signal.SIGINT) -> None:

@@ -387,7 +387,7 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
         # a signal raised inside a CasADi call comes out as another exception (NotImplementedError): it is the
         # interruption, and the run keeps its finished starts as for any other (a robust finish checks for
         # signals between its samples itself, so the finish is not deferred as a whole)
-        if interrupt.pending() is not None:
+        if interrupt.pending() is not None and not interrupt.deferring():
             raise KeyboardInterrupt from None
         raise
     extra_failed = [] if finished.rules is None or not best.satisfied else [

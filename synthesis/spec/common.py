@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
 from synthesis.errors import SpecError
@@ -148,6 +148,17 @@ class ProblemSpec(StrictModel):
                       description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
     tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve")
+
+    @field_validator("name")
+    @classmethod
+    def _not_another_commands_folder(cls, name: str) -> str:
+        # check writes OUT/<name>-check/ and tolerance OUT/<name>-tolerance/: a spec named so would meet another
+        # spec's run folder
+        for suffix in ("-check", "-tolerance"):
+            if name.endswith(suffix):
+                raise PydanticCustomError("run_name_suffix", "may not end in '{suffix}': agrisynth names another "
+                                          "command's run folder <name>{suffix}", {"suffix": suffix})
+        return name
 
 
 def starts_field(default: int):
