@@ -78,7 +78,7 @@ def run_process(args: list[str], cwd: Path, on_start=None) -> tuple[int, int, st
     with open(err_path, "wb") as err:
         proc = subprocess.Popen([sys.executable, "-m", "synthesis.program", *map(str, args)], cwd=cwd,
                                 stdout=subprocess.DEVNULL, stderr=err)
-        timer = threading.Timer(RUN_SECONDS, proc.kill)
+        timer = threading.Timer(RUN_SECONDS, lambda: None if _exited(proc) else os.kill(proc.pid, signal.SIGKILL))
         timer.start()
         try:
             if on_start is not None:
@@ -103,6 +103,12 @@ def logged_starts(out: Path, name: str) -> int:
     return max(counts + [0])
 
 
+def _exited(proc: subprocess.Popen) -> bool:
+    """Whether the child has exited, without reaping it: run_process reaps it with wait4 for its peak memory
+    (Popen.poll or send_signal would reap it first, and wait4 would find no child)."""
+    return os.waitid(os.P_PID, proc.pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
+
+
 def signal_after_a_start(job: Job, out: Path, rng: random.Random):
     """Deliver ``job.signal`` a random moment after the run's first finished start (if it is still running)."""
     delay = rng.uniform(0.0, 1.5)
@@ -110,12 +116,12 @@ def signal_after_a_start(job: Job, out: Path, rng: random.Random):
     def act(proc: subprocess.Popen) -> None:
         deadline = time.monotonic() + RUN_SECONDS
         while logged_starts(out, job.name) < 1 and time.monotonic() < deadline:
-            if proc.poll() is not None:
+            if _exited(proc):
                 return
             time.sleep(0.05)
         time.sleep(delay)
-        if proc.poll() is None:
-            proc.send_signal(job.signal)
+        if not _exited(proc):
+            os.kill(proc.pid, job.signal)      # the pid is still this child's: it is not reaped before wait4
             job.signalled = True
             job.events.append(f"{signal.Signals(job.signal).name} {delay:.2f} s after start 1")
     return act
