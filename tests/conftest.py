@@ -36,7 +36,13 @@ def example(request) -> int:
 
 
 def pytest_collection_modifyitems(items):
-    """The tests marked ``long`` first (in their order, the rest after in theirs): pytest-xdist hands tests out in
-    this order, and a 50 s test begun late keeps one worker busy alone at the end of the run."""
-    items.sort(key=lambda item: item.get_closest_marker("long") is None)
+    """The tests marked ``long`` first, then the studies (``benchmark``, ``fuzz``: tens of seconds each), the rest
+    after, each in its order: pytest-xdist hands tests out in this order, and a 50 s test begun late keeps one
+    worker busy alone at the end of the run -- in ``pytest`` and in ``pytest -m 'slow or fuzz'`` alike."""
+    def order(item) -> int:
+        if item.get_closest_marker("long"):
+            return 0
+        return 1 if item.get_closest_marker("benchmark") or item.get_closest_marker("fuzz") else 2
+
+    items.sort(key=order)
 

@@ -14,6 +14,7 @@ from solving import run_solve
 from synthesis.kinds.fourbar_path.synthetic import POINT_COUNTS, SEEDS, truth_data, truth_spec
 
 
+@pytest.mark.slow
 def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
     spec = write_spec(tmp_path, truth_data(3, 6, timed=True))
     proc = cli("bench", str(spec), "--repeats", "2", "--out", str(tmp_path), cwd=tmp_path)

@@ -212,6 +212,7 @@ def test_extreme_matrix_row_of_a_known_failure():
 GUIDE_TUBE = LIBRARY / "guide_tube" / "uniform_spacing.toml"
 
 
+@pytest.mark.slow
 def test_differential_evolution_stops_at_a_loose_target_and_times_it():
     """A peer is timed to the target.  DE given a loose target (twice the redesign's spread)
     stops at the first generation whose best member meets it -- re-checked on the fine grid with the kind's
@@ -283,6 +284,7 @@ def test_a_run_that_misses_the_target_has_no_time_to_target():
     assert b["time_ratio_text"].startswith("n/a (target not reached) by b")
 
 
+@pytest.mark.slow
 def test_quick_benches_every_spec_named_and_a_named_spec_replaces_its_kinds_default_set(tmp_path):
     """`--problems SPEC` is "instead of its kind's default set": with the kind named too, and with --quick (which
     keeps the first problem of a default set), every spec named is benched and nothing else -- the spec was dropped
@@ -315,6 +317,7 @@ def test_the_best_so_far_line_is_held_to_the_median_runs_end():
     assert best_so_far({"trace": [], "median_s": 3.0}, 0.0) == []
 
 
+@pytest.mark.slow
 def test_a_peer_is_held_to_the_nlp_s_equality_rows_as_ipopt_is(tmp_path):
     """A trial: crank-rocker K = 1.4, swing 60 deg, objective max_transmission_angle, l10 free.  The re-check allows
     |K - 1.4| <= 0.005 and |psi - 60| <= 0.1 (tolerances), the NLP pins both exactly; an SLSQP answer inside the

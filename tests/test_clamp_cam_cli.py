@@ -34,6 +34,7 @@ def spec_with(tmp_path: Path, *edits: tuple[str, str], base: str = OPENING) -> P
     return path
 
 
+@pytest.mark.slow
 def test_check_writes_result_plots_and_workshop_files(tmp_path):
     import ezdxf
 
@@ -96,6 +97,7 @@ def _modules(tmp_path, command: str, spec: Path, extra: list[str] = ()) -> set[s
     return set(line[0].split()[1:])
 
 
+@pytest.mark.slow
 def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optimised_law(tmp_path):
     checked = _modules(tmp_path, "check", CAMS / "opening_cam.toml")
     assert "synthesis.kinds.clamp_cam.check" in checked and "ezdxf" in checked       # the DXF was written
@@ -172,6 +174,7 @@ def test_timing_window_the_cam_misses_is_a_violated_rule_in_check(tmp_path):
     assert not rule["satisfied"] and rule["value"] == pytest.approx(-12.4, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_timing_window_no_design_can_meet_exits_3_naming_the_rule(tmp_path):
     path = spec_with(tmp_path, ("rise_start = 146.0", "rise_start = { init = 146.0, bounds = [140.0, 150.0] }"),
                      ("hold_near = [[0.0, 146.0]]", "hold_near = [[0.0, 160.0]]"),

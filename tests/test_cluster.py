@@ -22,6 +22,7 @@ def cluster():
         yield c
 
 
+@pytest.mark.slow
 def test_cluster_run_gives_the_local_result(cluster):
     loaded = load_spec(PLANTING / "redesign_from_example1.toml")
     local, _, _ = run_solve(loaded, starts=3, seed=5, workers=1)
@@ -31,6 +32,7 @@ def test_cluster_run_gives_the_local_result(cluster):
     assert remote.solver["scheduler"] == cluster.scheduler_address and remote.solver["best_start"] == local.solver["best_start"]
 
 
+@pytest.mark.slow
 def test_fourbar_path_on_the_cluster_gives_the_local_result(cluster):
     loaded = load_spec(PLANTING.parent / "fourbar_path" / "picking_arc.toml")
     local, _, _ = run_solve(loaded, starts=3, seed=1, workers=1)

@@ -165,6 +165,7 @@ def test_table13_hd650r_entries_that_do_not_reproduce():
     assert not [k for k, v in at.items() if k[0] == 45 and abs(v - 99) <= 1.5]
 
 
+@pytest.mark.slow
 def test_baseline_checks_report_table13_published_ours_difference(tmp_path):
     expected_bad = {"Table 13, delta before cutting (beta = 90 deg: 117~113), first",
                     "Table 13, delta before cutting (beta = 45 deg: 99~126), first",
@@ -378,6 +379,7 @@ FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.ki
              "synthesis.kinds.guide_way", "synthesis.kinds.steering_linkage", "synthesis.kinds.tillage_linkage", "cvxpy", "ezdxf")
 
 
+@pytest.mark.slow
 def test_a_combing_chain_run_imports_no_other_kind(tmp_path):
     code = f"""
 import sys

@@ -151,6 +151,7 @@ def test_compare_cli_refuses_a_fifo_and_non_utf8_in_one_line_and_writes_nothing(
     assert not (tmp_path / "cmp").exists()
 
 
+@pytest.mark.slow
 def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
     """--out naming a RESULT folder (with --force, which replaces an agrisynth folder) or a folder inside it is refused
     in one line (exit 2) before anything is written: the page would replace, or sit in, what it compares."""

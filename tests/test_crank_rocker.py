@@ -189,6 +189,7 @@ def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(
 
 
 
+@pytest.mark.slow
 def test_requirements_no_crank_rocker_meets_are_diagnosed_as_the_transmission_rule_missing_by_the_best_gap(tmp_path):
     """K = 1.4, swing 45 deg, gamma_min >= 45 deg, frame 200 mm (a practitioner's trial): the best any crank-rocker
     reaches at that K and swing is about 35.14 deg.  The elastic re-solve from the given design stopped on an

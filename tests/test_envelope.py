@@ -105,6 +105,7 @@ def example1_solved():
     return nominal_loaded, nominal, env_loaded, envelope
 
 
+@pytest.mark.slow
 def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesign_does_not(example1_solved):
     speeds = [round(0.50 + 0.01 * k, 2) for k in range(26)]
     nominal_loaded, nominal, env_loaded, envelope = example1_solved
@@ -143,6 +144,7 @@ def test_planting_envelope_design_holds_at_every_speed_where_the_nominal_redesig
 
 
 @pytest.mark.parametrize("example, first_fail, entry_at_075, p4p6_min", [(3, 0.69, 76.591, 29.421), (4, 0.66, 75.272, 26.359)])
+@pytest.mark.slow
 def test_planting_envelope_redesigns_of_examples_3_and_4(example, first_fail, entry_at_075, p4p6_min):
     """The nominal redesign enters too flat from ``first_fail`` m/s on; the envelope design
     passes every rule at every 0.01 m/s (start 0 is the best of the spec's 16 starts for both)."""
@@ -184,6 +186,7 @@ def _ode_spread_mm(design: dict, mu: float, spacing: float) -> float:
     return 500.0 * abs(times[0] - times[1])
 
 
+@pytest.mark.slow
 def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nominal_design_does_not(tmp_path):
     from solving import spec_with
 
@@ -209,6 +212,7 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
     assert len(table["values"]) == 21 and max(table["values"]) == pytest.approx(env.max(), abs=2e-3)
 
 
+@pytest.mark.slow
 def test_envelope_run_folder_through_the_cli(tmp_path):
     """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
     and the @envelope rows for the solution and the given design, envelope.png beside the report."""
@@ -232,6 +236,7 @@ def test_envelope_run_folder_through_the_cli(tmp_path):
     assert "spacing_error@envelope" in run.stdout and "12.36" in run.stdout
 
 
+@pytest.mark.slow
 def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_redesign_does_not():
     """200-300 r/min at 0.6 m/s, re-checked every 2 r/min by the float check; the 2 mm seedling clearance keeps P1 a
     crossing (without it one start ends on a loop that only touches the seedling-top line: no P1 in the re-check)."""
@@ -265,6 +270,7 @@ def test_planting_crank_speed_envelope_holds_at_every_2_rpm_where_the_nominal_re
     assert min(entry) == pytest.approx(80.2, abs=1e-3)
 
 
+@pytest.mark.slow
 def test_seedling_clearance_keeps_p1_a_crossing(tmp_path):
     """The crank-speed envelope from start 0 of a 230-270 r/min range without a clearance ends with the loop's top
     on the seedling-top line (P1 a tangency: P1 not found by the float check); with 2 mm start 0 finds it.  (Without
@@ -289,6 +295,7 @@ ENVELOPE_SPEC = LIBRARY / "planting_arm/envelope_redesign_from_example1.toml"
 FORWARD_RANGE = "forward_speed = { range = [0.50, 0.75], samples = 4, nominal = 0.6, step = 0.01 }"
 
 
+@pytest.mark.slow
 def test_check_of_a_range_spec_says_it_evaluated_the_nominal_point_only(tmp_path):
     """check reads a range's nominal value: it says so, and its verdict names the nominal point, instead of
     "every rule satisfied" for a design that may fail inside the range."""
@@ -329,6 +336,7 @@ def test_a_malformed_range_of_a_field_that_takes_ranges_is_not_called_one_value(
     assert "takes one value" not in err
 
 
+@pytest.mark.slow
 def test_monte_carlo_of_an_envelope_design_checks_every_operating_point(example1_solved, tmp_path):
     """The Monte-Carlo of a spec with an operating range re-checks each sampled design (uniform in the
     tolerance box) at the nominal point and at every point of the re-check grid; a sample passes when every rule

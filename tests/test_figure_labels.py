@@ -37,7 +37,8 @@ def drawn_texts(monkeypatch, writer, results, folder) -> list[str]:
     return texts
 
 
-@pytest.mark.parametrize("kind_name", OVERLAID)
+@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow) if k == "planting_fourbar" else k
+                                       for k in OVERLAID])
 def test_one_design_is_never_the_baseline(kind_name, tmp_path, monkeypatch):
     kind = kinds.get(kind_name)
     loaded = load_spec(LIBRARY / kind.example)

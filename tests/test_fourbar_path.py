@@ -231,10 +231,12 @@ def test_too_many_points(tmp_path):
 @pytest.mark.parametrize("edit, message", [
     (lambda d: d["targets"]["points"].__setitem__(2, [float("nan"), 0.0]),
      "targets.points[2][0]: nan is not a finite number"),
-    (lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
-     "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)"),
-    (lambda d: d["linkage"].update(r3={"init": 30, "bounds": [5, 1e200]}),
-     "linkage.r3.bounds[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)"),
+    pytest.param(lambda d: d["targets"]["points"].__setitem__(0, [1e300, 0.0]),
+                 "targets.points[0][0]: 1e+300 is beyond the largest magnitude a spec value may have (1e+12)",
+                 marks=pytest.mark.slow),
+    pytest.param(lambda d: d["linkage"].update(r3={"init": 30, "bounds": [5, 1e200]}),
+                 "linkage.r3.bounds[1]: 1e+200 is beyond the largest magnitude a spec value may have (1e+12)",
+                 marks=pytest.mark.slow),
 ], ids=["nan", "huge-point", "huge-bound"])
 def test_bad_input_exits_2_without_a_traceback(tmp_path, edit, message):
     data = truth_data(0, 6, timed=False)

@@ -82,6 +82,7 @@ def test_the_screen_lays_an_open_arc_onto_a_rocking_linkages_range_of_motion(mon
     assert designs[0][8] == pytest.approx(360.0 - 25.0, abs=1e-5)
 
 
+@pytest.mark.slow
 def test_the_configuration_form_is_the_closed_form_where_its_rows_hold():
     """At a crank-rocker's crank angles with the coupler angles of the closed form (the spec's assembly), the
     configuration form's closure rows are zero, its assembly rows <= 0, and its path error is the crank-angle
@@ -106,6 +107,7 @@ def test_the_configuration_form_is_the_closed_form_where_its_rows_hold():
     assert np.abs(closure).max() < 1e-12 and side.min() > 0.0
 
 
+@pytest.mark.slow
 def test_the_configuration_form_converges_where_the_crank_reaches_its_dead_positions():
     """dwell_arc15's best known design has its first and last targets at the crank's dead positions (the ends of its
     one interval of motion).  From that design with its links 1 % off (seeded) and placed as a screened start is
@@ -153,6 +155,7 @@ def _kept_from_the_configuration_form(spec, out):
     return ev
 
 
+@pytest.mark.slow
 def test_a_closed_loop_start_the_crank_angle_form_does_not_finish_is_polished_in_the_configuration_form():
     """kidney25 (closed loop, grashof "any", seed 0): start 45 ends without converging in the crank-angle form; the
     configuration form takes it on from there and converges (Solve_Succeeded) at the best known objective, its
@@ -186,6 +189,7 @@ def test_the_recheck_reads_a_crank_direction_the_spec_fixes():
         assert len(sequence) == 1 and sequence[0].satisfied is holds
 
 
+@pytest.mark.slow
 def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form(monkeypatch):
     """kidney25 with max_iter 60 (seed 0): start 3 reaches max_iter near the reference and is resumed once in the
     crank-angle form (its details name no form), within RESUME_ITERATIONS; kept only if it converged no higher."""
@@ -205,6 +209,7 @@ def test_a_closed_loops_max_iter_start_is_resumed_in_the_crank_angle_form(monkey
         assert resumed.return_status == "Maximum_Iterations_Exceeded"
 
 
+@pytest.mark.slow
 def test_a_polish_stopped_by_its_iteration_cap_keeps_the_starts_own_answer(monkeypatch):
     """kidney25 (seed 0): start 45 ends unconverged in the crank-angle form and its configuration-form polish
     converges at the best known (test above).  Stopped after POLISH_ITERATIONS = 5 without converging, the polish is
@@ -233,6 +238,7 @@ def test_a_polish_stopped_by_its_iteration_cap_keeps_the_starts_own_answer(monke
     assert "polished in the configuration form: User_Requested_Stop, not kept (did not converge)" in capped.raw.log
 
 
+@pytest.mark.slow
 def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(monkeypatch):
     """kidney25, seed 2, start 35: the crank-angle form ends with a failed step on the change point (target 0 at crank
     180 deg, r1 + r2 = r3 + r4: the links in line).  The polish (POLISH_MU_INIT 1e-2) converges there, Solve_Succeeded
@@ -252,6 +258,7 @@ def test_the_polish_at_a_change_point_starts_with_a_larger_barrier_parameter(mon
     assert before.details["resumed"]["path_error_mm2"] > 100 * BEST_KNOWN["kidney25"]
 
 
+@pytest.mark.slow
 def test_an_open_arcs_max_iter_start_resumes_in_the_configuration_form_for_its_own_iteration_budget():
     """stroke_lift14 (open arc, grashof "any", seed 1): start 43 reaches max_iter in the configuration form and its
     resume converges after more than RESUME_ITERATIONS (150, the crank-angle form's budget, which would have stopped
@@ -269,6 +276,7 @@ def test_an_open_arcs_max_iter_start_resumes_in_the_configuration_form_for_its_o
     assert ev.sum_sq == pytest.approx(out.objective, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_a_rocking_screened_start_follows_its_own_order_or_the_direction_the_spec_fixes():
     """dwell_arc15's screened starts whose crank only rocks: with direction "either" each start's direction is the
     order of its crank angles within its interval of motion (not the cw / ccw alternation of the unscreened starts);

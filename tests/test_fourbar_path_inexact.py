@@ -68,6 +68,7 @@ def test_the_pool_of_screened_starts_is_deterministic():
 
 
 @pytest.mark.parametrize("name", ["egg16", "dwell_arc15"])
+@pytest.mark.slow
 def test_the_screened_list_is_the_same_for_any_thread_count(name, monkeypatch):
     """The screen's blocks run on THREADS threads: the designs and residuals are the same to the bit for 1, 2 and 3
     threads -- a closed crank-rocker loop (egg16) and an open "any" arc (dwell_arc15, whose rocking shapes have a
@@ -133,6 +134,7 @@ def test_screened_starts_are_distinct_in_bounds_and_crank_rockers():
     assert BEST_KNOWN["egg16"] < maker.reference < 10.0 * BEST_KNOWN["egg16"]
 
 
+@pytest.mark.slow
 def test_the_early_cut_stops_a_start_at_its_iteration(monkeypatch):
     """At iteration k of CUTS a start whose path error is above its factor x the best screened start's stops
     (User_Requested_Stop) -- by iteration count, so the same in any worker; one below it runs on."""
@@ -147,6 +149,7 @@ def test_the_early_cut_stops_a_start_at_its_iteration(monkeypatch):
     assert kept.objective < cut.objective
 
 
+@pytest.mark.slow
 def test_grashof_any_starts_close_the_loop_at_their_start_angles():
     """A random design of the wide box often closes the loop at none of its start angles (IPOPT then stops
     at iteration 0 on NaN); every start of a grashof = "any" closed loop is a linkage whose crank turns (an open
@@ -193,6 +196,7 @@ def test_the_exact_motion_rows_see_the_loop_open_between_targets():
     assert nlp.compiled.t.g.numel() == 2 * 2     # assembly: one row per gap at its shortest, one at its longest diagonal
 
 
+@pytest.mark.slow
 def test_the_exact_motion_extremes_are_the_worst_of_a_dense_sampling():
     """The exact form's rule values (each gap at the two crank angles of rules.motion_extremes) equal the worst of
     3,000 samples per gap, for random linkages and random crank angles spanning up to 1.5 turns per gap, either
@@ -269,6 +273,7 @@ def test_the_numeric_re_check_equals_the_per_sample_expressions_at_the_same_desi
     assert seen["open"] >= 10 and seen["evaluated"] >= 80, seen
 
 
+@pytest.mark.slow
 def test_a_small_inexact_problem_solves_within_the_rules():
     """egg16 (16 points, crank-rocker, free unordered timing), 16 starts: every rule holding on the fine
     grid, the status saying how IPOPT stopped, no start below the best known objective, no start stopped
@@ -283,6 +288,7 @@ def test_a_small_inexact_problem_solves_within_the_rules():
 
 
 @pytest.mark.parametrize("name", ["stroke_lift14", "egg16"])
+@pytest.mark.slow
 def test_an_inexact_problem_gives_the_same_answer_on_one_and_two_workers(name):
     """An open "any" arc (the configuration form) and a closed loop whose starts 2 and 4 are fitted at their crank
     angles first (nlp.TIMING_FIRST)."""
@@ -465,6 +471,7 @@ def test_a_run_with_its_own_x_bounds_holds_fixed_entries_exactly_and_is_checked(
             nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=(lo, hi))
 
 
+@pytest.mark.slow
 def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     """Continuation (nlp.TIMING_FIRST): only the Latin-hypercube starts of a screened set (even starts after 0) are
     marked; such a start's first phase holds its crank angles and moves the design, lowering the path error at those
@@ -521,6 +528,7 @@ def test_an_unplaced_start_is_first_fitted_at_its_own_crank_angles(monkeypatch):
     assert interior >= 6            # r1..r4, rcy, y0 inside their bounds at this start: a real stationarity check
 
 
+@pytest.mark.slow
 def test_a_start_whose_fixed_angles_break_the_sequence_rule_has_no_fixed_phase():
     """s_curve12 orders its targets ([rules] order): a random start whose nearest curve points give two neighbouring
     targets the same crank angle (a step of 0, which no design repairs: its fixed phase cannot converge) is solved as

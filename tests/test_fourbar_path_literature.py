@@ -153,6 +153,7 @@ def test_the_specs_validate_with_the_sources_ranges_timing_and_rules():
     assert set(BEST_KNOWN) == set(NAMES)
 
 
+@pytest.mark.slow
 def test_16_starts_with_every_rule_reach_the_best_published_linkage():
     """16 starts, seed 0, one worker: each problem's best is at or below every published linkage (rules holding
     on the fine grid) and at the best known of the recorded 64- and 512-start runs."""

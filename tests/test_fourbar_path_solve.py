@@ -61,7 +61,7 @@ def assert_solved(result) -> None:
     assert all(r["satisfied"] for r in result.rules)
 
 
-@pytest.mark.parametrize("timed", [True, False], ids=["timed", "free"])
+@pytest.mark.parametrize("timed", [True, pytest.param(False, marks=pytest.mark.slow)], ids=["timed", "free"])
 @pytest.mark.parametrize("n", POINT_COUNTS)
 def test_synthetic_truth_is_recovered_for_ten_mechanisms(n, timed):
     """10 random Grashof crank-rockers: the default multistart (64 starts, seed 0), ended at the
@@ -97,7 +97,7 @@ def test_without_early_stop_the_best_start_is_reported_with_the_starts_needed():
     assert log.count("===== start") == 16
 
 
-@pytest.mark.parametrize("grashof", ["any", "double_crank"])
+@pytest.mark.parametrize("grashof", ["any", pytest.param("double_crank", marks=pytest.mark.slow)])
 def test_other_grashof_classes_and_their_rules(grashof):
     data = truth_data(5, 6, timed=grashof == "any", solver={"stop_at_objective": RECOVERED, "starts": 32})
     data["rules"]["grashof"] = grashof
@@ -171,6 +171,7 @@ def test_a_failed_start_reports_the_objective_of_the_design_it_returns():
     assert "Invalid_Number_Detected" in statuses       # the case this test is about does occur
 
 
+@pytest.mark.slow
 def test_same_seed_same_result_for_any_number_of_workers():
     loaded = truth_spec(0, 18, timed=False, solver={"stop_at_objective": RECOVERED, "starts": 24})
     a, _, _ = run_solve(loaded, workers=1)
@@ -180,6 +181,7 @@ def test_same_seed_same_result_for_any_number_of_workers():
         assert b.design[k] == pytest.approx(a.design[k], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_picking_arc_baseline_solves_within_the_rules():
     loaded = load_spec(PATH_LIBRARY / "picking_arc.toml")
     result, _, _ = run_solve(loaded, starts=4, workers=1)
@@ -204,6 +206,7 @@ def independently_rechecked_generic(loaded, result) -> None:
 
 # ---------------------------------------------------------------------------- CLI
 
+@pytest.mark.slow
 def test_solve_cli_writes_the_contract_and_figures(tmp_path):
     proc = cli("solve", str(PATH_LIBRARY / "picking_arc.toml"), "--starts", "2", "--workers", "1",
                "--out", str(tmp_path), cwd=tmp_path)
@@ -235,6 +238,7 @@ def test_solve_cli_writes_the_contract_and_figures(tmp_path):
     assert (tmp_path / names[0]).stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_check_cli_evaluates_a_given_design(tmp_path):
     data = truth_data(6, 10, timed=False)
     truth, _ = random_crank_rocker(6)          # the mechanism the targets came from, as the given design
@@ -250,6 +254,7 @@ def test_check_cli_evaluates_a_given_design(tmp_path):
     assert gaps == pytest.approx(36.0, abs=1e-5)
 
 
+@pytest.mark.slow
 def test_infeasible_transmission_window_exits_3_naming_the_rule(tmp_path):
     data = truth_data(1, 6, timed=True, solver={"starts": 4})
     data["rules"]["transmission_angle"] = [89.9, 90.1]   # needs 4 r1 r2 / (2 r3 r4) < 0.0035: r2 >= 5, r3, r4 <= 60
@@ -277,6 +282,7 @@ def capped_picking_arc(tmp_path: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_capped_iterations_are_failed_not_infeasible(tmp_path):
     """With max_iter = 1 and 2 starts the run used to say "infeasible", naming all five rules on
     the strength of an elastic re-solve that itself stopped at the iteration limit."""
@@ -338,6 +344,7 @@ FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.planting.kinematics", 
              "synthesis.kinds.guide_tube", "synthesis.kinds.picker", "cvxpy", "synthesis.kinds.planting.rules.acceleration", "synthesis.kinds.planting.rules.depth")
 
 
+@pytest.mark.slow
 def test_a_fourbar_path_run_imports_no_other_kind(tmp_path):
     arc = str(PATH_LIBRARY / "picking_arc.toml")
     modules = modules_after_runs(tmp_path, [["check", arc, "--out", str(tmp_path / "c")],

@@ -149,7 +149,13 @@ def fuzz(kind: str, examples: int, tmp_path: Path, derandomize: bool = False) ->
     print(f"{kind}: {examples} documents, {REACHED['check'] - before} reached a result")
 
 
-@pytest.mark.parametrize("kind", library_kinds())
+#: the kinds whose 100 documents take seconds: run with the slow tests (the study below fuzzes every kind)
+SLOW_TO_FUZZ = {"clamp_cam", "comb_finger", "combing_chain", "crank_rocker", "guide_way", "picker", "planting_fourbar",
+                "steering_linkage", "tillage_linkage"}
+
+
+@pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.slow) if k in SLOW_TO_FUZZ else k
+                                  for k in library_kinds()])
 def test_no_spec_document_crashes_check(kind, tmp_path):
     # the default suite sees the same 100 documents every run (deterministic CI)
     fuzz(kind, 100, tmp_path, derandomize=True)

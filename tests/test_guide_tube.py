@@ -266,6 +266,7 @@ FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.ki
              "synthesis.kinds.crank_rocker", "synthesis.kinematics", "cvxpy", "ezdxf")
 
 
+@pytest.mark.slow
 def test_a_guide_tube_run_imports_no_linkage_cam_or_convex_code(tmp_path):
     code = f"""
 import sys
@@ -305,6 +306,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
     assert "Traceback" not in proc.stderr
 
 
+@pytest.mark.slow
 def test_infeasible_angle_range_exits_3_naming_the_rule(tmp_path):
     path = spec_with(tmp_path, DELTA2, [("init = 41, bounds = [25, 70]", "init = 60, bounds = [50, 70]")])
     proc = run("solve", str(path), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path)
@@ -352,6 +354,7 @@ def test_a_spacing_error_limit_over_the_row_spacings_is_met_on_the_fine_grid(tmp
     assert result.extra["landing_time_spread_s"] < 1e-9                   # and equal at 230 mm
 
 
+@pytest.mark.slow
 def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path):
     from solving import diagnose_infeasible
 
@@ -363,6 +366,7 @@ def test_an_unreachable_spacing_error_limit_is_diagnosed_as_conflicting(tmp_path
     assert "Rules that conflict" in str(error) and "spacing_error" in str(error)
 
 
+@pytest.mark.slow
 def test_a_solve_on_two_workers_leaves_no_ipopt_log_in_the_temp_dir(tmp_path):
     """IPOPT's output is captured per solve from file descriptor 1 into anonymous temporary files; pool
     workers exit without running finalisers, so a named log file per solver would stay behind."""

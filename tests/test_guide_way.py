@@ -152,6 +152,7 @@ def _run(args, cwd=ROOT):
     return agrisynth(*args, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow
 def test_check_writes_exports_and_imports_no_other_kind(tmp_path):
     proc = _run(["check", str(LIBRARY / "guide_way" / "liang_2z.toml"), "--out", str(tmp_path)])
     assert proc.returncode == 1, proc.stderr
@@ -192,6 +193,7 @@ def test_bad_input_is_one_line_exit_2(tmp_path, edit, message):
 
 @same_solve("guide_way/smooth_redesign.toml")
 @pytest.mark.long
+@pytest.mark.slow
 def test_redesign_solves_smooth_without_undercut(baseline):
     loaded = load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml")
     result, _, _ = solved_library_spec("guide_way/smooth_redesign.toml")
@@ -268,6 +270,7 @@ def test_a_spec_holding_the_fits_control_points_checks_and_solves_as_the_one_lea
     assert np.allclose(box[24:] - start[24:, None], [[-1.0, 2.0]] * 24, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_and_tangents(tmp_path):
     """The NLP holds the key points and tangents as equality rows; `check` of a given control polygon holds them as
     rules (key_points <= 0.01 mm, key_tangents <= 0.01 deg).  The convex fit meets them to 3e-14 mm and 0 deg;
@@ -308,6 +311,7 @@ def test_a_control_polygon_missing_the_key_points_fails_check_naming_key_points_
     assert "path_at_E" not in keys["E"] and keys["E"]["miss_mm"] < 1e-12
 
 
+@pytest.mark.slow
 def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0():
     """The fold window's samples come from start 0 (the spec's control points, else the fit), as the check finds
     them on the path it evaluates.  smooth_redesign (no control given): start 0 is the fit, the masks and start 0's
@@ -349,6 +353,7 @@ def test_the_nlp_holds_the_pressure_angle_outside_the_fold_window_of_its_start_0
     assert [e.centre_deg for e in nlp.edges] == pytest.approx([135.0, 135.0], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_the_nlp_holds_the_pressure_angle_at_the_fold_windows_edges_which_move_with_the_design():
     """Each edge of the fold window is a variable of the NLP (u_e with theta(M(u_e)) = the fold's arm angle -/+ the
     window): the pressure angle's largest value outside the window is at an edge, which moves with the design.
@@ -415,6 +420,7 @@ def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceb
                               "solved design")
 
 
+@pytest.mark.slow
 def test_control_points_given_one_line_messages_name_the_file_and_field(tmp_path):
     """All fixed: solve names where to free one ([spline] control[0][0]); `move` with `control` is refused (it would
     be ignored); a control polygon the arm cannot follow names the file and [spline] control, in check and solve."""
@@ -510,6 +516,7 @@ def test_an_unknown_point_name_says_which_spline_field_holds_it(tmp_path, old, n
     assert str(err.value) == f"{path}: guide_way.{field}: point 'Z' is not in [points] (A, B, C, D, E)"
 
 
+@pytest.mark.slow
 def test_the_fit_needs_no_tangent_at_every_key_point(tmp_path):
     """[spline] tangents is optional per key point: smooth_redesign without its tangent at E stopped the convex
     solver short of the optimum (CLARABEL "InsufficientProgress", in mm its numbers spanned 1e-3 .. 1e5) and `check`
@@ -610,6 +617,7 @@ def test_the_fold_window_is_measured_from_the_fold_itself_and_its_edges_are_samp
     assert min(abs(abs(at - facts["key_theta_deg"][spec.spline.fold][side]) - w) for side in ("arriving", "leaving")) < 1e-9
 
 
+@pytest.mark.slow
 def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_path):
     """A review's case: the window's edge samples re-sampled the conic found by the segment's name, and two
     segments named alike made brentq raise (a traceback).  Pieces pair with their stretches by index: the same
@@ -627,6 +635,7 @@ def test_conic_segments_sharing_a_name_are_checked_each_on_its_own_conic(tmp_pat
     assert rules["b"]["pressure_angle"] == rules["a"]["pressure_angle"]
 
 
+@pytest.mark.slow
 def test_a_start_the_arm_cannot_drive_is_moved_onto_the_key_points_and_towards_the_fit():
     """A Latin-hypercube start (each of the 48 coordinates within `move` = 40 mm of the fit) misses the fold point D
     on |OM| = R - d and dips inside that circle: IPOPT stopped at its first evaluation (Invalid_Number_Detected, 0

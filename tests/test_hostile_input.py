@@ -277,6 +277,7 @@ def test_a_peer_that_passes_the_probe_then_stops_answering_dask_is_refused_by_th
         in message, message
 
 
+@pytest.mark.slow
 def test_solve_with_a_scheduler_sending_a_length_then_garbage_exits_2_in_one_line(tmp_path):
     with _Peer(DASK_HANDSHAKE[:8] + b"\xff" * 58) as peer:
         proc = agrisynth("solve", LIBRARY / "planting_arm" / "redesign_from_example1.toml", "--starts", "2",
@@ -463,6 +464,7 @@ def test_a_signal_inside_a_casadi_call_of_a_monte_carlo_sample_stops_the_run_aft
 
 
 @pytest.mark.long
+@pytest.mark.slow
 def test_sigterm_during_a_robust_solves_monte_carlo_keeps_the_starts_and_exits_143_within_5_s(tmp_path):
     """The reproducer itself: a tolerance-robust solve (2 starts, one worker; 5,000 Monte-Carlo samples, minutes of
     checking) gets SIGTERM 3 s after its last start is logged, in its answer's check.  It was a NotImplementedError
@@ -545,6 +547,7 @@ def _comparable(result: dict) -> dict:
     return result
 
 
+@pytest.mark.slow
 def test_a_killed_runs_staging_folder_is_removed_once_its_resume_is_complete(tmp_path):
     """After a SIGKILL, `--resume OUT/.<name>.run-XXXX` wrote the answer to OUT/<name>/ and left the staging folder
     with its stale starts.jsonl (3 of 3 trials): now it is removed, the answer being the uninterrupted run's."""
@@ -559,6 +562,7 @@ def test_a_killed_runs_staging_folder_is_removed_once_its_resume_is_complete(tmp
 
 
 @pytest.mark.parametrize("why", ["running", "foreign_file", "sub_folder"])
+@pytest.mark.slow
 def test_a_staging_folder_that_may_still_be_in_use_or_holds_anything_else_is_kept(tmp_path, why):
     """Removed only when everything says it is a dead run's staging folder and nothing else: a marker naming a
     running process (a run still writing there), a file agrisynth does not write, or a folder in it: kept."""
@@ -602,6 +606,7 @@ def test_three_targets_two_of_them_1e9_mm_apart_are_refused_as_two(tmp_path):
         f"given (points closer than 1e-06 of the set's size, 0.000217 mm here, are one target)")
 
 
+@pytest.mark.slow
 def test_targets_1e7_mm_apart_are_one_target_and_the_run_says_so(tmp_path):
     """Four targets, the last two 1e-7 mm apart (the set 217 mm across: under its 2.17e-4 mm): check and solve name
     them one target in result.json (facts.same_targets, the note) and on the terminal; the solve is still optimal."""

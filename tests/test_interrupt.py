@@ -245,12 +245,15 @@ def test_resume_refuses_another_spec_or_other_settings(tmp_path):
 
 
 @pytest.mark.parametrize("command, where, code", [
-    (("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "synthesis.cli:rule_table", 1),   # 3 violated
-    (("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.cli:comparison_table", 0),   # every rule holds
+    pytest.param(("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "synthesis.cli:rule_table", 1,
+                 marks=pytest.mark.slow),                                                   # 3 violated
+    pytest.param(("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.cli:comparison_table", 0,
+                 marks=pytest.mark.slow),                                                   # every rule holds
     # the signal as the solve returns, before the result is written (the log of the starts, the progress bar):
     # the trial found the whole run discarded there, exit 130 and nothing written
     (("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.core.solve:ipopt_log", 0),
-    (("solve", SPEC, "--starts", 2, "--workers", 1), "rich.progress:Progress:exit", 0),
+    pytest.param(("solve", SPEC, "--starts", 2, "--workers", 1), "rich.progress:Progress:exit", 0,
+                 marks=pytest.mark.slow),
 ])
 def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_code(tmp_path, command, where, code):
     """A Ctrl-C after the last start, while the answer is being written or its summary printed: the run is
@@ -287,6 +290,7 @@ def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_co
     assert "rule(s) violated" in proc.stdout if code == 1 else "every rule satisfied" in proc.stdout
 
 
+@pytest.mark.slow
 def test_main_called_in_process_leaves_the_signals_to_its_caller(tmp_path):
     """A review found main()'s 'ignore signals once the answer is printed' sticky: after an in-process check the test
     process ignored SIGINT and SIGTERM (Ctrl-C, a CI timeout), and so did its children.  main() now forgets it is a

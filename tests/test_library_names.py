@@ -70,6 +70,7 @@ def test_problems_copy_writes_the_library_file_byte_for_byte_and_never_overwrite
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm2.toml", "redesign_from_example1.toml", "sub"]
 
 
+@pytest.mark.slow
 def test_problems_copy_of_a_spec_naming_other_spec_files_copies_them_beside_it_and_the_copy_checks(tmp_path):
     proc = agrisynth("problems", "--copy", "picker/cai2020_picker.toml", "--out", "mine.toml", cwd=tmp_path, timeout=60)
     assert proc.returncode == 0, proc.stderr
@@ -110,6 +111,7 @@ def test_problems_copy_into_the_library_itself_is_refused(tmp_path):
     assert (here / "taiwan_example1.toml").read_bytes() == before
 
 
+@pytest.mark.slow
 def test_check_and_solve_take_a_library_name_where_no_such_file_is_here_and_say_which_file(tmp_path):
     proc = agrisynth("check", "steering/steering_redesign_27.toml", cwd=tmp_path, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr

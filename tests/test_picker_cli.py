@@ -23,7 +23,7 @@ def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("spec, files", [
     ("cai2020_crank_rocker", ["extremes.png"]),
     ("cai2020_double_crank", ["path.png"]),
-    ("cai2020_picker", ["trajectory.png", "animation.gif"]),
+    pytest.param("cai2020_picker", ["trajectory.png", "animation.gif"], marks=pytest.mark.slow),
 ])
 def test_published_designs_check_clean(tmp_path, spec, files):
     proc = run("check", str(PICKER / f"{spec}.toml"), "--out", str(tmp_path), cwd=tmp_path)
@@ -134,6 +134,7 @@ print(json.dumps(bad))
 """
 
 
+@pytest.mark.slow
 def test_runs_import_no_other_mechanism(tmp_path):
     code = FORBIDDEN_PROBE.format(p=PICKER, out=tmp_path)
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
@@ -141,6 +142,7 @@ def test_runs_import_no_other_mechanism(tmp_path):
     assert json.loads(proc.stdout.strip().splitlines()[-1]) == []
 
 
+@pytest.mark.slow
 def test_compare_figures_overlay_baseline_and_solution(tmp_path):
     from synthesis import kinds
     from synthesis.kinds.crank_rocker.check import run_check as check_crank_rocker

@@ -70,6 +70,7 @@ def test_table1_values_are_in_the_library(example):
     assert "Table 1" in spec.source
 
 
+@pytest.mark.slow
 def test_planting_check_imports_no_other_mechanism(tmp_path):
     """The whole `agrisynth check` of a planting spec (rules, figures, report) in a fresh interpreter."""
     script = (

@@ -15,6 +15,9 @@ from synthesis.report.tables import candidates, design_rows, rule_rows, worst_ma
 from synthesis.result import SCHEMA_VERSION, load_result
 from solving import agrisynth
 
+#: most tests here read the same two checked runs (``runs``, seconds of figures): one test process draws them once
+pytestmark = pytest.mark.xdist_group("report-runs")
+
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
@@ -55,6 +58,7 @@ def test_design_table_highlights_what_differs_from_the_baseline(runs):
     assert [c.label for c in same] == ["taiwan_example1 (1)", "taiwan_example1 (2)"]
 
 
+@pytest.mark.slow
 def test_compare_page_has_one_red_cell_per_violation_and_every_figure(runs, tmp_path):
     cands = load_candidates([runs[0][0], runs[1][0] / "result.json"])
     page = write_comparison(cands, tmp_path / "cmp")
@@ -165,6 +169,7 @@ def test_unknown_kind_and_broken_bench_are_refused(runs, tmp_path):
         load_bench(bench)
 
 
+@pytest.mark.slow
 def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
     from synthesis.kinds.planting import plots
 
@@ -178,6 +183,7 @@ def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
     assert "trajectory.png not written: RuntimeError: out of ink" in page and "src='trajectory.png'" not in page
 
 
+@pytest.mark.slow
 def test_picker_comparison_overlays_the_clamp_trajectories(tmp_path):
     folder, result = checked_run(PLANTING.parent / "picker" / "cai2020_picker.toml", tmp_path / "runs")
     page = write_comparison(load_candidates([folder, folder / "result.json"]), tmp_path / "cmp")
@@ -206,6 +212,7 @@ def test_the_design_table_names_a_crank_rockers_assembly_from_its_facts():
     assert not any(d for name, row in rows.items() if name != "branch (assembly)" for d in row.differs)
 
 
+@pytest.mark.slow
 def test_the_design_tables_bounds_are_each_designs_own_where_the_specs_disagree(runs, tmp_path):
     """A published design (every variable fixed) beside a redesign of it (free within bounds): the bounds column
     once showed the first design's "fixed" for both, beside the redesign's "at lower bound"."""

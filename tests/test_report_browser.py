@@ -66,6 +66,7 @@ def assert_fits(widths: dict) -> None:
 
 
 @pytest.mark.long
+@pytest.mark.slow
 def test_compare_page_in_headless_chromium(tmp_path, sync_playwright):
     runs = [checked_run(PLANTING / f"taiwan_example{k}.toml", tmp_path / "runs") for k in (1, 3, 4)]
     cands = load_candidates([folder for folder, _ in runs])

@@ -11,6 +11,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from synthesis import kinds
 from synthesis.core.solve import baseline_rules, solve_spec
@@ -117,6 +118,7 @@ def test_linkage_drawings_carry_joint_letters_and_link_lengths():
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_the_animation_is_large_enough_and_counts_its_frames(tmp_path):
     from PIL import Image
 
@@ -168,6 +170,7 @@ def test_library_warnings_go_to_the_log_not_the_terminal(capfd):
     assert "WARNING" not in out + err and "delta_grad" not in out + err and "RuntimeWarning" not in out + err
 
 
+@pytest.mark.slow
 def test_warnings_while_drawing_go_to_the_runs_log_not_the_terminal(tmp_path):
     """A planting arm whose links cannot close (l4 = 2 mm) has no trajectory: matplotlib warns that its
     legends are empty.  `check` prints none of it: the run's warnings.log has it and the report links it."""

@@ -78,6 +78,7 @@ def test_a_run_folder_of_an_earlier_version_is_replaced_only_if_it_holds_agrisyn
             (final / extra).parent.rmdir()
 
 
+@pytest.mark.slow
 def test_resume_from_a_staging_folder_writes_the_spec_named_folder(tmp_path):
     """README: after a SIGKILL or a power loss, resume from the staging folder (OUT/.<name>.run-XXXX, no folder name):
     the result goes to OUT/<spec name>.  A finished run's folder stands in for the staging one (same marker and
@@ -95,6 +96,7 @@ def test_resume_from_a_staging_folder_writes_the_spec_named_folder(tmp_path):
     assert json.loads((tmp_path / "b" / "steering_redesign_27" / "result.json").read_text())["solver"]["starts"] == 2
 
 
+@pytest.mark.slow
 def test_force_through_the_cli_keeps_a_users_file_and_says_so(tmp_path):
     proc = agrisynth("check", str(PLANTING / "taiwan_example1.toml"), "--out", str(tmp_path), timeout=120)
     assert proc.returncode == 1, proc.stderr
@@ -225,6 +227,7 @@ def test_bench_output_follows_the_run_folder_rules(tmp_path):
     assert [p.name for p in mine.iterdir()] == ["bench"] and list((mine / "bench").iterdir()) == []
 
 
+@pytest.mark.slow
 def test_check_solve_compare_and_check_of_solved_toml_need_no_flag_and_keep_every_result(tmp_path):
     """The natural order of work on one spec, in a folder holding only that spec: check it, solve it, compare the two,
     check the solved design.  Each command writes its own run folder (check OUT/<name>-check/, solve OUT/<name>/,

@@ -46,7 +46,9 @@ def edited(tmp_path: Path, replacements: list[tuple[str, str]],
 REDESIGN_OBJECTIVE = {1: 0.5611548410639, 2: 0.9380752773249, 3: 0.6391376807773, 4: 0.2933221589449}
 
 
-@pytest.mark.parametrize("example", [pytest.param(k, marks=same_solve(f"planting_arm/redesign_from_example{k}.toml"))
+#: examples 1-3 read the library's solves of seconds (tests/test_library.py runs them with the slow tests)
+@pytest.mark.parametrize("example", [pytest.param(k, marks=[same_solve(f"planting_arm/redesign_from_example{k}.toml")]
+                                                  + ([pytest.mark.slow] if k != 4 else []))
                                      for k in (1, 2, 3, 4)])
 def test_redesign_satisfies_every_rule_when_rechecked_independently(example):
     loaded = load_spec(PLANTING / f"redesign_from_example{example}.toml")
@@ -70,6 +72,7 @@ def test_redesign_satisfies_every_rule_when_rechecked_independently(example):
     assert set(result.extra["precision_points"]) == {"P1", "P2", "P3", "P4", "P5", "P6"}
 
 
+@pytest.mark.slow
 def test_same_spec_and_seed_give_the_same_design():
     loaded = load_spec(PLANTING / "redesign_from_example1.toml")
     a, _, _ = solve(loaded, starts=4, seed=3, workers=1)
@@ -124,6 +127,7 @@ def test_solve_of_a_spec_with_nothing_free_is_bad_input():
         solve(loaded, starts=2, workers=1)
 
 
+@pytest.mark.slow
 def test_robust_objective_is_the_fine_grid_smallest_margin():
     loaded = edited_objective("robust")
     result, reports, _ = solve(loaded, starts=2, seed=0, workers=1)
@@ -138,6 +142,7 @@ def test_robust_objective_is_the_fine_grid_smallest_margin():
     assert smallest == pytest.approx(best.outcome.details["solver_objective"] + loaded.model.solver.backoff, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_robust_objective_agrees_with_the_verdict_at_a_margin_of_zero(tmp_path):
     """Soil 30 mm above the lowest point with the depth limit [20, 30]: the depth rule's margin is 0 by
     construction.  Every start ends Infeasible_Problem_Detected (IPOPT keeps the rows 0.02 x scale inside
@@ -158,6 +163,7 @@ def test_robust_objective_agrees_with_the_verdict_at_a_margin_of_zero(tmp_path):
     assert reports[result.solver["best_start"]].outcome.details["solver_objective"] == pytest.approx(-798.264, abs=1e-3)
 
 
+@pytest.mark.slow
 def test_unreachable_p1p3_names_p1p3_among_the_conflicting_rules(tmp_path):
     loaded = edited(tmp_path, [("[solver]", "[rules]\np1p3 = [200, 210]\n\n[solver]")])
     result, reports, _ = solve(loaded, workers=1)
@@ -176,6 +182,7 @@ def test_unreachable_p1p3_names_p1p3_among_the_conflicting_rules(tmp_path):
     assert "p1p3_distance (misses its limit by 12.9 mm; still by 7.36 mm re-solved alone from there, every other rule but grashof_crank_rocker relaxed" in str(error)
 
 
+@pytest.mark.slow
 def test_infeasible_rule_set_names_the_rules_out_of_reach():
     loaded = load_spec(PLANTING / "infeasible_deep_planting.toml")
     result, reports, _ = solve(loaded, workers=1)
@@ -247,6 +254,7 @@ def cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return agrisynth(*args, cwd=cwd)
 
 
+@pytest.mark.slow
 def test_infeasible_rule_set_exits_3_naming_the_conflict_cli(tmp_path):
     proc = cli("solve", str(PLANTING / "infeasible_deep_planting.toml"), "--out", str(tmp_path), "--workers", "1",
                cwd=tmp_path)
@@ -258,6 +266,7 @@ def test_infeasible_rule_set_exits_3_naming_the_conflict_cli(tmp_path):
     assert "precision_points" in data["facts"]
 
 
+@pytest.mark.slow
 def test_failed_run_exits_3_with_its_result(tmp_path):
     text = (PLANTING / "redesign_from_example1.toml").read_text()
     assert "max_iter" not in text
@@ -323,6 +332,7 @@ def _peak_acc(result) -> float:
     return max(float(np.hypot(ax, ay)) for ax, ay in zip(tr["ax"], tr["ay"]))
 
 
+@pytest.mark.slow
 def test_smooth_objective_lowers_the_peak_acceleration():
     smooth, _, _ = solve(edited_objective("smooth"), starts=2, seed=0, workers=1)
     nearest, _, _ = solve(edited_objective("nearest"), starts=2, seed=0, workers=1)

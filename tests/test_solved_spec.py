@@ -36,6 +36,8 @@ def _solving_kinds() -> list:
             continue
         if solves:
             marks = [pytest.mark.xfail(reason=KNOWN[name], strict=True)] if name in KNOWN else []
+            if name == "guide_way":     # a solve of seconds: run with the slow tests
+                marks.append(pytest.mark.slow)
             out.append(pytest.param(name, marks=marks))
     return out
 
@@ -79,6 +81,7 @@ def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
     assert all(n in result.design for n, v in listed.items() if v["free"])
 
 
+@pytest.mark.slow
 def test_piped_solve_prints_each_start_the_design_and_writes_solved_toml(tmp_path):
     text = (LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").read_text()
     for old, new in (('name = "cai2020_crank_rocker_synthesis"', 'name = "tight"'),

@@ -315,6 +315,7 @@ FORBIDDEN = ("synthesis.kinds.tillage_linkage", "synthesis.kinds.tillage_linkage
              "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 
+@pytest.mark.slow
 def test_a_steering_run_imports_no_other_kind(tmp_path):
     modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", str(tmp_path)],
                                             ["solve", str(REDESIGN_27), "--workers", "1", "--out", str(tmp_path)]])

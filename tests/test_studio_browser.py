@@ -214,6 +214,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
 
 
 @pytest.mark.long
+@pytest.mark.slow
 def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright):
     """guide_way, whose design is the spline's 48 control points (the spec leaves them to the convex fit; the
     studio writes them out): a slider and a number box per coordinate, grouped per point; drag P4_y up and the

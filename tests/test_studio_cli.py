@@ -115,6 +115,7 @@ def _alive(pid: int) -> bool:
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.slow
 def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(tmp_path, sig):
     """SIGTERM (or a closed terminal's SIGHUP) to `agrisynth studio` while a solve runs: the worker stops too,
     and the run folder keeps the starts finished so far, with status interrupted."""

@@ -400,6 +400,7 @@ def test_cancel_answers_at_once_and_kills_a_worker_that_does_not_stop(tmp_path):
         assert ended["exit"] == "killed after 0.5 s of not stopping (nothing kept)"
 
 
+@pytest.mark.slow
 def test_a_solve_runs_the_studios_own_package_whatever_its_folder(tmp_path, monkeypatch):
     """Started with a relative PYTHONPATH (`PYTHONPATH=. agrisynth studio ...`): the worker, which runs in the
     studio's folder, still imports this synthesis package and its run is written."""

@@ -169,6 +169,7 @@ def independent_recheck(spec, design: dict, turn_points: int = 360001) -> dict:
             "slot": math.degrees(math.asin(a / b)), "engagement": c - a - b}
 
 
+@pytest.mark.slow
 def test_redesign_meets_every_rule_on_an_independent_finer_grid():
     loaded = load_spec(REDESIGN)
     result, reports, _ = run_solve(loaded, workers=1)
@@ -189,6 +190,7 @@ def test_redesign_meets_every_rule_on_an_independent_finer_grid():
     assert d["c"] < 0.75 * 500.0
 
 
+@pytest.mark.slow
 def test_max_margin_reaches_the_depth_band_s_half_width(tmp_path):
     """max_margin: the smallest normalised margin cannot exceed the depth band's half-width over its scale,
     (120 - 90) / 2 / 10 = 1.5; the solve reaches that bound with the depth at 105 mm."""
@@ -206,6 +208,7 @@ def test_max_margin_reaches_the_depth_band_s_half_width(tmp_path):
 
 
 
+@pytest.mark.slow
 def test_check_cli_writes_result_trajectory_and_figure(tmp_path):
     proc = agrisynth("check", str(BASELINE), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -272,6 +275,7 @@ FORBIDDEN = ("synthesis.kinds.steering_linkage", "synthesis.kinds.steering_linka
              "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 
+@pytest.mark.slow
 def test_a_tillage_run_imports_no_other_kind(tmp_path):
     out = str(tmp_path / "out")
     modules = modules_after_runs(tmp_path, [["check", str(BASELINE), "--out", out],

@@ -53,8 +53,9 @@ AS_NLP = {
 PER_SAMPLE = {("clamp_cam", "timing_hold_near[0]"): 1, ("clamp_cam", "timing_hold_far[0]"): 1,
               ("comb_finger", "finger_clear_of_other_unit"): 5}
 KINDS = ["planting_fourbar", "crank_rocker", "picker_double_crank", "steering_linkage", "tillage_linkage",
-         "combing_chain", "comb_finger", "clamp_cam", "fourbar_path", "guide_tube",
-         pytest.param("guide_way", marks=pytest.mark.benchmark)]     # 48 control-point coordinates: ~1 min
+         pytest.param("combing_chain", marks=pytest.mark.slow), "comb_finger", "clamp_cam", "fourbar_path",
+         # guide_way's 48 control-point coordinates: 30 s on a loaded machine, a study CI runs
+         "guide_tube", pytest.param("guide_way", marks=[pytest.mark.benchmark, pytest.mark.slow])]
 #: a design to compare at instead of the example's given one: fourbar_path's example gives r1 = r2 = r3 = r4
 #: (a change-point linkage on the Grashof limit, where the class rule has a kink)
 DESIGNS = {"fourbar_path": {"r1": 100.0, "r2": 30.0, "r3": 90.0, "r4": 80.0, "rcx": 40.0, "rcy": 20.0,
@@ -179,6 +180,7 @@ def test_robust_transcription_holds_the_linearised_worst_case(aux):
     assert out.x[0] == pytest.approx(0.1 + math.sqrt(1.01), abs=1e-6)
 
 
+@pytest.mark.slow
 def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_tolerance():
     """opening_cam_robust_redesign: +-0.2 mm on base radius and offset, +-0.05 mm on the roller.  The nominal
     redesign sits on the return pressure angle and the 3 mm working radius (its margins are the solver's back-off
@@ -228,7 +230,8 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
 @pytest.mark.parametrize("spec, explained", [
     # p1p3 curves: 11.8 % at +-0.2 mm / +-0.3 deg, 6.2 % at half of it (second order), 0.02 mm of a 4.7 mm margin;
     # planting depth is the analysis depth by definition (no loss to compare)
-    ("planting_arm/redesign_from_example1.toml", {"p1p3_distance": "second order", "planting_depth": "no margin loss"}),
+    pytest.param("planting_arm/redesign_from_example1.toml",
+                 {"p1p3_distance": "second order", "planting_depth": "no margin loss"}, marks=pytest.mark.slow),
     ("picker/cai2020_crank_rocker_synthesis.toml", {}),
     # the NLP holds kappa (r + m) - 1, the re-check reports the working radius in mm
     ("clamp_cam/opening_cam_redesign_modified_sine.toml", {"no_undercut": "other terms"}),
@@ -266,10 +269,11 @@ OPERATING = {"planting_fourbar": {"forward_speed", "crank_speed"}, "guide_tube":
              "comb_finger": {"machine_speed", "row_spacing"}}
 
 
-@pytest.mark.parametrize("spec", ["planting_arm/crank_speed_envelope_redesign_from_example1.toml",
-                                  "guide_tube/uniform_spacing_mu_envelope.toml",
-                                  "planting_arm/redesign_from_example1.toml", "guide_tube/uniform_spacing.toml",
-                                  "tillage/tillage_redesign.toml"])
+@pytest.mark.parametrize("spec", [*(pytest.param(s, marks=pytest.mark.slow) for s in (
+                                      "planting_arm/crank_speed_envelope_redesign_from_example1.toml",
+                                      "guide_tube/uniform_spacing_mu_envelope.toml",
+                                      "planting_arm/redesign_from_example1.toml")),
+                                  "guide_tube/uniform_spacing.toml", "tillage/tillage_redesign.toml"])
 def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     """On an envelope spec and on a nominal one (no range: the analysis declares the conditions as
     symbols all the same), every rule's derivative w.r.t. every operating condition the kind reads (planting:
@@ -305,6 +309,7 @@ def test_operating_sensitivities_equal_central_differences_of_the_recheck(spec):
     assert compared and moving
 
 
+@pytest.mark.slow
 def test_tolerance_cli_on_an_envelope_spec_reports_operating_sensitivities(tmp_path):
     """`agrisynth tolerance` of an envelope spec: result.json facts.tolerance.operating (mu, its nominal) and each
     stack-up row's operating_sensitivity and operating_point; report.md's table of d/d mu."""
@@ -642,6 +647,7 @@ def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
 
 
 @pytest.mark.parametrize("spec", ["combing_chain/redesign_window_80_100.toml", "combing_chain/redesign_two_speed.toml"])
+@pytest.mark.slow
 def test_combing_chain_range_end_sensitivities_equal_central_differences_and_the_analytic_ones(spec):
     """combing_chain's operating conditions are ranges its rules already hold over (machine speed V_s, initial
     plant angle beta): the analysis declares their four ends.  Every rule's derivative w.r.t. every end equals

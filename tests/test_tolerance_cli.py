@@ -99,6 +99,7 @@ def test_samples_0_exits_on_the_design_and_its_linear_worst_cases(tmp_path):
     assert "Monte-Carlo: none (--samples 0)" in run.stdout and "0.00 %" not in run.stdout
 
 
+@pytest.mark.slow
 def test_the_monte_carlo_counts_per_rule_the_samples_where_the_rule_could_not_be_evaluated(tmp_path):
     """A sample whose design assembles but misses a precision point (P3 not found) has rules without a margin: their
     worst_margin is null, and "unevaluable" (the samples the re-check could not evaluate at all) stayed 0, so the
@@ -124,6 +125,7 @@ def test_tol_refuses_a_variable_given_twice(tmp_path):
     assert run.stderr.strip() == "error: --tol arm_length: given twice (0.2 and 0.3); give each variable once"
 
 
+@pytest.mark.slow
 def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     solve = agrisynth("solve", str(STEERING), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "runs"),
                       cwd=tmp_path)
@@ -234,6 +236,7 @@ def test_a_robust_answer_whose_monte_carlo_finds_misses_says_so(tmp_path, monkey
     assert "note: " + note in " ".join(run.output.split())
 
 
+@pytest.mark.slow
 def test_a_robust_run_that_fails_its_linearised_worst_case_carries_no_monte_carlo_note(tmp_path):
     """The library's robust clamp cam with an oscillating follower and every angle +-0.3 deg: the fixed timing rows
     cannot hold at their worst case, so the run fails (exit 3) and its note says which rows miss; the Monte-Carlo's
@@ -277,6 +280,7 @@ def test_the_monte_carlo_note_names_the_rules_missed_in_evaluated_samples_and_th
     assert _sampled_misses({**mc, "pass_rate": 1.0}) is None and _sampled_misses({"samples": 0, "pass_rate": None}) is None
 
 
+@pytest.mark.slow
 def test_a_tolerance_box_no_design_can_hold_names_the_rule_and_the_tolerance_that_breaks_it(tmp_path):
     """cai2020's crank-rocker at +-5 mm: exit 3; the message names min_transmission_angle@tolerance, by how much its
     linear worst case misses at the elastic re-solve's design (the elastic slack itself), the largest
@@ -360,6 +364,7 @@ def test_samples_outside_the_cams_domain_are_unevaluable_not_read_as_designs(tmp
         assert "inf" not in cells and "-inf" not in cells and "nan" not in cells
 
 
+@pytest.mark.slow
 def test_guide_tube_equal_times_in_a_tolerance_box_hold_the_spread_limit_at_every_corner(tmp_path):
     """With objective nearest or fastest the NLP pins equal landing times (t_k = t_0), an equality no tolerance box
     can hold at its corners: the robust solve kept it as it was, so the spread limit was never held in the box and
@@ -528,6 +533,7 @@ def test_a_spec_s_per_variable_half_width_is_checked_as_the_option_is(tmp_path, 
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_equal_times_in_a_tolerance_box_over_a_friction_range_are_held_at_each_scenario(tmp_path):
     """The review of Rule.box_rows: an operating range fills its scenarios' values into a rule's rows, and the box
     form was left with the symbol mu in it: IPOPT refused to start ("variables [mu] are free"), a traceback and exit

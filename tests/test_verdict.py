@@ -119,7 +119,8 @@ def test_every_solving_kind_is_covered():
     assert set(NOTHING_FREE) | {"planting_fourbar", "fourbar_path"} == solving
 
 
-@pytest.mark.parametrize("kind", sorted(CAPPED))
+@pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.slow) if k == "guide_way" else k
+                                  for k in sorted(CAPPED)])
 def test_no_start_converged_is_failed_not_infeasible(tmp_path, kind):
     source, replacements, starts = CAPPED[kind]
     loaded = load_spec(edited_spec(tmp_path, source, replacements))
@@ -150,8 +151,11 @@ UNKNOWN_ALONE: set[str] = set()
 EITHER_ALONE = {"guide_way"}
 
 
-@pytest.mark.parametrize("kind", [pytest.param(k, marks=[pytest.mark.long] if k == "guide_way" else [])
-                                  for k in sorted(UNREACHABLE)])
+#: the solves of seconds (guide_way's a minute, started first)
+UNREACHABLE_MARKS = {"guide_way": [pytest.mark.slow, pytest.mark.long], "planting_fourbar": [pytest.mark.slow]}
+
+
+@pytest.mark.parametrize("kind", [pytest.param(k, marks=UNREACHABLE_MARKS.get(k, [])) for k in sorted(UNREACHABLE)])
 def test_unreachable_rule_is_infeasible_and_named(tmp_path, kind):
     source, replacements, rule, starts = UNREACHABLE[kind]
     loaded = load_spec(edited_spec(tmp_path, source, replacements))
@@ -271,6 +275,7 @@ def test_a_rule_value_that_is_not_a_number_is_an_infinite_violation():
     assert rep.records[0].value is None and "not a number" in rep.records[0].note
 
 
+@pytest.mark.slow
 def test_a_tolerance_box_no_design_can_hold_fails_instead_of_passing(tmp_path):
     """steering_redesign_40 with a +-60 mm / +-15 deg box (wider than half the arm's range): the nominal
     rules hold at the best start, the linearised worst cases do not -> failed, exit 3, named."""
@@ -291,6 +296,7 @@ def test_a_tolerance_box_no_design_can_hold_fails_instead_of_passing(tmp_path):
                                           ("fourbar_path/picking_arc.toml", "length = 0.05\nangle = 0.05"),
                                           # its design variables enter only an epigraph's rows and Grashof coordinates
                                           ("picker/picker_double_crank_redesign.toml", "length = 0.1\nangle = 0.1")])
+@pytest.mark.slow
 def test_guide_tube_and_fourbar_path_hold_their_rules_in_a_tolerance_box(tmp_path, relative, box):
     """Kinds whose NLP is not in the spec's own variables take a tolerance box too: guide_tube (its NLP names the
     angles I, II; the spec delta_I, delta_II) and fourbar_path (its NLP in units of the targets' size: the box is
@@ -322,6 +328,7 @@ def test_a_tolerance_box_on_a_fixed_variable_the_nlp_takes_as_a_number_is_bad_in
         run_solve(load_spec(path), starts=1, workers=1)
 
 
+@pytest.mark.slow
 def test_a_tolerance_on_a_fixed_fourbar_path_variable_is_refused_not_dropped(tmp_path):
     """fourbar_path computes with a fixed variable's number: its tolerance would be held nowhere.  Refused, naming it
     and the fix; written {init = v, bounds = [v, v]} it is a decision entry the box applies to."""
@@ -340,6 +347,7 @@ def test_a_tolerance_on_a_fixed_fourbar_path_variable_is_refused_not_dropped(tmp
     assert all(r["satisfied"] for r in result.rules if r["name"].endswith("@tolerance"))
 
 
+@pytest.mark.slow
 def test_a_robust_grashof_any_path_is_held_and_read_on_the_spec_s_samples(tmp_path):
     """grashof = "any" holds closure and transmission between the targets (exactly, at each gap's extremes: the
     rows' crank angles are functions of the targets' ones).  Under a tolerance box the whole problem is solved and
@@ -362,6 +370,7 @@ def test_a_robust_grashof_any_path_is_held_and_read_on_the_spec_s_samples(tmp_pa
     assert result.status in ("optimal", "feasible")
 
 
+@pytest.mark.slow
 def test_a_signal_while_the_answer_is_finished_keeps_every_start(tmp_path, monkeypatch):
     """Ctrl-C after every start finished, while the kind finishes the answer (a robust solve's Monte-Carlo check,
     the slow part of one): the run keeps its starts and their best as an interrupted result (exit 130, --resume),

@@ -23,7 +23,8 @@ import pytest
 
 from conftest import LIBRARY, ROOT
 
-pytestmark = pytest.mark.long
+#: a wheel build and a venv: about a minute (run with the slow tests, started first)
+pytestmark = [pytest.mark.slow, pytest.mark.long]
 
 #: what a copy of the checkout leaves out: version control, outputs, caches, earlier builds
 NOT_SOURCE = shutil.ignore_patterns(".git", "results", "build", "dist", "*.egg-info", "__pycache__", ".hypothesis",

@@ -13,6 +13,7 @@ from fourbar_path_support import cli, write_spec
 from synthesis.kinds.fourbar_path.synthetic import truth_data
 
 
+@pytest.mark.slow
 def test_change_point_linkage_is_diagnosed_not_crashed(tmp_path, record_property):
     """r1 = r2 fixed: the only crank-rockers are change-point linkages (r3 = r4), where O'A shrinks to
     zero at theta2 = 0 and the transmission angle to 0 deg, so [30, 150] cannot hold: exit 3 naming it."""
@@ -24,6 +25,7 @@ def test_change_point_linkage_is_diagnosed_not_crashed(tmp_path, record_property
     record_property("figure", "exit 3 naming transmission_angle_min (the rule a change-point linkage cannot meet)")
 
 
+@pytest.mark.slow
 def test_collinear_targets_are_approximated_within_the_rules(tmp_path, record_property):
     """Seven points on a 60 mm straight line: a four-bar coupler curve is algebraic of degree 6, so it
     meets a line in at most 6 points (Bezout) and no coupler curve passes all 7; the fit obeys every rule."""
@@ -39,6 +41,7 @@ def test_collinear_targets_are_approximated_within_the_rules(tmp_path, record_pr
                               f"{out['facts']['path_error']['max_mm']:.3f} mm (< 1 mm; exactly 0 is impossible)")
 
 
+@pytest.mark.slow
 def test_repeated_targets_share_one_crank_angle(tmp_path, record_property):
     """Three of six targets coincident: a valid design with one crank angle for them (spread < 1e-3 deg) and a
     zero-error fit (objective < 1e-8 mm^2)."""

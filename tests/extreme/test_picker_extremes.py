@@ -95,6 +95,7 @@ def test_time_ratio_below_one_is_bad_input(tmp_path):
 
 @pytest.mark.parametrize("time_ratio, swing, gamma", [("1.25", "50.0", "45.0"), ("1.25", "50.0", "60.0"),
                                                       ("2.0", "120.0", "40.0")])
+@pytest.mark.slow
 def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_ratio, swing, gamma,
                                                               record_property):
     """No crank-rocker with this K and swing has this gamma_min: exit 3 naming the conflicting rules."""
@@ -109,6 +110,7 @@ def test_impossible_transmission_angle_exits_3_naming_the_rules(tmp_path, time_r
     record_property("figure", "exit 3: " + err[err.index("min_transmission_angle (misses"):][:90])
 
 
+@pytest.mark.slow
 def test_swing_near_180_deg_exits_3_with_a_result_file(tmp_path):
     """psi = 179 deg: no crank-rocker swings that far with gamma_min = 40 deg, and some starts end on designs
     the re-check cannot evaluate.  Their violation cannot be measured: result.json says null, not inf."""
