@@ -127,6 +127,11 @@ class Kind(ABC):
         """What a result holds of its answer beyond ``design`` that :meth:`KindNLP.answer_start` reads; none here."""
         return {}
 
+    def headline(self, result: Result) -> list[str]:
+        """The figures an engineer looks at first, one short line each, for the terminal summary and the report's
+        first screen (a path's error per target, its rms and maximum); none by default."""
+        return []
+
     @property
     def solves(self) -> bool:
         """Whether the kind has a solve side, read without importing it (it overrides :meth:`solving`)."""
@@ -192,6 +197,9 @@ class SolvingReplaced(Kind):
 
     def answer_details(self, result: Result) -> dict:
         return self.base.answer_details(result)
+
+    def headline(self, result: Result) -> list[str]:
+        return self.base.headline(result)
 
     @property
     def benches(self) -> bool:
