@@ -14,8 +14,15 @@ from __future__ import annotations
 
 import difflib
 import glob
+import os
 from importlib.resources import files
 from pathlib import Path, PurePosixPath
+
+from synthesis.errors import OutputError, SpecError
+from synthesis.result import atomic_write_drawn
+from synthesis.spec import load_spec
+from synthesis.spec.design_info import walk_fields
+from synthesis.spec.docmeta import SpecFile
 
 #: the folder the running ``synthesis`` package was imported from: site-packages for an installed copy, the
 #: checkout's root for an editable install or a checkout on PYTHONPATH
@@ -97,14 +104,6 @@ def copy_out(source: Path, target: Path, *, force: bool = False) -> list[Path]:
     OutputError (exit 2, before anything is written) when a file to write exists and ``force`` is not given, when
     it is a library file itself, or when the folder to write in does not exist.  Returns the files written, the spec
     first."""
-    import os
-
-    from synthesis.spec.design_info import walk_fields
-    from synthesis.errors import OutputError, SpecError
-    from synthesis.result import atomic_write_drawn
-    from synthesis.spec import load_spec
-    from synthesis.spec.docmeta import SpecFile
-
     target = Path(target)
     if target.is_dir():
         target = target / source.name

@@ -14,7 +14,10 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from synthesis import __version__
+from synthesis.core import interrupt
 from synthesis.errors import OutputError, ResultError
+from synthesis.files import read_json
 
 STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated", "interrupted")
 #: version of the result.json layout; readers refuse a newer one rather than misread it
@@ -28,9 +31,7 @@ RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
 
 def versions() -> dict[str, str]:
-    import casadi
-
-    from synthesis import __version__
+    import casadi       # here, not above: reading a result must not load CasADi
 
     return {"agrisynth": __version__, "casadi": casadi.__version__, "python": platform.python_version()}
 
@@ -128,8 +129,6 @@ MAX_NAME = 200
 
 def load_result(path: str | Path) -> Result:
     """Read a run folder's result.json (or the file itself); ResultError (exit 2) says what is wrong."""
-    from synthesis.files import read_json
-
     path = Path(path)
     if path.is_dir():
         path = path / "result.json"
@@ -229,8 +228,6 @@ MAX_MARKER_BYTES = 1024**2
 
 def _marker(folder: Path) -> Any:
     """The parsed marker of ``folder`` (ResultError when it is not a regular file, too large, not JSON ...)."""
-    from synthesis.files import read_json
-
     return read_json(folder / RUN_MARKER, MAX_MARKER_BYTES, "run folder marker", ResultError, "a run folder marker")
 
 
@@ -362,8 +359,6 @@ class RunFolder:
         Under an exclusive lock on the output folder and with SIGINT/SIGTERM deferred, so two runs racing
         into one folder take turns (the folder is always one run's, whole) and no half-moved folder or
         ``.old`` leftover remains."""
-        from synthesis.core import interrupt
-
         with _locked(self.final.parent), interrupt.deferred():
             try:
                 replace = self.permitted()

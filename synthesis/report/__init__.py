@@ -10,6 +10,8 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from synthesis import kinds
+from synthesis.core.library_log import captured_warnings
 from synthesis.errors import NothingToDraw
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
@@ -22,8 +24,6 @@ def _caption(name: str) -> str:
 
 def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple[str, str]], list[str]]:
     """Draw the kind's overlay figures of the candidates into ``folder``: ([(file, caption)], notes)."""
-    from synthesis import kinds
-
     writer = kinds.compare_figures(cands[0].result.kind)
     if writer is None:
         return [], []
@@ -49,9 +49,6 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
 
     A figure that fails is left out and named on the page: it must never cost the run its result.
     """
-    from synthesis import kinds
-    from synthesis.core.library_log import captured_warnings
-
     written: list[str] = []
     failed: list[str] = []
     said: list[str] = []            # library warnings while drawing (matplotlib's): for the run's log

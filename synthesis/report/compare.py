@@ -11,10 +11,12 @@ import os
 from pathlib import Path
 
 from synthesis.errors import OutputError, ResultError
+from synthesis.files import read_json
 from synthesis.report import comparison_figures
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
-from synthesis.result import atomic_write_text, load_result, open_run_folder
+from synthesis.result import MAX_RESULT_BYTES, RUN_NAME, atomic_write_text, load_result, open_run_folder
+from synthesis.spec import KINDS
 
 
 def bench_file(path: Path) -> Path | None:
@@ -35,9 +37,6 @@ def is_bench(path: Path) -> bool:
 
 def load_bench(path: Path) -> list[dict]:
     """The per-problem results of a bench.json, shaped as ``synthesis.bench.run_case`` returns them."""
-    from synthesis.files import read_json
-    from synthesis.result import MAX_RESULT_BYTES
-
     path = bench_file(path) or path / "bench.json"
     data = read_json(path, MAX_RESULT_BYTES, "bench.json", ResultError, "a bench.json")
     try:
@@ -80,8 +79,6 @@ def load_candidates(paths: list[Path]) -> list[Candidate]:
     """Read every result (run folder or result.json); one kind only, the first is the baseline."""
     if not paths:
         raise ResultError("compare needs at least one RESULT (a run folder or its result.json)")
-    from synthesis.spec import KINDS
-
     results = [load_result(p) for p in paths]
     files = [p / "result.json" if p.is_dir() else p for p in paths]
     for f, r in zip(files, results):
@@ -140,8 +137,6 @@ def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None
 def open_output_folder(out: Path, force: bool = False):
     """The run folder of an output written to ``out`` itself (compare, bench): :func:`open_run_folder` of
     its parent and name (OutputError, exit 2, when something that must be kept is there)."""
-    from synthesis.result import RUN_NAME
-
     full = Path(os.path.abspath(out))
     if not RUN_NAME.match(full.name):
         raise OutputError(f"--out {out}: the output folder's name must be letters, digits and _ . - only "

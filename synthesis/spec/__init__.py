@@ -13,6 +13,7 @@ from pathlib import Path
 
 from pydantic import BaseModel
 
+from synthesis import kinds
 from synthesis.errors import SpecError
 from synthesis.spec.common import read_toml, shown, validate
 
@@ -20,8 +21,6 @@ class _Kinds:
     """The kind names of the registry (:mod:`synthesis.kinds`), read when used (so runtime kinds count)."""
 
     def __contains__(self, name) -> bool:
-        from synthesis import kinds
-
         try:
             kinds.get(name)         # the kind's own folder first: no other kind's package is imported
         except SpecError:
@@ -29,8 +28,6 @@ class _Kinds:
         return True
 
     def __iter__(self):
-        from synthesis import kinds
-
         return iter(kinds.names())
 
 
@@ -66,8 +63,6 @@ class LoadedSpec:
 
 
 def model_class(kind: str) -> type[BaseModel]:
-    from synthesis import kinds
-
     return kinds.get(kind).spec_model()
 
 

@@ -20,6 +20,7 @@ from pydantic_core import PydanticCustomError
 
 from synthesis.errors import SpecError
 from synthesis.files import read_regular, shown
+from synthesis.spec.docmeta import units_in
 
 
 def _sign_not_a_bool(value: Any) -> Any:
@@ -315,8 +316,6 @@ def _field_at(model: type[BaseModel], loc: tuple):
 
 def _unit_hint(model: type[BaseModel], loc: tuple) -> str:
     """" in mm" (the field's unit, from its description) or ""."""
-    from synthesis.spec.docmeta import units_in
-
     field = _field_at(model, loc)
     units = units_in(field.description) if field is not None else []
     return f" in {' or '.join(units)}" if units else ""

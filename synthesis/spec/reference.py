@@ -30,8 +30,9 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 import annotated_types as at
 from pydantic import BaseModel
 
+from synthesis import kinds
 from synthesis.library import IMPORT_ROOT, LIBRARY, checkout
-from synthesis.spec.common import FreeVariable
+from synthesis.spec.common import FreeVariable, StrictModel, read_toml
 from synthesis.spec.docmeta import UNITS, SpecFile, TomlType, units_in
 
 #: the reference of every kind, generated into the source checkout's docs (an installed copy has no docs folder)
@@ -167,8 +168,6 @@ def _one_line(text: str | None) -> str:
 
 def _doc(cls) -> str:
     """The first paragraph of the section's own docstring (or of a base section's; never the generic ones)."""
-    from synthesis.spec.common import StrictModel
-
     for c in cls.__mro__:
         if c in (StrictModel, BaseModel, object):
             break
@@ -373,8 +372,6 @@ def _item_rewrite(rewrite: dict, list_path: str, index: int) -> dict:
 # ---------------------------------------------------------------------------------------- what the CLI shows
 
 def kind_entries(kind_name: str) -> list[Entry]:
-    from synthesis import kinds
-
     return entries(kinds.get(kind_name).spec_model())
 
 
@@ -388,9 +385,6 @@ def template(kind_name: str, directory: Path | None = None) -> str:
 
     ``directory``: where the file will live (spec-file fields are made relative to it; default: the
     current directory)."""
-    from synthesis import kinds
-    from synthesis.spec.common import read_toml
-
     kind = kinds.get(kind_name)
     model = kind.spec_model()
     if not kind.example:
@@ -420,8 +414,6 @@ def _spec_file_fields(model):
 def markdown(kind_names: list[str] | None = None) -> str:
     """docs/specs.md: the reference of every registered kind (a kind whose package does not import is
     named, with the error, instead of its table)."""
-    from synthesis import kinds
-
     names = kinds.names() if kind_names is None else kind_names
     out = ["# Spec reference", "",
            f"Generated from the spec models by `{REGENERATE}`; do not edit by hand (a test fails when it is stale).",

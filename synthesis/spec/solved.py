@@ -18,7 +18,11 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from synthesis import kinds
+from synthesis.core.coordinates import BOUND_TOLERANCE
+from synthesis.spec.common import is_free, validate
 from synthesis.spec.design_info import describe
+from synthesis.spec.reference import write_toml
 from synthesis.errors import SpecError
 
 FILENAME = "solved.toml"
@@ -41,8 +45,6 @@ def set_at_path(data: Any, path: str, value: Any) -> None:
 
 def solved_data(loaded, result) -> dict[str, Any]:
     """The spec file's data with the solved design in place of every free variable."""
-    from synthesis import kinds
-
     # the file's data as the run read it (not as the file is now), a design the spec left to the kind written out
     loaded, data = kinds.explicit_design(loaded)
     info = describe(loaded.model)
@@ -65,8 +67,6 @@ def _given_design(loaded, result, data: dict) -> None:
     """A ``[design]`` table (the given design a kind reads, e.g. a path synthesis', with free timing its crank
     angles too): each of its fields the result has is set to the solution, where the spec allows it (a
     field the spec already prescribes elsewhere, e.g. timed targets' crank angles, is left out)."""
-    from synthesis.spec.common import validate
-
     model = type(loaded.model)
     field = model.model_fields.get("design")
     section = getattr(loaded.model, "design", None)
@@ -91,9 +91,6 @@ def _given_design(loaded, result, data: dict) -> None:
 def _fixed_values_moved(model, design: dict) -> str:
     """"l10 = 161.373 where the spec fixes 140" for the design variables the spec fixes that ``design`` moved ("" when
     none did; a kind whose spec lists no variables says nothing)."""
-    from synthesis.core.coordinates import BOUND_TOLERANCE
-    from synthesis.spec.common import is_free
-
     variables = model.variables() if hasattr(model, "variables") else {}
     moved = []
     for name, v in variables.items():
@@ -106,8 +103,6 @@ def _fixed_values_moved(model, design: dict) -> str:
 
 
 def solved_toml(loaded, result) -> str:
-    from synthesis.spec.reference import write_toml
-
     data = solved_data(loaded, result)
     objective = result.objective or {}
     value = objective.get("value")
