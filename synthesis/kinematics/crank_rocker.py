@@ -81,6 +81,13 @@ def rocker_curve(cr: CrankRocker, phi) -> dict[str, np.ndarray]:
             "tip": tip.reshape(2, -1)}
 
 
+def joints(cr: CrankRocker, phi: float) -> dict[str, list[float]]:
+    """G, A, F, E (mm, the mechanism's own frame) at crank angle phi (rad)."""
+    tip = rocker_curve(cr, np.array([phi]))["tip"][:, 0]
+    return {"G": [0.0, 0.0], "A": [cr.l10, 0.0], "F": [cr.l7 * math.cos(phi), cr.l7 * math.sin(phi)],
+            "E": [float(tip[0]), float(tip[1])]}
+
+
 def turn_grid(samples: int) -> np.ndarray:
     """``samples`` crank angles evenly over a turn from 0 (the crank along G -> A).
 

@@ -14,7 +14,7 @@ from constraints import Rule
 from constraints.grashof import grashof_rule
 from synthesis.kinds.crank_rocker.rules import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
-from synthesis.kinematics.crank_rocker import (CrankRocker, QuickReturn, acute, quick_return, rocker_curve,
+from synthesis.kinematics.crank_rocker import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
                                               transmission_angles_deg, turn_grid)
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -69,13 +69,6 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
     u, w = tips[:, 0] - a, tips[:, 1] - a
     return rules_of(spec, (cr.l7, cr.l8, cr.l9, cr.l10), min(q.stroke_fold_to_ext, q.stroke_ext_to_fold), u, w,
                     transmission_angles_deg(cr, samples)), q
-
-
-def joints(cr: CrankRocker, phi: float) -> dict[str, list[float]]:
-    """G, A, F, E (mm, the mechanism's own frame) at crank angle phi (rad)."""
-    tip = rocker_curve(cr, np.array([phi]))["tip"][:, 0]
-    return {"G": [0.0, 0.0], "A": [cr.l10, 0.0], "F": [cr.l7 * math.cos(phi), cr.l7 * math.sin(phi)],
-            "E": [float(tip[0]), float(tip[1])]}
 
 
 def motion_facts(cr: CrankRocker, q: QuickReturn | None, samples: int = 361) -> dict:
