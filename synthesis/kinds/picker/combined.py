@@ -172,30 +172,12 @@ def run_check(loaded: LoadedSpec) -> Result:
     t = np.linspace(0.0, period, TRAJECTORY_SAMPLES)
     s = states(drive, t)
     instants = {"picking": 0.0, "dropping": drive.holding_angle / drive.omega, "picking_again": period}
-    at = states(drive, list(instants.values()))
-    speed = np.hypot(*at["V"]) / 1000.0
-    targets = {"picking": dc_spec.target.m1, "dropping": dc_spec.target.m2, "picking_again": dc_spec.target.m1}
-    instant_table = {}
-    for k, (name, tt) in enumerate(instants.items()):
-        mx, my = at["M"][:, k]
-        tx, ty = targets[name]
-        instant_table[name] = {"t": tt, "speed_m_s": float(speed[k]), "x": float(mx), "y": float(my),
-                               "crank_ab_deg": math.degrees(float(at["phi1"][k])),
-                               "distance_to_target_mm": float(math.hypot(mx - tx, my - ty))}
-    if spec.published.instants is not None:
-        for name, tp in zip(instants, spec.published.instants):
-            instant_table[name]["published_t"] = tp
+    instant_table = _instant_table(spec, dc_spec, drive, instants)
     speeds = np.hypot(*s["V"]) / 1000.0
     ab = np.degrees(s["phi1"])
     frames_t = np.linspace(0.0, period, ANIMATION_FRAMES, endpoint=False)
     frames = states(drive, frames_t)
-    ae_pick = math.degrees(drive.theta2) + math.degrees(drive.mount * (drive.beta_pick - math.pi))
-    design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
-    design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
-    design.update({"theta1": inst.theta1, "theta2": inst.theta2})
-    described = describe_part("crank_rocker", cr_spec, str(cr_loaded.path))
-    described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
-    described.update(describe_fixed(spec, {"theta1": "installation.theta1", "theta2": "installation.theta2"}))
+    design, described = _design_of(spec, cr_loaded, dc_loaded)
     return Result(
         kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design, rules=rules,
         design_variables=described,
@@ -216,15 +198,52 @@ def run_check(loaded: LoadedSpec) -> Result:
             "peak_speed_m_s": float(speeds.max()),
             "peak_speed_t": float(t[int(np.argmax(speeds))]),
             "crank_ab_range_deg": [float(ab.min()), float(ab.max())],
-            "installation": {"picking_extreme": inst.picking_extreme, "theta1_published_deg": inst.theta1,
-                             "theta1_computed_deg": theta1, "theta2_deg": inst.theta2,
-                             "crank_sense": "counter-clockwise" if drive.sense * drive.mount > 0 else "clockwise",
-                             "rocker_mounted_mirrored": drive.mount < 0,
-                             "rocker_ae_at_picking_deg": ae_pick % 360.0,
-                             "joint_angle_ab_minus_ae_deg": math.remainder(
-                                 dc_spec.drive.start - dc_spec.design_values()["phi3"] - ae_pick, 360.0)},
+            "installation": _installation_facts(inst, dc_spec, drive, theta1),
             "target_arc": double_crank_check.facts(dc_spec, dc)["target_arc"],
             "frames": [{"t": float(ft), "joints": machine_joints(drive, float(a), float(c))}
                        for ft, a, c in zip(frames_t, frames["phi1"], frames["phi7"])],
         },
     )
+
+
+def _instant_table(spec, dc_spec, drive: Drive, instants: dict[str, float]) -> dict:
+    """The clamp point at picking, dropping and picking again: where it is, how fast, how far from its target."""
+    at = states(drive, list(instants.values()))
+    speed = np.hypot(*at["V"]) / 1000.0
+    targets = {"picking": dc_spec.target.m1, "dropping": dc_spec.target.m2, "picking_again": dc_spec.target.m1}
+    instant_table = {}
+    for k, (name, tt) in enumerate(instants.items()):
+        mx, my = at["M"][:, k]
+        tx, ty = targets[name]
+        instant_table[name] = {"t": tt, "speed_m_s": float(speed[k]), "x": float(mx), "y": float(my),
+                               "crank_ab_deg": math.degrees(float(at["phi1"][k])),
+                               "distance_to_target_mm": float(math.hypot(mx - tx, my - ty))}
+    if spec.published.instants is not None:
+        for name, tp in zip(instants, spec.published.instants):
+            instant_table[name]["published_t"] = tp
+    return instant_table
+
+
+def _design_of(spec, cr_loaded: LoadedSpec, dc_loaded: LoadedSpec) -> tuple[dict, dict]:
+    """The picker's design (both parts' variables, prefixed, and the installation angles) and its description."""
+    cr_spec, dc_spec, inst = cr_loaded.model, dc_loaded.model, spec.installation
+    design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
+    design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
+    design.update({"theta1": inst.theta1, "theta2": inst.theta2})
+    described = describe_part("crank_rocker", cr_spec, str(cr_loaded.path))
+    described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
+    described.update(describe_fixed(spec, {"theta1": "installation.theta1", "theta2": "installation.theta2"}))
+    return design, described
+
+
+def _installation_facts(inst, dc_spec, drive: Drive, theta1: float) -> dict:
+    ae_pick = math.degrees(drive.theta2) + math.degrees(drive.mount * (drive.beta_pick - math.pi))
+    return {"picking_extreme": inst.picking_extreme, "theta1_published_deg": inst.theta1,
+            "theta1_computed_deg": theta1, "theta2_deg": inst.theta2,
+            "crank_sense": "counter-clockwise" if drive.sense * drive.mount > 0 else "clockwise",
+            "rocker_mounted_mirrored": drive.mount < 0,
+            "rocker_ae_at_picking_deg": ae_pick % 360.0,
+            "joint_angle_ab_minus_ae_deg": math.remainder(
+                dc_spec.drive.start - dc_spec.design_values()["phi3"] - ae_pick, 360.0)}
+
+
