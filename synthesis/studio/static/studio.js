@@ -85,6 +85,7 @@ function buildSliders() {
     row.append(label);
     const range = el("input", { type: "range", id: `range-${v.name}`, name: v.name });
     const number = el("input", { type: "number", id: `number-${v.name}`, name: v.name });
+    const step = v.free ? stepOf(v) : null;
     for (const input of [range, number]) {
       if (v.free) {
         input.min = v.bounds[0]; input.max = v.bounds[1];
@@ -95,7 +96,12 @@ function buildSliders() {
       input.value = v.value;
     }
     if (!v.free) { range.min = v.value - 1; range.max = v.value + 1; range.value = v.value; }
-    range.step = v.free ? String((v.bounds[1] - v.bounds[0]) / 1000) : "any";
+    if (v.free) {
+      range.step = String(step);            // a drag moves by whole steps too
+      range.dataset.step = String(step);
+      range.addEventListener("keydown", (ev) => stepKey(ev, v, step, true));
+      number.addEventListener("keydown", (ev) => stepKey(ev, v, step, false));
+    }
     range.addEventListener("input", () => { setValue(v.name, Number(range.value)); request("coarse"); });
     range.addEventListener("change", () => { setValue(v.name, Number(range.value)); request("fine"); });
     number.addEventListener("change", () => {
@@ -104,9 +110,33 @@ function buildSliders() {
       setValue(v.name, x); request("fine");
     });
     row.append(range, number, el("span", { class: "unit" }, v.unit || ""));
-    row.append(el("span", { class: "bounds" }, v.free ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]` : (v.note || "fixed in the spec")));
+    row.append(el("span", { class: "bounds" }, v.free
+      ? `free in [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]; key step ${fmt(step)} (shift ${fmt(10 * step)})`
+      : (v.note || "fixed in the spec")));
     containerOf(box, v).append(row);
   }
+}
+
+// an arrow key's step: 1/200 of the bound range as 1, 2 or 5 x 10^k, at least 0.1 mm or 0.1 deg (finer is
+// below what a drawing shows); shift moves 10 steps
+function stepOf(v) {
+  const span = v.bounds[1] - v.bounds[0];
+  const step = span > 0 ? niceNearest(span / 200) : 1;
+  return v.unit === "mm" || v.unit === "deg" ? Math.max(step, 0.1) : step;
+}
+
+// one step from the value the page holds (not from the slider's snapped position), within the bounds; the fine
+// grid at once (a key press is a release)
+function stepKey(ev, v, step, sideways) {
+  const keys = sideways ? { ArrowUp: 1, ArrowRight: 1, ArrowDown: -1, ArrowLeft: -1 } : { ArrowUp: 1, ArrowDown: -1 };
+  const direction = keys[ev.key];
+  if (!direction) return;
+  ev.preventDefault();
+  const moved = state.values[v.name] + direction * step * (ev.shiftKey ? 10 : 1);
+  const x = Math.min(v.bounds[1], Math.max(v.bounds[0], Number(moved.toPrecision(12))));
+  if (x === state.values[v.name]) return;
+  setValue(v.name, x);
+  request("fine");
 }
 
 function setValue(name, x) {
@@ -202,10 +232,31 @@ function renderTable(data) {
 }
 
 // ---- drawing --------------------------------------------------------------------------------------------
-function extent(groups) {
+// Every panel is drawn in the svg's own pixels (viewBox 0 0 width height, redrawn on resize): texts have a font
+// size in px that is the size on screen, the axes carry ticks in the data's units (mm) at round values, and a
+// scale bar says how long a round number of mm is.  The frame maps data (y up) to pixels (y down).
+const MARGIN = { left: 64, right: 16, top: 14, bottom: 46 };
+const TEXT_PX = 12;            // point, joint, tick and line labels
+const TICK_PX = 90;            // about one tick every 90 px
+
+// the 1, 2 or 5 x 10^k at or above raw (tick spacings, scale bars)
+function niceAbove(raw) {
+  const base = 10 ** Math.floor(Math.log10(raw));
+  const m = raw / base;
+  return (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10) * base;
+}
+
+// the 1, 2 or 5 x 10^k nearest raw (slider steps)
+function niceNearest(raw) {
+  const base = 10 ** Math.floor(Math.log10(raw));
+  const m = raw / base;
+  return (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10) * base;
+}
+
+function extent(groups, surfaces) {
   let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
   const add = (x, y) => {
-    if (x === null || y === null) return;
+    if (x === null || y === null || x === undefined || y === undefined) return;
     x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
   };
   for (const g of groups) {
@@ -216,35 +267,152 @@ function extent(groups) {
       if (isPlaced(v)) placedPoints(g, v).forEach((xy) => add(xy[0], xy[1])); else add(v[0], v[1]);
     }
   }
-  if (!Number.isFinite(x0)) return [-1, -1, 2, 2];
-  const pad = 0.06 * Math.max(x1 - x0, y1 - y0, 1);
-  return [x0 - pad, -y1 - pad, x1 - x0 + 2 * pad, y1 - y0 + 2 * pad];   // SVG y runs down: y drawn as -y
+  for (const s of surfaces || []) add(s.at[0], s.at[1]);        // a surface's point is in view: so is its line
+  if (!Number.isFinite(x0)) return [-1, -1, 1, 1];
+  const pad = 0.05 * Math.max(x1 - x0, y1 - y0, 1);
+  return [x0 - pad, y0 - pad, x1 + pad, y1 + pad];
 }
 
-function pathOf(xs, ys) {
+// data -> pixels for one svg: equal scales (a drawing) or each axis its own (a chart); the data's box is centred
+// and the axes span the whole plot area
+function frameOf(root, box, equal) {
+  const width = Math.max(root.clientWidth, 200), height = Math.max(root.clientHeight, 150);
+  const pw = width - MARGIN.left - MARGIN.right, ph = height - MARGIN.top - MARGIN.bottom;
+  let [x0, y0, x1, y1] = box;
+  let sx = pw / Math.max(x1 - x0, 1e-9), sy = ph / Math.max(y1 - y0, 1e-9);
+  if (equal) {
+    const s = Math.min(sx, sy);
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    [x0, x1, y0, y1] = [cx - pw / (2 * s), cx + pw / (2 * s), cy - ph / (2 * s), cy + ph / (2 * s)];
+    sx = sy = s;
+  }
+  return {
+    width, height, x0, x1, y0, y1, sx, sy, equal,
+    left: MARGIN.left, top: MARGIN.top, right: width - MARGIN.right, bottom: height - MARGIN.bottom,
+    px: (x) => MARGIN.left + (x - x0) * sx,
+    py: (y) => MARGIN.top + (y1 - y) * sy,
+  };
+}
+
+function text(x, y, label, attrs) {
+  const t = svg("text", { x, y, "font-size": TEXT_PX, ...attrs });
+  t.textContent = label;
+  return t;
+}
+
+// ticks at the round values inside [lo, hi]
+function ticks(lo, hi, pixels) {
+  const step = niceAbove((hi - lo) / Math.max(2, pixels / TICK_PX));
+  const out = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) out.push(Number(v.toPrecision(12)));
+  return { step, values: out };
+}
+
+function drawAxes(root, f, xTitle, yTitle) {
+  const g = svg("g", { class: "axes", fill: "#444" });
+  const grid = svg("g", { class: "grid", stroke: "#ececec", "stroke-width": 1 });
+  const tx = ticks(f.x0, f.x1, f.right - f.left), ty = ticks(f.y0, f.y1, f.bottom - f.top);
+  for (const v of tx.values) {
+    const x = f.px(v);
+    grid.append(svg("line", { x1: x, y1: f.top, x2: x, y2: f.bottom }));
+    g.append(svg("line", { x1: x, y1: f.bottom, x2: x, y2: f.bottom + 5, stroke: "#444" }));
+    g.append(text(x, f.bottom + 18, fmt(v), { "text-anchor": "middle", class: "tick", "data-tick-x": v }));
+  }
+  for (const v of ty.values) {
+    const y = f.py(v);
+    grid.append(svg("line", { x1: f.left, y1: y, x2: f.right, y2: y }));
+    g.append(svg("line", { x1: f.left - 5, y1: y, x2: f.left, y2: y, stroke: "#444" }));
+    g.append(text(f.left - 8, y + 4, fmt(v), { "text-anchor": "end", class: "tick", "data-tick-y": v }));
+  }
+  g.append(svg("rect", { x: f.left, y: f.top, width: f.right - f.left, height: f.bottom - f.top, fill: "none",
+    stroke: "#999" }));
+  g.append(text((f.left + f.right) / 2, f.height - 8, xTitle, { "text-anchor": "middle", class: "axis-title" }));
+  g.append(text(14, (f.top + f.bottom) / 2, yTitle, { "text-anchor": "middle", class: "axis-title",
+    transform: `rotate(-90 14 ${(f.top + f.bottom) / 2})` }));
+  root.append(grid, g);
+  root.dataset.tickStep = `${tx.step} ${ty.step}`;
+}
+
+// a bar of a round length in mm, bottom right inside the plot area
+function drawScaleBar(root, f) {
+  const mm = niceAbove((f.x1 - f.x0) / 8);
+  const length = mm * f.sx, x1 = f.right - 14, x0 = x1 - length, y = f.bottom - 14;
+  const g = svg("g", { class: "scale-bar", "data-scale-mm": mm, stroke: "#111", "stroke-width": 2 });
+  g.append(svg("rect", { x: x0 - 6, y: y - 22, width: length + 12, height: 30, fill: "#fff", "fill-opacity": 0.8,
+    stroke: "none" }));
+  g.append(svg("line", { x1: x0, y1: y, x2: x1, y2: y, "stroke-width": 3 }));
+  for (const x of [x0, x1]) g.append(svg("line", { x1: x, y1: y - 5, x2: x, y2: y + 5 }));
+  g.append(text((x0 + x1) / 2, y - 7, `${fmt(mm)} mm`, { "text-anchor": "middle", stroke: "none", fill: "#111" }));
+  root.append(g);
+}
+
+// ground, soil surface, seedbed: straight lines across the panel, each through a point at an angle, read from
+// what the server sends (key points, the design's values) and the kind's frame (docs/ARCHITECTURE.md, studio)
+const SURFACES = {
+  // planting: P4 is where the claw path meets the soil surface (machine and ground frames); the seedbed bottom
+  // passes through the seedbed point, tilted by the design's seedbed_tilt
+  planting_fourbar: (panelId, group, values) => {
+    const p = Object.fromEntries((group.points || []).map((q) => [q.name, q]));
+    const out = [];
+    if (p.P4) out.push({ name: "soil surface", at: [p.P4.x, p.P4.y], deg: 0, colour: "#8b4513" });
+    if (panelId === "panel-main" && p.seedbed && typeof values.seedbed_tilt === "number") {
+      out.push({ name: "seedbed bottom", at: [p.seedbed.x, p.seedbed.y], deg: values.seedbed_tilt, colour: "#2a8a2a" });
+    }
+    return out;
+  },
+  // tillage: the rollers C stand height_c above the ground (machine frame, C at the origin); the ground frame's y
+  // is the height above the ground
+  tillage_linkage: (panelId, group, values) => {
+    if (panelId === "panel-ground") return [{ name: "ground", at: [0, 0], deg: 0, colour: "#8b4513" }];
+    return typeof values.height_c === "number"
+      ? [{ name: "ground", at: [0, -values.height_c], deg: 0, colour: "#8b4513" }] : [];
+  },
+  // comb_finger's front view: y up from the ground line
+  comb_finger: (panelId) => (panelId === "panel-main" ? [{ name: "ground", at: [0, 0], deg: 0, colour: "#8b4513" }] : []),
+};
+
+function surfacesOf(panelId, group, values) {
+  const recipe = state.info && SURFACES[state.info.kind];
+  return recipe && group ? recipe(panelId, group, values || {}) : [];
+}
+
+function drawSurfaces(root, f, surfaces) {
+  const reach = 4 * (f.x1 - f.x0 + f.y1 - f.y0);
+  for (const s of surfaces) {
+    const a = (s.deg * Math.PI) / 180, ux = Math.cos(a), uy = Math.sin(a);
+    const g = svg("g", { class: "surface", "data-surface": s.name });
+    g.append(svg("line", { x1: f.px(s.at[0] - reach * ux), y1: f.py(s.at[1] - reach * uy),
+      x2: f.px(s.at[0] + reach * ux), y2: f.py(s.at[1] + reach * uy), stroke: s.colour, "stroke-width": 2 }));
+    // the label where the line leaves the plot area on the right (or its bottom/top edge when steep)
+    let t = (f.x1 - s.at[0]) / (Math.abs(ux) > 1e-9 ? ux : 1e-9);
+    if (Math.abs(uy) > 1e-9) t = Math.min(t, ((uy > 0 ? f.y1 : f.y0) - s.at[1]) / uy);
+    const lx = Math.min(f.px(s.at[0] + t * ux) - 4, f.right - 4), ly = f.py(s.at[1] + t * uy);
+    g.append(text(lx, Math.min(Math.max(ly - 6, f.top + 14), f.bottom - 6), s.name,
+      { "text-anchor": "end", fill: s.colour, class: "surface-label halo" }));
+    root.append(g);
+  }
+}
+
+function pathOf(xs, ys, f) {
   let d = "";
   xs.forEach((x, i) => {
     if (x === null || ys[i] === null) return;
-    d += `${d && xs[i - 1] !== null && ys[i - 1] !== null ? "L" : "M"}${x},${-ys[i]}`;
+    d += `${d && xs[i - 1] !== null && ys[i - 1] !== null ? "L" : "M"}${f.px(x).toFixed(1)},${f.py(ys[i]).toFixed(1)}`;
   });
   return d;
 }
 
-function drawGroup(root, group, unit, ghost) {
+function drawGroup(root, group, f, ghost) {
   const g = svg("g", { class: ghost ? "baseline" : "current", opacity: ghost ? "0.35" : "1" });
   (group.lines || []).forEach((l, i) => {
-    g.append(svg("path", { d: pathOf(l.x, l.y), fill: "none", "data-line": l.name,
-      stroke: ghost ? "#888" : COLOURS[i % COLOURS.length], "stroke-width": l.main ? 2.2 : 1.2,
-      "stroke-dasharray": ghost ? "4 3" : "", "vector-effect": "non-scaling-stroke" }));
+    g.append(svg("path", { d: pathOf(l.x, l.y, f), fill: "none", "data-line": l.name,
+      stroke: ghost ? "#888" : COLOURS[i % COLOURS.length], "stroke-width": l.main ? 2.2 : 1.4,
+      "stroke-dasharray": ghost ? "5 4" : "" }));
   });
   for (const p of group.points || []) {
     if (p.x === null || p.y === null) continue;
-    g.append(svg("circle", { cx: p.x, cy: -p.y, r: 0.9 * unit, fill: ghost ? "#888" : "#d62728", "data-point": p.name }));
-    if (!ghost) {
-      const t = svg("text", { x: p.x + 1.2 * unit, y: -p.y - 1.2 * unit, "font-size": 3.2 * unit, fill: "#333" });
-      t.textContent = p.name;
-      g.append(t);
-    }
+    g.append(svg("circle", { cx: f.px(p.x), cy: f.py(p.y), r: 4, fill: ghost ? "#888" : "#d62728", "data-point": p.name }));
+    if (!ghost) g.append(text(f.px(p.x) + 6, f.py(p.y) - 6, p.name, { fill: "#222", class: "point-label halo" }));
   }
   root.append(g);
 }
@@ -263,31 +431,27 @@ function placedPoints(mechanism, v) {
     .map((xy) => [v.at[0] + c * xy[0] - s * xy[1], v.at[1] + s * xy[0] + c * xy[1]]);
 }
 
-function drawPose(root, mechanism, k, unit, ghost) {
+function drawPose(root, mechanism, k, f, ghost) {
   const pose = mechanism.frames[k % mechanism.frames.length];
   const frame = {};
   const g = svg("g", { class: ghost ? "pose baseline" : "pose", opacity: ghost ? "0.35" : "1" });
   for (const [n, v] of Object.entries(pose)) {
     if (!isPlaced(v)) { frame[n] = v; continue; }
-    const pts = placedPoints(mechanism, v).map((xy) => `${xy[0]},${-xy[1]}`).join(" ");
+    const pts = placedPoints(mechanism, v).map((xy) => `${f.px(xy[0]).toFixed(1)},${f.py(xy[1]).toFixed(1)}`).join(" ");
     g.append(svg("polyline", { points: pts, fill: "none", stroke: ghost ? "#888" : "#333", "stroke-width": 2,
-      "vector-effect": "non-scaling-stroke", "data-outline": n }));
+      "data-outline": n }));
   }
   const names = Object.keys(frame);
   const bars = mechanism.bars || names.slice(1).map((n, i) => [names[i], n]);
   for (const [a, b] of bars) {
     if (!frame[a] || !frame[b]) continue;
-    g.append(svg("line", { x1: frame[a][0], y1: -frame[a][1], x2: frame[b][0], y2: -frame[b][1],
-      stroke: ghost ? "#888" : "#333", "stroke-width": 3, "stroke-linecap": "round", "vector-effect": "non-scaling-stroke" }));
+    g.append(svg("line", { x1: f.px(frame[a][0]), y1: f.py(frame[a][1]), x2: f.px(frame[b][0]), y2: f.py(frame[b][1]),
+      stroke: ghost ? "#888" : "#333", "stroke-width": 3, "stroke-linecap": "round" }));
   }
   for (const n of names) {
-    g.append(svg("circle", { cx: frame[n][0], cy: -frame[n][1], r: 1.1 * unit, fill: "#fff", stroke: "#333",
-      "vector-effect": "non-scaling-stroke", "data-joint": n }));
-    if (!ghost) {
-      const t = svg("text", { x: frame[n][0] + 1.5 * unit, y: -frame[n][1] + 3 * unit, "font-size": 3 * unit, fill: "#555" });
-      t.textContent = n;
-      g.append(t);
-    }
+    const [x, y] = [f.px(frame[n][0]), f.py(frame[n][1])];
+    g.append(svg("circle", { cx: x, cy: y, r: 4.5, fill: "#fff", stroke: "#333", "stroke-width": 1.5, "data-joint": n }));
+    if (!ghost) g.append(text(x + 7, y + 16, n, { fill: "#444", class: "joint-label halo" }));
   }
   root.append(g);
 }
@@ -296,10 +460,61 @@ function panel(id, title) {
   let box = document.getElementById(id);
   if (!box) {
     box = el("div", { class: "panel", id });
-    box.append(el("h3", {}, title), svg("svg", { preserveAspectRatio: "xMidYMid meet" }), el("div", { class: "legend" }));
+    box.append(el("h3", {}, title), svg("svg", { preserveAspectRatio: "none" }), el("div", { class: "legend" }));
     document.getElementById("panels").append(box);
   }
   return box;
+}
+
+// one drawing panel: axes, surfaces, curves and points, the pose; the frame kept for the animation
+function drawPanel(box, id, group, ghost, mechanism, ghostMech) {
+  const root = box.querySelector("svg");
+  const values = (state.current && state.current.values) || {};
+  const surfaces = surfacesOf(id, group, values);
+  const f = frameOf(root, extent([group, ghost, mechanism, ghostMech && ghostMech.frames.length ? ghostMech : null],
+                                 surfaces), true);
+  root.setAttribute("viewBox", `0 0 ${f.width} ${f.height}`);
+  root.replaceChildren();
+  root.frame = f;
+  drawAxes(root, f, "x, mm", "y, mm");
+  const clip = `clip-${id}`;
+  const defs = svg("defs");
+  const clipPath = svg("clipPath", { id: clip });
+  clipPath.append(svg("rect", { x: f.left, y: f.top, width: f.right - f.left, height: f.bottom - f.top }));
+  defs.append(clipPath);
+  const data = svg("g", { class: "data", "clip-path": `url(#${clip})` });
+  root.append(defs, data);
+  drawSurfaces(data, f, surfaces);
+  if (ghost) drawGroup(data, ghost, f, true);
+  drawGroup(data, group, f, false);
+  if (ghostMech && ghostMech.frames.length) {
+    const ghostPoses = svg("g", { class: "ghost-poses" });
+    data.append(ghostPoses);
+    drawPose(ghostPoses, ghostMech, state.frame, f, true);
+  }
+  if (mechanism) {
+    const poses = svg("g", { class: "poses" });
+    data.append(poses);
+    drawPose(poses, mechanism, state.frame, f, false);
+  }
+  drawScaleBar(root, f);
+  const legend = box.querySelector(".legend");
+  legend.replaceChildren();
+  (group.lines || []).forEach((l, i) => {
+    const s = el("span");
+    const swatch = el("i");
+    swatch.style.background = COLOURS[i % COLOURS.length];
+    s.append(swatch, document.createTextNode(l.name));
+    legend.append(s);
+  });
+  for (const s of surfaces) {
+    const item = el("span");
+    const swatch = el("i");
+    swatch.style.background = s.colour;
+    item.append(swatch, document.createTextNode(s.name));
+    legend.append(item);
+  }
+  if (ghost) legend.append(el("span", {}, "grey dashed: baseline (the spec's given design)"));
 }
 
 function renderDrawing() {
@@ -325,34 +540,7 @@ function renderDrawing() {
     if (!sections.some((s) => s[0] === id) && document.getElementById(id)) document.getElementById(id).remove();
   }
   for (const [id, title, group, ghost, mechanism, ghostMech] of sections) {
-    const box = panel(id, title);
-    const root = box.querySelector("svg");
-    const view = extent([group, ghost, mechanism, ghostMech && ghostMech.frames.length ? ghostMech : null]);
-    const unit = Math.max(view[2], view[3]) / 200;
-    root.setAttribute("viewBox", view.join(" "));
-    root.replaceChildren();
-    if (ghost) drawGroup(root, ghost, unit, true);
-    drawGroup(root, group, unit, false);
-    if (ghostMech && ghostMech.frames.length) {
-      const ghostPoses = svg("g", { class: "ghost-poses" });
-      root.append(ghostPoses);
-      drawPose(ghostPoses, ghostMech, state.frame, unit, true);
-    }
-    if (mechanism) {
-      const poses = svg("g", { class: "poses" });
-      root.append(poses);
-      drawPose(poses, mechanism, state.frame, unit, false);
-    }
-    const legend = box.querySelector(".legend");
-    legend.replaceChildren();
-    (group.lines || []).forEach((l, i) => {
-      const s = el("span");
-      const swatch = el("i");
-      swatch.style.background = COLOURS[i % COLOURS.length];
-      s.append(swatch, document.createTextNode(l.name));
-      legend.append(s);
-    });
-    if (ghost) legend.append(el("span", {}, "grey dashed: baseline (the spec's given design)"));
+    drawPanel(panel(id, title), id, group, ghost, mechanism, ghostMech);
   }
   renderCharts(d.charts || [], b ? b.charts : null);
 }
@@ -373,15 +561,17 @@ function renderCharts(charts, ghosts) {
     const xs = all.flatMap((c) => c.x).filter((v) => v !== null);
     const ys = all.flatMap((c) => c.series.flatMap((s) => s.y)).filter((v) => v !== null);
     const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
-    const w = Math.max(x1 - x0, 1e-9), h = Math.max(y1 - y0, 1e-9);
+    const h = Math.max(y1 - y0, 1e-9);
     const root = panelBox.querySelector("svg");
-    root.setAttribute("viewBox", `${x0} ${-y1 - 0.05 * h} ${w} ${1.1 * h}`);
+    const f = frameOf(root, [x0, y0 - 0.05 * h, x1, y1 + 0.05 * h], false);
+    root.setAttribute("viewBox", `0 0 ${f.width} ${f.height}`);
     root.replaceChildren();
+    drawAxes(root, f, `${chart.x_name}`, "deg");
     for (const [c, grey] of [[ghost, true], [chart, false]]) {
       if (!c) continue;
-      c.series.forEach((s, k) => root.append(svg("path", { d: pathOf(c.x, s.y), fill: "none", "data-series": s.name,
-        stroke: grey ? "#888" : COLOURS[k % COLOURS.length], "stroke-width": 1.5, "stroke-dasharray": grey ? "4 3" : "",
-        "vector-effect": "non-scaling-stroke", opacity: grey ? "0.5" : "1" })));
+      c.series.forEach((s, k) => root.append(svg("path", { d: pathOf(c.x, s.y, f), fill: "none", "data-series": s.name,
+        stroke: grey ? "#888" : COLOURS[k % COLOURS.length], "stroke-width": 1.8, "stroke-dasharray": grey ? "5 4" : "",
+        opacity: grey ? "0.5" : "1" })));
     }
     const legend = panelBox.querySelector(".legend");
     legend.replaceChildren(el("span", {}, `${chart.x_name} ${fmt(x0)} … ${fmt(x1)};`));
@@ -402,15 +592,13 @@ function tick() {
   state.frame += 1;
   const root = document.querySelector("#panel-main svg");
   const poses = root && root.querySelector("g.poses");
-  if (!poses) return;
-  const view = root.getAttribute("viewBox").split(" ").map(Number);
-  const unit = Math.max(view[2], view[3]) / 200;
+  if (!poses || !root.frame) return;
   poses.replaceChildren();
-  drawPose(poses, data.drawing.mechanism, state.frame, unit, false);
+  drawPose(poses, data.drawing.mechanism, state.frame, root.frame, false);
   const ghostPoses = root.querySelector("g.ghost-poses");      // the baseline moves in step when compared
   if (ghostPoses && state.baseline && state.baseline.drawing) {
     ghostPoses.replaceChildren();
-    drawPose(ghostPoses, state.baseline.drawing.mechanism, state.frame, unit, true);
+    drawPose(ghostPoses, state.baseline.drawing.mechanism, state.frame, root.frame, true);
   }
 }
 
@@ -518,6 +706,11 @@ async function start() {
     renderDrawing();
   });
   document.getElementById("animate").addEventListener("change", animate);
+  let resizing = 0;                           // drawn in the svg's pixels: a new width draws again
+  window.addEventListener("resize", () => {
+    cancelAnimationFrame(resizing);
+    resizing = requestAnimationFrame(() => { if (state.current) renderDrawing(); });
+  });
   animate();
   if (solvable) poll();
   document.body.dataset.ready = "1";
