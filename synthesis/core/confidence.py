@@ -1,0 +1,161 @@
+"""How sure is "optimal"?  Distinct local optima among a multistart's starts, and a Bayesian estimate of how many
+were not seen and of the probability that the best found is the global optimum within the bounds.
+
+The estimate is Boender and Rinnooy Kan's (C. G. E. Boender and A. H. G. Rinnooy Kan, "Bayesian stopping rules for
+multistart global optimization methods", Mathematical Programming 37 (1987) 59-80).  Its model:
+
+- each start is drawn at random from the design box and its local solve ends at the optimum whose *basin* (region
+  of attraction) holds the start; the basins cover the box and do not overlap;
+- the number of optima K has a uniform (improper) prior on 1, 2, ...; given K, the basins' relative sizes have a
+  uniform prior on the simplex (a Dirichlet(1, ..., 1) distribution).
+
+After N starts that reached W distinct optima, the posterior of K is
+
+    p(k | N, W)  proportional to  k! (k - 1)! / ((k - W)! (N + k - 1)!),    k >= W,
+
+whose mean is W (N - 1) / (N - W - 2) (finite when N >= W + 3); the posterior expected share of the box held by
+the basins not yet seen is W (W + 1) / (N (N - 1)).  Boender and Rinnooy Kan stop when the expected number of
+optima not yet seen is below one half.  We add one quantity of the same model: if the global optimum's basin is any
+of the K basins, none favoured (its size drawn like the others'), the probability that it is among the W seen is
+the posterior mean of W / K, which is (N - W - 1) / (N - 1).
+
+Where the model fails: the starts are not uniform in the box (a kind that builds its own starts, screened or
+continued starts, a start map that is not the identity); basins of very unequal size (a global optimum with a tiny
+basin is found less often than the model assumes, so the probability is then an overestimate); local solves that
+end at a point that is not a local optimum (those starts are left out of N: only starts that converged with every
+rule held count).  The result says so beside the numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import gammaln
+
+#: starts whose objectives agree to this relative tolerance (of max(1, |f|)) and whose designs lie within
+#: DESIGN_TOLERANCE of each other in the unit box are one optimum.  IPOPT stops at a KKT error of 1e-8 (tol) or,
+#: accepted, 1e-6 (acceptable_tol) in its scaled problem; an objective is then known to about the square of the
+#: design's error times the curvature, so 1e-6 relative separates optima that differ in the sixth digit and no
+#: closer, and 1e-3 of the box in the design keeps two starts that stopped a little apart on a flat valley one.
+OBJECTIVE_TOLERANCE = 1e-6
+DESIGN_TOLERANCE = 1e-3
+#: the posterior sums run to this k beyond W; past it the tail is added in closed form (terms fall as k^(W - N))
+_TERMS = 20_000
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """One distinct local optimum: its objective, the starts that reached it, the first of them."""
+    objective: float
+    starts: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        return len(self.starts)
+
+
+def distinct_optima(objectives, unit_designs, start_ids, *, objective_tolerance: float = OBJECTIVE_TOLERANCE,
+                    design_tolerance: float = DESIGN_TOLERANCE) -> list[Optimum]:
+    """Group converged starts into distinct optima, best first.
+
+    ``objectives`` (N), ``unit_designs`` (N x n, each design mapped to the unit box by its bounds) and
+    ``start_ids`` (N) are of the starts that converged with every rule held.  Two starts are one optimum when their
+    objectives agree to ``objective_tolerance`` (relative to max(1, |f|)) and their designs are within
+    ``design_tolerance`` (max-norm, unit box); starts are taken in order of objective, each joining the first
+    optimum it matches (its representative: the best start of the group), so the grouping is the same for any
+    order of the input.
+    """
+    f = np.asarray(objectives, dtype=float)
+    x = np.asarray(unit_designs, dtype=float).reshape(len(f), -1)
+    ids = np.asarray(start_ids)
+    order = np.lexsort((ids, f))
+    groups: list[tuple[float, np.ndarray, list[int]]] = []
+    for i in order:
+        for g_f, g_x, members in groups:
+            close_f = abs(f[i] - g_f) <= objective_tolerance * max(1.0, abs(g_f))
+            if close_f and float(np.max(np.abs(x[i] - g_x), initial=0.0)) <= design_tolerance:
+                members.append(int(ids[i]))
+                break
+        else:
+            groups.append((float(f[i]), x[i], [int(ids[i])]))
+    return [Optimum(g_f, tuple(sorted(members))) for g_f, _, members in groups]
+
+
+def _log_posterior_terms(n: int, w: int, k: np.ndarray) -> np.ndarray:
+    """log of k! (k-1)! / ((k-w)! (n+k-1)!): the unnormalised posterior of K = k."""
+    return gammaln(k + 1) + gammaln(k) - gammaln(k - w + 1) - gammaln(n + k)
+
+
+def posterior_mean(n: int, w: int, power: float, k_max: int | None = None) -> float:
+    """E[K^power | N = n starts, W = w optima] under the uniform prior on K (on w..k_max when given, a test's
+    proper prior; else on every k >= w, the sum's tail past its last term added in closed form: the terms fall as
+    k^(w - n) (Stirling), so the sum converges when n >= w + 2 + power)."""
+    last = k_max if k_max is not None else w + _TERMS
+    k = np.arange(w, last + 1, dtype=float)
+    p = np.exp(_log_posterior_terms(n, w, k) - _log_posterior_terms(n, w, k[:1])[0])
+    total, moment = p.sum(), np.sum(p * k ** power)
+    if k_max is None:
+        end = k[-1]
+        total += p[-1] * end / (n - w - 1)
+        moment += p[-1] * end ** power * end / (n - w - 1 - power)
+    return float(moment / total)
+
+
+def probability_k(n: int, w: int, k: int, k_max: int | None = None) -> float:
+    """P(K = k | N = n, W = w) (the prior as in :func:`posterior_mean`)."""
+    return float(np.exp(_log_posterior_terms(n, w, np.array([float(k)]))[0] - _log_normaliser(n, w, k_max)))
+
+
+def _log_normaliser(n: int, w: int, k_max: int | None) -> float:
+    last = k_max if k_max is not None else w + _TERMS
+    k = np.arange(w, last + 1, dtype=float)
+    logp = _log_posterior_terms(n, w, k)
+    scale = logp[0]
+    p = np.exp(logp - scale)
+    total = p.sum() + (p[-1] * k[-1] / (n - w - 1) if k_max is None else 0.0)
+    return float(scale + np.log(total))
+
+
+@dataclass(frozen=True)
+class Confidence:
+    """The confidence statement of one multistart (result.json ``solver.confidence``)."""
+    starts_counted: int                  # N: starts that converged with every rule held
+    distinct_optima: int                 # W
+    starts_at_best: int                  # starts that reached the best optimum
+    expected_optima: float | None        # posterior mean of K (None: N < W + 3, not defined)
+    expected_unseen: float | None        # expected_optima - W
+    unseen_basin_share: float | None     # posterior expected share of the box in basins not seen (N >= 2)
+    probability_all_found: float | None  # posterior P(K = W)
+    probability_global: float | None     # posterior mean of W / K: the best found is the global optimum
+    sure: bool                           # Boender and Rinnooy Kan's rule: expected_unseen < 0.5
+
+    def to_json(self) -> dict:
+        return {"starts_counted": self.starts_counted, "distinct_optima": self.distinct_optima,
+                "starts_at_best": self.starts_at_best, "expected_optima": self.expected_optima,
+                "expected_unseen_optima": self.expected_unseen, "unseen_basin_share": self.unseen_basin_share,
+                "probability_all_optima_found": self.probability_all_found,
+                "probability_best_is_global": self.probability_global, "stopping_rule_met": self.sure,
+                "method": "Boender & Rinnooy Kan (1987), uniform prior on the number of optima and on basin sizes"}
+
+
+def confidence(optima: list[Optimum]) -> Confidence:
+    """The Bayesian statement for the distinct optima of N counted starts (:func:`distinct_optima`)."""
+    n = sum(o.count for o in optima)
+    w = len(optima)
+    best = optima[0].count if optima else 0
+    if w == 0:
+        return Confidence(0, 0, 0, None, None, None, None, None, False)
+    share = w * (w + 1) / (n * (n - 1)) if n >= 2 else None
+    if n < w + 2:             # the posterior is improper: every start found a new optimum, or nearly
+        return Confidence(n, w, best, None, None, share, 0.0, None, False)
+    # the posterior mean of W / K is (N - W - 1) / (N - 1) (the sum of posterior_mean(n, w, -1) in closed form;
+    # tests/test_confidence.py checks the two agree)
+    p_global = (n - w - 1) / (n - 1)
+    p_all = probability_k(n, w, w)
+    if n < w + 3:
+        return Confidence(n, w, best, None, None, share, p_all, p_global, False)
+    expected = w * (n - 1) / (n - w - 2)
+    return Confidence(n, w, best, expected, expected - w, share, p_all, p_global, expected - w < 0.5)
+

@@ -1,0 +1,78 @@
+"""The multistart confidence (synthesis/core/confidence.py): its closed forms against the posterior summed
+term by term, its calibration on draws from its own model, and the grouping of starts into optima."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from synthesis.core.confidence import (Optimum, confidence, distinct_optima, posterior_mean, probability_k)
+
+CASES = [(10, 2), (32, 3), (64, 7), (100, 1), (40, 12)]
+
+
+@pytest.mark.parametrize("n, w", CASES)
+def test_closed_forms_equal_the_posterior_summed(n, w):
+    c = confidence([Optimum(float(i), tuple(range(i * 1000, i * 1000 + m)))
+                    for i, m in enumerate([n - w + 1] + [1] * (w - 1))])
+    assert (c.starts_counted, c.distinct_optima) == (n, w)
+    assert c.expected_optima == pytest.approx(posterior_mean(n, w, 1.0), rel=1e-9)
+    assert c.probability_global == pytest.approx(w * posterior_mean(n, w, -1.0), rel=1e-9)
+    assert c.probability_all_found == pytest.approx(probability_k(n, w, w), rel=1e-12)
+    # the unseen basins' expected share, summed over the posterior: given K = k, the basin sizes are
+    # Dirichlet(1 + counts, 1, ..., 1), whose unseen part has mean (k - w) / (n + k)
+    k = np.arange(w, w + 20_000, dtype=float)
+    pk = np.array([probability_k(n, w, int(kk)) for kk in k[:200]])
+    head = float(np.sum(pk * (k[:200] - w) / (n + k[:200])))
+    assert c.unseen_basin_share == pytest.approx(head, rel=2e-3 if n - w < 20 else 1e-9)
+
+
+def test_posterior_of_k_sums_to_one_on_a_proper_prior():
+    assert sum(probability_k(20, 4, k, k_max=30) for k in range(4, 31)) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_probability_is_calibrated_on_draws_from_its_model():
+    """K uniform on 1..12, basin sizes uniform on the simplex, the global optimum one basin at random: of the runs
+    the estimate gives a probability p, a share p find the global (tested over all runs at once, in three bins)."""
+    rng = np.random.default_rng(7)
+    k_max, n = 12, 15
+    predicted, found = [], []
+    for _ in range(6000):
+        k = int(rng.integers(1, k_max + 1))
+        sizes = rng.dirichlet(np.ones(k))
+        hits = rng.choice(k, size=n, p=sizes)
+        seen = np.unique(hits)
+        predicted.append(len(seen) * posterior_mean(n, len(seen), -1.0, k_max=k_max))
+        found.append(int(rng.integers(k)) in seen)
+    predicted, found = np.array(predicted), np.array(found, dtype=float)
+    for lo, hi in [(0.0, 0.8), (0.8, 0.9), (0.9, 1.01)]:
+        sel = (predicted >= lo) & (predicted < hi)
+        if sel.sum() < 200:
+            continue
+        se = np.sqrt(predicted[sel].mean() * (1 - predicted[sel].mean()) / sel.sum())
+        assert abs(found[sel].mean() - predicted[sel].mean()) < 4 * se + 0.01, (lo, hi)
+
+
+def test_starts_that_end_at_one_optimum_are_grouped_in_any_order():
+    f = [1.0, 1.0 + 1e-9, 2.0, 1.0, 5.0]
+    x = [[0.1, 0.2], [0.1 + 1e-5, 0.2], [0.5, 0.5], [0.9, 0.9], [0.3, 0.3]]
+    ids = [4, 1, 7, 2, 3]
+    optima = distinct_optima(f, x, ids)
+    # starts 4 and 1 share an objective and a design; start 2 has the objective but lies elsewhere
+    assert [o.starts for o in optima] == [(2,), (1, 4), (7,), (3,)]     # ties in objective: lowest start first
+    perm = [3, 0, 4, 2, 1]
+    again = distinct_optima([f[i] for i in perm], [x[i] for i in perm], [ids[i] for i in perm])
+    assert [o.starts for o in again] == [o.starts for o in optima]
+
+
+def test_a_new_optimum_at_every_start_says_nothing():
+    c = confidence([Optimum(float(i), (i,)) for i in range(5)])
+    assert c.expected_optima is None and c.probability_global is None and not c.sure
+
+
+def test_the_stopping_rule_is_met_only_when_fewer_than_half_an_optimum_is_expected_unseen():
+    # W = 2: E[K] - W = 2 (W + 1) / (N - 4) < 0.5 from N = 17 on
+    def at(n):
+        return confidence([Optimum(0.0, tuple(range(n - 1))), Optimum(1.0, (n,))])
+    assert not at(16).sure and at(17).sure
+    assert at(17).expected_unseen == pytest.approx(2 * 3 / 13)
