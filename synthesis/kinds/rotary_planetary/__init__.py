@@ -1,0 +1,39 @@
+"""Kind rotary_planetary: the rotary transplanting mechanism whose planting arms ride on non-circular planetary
+gear trains (sun fixed, compound idler, planet carrying the arm; two arms per gearbox)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from synthesis.core.kind import Kind
+
+if TYPE_CHECKING:
+    from synthesis.core.kind import FigureWriter, Poses, Solving, SpecModel
+    from synthesis.result import Result
+    from synthesis.spec import LoadedSpec
+
+
+class RotaryPlanetary(Kind):
+    name = "rotary_planetary"
+    summary = "rotary transplanting mechanism with non-circular planetary gears: laws, pitch curves, key poses"
+    objectives = {"key_pose_miss": "smallest sum of squared key-pose misses, mm^2 + deg^2",
+                  "smooth_law": "smoothest laws (mean squared second derivative of F and G, deg^2/rad^4)"}
+    example = "rotary_planetary/key_pose_redesign.toml"
+
+    def spec_model(self) -> type[SpecModel]:
+        from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
+
+        return RotaryPlanetarySpec
+
+    def check(self, loaded: LoadedSpec) -> Result:
+        from synthesis.kinds.rotary_planetary.check import run_check
+
+        return run_check(loaded)
+
+    def solving(self) -> Solving:
+        from synthesis.kinds.rotary_planetary.solve import SOLVING
+
+        return SOLVING
+
+
+KIND = RotaryPlanetary()

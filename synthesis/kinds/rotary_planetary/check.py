@@ -1,0 +1,249 @@
+"""``agrisynth check`` for kind rotary_planetary: the given design's gear and transplanting rules, and the trace
+the NLP builds its rows from (one function on floats and symbols: :func:`rules_of`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from constraints.base import Rule
+from synthesis.kinds.rotary_planetary import rules as R
+from synthesis.kinds.rotary_planetary.kinematics import (
+    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_rate, turn_grid,
+)
+from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
+from synthesis.result import Result
+from synthesis.spec import LoadedSpec
+
+RAD = math.pi / 180.0
+DEG = 180.0 / math.pi
+#: carrier angles of the check's grid over a turn (0.1 deg)
+CHECK_SAMPLES = 3600
+#: samples of the in-soil stroke in the check
+CHECK_SOIL_SAMPLES = 400
+
+
+def train_of(spec: RotaryPlanetarySpec, design: dict) -> Train:
+    """The train of a design (spec units: mm, deg; numbers or symbols) in mm and rad."""
+    kp, ki = spec.harmonics
+
+    def law(name: str, n: int) -> list:
+        return [design[f"{name}_{k}"] * RAD for k in range(1, n + 1)]
+
+    return Train(design["centre_distance_1"], design["centre_distance_2"], law("planet_cos", kp),
+                 law("planet_sin", kp), law("idler_cos", ki), law("idler_sin", ki), design["arm_length"],
+                 design["arm_angle"] * RAD, design["claw_angle"] * RAD)
+
+
+@dataclass
+class Angles:
+    """Carrier angles (rad; numbers or symbols) where the rules are read: the loop's top and bottom, soil entry and
+    exit (None: the tip never enters the soil, ``missing`` says why) and each key pose."""
+
+    top: Any
+    bottom: Any
+    entry: Any = None
+    exit: Any = None
+    poses: dict = field(default_factory=dict)
+    missing: str | None = None
+
+
+def omega(spec: RotaryPlanetarySpec) -> float:
+    """Carrier speed, rad/s."""
+    return spec.operation.carrier_speed * 2.0 * math.pi / 60.0
+
+
+def forward_mm_s(spec: RotaryPlanetarySpec) -> float:
+    return spec.operation.forward_speed * 1000.0
+
+
+def soil_y(spec: RotaryPlanetarySpec) -> float:
+    return -spec.operation.axis_height
+
+
+def plant_spacing(spec: RotaryPlanetarySpec) -> float:
+    """Forward travel per plant, mm: half a carrier turn at the forward speed."""
+    return forward_mm_s(spec) * math.pi / omega(spec)
+
+
+def _cat(parts):
+    if is_symbolic(*parts):
+        return ca.vertcat(*[ca.vec(p) for p in parts])
+    return np.concatenate([np.ravel(np.asarray(p, dtype=float)) for p in parts])
+
+
+def _wrap_deg(d):
+    return ca.atan2(ca.sin(d * RAD), ca.cos(d * RAD)) * DEG
+
+
+def gear_rules(spec: RotaryPlanetarySpec, train: Train, grid) -> list[Rule]:
+    o = ops_of(train, grid)
+    p1, p2 = pairs(train, grid)
+    lim = spec.rules
+    curvatures = _cat([c.curvature(o) for c in (p1.driver, p1.driven, p2.driver, p2.driven)])
+    normal = _cat([p1.driver.normal_angle(o), p2.driver.normal_angle(o)]) * DEG
+    return [R.pair_ratio_rule(_cat([p1.ratio[0], p2.ratio[0]]), lim.ratio_min, lim.ratio_max),
+            R.concave_radius_rule(curvatures, lim.min_concave_radius),
+            R.normal_angle_rule(normal, lim.max_normal_angle)]
+
+
+def soil_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles, soil_samples: int) -> list[Rule]:
+    lim, w, v = spec.rules, omega(spec), forward_mm_s(spec)
+    if angles.missing:
+        return [R.entry_angle_rule(None, None, lim.entry_angle_min, angles.missing),
+                R.hole_width_rule(None, None, lim.hole_width_max, angles.missing),
+                R.in_soil_speed_rule(None, lim.in_soil_forward_speed_max, angles.missing)]
+    dx_in, dy_in = tip_rate(train, angles.entry)
+    x_in, _ = tip(train, angles.entry)
+    x_out, _ = tip(train, angles.exit)
+    s = np.linspace(0.0, 1.0, soil_samples)
+    span = angles.exit - angles.entry
+    stroke = angles.entry + span * (ca.DM(s) if is_symbolic(span) else s)
+    dx, _ = tip_rate(train, stroke)
+    return [R.entry_angle_rule(w * dx_in - v, w * dy_in, lim.entry_angle_min),
+            R.hole_width_rule(x_in - v * angles.entry / w, x_out - v * angles.exit / w, lim.hole_width_max),
+            R.in_soil_speed_rule(v - w * dx, lim.in_soil_forward_speed_max)]
+
+
+def pose_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> list[Rule]:
+    out: list[Rule] = []
+    for name, pose in spec.key_poses.items():
+        x, y = tip(train, angles.poses[name])
+        miss = None
+        if pose.attitude is not None:
+            miss = _wrap_deg(claw_attitude(train, angles.poses[name]) * DEG - pose.attitude)
+        out += R.pose_rules(name, x - pose.x, y - pose.y, pose.tolerance, miss, pose.attitude_tolerance)
+    return out
+
+
+def rules_of(spec: RotaryPlanetarySpec, train: Train, angles: Angles, grid, soil_samples: int) -> list[Rule]:
+    """Every rule of the spec, on floats (angles found on the grid) or symbols (angles the NLP's variables)."""
+    _, y_top = tip(train, angles.top)
+    _, y_bottom = tip(train, angles.bottom)
+    _, y_grid = tip(train, grid)
+    lim = spec.rules
+    return [*gear_rules(spec, train, grid),
+            R.trajectory_height_rule(y_top, y_bottom, lim.trajectory_height_min),
+            *R.planting_depth_rules(soil_y(spec), y_bottom, y_grid, lim.planting_depth),
+            *soil_rules(spec, train, angles, soil_samples),
+            R.plant_spacing_rule(plant_spacing(spec), lim.plant_spacing),
+            *pose_rules(spec, train, angles)]
+
+
+# --- the angles on floats ----------------------------------------------------------------------------------------
+
+def _refine(f, phi0: float, h: float) -> float:
+    """The minimiser of f near phi0 (within one grid step h)."""
+    r = minimize_scalar(f, bounds=(phi0 - h, phi0 + h), method="bounded", options={"xatol": 1e-12})
+    return float(r.x) if f(float(r.x)) <= f(phi0) else phi0
+
+
+def _y(train: Train, phi: float) -> float:
+    return float(tip(train, phi)[1])
+
+
+def _crossing(train: Train, level: float, phi_bottom: float, h: float, direction: int, n: int):
+    """The carrier angle nearest phi_bottom (before it: direction -1, after: +1) where the tip crosses y = level."""
+    inside = phi_bottom
+    for _ in range(n):
+        outside = inside + direction * h
+        if _y(train, outside) >= level:
+            lo, hi = sorted((inside, outside))
+            return brentq(lambda p: _y(train, p) - level, lo, hi, xtol=1e-14, rtol=1e-15)
+        inside = outside
+    return None
+
+
+def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES) -> Angles:
+    """The loop's extremes, soil entry and exit and the key poses' carrier angles of a numeric design."""
+    grid = turn_grid(n)
+    h = grid[1]
+    x, y = tip(train, grid)
+    bottom = _refine(lambda p: _y(train, p), float(grid[np.argmin(y)]), h)
+    top = _refine(lambda p: -_y(train, p), float(grid[np.argmax(y)]), h)
+    poses = {}
+    for name, pose in spec.key_poses.items():
+        if pose.carrier_angle is not None:
+            poses[name] = pose.carrier_angle * RAD
+            continue
+
+        def dist2(p, pose=pose):
+            px, py = tip(train, p)
+            return float((px - pose.x) ** 2 + (py - pose.y) ** 2)
+
+        poses[name] = _refine(dist2, float(grid[np.argmin((x - pose.x) ** 2 + (y - pose.y) ** 2)]), h)
+    angles = Angles(top, bottom, poses=poses)
+    level = soil_y(spec)
+    lowest = _y(train, bottom)
+    if lowest >= level:
+        angles.missing = f"the claw tip never reaches the soil (lowest at y = {lowest:.2f} mm, surface {level:g} mm)"
+        return angles
+    angles.entry = _crossing(train, level, bottom, h, -1, n)
+    angles.exit = _crossing(train, level, bottom, h, +1, n)
+    if angles.entry is None or angles.exit is None:
+        angles.missing = "the claw tip stays in the soil over a whole turn"
+    return angles
+
+
+def evaluate(spec: RotaryPlanetarySpec, design: dict, n: int = CHECK_SAMPLES, soil_samples: int = CHECK_SOIL_SAMPLES
+             ) -> tuple[list[Rule], Train, Angles]:
+    train = train_of(spec, design)
+    angles = find_angles(spec, train, n)
+    return rules_of(spec, train, angles, turn_grid(n), soil_samples), train, angles
+
+
+# --- facts --------------------------------------------------------------------------------------------------------
+
+def motion_facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles, samples: int = 361) -> dict:
+    """What the design does: the loop in the machine and ground frames with the claw's attitude, the laws, the
+    pitch-curve ratios, the key poses reached; curves for the figures (from result.json alone)."""
+    phi = np.linspace(0.0, 2.0 * math.pi, samples)
+    x, y = tip(train, phi)
+    w, v = omega(spec), forward_mm_s(spec)
+    p1, p2 = pairs(train, phi)
+    att = claw_attitude(train, phi) * DEG
+    poses = {}
+    for name, pose in spec.key_poses.items():
+        a = angles.poses[name]
+        px, py = tip(train, a)
+        poses[name] = {"carrier_deg": a * DEG, "x": float(px), "y": float(py),
+                       "miss_mm": math.hypot(float(px) - pose.x, float(py) - pose.y),
+                       "attitude_deg": float(claw_attitude(train, a)) * DEG,
+                       "target": {"x": pose.x, "y": pose.y, "attitude": pose.attitude}}
+    _, y_top = tip(train, angles.top)
+    _, y_bottom = tip(train, angles.bottom)
+    soil = None
+    if not angles.missing:
+        xi, _ = tip(train, angles.entry)
+        xo, _ = tip(train, angles.exit)
+        soil = {"entry_carrier_deg": angles.entry * DEG, "exit_carrier_deg": angles.exit * DEG,
+                "hole_width_mm": abs((xo - v * angles.exit / w) - (xi - v * angles.entry / w))}
+    return {
+        "frame": "machine: origin on the carrier axis, x rearwards, y up; ground: x_ground = x_machine - V t, "
+                 "t = carrier angle / omega; the carrier turns counter-clockwise",
+        "carrier_speed_rad_s": w, "forward_speed_mm_s": v, "soil_y_mm": soil_y(spec),
+        "plant_spacing_mm": plant_spacing(spec),
+        "trajectory_height_mm": float(y_top - y_bottom), "planting_depth_mm": float(soil_y(spec) - y_bottom),
+        "soil": soil, "poses": poses, "missing": angles.missing,
+        "curves": {"carrier_deg": (phi * DEG).tolist(), "x": np.asarray(x).tolist(), "y": np.asarray(y).tolist(),
+                   "x_ground": (x - v * phi / w).tolist(), "claw_attitude_deg": np.asarray(att).tolist(),
+                   "pair1_ratio": np.asarray(p1.ratio[0]).tolist(), "pair2_ratio": np.asarray(p2.ratio[0]).tolist()},
+    }
+
+
+def facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> dict:
+    return {"source": spec.source, "harmonics": {"planet": spec.harmonics[0], "idler": spec.harmonics[1]},
+            "motion": motion_facts(spec, train, angles)}
+
+
+def run_check(loaded: LoadedSpec) -> Result:
+    spec = loaded.model
+    design = spec.design_values()
+    rules, train, angles = evaluate(spec, design)
+    return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
+                  rules=[r.record().to_json() for r in rules], extra=facts(spec, train, angles))

@@ -1,0 +1,99 @@
+"""Rules of kind rotary_planetary, each a function of a trace (floats for check and re-check, CasADi symbols for
+the NLP).  Where a rule's limit comes from and which are our assumptions: problems/rotary_planetary/NOTES.md,
+"Rules".
+
+A rule whose value is a maximum or a minimum over the turn is written for the optimiser with auxiliary carrier
+angles the NLP owns (the loop's top and bottom, soil entry and exit, each key pose's angle): "there is a bottom
+at least this deep" is one smooth row at the bottom's angle, "every point no deeper than that" is a row per
+sample.  On floats the caller passes the extremes it found on its grid.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from constraints.base import Rule, not_evaluated
+
+DEG = 180.0 / math.pi
+
+
+def pair_ratio_rule(ratios, lo: float, hi: float) -> Rule:
+    """i = r_driver / r_driven of both pairs over a turn within [lo, hi]: bounded pitch radii (lo > 0 also keeps
+    every gear turning one way)."""
+    return Rule("pair_ratio", ratios, lo, hi, "-", 0.1, "both pairs over a turn")
+
+
+def concave_radius_rule(curvatures, min_radius: float) -> Rule:
+    """Signed curvature of the four pitch curves >= -1 / min_radius: where a curve is concave, its radius of
+    curvature is at least min_radius (a hob or shaper cutter of that radius can cut it); convex parts are free."""
+    return Rule("pitch_curve_concavity", curvatures, -1.0 / min_radius, None, "1/mm", 0.01,
+                "four pitch curves over a turn")
+
+
+def normal_angle_rule(angles_deg, max_deg: float) -> Rule:
+    """Angle between the pitch curves' common normal at the contact and the line of centres within +-max: the
+    working pressure angle of the teeth departs from the tool's by this much."""
+    return Rule("pitch_normal_angle", angles_deg, -max_deg, max_deg, "deg", 5.0, "both pairs over a turn")
+
+
+def trajectory_height_rule(y_top, y_bottom, minimum: float, missing: str | None = None) -> Rule:
+    if missing:
+        return not_evaluated("trajectory_height", minimum, None, "mm", "top to bottom of the loop", missing)
+    return Rule("trajectory_height", y_top - y_bottom, minimum, None, "mm", 10.0, "top to bottom of the loop")
+
+
+def planting_depth_rules(soil_y, y_bottom, y_samples, depth: tuple[float, float]) -> list[Rule]:
+    """The lowest tip point between depth[0] and depth[1] below the soil surface: deep enough at the bottom (one
+    row at its angle), not too deep anywhere (a row per sample; on floats y_samples is the bottom itself)."""
+    lo, hi = depth
+    return [Rule("planting_depth", soil_y - y_bottom, lo, None, "mm", 5.0, "lowest tip point"),
+            Rule("planting_depth_max", soil_y - y_samples, None, hi, "mm", 5.0, "over a turn")]
+
+
+def entry_angle_rule(vx_ground, vy, minimum_deg: float, missing: str | None = None) -> Rule:
+    """Direction of the tip's ground-frame velocity at soil entry to the horizontal, atan2(|vy|, |vx|) (as the
+    four-bar planting arm's entry angle); the smooth row measures the direction from +x, vy < 0 at entry."""
+    where = "at soil entry, ground frame"
+    if missing:
+        return not_evaluated("entry_angle", minimum_deg, None, "deg", where, missing)
+    angle = ca.atan2(ca.fabs(vy), ca.fabs(vx_ground)) * DEG
+    rows = ((ca.atan2(-vy, vx_ground) * DEG, minimum_deg, 180.0 - minimum_deg),)
+    return Rule("entry_angle", angle, minimum_deg, None, "deg", 10.0, where, nlp_rows=rows)
+
+
+def hole_width_rule(x_ground_entry, x_ground_exit, maximum: float, missing: str | None = None) -> Rule:
+    """Ground-frame distance between the tip's soil entry and exit points: the hole it leaves at the surface."""
+    where = "soil surface, ground frame"
+    if missing:
+        return not_evaluated("hole_width", None, maximum, "mm", where, missing)
+    span = x_ground_exit - x_ground_entry
+    return Rule("hole_width", ca.fabs(span), None, maximum, "mm", 5.0, where, nlp_rows=((span, -maximum, maximum),))
+
+
+def in_soil_speed_rule(forward_speeds, maximum: float, missing: str | None = None) -> Rule:
+    """The tip's forward speed relative to the ground while in the soil <= maximum (0: it never pushes the soil
+    or the seedling forward)."""
+    where = "soil entry to exit, ground frame"
+    if missing:
+        return not_evaluated("in_soil_forward_speed", None, maximum, "mm/s", where, missing)
+    return Rule("in_soil_forward_speed", forward_speeds, None, maximum, "mm/s", 50.0, where)
+
+
+def plant_spacing_rule(spacing, limits: tuple[float, float]) -> Rule:
+    """Forward travel per plant: two arms plant twice per carrier turn."""
+    return Rule("plant_spacing", spacing, limits[0], limits[1], "mm", 10.0, "forward speed, two plants per turn")
+
+
+def pose_rules(name: str, dx, dy, tolerance: float, attitude_miss_deg=None, attitude_tolerance: float = 0.0
+               ) -> list[Rule]:
+    """Tip within ``tolerance`` of the pose (the NLP row: squared distance) and, if the pose gives one, the claw's
+    attitude within ``attitude_tolerance`` (``attitude_miss_deg`` already wrapped into (-180, 180])."""
+    where = f"key pose {name}"
+    rules = [Rule(f"pose_{name}", ca.sqrt(dx * dx + dy * dy), None, tolerance, "mm", 1.0, where,
+                  nlp_rows=((dx * dx + dy * dy, None, tolerance * tolerance),), row_unit="mm^2")]
+    if attitude_miss_deg is not None:
+        rules.append(Rule(f"pose_{name}_attitude", attitude_miss_deg, -attitude_tolerance, attitude_tolerance,
+                          "deg", 1.0, where))
+    return rules

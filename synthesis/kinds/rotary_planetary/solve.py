@@ -1,0 +1,52 @@
+"""The solve side of kind rotary_planetary (:data:`SOLVING`): its NLP, the fine-grid re-check and the facts."""
+
+from __future__ import annotations
+
+from synthesis.core.coordinates import outside_bounds
+from synthesis.core.kind import Finished, Setting, Solving
+from synthesis.core.verdict import FINE, Recheck, StartReport
+from synthesis.kinds.rotary_planetary.check import evaluate, facts, find_angles, train_of
+from synthesis.kinds.rotary_planetary.nlp import RotaryPlanetaryNLP
+from synthesis.spec.common import design_box
+
+OBJECTIVE_UNITS = {"key_pose_miss": "mm^2 + deg^2", "smooth_law": "deg^2/rad^4"}
+
+
+def build(setting: Setting, elastic: bool = False) -> RotaryPlanetaryNLP:
+    return RotaryPlanetaryNLP(setting.spec, elastic=elastic)
+
+
+def recheck(setting: Setting, outcome) -> Recheck:
+    """Every rule of a returned design on a grid 10x finer than the solver's, its angles found anew."""
+    spec = setting.spec
+    names = list(spec.variables())
+    outside = outside_bounds(names, design_box(spec.variables(), names)[0], outcome.design)
+    rules, train, angles = evaluate(spec, outcome.design, FINE * spec.solver.samples_per_turn,
+                                    FINE * spec.solver.in_soil_samples)
+    return Recheck(rules, (train, angles), invalid=outside)
+
+
+def finish(setting: Setting, best: StartReport) -> Finished:
+    spec = setting.spec
+    design = dict(best.outcome.design)
+    if best.context is None:
+        train = train_of(spec, design)
+        angles = find_angles(spec, train)
+    else:
+        train, angles = best.context
+    return Finished(design=design,
+                    objective={"name": spec.objective.name, "value": best.outcome.objective,
+                               "unit": OBJECTIVE_UNITS[spec.objective.name]},
+                    facts={**facts(spec, train, angles),
+                           "solver_carrier_deg": best.outcome.details.get("carrier_deg")},
+                    solver_settings={"samples_per_turn": spec.solver.samples_per_turn,
+                                     "in_soil_samples": spec.solver.in_soil_samples})
+
+
+def baseline_rules(setting: Setting) -> list[dict] | None:
+    rules, _, _ = evaluate(setting.spec, setting.spec.design_values())
+    return [r.record().to_json() for r in rules]
+
+
+SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules,
+                  samples_hint="[solver] samples_per_turn")
