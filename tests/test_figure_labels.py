@@ -87,3 +87,51 @@ def test_guide_tube_bars_start_at_zero_and_carry_their_values(tmp_path, monkeypa
     assert ax.get_ylim()[0] == 0.0
     labels = [t.get_text() for t in ax.texts]
     assert labels == [f"{t['t_z']:.4f}" for r in (first, other) for t in r.extra["tubes"]]
+
+
+#: kind -> its run figures (every PNG of Kind.figures, the first is the kind's main figure)
+RUN_FIGURES = {k: [n for n in kinds.get(k).figures() if n.endswith(".png")] for k in kinds.names()
+               if kinds.get(k).example}
+
+
+def legend_overlaps(fig: Figure) -> list[str]:
+    """Each legend of ``fig`` (of an axes or of the figure) that covers an axes' data area or reaches past the
+    figure's edge, as drawn at the figure's own size and dpi (the saved image is that canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)           # the figure's own canvas is gone once pyplot closed it
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None] + list(fig.legends)
+    out = []
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        for i, ax in enumerate(fig.axes):
+            if ax.get_visible() and box.overlaps(ax.get_window_extent(renderer)):
+                out.append(f"legend {[t.get_text() for t in legend.get_texts()][:3]} over axes {i} "
+                           f"({ax.get_title() or ax.get_xlabel()})")
+        inside = fig.bbox
+        if box.x0 < inside.x0 - 1 or box.y0 < inside.y0 - 1 or box.x1 > inside.x1 + 1 or box.y1 > inside.y1 + 1:
+            out.append(f"legend {[t.get_text() for t in legend.get_texts()][:3]} past the figure's edge")
+    return out
+
+
+@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow) if k == "planting_fourbar" else k
+                                       for k in RUN_FIGURES])
+def test_legends_stay_outside_the_drawing(kind_name, tmp_path, monkeypatch):
+    """Every legend of every run figure lies beside the axes (below or right of them), never over a link, a label
+    or a curve, and inside the figure: its bounding box meets no axes' data area (the coupler curve's legend covered
+    a link and its length label)."""
+    kind = kinds.get(kind_name)
+    result = kinds.checker(kind_name)(load_spec(LIBRARY / kind.example))
+    drawn: list[Figure] = []
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: drawn.append(fig))
+    found = {}
+    for name in RUN_FIGURES[kind_name]:
+        drawn.clear()
+        kind.figures()[name](result, tmp_path / name)
+        assert drawn, name
+        legends = sum(len(f.legends) + sum(ax.get_legend() is not None for ax in f.axes) for f in drawn)
+        found[name] = (legends, [o for f in drawn for o in legend_overlaps(f)])
+    assert {name: overlaps for name, (_, overlaps) in found.items() if overlaps} == {}
+    assert sum(n for n, _ in found.values()) >= 1, found        # the kind's figures have legends to judge

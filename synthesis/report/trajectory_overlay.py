@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.report.labels import candidate_label  # noqa: E402
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 
@@ -39,7 +40,7 @@ def trajectory_overlay(results: list[Result], folder: Path) -> list[tuple[str, s
     ax_speed.set_ylabel("speed, m/s")
     for ax in (ax_path, ax_speed):
         ax.grid(alpha=0.3)
-    ax_path.legend(fontsize=7)
+    legend_below(ax_path, ncol=2, fontsize=7)
     fig.tight_layout()
     fig.savefig(folder / "trajectories.png", dpi=100)
     plt.close(fig)

@@ -15,6 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.legends import legend_below, legend_right  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 SEGMENT_COLOURS = {"rise": "#fde0c5", "far_dwell": "#e8f0fa", "return": "#fbd3d3", "near_dwell": "#f3f3f3"}
@@ -57,8 +58,8 @@ def _motion_axes(results: list[Result], title: str):
             for sign in (1, -1):
                 axes[3].axhline(sign * value, ls="--", lw=0.9, color="tab:red" if text == "rise limit" else "tab:purple",
                                 label=text if sign == 1 else None)
-    axes[3].legend(fontsize=7, loc="best")
-    axes[0].legend(fontsize=7, loc="best")
+    legend_below(axes[3], fontsize=7)
+    legend_right(axes[0], fontsize=7)
     axes[-1].set_xlabel("crank angle on the picker's clock, deg (0 = pick)")
     axes[-1].set_xlim(0, 360)
     axes[-1].set_xticks(np.arange(0, 361, 30))
@@ -112,7 +113,7 @@ def profile_figure(result: Result, path: Path) -> None:
     ax.set_xlabel("x, mm")
     ax.set_ylabel("y, mm")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper right")
+    legend_below(ax, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -131,7 +132,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_xlabel("x, mm")
     ax.set_ylabel("y, mm")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper right")
+    legend_below(ax, fontsize=7)
     ax.set_title("working profiles (cam frame, cam angle 0 = start of the rise)", fontsize=10)
     fig.tight_layout()
     fig.savefig(folder / "cam_profile_compare.png", dpi=110)

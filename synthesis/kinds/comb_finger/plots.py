@@ -11,6 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 
@@ -50,7 +51,7 @@ def finger_figure(result: Result, path: Path) -> None:
     ax2.set_ylabel("tip rise above its lowest point, mm")
     ax2.set_title(f"side view: t = {ex['combing_time_s']:.3g} s, l = {ex['combing_lift_l_mm']:.3g} mm, "
                   f"V_s = {ex['machine_speed_m_s']:g} m/s", fontsize=9)
-    ax2.legend(fontsize=8)
+    legend_below(ax2, ncol=1, fontsize=8)
     for a in (ax, ax2):
         a.grid(alpha=0.3)
     fig.tight_layout()
@@ -86,7 +87,7 @@ def comparison(results: list[Result]):
     side.set_title("side view, ground frame: the combing turn to F (dotted: the eq 21 chord)", fontsize=9)
     for ax in (front, side):
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        legend_below(ax, ncol=2, fontsize=8)
     fig.tight_layout()
     return fig
 

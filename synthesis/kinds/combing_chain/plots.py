@@ -11,6 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 STYLES = ("-", "--", ":", "-.")
@@ -61,7 +62,7 @@ def delta_figure(result: Result, path: Path) -> None:
     ax_l.set_ylabel("eq 13: plant length with its tip at the tine at the cut, cm")
     for a in (ax_d, ax_l):
         a.grid(alpha=0.3)
-    ax_d.legend(fontsize=7, loc="best")
+    legend_below(ax_d, ncol=2, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -79,7 +80,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax_l.set_ylabel("eq 13 plant length, cm")
     for a in (ax_d, ax_l):
         a.grid(alpha=0.3)
-    ax_d.legend(fontsize=6)
+    legend_below(ax_d, ncol=2, fontsize=7)
     fig.tight_layout()
     name = "compare_combing_chain.png"
     fig.savefig(folder / name, dpi=110)

@@ -11,6 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 EXTREME_STYLE = {"folded": ("tab:blue", "folded extreme"), "extended": ("tab:red", "extended extreme")}
@@ -59,12 +60,12 @@ def extremes_figure(result: Result, path: Path) -> None:
     ax.set_xlabel("x, mm (G at the origin, A on +x)")
     ax.set_ylabel("y, mm")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    legend_below(ax, fontsize=7)
     ax.set_title(" ".join(f"{k} = {v:.2f}" for k, v in d.items()) + " mm", fontsize=10)
     ax2.set_xlabel("crank angle from G -> A, deg")
     ax2.set_ylabel("rocker angle A -> E, deg", color="tab:green")
     ax2.grid(alpha=0.3)
-    ax2.legend(fontsize=7, loc="upper left")
+    legend_below(ax2, fontsize=7)
     fig.suptitle(f"{result.name}: crank-rocker at its extreme positions", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -90,7 +91,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax2.set_ylabel("transmission angle mu, deg")
     for a in (ax, ax2):
         a.grid(alpha=0.3)
-        a.legend(fontsize=7)
+        legend_below(a, ncol=2, fontsize=7)
     fig.tight_layout()
     name = "compare_crank_rocker.png"
     fig.savefig(folder / name, dpi=110)

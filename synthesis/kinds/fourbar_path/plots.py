@@ -21,6 +21,7 @@ from synthesis.kinds.fourbar_path.construction import joint_positions  # noqa: E
 from synthesis.kinds.fourbar_path.kinematics import VARIABLES  # noqa: E402
 from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.report.labels import candidate_label  # noqa: E402
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 GIF_FRAMES = 36
@@ -112,7 +113,7 @@ def coupler_curve_figure(result: Result, path: Path) -> None:
         ax.plot([], [], **LINK, label="linkage at target 1 (lengths in mm)")
     _frame_axes(ax, result, [x + 1j * y, targets[:, 0] + 1j * targets[:, 1] if targets.size else np.zeros(0),
                              *joints.values()])
-    ax.legend(fontsize=8, loc="best")
+    legend_below(ax, ncol=3, fontsize=8)
     ax.set_title(_title(result), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -178,7 +179,7 @@ def compare_coupler_curves(results: list[Result], folder: Path) -> list[str]:
             everything.append(targets[:, 0] + 1j * targets[:, 1])
         everything.append(x + 1j * y)
     _frame_axes(ax, results[0], everything)
-    ax.legend(fontsize=8, loc="best")
+    legend_below(ax, ncol=3, fontsize=8)
     ax.set_title("coupler curves and targets", fontsize=10)
     fig.tight_layout()
     fig.savefig(folder / "coupler_curves.png", dpi=110)

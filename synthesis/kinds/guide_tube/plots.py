@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 
 from synthesis.errors import NothingToDraw  # noqa: E402
 from synthesis.report.labels import baseline_note  # noqa: E402
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 PHASES = (("t_fall", "free fall (eq 14)", "tab:blue"), ("t_slide", "slide on the wall (eq 17)", "tab:orange"),
@@ -71,7 +72,7 @@ def drop_times_figure(result: Result, path: Path) -> None:
     ax_t.set_title(f"drop time at {rows['design_spacing_mm']:g} mm row spacing: spread "
                    f"{1000 * ex['landing_time_spread_s']:.3g} ms = {ex['spacing_error_mm']:.3g} mm "
                    f"at {rows['forward_speed']:g} m/s", fontsize=9)
-    ax_t.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
+    legend_below(ax_t, fontsize=7)
     _spacing_axis(ax_e, result, "forward speed x landing-time spread")
     limit = _spacing_rule_limit(result)
     if limit is not None:
@@ -84,7 +85,7 @@ def drop_times_figure(result: Result, path: Path) -> None:
     spread_axis.set_ylabel("landing-time spread, ms")
     ax_e.set_ylim(bottom=0)
     ax_e.grid(alpha=0.3)
-    ax_e.legend(fontsize=7, loc="upper right")
+    legend_below(ax_e, ncol=1, fontsize=7)
     ax_e.set_title("plant-position error over the row spacings (same angles)", fontsize=9)
     fig.suptitle(f"{result.name}: guide-tube drop times (mu = {ex['physics']['mu']:.4g}, "
                  f"{ex['physics']['mu_source']})", fontsize=11)
@@ -113,7 +114,7 @@ def drop_profile_figure(result: Result, path: Path) -> None:
     ax.set_ylim(bottom=0)
     ax.set_xlim(left=0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_below(ax, ncol=2, fontsize=8)
     ax.set_title(f"{result.name}: drop profiles at {ex['rows']['design_spacing_mm']:g} mm row spacing; "
                  f"closed form - ODE <= {ex['closed_form_vs_ode_max_s']:.1e} s", fontsize=10)
     fig.tight_layout()
@@ -143,7 +144,7 @@ def sensitivity_figure(result: Result, path: Path) -> None:
     ax.set_ylabel("plant-position error, mm")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    legend_below(ax, ncol=2, fontsize=7)
     ax.set_title(f"{result.name}: sensitivity of the plant-position error "
                  f"({ex['rows']['forward_speed']:g} m/s)", fontsize=10)
     fig.tight_layout()
@@ -177,12 +178,12 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
     hi = max(t["t_z"] for r in results for t in r.extra["tubes"])
     ax_t.set_ylim(0.0, 1.25 * hi)           # room for the value labels above the bars
     ax_t.set_ylabel("landing time t_z, s (value on each bar)")
-    ax_t.legend(fontsize=7)
+    legend_below(ax_t, ncol=2, fontsize=7)
     ax_e.set_xlabel("row spacing, mm")
     ax_e.set_ylabel("plant-position error, mm")
     ax_e.set_ylim(bottom=0)
     ax_e.grid(alpha=0.3)
-    ax_e.legend(fontsize=7)
+    legend_below(ax_e, ncol=2, fontsize=7)
     not_drawn = f"; not drawn, no design the drop model could evaluate: {', '.join(missing)}" if missing else ""
     first = " compared (baseline first)" if baseline_drawn else " compared"
     fig.suptitle("guide tubes" + baseline_note(first, len(results)) + not_drawn, fontsize=11)

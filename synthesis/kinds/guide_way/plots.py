@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.report.gif import save_gif  # noqa: E402
+from synthesis.report.legends import legend_below, legend_right  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 ANIMATION_FRAMES = 72
@@ -67,7 +68,7 @@ def guide_figure(result: Result, path: Path) -> None:
                  + (f"\n{n} undercut stretch(es) marked x" if n else ""), fontsize=10)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    legend_below(ax, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -151,7 +152,7 @@ def _cycle_axes(results: list[Result], title: str):
     axes[1].set_xlabel("arm angle theta, deg")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        legend_right(ax, fontsize=7)
     axes[1].set_xlim(0, 360)
     axes[1].set_xticks(np.arange(0, 361, 30))
     fig.suptitle(title, fontsize=10)
@@ -209,7 +210,7 @@ def compare_figures(results: list[Result], folder: Path) -> list[str]:
         _draw_guide(ax, res, f"C{k}", res.name, details=False)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    legend_below(ax, fontsize=7)
     ax.set_title("claw paths, roller-centre lines and groove walls compared (mm)", fontsize=10)
     fig.tight_layout()
     fig.savefig(folder / "guide_way_compare.png", dpi=100)

@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.report.gif import save_gif  # noqa: E402
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 DOUBLE_CRANK = (("A", "B"), ("B", "C"), ("C", "D"), ("A", "D"), ("C", "M"))
@@ -60,7 +61,7 @@ def path_figure(result: Result, path: Path) -> None:
     ax.set_xlabel("x, mm (origin: power-output bar)")
     ax.set_ylabel("y, mm (up)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    legend_below(ax, ncol=2, fontsize=7)
     err = ex["arc_error"]
     ax.set_title(f"eq (4) = {err['eq4_sum_mm']:.4g} mm, RMS {err['rms_mm']:.3g} mm, max {err['max_mm']:.3g} mm",
                  fontsize=10)
@@ -99,7 +100,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax2.set_ylabel("|M - target|, mm (log)")
     for a in (ax, ax2):
         a.grid(alpha=0.3)
-        a.legend(fontsize=7)
+        legend_below(a, ncol=2, fontsize=7)
     fig.tight_layout()
     name = "compare_picker_double_crank.png"
     fig.savefig(folder / name, dpi=110)
@@ -121,7 +122,7 @@ def picker_figure(result: Result, path: Path) -> None:
     ax.set_xlabel("x, mm")
     ax.set_ylabel("y, mm")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    legend_below(ax, ncol=2, fontsize=7)
     ax.set_title("linkage at picking (blue: double crank, orange: crank-rocker)", fontsize=10)
     ax2.plot(tr["t"], tr["speed_m_s"], color="tab:red", label="|v_M|")
     for name, inst in ex["instants"].items():

@@ -19,6 +19,7 @@ from synthesis.kinds.planting.kinematics import ArmDesign, joint_positions  # no
 from synthesis.kinds.planting.plots import COLOURS as POINT_COLOURS, style_plane  # noqa: E402
 from synthesis.report.gif import save_gif  # noqa: E402
 from synthesis.report.labels import baseline_note, candidate_label  # noqa: E402
+from synthesis.report.legends import legend_below, legend_right  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
@@ -71,7 +72,7 @@ def paths_figure(results: list[Result], path: Path) -> None:
     ax_g.set_title("ground frame")
     for ax in (ax_m, ax_g):
         style_plane(ax)
-    ax_m.legend(fontsize=7, loc="best")
+    legend_below(ax_m, fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -107,7 +108,7 @@ def kinematics_figure(results: list[Result], path: Path) -> None:
     axes[2].axhline(0.0, color="k", lw=0.6)
     axes[2].set_xlabel("time from soil exit P6, s (shaded: the " + baseline_note("baseline's ", len(results))
                        + "hold / throw / release phases)")
-    axes[0].legend(fontsize=7)
+    legend_right(axes[0], fontsize=7)
     for ax in axes:
         ax.grid(alpha=0.3)
     fig.tight_layout()

@@ -10,6 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 COLOURS = {"P1": "tab:green", "P2": "tab:olive", "P3": "tab:brown",
@@ -60,7 +61,7 @@ def trajectory_figure(result: Result, path: Path) -> None:
     ax_g.set_title(f"ground frame, {result.extra.get('operation', {}).get('forward_speed_m_s', '?')} m/s")
     for ax in (ax_m, ax_g):
         style_plane(ax)
-    ax_m.legend(fontsize=7, loc="best")
+    legend_below(ax_m, fontsize=7)
     fig.suptitle(f"{result.name}: claw-tip trajectory", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 
@@ -32,7 +33,7 @@ def _linkage(ax, facts: dict) -> None:
     ax.set_xlabel("x, mm (to the right kingpin)")
     ax.set_ylabel("y, mm (forward)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower center")
+    legend_below(ax, fontsize=7)
 
 
 def steering_figure(result: Result, path: Path) -> None:
@@ -54,7 +55,6 @@ def steering_figure(result: Result, path: Path) -> None:
         axb.plot(curve["inside_deg"], mu, ":", color="tab:purple", lw=1.0, label="transmission angle, outer arm")
         axb.plot(curve["inside_deg"], mi, "-.", color="tab:purple", lw=1.0, label="transmission angle, inner arm")
         axb.set_ylabel("tie-rod transmission angle (acute), deg", color="tab:purple")
-        axb.legend(fontsize=7, loc="lower right")
     else:
         ax2.text(0.5, 0.5, f"dead centre at inside lock {facts.get('dead_centre_inside_deg', float('nan')):.2f} deg",
                  ha="center", transform=ax2.transAxes)
@@ -69,7 +69,9 @@ def steering_figure(result: Result, path: Path) -> None:
     ax2.set_xlabel("inside lock beta, deg")
     ax2.set_ylabel("steering error alpha - alpha_Ackermann, deg")
     ax2.grid(alpha=0.3)
-    ax2.legend(fontsize=7, loc="lower left")
+    twin = [a for a in fig.axes if a is not ax2 and a.get_position().bounds == ax2.get_position().bounds]
+    entries = [e for a in [ax2, *twin] for e in zip(*a.get_legend_handles_labels())]   # one legend, both y axes
+    legend_below(ax2, ncol=2, fontsize=7, handles=[h for h, _ in entries], labels=[t for _, t in entries])
     radius = facts.get("turning_radius", {})
     title = (f"{result.name}: steering trapezoid; turning radius L / sin(beta_max) = "
              f"{radius.get('value_mm', float('nan')) / 1000:.2f} m at inside lock {radius.get('inside_lock_deg', float('nan')):g} deg")
@@ -97,7 +99,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_ylabel("alpha - alpha_Ackermann, deg")
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=8)
+        legend_below(ax, ncol=2, fontsize=8)
     fig.tight_layout()
     name = "compare_steering_error.png"
     fig.savefig(folder / name, dpi=110)

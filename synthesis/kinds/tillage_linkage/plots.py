@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 TURNS = 3       # crank turns drawn in the ground frame (Fig. 20)
@@ -42,7 +43,7 @@ def _machine(ax, result: Result) -> None:
     ax.set_xlabel("x, mm (machine frame, travel to +x)")
     ax.set_ylabel("y, mm (C at 0)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
+    legend_below(ax, ncol=2, fontsize=7)
 
 
 def _ground(ax, result: Result) -> None:
@@ -64,7 +65,7 @@ def _ground(ax, result: Result) -> None:
     ax.set_title(f"Fig. 20: {op['crank_speed_r_min']:g} r/min, {op['forward_speed_m_s']:g} m/s, "
                  f"{advance:.0f} mm per turn", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper right")
+    legend_below(ax, ncol=2, fontsize=7)
 
 
 def _rates(ax, result: Result) -> None:
@@ -82,8 +83,8 @@ def _rates(ax, result: Result) -> None:
     ax.set_xlabel("crank angle omega, deg (shaded: in the soil)")
     ax.set_ylabel("per unit crank angle")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
-    ax2.legend(fontsize=7, loc="upper right")
+    entries = [e for a in (ax, ax2) for e in zip(*a.get_legend_handles_labels())]   # one legend, both y axes
+    legend_below(ax, ncol=2, fontsize=7, handles=[h for h, _ in entries], labels=[t for _, t in entries])
 
 
 def tillage_figure(result: Result, path: Path) -> None:
@@ -114,7 +115,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_ylabel("height above ground, mm")
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=8)
+        legend_below(ax, ncol=2, fontsize=8)
     fig.tight_layout()
     name = "compare_tillage_path.png"
     fig.savefig(folder / name, dpi=110)
