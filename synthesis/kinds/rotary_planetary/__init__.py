@@ -35,5 +35,21 @@ class RotaryPlanetary(Kind):
 
         return SOLVING
 
+    def figures(self) -> dict[str, FigureWriter]:
+        from synthesis.kinds.rotary_planetary.export import write_pitch_curves_csv, write_pitch_curves_dxf
+        from synthesis.kinds.rotary_planetary.plots import law_figure, pitch_curves_figure, trajectory_figure
+
+        return {"trajectory.png": trajectory_figure,
+                "trajectory.svg": trajectory_figure,
+                "law.png": law_figure,
+                "pitch_curves.png": pitch_curves_figure,
+                "pitch_curves.csv": write_pitch_curves_csv,
+                "pitch_curves.dxf": write_pitch_curves_dxf}
+
+    def poses(self) -> Poses:
+        from synthesis.kinds.rotary_planetary.poses import POSES
+
+        return POSES
+
 
 KIND = RotaryPlanetary()

@@ -14,7 +14,7 @@ from scipy.optimize import brentq, minimize_scalar
 from constraints.base import Rule
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (
-    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_rate, turn_grid,
+    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_rate, train_from_design, turn_grid,
 )
 from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
 from synthesis.result import Result
@@ -30,14 +30,7 @@ CHECK_SOIL_SAMPLES = 400
 
 def train_of(spec: RotaryPlanetarySpec, design: dict) -> Train:
     """The train of a design (spec units: mm, deg; numbers or symbols) in mm and rad."""
-    kp, ki = spec.harmonics
-
-    def law(name: str, n: int) -> list:
-        return [design[f"{name}_{k}"] * RAD for k in range(1, n + 1)]
-
-    return Train(design["centre_distance_1"], design["centre_distance_2"], law("planet_cos", kp),
-                 law("planet_sin", kp), law("idler_cos", ki), law("idler_sin", ki), design["arm_length"],
-                 design["arm_angle"] * RAD, design["claw_angle"] * RAD)
+    return train_from_design(design)
 
 
 @dataclass

@@ -222,6 +222,26 @@ def pairs(train: Train, phi) -> tuple[Pair, Pair]:
     return Pair(i1, train.a1, sun, idler1), Pair(i2, train.a2, idler2, planet)
 
 
+def harmonics_of(design: dict, law: str) -> int:
+    """How many harmonics a design's law has (``planet`` or ``idler``): its ``<law>_cos_k`` entries."""
+    k = 0
+    while f"{law}_cos_{k + 1}" in design:
+        k += 1
+    return k
+
+
+def train_from_design(design: dict) -> Train:
+    """The train of a design in spec units (mm, deg; numbers or symbols), in mm and rad."""
+    rad = math.pi / 180.0
+
+    def law(name: str, part: str) -> list:
+        return [design[f"{name}_{part}_{k}"] * rad for k in range(1, harmonics_of(design, name) + 1)]
+
+    return Train(design["centre_distance_1"], design["centre_distance_2"], law("planet", "cos"),
+                 law("planet", "sin"), law("idler", "cos"), law("idler", "sin"), design["arm_length"],
+                 design["arm_angle"] * rad, design["claw_angle"] * rad)
+
+
 def turn_grid(n: int) -> np.ndarray:
     """n carrier angles evenly over one turn, [0, 2 pi)."""
     return np.arange(n) * (2.0 * math.pi / n)
