@@ -33,6 +33,7 @@ EXPECTED: dict[str, dict] = {
     "clamp_cam/rotating_cam.toml": {"check": 1, "solve": ("exit", 2)},
     "clamp_cam/rotating_cam_redesign.toml": {"check": 1, "solve": ("optimal", 50.83704406389)},
     "picker/cai2020_crank_rocker.toml": {"check": 0, "solve": ("exit", 2)},
+    "picker/cai2020_crank_rocker_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
     "picker/cai2020_crank_rocker_synthesis.toml": {"check": 1, "solve": ("optimal", 435.13428762281086)},
     "picker/cai2020_double_crank.toml": {"check": 0, "solve": ("exit", 2)},
     "picker/cai2020_picker.toml": {"check": 0},

@@ -8,7 +8,8 @@ from __future__ import annotations
 import re
 
 #: the units of specs (docs/ARCHITECTURE.md, "Units"), longest first so "m/s^2" is not read as "m/s"
-UNITS = ("mm/s^2", "m/s^2", "deg/s^2", "mm/s", "m/s", "r/min", "mm^2", "1/mm", "mm", "deg", "s")
+UNITS = ("mm/s^2", "m/s^2", "deg/s^2", "mm/s", "m/s", "r/min", "mm^2", "1/mm", "mm", "deg", "s",
+         "kg/m^3", "kg m^2", "kg", "N m", "N")     # the last five: the [dynamics] table's
 _UNIT = re.compile(r"(?<![\w/^.'-])(" + "|".join(re.escape(u) for u in UNITS) + r")(?![\w/^'-])")
 
 

@@ -11,11 +11,13 @@ import math
 import numpy as np
 
 from constraints import Rule
+from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule
 from constraints.grashof import grashof_rule
 from synthesis.kinds.crank_rocker.rules import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
 from synthesis.kinematics.crank_rocker import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
                                               transmission_angles_deg, turn_grid)
+from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
@@ -35,10 +37,43 @@ def rules_of(spec: CrankRockerSpec, lengths, stroke, u, w, mu) -> list[Rule]:
     pivot, and the transmission angles (deg) over a turn.  Used by check, the NLP and the re-check."""
     req, tol = spec.requirements, spec.tolerances
     l7, l8, l9, l10 = lengths
-    return [grashof_rule(l10, l7, l8, l9),
-            time_ratio_rule(stroke, req.time_ratio, tol.time_ratio),
-            rocker_swing_rule(u, w, l9, req.rocker_swing, tol.rocker_swing),
-            acute_transmission_rule(mu, req.min_transmission_angle, "over a turn")]
+    rules = [grashof_rule(l10, l7, l8, l9),
+             time_ratio_rule(stroke, req.time_ratio, tol.time_ratio),
+             rocker_swing_rule(u, w, l9, req.rocker_swing, tol.rocker_swing),
+             acute_transmission_rule(mu, req.min_transmission_angle, "over a turn")]
+    if spec.dynamics is not None and spec.dynamics.has_rules():
+        # sampled on the transmission angle's grid (the solver's samples_per_turn, the check's, the re-check's)
+        samples = mu.numel() if hasattr(mu, "numel") else len(mu)
+        rules += dynamics_rules(linkage_dynamics(spec, lengths), spec.dynamics.limits, samples)
+    return rules
+
+
+def unevaluated_dynamics_rules(spec: CrankRockerSpec, why: str) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules of a crank that cannot turn: not evaluated, for the same reason."""
+    limits = spec.dynamics.limits if spec.dynamics is not None else None
+    if limits is None:
+        return []
+    rules = []
+    if limits.peak_input_torque is not None:
+        rules.append(peak_input_torque_rule(None, limits.peak_input_torque, missing=why))
+    if limits.peak_shaking_force is not None:
+        rules.append(peak_shaking_force_rule(None, None, limits.peak_shaking_force, missing=why))
+    return rules
+
+
+#: the crank-rocker's joints and links by their seed-001 names, in synthesis.dynamics.fourbar's order
+DYNAMICS_JOINTS = ("G", "F", "E", "A")
+DYNAMICS_LINKS = ("crank GF", "coupler FE", "rocker AE")
+
+
+def linkage_dynamics(spec: CrankRockerSpec, lengths) -> FourbarDynamics:
+    """The inverse dynamics' inputs of the lengths (l7, l8, l9, l10: floats or symbols): the shared four-bar with
+    frame l10, crank l7, coupler l8, rocker l9 and the frame along +x (synthesis.kinematics.crank_rocker)."""
+    l7, l8, l9, l10 = lengths
+    table = spec.dynamics
+    bars = {"crank": [((0.0, 0.0), (l7, 0.0))], "coupler": [((0.0, 0.0), (l8, 0.0))],
+            "rocker": [((0.0, 0.0), (l9, 0.0))]}
+    return FourbarDynamics.of(table, spec.branch, (l10, l7, l8, l9, 0.0), bars, table.crank_speed * 2 * math.pi / 60)
 
 
 def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLES
@@ -50,7 +85,8 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
         return [grashof_rule(cr.l10, cr.l7, cr.l8, cr.l9),
                 time_ratio_rule(None, req.time_ratio, tol.time_ratio, why),
                 rocker_swing_rule(None, None, None, req.rocker_swing, tol.rocker_swing, why),
-                acute_transmission_rule(None, req.min_transmission_angle, "over a turn", missing=why)], None
+                acute_transmission_rule(None, req.min_transmission_angle, "over a turn", missing=why),
+                *unevaluated_dynamics_rules(spec, why)], None
 
     if not cr.crank_turns():
         slacks = cr.grashof_slacks()
@@ -105,11 +141,16 @@ def motion_facts(cr: CrankRocker, q: QuickReturn | None, samples: int = 361) -> 
 
 def facts(spec: CrankRockerSpec, cr: CrankRocker, q: QuickReturn | None) -> dict:
     req = spec.requirements
+    extra = {}
+    if spec.dynamics is not None and q is not None:
+        extra["dynamics"] = dynamics_facts(linkage_dynamics(spec, (cr.l7, cr.l8, cr.l9, cr.l10)),
+                                           spec.dynamics.samples, DYNAMICS_JOINTS, DYNAMICS_LINKS,
+                                           spec.dynamics.crank_speed, spec.dynamics)
     return {"source": spec.source, "branch": spec.branch,
             "requirements": {"time_ratio": req.time_ratio, "rocker_swing_deg": req.rocker_swing,
                              "min_transmission_angle_deg": req.min_transmission_angle},
             "frame": "crank pivot G at the origin, rocker pivot A on +x; crank angle from G -> A, counter-clockwise",
-            "motion": motion_facts(cr, q)}
+            "motion": motion_facts(cr, q), **extra}
 
 
 def run_check(loaded: LoadedSpec) -> Result:
@@ -119,3 +160,4 @@ def run_check(loaded: LoadedSpec) -> Result:
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=spec.design_values(), rules=[r.record().to_json() for r in rules],
                   extra=facts(spec, cr, q))
+

@@ -11,6 +11,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from synthesis.spec.dynamics import DynamicsSection
 from synthesis.spec.common import (
     POSITIVE, Sign, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive_fields,
     starts_field, value_of,
@@ -75,6 +76,15 @@ class CrankRockerSpec(ProblemSpec):
                                                   "(mirror images: same K, swing and transmission angles)")
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    dynamics: DynamicsSection | None = Field(
+        None, description="mass properties, crank speed and limits for the inverse dynamics at constant crank speed "
+                          "(docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no dynamics rules")
+
+    @model_validator(mode="after")
+    def _dynamics_has_a_speed(self) -> "CrankRockerSpec":
+        if self.dynamics is not None and self.dynamics.crank_speed is None:
+            raise ValueError("dynamics.crank_speed: a crank_rocker has no crank speed of its own; give it in r/min")
+        return self
 
     def variables(self) -> dict[str, Variable]:
         return {n: getattr(self.links, n) for n in ("l7", "l8", "l9", "l10")}

@@ -1,0 +1,114 @@
+"""A four-bar kind's dynamics: its inputs gathered once, its rules over a turn and result.json's ``facts.dynamics``.
+
+A kind maps its own geometry on :mod:`synthesis.dynamics.fourbar`'s (l1 frame, l2 crank, l3 coupler, l4 rocker,
+zeta) and names its joints and links; the rules are the same functions on floats (``check``, the re-check) and on
+CasADi symbols (the NLP), so the two cannot drift apart (docs/ARCHITECTURE.md "Dynamics").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from constraints import Rule
+from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule
+from synthesis.dynamics import mass as mass_properties
+from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn, peaks
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class FourbarDynamics:
+    """Everything the inverse dynamics reads: geometry (mm, rad), mass and load vectors (SI), crank speed (rad/s),
+    gravity (m/s^2).  Geometry, mass and crank speed may be CasADi symbols."""
+
+    branch: int
+    geometry: tuple
+    mass: tuple
+    loads: tuple
+    omega: object
+    gravity: tuple
+
+    @classmethod
+    def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega) -> "FourbarDynamics":
+        """From a spec's ``[dynamics]`` table (:class:`synthesis.spec.dynamics.DynamicsSection`); ``bars``: each link's
+        bars (start, end) in mm in its link frame, read for a link given as a bar."""
+        return cls(branch, tuple(geometry), tuple(mass_properties.mass_vector(table, bars, LINKS)),
+                   tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity))
+
+    def over_turn(self, crank) -> dict:
+        return over_turn(self.branch, crank, self.geometry, self.mass, self.loads, self.omega, self.gravity)
+
+
+def turn(samples: int) -> np.ndarray:
+    """``samples`` crank angles evenly over a turn from 0 (rad)."""
+    return np.linspace(0.0, TWO_PI, samples, endpoint=False)
+
+
+def _column(values):
+    """Sampled values as a column: a CasADi vector for symbols, a flat numpy array for numbers."""
+    return np.ravel(values) if isinstance(values, np.ndarray) else ca.vec(values)
+
+
+def dynamics_rules(dyn: FourbarDynamics, limits, samples: int) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules over ``samples`` crank angles of a turn (none when no limit is given)."""
+    if limits.peak_input_torque is None and limits.peak_shaking_force is None:
+        return []
+    out = dyn.over_turn(turn(samples))
+    rules = []
+    if limits.peak_input_torque is not None:
+        rules.append(peak_input_torque_rule(_column(out["torque"]), limits.peak_input_torque))
+    if limits.peak_shaking_force is not None:
+        force = out["shaking_force"]
+        rules.append(peak_shaking_force_rule(_column(force[0, :]), _column(force[1, :]), limits.peak_shaking_force))
+    return rules
+
+
+def dynamics_facts(dyn: FourbarDynamics, samples: int, joint_names: tuple[str, ...], link_names: tuple[str, ...],
+                   crank_speed_rpm: float, table) -> dict:
+    """result.json's ``facts.dynamics``: every sampled quantity over a turn, and each link's mass, inertia, centre of
+    mass and angle, so the energy balance can be re-checked from the file alone (docs/ARCHITECTURE.md "result.json")."""
+    crank = turn(samples)
+    out = dyn.over_turn(crank)
+    torque, omega = out["torque"], float(dyn.omega)
+    power = torque * omega
+    force = out["shaking_force"]
+    magnitude = np.hypot(force[0], force[1])
+    links = []
+    for k, name in enumerate(link_names):
+        links.append({"name": name, "role": LINKS[k], "mass_kg": float(dyn.mass[4 * k]),
+                      "inertia_kgm2": float(dyn.mass[4 * k + 3]),
+                      "com_mm": (out["com"][:, k, :].T * 1000.0).tolist(),
+                      "angle_deg": np.degrees(np.unwrap(out["angle"][k])).tolist(),
+                      "com_velocity_mps": out["com_velocity"][:, k, :].T.tolist(),
+                      "angular_velocity_radps": out["angular_velocity"][k].tolist()})
+    loads: bool | dict = False
+    if table.external_loads:
+        loads = {"loads": [load.model_dump() for load in table.external_loads],
+                 "external_power_W": out["external_power"].tolist()}
+    return {
+        "crank_deg": np.degrees(crank).tolist(),
+        "crank_speed_rpm": crank_speed_rpm,
+        "input_torque_Nm": torque.tolist(),
+        "power_W": power.tolist(),
+        "shaking_force_N": force.T.tolist(),
+        "shaking_moment_Nm": out["shaking_moment"].tolist(),
+        "joints": {joint_names[j]: out["reactions"][:, j, :].T.tolist() for j in range(len(JOINTS))},
+        "joint_roles": dict(zip(joint_names, JOINTS)),
+        "links": links,
+        "gravity_mps2": [float(v) for v in dyn.gravity],
+        "external_loads": loads,
+        "summary": {"input_torque_Nm": peaks(torque, crank), "power_W": peaks(power, crank),
+                    "shaking_force_N": peaks(magnitude, crank),
+                    "shaking_moment_Nm": peaks(out["shaking_moment"], crank),
+                    "joints_N": {joint_names[j]: peaks(np.hypot(*out["reactions"][:, j, :]), crank)
+                                 for j in range(len(JOINTS))}},
+        "conventions": "reaction at a joint: force of the link nearer the frame on the next (N, machine frame); "
+                       "input torque: the motor's on the crank, counter-clockwise positive; shaking force and moment "
+                       "(about the crank pivot): what the moving links put on the frame, gravity included",
+        "assumption": table.assumption,
+    }

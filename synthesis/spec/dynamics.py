@@ -1,0 +1,94 @@
+"""The optional ``[dynamics]`` table of a four-bar kind's spec: mass properties, gravity, crank speed, loads, limits.
+
+Shared by the kinds whose mechanism is a planar four-bar driven at its crank (``crank_rocker``, ``planting_fourbar``;
+docs/ARCHITECTURE.md "Dynamics").  Each moving link (crank, coupler, rocker) is given either as a **bar** of a
+material density and a cross-section area (its mass and inertia then follow the link's length, and change with it in
+the NLP) or as **lumped** mass properties (mass, centre of mass in the link frame, inertia about the centre of mass).
+
+The link frame of each link: origin at its first joint (crank: the crank pivot; coupler: the crank pin; rocker: the
+rocker pivot), x towards its second joint (the crank pin; the coupler-rocker joint; the coupler-rocker joint), y
+90 deg counter-clockwise from x.  Units: kg, kg/m^3, mm^2, mm, kg m^2, m/s^2, N, N m, r/min.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from synthesis.spec.common import StrictModel
+
+#: the moving links of a four-bar, in the order the dynamics reads them
+LINKS = ("crank", "coupler", "rocker")
+
+
+class BarLink(StrictModel):
+    """A straight bar of uniform section along the link's joints: mass = density x area x length, inertia m L^2 / 12."""
+
+    density: float = Field(gt=0.0, le=25000.0, description="material density, kg/m^3 (steel 7850, aluminium 2700)")
+    area: float = Field(gt=0.0, le=1.0e5, description="cross-section area of the bar, mm^2")
+
+
+class LumpedLink(StrictModel):
+    """A link's mass properties as given: they stay the same when a length changes."""
+
+    mass: float = Field(ge=0.0, le=1000.0, description="link mass, kg")
+    com: tuple[float, float] = Field(description="centre of mass in the link frame, mm")
+    inertia: float = Field(ge=0.0, le=1000.0, description="moment of inertia about the centre of mass, kg m^2")
+
+
+class PointMass(StrictModel):
+    """A mass carried by a link (a claw, a seedling, a counterweight), its own inertia neglected."""
+
+    link: Literal["crank", "coupler", "rocker"] = Field(description="the link that carries it")
+    mass: float = Field(gt=0.0, le=1000.0, description="mass, kg")
+    at: tuple[float, float] = Field(description="position in the link frame, mm")
+    note: str = Field("", description="what it is and where its value comes from")
+
+
+class ExternalLoad(StrictModel):
+    """A constant force (machine frame) acting at a point fixed on a link, e.g. soil resistance on the claw."""
+
+    link: Literal["crank", "coupler", "rocker"] = Field(description="the link it acts on")
+    force: tuple[float, float] = Field(description="force on the link, machine frame, N")
+    at: tuple[float, float] = Field(description="point of application in the link frame, mm")
+    note: str = Field("", description="where the value comes from (an assumption unless a paper gives it)")
+
+
+class DynamicsLimits(StrictModel):
+    """Rules on the dynamics; a limit left out is no rule."""
+
+    peak_input_torque: float | None = Field(None, gt=0.0, description="largest |input torque| over a turn, N m")
+    peak_shaking_force: float | None = Field(None, gt=0.0,
+                                             description="largest shaking force on the frame over a turn, N")
+
+
+class DynamicsSection(StrictModel):
+    """Mass properties and loads for the inverse dynamics at constant crank speed (docs/ARCHITECTURE.md "Dynamics")."""
+
+    crank: BarLink | LumpedLink = Field(description="the crank: a bar {density, area} or {mass, com, inertia}")
+    coupler: BarLink | LumpedLink = Field(description="the coupler (planting_fourbar: a bar is AB and the claw arm "
+                                                      "AC of the same section): a bar or {mass, com, inertia}")
+    rocker: BarLink | LumpedLink = Field(description="the rocker: a bar {density, area} or {mass, com, inertia}")
+    point_masses: list[PointMass] = Field(default_factory=list, description="masses carried by the links")
+    gravity: tuple[float, float] = Field((0.0, -9.81), description="gravity in the machine frame, m/s^2 (0 allowed)")
+    crank_speed: float | None = Field(None, gt=0.0, le=5000.0,
+                                      description="constant crank speed, r/min (counter-clockwise); a kind that "
+                                                  "has its own crank speed reads that one")
+    external_loads: list[ExternalLoad] = Field(default_factory=list,
+                                               description="constant forces on the links (at most one per link)")
+    samples: int = Field(360, ge=8, le=3600, description="crank angles of result.json's facts.dynamics over a turn")
+    limits: DynamicsLimits = Field(default_factory=DynamicsLimits)
+    assumption: str = Field("", description="which values are ours, not a paper's")
+
+    @model_validator(mode="after")
+    def _one_load_per_link(self) -> "DynamicsSection":
+        links = [load.link for load in self.external_loads]
+        doubled = sorted({n for n in links if links.count(n) > 1})
+        if doubled:
+            raise ValueError(f"external_loads: give at most one load per link (their resultant); "
+                             f"{', '.join(doubled)} has more")
+        return self
+
+    def has_rules(self) -> bool:
+        return self.limits.peak_input_torque is not None or self.limits.peak_shaking_force is not None

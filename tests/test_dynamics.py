@@ -1,0 +1,193 @@
+"""Inverse dynamics of the four-bar kinds (docs/ARCHITECTURE.md "Dynamics").
+
+* An independent multibody formulation (sympy.physics.mechanics: frames, points, accelerations by differentiating
+  position vectors in time, the loop's velocity and acceleration from its constraint equations, and the 9 x 9
+  Newton-Euler system about each link's centre of mass solved by sympy) gives the same input torque, joint forces and
+  shaking force as synthesis.dynamics (closed form about the pivots, CasADi derivatives) to 1e-6 relative.
+* Energy balance from result.json alone: the input work over each sample interval (the periodic power integrated
+  spectrally) equals the change of kinetic plus potential energy of the links; over a turn the net work is zero.
+* The rules' AD derivatives equal central differences of the same rules on floats.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+import sympy as sp
+from sympy.physics.mechanics import Point, ReferenceFrame, dynamicsymbols, msubs
+
+from conftest import LIBRARY
+from synthesis.dynamics import mass as mass_properties
+from synthesis.dynamics.fourbar import over_turn
+from synthesis.kinds.crank_rocker.check import linkage_dynamics, rules_of
+from synthesis import kinds
+from synthesis.result import result_text
+from synthesis.spec import load_spec
+
+#: a lumped set of mass properties per link (kg, m, m, kg m^2), centres off the link lines so every term counts
+LUMPED = [0.30, 0.021, 0.004, 2.0e-4, 0.65, 0.050, -0.012, 1.4e-3, 0.45, 0.060, 0.008, 9.0e-4]
+#: (geometry l1..l4 mm, zeta rad, branch) of the seed-001 crank-rocker and the seed-000 planting arm (example 1)
+CASES = {"crank_rocker": ((140.0, 54.0, 107.6, 133.5, 0.0), 1),
+         "planting_arm": ((75.0, 35.0, 75.0, 80.0, math.radians(-90.0)), -1)}
+OMEGA = 250 * 2 * math.pi / 60
+GRAVITY = (0.3, -9.81)
+
+
+def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
+    """Torque, reactions (frame-crank, crank-coupler, coupler-rocker, frame-rocker) and shaking force at crank angle
+    theta, by sympy.physics.mechanics: link angles q1 (crank, absolute), q2, q3 with the loop closed numerically."""
+    l1, l2, l3, l4, zeta = geometry
+    q1, q2, q3 = dynamicsymbols("q1 q2 q3")
+    t = dynamicsymbols._t
+    frame = ReferenceFrame("N")
+    links = [frame.orientnew(f"C{k}", "Axis", (q, frame.z)) for k, q in enumerate((q1, q2, q3), 1)]
+    o = Point("O")
+    o_rocker = o.locatenew("Op", l1 / 1000 * (sp.cos(zeta) * frame.x + sp.sin(zeta) * frame.y))
+    a = o.locatenew("A", l2 / 1000 * links[0].x)
+    b = a.locatenew("B", l3 / 1000 * links[1].x)
+    loop = b.pos_from(o) - o_rocker.pos_from(o) - l4 / 1000 * links[2].x
+    closure = [loop.dot(frame.x), loop.dot(frame.y)]
+    crank = float(zeta + theta)
+    q23 = sp.nsolve([c.subs(q1, crank) for c in closure], [q2, q3], angles_guess, tol=1e-30, prec=30)
+    values = {q1: crank, q2: q23[0], q3: q23[1]}
+    # the loop's velocity and acceleration: the time derivatives of its closure, q1' = omega, q1'' = 0
+    d1 = [sp.diff(c, t) for c in closure]
+    d2 = [sp.diff(c, t, 2) for c in closure]
+    first = {q1.diff(t): omega}
+    u = sp.solve([msubs(e, first, values) for e in d1], [q2.diff(t), q3.diff(t)])
+    second = {q1.diff(t, 2): 0.0, q2.diff(t, 2): sp.Symbol("a2"), q3.diff(t, 2): sp.Symbol("a3")}
+    known = {**first, q2.diff(t): u[q2.diff(t)], q3.diff(t): u[q3.diff(t)]}
+    acc = sp.solve([msubs(e, second, known, values) for e in d2], [sp.Symbol("a2"), sp.Symbol("a3")])
+    alpha = [0.0, acc[sp.Symbol("a2")], acc[sp.Symbol("a3")]]
+    kin = {q1.diff(t, 2): 0.0, q2.diff(t, 2): acc[sp.Symbol("a2")], q3.diff(t, 2): acc[sp.Symbol("a3")], **known}
+    origins = (o, a, o_rocker)
+    coms = [origins[k].locatenew(f"G{k}", mass[4 * k + 1] * links[k].x + mass[4 * k + 2] * links[k].y)
+            for k in range(3)]
+    f = sp.symbols("fox foy fax fay fbx fby fpx fpy torque")
+    fo, fa, fb, fp = (f[0] * frame.x + f[1] * frame.y, f[2] * frame.x + f[3] * frame.y,
+                      f[4] * frame.x + f[5] * frame.y, f[6] * frame.x + f[7] * frame.y)
+    g = gravity[0] * frame.x + gravity[1] * frame.y
+    # (forces at points, torque) on each link: frame on crank at O and the motor, crank on coupler at A, ...
+    loads = [([(fo, o), (-fa, a)], f[8]), ([(fa, a), (-fb, b)], 0), ([(fb, b), (fp, o_rocker)], 0)]
+    equations = []
+    for k, (forces, torque) in enumerate(loads):
+        m, inertia = mass[4 * k], mass[4 * k + 3]
+        acc_com = coms[k].pos_from(o).dt(frame).dt(frame)
+        resultant = sum((force for force, _ in forces), m * g) - m * acc_com
+        moment = sum((p.pos_from(coms[k]).cross(force) for force, p in forces), torque * frame.z)
+        equations += [resultant.dot(frame.x), resultant.dot(frame.y), moment.dot(frame.z) - inertia * alpha[k]]
+    numeric = [sp.N(msubs(e, kin, values), 20) for e in equations]
+    solution = sp.solve(numeric, f)
+    s = np.array([float(solution[x]) for x in f])
+    reactions = s[:8].reshape(4, 2).T
+    return s[8], reactions, -(reactions[:, 0] + reactions[:, 3])
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
+    geometry, branch = CASES[case]
+    thetas = np.radians([0.0, 47.0, 133.0, 200.0, 291.0])
+    ours = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, OMEGA, GRAVITY)
+    for i, theta in enumerate(thetas):
+        torque, reactions, shaking = sympy_newton_euler(geometry, LUMPED, OMEGA, GRAVITY, theta,
+                                                        [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
+        scale = np.abs(reactions).max()
+        assert ours["torque"][i] == pytest.approx(torque, rel=1e-6, abs=1e-9 * scale)
+        np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-6, atol=1e-9 * scale)
+        np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-6, atol=1e-9 * scale)
+    # not a trivial agreement: the torque changes sign over the turn and the forces are tens of newtons
+    assert ours["torque"].min() < 0 < ours["torque"].max()
+    assert np.abs(ours["reactions"]).max() > 10.0
+
+
+def test_planting_coupler_bars_combine_by_the_parallel_axis_theorem():
+    """The coupler AB with the claw arm AC and a claw mass: against the bars integrated point by point."""
+    ab, ac = (75.0, 0.0), (191.0 * math.cos(math.radians(-31)), 191.0 * math.sin(math.radians(-31)))
+    m, cx, cy, inertia = mass_properties.combine([mass_properties.bar(7850, 100, (0, 0), ab),
+                                                  mass_properties.bar(7850, 100, (0, 0), ac),
+                                                  mass_properties.point(0.05, ac)])
+    s = (np.arange(200000) + 0.5) / 200000
+    pts = [np.outer(s, end) / 1000.0 for end in (ab, ac)]
+    dm = [7850 * 100e-6 * np.hypot(*end) / 1000.0 / s.size for end in (ab, ac)]
+    total = dm[0] * s.size + dm[1] * s.size + 0.05
+    centre = (dm[0] * pts[0].sum(0) + dm[1] * pts[1].sum(0) + 0.05 * np.array(ac) / 1000) / total
+    spread = (dm[0] * ((pts[0] - centre) ** 2).sum() + dm[1] * ((pts[1] - centre) ** 2).sum()
+              + 0.05 * ((np.array(ac) / 1000 - centre) ** 2).sum())
+    assert m == pytest.approx(total, rel=1e-12)
+    assert (cx, cy) == pytest.approx(tuple(centre), rel=1e-9)
+    assert inertia == pytest.approx(spread, rel=1e-8)
+
+
+def energy_residuals(dyn: dict) -> tuple[np.ndarray, np.ndarray, float]:
+    """From result.json's facts.dynamics alone: per sample interval, the input work (the periodic power integrated
+    exactly by its Fourier series: spectral, no trapezoid error) and the change of kinetic + potential energy; the
+    net work of the turn."""
+    crank = np.radians(dyn["crank_deg"])
+    omega = dyn["crank_speed_rpm"] * 2 * math.pi / 60
+    power = np.array(dyn["power_W"])
+    if dyn["external_loads"]:
+        power = power + np.array(dyn["external_loads"]["external_power_W"])
+    n = power.size
+    c = np.fft.rfft(power) / n
+    k = np.arange(c.size)
+    # antiderivative in theta of sum c_k e^{ik theta} (+ conjugates): c_0 theta + sum 2 Re(c_k e^{ik theta} / (ik))
+    def antiderivative(theta):
+        waves = np.exp(1j * np.outer(theta, k[1:])) / (1j * k[1:])
+        weight = np.where(k[1:] == n // 2, 1.0, 2.0) if n % 2 == 0 else 2.0
+        return c[0].real * theta + (waves * c[1:] * weight).real.sum(1)
+    ends = np.append(crank, crank[0] + 2 * math.pi)
+    work = np.diff(antiderivative(ends)) / omega
+    g = np.array(dyn["gravity_mps2"])
+    energy = np.zeros(n)
+    for link in dyn["links"]:
+        v = np.array(link["com_velocity_mps"])
+        energy += (0.5 * link["mass_kg"] * (v ** 2).sum(1)
+                   + 0.5 * link["inertia_kgm2"] * np.array(link["angular_velocity_radps"]) ** 2
+                   - link["mass_kg"] * (np.array(link["com_mm"]) / 1000.0) @ g)
+    return work, np.diff(np.append(energy, energy[0])), c[0].real * 2 * math.pi / omega
+
+
+def checked_json(path) -> dict:
+    """result.json's data of ``check`` on a library spec, as written (strict JSON) and read back."""
+    loaded = load_spec(path)
+    return json.loads(result_text(kinds.get(loaded.model.kind).check(loaded)))
+
+
+def test_energy_balance_of_the_crank_rocker_result():
+    dyn = checked_json(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")["facts"]["dynamics"]
+    work, change, net = energy_residuals(dyn)
+    peak = np.abs(work).max()
+    assert peak > 1e-3
+    assert np.abs(work - change).max() <= 1e-6 * peak
+    assert abs(net) <= 1e-9 * np.abs(dyn["power_W"]).max() * 2 * math.pi / (250 * 2 * math.pi / 60)
+
+
+def test_rule_derivatives_equal_central_differences():
+    """d(rule rows)/d(lengths) by CasADi AD against central differences of the same rows on floats."""
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")
+    spec = loaded.model.model_copy(update={"dynamics": loaded.model.dynamics.model_copy(
+        update={"limits": loaded.model.dynamics.limits.model_copy(update={"peak_input_torque": 1.0,
+                                                                          "peak_shaking_force": 20.0})})})
+    x0 = np.array([54.0, 107.6, 133.5, 140.0])
+    z = ca.SX.sym("z", 4)
+    mu = ca.SX.sym("mu", 72)            # the rows read only the lengths; a stand-in for the transmission samples
+    names = ("peak_input_torque", "peak_shaking_force")
+
+    def rows(lengths):
+        rules = {r.name: r for r in rules_of(spec, [lengths[i] for i in range(4)], 1.0, (1.0, 0.0), (0.0, 1.0), mu)}
+        return ca.vertcat(*[rules[n].rows()[0][0] for n in names])
+
+    f = ca.Function("rows", [z, mu], [rows(z), ca.jacobian(rows(z), z)])
+    values, jac = (np.asarray(v) for v in f(x0, np.full(72, 60.0)))
+    h = 1e-4
+    for i in range(4):
+        step = np.zeros(4)
+        step[i] = h
+        central = (np.asarray(f(x0 + step, np.full(72, 60.0))[0]) - np.asarray(f(x0 - step, np.full(72, 60.0))[0])) / (2 * h)
+        scale = np.abs(jac[:, i]).max()
+        np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * scale)
+    assert values.shape == (144, 1) and np.abs(jac).max() > 1e-3
