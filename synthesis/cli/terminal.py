@@ -1,20 +1,38 @@
 """What the CLI prints besides the rule tables: the spec reference, the solved design, per-start lines.
 
-Tables fit the terminal: on a terminal rich wraps the long columns to its width; piped, nothing is ever
-cut (a file name or a number is printed whole, lines may be as long as they need).
+Tables fit the terminal: on a terminal rich wraps the long columns to its width; piped, a run's tables are
+folded to a readable width (:func:`table_width`: $COLUMNS, else 120 characters) and nothing is ever cut (a long
+cell continues on the next line of its cell).  Text lines are never wrapped when piped.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import sys
 
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-#: piped output: wide enough that no table cell is cut (lines are as long as their content)
+#: piped output: wide enough that no line of text is wrapped (lines are as long as their content)
 PIPED_WIDTH = 10_000
+#: piped output: the width a run's tables are folded to when $COLUMNS does not say one
+PIPED_TABLE_WIDTH = 120
+
+
+def table_width(stream=None) -> int | None:
+    """The width a table is printed at: the terminal's (None: rich measures it); piped, $COLUMNS when it is a
+    positive whole number, else :data:`PIPED_TABLE_WIDTH` (a table of notes was 300 characters wide and more)."""
+    if (stream or sys.stdout).isatty():
+        return None
+    columns = os.environ.get("COLUMNS", "")
+    return int(columns) if columns.isdigit() and int(columns) > 0 else PIPED_TABLE_WIDTH
+
+
+def print_table(console: Console, table: Table) -> None:
+    """``table`` on ``console`` at :func:`table_width` (a long cell folds within its column, never cut)."""
+    console.print(table, width=table_width(console.file))
 
 
 def console_for(stream=None, *, stderr: bool = False) -> Console:
@@ -67,14 +85,15 @@ def _value(v) -> str:
 
 def design_table(rows, title: str, solved: str = "solved") -> Table:
     """The solved design beside the given one: value, unit, bounds, free/fixed and at-bound marks
-    (rows: :func:`synthesis.report.tables.design_rows`); ``solved``: the answer's column heading."""
+    (rows: :func:`synthesis.report.tables.design_rows`); ``solved``: the answer's column heading.  The marks'
+    column is there only when a variable is at a bound (it was an empty last column otherwise)."""
     table = plain_table(title)
+    marks = [r.at_bound[0] if r.at_bound else "" for r in rows]
     add_columns(table, (("variable", "left"), ("given (start 0)", "right"), (solved, "right"), ("unit", "left"),
-                        ("bounds", "right"), ("", "left")))
-    for r in rows:
+                        ("bounds", "right"), *((("", "left"),) if any(marks) else ())))
+    for r, mark in zip(rows, marks):
         bounds = {None: "", False: "fixed"}.get(r.free, f"[{_value(r.bounds[0])}, {_value(r.bounds[1])}]"
                                                  if r.bounds else "free")
-        mark = r.at_bound[0] if r.at_bound else ""
         table.add_row(escape(r.name), escape(_value(r.given)), escape(_value(r.values[0])), escape(r.unit),
-                      escape(bounds), f"[yellow]at {mark} bound[/]" if mark else "")
+                      escape(bounds), *((f"[yellow]at {mark} bound[/]" if mark else "",) if any(marks) else ()))
     return table

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from synthesis import kinds
 from synthesis.result import Result
 
 #: longest polyline sent to the page (a longer one is thinned evenly, its ends kept)
@@ -157,6 +158,4 @@ def drawing(result: Result) -> dict[str, Any]:
 
 def _kind_poses(kind: str):
     """The kind's own poses (``Kind.poses``) where its check's facts give none, else None."""
-    from synthesis import kinds
-
     return kinds.get(kind).poses()

@@ -15,16 +15,24 @@ import secrets
 import signal
 import socket
 import threading
+import time
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import uvicorn
+
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 from starlette.responses import JSONResponse, PlainTextResponse, Response
 from starlette.routing import Route
 
+from synthesis import kinds
+from synthesis.core import interrupt
 from synthesis.errors import AgrisynthError, OutputError
+from synthesis.files import loads
 from synthesis.result import atomic_write_text
 from synthesis.studio.session import Session
 from synthesis.studio.solver import GRACE, SolveJob
@@ -155,8 +163,6 @@ class Studio:
         return JSONResponse(data, status_code=status, headers=SECURITY_HEADERS)
 
     async def _body(self, request: Request, keys: frozenset[str]) -> dict:
-        from synthesis.files import loads
-
         if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
             raise AgrisynthError("request: expected Content-Type application/json")
         declared = request.headers.get("content-length", "")
@@ -189,8 +195,6 @@ class Studio:
 
     async def _handle(self, request: Request, work, keys: frozenset[str] = frozenset()) -> JSONResponse:
         """Run ``work(body)`` off the event loop; ``keys``: the only keys a POST body may have."""
-        from starlette.concurrency import run_in_threadpool
-
         try:
             body = await self._body(request, keys) if request.method == "POST" else {}
             return self._answer(await run_in_threadpool(work, body))
@@ -241,8 +245,6 @@ class Studio:
         def work(body):
             if not self.session.free:
                 raise AgrisynthError(f"kind {self.session.kind}: the spec has no free design variable to solve for")
-            from synthesis import kinds
-
             if not kinds.get(self.session.kind).solves:
                 raise AgrisynthError(f"kind {self.session.kind} has nothing to optimise (check-only)")
             starts = body.get("starts", 1)
@@ -282,8 +284,6 @@ class Studio:
 
     def start_in_thread(self) -> "threading.Thread":
         """Serve from a background thread (tests, benchmarks); returns once the server listens."""
-        import time
-
         self._server = self.server()
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
         self._thread.start()
@@ -300,9 +300,9 @@ class Studio:
             self._thread.join(self.grace + 30)
         self.stop_job()
 
-    def server(self):
-        import uvicorn
-
+    def server(self, on_listening: Callable[[], None] | None = None):
+        """The uvicorn server of the app; ``on_listening`` is called once its socket listens (the address printed
+        then is answered at once)."""
         studio = self
 
         class Server(uvicorn.Server):
@@ -317,6 +317,11 @@ class Studio:
                 if sig not in self.ignored_signals:
                     super().handle_exit(sig, frame)
 
+            async def startup(self, sockets=None) -> None:
+                await super().startup(sockets)
+                if self.started and on_listening is not None:
+                    on_listening()
+
             async def shutdown(self, sockets=None) -> None:
                 # here, not after run() returns: on SIGTERM uvicorn re-raises the signal as soon as it has shut
                 # down, which ends the process before any code after run() would cancel the solve
@@ -326,17 +331,16 @@ class Studio:
         config = uvicorn.Config(self.app, log_level="warning", access_log=False, lifespan="off", ws="none")
         return Server(config)
 
-    def serve(self) -> None:
+    def serve(self, on_listening: Callable[[], None] | None = None) -> None:
         """Serve until Ctrl-C, SIGTERM or SIGHUP; a running solve is cancelled on the way out, then the signal
-        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  A signal the
+        has its usual effect (Ctrl-C: KeyboardInterrupt; SIGTERM, SIGHUP: the process ends by it).  ``on_listening``:
+        called once the socket listens (where the command prints the page's address).  A signal the
         studio was started with ignored stays ignored: under ``nohup`` (SIGHUP ignored) it keeps serving when its
         terminal closes."""
-        from synthesis.core import interrupt
-
         # the program's start-up handlers give way: the studio's signals act as the process was started with (uvicorn
         # takes SIGINT and SIGTERM while it serves and re-raises them under these dispositions)
         interrupt.restore()
-        server = self.server()
+        server = self.server(on_listening)
         server.ignored_signals = frozenset(sig for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
                                            if signal.getsignal(sig) is signal.SIG_IGN)
         # uvicorn shuts down gracefully on SIGINT and SIGTERM only; a closed terminal (SIGHUP) would otherwise

@@ -25,6 +25,9 @@ from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.solved import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.common import validate
+from synthesis.spec.docmeta import SpecFile
+from synthesis.spec.operating import ranges_of
+from synthesis.spec.reference import write_toml
 from synthesis.studio import drawing, grids
 
 def _node(data: Any, path: str) -> Any:
@@ -159,8 +162,6 @@ class Session:
 
     def _other_spec_files(self) -> list[tuple[str, Path]]:
         """(TOML path, file) of every field naming another spec file (relative to the spec that holds it)."""
-        from synthesis.spec.docmeta import SpecFile
-
         return [(path, (self.loaded.path.parent / value).resolve())
                 for path, info, value in walk_fields(self.loaded.model)
                 if isinstance(value, str) and any(isinstance(m, SpecFile) for m in info.metadata)]
@@ -192,8 +193,6 @@ class Session:
 
     def spec_text(self, values: dict[str, float], name: str, note: str, folder: Path) -> str:
         """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
-        from synthesis.spec.reference import write_toml
-
         data = self.spec_data(values, name, folder)
         validate(type(self.loaded.model), data, prefix=self.kind)       # never write a spec check refuses
         head = [f"# {note}", f"# from {self.loaded.path.name} (sha256 {self.loaded.sha256})", ""]
@@ -221,8 +220,6 @@ class Session:
     def scope(self) -> str:
         """Where the verdict holds: "" everywhere the spec asks, else (an operating range) at its nominal point
         only, as check says it -- a design may fail inside the range (solve re-checks it over the range)."""
-        from synthesis.spec.operating import ranges_of
-
         ranged = sorted(ranges_of(self.loaded.model))
         if not ranged:
             return ""

@@ -1,10 +1,10 @@
-"""Solve from here: ``agrisynth solve`` on the page's values, in a worker process, one at a time, cancellable.
+"""Solve from here: the solve run on the page's values, in a worker process, one at a time, cancellable.
 
 The values are written as a spec (the spec file with each free variable's start value set to them, so
-they are start 0) into the studio's folder, and ``agrisynth solve`` runs on it there, exactly as a
-user would run it: the same multistart, the same run folder (result.json, report, solved.toml, ipopt.log).
-Progress is read from the lines ``solve`` prints for each finished start when its output is piped;
-cancelling sends SIGTERM, which ``solve`` answers by keeping the finished starts (exit 143); a worker
+they are start 0) into the studio's folder, and the worker (:mod:`.worker`) runs :func:`synthesis.runs.solve` on
+it there, as ``agrisynth solve`` does: the same multistart, the same run folder (result.json, report, solved.toml,
+ipopt.log).  Progress is the run's events, sent by the worker as JSON lines on its standard output (nothing
+printed is parsed); cancelling sends SIGTERM, which the run answers by keeping the finished starts (exit 143); a worker
 still alive GRACE seconds later is killed (SIGKILL).  The worker runs in its own process group, so the
 studio, not the terminal, decides when it stops (Ctrl-C, SIGTERM or SIGHUP to the studio cancel it the
 same way, unless the studio was started with that signal ignored, as nohup does SIGHUP) and the kill reaches
@@ -13,8 +13,8 @@ anything it started.
 
 from __future__ import annotations
 
+import json
 import os
-import re
 import signal
 import subprocess
 import sys
@@ -24,10 +24,9 @@ from pathlib import Path
 from typing import Any
 
 from synthesis.library import IMPORT_ROOT
+from synthesis.result import load_result
 from synthesis.studio.session import finite
 
-#: "start 3 finished (2/16): ..." -- one line per finished start (synthesis.cli._start_line)
-_PROGRESS = re.compile(r"^start (\d+) finished \((\d+)/(\d+)\)")
 #: exit codes of `agrisynth solve` (docs/ARCHITECTURE.md, "Exit codes") in words
 EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad input", 3: "infeasible or failed",
          130: "interrupted", 143: "cancelled (the finished starts are kept)"}
@@ -42,12 +41,12 @@ def worker_env() -> dict[str, str]:
     first on PYTHONPATH, so the worker imports the same one whatever its working directory (the studio's folder)
     and however the studio found it (a relative PYTHONPATH, say)."""
     given = os.environ.get("PYTHONPATH", "")
-    return dict(os.environ, COLUMNS="120", PYTHONPATH=os.pathsep.join([str(IMPORT_ROOT)] + ([given] if given else [])))
+    return dict(os.environ, PYTHONPATH=os.pathsep.join([str(IMPORT_ROOT)] + ([given] if given else [])))
 
 
 @dataclass
 class SolveJob:
-    """One `agrisynth solve` run in its own process."""
+    """One solve run in its own process (:mod:`.worker`)."""
 
     run_name: str
     spec_file: Path
@@ -57,6 +56,8 @@ class SolveJob:
     done: int = 0
     total: int = 0
     lines: list[str] = field(default_factory=list)
+    error: str | None = None            # the run's own word on why it failed (bad input, infeasible)
+    stderr: list[str] = field(default_factory=list)     # the last lines the worker wrote to its standard error
     exit_code: int | None = None
     cancelled: bool = False
     killed: bool = False
@@ -64,26 +65,37 @@ class SolveJob:
     _reader: threading.Thread | None = None
 
     def start(self) -> None:
-        cmd = [sys.executable, "-m", "synthesis.cli", "solve", str(self.spec_file), "--out", str(self.out),
-               "--starts", str(self.starts), "--workers", "1"]
+        cmd = [sys.executable, "-m", "synthesis.studio.worker", str(self.spec_file), str(self.out), str(self.starts)]
         self.total = self.starts
         # its own session (so its own process group): a Ctrl-C in the studio's terminal reaches the studio only,
         # which then cancels the worker, and the group can be killed as a whole
-        self.process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        self.process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                         env=worker_env(), cwd=self.out, start_new_session=True)
-        self._reader = threading.Thread(target=self._read, daemon=True)
+        errors = threading.Thread(target=self._read_errors, daemon=True)
+        errors.start()
+        self._reader = threading.Thread(target=self._read, args=(errors,), daemon=True)
         self._reader.start()
 
-    def _read(self) -> None:
+    def _read(self, errors: threading.Thread) -> None:
+        """The worker's events (one JSON object a line), until it ends; then its exit code."""
         assert self.process is not None and self.process.stdout is not None
-        for line in self.process.stdout:
-            line = line.rstrip()
-            match = _PROGRESS.match(line)
-            if match:
-                self.done, self.total = int(match.group(2)), int(match.group(3))
-            if line.strip():
-                self.lines = (self.lines + [line])[-TAIL:]
+        for text in self.process.stdout:
+            try:
+                event = json.loads(text)
+            except ValueError:       # the channel is the worker's alone; a torn last line (a kill) is no event
+                continue
+            self.done, self.total = event.get("done", self.done), event.get("total", self.total)
+            self.error = event.get("error", self.error)
+            if event.get("line"):
+                self.lines = (self.lines + [event["line"]])[-TAIL:]
+        errors.join()
         self.exit_code = self.process.wait()
+
+    def _read_errors(self) -> None:
+        assert self.process is not None and self.process.stderr is not None
+        for line in self.process.stderr:
+            if line.strip():
+                self.stderr = (self.stderr + [line.rstrip()])[-TAIL:]
 
     @property
     def running(self) -> bool:
@@ -120,8 +132,6 @@ class SolveJob:
         path = self.out / self.run_name / "result.json"
         if self.running or not path.is_file():
             return None
-        from synthesis.result import load_result
-
         return load_result(path).to_json()
 
     def _exit_words(self, result: dict[str, Any] | None) -> str:
@@ -135,8 +145,8 @@ class SolveJob:
             return f"killed after {self.grace:g} s of not stopping (nothing kept)"
         if self.cancelled and self.exit_code in (143, -signal.SIGTERM):    # -15: ended before solve set its handler
             return "cancelled before any start finished (nothing kept)"
-        last = self.lines[-1][:200] if self.lines else "no output"
-        return f"failed (exit {self.exit_code}): {last}"
+        last = self.error or (self.stderr or self.lines or ["no output"])[-1]
+        return f"failed (exit {self.exit_code}): {last[:200]}"
 
     def status(self) -> dict[str, Any]:
         if self.running:

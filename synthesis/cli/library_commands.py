@@ -1,0 +1,94 @@
+"""``agrisynth problems`` and ``agrisynth spec``: the kinds and the problem library listed or copied out, a kind's
+spec reference or a starting spec of it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+from rich.markup import escape
+from rich.table import Table
+
+from synthesis import kinds
+from synthesis.cli import terminal
+from synthesis.cli.views import console
+from synthesis.library import LIBRARY
+from synthesis.runs import library
+from synthesis.spec import reference as specref
+
+
+@click.command("problems")
+@click.option("--dir", "library_dir", type=click.Path(exists=True, file_okay=False, path_type=Path), default=LIBRARY,
+              show_default=True, help="problem library folder")
+@click.option("--copy", "name", metavar="NAME", default=None,
+              help="copy the library spec NAME (its file as listed, e.g. planting_arm/taiwan_example1.toml, or its "
+                   "file name alone) into the working folder to edit it, with the spec files it names")
+@click.option("--out", "target", type=click.Path(path_type=Path), default=None,
+              help="with --copy: the file (or folder) to write [default: the spec's file name, here]")
+@click.option("--force", is_flag=True, help="with --copy: replace a file of that name (without it an existing "
+                                            "file is kept and the command exits 2)")
+def problems_command(library_dir: Path, name: str | None, target: Path | None, force: bool) -> None:
+    """List the problem kinds (what each designs, whether it solves) and the problem library:
+    kind, name, source of every spec file.  `check` and `solve` take a library spec by its file as
+    listed (planting_arm/taiwan_example1.toml) where the working folder has no such file.
+
+    \b
+    Examples:
+      agrisynth problems --copy planting_arm/redesign_from_example1.toml
+      agrisynth problems --copy taiwan_example1 --out my_arm.toml && agrisynth check my_arm.toml
+    """
+    if name is None:
+        for option, given in (("--out", target is not None), ("--force", force)):
+            if given:
+                raise click.UsageError(f"{option} goes with --copy NAME")
+        list_library(library_dir)
+        return
+    source, written = library.copy_spec(name, library_dir, target, force)
+    also = f" (and {', '.join(escape(str(p)) for p in written[1:])}, the spec files it names)" if written[1:] else ""
+    console.print(f"wrote {escape(str(written[0]))}{also}: a copy of the library's "
+                  f"{escape(source.relative_to(library_dir).as_posix())} to edit; check it with  agrisynth check "
+                  f"{escape(str(written[0]))}", soft_wrap=True)
+
+
+def list_library(library_dir: Path) -> None:
+    kinds_table = terminal.add_columns(Table(title="kinds", title_justify="left"),
+                                       [(col, "left") for col in ("kind", "mechanism", "commands", "try")])
+    for kind, summary, commands, example in library.kind_rows():
+        kinds_table.add_row(kind, escape(summary), commands, example)
+    console.print(kinds_table)
+    table = terminal.add_columns(Table(title=f"problem library: {library_dir}", title_justify="left"),
+                                 [(col, "left") for col in ("kind", "name", "file", "source")])
+    for entry in library.library_entries(library_dir):
+        table.add_row(escape(entry.kind), escape(entry.name), escape(entry.file), escape(entry.unread or entry.source))
+    console.print(table)
+    console.print("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
+                  "copy one to edit: agrisynth problems --copy FILE", soft_wrap=True)
+
+
+@click.command("spec")
+@click.argument("kind")
+@click.option("--template", is_flag=True, help="write a commented starting spec of KIND (the library example's "
+                                               "values, every field described) instead of the reference")
+@click.option("--out", "target", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="with --template: write it to this new file (default: print it)")
+def spec_command(kind: str, template: bool, target: Path | None) -> None:
+    """The spec reference of KIND: every field with its TOML path, type, unit, default (or
+    "required"), allowed range and meaning.  The same for every kind: docs/specs.md.
+
+    \b
+    Examples:
+      agrisynth spec planting_fourbar
+      agrisynth spec clamp_cam --template --out my_cam.toml && agrisynth check my_cam.toml
+    """
+    description = kinds.get(kind)           # SpecError (exit 2) naming the known kinds
+    if target is not None and not template:
+        raise click.BadParameter("--out writes a template: give --template too", param_hint="--out")
+    if not template:
+        terminal.console_for().print(terminal.reference_table(kind, description.summary, specref.kind_entries(kind)))
+        return
+    if target is None:
+        click.echo(specref.template(kind), nl=False)
+        return
+    library.write_template(kind, target)
+    console.print(f"wrote {escape(str(target))}: a {kind} spec to edit; check it with  agrisynth check {escape(str(target))}",
+                  soft_wrap=True)

@@ -1,0 +1,71 @@
+"""The option types and help texts the commands share: whole numbers, half-widths, scheduler addresses."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import click
+
+FORCE_HELP = ("replace OUT/<name>/ when it holds an earlier agrisynth run (without --force such a run is kept and "
+              "the command exits 2 before doing anything; a file or folder agrisynth did not write, also one put "
+              "inside such a run, is never replaced or deleted, with or without --force)")
+
+#: a scheduler address agrisynth accepts: tcp://host:port (dask's default protocol) or host:port
+SCHEDULER = re.compile(r"^(tcp://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):[0-9]{1,5}$")
+MAX_STARTS = 10000
+MAX_WORKERS = 256
+
+
+class WholeNumber(click.IntRange):
+    """An integer option: click's IntRange calls '1e9' "not a valid integer range", which reads as if a range were
+    asked for; this says what is wanted and within which limits."""
+
+    name = "whole number"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str):
+            try:
+                int(value)
+            except ValueError:
+                self.fail(f"{value!r} is not a whole number ({self._describe_range()})", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class HalfWidth(click.FloatRange):
+    """A tolerance half-width: a finite number >= 0 (click's FloatRange lets nan and inf through)."""
+
+    name = "half-width"
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
+#: the spec's [tolerance] limits (spec.common.ToleranceSpec): the options take what a spec may say
+LENGTH_HALF_WIDTH = HalfWidth(min=0, max=1e3)
+ANGLE_HALF_WIDTH = HalfWidth(min=0, max=90)
+
+
+def scheduler_address(ctx, param, value: str | None) -> str | None:
+    """--scheduler: tcp://host:port or host:port, said as tcp://host:port."""
+    if value is None:
+        return None
+    if len(value) > 300 or not SCHEDULER.match(value) or not 0 < int(value.rsplit(":", 1)[1]) < 65536:
+        raise click.BadParameter(f"{value[:80]!r} is not a scheduler address: give tcp://host:port "
+                                 f"(e.g. tcp://10.0.0.5:8786)")
+    return value if value.startswith("tcp://") else f"tcp://{value}"
+
+
+def objectives_help() -> str:
+    """The objectives of every kind that solves, from the registry (one line each, wrapped by hand)."""
+    from synthesis import kinds      # the registry: read only when solve's help is asked for
+
+    lines = []
+    for kind in kinds.all_kinds():
+        if kind.solves:
+            lines.append(f"  {kind.name}:")
+            lines += [f"    {name}  {meaning}" for name, meaning in kind.objectives.items()]
+    return "\n    ".join(lines)

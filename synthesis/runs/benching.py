@@ -1,0 +1,81 @@
+"""``bench``: error against run time of every method on each problem, the sample-count sweep, the extreme-case
+matrix; written to OUT/bench/ (bench.json, bench.md, plots)."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+
+from synthesis import bench as benchmod
+from synthesis.result import open_run_folder
+from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
+from synthesis.runs.requests import BadRequest, BenchRequest, Outcome
+from synthesis.spec import KINDS, load_spec
+
+
+def problems_by_kind(request: BenchRequest) -> dict[str, list | None]:
+    """{kind: its spec files to bench, or None for its default set} of the request's problems (none: every kind
+    with a bench); a kind without bench cases or a name that is neither is a :class:`BadRequest` of PROBLEM."""
+    known = benchmod.kinds_with_bench()
+    by_kind: dict[str, list | None] = {}
+    items = [*request.problems, *(str(f) for f in request.spec_files)]
+    for item in items or tuple(known):
+        if item in known:
+            by_kind.setdefault(item, None)
+        elif item in KINDS:
+            raise BadRequest(f"kind {item!r} has no bench cases (kinds with a bench: {', '.join(known)})", "PROBLEM")
+        elif item.endswith(".toml") or Path(item).exists():
+            loaded = load_spec(item)
+            if loaded.kind not in known:
+                raise BadRequest(f"{item}: kind {loaded.kind!r} has no bench cases "
+                                 f"(kinds with a bench: {', '.join(known)})", "PROBLEM")
+            # a spec file replaces its kind's default set, also when the kind is named too (before or after it)
+            by_kind[loaded.kind] = (by_kind.get(loaded.kind) or []) + [loaded]
+        else:
+            raise BadRequest(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
+                             "PROBLEM")
+    return by_kind
+
+
+def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
+    named = bool(request.problems or request.spec_files)
+    cases = []
+    for kind, specs in by_kind.items():
+        try:
+            cases += benchmod.cases_for(kind, specs, 0, None if named else benchmod.OWN_CASES_IN_EVERY_KIND_RUN,
+                                        quick=request.quick)
+        except Exception as exc:      # noqa: BLE001 - one kind's broken bench set must not stop the others
+            if named:
+                raise
+            emit(RunWarning(f"bench: kind {kind} left out: its bench cases could not be made "
+                            f"({type(exc).__name__}: {exc})"))
+    return cases
+
+
+def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
+    """Bench, write OUT/bench/; ``details``: (the problems' results, repeats, settings).  Progress as
+    ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
+    repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
+    by_kind = problems_by_kind(request)
+    run_folder = open_run_folder(request.out, "bench", force=request.force)   # refused (exit 2) before any benching
+    try:
+        cases = _cases(request, by_kind, emit)
+        extreme_on = not request.no_extreme and not (request.problems or request.spec_files) and not request.quick
+        emit(BenchStarted(sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)))
+        t0 = time.perf_counter()
+        results = [benchmod.run_case(case, repeats, lambda what: emit(BenchStep(what))) for case in cases]
+        extreme = None
+        if extreme_on:
+            from synthesis.bench.extreme import extreme_matrix     # the matrix' own spec set: only when it runs
+
+            emit(BenchStep("extreme-case matrix (tests/extreme/)"))
+            extreme = extreme_matrix()
+            emit(BenchStep(None))
+        study = dataclasses.asdict(benchmod.study_settings(request.quick))
+        settings = {"repeats": repeats, "quick": request.quick, "study": study, "problems": [c.problem for c in cases],
+                    "wall_s": round(time.perf_counter() - t0, 1)}
+        folder = benchmod.write_bench(request.out, results, settings, extreme, run_folder=run_folder)
+    finally:
+        run_folder.discard()       # the staging folder, if the bench stopped (moved into place: nothing left)
+    return Outcome(0, folder=folder, details=(results, repeats, settings))

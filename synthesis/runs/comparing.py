@@ -1,0 +1,41 @@
+"""``compare``: result folders (and bench outputs) side by side in one page, OUT/compare.html."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from synthesis.errors import OutputError
+from synthesis.report.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
+                                      write_comparison)
+from synthesis.result import is_run_folder
+from synthesis.runs.events import Subscriber
+from synthesis.runs.requests import CompareRequest, Outcome
+
+
+def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
+    """--force would replace a result being compared: OUT may neither hold nor be inside a RESULT."""
+    target = Path(os.path.realpath(out))              # realpath, not resolve(): a symlink loop is the loader's to name
+    for given in results:
+        read = Path(os.path.realpath(given))
+        if read.name == "result.json" and is_run_folder(read.parent):
+            read = read.parent                        # a run given as its result.json: the run folder is the result
+        if read == target or target in read.parents or read in target.parents:
+            raise OutputError(f"--out {out} holds or is inside RESULT {given}: the page would replace what it "
+                              f"compares; write it to another folder")
+
+
+def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
+    """Write OUT/compare.html and its figures; ``details``: (the candidates compared, the first the baseline; the
+    page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
+    refuse_overlap(request.results, request.out)
+    folder = open_output_folder(request.out, request.force)          # refused (exit 2) before anything is read
+    try:
+        cands = load_candidates([p for p in request.results if not is_bench(p)])
+        bench = [res for p in request.results if is_bench(p)
+                 for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
+    except BaseException:
+        folder.discard()
+        raise
+    page = write_comparison(cands, request.out, bench, folder=folder)
+    return Outcome(0, folder=page.parent, details=(cands, page))

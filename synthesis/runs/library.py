@@ -1,0 +1,66 @@
+"""``problems`` and ``spec --template``: the kinds and the problem library listed, a library spec copied out to
+edit, a kind's commented starting spec written."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from synthesis import kinds
+from synthesis.errors import OutputError, SpecError
+from synthesis.library import copy_out, library_spec, unknown_name_text
+from synthesis.result import atomic_write_text
+from synthesis.spec import reference
+from synthesis.spec.common import read_toml
+
+
+@dataclass(frozen=True)
+class LibraryEntry:
+    """One spec file of the library: its kind, name and source, or why it could not be read (``unread``)."""
+
+    file: str
+    kind: str = "?"
+    name: str = "?"
+    source: str = ""
+    unread: str | None = None
+
+
+def kind_rows() -> list[tuple[str, str, str, str]]:
+    """(kind, mechanism, commands, example to try) of every kind, read from the registry."""
+    return [(kind.name, kind.summary, "check, solve" if kind.solves else "check",
+             f"problems/{kind.example}" if kind.example else "") for kind in kinds.all_kinds()]
+
+
+def library_entries(library: Path) -> list[LibraryEntry]:
+    """Every spec file under ``library``, sorted; one unreadable file is an entry saying so, not the end."""
+    entries = []
+    for path in sorted(library.rglob("*.toml")):
+        if not path.is_file():          # a folder named x.toml is no spec
+            continue
+        file = str(path.relative_to(library))
+        try:
+            data, _ = read_toml(path)
+        except SpecError as exc:
+            entries.append(LibraryEntry(file, unread=f"not read: {str(exc).removeprefix(f'{path}: ')}"))
+            continue
+        entries.append(LibraryEntry(file, str(data.get("kind", "?")), str(data.get("name", "?")),
+                                    str(data.get("source", ""))))
+    return entries
+
+
+def copy_spec(name: str, library: Path, target: Path | None, force: bool) -> tuple[Path, list[Path]]:
+    """The library spec NAME copied (with the spec files it names) to ``target`` (default: its file name, here);
+    returns (the library's file, the files written)."""
+    source = library_spec(name, library)
+    if source is None:
+        raise SpecError(unknown_name_text(name, library))
+    return source, copy_out(source, Path(source.name) if target is None else target, force=force)
+
+
+def write_template(kind: str, target: Path) -> None:
+    """A commented starting spec of ``kind`` written to the new file ``target`` (a template never replaces one)."""
+    if target.exists():
+        raise OutputError(f"{target}: already exists; give a new file name (a template never replaces a file)")
+    if not target.parent.is_dir():
+        raise OutputError(f"{target}: no folder {target.parent} to write it in")
+    atomic_write_text(target, reference.template(kind, target.parent))

@@ -1,0 +1,182 @@
+"""``solve``: the multistart solve of a spec, its run folder OUT/<name>/ (starts.jsonl as the starts finish), the
+interrupted run's best-so-far kept, a ``--resume`` finishing it (docs/ARCHITECTURE.md, "Interrupts")."""
+
+from __future__ import annotations
+
+import signal
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from synthesis import kinds
+from synthesis.core import interrupt, startlog
+from synthesis.core import solve as core
+from synthesis.core.executor import default_workers
+from synthesis.core.library_log import captured_warnings
+from synthesis.errors import AgrisynthError, AssemblyError, OutputError, SpecError
+from synthesis.result import RUN_NAME, is_run_folder
+from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
+from synthesis.runs.output import RunOutput, text_file
+from synthesis.runs.requests import Outcome, SolveRequest, SolveWritten, Stopped
+from synthesis.runs.specs import described, loaded_spec
+from synthesis.spec.solved import FILENAME as SOLVED_SPEC, solved_toml
+
+#: most worker processes a run starts
+MAX_WORKERS = 256
+
+
+@dataclass
+class _Plan:
+    """What the run does, settled before any solving: the starts, the seed, the folder, what it resumes."""
+
+    starts: int                       # how many the run has
+    asked: int | None                 # as asked (None: the spec's)
+    seed: int | None                  # as asked (None: the spec's)
+    settings: dict
+    fingerprint: str
+    out: Path
+    folder_name: str
+    finished: dict | None = None      # the resumed run's finished starts
+    replaceable: Path | None = None
+
+
+def staging_hint(folder: Path) -> str:
+    """A run killed outright (SIGKILL, power loss) leaves its starts in the staging folder beside the one it was to
+    become (OUT/.<name>.run-XXXX/, starts.jsonl): name it, newest first, so --resume can be given it."""
+    folder = Path(folder)
+    staged = []
+    for p in folder.parent.glob(f".{folder.name}.run-*"):
+        try:                    # a solve's (a check's holds no starts); one may vanish as it is read
+            if is_run_folder(p) and (p / "starts.jsonl").is_file():
+                staged.append((p.stat().st_mtime, p))
+        except OSError:
+            continue
+    if not staged:
+        return ""
+    staged.sort(reverse=True)
+    return (f"; a solve that did not finish (killed, or still running) left its starts in {staged[0][1]}: give that "
+            f"folder to --resume" + (f" ({len(staged) - 1} older one(s) beside it)" if len(staged) > 1 else ""))
+
+
+def _probe(scheduler: str | None) -> None:
+    """A peer that is no dask scheduler: exit 2 now, within the connect timeout."""
+    if scheduler is None:
+        return
+    try:
+        from synthesis.core.cluster import probe_scheduler      # the cluster extra: only when a scheduler is given
+    except ImportError:
+        raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
+    probe_scheduler(scheduler)
+
+
+def _plan(request: SolveRequest, loaded) -> _Plan:
+    starts, seed, resume = request.starts, request.seed, request.resume
+    if resume is not None:
+        if not is_run_folder(resume):
+            raise OutputError(f"--resume {resume}: not an agrisynth run folder{staging_hint(resume)}")
+        earlier = startlog.settings_of(resume)      # --starts and --seed default to the interrupted run's
+        starts = earlier.get("starts") if starts is None and isinstance(earlier.get("starts"), int) else starts
+        seed = earlier.get("seed") if seed is None and isinstance(earlier.get("seed"), int) else seed
+    n = starts or loaded.model.solver.starts
+    the_seed = loaded.model.solver.seed if seed is None else seed
+    settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed)
+    plan = _Plan(n, starts, seed, settings, fingerprint, Path("results") if request.out is None else request.out, loaded.name)
+    if resume is not None:
+        plan.finished = startlog.read(resume, fingerprint)
+        where = resume.resolve()
+        plan.out = where.parent
+        # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
+        # SIGKILL (.<name>.run-XXXX, README) is no folder name: its result goes to OUT/<spec name>, as before
+        if RUN_NAME.match(where.name):
+            plan.folder_name, plan.replaceable = where.name, resume
+    return plan
+
+
+def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
+    """Solve, write result.json, report.html, ipopt.log, solved.toml, starts.jsonl and the figures.  Exit code 0
+    every rule holds, 1 a rule violated, 3 infeasible or failed (``error``), 128 + the signal when a signal stopped
+    it (``stopped``: its finished starts kept).  The written result is handed over as ``ResultWritten`` (details:
+    :class:`SolveWritten`); progress as ``SolveStarted``, ``StartFinished`` per start and ``StartsDone``."""
+    interrupt.install(keep_ignored=True)     # a signal the process was started ignoring stays ignored
+    loaded = loaded_spec(request.spec, emit)
+    kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
+    _probe(request.scheduler)
+    workers = min(request.workers or default_workers(), MAX_WORKERS)
+    plan = _plan(request, loaded)
+    with RunOutput(plan.out, plan.folder_name, force=request.force, spec=loaded.path, replaceable=plan.replaceable,
+                   resumed_from=request.resume) as output:     # a killed run's staging folder: removed once complete
+        log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
+        solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
+        if isinstance(solved, core.Interrupted):
+            return _keep_interrupted(solved, output, kind, loaded, plan.starts)
+        # every start is done: a signal from here on is noted and the finished result written all the same
+        with output.finishing(emit):
+            emit(StartsDone())
+            result, reports, log = solved
+            if said():
+                log += f"\n# library warnings outside the IPOPT runs\n{said()}"
+            described(result, loaded)
+            log_file.close()
+            if request.verbose:
+                emit(SolverLog(log))
+            baseline = core.baseline_rules(kind, loaded)
+            files = {"ipopt.log": text_file(log), SOLVED_SPEC: text_file(solved_toml(loaded, result))}
+            details = SolveWritten(baseline, workers, request.scheduler, len(plan.finished or ()), request.resume,
+                                   kind.headline(result))
+            folder, _ = output.finish(emit, result, files, given_rules=baseline, details=details)
+            error = core.exit_error(kind, result, reports) if result.status in ("infeasible", "failed") else None
+    return Outcome(3 if error else 1 if result.violated() else 0, result, folder, error=error)
+
+
+def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, log_file, emit: Subscriber):
+    """Every start solved: ((result, reports, log), the library warnings said meanwhile), or (the Interrupted
+    exception, ...) when a signal stopped the run."""
+    emit(SolveStarted(loaded.name, plan.starts))
+    done = 0
+
+    def on_start(report, best) -> None:
+        nonlocal done
+        done += 1
+        emit(start_finished(report, best, done, plan.starts))
+
+    solved = None         # (result, reports, log) once every start has finished
+    stderr = sys.stderr   # the warnings capture swaps it; an exit cut short by a signal may not swap it back
+    said = lambda: ""     # noqa: E731 - nothing said until the capture has begun
+    try:
+        with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
+            solved = core.run_solve(kind, loaded, plan.asked, plan.seed, workers, on_start, request.scheduler,
+                                    record=log_file.append, finished=plan.finished)
+    except (SpecError, AssemblyError) as exc:
+        # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is said as check says it:
+        # the file first
+        if str(loaded.path) in str(exc):
+            raise
+        raise type(exc)(f"{loaded.path}: {exc}") from None
+    except core.Interrupted as exc:
+        log_file.close()
+        return exc, said
+    except (KeyboardInterrupt, SystemError) as exc:
+        # the signal came as the run returned (closing the warnings capture): the result is complete, so it is
+        # kept like any later signal (noted, the exit code the result's)
+        if solved is None or not interrupt.caused_by_signal(exc):
+            raise
+        with interrupt.deferred(reraise=False):
+            sys.stderr = stderr
+    return solved, said
+
+
+def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, n: int) -> Outcome:
+    """The one place an interrupted run is kept: its best-so-far result (status interrupted), its report and
+    starts.jsonl written, no figures (the run ends within seconds of the signal; --resume draws them), the rule
+    table of the given design beside it as in a finished solve's report; nothing is written (and nothing
+    replaced) when no start had finished."""
+    name = signal.Signals(exc.signum).name
+    if exc.partial is None:
+        output.folder.discard()
+        return Outcome(exc.exit_code, stopped=Stopped(name, 0, n, None, loaded.path))
+    result, reports, log = exc.partial
+    described(result, loaded)
+    with interrupt.deferred(reraise=False):
+        folder, _ = output.write(result, {"ipopt.log": text_file(log)}, given_rules=core.baseline_rules(kind, loaded),
+                                 figures=False)
+    return Outcome(exc.exit_code, result, folder, stopped=Stopped(name, len(reports), n, folder, loaded.path))

@@ -1,0 +1,77 @@
+"""Reading the spec a run is asked for: the file (or the library's spec of that name), its notes, the design
+variables it may name, and the description reports show of each variable."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from synthesis import kinds
+from synthesis.errors import AgrisynthError, AssemblyError, SpecError
+from synthesis.library import LIBRARY, library_spec
+from synthesis.runs.events import Note, SpecFromLibrary, Subscriber
+from synthesis.spec import design_info, load_spec
+from synthesis.spec.plausibility import unit_notes
+from synthesis.tolerance.design import spec_keys
+
+
+def spec_file(spec: Path, emit: Subscriber) -> Path:
+    """SPEC as given, when there is such a file (or the library has no spec of that name either: reading it says
+    so); otherwise the library spec it names (planting_arm/taiwan_example1.toml, problems/... as the README
+    writes it, or a file name the library has once), told as :class:`SpecFromLibrary`."""
+    if os.path.lexists(spec):
+        return spec
+    found = library_spec(spec)
+    if found is None:
+        return spec
+    emit(SpecFromLibrary(spec, found.relative_to(LIBRARY).as_posix(), found))
+    return found
+
+
+def unknown_design_variables(model, names: list[str], where: str) -> None:
+    """SpecError naming those of ``names`` that are no design variable of the spec (a variable's name in the kind's
+    NLP is taken too, as the analysis maps it: spec_keys); nothing is said of a kind that declares none."""
+    info = design_info.describe(model)
+    unknown = [n for n, key in zip(names, spec_keys(names, info)) if key not in info]
+    if info and unknown:
+        raise SpecError(f"{where}: unknown design variable {', '.join(unknown)} (known: {', '.join(info)})")
+
+
+def tolerance_names_known(loaded) -> None:
+    """A [tolerance] variables entry naming no design variable is bad input in check too (solve and tolerance
+    refuse it; check ignored it)."""
+    tol = getattr(loaded.model, "tolerance", None)
+    if tol is not None and tol.variables:
+        unknown_design_variables(loaded.model, list(tol.variables), f"{loaded.path}: tolerance.variables")
+
+
+def loaded_spec(spec: Path, emit: Subscriber):
+    """The spec a check or solve runs on: read, its tolerance names checked, its unit notes told."""
+    loaded = load_spec(spec_file(spec, emit))
+    tolerance_names_known(loaded)
+    for note in unit_notes(loaded.model):
+        emit(Note(note))
+    return loaded
+
+
+def described(result, loaded):
+    """The result, told what the spec says of each design variable (unit, bounds, free): reports show it.  A spec
+    that leaves part of its design to the kind (a convex fit of its path's control points) is described with
+    that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
+    solve moved is listed, free, with the box it moved in."""
+    if kinds.get(loaded.kind).writes_explicit_design:
+        try:
+            loaded, _ = kinds.explicit_design(loaded)       # the file as the run read it
+        except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded
+            pass
+    return design_info.attach(result, loaded.model)
+
+
+def in_file(loaded, evaluate):
+    """``evaluate(loaded)``; a design that cannot be evaluated (AssemblyError) is named with its spec file."""
+    try:
+        return evaluate(loaded)
+    except AssemblyError as exc:
+        if str(exc).startswith(str(loaded.path)):
+            raise
+        raise AssemblyError(f"{loaded.path}: {loaded.kind}: {exc}") from None

@@ -1,0 +1,80 @@
+"""``tolerance``: exact sensitivities, the linear stack-up and a seeded Monte-Carlo of a design, written to
+OUT/<name>-tolerance/."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from synthesis import kinds
+from synthesis.errors import ResultError, SpecError
+from synthesis.files import read_json
+from synthesis.result import MAX_RESULT_BYTES, write_folder
+from synthesis.runs.events import MonteCarloPlan, Subscriber
+from synthesis.runs.requests import Outcome, ToleranceRequest
+from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables
+from synthesis.spec import load_spec
+from synthesis.tolerance.analysis import analyse
+from synthesis.tolerance.envelope import grid_of
+from synthesis.tolerance.output import artifacts, verdict_rows
+
+
+def no_solved_design(folder: Path) -> str:
+    """Why a folder given to `tolerance` has no solved design, from its result.json where it has one (read as
+    `compare` reads one: a FIFO, a device or a hostile file there is no status, never a hang or a traceback)."""
+    try:
+        data = read_json(folder / "result.json", MAX_RESULT_BYTES, "result.json", ResultError)
+    except ResultError:
+        data = None
+    status = data.get("status") if isinstance(data, dict) else None
+    if status == "interrupted":
+        return (f"{folder}: an interrupted run, with no solved design (solved.toml) yet: finish it with "
+                f"`agrisynth solve SPEC --resume {folder}`, then give this folder again")
+    if status == "evaluated":
+        return f"{folder}: a check's folder, with no solved design: give the spec file it checked"
+    return f"{folder}: no solved.toml in this folder (give a solve's run folder or a spec file)"
+
+
+def design_file(target: Path, emit: Subscriber) -> Path:
+    """The spec file of RESULT|SPEC: a spec (or the library's of that name), or a run folder's solved.toml (a run
+    given as its result.json: its folder's)."""
+    target = spec_file(target, emit)
+    if target.is_file() and target.suffix == ".json":      # a run's result.json: its folder's solved design
+        target = target.parent
+    if target.is_dir():
+        if not (target / "solved.toml").is_file():
+            raise SpecError(no_solved_design(target))
+        target = target / "solved.toml"
+    return target
+
+
+def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
+    """Analyse and write result.json, report.md, tornado.png.  Exit code 0 when the design and every Monte-Carlo
+    sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``: (the analysis'
+    facts, the rows that decided a failure)."""
+    loaded = load_spec(design_file(request.target, emit))
+    tolerance_names_known(loaded)
+    kind = kinds.solving_kind(loaded.kind)
+    spec = loaded.model
+    tol = spec.tolerance
+    length = request.length if request.length is not None else (tol.length if tol else None)
+    angle = request.angle if request.angle is not None else (tol.angle if tol else None)
+    per_variable = {**(dict(tol.variables) if tol else {}), **request.per_variable}
+    if request.per_variable:               # an unknown name is bad input, said before any analysis
+        unknown_design_variables(spec, list(request.per_variable), "--tol")
+    if not (length or angle or any(per_variable.values())) and request.samples != 0:
+        raise SpecError("tolerance: give --length and/or --angle (or a [tolerance] table in the spec)")
+    samples = request.samples if request.samples is not None else (tol.samples if tol else 1000)
+    seed = request.seed if request.seed is not None else (tol.seed if tol else 0)
+    design = kinds.checker(loaded.kind)(loaded).design
+    points = len(grid_of(spec))
+    if points > 1:        # an envelope: every sample is re-checked at every point of the range's grid
+        emit(MonteCarloPlan(samples, points))
+    facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
+                    seed=seed)
+    name = spec.name.removesuffix("_solved")
+    folder, _ = write_folder(request.out / f"{name}-tolerance", artifacts(kind.name, name, loaded.sha256, facts),
+                             force=request.force)
+    # the rows result.json holds decide, so a reader of it sees why: the design's own rules and, per rule, every
+    # Monte-Carlo sample holding it (--samples 0: its linearised worst case in the box)
+    failed = [r for r in facts["nominal_rules"] + verdict_rows(facts) if not r["satisfied"]]
+    return Outcome(1 if failed else 0, folder=folder, details=(facts, failed))
