@@ -346,3 +346,95 @@ def test_an_operating_range_s_verdict_line_names_the_nominal_point(tmp_path, syn
     assert verdict == (f"{said} at the nominal operating point (forward_speed given as a range: this page evaluates "
                        "the nominal value only; solve re-checks every rule over the range)")
     assert not seen["errors"]
+
+
+#: every text of the drawings and their legends: its computed font size, and the svg's pixels per viewBox unit
+TEXT_SIZES = """() => ({
+  svg: Array.from(document.querySelectorAll('#panels svg text')).map(t => parseFloat(getComputedStyle(t).fontSize)),
+  legend: Array.from(document.querySelectorAll('#panels .legend span')).map(s => parseFloat(getComputedStyle(s).fontSize)),
+  scale: Array.from(document.querySelectorAll('#panels svg')).map(s => s.getBoundingClientRect().width / s.viewBox.baseVal.width),
+})"""
+#: the main panel's axes: tick values and their x (or y) pixel, the scale bar's length in px and in mm
+AXES = """() => { const root = document.querySelector('#panel-main svg');
+  const ticks = (a) => Array.from(root.querySelectorAll(`text[data-tick-${a}]`)).map(t => [Number(t.dataset['tick' + a.toUpperCase()]), Number(t.getAttribute(a))]);
+  const bar = root.querySelector('g.scale-bar'); const line = bar.querySelector('line');
+  return { x: ticks('x'), y: ticks('y'), titles: Array.from(root.querySelectorAll('text.axis-title')).map(t => t.textContent),
+           barMm: Number(bar.dataset.scaleMm), barPx: Number(line.getAttribute('x2')) - Number(line.getAttribute('x1')),
+           barText: bar.querySelector('text').textContent }; }"""
+
+
+def round_step(step: float) -> bool:
+    """Whether ``step`` is 1, 2 or 5 x 10^k."""
+    import math
+
+    mantissa = step / 10 ** math.floor(math.log10(step) + 1e-9)
+    return any(abs(mantissa - m) < 1e-6 for m in (1, 2, 5))
+
+
+def test_the_drawing_reads_at_a_glance(tmp_path, sync_playwright):
+    """planting_fourbar in a 1280 px wide window: the drawing panel at least 60 % of the window, every label at
+    least 11 px on screen, axes in mm with ticks at round values and a scale bar that is as long as it says, the
+    soil surface and the seedbed bottom drawn as lines across the panel through P4 and the seedbed point; one arrow
+    key moves l2 by its step (0.1 mm: 1/200 of 28 ... 42 mm is 0.07, at least 0.1 mm), shift ten steps."""
+    spec = STUDIO_SPECS["planting_fourbar"]
+    with running_studio(spec, tmp_path / "studio") as studio, studio_page(sync_playwright, studio) as (page, seen):
+        page.set_viewport_size({"width": 1280, "height": 900})
+        page.uncheck("#animate")
+        page.wait_for_function("() => document.querySelector('#panel-main svg').viewBox.baseVal.width === "
+                               "document.querySelector('#panel-main svg').getBoundingClientRect().width")
+        panel = page.locator("#panel-main").bounding_box()
+        assert panel["width"] >= 0.6 * 1280, panel
+        sizes = page.evaluate(TEXT_SIZES)
+        assert len(sizes["svg"]) >= 30 and min(sizes["svg"]) >= 11, sizes["svg"]
+        assert sizes["legend"] and min(sizes["legend"]) >= 11, sizes["legend"]
+        assert all(abs(s - 1) < 1e-6 for s in sizes["scale"]), sizes["scale"]     # one viewBox unit = one px
+        axes = page.evaluate(AXES)
+        assert axes["titles"] == ["x, mm", "y, mm"]
+        for a in ("x", "y"):
+            values = [v for v, _ in axes[a]]
+            assert len(values) >= 4, axes[a]
+            step = values[1] - values[0]
+            assert round_step(step) and all(abs(v / step - round(v / step)) < 1e-9 for v in values), values
+        (v0, x0), (v1, x1) = axes["x"][0], axes["x"][-1]
+        px_per_mm = (x1 - x0) / (v1 - v0)
+        (w0, y0), (w1, y1) = axes["y"][0], axes["y"][-1]
+        assert (y0 - y1) / (w1 - w0) == pytest.approx(px_per_mm, rel=1e-6)         # equal scales: a true drawing
+        assert round_step(axes["barMm"]) and axes["barText"] == f"{axes['barMm']:g} mm"
+        assert axes["barPx"] == pytest.approx(axes["barMm"] * px_per_mm, rel=1e-6)
+        # the soil surface: horizontal through P4 in both frames; the seedbed bottom through the seedbed point at
+        # the design's seedbed tilt (-34.1 deg)
+        for panel_id in ("panel-main", "panel-ground"):
+            line = page.locator(f"#{panel_id} g.surface[data-surface='soil surface'] line")
+            p4 = page.locator(f"#{panel_id} circle[data-point='P4']")
+            y_a, y_b = float(line.get_attribute("y1")), float(line.get_attribute("y2"))
+            assert y_a == pytest.approx(y_b) == pytest.approx(float(p4.get_attribute("cy")), abs=0.01)
+            assert float(line.get_attribute("x2")) - float(line.get_attribute("x1")) > 1280   # across the panel
+        seedbed = page.locator("#panel-main g.surface[data-surface='seedbed bottom'] line")
+        ends = [float(seedbed.get_attribute(k)) for k in ("x1", "y1", "x2", "y2")]
+        import math
+
+        assert math.degrees(math.atan2(-(ends[3] - ends[1]), ends[2] - ends[0])) == pytest.approx(-34.1, abs=1e-6)
+        point = page.locator("#panel-main circle[data-point='seedbed']")
+        cx, cy = float(point.get_attribute("cx")), float(point.get_attribute("cy"))
+        cross = (ends[2] - ends[0]) * (cy - ends[1]) - (ends[3] - ends[1]) * (cx - ends[0])
+        assert abs(cross) / math.hypot(ends[2] - ends[0], ends[3] - ends[1]) < 0.05        # through the point
+        assert page.locator("#panel-ground g.surface[data-surface='seedbed bottom']").count() == 0
+
+        # an arrow key: one step of 0.1 mm from 35 (the fine grid at once), shift: ten steps
+        assert page.get_attribute("#range-l2", "data-step") == "0.1"
+        assert page.get_attribute("#range-l4", "data-step") == "0.2"                   # 32 mm / 200 = 0.16
+        assert "key step 0.1 (shift 1)" in page.inner_text(".var[data-var='l2'] .bounds")
+        for key, expected in (("ArrowRight", 35.1), ("Shift+ArrowRight", 36.1), ("ArrowDown", 36.0)):
+            count = int(page.get_attribute("body", "data-evaluations"))
+            page.focus("#range-l2")
+            page.keyboard.press(key)
+            page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {count} && "
+                                   "document.body.dataset.busy === '0'", timeout=30_000)
+            assert float(page.input_value("#number-l2")) == expected, key
+            assert page.get_attribute("body", "data-grid") == "fine"
+        # a wider window: the drawing follows (still one px per viewBox unit)
+        page.set_viewport_size({"width": 1600, "height": 900})
+        page.wait_for_function("() => Math.abs(document.querySelector('#panel-main svg').viewBox.baseVal.width - "
+                               "document.querySelector('#panel-main svg').getBoundingClientRect().width) < 0.5")
+        assert page.locator("#panel-main").bounding_box()["width"] >= 0.6 * 1600
+        assert seen["left"] == [] and seen["errors"] == []
