@@ -10,6 +10,7 @@ import difflib
 import hashlib
 import json
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
@@ -190,6 +191,20 @@ MIN_MAGNITUDE = 1e-12     #: the smallest non-zero magnitude of a spec number
 MAX_INT = 2**53
 
 
+#: a number followed by a unit, outside quotes (``crank_speed = 250 rpm``): TOML has no such value
+_UNQUOTED_UNIT = re.compile(r"[=,\[{]\s*([-+]?\d[\d_]*(?:\.\d+)?(?:[eE][-+]?\d+)?\s*[A-Za-z%\u00b0\u00b5][\w/%\u00b0\u00b5^*.-]*)")
+
+
+def _unquoted_unit_hint(text: str, exc: tomllib.TOMLDecodeError) -> str:
+    """"; a value with a unit must be quoted ("250 rpm")" when the line TOML stopped at holds a number with a unit
+    (the parser's own message names only the column); "" otherwise."""
+    at = re.search(r"\(at line (\d+), column \d+\)$", str(exc))        # Python 3.11's error has no lineno
+    lines = text.splitlines()
+    line = lines[int(at.group(1)) - 1] if at and 0 < int(at.group(1)) <= len(lines) else ""
+    found = _UNQUOTED_UNIT.search(line.split("#")[0])
+    return f'; a value with a unit must be quoted ("{found.group(1).strip()}")' if found else ""
+
+
 def read_toml(path: Path) -> tuple[dict[str, Any], str]:
     """Parse a spec file; returns (data, sha256 of the bytes). Errors carry line and column.
 
@@ -210,7 +225,7 @@ def read_toml(path: Path) -> tuple[dict[str, Any], str]:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SpecError(f"{path}: not valid TOML: {shown(str(exc), 200)[1:-1]}") from None
+        raise SpecError(f"{path}: not valid TOML: {shown(str(exc), 200)[1:-1]}{_unquoted_unit_hint(text, exc)}") from None
     except RecursionError:
         raise SpecError(f"{path}: not valid TOML: nested deeper than {MAX_DEPTH} levels") from None
     try:
