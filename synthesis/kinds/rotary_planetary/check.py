@@ -132,8 +132,11 @@ def rules_of(spec: RotaryPlanetarySpec, train: Train, angles: Angles, grid, soil
 
 def _refine(f, phi0: float, h: float) -> float:
     """The minimiser of f near phi0 (within one grid step h)."""
-    r = minimize_scalar(f, bounds=(phi0 - h, phi0 + h), method="bounded", options={"xatol": 1e-12})
-    return float(r.x) if f(float(r.x)) <= f(phi0) else phi0
+    # over the offset from phi0: Brent's bounded search stops at sqrt(eps) |x| relative, 1e-8 rad at phi0 = 4 rad,
+    # enough to misplace a pose the solver holds at its tolerance by 1e-8 deg
+    r = minimize_scalar(lambda d: f(phi0 + d), bounds=(-h, h), method="bounded", options={"xatol": 1e-14})
+    best = phi0 + float(r.x)
+    return best if f(best) <= f(phi0) else phi0
 
 
 def _y(train: Train, phi: float) -> float:
@@ -152,6 +155,17 @@ def _crossing(train: Train, level: float, phi_bottom: float, h: float, direction
     return None
 
 
+def _pose_miss(train: Train, pose, phi: float) -> float:
+    """The larger of the tip's distance and the attitude's miss at carrier angle phi, each over its tolerance:
+    the pose holds at phi iff <= 1, so its best carrier angle is where this is least."""
+    px, py = tip(train, phi)
+    miss = math.hypot(float(px) - pose.x, float(py) - pose.y) / pose.tolerance
+    if pose.attitude is not None:
+        wrapped = (float(claw_attitude(train, phi)) * DEG - pose.attitude + 180.0) % 360.0 - 180.0
+        miss = max(miss, abs(wrapped) / pose.attitude_tolerance)
+    return miss
+
+
 def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES) -> Angles:
     """The loop's extremes, soil entry and exit and the key poses' carrier angles of a numeric design."""
     grid = turn_grid(n)
@@ -165,11 +179,10 @@ def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES)
             poses[name] = pose.carrier_angle * RAD
             continue
 
-        def dist2(p, pose=pose):
-            px, py = tip(train, p)
-            return float((px - pose.x) ** 2 + (py - pose.y) ** 2)
+        def miss(p, pose=pose):
+            return _pose_miss(train, pose, p)
 
-        poses[name] = _refine(dist2, float(grid[np.argmin((x - pose.x) ** 2 + (y - pose.y) ** 2)]), h)
+        poses[name] = _refine(miss, float(grid[np.argmin([miss(p) for p in grid])]), h)
     angles = Angles(top, bottom, poses=poses)
     level = soil_y(spec)
     lowest = _y(train, bottom)
