@@ -43,22 +43,43 @@ def test_finite_difference_mode_reaches_the_exact_mode_optimum():
     assert exact.details["build_s"] >= exact.details["nlp_build_s"] > 0
 
 
-def test_hooks_are_context_local():
+def test_the_solve_method_is_an_explicit_argument_of_the_nlps_a_kind_builds():
+    """The derivative mode reaches the kind's CompiledNLP only through the transform that says it (no state a
+    build outside it could see); a mode not known is refused before any build."""
     loaded = load_spec(STEERING)
-    with ipopt.derivatives("finite_difference"):
-        assert _nlp(loaded).compiled.derivatives == "finite_difference"
-    assert _nlp(loaded).compiled.derivatives == "exact"
-    with pytest.raises(ValueError):
-        with ipopt.derivatives("symbolic"):
-            pass
+    setting = Setting(loaded.model, 0, kinds.get(loaded.kind).solving().prepare(loaded.model))
+    fd_kind = ipopt.solved_with_method(kinds.get(loaded.kind), derivatives="finite_difference")
+    fd = fd_kind.solving().build(setting, False)
+    assert fd.compiled.derivatives == "finite_difference" and fd.compiled.method.runner is None
+    assert fd.compiled.solver.stats is not None and fd.compiled.discarded_s >= 0.0
+    assert _nlp(loaded).compiled.derivatives == "exact" and _nlp(loaded).compiled.method == ipopt.EXACT
+    with pytest.raises(ValueError, match="derivatives: 'symbolic' is not one of exact, finite_difference"):
+        ipopt.solved_with_method(kinds.get(loaded.kind), derivatives="symbolic")
+    with pytest.raises(ValueError, match="length_factor"):
+        ipopt.SolveMethod(length_factor=0.0)
+
+
+def test_a_reconfigured_nlp_solves_as_one_built_with_its_method():
+    """reconfigure(derivatives=...) on a built NLP gives IPOPT the finite-difference options (the same iterations as
+    an NLP built so) and counts the replaced setup's seconds as discarded."""
+    loaded = load_spec(STEERING)
+    nlp = _nlp(loaded)
+    built_fd = ipopt.CompiledNLP(nlp.compiled.problem, method=ipopt.SolveMethod(derivatives="finite_difference"))
+    nlp.compiled.reconfigure(derivatives="finite_difference")
+    assert nlp.compiled.discarded_s > 0 and built_fd.discarded_s == 0
+    x0 = nlp.compiled.t.lbw[:nlp.compiled.n_x] * 0.5 + nlp.compiled.t.ubw[:nlp.compiled.n_x] * 0.5
+    a, b = nlp.compiled.solve(0, x0), built_fd.solve(0, x0)
+    assert a.iterations == b.iterations and a.objective == b.objective
 
 
 def test_slsqp_peer_solves_the_same_transcribed_nlp():
     loaded = load_spec(STEERING)
     nlp = _nlp(loaded)
-    with ipopt.solved_with(slsqp_runner):
+    with ipopt.answered_by([nlp.compiled], slsqp_runner):
+        assert nlp.compiled.peer_method
         out = nlp.solve(0, nlp.init)
-    exact = nlp.solve(0, nlp.init)           # IPOPT from the same start, outside the hook
+    assert not nlp.compiled.peer_method
+    exact = nlp.solve(0, nlp.init)           # IPOPT from the same start, its runner back
     assert out.return_status.startswith("SLSQP") and exact.return_status == "Solve_Succeeded"
     assert out.objective == pytest.approx(exact.objective, rel=1e-6)
 
@@ -307,13 +328,13 @@ def test_quick_benches_every_spec_named_and_a_named_spec_replaces_its_kinds_defa
 
 def test_the_best_so_far_line_is_held_to_the_median_runs_end():
     """A method whose one improvement came at 0.25 s in a 10.1 s median run was drawn as a lone point at 0.25 s (one
-    point makes no line); the trace is held to the run's end, and a gap below the floor is drawn at the floor."""
-    from synthesis.bench import FLOOR, best_so_far
+    point makes no line); the trace is held to the run's end, and a gap of 0 stays 0 (the plot draws it on its floor line)."""
+    from synthesis.bench import best_so_far
 
     row = {"trace": [(0.25, 0.7435)], "median_s": 10.1}
     assert best_so_far(row, 0.5) == [(0.25, pytest.approx(0.2435)), (10.1, pytest.approx(0.2435))]
     row = {"trace": [(0.1, 2.0), (0.5, None), (0.9, 1.0)], "median_s": 0.9}          # ends at its last improvement
-    assert best_so_far(row, 1.0) == [(0.1, 1.0), (0.9, FLOOR)]
+    assert best_so_far(row, 1.0) == [(0.1, 1.0), (0.9, 0.0)]
     assert best_so_far({"trace": [], "median_s": 3.0}, 0.0) == []
 
 
@@ -340,3 +361,84 @@ def test_a_peer_is_held_to_the_nlp_s_equality_rows_as_ipopt_is(tmp_path):
     assert peer.objective >= exact.objective - 1e-4
     assert min(objective for _, objective in peer.trace) >= exact.objective - 1e-4
     assert peer.details["equality_miss"] > EQUALITY_TOL        # some SLSQP answer missed them (now not counted)
+
+
+def _tick_label_boxes(fig) -> list[list]:
+    """Per axis of the figure (top axes too), the window boxes of its visible, non-empty tick labels."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    axes = list(fig.axes) + [child for ax in fig.axes for child in ax.child_axes]
+    return [[t.get_window_extent(renderer) for t in axis.get_ticklabels() if t.get_visible() and t.get_text()]
+            for ax in axes for axis in (ax.xaxis, ax.yaxis)]
+
+
+def _no_overlap(boxes) -> bool:
+    return not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
+def _result(gaps_by_method: dict, times: dict, violations: dict) -> dict:
+    best = 71.08
+    rows = [{"problem": "opening_cam_redesign", "method": m, "objectives": [best + g for g in gaps],
+             "wall_s": times[m], "median_s": times[m][0], "worst_violation": violations[m],
+             "trace": [(times[m][0] * 0.9, best + gaps[0])]} for m, gaps in gaps_by_method.items()]
+    return {"problem": "opening_cam_redesign", "best_known": best, "rows": rows}
+
+
+def test_the_error_plot_is_fitted_to_its_data_with_0_on_a_floor_line_and_no_label_overlapping():
+    """`agrisynth bench clamp_cam --quick` drew its two points (gaps 8.1e-9 and 0, violations 0) on eight empty
+    decades, a 0 at 1e-16, with crowded minor labels: the axes now reach a factor 1.6 beyond the data, a 0 sits on
+    the floor line a decade below the smallest nonzero value (its tick labelled "0"), and no tick labels overlap."""
+    from synthesis.report.bench_plots import MARGIN, error_figure
+
+    fig = error_figure([_result({"ipopt_multistart": [8.09e-9], "ipopt_finite_differences": [0.0]},
+                                {"ipopt_multistart": [0.298], "ipopt_finite_differences": [0.201]},
+                                {"ipopt_multistart": 0.0, "ipopt_finite_differences": 0.0})])
+    ax_gap, ax_vio = fig.axes
+    assert ax_gap.get_ylim() == pytest.approx((8.09e-10 / MARGIN, 8.09e-9 * MARGIN), rel=1e-9)
+    assert ax_gap.get_xlim() == pytest.approx((0.9 * 0.201 / MARGIN, 0.298 * MARGIN))     # the FD trace starts at 0.18 s
+    floor_lines = [line for line in ax_gap.get_lines() if line.get_linestyle() == ":"]
+    assert floor_lines and floor_lines[0].get_ydata()[0] == pytest.approx(8.09e-10)
+    assert "0" in [t.get_text() for t in ax_gap.get_yticklabels()]
+    assert ax_vio.get_ylim() == pytest.approx((1.0 / MARGIN, MARGIN))           # every violation 0: the floor only
+    assert [t.get_text() for t in ax_vio.get_yticklabels()] == ["0"]
+    assert any("0 (gap)" in t.get_text() for t in ax_gap.get_legend().get_texts())
+    assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("gaps, times", [([1e-12, 3e-7, 0.02, 40.0], [0.011, 0.4, 9.0, 95.0]),
+                                         ([2e-3, 2.5e-3], [1.0, 1.2]),
+                                         ([0.0, 0.0], [5.0, 5.0])])
+def test_the_error_plot_s_axes_stay_within_two_decades_of_the_data_and_labels_apart(gaps, times):
+    from synthesis.report.bench_plots import error_figure
+
+    fig = error_figure([_result({"a": gaps, "b": gaps[::-1]}, {"a": times, "b": times[::-1]}, {"a": 1e-5, "b": 0.0})])
+    ax_gap, ax_vio = fig.axes
+    nonzero = [g for g in gaps if g > 0] or [1.0]
+    lo, hi = ax_gap.get_ylim()
+    assert min(nonzero) / 100 <= lo <= min(nonzero) and max(nonzero) <= hi <= max(nonzero) * 10
+    lo, hi = ax_gap.get_xlim()
+    assert min(times) / 10 <= lo <= min(times) * 0.9 and max(times) <= hi <= max(times) * 10
+    assert ax_vio.get_ylim()[0] >= 1e-5 / 100
+    assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+
+
+def test_the_sample_sweep_plot_is_fitted_and_names_each_count_on_its_top_axis():
+    from synthesis.report.bench_plots import sweep_figure
+
+    sweep = _swept_result("opening_cam_redesign")["sweep"]
+    sweep["rows"][0] |= {"objective_gap": 0.0133, "median_s": 0.146}
+    sweep["rows"][1] |= {"objective_gap": 0.0, "median_s": 0.243}
+    fig = sweep_figure(sweep)
+    ax = fig.axes[0]
+    lo, hi = ax.get_ylim()
+    assert 1e-7 / 2 <= lo < 1e-7 and 0.0133 < hi < 0.0133 * 2        # the floor: a decade below the target 1e-6
+    top = ax.child_axes[0]
+    fig.canvas.draw()
+    assert [t.get_text() for t in top.get_xticklabels() if t.get_text()] == ["9", "18"]
+    assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
+    import matplotlib.pyplot as plt
+    plt.close(fig)

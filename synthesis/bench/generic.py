@@ -7,11 +7,11 @@ into a :class:`~synthesis.bench.BenchCase` whose methods all run the kind's own 
 
 ipopt_multistart          IPOPT with CasADi's exact derivatives (the reference of every ratio)
 ipopt_finite_differences  the same NLP with IPOPT fed function values only: forward differences of f
-                          and g and a limited-memory Hessian (:func:`synthesis.core.ipopt.derivatives`)
+                          and g and a limited-memory Hessian (``SolveMethod(derivatives="finite_difference")``)
 slsqp                     scipy.optimize.minimize(method="SLSQP") on the same transcribed NLP (the kind's
                           f and g as numeric CasADi Functions, scipy's finite differences, the rows as
                           scipy constraints, maxiter = the spec's max_iter, ftol 1e-9), from the same starts
-                          (:func:`synthesis.core.ipopt.solved_with`), stopped at the target or its time
+                          (the runner of :class:`synthesis.core.ipopt.SolveMethod`), stopped at the target or its time
                           budget (``slsqp_budget_s`` per run, shared by the starts)
 differential_evolution    scipy's differential_evolution over the same NLP's variables (its bounds; rows
                           as a NonlinearConstraint), one run from the spec's start (x0), default strategy
@@ -47,14 +47,20 @@ import dataclasses
 import math
 import statistics
 import time
-from contextvars import ContextVar
 from typing import Any, Callable
 
 import numpy as np
+from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
-from synthesis.bench import BenchCase, MethodRun
-from synthesis.core.kind import KindNLP
+from synthesis import kinds
+from synthesis.bench.case import BenchCase, MethodRun
+from synthesis.core.ipopt import NLPOutcome, answered_by, compiled_in, solved_with_method
+from synthesis.core.kind import KindNLP, Setting
+from synthesis.core.solve import _recheck, run_multistart
+from synthesis.core.verdict import better, report_of
+from synthesis.errors import AgrisynthError
 from synthesis.library import LIBRARY
+from synthesis.spec import load_spec
 
 
 #: target = best known + max(ABS_TOLERANCE, REL_TOLERANCE x |best known|)
@@ -109,13 +115,15 @@ class TargetWatch:
     design meets the target mid-run exactly when it would at the end.  The peers call it once per SLSQP
     iteration / differential_evolution generation, an iterate unchanged since the last call not again
     (DE's best member often survives generations); its time (``check_s``) is left out of the run's times
-    and budgets and reported apart."""
+    and budgets and reported apart, as are the seconds of solver setups the bench replaced (``discarded_s``:
+    :meth:`synthesis.core.ipopt.CompiledNLP.reconfigure`)."""
 
-    def __init__(self, target: float, recheck: Callable, t0: float):
+    def __init__(self, target: float, recheck: Callable | None, t0: float):
         self.target, self.recheck, self.t0 = target, recheck, t0
         self.sign = 1.0
         self.trace: list[tuple[float, float]] = []
         self.check_s = 0.0
+        self.discarded_s = 0.0
         self.checks = 0
         self.hit_s: float | None = None
         self._nlp = self._start = self._x0 = None
@@ -128,9 +136,18 @@ class TargetWatch:
         """Whether start's answer holds the NLP's equality rows (IPOPT's always do: no miss recorded)."""
         return self.equality_miss.get(start, 0.0) <= EQUALITY_TOL
 
+    def holds(self, report) -> bool:
+        """A start's report holds every rule and (a peer's) the NLP's equality rows."""
+        return report.satisfied and self.holds_equalities(report.outcome.start)
+
+    @property
+    def excluded_s(self) -> float:
+        """Seconds of the run that were the bench's, not the method's: the target checks, replaced setups."""
+        return self.check_s + self.discarded_s
+
     def now(self) -> float:
-        """Seconds since the run's start, the checks left out."""
-        return time.perf_counter() - self.t0 - self.check_s
+        """Seconds since the run's start, the bench's own seconds left out."""
+        return time.perf_counter() - self.t0 - self.excluded_s
 
     @property
     def checking(self) -> bool:
@@ -162,7 +179,7 @@ class TargetWatch:
         if self._last is not None and self._last[0] == key:     # the same iterate again (DE's best member kept)
             return self._last[1]
         t = time.perf_counter()
-        at = t - self.t0 - self.check_s
+        at = t - self.t0 - self.excluded_s
         met = self._meets(compiled, w, p, at)
         self.check_s += time.perf_counter() - t
         self.checks += 1
@@ -170,11 +187,6 @@ class TargetWatch:
         return met
 
     def _meets(self, compiled, w: np.ndarray, p: np.ndarray, at: float) -> bool:
-        from synthesis.core import ipopt
-        from synthesis.core.ipopt import NLPOutcome
-        from synthesis.core.verdict import report_of
-        from synthesis.errors import AgrisynthError
-
         if equality_miss(compiled, w, p) > EQUALITY_TOL:
             return False
         try:
@@ -188,7 +200,7 @@ class TargetWatch:
                 return done if done is not None else NLPOutcome(start, np.asarray(w0, float), math.inf, "not run",
                                                                 False, 0, 0.0, "", np.zeros(len(c.t.lbg)))
 
-            with ipopt.solved_with(iterate):
+            with answered_by(compiled_in(self._nlp), iterate):      # the start's solves answered by w
                 outcome = self._nlp.solve(self._start, self._x0)
             report = report_of(outcome, self.recheck)
         except (AgrisynthError, ValueError, ArithmeticError, RuntimeError):
@@ -215,9 +227,6 @@ def equality_miss(compiled, w, p) -> float:
     g = np.asarray(compiled.g_function(w, p), float).ravel()[eq]
     miss = np.abs(g - lbg[eq]) / np.maximum(1.0, np.abs(lbg[eq]))
     return float(np.max(np.nan_to_num(miss, nan=np.inf)))
-
-
-_watch: ContextVar[TargetWatch | None] = ContextVar("agrisynth_bench_target_watch", default=None)
 
 
 class _AnnouncedNLP(KindNLP):
@@ -256,6 +265,7 @@ def watched_kind(kind, watch: TargetWatch, stop: bool):
 
     def build(setting, elastic):
         nlp = solving.build(setting, elastic)
+        watch.discarded_s += sum(compiled.discarded_s for compiled in compiled_in(nlp))
         return nlp if elastic else _AnnouncedNLP(nlp, watch)
 
     def stop_when(setting):
@@ -264,8 +274,7 @@ def watched_kind(kind, watch: TargetWatch, stop: bool):
             return own
 
         def stop_at_target(report) -> bool:
-            at_target = (report.satisfied and watch.holds_equalities(report.outcome.start)
-                         and math.isfinite(report.outcome.objective)
+            at_target = (watch.holds(report) and math.isfinite(report.outcome.objective)
                          and watch.sign * report.outcome.objective <= watch.target)
             return at_target or (own is not None and own(report))
         return stop_at_target
@@ -278,57 +287,54 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
     violation, best-so-far trace of designs meeting every rule (its first point at or below ``target`` is the
     run's time to target), and the build/solve split and iterations in ``details``.
 
-    ``runner`` (a peer): ``target`` finite, each of its iterates is checked against it (:class:`TargetWatch`;
-    the checks' time is left out of every time and reported as ``details["target_check_s"]``), and
-    ``stop_at_target`` ends the peer's start at the first iterate meeting it and the multistart at that
-    start.  IPOPT (no runner): a start's time to target is its end (re-check included), the time a multistart
-    stopping at the first start meeting the target would take; the run itself is not stopped."""
-    from synthesis import kinds
-    from synthesis.core import ipopt
-    from synthesis.core.kind import Setting
-    from synthesis.core.solve import _recheck, run_multistart
-
+    ``derivatives``: IPOPT's ("exact" or "finite_difference").  ``runner(compiled, start, w0, p, watch)`` (a peer):
+    answers every start instead of IPOPT; ``target`` finite, each of its iterates is checked against it
+    (:class:`TargetWatch`, handed to it; the checks' time is left out of every time and reported as
+    ``details["target_check_s"]``), and ``stop_at_target`` ends the peer's start at the first iterate meeting it
+    and the multistart at that start.  IPOPT (no runner): a start's time to target is its end (re-check
+    included), the time a multistart stopping at the first start meeting the target would take; the run itself
+    is not stopped."""
     kind = kinds.get(loaded.kind)
     solving = kind.solving()
     spec = loaded.model
     t0 = time.perf_counter()
     watch = TargetWatch(target if runner is not None else math.inf, None, t0)
-    recording = None
+    method: dict[str, Any] = {"derivatives": derivatives}
     if runner is not None:
-        def recording(compiled, start, w0, p):
-            out = runner(compiled, start, w0, p)
-            watch.finished_stage(compiled, out)
-            # the start's answer is its last stage's (a kind solving several NLPs in turn)
-            watch.equality_miss[start] = equality_miss(compiled, out.x, p)
-            return out
-    token = _watch.set(watch)
-    try:
-        with ipopt.derivatives(derivatives), ipopt.solved_with(recording):
-            setting = Setting(spec, seed, solving.prepare(spec))
-            sign = -1.0 if solving.maximise(setting) else 1.0
-            watch.sign = sign
+        method["runner"] = _recording(runner, watch)
+    setting = Setting(spec, seed, solving.prepare(spec))
+    watch.sign = -1.0 if solving.maximise(setting) else 1.0
+    watch.recheck = lambda outcome: _recheck(solving, setting, outcome)
 
-            def holds(report) -> bool:       # every rule, and (a peer's) the NLP's equality rows
-                return report.satisfied and watch.holds_equalities(report.outcome.start)
-            watch.recheck = lambda outcome: _recheck(solving, setting, outcome)
+    def on_start(report, best) -> None:
+        if watch.holds(report):            # add keeps the best so far: the run's best-so-far trace
+            watch.add(watch.now(), watch.sign * report.outcome.objective)
 
-            def on_start(report, best) -> None:
-                if holds(report):            # add keeps the best so far: the run's best-so-far trace
-                    watch.add(watch.now(), sign * report.outcome.objective)
+    measured = watched_kind(solved_with_method(kind, **method), watch, stop_at_target and runner is not None)
+    run = run_multistart(measured, setting, starts=starts, workers=1, on_start=on_start)
+    total = time.perf_counter() - t0 - watch.excluded_s
+    return _measured_run(run, watch, total, spec, peer=runner is not None, stop_at_target=stop_at_target)
 
-            run = run_multistart(watched_kind(kind, watch, stop_at_target and runner is not None), setting,
-                                 starts=starts, workers=1, on_start=on_start)
-    finally:
-        _watch.reset(token)
-    total = time.perf_counter() - t0 - watch.check_s
-    best = run.best
-    if not holds(best):              # a peer's answer off the NLP's equality rows is not its answer
-        from synthesis.core.verdict import better
 
+def _recording(runner: Callable, watch: TargetWatch) -> Callable:
+    """The method's runner: the peer, handed the watch, each answer recorded as its start's stage (the start's
+    answer is its last stage's, for a kind solving several NLPs in turn) with its miss of the equality rows."""
+    def run(compiled, start, w0, p):
+        out = runner(compiled, start, w0, p, watch)
+        watch.finished_stage(compiled, out)
+        watch.equality_miss[start] = equality_miss(compiled, out.x, p)
+        return out
+    return run
+
+
+def _measured_run(run, watch: TargetWatch, total: float, spec, peer: bool, stop_at_target: bool) -> MethodRun:
+    """The MethodRun of a measured multistart: its best start holding the NLP's equality rows, and the details."""
+    best, sign = run.best, watch.sign
+    if not watch.holds(best):              # a peer's answer off the NLP's equality rows is not its answer
         for report in run.reports:
-            if holds(report) and (not holds(best) or better(report, best, sign < 0)):
+            if watch.holds(report) and (not watch.holds(best) or better(report, best, sign < 0)):
                 best = report
-    unheld = not holds(best) and best.satisfied
+    unheld = not watch.holds(best) and best.satisfied
     ipopt_s = sum(r.outcome.wall_s for r in run.reports)
     objective = sign * best.outcome.objective
     iterations = [r.outcome.iterations for r in run.reports]
@@ -343,19 +349,14 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
         "recheck_s": max(run.wall_s - run.build_s - watch.check_s - ipopt_s, 0.0), "nlp_build_s": run.build_s,
         "samples": sample_settings(spec),
     }
-    if runner is not None:
+    if peer:
         details |= {"target_checks": watch.checks, "target_check_s": watch.check_s,
                     "stopped_at_target": watch.hit_s is not None and stop_at_target,
                     "equality_miss": max(watch.equality_miss.values(), default=0.0)}
     if unheld:       # no start held them: its rules may pass, but it did not solve the NLP the others did
         objective = math.inf
     return MethodRun(objective if math.isfinite(objective) else math.inf, best.worst_violation, watch.trace, details,
-                     trace_satisfied=True, excluded_s=watch.check_s)
-
-
-def current_watch() -> TargetWatch | None:
-    """The target watch of the run being measured (a peer's runner checks its iterates with it)."""
-    return _watch.get()
+                     trace_satisfied=True, excluded_s=watch.excluded_s)
 
 
 # ---------------------------------------------------------------------------- peers on the same NLP
@@ -377,15 +378,12 @@ def _nlp_functions(compiled, p):
     return f, g
 
 
-def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: float = math.inf):
+def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: float = math.inf,
+                 watch: TargetWatch | None = None):
     """scipy SLSQP on the transcribed NLP from the kind's start; function values only (scipy's differences);
     stopped (StopIteration from its callback, which scipy honours for SLSQP) once ``budget_s`` of wall time
-    has passed, or -- measured with a target (:class:`TargetWatch`) -- at the first iteration whose iterate
-    meets the target (checked once per iteration; the check's time left out of the budget and the wall time)."""
-    from scipy.optimize import minimize
-
-    from synthesis.core.ipopt import NLPOutcome
-
+    has passed, or -- measured with a target (``watch``) -- at the first iteration whose iterate meets the target
+    (checked once per iteration; the check's time left out of the budget and the wall time)."""
     t = compiled.t
     f, g = _nlp_functions(compiled, p)
     lbg, ubg = t.lbg, t.ubg
@@ -398,7 +396,6 @@ def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: 
         constraints.append({"type": "ineq", "fun": lambda w: np.concatenate([(g(w) - lbg)[lo], (ubg - g(w))[hi]])})
     bounds = [(a if math.isfinite(a) else None, b if math.isfinite(b) else None) for a, b in zip(t.lbw, t.ubw)]
     x0 = np.clip(w0, t.lbw, t.ubw)
-    watch = current_watch()
     checked0 = watch.check_s if watch is not None else 0.0
     t0 = time.perf_counter()
     at_target = []
@@ -422,20 +419,16 @@ def slsqp_runner(compiled, start: int, w0: np.ndarray, p: np.ndarray, budget_s: 
 
 
 def slsqp_with_budget(budget_s: float) -> Callable:
-    """:func:`slsqp_runner` stopped at ``budget_s`` per start."""
-    return lambda compiled, start, w0, p: slsqp_runner(compiled, start, w0, p, budget_s)
+    """:func:`slsqp_runner` stopped at ``budget_s`` per start: ``runner(compiled, start, w0, p, watch=None)``."""
+    return lambda compiled, start, w0, p, watch=None: slsqp_runner(compiled, start, w0, p, budget_s, watch)
 
 
 def de_runner(budget_s: float, seed: int) -> Callable:
     """scipy differential_evolution on the transcribed NLP (one run from the start), stopped at ``budget_s``
-    of wall time or -- measured with a target (:class:`TargetWatch`) -- at the first generation whose best
-    member meets the target (its callback returns True; checked once per generation, the check's time left
-    out of the budget and the wall time)."""
-    def run(compiled, start: int, w0: np.ndarray, p: np.ndarray):
-        from scipy.optimize import NonlinearConstraint, differential_evolution
-
-        from synthesis.core.ipopt import NLPOutcome
-
+    of wall time or -- measured with a target (the :class:`TargetWatch` it is handed) -- at the first generation
+    whose best member meets the target (its callback returns True; checked once per generation, the check's time
+    left out of the budget and the wall time): ``runner(compiled, start, w0, p, watch=None)``."""
+    def run(compiled, start: int, w0: np.ndarray, p: np.ndarray, watch: TargetWatch | None = None):
         t = compiled.t
         lbw, ubw, derived = de_bounds(t.lbw, t.ubw, w0)
         f, g = _nlp_functions(compiled, p)
@@ -448,7 +441,6 @@ def de_runner(budget_s: float, seed: int) -> Callable:
             return w
 
         constraints = [NonlinearConstraint(lambda z: g(full(z)), t.lbg, t.ubg)] if len(t.lbg) else []
-        watch = current_watch()
         checked0 = watch.check_s if watch is not None else 0.0
         t0 = time.perf_counter()
         at_target: list[np.ndarray] = []
@@ -563,30 +555,33 @@ def sample_sweep(loaded, settings: StudySettings, seed: int = 0,
             tick(f"{loaded.name}: samples {_samples_text(samples)} {k + 1}/{settings.sweep_repeats}")
             runs.append(measure(_with_solver(loaded, **samples), starts, seed))
             tick(None)
-        walls = [r.details["build_s"] + r.details["ipopt_s"] + r.details["recheck_s"] for r in runs]
-        median = float(statistics.median(walls))
-        typical = min(runs, key=lambda r: abs(sum(r.details[k] for k in ("build_s", "ipopt_s", "recheck_s")) - median))
-        rows.append({"factor": factor, "samples": samples, "wall_s": walls, "median_s": median,
-                     "build_s": typical.details["build_s"], "ipopt_s": typical.details["ipopt_s"],
-                     "iterations": typical.details["iterations"],
-                     "median_iterations": typical.details["median_iterations"],
-                     "objective": typical.objective, "worst_violation": typical.worst_violation,
-                     "satisfied": typical.worst_violation == 0 and math.isfinite(typical.objective),
-                     "reused_runs": reused})
+        rows.append(_sweep_row(factor, samples, runs, reused))
     finest = rows[-1]["objective"] if rows else math.nan
     for row in rows:
         row["objective_gap"] = (abs(row["objective"] - finest) if math.isfinite(row["objective"]) and math.isfinite(finest)
                                 else math.inf)
-    reaching = None
+    return {"problem": loaded.name, "kind": loaded.kind, "starts": starts, "repeats": settings.sweep_repeats,
+            "violation_target": VIOLATION_TARGET, "rows": rows, "skipped": skipped, "reaching": _reaching(rows)}
+
+
+def _sweep_row(factor: float, samples: dict, runs: list[MethodRun], reused: int) -> dict:
+    """A sample count's row: the median of its runs' times (build, IPOPT, re-check) and the typical run's figures."""
+    walls = [r.details["build_s"] + r.details["ipopt_s"] + r.details["recheck_s"] for r in runs]
+    median = float(statistics.median(walls))
+    typical = min(runs, key=lambda r: abs(sum(r.details[k] for k in ("build_s", "ipopt_s", "recheck_s")) - median))
+    return {"factor": factor, "samples": samples, "wall_s": walls, "median_s": median,
+            "build_s": typical.details["build_s"], "ipopt_s": typical.details["ipopt_s"],
+            "iterations": typical.details["iterations"], "median_iterations": typical.details["median_iterations"],
+            "objective": typical.objective, "worst_violation": typical.worst_violation,
+            "satisfied": typical.worst_violation == 0 and math.isfinite(typical.objective), "reused_runs": reused}
+
+
+def _reaching(rows: list[dict]) -> dict | None:
+    """The first sample count from which on the violation is at most VIOLATION_TARGET, or None."""
     for i, row in enumerate(rows):
         if all(r["worst_violation"] <= VIOLATION_TARGET for r in rows[i:]):
-            reaching = i
-            break
-    return {"problem": loaded.name, "kind": loaded.kind, "starts": starts, "repeats": settings.sweep_repeats,
-            "violation_target": VIOLATION_TARGET, "rows": rows, "skipped": skipped,
-            "reaching": None if reaching is None else {"samples": rows[reaching]["samples"],
-                                                       "median_s": rows[reaching]["median_s"],
-                                                       "worst_violation": rows[reaching]["worst_violation"]}}
+            return {"samples": row["samples"], "median_s": row["median_s"], "worst_violation": row["worst_violation"]}
+    return None
 
 
 def _samples_text(samples: dict) -> str:
@@ -645,15 +640,11 @@ def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dic
                      studies=studies or {}, warmup=lambda: measure(loaded, 1, spec_seed))
 
 
-def library_cases(specs, seed: int, default: list[str], settings: StudySettings | None = None,
+def library_cases(specs, seed: int, default: list[str], settings: StudySettings = FULL,
                   studies: dict | None = None) -> list[BenchCase]:
     """The kind's bench cases: ``specs`` (LoadedSpec list) or, when None, the ``default`` library files
-    (relative to problems/).  ``studies``: extra rows (name -> callable) the kind adds to its first case."""
-    from synthesis.spec import load_spec
-
-    if settings is None:
-        from synthesis.bench import current_settings
-        settings = current_settings()
+    (relative to problems/; the first only at :data:`QUICK` settings).  ``studies``: extra rows (name -> callable)
+    the kind adds to its first case."""
     if specs is None:
         specs = [load_spec(LIBRARY / f) for f in default[:1 if settings is QUICK else None]]
     return [case_for(s, settings, seed, studies if i == 0 else None) for i, s in enumerate(specs)]

@@ -9,7 +9,7 @@ IPOPT sees every variable at its *nominal scale*, the kind's own unit: w = s * z
 and nothing outside this module sees z (starts, bounds, the returned point and the multipliers are mapped in and
 out; :attr:`CompiledNLP.t`, ``f_function`` and ``g_function`` stay in the kind's units).  s is read from the
 units the problem declares, not guessed from numbers: solved with every length ``factor`` times its number in
-the kind's unit (:func:`length_unit`; 1e-3: metres for mm), a variable of length power p (mm, m/s: 1, mm^2: 2,
+the kind's unit (``SolveMethod.length_factor``; 1e-3: metres for mm), a variable of length power p (mm, m/s: 1, mm^2: 2,
 deg, rad, ratios: 0) has s = factor**p and the objective is divided by factor**p of its unit alike, so IPOPT
 sees the kind's variables and objective whatever the length unit (the scale cases of the extreme-case matrix,
 tests/extreme/test_scale.py), and each row is divided by factor**p of its declared unit alike (g / s_g), so
@@ -31,31 +31,37 @@ watch=rule)``): ``rule(iteration, f)`` is called at every IPOPT iteration with t
 units and stops the solve (``User_Requested_Stop``) when it returns True -- a deterministic early cut of a
 hopeless start, decided by iterations and objective, not by time (a free-timing path synthesis).
 
-Four hooks serve the bench (:mod:`synthesis.bench.generic`) and the tests and nothing else; all are
-context-local, so a solve outside them is untouched:
+How a CompiledNLP solves is one explicit value, its :class:`SolveMethod` (``CompiledNLP(problem, method=...)``,
+or :meth:`CompiledNLP.reconfigure` on one a kind built); the default is IPOPT with CasADi's exact derivatives, the
+nominal scaling and the kind's own units, and only the bench (:mod:`synthesis.bench.generic`) and the tests ask for
+another:
 
-* :func:`derivatives` ``("finite_difference")``: CompiledNLPs built inside give IPOPT function values
-  only -- IPOPT differences f and g itself (``gradient_approximation`` / ``jacobian_approximation =
-  finite-difference-values``) and keeps a limited-memory Hessian -- instead of CasADi's exact derivatives
-  (the exact-against-approximate study; never in a solve: docs/ARCHITECTURE.md, "Conventions");
-* :func:`solved_with` ``(runner)``: ``CompiledNLP.solve`` hands its start to ``runner(compiled, start,
-  w0, p) -> NLPOutcome`` instead of IPOPT (a peer method on the same transcribed NLP and starts; a kind's own
-  extra phase before a start, such as a path synthesis' fixed-timing fit of its random starts, is IPOPT's, so a peer
-  starts those from the start as drawn);
-* :func:`variable_scaling` ``("none")``: CompiledNLPs built inside give IPOPT the raw variables (s = 1),
-  to measure what the nominal scaling does;
-* :func:`length_unit` ``(factor)``: CompiledNLPs built inside hand IPOPT the problem with every length
-  ``factor`` times its number in the kind's unit (1e-3: metres for mm; :mod:`synthesis.core.units`), mapping
-  starts, the returned point and the multipliers to and from the kind's units, so the kind and the multistart
-  see mm as always (the scale case of tests/extreme/test_scale.py).
+* ``derivatives="finite_difference"``: IPOPT is given function values only -- it differences f and g itself
+  (``gradient_approximation`` / ``jacobian_approximation = finite-difference-values``) and keeps a limited-memory
+  Hessian -- instead of CasADi's exact derivatives (the exact-against-approximate study; never in a solve:
+  docs/ARCHITECTURE.md, "Conventions");
+* ``runner``: :meth:`CompiledNLP.solve` hands its start to ``runner(compiled, start, w0, p) -> NLPOutcome``
+  instead of IPOPT (a peer method on the same transcribed NLP and starts; a kind's own extra phase before a start,
+  such as a path synthesis' fixed-timing fit of its random starts, is IPOPT's, so a peer starts those from the
+  start as drawn: :attr:`CompiledNLP.peer_method`);
+* ``scaling="none"``: IPOPT is given the raw variables (s = 1), to measure what the nominal scaling does;
+* ``length_factor``: IPOPT is handed the problem with every length ``factor`` times its number in the kind's unit
+  (1e-3: metres for mm; :mod:`synthesis.core.units`), starts, the returned point and the multipliers mapped to and
+  from the kind's units, so the kind and the multistart see mm as always (the scale case of
+  tests/extreme/test_scale.py).
+
+A kind's problems are compiled with its build's ``Setting.method`` (:func:`synthesis.core.declared.compile_problem`);
+:func:`solved_with_method` is the kind transform that sets it, and reconfigures after the build an NLP a kind
+compiled without it (a changed derivative mode or length unit then builds IPOPT's solver again; the seconds of the
+discarded build are :attr:`CompiledNLP.discarded_s`, which the bench leaves out of its times).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
@@ -85,7 +91,7 @@ PRESETS: dict[str, dict] = {
                   "ipopt.bound_relax_factor": 0.0},
 }
 
-#: what :func:`derivatives` ``("finite_difference")`` adds to a preset: IPOPT's own forward differences of
+#: what ``SolveMethod(derivatives="finite_difference")`` adds to a preset: IPOPT's own forward differences of
 #: f and g (it never calls CasADi's gradient or Jacobian) and a limited-memory (L-BFGS) Hessian
 FINITE_DIFFERENCE = {"ipopt.hessian_approximation": "limited-memory",
                      "ipopt.gradient_approximation": "finite-difference-values",
@@ -93,60 +99,74 @@ FINITE_DIFFERENCE = {"ipopt.hessian_approximation": "limited-memory",
 DERIVATIVES = ("exact", "finite_difference")
 SCALINGS = ("nominal", "none")
 
-_derivatives: ContextVar[str] = ContextVar("agrisynth_ipopt_derivatives", default="exact")
-_solve_with: ContextVar[Callable | None] = ContextVar("agrisynth_solve_with", default=None)
-_scaling: ContextVar[str] = ContextVar("agrisynth_variable_scaling", default="nominal")
-_length_factor: ContextVar[float] = ContextVar("agrisynth_length_factor", default=1.0)
+@dataclass(frozen=True)
+class SolveMethod:
+    """How a :class:`CompiledNLP` solves (module docstring): IPOPT's derivatives ("exact" or "finite_difference"),
+    its variables ("nominal": w = s * z, or "none": w), the length unit it sees (``length_factor`` times the kind's)
+    and, with a ``runner``, a peer method answering every start instead of IPOPT."""
+
+    derivatives: str = "exact"
+    scaling: str = "nominal"
+    length_factor: float = 1.0
+    runner: Callable | None = None
+
+    def __post_init__(self):
+        for what, mode, allowed in (("derivatives", self.derivatives, DERIVATIVES),
+                                    ("scaling", self.scaling, SCALINGS)):
+            if mode not in allowed:
+                raise ValueError(f"{what}: {mode!r} is not one of {', '.join(allowed)}")
+        factor = float(self.length_factor)
+        if not (math.isfinite(factor) and factor > 0.0):
+            raise ValueError(f"length_factor: the factor must be a positive number, not {self.length_factor!r}")
+        object.__setattr__(self, "length_factor", factor)
+
+    def builds_like(self, other: SolveMethod) -> bool:
+        """Whether IPOPT's solver built for ``other`` serves this method too (the scaling and the runner are read
+        per solve)."""
+        return self.derivatives == other.derivatives and self.length_factor == other.length_factor
+
+
+EXACT = SolveMethod()
+
+
+def compiled_in(nlp) -> list[CompiledNLP]:
+    """The CompiledNLPs a kind's NLP (:class:`~synthesis.core.kind.KindNLP`) holds: ``compiled``, its ``stages``
+    and its reduced form's (``configuration.compiled``)."""
+    configuration = getattr(nlp, "configuration", None)
+    found = [nlp.compiled, *getattr(nlp, "stages", ()), getattr(configuration, "compiled", None)]
+    return [c for c in found if isinstance(c, CompiledNLP)]
+
+
+def solved_with_method(kind, **changes):
+    """``kind`` with every NLP its solve builds solved by its :class:`SolveMethod` with ``changes`` (e.g.
+    ``derivatives="finite_difference"``, ``length_factor=1e-3``, ``runner=peer``): a kind transform
+    (``Kind.solving_with``), the kind itself untouched.  The build's setting carries the method
+    (``Setting.method``, which the core's compile of a kind's problem hands each CompiledNLP); an NLP the kind
+    compiled without it is reconfigured after the build (:meth:`CompiledNLP.reconfigure`)."""
+    SolveMethod(**changes)          # a bad mode or factor is refused here, before any build
+    solving = kind.solving()
+
+    def build(setting, elastic):
+        method = dataclasses.replace(setting.method or EXACT, **changes)
+        nlp = solving.build(dataclasses.replace(setting, method=method), elastic)
+        for compiled in compiled_in(nlp):
+            compiled.reconfigure(**changes)
+        return nlp
+    return kind.solving_with(dataclasses.replace(solving, build=build))
 
 
 @contextmanager
-def _mode(var: ContextVar[str], mode: str, allowed, what: str) -> Iterator[None]:
-    """``var`` set to ``mode`` (one of ``allowed``) while the block runs: CompiledNLPs built there read it."""
-    if mode not in allowed:
-        raise ValueError(f"{what}: {mode!r} is not one of {', '.join(allowed)}")
-    token = var.set(mode)
+def answered_by(compiled: list[CompiledNLP], runner: Callable | None) -> Iterator[None]:
+    """Each of ``compiled`` answers its solves with ``runner`` while the block runs (its method's runner before and
+    after): a look at the start a kind's NLP would hand IPOPT, or at an iterate mapped as an answer."""
+    before = [c.method for c in compiled]
+    for c in compiled:
+        c.reconfigure(runner=runner)
     try:
         yield
     finally:
-        var.reset(token)
-
-
-def derivatives(mode: str):
-    """CompiledNLPs built inside get ``mode`` derivatives ("exact" or "finite_difference")."""
-    return _mode(_derivatives, mode, DERIVATIVES, "derivatives")
-
-
-def variable_scaling(mode: str):
-    """CompiledNLPs built inside give IPOPT ``mode`` variables ("nominal": w = s * z, or "none": w)."""
-    return _mode(_scaling, mode, SCALINGS, "variable_scaling")
-
-
-@contextmanager
-def length_unit(factor: float) -> Iterator[None]:
-    """CompiledNLPs built inside solve their problem with every length in a unit ``factor`` times the kind's."""
-    factor = float(factor)
-    if not (math.isfinite(factor) and factor > 0.0):
-        raise ValueError(f"length_unit: the factor must be a positive number, not {factor!r}")
-    token = _length_factor.set(factor)
-    try:
-        yield
-    finally:
-        _length_factor.reset(token)
-
-
-@contextmanager
-def solved_with(runner: Callable | None) -> Iterator[None]:
-    """``CompiledNLP.solve`` inside calls ``runner(compiled, start, w0, p) -> NLPOutcome`` instead of IPOPT."""
-    token = _solve_with.set(runner)
-    try:
-        yield
-    finally:
-        _solve_with.reset(token)
-
-
-def peer_method_active() -> bool:
-    """Whether CompiledNLP.solve is answered by a peer method (inside solved_with) rather than IPOPT."""
-    return _solve_with.get() is not None
+        for c, method in zip(compiled, before):
+            c.method = method
 
 
 @dataclass
@@ -205,16 +225,64 @@ class CompiledNLP:
 
     def __init__(self, problem: Problem, elastic: bool = False, derivatives: str | None = None,
                  scaling: str | None = None, length_factor: float | None = None,
-                 watched: bool = False):
+                 watched: bool = False, method: SolveMethod | None = None, with_solver: bool = True,
+                 robust_start: bool = False):
+        """``method`` (default: exact derivatives, nominal scaling, the kind's units, IPOPT), each of
+        ``derivatives``, ``scaling`` and ``length_factor`` given replacing its field (a kind's own choice).
+        ``with_solver`` False: no IPOPT instance (``solver`` None), the problem is evaluated and never solved (the
+        tolerance analysis: IPOPT's setup of the exact Hessian is most of a build on its 10x grid); ``robust_start``:
+        each start's extras are followed by the tolerance box's sensitivity and epigraph starts at x0
+        (:meth:`~synthesis.core.transcribe.Transcription.full_extra`; a robust solve)."""
         t0 = time.perf_counter()
         self.problem = problem
         self.elastic = elastic
-        self.derivatives = _derivatives.get() if derivatives is None else derivatives
-        self.scaling = _scaling.get() if scaling is None else scaling
+        self.watched = watched
+        changes = {k: v for k, v in (("derivatives", derivatives), ("scaling", scaling),
+                                     ("length_factor", length_factor)) if v is not None}
+        method = EXACT if method is None else method
+        self.method = dataclasses.replace(method, **changes) if changes else method
         self.t: Transcription = transcribe(problem, elastic)
-        # what IPOPT is given: the kind's NLP, or it in another length unit (length_unit): w' = u w, g' = c_g g,
-        # f' = c_f f (synthesis.core.units); t stays the kind's
-        factor = _length_factor.get() if length_factor is None else float(length_factor)
+        self.with_solver = with_solver
+        self.robust_start = robust_start and self.t.robust is not None
+        self.discarded_s = 0.0      # seconds of IPOPT setups reconfigure() replaced (the bench leaves them out)
+        self._build_ipopt()
+        self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
+        self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])
+        self.build_s = time.perf_counter() - t0     # transcription and IPOPT's setup (the bench reports it)
+
+    @property
+    def derivatives(self) -> str:
+        return self.method.derivatives
+
+    @property
+    def scaling(self) -> str:
+        return self.method.scaling
+
+    @property
+    def peer_method(self) -> bool:
+        """Whether a peer method (the method's runner) answers this NLP's solves rather than IPOPT."""
+        return self.method.runner is not None
+
+    def reconfigure(self, **changes) -> None:
+        """Solve with this NLP's method with ``changes`` from now on (:class:`SolveMethod`'s fields); a changed
+        derivative mode or length unit builds IPOPT's solver again (the transcription is kept), the replaced
+        setup's seconds added to :attr:`discarded_s`."""
+        method = dataclasses.replace(self.method, **changes)
+        if method.builds_like(self.method):
+            self.method = method
+            return
+        discarded = self._ipopt_s
+        self.method = method
+        self._build_ipopt()
+        self.discarded_s += discarded
+        self.build_s += self._ipopt_s - discarded
+
+    def _build_ipopt(self) -> None:
+        """IPOPT's solver of the method: the kind's NLP, or it in another length unit: w' = u w, g' = c_g g,
+        f' = c_f f (synthesis.core.units); ``t`` stays the kind's."""
+        t0 = time.perf_counter()
+        problem, elastic = self.problem, self.elastic
+        factor = self.method.length_factor
         if factor != 1.0 and self.t.robust is not None:
             raise ValueError(f"problem {problem.name}: a length unit change of a tolerance box (robust) problem is "
                              f"not built (its sensitivity variables mix units)")
@@ -231,21 +299,19 @@ class CompiledNLP:
             self._f, self._g = f * self._objective_unit, g * ca.DM(self._row_unit)
         opts = {"print_time": False, "show_eval_warnings": False, "ipopt.print_level": 5, "ipopt.sb": "yes",
                 **PRESETS[problem.ipopt], **problem.ipopt_options, "ipopt.max_iter": problem.max_iter,
-                **(FINITE_DIFFERENCE if self.derivatives == "finite_difference" else {})}
+                **(FINITE_DIFFERENCE if self.method.derivatives == "finite_difference" else {})}
         nlp = {"x": self._w, "f": self._f, "g": self._g}
         if problem.parameters.numel():
             nlp["p"] = problem.parameters
         self._watch = None
         # one watch per solver (the scaled one has n_w + 1 + n_g more parameters: s, the objective's and rows' scales)
-        if watched:
+        if self.watched:
             self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
-        self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts)
+        self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts) if self.with_solver else None
         self._scaled_solver = None         # built on the first start solved in another length unit
-        self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
-        self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])
-        self.build_s = time.perf_counter() - t0     # transcription and IPOPT's setup (the bench reports it)
+        self._ipopt_s = time.perf_counter() - t0
 
     def scaled_solver(self):
         """IPOPT on z with w = s * z, s (the nominal values) appended to the problem's parameters; built once,
@@ -263,6 +329,7 @@ class CompiledNLP:
                 opts = {**opts, "iteration_callback": self._scaled_watch}
             self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, opts)
             self.build_s += time.perf_counter() - t0
+            self._ipopt_s += time.perf_counter() - t0
         return self._scaled_solver
 
     @property
@@ -280,29 +347,16 @@ class CompiledNLP:
         ``watch(iteration, f)`` True stops it (a solver built ``watched=True``; module docstring); ``x_bounds``
         (lower, upper) replace the bounds of the problem's x for this run only (within them: an entry with equal
         bounds is held fixed, e.g. a phase of a continuation); ``extra_bounds`` those of the extra variables
-        (any values, lower <= upper: e.g. elastic slacks held at a value).  A peer method (solved_with) has no
-        such run."""
+        (any values, lower <= upper: e.g. elastic slacks held at a value).  A peer method (the method's runner) has
+        no such run."""
+        if self.robust_start:
+            extra0 = self.t.full_extra(extra0, x0, p)
         extra0 = self.t.extra_init if extra0 is None else np.asarray(extra0, float)
         p = np.zeros(0) if p is None else np.atleast_1d(np.asarray(p, float))
-        lbw, ubw = self.t.lbw, self.t.ubw
-        if x_bounds is not None:
-            n = self.t.n_x
-            lo, hi = (np.asarray(b, float) for b in x_bounds)
-            if lo.shape != (n,) or hi.shape != (n,) or not (np.all(lbw[:n] <= lo) and np.all(lo <= hi)
-                                                            and np.all(hi <= ubw[:n])):      # NaN fails too
-                raise ValueError(f"problem {self.problem.name}: x_bounds must be {n} lower and upper values within "
-                                 f"the problem's bounds, lower <= upper")
-            lbw, ubw = np.concatenate([lo, lbw[n:]]), np.concatenate([hi, ubw[n:]])
-        if extra_bounds is not None:
-            n, m = self.t.n_x, len(lbw) - self.t.n_x
-            lo, hi = (np.asarray(b, float) for b in extra_bounds)
-            if lo.shape != (m,) or hi.shape != (m,) or not np.all(lo <= hi):      # NaN fails too
-                raise ValueError(f"problem {self.problem.name}: extra_bounds must be {m} lower and upper values, "
-                                 f"lower <= upper")
-            lbw, ubw = np.concatenate([lbw[:n], lo]), np.concatenate([ubw[:n], hi])
+        lbw, ubw = self._run_bounds(x_bounds, extra_bounds)
         args = dict(x0=np.concatenate([np.asarray(x0, float), extra0]), lbx=lbw, ubx=ubw,
                     lbg=self.t.lbg, ubg=self.t.ubg)
-        runner = _solve_with.get()
+        runner = self.method.runner
         if runner is not None:
             if x_bounds is not None or extra_bounds is not None:
                 raise ValueError(f"problem {self.problem.name}: a run with its own bounds has no peer method")
@@ -356,6 +410,27 @@ class CompiledNLP:
         lam = np.asarray(sol["lam_g"]).ravel() * sf * self._row_unit / (sg * self._objective_unit)
         return NLPOutcome(start, x, f if math.isfinite(f) else math.inf, stats["return_status"],
                           bool(stats["success"]), int(stats["iter_count"]), wall, log(), lam, p)
+
+    def _run_bounds(self, x_bounds, extra_bounds) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) of the decision vector for one run: the transcription's, ``x_bounds`` replacing those of
+        the problem's x (within them) and ``extra_bounds`` those of the extra variables (:meth:`solve`)."""
+        lbw, ubw = self.t.lbw, self.t.ubw
+        if x_bounds is not None:
+            n = self.t.n_x
+            lo, hi = (np.asarray(b, float) for b in x_bounds)
+            if lo.shape != (n,) or hi.shape != (n,) or not (np.all(lbw[:n] <= lo) and np.all(lo <= hi)
+                                                            and np.all(hi <= ubw[:n])):      # NaN fails too
+                raise ValueError(f"problem {self.problem.name}: x_bounds must be {n} lower and upper values within "
+                                 f"the problem's bounds, lower <= upper")
+            lbw, ubw = np.concatenate([lo, lbw[n:]]), np.concatenate([hi, ubw[n:]])
+        if extra_bounds is not None:
+            n, m = self.t.n_x, len(lbw) - self.t.n_x
+            lo, hi = (np.asarray(b, float) for b in extra_bounds)
+            if lo.shape != (m,) or hi.shape != (m,) or not np.all(lo <= hi):      # NaN fails too
+                raise ValueError(f"problem {self.problem.name}: extra_bounds must be {m} lower and upper values, "
+                                 f"lower <= upper")
+            lbw, ubw = np.concatenate([lbw[:n], lo]), np.concatenate([ubw[:n], hi])
+        return lbw, ubw
 
     def slack_values(self, x: np.ndarray) -> dict[str, float]:
         """Elastic form: each relaxable rule's slack at a returned decision vector, in the rule's unit."""

@@ -115,7 +115,7 @@ def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None
         figures, notes = comparison_figures(cands, staging)
         notes = _different_targets(cands) + notes
         if bench:
-            from synthesis.bench import plot_error_vs_time
+            from synthesis.report.bench_plots import plot_error_vs_time
 
             try:
                 plot_error_vs_time(bench, staging / "error_vs_time.png")

@@ -59,6 +59,7 @@ from synthesis.core.solve import run_solve
 from synthesis.kinds.fourbar_path.check import evaluate
 from synthesis.kinds.fourbar_path.construction import joint_positions
 from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_spec
+from synthesis.kinds.fourbar_path import literature
 from synthesis.kinds.fourbar_path.starts import CLASS_ROWS
 from synthesis.kinds.fourbar_path.synthetic import truth_spec
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
@@ -347,8 +348,6 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
     literature.BEST_KNOWN (the lowest any recorded run found); target 1e-6 relative above it (no absolute floor: the
     objectives go down to 1e-7 units^2).
     """
-    from synthesis.kinds.fourbar_path import literature
-
     def published(name: str, spec):
         def run(target: float) -> MethodRun:
             scores = literature.competitor_scores(name)
