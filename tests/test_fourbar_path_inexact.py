@@ -449,8 +449,8 @@ def _path_error_independent(spec, design: np.ndarray, theta: np.ndarray) -> floa
 def test_a_run_with_its_own_x_bounds_holds_fixed_entries_exactly_and_is_checked():
     """CompiledNLP.solve(x_bounds=...): entries with equal bounds come back exactly as given (egg16's crank angles),
     the rest move; bounds outside the problem's, of the wrong length or crossed are refused, and so is such a run
-    under a peer method (solved_with), which has no way to hold them."""
-    from synthesis.core.ipopt import solved_with
+    under a peer method (the method's runner), which has no way to hold them."""
+    from synthesis.core.ipopt import answered_by
     spec = inexact_spec("egg16").model
     nlp = PathNLP(spec, seed=0)
     sp = nlp.start(2, nlp.init)
@@ -466,7 +466,7 @@ def test_a_run_with_its_own_x_bounds_holds_fixed_entries_exactly_and_is_checked(
     for bad in ((wider, hi), (lo[:-1], hi[:-1]), (hi, lo)):
         with pytest.raises(ValueError, match="x_bounds"):
             nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=bad)
-    with solved_with(lambda compiled, start, x0, p: None):
+    with answered_by([nlp.compiled], lambda compiled, start, x0, p: None):
         with pytest.raises(ValueError, match="no peer method"):
             nlp.compiled.solve(2, w0, p=sp.sign, x_bounds=(lo, hi))
 

@@ -9,7 +9,7 @@ by factor**p (p = 1 for mm, m/s and mm/s^2, 2 for mm^2, -1 for 1/mm, 0 for deg, 
 numbers).  :data:`LENGTH_POWER` is the table; a unit not in it is refused (:func:`length_power`), not guessed.
 
 The factors of a transcription's variables, rows and objective (:func:`variable_factors`, :func:`row_factors`,
-:func:`objective_factor`) are what :func:`synthesis.core.ipopt.length_unit` applies to hand IPOPT the problem
+:func:`objective_factor`) are what ``synthesis.core.ipopt.SolveMethod(length_factor=...)`` applies to hand IPOPT the problem
 in another length unit: w' = c_w w, g' = c_g g (bounds alike, so the kind's back-off carries over exactly),
 f' = c_f f -- the same feasible set and minimiser, in the numbers a user working in metres would give IPOPT.
 """

@@ -1,7 +1,7 @@
 """Scale (the extreme-case matrix): every library problem with free variables solved with its lengths in
 metres (every length x 1e-3) and x 1e3 instead of mm, against the same problem in mm.
 
-The unit change is applied to the problem's NLP in the core (``ipopt.length_unit``, synthesis.core.units):
+The unit change is applied to the problem's NLP in the core (``ipopt.SolveMethod.length_factor``, synthesis.core.units):
 every variable, row, bound and the objective of declared length power p is multiplied by factor**p (mm, m/s,
 mm/s^2: p = 1, mm^2: 2, deg, rad, ratios: 0) -- the same feasible set and minimiser, the numbers a user in
 metres would hand IPOPT.  Kinds carry mm constants and specs are in mm by contract, so the change is made on the
@@ -25,7 +25,7 @@ from solving import run_solve
 from synthesis import kinds
 from synthesis.core import ipopt, units
 from synthesis.core.kind import Setting
-from synthesis.core.solve import run_multistart
+from synthesis.core.solve import run_multistart, run_solve as run_core_solve
 from synthesis.spec.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
@@ -97,8 +97,7 @@ def solve_in(loaded, factor: float, starts: int):
     spec = loaded.model
     # prepare (fits to published tables, laws) is data for the problem, in mm: not the NLP a unit change is about
     setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
-    with ipopt.length_unit(factor):
-        return run_multistart(kind, setting, starts=starts, workers=1)
+    return run_multistart(ipopt.solved_with_method(kind, length_factor=factor), setting, starts=starts, workers=1)
 
 
 def design_difference(design: dict, reference: dict) -> float:
@@ -164,8 +163,8 @@ def own_accuracy(loaded, best, starts: int) -> float | None:
 
 def conflicting_rules(loaded, factor: float, starts: int) -> list[str]:
     """The conflicting rules of the whole solve (multistart, then the elastic diagnosis) in that unit."""
-    with ipopt.length_unit(factor):
-        result, _, _ = run_solve(loaded, starts=starts, workers=1)
+    kind = ipopt.solved_with_method(kinds.solving_kind_for(loaded), length_factor=factor)
+    result, _, _ = run_core_solve(kind, loaded, starts=starts, workers=1)
     return sorted((result.elastic or {}).get("conflicting", []))
 
 
@@ -218,8 +217,7 @@ def test_length_power_table_and_an_unknown_unit():
     with pytest.raises(ValueError, match="rule spacing.*'furlong'"):
         units.length_power("furlong", "rule spacing")
     with pytest.raises(ValueError):
-        with ipopt.length_unit(0.0):
-            pass
+        ipopt.SolveMethod(length_factor=0.0)
 
 
 def _crank_rocker_spec(tmp_path, k: float):
@@ -371,8 +369,7 @@ def test_a_watched_solve_sees_the_objective_in_the_problem_s_units(factor, scali
     problem = Problem("watched", x, [0.0, 0.0], [100.0, 100.0], [], [],
                       ObjectiveParts(f=(x[0] - 30) ** 2 + (x[1] - 40) ** 2 + 7.0), x_units=["mm", "mm"],
                       objective_unit="mm^2")
-    with ipopt.length_unit(factor), ipopt.variable_scaling(scaling):
-        nlp = CompiledNLP(problem, watched=True)
+    nlp = CompiledNLP(problem, watched=True, method=ipopt.SolveMethod(scaling=scaling, length_factor=factor))
     seen = []
     out = nlp.solve(0, np.array([1.0, 2.0]), watch=lambda k, f: seen.append(f) or False)
     assert seen[0] == pytest.approx(29.0 ** 2 + 38.0 ** 2 + 7.0, rel=1e-12)
