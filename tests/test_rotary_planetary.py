@@ -1,0 +1,221 @@
+"""Kind rotary_planetary: the exported pitch curves checked independently of the kind's formulas (centre distance,
+rolling without slip, closure, the claw tip rebuilt by rolling the exported curves), key poses, the solved library
+redesign on a finer grid, and the rules' exact derivatives against central differences."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_simpson
+
+from conftest import LIBRARY
+from synthesis import kinds
+from synthesis.kinds.rotary_planetary.check import Angles, evaluate, find_angles, rules_of, train_of
+from synthesis.kinds.rotary_planetary.export import write_pitch_curves_csv, write_pitch_curves_dxf
+from synthesis.kinds.rotary_planetary.kinematics import turn_grid
+from synthesis.spec import load_spec
+
+KIND = kinds.get("rotary_planetary")
+
+#: a design whose four pitch curves are all non-circular (both laws with two harmonics)
+SPEC = """
+kind = "rotary_planetary"
+name = "rp_test"
+source = "test design"
+
+[gears]
+centre_distance_1 = 38.0
+centre_distance_2 = 52.0
+planet_cos = [-12.0, 2.0]
+planet_sin = [-6.0, 1.5]
+idler_cos = [4.0, -1.0]
+idler_sin = [3.0, 0.5]
+
+[arm]
+length = 200.0
+angle = -150.0
+claw_angle = 20.0
+
+[operation]
+carrier_speed = 150.0
+forward_speed = 0.6
+axis_height = 200.0
+
+[key_poses.at_60]
+x = -150.0
+y = 20.0
+carrier_angle = 60.0
+attitude = -120.0
+
+[rules]
+planting_depth = [15.0, 45.0]
+hole_width_max = 40.0
+plant_spacing = [100.0, 220.0]
+"""
+
+
+@pytest.fixture(scope="module")
+def checked(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("rp")
+    (folder / "spec.toml").write_text(SPEC)
+    loaded = load_spec(folder / "spec.toml")
+    result = KIND.check(loaded)
+    write_pitch_curves_csv(result, folder / "pitch_curves.csv")
+    return loaded, result, folder
+
+
+@pytest.fixture(scope="module")
+def table(checked) -> dict[str, np.ndarray]:
+    with open(checked[2] / "pitch_curves.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    return {name: np.array([float(r[i]) for r in rows[1:]]) for i, name in enumerate(rows[0])}
+
+
+def _points(table, col: str) -> np.ndarray:
+    a, r = np.radians(table[f"{col}_deg"]), table[f"{col}_radius_mm"]
+    return np.column_stack([r * np.cos(a), r * np.sin(a)])
+
+
+def _arcs(p: np.ndarray) -> np.ndarray:
+    """Arc length over each double interval [k, k+2] (k even) of a sampled curve: the arc of the circle through
+    the three samples (error of order h^4, where a chord's is h^2)."""
+    a, b, c = p[0:-2:2], p[1:-1:2], p[2::2]
+    ab, bc, ca_ = (np.linalg.norm(u - v, axis=1) for u, v in ((a, b), (b, c), (c, a)))
+    cross = np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    radius = ab * bc * ca_ / (2.0 * cross)
+    return 2.0 * radius * (np.arcsin(ab / (2 * radius)) + np.arcsin(bc / (2 * radius)))
+
+
+def test_csv_columns_and_centre_distance(table):
+    assert list(table)[0] == "carrier_deg" and len(table["carrier_deg"]) == 3601
+    for k, a in ((1, 38.0), (2, 52.0)):
+        assert np.all(table[f"pair{k}_centre_distance_mm"] == a)
+        total = table[f"pair{k}_driver_radius_mm"] + table[f"pair{k}_driven_radius_mm"]
+        assert np.max(np.abs(total - a)) < 1e-9
+        # the curves are not circles: each radius varies by millimetres over a turn
+        assert np.ptp(table[f"pair{k}_driver_radius_mm"]) > 1.0
+
+
+def test_pairs_roll_without_slip(table):
+    for k in (1, 2):
+        drv, dvn = _arcs(_points(table, f"pair{k}_driver")), _arcs(_points(table, f"pair{k}_driven"))
+        assert np.max(np.abs(drv / dvn - 1.0)) < 1e-6
+        # and the whole perimeters agree (both gears turn once per carrier turn)
+        assert abs(drv.sum() / dvn.sum() - 1.0) < 1e-9
+
+
+def test_each_curve_closes(table):
+    for col in ("pair1_driver", "pair1_driven", "pair2_driver", "pair2_driven"):
+        turn = table[f"{col}_deg"][-1] - table[f"{col}_deg"][0]
+        assert abs(abs(turn) - 360.0) < 1e-9, col
+        assert abs(table[f"{col}_radius_mm"][-1] - table[f"{col}_radius_mm"][0]) < 1e-9, col
+
+
+def test_tip_from_rolling_the_exported_curves(checked, table):
+    """Roll the exported curves: the idler turns r_sun / r_idler1 and the planet r_idler2 / r_planet times as fast
+    as its driver (carrier frame); the planet's angle at carrier 0 is read off its curve's contact angle."""
+    _, result, _ = checked
+    d = result.design
+    phi = np.radians(table["carrier_deg"])
+    idler_rate = table["pair1_driver_radius_mm"] / table["pair1_driven_radius_mm"]
+    planet_rate = -idler_rate * table["pair2_driver_radius_mm"] / table["pair2_driven_radius_mm"]
+    # the planet meets the idler at pi in the carrier frame: its body turned by pi - (contact angle in its frame)
+    theta3 = (math.pi - np.radians(table["pair2_driven_deg"][0])) + cumulative_simpson(planet_rate, x=phi, initial=0.0)
+    alpha = math.radians(d["arm_angle"]) + phi + theta3
+    r = d["centre_distance_1"] + d["centre_distance_2"]
+    x = r * np.cos(phi) + d["arm_length"] * np.cos(alpha)
+    y = r * np.sin(phi) + d["arm_length"] * np.sin(alpha)
+    curves = result.extra["motion"]["curves"]
+    assert np.allclose(curves["carrier_deg"], table["carrier_deg"][::10])
+    assert np.max(np.hypot(x[::10] - curves["x"], y[::10] - curves["y"])) < 1e-6
+    # the arm swings: its attitude spans more than 20 deg over a turn
+    assert np.ptp(curves["claw_attitude_deg"]) > 20.0
+
+
+def test_prescribed_key_pose_is_read_at_its_carrier_angle(checked):
+    _, result, _ = checked
+    d = result.design
+    phi = math.radians(60.0)
+    # the law by hand: F(60 deg) from the spec's coefficients
+    f = sum(c * math.cos(k * phi) + s * math.sin(k * phi) for k, (c, s) in enumerate(((-12.0, -6.0), (2.0, 1.5)), 1))
+    alpha = math.radians(-150.0 + f)
+    x = 90.0 * math.cos(phi) + 200.0 * math.cos(alpha)
+    y = 90.0 * math.sin(phi) + 200.0 * math.sin(alpha)
+    rules = {r["name"]: r for r in result.rules}
+    assert rules["pose_at_60"]["value"] == pytest.approx(math.hypot(x + 150.0, y - 20.0), abs=1e-9)
+    assert rules["pose_at_60_attitude"]["value"] == pytest.approx(-150.0 + f + 20.0 + 120.0, abs=1e-9)
+    assert d["centre_distance_1"] + d["centre_distance_2"] == 90.0
+
+
+def test_dxf_holds_four_closed_pitch_curves(checked, tmp_path):
+    import ezdxf
+
+    _, result, _ = checked
+    write_pitch_curves_dxf(result, tmp_path / "pitch_curves.dxf")
+    doc = ezdxf.readfile(tmp_path / "pitch_curves.dxf")
+    polylines = {e.dxf.layer: e for e in doc.modelspace().query("LWPOLYLINE")}
+    assert set(polylines) == {"SUN", "IDLER_1", "IDLER_2", "PLANET"}
+    assert all(p.closed for p in polylines.values())
+    # in mesh at carrier angle 0: the sun's and idler gear 1's curves touch on the carrier line
+    sun = np.array(polylines["SUN"].get_points("xy"))
+    idler = np.array(polylines["IDLER_1"].get_points("xy"))
+    assert sun[0, 1] == pytest.approx(0.0, abs=1e-9)
+    assert np.min(np.hypot(idler[:, 0] - sun[0, 0], idler[:, 1] - sun[0, 1])) < 1e-6
+
+
+def test_rules_ad_jacobian_matches_central_differences(checked):
+    loaded, result, _ = checked
+    spec = loaded.model
+    names = list(spec.variables())
+    x0 = np.array([result.design[n] for n in names])
+    angles = dict(top=1.2, bottom=4.1, entry=3.8, exit=4.4, poses={"at_60": math.radians(60.0)})
+    grid = turn_grid(24)
+
+    def rows(design):
+        rules = rules_of(spec, train_of(spec, design), Angles(**angles), grid, 5)
+        return [r.expr for r in rules if r.name != "plant_spacing"]
+
+    z = ca.SX.sym("z", len(names))
+    symbolic = ca.vertcat(*[ca.vec(e) for e in rows({n: z[i] for i, n in enumerate(names)})])
+    f = ca.Function("f", [z], [symbolic, ca.jacobian(symbolic, z)])
+
+    def numeric(x):
+        return np.concatenate([np.ravel(np.asarray(e, dtype=float)) for e in rows(dict(zip(names, x)))])
+
+    value, jac = (np.array(v) for v in f(x0))
+    assert np.allclose(value.ravel(), numeric(x0), rtol=1e-12, atol=1e-12)
+    fd = np.column_stack([(numeric(x0 + h * e) - numeric(x0 - h * e)) / (2 * h)
+                          for e, h in ((np.eye(len(x0))[i], 1e-5 * max(1.0, abs(x0[i]))) for i in range(len(x0)))])
+    scale = np.maximum(np.abs(jac), 1.0)
+    assert np.max(np.abs(jac - fd) / scale) < 1e-6
+
+
+def test_check_finds_soil_crossings_and_reports_every_rule(checked):
+    loaded, result, _ = checked
+    names = [r["name"] for r in result.rules]
+    assert names[:3] == ["pair_ratio", "pitch_curve_concavity", "pitch_normal_angle"]
+    assert {"entry_angle", "hole_width", "in_soil_forward_speed", "plant_spacing"} <= set(names)
+    soil = result.extra["motion"]["soil"]
+    assert soil["entry_carrier_deg"] < soil["exit_carrier_deg"]
+    spacing = next(r for r in result.rules if r["name"] == "plant_spacing")
+    assert spacing["value"] == pytest.approx(600.0 * 0.2, rel=1e-12)     # V * half a turn at 150 r/min
+
+
+@pytest.mark.slow
+def test_solved_redesign_holds_every_rule_on_a_finer_grid():
+    from synthesis.core.solve import solve_spec
+
+    loaded = load_spec(LIBRARY / "rotary_planetary/key_pose_redesign.toml")
+    result, _, _ = solve_spec(loaded, workers=1)
+    assert result.status == "optimal"
+    spec = loaded.model
+    rules, _, _ = evaluate(spec, result.design, n=20 * spec.solver.samples_per_turn, soil_samples=2000)
+    records = [r.record() for r in rules]
+    assert all(r.satisfied for r in records), [r.name for r in records if not r.satisfied]
+    for name, pose in result.extra["motion"]["poses"].items():
+        assert pose["miss_mm"] <= spec.key_poses[name].tolerance + 1e-6
