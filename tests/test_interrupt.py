@@ -245,9 +245,9 @@ def test_resume_refuses_another_spec_or_other_settings(tmp_path):
 
 
 @pytest.mark.parametrize("command, where, code", [
-    pytest.param(("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "synthesis.cli:rule_table", 1,
+    pytest.param(("check", LIBRARY / "planting_arm" / "taiwan_example1.toml"), "synthesis.cli.views:rule_table", 1,
                  marks=pytest.mark.slow),                                                   # 3 violated
-    pytest.param(("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.cli:comparison_table", 0,
+    pytest.param(("solve", SPEC, "--starts", 2, "--workers", 1), "synthesis.cli.views:comparison_table", 0,
                  marks=pytest.mark.slow),                                                   # every rule holds
     # the signal as the solve returns, before the result is written (the log of the starts, the progress bar):
     # the trial found the whole run discarded there, exit 130 and nothing written
@@ -294,15 +294,15 @@ def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_co
 def test_main_called_in_process_leaves_the_signals_to_its_caller(tmp_path):
     """A review found main()'s 'ignore signals once the answer is printed' sticky: after an in-process check the test
     process ignored SIGINT and SIGTERM (Ctrl-C, a CI timeout), and so did its children.  main() now forgets it is a
-    program when it returns, and the in-process helper restores the handlers it found."""
-    from synthesis import cli
+    program when it returns (it is one only through click's context of that call), and the in-process helper restores
+    the handlers it found."""
     from test_run_folders import cli_in_process
 
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     code, _ = cli_in_process("check", str(LIBRARY / "planting_arm" / "taiwan_example1.toml"), "--out", str(tmp_path))
     assert code == 1 and (tmp_path / "taiwan_example1-check" / "result.json").exists()
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
-    assert signal.SIG_IGN not in before and cli._as_program is False
+    assert signal.SIG_IGN not in before
 
 
 def test_a_signal_that_fired_inside_a_c_callback_is_an_interruption_not_a_traceback():
