@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from synthesis.core.kind import Kind
 
 if TYPE_CHECKING:
-    from synthesis.core.kind import FigureWriter, Poses, Solving, SpecModel
+    from synthesis.core.kind import CoarseCheck, FigureWriter, Poses, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -45,6 +45,11 @@ class RotaryPlanetary(Kind):
                 "pitch_curves.png": pitch_curves_figure,
                 "pitch_curves.csv": write_pitch_curves_csv,
                 "pitch_curves.dxf": write_pitch_curves_dxf}
+
+    def coarse_check(self) -> CoarseCheck:
+        from synthesis.kinds.rotary_planetary.coarse import COARSE
+
+        return COARSE
 
     def poses(self) -> Poses:
         from synthesis.kinds.rotary_planetary.poses import POSES
