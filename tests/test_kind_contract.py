@@ -19,13 +19,10 @@ from solving import agrisynth
 
 TOY = """kind = "toy_disc"
 name = "toy"
-[point]
 x = {{ init = 0.0, bounds = [-20.0, 20.0] }}
 y = {{ init = 1.0, bounds = [-20.0, 20.0] }}
-[rules]
 radius = {radius}
 y_min = {y_min}
-[objective]
 target = [30.0, 40.0]
 [solver]
 starts = 3
@@ -98,17 +95,17 @@ def test_a_design_the_elastic_re_solve_finds_without_slack_is_solved_from_and_ke
     rules do not conflict: the elastic re-solve needs no slack.  Its design is a start the run missed: one more
     start (index = starts) solves the spec's NLP from it, is re-checked like any other and, satisfying every
     rule, is the result -- not status "failed" with a feasible design thrown away."""
-    import toy_kind
+    from synthesis.core.declared import DeclaredNLP
     from synthesis.core.outcome import StartOutcome
 
-    solve = toy_kind.ToyNLP.solve
+    solve = DeclaredNLP.solve
 
     def gives_up(self, start, x0):
         if self.compiled.elastic or start >= 3:
             return solve(self, start, x0)
         return StartOutcome(start, {"x": 19.0, "y": 19.0}, 41.0**2 + 21.0**2 - 20.0, "Infeasible_Problem_Detected",
                             False, 7, 0.0, "")
-    monkeypatch.setattr(toy_kind.ToyNLP, "solve", gives_up)
+    monkeypatch.setattr(DeclaredNLP, "solve", gives_up)
     path = tmp_path / "toy.toml"
     path.write_text(TOY.format(radius=10.0, y_min=-5.0))
     result, reports, _ = run_solve(toy, load_spec(path), workers=1)
@@ -126,12 +123,12 @@ def test_a_start_from_the_elastic_design_that_misses_a_rule_or_is_interrupted_is
     """The extra start is kept only when it satisfies every rule: otherwise the run is what it was (status failed,
     three starts).  A signal during it discards it, as the multistart discards an interrupted start, and the run
     ends interrupted with its three finished starts."""
-    import toy_kind
     from synthesis.core import interrupt
+    from synthesis.core.declared import DeclaredNLP
     from synthesis.core.interrupt import Interrupted
     from synthesis.core.outcome import StartOutcome
 
-    solve = toy_kind.ToyNLP.solve
+    solve = DeclaredNLP.solve
     stop_at_extra = {"on": False}
 
     def gives_up(self, start, x0):
@@ -140,7 +137,7 @@ def test_a_start_from_the_elastic_design_that_misses_a_rule_or_is_interrupted_is
         if start >= 3 and stop_at_extra["on"]:
             interrupt.simulate()
         return StartOutcome(start, {"x": 19.0, "y": 19.0}, 1000.0, "Infeasible_Problem_Detected", False, 7, 0.0, "")
-    monkeypatch.setattr(toy_kind.ToyNLP, "solve", gives_up)
+    monkeypatch.setattr(DeclaredNLP, "solve", gives_up)
     path = tmp_path / "toy.toml"
     path.write_text(TOY.format(radius=10.0, y_min=-5.0))
     result, reports, _ = run_solve(toy, load_spec(path), workers=1)

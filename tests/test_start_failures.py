@@ -86,13 +86,10 @@ def toy():
 
 TOY = """kind = "toy_disc"
 name = "toy"
-[point]
 x = { init = 0.0, bounds = [-20.0, 20.0] }
 y = { init = 1.0, bounds = [-20.0, 20.0] }
-[rules]
 radius = 10.0
 y_min = -5.0
-[objective]
 target = [30.0, 40.0]
 [solver]
 starts = 3
@@ -100,7 +97,7 @@ starts = 3
 
 
 def test_a_solve_keeps_going_past_a_raising_start_and_writes_it(tmp_path, toy):
-    from synthesis.core.ipopt import solved_with
+    from synthesis.core.ipopt import answered_by, solved_with_method
     from synthesis.core.solve import run_solve
     from synthesis.errors import SolverError
     from synthesis.result import result_text
@@ -113,11 +110,10 @@ def test_a_solve_keeps_going_past_a_raising_start_and_writes_it(tmp_path, toy):
     def runner(compiled, start, w0, p):
         if start == 0:
             raise RuntimeError("NLP evaluation failed\nin a way IPOPT could not handle")
-        with solved_with(None):
+        with answered_by([compiled], None):        # IPOPT itself for the other starts
             return compiled.solve(start, w0[:compiled.n_x])
 
-    with solved_with(runner):
-        result, reports, _ = run_solve(toy, loaded, workers=1)
+    result, reports, _ = run_solve(solved_with_method(toy, runner=runner), loaded, workers=1)
     assert result.status == "optimal" and result.solver["best_start"] != 0
     row = json.loads(result_text(result))["starts"][0]
     assert row["return_status"] == "Start_Raised: RuntimeError" and row["objective"] is None
@@ -127,8 +123,8 @@ def test_a_solve_keeps_going_past_a_raising_start_and_writes_it(tmp_path, toy):
     def always(compiled, start, w0, p):
         raise MemoryError("cannot allocate")
 
-    with solved_with(always), pytest.raises(SolverError) as err:
-        run_solve(toy, loaded, workers=1)
+    with pytest.raises(SolverError) as err:
+        run_solve(solved_with_method(toy, runner=always), loaded, workers=1)
     assert err.value.exit_code == 3
     assert str(err.value) == ("toy_disc: no start could be solved: start 0 Start_Raised: MemoryError (the start "
                               "raised MemoryError: cannot allocate); start 1 Start_Raised: MemoryError (the start "

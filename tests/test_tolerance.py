@@ -405,21 +405,19 @@ def _cam_in_seconds_with_a_cap(model):
     ("combing_chain/redesign_window_80_100.toml", None, 0.39935765896037506, 12),
     ("combing_chain/redesign_two_speed.toml", None, 1.8261361473864457, 7)])
 def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(spec, variant, objective, iterations):
-    """The operating conditions are symbols only inside the analysis (operating_as_symbols): a solve of a nominal
+    """The operating conditions are symbols only inside the analysis (Setting.operating_symbols): a solve of a nominal
     spec builds the NLP it always did (numbers; no operating_source), so one IPOPT solve from the spec's own start
     ends at the objective and iteration count measured on main before the change, to the bit (clamp_cam,
     comb_finger and combing_chain: measured on the integration branch at cc5d746, before their symbols).  The analysis's symbolic
     build is the same problem (its conditions resolved at their nominal values): same iterations, the objective to
     rounding."""
-    from synthesis.core.problem import operating_as_symbols
     loaded = load_spec(LIBRARY / spec)
     model = loaded.model if variant is None else variant(loaded.model)
     solving = kinds.solving_kind(loaded.kind).solving()
     setting = Setting(model, 0, solving.prepare(model))
     nominal = solving.build(setting, False)
     assert nominal.problem.operating_source is None
-    with operating_as_symbols():
-        symbolic = solving.build(setting, False)
+    symbolic = solving.build(Setting(model, 0, setting.data, operating_symbols=True), False)
     assert symbolic.problem.operating_source is not None
     solved, again = nominal.solve(0, nominal.init), symbolic.solve(0, symbolic.init)
     assert solved.success and (solved.objective, solved.iterations) == (objective, iterations)
@@ -431,11 +429,9 @@ def _rows_at_start(kind, spec, aux_guess: str):
     equalities from the start design and ``nlp.<aux_guess>(design)``, and every row g (with its lower bounds) there,
     the epigraph variables of a tolerance box at their start (1.01 |dg/dd| + 1e-9)."""
     from synthesis.core.sensitivity import Sensitivity
-    from synthesis.tolerance.design import without_ipopt
 
     solving = kind.solving()
-    with without_ipopt():
-        nlp = solving.build(Setting(spec, 0, solving.prepare(spec)), False)
+    nlp = solving.build(Setting(spec, 0, solving.prepare(spec), solver=False), False)
     t = nlp.compiled.t
     design = dict(zip(nlp.names, (float(v) for v in nlp.init)))
     x = Sensitivity(nlp.problem, len(nlp.names)).pin(np.concatenate([nlp.init, getattr(nlp, aux_guess)(design)]))
@@ -715,7 +711,6 @@ def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve
     solve's NLP is unchanged: one IPOPT solve from the comparison design (DESIGNS: the library spec's own start, on
     the Grashof limit, is no start to compare at) runs to the 1000-iteration cap at the objective measured on the
     integration branch at cc5d746, to the bit, and the analysis's symbolic build does the same."""
-    from synthesis.core.problem import operating_as_symbols
     from synthesis.spec.operating import at_operating
     from synthesis.tolerance.analysis import operating_dependence
     kind = kinds.get("fourbar_path")
@@ -734,8 +729,7 @@ def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve
     setting = Setting(loaded.model, 0, solving.prepare(loaded.model))
     nominal = solving.build(setting, False)
     assert nominal.problem.operating_source is None
-    with operating_as_symbols():
-        symbolic = solving.build(setting, False)
+    symbolic = solving.build(Setting(loaded.model, 0, setting.data, operating_symbols=True), False)
     assert symbolic.problem.operating_source is not None
     x0 = np.array([DESIGNS["fourbar_path"][n] for n in nominal.names])
     solved, again = nominal.solve(0, x0), symbolic.solve(0, x0)

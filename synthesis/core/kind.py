@@ -73,6 +73,11 @@ class Kind(ABC):
     #: why a ``[tolerance]`` table in ``solve`` is refused for this kind (one clause, said before anything is built);
     #: None: the robust transcription takes it
     robust_refusal: str | None = None
+    #: rule name -> what fixes its value where no design variable moves it (:class:`FixedBy`: the spec field of the
+    #: input, the field of the rule's limits), named by the pre-solve refusal of such a rule violated
+    #: (:mod:`synthesis.core.pinned`) and by the exit-3 message; a rule not named here is described by the fixed design
+    #: variables it reads
+    fixed_by: dict[str, FixedBy] = {}
 
     @abstractmethod
     def spec_model(self) -> type[SpecModel]:
@@ -132,6 +137,19 @@ class Kind(ABC):
         first screen (a path's error per target, its rms and maximum); none by default."""
         return []
 
+    def result_tables(self, result: Result) -> list[ResultTable]:
+        """Tables of the result's own figures for the report, below its headline (a path's error per target); none
+        by default."""
+        return []
+
+    def rule_fixed_by(self, rule_name: str) -> FixedBy | None:
+        """What fixes a rule's value where no design variable moves it, by the rule's name as the problem gives it;
+        by default :attr:`fixed_by` of it, a rule held at an operating scenario (``<rule>@<condition>=<value>``) or one
+        of a numbered family (``<rule>[0]``) being its rule's.  A kind whose rule names carry a part's name (a
+        tube's) overrides it."""
+        base = rule_name.split("@", 1)[0]
+        return self.fixed_by.get(base) or self.fixed_by.get(base.split("[", 1)[0])
+
     @property
     def solves(self) -> bool:
         """Whether the kind has a solve side, read without importing it (it overrides :meth:`solving`)."""
@@ -161,6 +179,7 @@ class SolvingReplaced(Kind):
         self.name, self.summary, self.objectives, self.example = base.name, base.summary, base.objectives, base.example
         self.bench_specs = base.bench_specs
         self.design_unit, self.robust_refusal = base.design_unit, base.robust_refusal
+        self.fixed_by = base.fixed_by
 
     def spec_model(self) -> type[SpecModel]:
         return self.base.spec_model()
@@ -201,6 +220,12 @@ class SolvingReplaced(Kind):
     def headline(self, result: Result) -> list[str]:
         return self.base.headline(result)
 
+    def rule_fixed_by(self, rule_name: str) -> FixedBy | None:
+        return self.base.rule_fixed_by(rule_name)
+
+    def result_tables(self, result: Result) -> list[ResultTable]:
+        return self.base.result_tables(result)
+
     @property
     def benches(self) -> bool:
         return self.base.benches
@@ -208,6 +233,24 @@ class SolvingReplaced(Kind):
     @property
     def writes_explicit_design(self) -> bool:
         return self.base.writes_explicit_design
+
+
+@dataclass(frozen=True)
+class ResultTable:
+    """A table of a result's own figures for the report (:meth:`Kind.result_tables`): its title, the column headings
+    (each with its unit) and the rows (numbers or text; None where there is no number)."""
+
+    title: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple, ...]
+
+
+@dataclass(frozen=True)
+class FixedBy:
+    """What fixes a rule's value where no design variable moves it (:attr:`Kind.fixed_by`)."""
+
+    inputs: str     # the spec field whose value is the rule's (``[soil] analysis_depth``)
+    limits: str     # the spec field of the rule's limits (``[rules] depth``)
 
 
 def _the_check(spec) -> str:
@@ -223,6 +266,15 @@ class CoarseCheck:
     evaluate: Callable[[Any], Any]               # loaded spec -> Result (status "evaluated"), the check's rules
     note: Callable[[Any], str]                   # spec -> what the coarse grid evaluates, in words (sample counts)
     fine_note: Callable[[Any], str] = _the_check  # spec -> what the fine grid (the check) evaluates, in words
+
+
+def figure_text(value, unit: str = "", digits: int = 3) -> str:
+    """A figure of a kind's :meth:`Kind.headline`: ``value`` to ``digits`` significant digits with its unit ("1.59
+    mm"), "-" where there is none (a result's null: not measured)."""
+    if value is None or isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        return "-"
+    text = f"{value:.{digits}g}"
+    return f"{text} {unit}" if unit else text
 
 
 def pose_mm(v: float) -> float | None:
@@ -288,11 +340,25 @@ class KindNLP(ABC):
 
 @dataclass(frozen=True)
 class Setting:
-    """What a kind's solve pieces receive: the validated spec, the run's seed and what ``prepare`` made."""
+    """What a kind's solve pieces receive: the validated spec, the run's seed and what ``prepare`` made, and the
+    transforms of the problem the kind declares (docs/ARCHITECTURE.md, "The kind contract"), explicit arguments of
+    its build that :func:`synthesis.core.declared.compile_problem` applies."""
 
     spec: Any
     seed: int = 0
     data: Any = None
+    #: every operating condition the kind reads declared as an :class:`~synthesis.core.problem.Operating` symbol,
+    #: even where no envelope samples it (resolved at its nominal value): the tolerance analysis then has every
+    #: rule's derivative w.r.t. it.  False (a solve): the kind writes them as numbers, the NLP it always was
+    operating_symbols: bool = False
+    #: the tolerance box the kind's problems are held in (problem -> :class:`~synthesis.core.problem.Tolerance`):
+    #: a robust solve (:mod:`synthesis.tolerance.robust`); None: the nominal problem
+    tolerance: Callable[[Any], Any] | None = None
+    #: False: the problems are compiled without an IPOPT instance (evaluated, never solved: the tolerance analysis)
+    solver: bool = True
+    #: how the problems are solved (:class:`~synthesis.core.ipopt.SolveMethod`: finite differences, another length
+    #: unit, a peer method instead of IPOPT: the bench's and tests' studies); None: IPOPT, exact derivatives
+    method: Any = None
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Sequence
 
 import casadi as ca
 import numpy as np
@@ -120,27 +118,6 @@ class Envelope:
     def scenarios(self) -> list[dict[str, float]]:
         names = list(self.samples)
         return [dict(zip(names, combo)) for combo in itertools.product(*(self.samples[n] for n in names))]
-
-
-_operating_as_symbols: ContextVar[bool] = ContextVar("agrisynth_operating_as_symbols", default=False)
-
-
-@contextmanager
-def operating_as_symbols() -> Iterator[None]:
-    """Kinds building a problem inside declare every operating condition they read as an :class:`Operating`
-    symbol, even when no envelope samples it (the problem resolves it at its nominal value): the sensitivity
-    analysis then has every rule's derivative w.r.t. it.  Outside, a kind with no envelope writes the conditions
-    as numbers, so the NLP a solve sees is the one it always was."""
-    token = _operating_as_symbols.set(True)
-    try:
-        yield
-    finally:
-        _operating_as_symbols.reset(token)
-
-
-def operating_symbols_wanted() -> bool:
-    """Whether a kind should declare its operating conditions as symbols (see :func:`operating_as_symbols`)."""
-    return _operating_as_symbols.get()
 
 
 def scenario_label(values: dict[str, float]) -> str:

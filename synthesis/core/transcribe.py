@@ -6,8 +6,8 @@ slack s_k >= 0 on all its rows, lb - scale*s <= row <= ub + scale*s, and the obj
 the smallest relaxation, in units of each rule's typical margin; rules whose slack stays positive
 are the ones that conflict.  Rules named hard stay hard (their slack is fixed at 0).
 
-*Robust* (either form, when the problem has a :class:`~synthesis.core.problem.Tolerance`, or one is
-given by :func:`tolerance_box` while it is transcribed): every inequality row g of a rule is held at its
+*Robust* (either form, when the problem has a :class:`~synthesis.core.problem.Tolerance`: a robust solve's
+problems get theirs by :func:`synthesis.core.declared.held_in_box`): every inequality row g of a rule is held at its
 linearised worst case in the tolerance box, g - sum_j t_j box_j >= lb and g + sum_j t_j box_j <= ub, with
 epigraph variables t_j >= dg/dd_j, t_j >= -dg/dd_j (so t_j >= |dg/dd_j| smoothly).  dg/dd is exact: AD
 partials and, where auxiliaries are pinned by structural equalities, the implicit-function sensitivity
@@ -17,37 +17,14 @@ follow the objective's (or the slacks); :meth:`Transcription.full_extra` gives t
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass
-from typing import Callable, Iterator, Sequence
+from typing import Sequence
 
 import casadi as ca
 import numpy as np
 
 from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, Row, Tolerance
 from synthesis.core.sensitivity import pinning_rows, total_jacobian
-
-_tolerance_of: ContextVar[Callable[[Problem], Tolerance | None] | None] = ContextVar("agrisynth_tolerance_of",
-                                                                                      default=None)
-
-
-@contextmanager
-def tolerance_box(resolver: Callable[[Problem], Tolerance | None] | None) -> Iterator[None]:
-    """Problems transcribed inside (and without their own ``tolerance``) get ``resolver(problem)``'s box:
-    how a robust solve reaches the NLP a kind builds without the kind knowing of it."""
-    token = _tolerance_of.set(resolver)
-    try:
-        yield
-    finally:
-        _tolerance_of.reset(token)
-
-
-def in_tolerance_box() -> bool:
-    """Whether problems built now are transcribed in a tolerance box (a robust solve): a kind keeps then to the
-    one form whose auxiliaries its rows pin (its whole problem, not a reduced form: ``KindNLP.configuration``)."""
-    return _tolerance_of.get() is not None
-
 
 class _Robust:
     """The robust rows of a problem's rules in a tolerance box, with their extra variables."""
@@ -213,8 +190,6 @@ def _max_min_margin(problem: Problem, objective: MaxMinMargin, hold=lambda rule,
 
 def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
     tol = problem.tolerance
-    if tol is None and _tolerance_of.get() is not None:
-        tol = _tolerance_of.get()(problem)
     robust = None if tol is None else _Robust(problem, tol)
     in_box = robust is not None
     hold = robust.hold if in_box else (lambda rule, rows: rows)

@@ -25,13 +25,11 @@ from constraints.base import RuleRecord
 from synthesis.core import interrupt
 from synthesis.core.kind import Kind, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import operating_as_symbols
 from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
-from synthesis.tolerance.design import (DesignMap, box_of, design_map, fine, freed, kind_start, whole_problem,
-                                        without_ipopt)
+from synthesis.tolerance.design import DesignMap, box_of, design_map, fine, freed, kind_start, whole_problem
 from synthesis.tolerance.envelope import SUFFIX, envelope_kind, grid_of
 
 
@@ -67,9 +65,9 @@ def linearise(kind: Kind, spec, design: dict, seed: int = 0) -> Linearised:
     data = solving.prepare(aspec)
     # every operating condition a symbol (resolved at its nominal value, the rules' values unchanged): the
     # derivatives w.r.t. forward speed, crank speed, friction, ... of a nominal spec too
-    with without_ipopt(), operating_as_symbols():
-        nlp = solving.build(Setting(aspec, seed, data), False)
-        whole_problem(nlp)         # every rule as the whole problem holds it (not the configuration form)
+    # (no IPOPT instance: the problem is evaluated, never solved)
+    nlp = solving.build(Setting(aspec, seed, data, operating_symbols=True, solver=False), False)
+    whole_problem(nlp)         # every rule as the whole problem holds it (not the configuration form)
     dmap = design_map(kind, nlp, spec)
     missing = [k for k in dmap.keys if k not in design]
     if missing:

@@ -5,14 +5,12 @@ variables no unit declares theirs (``Kind.design_unit``)."""
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from pydantic import BaseModel
 
-from synthesis.core.ipopt import NLPOutcome, solved_with
+from synthesis.core.ipopt import NLPOutcome, answered_by, compiled_in
 from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
 from synthesis.spec.design_info import describe
@@ -119,18 +117,6 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     return np.array(box)
 
 
-@contextmanager
-def without_ipopt():
-    """Kind NLPs built inside get no IPOPT instance (the analysis evaluates their problem, never solves
-    it; IPOPT's setup of the exact Hessian is most of a build on the 10x grid)."""
-    original = ca.nlpsol
-    ca.nlpsol = lambda *args, **kwargs: None
-    try:
-        yield
-    finally:
-        ca.nlpsol = original
-
-
 def whole_problem(nlp) -> None:
     """The kind's NLP solves its whole problem from every start: a second, reduced form it may solve first
     (``KindNLP.configuration``) is dropped, so a tolerance box holds, and the analysis reads, every rule as the
@@ -147,7 +133,7 @@ def kind_start(nlp, x_design: np.ndarray):
         seen.append((compiled, np.array(w0, float), np.array(p, float)))
         return NLPOutcome(start, np.array(w0, float), 0.0, "captured", True, 0, 0.0, "")
 
-    with solved_with(capture):
+    with answered_by(compiled_in(nlp), capture):
         try:
             nlp.solve(0, np.asarray(x_design, float))
         except Exception:   # noqa: BLE001 - only the captured start matters

@@ -1,10 +1,10 @@
 """``solve`` of a spec with a ``[tolerance]`` table: every rule held at its linearised worst case in the
 tolerance box (the core transcription's robust form, :mod:`synthesis.core.transcribe`), for every kind.
 
-:func:`robust_kind` wraps a kind's :class:`~synthesis.core.kind.Solving`: its NLP is built inside
-:func:`~synthesis.core.transcribe.tolerance_box` (so the kind's own Problem is transcribed robustly, the kind
-knowing nothing of it), the robust extra variables get their start values at each start, and the result
-gets the Monte-Carlo check of the answer under ``facts.tolerance``.
+:func:`robust_kind` wraps a kind's :class:`~synthesis.core.kind.Solving`: its NLP is built with the box in its
+setting (``Setting.tolerance``: :func:`synthesis.core.declared.compile_problem` holds the kind's own Problem in it,
+the kind knowing nothing of it, and starts the robust extra variables at each start), and the result gets the
+Monte-Carlo check of the answer under ``facts.tolerance``.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from synthesis.core import interrupt
 from synthesis.core.kind import Finished, Kind, Setting
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
-from synthesis.core.transcribe import tolerance_box
 from synthesis.spec.design_info import describe, describe_lists
 from synthesis.errors import SpecError
 from synthesis.tolerance.design import DesignMap, box_of, spec_keys, whole_problem
@@ -85,40 +84,28 @@ class _Resolver:
         return Tolerance(n, box, J)
 
 
-def _padded(compiled):
-    """compiled.solve with the robust extras' start values appended to the kind's own extras."""
-    solve = compiled.solve
-
-    def run(start, x0, extra0=None, p=None, **options):
-        return solve(start, x0, compiled.t.full_extra(extra0, x0, p), p, **options)
-    return run
-
-
 @dataclasses.dataclass(frozen=True)
 class RobustBuild:
+    """The kind's build with its problems held in the spec's tolerance box (``Setting.tolerance``)."""
+
     base: object
     kind: Kind
 
     def __call__(self, setting: Setting, elastic: bool = False):
         expected = list(describe(setting.spec))
-        with tolerance_box(_Resolver(self.kind, setting.spec)):
-            try:
-                nlp = self.base(setting, elastic)
-                # the kind's whole problem, as built here in the box (a reduced form it solves first dropped)
-                whole_problem(nlp)
-                solvers = [nlp.compiled]
-            except PinningError as exc:     # structural rows that do not pin the NLP's other variables
-                raise SpecError(f"{self.kind.name}: a [tolerance] table in `solve` is not supported for this kind "
-                                f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
+        try:
+            nlp = self.base(dataclasses.replace(setting, tolerance=_Resolver(self.kind, setting.spec)), elastic)
+            # the kind's whole problem, as built here in the box (a reduced form it solves first dropped)
+            whole_problem(nlp)
+        except PinningError as exc:     # structural rows that do not pin the NLP's other variables
+            raise SpecError(f"{self.kind.name}: a [tolerance] table in `solve` is not supported for this kind "
+                            f"yet ({exc}); `agrisynth tolerance RESULT` analyses a solved design") from None
         if spec_keys(list(nlp.names), describe(setting.spec)) != expected:
             # the box is sized and ordered by the spec's design variables: a kind whose NLP works in other
             # variables (a subset, nominal units) cannot take it yet
             raise SpecError(f"{self.kind.name}: a [tolerance] table in `solve` is not supported for this kind yet "
                             f"(its NLP variables {list(nlp.names)} are not the spec's {expected}); "
                             f"`agrisynth tolerance RESULT` analyses a solved design")
-        for compiled in [*solvers, *nlp.stages]:
-            if compiled is not None and compiled.t.robust is not None:
-                compiled.solve = _padded(compiled)
         return nlp
 
 

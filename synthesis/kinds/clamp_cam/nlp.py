@@ -20,10 +20,10 @@ import numpy as np
 from constraints.base import Rule
 from synthesis.kinds.clamp_cam.motion import Timing
 from synthesis.kinds.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, operating_symbols_wanted, per_rule_backoff
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, per_rule_backoff
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
 from synthesis.kinds.clamp_cam.spec import ClampCamSpec
@@ -40,7 +40,8 @@ OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
 class CamNLP(KindNLP):
     """Built once per spec; :meth:`solve` runs one IPOPT solve from a start point."""
 
-    def __init__(self, spec: ClampCamSpec, optimised=None, elastic: bool = False):
+    def __init__(self, spec: ClampCamSpec, optimised=None, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec)
         self.spec, self.elastic = spec, elastic
         variables = spec.variables()
         self.names = list(variables)
@@ -56,7 +57,7 @@ class CamNLP(KindNLP):
         # d rule / d crank speed (the acceleration's omega^2, windows timed in seconds).  Not with an optimised law
         # under an acceleration cap: that law is refitted (cvxpy) at each speed, a change the NLP cannot see
         self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min")]
-                          if operating_symbols_wanted() and not (spec.motion.law == "optimised"
+                          if setting.operating_symbols and not (spec.motion.law == "optimised"
                                                                  and spec.rules.max_acceleration is not None) else [])
         alpha, kappa, acc = self._sampled(v, rise_law, return_law)
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
@@ -75,7 +76,7 @@ class CamNLP(KindNLP):
                                # in a tolerance box the follower geometry exists for every design in it: its rows
                                # (all but the first, the turn's 360 deg) held at their linearised worst case
                                robust_structural=tuple(range(1, len(structural))))
-        self.compiled = CompiledNLP(self.problem, elastic)
+        self.compiled = compile_problem(setting, self.problem, elastic)
         self.rules = self.problem.rules
 
     # ------------------------------------------------------------------ model pieces

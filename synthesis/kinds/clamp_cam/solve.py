@@ -16,7 +16,7 @@ def prepare(spec):
 
 
 def build(setting: Setting, elastic: bool = False) -> CamNLP:
-    return CamNLP(setting.spec, setting.data, elastic=elastic)
+    return CamNLP(setting.spec, setting.data, elastic=elastic, setting=setting)
 
 
 def fine_check(spec, design: dict[str, float], optimised=None) -> list:

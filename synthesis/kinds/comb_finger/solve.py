@@ -6,13 +6,10 @@ from __future__ import annotations
 import math
 
 from synthesis.kinds.comb_finger.check import evaluate, facts, trajectory
-from synthesis.kinds.comb_finger.nlp import CombFingerNLP
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
+from synthesis.kinds.comb_finger.nlp import problem
 from synthesis.core.verdict import Recheck, StartReport
-
-
-def build(setting: Setting, elastic: bool = False) -> CombFingerNLP:
-    return CombFingerNLP(setting.spec, elastic=elastic)
 
 
 def recheck(setting: Setting, outcome) -> Recheck:
@@ -44,6 +41,6 @@ def maximise(setting: Setting) -> bool:
     return True
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   samples_hint="[solver] turn_samples",
                   relax_hint="Loosen those requirements or widen the bounds of r, e, alpha, omega, b and rho.")

@@ -1,4 +1,4 @@
-"""The combing-chain NLP: chain speed(s) (and the gear switch speed) so that every plant of the beta range
+"""The combing-chain problem: chain speed(s) (and the gear switch speed) so that every plant of the beta range
 is combed into the delta window at every machine speed, on the solver's (beta, V_s) grid.
 
 The rows are :func:`synthesis.kinds.combing_chain.check.rules_of` on CasADi symbols (eq 12 with exact AD);
@@ -12,10 +12,9 @@ import numpy as np
 
 from synthesis.kinds.combing_chain import geometry as g
 from synthesis.kinds.combing_chain.check import rules_of, trace
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
-from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted
+from synthesis.core.declared import Declared, binding, named
+from synthesis.core.kind import Setting
+from synthesis.core.problem import ObjectiveParts, Operating, Problem
 from synthesis.errors import SpecError
 from synthesis.kinds.combing_chain.spec import CombingChainSpec
 from synthesis.spec.design_info import units_of
@@ -42,54 +41,46 @@ def require_window(spec: CombingChainSpec) -> tuple[float, float] | None:
     return lo, hi
 
 
-class CombingChainNLP(KindNLP):
-    """Built once per spec; :meth:`solve` runs IPOPT from one start (chain speeds, switch speed)."""
+def problem(setting: Setting) -> Declared:
+    """The problem of one spec; the reported objective is the window margin (deg) or the chains' speeds summed."""
+    spec = setting.spec
+    window = require_window(spec)
+    variables = spec.variables()
+    names = list(variables)
+    bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
+    init = np.array([value_of(v) for v in variables.values()], dtype=float)
+    x = ca.SX.sym("x", len(names))
+    design = {n: x[i] for i, n in enumerate(names)}
+    # the tolerance analysis's build only: the ends of the operating ranges (machine speed, initial plant
+    # angle) symbols, for d rule / d end; a solve's NLP writes them as the numbers it always did
+    op = spec.operation
+    operating = ([Operating(f"{name}_{end}", ca.SX.sym(f"{name}_{end}"), getattr(op, name)[i], unit)
+                  for name, unit in (("machine_speed", "m/s"), ("plant_angle", "deg"))
+                  for i, end in enumerate(("lo", "hi"))] if setting.operating_symbols else [])
+    ends = [o.symbol for o in operating]
+    tr = trace(spec, design, spec.solver.beta_samples, spec.solver.speed_samples,
+               {"machine_speed": (ends[0], ends[1]), "plant_angle": (ends[2], ends[3])} if ends else None)
+    rules = rules_of(spec, tr)
+    speeds = [design[n] for n in spec.speed_names()]
+    margin_objective = spec.objective.name == "max_window_margin" and window is not None
+    if margin_objective:
+        lo, hi = window
+        m = ca.SX.sym("window_margin")
+        deltas = ca.vertcat(*[d for gt in tr.gears for row in gt.delta for d in row])
+        objective = ObjectiveParts(f=-m, extra=m, extra_lb=[-180.0], extra_ub=[180.0], extra_init=[0.0],
+                                   rows=[(deltas - lo - m, 0.0, None), (hi - deltas - m, 0.0, None)],
+                                   extra_units=["deg"], row_units=["deg", "deg"])
+    else:
+        objective = ObjectiveParts(f=ca.sum1(ca.vertcat(*speeds)))
+    declared = Problem("combing_chain", x, bounds[:, 0], bounds[:, 1], [], rules, objective,
+                       ipopt="tight", x_units=units_of(spec, names),
+                       objective_unit="deg" if margin_objective else "m/s", max_iter=spec.solver.max_iter,
+                       operating=operating)
 
-    def __init__(self, spec: CombingChainSpec, elastic: bool = False):
-        self.spec = spec
-        window = require_window(spec)
-        variables = spec.variables()
-        self.names = list(variables)
-        self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
-        self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
-        x = ca.SX.sym("x", len(self.names))
-        design = {n: x[i] for i, n in enumerate(self.names)}
-        # the tolerance analysis's build only: the ends of the operating ranges (machine speed, initial plant
-        # angle) symbols, for d rule / d end; a solve's NLP writes them as the numbers it always did
-        op = spec.operation
-        self.operating = ([Operating(f"{name}_{end}", ca.SX.sym(f"{name}_{end}"), getattr(op, name)[i], unit)
-                           for name, unit in (("machine_speed", "m/s"), ("plant_angle", "deg"))
-                           for i, end in enumerate(("lo", "hi"))] if operating_symbols_wanted() else [])
-        ends = [o.symbol for o in self.operating]
-        tr = trace(spec, design, spec.solver.beta_samples, spec.solver.speed_samples,
-                   {"machine_speed": (ends[0], ends[1]), "plant_angle": (ends[2], ends[3])} if ends else None)
-        rules = rules_of(spec, tr)
-        speeds = [design[n] for n in spec.speed_names()]
-        self.margin_objective = spec.objective.name == "max_window_margin" and window is not None
-        if self.margin_objective:
-            lo, hi = window
-            m = ca.SX.sym("window_margin")
-            deltas = ca.vertcat(*[d for gt in tr.gears for row in gt.delta for d in row])
-            objective = ObjectiveParts(f=-m, extra=m, extra_lb=[-180.0], extra_ub=[180.0], extra_init=[0.0],
-                                       rows=[(deltas - lo - m, 0.0, None), (hi - deltas - m, 0.0, None)],
-                                       extra_units=["deg"], row_units=["deg", "deg"])
-        else:
-            objective = ObjectiveParts(f=ca.sum1(ca.vertcat(*speeds)))
-        self.problem = Problem("combing_chain", x, self.bounds[:, 0], self.bounds[:, 1], [], rules, objective,
-                               ipopt="tight", x_units=units_of(spec, self.names),
-                               objective_unit="deg" if self.margin_objective else "m/s", max_iter=spec.solver.max_iter,
-                               operating=self.operating)
-        self.compiled = CompiledNLP(self.problem, elastic)
+    def reported(out, design: dict, elastic: bool) -> float:
+        if margin_objective and not elastic:
+            return float(out.x[len(names)])
+        return sum(design[s] for s in spec.speed_names())
 
-    def solve(self, start: int, x0) -> StartOutcome:
-        out = self.compiled.solve(start, x0)
-        n = len(self.names)
-        design = {name: float(v) for name, v in zip(self.names, out.x[:n])}
-        if self.margin_objective and not self.compiled.elastic:
-            objective = float(out.x[n])
-        else:
-            objective = sum(design[s] for s in self.spec.speed_names())
-        binding = [] if self.compiled.elastic else self.compiled.active_rules(out)
-        at_bound = [name for name, v, (a, b) in zip(self.names, out.x[:n], self.bounds)
-                    if b > a and min(v - a, b - v) <= 1e-7 * max(1.0, abs(v))]
-        return StartOutcome.of(out, design, objective, binding_rules=binding, variables_at_bounds=at_bound)
+    return Declared(declared, names, bounds, init, design=named(names), objective=reported,
+                    details=lambda out, compiled: binding(out, compiled, names, bounds, 1e-7))

@@ -4,15 +4,12 @@ finer in each direction, and the result's facts (with the closed-form answer bes
 from __future__ import annotations
 
 from synthesis.kinds.combing_chain.check import evaluate, facts
-from synthesis.kinds.combing_chain.nlp import CombingChainNLP
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
+from synthesis.kinds.combing_chain.nlp import problem
 from synthesis.core.verdict import FINE, Recheck, StartReport
 
 OBJECTIVE_UNITS = {"max_window_margin": "deg", "min_chain_speed": "m/s"}
-
-
-def build(setting: Setting, elastic: bool = False) -> CombingChainNLP:
-    return CombingChainNLP(setting.spec, elastic=elastic)
 
 
 def fine_samples(spec) -> tuple[int, int]:
@@ -68,7 +65,7 @@ def maximise(setting: Setting) -> bool:
     return setting.spec.objective.name == "max_window_margin"
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   samples_hint="[solver] beta_samples and speed_samples",
                   relax_hint="Widen the window, narrow the plant-angle or machine-speed range, widen the chain-speed "
                              "bounds, or add a second chain gear (speeds = [gear 1, gear 2] with a switch_speed).")

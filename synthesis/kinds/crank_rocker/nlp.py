@@ -1,4 +1,4 @@
-"""The crank-rocker NLP: K, swing and transmission angle as constraints on the simulated mechanism.
+"""The crank-rocker problem: K, swing and transmission angle as constraints on the simulated mechanism.
 
 Decision variables: the four lengths (fixed ones get lo = hi) and the crank angles phi_a, phi_b of
 the rocker's two extreme positions; IPOPT sees the lengths in Grashof coordinates (the crank and the
@@ -17,9 +17,8 @@ import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
 from synthesis.kinds.crank_rocker.check import rules_of
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
-from synthesis.core.outcome import StartOutcome
+from synthesis.core.declared import Declared
+from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.core.starts import pull_inside
 from synthesis.kinematics import fourbar
@@ -43,81 +42,80 @@ def grashof_slacks(lengths: np.ndarray) -> np.ndarray:
     return np.array(list(fourbar.crank_rotation_slacks(l10, l7, l8, l9).values()), dtype=float)
 
 
-class CrankRockerNLP(KindNLP):
-    """Built once per spec; :meth:`solve` runs IPOPT from one start (lengths only; extremes are guessed)."""
+def problem(setting: Setting) -> Declared:
+    """The problem of one spec: a start's lengths moved inside the crank-rocker region, its extremes guessed from
+    their simulation; the extremes (phi_a, phi_b, deg) in each start's details."""
+    spec = setting.spec
+    bounds, init = design_box(spec.variables(), NAMES)
+    # decision coordinates z: l7, the three Grashof slacks (>= 0: the crank always turns, so the
+    # kinematics are defined at every iterate), phi_a, phi_b; x: the lengths and angles they give
+    z = ca.SX.sym("z", 6)
+    x = COORDINATES.design(z)
+    p, phi_a, phi_b = x[:4], x[4], x[5]
+    f = rocker_function(spec.branch)
+    _, dbeta_a, _, _, tip_a = f(phi_a, p)
+    _, dbeta_b, _, _, tip_b = f(phi_b, p)
+    lbx = np.concatenate([bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
+    ubx = np.concatenate([bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
+    structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0), *COORDINATES.length_rows(x, lbx, ubx)]
+    n = spec.solver.samples_per_turn
+    mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
+    a = ca.vertcat(p[3], 0.0)
+    # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
+    rules = rules_of(spec, [p[i] for i in range(4)], phi_b - phi_a, tip_a - a, tip_b - a, mu)
+    total_length = spec.objective.name == "min_total_length"
+    # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
+    declared = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, _objective(spec, p, mu),
+                       hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
+                       # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
+                       # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
+                       x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,
+                       objective_unit="mm" if total_length else "deg", max_iter=spec.solver.max_iter)
 
-    def __init__(self, spec: CrankRockerSpec, elastic: bool = False):
-        self.spec = spec
-        variables = spec.variables()
-        self.names = list(NAMES)
-        self.bounds, self.init = design_box(variables, NAMES)
-        # decision coordinates z: l7, the three Grashof slacks (>= 0: the crank always turns, so the
-        # kinematics are defined at every iterate), phi_a, phi_b; x: the lengths and angles they give
-        z = ca.SX.sym("z", 6)
-        x = COORDINATES.design(z)
-        p, phi_a, phi_b = x[:4], x[4], x[5]
-        f = rocker_function(spec.branch)
-        _, dbeta_a, _, _, tip_a = f(phi_a, p)
-        _, dbeta_b, _, _, tip_b = f(phi_b, p)
-        lbx = np.concatenate([self.bounds[:, 0], [-2 * TWO_PI, -2 * TWO_PI]])
-        ubx = np.concatenate([self.bounds[:, 1], [3 * TWO_PI, 3 * TWO_PI]])
-        structural = [(dbeta_a, 0.0, 0.0), (dbeta_b, 0.0, 0.0), *COORDINATES.length_rows(x, lbx, ubx)]
-        n = spec.solver.samples_per_turn
-        mu = ca.vec(f.map(n)(turn_grid(n).reshape(1, -1), p)[3]) * (180.0 / math.pi)
-        a = ca.vertcat(p[3], 0.0)
-        # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
-        rules = rules_of(spec, [p[i] for i in range(4)], phi_b - phi_a, tip_a - a, tip_b - a, mu)
-        objective = self._objective(p, mu)
-        # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
-        self.problem = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, objective,
-                               hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
-                               # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
-                               # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
-                               x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,
-                               objective_unit="mm" if spec.objective.name == "min_total_length" else "deg",
-                               max_iter=spec.solver.max_iter)
-        self.compiled = CompiledNLP(self.problem, elastic)
+    def start(lengths: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
+        lengths = pull_inside(np.asarray(lengths, float), init, grashof_slacks, START_MARGIN)
+        return COORDINATES.coordinates(np.concatenate([lengths, extremes_guess(spec, lengths)])), None
 
-    def _objective(self, p, mu) -> ObjectiveParts:
-        if self.spec.objective.name == "min_total_length":
-            return ObjectiveParts(f=ca.sum1(p) / 100.0)
-        t = ca.SX.sym("gamma_min")
-        # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
-        rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
-        return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
-                              extra_init=[self.spec.requirements.min_transmission_angle], rows=rows,
-                              extra_units=["deg"], row_units=["deg", "deg"])
-
-    def report_objective(self, design: dict[str, float], f: float) -> float:
+    def reported(out, design: dict, elastic: bool) -> float:
         """Total length (mm) of the design itself, or the smallest transmission angle (deg) the epigraph
         variable reached."""
-        return sum(design.values()) if self.spec.objective.name == "min_total_length" else -f * 10.0
+        return sum(design.values()) if total_length else -out.objective * 10.0
 
-    def extremes_guess(self, lengths: np.ndarray) -> np.ndarray:
-        """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
-        cr = CrankRocker(*lengths, branch=self.spec.branch)
-        if cr.crank_turns():
-            try:
-                q = quick_return(cr)
-            except ValueError:
-                q = None
-            if q is not None:
-                ex = q.extremes
-                if q.stroke_fold_to_ext <= q.stroke_ext_to_fold:
-                    return np.array([ex.phi_folded, ex.phi_folded + q.stroke_fold_to_ext])
-                return np.array([ex.phi_extended, ex.phi_extended + q.stroke_ext_to_fold])
-        return np.array([0.0, TWO_PI / (1.0 + self.spec.requirements.time_ratio)])
-
-    def prepared_start(self, lengths: np.ndarray) -> np.ndarray:
-        return pull_inside(np.asarray(lengths, float), self.init, grashof_slacks, START_MARGIN)
-
-    def solve(self, start: int, lengths: np.ndarray) -> StartOutcome:
-        """One IPOPT run from the lengths (moved inside the crank-rocker region), the extremes guessed
-        from their simulation; extremes (phi_a, phi_b, deg) in the start's details."""
-        lengths = self.prepared_start(lengths)
-        out = self.compiled.solve(start, COORDINATES.coordinates(np.concatenate([lengths,
-                                                                                 self.extremes_guess(lengths)])))
+    def extremes(out, compiled) -> dict:
         x = COORDINATES.design(out.x[:6])
-        design = {n: float(v) for n, v in zip(NAMES, x[:4])}
-        return StartOutcome.of(out, design, self.report_objective(design, out.objective),
-                               extremes_crank_deg=[math.degrees(float(x[4])), math.degrees(float(x[5]))])
+        return {"extremes_crank_deg": [math.degrees(float(x[4])), math.degrees(float(x[5]))]}
+
+    return Declared(declared, list(NAMES), bounds, init, design=_design, start=start, objective=reported,
+                    details=extremes)
+
+
+def _design(z: np.ndarray) -> dict:
+    x = COORDINATES.design(z[:6])
+    return {n: float(v) for n, v in zip(NAMES, x[:4])}
+
+
+def _objective(spec, p, mu) -> ObjectiveParts:
+    if spec.objective.name == "min_total_length":
+        return ObjectiveParts(f=ca.sum1(p) / 100.0)
+    t = ca.SX.sym("gamma_min")
+    # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
+    rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
+    return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
+                          extra_init=[spec.requirements.min_transmission_angle], rows=rows,
+                          extra_units=["deg"], row_units=["deg", "deg"])
+
+
+def extremes_guess(spec, lengths: np.ndarray) -> np.ndarray:
+    """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
+    cr = CrankRocker(*lengths, branch=spec.branch)
+    if cr.crank_turns():
+        try:
+            q = quick_return(cr)
+        except ValueError:
+            q = None
+        if q is not None:
+            ex = q.extremes
+            if q.stroke_fold_to_ext <= q.stroke_ext_to_fold:
+                return np.array([ex.phi_folded, ex.phi_folded + q.stroke_fold_to_ext])
+            return np.array([ex.phi_extended, ex.phi_extended + q.stroke_ext_to_fold])
+    return np.array([0.0, TWO_PI / (1.0 + spec.requirements.time_ratio)])

@@ -3,19 +3,16 @@ the closed form of eq (8)-(10) beside the optimum."""
 
 from __future__ import annotations
 
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.kinds.crank_rocker.closed_form import solve_paper_equations
 from synthesis.core.coordinates import outside_bounds
-from synthesis.kinds.crank_rocker.nlp import NAMES, CrankRockerNLP
+from synthesis.kinds.crank_rocker.nlp import NAMES, problem
 from synthesis.spec.common import design_box, is_free
 
 OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg"}
-
-
-def build(setting: Setting, elastic: bool = False) -> CrankRockerNLP:
-    return CrankRockerNLP(setting.spec, elastic=elastic)
 
 
 def recheck(setting: Setting, outcome) -> Recheck:
@@ -68,6 +65,6 @@ def maximise(setting: Setting) -> bool:
     return setting.spec.objective.name == "max_transmission_angle"
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   # the given design assembles; the least-violating start may not
                   elastic_from="given", samples_hint="[solver] samples_per_turn")

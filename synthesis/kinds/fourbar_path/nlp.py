@@ -36,11 +36,10 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinds.fourbar_path.rules.sequence import sequence_slacks
-from synthesis.core.ipopt import CompiledNLP, peer_method_active
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Operating, Problem, operating_symbols_wanted, relative_backoff
-from synthesis.core.transcribe import in_tolerance_box
+from synthesis.core.problem import ObjectiveParts, Operating, Problem, relative_backoff
 from synthesis.kinds.fourbar_path.natural import ConfigurationNLP
 from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_rules
 from synthesis.kinds.fourbar_path.starts import StartMaker, StartPoint
@@ -158,7 +157,8 @@ class PathNLP(KindNLP):
     #: the core cannot solve it from a given design (core.solve.start_from_elastic skips such an NLP)
     builds_its_own_starts = True
 
-    def __init__(self, spec: FourbarPathSpec, seed: int = 0, elastic: bool = False):
+    def __init__(self, spec: FourbarPathSpec, seed: int = 0, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec, seed)
         self.spec = spec
         self.names = list(VARIABLES)
         self.bounds = np.array(spec.bounds_array(), dtype=float)
@@ -195,7 +195,7 @@ class PathNLP(KindNLP):
         # the tolerance analysis's build only: the crank speed a symbol, though no rule reads it (it only scales the
         # trajectory's time), so the analysis reports d rule / d crank speed = 0 rather than leaving it out
         operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.crank_speed, "r/min")]
-                     if operating_symbols_wanted() else [])
+                     if setting.operating_symbols else [])
 
         def problem(samples: int) -> Problem:
             out = Problem(
@@ -227,7 +227,8 @@ class PathNLP(KindNLP):
         # grashof = "any": the motion's rows exact, each gap at its extremes (EXTREMES); else the spec's samples
         # (read only by the rules of "any": the others are evaluated at the targets and in closed form)
         self.samples = EXTREMES if spec.rules.grashof == "any" else spec.solver.samples
-        self.compiled = CompiledNLP(problem(self.samples), elastic, scaling=OWN_UNITS, watched=self.watched)
+        self.compiled = compile_problem(setting, problem(self.samples), elastic, scaling=OWN_UNITS,
+                                        watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
         # grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION;
@@ -235,7 +236,7 @@ class PathNLP(KindNLP):
         self.configuration = None
         self._polisher_settings = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
-                and not in_tolerance_box() and not operating_symbols_wanted()):
+                and setting.tolerance is None and not setting.operating_symbols):
             options = self._ipopt_options(spec)
             form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
                                  opts, spec.solver.max_iter)
@@ -329,7 +330,7 @@ class PathNLP(KindNLP):
         # 150-420 iterations per start (dwell_arc15, stroke_lift14; INEXACT.md)
         in_configuration = self._open_in_configuration
         if (sp.timing_first and self.continuation and not in_configuration
-                and self._sequence_can_hold(sp) and not peer_method_active()):
+                and self._sequence_can_hold(sp) and not self.compiled.peer_method):
             w0, first = self._fit_at_start_timing(index, w0, sp.sign)
         resumed = None
         if in_configuration:

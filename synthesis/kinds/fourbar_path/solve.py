@@ -27,7 +27,7 @@ OBJECTIVE = "sum_squared_distance"
 
 
 def build(setting: Setting, elastic: bool = False) -> PathNLP:
-    return PathNLP(setting.spec, seed=setting.seed, elastic=elastic)
+    return PathNLP(setting.spec, seed=setting.seed, elastic=elastic, setting=setting)
 
 
 def recheck(setting: Setting, outcome) -> Recheck:

@@ -23,10 +23,10 @@ from synthesis.errors import SpecError
 from synthesis.kinds.guide_tube.check import rules_of
 from synthesis.kinds.guide_tube.drop import DropPhases, Physics, Tube, drop_phases
 from synthesis.kinds.guide_tube.scene import GuideTubeScene
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import (Envelope, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+from synthesis.core.problem import (Envelope, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
 from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.kinds.guide_tube.spec import GuideTubeSpec
@@ -43,7 +43,9 @@ def symbolic_drop(delta_deg, tube: Tube, physics: Physics) -> DropPhases:
 class GuideTubeNLP(KindNLP):
     """Built once (CasADi functions and the compiled NLP), solved from many starts."""
 
-    def __init__(self, spec: GuideTubeSpec, scene: GuideTubeScene, elastic: bool = False):
+    def __init__(self, spec: GuideTubeSpec, scene: GuideTubeScene, elastic: bool = False,
+                 setting: Setting | None = None):
+        setting = setting or Setting(spec)
         free = [t for t in spec.tubes if is_free(t.angle)]
         if not free:
             raise SpecError("guide_tube.tubes: solve needs at least one free wall angle (angle = {init, bounds}); "
@@ -56,7 +58,7 @@ class GuideTubeNLP(KindNLP):
         # resolved at their numbers where not sampled (every rule's derivative w.r.t. both); otherwise, as a solve
         # sees them, numbers (but a mu range)
         ranges = ranges_of(spec)
-        wanted = operating_symbols_wanted()
+        wanted = setting.operating_symbols
         symbolic = bool(ranges) or wanted
         nominal_mu, nominal_speed = scene.physics.mu, spec.rows.forward_speed
         self.mu = ca.SX.sym("mu") if symbolic else nominal_mu
@@ -87,7 +89,7 @@ class GuideTubeNLP(KindNLP):
         times = ca.vertcat(*design_times)
         self._times = ca.Function("design_times", [delta], [ca.substitute(times, self.mu, ca.SX(nominal_mu))
                                                             if symbolic else times])
-        self.compiled = CompiledNLP(self.problem, elastic)
+        self.compiled = compile_problem(setting, self.problem, elastic)
         self.rules = self.problem.rules
 
     def _objective(self, delta, angles: dict, design_times: list, uniform: bool) -> ObjectiveParts:

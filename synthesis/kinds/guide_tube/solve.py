@@ -17,7 +17,7 @@ def prepare(spec) -> GuideTubeScene:
 
 
 def build(setting: Setting, elastic: bool = False) -> GuideTubeNLP:
-    return GuideTubeNLP(setting.spec, setting.data, elastic=elastic)
+    return GuideTubeNLP(setting.spec, setting.data, elastic=elastic, setting=setting)
 
 
 def angles_of(design: dict[str, float]) -> dict[str, float]:

@@ -20,8 +20,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
 from synthesis.errors import SpecError
@@ -92,7 +92,8 @@ PULLS = 6
 
 
 class GuideNLP(KindNLP):
-    def __init__(self, spec, fit, elastic: bool = False):
+    def __init__(self, spec, fit, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec)
         s = spec.spline
         n = s.control_points
         self.spec, self.n, self.fit = spec, n, fit
@@ -133,7 +134,7 @@ class GuideNLP(KindNLP):
                                x_units=["mm"] * (2 * n) + [""] * len(self.edges),
                                structural_units=self._structural_units + ["rad"] * len(self.edges),
                                objective_unit="")
-        self.compiled = CompiledNLP(self.problem, elastic)
+        self.compiled = compile_problem(setting, self.problem, elastic)
 
     def _about_the_key_point(self, edges: list) -> list:
         """Start 0's window edges measured from the arm angle at the fold's key point, where the NLP's rows put the

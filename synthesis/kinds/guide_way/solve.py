@@ -27,7 +27,7 @@ def build(setting: Setting, elastic: bool = False):
 
     if setting.data is None:
         return FixedGuide(setting.spec)
-    return GuideNLP(setting.spec, setting.data, elastic)
+    return GuideNLP(setting.spec, setting.data, elastic, setting)
 
 
 def _control(spec, design: dict):

@@ -21,8 +21,8 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
@@ -50,7 +50,8 @@ def grashof_slacks(x: np.ndarray) -> np.ndarray:
 class PickerNLP(KindNLP):
     """Built once per spec (least-squares stage and, for eq 4, the exact epigraph stage); reused for every start."""
 
-    def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False):
+    def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec)
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
@@ -76,13 +77,13 @@ class PickerNLP(KindNLP):
                       x_units=["mm"] * 7 + ["deg"] * 2, structural_units=["mm"] * 3)
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
         shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
-        self.stages = [CompiledNLP(Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0), objective_unit="mm^2",
-                                           **common),
-                                   elastic)]
+        self.stages = [compile_problem(setting, Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0),
+                                                        objective_unit="mm^2", **common),
+                                       elastic)]
         self.stage_names = ["least_squares"]
         if spec.objective.name == "sum_of_distances" and not elastic:
-            self.stages.append(CompiledNLP(Problem("picker_eq4", *shape, _sum_of_distances(r), objective_unit="mm",
-                                                      **common)))
+            self.stages.append(compile_problem(setting, Problem("picker_eq4", *shape, _sum_of_distances(r),
+                                                                objective_unit="mm", **common)))
             self.stage_names.append("sum_of_distances")
         # the elastic diagnosis reads the least-squares stage (the only one in elastic mode)
         self.compiled = self.stages[0]

@@ -14,7 +14,7 @@ OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2"}
 
 
 def build(setting: Setting, elastic: bool = False) -> PickerNLP:
-    return PickerNLP(setting.spec, elastic=elastic)
+    return PickerNLP(setting.spec, elastic=elastic, setting=setting)
 
 
 def recheck(setting: Setting, outcome) -> Recheck:

@@ -15,10 +15,10 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
@@ -37,7 +37,8 @@ HARD_IN_ELASTIC = ("grashof_crank_rocker",)
 class PlantingNLP(KindNLP):
     """Built once per spec and process; :meth:`solve` runs one IPOPT solve from a design."""
 
-    def __init__(self, spec: PlantingFourbarSpec, elastic: bool = False):
+    def __init__(self, spec: PlantingFourbarSpec, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec)
         self.spec = spec
         self.elastic = elastic
         variables = spec.variables()
@@ -50,7 +51,7 @@ class PlantingNLP(KindNLP):
         # symbols, resolved at their numbers where not sampled (so `agrisynth tolerance` has every rule's derivative
         # w.r.t. both); otherwise, as a solve of a nominal spec sees them, both stay numbers
         ranges = ranges_of(spec)
-        symbolic = bool(ranges) or operating_symbols_wanted()
+        symbolic = bool(ranges) or setting.operating_symbols
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
                           for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if symbolic]
         op = {o.name: o.symbol for o in self.operating}
@@ -89,7 +90,7 @@ class PlantingNLP(KindNLP):
             x_units=[*units_of(spec, self.names), *["rad"] * th.numel()],
             structural_units=self._structural_units(), objective_unit="",
         )
-        self.compiled = CompiledNLP(self.problem, elastic)
+        self.compiled = compile_problem(setting, self.problem, elastic)
 
     # ------------------------------------------------------------------ the declaration
 

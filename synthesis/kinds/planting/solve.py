@@ -16,7 +16,7 @@ OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2"}
 
 
 def build(setting: Setting, elastic: bool = False) -> PlantingNLP:
-    return PlantingNLP(setting.spec, elastic=elastic)
+    return PlantingNLP(setting.spec, elastic=elastic, setting=setting)
 
 
 def smallest_margin(report: StartReport) -> float:

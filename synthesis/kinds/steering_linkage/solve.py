@@ -3,10 +3,11 @@ finer grid of inside locks (closed-form outer locks, dead centre root-found) and
 
 from __future__ import annotations
 
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.steering_linkage.check import evaluate, facts
-from synthesis.kinds.steering_linkage.nlp import SteeringNLP
+from synthesis.kinds.steering_linkage.nlp import problem
 
 
 def prepare(spec) -> dict:
@@ -14,10 +15,6 @@ def prepare(spec) -> dict:
     from synthesis.kinds.steering_linkage.table12 import explain
 
     return explain(spec)
-
-
-def build(setting: Setting, elastic: bool = False) -> SteeringNLP:
-    return SteeringNLP(setting.spec, elastic=elastic)
 
 
 def _fine_max_error(report: StartReport) -> float:
@@ -65,7 +62,7 @@ def baseline_rules(setting: Setting) -> list[dict]:
     return [r.record().to_json() for r in rules]
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
                   elastic_from="given", samples_hint="[solver] samples or [solver] backoff",
                   relax_hint="Lower min_transmission_angle, widen the arm_length limits or the bounds of "
                              "arm_length / base_angle.")

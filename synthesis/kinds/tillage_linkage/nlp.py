@@ -19,10 +19,10 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
+from synthesis.core.declared import compile_problem
+from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import (MaxMinMargin, ObjectiveParts, Operating, Problem, operating_symbols_wanted,
+from synthesis.core.problem import (MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     per_rule_backoff)
 from synthesis.kinds.tillage_linkage.kinematics import path_function
 from synthesis.spec.common import design_box
@@ -41,7 +41,8 @@ EXISTENCE_ROWS = (4, 5, 6, 7, 8)
 
 
 class TillageNLP(KindNLP):
-    def __init__(self, spec: TillageSpec, elastic: bool = False):
+    def __init__(self, spec: TillageSpec, elastic: bool = False, setting: Setting | None = None):
+        setting = setting or Setting(spec)
         self.spec = spec
         variables = spec.variables()
         self.names = list(NAMES)
@@ -78,7 +79,7 @@ class TillageNLP(KindNLP):
         # so it has every rule's derivative w.r.t. them (they enter only the in-soil velocity, never a structural row)
         self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min"),
                            Operating("forward_speed", ca.SX.sym("forward_speed"), spec.operation.forward_speed, "m/s")]
-                          if operating_symbols_wanted() else [])
+                          if setting.operating_symbols else [])
         if self.operating:
             rate, forward = self.operating[0].symbol * TWO_PI / 60.0, self.operating[1].symbol
         else:
@@ -114,7 +115,7 @@ class TillageNLP(KindNLP):
                                # the order entry < lowest < exit -- is held at its linearised worst case like a rule,
                                # so every design in the box has them (as planting's precision points)
                                robust_structural=EXISTENCE_ROWS)
-        self.compiled = CompiledNLP(self.problem, elastic)
+        self.compiled = compile_problem(setting, self.problem, elastic)
 
     def angles_guess(self, design: dict[str, float]) -> np.ndarray:
         """omega_low, omega_top, omega_in, omega_out of a start: root-found on its own motion; a start whose

@@ -12,7 +12,7 @@ OBJECTIVE_UNITS = {"min_bar_length": "mm", "max_margin": "normalised margin"}
 
 
 def build(setting: Setting, elastic: bool = False) -> TillageNLP:
-    return TillageNLP(setting.spec, elastic=elastic)
+    return TillageNLP(setting.spec, elastic=elastic, setting=setting)
 
 
 def fine(spec, design: dict[str, float]):
