@@ -609,3 +609,47 @@ def test_an_operating_range_s_verdict_says_it_is_the_nominal_point_s(tmp_path):
     with running_studio(STUDIO_SPECS["planting_fourbar"], tmp_path / "b") as s:
         plain = api(s, "/api/evaluate", {"values": moved_values(s.session), "grid": "fine"})
     assert plain["scope"] == ""     # the page's verdict line: tests/test_studio_browser.py
+
+
+def test_the_address_is_told_once_the_socket_listens(tmp_path):
+    """The studio printed its address a moment before its socket listened (a browser given it at once was refused):
+    the command prints it from ``on_listening``, which the server calls once it accepts connections."""
+    import socket
+    import threading
+
+    from synthesis.studio.server import Studio
+
+    studio = Studio(STUDIO_SPECS["crank_rocker"], tmp_path / "studio")
+    with pytest.raises(ConnectionRefusedError):            # bound, not yet listening
+        socket.create_connection(("127.0.0.1", studio.port), timeout=5).close()
+    answered = []
+    told = threading.Event()
+
+    def listening() -> None:
+        with socket.create_connection(("127.0.0.1", studio.port), timeout=5):
+            answered.append(studio.port)
+        told.set()
+
+    server = studio.server(listening)
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [studio.socket]}, daemon=True)
+    thread.start()
+    try:
+        assert told.wait(60) and answered == [studio.port]
+    finally:
+        server.should_exit = True
+        thread.join(60)
+
+
+def test_the_missing_extra_message_names_the_install_at_hand(tmp_path):
+    """A source checkout (pyproject.toml beside the package: editable, or on PYTHONPATH) is told to install the extra
+    editable from its own folder; an installed copy (site-packages) from the package index, never `pip install -e`."""
+    from synthesis.studio import install_command, missing_extra_text
+
+    checkout, site = tmp_path / "checkout", tmp_path / "site-packages"
+    for root in (checkout, site):
+        (root / "synthesis").mkdir(parents=True)
+    (checkout / "pyproject.toml").write_text("[project]\nname = 'agrisynth'\n")
+    assert install_command(checkout / "synthesis") == f"pip install -e '{checkout}[studio]'"
+    assert install_command(site / "synthesis") == "pip install 'agrisynth[studio]'"
+    assert missing_extra_text("uvicorn", site / "synthesis") == (
+        "agrisynth studio needs the studio extra (uvicorn is missing): pip install 'agrisynth[studio]'")

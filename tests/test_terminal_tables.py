@@ -9,7 +9,7 @@ import pytest
 from rich.console import Console
 
 from synthesis.cli import terminal
-from synthesis.cli import bench_table, comparison_table, rule_table
+from synthesis.cli.views import bench_table, comparison_table, rule_table
 from synthesis.report.tables import DesignRow
 
 NAME = "opening_cam_redesign_modified_sine_return"
@@ -50,3 +50,37 @@ def test_no_cell_is_cut_at_any_width(name, table, cells, width):
     assert "…" not in text
     assert body_cells(text) == cells
     assert max(len(ln) for ln in text.splitlines()) <= width
+
+
+class _Pipe(io.StringIO):
+    def isatty(self) -> bool:
+        return False
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_piped_table_is_folded_to_a_readable_width(monkeypatch):
+    """Piped, a rule table with a long note was as wide as its longest cell (300 characters and more): it is folded
+    to $COLUMNS, else 120, and still no cell is cut; on a terminal rich measures the terminal itself."""
+    note = "where the coupler curve leaves the furrow, " * 8
+    rule = {**RULE, "where": note}
+    monkeypatch.delenv("COLUMNS", raising=False)
+    assert terminal.table_width(_Pipe()) == 120 and terminal.table_width(_Terminal()) is None
+    for columns, width in (("", 120), ("90", 90), ("wide", 120), ("0", 120)):
+        monkeypatch.setenv("COLUMNS", columns)
+        out = _Pipe()
+        terminal.print_table(Console(file=out, width=terminal.PIPED_WIDTH, highlight=False), rule_table([rule], "t"))
+        text = out.getvalue()
+        assert max(len(ln) for ln in text.splitlines()) == width, columns
+        assert "…" not in text and body_cells(text)[-1] == note.replace(" ", "")
+
+
+def test_the_design_table_has_a_marks_column_only_when_a_variable_is_at_a_bound():
+    inside = DesignRow("crank", [20.0], [False], "mm", [10.0, 150.0], True, [], 25.0)
+    for rows, columns in (([inside], 5), (DESIGN + [inside], 6)):
+        text = printed(terminal.design_table(rows, "t"), 200)
+        header = next(ln for ln in text.splitlines() if ln.startswith("┃"))
+        assert header.count("┃") - 1 == columns, header
