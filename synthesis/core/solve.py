@@ -22,6 +22,7 @@ from synthesis.core import interrupt
 from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.kind import Kind, Setting, Solving
+from synthesis.core.pinned import fixed_fields, of_nlp, refuse_violated
 from synthesis.core.verdict import (FINE, SLACK_TOL, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
                                     diagnosis_of, failure_of, measured, report_of, status_note, status_of,
                                     unsatisfied_error)
@@ -84,6 +85,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         raise SpecError(f"{kind.name}: solve needs at least one free design variable (give one bounds, e.g. "
                         f"{_written_at(setting.spec, nlp.names[0])} = {{init = ..., bounds = [lo, hi]}}); every one "
                         f"is fixed, so use `agrisynth check`")
+    refuse_violated(kind, setting.spec, nlp)     # a violated rule no design variable moves: exit 2 before any start
     x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
                                       setting.seed)
     maximise = solving.maximise(setting)
@@ -207,7 +209,9 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     return replace(diagnosis, design=design or None,
                    alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks),
                    at_bounds=at_bounds(nlp.design_names, nlp.bounds, design)
-                   if diagnosis.relaxed else [])
+                   if diagnosis.relaxed else [],
+                   fixed=fixed_fields(kind, of_nlp(kind, setting.spec, nlp), diagnosis.relaxed)
+                   if diagnosis.relaxed else {})
 
 
 def at_bounds(names, bounds, design: dict) -> list[dict]:

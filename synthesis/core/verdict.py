@@ -166,6 +166,9 @@ class ElasticDiagnosis:
     hard: list[str] = field(default_factory=list)
     #: the free design variables at a bound of the elastic design (core.solve.at_bounds): where wider bounds may help
     at_bounds: list[dict] = field(default_factory=list)
+    #: rule -> the spec field that fixes its value, no design variable moving it (core.pinned; result.json
+    #: ``elastic.fixed_by``): what to change for such a rule, rather than the bounds
+    fixed: dict[str, str] = field(default_factory=dict)
 
     @property
     def relaxed(self) -> list[str]:
@@ -207,6 +210,7 @@ class ElasticDiagnosis:
                 "scales": self.scales, "binding": self.binding, "relaxed": self.relaxed,
                 "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
                 "out_of_reach": self.out_of_reach, "hard": self.hard, "at_bounds": self.at_bounds,
+                **({"fixed_by": self.fixed} if self.fixed else {}),
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
@@ -214,7 +218,8 @@ class ElasticDiagnosis:
         slacks = {n: math.inf if s is None else s for n, s in data["slacks"].items()}
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
                    data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})),
-                   hard=list(data.get("hard", [])), at_bounds=list(data.get("at_bounds", [])))
+                   hard=list(data.get("hard", [])), at_bounds=list(data.get("at_bounds", [])),
+                   fixed=dict(data.get("fixed_by") or {}))
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -286,9 +291,13 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
             text = f"{name} (misses its limit by {elastic.slacks[name]:.3g}{unit(name)}"
             if name in out:
                 kept = f" but {', '.join(elastic.hard)}" if elastic.hard else ""
+                # a rule the spec's inputs fix: the field to change, not the bounds (core.pinned)
+                held = (f"{elastic.fixed[name]} fixes it (no design variable moves it)" if name in elastic.fixed
+                        else "near that design the variable bounds or the mechanism hold it back")
                 text += (f"; still by {elastic.alone[name]:.3g}{unit(name)} re-solved alone from there, every other "
-                         f"rule{kept} relaxed: near that design the variable bounds or the mechanism hold it back, "
-                         f"not the other rules")
+                         f"rule{kept} relaxed: {held}, not the other rules")
+            elif name in elastic.fixed:
+                text += f"; {elastic.fixed[name]} fixes it (no design variable moves it)"
             return text + ")"
 
         holding = [name for name in elastic.conflicting if name not in relaxed]

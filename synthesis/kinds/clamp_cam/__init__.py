@@ -31,6 +31,11 @@ class ClampCam(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.clamp_cam.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.clamp_cam.solve import SOLVING
 

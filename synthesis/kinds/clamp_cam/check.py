@@ -14,6 +14,7 @@ from synthesis.kinds.clamp_cam.motion import SEGMENT_NAMES
 from synthesis.kinds.clamp_cam.scene import (CamScene, evaluate, law_warning, stroke_unit, to_report_units,
                                        window_degrees)
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
@@ -184,4 +185,16 @@ def run_check(loaded: LoadedSpec) -> Result:
                   trajectory=trajectory, extra=extra)
 
 
-
+def headline(result: Result) -> list[str]:
+    """The largest pressure angle of each moving segment, the smallest working radius against the roller, from
+    result.json facts."""
+    cam = (result.extra or {}).get("cam") or {}
+    if not cam:
+        return []
+    segments = cam.get("segments") or {}
+    angles = ", ".join(f"{name} {figure_text(s.get('max_pressure_angle_deg'), 'deg')}" for name, s in segments.items()
+                       if isinstance(s, dict))
+    return [f"pressure angle max: {angles}" if angles else "pressure angle: -",
+            f"smallest working radius {figure_text(cam.get('min_working_radius_mm'), 'mm')} (roller "
+            f"{figure_text(cam.get('roller_radius_mm'), 'mm')}){', undercut' if cam.get('undercut') else ''}; "
+            f"{cam.get('law', '')} law, stroke {figure_text(cam.get('stroke'), cam.get('stroke_unit', ''))}"]

@@ -33,6 +33,11 @@ class CombFinger(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.comb_finger.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.comb_finger.solve import SOLVING
 

@@ -17,6 +17,7 @@ from constraints import Rule
 from synthesis.kinds.comb_finger.rules import (finger_clear_rule, finger_hides_rule, finger_protrudes_rule, root_clearance_rule,
                                      tip_reaches_ground_rule, tip_speed_rule, unit_within_row_rule, units_gap_rule)
 from synthesis.kinds.comb_finger import geometry as g
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.comb_finger.spec import CombFingerSpec
@@ -218,3 +219,16 @@ def run_check(loaded: LoadedSpec) -> Result:
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], trajectory=trajectory(spec, design),
                   extra=facts(spec, design))
+
+
+def headline(result: Result) -> list[str]:
+    """Tip speed, root clearance, combing angle and lift, the gap between the two units, from result.json facts."""
+    facts = result.extra or {}
+    if "tip_speed_m_s" not in facts:
+        return []
+    return [f"tip speed {figure_text(facts.get('tip_speed_m_s'), 'm/s')}, root clearance "
+            f"{figure_text(facts.get('root_clearance_PD_mm'), 'mm')}, units gap "
+            f"{figure_text(facts.get('units_gap_mm'), 'mm')}",
+            f"combing angle {figure_text(facts.get('combing_angle_theta_deg'), 'deg')} over a "
+            f"{figure_text(facts.get('combing_turn_deg'), 'deg')} turn, lift "
+            f"{figure_text(facts.get('combing_lift_l_mm'), 'mm')}"]

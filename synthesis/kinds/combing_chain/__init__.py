@@ -34,6 +34,11 @@ class CombingChain(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.combing_chain.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.combing_chain.solve import SOLVING
 

@@ -17,6 +17,7 @@ import numpy as np
 from constraints import Rule
 from synthesis.kinds.combing_chain.rules import tine_reaches_plant_rule, window_bottom_rule, window_top_rule
 from synthesis.kinds.combing_chain import geometry as g
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.combing_chain.spec import CombingChainSpec
@@ -295,3 +296,22 @@ def run_check(loaded: LoadedSpec) -> Result:
     rules, tr = evaluate(spec, design)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], extra=facts(spec, design, tr))
+
+
+def headline(result: Result) -> list[str]:
+    """Per gear: the tine's angle at the cut over the machine speeds and plant angles, and the plant lengths that
+    fit; the worst tine-reaches-plant margin, from result.json facts and rules."""
+    facts = result.extra or {}
+    lines = []
+    for gear in facts.get("gears") or []:
+        if not isinstance(gear, dict):
+            continue
+        delta, length = gear.get("delta_deg") or {}, gear.get("plant_length_mm") or {}
+        lines.append(f"gear {gear.get('gear')} (chain {figure_text(gear.get('chain_speed'), 'm/s')}): tine at the cut "
+                     f"{figure_text(delta.get('min'), '')}-{figure_text(delta.get('max'), 'deg')}, plants "
+                     f"{figure_text(length.get('min'), '', 4)}-{figure_text(length.get('max'), 'mm', 4)} long")
+    reach = [r for r in result.rules if r["name"].endswith("tine_reaches_plant")]
+    if reach:
+        worst = min(reach, key=lambda r: r["margin"] if r.get("margin") is not None else -math.inf)
+        lines.append(f"tine overtakes the plant by at least {figure_text(worst.get('value'), worst.get('unit', ''))}")
+    return lines

@@ -32,6 +32,11 @@ class CrankRocker(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.crank_rocker.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.crank_rocker.solve import SOLVING
 

@@ -18,6 +18,7 @@ from constraints.transmission import acute_transmission_rule
 from synthesis.kinematics.crank_rocker import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
                                               transmission_angles_deg, turn_grid)
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
@@ -161,3 +162,19 @@ def run_check(loaded: LoadedSpec) -> Result:
                   design=spec.design_values(), rules=[r.record().to_json() for r in rules],
                   extra=facts(spec, cr, q))
 
+
+def headline(result: Result) -> list[str]:
+    """Rocker stroke, time ratio and the smallest transmission angle (where), from result.json facts."""
+    motion = (result.extra or {}).get("motion") or {}
+    if not motion:
+        return []
+    strokes = motion.get("strokes_deg") or {}
+    line = (f"rocker stroke {figure_text(motion.get('rocker_swing_deg'), 'deg', 4)}, time ratio "
+            f"{figure_text(motion.get('time_ratio'), '', 4)}, transmission angle min "
+            f"{figure_text(motion.get('min_transmission_angle_deg'), 'deg', 4)} at crank "
+            f"{figure_text(motion.get('min_transmission_at_crank_deg'), 'deg')}")
+    out = [line]
+    if strokes:
+        out.append(f"crank turn: {figure_text(strokes.get('folded_to_extended'), 'deg', 4)} folded to extended, "
+                   f"{figure_text(strokes.get('extended_to_folded'), 'deg', 4)} back")
+    return out

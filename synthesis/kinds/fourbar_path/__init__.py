@@ -9,7 +9,7 @@ from synthesis.core.kind import Kind
 if TYPE_CHECKING:
     import numpy as np
 
-    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, ResultTable, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -29,6 +29,16 @@ class FourbarPath(Kind):
         from synthesis.kinds.fourbar_path.check import run_check
 
         return run_check(loaded)
+
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.fourbar_path.check import headline
+
+        return headline(result)
+
+    def result_tables(self, result: Result) -> list[ResultTable]:
+        from synthesis.kinds.fourbar_path.check import target_error_table
+
+        return [target_error_table(result)]
 
     def solving(self) -> Solving:
         from synthesis.kinds.fourbar_path.solve import SOLVING

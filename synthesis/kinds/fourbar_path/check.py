@@ -27,6 +27,7 @@ from constraints import Rule
 from synthesis.core.verdict import FINE
 from synthesis.kinds.fourbar_path.rule_set import path_rules
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES, coupler_function, design_parameters
+from synthesis.core.kind import ResultTable, figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec, same_targets
@@ -205,3 +206,43 @@ def run_check(loaded: LoadedSpec) -> Result:
                   design=result_design(design, ev.crank_deg), rules=records,
                   trajectory=trajectory(spec, design, ev.crank_deg, _direction("either", ev.crank_deg)[0]),
                   extra=facts)
+
+
+#: a headline lists each target's error up to this many targets (more: the summary line, and the report's table)
+HEADLINE_TARGETS = 12
+
+
+def target_error_rows(result: Result) -> list[dict]:
+    """Each target's error from result.json facts: ``{"target": 1-based number (the figure's label), "x", "y",
+    "error_mm"}`` (error None where the loop does not close there)."""
+    facts = result.extra or {}
+    targets, errors = facts.get("targets") or [], facts.get("target_errors_mm") or []
+    return [{"target": i + 1, "x": float(p[0]), "y": float(p[1]), "error_mm": e}
+            for i, (p, e) in enumerate(zip(targets, errors))]
+
+
+def headline(result: Result) -> list[str]:
+    """The path error an engineer reads first: rms and maximum (at which target) over the targets, then each
+    target's error (up to HEADLINE_TARGETS targets), all from result.json facts."""
+    rows = target_error_rows(result)
+    summary = (result.extra or {}).get("path_error") or {}
+    if not rows:
+        return []
+    measured = [r for r in rows if r["error_mm"] is not None]
+    if len(measured) < len(rows):
+        missing = ", ".join(str(r["target"]) for r in rows if r["error_mm"] is None)
+        line = f"path error: the loop does not close at target(s) {missing}"
+    else:
+        worst = max(measured, key=lambda r: r["error_mm"])
+        line = (f"path error over {len(rows)} targets: rms {figure_text(summary.get('rms_mm'), 'mm')}, max "
+                f"{figure_text(summary.get('max_mm'), 'mm')} at target {worst['target']}")
+    if len(rows) > HEADLINE_TARGETS:
+        return [line]
+    return [line] + [f"target {r['target']} ({r['x']:.4g}, {r['y']:.4g}) mm: error {figure_text(r['error_mm'], 'mm')}"
+                     for r in rows]
+
+
+def target_error_table(result: Result) -> ResultTable:
+    """The report's table of the path error at each target (:func:`target_error_rows`)."""
+    return ResultTable("Path error per target", ("target", "x, mm", "y, mm", "error, mm"),
+                       tuple((r["target"], r["x"], r["y"], r["error_mm"]) for r in target_error_rows(result)))

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from synthesis.core.kind import Kind
+from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Solving, SpecModel
@@ -38,6 +38,21 @@ class GuideTube(Kind):
         from synthesis.kinds.guide_tube.check import run_check
 
         return run_check(loaded)
+
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.guide_tube.check import headline
+
+        return headline(result)
+
+    def rule_fixed_by(self, rule_name: str) -> FixedBy | None:
+        """A tube's own rules (``wall_exit_speed_<tube>``, ``free_fall_height_<tube>``) are fixed by that tube's entry
+        where its angle is a number: a tube given whole is no design variable."""
+        for prefix, limits in (("wall_exit_speed_", "[rules] min_exit_speed"),
+                               ("free_fall_height_", "[rules] min_free_fall")):
+            if rule_name.startswith(prefix):
+                tube = rule_name[len(prefix):].split("@", 1)[0]
+                return FixedBy(f"tube {tube}'s angle, l3, h5 and h6 in [[tubes]]", limits)
+        return None
 
     def solving(self) -> Solving:
         from synthesis.kinds.guide_tube.solve import SOLVING

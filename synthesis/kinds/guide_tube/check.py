@@ -14,6 +14,7 @@ from synthesis.kinds.guide_tube.drop import DropPhases, Physics, SeedlingSticks,
 from synthesis.kinds.guide_tube.ode import simulate
 from synthesis.kinds.guide_tube.scene import MM, GuideTubeScene
 from synthesis.kinds.guide_tube.slope import landing_time_slope
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
@@ -205,3 +206,18 @@ def physics_facts(scene: GuideTubeScene) -> dict:
     return {"drop_height_mm": base.height / MM, "gravity": base.gravity,
             "terminal_speed": None if math.isinf(base.terminal_speed) else base.terminal_speed,
             "mu": base.mu, "mu_source": "given" if scene.calibration is None else "calibrated"}
+
+
+def headline(result: Result) -> list[str]:
+    """Each tube's landing time and wall angle, the spread between them and the plant-position error it makes, from
+    result.json facts."""
+    facts = result.extra or {}
+    tubes = [t for t in facts.get("tubes") or [] if isinstance(t, dict)]
+    if not tubes:
+        return []
+    times = ", ".join(f"{t.get('name')} {figure_text(t.get('t_z'), 's', 4)} "
+                      f"(delta {figure_text(t.get('delta_deg'), 'deg', 4)})" for t in tubes)
+    spread = facts.get("landing_time_spread_s")
+    return [f"landing times: {times}",
+            f"spread {figure_text(None if spread is None else 1000.0 * spread, 'ms')}, plant-position error "
+            f"{figure_text(facts.get('spacing_error_mm'), 'mm')}"]

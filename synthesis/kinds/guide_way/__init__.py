@@ -33,6 +33,11 @@ class GuideWay(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.guide_way.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.guide_way.solve import SOLVING
 

@@ -16,6 +16,7 @@ import numpy as np
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import conics as cn
 from synthesis.kinds.guide_way import scene as sc
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
@@ -278,3 +279,24 @@ def explicit_design(loaded: LoadedSpec, data: dict) -> dict:
     out["spline"] = dict(spline, control=[[{"init": float(v), "bounds": [float(v) - move, float(v) + move]}
                                                    for v in point] for point in control])
     return out
+
+
+def headline(result: Result) -> list[str]:
+    """The guide way's largest pressure angle and smallest radius (where), the joints' jumps and the fold's reach,
+    from result.json facts."""
+    facts = result.extra or {}
+    pressure, radius = facts.get("pressure_angle_max") or {}, facts.get("smallest_radius") or {}
+    if not pressure and not radius:
+        return []
+    lines = [f"pressure angle max {figure_text(pressure.get('value'), 'deg')} ({pressure.get('stretch', '-')}), "
+             f"smallest radius {figure_text(radius.get('value'), 'mm')} ({radius.get('stretch', '-')})"]
+    joints = facts.get("joints") or {}
+    jumps = [f"{name} {figure_text(j.get('position_jump_mm'), 'mm')} / {figure_text(j.get('tangent_jump_deg'), 'deg')}"
+             for name, j in joints.items() if isinstance(j, dict)]
+    if jumps:
+        lines.append(f"joint jumps (position / tangent): {', '.join(jumps)}")
+    fold = facts.get("fold") or {}
+    if fold:
+        lines.append(f"fold at {fold.get('point', '-')}: claw tip {figure_text(fold.get('distance_mm'), 'mm', 4)} "
+                     f"from the centre, {figure_text(fold.get('excess_mm'), 'mm')} beyond the fold radius")
+    return lines

@@ -32,6 +32,11 @@ class PickerDoubleCrank(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.picker.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.picker.solve import SOLVING
 
@@ -81,6 +86,11 @@ class Picker(Kind):
         from synthesis.kinds.picker.combined import run_check
 
         return run_check(loaded)
+
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.picker.check import combined_headline
+
+        return combined_headline(result)
 
     def figures(self) -> dict[str, FigureWriter]:
         from synthesis.kinds.picker.export import write_picker_csv, write_picker_dxf

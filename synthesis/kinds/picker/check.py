@@ -20,6 +20,7 @@ from synthesis.errors import AssemblyError
 from synthesis.kinematics import fourbar
 from synthesis.kinds.picker.kinematics.arc import arc_through, points_on_arc
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, assembles, clamp_states, joint_positions
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
@@ -134,3 +135,34 @@ def run_check(loaded: LoadedSpec) -> Result:
     design["branch"] = spec.linkage.branch
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], extra=facts(spec, dc))
+
+
+def headline(result: Result) -> list[str]:
+    """The clamp's miss of its target arc (rms, maximum, eq 4's sum) and the smallest transmission angle, from
+    result.json facts and rules."""
+    arc = (result.extra or {}).get("arc_error") or {}
+    rules = {r["name"]: r for r in result.rules}
+    if not arc:
+        return []
+    points = arc.get("points") or []
+    mu = rules.get("min_transmission_angle") or {}
+    return [f"arc error over {len(points)} points: rms {figure_text(arc.get('rms_mm'), 'mm')}, max "
+            f"{figure_text(arc.get('max_mm'), 'mm')} (eq 4 sum {figure_text(arc.get('eq4_sum_mm'), 'mm')})",
+            f"path off the circle at most {figure_text(arc.get('path_off_circle_max_mm'), 'mm')}, transmission angle "
+            f"min {figure_text(mu.get('value'), 'deg')}"]
+
+
+def combined_headline(result: Result) -> list[str]:
+    """The combined picker (drive and linkage): how near the clamp picks and drops to its targets and when, and its
+    peak speed, from result.json facts."""
+    facts = result.extra or {}
+    instants = facts.get("instants") or {}
+    lines = []
+    for name in ("picking", "dropping"):
+        at = instants.get(name)
+        if isinstance(at, dict):
+            lines.append(f"{name}: {figure_text(at.get('distance_to_target_mm'), 'mm')} from its target at "
+                         f"t = {figure_text(at.get('t'), 's')} (published {figure_text(at.get('published_t'), 's')})")
+    if facts.get("peak_speed_m_s") is not None:
+        lines.append(f"peak clamp speed {figure_text(facts.get('peak_speed_m_s'), 'm/s')}")
+    return lines

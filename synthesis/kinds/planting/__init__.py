@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from synthesis.core.kind import Kind
+from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
@@ -20,6 +20,8 @@ class PlantingFourbar(Kind):
                   "smooth": "smallest peak claw acceleration over a turn, mm/s^2"}
     example = "planting_arm/redesign_from_example1.toml"
     bench_specs = ("planting_arm/redesign_from_example1.toml", "planting_arm/redesign_from_example3.toml")
+    #: with [soil] analysis_depth the soil is placed that far above the lowest point: the depth is that number
+    fixed_by = {"planting_depth": FixedBy("[soil] analysis_depth", "[rules] depth")}
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -30,6 +32,11 @@ class PlantingFourbar(Kind):
         from synthesis.kinds.planting.check import run_check
 
         return run_check(loaded)
+
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.planting.check import headline
+
+        return headline(result)
 
     def solving(self) -> Solving:
         from synthesis.kinds.planting.solve import SOLVING

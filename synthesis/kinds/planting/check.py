@@ -11,6 +11,7 @@ from synthesis.kinds.planting.kinematics import tip_state
 from synthesis.kinds.planting.rule_set import planting_rules
 from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
                                       find_precision_points, float_trace)
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 
@@ -109,3 +110,31 @@ def run_check(loaded: LoadedSpec) -> Result:
         design=design, rules=records, trajectory=trajectory(scene, pts),
         extra=scene_facts(spec, scene, pts),
     )
+
+
+#: the rules of the precision points P1-P6 a planting engineer reads first, in the table's order
+POINT_RULES = ("p1p3_distance", "p2p3_distance", "p1p2p3_collinearity", "entry_angle", "planting_depth",
+               "p4p6_distance", "p2_speed")
+
+
+def headline(result: Result) -> list[str]:
+    """Entry angle, planting depth and hole (P4-P6), the seedling pick (P1-P3), and which point rules miss and by how
+    much, from result.json's rules and facts."""
+    rules = {r["name"]: r for r in result.rules}
+
+    def value(name: str) -> str:
+        rule = rules.get(name) or {}
+        return figure_text(rule.get("value"), rule.get("unit", ""))
+
+    points = (result.extra or {}).get("precision_points") or {}
+    lines = [f"entry angle {value('entry_angle')}, planting depth {value('planting_depth')}, hole P4-P6 "
+             f"{value('p4p6_distance')}",
+             f"pick: P1-P3 {value('p1p3_distance')}, P2-P3 {value('p2p3_distance')}, P1-P2-P3 off line "
+             f"{value('p1p2p3_collinearity')}, P2 speed {value('p2_speed')}"]
+    lost = [name for name, p in points.items() if isinstance(p, dict) and not p.get("found", True)]
+    if lost:
+        lines.append(f"not found on the path: {', '.join(lost)}")
+    misses = [f"{name} by {figure_text(-rules[name]['margin'], rules[name].get('unit', ''))}" for name in POINT_RULES
+              if name in rules and not rules[name].get("satisfied") and rules[name].get("margin") is not None]
+    lines.append(f"P1-P6 misses: {'; '.join(misses)}" if misses else "P1-P6: every point rule holds")
+    return lines

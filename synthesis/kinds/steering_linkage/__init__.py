@@ -35,6 +35,11 @@ class SteeringLinkage(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.steering_linkage.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.steering_linkage.solve import SOLVING
 

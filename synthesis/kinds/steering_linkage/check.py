@@ -20,6 +20,7 @@ from synthesis.kinds.steering_linkage.rules import arm_length_rule, tie_rod_tran
 from synthesis.core.verdict import FINE
 from synthesis.kinds.steering_linkage.kinematics import (ackermann_outer, dead_centre_cosine, inner_tip, kingpins,
                                                      outer_lock, outer_tip, tie_rod_length, transmission_angles)
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.steering_linkage.spec import SteeringSpec
@@ -173,3 +174,20 @@ def run_check(loaded: LoadedSpec) -> Result:
     rules, tr = evaluate(spec, design, FINE * spec.solver.samples)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], extra=facts(spec, design, tr, explain(spec)))
+
+
+def headline(result: Result) -> list[str]:
+    """The Ackermann error (largest, where), the outside wheel at full lock against Ackermann's, the smallest
+    transmission angle and the turning radius, from result.json facts."""
+    facts = result.extra or {}
+    if "max_steering_error_deg" not in facts:
+        return []
+    turning = facts.get("turning_radius")
+    radius = turning.get("value_mm") if isinstance(turning, dict) else None
+    return [f"Ackermann error max {figure_text(facts.get('max_steering_error_deg'), 'deg')} at inside "
+            f"{figure_text(facts.get('max_error_at_inside_deg'), 'deg')}",
+            f"at full lock ({figure_text(facts.get('max_inside_lock_deg'), 'deg')} inside): outside "
+            f"{figure_text(facts.get('outside_at_max_lock_deg'), 'deg', 4)}, Ackermann "
+            f"{figure_text(facts.get('ackermann_at_max_lock_deg'), 'deg', 4)}; turning radius "
+            f"{figure_text(radius, 'mm', 4)}",
+            f"transmission angle min {figure_text(facts.get('min_transmission_angle_deg'), 'deg')}"]

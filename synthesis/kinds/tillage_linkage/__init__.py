@@ -36,6 +36,11 @@ class TillageLinkage(Kind):
 
         return run_check(loaded)
 
+    def headline(self, result: Result) -> list[str]:
+        from synthesis.kinds.tillage_linkage.check import headline
+
+        return headline(result)
+
     def solving(self) -> Solving:
         from synthesis.kinds.tillage_linkage.solve import SOLVING
 

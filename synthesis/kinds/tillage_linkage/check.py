@@ -19,6 +19,7 @@ from synthesis.kinds.tillage_linkage.rules import (bar_engagement_rule, bar_slot
                                  working_depth_rule)
 from synthesis.core.verdict import FINE
 from synthesis.kinds.tillage_linkage.kinematics import (acceleration, bar_angle, direction, joints, path_function, speed)
+from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.tillage_linkage.spec import TillageSpec
@@ -262,3 +263,17 @@ def run_check(loaded: LoadedSpec) -> Result:
     _, trajectory = curves(spec, design, m)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], trajectory=trajectory, extra=facts(spec, design, m))
+
+
+def headline(result: Result) -> list[str]:
+    """Working depth and lift, the ground speed in the soil (rearward is negative) and the bar's slot angle, from
+    result.json facts."""
+    facts = result.extra or {}
+    low, high = facts.get("lowest_point") or {}, facts.get("highest_point") or {}
+    if not low:
+        return []
+    return [f"working depth {figure_text(low.get('depth_mm'), 'mm', 4)}, lift "
+            f"{figure_text(high.get('lift_mm'), 'mm', 4)}",
+            f"ground speed in the soil at most {figure_text(facts.get('max_ground_speed_in_soil_m_s'), 'm/s')}, bar slot "
+            f"angle max {figure_text(facts.get('bar_slot_angle_max_deg'), 'deg')}, peak speed "
+            f"{figure_text(facts.get('peak_speed_m_s'), 'm/s')}"]
