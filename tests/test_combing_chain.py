@@ -293,9 +293,10 @@ def test_rules_recheck_on_the_10x_grid_and_names_agree_on_floats_and_symbols():
     spec = load_spec(TWO_SPEED).model
     design = spec.design_values()
     fine = recheck_rules(spec, design)
-    from synthesis.kinds.combing_chain.nlp import CombingChainNLP
+    from synthesis.core.kind import Setting
+    from synthesis.kinds.combing_chain.solve import SOLVING
 
-    nlp = CombingChainNLP(spec)
+    nlp = SOLVING.build(Setting(spec))
     assert [r.name for r in fine] == [r.name for r in nlp.problem.rules]
     top = next(r for r in fine if r.name == "gear1_window_top")
     assert np.asarray(top.expr).size == 10 * 13 * 10 * 5

@@ -240,10 +240,11 @@ def test_declared_units_match_the_physics(tmp_path, k):
     """Independent re-check of the declared units: the crank-rocker's spec with every length x k builds (by the
     kind's own code) the NLP a length unit change must give, so at any point its rows and objective equal the
     mm NLP's rows x factor**p of their declared units -- at 5 random points, to 1e-9 relative."""
-    from synthesis.kinds.crank_rocker.nlp import CrankRockerNLP
+    from synthesis.core.kind import Setting
+    from synthesis.kinds.crank_rocker.solve import SOLVING
 
-    mm = CrankRockerNLP(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").model)
-    scaled = CrankRockerNLP(_crank_rocker_spec(tmp_path, k).model)
+    mm = SOLVING.build(Setting(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_synthesis.toml").model))
+    scaled = SOLVING.build(Setting(_crank_rocker_spec(tmp_path, k).model))
     declared = ipopt.CompiledNLP(mm.problem, length_factor=k)
     n_w = mm.compiled.t.w.numel()
     u, c = declared._unit, declared._row_unit
