@@ -19,6 +19,7 @@ class RotaryPlanetary(Kind):
     objectives = {"key_pose_miss": "smallest sum of squared key-pose misses, mm^2 + deg^2",
                   "smooth_law": "smoothest laws (mean squared second derivative of F and G, deg^2/rad^4)"}
     example = "rotary_planetary/key_pose_redesign.toml"
+    bench_specs = ("rotary_planetary/smooth_loop_redesign.toml", "rotary_planetary/key_pose_redesign.toml")
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
@@ -45,6 +46,22 @@ class RotaryPlanetary(Kind):
                 "pitch_curves.png": pitch_curves_figure,
                 "pitch_curves.csv": write_pitch_curves_csv,
                 "pitch_curves.dxf": write_pitch_curves_dxf}
+
+    def headline(self, result: Result) -> list[str]:
+        """Each key pose's miss (tip, attitude), the loop's height and depth and the hole it leaves."""
+        motion = (result.extra or {}).get("motion") or {}
+        lines = []
+        for name, pose in (motion.get("poses") or {}).items():
+            target = pose.get("target") or {}
+            att = "" if target.get("attitude") is None else \
+                f", attitude {pose['attitude_deg']:.1f} deg (target {target['attitude']:g})"
+            lines.append(f"pose {name}: tip {pose['miss_mm']:.3f} mm from target{att}")
+        if "trajectory_height_mm" in motion:
+            soil = motion.get("soil") or {}
+            hole = f", hole {soil['hole_width_mm']:.1f} mm" if soil else ", never in the soil"
+            lines.append(f"loop {motion['trajectory_height_mm']:.1f} mm tall, {motion['planting_depth_mm']:.1f} mm "
+                         f"deep{hole}")
+        return lines
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.rotary_planetary.coarse import COARSE
