@@ -14,13 +14,9 @@ import importlib
 import sys
 
 import click
-from rich.console import Console
-from rich.markup import escape
 
 from synthesis.core import interrupt
 from synthesis.errors import AgrisynthError
-
-err_console = Console(stderr=True, highlight=False)
 
 #: command -> (the module defining it, its one-line help for ``agrisynth --help``: tests/test_cli_check.py holds it
 #: equal to the command's own)
@@ -115,8 +111,7 @@ def main() -> None:
         # one line, like every other bad input (click's own form is three: Usage, Try, Error)
         ctx = getattr(exc, "ctx", None)
         hint = f" (see `{ctx.command_path} --help`)" if isinstance(exc, click.UsageError) and ctx is not None else ""
-        err_console.print(f"[bold red]error:[/] {escape(exc.format_message())}{escape(hint)}", markup=True,
-                          soft_wrap=True)
+        _say_error(f"{exc.format_message()}{hint}")
         sys.exit(2)
     except (click.exceptions.Abort, KeyboardInterrupt) as exc:
         _interrupted(interrupt.signal_of(exc))
@@ -127,7 +122,7 @@ def main() -> None:
             raise
         _interrupted(interrupt.signal_of(exc))
     except AgrisynthError as exc:
-        err_console.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True, soft_wrap=True)
+        _say_error(str(exc))
         sys.exit(exc.exit_code)
     except Exception:
         # a signal's KeyboardInterrupt raised inside a CasADi call comes out as another exception (NotImplementedError:
@@ -137,6 +132,16 @@ def main() -> None:
         _interrupted(interrupt.pending())
 
 
+def _say_error(message: str) -> None:
+    """"error: <message>" on standard error, one line (red on a terminal)."""
+    # rich only now: `agrisynth --help` and a command's own output do not wait for it (a command's views import it)
+    from rich.console import Console
+    from rich.markup import escape
+
+    Console(stderr=True, highlight=False).print(f"[bold red]error:[/] {escape(message)}", markup=True, soft_wrap=True)
+
+
 def _interrupted(signum: int) -> None:
-    err_console.print("interrupted")
+    sys.stderr.write("interrupted\n")
+    sys.stderr.flush()
     sys.exit(128 + signum)
