@@ -64,10 +64,15 @@ def _annotate(ax, joints: dict, k: int = 0) -> None:
     for name, p in z.items():
         ax.annotate(name, (p.real, p.imag), textcoords="offset points", xytext=(5, 5), fontsize=9,
                     fontweight="bold", zorder=8)
+    # each length beside its link's middle, off the link along its normal; the links that often run nearly along
+    # another (the ground beside the rocker, the coupler triangle's two sides to P) on opposite sides
+    sides = {("O", "O'"): -1.0, ("B", "P"): -1.0}
     for a, b in (("O", "O'"), ("O", "A"), ("A", "B"), ("B", "O'"), ("A", "P"), ("B", "P")):
-        m = (z[a] + z[b]) / 2
-        ax.annotate(f"{abs(z[b] - z[a]):.1f}", (m.real, m.imag), textcoords="offset points", xytext=(0, -10),
-                    ha="center", fontsize=7.5, color="0.3", zorder=8,
+        m, d = (z[a] + z[b]) / 2, z[b] - z[a]
+        normal = 1j * d / abs(d) if abs(d) > 0 else 1j
+        off = 11.0 * sides.get((a, b), 1.0) * normal
+        ax.annotate(f"{abs(d):.1f}", (m.real, m.imag), textcoords="offset points", xytext=(off.real, off.imag),
+                    ha="center", va="center", fontsize=7.5, color="0.3", zorder=8,
                     bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
 
 

@@ -235,9 +235,9 @@ function renderTable(data) {
 // Every panel is drawn in the svg's own pixels (viewBox 0 0 width height, redrawn on resize): texts have a font
 // size in px that is the size on screen, the axes carry ticks in the data's units (mm) at round values, and a
 // scale bar says how long a round number of mm is.  The frame maps data (y up) to pixels (y down).
-const MARGIN = { left: 64, right: 16, top: 14, bottom: 46 };
+const MARGIN = { left: 64, right: 16, top: 34, bottom: 46 };   // the scale bar sits in the top margin
 const TEXT_PX = 12;            // point, joint, tick and line labels
-const TICK_PX = 90;            // about one tick every 90 px
+const TICK_PX = { x: 90, y: 60 };   // about one tick every 90 px across, 60 px up
 
 // the 1, 2 or 5 x 10^k at or above raw (tick spacings, scale bars)
 function niceAbove(raw) {
@@ -301,8 +301,8 @@ function text(x, y, label, attrs) {
 }
 
 // ticks at the round values inside [lo, hi]
-function ticks(lo, hi, pixels) {
-  const step = niceAbove((hi - lo) / Math.max(2, pixels / TICK_PX));
+function ticks(lo, hi, pixels, spacing) {
+  const step = niceAbove((hi - lo) / Math.max(2, pixels / spacing));
   const out = [];
   for (let v = Math.ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step) out.push(Number(v.toPrecision(12)));
   return { step, values: out };
@@ -311,7 +311,7 @@ function ticks(lo, hi, pixels) {
 function drawAxes(root, f, xTitle, yTitle) {
   const g = svg("g", { class: "axes", fill: "#444" });
   const grid = svg("g", { class: "grid", stroke: "#ececec", "stroke-width": 1 });
-  const tx = ticks(f.x0, f.x1, f.right - f.left), ty = ticks(f.y0, f.y1, f.bottom - f.top);
+  const tx = ticks(f.x0, f.x1, f.right - f.left, TICK_PX.x), ty = ticks(f.y0, f.y1, f.bottom - f.top, TICK_PX.y);
   for (const v of tx.values) {
     const x = f.px(v);
     grid.append(svg("line", { x1: x, y1: f.top, x2: x, y2: f.bottom }));
@@ -333,21 +333,19 @@ function drawAxes(root, f, xTitle, yTitle) {
   root.dataset.tickStep = `${tx.step} ${ty.step}`;
 }
 
-// a bar of a round length in mm, bottom right inside the plot area
+// a bar of a round length in mm, in the top margin over the plot area's right end: it never covers the drawing
 function drawScaleBar(root, f) {
   const mm = niceAbove((f.x1 - f.x0) / 8);
-  const length = mm * f.sx, x1 = f.right - 14, x0 = x1 - length, y = f.bottom - 14;
+  const length = mm * f.sx, x1 = f.right, x0 = x1 - length, y = f.top - 12;
   const g = svg("g", { class: "scale-bar", "data-scale-mm": mm, stroke: "#111", "stroke-width": 2 });
-  g.append(svg("rect", { x: x0 - 6, y: y - 22, width: length + 12, height: 30, fill: "#fff", "fill-opacity": 0.8,
-    stroke: "none" }));
   g.append(svg("line", { x1: x0, y1: y, x2: x1, y2: y, "stroke-width": 3 }));
   for (const x of [x0, x1]) g.append(svg("line", { x1: x, y1: y - 5, x2: x, y2: y + 5 }));
-  g.append(text((x0 + x1) / 2, y - 7, `${fmt(mm)} mm`, { "text-anchor": "middle", stroke: "none", fill: "#111" }));
+  g.append(text(x0 - 8, y + 4, `${fmt(mm)} mm`, { "text-anchor": "end", stroke: "none", fill: "#111" }));
   root.append(g);
 }
 
 // ground, soil surface, seedbed: straight lines across the panel, each through a point at an angle, read from
-// what the server sends (key points, the design's values) and the kind's frame (docs/ARCHITECTURE.md, studio)
+// what the server sends (key points, the design's values) and the kind's frame (docs/ARCHITECTURE.md, Conventions)
 const SURFACES = {
   // planting: P4 is where the claw path meets the soil surface (machine and ground frames); the seedbed bottom
   // passes through the seedbed point, tilted by the design's seedbed_tilt
