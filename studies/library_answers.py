@@ -35,7 +35,7 @@ def _stable(value):
 
 def answers(spec_path: Path, solve: bool) -> dict:
     from synthesis import kinds
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.errors import AgrisynthError
     from synthesis.spec import load_spec
 

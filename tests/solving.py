@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 from synthesis import kinds
 from synthesis.core.kind import Setting
-from synthesis.core.solve import solve_spec as run_solve
+from synthesis.kinds import solve_spec as run_solve
 
 
 @functools.lru_cache(maxsize=None)

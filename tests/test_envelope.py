@@ -14,7 +14,7 @@ from constraints.base import Rule
 from synthesis import kinds
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.problem import Envelope, ObjectiveParts, Operating, Problem
-from synthesis.core.solve import solve_spec
+from synthesis.kinds import solve_spec
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.operating import at_operating, ranges_of
 

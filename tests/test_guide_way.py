@@ -406,7 +406,7 @@ def test_a_robust_build_its_structural_rows_cannot_pin_is_bad_input_not_a_traceb
     """Without the refusal above, the robust transcription's PinningError (45 = 48 + 2 window edges - 5 auxiliaries,
     16 rows) comes out as the same kind of one-line SpecError (exit 2), for any kind it happens to."""
     from synthesis import kinds
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.errors import SpecError
 
     monkeypatch.setattr(type(kinds.get("guide_way")), "robust_refusal", None)

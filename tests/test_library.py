@@ -15,7 +15,7 @@ import pytest
 
 from conftest import LIBRARY
 from synthesis import kinds
-from synthesis.core.solve import solve_spec
+from synthesis.kinds import solve_spec
 from synthesis.errors import AgrisynthError
 from synthesis.spec import load_spec
 from solving import same_solve, solved_library_spec

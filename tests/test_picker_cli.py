@@ -147,7 +147,7 @@ def test_compare_figures_overlay_baseline_and_solution(tmp_path):
     from synthesis import kinds
     from synthesis.kinds.crank_rocker.check import run_check as check_crank_rocker
     from synthesis.kinds.picker.check import run_check as check_double_crank
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.result import Result
     from synthesis.spec import load_spec
 

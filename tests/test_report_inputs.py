@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from synthesis import kinds
-from synthesis.core.solve import baseline_rules, solve_spec
+from synthesis.core.solve import baseline_rules
+from synthesis.kinds import solve_spec
 from synthesis.report import run_artifacts, write_report
 from synthesis.report.tables import candidates, operating_conditions
 from synthesis.result import Result

@@ -208,7 +208,7 @@ def test_check_finds_soil_crossings_and_reports_every_rule(checked):
 
 @pytest.mark.slow
 def test_solved_redesign_holds_every_rule_on_a_finer_grid():
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
 
     loaded = load_spec(LIBRARY / "rotary_planetary/key_pose_redesign.toml")
     result, _, _ = solve_spec(loaded, workers=1)
@@ -219,3 +219,40 @@ def test_solved_redesign_holds_every_rule_on_a_finer_grid():
     assert all(r.satisfied for r in records), [r.name for r in records if not r.satisfied]
     for name, pose in result.extra["motion"]["poses"].items():
         assert pose["miss_mm"] <= spec.key_poses[name].tolerance + 1e-6
+
+
+def _check_law(tmp_path, planet_sin: str, idler_sin: str = "[0.0]"):
+    text = SPEC.replace("planet_cos = [-12.0, 2.0]", "planet_cos = [0.0]").replace(
+        "planet_sin = [-6.0, 1.5]", f"planet_sin = {planet_sin}").replace(
+        "idler_cos = [4.0, -1.0]", "idler_cos = [0.0]").replace("idler_sin = [3.0, 0.5]", f"idler_sin = {idler_sin}")
+    (tmp_path / "spec.toml").write_text(text)
+    result = KIND.check(load_spec(tmp_path / "spec.toml"))
+    return result, {r["name"]: r for r in result.rules}
+
+
+def test_nearly_circular_gears(tmp_path):
+    """Laws of 1e-6 deg: four circles of radius a/2, ratio 1, the normals on the line of centres."""
+    result, rules = _check_law(tmp_path, "[1e-6]", "[1e-6]")
+    assert rules["pair_ratio"]["value"] == pytest.approx(1.0, abs=1e-7)
+    assert rules["pitch_normal_angle"]["value"] == pytest.approx(0.0, abs=1e-6)
+    # the least curvature of the four circles: 1 / (52 / 2) mm
+    assert rules["pitch_curve_concavity"]["value"] == pytest.approx(2.0 / 52.0, rel=1e-6)
+    columns = write_pitch_curves_csv(result, tmp_path / "c.csv") or None
+    assert columns is None
+    with open(tmp_path / "c.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert max(abs(float(r["pair2_driven_radius_mm"]) - 26.0) for r in rows) < 1e-5
+
+
+def test_very_eccentric_gears_are_flagged_not_crashed(tmp_path):
+    """F' reaching 0.98 rad/rad: the planet nearly stops relative to the carrier (pair 2's ratio 0.023); beyond
+    1 rad/rad it would turn back (a negative ratio) and at 2 the driven radius is infinite: each is a violated or
+    unevaluated rule, never a traceback."""
+    _, rules = _check_law(tmp_path, "[56.0]")
+    assert rules["pair_ratio"]["value"] == pytest.approx(1.0 - math.radians(56.0), rel=1e-6)
+    assert not rules["pair_ratio"]["satisfied"] and not rules["pitch_curve_concavity"]["satisfied"]
+    _, rules = _check_law(tmp_path, "[80.0]")
+    assert rules["pair_ratio"]["value"] == pytest.approx(1.0 - math.radians(80.0), rel=1e-6) and \
+        rules["pair_ratio"]["value"] < 0
+    _, rules = _check_law(tmp_path, f"[{math.degrees(2.0)!r}]")
+    assert not rules["pair_ratio"]["satisfied"]

@@ -194,7 +194,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
     ours = strict_json(run / "result.json")
     assert (run / "solved.toml").is_file() and (run / "report.html").is_file()
     # the solve `agrisynth solve HERE --starts 1` runs (core.solve_spec), again, in this process
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.spec import load_spec
 
     theirs = solve_spec(load_spec(here_spec), starts=1, workers=1)[0].to_json()
@@ -278,7 +278,7 @@ def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright)
         assert seen["left"] == [] and seen["errors"] == []
 
     from synthesis import kinds
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.spec import load_spec
 
     # the dragged design: red exactly where the check of the saved spec says violated, and the drag changed that

@@ -188,7 +188,7 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
     worst case lies) and at every sample, for 0.56 mm more base radius."""
     import itertools
 
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.tolerance.design import box_of
 
     kind = kinds.get("clamp_cam")
@@ -239,7 +239,7 @@ def test_robust_cam_holds_pressure_angle_and_working_radius_within_profile_toler
 def test_linearised_worst_case_is_within_10_percent_of_the_sampled_one_or_explained(spec, explained):
     """Per rule, |linear loss - sampled loss| / sampled loss <= 10 %, the sampled worst case being the
     Monte-Carlo's and the nonlinear re-check at the rule's linear worst corner of the box; else an explanation."""
-    from synthesis.core.solve import solve_spec
+    from synthesis.kinds import solve_spec
     from synthesis.tolerance.analysis import analyse
     loaded = load_spec(LIBRARY / spec)
     solved, _, _ = solve_spec(loaded, starts=1, workers=1)

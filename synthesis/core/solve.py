@@ -446,15 +446,6 @@ def _note(status: str, best: StartReport, run: Run) -> str | None:
     return status_note(best)
 
 
-def solve_spec(loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
-               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
-               scheduler: str | None = None) -> tuple[Result, list[StartReport], str]:
-    """:func:`run_solve` of the loaded spec's own kind (SpecError, exit 2, for a check-only kind)."""
-    from synthesis import kinds
-
-    return run_solve(kinds.solving_kind_for(loaded), loaded, starts, seed, workers, on_start, scheduler)
-
-
 def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> SolverError:
     """The exit-3 error of a run with status infeasible or failed, from what the result says."""
     solving = kind.solving()
@@ -482,5 +473,5 @@ def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
         return None
 
 
-__all__ = ["Run", "run_solve", "solve_spec", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
+__all__ = ["Run", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
            "starts_table", "reaching_best", "ipopt_log"]

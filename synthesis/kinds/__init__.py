@@ -159,6 +159,15 @@ def solving_kind_for(loaded) -> Kind:
     return robust_kind(kind, loaded.model)
 
 
+def solve_spec(loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
+               on_start: Callable = lambda report, best: None, scheduler: str | None = None) -> tuple:
+    """:func:`synthesis.core.solve.run_solve` of the loaded spec's own kind, as :func:`solving_kind_for` gives it
+    (SpecError, exit 2, for a check-only kind): (result, every start's report, IPOPT log)."""
+    from synthesis.core.solve import run_solve      # listing kinds imports no solve core
+
+    return run_solve(solving_kind_for(loaded), loaded, starts, seed, workers, on_start, scheduler)
+
+
 def explicit_design(loaded, data: dict | None = None) -> tuple:
     """(loaded spec, spec file data) with every design variable written out (see ``Kind.explicit_design``) and
     the spec validated again from that data; both as given for a kind whose specs always hold their whole design.
