@@ -199,8 +199,11 @@ def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES)
 def evaluate(spec: RotaryPlanetarySpec, design: dict, n: int = CHECK_SAMPLES, soil_samples: int = CHECK_SOIL_SAMPLES
              ) -> tuple[list[Rule], Train, Angles]:
     train = train_of(spec, design)
-    angles = find_angles(spec, train, n)
-    return rules_of(spec, train, angles, turn_grid(n), soil_samples), train, angles
+    # a law steep enough to stop a gear divides by zero: the rule's record says so (an infinite radius fails its
+    # rule, NaN is "not evaluated"); numpy's warning would only repeat it
+    with np.errstate(divide="ignore", invalid="ignore"):
+        angles = find_angles(spec, train, n)
+        return rules_of(spec, train, angles, turn_grid(n), soil_samples), train, angles
 
 
 # --- facts --------------------------------------------------------------------------------------------------------
@@ -243,8 +246,10 @@ def motion_facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles, sample
 
 
 def facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> dict:
+    with np.errstate(divide="ignore", invalid="ignore"):      # as in evaluate: the rules say it
+        motion = motion_facts(spec, train, angles)
     return {"source": spec.source, "harmonics": {"planet": spec.harmonics[0], "idler": spec.harmonics[1]},
-            "motion": motion_facts(spec, train, angles)}
+            "motion": motion}
 
 
 def run_check(loaded: LoadedSpec) -> Result:
