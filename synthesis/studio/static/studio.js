@@ -276,7 +276,9 @@ function extent(groups, surfaces) {
 // data -> pixels for one svg: equal scales (a drawing) or each axis its own (a chart); the data's box is centred
 // and the axes span the whole plot area
 function frameOf(root, box, equal) {
-  const width = Math.max(root.clientWidth, 200), height = Math.max(root.clientHeight, 150);
+  // the size the resize observer last saw (reading clientWidth after the table changed costs a page layout)
+  const size = root.size || (root.size = [root.clientWidth, root.clientHeight]);
+  const width = Math.max(size[0], 200), height = Math.max(size[1], 150);
   const pw = width - MARGIN.left - MARGIN.right, ph = height - MARGIN.top - MARGIN.bottom;
   let [x0, y0, x1, y1] = box;
   let sx = pw / Math.max(x1 - x0, 1e-9), sy = ph / Math.max(y1 - y0, 1e-9);
@@ -454,12 +456,27 @@ function drawPose(root, mechanism, k, f, ghost) {
   root.append(g);
 }
 
+// drawn in the svg's pixels: an svg whose size changes (the window, the layout) is drawn again at its new size
+let redrawing = 0;
+const resized = new ResizeObserver((entries) => {
+  let changed = false;
+  for (const entry of entries) {
+    const root = entry.target, box = entry.contentRect;
+    if (!root.size || root.size[0] !== box.width || root.size[1] !== box.height) changed = true;
+    root.size = [box.width, box.height];
+  }
+  if (!changed) return;
+  cancelAnimationFrame(redrawing);
+  redrawing = requestAnimationFrame(() => { if (state.current) renderDrawing(); });
+});
+
 function panel(id, title) {
   let box = document.getElementById(id);
   if (!box) {
     box = el("div", { class: "panel", id });
     box.append(el("h3", {}, title), svg("svg", { preserveAspectRatio: "none" }), el("div", { class: "legend" }));
     document.getElementById("panels").append(box);
+    resized.observe(box.querySelector("svg"));
   }
   return box;
 }
@@ -552,6 +569,7 @@ function renderCharts(charts, ghosts) {
       panelBox = el("div", { class: "panel chart", id: `chart-${i}`, "data-index": String(i) });
       panelBox.append(el("h3"), svg("svg", { preserveAspectRatio: "none" }), el("div", { class: "legend" }));
       box.append(panelBox);
+      resized.observe(panelBox.querySelector("svg"));
     }
     panelBox.querySelector("h3").textContent = `${chart.name}: deg over ${chart.x_name}`;
     const ghost = ghosts && ghosts[i] && ghosts[i].name === chart.name ? ghosts[i] : null;
@@ -704,11 +722,6 @@ async function start() {
     renderDrawing();
   });
   document.getElementById("animate").addEventListener("change", animate);
-  let resizing = 0;                           // drawn in the svg's pixels: a new width draws again
-  window.addEventListener("resize", () => {
-    cancelAnimationFrame(resizing);
-    resizing = requestAnimationFrame(() => { if (state.current) renderDrawing(); });
-  });
   animate();
   if (solvable) poll();
   document.body.dataset.ready = "1";
