@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
+import html
 import json
 import re
 
 import pytest
 
-from conftest import PLANTING
+from conftest import LIBRARY, PLANTING
 from report_fixtures import checked_run
 from synthesis.report.compare import load_candidates, write_comparison
 from synthesis.errors import ResultError
-from synthesis.report.tables import candidates, design_rows, rule_rows, worst_margins
+from synthesis import kinds
+from synthesis.report.tables import candidates, design_rows, headlines, rule_rows, worst_margins
 from synthesis.result import SCHEMA_VERSION, load_result
 from solving import agrisynth
 
@@ -351,3 +354,35 @@ def test_a_check_beside_a_solve_says_it_has_no_objective():
     facts = dict(run_facts(candidates([check, solve])))
     assert facts["objective"] == ["none: a check evaluates the rules only", "min_total_length = 435.13 mm"]
     assert "objective" not in dict(run_facts(candidates([check, check])))
+
+
+def test_each_candidates_headline_opens_its_verdict_box(runs):
+    """The report's first screen: each candidate's headline (Kind.headline) in its verdict box, before the rules."""
+    folder, result = runs[0]
+    page = (folder / "report.html").read_text()
+    lines = kinds.get(result.kind).headline(result)
+    assert lines[0] == "entry angle 79.3 deg, planting depth 25 mm, hole P4-P6 28.6 mm"
+    box = page[page.index("<div class='verdicts'>"):page.index("<h2>Rules</h2>")]
+    assert "<ul class='headline'>" + "".join(f"<li>{html.escape(line)}</li>" for line in lines) + "</ul>" in box
+    (head,) = headlines(candidates([result]))
+    assert head.lines == lines and head.tables == []
+
+
+def test_a_path_synthesis_report_tables_its_error_per_target(tmp_path):
+    folder, result = checked_run(LIBRARY / "fourbar_path" / "picking_arc.toml", tmp_path)
+    page = (folder / "report.html").read_text()
+    assert "path error over 10 targets: rms 234 mm, max 238 mm at target 3" in page
+    table = page[page.index("<h2>Path error per target</h2>"):page.index("<h2>Rules</h2>")]
+    cells = re.findall(r"<tr><td class='num'>(\d+)</td><td class='num'>([^<]+)</td><td class='num'>([^<]+)</td>"
+                       r"<td class='num'>([^<]+)</td></tr>", table)
+    assert [int(c[0]) for c in cells] == list(range(1, 11))
+    errors = result.extra["target_errors_mm"]
+    assert [float(c[3]) for c in cells] == pytest.approx(errors, rel=5e-4)       # shown to 4 digits
+    assert float(cells[2][3]) == pytest.approx(238.2, abs=0.05)                  # target 3, the largest
+
+
+def test_a_result_its_kind_cannot_read_has_no_headline_and_keeps_its_page(runs):
+    _, result = runs[0]
+    odd = dataclasses.replace(result, extra={**result.extra, "precision_points": ["not", "a", "table"]})
+    (head,) = headlines(candidates([odd]))
+    assert head.lines == [] and head.tables == []

@@ -195,9 +195,10 @@ def test_infeasible_rule_set_names_the_rules_out_of_reach(tmp_path):
     elastic = result.elastic
     assert elastic["relaxed"] == ["transmission_angle_min"]
     assert "grashof_crank_rocker" not in elastic["slacks"]          # kept hard: the crank must turn
-    # re-solved alone, every other rule relaxed: the smallest transmission angle of a crank-rocker is at the crank along the frame, cos mu = (l3^2 + l4^2 -
-    # (l1 - l2)^2) / (2 l3 l4), largest at the box corner l2, l3, l4 all at their lower bounds (each derivative of
-    # cos mu is positive there): 36.16 deg, 3.84 short of 40.  The entry angle costs the elastic design 0.03 deg more.
+    # re-solved alone, every other rule relaxed: the smallest transmission angle of a crank-rocker is at the crank
+    # along the frame, cos mu = (l3^2 + l4^2 - (l1 - l2)^2) / (2 l3 l4), largest at the box corner l2, l3, l4 all at
+    # their lower bounds (each derivative of cos mu is positive there): 36.16 deg, 3.84 short of 40.  The entry angle
+    # costs the elastic design 0.03 deg more.
     l1, l2, l3, l4 = 75.0, 31.5, 67.5, 72.0
     mu = math.degrees(math.acos((l3 ** 2 + l4 ** 2 - (l1 - l2) ** 2) / (2 * l3 * l4)))
     assert elastic["alone"]["transmission_angle_min"] == pytest.approx(40.0 - mu, abs=1e-4)

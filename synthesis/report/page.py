@@ -10,8 +10,9 @@ import html
 import math
 
 from constraints.base import limit_text
-from synthesis.report.tables import (GIVEN_HEADING, Candidate, RuleCell, design_rows, is_single_solve, operating_conditions,
-                                     rule_rows, run_facts, shows_given, shows_given_rules, solved_heading, worst_margins)
+from synthesis.report.tables import (GIVEN_HEADING, Candidate, Headline, RuleCell, design_rows, headlines, is_single_solve,
+                                     operating_conditions, rule_rows, run_facts, shows_given, shows_given_rules,
+                                     solved_heading, worst_margins)
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
 
@@ -25,6 +26,7 @@ h1 { margin-bottom: .2em; } h2 { margin-top: 1.6em; border-bottom: 2px solid #e4
 .verdict.bad { background: #fdecec; border-color: #f0b4b4; }
 .verdict b { display: block; }
 .verdict p.diagnosis { margin: .4em 0 0; max-width: 60em; font-size: .92em; }
+.verdict ul.headline { margin: .4em 0 0; padding-left: 1.2em; font-variant-numeric: tabular-nums; }
 table { border-collapse: collapse; margin: .8em 0; font-size: 14px; }
 th, td { border-bottom: 1px solid #e4e4e4; padding: 4px 10px; text-align: left; vertical-align: top; }
 th { background: #f5f5f7; position: sticky; top: 0; }
@@ -206,16 +208,40 @@ def facts_table(cands: list[Candidate]) -> str:
     return f"<table class='facts'><tr><th></th>{_header(cands)}</tr>\n{rows}</table>"
 
 
-def _verdicts(cands: list[Candidate]) -> str:
+def _headline(head: Headline) -> str:
+    """A candidate's headline lines, in its verdict box (the page's first screen)."""
+    if not head.lines:
+        return ""
+    return "<ul class='headline'>" + "".join(f"<li>{html.escape(line)}</li>" for line in head.lines) + "</ul>"
+
+
+def result_tables(heads: list[Headline]) -> str:
+    """The kinds' tables of their results' own figures (a path's error per target), each under its title; with
+    several candidates, each candidate's own, labelled."""
+    parts = []
+    for head in heads:
+        for table in head.tables:
+            label = f" &mdash; {html.escape(head.label)}" if len(heads) > 1 else ""
+            columns = "".join(f"<th>{html.escape(c)}</th>" for c in table.columns)
+            rows = "\n".join("<tr>" + "".join(f"<td class='num'>{_num(v)}</td>" if not isinstance(v, str)
+                                              else f"<td>{html.escape(v)}</td>" for v in row) + "</tr>"
+                             for row in table.rows)
+            parts.append(f"<h2>{html.escape(table.title)}{label}</h2>\n<div class='scroll'><table class='result'>"
+                         f"<tr>{columns}</tr>\n{rows}</table></div>")
+    return "\n".join(parts)
+
+
+def _verdicts(cands: list[Candidate], heads: list[Headline] | None = None) -> str:
+    heads = headlines(cands) if heads is None else heads
     out = []
-    for c in cands:
+    for c, head in zip(cands, heads):
         bad = [r["name"] for r in c.result.violated()]
         text = "every rule satisfied" if not bad else f"{len(bad)} rule(s) violated: {', '.join(bad)}"
         # an infeasible or failed solve keeps its exit-3 message: which rules are out of reach, what to change
         diagnosis = (c.result.solver or {}).get("diagnosis")
         said = f"<p class='diagnosis'>{html.escape(diagnosis)}</p>" if isinstance(diagnosis, str) else ""
         out.append(f"<div class='verdict{' bad' if bad else ''}'><b>{html.escape(c.label)}</b>"
-                   f"{html.escape(c.result.status)}: {html.escape(text)}{said}</div>")
+                   f"{html.escape(c.result.status)}: {html.escape(text)}{_headline(head)}{said}</div>")
     return f"<div class='verdicts'>{''.join(out)}</div>"
 
 
@@ -285,6 +311,7 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
     if exports:
         figs += "\n<p>Files: " + ", ".join(f"<a href='{html.escape(f)}'>{html.escape(f)}</a>" for f in exports) + "</p>"
     missing = "\n".join(f"<p class='missing'>{html.escape(n)}</p>" for n in notes)
+    heads = headlines(cands)
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
@@ -292,7 +319,8 @@ def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[s
 <style>{CSS}</style></head><body>
 <h1>{html.escape(title)}</h1>
 <p class="lede">kind <code>{html.escape(kind)}</code>{(' &middot; ' + html.escape(source)) if source else ''}</p>
-{_verdicts(cands)}
+{_verdicts(cands, heads)}
+{result_tables(heads)}
 <h2>Rules</h2>
 {rule_columns(cands)}
 <div class="scroll">{rule_table(cands)}</div>

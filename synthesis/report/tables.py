@@ -10,6 +10,9 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from synthesis import kinds
+from synthesis.core.kind import ResultTable
+from synthesis.errors import AgrisynthError
 from synthesis.result import Result
 
 #: a design value differs from the baseline's when it moves by more than this (relative, or absolute near 0)
@@ -310,3 +313,28 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
     versions = sorted({k for c in cands for k in c.result.versions})
     facts += [(f"{k} version", [c.result.versions.get(k) for c in cands]) for k in versions]
     return [(name, values) for name, values in facts if any(v is not None for v in values)]
+
+
+@dataclass(frozen=True)
+class Headline:
+    """A candidate's first screen: the figures its kind says an engineer looks at first (:meth:`Kind.headline`), and
+    the kind's tables of its own figures (:meth:`Kind.result_tables`: a path's error per target)."""
+
+    label: str
+    lines: list[str]
+    tables: list[ResultTable]
+
+
+def headlines(cands: list[Candidate]) -> list[Headline]:
+    """Each candidate's headline, from its result alone.  A result its kind cannot read (an unknown kind, facts of
+    an older or hand-edited file) has none: the page is never lost for it."""
+    out = []
+    for c in cands:
+        try:
+            kind = kinds.get(c.result.kind)
+            lines, tables = list(kind.headline(c.result)), list(kind.result_tables(c.result))
+        except (AgrisynthError, KeyError, TypeError, ValueError, AttributeError, IndexError):
+            lines, tables = [], []
+        out.append(Headline(c.label, [str(line) for line in lines], tables))
+    return out
+
