@@ -119,7 +119,7 @@ SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_examp
 #: solves of seconds: run with the slow tests (`pytest -m slow`); the default suite keeps a solve of every kind
 #: (planting_arm: redesign_from_example4)
 SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml",
-        "picker/picker_double_crank_redesign.toml", "planting_arm/infeasible_deep_planting.toml",
+        "picker/picker_double_crank_redesign.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml"}
 #: solves of 10 s or more (started first: tests/conftest.py)
 LONG = {"fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml"}
