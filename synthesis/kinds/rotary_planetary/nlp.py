@@ -1,4 +1,4 @@
-"""The rotary_planetary NLP: the design (spec units) and the carrier angles where the rules are read.
+"""The rotary_planetary problem, as the kind declares it (the core compiles and solves it): the design (spec units) and the carrier angles where the rules are read.
 
 Decision vector: the design variables in ``RotaryPlanetarySpec.variables()`` order (mm, deg; a fixed one has
 lo = hi), then the loop's top and bottom, soil entry and exit, and each free key pose's carrier angle (rad).
@@ -15,9 +15,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.ipopt import CompiledNLP
-from synthesis.core.kind import KindNLP
-from synthesis.core.outcome import StartOutcome
+from synthesis.core.declared import Declared, named
+from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.kinds.rotary_planetary.check import (
     Angles, find_angles, rules_of, soil_y, train_of,
@@ -51,65 +50,68 @@ def pose_miss(spec: RotaryPlanetarySpec, rules) -> list:
     return out
 
 
-class RotaryPlanetaryNLP(KindNLP):
-    """Built once per spec; :meth:`solve` runs IPOPT from one design, its carrier angles found on its loop."""
+def problem(setting: Setting) -> Declared:
+    """The problem of one spec: a start's design clipped into its bounds, its carrier angles found on its loop;
+    the solver's carrier angles (deg) in each start's details."""
+    spec = setting.spec
+    variables = spec.variables()
+    names = list(variables)
+    bounds, init = design_box(variables, names)
+    free_poses = [n for n, p in spec.key_poses.items() if p.carrier_angle is None]
+    n_design, n_aux = len(names), 4 + len(free_poses)
+    z = ca.SX.sym("z", n_design + n_aux)
+    design = {n: z[i] for i, n in enumerate(names)}
+    top, bottom, entry, exit_ = (z[n_design + i] for i in range(4))
+    poses = {n: z[n_design + 4 + j] for j, n in enumerate(free_poses)}
+    poses.update({n: p.carrier_angle * math.pi / 180.0 for n, p in spec.key_poses.items()
+                  if p.carrier_angle is not None})
+    train = train_of(spec, design)
+    samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
+    rules = [r for r in rules_of(spec, train, Angles(top, bottom, entry, exit_, poses), turn_grid(samples), soil_n)
+             if r.name != "plant_spacing"]
+    level = soil_y(spec)
+    s = ca.DM(np.linspace(0.0, 1.0, soil_n + 2)[1:-1])
+    _, y_stroke = tip(train, entry + (exit_ - entry) * s)
+    _, dy_in = tip_rate(train, entry)
+    _, dy_out = tip_rate(train, exit_)
+    structural = [(tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0),
+                  (dy_in, None, 0.0), (dy_out, 0.0, None), (bottom - entry, 0.0, None),
+                  (exit_ - bottom, 0.0, None), (exit_ - entry, None, math.pi), (y_stroke - level, None, 0.0)]
+    if spec.objective.name == "key_pose_miss":
+        misses = pose_miss(spec, rules)
+        f = ca.sum1(ca.vertcat(*misses)) if misses else ca.SX(0.0)
+    else:
+        f = smoothness(spec, design)
+    lbx = np.concatenate([bounds[:, 0], np.full(n_aux, ANGLE_RANGE[0])])
+    ubx = np.concatenate([bounds[:, 1], np.full(n_aux, ANGLE_RANGE[1])])
+    lengths = ("centre_distance_1", "centre_distance_2", "arm_length")
+    declared = Problem("rotary_planetary", z, lbx, ubx, structural, rules, ObjectiveParts(f=f / 100.0),
+                       x_units=["mm" if n in lengths else "deg" for n in names] + ["rad"] * n_aux,
+                       structural_units=["mm", "mm", "mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
+                       objective_unit="mm^2" if spec.objective.name == "key_pose_miss" else "deg^2",
+                       max_iter=spec.solver.max_iter)
 
-    def __init__(self, spec: RotaryPlanetarySpec, elastic: bool = False):
-        self.spec = spec
-        variables = spec.variables()
-        self.names = list(variables)
-        self.bounds, self.init = design_box(variables, self.names)
-        self.free_poses = [n for n, p in spec.key_poses.items() if p.carrier_angle is None]
-        n_design, n_aux = len(self.names), 4 + len(self.free_poses)
-        z = ca.SX.sym("z", n_design + n_aux)
-        design = {n: z[i] for i, n in enumerate(self.names)}
-        top, bottom, entry, exit_ = (z[n_design + i] for i in range(4))
-        poses = {n: z[n_design + 4 + j] for j, n in enumerate(self.free_poses)}
-        poses.update({n: p.carrier_angle * math.pi / 180.0 for n, p in spec.key_poses.items()
-                      if p.carrier_angle is not None})
-        train = train_of(spec, design)
-        angles = Angles(top, bottom, entry, exit_, poses)
-        samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
-        rules = [r for r in rules_of(spec, train, angles, turn_grid(samples), soil_n) if r.name != "plant_spacing"]
-        level = soil_y(spec)
-        s = ca.DM(np.linspace(0.0, 1.0, soil_n + 2)[1:-1])
-        _, y_stroke = tip(train, entry + (exit_ - entry) * s)
-        _, dy_in = tip_rate(train, entry)
-        _, dy_out = tip_rate(train, exit_)
-        structural = [(tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0),
-                      (dy_in, None, 0.0), (dy_out, 0.0, None), (bottom - entry, 0.0, None),
-                      (exit_ - bottom, 0.0, None), (exit_ - entry, None, math.pi), (y_stroke - level, None, 0.0)]
-        if spec.objective.name == "key_pose_miss":
-            misses = pose_miss(spec, rules)
-            f = ca.sum1(ca.vertcat(*misses)) if misses else ca.SX(0.0)
-        else:
-            f = smoothness(spec, design)
-        lbx = np.concatenate([self.bounds[:, 0], np.full(n_aux, ANGLE_RANGE[0])])
-        ubx = np.concatenate([self.bounds[:, 1], np.full(n_aux, ANGLE_RANGE[1])])
-        units = {"arm_angle": "deg", "claw_angle": "deg"}
-        x_units = [units.get(n, "mm" if n in ("centre_distance_1", "centre_distance_2", "arm_length") else "deg")
-                   for n in self.names] + ["rad"] * n_aux
-        self.problem = Problem("rotary_planetary", z, lbx, ubx, structural, rules, ObjectiveParts(f=f / 100.0),
-                               x_units=x_units,
-                               structural_units=["mm", "mm", "mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
-                               objective_unit="mm^2" if spec.objective.name == "key_pose_miss" else "deg^2",
-                               max_iter=spec.solver.max_iter)
-        self.compiled = CompiledNLP(self.problem, elastic)
+    def start(x_design: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
+        x_design = np.clip(np.asarray(x_design, dtype=float), bounds[:, 0], bounds[:, 1])
+        return np.concatenate([x_design, aux_guess(spec, names, free_poses, x_design)]), None
 
-    def aux_guess(self, x_design: np.ndarray) -> np.ndarray:
-        """The start's carrier angles: its loop's extremes, soil crossings and nearest points to the poses."""
-        design = dict(zip(self.names, (float(v) for v in x_design)))
-        angles = find_angles(self.spec, train_of(self.spec, design), 720)
-        entry = angles.entry if angles.entry is not None else angles.bottom - 0.3
-        exit_ = angles.exit if angles.exit is not None else angles.bottom + 0.3
-        return np.array([angles.top, angles.bottom, entry, exit_, *(angles.poses[n] for n in self.free_poses)])
+    def reported(out, design: dict, elastic: bool) -> float:
+        return out.objective * 100.0
 
-    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
-        x_design = np.clip(np.asarray(x_design, dtype=float), self.bounds[:, 0], self.bounds[:, 1])
-        out = self.compiled.solve(start, np.concatenate([x_design, self.aux_guess(x_design)]))
-        n = len(self.names)
-        design = {name: float(v) for name, v in zip(self.names, out.x[:n])}
-        aux = [math.degrees(float(v)) for v in out.x[n:]]
-        return StartOutcome.of(out, design, out.objective * 100.0,
-                               carrier_deg={"top": aux[0], "bottom": aux[1], "entry": aux[2], "exit": aux[3],
-                                            **{p: aux[4 + j] for j, p in enumerate(self.free_poses)}})
+    def carrier_angles(out, compiled) -> dict:
+        aux = [math.degrees(float(v)) for v in out.x[n_design:n_design + n_aux]]
+        return {"carrier_deg": {"top": aux[0], "bottom": aux[1], "entry": aux[2], "exit": aux[3],
+                                **{p: aux[4 + j] for j, p in enumerate(free_poses)}}}
+
+    return Declared(declared, names, bounds, init, design=named(names), start=start, objective=reported,
+                    details=carrier_angles)
+
+
+def aux_guess(spec: RotaryPlanetarySpec, names: list[str], free_poses: list[str], x_design: np.ndarray) -> np.ndarray:
+    """A start's carrier angles: its loop's extremes, soil crossings and the poses' best angles on a 0.5 deg grid."""
+    design = dict(zip(names, (float(v) for v in x_design)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        angles = find_angles(spec, train_of(spec, design), 720)
+    entry = angles.entry if angles.entry is not None else angles.bottom - 0.3
+    exit_ = angles.exit if angles.exit is not None else angles.bottom + 0.3
+    return np.array([angles.top, angles.bottom, entry, exit_, *(angles.poses[n] for n in free_poses)])

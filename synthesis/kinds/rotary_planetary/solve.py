@@ -1,19 +1,16 @@
-"""The solve side of kind rotary_planetary (:data:`SOLVING`): its NLP, the fine-grid re-check and the facts."""
+"""The solve side of kind rotary_planetary (:data:`SOLVING`): its declared problem, the fine-grid re-check and the facts."""
 
 from __future__ import annotations
 
 from synthesis.core.coordinates import outside_bounds
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.rotary_planetary.check import evaluate, facts, find_angles, train_of
-from synthesis.kinds.rotary_planetary.nlp import RotaryPlanetaryNLP
+from synthesis.kinds.rotary_planetary.nlp import problem
 from synthesis.spec.common import design_box
 
 OBJECTIVE_UNITS = {"key_pose_miss": "mm^2 + deg^2", "smooth_law": "deg^2/rad^4"}
-
-
-def build(setting: Setting, elastic: bool = False) -> RotaryPlanetaryNLP:
-    return RotaryPlanetaryNLP(setting.spec, elastic=elastic)
 
 
 def recheck(setting: Setting, outcome) -> Recheck:
@@ -48,5 +45,5 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
     return [r.record().to_json() for r in rules]
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules,
                   samples_hint="[solver] samples_per_turn")
