@@ -9,6 +9,8 @@ variables' bounds, so the same seed gives the same starts on any machine.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import math
 import multiprocessing
 import os
 import signal
@@ -22,6 +24,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from synthesis.core import interrupt
+from synthesis.core.outcome import StartOutcome
 from synthesis.errors import AgrisynthError
 
 _worker_solver: Any = None   # the solver built by this worker process's initializer
@@ -37,10 +40,6 @@ def failed_start(index: int, status: str, reason: str):
     """The outcome of a start that could not be solved (the default ``failure`` of :func:`run_starts`):
     not converged, objective inf, no design, and ``details["failure"]`` the reason (the verdict never
     re-checks it and ranks it below every start that ran)."""
-    import math
-
-    from synthesis.core.outcome import StartOutcome
-
     return StartOutcome(index, {}, math.inf, status, False, 0, 0.0, f"{status}: {reason}\n",
                         details={"failure": reason})
 
@@ -77,8 +76,6 @@ def _die_with(main_pid: int) -> None:
     """End this process when ``main_pid`` ends: PR_SET_PDEATHSIG where Linux has it, and a watchdog thread."""
     parent = os.getppid()
     try:
-        import ctypes
-
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG = 1
     except (OSError, AttributeError, TypeError):
         pass
@@ -169,160 +166,212 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     signal came is discarded (IPOPT returns it as if finished).  Outcomes already passed to ``on_done``
     are the caller's to keep.
     """
-    outcomes: dict[int, Any] = {}
-    stop_at = len(starts) - 1                  # the last start index that counts
-    for i in sorted(finished or {}):
-        if i > stop_at:
-            break
-        out = finished[i]
-        outcomes[i] = out
-        on_done(out)
-        if stop_when is not None and stop_when(out):
-            stop_at = i
-            break
-    todo = [i for i in range(stop_at + 1) if i not in outcomes]
+    run = _Multistart(factory, starts, on_done, stop_when, failure)
+    run.replay(finished or {})
+    todo = [i for i in range(run.stop_at + 1) if i not in run.outcomes]
     if scheduler is not None:
+        return run.on_cluster(todo, scheduler)
+    if todo and workers <= 1:      # in this process: no pool start-up cost, the solver built once
+        run.in_process(todo)
+    elif todo:
+        run.in_pools(todo, workers)
+    return run.counted()
+
+
+class _Multistart:
+    """One call of :func:`run_starts`: the outcomes kept so far, the last start that counts (``stop_at``, lowered by
+    an early stop) and how a finished start is kept."""
+
+    def __init__(self, factory: Callable[[], Any], starts: np.ndarray, on_done: Callable[[Any], None],
+                 stop_when: Callable[[Any], bool] | None, failure: Callable[[int, str, str], Any]):
+        self.factory, self.starts, self.on_done, self.stop_when, self.failure = (factory, starts, on_done, stop_when,
+                                                                                 failure)
+        self.outcomes: dict[int, Any] = {}
+        self.stop_at = len(starts) - 1                  # the last start index that counts
+
+    def counted(self) -> list:
+        return [self.outcomes[i] for i in range(self.stop_at + 1)]
+
+    def settled(self) -> bool:
+        return all(i in self.outcomes for i in range(self.stop_at + 1))
+
+    def replay(self, finished: dict[int, Any]) -> None:
+        """A resumed run's finished starts, in start order, as if they had just finished."""
+        for i in sorted(finished):
+            if i > self.stop_at:
+                break
+            out = finished[i]
+            self.outcomes[i] = out
+            self.on_done(out)
+            if self.stop_when is not None and self.stop_when(out):
+                self.stop_at = i
+                break
+
+    def accept(self, out) -> None:
+        if out.start > self.stop_at or out.start in self.outcomes:
+            return
+        self.outcomes[out.start] = out
+        self.on_done(out)
+        if self.stop_when is not None and out.start < self.stop_at and self.stop_when(out):
+            self.stop_at = out.start
+
+    def on_cluster(self, todo: list[int], scheduler: str) -> list:
+        """Every start on the cluster; an early stop only trims the outcomes (the answer does not depend on where
+        it ran)."""
         try:
-            from synthesis.core.cluster import run_starts_on_cluster
+            from synthesis.core.cluster import run_starts_on_cluster      # dask.distributed: an optional extra
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
-        solved = (run_starts_on_cluster(factory, starts[todo], scheduler, on_done, indices=todo, failure=failure)
-                  if todo else [])
-        outcomes.update({out.start: out for out in solved})
-        everything = [outcomes[i] for i in range(stop_at + 1)]
-        first = next((i for i, out in enumerate(everything) if stop_when is not None and stop_when(out)), None)
+        solved = (run_starts_on_cluster(self.factory, self.starts[todo], scheduler, self.on_done, indices=todo,
+                                        failure=self.failure) if todo else [])
+        self.outcomes.update({out.start: out for out in solved})
+        everything = self.counted()
+        first = next((i for i, out in enumerate(everything) if self.stop_when is not None and self.stop_when(out)),
+                     None)
         return everything if first is None else everything[:first + 1]
 
-    def settled() -> bool:
-        return all(i in outcomes for i in range(stop_at + 1))
-
-    if not todo:
-        return [outcomes[i] for i in range(stop_at + 1)]
-
-    def accept(out) -> None:
-        nonlocal stop_at
-        if out.start > stop_at or out.start in outcomes:
-            return
-        outcomes[out.start] = out
-        on_done(out)
-        if stop_when is not None and out.start < stop_at and stop_when(out):
-            stop_at = out.start
-
-    if workers <= 1:      # in this process: no pool start-up cost, the solver built once
-        solver = factory()
+    def in_process(self, todo: list[int]) -> None:
+        solver = self.factory()
         interrupt.check()
         for i in todo:
-            if i > stop_at:
+            if i > self.stop_at:
                 break
             try:
-                out = solver.solve(i, starts[i])
+                out = solver.solve(i, self.starts[i])
             except Exception as exc:          # this start's failure; the run goes on
                 if interrupt.pending() is not None:
                     raise KeyboardInterrupt from None
-                out = failure(i, *_raised(exc))
+                out = self.failure(i, *_raised(exc))
             if interrupt.pending() is not None:      # IPOPT was stopped inside this start: not a finished one
                 raise KeyboardInterrupt
-            accept(out)
-        return [outcomes[i] for i in range(stop_at + 1)]
+            self.accept(out)
 
-    def pool_round(indices: list[int], n_workers: int) -> tuple[list[int], str | None]:
-        """Solve ``indices`` in one process pool.  Returns the starts that began but did not finish and,
-        when a worker died (the pool is then broken), what happened to it (None: every start finished)."""
+    def remaining(self, todo: list[int]) -> list[int]:
+        return [i for i in todo if i <= self.stop_at and i not in self.outcomes]
+
+    def in_pools(self, todo: list[int], workers: int) -> None:
+        """The starts in process pools of ``workers``; after a worker dies, the starts that were running in it are
+        solved again each alone in a pool of one, so the start that brings its worker down is the one named."""
+        idle_breaks = 0
+        while self.remaining(todo):
+            suspects, broken = _PoolRound(self, self.remaining(todo), workers).run()
+            if broken is None:
+                break
+            if not suspects:        # a worker died outside any start (building the solver?): try once more
+                idle_breaks += 1
+                if idle_breaks >= 2:
+                    for i in self.remaining(todo):
+                        self.accept(self.failure(i, WORKER_CRASHED, f"{broken} before solving it (every worker "
+                                                                    f"process dies before solving any start: "
+                                                                    f"building the solver?)"))
+                continue
+            idle_breaks = 0
+            for i in suspects:
+                if i > self.stop_at or i in self.outcomes:
+                    continue
+                _, alone = _PoolRound(self, [i], 1).run()
+                if i not in self.outcomes:
+                    self.accept(self.failure(i, WORKER_CRASHED, f"{alone or broken} while solving this start"))
+
+
+class _PoolRound:
+    """Some starts of a :class:`_Multistart` solved in one process pool.
+
+    While this thread is inside concurrent.futures a signal is only recorded, and raised at the loop's safe point:
+    raised there, it can leave a future's lock held (wait() takes every waited future's lock one by one), and the
+    pool's manager thread, cancelling that future, then blocks forever and shutdown() with it (a SIGTERM hung a run
+    this way)."""
+
+    def __init__(self, run: _Multistart, indices: list[int], n_workers: int):
+        self.multistart, self.indices = run, indices
         ctx = multiprocessing.get_context()
-        began_q = ctx.SimpleQueue()
-        pool = ProcessPoolExecutor(max_workers=min(n_workers, len(indices)), mp_context=ctx,
-                                   initializer=_init_worker, initargs=(factory, os.getpid(), began_q))
-        began: set[int] = set()
-        futures: dict = {}
-        procs: list = []
-        broken: str | None = None
+        self.began_q = ctx.SimpleQueue()
+        self.pool = ProcessPoolExecutor(max_workers=min(n_workers, len(indices)), mp_context=ctx,
+                                        initializer=_init_worker, initargs=(run.factory, os.getpid(), self.began_q))
+        self.began: set[int] = set()
+        self.futures: dict = {}
+        self.procs: list = []
+        self.broken: str | None = None
 
-        def accept_finished() -> None:
-            """Keep every start whose future finished without raising and is not yet kept."""
-            for fut in sorted(futures, key=futures.get):
-                if fut.done() and not fut.cancelled() and fut.exception() is None:
-                    accept(fut.result())
-
-        # While this thread is inside concurrent.futures a signal is only recorded, and raised at the loop's
-        # safe point: raised there, it can leave a future's lock held (wait() takes every waited future's
-        # lock one by one), and the pool's manager thread, cancelling that future, then blocks forever and
-        # shutdown() with it (a SIGTERM hung a run this way).
+    def run(self) -> tuple[list[int], str | None]:
+        """Returns the starts that began but did not finish and, when a worker died (the pool is then broken), what
+        happened to it (None: every start finished)."""
         try:
-            with interrupt.deferred(reraise=False):
-                futures = {pool.submit(_solve_in_worker, i, starts[i]): i for i in indices}
-            procs = list((getattr(pool, "_processes", None) or {}).values())
-            by_start = {i: fut for fut, i in futures.items()}
-            waiting = set(futures)
-            cancelled_after = len(starts)
-            while waiting and not settled():
-                with interrupt.deferred(reraise=False):
-                    done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
-                    _drain(began_q, began)
-                    for fut in sorted(done, key=futures.get):
-                        if fut.cancelled():      # a start after the early stop, cancelled before it ran
-                            continue
-                        try:
-                            out = fut.result()
-                        except BrokenProcessPool:
-                            broken = "its worker process died"
-                            continue
-                        except Exception as exc:        # raised inside the start: its failure, the run goes on
-                            out = failure(futures[fut], *_raised(exc))
-                        accept(out)
-                    if stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
-                        for later in range(stop_at + 1, cancelled_after):
-                            if later in by_start:
-                                by_start[later].cancel()
-                        cancelled_after = stop_at + 1
-                interrupt.check()       # the loop's safe point: the starts that finished are kept
-                if broken is not None:
-                    codes = [p.exitcode for p in procs if p.exitcode not in (None, 0, -signal.SIGTERM)]
-                    broken = _exit_text(codes[0]) if len(codes) == 1 else broken
-                    break
+            self.collect()
         except BaseException as exc:
-            with interrupt.deferred(reraise=False):      # a second signal does not cut the clean-up short
-                if interrupt.caused_by_signal(exc):     # the starts that finished since the last look are kept
-                    with contextlib.suppress(Exception):    # (never at the cost of ending the workers below)
-                        accept_finished()
-                for fut in futures:
-                    fut.cancel()
-                _end_workers(pool)
-                pool.shutdown(wait=True, cancel_futures=True)
+            self.abort(exc)
             raise
+        self.close()
+        run = self.multistart
+        return sorted(i for i in self.began if i not in run.outcomes and i <= run.stop_at), self.broken
+
+    def accept_finished(self) -> None:
+        """Keep every start whose future finished without raising and is not yet kept."""
+        for fut in sorted(self.futures, key=self.futures.get):
+            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                self.multistart.accept(fut.result())
+
+    def collect(self) -> None:
+        """Submit the starts and keep each as it finishes, until every start that counts is kept or a worker dies."""
+        run = self.multistart
+        with interrupt.deferred(reraise=False):
+            self.futures = {self.pool.submit(_solve_in_worker, i, run.starts[i]): i for i in self.indices}
+        self.procs = list((getattr(self.pool, "_processes", None) or {}).values())
+        by_start = {i: fut for fut, i in self.futures.items()}
+        waiting = set(self.futures)
+        cancelled_after = len(run.starts)
+        while waiting and not run.settled():
+            with interrupt.deferred(reraise=False):
+                done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
+                _drain(self.began_q, self.began)
+                for fut in sorted(done, key=self.futures.get):
+                    self.keep(fut)
+                if run.stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
+                    for later in range(run.stop_at + 1, cancelled_after):
+                        if later in by_start:
+                            by_start[later].cancel()
+                    cancelled_after = run.stop_at + 1
+            interrupt.check()       # the loop's safe point: the starts that finished are kept
+            if self.broken is not None:
+                codes = [p.exitcode for p in self.procs if p.exitcode not in (None, 0, -signal.SIGTERM)]
+                self.broken = _exit_text(codes[0]) if len(codes) == 1 else self.broken
+                break
+
+    def keep(self, fut) -> None:
+        """A finished future's start: its outcome, or its failure when it raised; a dead worker breaks the pool."""
+        if fut.cancelled():      # a start after the early stop, cancelled before it ran
+            return
+        try:
+            out = fut.result()
+        except BrokenProcessPool:
+            self.broken = "its worker process died"
+            return
+        except Exception as exc:        # raised inside the start: its failure, the run goes on
+            out = self.multistart.failure(self.futures[fut], *_raised(exc))
+        self.multistart.accept(out)
+
+    def abort(self, exc: BaseException) -> None:
+        """A signal or an error: the starts that finished since the last look are kept (after a signal), the others
+        cancelled and the workers ended."""
+        with interrupt.deferred(reraise=False):      # a second signal does not cut the clean-up short
+            if interrupt.caused_by_signal(exc):
+                with contextlib.suppress(Exception):    # (never at the cost of ending the workers below)
+                    self.accept_finished()
+            for fut in self.futures:
+                fut.cancel()
+            _end_workers(self.pool)
+            self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def close(self) -> None:
         with interrupt.deferred():
             # after an early stop the starts still running are not needed: they are waited for (as shutdown
             # would) only until a signal comes, then their workers are ended
-            running = [fut for fut in futures if not fut.done()] if broken is None else []
+            running = [fut for fut in self.futures if not fut.done()] if self.broken is None else []
             while running and interrupt.pending() is None:
                 running = list(wait(running, timeout=0.5)[1])
-            if broken is not None or running:
-                _end_workers(pool)
-            pool.shutdown(wait=True, cancel_futures=True)
-            _drain(began_q, began)
-            if broken is not None:
-                accept_finished()           # starts that finished as the pool broke
-        return sorted(i for i in began if i not in outcomes and i <= stop_at), broken
-
-    def remaining() -> list[int]:
-        return [i for i in todo if i <= stop_at and i not in outcomes]
-
-    idle_breaks = 0
-    while remaining():
-        suspects, broken = pool_round(remaining(), workers)
-        if broken is None:
-            break
-        if not suspects:        # a worker died outside any start (building the solver?): try once more
-            idle_breaks += 1
-            if idle_breaks >= 2:
-                for i in remaining():
-                    accept(failure(i, WORKER_CRASHED, f"{broken} before solving it (every worker process dies "
-                                                      f"before solving any start: building the solver?)"))
-            continue
-        idle_breaks = 0
-        for i in suspects:      # each alone in a pool of one: the start that brings its worker down is named
-            if i > stop_at or i in outcomes:
-                continue
-            _, alone = pool_round([i], 1)
-            if i not in outcomes:
-                accept(failure(i, WORKER_CRASHED, f"{alone or broken} while solving this start"))
-    return [outcomes[i] for i in range(stop_at + 1)]
+            if self.broken is not None or running:
+                _end_workers(self.pool)
+            self.pool.shutdown(wait=True, cancel_futures=True)
+            _drain(self.began_q, self.began)
+            if self.broken is not None:
+                self.accept_finished()           # starts that finished as the pool broke
