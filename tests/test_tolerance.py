@@ -620,7 +620,7 @@ def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
     unit_within_row's margin (by half the spacing's change)."""
     from synthesis.spec.operating import at_operating
     from synthesis.tolerance.analysis import analyse
-    from synthesis.tolerance.output import table
+    from synthesis.tolerance.output import full_table
     loaded = load_spec(LIBRARY / "comb_finger/redesign_max_combing.toml")
     kind = kinds.get("comb_finger")
     solving = kind.solving()
@@ -631,7 +631,7 @@ def test_comb_finger_operating_conditions_are_reported_with_derivative_zero():
     assert facts["operating_dependence"] == {"machine_speed": [], "row_spacing": []}
     assert len(facts["stack_up"]) == 7
     assert all(r["operating_sensitivity"] == {"machine_speed": 0.0, "row_spacing": 0.0} for r in facts["stack_up"])
-    assert "No rule's value depends on machine_speed, row_spacing" in table(facts)
+    assert "No rule's value depends on machine_speed, row_spacing" in full_table(facts)
     base = _records(solving, Setting(loaded.model, 0, solving.prepare(loaded.model)), facts["design"])
     for name, nominal in (("machine_speed", 0.4), ("row_spacing", 450.0)):
         for factor in (0.99, 1.01):

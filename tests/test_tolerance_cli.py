@@ -114,8 +114,18 @@ def test_the_monte_carlo_counts_per_rule_the_samples_where_the_rule_could_not_be
     for name, r in mc["rules"].items():
         assert (r["worst_margin"] is None) == (r["unevaluable"] > 0), name
         assert round(r["pass_rate"] * 40) <= 40 - r["unevaluable"], name     # an unevaluated rule never passes
+    report = (tmp_path / "taiwan_example1-tolerance" / "report.md").read_text()
     for name, n in counted.items():
-        assert f"| {name} |" in run.stdout and f"(not evaluable in {n} of 40 samples: counted as failing)" in run.stdout
+        line = next(line for line in report.splitlines() if line.startswith(f"| {name} |"))
+        assert f"(not evaluable in {n} of 40 samples: counted as failing)" in line
+    # why, counted by reason: in result.json, in report.md and (the top reasons) in the terminal summary
+    reasons = mc["unevaluable_reasons"]
+    assert reasons[0]["reason"].startswith("P1 not found: the claw does not cross the line 110 mm above the seedbed "
+                                           "bottom on its way down between soil exit and entry")
+    assert reasons[0]["samples"] == max(counted.values()) and set(reasons[0]["rules"]) <= set(counted)
+    assert sum(r["samples"] for r in reasons) >= mc["samples_not_fully_evaluable"] == max(counted.values())
+    assert f"| {reasons[0]['samples']} | {reasons[0]['reason']} |" in report
+    assert f"{reasons[0]['samples']:>7}  P1 not found: the claw does not cross the line 110 mm" in run.stdout
 
 
 def test_tol_refuses_a_variable_given_twice(tmp_path):
@@ -337,7 +347,8 @@ def test_a_rule_the_nlp_writes_in_other_terms_shows_the_re_checks_unit_and_no_lo
     row = next(r for r in facts["stack_up"] if r["name"] == "no_undercut")
     assert row["unit"] == "1" and row["recheck_unit"] == "mm" and not row["same_terms"]
     assert row["linear_over_sampled"] is None
-    line = next(l for l in run.stdout.splitlines() if l.startswith("| no_undercut | mm |"))
+    report = (tmp_path / "opening_cam_redesign-tolerance" / "report.md").read_text()
+    line = next(l for l in report.splitlines() if l.startswith("| no_undercut | mm |"))
     assert f"{row['linear_worst_margin']:.4g} (NLP's terms, 1)" in line
 
 

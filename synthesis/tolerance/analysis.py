@@ -9,12 +9,16 @@
 3. Seeded Monte-Carlo: N designs drawn uniformly in the box, each re-checked by the kind's own float
    re-check (``Solving.recheck``): pass rate per rule and overall, worst sampled margin, and the ratio of
    the linear to the sampled margin loss (a uniform sample rarely reaches a corner of the box, where the
-   linear worst case sits, so ratios above 1 are expected with many variables).
+   linear worst case sits, so ratios above 1 are expected with many variables).  The samples are re-checked in
+   batches on the core's process pool (:mod:`synthesis.core.executor`), each by the same float re-check wherever it
+   runs, so the numbers are the same for any number of workers; why samples could not be evaluated is counted by
+   reason (:func:`unevaluable_reasons`).
 """
 
 from __future__ import annotations
 
 import math
+import re
 import time
 from dataclasses import dataclass
 
@@ -23,6 +27,7 @@ import numpy as np
 from constraints import not_evaluated
 from constraints.base import RuleRecord
 from synthesis.core import interrupt
+from synthesis.core.executor import default_workers, run_starts
 from synthesis.core.kind import Kind, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.sensitivity import Sensitivity, linear_worst
@@ -264,50 +269,143 @@ def explain_gaps(kind: Kind, spec, design: dict, dmap: DesignMap, rows: list[dic
                                   f"the linear worst case is {'optimistic' if diff > 0 else 'conservative'} by {share}")
 
 
-def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray, samples: int, seed: int,
-                setting_seed: int = 0) -> dict:
-    """``samples`` designs uniform in the box (numpy default_rng(seed)), each re-checked by the kind.
+#: samples one task of the Monte-Carlo's process pool re-checks (a task's overhead is a few ms; a sample's re-check
+#: is some 10-100 ms)
+BATCH = 16
 
-    A spec with operating ranges (an envelope) re-checks each sampled design at every point of the re-check's
-    grid of the ranges (the solve's own envelope re-check, :mod:`synthesis.tolerance.envelope`): a sample passes
-    when every rule holds at the nominal point and at every grid point (``<rule>@envelope``: its worst point), so
-    the pass rate reads "share of machines built within the tolerances that work over the whole range";
-    ``pass_rate_at_nominal`` is the same samples at the nominal operating point only."""
-    ranges = ranges_of(spec)
-    solving = envelope_kind(kind, spec).solving()
-    setting = Setting(spec, setting_seed, solving.prepare(spec))
-    rng = np.random.default_rng(seed)
-    offsets = rng.uniform(-1.0, 1.0, size=(samples, dmap.n)) * box
-    passed: dict[str, int] = {}
-    worst: dict[str, float] = {}
-    not_evaluated: dict[str, int] = {}       # per rule: samples where that rule could not be evaluated (no margin)
-    all_pass = nominal_pass = unevaluable = 0
-    verdicts: list[dict[str, bool]] = []     # per evaluated sample: rule name -> satisfied
-    t0 = time.perf_counter()
-    for i in range(samples):
-        trial = dict(design)
-        for j, key in enumerate(dmap.keys):
-            trial[key] = design[key] + float(offsets[i, j])
+#: a number in a reason, read out to count reasons that differ only in their figures as one
+_NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One Monte-Carlo sample re-checked: per rule (name, margin, satisfied, note), or why the re-check raised."""
+
+    rules: list | None
+    raised: str | None = None
+
+
+@dataclass(frozen=True)
+class _Batch:
+    """The samples of one task of the pool (``start``: the task's index, as the core's pool names a task)."""
+
+    start: int
+    samples: list | None
+    failure: str | None = None
+
+
+@dataclass(frozen=True)
+class SampleChecker:
+    """The kind's float re-check of the Monte-Carlo's samples, ``BATCH`` per task; built once per worker process
+    (the core's pool calls it as a start's solver: ``solve(task, _)``)."""
+
+    solving: object
+    setting: Setting
+    design: dict
+    keys: tuple
+    offsets: np.ndarray
+    batch: int = BATCH
+
+    def __call__(self) -> "SampleChecker":
+        """The pool's factory of a worker's solver: the checker itself (built and sent once per worker)."""
+        return self
+
+    def solve(self, task: int, _unused=None) -> _Batch:
+        first = task * self.batch
+        return _Batch(task, [self.sample(i) for i in range(first, min(first + self.batch, len(self.offsets)))])
+
+    def sample(self, i: int) -> Sample:
+        trial = dict(self.design)
+        for j, key in enumerate(self.keys):
+            trial[key] = self.design[key] + float(self.offsets[i, j])
         try:
             # a signal is obeyed between samples (raised as KeyboardInterrupt once the sample is done), never inside
             # one: raised inside a CasADi call it came out as a NotImplementedError traceback, or was swallowed and
             # the remaining thousands of samples run on
             with interrupt.deferred():
                 records = [r.record() for r in
-                           solving.recheck(setting, StartOutcome(i, trial, 0.0, "", True, 0, 0.0, "")).rules]
-        except (AgrisynthError, ValueError, ArithmeticError):
+                           self.solving.recheck(self.setting, StartOutcome(i, trial, 0.0, "", True, 0, 0.0, "")).rules]
+        except (AgrisynthError, ValueError, ArithmeticError) as exc:
+            return Sample(None, " ".join(str(exc).split()) or type(exc).__name__)
+        return Sample([(r.name, r.margin, bool(r.satisfied), getattr(r, "note", None)) for r in records])
+
+
+def _failed_batch(task: int, status: str, reason: str) -> _Batch:
+    return _Batch(task, None, f"{status}: {reason}")
+
+
+def check_samples(solving, setting: Setting, design: dict, keys, offsets: np.ndarray,
+                  workers: int | None = None) -> list[Sample]:
+    """Every sample re-checked by the kind, in sample order, on the core's process pool (``workers``; None: one per
+    core, never more than there are tasks; 1: in this process).  Each sample is the same float re-check wherever
+    it runs, so the list is the same for any number of workers."""
+    tasks = -(-len(offsets) // BATCH)
+    workers = min(default_workers() if workers is None else workers, tasks)
+    checker = SampleChecker(solving, setting, dict(design), tuple(keys), np.asarray(offsets, float))
+    batches = run_starts(checker, np.zeros((tasks, 0)), workers, failure=_failed_batch) if tasks else []
+    failed = next((b for b in batches if b.samples is None), None)
+    if failed is not None:
+        raise AgrisynthError(f"the Monte-Carlo's re-check of samples {failed.start * BATCH}-"
+                             f"{min((failed.start + 1) * BATCH, len(offsets)) - 1} failed: {failed.failure}")
+    return [s for b in batches for s in b.samples]
+
+
+def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray, samples: int, seed: int,
+                setting_seed: int = 0, workers: int | None = 1) -> dict:
+    """``samples`` designs uniform in the box (numpy default_rng(seed)), each re-checked by the kind
+    (:func:`check_samples`: on ``workers`` processes of the core's pool, None one per core; the same answer for any
+    number.  One by default: a robust solve checks its answer in its own process, as its ``--workers`` asked).
+
+    A spec with operating ranges (an envelope) re-checks each sampled design at every point of the re-check's
+    grid of the ranges (the solve's own envelope re-check, :mod:`synthesis.tolerance.envelope`): a sample passes
+    when every rule holds at the nominal point and at every grid point (``<rule>@envelope``: its worst point), so
+    the pass rate reads "share of machines built within the tolerances that work over the whole range";
+    ``pass_rate_at_nominal`` is the same samples at the nominal operating point only.  ``unevaluable_reasons``:
+    why samples (or some of their rules) could not be evaluated, counted by reason (:func:`unevaluable_reasons`)."""
+    ranges = ranges_of(spec)
+    solving = envelope_kind(kind, spec).solving()
+    setting = Setting(spec, setting_seed, solving.prepare(spec))
+    rng = np.random.default_rng(seed)
+    offsets = rng.uniform(-1.0, 1.0, size=(samples, dmap.n)) * box
+    t0 = time.perf_counter()
+    checked = check_samples(solving, setting, design, dmap.keys, offsets, workers)
+    out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
+           **tally(checked, samples), "unevaluable_reasons": unevaluable_reasons(checked),
+           "wall_s": time.perf_counter() - t0}
+    if ranges:
+        grid = grid_of(spec)
+        span = ", ".join(f"{n} {r.range[0]:g}-{r.range[1]:g}" for n, (_, r) in ranges.items())
+        out["distribution"] = (f"uniform in the tolerance box, each design re-checked at the nominal operating point "
+                               f"and at every one of the {len(grid)} points of the re-check grid over {span}")
+        out["envelope"] = {"conditions": {n: list(r.range) for n, (_, r) in ranges.items()}, "points": len(grid),
+                           "pass_rate_at_nominal": out.pop("pass_rate_at_nominal")}
+    else:
+        out.pop("pass_rate_at_nominal")
+    return out
+
+
+def tally(checked: list[Sample], samples: int) -> dict:
+    """Pass rates (overall, at the nominal operating point, per rule), per rule the worst margin and the samples
+    where it could not be evaluated, and the samples the re-check could not evaluate at all."""
+    passed: dict[str, int] = {}
+    worst: dict[str, float] = {}
+    not_evaluated: dict[str, int] = {}       # per rule: samples where that rule could not be evaluated (no margin)
+    all_pass = nominal_pass = unevaluable = 0
+    verdicts: list[dict[str, bool]] = []     # per evaluated sample: rule name -> satisfied
+    for sample in checked:
+        if sample.rules is None:
             unevaluable += 1
             continue
         ok = at_nominal = True
-        verdicts.append({r.name: bool(r.satisfied) for r in records})
-        for r in records:
-            m = -math.inf if r.margin is None or not math.isfinite(r.margin) else r.margin
-            worst[r.name] = min(worst.get(r.name, math.inf), m)
+        verdicts.append({name: satisfied for name, _, satisfied, _ in sample.rules})
+        for name, margin, satisfied, _ in sample.rules:
+            m = -math.inf if margin is None or not math.isfinite(margin) else margin
+            worst[name] = min(worst.get(name, math.inf), m)
             if m == -math.inf:
-                not_evaluated[r.name] = not_evaluated.get(r.name, 0) + 1
-            ok = ok and bool(r.satisfied)
-            if not r.name.endswith(SUFFIX):
-                at_nominal = at_nominal and bool(r.satisfied)
+                not_evaluated[name] = not_evaluated.get(name, 0) + 1
+            ok = ok and satisfied
+            if not name.endswith(SUFFIX):
+                at_nominal = at_nominal and satisfied
         all_pass += int(ok)
         nominal_pass += int(at_nominal)
     # a <rule>@envelope row is written only where the rule's value changes over the grid; in a sample without it
@@ -317,22 +415,61 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         for name in every_name:
             held = held_in.get(name, held_in.get(name[:-len(SUFFIX)]) if name.endswith(SUFFIX) else None)
             passed[name] = passed.get(name, 0) + int(bool(held))
-    out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
-           "pass_rate": all_pass / samples if samples else None, "unevaluable": unevaluable,
-           # a rule's worst_margin is null when it could not be evaluated in some sample (its "unevaluable" count;
-           # "unevaluable" above counts the samples the re-check could not evaluate at all)
-           "rules": {n: {"pass_rate": passed[n] / samples, "worst_margin": worst[n] if math.isfinite(worst[n]) else None,
-                         "unevaluable": not_evaluated.get(n, 0)}
-                     for n in passed},
-           "wall_s": time.perf_counter() - t0}
-    if ranges:
-        grid = grid_of(spec)
-        span = ", ".join(f"{n} {r.range[0]:g}-{r.range[1]:g}" for n, (_, r) in ranges.items())
-        out["distribution"] = (f"uniform in the tolerance box, each design re-checked at the nominal operating point "
-                               f"and at every one of the {len(grid)} points of the re-check grid over {span}")
-        out["envelope"] = {"conditions": {n: list(r.range) for n, (_, r) in ranges.items()}, "points": len(grid),
-                           "pass_rate_at_nominal": nominal_pass / samples if samples else None}
-    return out
+    partly = sum(1 for s in checked if s.rules is None or any(m is None or not math.isfinite(m) for _, m, _, _ in s.rules))
+    return {"pass_rate": all_pass / samples if samples else None, "unevaluable": unevaluable,
+            # samples the re-check could not evaluate at all, or where some rule has no margin
+            "samples_not_fully_evaluable": partly,
+            "pass_rate_at_nominal": nominal_pass / samples if samples else None,
+            # a rule's worst_margin is null when it could not be evaluated in some sample (its "unevaluable" count;
+            # "unevaluable" above counts the samples the re-check could not evaluate at all)
+            "rules": {n: {"pass_rate": passed[n] / samples, "worst_margin": worst[n] if math.isfinite(worst[n]) else None,
+                          "unevaluable": not_evaluated.get(n, 0)}
+                      for n in passed}}
+
+
+def _sample_causes(sample: Sample) -> dict[str, list[str]]:
+    """Why a sample, or some of its rules, could not be evaluated: reason -> the rules it leaves without a margin
+    (every rule: ``["(every rule)"]``).  A rule whose note ends in another's ("P2 not searched: P3 not found: ...")
+    is that other's consequence and is counted under it."""
+    if sample.rules is None:
+        return {sample.raised: ["(every rule)"]}
+    notes: dict[str, list[str]] = {}
+    for name, margin, _, note in sample.rules:
+        if margin is None or not math.isfinite(margin):
+            notes.setdefault(note or "the margin is not a finite number", []).append(name)
+    causes: dict[str, list[str]] = {}
+    for text, names in notes.items():
+        cause = min((t for t in notes if text.endswith(": " + t)), key=len, default=text)
+        causes.setdefault(cause, []).extend(names)
+    return causes
+
+
+def unevaluable_reasons(checked: list[Sample]) -> list[dict]:
+    """Every reason a sample (or some of its rules) could not be evaluated, counted: ``reason`` (the kind's words;
+    figures that differ between samples shown as their range), ``samples`` (how many), ``rules`` (which it leaves
+    without a margin), most frequent first.  Reasons that differ only in their figures count as one."""
+    groups: dict[str, dict] = {}
+    for sample in checked:
+        for text, names in _sample_causes(sample).items():
+            group = groups.setdefault(_NUMBER.sub("#", text), {"text": text, "figures": [], "samples": 0, "rules": {}})
+            group["samples"] += 1
+            group["figures"].append([float(f) for f in _NUMBER.findall(text)])
+            group["rules"].update(dict.fromkeys(names))
+    rows = [{"reason": _with_ranges(g["text"], g["figures"]), "samples": g["samples"], "rules": list(g["rules"])}
+            for g in groups.values()]
+    return sorted(rows, key=lambda r: -r["samples"])
+
+
+def _with_ranges(text: str, figures: list[list[float]]) -> str:
+    """``text`` with each figure that differs between the samples written as its range over them ("4.1 mm" ->
+    "0.3-4.1 mm")."""
+    columns = list(zip(*figures))
+    parts = _NUMBER.split(text)
+    out = [parts[0]]
+    for k, (shown, rest) in enumerate(zip(_NUMBER.findall(text), parts[1:])):
+        lo, hi = min(columns[k]), max(columns[k])
+        out.append((shown if lo == hi else f"{lo:g} to {hi:g}") + rest)
+    return "".join(out)
 
 
 def _nominal_rules(solving, setting: Setting, lin: Linearised) -> list[RuleRecord]:
@@ -364,14 +501,16 @@ def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
 
 
 def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: float | None,
-            per_variable: dict[str, float] | None = None, samples: int = 1000, seed: int = 0) -> dict:
-    """The whole analysis as result.json ``facts`` (see the module docstring), with the nominal re-check."""
+            per_variable: dict[str, float] | None = None, samples: int = 1000, seed: int = 0,
+            workers: int | None = None) -> dict:
+    """The whole analysis as result.json ``facts`` (see the module docstring), with the nominal re-check; the
+    Monte-Carlo on ``workers`` processes (None: one per core)."""
     lin = linearise(kind, spec, design, seed)
     box = box_of(lin.dmap, length, angle, per_variable or {})
     rows = stack_up(lin, box)
     solving = kind.solving()
     nominal = _nominal_rules(solving, Setting(spec, seed, solving.prepare(spec)), lin)
-    mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed)
+    mc = monte_carlo(kind, spec, lin.design, lin.dmap, box, samples, seed, workers=workers)
     corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)
     recheck = {r.name: r for r in nominal}
     settings = _Settings(solving, spec, seed)

@@ -4,11 +4,17 @@ stack-up of each of the worst rules)."""
 
 from __future__ import annotations
 
+import math
+import textwrap
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 
-from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text, versions
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text, versions  # noqa: E402
 
 
 def verdict_rows(facts: dict) -> list[dict]:
@@ -74,7 +80,9 @@ def result_json(kind: str, name: str, sha: str, facts: dict) -> dict:
             "facts": {"tolerance": facts}}
 
 
-def table(facts: dict) -> str:
+def full_table(facts: dict) -> str:
+    """report.md's tables: every rule's stack-up, Monte-Carlo and corner columns, the derivatives w.r.t. the operating
+    conditions, the explanation of every linear-vs-sampled gap and every reason a sample could not be evaluated."""
     mc = facts["monte_carlo"]
 
     lines = [(f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
@@ -119,7 +127,170 @@ def table(facts: dict) -> str:
     if notes:
         lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
                       "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
+    reasons = mc.get("unevaluable_reasons") or []
+    if reasons:
+        lines += ["", "Why samples could not be evaluated (each reason once per sample; a sample may have several):", "",
+                  "| samples | reason | rules without a margin |", "|---|---|---|"]
+        lines += [f"| {r['samples']} | {r['reason']} | {', '.join(r['rules'])} |" for r in reasons]
     return "\n".join(lines) + "\n"
+
+
+#: the terminal summary: its width (columns), the failing rules it says how they fail, the rules its table shows and
+#: the reasons for unevaluable samples it names, at most
+WIDTH, SHOWN_FAILURES, SHOWN_RULES, SHOWN_REASONS = 100, 3, 6, 3
+#: the suffixes of the verdict rows (:func:`verdict_rows`) after the rule's own name
+_VERDICT_SUFFIXES = ("@monte_carlo", "@linear_worst_corner", "@tolerance")
+
+
+def table(facts: dict) -> str:
+    """What `agrisynth tolerance` prints: one screen of at most :data:`WIDTH` columns -- the verdict, the box, the
+    Monte-Carlo's pass rate, the rules that decide the verdict (else the tightest ones) with their drivers, what to
+    tighten first, the top reasons samples could not be evaluated, and where the full tables are (report.md)."""
+    mc, rows = facts["monte_carlo"], facts["stack_up"]
+    failing = failing_rules(facts)
+    shown = _shown_rules(rows, failing)
+    lines = [_verdict_line(facts, failing, [r["name"] for r in shown]), _box_line(facts["tolerance"]), _monte_carlo_line(mc), ""]
+    lines += _rule_lines(shown, failing, mc["samples"])
+    if len(rows) > len(shown):
+        lines.append(f"({len(rows) - len(shown)} more rule(s) in report.md)")
+    lines += _tighten_line(shown, failing) + _reason_lines(mc)
+    lines += ["Full tables (every rule, operating derivatives, gap notes, every reason): report.md"]
+    return "\n".join(line for text in lines for part in text.split("\n") for line in _fit(part)) + "\n"
+
+
+def failing_rules(facts: dict) -> dict[str, list[str]]:
+    """Rule name -> how it fails (at the design, in samples, at its linear worst corner), from the rows the exit code
+    reads; a sample the re-check could not evaluate at all is under "(samples)"."""
+    failing: dict[str, list[str]] = {}
+    for r in facts["nominal_rules"]:
+        if not r["satisfied"]:
+            failing.setdefault(r["name"], []).append("at the design")
+    for r in verdict_rows(facts):
+        if r["satisfied"]:
+            continue
+        name = r["name"]
+        base = next((name.removesuffix(s) for s in _VERDICT_SUFFIXES if name.endswith(s)), "(samples)")
+        how = {"@monte_carlo": f"in {100 * (1 - (r['value'] or 0)):.1f} % of the samples",
+               "@linear_worst_corner": f"at its linear worst corner ({r['note']})",
+               "@tolerance": "at its linear worst case"}
+        failing.setdefault(base, []).append(next((v for s, v in how.items() if name.endswith(s)),
+                                                 "some samples not evaluable"))
+    return failing
+
+
+def _scaled_worst(row: dict) -> float:
+    m = row.get("linear_worst_margin")
+    return math.inf if m is None else m / (row.get("scale") or 1.0)
+
+
+def _shown_rules(rows: list[dict], failing: dict) -> list[dict]:
+    """The rules that fail (fewest samples passing first), then the tightest that hold (smallest linear worst margin
+    relative to the rule's scale), at least three and at most :data:`SHOWN_RULES`."""
+    def order(r):
+        rate = r.get("mc_pass_rate")
+        return (r["name"] not in failing, 1.0 if rate is None else rate, _scaled_worst(r))
+    ranked = sorted(rows, key=order)
+    return ranked[:min(SHOWN_RULES, max(3, sum(r["name"] in failing for r in rows)))]
+
+
+def _verdict_line(facts: dict, failing: dict, ranked: list[str]) -> str:
+    """The verdict, and how each of the first failing rules (in the table's order) fails."""
+    mc = facts["monte_carlo"]
+    if failing:
+        names = sorted((n for n in failing if n != "(samples)"),
+                       key=lambda n: ranked.index(n) if n in ranked else len(ranked))
+        return "\n".join([f"Verdict: FAILS in the tolerance box: {len(names)} rule(s) break"
+                          + ("; some samples cannot be evaluated" if "(samples)" in failing else "")]
+                         + [f"  {n}: {', '.join(failing[n])}" for n in names[:SHOWN_FAILURES]]
+                         + ([f"  ... and {len(names) - SHOWN_FAILURES} more (FAIL in the table, all in report.md)"]
+                            if len(names) > SHOWN_FAILURES else []))
+    if mc["samples"]:
+        return f"Verdict: holds: the design and all {mc['samples']} samples pass every rule; no linear worst corner breaks one"
+    return "Verdict: holds: the design passes every rule and every linear worst case in the box holds"
+
+
+def _box_line(tolerance: dict) -> str:
+    groups: dict[tuple, list[str]] = {}
+    for key, t in tolerance.items():
+        if t["half_width"]:
+            groups.setdefault((t["half_width"], t["unit"]), []).append(key)
+    return "Box: " + "; ".join(f"±{w:g} {u}".rstrip() + f" on {', '.join(keys)}" for (w, u), keys in groups.items())
+
+
+def _monte_carlo_line(mc: dict) -> str:
+    if not mc["samples"]:
+        return "Monte-Carlo: none (--samples 0): sensitivities and the linear stack-up only"
+    text = f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}): {_pct(mc['pass_rate'])} pass every rule"
+    env = mc.get("envelope")
+    if env:
+        text += (f" at all {env['points']} operating points and the nominal one ({_pct(env['pass_rate_at_nominal'])} "
+                 f"at the nominal point alone)")
+    partly = mc.get("samples_not_fully_evaluable")
+    if partly:
+        text += f"; {partly} ({partly / mc['samples']:.1%}) not fully evaluable (failing)"
+    return text
+
+
+def _rule_lines(shown: list[dict], failing: dict, samples: int) -> list[str]:
+    width = max([len("rule")] + [len(r["name"]) for r in shown])
+    head = f"{'rule':<{width}}  {'':4} {'unit':<7}{'margin':>9} {'lin. worst':>10} {'MC pass':>8} {'MC worst':>9}  "
+    lines = [head + ("drivers (loss share)" if len(head) + 20 <= WIDTH else "drivers")]
+    for r in shown:
+        unit = r.get("recheck_unit") or r["unit"]
+        cells = (f"{r['name']:<{width}}  {'FAIL' if r['name'] in failing else 'ok':4} {unit or '-':<7}"
+                 f"{_num(r.get('recheck_margin')):>9} {_num(r.get('linear_worst_margin')):>10} "
+                 f"{_num(r.get('mc_pass_rate'), '{:.1%}') if samples else '-':>8} {_num(r.get('mc_worst_margin')):>9}  ")
+        drivers = [f"{v} {100 * s:.0f}%" for v, s in _shares(r)[:3]]
+        while drivers and len(cells + ", ".join(drivers)) > WIDTH:
+            drivers.pop()
+        lines.append(cells + ", ".join(drivers))
+    return lines
+
+
+def _shares(row: dict) -> list[tuple[str, float]]:
+    """The row's driving variables with their share of its linear loss, largest first."""
+    total = sum(abs(c) for c in (row.get("contributions") or {}).values() if c)
+    return [(d["variable"], d["contribution"] / total) for d in row.get("drivers") or []] if total else []
+
+
+def _tighten_line(shown: list[dict], failing: dict) -> list[str]:
+    """The variables with the largest summed share of the failing rules' linear losses: where a tighter tolerance
+    helps most."""
+    share: dict[str, float] = {}
+    for r in shown:
+        if r["name"] in failing:
+            for v, s in _shares(r):
+                share[v] = share.get(v, 0.0) + s
+    if not share:
+        return []
+    top = sorted(share, key=lambda v: -share[v])[:3]
+    return ["Tighten first (most of the failing rules' linear loss): " + ", ".join(top)]
+
+
+def _reason_lines(mc: dict) -> list[str]:
+    reasons = mc.get("unevaluable_reasons") or []
+    if not reasons:
+        return []
+    lines = ["", "Not evaluable, by reason (samples):"]
+    for r in reasons[:SHOWN_REASONS]:
+        lines += textwrap.wrap(f"{r['samples']:>7}  {r['reason']}", WIDTH, subsequent_indent=" " * 9, max_lines=2,
+                               placeholder=" ...")
+    if len(reasons) > SHOWN_REASONS:
+        lines.append(f"  ({len(reasons) - SHOWN_REASONS} more reason(s) in report.md)")
+    return lines
+
+
+def _fit(text: str) -> list[str]:
+    """``text`` as lines of at most :data:`WIDTH` columns: wrapped (the continuation indented as the text is), at most
+    two lines, the rest cut with "..."."""
+    if len(text) <= WIDTH:
+        return [text]
+    indent = " " * (len(text) - len(text.lstrip()) + 2)
+    return textwrap.wrap(text, WIDTH, subsequent_indent=indent, max_lines=2, placeholder=" ...")
+
+
+def _num(value, fmt: str = "{:.4g}") -> str:
+    return "-" if value is None else fmt.format(value)
 
 
 def _envelope_lines(mc: dict) -> list[str]:
@@ -152,10 +323,6 @@ def tornado(facts: dict, path: Path) -> None:
     horizontal bar per driving variable from margin - |dg/dx_i| tol_i to margin + |dg/dx_i| tol_i, centred on the
     rule's nominal margin at its worst sample, largest at the top; the red line is the limit (margin 0), the dashed
     one the linear worst case (every bar's low end at once)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     rows = tornado_rules(facts)
     tol = facts["tolerance"]
     if not rows:
@@ -231,5 +398,5 @@ TORNADO_LINK = ("\n![tolerance tornado: each of the worst rules' margin, one bar
 
 def artifacts(kind: str, name: str, sha: str, facts: dict) -> dict:
     return {"result.json": lambda p: atomic_write_text(p, finite_json_text(result_json(kind, name, sha, facts))),
-            "report.md": lambda p: atomic_write_text(p, table(facts) + TORNADO_LINK),
+            "report.md": lambda p: atomic_write_text(p, full_table(facts) + TORNADO_LINK),
             "tornado.png": lambda p: tornado(facts, p)}

@@ -189,7 +189,8 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
                 hint = (f" (that line is {what} = {level:g} mm: lower it, or give the arm a taller loop)"
                         if what else "")
                 problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
-                                  f"seedbed bottom on its way down between soil exit and entry{hint}")
+                                  f"seedbed bottom on its way down between soil exit and entry{hint}" if what else
+                                  f"{name} not found: {_misses_the_bottom(s, cycle, theta['P6'], end)}")
                 for later, _ in levels[k + 1:]:      # searched before `name` on the way down: its reason is theirs
                     problems[later] = f"{later} not searched: {problems[name]}"
                 break
@@ -200,6 +201,25 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
         for name in ("P1", "P2", "P3"):
             problems[name] = problems["P4"]
     return PrecisionPoints(theta, soil, problems)
+
+
+def _misses_the_bottom(heights: np.ndarray, cycle: np.ndarray, exit_: float, entry: float) -> str:
+    """Why the claw (its heights above the seedbed bottom at crank angles ``cycle``, mm and rad) never comes down
+    through the seedbed bottom between soil exit ``exit_`` and soil entry ``entry``, in what the tip does ("the line
+    0 mm above the seedbed bottom" said nothing a designer could act on)."""
+    inside = (cycle > exit_) & (cycle <= entry)
+    way = heights[inside]
+    if not way.size or way.min() > 0.0:
+        lowest = f": its tip stays {way.min():.1f} mm above it" if way.size else ""
+        return f"the claw never reaches the seedbed bottom between soil exit and entry{lowest}"
+    later = [i for i in _crossings(heights, 0.0, downward=True) if cycle[i] > entry]
+    if later:
+        return (f"the claw enters the soil (crank angle {math.degrees(entry) % 360:.0f} deg) before it comes down "
+                f"to the seedbed bottom ({math.degrees(cycle[later[0]]) % 360:.0f} deg)")
+    if way.max() < 0.0:
+        return (f"the claw stays below the seedbed bottom all the way between soil exit and entry (at least "
+                f"{-way.max():.1f} mm below it)")
+    return "the claw crosses the seedbed bottom only on its way up between soil exit and entry, never down"
 
 
 # ----------------------------------------------------------------------------- rules
