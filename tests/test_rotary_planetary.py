@@ -255,3 +255,20 @@ def test_very_eccentric_gears_are_flagged_not_crashed(tmp_path):
         rules["pair_ratio"]["value"] < 0
     _, rules = _check_law(tmp_path, f"[{math.degrees(2.0)!r}]")
     assert not rules["pair_ratio"]["satisfied"]
+
+
+def test_trajectory_speeds_and_accelerations_are_the_positions_derivatives(checked):
+    """result.json's trajectory: ground-frame velocity and acceleration against central differences of its own
+    positions in time (1 deg steps at 150 r/min: second-order differences to 1e-3 relative)."""
+    _, result, _ = checked
+    tr = result.trajectory
+    t, x, y = (np.asarray(tr[k]) for k in ("t", "x", "y"))
+    h = t[1] - t[0]
+    vx = (x[2:] - x[:-2]) / (2 * h)
+    ax = (x[2:] - 2 * x[1:-1] + x[:-2]) / h**2
+    ay = (y[2:] - 2 * y[1:-1] + y[:-2]) / h**2
+    assert np.max(np.abs(vx - np.asarray(tr["vx"][1:-1]))) < 1e-3 * np.max(np.abs(vx))
+    assert np.max(np.abs(ax - np.asarray(tr["ax"][1:-1]))) < 1e-3 * np.max(np.abs(ax))
+    assert np.max(np.abs(ay - np.asarray(tr["ay"][1:-1]))) < 1e-3 * np.max(np.abs(ay))
+    # the ground frame: x_ground = x_machine - V t
+    assert np.allclose(np.asarray(tr["machine"]["x"]) - 600.0 * t, x, atol=1e-9)

@@ -14,7 +14,7 @@ from scipy.optimize import brentq, minimize_scalar
 from constraints.base import Rule
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (
-    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_rate, train_from_design, turn_grid,
+    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_curvature_rate, tip_rate, train_from_design, turn_grid,
 )
 from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
 from synthesis.result import Result
@@ -245,6 +245,22 @@ def motion_facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles, sample
     }
 
 
+def trajectory(spec: RotaryPlanetarySpec, train: Train, samples: int = 361) -> dict:
+    """One carrier turn of claw-tip samples (result.json's trajectory keys) from carrier angle 0, ground frame, the
+    machine frame nested."""
+    w, v = omega(spec), forward_mm_s(spec)
+    phi = np.linspace(0.0, 2.0 * math.pi, samples)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x, y = tip(train, phi)
+        dx, dy = tip_rate(train, phi)
+        ddx, ddy = tip_curvature_rate(train, phi)
+    t = phi / w
+    return {"frame": "ground", "t": t.tolist(), "crank_deg": np.degrees(phi).tolist(),
+            "x": (x - v * t).tolist(), "y": y.tolist(), "vx": (w * dx - v).tolist(), "vy": (w * dy).tolist(),
+            "ax": (w * w * ddx).tolist(), "ay": (w * w * ddy).tolist(),
+            "machine": {"x": x.tolist(), "y": y.tolist(), "vx": (w * dx).tolist(), "vy": (w * dy).tolist()}}
+
+
 def facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> dict:
     with np.errstate(divide="ignore", invalid="ignore"):      # as in evaluate: the rules say it
         motion = motion_facts(spec, train, angles)
@@ -257,4 +273,5 @@ def run_check(loaded: LoadedSpec) -> Result:
     design = spec.design_values()
     rules, train, angles = evaluate(spec, design)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
-                  rules=[r.record().to_json() for r in rules], extra=facts(spec, train, angles))
+                  rules=[r.record().to_json() for r in rules], trajectory=trajectory(spec, train),
+                  extra=facts(spec, train, angles))

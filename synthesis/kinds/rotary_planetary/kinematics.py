@@ -131,6 +131,18 @@ def tip_rate(train: Train, phi):
             r * o.m.cos(phi) + train.arm_length * dalpha * o.m.cos(alpha))
 
 
+def tip_curvature_rate(train: Train, phi):
+    """d^2 tip / d phi^2 (mm/rad^2), machine frame; times omega^2 it is the tip's acceleration (constant omega)."""
+    o = ops_of(train, phi)
+    phi = o.angles(phi)
+    alpha = train.arm_angle + fourier(o, train.planet_cos, train.planet_sin, phi)
+    d1 = fourier(o, train.planet_cos, train.planet_sin, phi, 1)
+    d2 = fourier(o, train.planet_cos, train.planet_sin, phi, 2)
+    r, arm = train.carrier_radius, train.arm_length
+    return (-r * o.m.cos(phi) - arm * (d2 * o.m.sin(alpha) + d1**2 * o.m.cos(alpha)),
+            -r * o.m.sin(phi) + arm * (d2 * o.m.cos(alpha) - d1**2 * o.m.sin(alpha)))
+
+
 def claw_attitude(train: Train, phi):
     """The claw's absolute direction (root to tip), rad from +x counter-clockwise (pointing down: -pi/2)."""
     return train.arm_angle + train.claw_angle + planet_law(train, phi)

@@ -6,7 +6,7 @@ from synthesis.core.coordinates import outside_bounds
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
-from synthesis.kinds.rotary_planetary.check import evaluate, facts, find_angles, train_of
+from synthesis.kinds.rotary_planetary.check import evaluate, facts, find_angles, train_of, trajectory
 from synthesis.kinds.rotary_planetary.nlp import problem
 from synthesis.spec.common import design_box
 
@@ -36,6 +36,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
                                "unit": OBJECTIVE_UNITS[spec.objective.name]},
                     facts={**facts(spec, train, angles),
                            "solver_carrier_deg": best.outcome.details.get("carrier_deg")},
+                    trajectory=trajectory(spec, train),
                     solver_settings={"samples_per_turn": spec.solver.samples_per_turn,
                                      "in_soil_samples": spec.solver.in_soil_samples})
 
