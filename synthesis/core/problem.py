@@ -251,17 +251,21 @@ class Problem:
         self.operating_source = OperatingSource(tuple(names), tuple(o.unit for o in ops), syms, source_structural,
                                                 tuple(sources), dict(nominal))
         if isinstance(self.objective, ObjectiveParts):
-            # f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where
-            # they read a sampled condition, so a min-max objective is the worst over the envelope
-            rows, units = [], []
-            declared = self.objective.row_units
-            for i, row in enumerate(self.objective.rows):
-                scenarios = envelope.scenarios() if depends(row[0]) else [{}]
-                rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
-                units += [declared[i]] * len(scenarios) if declared is not None else []
-            self.objective = dataclasses.replace(self.objective, f=at(self.objective.f, nominal), rows=rows,
-                                                 row_units=None if declared is None else units)
+            self.objective = _objective_over(self.objective, at, depends, envelope, nominal)
         self.operating = ()           # resolved: a copy of this problem (dataclasses.replace) stays as it is
+
+
+def _objective_over(objective: ObjectiveParts, at, depends, envelope: Envelope | None, nominal: dict) -> ObjectiveParts:
+    """f at the nominal values; the objective's rows (an epigraph: tau >= |e|) once per scenario where they read a
+    sampled condition, so a min-max objective is the worst over the envelope."""
+    rows, units = [], []
+    declared = objective.row_units
+    for i, row in enumerate(objective.rows):
+        scenarios = envelope.scenarios() if depends(row[0]) else [{}]
+        rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
+        units += [declared[i]] * len(scenarios) if declared is not None else []
+    return dataclasses.replace(objective, f=at(objective.f, nominal), rows=rows,
+                               row_units=None if declared is None else units)
 
 
 def depends_on_one(rule: Rule, symbol: ca.SX) -> bool:

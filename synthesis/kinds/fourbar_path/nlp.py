@@ -231,19 +231,22 @@ class PathNLP(KindNLP):
                                         watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
-        # grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION;
-        # not in a tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)
         self.configuration = None
         self._polisher_settings = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and setting.tolerance is None and not setting.operating_symbols):
-            options = self._ipopt_options(spec)
-            form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
-                                 opts, spec.solver.max_iter)
-            self.configuration = ConfigurationNLP(*form(options))
-            if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
-                self._polisher_settings = (form({**options, "ipopt.mu_init": POLISH_MU_INIT}),
-                                           contextvars.copy_context())
+            self._configuration_form(spec, lbx, ubx, f_unit)
+
+    def _configuration_form(self, spec: FourbarPathSpec, lbx: np.ndarray, ubx: np.ndarray, f_unit: float) -> None:
+        """grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION; not in a
+        tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)."""
+        options = self._ipopt_options(spec)
+        form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
+                             opts, spec.solver.max_iter)
+        self.configuration = ConfigurationNLP(*form(options))
+        if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
+            self._polisher_settings = (form({**options, "ipopt.mu_init": POLISH_MU_INIT}),
+                                       contextvars.copy_context())
 
     @property
     def _open_in_configuration(self) -> bool:
