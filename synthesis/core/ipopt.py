@@ -131,10 +131,10 @@ EXACT = SolveMethod()
 
 def compiled_in(nlp) -> list[CompiledNLP]:
     """The CompiledNLPs a kind's NLP (:class:`~synthesis.core.kind.KindNLP`) holds: ``compiled``, its ``stages``
-    and its reduced form's (``configuration.compiled``)."""
-    configuration = getattr(nlp, "configuration", None)
-    found = [nlp.compiled, *getattr(nlp, "stages", ()), getattr(configuration, "compiled", None)]
-    return [c for c in found if isinstance(c, CompiledNLP)]
+    and its reduced form's (``configuration.compiled``).  (One a kind builds later, on first use, is not among
+    them: it has the method of the setting it is compiled with.)"""
+    forms = [nlp] if nlp.configuration is None else [nlp, nlp.configuration]
+    return [c for c in [*(form.compiled for form in forms), *nlp.stages] if c is not None]
 
 
 def solved_with_method(kind, **changes):
