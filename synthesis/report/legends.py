@@ -8,6 +8,8 @@ makes room for it inside the figure, so it is called after the legend is placed.
 from __future__ import annotations
 
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import RendererAgg
+from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 from matplotlib.transforms import BboxBase, IdentityTransform
 import numpy as np
@@ -29,6 +31,15 @@ def _twins(ax: Axes) -> list[Axes]:
     return [a for a in ax.figure.axes if a is ax or a.get_position().bounds == box]
 
 
+def _renderer(fig: Figure):
+    """What measures the labels: the canvas's renderer, or (an SVG or PDF canvas, which keeps none) an Agg renderer of
+    the figure's size: text is measured the same by both."""
+    if hasattr(fig.canvas, "get_renderer"):
+        return fig.canvas.get_renderer()
+    width, height = fig.bbox.size
+    return RendererAgg(int(width), int(height), fig.dpi)
+
+
 class _Beside(BboxBase):
     """The edge (in pixels: the legend is given an identity transform) a legend hangs from: under the axes' x tick labels and x label (``below``) or right of its (and its
     twins') y tick labels and y label.  Measured again whenever the axes' box changes, so it follows the figure's
@@ -42,7 +53,7 @@ class _Beside(BboxBase):
     def get_points(self) -> np.ndarray:
         self._invalid = 0               # valid until the axes' box changes again (else no change would reach us)
         fig = self.ax.figure
-        renderer = fig.canvas.get_renderer()
+        renderer = _renderer(fig)
         box = self.ax.get_window_extent(renderer)
         gap = GAP * fig.dpi
         if self.below:

@@ -191,8 +191,9 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
     ax.set_ylim(xy[1].min() - pad, xy[1].max() + pad)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9, loc="upper right")
+    legend_below(ax, ncol=2, fontsize=9)
     ax.set_title("one crank turn (machine frame, mm)", fontsize=11)
+    fig.tight_layout()                  # room for the legend under the drawing
     counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10,
                       bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.8"))
     drawn: list = []
