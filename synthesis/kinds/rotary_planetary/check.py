@@ -155,15 +155,9 @@ def _crossing(train: Train, level: float, phi_bottom: float, h: float, direction
     return None
 
 
-def _pose_miss(train: Train, pose, phi: float) -> float:
-    """The larger of the tip's distance and the attitude's miss at carrier angle phi, each over its tolerance:
-    the pose holds at phi iff <= 1, so its best carrier angle is where this is least."""
+def _pose_distance(train: Train, pose, phi: float) -> float:
     px, py = tip(train, phi)
-    miss = math.hypot(float(px) - pose.x, float(py) - pose.y) / pose.tolerance
-    if pose.attitude is not None:
-        wrapped = (float(claw_attitude(train, phi)) * DEG - pose.attitude + 180.0) % 360.0 - 180.0
-        miss = max(miss, abs(wrapped) / pose.attitude_tolerance)
-    return miss
+    return math.hypot(float(px) - pose.x, float(py) - pose.y)
 
 
 def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES) -> Angles:
@@ -180,9 +174,10 @@ def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES)
             continue
 
         def miss(p, pose=pose):
-            return _pose_miss(train, pose, p)
+            return _pose_distance(train, pose, p)
 
-        poses[name] = _refine(miss, float(grid[np.argmin([miss(p) for p in grid])]), h)
+        # the pose is read where the tip is nearest its target (the NLP pins its angle there too)
+        poses[name] = _refine(miss, float(grid[np.argmin((x - pose.x) ** 2 + (y - pose.y) ** 2)]), h)
     angles = Angles(top, bottom, poses=poses)
     level = soil_y(spec)
     lowest = _y(train, bottom)

@@ -2,9 +2,10 @@
 
 Decision vector: the design variables in ``RotaryPlanetarySpec.variables()`` order (mm, deg; a fixed one has
 lo = hi), then the loop's top and bottom, soil entry and exit, and each free key pose's carrier angle (rad).
-Structural rows make entry and exit the soil crossings around the bottom: the tip at the surface there, going
-down at entry and up at exit, below the surface in between (the in-soil samples), the stroke shorter than half
-a turn.  Every rule is :func:`synthesis.kinds.rotary_planetary.check.rules_of` on these symbols, so the check
+Structural rows pin each of these angles (the loop's top and bottom where the tip's height is stationary, entry
+and exit on the soil surface, a free pose where the tip is nearest its target) and make entry and exit the soil
+crossings around the bottom: going down at entry and up at exit, below the surface in between (the in-soil
+samples), the stroke shorter than half a turn.  Every rule is :func:`synthesis.kinds.rotary_planetary.check.rules_of` on these symbols, so the check
 and the NLP cannot drift apart; a rule with no design in it (the plant spacing) is left to the re-check.
 """
 
@@ -74,7 +75,16 @@ def problem(setting: Setting) -> Declared:
     _, y_stroke = tip(train, entry + (exit_ - entry) * s)
     _, dy_in = tip_rate(train, entry)
     _, dy_out = tip_rate(train, exit_)
-    structural = [(tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0),
+    # one equality row pins each auxiliary angle (the tolerance analysis differentiates through them): the top and
+    # bottom are where the tip's height is stationary, entry and exit on the surface, a pose where the tip is
+    # nearest its target (the check's reading, find_angles)
+    nearest = []
+    for name in free_poses:
+        (px, py), (dx, dy) = tip(train, poses[name]), tip_rate(train, poses[name])
+        pose = spec.key_poses[name]
+        nearest.append(((px - pose.x) * dx + (py - pose.y) * dy, 0.0, 0.0))
+    structural = [(tip_rate(train, top)[1], 0.0, 0.0), (tip_rate(train, bottom)[1], 0.0, 0.0),
+                  (tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0), *nearest,
                   (dy_in, None, 0.0), (dy_out, 0.0, None), (bottom - entry, 0.0, None),
                   (exit_ - bottom, 0.0, None), (exit_ - entry, None, math.pi), (y_stroke - level, None, 0.0)]
     if spec.objective.name == "key_pose_miss":
@@ -87,7 +97,8 @@ def problem(setting: Setting) -> Declared:
     lengths = ("centre_distance_1", "centre_distance_2", "arm_length")
     declared = Problem("rotary_planetary", z, lbx, ubx, structural, rules, ObjectiveParts(f=f / 100.0),
                        x_units=["mm" if n in lengths else "deg" for n in names] + ["rad"] * n_aux,
-                       structural_units=["mm", "mm", "mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
+                       structural_units=["mm/rad", "mm/rad", "mm", "mm"] + ["mm^2/rad"] * len(free_poses)
+                       + ["mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
                        objective_unit="mm^2" if spec.objective.name == "key_pose_miss" else "deg^2",
                        max_iter=spec.solver.max_iter)
 
