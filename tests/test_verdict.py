@@ -473,3 +473,24 @@ def test_a_limit_of_minus_zero_reads_as_zero():
     assert limit_text((-0.0, 1.5)) == "[0, 1.5]"
     assert limit_text((-2.0, None)) == ">= -2"
     assert limit_text((None, None)) == "-"
+
+
+def test_a_rule_the_spec_fixes_is_named_with_its_field_not_the_bounds():
+    """An elastic diagnosis giving up on a rule no design variable moves (elastic.fixed_by, from core.pinned): the
+    exit-3 message names the spec field that fixes it where it would blame the bounds or the mechanism."""
+    reports = [_report(0, "Infeasible_Problem_Detected", False)]
+    units, scales = {"planting_depth": "mm", "gap": "mm"}, {"planting_depth": 5.0, "gap": 1.0}
+    elastic = ElasticDiagnosis("Solve_Succeeded", True, {"planting_depth": 15.0, "gap": 2.0}, units, scales,
+                               alone={"planting_depth": 15.0, "gap": 2.0},
+                               fixed={"planting_depth": "[soil] analysis_depth"})
+    assert elastic.out_of_reach == ["planting_depth", "gap"]
+    message = str(unsatisfied_error("infeasible", ["planting_depth", "gap"], reports, elastic,
+                                    samples_hint="[solver] samples"))
+    assert ("planting_depth (misses its limit by 15 mm; still by 15 mm re-solved alone from there, every other rule "
+            "relaxed: [soil] analysis_depth fixes it (no design variable moves it), not the other rules)") in message
+    assert ("gap (misses its limit by 2 mm; still by 2 mm re-solved alone from there, every other rule relaxed: near "
+            "that design the variable bounds or the mechanism hold it back, not the other rules)") in message
+    data = elastic.to_json()
+    assert data["fixed_by"] == {"planting_depth": "[soil] analysis_depth"}
+    assert ElasticDiagnosis.from_json(data).fixed == elastic.fixed
+    assert "fixed_by" not in ElasticDiagnosis("Solve_Succeeded", True, {"gap": 2.0}, units, scales).to_json()
