@@ -135,3 +135,7 @@ def test_legends_stay_outside_the_drawing(kind_name, tmp_path, monkeypatch):
         found[name] = (legends, [o for f in drawn for o in legend_overlaps(f)])
     assert {name: overlaps for name, (_, overlaps) in found.items() if overlaps} == {}
     assert sum(n for n, _ in found.values()) >= 1, found        # the kind's figures have legends to judge
+    monkeypatch.undo()
+    for name in [n for n in kind.figures() if n.endswith(".svg")]:     # an SVG canvas places the legends too
+        kind.figures()[name](result, tmp_path / name)
+        assert (tmp_path / name).stat().st_size > 10_000, name
