@@ -23,10 +23,15 @@ from sympy.physics.mechanics import Point, ReferenceFrame, dynamicsymbols, msubs
 from conftest import LIBRARY
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.fourbar import over_turn
-from synthesis.kinds.crank_rocker.check import linkage_dynamics, rules_of
+from synthesis.kinds.crank_rocker.check import rules_of
+from synthesis.kinds.planting.check import dynamics_facts_of
+from synthesis.kinds.planting.dynamics import arm_dynamics, arm_dynamics_rules
+from synthesis.kinds.planting.scene import PlantingScene
+from synthesis.kinds.planting.spec import PlantingFourbarSpec
 from synthesis import kinds
 from synthesis.result import result_text
 from synthesis.spec import load_spec
+from synthesis.spec.dynamics import DynamicsLimits, ExternalLoad
 
 #: a lumped set of mass properties per link (kg, m, m, kg m^2), centres off the link lines so every term counts
 LUMPED = [0.30, 0.021, 0.004, 2.0e-4, 0.65, 0.050, -0.012, 1.4e-3, 0.45, 0.060, 0.008, 9.0e-4]
@@ -191,3 +196,82 @@ def test_rule_derivatives_equal_central_differences():
         scale = np.abs(jac[:, i]).max()
         np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * scale)
     assert values.shape == (144, 1) and np.abs(jac).max() > 1e-3
+
+
+def test_energy_balance_of_the_planting_arm_result():
+    dyn = checked_json(LIBRARY / "planting_arm" / "taiwan_example1_dynamics.toml")["facts"]["dynamics"]
+    work, change, net = energy_residuals(dyn)
+    peak = np.abs(work).max()
+    assert peak > 1e-2 and dyn["external_loads"] is False
+    assert np.abs(work - change).max() <= 1e-6 * peak
+    assert abs(net) <= 1e-9 * peak
+
+
+def test_energy_balance_with_an_external_load():
+    """A constant force on the rocker: the input and the load's work together change the energy; over a turn the
+    input work is what the load takes (not zero)."""
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")
+    table = loaded.model.dynamics.model_copy(update={"external_loads": [
+        ExternalLoad(link="rocker", force=(-30.0, 12.0), at=(133.5, 0.0), note="test load")]})
+    spec = loaded.model.model_copy(update={"dynamics": table})
+    result = kinds.get("crank_rocker").check(type(loaded)(**{**loaded.__dict__, "model": spec}))
+    dyn = json.loads(result_text(result))["facts"]["dynamics"]
+    work, change, net = energy_residuals(dyn)
+    own = checked_json(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")["facts"]["dynamics"]
+    assert np.abs(work - change).max() <= 1e-6 * np.abs(work).max()
+    assert dyn["external_loads"]["loads"][0]["force"] == [-30.0, 12.0]
+    assert not np.allclose(dyn["input_torque_Nm"], own["input_torque_Nm"], rtol=1e-2)
+    # net (input + load) work over a turn is zero; the input's alone equals minus the load's
+    omega = 250 * 2 * math.pi / 60
+    input_net = np.mean(dyn["power_W"]) * 2 * math.pi / omega
+    load_net = np.mean(dyn["external_loads"]["external_power_W"]) * 2 * math.pi / omega
+    assert abs(net) <= 1e-9 * np.abs(work).max()
+    assert input_net == pytest.approx(-load_net, rel=1e-9, abs=1e-12)
+
+
+def test_a_spec_without_dynamics_has_no_dynamics_rules_or_facts():
+    for path in ("picker/cai2020_crank_rocker.toml", "planting_arm/taiwan_example1.toml"):
+        data = checked_json(LIBRARY / path)
+        assert "dynamics" not in data["facts"]
+        assert not {"peak_input_torque", "peak_shaking_force"} & {r["name"] for r in data["rules"]}
+
+
+#: seed 000 Table 1's designs at 250 r/min with taiwan_example1_dynamics.toml's arm section (steel 20 x 5 mm bars,
+#: a 50 g claw at C, gravity -Y): peak |input torque| N m and its crank angle deg, peak |shaking force| N
+#: (problems/planting_arm/DYNAMICS.md)
+PUBLISHED = {"taiwan_example1": (2.5242, 340.0, 29.560), "taiwan_example2": (0.5764, 336.0, 15.083),
+             "taiwan_example2_zeta_minus41": (0.7026, 338.0, 18.835), "taiwan_example3": (2.4106, 339.0, 26.799),
+             "taiwan_example4": (3.1188, 343.0, 30.665)}
+
+
+@pytest.mark.parametrize("name", sorted(PUBLISHED))
+def test_published_planting_designs_peak_torque_and_shaking_force(name):
+    import tomllib
+    table = tomllib.loads((LIBRARY / "planting_arm" / "taiwan_example1_dynamics.toml").read_text())["dynamics"]
+    data = tomllib.loads((LIBRARY / "planting_arm" / f"{name}.toml").read_text())
+    spec = PlantingFourbarSpec.model_validate({**data, "dynamics": table})
+    summary = dynamics_facts_of(PlantingScene.from_spec(spec), 250.0)["dynamics"]["summary"]
+    torque, at, force = PUBLISHED[name]
+    assert summary["input_torque_Nm"]["peak"] == pytest.approx(torque, abs=5e-5)
+    assert summary["input_torque_Nm"]["peak_at_crank_deg"] == pytest.approx(at)
+    assert summary["shaking_force_N"]["peak"] == pytest.approx(force, abs=5e-4)
+
+
+def test_planting_rule_derivatives_equal_central_differences():
+    """The arm's dynamics rows (l5 and phi move the claw arm and the claw's mass) by AD against central differences."""
+    loaded = load_spec(LIBRARY / "planting_arm" / "taiwan_example1_dynamics.toml")
+    table = loaded.model.dynamics.model_copy(update={"limits": DynamicsLimits(peak_input_torque=1.0,
+                                                                               peak_shaking_force=20.0)})
+    p = ca.SX.sym("p", 7)
+    dyn = arm_dynamics(table, p, -1, OMEGA)
+    rules = {r.name: r for r in arm_dynamics_rules(dyn, 36)}
+    rows = ca.vertcat(*[rules[n].rows()[0][0] for n in ("peak_input_torque", "peak_shaking_force")])
+    f = ca.Function("rows", [p], [rows, ca.jacobian(rows, p)])
+    p0 = np.array([75.0, 35.0, 75.0, 80.0, 191.0, math.radians(-90.0), math.radians(31.0)])
+    jac = np.asarray(f(p0)[1])
+    for i, h in enumerate([1e-4] * 5 + [1e-6] * 2):
+        step = np.zeros(7)
+        step[i] = h
+        central = (np.asarray(f(p0 + step)[0]) - np.asarray(f(p0 - step)[0])) / (2 * h)
+        np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * np.abs(jac[:, i]).max())
+    assert np.abs(jac[:, 4]).max() > 1e-3       # the claw arm's length moves the torque

@@ -34,10 +34,12 @@ class FourbarDynamics:
     gravity: tuple
 
     @classmethod
-    def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega) -> "FourbarDynamics":
+    def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega,
+           tips: dict | None = None) -> "FourbarDynamics":
         """From a spec's ``[dynamics]`` table (:class:`synthesis.spec.dynamics.DynamicsSection`); ``bars``: each link's
-        bars (start, end) in mm in its link frame, read for a link given as a bar."""
-        return cls(branch, tuple(geometry), tuple(mass_properties.mass_vector(table, bars, LINKS)),
+        bars (start, end) in mm in its link frame, read for a link given as a bar; ``tips``: link -> the kind's traced
+        point on it (mm, link frame), where a point mass ``at = "tip"`` sits."""
+        return cls(branch, tuple(geometry), tuple(mass_properties.mass_vector(table, bars, LINKS, tips)),
                    tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity))
 
     def over_turn(self, crank) -> dict:
@@ -54,12 +56,19 @@ def _column(values):
     return np.ravel(values) if isinstance(values, np.ndarray) else ca.vec(values)
 
 
-def dynamics_rules(dyn: FourbarDynamics, limits, samples: int) -> list[Rule]:
-    """The ``[dynamics.limits]`` rules over ``samples`` crank angles of a turn (none when no limit is given)."""
+def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: str | None = None) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules over ``samples`` crank angles of a turn (none when no limit is given); not
+    evaluated, for the reason ``missing``, when the crank cannot turn."""
+    rules = []
+    if missing is not None:
+        if limits.peak_input_torque is not None:
+            rules.append(peak_input_torque_rule(None, limits.peak_input_torque, missing=missing))
+        if limits.peak_shaking_force is not None:
+            rules.append(peak_shaking_force_rule(None, None, limits.peak_shaking_force, missing=missing))
+        return rules
     if limits.peak_input_torque is None and limits.peak_shaking_force is None:
         return []
     out = dyn.over_turn(turn(samples))
-    rules = []
     if limits.peak_input_torque is not None:
         rules.append(peak_input_torque_rule(_column(out["torque"]), limits.peak_input_torque))
     if limits.peak_shaking_force is not None:

@@ -40,24 +40,28 @@ def combine(parts: list[tuple]) -> tuple:
     return (total, cx, cy, inertia)
 
 
-def link_properties(section, bars: list[tuple], point_masses) -> tuple:
+def link_properties(section, bars: list[tuple], point_masses, tip=None) -> tuple:
     """A link's (mass, com_x, com_y, inertia): a bar section (``density``, ``area``) over the link's ``bars``
-    ((start, end) in mm, link frame), or lumped values (``mass``, ``com`` mm, ``inertia``), plus its point masses."""
+    ((start, end) in mm, link frame), or lumped values (``mass``, ``com`` mm, ``inertia``), plus its point masses
+    (one ``at = "tip"`` sits at ``tip``, the kind's traced point in the link frame, mm)."""
     if hasattr(section, "density"):
         parts = [bar(section.density, section.area, a, b) for a, b in bars]
     else:
         parts = [(section.mass, section.com[0] / 1000.0, section.com[1] / 1000.0, section.inertia)]
-    parts += [point(pm.mass, pm.at) for pm in point_masses]
+    for pm in point_masses:
+        if pm.at == "tip" and tip is None:
+            raise ValueError(f"a point mass at the tip of the {pm.link}, which has no traced point")
+        parts.append(point(pm.mass, tip if pm.at == "tip" else pm.at))
     return combine(parts)
 
 
-def mass_vector(dynamics, bars: dict[str, list[tuple]], links: tuple[str, ...]) -> list:
+def mass_vector(dynamics, bars: dict[str, list[tuple]], links: tuple[str, ...], tips: dict | None = None) -> list:
     """The 12 mass parameters (:data:`MASS_FIELDS` per link) of a ``[dynamics]`` table; ``bars``: link -> its bars
-    (start, end) in mm in the link frame, read when the link is given as a bar."""
+    (start, end) in mm in the link frame, read when the link is given as a bar; ``tips``: link -> its traced point."""
     out: list = []
     for name in links:
         carried = [pm for pm in dynamics.point_masses if pm.link == name]
-        out += list(link_properties(getattr(dynamics, name), bars[name], carried))
+        out += list(link_properties(getattr(dynamics, name), bars[name], carried, (tips or {}).get(name)))
     return out
 
 

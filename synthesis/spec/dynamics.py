@@ -42,7 +42,9 @@ class PointMass(StrictModel):
 
     link: Literal["crank", "coupler", "rocker"] = Field(description="the link that carries it")
     mass: float = Field(gt=0.0, le=1000.0, description="mass, kg")
-    at: tuple[float, float] = Field(description="position in the link frame, mm")
+    at: tuple[float, float] | Literal["tip"] = Field(
+        description="position in the link frame, mm; or \"tip\": the kind's traced point on that link, which "
+                    "moves with the design (planting_fourbar: the claw tip C on the coupler)")
     note: str = Field("", description="what it is and where its value comes from")
 
 

@@ -11,7 +11,6 @@ import math
 import numpy as np
 
 from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule
 from constraints.grashof import grashof_rule
 from synthesis.kinds.crank_rocker.rules import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
@@ -51,15 +50,7 @@ def rules_of(spec: CrankRockerSpec, lengths, stroke, u, w, mu) -> list[Rule]:
 
 def unevaluated_dynamics_rules(spec: CrankRockerSpec, why: str) -> list[Rule]:
     """The ``[dynamics.limits]`` rules of a crank that cannot turn: not evaluated, for the same reason."""
-    limits = spec.dynamics.limits if spec.dynamics is not None else None
-    if limits is None:
-        return []
-    rules = []
-    if limits.peak_input_torque is not None:
-        rules.append(peak_input_torque_rule(None, limits.peak_input_torque, missing=why))
-    if limits.peak_shaking_force is not None:
-        rules.append(peak_shaking_force_rule(None, None, limits.peak_shaking_force, missing=why))
-    return rules
+    return [] if spec.dynamics is None else dynamics_rules(None, spec.dynamics.limits, 0, missing=why)
 
 
 #: the crank-rocker's joints and links by their seed-001 names, in synthesis.dynamics.fourbar's order

@@ -84,6 +84,9 @@ class CrankRockerSpec(ProblemSpec):
     def _dynamics_has_a_speed(self) -> "CrankRockerSpec":
         if self.dynamics is not None and self.dynamics.crank_speed is None:
             raise ValueError("dynamics.crank_speed: a crank_rocker has no crank speed of its own; give it in r/min")
+        if self.dynamics is not None and any(pm.at == "tip" for pm in self.dynamics.point_masses):
+            raise ValueError("dynamics.point_masses: at = \"tip\" names a traced point, which a crank_rocker has "
+                             "not; give the position in the link frame, mm")
         return self
 
     def variables(self) -> dict[str, Variable]:

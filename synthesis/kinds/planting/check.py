@@ -8,7 +8,9 @@ import numpy as np
 
 from constraints import Rule
 from synthesis.kinds.planting.kinematics import tip_state
-from synthesis.kinds.planting.rule_set import planting_rules
+from synthesis.dynamics.linkage import dynamics_facts
+from synthesis.kinds.planting.dynamics import JOINTS, LINKS, arm_dynamics, arm_linkage
+from synthesis.kinds.planting.rule_set import Trace, planting_rules
 from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
                                       find_precision_points, float_trace)
 from synthesis.core.kind import figure_text
@@ -27,14 +29,20 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMP
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:
         pts = find_precision_points(scene)
-        return planting_rules(float_trace(scene, pts, phase_samples, turn_samples), limits), pts
+        return planting_rules(with_dynamics(scene, float_trace(scene, pts, phase_samples, turn_samples)), limits), pts
     return unevaluated(scene, limits, why), None
+
+
+def with_dynamics(scene: PlantingScene, trace: Trace) -> Trace:
+    """The trace with the dynamics rules' input when the spec's [dynamics] table sets a limit."""
+    trace.dynamics = arm_dynamics(scene.dynamics, scene.design.parameters(), scene.design.branch, scene.motion.omega)
+    return trace
 
 
 def unevaluated(scene: PlantingScene, limits, why: str) -> list[Rule]:
     """The rules of a design whose crank cannot turn: only those of the link lengths evaluated."""
     nowhere = PrecisionPoints({n: None for n in POINTS}, None, {n: why for n in POINTS})
-    return planting_rules(float_trace(scene, nowhere, turn_missing=why), limits)
+    return planting_rules(with_dynamics(scene, float_trace(scene, nowhere, turn_missing=why)), limits)
 
 
 def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:
@@ -95,7 +103,19 @@ def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict
                     "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
         # rule limits the spec did not write, and how they follow from its inputs
         "rule_limits_from_inputs": spec.derived_limits(),
+        **dynamics_facts_of(scene, spec.operation.crank_speed),
     }
+
+
+def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float) -> dict:
+    """``{"dynamics": ...}``: the arm's inverse dynamics over a turn (docs/ARCHITECTURE.md "result.json"), when the
+    spec has a [dynamics] table and the crank turns; else nothing."""
+    if scene.dynamics is None or assembly_status(scene.design) is not None:
+        return {}
+    d = scene.design
+    linkage = arm_linkage(scene.dynamics, d.parameters(), d.branch, scene.motion.omega)
+    return {"dynamics": dynamics_facts(linkage, scene.dynamics.samples, JOINTS, LINKS,
+                                       crank_speed_rpm, scene.dynamics)}
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -20,6 +20,7 @@ from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
+from synthesis.kinds.planting.dynamics import arm_dynamics
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
@@ -126,7 +127,8 @@ class PlantingNLP(KindNLP):
                      vel={k: (st[1][0], st[1][1]) for k, st in states.items()},
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
-                     acc_scale=self.omega**2 * value_of(spec.arm.l2))
+                     acc_scale=self.omega**2 * value_of(spec.arm.l2),
+                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega))
 
     def _structural(self, v, p, theta, states, top=None) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a

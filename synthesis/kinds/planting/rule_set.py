@@ -22,6 +22,7 @@ from constraints.grashof import grashof_rule
 from synthesis.kinds.planting.rules.precision_points import p4p6_rule, seedbed_rules
 from synthesis.kinds.planting.rules.speed import p2_speed_rule
 from constraints.transmission import transmission_rules
+from synthesis.kinds.planting.dynamics import arm_dynamics_rules
 
 TWO_PI = 2.0 * math.pi
 POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
@@ -52,6 +53,9 @@ class Trace:
     acc_scale: float
     problems: dict[str, str] = field(default_factory=dict)
     turn_missing: str | None = None
+    #: the inverse dynamics and its limits when the spec's [dynamics] table sets one
+    #: (synthesis.kinds.planting.dynamics.ArmDynamics), else None: no dynamics rule
+    dynamics: Any = None
 
     def missing(self, *names: str) -> str | None:
         """Why any of ``names`` is absent (the first reason), or None when all exist."""
@@ -91,6 +95,9 @@ def planting_rules(tr: Trace, limits) -> list[Rule]:
                                             tr.missing(a, b)))
     rules.append(grashof_rule(*tr.links))
     rules += transmission_rules(tr.mu_deg, limits.transmission_angle, tr.turn_missing)
+    if tr.dynamics is not None:      # on the transmission angle's grid over the turn
+        samples = 0 if tr.mu_deg is None else (tr.mu_deg.numel() if hasattr(tr.mu_deg, "numel") else len(tr.mu_deg))
+        rules += arm_dynamics_rules(tr.dynamics, samples, tr.turn_missing)
     return rules
 
 

@@ -50,6 +50,8 @@ class PlantingScene:
     #: typical |a_y| normalising the acceleration margins (mm/s^2): omega^2 x the spec's *given* crank
     #: length, the same number the NLP uses; None: omega^2 x this design's crank length
     reference_acc: float | None = None
+    #: the spec's [dynamics] table (synthesis.spec.dynamics.DynamicsSection), or None
+    dynamics: object = None
 
     @property
     def acc_scale(self) -> float:
@@ -65,7 +67,8 @@ class PlantingScene:
         bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
                       spec.seedbed.thickness, spec.seedbed.seedling_height)
         soil = v.get("soil_level") if spec.soil.level is not None else None
-        return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2))
+        return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2),
+                   spec.dynamics)
 
 
 @dataclass

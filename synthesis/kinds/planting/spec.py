@@ -15,6 +15,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
+from synthesis.spec.dynamics import DynamicsSection
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
     POSITIVE, WITHIN_A_TURN, Interval, documented_range, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
@@ -168,7 +169,19 @@ class PlantingFourbarSpec(ProblemSpec):
     rules: RulesSection = Field(default_factory=RulesSection)
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    dynamics: DynamicsSection | None = Field(
+        None, description="mass properties and limits for the inverse dynamics at the [operation] crank speed "
+                          "(docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no dynamics rules")
     _derived: tuple = PrivateAttr(default=())          # rule limits filled in from the inputs
+
+    @model_validator(mode="after")
+    def _one_crank_speed(self) -> "PlantingFourbarSpec":
+        if self.dynamics is not None and self.dynamics.crank_speed is not None:
+            raise ValueError("dynamics.crank_speed: a planting arm turns at [operation] crank_speed; leave it out here")
+        if self.dynamics is not None and any(pm.at == "tip" and pm.link != "coupler"
+                                             for pm in self.dynamics.point_masses):
+            raise ValueError("dynamics.point_masses: at = \"tip\" is the claw tip C, on the coupler")
+        return self
 
     @model_validator(mode="after")
     def _limits_follow_the_inputs(self) -> "PlantingFourbarSpec":
