@@ -116,3 +116,15 @@ def test_a_value_with_an_unquoted_unit_says_to_quote_it(tmp_path):
     assert 'must be quoted ("50.0 mm")' in agrisynth("check", str(spec)).stderr
     spec.write_text('kind = "crank_rocker"\nname = "unit"\nl2 = [1, 2\n')        # another TOML error: no hint
     assert "must be quoted" not in agrisynth("check", str(spec)).stderr
+
+
+def test_the_studio_worker_tells_the_page_progress_and_lines_not_printed_text():
+    """What the studio's worker sends for each event: progress and the line the page shows (JSON, never a print)."""
+    from synthesis.studio.worker import message
+
+    start = events.StartFinished(1, 1, 4, 3.5, "worst violation 0.2", "Solve_Succeeded", 12, 0.5, 1, 3.5,
+                                 "worst violation 0.2")
+    assert message(events.SolveStarted("arm", 4)) == {"total": 4}
+    assert message(start) == {"done": 1, "total": 4, "line": start.line()}
+    assert message(events.Note("l2 looks like metres")) == {"line": "note: l2 looks like metres"}
+    assert message(events.StartsDone()) is None and message(events.SolverLog("ipopt")) is None
