@@ -393,6 +393,11 @@ function drawSurfaces(root, f, surfaces) {
   }
 }
 
+// a label's x and anchor: right of its point, or left of it near the plot area's right edge (never cut off there)
+function beside(f, x, gap) {
+  return x > f.right - 90 ? [x - gap, "end"] : [x + gap, "start"];
+}
+
 function pathOf(xs, ys, f) {
   let d = "";
   xs.forEach((x, i) => {
@@ -412,7 +417,10 @@ function drawGroup(root, group, f, ghost) {
   for (const p of group.points || []) {
     if (p.x === null || p.y === null) continue;
     g.append(svg("circle", { cx: f.px(p.x), cy: f.py(p.y), r: 4, fill: ghost ? "#888" : "#d62728", "data-point": p.name }));
-    if (!ghost) g.append(text(f.px(p.x) + 6, f.py(p.y) - 6, p.name, { fill: "#222", class: "point-label halo" }));
+    if (!ghost) {
+      const [x, anchor] = beside(f, f.px(p.x), 6);
+      g.append(text(x, f.py(p.y) - 6, p.name, { fill: "#222", class: "point-label halo", "text-anchor": anchor }));
+    }
   }
   root.append(g);
 }
@@ -451,7 +459,10 @@ function drawPose(root, mechanism, k, f, ghost) {
   for (const n of names) {
     const [x, y] = [f.px(frame[n][0]), f.py(frame[n][1])];
     g.append(svg("circle", { cx: x, cy: y, r: 4.5, fill: "#fff", stroke: "#333", "stroke-width": 1.5, "data-joint": n }));
-    if (!ghost) g.append(text(x + 7, y + 16, n, { fill: "#444", class: "joint-label halo" }));
+    if (!ghost) {
+      const [lx, anchor] = beside(f, x, 7);
+      g.append(text(lx, y + 16, n, { fill: "#444", class: "joint-label halo", "text-anchor": anchor }));
+    }
   }
   root.append(g);
 }
