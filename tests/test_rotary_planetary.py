@@ -272,3 +272,17 @@ def test_trajectory_speeds_and_accelerations_are_the_positions_derivatives(check
     assert np.max(np.abs(ay - np.asarray(tr["ay"][1:-1]))) < 1e-3 * np.max(np.abs(ay))
     # the ground frame: x_ground = x_machine - V t
     assert np.allclose(np.asarray(tr["machine"]["x"]) - 600.0 * t, x, atol=1e-9)
+
+
+@pytest.mark.slow
+def test_a_plant_spacing_no_design_meets_is_refused_before_any_start(tmp_path):
+    """120 mm (0.6 m/s, 150 r/min, two plants a turn) against [150, 220]: exit 2 naming the fields to change."""
+    from synthesis.errors import AgrisynthError
+    from synthesis.kinds import solve_spec
+
+    text = (LIBRARY / "rotary_planetary/smooth_loop_redesign.toml").read_text()
+    (tmp_path / "spec.toml").write_text(text.replace("plant_spacing = [100.0, 220.0]", "plant_spacing = [150.0, 220.0]"))
+    with pytest.raises(AgrisynthError) as err:
+        solve_spec(load_spec(tmp_path / "spec.toml"), workers=1)
+    assert err.value.exit_code == 2
+    assert "plant_spacing = 120 mm" in str(err.value) and "[operation] forward_speed" in str(err.value)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from synthesis.core.kind import Kind
+from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
     from synthesis.core.kind import CoarseCheck, FigureWriter, Poses, Solving, SpecModel
@@ -19,6 +19,7 @@ class RotaryPlanetary(Kind):
     objectives = {"key_pose_miss": "smallest sum of squared key-pose misses, mm^2 + deg^2",
                   "smooth_law": "smoothest laws (mean squared second derivative of F and G, deg^2/rad^4)"}
     example = "rotary_planetary/key_pose_redesign.toml"
+    fixed_by = {"plant_spacing": FixedBy("[operation] forward_speed and carrier_speed", "[rules] plant_spacing")}
     bench_specs = ("rotary_planetary/smooth_loop_redesign.toml", "rotary_planetary/key_pose_redesign.toml")
 
     def spec_model(self) -> type[SpecModel]:

@@ -6,7 +6,8 @@ Structural rows pin each of these angles (the loop's top and bottom where the ti
 and exit on the soil surface, a free pose where the tip is nearest its target) and make entry and exit the soil
 crossings around the bottom: going down at entry and up at exit, below the surface in between (the in-soil
 samples), the stroke shorter than half a turn.  Every rule is :func:`synthesis.kinds.rotary_planetary.check.rules_of` on these symbols, so the check
-and the NLP cannot drift apart; a rule with no design in it (the plant spacing) is left to the re-check.
+and the NLP cannot drift apart; the plant spacing, which no design variable moves, is among them for the core's
+pre-solve refusal of a violated one (``Kind.fixed_by``).
 """
 
 from __future__ import annotations
@@ -68,8 +69,7 @@ def problem(setting: Setting) -> Declared:
                   if p.carrier_angle is not None})
     train = train_of(spec, design)
     samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
-    rules = [r for r in rules_of(spec, train, Angles(top, bottom, entry, exit_, poses), turn_grid(samples), soil_n)
-             if r.name != "plant_spacing"]
+    rules = rules_of(spec, train, Angles(top, bottom, entry, exit_, poses), turn_grid(samples), soil_n)
     level = soil_y(spec)
     s = ca.DM(np.linspace(0.0, 1.0, soil_n + 2)[1:-1])
     _, y_stroke = tip(train, entry + (exit_ - entry) * s)
