@@ -217,8 +217,8 @@ def _misses_the_bottom(heights: np.ndarray, cycle: np.ndarray, exit_: float, ent
         return f"the claw never reaches the seedbed bottom between soil exit and entry{lowest}"
     later = [i for i in _crossings(heights, 0.0, downward=True) if cycle[i] > entry]
     if later:
-        return (f"the claw enters the soil (crank angle {math.degrees(entry) % 360:.0f} deg) before it comes down "
-                f"to the seedbed bottom ({math.degrees(cycle[later[0]]) % 360:.0f} deg)")
+        return (f"the claw enters the soil (crank angle {math.degrees(entry) % 360:.1f} deg) before it comes down "
+                f"to the seedbed bottom ({math.degrees(cycle[later[0]]) % 360:.1f} deg)")
     if way.max() < 0.0:
         return (f"the claw stays below the seedbed bottom all the way between soil exit and entry (at least "
                 f"{-way.max():.1f} mm below it)")
