@@ -4,12 +4,12 @@ in-soil samples; coarse on the [solver] samples_per_turn and in_soil_samples."""
 from __future__ import annotations
 
 from synthesis.core.kind import CoarseCheck
+from synthesis.kinds.rotary_planetary.check import CHECK_SAMPLES, CHECK_SOIL_SAMPLES, facts
+from synthesis.kinds.rotary_planetary.check import evaluate as rules_at
 from synthesis.result import Result
 
 
 def evaluate(loaded) -> Result:
-    from synthesis.kinds.rotary_planetary.check import evaluate as rules_at, facts
-
     spec = loaded.model
     design = spec.design_values()
     rules, train, angles = rules_at(spec, design, spec.solver.samples_per_turn, spec.solver.in_soil_samples)
@@ -18,8 +18,6 @@ def evaluate(loaded) -> Result:
 
 
 def note(spec) -> str:
-    from synthesis.kinds.rotary_planetary.check import CHECK_SAMPLES, CHECK_SOIL_SAMPLES
-
     return (f"the check with [solver] samples_per_turn {spec.solver.samples_per_turn} carrier angles and "
             f"in_soil_samples {spec.solver.in_soil_samples} (fine: {CHECK_SAMPLES} and {CHECK_SOIL_SAMPLES})")
 

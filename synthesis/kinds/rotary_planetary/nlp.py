@@ -43,7 +43,7 @@ def smoothness(spec: RotaryPlanetarySpec, design: dict):
     return total
 
 
-def pose_miss(spec: RotaryPlanetarySpec, rules) -> list:
+def pose_miss(rules) -> list:
     """The key-pose rows' squared misses (mm^2, deg^2) from the rules built on symbols."""
     out = []
     for r in rules:
@@ -69,26 +69,11 @@ def problem(setting: Setting) -> Declared:
                   if p.carrier_angle is not None})
     train = train_of(spec, design)
     samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
-    rules = rules_of(spec, train, Angles(top, bottom, entry, exit_, poses), turn_grid(samples), soil_n)
-    level = soil_y(spec)
-    s = ca.DM(np.linspace(0.0, 1.0, soil_n + 2)[1:-1])
-    _, y_stroke = tip(train, entry + (exit_ - entry) * s)
-    _, dy_in = tip_rate(train, entry)
-    _, dy_out = tip_rate(train, exit_)
-    # one equality row pins each auxiliary angle (the tolerance analysis differentiates through them): the top and
-    # bottom are where the tip's height is stationary, entry and exit on the surface, a pose where the tip is
-    # nearest its target (the check's reading, find_angles)
-    nearest = []
-    for name in free_poses:
-        (px, py), (dx, dy) = tip(train, poses[name]), tip_rate(train, poses[name])
-        pose = spec.key_poses[name]
-        nearest.append(((px - pose.x) * dx + (py - pose.y) * dy, 0.0, 0.0))
-    structural = [(tip_rate(train, top)[1], 0.0, 0.0), (tip_rate(train, bottom)[1], 0.0, 0.0),
-                  (tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0), *nearest,
-                  (dy_in, None, 0.0), (dy_out, 0.0, None), (bottom - entry, 0.0, None),
-                  (exit_ - bottom, 0.0, None), (exit_ - entry, None, math.pi), (y_stroke - level, None, 0.0)]
+    angles = Angles(top, bottom, entry, exit_, poses)
+    rules = rules_of(spec, train, angles, turn_grid(samples), soil_n)
+    structural = structural_rows(spec, train, angles, free_poses)
     if spec.objective.name == "key_pose_miss":
-        misses = pose_miss(spec, rules)
+        misses = pose_miss(rules)
         f = ca.sum1(ca.vertcat(*misses)) if misses else ca.SX(0.0)
     else:
         f = smoothness(spec, design)
@@ -116,6 +101,27 @@ def problem(setting: Setting) -> Declared:
 
     return Declared(declared, names, bounds, init, design=named(names), start=start, objective=reported,
                     details=carrier_angles)
+
+
+def structural_rows(spec: RotaryPlanetarySpec, train, angles: Angles, free_poses: list[str]) -> list:
+    """One equality row pinning each auxiliary angle (the tolerance analysis differentiates through them): the top
+    and bottom where the tip's height is stationary, entry and exit on the surface, a pose where the tip is nearest
+    its target (the check's reading, find_angles); then entry going down and exit up around the bottom, the
+    in-soil samples below the surface, the stroke shorter than half a turn."""
+    level = soil_y(spec)
+    entry, exit_ = angles.entry, angles.exit
+    s = ca.DM(np.linspace(0.0, 1.0, spec.solver.in_soil_samples + 2)[1:-1])
+    _, y_stroke = tip(train, entry + (exit_ - entry) * s)
+    nearest = []
+    for name in free_poses:
+        (px, py), (dx, dy) = tip(train, angles.poses[name]), tip_rate(train, angles.poses[name])
+        pose = spec.key_poses[name]
+        nearest.append(((px - pose.x) * dx + (py - pose.y) * dy, 0.0, 0.0))
+    return [(tip_rate(train, angles.top)[1], 0.0, 0.0), (tip_rate(train, angles.bottom)[1], 0.0, 0.0),
+            (tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0), *nearest,
+            (tip_rate(train, entry)[1], None, 0.0), (tip_rate(train, exit_)[1], 0.0, None),
+            (angles.bottom - entry, 0.0, None), (exit_ - angles.bottom, 0.0, None), (exit_ - entry, None, math.pi),
+            (y_stroke - level, None, 0.0)]
 
 
 def aux_guess(spec: RotaryPlanetarySpec, names: list[str], free_poses: list[str], x_design: np.ndarray) -> np.ndarray:
