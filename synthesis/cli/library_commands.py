@@ -90,5 +90,5 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
         click.echo(specref.template(kind), nl=False)
         return
     library.write_template(kind, target)
-    console.print(f"wrote {escape(str(target))}: a {kind} spec to edit; check it with  agrisynth check {escape(str(target))}",
-                  soft_wrap=True)
+    console.print(f"wrote {escape(str(target))}: a {kind} spec to edit; check it with  agrisynth check "
+                  f"{escape(str(target))}", soft_wrap=True)

@@ -72,7 +72,7 @@ def tolerance_command(target: Path, out: Path, length: float | None, angle: floa
     request = ToleranceRequest(target, out, length, angle, per_variable_tolerances(tols), samples, seed, force)
     with Terminal() as terminal:
         outcome = runs.tolerance(request, terminal)
-    facts, failed = outcome.details
+    facts, failed = outcome.details.facts, outcome.details.failed
     console.print(escape(tolerance_table(facts)))
     console.print(f"wrote {escape(str(outcome.folder))}/")
     if failed:      # say which rows decide it: a table of 100 % passes may still hold a corner that breaks a rule
@@ -112,12 +112,12 @@ def compare_command(results: tuple[Path, ...], out: Path, force: bool) -> None:
       agrisynth compare results/taiwan_example1-check results/redesign_from_example1
     """
     with Terminal() as terminal:
-        cands, page = runs.compare(CompareRequest(results, out, force), terminal).details
-    for c in cands:
+        compared = runs.compare(CompareRequest(results, out, force), terminal).details
+    for c in compared.candidates:
         bad = c.result.violated()
         verdict = "[green]every rule satisfied[/]" if not bad else f"[red]{len(bad)} rule(s) violated[/]"
         console.print(f"{escape(c.label)}: {c.result.status}, {verdict}")
-    console.print(f"wrote {escape(str(page))}")
+    console.print(f"wrote {escape(str(compared.page))}")
 
 
 @click.command("bench")
@@ -162,6 +162,6 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
             outcome = runs.bench(request, terminal)
     except BadRequest as exc:
         raise click.BadParameter(str(exc), param_hint=exc.field) from None
-    results, repeats, settings = outcome.details
-    print_table(console, bench_table(results, repeats))
-    console.print(f"wrote {escape(str(outcome.folder))}/bench.json, bench.md and plots ({settings['wall_s']:.0f} s)")
+    rows = outcome.details
+    print_table(console, bench_table(rows.results, rows.repeats))
+    console.print(f"wrote {escape(str(outcome.folder))}/bench.json, bench.md and plots ({rows.settings['wall_s']:.0f} s)")

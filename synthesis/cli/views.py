@@ -57,13 +57,14 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str, 
         return ("-" if r["value"] is None else f"{r['value']:.4g}"), _verdict(r)
 
     for r in best:
-        table.add_row(escape(r["name"]), limit_text(r["limit"]), *cell(base.get(r["name"])), *cell(r), escape(r["unit"]))
+        table.add_row(escape(r["name"]), limit_text(r["limit"]), *cell(base.get(r["name"])), *cell(r),
+                      escape(r["unit"]))
     return table
 
 
 def bench_table(results: list[dict], repeats: int) -> Table:
-    table = Table(title=f"bench: objective reached, median wall time and time to target (IPOPT methods: {repeats} runs)",
-                  title_justify="left")
+    table = Table(title=f"bench: objective reached, median wall time and time to target (IPOPT methods: {repeats} "
+                        f"runs)", title_justify="left")
     add_columns(table, (("problem", "left"), ("method", "left"), ("objective", "right"), ("gap to best", "right"),
                         ("worst violation", "right"), ("median s", "right"), ("time to target s", "right"),
                         ("iterations", "right"), ("time-to-target ratio", "right")))
@@ -139,7 +140,8 @@ def _solver_line(result, details: SolveWritten) -> str:
             f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
             f"{'and one from the elastic re-solve ' if s.get('starts_run', 0) > s['starts'] else ''}"
             f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
-            f"{f'the cluster at {escape(details.scheduler)}' if details.scheduler else f'{details.workers} worker(s)'}; "
+            f"{f'the cluster at {escape(details.scheduler)}' if details.scheduler else f'{details.workers} worker(s)'}"
+            f"; "
             f"status {result.status}")
 
 

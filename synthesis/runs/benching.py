@@ -10,7 +10,7 @@ from pathlib import Path
 from synthesis import bench as benchmod
 from synthesis.result import open_run_folder
 from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
-from synthesis.runs.requests import BadRequest, BenchRequest, Outcome
+from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
 from synthesis.spec import KINDS, load_spec
 
 
@@ -54,7 +54,7 @@ def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
 
 
 def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
-    """Bench, write OUT/bench/; ``details``: (the problems' results, repeats, settings).  Progress as
+    """Bench, write OUT/bench/; ``details``: :class:`BenchRows`.  Progress as
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
     repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
     by_kind = problems_by_kind(request)
@@ -78,4 +78,4 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
         folder = benchmod.write_bench(request.out, results, settings, extreme, run_folder=run_folder)
     finally:
         run_folder.discard()       # the staging folder, if the bench stopped (moved into place: nothing left)
-    return Outcome(0, folder=folder, details=(results, repeats, settings))
+    return Outcome(0, folder=folder, details=BenchRows(results, repeats, settings))

@@ -27,6 +27,7 @@ def check(request: CheckRequest, emit: Subscriber) -> Outcome:
         # evaluated: from here a signal is noted, the result written and its summary handed over (one deferral over
         # both, so no moment between them obeys it)
         with output.finishing(emit):
-            details = CheckWritten(loaded.path, sorted(ranges_of(loaded.model)), kinds.get(loaded.kind).headline(result))
+            details = CheckWritten(loaded.path, sorted(ranges_of(loaded.model)),
+                                   kinds.get(loaded.kind).headline(result))
             folder, _ = output.finish(emit, result, files, details=details)
     return Outcome(1 if result.violated() else 0, result, folder)

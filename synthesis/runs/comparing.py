@@ -10,7 +10,7 @@ from synthesis.report.compare import (bench_of_kind, is_bench, load_bench, load_
                                       write_comparison)
 from synthesis.result import is_run_folder
 from synthesis.runs.events import Subscriber
-from synthesis.runs.requests import CompareRequest, Outcome
+from synthesis.runs.requests import CompareRequest, Comparison, Outcome
 
 
 def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
@@ -26,8 +26,8 @@ def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
 
 
 def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
-    """Write OUT/compare.html and its figures; ``details``: (the candidates compared, the first the baseline; the
-    page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
+    """Write OUT/compare.html and its figures; ``details``: :class:`Comparison` (the candidates, the first the
+    baseline; the page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
     refuse_overlap(request.results, request.out)
     folder = open_output_folder(request.out, request.force)          # refused (exit 2) before anything is read
     try:
@@ -38,4 +38,4 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
         folder.discard()
         raise
     page = write_comparison(cands, request.out, bench, folder=folder)
-    return Outcome(0, folder=page.parent, details=(cands, page))
+    return Outcome(0, folder=page.parent, details=Comparison(cands, page))

@@ -84,7 +84,8 @@ class SolverLog:
 @dataclass(frozen=True)
 class ResultWritten:
     """A run's result is in its folder (handed over inside the deferral, so its summary is printed before a signal
-    noted meanwhile is obeyed).  ``details``: what the summary says beside the result (:mod:`.outcomes`)."""
+    noted meanwhile is obeyed).  ``details``: what the summary says beside the result (``CheckWritten``,
+    ``SolveWritten`` of :mod:`synthesis.runs.requests`)."""
 
     result: Any
     folder: Path

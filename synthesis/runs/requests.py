@@ -95,6 +95,31 @@ class SolveWritten:
 
 
 @dataclass(frozen=True)
+class ToleranceFacts:
+    """The tolerance analysis (``synthesis.tolerance.analysis.analyse``'s facts) and the rows that failed."""
+
+    facts: dict
+    failed: list[dict]
+
+
+@dataclass(frozen=True)
+class BenchRows:
+    """Each benched problem's results, the IPOPT methods' repeats and the settings bench.json records."""
+
+    results: list[dict]
+    repeats: int
+    settings: dict
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The candidates compared (the first is the baseline) and the page written."""
+
+    candidates: list
+    page: Path
+
+
+@dataclass(frozen=True)
 class Stopped:
     """A run a signal stopped: ``kept`` the folder holding its finished starts (None: nothing had finished,
     nothing written)."""
@@ -109,8 +134,8 @@ class Stopped:
 @dataclass(frozen=True)
 class Outcome:
     """A run's answer: ``exit_code`` as above; ``result`` (check, solve), ``folder`` where it was written,
-    ``error`` (exit 3: raise it), ``stopped`` (a signal ended it), ``details`` (per run: tolerance facts and the
-    rows that failed, bench rows, compared candidates)."""
+    ``error`` (exit 3: raise it), ``stopped`` (a signal ended it), ``details`` (per run: :class:`ToleranceFacts`,
+    :class:`BenchRows`, :class:`Comparison`)."""
 
     exit_code: int
     result: Any = None

@@ -80,7 +80,8 @@ def _plan(request: SolveRequest, loaded) -> _Plan:
     n = starts or loaded.model.solver.starts
     the_seed = loaded.model.solver.seed if seed is None else seed
     settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed)
-    plan = _Plan(n, starts, seed, settings, fingerprint, Path("results") if request.out is None else request.out, loaded.name)
+    out = Path("results") if request.out is None else request.out
+    plan = _Plan(n, starts, seed, settings, fingerprint, out, loaded.name)
     if resume is not None:
         plan.finished = startlog.read(resume, fingerprint)
         where = resume.resolve()

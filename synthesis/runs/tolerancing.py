@@ -10,7 +10,7 @@ from synthesis.errors import ResultError, SpecError
 from synthesis.files import read_json
 from synthesis.result import MAX_RESULT_BYTES, write_folder
 from synthesis.runs.events import MonteCarloPlan, Subscriber
-from synthesis.runs.requests import Outcome, ToleranceRequest
+from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
 from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables
 from synthesis.spec import load_spec
 from synthesis.tolerance.analysis import analyse
@@ -49,8 +49,8 @@ def design_file(target: Path, emit: Subscriber) -> Path:
 
 def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     """Analyse and write result.json, report.md, tornado.png.  Exit code 0 when the design and every Monte-Carlo
-    sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``: (the analysis'
-    facts, the rows that decided a failure)."""
+    sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``:
+    :class:`ToleranceFacts` (the analysis' facts, the rows that decided a failure)."""
     loaded = load_spec(design_file(request.target, emit))
     tolerance_names_known(loaded)
     kind = kinds.solving_kind(loaded.kind)
@@ -77,4 +77,4 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     # the rows result.json holds decide, so a reader of it sees why: the design's own rules and, per rule, every
     # Monte-Carlo sample holding it (--samples 0: its linearised worst case in the box)
     failed = [r for r in facts["nominal_rules"] + verdict_rows(facts) if not r["satisfied"]]
-    return Outcome(1 if failed else 0, folder=folder, details=(facts, failed))
+    return Outcome(1 if failed else 0, folder=folder, details=ToleranceFacts(facts, failed))
