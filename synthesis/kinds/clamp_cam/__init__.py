@@ -12,6 +12,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/clamp_cam/parts.py)."""
+    from synthesis.kinds.clamp_cam import parts
+
+    return parts
+
+
 class ClampCam(Kind):
     name = "clamp_cam"
     summary = "clamp cams: motion law, roller-follower profile, pressure angle, undercut (seed 001 §2.2)"
@@ -27,45 +35,30 @@ class ClampCam(Kind):
         return ClampCamSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.clamp_cam.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.clamp_cam.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.clamp_cam.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.clamp_cam.export import write_csv, write_dxf
-        from synthesis.kinds.clamp_cam.plots import motion_figure, profile_figure
-
-        return {"motion.png": motion_figure,
-                "profile.png": profile_figure,
-                "profile.svg": profile_figure,
-                "profile.csv": write_csv,
-                "profile.dxf": write_dxf}
+        return {"motion.png": _parts().motion_figure,
+                "profile.png": _parts().profile_figure,
+                "profile.svg": _parts().profile_figure,
+                "profile.csv": _parts().write_csv,
+                "profile.dxf": _parts().write_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.clamp_cam.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.clamp_cam.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
     def poses(self) -> Poses:
-        from synthesis.kinds.clamp_cam.poses import POSES
-
-        return POSES
+        return _parts().POSES
 
 
 KIND = ClampCam()

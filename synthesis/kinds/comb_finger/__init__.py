@@ -16,6 +16,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/comb_finger/parts.py)."""
+    from synthesis.kinds.comb_finger import parts
+
+    return parts
+
+
 class CombFinger(Kind):
     name = "comb_finger"
     summary = "eccentric rotating comb fingers: largest combing angle with root-zone and unit clearances (seed 002 §四.3 eq 17-22)"
@@ -29,41 +37,27 @@ class CombFinger(Kind):
         return CombFingerSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.comb_finger.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.comb_finger.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.comb_finger.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.comb_finger.plots import finger_figure
-
-        return {"comb_finger.png": finger_figure,
-                "comb_finger.svg": finger_figure}
+        return {"comb_finger.png": _parts().finger_figure,
+                "comb_finger.svg": _parts().finger_figure}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.comb_finger.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.comb_finger.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
     def poses(self) -> Poses:
-        from synthesis.kinds.comb_finger.poses import POSES
-
-        return POSES
+        return _parts().POSES
 
 
 KIND = CombFinger()

@@ -16,6 +16,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/combing_chain/parts.py)."""
+    from synthesis.kinds.combing_chain import parts
+
+    return parts
+
+
 class CombingChain(Kind):
     name = "combing_chain"
     summary = "stem-combing chain: chain speed(s) so every plant is combed into a window before the cut (seed 002 §四.3 eq 12-13)"
@@ -30,36 +38,24 @@ class CombingChain(Kind):
         return CombingChainSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.combing_chain.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.combing_chain.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.combing_chain.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.combing_chain.plots import delta_figure
-
-        return {"delta_over_beta.png": delta_figure,
-                "delta_over_beta.svg": delta_figure}
+        return {"delta_over_beta.png": _parts().delta_figure,
+                "delta_over_beta.svg": _parts().delta_figure}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.combing_chain.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.combing_chain.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
 
 KIND = CombingChain()

@@ -14,11 +14,22 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/crank_rocker/parts.py)."""
+    from synthesis.kinds.crank_rocker import parts
+
+    return parts
+
+
 class CrankRocker(Kind):
     name = "crank_rocker"
     summary = "crank-rocker from time ratio K, swing and minimum transmission angle (seed 001 §2.1.3)"
     objectives = {"min_total_length": "smallest l7 + l8 + l9 + l10, mm",
-                  "max_transmission_angle": "largest smallest transmission angle over a turn, deg"}
+                  "max_transmission_angle": "largest smallest transmission angle over a turn, deg",
+                  "min_peak_torque": "smallest peak |input torque| over a turn, N m ([dynamics] needed)",
+                  "min_peak_shaking_force": "smallest peak shaking force on the frame over a turn, N ([dynamics] "
+                                            "needed)"}
     example = "picker/cai2020_crank_rocker_synthesis.toml"
     bench_specs = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/crank_rocker_max_transmission.toml")
 
@@ -28,50 +39,33 @@ class CrankRocker(Kind):
         return CrankRockerSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.crank_rocker.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.crank_rocker.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.crank_rocker.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.crank_rocker.export import write_linkage_dxf, write_paths_csv
-        from synthesis.kinds.crank_rocker.plots import extremes_figure
-
-        return {"extremes.png": extremes_figure,
-                "extremes.svg": extremes_figure,
-                "paths.csv": write_paths_csv,
-                "linkage.dxf": write_linkage_dxf}
+        return {"extremes.png": _parts().extremes_figure,
+                "extremes.svg": _parts().extremes_figure,
+                "paths.csv": _parts().write_paths_csv,
+                "linkage.dxf": _parts().write_linkage_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.crank_rocker.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.crank_rocker.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
     def poses(self) -> Poses:
-        from synthesis.kinds.crank_rocker.poses import POSES
-
-        return POSES
+        return _parts().POSES
 
     def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         """The NLP works in Grashof coordinates (three lengths replaced by the slacks of the Grashof rows)."""
-        from synthesis.kinds.crank_rocker.nlp import COORDINATES
-
-        return COORDINATES.affine(n)
+        return _parts().COORDINATES.affine(n)
 
 
 KIND = CrankRocker()

@@ -14,6 +14,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/fourbar_path/parts.py)."""
+    from synthesis.kinds.fourbar_path import parts
+
+    return parts
+
+
 class FourbarPath(Kind):
     name = "fourbar_path"
     summary = "any four-bar coupler point through N target points, timing prescribed or free"
@@ -26,39 +34,26 @@ class FourbarPath(Kind):
         return FourbarPathSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.fourbar_path.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.fourbar_path.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def result_tables(self, result: Result) -> list[ResultTable]:
-        from synthesis.kinds.fourbar_path.check import target_error_table
-
-        return [target_error_table(result)]
+        return [_parts().target_error_table(result)]
 
     def solving(self) -> Solving:
-        from synthesis.kinds.fourbar_path.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.fourbar_path.export import write_linkage_dxf, write_paths_csv
-        from synthesis.kinds.fourbar_path.plots import coupler_curve_figure, linkage_animation
-
-        return {"coupler_curve.png": coupler_curve_figure,
-                "coupler_curve.svg": coupler_curve_figure,
-                "linkage.gif": linkage_animation,
-                "paths.csv": write_paths_csv,
-                "linkage.dxf": write_linkage_dxf}
+        return {"coupler_curve.png": _parts().coupler_curve_figure,
+                "coupler_curve.svg": _parts().coupler_curve_figure,
+                "linkage.gif": _parts().linkage_animation,
+                "paths.csv": _parts().write_paths_csv,
+                "linkage.dxf": _parts().write_linkage_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.fourbar_path.plots import compare_coupler_curves
-
-        return compare_coupler_curves
+        return _parts().compare_coupler_curves
 
     def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
         from synthesis.kinds.fourbar_path.bench import bench_cases
@@ -66,20 +61,14 @@ class FourbarPath(Kind):
         return bench_cases(specs, seed)
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.fourbar_path.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
     def poses(self) -> Poses:
-        from synthesis.kinds.fourbar_path.poses import POSES
-
-        return POSES
+        return _parts().POSES
 
     def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         """The NLP works in nominal units of the targets' size: design = offset + scale * z."""
-        from synthesis.kinds.fourbar_path.nlp import nominal_affine
-
-        return nominal_affine(spec, n)
+        return _parts().nominal_affine(spec, n)
 
     def answer_details(self, result: Result) -> dict:
         """The crank's direction, which result.json keeps in ``facts`` and a start in its details."""

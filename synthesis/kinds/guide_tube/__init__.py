@@ -20,6 +20,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/guide_tube/parts.py)."""
+    from synthesis.kinds.guide_tube import parts
+
+    return parts
+
+
 class GuideTube(Kind):
     name = "guide_tube"
     summary = "guide-tube wall angles for equal landing times (seed 001 §2.4)"
@@ -35,14 +43,10 @@ class GuideTube(Kind):
         return GuideTubeSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.guide_tube.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.guide_tube.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def rule_fixed_by(self, rule_name: str) -> FixedBy | None:
         """A tube's own rules (``wall_exit_speed_<tube>``, ``free_fall_height_<tube>``) are fixed by that tube's entry
@@ -55,28 +59,20 @@ class GuideTube(Kind):
         return None
 
     def solving(self) -> Solving:
-        from synthesis.kinds.guide_tube.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.guide_tube.plots import drop_profile_figure, drop_times_figure, sensitivity_figure
-
-        return {"drop_times.png": drop_times_figure,
-                "drop_times.svg": drop_times_figure,
-                "drop_profiles.png": drop_profile_figure,
-                "sensitivity.png": sensitivity_figure}
+        return {"drop_times.png": _parts().drop_times_figure,
+                "drop_times.svg": _parts().drop_times_figure,
+                "drop_profiles.png": _parts().drop_profile_figure,
+                "sensitivity.png": _parts().sensitivity_figure}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.guide_tube.plots import compare_figures
-
-        return compare_figures
+        return _parts().compare_figures
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.guide_tube.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
 
 KIND = GuideTube()

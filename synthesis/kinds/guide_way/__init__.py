@@ -13,6 +13,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/guide_way/parts.py)."""
+    from synthesis.kinds.guide_way import parts
+
+    return parts
+
+
 class GuideWay(Kind):
     name = "guide_way"
     summary = "rotary-arm slide guide way: claw path, roller-centre line, groove walls, undercut (seed 003)"
@@ -29,47 +37,32 @@ class GuideWay(Kind):
         return GuideWaySpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.guide_way.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.guide_way.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.guide_way.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.guide_way.export import write_centre_csv, write_dxf, write_walls_csv
-        from synthesis.kinds.guide_way.plots import animation, cycle_figure, guide_figure
-
-        return {"guide_way.png": guide_figure,
-                "guide_way.svg": guide_figure,
-                "cycle.png": cycle_figure,
-                "animation.gif": animation,
-                "centre_line.csv": write_centre_csv,
-                "walls.csv": write_walls_csv,
-                "guide_way.dxf": write_dxf}
+        return {"guide_way.png": _parts().guide_figure,
+                "guide_way.svg": _parts().guide_figure,
+                "cycle.png": _parts().cycle_figure,
+                "animation.gif": _parts().animation,
+                "centre_line.csv": _parts().write_centre_csv,
+                "walls.csv": _parts().write_walls_csv,
+                "guide_way.dxf": _parts().write_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.guide_way.plots import compare_figures
-
-        return compare_figures
+        return _parts().compare_figures
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.guide_way.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
     def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
-        from synthesis.kinds.guide_way.check import explicit_design
-
-        return explicit_design(loaded, data)
+        return _parts().explicit_design(loaded, data)
 
 
 KIND = GuideWay()

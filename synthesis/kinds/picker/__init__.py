@@ -14,6 +14,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/picker/parts.py)."""
+    from synthesis.kinds.picker import parts
+
+    return parts
+
+
 class PickerDoubleCrank(Kind):
     name = "picker_double_crank"
     summary = "double crank whose clamp point follows the picking arc (seed 001 §2.1.2)"
@@ -28,45 +36,30 @@ class PickerDoubleCrank(Kind):
         return PickerDoubleCrankSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.picker.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.picker.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.picker.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.picker.export import write_double_crank_csv, write_double_crank_dxf
-        from synthesis.kinds.picker.plots import path_figure
-
-        return {"path.png": path_figure,
-                "path.svg": path_figure,
-                "paths.csv": write_double_crank_csv,
-                "linkage.dxf": write_double_crank_dxf}
+        return {"path.png": _parts().path_figure,
+                "path.svg": _parts().path_figure,
+                "paths.csv": _parts().write_double_crank_csv,
+                "linkage.dxf": _parts().write_double_crank_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.picker.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.picker.coarse import DOUBLE_CRANK
-
-        return DOUBLE_CRANK
+        return _parts().DOUBLE_CRANK
 
     def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         """The NLP works in Grashof coordinates (three lengths replaced by the slacks of the Grashof rows)."""
-        from synthesis.kinds.picker.nlp import COORDINATES
-
-        return COORDINATES.affine(n)
+        return _parts().COORDINATES.affine(n)
 
 
 DOUBLE_CRANK = PickerDoubleCrank()
@@ -83,34 +76,23 @@ class Picker(Kind):
         return PickerSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.picker.combined import run_check
-
-        return run_check(loaded)
+        return _parts().combined_run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.picker.check import combined_headline
-
-        return combined_headline(result)
+        return _parts().combined_headline(result)
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.picker.export import write_picker_csv, write_picker_dxf
-        from synthesis.kinds.picker.plots import picker_animation, picker_figure
-
-        return {"trajectory.png": picker_figure,
-                "trajectory.svg": picker_figure,
-                "animation.gif": picker_animation,
-                "paths.csv": write_picker_csv,
-                "linkage.dxf": write_picker_dxf}
+        return {"trajectory.png": _parts().picker_figure,
+                "trajectory.svg": _parts().picker_figure,
+                "animation.gif": _parts().picker_animation,
+                "paths.csv": _parts().write_picker_csv,
+                "linkage.dxf": _parts().write_picker_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.report.trajectory_overlay import trajectory_overlay
-
-        return trajectory_overlay
+        return _parts().trajectory_overlay
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.picker.coarse import PICKER
-
-        return PICKER
+        return _parts().PICKER
 
 
 PICKER = Picker()        # evaluated only: the combined mechanism of two solved designs

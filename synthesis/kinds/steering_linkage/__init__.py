@@ -18,6 +18,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/steering_linkage/parts.py)."""
+    from synthesis.kinds.steering_linkage import parts
+
+    return parts
+
+
 class SteeringLinkage(Kind):
     name = "steering_linkage"
     summary = "Ackermann steering trapezoid: Table 12 explained, minimax steering error (seed 002 Table 12)"
@@ -31,39 +39,26 @@ class SteeringLinkage(Kind):
         return SteeringSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.steering_linkage.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.steering_linkage.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.steering_linkage.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.steering_linkage.export import write_linkage_dxf, write_paths_csv
-        from synthesis.kinds.steering_linkage.plots import steering_figure
-
-        return {"steering.png": steering_figure,
-                "steering.svg": steering_figure,
-                "paths.csv": write_paths_csv,
-                "linkage.dxf": write_linkage_dxf}
+        return {"steering.png": _parts().steering_figure,
+                "steering.svg": _parts().steering_figure,
+                "paths.csv": _parts().write_paths_csv,
+                "linkage.dxf": _parts().write_linkage_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.steering_linkage.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.steering_linkage.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
 
 KIND = SteeringLinkage()

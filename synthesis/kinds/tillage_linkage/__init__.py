@@ -18,6 +18,14 @@ if TYPE_CHECKING:
     from synthesis.spec import LoadedSpec
 
 
+def _parts():
+    """The kind's modules (check, solve, figures ...), imported once on first use: listing kinds imports
+    none of them (synthesis/kinds/tillage_linkage/parts.py)."""
+    from synthesis.kinds.tillage_linkage import parts
+
+    return parts
+
+
 class TillageLinkage(Kind):
     name = "tillage_linkage"
     summary = "distorted rotary tillage linkage: crank, bar through a roller pair, tool path (seed 002 eq 3-11)"
@@ -32,39 +40,26 @@ class TillageLinkage(Kind):
         return TillageSpec
 
     def check(self, loaded: LoadedSpec) -> Result:
-        from synthesis.kinds.tillage_linkage.check import run_check
-
-        return run_check(loaded)
+        return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
-        from synthesis.kinds.tillage_linkage.check import headline
-
-        return headline(result)
+        return _parts().headline(result)
 
     def solving(self) -> Solving:
-        from synthesis.kinds.tillage_linkage.solve import SOLVING
-
-        return SOLVING
+        return _parts().SOLVING
 
     def figures(self) -> dict[str, FigureWriter]:
-        from synthesis.kinds.tillage_linkage.export import write_linkage_dxf, write_paths_csv
-        from synthesis.kinds.tillage_linkage.plots import tillage_figure
-
-        return {"tillage.png": tillage_figure,
-                "tillage.svg": tillage_figure,
-                "paths.csv": write_paths_csv,
-                "linkage.dxf": write_linkage_dxf}
+        return {"tillage.png": _parts().tillage_figure,
+                "tillage.svg": _parts().tillage_figure,
+                "paths.csv": _parts().write_paths_csv,
+                "linkage.dxf": _parts().write_linkage_dxf}
 
     def compare_figures(self) -> CompareWriter:
-        from synthesis.kinds.tillage_linkage.plots import compare_figure
-
-        return compare_figure
+        return _parts().compare_figure
 
 
     def coarse_check(self) -> CoarseCheck:
-        from synthesis.kinds.tillage_linkage.coarse import COARSE
-
-        return COARSE
+        return _parts().COARSE
 
 
 KIND = TillageLinkage()
