@@ -70,6 +70,8 @@ class ArmSection(StrictModel):
 
 
 class Operation(StrictModel):
+    """How the machine runs: the gearbox's speed, the forward speed and where the soil is."""
+
     carrier_speed: float = Field(gt=0, le=2000, description="carrier (gearbox) speed, r/min")
     forward_speed: float = Field(gt=0, le=10, description="machine forward speed, m/s")
     axis_height: float = Field(gt=0, description="carrier axis above the soil surface, mm")
@@ -122,6 +124,8 @@ class Rules(StrictModel):
 
 
 class ObjectiveSection(StrictModel):
+    """What `solve` optimises among the designs that hold every rule."""
+
     name: Literal["key_pose_miss", "smooth_law"] = Field(
         "key_pose_miss", description="key_pose_miss: smallest sum of squared key-pose misses (mm^2 and deg^2); "
                                      "smooth_law: smallest mean squared second derivative of the laws F and G "
