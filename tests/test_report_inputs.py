@@ -174,19 +174,19 @@ def test_library_warnings_go_to_the_log_not_the_terminal(capfd):
 @pytest.mark.slow
 def test_warnings_while_drawing_go_to_the_runs_log_not_the_terminal(tmp_path, monkeypatch):
     """A planting arm whose links cannot close (l4 = 2 mm) has no trajectory, and its trajectory figure warns as it
-    is drawn (a UserWarning added here: the figures no longer ask matplotlib for an empty legend, the warning this
+    is drawn (a UserWarning added here, from the axes styling it calls: the figures no longer ask matplotlib for an empty legend, the warning this
     test used to hear).  `check` prints none of it: the run's warnings.log has it and the report links it."""
     import warnings
 
     from synthesis.kinds.planting import plots
 
-    drawn = plots.trajectory_figure
+    styled = plots.style_plane          # called by the figure as it draws (the figure writers may be cached)
 
-    def warning(result, path):
+    def warning(ax):
         warnings.warn("No artists with labels found to put in legend", UserWarning)
-        drawn(result, path)
+        styled(ax)
 
-    monkeypatch.setattr(plots, "trajectory_figure", warning)
+    monkeypatch.setattr(plots, "style_plane", warning)
 
     text = (PROBLEMS / "planting_arm" / "redesign_from_example1.toml").read_text()
     old = "l4 = { init = 80, bounds = [64, 96] }"
