@@ -12,6 +12,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from constraints.base import Rule
+from synthesis.core.verdict import FINE
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (
     Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_curvature_rate, tip_rate, train_from_design, turn_grid,
@@ -22,10 +23,16 @@ from synthesis.spec import LoadedSpec
 
 RAD = math.pi / 180.0
 DEG = 180.0 / math.pi
-#: carrier angles of the check's grid over a turn (0.1 deg)
+#: carrier angles of a turn where the tip's extremes and the poses are first looked for (0.1 deg), before refining
 CHECK_SAMPLES = 3600
-#: samples of the in-soil stroke in the check
+#: samples of the in-soil stroke where no [solver] setting gives them
 CHECK_SOIL_SAMPLES = 400
+
+
+def check_grid(spec: RotaryPlanetarySpec) -> tuple[int, int]:
+    """The check's samples over a turn and over the in-soil stroke: the solve's re-check grid (FINE x the [solver]
+    samples), so that `check` of a solve's solved.toml reads the solve's rule table."""
+    return FINE * spec.solver.samples_per_turn, FINE * spec.solver.in_soil_samples
 
 
 def train_of(spec: RotaryPlanetarySpec, design: dict) -> Train:
@@ -266,7 +273,7 @@ def facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> dict:
 def run_check(loaded: LoadedSpec) -> Result:
     spec = loaded.model
     design = spec.design_values()
-    rules, train, angles = evaluate(spec, design)
+    rules, train, angles = evaluate(spec, design, *check_grid(spec))
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], trajectory=trajectory(spec, train),
                   extra=facts(spec, train, angles))

@@ -1,10 +1,10 @@
-"""The rotary_planetary check on the studio's coarse grid: the check reads its rules on 3600 carrier angles and 400
-in-soil samples; coarse on the [solver] samples_per_turn and in_soil_samples."""
+"""The rotary_planetary check on the studio's coarse grid: the check reads its rules on 10x the [solver]
+samples_per_turn and in_soil_samples (the solve's re-check grid); coarse on those samples themselves."""
 
 from __future__ import annotations
 
 from synthesis.core.kind import CoarseCheck
-from synthesis.kinds.rotary_planetary.check import CHECK_SAMPLES, CHECK_SOIL_SAMPLES, facts
+from synthesis.kinds.rotary_planetary.check import check_grid, facts
 from synthesis.kinds.rotary_planetary.check import evaluate as rules_at
 from synthesis.result import Result
 
@@ -18,8 +18,9 @@ def evaluate(loaded) -> Result:
 
 
 def note(spec) -> str:
+    fine, soil = check_grid(spec)
     return (f"the check with [solver] samples_per_turn {spec.solver.samples_per_turn} carrier angles and "
-            f"in_soil_samples {spec.solver.in_soil_samples} (fine: {CHECK_SAMPLES} and {CHECK_SOIL_SAMPLES})")
+            f"in_soil_samples {spec.solver.in_soil_samples} (fine: {fine} and {soil})")
 
 
 COARSE = CoarseCheck(evaluate=evaluate, note=note)

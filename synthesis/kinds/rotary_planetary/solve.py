@@ -5,8 +5,8 @@ from __future__ import annotations
 from synthesis.core.coordinates import outside_bounds
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
-from synthesis.core.verdict import FINE, Recheck, StartReport
-from synthesis.kinds.rotary_planetary.check import evaluate, facts, find_angles, train_of, trajectory
+from synthesis.core.verdict import Recheck, StartReport
+from synthesis.kinds.rotary_planetary.check import check_grid, evaluate, facts, find_angles, train_of, trajectory
 from synthesis.kinds.rotary_planetary.nlp import problem
 from synthesis.spec.common import design_box
 
@@ -18,8 +18,7 @@ def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     names = list(spec.variables())
     outside = outside_bounds(names, design_box(spec.variables(), names)[0], outcome.design)
-    rules, train, angles = evaluate(spec, outcome.design, FINE * spec.solver.samples_per_turn,
-                                    FINE * spec.solver.in_soil_samples)
+    rules, train, angles = evaluate(spec, outcome.design, *check_grid(spec))
     return Recheck(rules, (train, angles), invalid=outside)
 
 
@@ -42,7 +41,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
 
 
 def baseline_rules(setting: Setting) -> list[dict] | None:
-    rules, _, _ = evaluate(setting.spec, setting.spec.design_values())
+    rules, _, _ = evaluate(setting.spec, setting.spec.design_values(), *check_grid(setting.spec))
     return [r.record().to_json() for r in rules]
 
 
