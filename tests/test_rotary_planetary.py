@@ -286,3 +286,29 @@ def test_a_plant_spacing_no_design_meets_is_refused_before_any_start(tmp_path):
         solve_spec(load_spec(tmp_path / "spec.toml"), workers=1)
     assert err.value.exit_code == 2
     assert "plant_spacing = 120 mm" in str(err.value) and "[operation] forward_speed" in str(err.value)
+
+
+def test_a_sun_ellipse_about_its_focus_drives_an_identical_ellipse():
+    """Two identical ellipses turning about their foci at centre distance 2a roll on each other (the elliptic gears
+    of the classic rotary transplanter).  Give the sun that ellipse, r = p / (1 - e cos phi): the idler law follows
+    (i1 = r / (2a - r), G' = i1 - 1, integrated per harmonic); the kind's idler gear 1 is then the same ellipse."""
+    from synthesis.kinds.rotary_planetary.kinematics import Train, pairs
+
+    a, e, n = 20.0, 0.15, 256
+    p = a * (1 - e * e)
+    phi = turn_grid(n)
+    sun = p / (1 - e * np.cos(phi))
+    g1 = sun / (2 * a - sun) - 1.0
+    assert abs(g1.mean()) < 1e-12              # the idler turns exactly once a carrier turn: the ratio is integer
+    c = np.fft.rfft(g1) / (n / 2)
+    k = np.arange(1, 15)
+    # G' = sum A_k cos k phi + B_k sin k phi  ->  G = sum (A_k / k) sin k phi - (B_k / k) cos k phi
+    cos_k, sin_k = -(-c[k].imag) / k, c[k].real / k
+    train = Train(2 * a, 30.0, [], [], list(cos_k), list(sin_k), 100.0, 0.0, 0.0)
+    fine = np.linspace(0.0, 2 * math.pi, 1001)
+    pair = pairs(train, fine)[0]
+    assert np.max(np.abs(pair.driver.radius[0] - p / (1 - e * np.cos(fine)))) < 1e-9
+    beta, r = pair.driven.angle[0], pair.driven.radius[0]
+    assert r.min() == pytest.approx(a * (1 - e), abs=1e-6) and r.max() == pytest.approx(a * (1 + e), abs=1e-6)
+    beta0 = beta[np.argmin(r)] - math.pi
+    assert np.max(np.abs(r - p / (1 - e * np.cos(beta - beta0)))) < 1e-6
