@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from synthesis import bench as benchmod
+from synthesis.bench.extreme import extreme_matrix
 from synthesis.result import open_run_folder
 from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
@@ -67,8 +68,6 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
         results = [benchmod.run_case(case, repeats, lambda what: emit(BenchStep(what))) for case in cases]
         extreme = None
         if extreme_on:
-            from synthesis.bench.extreme import extreme_matrix     # the matrix' own spec set: only when it runs
-
             emit(BenchStep("extreme-case matrix (tests/extreme/)"))
             extreme = extreme_matrix()
             emit(BenchStep(None))
