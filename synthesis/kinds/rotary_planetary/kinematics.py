@@ -77,6 +77,9 @@ class Ops:
         self.m = ca if symbolic else np
         self.symbolic = symbolic
 
+    def atan(self, x):
+        return ca.atan(x) if self.symbolic else np.arctan(x)
+
     def angles(self, phi):
         if self.symbolic and not isinstance(phi, (ca.SX, ca.MX)):
             return ca.DM(np.atleast_1d(np.asarray(phi, dtype=float)))
@@ -202,7 +205,7 @@ class PitchCurve:
         """Angle between the pitch curve's normal at the contact point and the line of centres, rad: the
         pressure-angle deviation of the teeth cut on it (0 on a circle)."""
         r, r1, _ = self.radius
-        return o.m.arctan(r1 / (r * self.angle[1])) if o.m is np else ca.atan(r1 / (r * self.angle[1]))
+        return o.atan(r1 / (r * self.angle[1]))
 
 
 @dataclass(frozen=True)
