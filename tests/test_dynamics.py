@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import json
+import re
 import math
 
 import casadi as ca
@@ -275,3 +276,27 @@ def test_planting_rule_derivatives_equal_central_differences():
         central = (np.asarray(f(p0 + step)[0]) - np.asarray(f(p0 - step)[0])) / (2 * h)
         np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * np.abs(jac[:, i]).max())
     assert np.abs(jac[:, 4]).max() > 1e-3       # the claw arm's length moves the torque
+
+
+@pytest.mark.parametrize("path, change, message", [
+    ("picker/cai2020_crank_rocker.toml", {"objective": {"name": "min_peak_torque"}}, "needs a [dynamics] table"),
+    ("planting_arm/taiwan_example1.toml", {"objective": {"name": "min_peak_shaking_force"}},
+     "needs a [dynamics] table"),
+    ("picker/cai2020_crank_rocker_dynamics.toml", {"dynamics": {"crank_speed": None}}, "has no crank speed"),
+    ("planting_arm/taiwan_example1_dynamics.toml", {"dynamics": {"crank_speed": 250.0}}, "[operation] crank_speed"),
+    ("picker/cai2020_crank_rocker_dynamics.toml",
+     {"dynamics": {"point_masses": [{"link": "rocker", "mass": 0.1, "at": "tip"}]}}, "names a traced point"),
+    ("planting_arm/taiwan_example1_dynamics.toml",
+     {"dynamics": {"external_loads": [{"link": "coupler", "force": [1.0, 0.0], "at": [0.0, 0.0]},
+                                      {"link": "coupler", "force": [0.0, 1.0], "at": [10.0, 0.0]}]}},
+     "at most one load per link"),
+])
+def test_dynamics_tables_that_cannot_hold_are_refused(path, change, message):
+    import tomllib
+    from pydantic import ValidationError
+    data = tomllib.loads((LIBRARY / path).read_text())
+    for key, value in change.items():
+        data[key] = {**data.get(key, {}), **value}
+        data[key] = {k: v for k, v in data[key].items() if v is not None}
+    with pytest.raises(ValidationError, match=re.escape(message)):
+        kinds.get(data["kind"]).spec_model().model_validate(data)

@@ -77,6 +77,32 @@ def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: s
     return rules
 
 
+def sampled(dyn: FourbarDynamics, samples: int) -> tuple:
+    """(input torque N m, shaking force x, y N) at ``samples`` crank angles of a turn, as columns: the samples a
+    min-peak objective's epigraph rows read (floats or symbols)."""
+    out = dyn.over_turn(turn(samples))
+    force = out["shaking_force"]
+    return _column(out["torque"]), _column(force[0, :]), _column(force[1, :])
+
+
+def peak_epigraph(dyn: FourbarDynamics, which: str, samples: int):
+    """The epigraph of a min-peak objective (smooth, as the core's other max-type objectives): a variable t with rows
+    t - torque >= 0 and t + torque >= 0 (``min_peak_torque``, t in N m) or t - (fx^2 + fy^2) >= 0
+    (``min_peak_shaking_force``, t in N^2) at every sample, t to be minimised.  Returns (t, rows, unit)."""
+    torque, fx, fy = sampled(dyn, samples)
+    if which == "min_peak_torque":
+        t = ca.SX.sym("peak_torque")
+        return t, [(t - torque, 0.0, None), (t + torque, 0.0, None)], "N m"
+    t = ca.SX.sym("peak_shaking_force_sq")
+    return t, [(t - (fx * fx + fy * fy), 0.0, None)], "N^2"
+
+
+def peak_of(dyn: FourbarDynamics, which: str, samples: int) -> float:
+    """The peak a min-peak objective minimises, on floats: |torque| N m or |shaking force| N over ``samples``."""
+    torque, fx, fy = sampled(dyn, samples)
+    return float(np.abs(torque).max() if which == "min_peak_torque" else np.hypot(fx, fy).max())
+
+
 def dynamics_facts(dyn: FourbarDynamics, samples: int, joint_names: tuple[str, ...], link_names: tuple[str, ...],
                    crank_speed_rpm: float, table) -> dict:
     """result.json's ``facts.dynamics``: every sampled quantity over a turn, and each link's mass, inertia, centre of

@@ -16,7 +16,8 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
-from synthesis.kinds.crank_rocker.check import rules_of
+from synthesis.dynamics.linkage import peak_epigraph, peak_of
+from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, linkage_dynamics, rules_of
 from synthesis.core.declared import Declared
 from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem
@@ -64,21 +65,24 @@ def problem(setting: Setting) -> Declared:
     # the NLP rows impose K and psi exactly; the records keep the spec's tolerances
     rules = rules_of(spec, [p[i] for i in range(4)], phi_b - phi_a, tip_a - a, tip_b - a, mu)
     total_length = spec.objective.name == "min_total_length"
+    peak = PEAK_UNITS.get(spec.objective.name)
     # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
     declared = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, _objective(spec, p, mu),
                        hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
                        # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
                        # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
                        x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,
-                       objective_unit="mm" if total_length else "deg", max_iter=spec.solver.max_iter)
+                       objective_unit=peak or ("mm" if total_length else "deg"), max_iter=spec.solver.max_iter)
 
     def start(lengths: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
         lengths = pull_inside(np.asarray(lengths, float), init, grashof_slacks, START_MARGIN)
         return COORDINATES.coordinates(np.concatenate([lengths, extremes_guess(spec, lengths)])), None
 
     def reported(out, design: dict, elastic: bool) -> float:
-        """Total length (mm) of the design itself, or the smallest transmission angle (deg) the epigraph
-        variable reached."""
+        """Total length (mm) of the design itself, the smallest transmission angle (deg) the epigraph
+        variable reached, or the peak torque (N m) or shaking force (N) of the design itself on the check's grid."""
+        if peak:
+            return peak_of(linkage_dynamics(spec, [design[n] for n in NAMES]), spec.objective.name, CHECK_SAMPLES)
         return sum(design.values()) if total_length else -out.objective * 10.0
 
     def extremes(out, compiled) -> dict:
@@ -94,15 +98,33 @@ def _design(z: np.ndarray) -> dict:
     return {n: float(v) for n, v in zip(NAMES, x[:4])}
 
 
+#: the min-peak objectives and the unit of each (synthesis.dynamics.linkage.PEAK_OBJECTIVES)
+PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
+
+
 def _objective(spec, p, mu) -> ObjectiveParts:
     if spec.objective.name == "min_total_length":
         return ObjectiveParts(f=ca.sum1(p) / 100.0)
+    if spec.objective.name in PEAK_UNITS:
+        return _peak_objective(spec, p)
     t = ca.SX.sym("gamma_min")
     # epigraph: t <= min(mu, 180 - mu) at every sample, maximise t
     rows = [(mu - t, 0.0, None), (180.0 - mu - t, 0.0, None)]
     return ObjectiveParts(f=-t / 10.0, extra=t, extra_lb=[0.0], extra_ub=[90.0],
                           extra_init=[spec.requirements.min_transmission_angle], rows=rows,
                           extra_units=["deg"], row_units=["deg", "deg"])
+
+
+def _peak_objective(spec, p) -> ObjectiveParts:
+    """Minimise the peak torque or shaking force over the solver's samples (an epigraph variable, scaled by the given
+    design's peak so the objective is about 1 at the start)."""
+    n = spec.solver.samples_per_turn
+    name = spec.objective.name
+    given = peak_of(linkage_dynamics(spec, [spec.design_values()[k] for k in NAMES]), name, n)
+    t, rows, unit = peak_epigraph(linkage_dynamics(spec, [p[i] for i in range(4)]), name, n)
+    typical = given if name == "min_peak_torque" else given * given
+    return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
+                          rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
 
 
 def extremes_guess(spec, lengths: np.ndarray) -> np.ndarray:

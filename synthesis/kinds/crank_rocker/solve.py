@@ -12,7 +12,8 @@ from synthesis.core.coordinates import outside_bounds
 from synthesis.kinds.crank_rocker.nlp import NAMES, problem
 from synthesis.spec.common import design_box, is_free
 
-OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg"}
+OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg", "min_peak_torque": "N m",
+                   "min_peak_shaking_force": "N"}
 
 
 def recheck(setting: Setting, outcome) -> Recheck:

@@ -52,11 +52,12 @@ class LinkSection(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the designs that satisfy every requirement."""
 
-    name: Literal["min_total_length", "max_transmission_angle"] = Field(
+    name: Literal["min_total_length", "max_transmission_angle", "min_peak_torque", "min_peak_shaking_force"] = Field(
         "min_total_length",
         description="min_total_length: shortest l7 + l8 + l9 + l10 meeting every requirement (the published "
                     "design at l10 = 140 mm); max_transmission_angle: largest minimum transmission angle for "
-                    "the given K and psi")
+                    "the given K and psi; min_peak_torque, min_peak_shaking_force: smallest peak input torque "
+                    "(N m) or shaking force (N) over a turn (a [dynamics] table needed)")
 
 
 class SolverSection(MultistartSettings):
@@ -82,6 +83,9 @@ class CrankRockerSpec(ProblemSpec):
 
     @model_validator(mode="after")
     def _dynamics_has_a_speed(self) -> "CrankRockerSpec":
+        if self.objective.name.startswith("min_peak") and self.dynamics is None:
+            raise ValueError(f"objective.name = {self.objective.name!r} needs a [dynamics] table (mass properties and "
+                             f"crank speed)")
         if self.dynamics is not None and self.dynamics.crank_speed is None:
             raise ValueError("dynamics.crank_speed: a crank_rocker has no crank speed of its own; give it in r/min")
         if self.dynamics is not None and any(pm.at == "tip" for pm in self.dynamics.point_masses):

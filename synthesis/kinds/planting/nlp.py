@@ -20,7 +20,9 @@ from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
-from synthesis.kinds.planting.dynamics import arm_dynamics
+from synthesis.dynamics.linkage import peak_epigraph, peak_of
+from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES
+from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
@@ -33,6 +35,8 @@ MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecut
 THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
 #: the rules without which the kinematics is undefined stay hard in the elastic diagnosis
 HARD_IN_ELASTIC = ("grashof_crank_rocker",)
+#: the min-peak objectives (synthesis.dynamics.linkage.peak_epigraph) and their units
+PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
 
 
 class PlantingNLP(KindNLP):
@@ -192,6 +196,8 @@ class PlantingNLP(KindNLP):
             return ObjectiveParts(f=ca.sumsqr((x - self.init) / width))
         if name == "robust":
             return MaxMinMargin()
+        if name in PEAK_UNITS:
+            return self._peak_objective(v)
         # smooth: minimise the peak squared acceleration over the turn (an epigraph variable z)
         m = self.spec.solver.samples_per_turn
         grid = np.linspace(0.0, TWO_PI, m, endpoint=False).reshape(1, -1)
@@ -201,6 +207,17 @@ class PlantingNLP(KindNLP):
         return ObjectiveParts(f=z, extra=z, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[0.0],
                               rows=[(z - ca.vec(ca.sum1(acc**2)) / self._smooth_scale(), 0.0, None)],
                               extra_units=[""], row_units=[""])
+
+    def _peak_objective(self, v) -> ObjectiveParts:
+        """Minimise the peak input torque or shaking force over a turn (an epigraph variable, scaled by the given
+        design's peak so the objective is about 1 at the start)."""
+        spec, name, n = self.spec, self.spec.objective.name, self.spec.solver.samples_per_turn
+        given = PlantingScene.from_spec(spec).design.parameters()
+        peak = peak_of(arm_linkage(spec.dynamics, given, spec.arm.branch, self.omega), name, n)
+        self.peak_typical = peak if name == "min_peak_torque" else peak * peak
+        t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym), name, n)
+        return ObjectiveParts(f=t / self.peak_typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf],
+                              extra_init=[self.peak_typical], rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
 
     def _smooth_scale(self) -> float:
         return (self.omega**2 * 100.0) ** 2
@@ -237,6 +254,10 @@ class PlantingNLP(KindNLP):
             return -f
         if self.spec.objective.name == "smooth":
             return math.sqrt(max(f, 0.0)) * self.omega**2 * 100.0
+        if self.spec.objective.name == "min_peak_torque":          # N m at the solver's samples
+            return f * self.peak_typical
+        if self.spec.objective.name == "min_peak_shaking_force":   # N at the solver's samples
+            return math.sqrt(max(f * self.peak_typical, 0.0))
         return f
 
     def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
@@ -247,5 +268,10 @@ class PlantingNLP(KindNLP):
         n = len(self.names)
         design = dict(zip(self.names, (float(v) for v in out.x[:n])))
         theta = {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])}
-        return StartOutcome.of(out, design, self.objective_value(out.objective), solver_crank_deg=theta,
+        value = self.objective_value(out.objective)
+        if self.spec.objective.name in PEAK_UNITS and not self.elastic:     # the design's own peak, check's grid
+            arm = PlantingScene.from_spec(self.spec, design).design.parameters()
+            value = peak_of(arm_linkage(self.spec.dynamics, arm, self.spec.arm.branch, self.omega),
+                            self.spec.objective.name, CHECK_TURN_SAMPLES)
+        return StartOutcome.of(out, design, value, solver_crank_deg=theta,
                                solver_objective=self.objective_value(out.objective))

@@ -12,7 +12,8 @@ from synthesis.kinds.planting.check import (CHECK_PHASE_SAMPLES, CHECK_TURN_SAMP
 from synthesis.kinds.planting.nlp import PlantingNLP
 from synthesis.kinds.planting.scene import PlantingScene
 
-OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2"}
+OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2", "min_peak_torque": "N m",
+                   "min_peak_shaking_force": "N"}
 
 
 def build(setting: Setting, elastic: bool = False) -> PlantingNLP:

@@ -134,9 +134,11 @@ class RulesSection(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the designs that satisfy every rule."""
 
-    name: Literal["nearest", "robust", "smooth"] = Field(
+    name: Literal["nearest", "robust", "smooth", "min_peak_torque", "min_peak_shaking_force"] = Field(
         "nearest", description="nearest: smallest change from the given design (default); robust: maximise the "
-                               "smallest normalised rule margin; smooth: minimise the peak claw acceleration")
+                               "smallest normalised rule margin; smooth: minimise the peak claw acceleration; "
+                               "min_peak_torque, min_peak_shaking_force: minimise the peak input torque (N m) or "
+                               "shaking force (N) over a turn (a [dynamics] table needed)")
 
 
 class SolverSection(MultistartSettings):
@@ -176,6 +178,8 @@ class PlantingFourbarSpec(ProblemSpec):
 
     @model_validator(mode="after")
     def _one_crank_speed(self) -> "PlantingFourbarSpec":
+        if self.objective.name.startswith("min_peak") and self.dynamics is None:
+            raise ValueError(f"objective.name = {self.objective.name!r} needs a [dynamics] table (mass properties)")
         if self.dynamics is not None and self.dynamics.crank_speed is not None:
             raise ValueError("dynamics.crank_speed: a planting arm turns at [operation] crank_speed; leave it out here")
         if self.dynamics is not None and any(pm.at == "tip" and pm.link != "coupler"
