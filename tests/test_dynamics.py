@@ -300,3 +300,18 @@ def test_dynamics_tables_that_cannot_hold_are_refused(path, change, message):
         data[key] = {k: v for k, v in data[key].items() if v is not None}
     with pytest.raises(ValidationError, match=re.escape(message)):
         kinds.get(data["kind"]).spec_model().model_validate(data)
+
+
+def test_the_dynamics_figure_is_drawn_from_the_result_alone(tmp_path):
+    """A result with facts.dynamics gets dynamics.png among its run's figures (synthesis/report); one without does not."""
+    from synthesis.report import run_artifacts
+    from synthesis.report.dynamics_plots import dynamics_figure
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")
+    result = kinds.get("crank_rocker").check(loaded)
+    dynamics_figure(result, tmp_path / "dynamics.png")
+    assert (tmp_path / "dynamics.png").stat().st_size > 10_000
+    plain = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker.toml")
+    assert "dynamics.png" in run_artifacts(result)
+    assert "dynamics.png" not in run_artifacts(kinds.get("crank_rocker").check(plain))
+    with pytest.raises(ValueError, match="no facts.dynamics"):
+        dynamics_figure(kinds.get("crank_rocker").check(plain), tmp_path / "none.png")

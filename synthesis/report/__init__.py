@@ -79,6 +79,11 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         from synthesis.tolerance.envelope import plot
 
         writers["envelope.png"] = lambda path: plot(result, path)
+    if isinstance((result.extra or {}).get("dynamics"), dict):
+        # a [dynamics] table: input torque, power and shaking force over a turn (docs/ARCHITECTURE.md "Dynamics")
+        from synthesis.report.dynamics_plots import dynamics_figure
+
+        writers["dynamics.png"] = lambda path: dynamics_figure(result, path)
     artifacts = {name: guarded(name, w) for name, w in writers.items()}
     artifacts["report.html"] = report
     return artifacts
