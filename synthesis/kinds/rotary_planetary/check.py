@@ -233,7 +233,7 @@ def motion_facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles, sample
         xi, _ = tip(train, angles.entry)
         xo, _ = tip(train, angles.exit)
         soil = {"entry_carrier_deg": angles.entry * DEG, "exit_carrier_deg": angles.exit * DEG,
-                "hole_width_mm": abs((xo - v * angles.exit / w) - (xi - v * angles.entry / w))}
+                "hole_width_mm": abs(float(xo - v * angles.exit / w) - float(xi - v * angles.entry / w))}
     return {
         "frame": "machine: origin on the carrier axis, x rearwards, y up; ground: x_ground = x_machine - V t, "
                  "t = carrier angle / omega; the carrier turns counter-clockwise",
