@@ -6,14 +6,19 @@ Imported only when a scheduler is given, so that local runs never import dask.
 from __future__ import annotations
 
 import contextlib
+import socket
+import struct
 import threading
+import time
 import uuid
 from typing import Any, Callable
 
+import msgpack
 import numpy as np
 from distributed import Client, WorkerPlugin, get_worker
 from distributed import as_completed as dask_completed
 
+from synthesis.core.executor import WORKER_CRASHED, _raised
 from synthesis.errors import AgrisynthError
 
 CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving up
@@ -62,10 +67,6 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
     here (AgrisynthError, exit 2) rather than left to dask, which would wait for ever or try to allocate
     what the peer's bytes announce.  Only plain TCP is spoken (tls:// and ucx:// are refused; an inproc://
     scheduler lives in this process and needs no probe)."""
-    import socket
-    import struct
-    import time
-
     scheme, sep, rest = address.partition("://")
     if scheme == "inproc":          # a scheduler in this very process (tests): nothing to probe
         return
@@ -140,10 +141,6 @@ def handshake_problem(message: bytes) -> str | None:
     None: a count of frames, their lengths (8 bytes each, little-endian) and the frames, the first of them a msgpack
     map naming the peer's ``python`` and ``compression`` (distributed.comm.core's handshake_info).  Read here with
     struct and msgpack alone: dask's own reader would unpickle what it is sent."""
-    import struct
-
-    import msgpack
-
     if len(message) < 8:
         return "its first message is too short to hold a frame count"
     (count,) = struct.unpack_from("<Q", message)
@@ -223,8 +220,6 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
                     except Exception as exc:
                         if failure is None:
                             raise _worker_failed(scheduler, exc) from None
-                        from synthesis.core.executor import WORKER_CRASHED, _raised
-
                         if type(exc).__name__ == "KilledWorker":
                             out = failure(index_of[fut.key], WORKER_CRASHED, f"the dask worker died: {exc}")
                         else:

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any, Callable
 
 from synthesis.core.kind import CoarseCheck
+from synthesis.spec import LoadedSpec
 
 #: sample counts of the check divided by this while dragging (the check's fine grid is 10x the solver's)
 COARSENING = 10
@@ -57,8 +58,6 @@ def solver_samples_note(spec) -> str:
 def by_solver_samples(check: Callable[[Any], Any], note: Callable[[Any], str] = solver_samples_note) -> CoarseCheck:
     """The coarse grid of a check that samples on 10x the [solver] counts: the same check on the coarser spec.
     ``check``: the kind's check (loaded spec -> Result)."""
-    from synthesis.spec import LoadedSpec
-
     def evaluate(loaded):
         if not sample_fields(loaded.model):
             return check(loaded)

@@ -8,14 +8,14 @@ import sys
 import tempfile
 from contextlib import contextmanager
 
+from synthesis.core.library_log import captured_warnings
+
 
 @contextmanager
 def captured_stdout():
     """Send fd 1 (where IPOPT prints) to a temporary file; yields a callable returning the text.  CasADi's
     warnings (written to ``sys.stderr``) and Python warnings raised meanwhile are appended to it
     (:mod:`synthesis.core.library_log`): they belong in the run's log, not on the terminal."""
-    from synthesis.core.library_log import captured_warnings
-
     sys.stdout.flush()
     saved = os.dup(1)
     text: list[str] = []

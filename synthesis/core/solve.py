@@ -28,6 +28,7 @@ from synthesis.core.verdict import (FINE, SLACK_TOL, TIE, ElasticDiagnosis, Star
                                     unsatisfied_error)
 from synthesis.errors import AgrisynthError, SolverError, SpecError
 from synthesis.result import Result
+from synthesis.spec.design_info import at_bound, describe
 
 
 @dataclass
@@ -59,8 +60,6 @@ def free_variables(nlp) -> list[str]:
 def _written_at(spec, name: str) -> str:
     """Where the spec file writes design variable ``name`` (``[links] l7``, ``[spline] control[0][0]``), else its
     name."""
-    from synthesis.spec.design_info import describe
-
     path = (describe(spec).get(name) or {}).get("path")
     if not path:
         return name
@@ -217,8 +216,6 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
 def at_bounds(names, bounds, design: dict) -> list[dict]:
     """The free design variables of ``design`` at a bound: ``{"name", "side" ("lower"/"upper"), "bound"}`` in the
     spec's units, in the variables' order; judged as the report's design table judges them (design_info.at_bound)."""
-    from synthesis.spec.design_info import at_bound
-
     out = []
     for name, (lo, hi) in zip(names, np.asarray(bounds, float)):
         side = at_bound(design.get(name), {"free": bool(hi > lo), "bounds": (lo, hi)})

@@ -20,9 +20,11 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from synthesis import __version__
 from synthesis.core.ipopt import NLPOutcome
 from synthesis.core.outcome import StartOutcome
 from synthesis.errors import OutputError
+from synthesis.files import open_regular, parse_json
 
 FILENAME = "starts.jsonl"
 FORMAT = 1
@@ -35,8 +37,6 @@ MAX_LINE_BYTES = 64 * 1024**2
 
 def fingerprint(kind: str, name: str, spec_sha256: str, starts: int, seed: int) -> tuple[dict, str]:
     """The settings that decide a run's starts, and their sha256 (what --resume must match)."""
-    from synthesis import __version__
-
     settings = {"kind": kind, "name": name, "spec_sha256": spec_sha256, "starts": int(starts), "seed": int(seed),
                 "agrisynth": __version__}
     return settings, hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()
@@ -125,8 +125,6 @@ class StartLog:
 
 def settings_of(folder: Path) -> dict:
     """The settings in the header line of ``folder/starts.jsonl`` ({} when there is none to read)."""
-    from synthesis.files import open_regular, parse_json
-
     path = Path(folder) / FILENAME
     try:
         with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
@@ -155,8 +153,6 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
     """The finished starts recorded in ``folder/starts.jsonl`` of a run with fingerprint ``print_``.
 
     OutputError (exit 2) when there is no such file or it belongs to a run with other settings."""
-    from synthesis.files import open_regular, parse_json
-
     path = Path(folder) / FILENAME
     if not os.path.lexists(path):
         raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)")

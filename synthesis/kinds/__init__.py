@@ -11,6 +11,7 @@ a kind's check, NLP and figures are imported by its methods when called.  Tests 
 
 from __future__ import annotations
 
+import copy
 import difflib
 import functools
 import importlib
@@ -177,9 +178,7 @@ def explicit_design(loaded, data: dict | None = None) -> tuple:
     written = get(loaded.kind).explicit_design(loaded, data)
     if written is data:
         return loaded, data
-    import copy
-
-    from synthesis.spec.common import validate
+    from synthesis.spec.common import validate      # synthesis.spec imports this registry
 
     return (type(loaded)(validate(type(loaded.model), written, prefix=loaded.kind), loaded.path, loaded.sha256,
                          copy.deepcopy(written)), written)

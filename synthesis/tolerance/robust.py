@@ -19,7 +19,8 @@ from synthesis.core.kind import Finished, Kind, Setting
 from synthesis.core.problem import Problem, Tolerance
 from synthesis.core.sensitivity import PinningError
 from synthesis.spec.design_info import describe, describe_lists
-from synthesis.errors import SpecError
+from synthesis.errors import AgrisynthError, SpecError
+from synthesis.tolerance.analysis import corner_margins, linearise, monte_carlo, stack_up
 from synthesis.tolerance.design import DesignMap, box_of, spec_keys, whole_problem
 
 
@@ -115,8 +116,6 @@ class RobustFinish:
     kind: Kind
 
     def __call__(self, setting: Setting, best) -> Finished:
-        from synthesis.tolerance.analysis import monte_carlo
-
         # a signal inside the kind's finish or the linearisation below is obeyed once it is done: raised inside a
         # CasADi call it came out as a NotImplementedError traceback ("wrong number or type of arguments")
         with interrupt.deferred():
@@ -196,8 +195,6 @@ def _worst_case_records(kind: Kind, spec, design: dict, box: np.ndarray, units: 
     """One rule row per rule: its linearised worst-case margin in the tolerance box (>= 0 holds).  ``units``: the
     re-check's unit of each rule; a rule the NLP writes in other terms (a curvature for a radius: unit "1" for mm)
     is linearised in the NLP's, and its row says so: same sign, not the same number."""
-    from synthesis.tolerance.analysis import corner_margins, linearise, stack_up
-
     # a rule whose NLP rows are the rule itself (an exact minimum over a turn, each branch of a max()) is read on
     # them, as the NLP held it (stack_up, Linearised.held): its sampled values linearise otherwise
     # (a finger's clearance from the other unit's: -9.5e-6 mm at its samples, +1e-6 on its exact row, +1.2e-5 at the
@@ -248,8 +245,6 @@ def breaking_rules(kind: Kind, spec, design: dict, *, first: tuple = ()) -> list
     its loss to the tolerances (sum_i |dg/dx_i| tol_i), every variable's share, the shares of all lengths / all
     angles, and the linear estimate of the largest uniform scale of the box that holds it at this design
     (nominal margin / loss; 0 when the rule misses even at the nominal design)."""
-    from synthesis.tolerance.analysis import linearise, stack_up
-
     tol = spec.tolerance
     lin = linearise(kind, spec, design)
     box = box_of(lin.dmap, tol.length, tol.angle, dict(tol.variables))
@@ -315,8 +310,6 @@ class ExplainBreak:
     spec: object
 
     def __call__(self, result) -> str | None:
-        from synthesis.errors import AgrisynthError
-
         elastic = result.elastic or {}
         names = list(describe(self.spec))
         use_elastic = bool(elastic.get("converged")) and isinstance(elastic.get("design"), dict)

@@ -26,6 +26,8 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import scene as sc
+from synthesis.kinds.guide_way.check import whose_path
+from synthesis.spec.common import bounds_of, value_of
 from synthesis.kinds.guide_way import spline as sp
 
 #: back-off of each sampled rule, x its scale, so the rules hold between the samples too (reach: none,
@@ -54,8 +56,6 @@ def control_of(x, n: int):
 def design_box(spec, fit) -> tuple[np.ndarray, np.ndarray]:
     """Start 0 and the bounds (2n x 2) of the control points: the spec's ``[spline] control`` where it gives them
     (a fixed coordinate has lo = hi), else the convex fit, each coordinate within ``move`` of it."""
-    from synthesis.spec.common import bounds_of, value_of
-
     given = spec.spline.control
     if given is None:
         init = np.concatenate([fit.control[:, 0], fit.control[:, 1]])
@@ -106,8 +106,6 @@ class GuideNLP(KindNLP):
         try:
             scene, self.edges = start_scene(spec, control_of(self.init, n), samples)
         except SpecError as exc:                        # start 0's path cannot be driven by the arm
-            from synthesis.kinds.guide_way.check import whose_path
-
             raise SpecError(f"{whose_path(spec)}, start 0: {exc}") from None
         self.masks = masks = scene.pressure_masks
         self.edges = self._about_the_key_point(self.edges)

@@ -3,18 +3,20 @@ IPOPT stage on its control points, the fine-grid re-check without CasADi's NLP a
 
 from __future__ import annotations
 
+import numpy as np
+
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
-from synthesis.kinds.guide_way.check import FINE, describe, given_control, scene_for
+from synthesis.errors import SpecError
+from synthesis.kinds.guide_way.check import FINE, describe, given_control, scene_for, whose_path
+from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP, control_of, names_of
 
 
 def prepare(spec):
     """The convex fit of a spline path (None for the paper's conics: nothing to optimise)."""
     if spec.spline is None:
         return None
-    from synthesis.errors import SpecError
-    from synthesis.kinds.guide_way.check import whose_path
-    from synthesis.kinds.guide_way.fit import fit_path
+    from synthesis.kinds.guide_way.fit import fit_path     # cvxpy: imported by a spline path's solve only
 
     try:
         return fit_path(spec)
@@ -23,16 +25,12 @@ def prepare(spec):
 
 
 def build(setting: Setting, elastic: bool = False):
-    from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP
-
     if setting.data is None:
         return FixedGuide(setting.spec)
     return GuideNLP(setting.spec, setting.data, elastic, setting)
 
 
 def _control(spec, design: dict):
-    from synthesis.kinds.guide_way.nlp import control_of, names_of
-
     n = spec.spline.control_points
     return control_of([design[k] for k in names_of(n)], n)
 
@@ -65,10 +63,6 @@ def _baseline_design(spec, fit) -> dict:
 
 
 def _fit_design(spec, fit):
-    from synthesis.kinds.guide_way.nlp import names_of
-
-    import numpy as np
-
     return names_of(spec.spline.control_points), [float(v) for v in np.concatenate([fit.control[:, 0],
                                                                                      fit.control[:, 1]])]
 

@@ -8,12 +8,11 @@ from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.steering_linkage.check import evaluate, facts
 from synthesis.kinds.steering_linkage.nlp import problem
+from synthesis.kinds.steering_linkage.table12 import explain
 
 
 def prepare(spec) -> dict:
     """Table 12 explained once per run (it does not depend on the design being solved for)."""
-    from synthesis.kinds.steering_linkage.table12 import explain
-
     return explain(spec)
 
 
