@@ -401,7 +401,10 @@ def test_the_error_plot_is_fitted_to_its_data_with_0_on_a_floor_line_and_no_labe
     assert "0" in [t.get_text() for t in ax_gap.get_yticklabels()]
     assert ax_vio.get_ylim() == pytest.approx((1.0 / MARGIN, MARGIN))           # every violation 0: the floor only
     assert [t.get_text() for t in ax_vio.get_yticklabels()] == ["0"]
-    assert any("0 (gap)" in t.get_text() for t in ax_gap.get_legend().get_texts())
+    assert ("0 (gap): drawn on this dotted line, a decade below the smallest nonzero value"
+            in [t.get_text() for t in ax_gap.get_legend().get_texts()])
+    assert ("0 (no violation): drawn on this dotted line, every value is 0"
+            in [t.get_text() for t in ax_vio.get_legend().get_texts()])
     assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
     import matplotlib.pyplot as plt
     plt.close(fig)

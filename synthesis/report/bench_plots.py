@@ -98,9 +98,11 @@ def fit_log_axis(ax, axis: str, values, floor: float | None = None) -> None:
     which.set_minor_formatter(NullFormatter())
 
 
-def _floor_handle(floor_of: str) -> Line2D:
-    return Line2D([], [], color="0.55", lw=0.9, ls=":", label=f"0 ({floor_of}): drawn on this dotted line, "
-                                                              "a decade below the smallest nonzero value")
+def _floor_handle(floor_of: str, values) -> Line2D:
+    """The legend entry of the floor line: where a 0 of ``values`` is drawn, and why there."""
+    where = ("a decade below the smallest nonzero value" if _finite_positive(values)
+             else "every value is 0")
+    return Line2D([], [], color="0.55", lw=0.9, ls=":", label=f"0 ({floor_of}): drawn on this dotted line, {where}")
 
 
 def plot_error_vs_time(results: list[dict], path: Path) -> None:
@@ -158,7 +160,7 @@ def error_figure(results: list[dict]):
         ax.grid(alpha=0.3)
         handles, labels = ax.get_legend_handles_labels()
         if handles:     # a bench with no result has nothing to name (matplotlib warns)
-            handles.append(_floor_handle(what))
+            handles.append(_floor_handle(what, values))
             legend_below(ax, ncol=2, fontsize=7, handles=handles, labels=labels + [handles[-1].get_label()])
     fig.suptitle("error against run time (points: repeats; lines: best so far in the median run)", fontsize=10)
     fig.tight_layout()
@@ -210,7 +212,7 @@ def sweep_figure(sweep: dict):
     ax.set_title(f"{sweep['problem']}: sample counts ({', '.join(rows[0]['samples'])})", fontsize=10)
     ax.grid(alpha=0.3)
     handles, labels = ax.get_legend_handles_labels()
-    handles.append(_floor_handle("exact"))
+    handles.append(_floor_handle("exact", values + [sweep["violation_target"]]))
     legend_below(ax, ncol=1, fontsize=8, handles=handles, labels=labels + [handles[-1].get_label()])
     fig.tight_layout()
     return fig
