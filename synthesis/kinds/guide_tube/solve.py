@@ -4,20 +4,17 @@ row-spacing grid and the result facts."""
 from __future__ import annotations
 
 from constraints import not_evaluated
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.errors import AgrisynthError
 from synthesis.kinds.guide_tube.check import FINE, design_of, rules_even_if_stuck, rules_of, scene_facts
-from synthesis.kinds.guide_tube.nlp import OBJECTIVE_UNITS, GuideTubeNLP
+from synthesis.kinds.guide_tube.nlp import OBJECTIVE_UNITS, problem
 from synthesis.kinds.guide_tube.scene import GuideTubeScene
 
 
 def prepare(spec) -> GuideTubeScene:
     return GuideTubeScene.from_spec(spec)
-
-
-def build(setting: Setting, elastic: bool = False) -> GuideTubeNLP:
-    return GuideTubeNLP(setting.spec, setting.data, elastic=elastic, setting=setting)
 
 
 def angles_of(design: dict[str, float]) -> dict[str, float]:
@@ -77,6 +74,6 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
     return [r.record().to_json() for r in rules]
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
                   samples_hint="[solver] samples or [solver] backoff",
                   relax_hint="Try wider bounds on the wall angles, looser limits on those rules, or more --starts.")
