@@ -412,6 +412,7 @@ def test_the_error_plot_is_fitted_to_its_data_with_0_on_a_floor_line_and_no_labe
 
 @pytest.mark.parametrize("gaps, times", [([1e-12, 3e-7, 0.02, 40.0], [0.011, 0.4, 9.0, 95.0]),
                                          ([2e-3, 2.5e-3], [1.0, 1.2]),
+                                         ([0.0, 2.05e-10, 2900.0], [0.08, 3.5, 0.0037]),      # DE's trace against IPOPT's 0
                                          ([0.0, 0.0], [5.0, 5.0])])
 def test_the_error_plot_s_axes_stay_within_two_decades_of_the_data_and_labels_apart(gaps, times):
     from synthesis.report.bench_plots import error_figure
@@ -424,6 +425,8 @@ def test_the_error_plot_s_axes_stay_within_two_decades_of_the_data_and_labels_ap
     lo, hi = ax_gap.get_xlim()
     assert min(times) / 10 <= lo <= min(times) * 0.9 and max(times) <= hi <= max(times) * 10
     assert ax_vio.get_ylim()[0] >= 1e-5 / 100
+    labelled = [float(v) for v, t in zip(ax_gap.get_yticks(), ax_gap.get_yticklabels()) if t.get_text() not in ("", "0")]
+    assert all(v > min(nonzero) / 10 * 4 for v in labelled)       # no number next to the floor's "0"
     assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
     import matplotlib.pyplot as plt
     plt.close(fig)

@@ -25,8 +25,10 @@ from synthesis.report.legends import legend_below  # noqa: E402
 
 #: the axes reach this factor beyond the data on either side (log scale)
 MARGIN = 1.6
-#: a tick closer than this factor to the floor line is not labelled (its label would touch the floor's "0")
+#: a tick closer than this factor to the floor line, or than NEAR_FLOOR_SHARE of the axis (log), is not labelled:
+#: its label would touch, or be read as, the floor's "0"
 NEAR_FLOOR = 4.0
+NEAR_FLOOR_SHARE = 0.08
 MARKERS = ["o", "s", "^", "D", "v"]
 DPI = 110
 
@@ -61,13 +63,14 @@ def _finite_positive(values) -> list[float]:
 
 
 def _log_ticks(lo: float, hi: float, floor: float | None = None) -> list[float]:
-    """Ticks within [lo, hi], none within a factor NEAR_FLOOR of the floor line: the decades, or where fewer than
+    """Ticks within [lo, hi], none near the floor line (:data:`NEAR_FLOOR`): the decades, or where fewer than
     two of them are in view the 1-2-5 steps, or where still fewer every step of 1 to 9 times a decade."""
     decades = [10.0 ** k for k in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)]
+    near = max(NEAR_FLOOR, (hi / lo) ** NEAR_FLOOR_SHARE)
     ticks: list[float] = []
     for steps in ((1,), (1, 2, 5), tuple(range(1, 10))):
         ticks = [d * m for d in decades for m in steps if lo <= d * m <= hi
-                 and (floor is None or not floor / NEAR_FLOOR < d * m < floor * NEAR_FLOOR)]
+                 and (floor is None or not floor / near < d * m < floor * near)]
         if len(ticks) >= 2:
             break
     return ticks
