@@ -122,6 +122,23 @@ def tip_state(design: ArmDesign, motion: Motion, theta) -> TipState:
     return TipState(theta, pos, dpos * motion.omega, ddpos * motion.omega**2)
 
 
+@lru_cache(maxsize=4)
+def tip_position(branch: int) -> ca.Function:
+    """CasADi Function (theta, p) -> C alone (2x1, mm): the same expression as :func:`tip_derivatives`' first output,
+    so the same numbers to the bit, without its derivatives (a precision-point search scans 3,600 positions)."""
+    theta = ca.SX.sym("theta")
+    p = ca.SX.sym("p", len(PARAMETERS))
+    return ca.Function(f"claw_tip_position_branch{'p' if branch > 0 else 'm'}", [theta, p],
+                       [ca.vertcat(*claw_tip(theta, p, branch))], ["theta", "p"], ["pos"])
+
+
+def tip_positions(design: ArmDesign, theta: np.ndarray) -> np.ndarray:
+    """Positions (2, N) of C at the crank angles theta (rad), mm: :func:`tip_state`'s ``pos``, bit for bit."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    return np.asarray(_mapped(tip_position, design.branch, theta.size)(theta.reshape(1, -1),
+                                                                       design.parameters())).reshape(2, -1)
+
+
 @lru_cache(maxsize=64)
 def _mapped(function, branch: int, n: int) -> ca.Function:
     """``function(branch).map(n)``, built once: a check or a Monte-Carlo sample evaluates the same few grids

@@ -15,7 +15,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from synthesis.errors import AssemblyError
-from synthesis.kinds.planting.kinematics import ArmDesign, Motion, link_angles, tip_derivatives, tip_state
+from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, link_angles, tip_derivatives, tip_positions,
+                                                 tip_state)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
 from synthesis.spec.common import value_of
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -154,7 +155,7 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
         return float(f(th, p)[1][1])
 
     coarse = np.linspace(0.0, TWO_PI, grid, endpoint=False)
-    ys = tip_state(d, m, coarse).pos[1]
+    ys = tip_positions(d, coarse)[1]
     k = int(np.argmin(ys))
     h = coarse[1]
     # the lowest point: vy changes sign from - to + around the grid minimum
@@ -166,8 +167,8 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
     soil = scene.soil_level if scene.soil_level is not None else y5 + scene.analysis_depth
 
     cycle = th5 + np.linspace(0.0, TWO_PI, grid + 1)
-    state = tip_state(d, m, cycle)
-    ycyc = state.pos[1]
+    positions = tip_positions(d, cycle)
+    ycyc = positions[1]
     if soil <= y5:
         why = f"the claw never reaches the soil: lowest point Y = {y5:.1f} mm is above the soil surface Y = {soil:.1f} mm"
         problems.update({"P4": why, "P6": why})
@@ -181,7 +182,7 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
         theta["P4"] = _refine(lambda t: y(t) - soil, cycle[dn[-1]], cycle[dn[-1] + 1])
 
     if theta["P4"] is not None:
-        s = bed.height(state.pos)
+        s = bed.height(positions)
         end = theta["P4"]
         levels = (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height))
         for k, (name, level) in enumerate(levels):
