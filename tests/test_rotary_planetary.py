@@ -288,27 +288,53 @@ def test_a_plant_spacing_no_design_meets_is_refused_before_any_start(tmp_path):
     assert "plant_spacing = 120 mm" in str(err.value) and "[operation] forward_speed" in str(err.value)
 
 
-def test_a_sun_ellipse_about_its_focus_drives_an_identical_ellipse():
-    """Two identical ellipses turning about their foci at centre distance 2a roll on each other (the elliptic gears
-    of the classic rotary transplanter).  Give the sun that ellipse, r = p / (1 - e cos phi): the idler law follows
-    (i1 = r / (2a - r), G' = i1 - 1, integrated per harmonic); the kind's idler gear 1 is then the same ellipse."""
+def _integrated(rate: np.ndarray, harmonics: int) -> tuple[list, list]:
+    """The Fourier coefficients (rad) of the zero-mean integral of a periodic rate sampled evenly over a turn:
+    rate = sum A_k cos k phi + B_k sin k phi  ->  sum (A_k / k) sin k phi - (B_k / k) cos k phi."""
+    c = np.fft.rfft(rate) / (len(rate) / 2)
+    k = np.arange(1, harmonics + 1)
+    return list(c[k].imag / k), list(c[k].real / k)
+
+
+def _is_ellipse_about_focus(beta: np.ndarray, r: np.ndarray, a: float, e: float) -> float:
+    """Largest distance (mm) of a polar curve from the ellipse r = a (1 - e^2) / (1 - e cos(beta - beta0)), its
+    nearest vertex's direction beta0 + pi read off the curve."""
+    beta0 = beta[np.argmin(r)] - math.pi
+    return float(np.max(np.abs(r - a * (1 - e * e) / (1 - e * np.cos(beta - beta0)))))
+
+
+def test_the_classic_train_of_three_identical_elliptic_gears():
+    """Two identical ellipses turning about their foci at centre distance 2a roll on each other: the elliptic gears
+    of the classic rotary transplanter (sun, idler and planet one ellipse each).  Give the sun that ellipse: the idler
+    law follows (i1 = r / (2a - r), G' = i1 - 1) and the kind's idler gear 1 is the same ellipse; let that idler
+    drive the planet at 2a (i2 = r_idler / (2a - r_idler) where it meets the planet, F' = 1 - i1 i2): the planet is
+    the same ellipse again.  Each gear turns exactly once a carrier turn (the rates' means are 0 to 1e-12)."""
     from synthesis.kinds.rotary_planetary.kinematics import Train, pairs
 
-    a, e, n = 20.0, 0.15, 256
+    a, e, n, harmonics = 20.0, 0.15, 512, 24
     p = a * (1 - e * e)
     phi = turn_grid(n)
     sun = p / (1 - e * np.cos(phi))
-    g1 = sun / (2 * a - sun) - 1.0
-    assert abs(g1.mean()) < 1e-12              # the idler turns exactly once a carrier turn: the ratio is integer
-    c = np.fft.rfft(g1) / (n / 2)
-    k = np.arange(1, 15)
-    # G' = sum A_k cos k phi + B_k sin k phi  ->  G = sum (A_k / k) sin k phi - (B_k / k) cos k phi
-    cos_k, sin_k = -(-c[k].imag) / k, c[k].real / k
-    train = Train(2 * a, 30.0, [], [], list(cos_k), list(sin_k), 100.0, 0.0, 0.0)
+    i1 = sun / (2 * a - sun)
+    assert abs(np.mean(i1 - 1.0)) < 1e-12
+    idler_cos, idler_sin = _integrated(i1 - 1.0, harmonics)
+    stage1 = pairs(Train(2 * a, 2 * a, [], [], idler_cos, idler_sin, 100.0, 0.0, 0.0), phi)[0]
+    assert np.max(np.abs(stage1.driver.radius[0] - sun)) < 1e-9
+    assert _is_ellipse_about_focus(stage1.driven.angle[0], stage1.driven.radius[0], a, e) < 1e-6
+    # the same ellipse meets the planet half a turn round the idler from the sun
+    beta0 = stage1.driven.angle[0][np.argmin(stage1.driven.radius[0])] - math.pi
+    idler_to_planet = p / (1 - e * np.cos(stage1.driven.angle[0] - math.pi - beta0))
+    i2 = idler_to_planet / (2 * a - idler_to_planet)
+    assert abs(np.mean(1.0 - i1 * i2)) < 1e-12
+    planet_cos, planet_sin = _integrated(1.0 - i1 * i2, harmonics)
+    train = Train(2 * a, 2 * a, planet_cos, planet_sin, idler_cos, idler_sin, 100.0, 0.0, 0.0)
     fine = np.linspace(0.0, 2 * math.pi, 1001)
-    pair = pairs(train, fine)[0]
-    assert np.max(np.abs(pair.driver.radius[0] - p / (1 - e * np.cos(fine)))) < 1e-9
-    beta, r = pair.driven.angle[0], pair.driven.radius[0]
-    assert r.min() == pytest.approx(a * (1 - e), abs=1e-6) and r.max() == pytest.approx(a * (1 + e), abs=1e-6)
-    beta0 = beta[np.argmin(r)] - math.pi
-    assert np.max(np.abs(r - p / (1 - e * np.cos(beta - beta0)))) < 1e-6
+    first, second = pairs(train, fine)
+    assert np.max(np.abs(second.driver.radius[0] - p / (1 - e * np.cos(first.driven.angle[0] - math.pi - beta0)))) \
+        < 1e-6
+    assert _is_ellipse_about_focus(second.driven.angle[0], second.driven.radius[0], a, e) < 1e-6
+    # the arm's swing: to first order in e each pair's ratio is 1 + 2e cos(.) and the two stages add in phase, so
+    # F swings about +-4e rad (34.4 deg at e = 0.15; exactly 34.1)
+    swing = np.degrees(np.ptp(sum(c * np.cos(k * fine) + s * np.sin(k * fine)
+                                  for k, (c, s) in enumerate(zip(planet_cos, planet_sin), start=1))))
+    assert 0.5 * swing == pytest.approx(math.degrees(4 * e), rel=0.02)
