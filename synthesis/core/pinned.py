@@ -18,15 +18,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
 from synthesis.errors import SpecError
 from synthesis.spec.design_info import describe
 
-#: points of the bounds the Jacobians are compared at (each one where the model evaluates)
+#: points of the bounds a rule's Jacobian is compared at (each one where the model evaluates it) ...
 POINTS = 3
-#: draws to find those points (a design where the linkage cannot assemble evaluates to NaN)
+#: ... of this many drawn (a design where the linkage cannot assemble evaluates to NaN), the first the bounds' middle
 DRAWS = 12
 #: the rule's Jacobian equals C x the rows' Jacobian to this relative accuracy (float round-off of equal graphs)
 JACOBIAN_RTOL = 1e-8
@@ -70,7 +71,8 @@ def _as_sx(expr) -> ca.SX | None:
 
 
 def _points(problem, function, rng) -> list[list[np.ndarray]]:
-    """Up to POINTS evaluations of ``function`` at points drawn in the bounds where everything is finite."""
+    """Up to POINTS evaluations of ``function`` (rules, their Jacobian, rows, theirs) at points drawn in the bounds
+    where the equality rows and their Jacobian are finite (a rule NaN there is judged on its other points)."""
     lo, hi = problem.lbx, problem.ubx
     base = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi),
                     np.where(np.isfinite(lo), lo + 1.0, np.where(np.isfinite(hi), hi - 1.0, 0.0)))
@@ -79,17 +81,15 @@ def _points(problem, function, rng) -> list[list[np.ndarray]]:
     for draw in range(DRAWS):
         x = base if draw == 0 else np.clip(base + (rng.random(base.size) - 0.5) * width, lo, hi)
         values = [np.asarray(v, float) for v in function(x)]
-        if all(np.all(np.isfinite(v)) for v in values):
+        if np.all(np.isfinite(values[2])) and np.all(np.isfinite(values[3])):
             out.append(values)
-            if len(out) == POINTS:
-                break
     return out
 
 
 def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = None) -> list[PinnedRule]:
     """The rules of ``problem`` whose value no free decision variable moves (the module docstring), in rule order.
     ``design_columns``: decision entry -> the spec paths of the design variables it is (to name the fixed ones a
-    pinned rule reads).  Empty when the model cannot be evaluated at enough points of the bounds."""
+    pinned rule reads).  A rule the model cannot evaluate at two points of the bounds is not judged."""
     x, params = problem.x, problem.parameters
     n = x.numel()
     free = problem.ubx > problem.lbx
@@ -117,14 +117,16 @@ def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = No
         return []
     e_all = ca.vertcat(*[e for _, e in candidates])
     function = ca.Function("pinned", [x], [e_all, ca.jacobian(e_all, x), h, ca.jacobian(h, x)])
-    points = _points(problem, function, np.random.default_rng(0))
-    if len(points) < 2:
-        return []
+    every_point = _points(problem, function, np.random.default_rng(0))
     out, offset = [], 0
     for rule, e in candidates:
         k = e.numel()
         rows_k = slice(offset, offset + k)
         offset += k
+        points = [p for p in every_point
+                  if np.all(np.isfinite(p[0][rows_k])) and np.all(np.isfinite(p[1][rows_k]))][:POINTS]
+        if len(points) < 2:         # too few points where the model evaluates it: nothing is known
+            continue
         # first over every entry (pinned by inputs that are no design variable), then over the free ones only (the
         # fixed design variables it reads pin it too: named)
         for columns in (np.ones(n, bool), free):
