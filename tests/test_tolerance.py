@@ -424,17 +424,19 @@ def test_the_solver_s_nominal_nlp_is_unchanged_by_the_operating_sensitivities(sp
     assert again.iterations == iterations and again.objective == pytest.approx(objective, rel=1e-13)
 
 
-def _rows_at_start(kind, spec, aux_guess: str):
+def _rows_at_start(kind, spec, aux_guess):
     """(nlp, g, lbg, x): the kind's NLP for ``spec`` built without IPOPT, its auxiliaries pinned by the structural
-    equalities from the start design and ``nlp.<aux_guess>(design)``, and every row g (with its lower bounds) there,
-    the epigraph variables of a tolerance box at their start (1.01 |dg/dd| + 1e-9)."""
+    equalities from the start design and ``nlp.<aux_guess>(design)`` (or ``aux_guess(spec, design)``), and every
+    row g (with its lower bounds) there, the epigraph variables of a tolerance box at their start (1.01 |dg/dd| +
+    1e-9)."""
     from synthesis.core.sensitivity import Sensitivity
 
     solving = kind.solving()
     nlp = solving.build(Setting(spec, 0, solving.prepare(spec), solver=False), False)
     t = nlp.compiled.t
     design = dict(zip(nlp.names, (float(v) for v in nlp.init)))
-    x = Sensitivity(nlp.problem, len(nlp.names)).pin(np.concatenate([nlp.init, getattr(nlp, aux_guess)(design)]))
+    guess = getattr(nlp, aux_guess) if isinstance(aux_guess, str) else (lambda d: aux_guess(spec, d))
+    x = Sensitivity(nlp.problem, len(nlp.names)).pin(np.concatenate([nlp.init, guess(design)]))
     g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
     return nlp, g, t.lbg, x
 
@@ -527,14 +529,14 @@ def test_tillage_entry_and_exit_are_held_at_their_worst_case_in_the_tolerance_bo
     entry to the lowest point and from there to the exit, their derivatives by central differences; each robust row
     is that angle minus sum_j |d angle / d d_j| tol_j (epigraph variables at their start), its lower bound GAP."""
     from synthesis.kinds.tillage_linkage import check
-    from synthesis.kinds.tillage_linkage.nlp import EXISTENCE_ROWS, GAP
+    from synthesis.kinds.tillage_linkage.nlp import EXISTENCE_ROWS, GAP, angles_guess
 
     path = tmp_path / "robust.toml"
     path.write_text((LIBRARY / "tillage/tillage_redesign.toml").read_text()
                     + "\n[tolerance]\nlength = 0.5\nangle = 0.5\nsamples = 10\nseed = 0\n")
     loaded = load_spec(path)
     spec = loaded.model
-    nlp, g, lbg, x = _rows_at_start(kinds.solving_kind_for(loaded), spec, "angles_guess")
+    nlp, g, lbg, x = _rows_at_start(kinds.solving_kind_for(loaded), spec, angles_guess)
     names = list(nlp.names)
     n = len(names)
     assert tuple(nlp.problem.robust_structural) == EXISTENCE_ROWS

@@ -385,9 +385,12 @@ def test_tillage_declared_units_match_its_kinematics(k):
     the mm one, so each structural row and the objective is factor**p of its mm value for its declared p --
     checked at 3 random designs to 1e-9 relative (they were declared plain numbers, which left them at mm size
     in another length unit: the x 1e3 row then ended start 0 at c = 393.3 instead of 373.1 mm)."""
-    from synthesis.kinds.tillage_linkage.nlp import TillageNLP
+    from synthesis.core.kind import Setting
+    from synthesis.kinds.tillage_linkage.nlp import angles_guess
+    from synthesis.kinds.tillage_linkage.solve import SOLVING
 
-    nlp = TillageNLP(load_spec(LIBRARY / "tillage" / "tillage_redesign.toml").model)
+    spec = load_spec(LIBRARY / "tillage" / "tillage_redesign.toml").model
+    nlp = SOLVING.build(Setting(spec))
     declared = ipopt.CompiledNLP(nlp.problem, length_factor=k)
     u, c = declared._unit, declared._row_unit
     structural = np.array([o is None for o in nlp.compiled.t.owner])
@@ -396,7 +399,7 @@ def test_tillage_declared_units_match_its_kinematics(k):
     for _ in range(3):
         design = np.array([rng.uniform(60, 140), rng.uniform(200, 380), rng.uniform(300, 800), rng.uniform(5, 60),
                            rng.uniform(100, 300)])
-        w = np.concatenate([design, nlp.angles_guess(dict(zip(nlp.names, design)))])
+        w = np.concatenate([design, angles_guess(spec, dict(zip(nlp.names, design)))])
         g = np.asarray(nlp.compiled.g_function(w, []), float).ravel()
         g_k = np.asarray(nlp.compiled.g_function(w * u, []), float).ravel()     # the k-times mechanism in mm
         np.testing.assert_allclose(g_k[structural], (c * g)[structural], rtol=1e-9,

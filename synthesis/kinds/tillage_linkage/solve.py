@@ -3,16 +3,13 @@ finer crank grid (extremes and soil entry/exit root-found anew, floats) and the 
 
 from __future__ import annotations
 
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.tillage_linkage.check import curves, evaluate, facts
-from synthesis.kinds.tillage_linkage.nlp import TillageNLP
+from synthesis.kinds.tillage_linkage.nlp import problem
 
 OBJECTIVE_UNITS = {"min_bar_length": "mm", "max_margin": "normalised margin"}
-
-
-def build(setting: Setting, elastic: bool = False) -> TillageNLP:
-    return TillageNLP(setting.spec, elastic=elastic, setting=setting)
 
 
 def fine(spec, design: dict[str, float]):
@@ -57,7 +54,7 @@ def maximise(setting: Setting) -> bool:
     return setting.spec.objective.name == "max_margin"
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   samples_hint="[solver] samples / soil_samples or [solver] backoff",
                   relax_hint="Loosen those requirements (depth, lift, rearward speed, slot angle, engagement) or "
                              "widen the bounds of a, b, c, theta and height_c.")
