@@ -21,12 +21,15 @@ from synthesis.files import read_json
 
 STATUSES = ("optimal", "feasible", "infeasible", "failed", "evaluated", "interrupted")
 #: version of the result.json layout; readers refuse a newer one rather than misread it
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 5
 #: version 2 moved the kind's own facts under "facts" and gave every solve the same tail:
 #: "starts", "elastic", "baseline_design", "fine_grid_worst_violation" (version 1 had them all at the
 #: top level, mixed with the kind's facts); version 3: every ``design`` entry is a number (mm / deg) or a list of
 #: numbers -- a design no longer holds ``branch`` as the assembly's name (a string), which its
-#: ``facts.branch`` holds (as it did in version 2).  Versions 1 and 2 are still read (:meth:`Result.from_json`)
+#: ``facts.branch`` holds (as it did in version 2); version 4: ``facts.dynamics`` (the inverse dynamics of a spec with a
+#: ``[dynamics]`` table, docs/ARCHITECTURE.md "result.json"), nothing else changed; version 5: ``solver.confidence``
+#: (how sure the best is the global optimum) and, for ``--starts auto``, ``solver.auto``.  Versions 1 to 4 are still read
+#: (:meth:`Result.from_json`)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
 

@@ -224,7 +224,7 @@ def test_envelope_run_folder_through_the_cli(tmp_path):
     folder = tmp_path / "uniform_spacing_mu_envelope"
     assert (folder / "envelope.png").stat().st_size > 0 and "envelope.png" in (folder / "report.html").read_text()
     result = strict_json(folder / "result.json")
-    assert result["schema_version"] == 3 and result["status"] == "optimal"
+    assert result["schema_version"] == 5 and result["status"] == "optimal"
     env = result["facts"]["envelope"]
     mus = env["conditions"]["mu"]["recheck_values"]
     assert len(mus) == 21 and mus[0] == 0.48476005 and mus[-1] == 0.72714007 and len(env["grid"]) == 21

@@ -224,7 +224,7 @@ def test_solve_cli_writes_the_contract_and_figures(tmp_path):
     assert data["objective"]["name"] == "sum_squared_distance" and data["objective"]["value"] >= 0
     assert set(data["solver"]) >= {"name", "return_status", "iterations", "wall_s", "starts", "seed", "best_start",
                                    "starts_run", "starts_needed", "starts_reaching_best", "stop_at_objective"}
-    assert data["schema_version"] == 3 and data["status"] == "feasible" and data["elastic"] is None
+    assert data["schema_version"] == 5 and data["status"] == "feasible" and data["elastic"] is None
     assert data["facts"]["path_error"]["max_mm"] < 0.05 and data["facts"]["crank_direction"] == "ccw"
     assert [row["start"] for row in data["starts"]] == [0, 1] and len(data["starts"][0]["details"]["crank_deg"]) == 10
     assert data["fine_grid_worst_violation"] == 0.0 and list(data["baseline_design"])[:9] == list(VARIABLES)

@@ -51,7 +51,7 @@ def test_a_toy_kind_checks_and_solves_to_its_known_optimum(tmp_path, toy):
     assert result.objective["value"] == pytest.approx(40.0**2, rel=1e-7)
     assert result.extra["distance_to_target_mm"] == pytest.approx(40.0, abs=1e-6)
     data = json.loads(json.dumps(result.to_json(), allow_nan=False))
-    assert data["schema_version"] == 3 and data["facts"] == {"distance_to_target_mm": result.extra["distance_to_target_mm"]}
+    assert data["schema_version"] == 5 and data["facts"] == {"distance_to_target_mm": result.extra["distance_to_target_mm"]}
     assert [row["start"] for row in data["starts"]] == [0, 1, 2] and data["elastic"] is None
     assert Result.from_json(data).extra == result.extra
 

@@ -32,7 +32,7 @@ def test_a_version_1_file_is_read_into_the_version_2_shape(tmp_path):
     assert r.starts == V1["starts"] and r.elastic is None and r.baseline_design == {"l7": 50.0}
     assert r.fine_grid_worst_violation == 0.0
     again = r.to_json()
-    assert again["schema_version"] == SCHEMA_VERSION == 3
+    assert again["schema_version"] == SCHEMA_VERSION == 4
     assert again["facts"] == r.extra and "motion" not in again
     assert Result.from_json(json.loads(json.dumps(again))) == r
 
@@ -59,7 +59,7 @@ def test_compare_reads_a_version_1_file_beside_a_version_2_one(tmp_path):
 def test_a_version_2_fourbar_path_file_keeps_its_branch_as_a_fact(tmp_path):
     """Version 2 wrote fourbar_path's assembly name in the design too; version 3 keeps only numbers there (design
     values in mm / deg).  A version-2 file is read with the name moved to facts.branch, so its figures draw the
-    assembly it was solved on, and written back as version 3."""
+    assembly it was solved on, and written back as the current version."""
     crossed = {"kind": "fourbar_path", "name": "old_path", "spec_sha256": "0" * 64, "status": "evaluated",
                "schema_version": 2, "rules": [], "facts": {"source": "test"},
                "design": {"r1": 60.0, "r2": 20.0, "r3": 70.0, "r4": 50.0, "rcx": 10.0, "rcy": 5.0, "x0": 0.0,
@@ -69,7 +69,7 @@ def test_a_version_2_fourbar_path_file_keeps_its_branch_as_a_fact(tmp_path):
     r = load_result(path)
     assert "branch" not in r.design and r.extra["branch"] == "crossed" and r.design["crank_deg"] == [0.0, 90.0, 180.0]
     again = r.to_json()
-    assert again["schema_version"] == 3 and again["facts"]["branch"] == "crossed" and "branch" not in again["design"]
+    assert again["schema_version"] == 4 and again["facts"]["branch"] == "crossed" and "branch" not in again["design"]
     # a version-2 file whose facts already hold the branch keeps the facts' value
     both = {**crossed, "facts": {"branch": "open"}}
     assert Result.from_json(both).extra["branch"] == "open" and "branch" not in Result.from_json(both).design

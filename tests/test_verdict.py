@@ -199,7 +199,7 @@ def test_failed_run_exits_3_with_result_and_message(tmp_path):
     err = " ".join(proc.stderr.split())
     assert "IPOPT found no design" in err and "Maximum_Iterations_Exceeded" in err
     data = json.loads((tmp_path / "out" / "cai2020_delta2" / "result.json").read_text())
-    assert data["schema_version"] == 3
+    assert data["schema_version"] == 4
     assert data["status"] == "failed" and data["elastic"]["relaxed"] == []
 
 
