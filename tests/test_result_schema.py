@@ -32,7 +32,7 @@ def test_a_version_1_file_is_read_into_the_version_2_shape(tmp_path):
     assert r.starts == V1["starts"] and r.elastic is None and r.baseline_design == {"l7": 50.0}
     assert r.fine_grid_worst_violation == 0.0
     again = r.to_json()
-    assert again["schema_version"] == SCHEMA_VERSION == 4
+    assert again["schema_version"] == SCHEMA_VERSION == 5
     assert again["facts"] == r.extra and "motion" not in again
     assert Result.from_json(json.loads(json.dumps(again))) == r
 
@@ -69,7 +69,7 @@ def test_a_version_2_fourbar_path_file_keeps_its_branch_as_a_fact(tmp_path):
     r = load_result(path)
     assert "branch" not in r.design and r.extra["branch"] == "crossed" and r.design["crank_deg"] == [0.0, 90.0, 180.0]
     again = r.to_json()
-    assert again["schema_version"] == 4 and again["facts"]["branch"] == "crossed" and "branch" not in again["design"]
+    assert again["schema_version"] == 5 and again["facts"]["branch"] == "crossed" and "branch" not in again["design"]
     # a version-2 file whose facts already hold the branch keeps the facts' value
     both = {**crossed, "facts": {"branch": "open"}}
     assert Result.from_json(both).extra["branch"] == "open" and "branch" not in Result.from_json(both).design

@@ -68,6 +68,8 @@ def distinct_optima(objectives, unit_designs, start_ids, *, objective_tolerance:
     order of the input.
     """
     f = np.asarray(objectives, dtype=float)
+    if not len(f):
+        return []
     x = np.asarray(unit_designs, dtype=float).reshape(len(f), -1)
     ids = np.asarray(start_ids)
     order = np.lexsort((ids, f))
@@ -159,3 +161,34 @@ def confidence(optima: list[Optimum]) -> Confidence:
     expected = w * (n - 1) / (n - w - 2)
     return Confidence(n, w, best, expected, expected - w, share, p_all, p_global, expected - w < 0.5)
 
+
+
+#: result.json ``solver.confidence`` lists at most this many optima, best first
+OPTIMA_SHOWN = 10
+
+
+def statement(objectives, unit_designs, start_ids, *, maximise: bool = False,
+              assumptions_not_met: list[str] | tuple[str, ...] = ()) -> dict:
+    """result.json ``solver.confidence``: the :class:`Confidence` fields, the distinct optima (``objective`` as the
+    kind states it, ``starts`` reaching it, ``first_start``), at most OPTIMA_SHOWN, best first, and where the
+    model's assumptions are known not to hold.  A maximised objective is grouped as its negative (best first)."""
+    sign = -1.0 if maximise else 1.0
+    optima = distinct_optima(sign * np.asarray(objectives, dtype=float), unit_designs, start_ids)
+    return {**confidence(optima).to_json(),
+            "optima": [{"objective": sign * o.objective, "starts": o.count, "first_start": o.starts[0]}
+                       for o in optima[:OPTIMA_SHOWN]],
+            "assumptions_not_met": list(assumptions_not_met)}
+
+
+def said(stated: dict) -> str:
+    """One line: "3 distinct optima in 28 converged starts, best reached by 19; P(best is global) ~ 0.89
+    (Boender & Rinnooy Kan; assumes uniform starts)"."""
+    n, w = stated.get("starts_counted", 0), stated.get("distinct_optima", 0)
+    if not n:
+        return "no start converged with every rule held: no statement on the global optimum"
+    p = stated.get("probability_best_is_global")
+    chance = (f"P(best is global) ~ {p:.2f}" if p is not None
+              else "P(best is global) not defined (too few starts for the optima seen)")
+    caveat = "; ".join(["assumes uniform starts", *(stated.get("assumptions_not_met") or [])])
+    return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, best reached "
+            f"by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")

@@ -19,8 +19,10 @@ from typing import Any, Callable
 import numpy as np
 
 from synthesis.core import interrupt
+from synthesis.core.confidence import statement
 from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts
 from synthesis.core.interrupt import Interrupted
+from synthesis.core.ipopt_log import reached_optimum
 from synthesis.core.kind import Kind, Setting, Solving
 from synthesis.core.pinned import fixed_fields, of_nlp, refuse_violated
 from synthesis.core.verdict import (FINE, SLACK_TOL, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
@@ -122,7 +124,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         kept = [reports[i] for i in sorted(reports)]
         best_kept = best_in_start_order(kept, maximise) if kept else None
         partial = (Run(kept, best_kept, starts, setting.seed, None if scheduler else workers, scheduler, wall,
-                       build_s=build_s)
+                       nlp, build_s)
                    if best_kept is not None and failure_of(best_kept.outcome) is None else None)
         raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
@@ -309,6 +311,35 @@ def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool)
     return {"starts_needed": min(hits) + 1, "starts_reaching_best": len(hits)}
 
 
+def confidence_statement(reports: list[StartReport], nlp, maximise: bool) -> dict | None:
+    """result.json ``solver.confidence`` (:mod:`synthesis.core.confidence`): the starts that converged with every
+    rule held (the starts an ``optimal`` verdict counts; the start from the elastic re-solve is no drawn start and is
+    left out) grouped into distinct optima in the unit box of the NLP's free variables.  None without the NLP (a
+    run interrupted before it was built)."""
+    if nlp is None:
+        return None
+    bounds = np.asarray(nlp.bounds, float)
+    free = bounds[:, 1] > bounds[:, 0]
+    lo, width = bounds[free, 0], bounds[free, 1] - bounds[free, 0]
+    counted = [r for r in reports if r.satisfied and r.outcome.success and reached_optimum(r.outcome.return_status)
+               and (r.outcome.details or {}).get("start_from") != FROM_ELASTIC]
+    units = [(nlp.x_of(r.outcome.design)[free] - lo) / width for r in counted]
+    return statement([r.outcome.objective for r in counted], np.reshape(units, (len(counted), int(free.sum()))),
+                     [r.outcome.start for r in counted], maximise=maximise, assumptions_not_met=_not_uniform(nlp))
+
+
+def _not_uniform(nlp) -> list[str]:
+    """Where a kind's starts break the estimate's model of uniform starts in the box of its decision variables."""
+    notes = []       # a Latin hypercube's points are each uniform in the box (stratified, so not independent)
+    if nlp.builds_its_own_starts:
+        notes.append("the kind builds its own starts (screened), not uniform in the box")
+    if nlp.configuration is not None:
+        notes.append("each start first solves a reduced form of the problem")
+    if list(nlp.design_names) != list(nlp.names):
+        notes.append("the decision variables are not the design's own (the design map is not the identity)")
+    return notes
+
+
 def starts_table(reports: list[StartReport]) -> list[dict]:
     """result.json ``starts``: one row per start, the same shape for every kind."""
     return [{"start": r.outcome.start, "return_status": r.outcome.return_status, "success": r.outcome.success,
@@ -410,7 +441,8 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
                 "seed": run.seed, "best_start": best.outcome.start, "workers": run.workers,
                 "scheduler": run.scheduler, "fine_grid_factor": FINE,
                 "status_note": _sentences(note or _note(status, best, run), finished.note),
-                **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings},
+                **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings,
+                "confidence": confidence_statement(run.reports, run.nlp, solving.maximise(setting))},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),
         baseline_design=(spec.design_values() if finished.baseline_design is None else finished.baseline_design),

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from synthesis import kinds
+from synthesis.core.confidence import said
 from synthesis.core.kind import ResultTable
 from synthesis.errors import AgrisynthError
 from synthesis.result import Result
@@ -280,6 +281,18 @@ def _starts_text(solver: dict | None):
     return f"{asked} + 1 from the elastic re-solve" if ran > asked else f"{ran} of {asked} run"
 
 
+def _confidence_text(solver: dict | None) -> str | None:
+    """The confidence statement's line (result.json ``solver.confidence``, a solve of schema version 5 on), and for
+    ``--starts auto`` why it stopped."""
+    stated = (solver or {}).get("confidence")
+    if not isinstance(stated, dict):
+        return None
+    auto = (solver or {}).get("auto")
+    stopped = (f"; --starts auto stopped by {auto.get('stopped_by')} after {solver.get('starts')} starts"
+               if isinstance(auto, dict) else "")
+    return said(stated) + stopped
+
+
 def _objectives(cands: list[Candidate]) -> list:
     """Each candidate's objective; beside a solve's, a check's says it has none (a check evaluates the
     rules only) rather than a bare dash a reader takes for a missing number."""
@@ -305,6 +318,7 @@ def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
         ("starts", [_starts_text(c.result.solver) for c in cands]),
         ("seed", [solver(c, "seed") for c in cands]),
         ("best start", [solver(c, "best_start") for c in cands]),
+        ("global optimum (how sure)", [_confidence_text(c.result.solver) for c in cands]),
         ("fine-grid worst violation (violation / rule scale)", [c.result.fine_grid_worst_violation for c in cands]),
         ("spec sha256", [c.result.spec_sha256 for c in cands]),
         ("source", [c.result.extra.get("source") for c in cands]),
