@@ -130,7 +130,7 @@ def test_quick_case_runs_every_study_and_writes_the_summary():
 
 
 def test_planting_derivative_error_row_against_the_paper():
-    from synthesis.kinds.planting import derivative_error_rows
+    from synthesis.kinds.planting.parts import derivative_error_rows
 
     rows = {(r["step_deg"], r["scheme"]): r for r in derivative_error_rows()}
     # the scheme's own speed error (the paper printed 1.48 % and 0.64 %: not what its scheme gives)
