@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
-    from synthesis.core.kind import CoarseCheck, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -68,6 +68,11 @@ class RotaryPlanetary(Kind):
         from synthesis.kinds.rotary_planetary.coarse import COARSE
 
         return COARSE
+
+    def compare_figures(self) -> CompareWriter:
+        from synthesis.kinds.rotary_planetary.plots import compare_figure
+
+        return compare_figure
 
     def poses(self) -> Poses:
         from synthesis.kinds.rotary_planetary.poses import POSES

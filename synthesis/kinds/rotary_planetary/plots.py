@@ -98,3 +98,28 @@ def pitch_curves_figure(result: Result, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+def compare_figure(results: list[Result], folder: Path) -> list[str]:
+    """The claw tip's loop (machine frame) and the claw's attitude over a turn of every candidate, baseline first."""
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 5))
+    for k, r in enumerate(results):
+        c = ((r.extra or {}).get("motion") or {}).get("curves")
+        if not c:
+            continue
+        style = "-" if k == 0 else "--"
+        ax.plot(c["x"], c["y"], style, lw=1.3, label=r.name)
+        ax2.plot(c["carrier_deg"], c["claw_attitude_deg"], style, lw=1.3, label=r.name)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (rearwards), mm")
+    ax.set_ylabel("y (up), mm")
+    ax2.set_xlabel("carrier angle, deg")
+    ax2.set_ylabel("claw attitude, deg from +x")
+    for a in (ax, ax2):
+        a.grid(alpha=0.3)
+        legend_below(a, ncol=2, fontsize=7)
+    fig.tight_layout()
+    name = "compare_rotary_planetary.png"
+    fig.savefig(folder / name, dpi=110)
+    plt.close(fig)
+    return [name]
