@@ -32,6 +32,34 @@ class WholeNumber(click.IntRange):
         return super().convert(value, param, ctx)
 
 
+class StartsCount(WholeNumber):
+    """--starts: a whole number of starts, or "auto" (grow until sure: synthesis.core.solve.AutoStarts)."""
+
+    name = "whole number or auto"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and value.strip().lower() == "auto":
+            return "auto"
+        if isinstance(value, str):
+            try:
+                int(value)
+            except ValueError:
+                self.fail(f"{value!r} is neither a whole number ({self._describe_range()}) nor auto", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class Seconds(click.FloatRange):
+    """A time budget in seconds: a finite number > 0."""
+
+    name = "seconds"
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number of seconds", param, ctx)
+        return number
+
+
 class HalfWidth(click.FloatRange):
     """A tolerance half-width: a finite number >= 0 (click's FloatRange lets nan and inf through)."""
 

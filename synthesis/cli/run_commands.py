@@ -9,8 +9,8 @@ import click
 
 from synthesis import runs
 from synthesis.cli import ends_process
-from synthesis.cli.options import (FORCE_HELP, MAX_STARTS, MAX_WORKERS, WholeNumber, objectives_help,
-                                   scheduler_address)
+from synthesis.cli.options import (FORCE_HELP, MAX_STARTS, MAX_WORKERS, Seconds, StartsCount, WholeNumber,
+                                   objectives_help, scheduler_address)
 from synthesis.cli.views import Terminal, stopped_message
 from synthesis.runs.requests import CheckRequest, Outcome, SolveRequest
 
@@ -63,9 +63,18 @@ class SolveCommand(click.Command):
               help="finish an interrupted run: the starts in RUN_DIR/starts.jsonl are not solved again and the "
                    "result is exactly the uninterrupted one; SPEC must be the same file and --starts/--seed (default: "
                    "that run's) the same settings (checked by sha256); the result replaces RUN_DIR")
-@click.option("--starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
-              help=f"multistart starts, at most {MAX_STARTS} (default: the spec's [solver] starts); "
-                   f"start 0 is the spec's design")
+@click.option("--starts", type=StartsCount(min=1, max=MAX_STARTS), default=None,
+              help=f"multistart starts, at most {MAX_STARTS}, or auto (default: the spec's [solver] starts); "
+                   f"start 0 is the spec's design.  auto: batches of 16, 32, 64, ... starts, each the run --starts N "
+                   f"would be, until fewer than half a local optimum is expected unseen (Boender & Rinnooy Kan) over "
+                   f"at least 16 starts that converged with every rule held, or a budget is spent; the same seed "
+                   f"gives the same answer and N for any workers")
+@click.option("--max-starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
+              help="--starts auto: the most starts (default 512)")
+@click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
+              help="--starts auto: begin no batch that would end past this many seconds (default: none).  A "
+                   "time-limited run is not deterministic in its count: how many starts it reaches depends on the "
+                   "machine (result.json solver.auto.stopped_by says time_limit when it stopped it)")
 @click.option("--seed", type=WholeNumber(min=0, max=2**53), default=None,
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
 @click.option("--workers", type=WholeNumber(min=1, max=MAX_WORKERS), default=None,
@@ -75,8 +84,9 @@ class SolveCommand(click.Command):
                    "installed) instead of local worker processes.  A scheduler runs the code it is sent: "
                    "trust it as you trust this machine")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
-def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None, starts: int | None,
-                  seed: int | None, workers: int | None, scheduler: str | None, verbose: bool) -> None:
+def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None, starts: int | str | None,
+                  max_starts: int | None, time_limit: float | None, seed: int | None, workers: int | None,
+                  scheduler: str | None, verbose: bool) -> None:
     """Optimise SPEC's free design variables so every rule holds (CasADi + IPOPT, exact derivatives).
 
     \b
@@ -103,7 +113,7 @@ def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None
                                  "not both", param_hint="--workers/--scheduler")
     if resume is not None and out is not None:
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
-    request = SolveRequest(spec, out, force, resume, starts, seed, workers, scheduler, verbose)
+    request = SolveRequest(spec, out, force, resume, starts, seed, workers, scheduler, verbose, max_starts, time_limit)
     with Terminal(ends_process()) as terminal:
         outcome = runs.solve(request, terminal)
     finish(outcome)

@@ -205,6 +205,7 @@ class Terminal:
         self._bar = contextlib.ExitStack()
         self._progress: Progress | None = None
         self._task = None
+        self._solving = False       # a solve's bar is shown (between SolveStarted and StartsDone)
 
     def __enter__(self) -> "Terminal":
         return self
@@ -234,6 +235,10 @@ class Terminal:
         err_console.print(f"[yellow]{escape(e.text)}[/]")
 
     def _on_SolveStarted(self, e: events.SolveStarted) -> None:
+        if self._solving:           # --starts auto began another batch: the same bar, its total grown
+            self._progress.update(self._task, total=e.total)
+            return
+        self._solving = True
         self._bar_of(f"solving {e.name}", e.total, TextColumn("{task.fields[best]}"))
 
     def _on_StartFinished(self, e: events.StartFinished) -> None:
@@ -244,6 +249,7 @@ class Terminal:
             console.file.flush()
 
     def _on_StartsDone(self, e: events.StartsDone) -> None:
+        self._solving = False
         self._bar.close()
 
     def _on_SolverLog(self, e: events.SolverLog) -> None:

@@ -48,6 +48,8 @@ class Run:
     nlp: Any = None
     #: of ``wall_s``, building that NLP in this process (the workers' own builds are in the rest)
     build_s: float = 0.0
+    #: ``--starts auto``: why it stopped and its batches (result.json ``solver.auto``); None for fixed starts
+    auto: dict | None = None
 
 
 def _recheck(solving: Solving, setting: Setting, outcome):
@@ -133,6 +135,76 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     if failure_of(best.outcome) is not None:             # ranked last: every start failed to run
         raise SolverError(f"{kind.name}: no start could be solved: {_failures(ordered)}")
     return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp, build_s)
+
+
+@dataclass(frozen=True)
+class AutoStarts:
+    """``--starts auto``: the multistart grows in batches until Boender and Rinnooy Kan's stopping rule holds
+    (:mod:`synthesis.core.confidence`, fewer than half an optimum expected unseen) over at least ``min_converged``
+    starts that converged with every rule held, or a budget is spent.
+
+    Batch k is the whole fixed-starts run of ``first * 2**k`` starts (the last one ``max_starts``): a Latin hypercube
+    of N points is not the first N of a larger one, so each batch draws its own, exactly those of ``--starts N``, and
+    a run that stops after N starts is ``--starts N`` to the bit.  Only start 0 (the spec's design, the same in every
+    batch) is carried from batch to batch; the starts solved in all are at most about twice the last batch's.  The
+    decision is taken on whole batches, so the answer and N are the same for any worker count or a cluster -- except
+    with ``time_limit_s``: a batch whose projected time (the last batch's, scaled by its size) would end past the
+    limit is not begun, and the count then depends on the machine."""
+
+    max_starts: int = 512
+    time_limit_s: float | None = None
+    min_converged: int = 16
+    first: int = 16
+
+    def batches(self) -> list[int]:
+        """The total starts of each batch: first, 2 first, 4 first, ..., max_starts."""
+        totals = [min(self.first, self.max_starts)]
+        while totals[-1] < self.max_starts:
+            totals.append(min(2 * totals[-1], self.max_starts))
+        return totals
+
+    def settings(self) -> dict:
+        """What decides an auto run's starts (its starts.jsonl fingerprint, result.json ``solver.auto``)."""
+        return {"max_starts": self.max_starts, "time_limit_s": self.time_limit_s, "min_converged": self.min_converged,
+                "first": self.first}
+
+
+def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, scheduler: str | None = None,
+             on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
+             record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
+             on_batch: Callable[[int], None] = lambda total: None, resumed_batch: int | None = None) -> Run:
+    """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
+    ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total)`` is told as a batch begins (the
+    run's starts.jsonl marks it); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
+    starts (the earlier batches ended without stopping, so the run goes on from that one)."""
+    maximise = kind.solving().maximise(setting)
+    totals = auto.batches()
+    first = totals.index(resumed_batch) if resumed_batch in totals else 0
+    carried = dict(finished or {}) if resumed_batch in totals else {}
+    t0 = time.perf_counter()
+    for k in range(first, len(totals)):
+        on_batch(totals[k])
+        began = time.perf_counter()
+        run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler, on_start=on_start,
+                             record=record, finished=carried)
+        took = time.perf_counter() - began
+        stated = confidence_statement(run.reports, run.nlp, maximise)
+        if len(run.reports) < totals[k]:
+            stopped_by = "stop_at_objective"         # the kind's own early stop ended the batch
+        elif stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged:
+            stopped_by = "rule"
+        elif k == len(totals) - 1:
+            stopped_by = "max_starts"
+        elif (auto.time_limit_s is not None
+              and time.perf_counter() - t0 + took * totals[k + 1] / totals[k] > auto.time_limit_s):
+            stopped_by = "time_limit"
+        else:
+            zero = run.reports[0].outcome
+            carried = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
+            continue
+        return replace(run, wall_s=time.perf_counter() - t0,
+                       auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings()})
+    raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
 def _failures(reports: list[StartReport], shown: int = 3) -> str:
@@ -358,12 +430,15 @@ def ipopt_log(reports: list[StartReport]) -> str:
 def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = None, workers: int = 1,
               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
               scheduler: str | None = None, record: Callable[[Any], None] | None = None,
-              finished: dict[int, Any] | None = None) -> tuple[Result, list[StartReport], str]:
+              finished: dict[int, Any] | None = None, auto: AutoStarts | None = None,
+              on_batch: Callable[[int], None] = lambda total: None,
+              resumed_batch: int | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 
     ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
     to run the starts on instead of ``workers`` local processes; ``record``/``finished``: see
-    :func:`run_multistart`.  Interrupted (SIGINT/SIGTERM): raises :class:`Interrupted` whose ``partial`` is
+    :func:`run_multistart`; ``auto`` (then ``starts`` is not used), ``on_batch``, ``resumed_batch``: see
+    :func:`run_auto`.  Interrupted (SIGINT/SIGTERM): raises :class:`Interrupted` whose ``partial`` is
     (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
     no start had finished."""
     spec = loaded.model
@@ -372,8 +447,12 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
     seed = spec.solver.seed if seed is None else seed
     setting = Setting(spec, seed, solving.prepare(spec))
     try:
-        run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler,
-                             on_start=on_start, record=record, finished=finished)
+        if auto is None:
+            run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler,
+                                 on_start=on_start, record=record, finished=finished)
+        else:
+            run = run_auto(kind, setting, auto, workers=workers, scheduler=scheduler, on_start=on_start,
+                           record=record, finished=finished, on_batch=on_batch, resumed_batch=resumed_batch)
     except Interrupted as exc:
         if exc.partial is None:
             raise
@@ -442,7 +521,8 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
                 "scheduler": run.scheduler, "fine_grid_factor": FINE,
                 "status_note": _sentences(note or _note(status, best, run), finished.note),
                 **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings,
-                "confidence": confidence_statement(run.reports, run.nlp, solving.maximise(setting))},
+                "confidence": confidence_statement(run.reports, run.nlp, solving.maximise(setting)),
+                **({} if run.auto is None else {"auto": run.auto})},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),
         baseline_design=(spec.design_values() if finished.baseline_design is None else finished.baseline_design),
@@ -502,5 +582,5 @@ def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
         return None
 
 
-__all__ = ["Run", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
+__all__ = ["Run", "AutoStarts", "run_auto", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
            "starts_table", "reaching_best", "ipopt_log"]

@@ -11,6 +11,7 @@ A line that cannot be read (cut off by a crash) is skipped: that start is solved
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -35,10 +36,17 @@ MAX_BYTES = 2 * 1024**3
 MAX_LINE_BYTES = 64 * 1024**2
 
 
-def fingerprint(kind: str, name: str, spec_sha256: str, starts: int, seed: int) -> tuple[dict, str]:
-    """The settings that decide a run's starts, and their sha256 (what --resume must match)."""
+#: a ``--starts auto`` run's line before each batch's starts: ``{"auto_batch": total}`` (those starts are of a run of
+#: that many; a resumed run reads the last batch's only)
+BATCH = "auto_batch"
+
+
+def fingerprint(kind: str, name: str, spec_sha256: str, starts: int, seed: int,
+                auto: dict | None = None) -> tuple[dict, str]:
+    """The settings that decide a run's starts, and their sha256 (what --resume must match); ``auto``: a
+    ``--starts auto`` run's settings (``starts`` then its most starts)."""
     settings = {"kind": kind, "name": name, "spec_sha256": spec_sha256, "starts": int(starts), "seed": int(seed),
-                "agrisynth": __version__}
+                "agrisynth": __version__, **({} if auto is None else {"starts_auto": auto})}
     return settings, hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()
 
 
@@ -119,6 +127,10 @@ class StartLog:
             data = {"unrecorded": getattr(outcome, "start", None), "why": str(exc)}
         self._line(data)
 
+    def batch(self, total: int) -> None:
+        """A ``--starts auto`` run begins its batch of ``total`` starts."""
+        self._line({BATCH: int(total)})
+
     def close(self) -> None:
         self.fh.close()
 
@@ -133,6 +145,23 @@ def settings_of(folder: Path) -> dict:
         return {}
     settings = line.get("settings") if isinstance(line, dict) else None
     return settings if isinstance(settings, dict) else {}
+
+
+def last_batch(folder: Path) -> int | None:
+    """The batch a ``--starts auto`` run was solving (its last ``auto_batch`` line; None: none there)."""
+    path = Path(folder) / FILENAME
+    last = None
+    try:
+        with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
+            for text in _lines(fh):
+                if text is not None and BATCH.encode() in text[:40]:
+                    with contextlib.suppress(OutputError):
+                        line = parse_json(text, path, OutputError)
+                        if isinstance(line, dict) and isinstance(line.get(BATCH), int):
+                            last = line[BATCH]
+    except (OSError, OutputError):
+        return None
+    return last
 
 
 def _lines(fh) -> Iterator[bytes | None]:
@@ -178,6 +207,9 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
                 continue
             if header is None:
                 raise OutputError(f"--resume {folder}: {FILENAME} has no header line; not written by agrisynth")
+            if BATCH in line:             # an auto run's next batch: its starts are another run's
+                finished.clear()
+                continue
             if "outcome" in line:
                 try:
                     out = decode(line)

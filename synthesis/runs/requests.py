@@ -36,11 +36,13 @@ class SolveRequest:
     out: Path | None = None             # None: results/, or where ``resume`` is
     force: bool = False
     resume: Path | None = None
-    starts: int | None = None           # None: the spec's [solver] starts (resumed: the interrupted run's)
+    starts: int | str | None = None     # None: the spec's [solver] starts (resumed: the interrupted run's); "auto"
     seed: int | None = None
     workers: int | None = None          # None: every core
     scheduler: str | None = None        # a dask.distributed address instead of local workers
     verbose: bool = False               # hand IPOPT's output over (SolverLog)
+    max_starts: int | None = None       # starts "auto": its budget of starts (None: AutoStarts' default)
+    time_limit: float | None = None     # starts "auto": its budget of seconds (None: none)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import signal
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from synthesis import kinds
@@ -17,7 +17,7 @@ from synthesis.errors import AgrisynthError, AssemblyError, OutputError, SpecErr
 from synthesis.result import RUN_NAME, is_run_folder
 from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
 from synthesis.runs.output import RunOutput, text_file
-from synthesis.runs.requests import Outcome, SolveRequest, SolveWritten, Stopped
+from synthesis.runs.requests import BadRequest, Outcome, SolveRequest, SolveWritten, Stopped
 from synthesis.runs.specs import described, loaded_spec
 from synthesis.spec.solved import FILENAME as SOLVED_SPEC, solved_toml
 
@@ -38,6 +38,8 @@ class _Plan:
     folder_name: str
     finished: dict | None = None      # the resumed run's finished starts
     replaceable: Path | None = None
+    auto: core.AutoStarts | None = None     # --starts auto (``starts`` is then its most starts)
+    resumed_batch: int | None = None        # --starts auto resumed: the batch the interrupted run was solving
 
 
 def staging_hint(folder: Path) -> str:
@@ -69,21 +71,41 @@ def _probe(scheduler: str | None) -> None:
     probe_scheduler(scheduler)
 
 
+def _auto_of(request: SolveRequest, loaded, earlier: dict) -> core.AutoStarts | None:
+    """--starts auto's settings: asked for, the interrupted run's (resumed without --starts), or the spec's [solver]
+    starts = "auto"; None for fixed starts (then --max-starts and --time-limit are bad input)."""
+    was = earlier.get("starts_auto") if isinstance(earlier.get("starts_auto"), dict) else None
+    asked = (request.starts == "auto" or (request.starts is None and was is not None)
+             or (request.starts is None and not earlier and getattr(loaded.model.solver, "starts_auto", False)))
+    if not asked:
+        if request.max_starts is not None or request.time_limit is not None:
+            raise BadRequest("--max-starts and --time-limit are budgets of --starts auto; give --starts auto (or "
+                             "[solver] starts = \"auto\") or leave them out", "--max-starts")
+        return None
+    base = core.AutoStarts(**{k: v for k, v in (was or {}).items() if k in core.AutoStarts.__dataclass_fields__})
+    return replace(base, **{k: v for k, v in (("max_starts", request.max_starts),
+                                              ("time_limit_s", request.time_limit)) if v is not None})
+
+
 def _plan(request: SolveRequest, loaded) -> _Plan:
     starts, seed, resume = request.starts, request.seed, request.resume
+    earlier: dict = {}
     if resume is not None:
         if not is_run_folder(resume):
             raise OutputError(f"--resume {resume}: not an agrisynth run folder{staging_hint(resume)}")
         earlier = startlog.settings_of(resume)      # --starts and --seed default to the interrupted run's
         starts = earlier.get("starts") if starts is None and isinstance(earlier.get("starts"), int) else starts
         seed = earlier.get("seed") if seed is None and isinstance(earlier.get("seed"), int) else seed
-    n = starts or loaded.model.solver.starts
+    auto = _auto_of(request, loaded, earlier)
+    n = auto.max_starts if auto is not None else starts or loaded.model.solver.starts
     the_seed = loaded.model.solver.seed if seed is None else seed
-    settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed)
+    settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed,
+                                                 None if auto is None else auto.settings())
     out = Path("results") if request.out is None else request.out
-    plan = _Plan(n, starts, seed, settings, fingerprint, out, loaded.name)
+    plan = _Plan(n, None if auto is not None else starts, seed, settings, fingerprint, out, loaded.name, auto=auto)
     if resume is not None:
         plan.finished = startlog.read(resume, fingerprint)
+        plan.resumed_batch = startlog.last_batch(resume) if auto is not None else None
         where = resume.resolve()
         plan.out = where.parent
         # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
@@ -132,13 +154,23 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
 def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, log_file, emit: Subscriber):
     """Every start solved: ((result, reports, log), the library warnings said meanwhile), or (the Interrupted
     exception, ...) when a signal stopped the run."""
-    emit(SolveStarted(loaded.name, plan.starts))
-    done = 0
+    batches = plan.auto.batches() if plan.auto is not None else [plan.starts]
+    first = batches.index(plan.resumed_batch) if plan.resumed_batch in batches else 0
+    done, total = 0, batches[first]
+    emit(SolveStarted(loaded.name, total))
 
     def on_start(report, best) -> None:
         nonlocal done
         done += 1
-        emit(start_finished(report, best, done, plan.starts))
+        emit(start_finished(report, best, done, total))
+
+    def on_batch(starts: int) -> None:
+        """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved."""
+        nonlocal total
+        log_file.batch(starts)
+        if starts != batches[first]:
+            total += starts
+            emit(SolveStarted(loaded.name, total))
 
     solved = None         # (result, reports, log) once every start has finished
     stderr = sys.stderr   # the warnings capture swaps it; an exit cut short by a signal may not swap it back
@@ -146,7 +178,8 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
     try:
         with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
             solved = core.run_solve(kind, loaded, plan.asked, plan.seed, workers, on_start, request.scheduler,
-                                    record=log_file.append, finished=plan.finished)
+                                    record=log_file.append, finished=plan.finished, auto=plan.auto,
+                                    on_batch=on_batch, resumed_batch=plan.resumed_batch)
     except (SpecError, AssemblyError) as exc:
         # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is said as check says it:
         # the file first

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
+                      model_validator)
 from pydantic_core import PydanticCustomError
 
 from synthesis.errors import SpecError
@@ -177,6 +178,23 @@ class MultistartSettings(StrictModel):
     starts: int = starts_field(16)
     seed: int = Field(0, ge=0, le=2**53, description="seed of the Latin-hypercube starts")
     max_iter: int = max_iter_field(500)
+    #: starts = "auto": the multistart grows until it is sure (synthesis.core.solve.AutoStarts); ``starts`` is then
+    #: the kind's default, which a fixed-starts run of the spec would use
+    _starts_auto: bool = PrivateAttr(False)
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _auto_starts(cls, data, handler):
+        auto = isinstance(data, dict) and data.get("starts") == "auto"
+        model = handler({k: v for k, v in data.items() if k != "starts"} if auto else data)
+        if auto:
+            model._starts_auto = True
+        return model
+
+    @property
+    def starts_auto(self) -> bool:
+        """Whether the spec says ``starts = "auto"``."""
+        return self._starts_auto
 
 
 #: what a spec file may hold: a file of at most MAX_SPEC_BYTES, tables nested at most MAX_DEPTH deep,
