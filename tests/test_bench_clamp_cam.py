@@ -8,7 +8,8 @@ import math
 import pytest
 
 from conftest import LIBRARY
-from synthesis.kinds.clamp_cam.nlp import CamNLP
+from synthesis.core.kind import Setting
+from synthesis.kinds.clamp_cam.solve import SOLVING
 from solving import run_solve
 from synthesis.spec import load_spec
 
@@ -17,7 +18,7 @@ SPEC = LIBRARY / "clamp_cam" / "opening_cam_redesign.toml"
 
 
 def test_bench_one_local_solve(benchmark):
-    nlp = CamNLP(load_spec(SPEC).model)
+    nlp = SOLVING.build(Setting(load_spec(SPEC).model))
     out = benchmark(nlp.solve, 0, nlp.init)
     benchmark.extra_info["iterations"] = out.iterations
     assert out.success

@@ -12,7 +12,8 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 from conftest import LIBRARY
-from synthesis.kinds.clamp_cam.nlp import CamNLP
+from synthesis.core.kind import Setting
+from synthesis.kinds.clamp_cam.solve import SOLVING
 from synthesis.kinds.clamp_cam.scene import CamScene, evaluate
 from solving import diagnose_infeasible, run_solve
 from synthesis.spec import LoadedSpec, load_spec
@@ -141,7 +142,7 @@ def test_longer_return_agrees_with_root_finding(solved):
 
 def test_constraint_jacobian_matches_central_differences():
     spec = load_spec(CAMS / "opening_cam_redesign_return.toml").model
-    nlp = CamNLP(spec)
+    nlp = SOLVING.build(Setting(spec))
     x = nlp.init + np.array([3.0, 0.0, 1.0, 0.0, 0.0, -5.0, 5.0, 0.0])
     t = nlp.compiled.t              # the transcribed NLP IPOPT sees
     J = np.asarray(ca.Function("J", [t.w], [ca.jacobian(t.g, t.w)])(x))

@@ -20,9 +20,8 @@ import numpy as np
 from constraints.base import Rule
 from synthesis.kinds.clamp_cam.motion import Timing
 from synthesis.kinds.clamp_cam.scene import follower_of, omega_of, rules_of, stroke_of
-from synthesis.core.declared import compile_problem
-from synthesis.core.kind import KindNLP, Setting
-from synthesis.core.outcome import StartOutcome
+from synthesis.core.declared import Declared, named
+from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Operating, Problem, Row, per_rule_backoff
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
@@ -37,12 +36,36 @@ SAMPLED = ("pressure_angle_rise", "pressure_angle_return", "no_undercut", "no_un
 OBJECTIVE_UNITS = {"base_radius": "mm", "pressure_angle": "deg", "nearest": "-"}
 
 
-class CamNLP(KindNLP):
-    """Built once per spec; :meth:`solve` runs one IPOPT solve from a start point."""
+def problem(setting: Setting) -> Declared:
+    """The problem of one spec (``setting.data``: an optimised law's fit): tau started at a start design's peak
+    |pressure angle| (the pressure_angle objective), the objective reported in its units."""
+    spec, cam = setting.spec, _CamProblem(setting.spec, setting.data, setting.operating_symbols)
+    names, name = cam.names, spec.objective.name
 
-    def __init__(self, spec: ClampCamSpec, optimised=None, elastic: bool = False, setting: Setting | None = None):
-        setting = setting or Setting(spec)
-        self.spec, self.elastic = spec, elastic
+    def start(x_design: np.ndarray, elastic: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """Start value of tau (pressure_angle objective): the start design's peak |pressure angle|."""
+        x_design = np.asarray(x_design, dtype=float)
+        if elastic or name != "pressure_angle":
+            return x_design, None
+        alpha = np.asarray(cam.alpha_function(x_design)).ravel()
+        return x_design, np.array([float(np.max(np.abs(alpha)))])
+
+    def reported(out, design: dict[str, float], elastic: bool) -> float:
+        """The objective in report units: base radius mm, peak pressure angle deg, or the distance."""
+        if name == "base_radius":
+            return design["base_radius"]
+        if name == "pressure_angle":
+            return out.objective * 10.0
+        return out.objective
+
+    return Declared(cam.problem, names, cam.bounds, cam.init, design=named(names), start=start, objective=reported)
+
+
+class _CamProblem:
+    """The cam's problem, declared piece by piece (variables, sampled pressure angles, rows, rules, objective)."""
+
+    def __init__(self, spec: ClampCamSpec, optimised, operating_symbols: bool):
+        self.spec = spec
         variables = spec.variables()
         self.names = list(variables)
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
@@ -57,7 +80,7 @@ class CamNLP(KindNLP):
         # d rule / d crank speed (the acceleration's omega^2, windows timed in seconds).  Not with an optimised law
         # under an acceleration cap: that law is refitted (cvxpy) at each speed, a change the NLP cannot see
         self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min")]
-                          if setting.operating_symbols and not (spec.motion.law == "optimised"
+                          if operating_symbols and not (spec.motion.law == "optimised"
                                                                  and spec.rules.max_acceleration is not None) else [])
         alpha, kappa, acc = self._sampled(v, rise_law, return_law)
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
@@ -76,7 +99,6 @@ class CamNLP(KindNLP):
                                # in a tolerance box the follower geometry exists for every design in it: its rows
                                # (all but the first, the turn's 360 deg) held at their linearised worst case
                                robust_structural=tuple(range(1, len(structural))))
-        self.compiled = compile_problem(setting, self.problem, elastic)
         self.rules = self.problem.rules
 
     # ------------------------------------------------------------------ model pieces
@@ -143,27 +165,3 @@ class CamNLP(KindNLP):
         return ObjectiveParts(f=tau / 10.0, extra=tau, extra_lb=[0.0], extra_ub=[90.0], extra_init=[0.0],
                               rows=[(tau - both, 0.0, None), (tau + both, 0.0, None)], extra_units=["deg"],
                               row_units=["deg", "deg"])
-
-    # ------------------------------------------------------------------ solving
-
-    def tau_start(self, x_design: np.ndarray) -> np.ndarray | None:
-        """Start value of tau (pressure_angle objective): the start design's peak |pressure angle|."""
-        if self.elastic or self.spec.objective.name != "pressure_angle":
-            return None
-        alpha = np.asarray(self.alpha_function(x_design)).ravel()
-        return np.array([float(np.max(np.abs(alpha)))])
-
-    def objective_value(self, design: dict[str, float], fvalue: float) -> float:
-        """The objective in report units: base radius mm, peak pressure angle deg, or the distance."""
-        name = self.spec.objective.name
-        if name == "base_radius":
-            return design["base_radius"]
-        if name == "pressure_angle":
-            return fvalue * 10.0
-        return fvalue
-
-    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
-        x_design = np.asarray(x_design, dtype=float)
-        out = self.compiled.solve(start, x_design, self.tau_start(x_design))
-        design = dict(zip(self.names, (float(v) for v in out.x[: len(self.names)])))
-        return StartOutcome.of(out, design, self.objective_value(design, out.objective))

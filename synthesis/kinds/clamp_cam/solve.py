@@ -4,8 +4,9 @@ and the result facts.  An optimised (B-spline) law is fitted once per run (cvxpy
 from __future__ import annotations
 
 from synthesis.kinds.clamp_cam.check import FINE, describe
-from synthesis.kinds.clamp_cam.nlp import OBJECTIVE_UNITS, CamNLP
+from synthesis.kinds.clamp_cam.nlp import OBJECTIVE_UNITS, problem
 from synthesis.kinds.clamp_cam.scene import CamScene, evaluate, fit_law
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 
@@ -13,10 +14,6 @@ from synthesis.core.verdict import Recheck, StartReport
 def prepare(spec):
     """The optimised law, fitted once (None for a closed-form law)."""
     return fit_law(spec)
-
-
-def build(setting: Setting, elastic: bool = False) -> CamNLP:
-    return CamNLP(setting.spec, setting.data, elastic=elastic, setting=setting)
 
 
 def fine_check(spec, design: dict[str, float], optimised=None) -> list:
@@ -54,7 +51,7 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
     return [r.record().to_json() for r in fine_check(spec, spec.design_values(), setting.data)]
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
+SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
                   samples_hint="[solver] samples_per_segment or [solver] backoff",
                   relax_hint="Try wider bounds on the design variables, looser limits on those rules, "
                              "or another motion law.")
