@@ -100,6 +100,10 @@ class DeclaredNLP(KindNLP):
         """The problem as the kind declared it (before any transform)."""
         return self.declared.problem
 
+    def design(self, x: np.ndarray) -> dict:
+        """The result design of a decision vector (the kind's design map)."""
+        return self.declared.design(x)
+
     def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
         d, elastic = self.declared, self.compiled.elastic
         x0, extra0 = d.start(x_design, elastic)
