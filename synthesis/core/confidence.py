@@ -169,15 +169,29 @@ OPTIMA_SHOWN = 10
 
 def statement(objectives, unit_designs, start_ids, *, maximise: bool = False,
               assumptions_not_met: list[str] | tuple[str, ...] = ()) -> dict:
-    """result.json ``solver.confidence``: the :class:`Confidence` fields, the distinct optima (``objective`` as the
-    kind states it, ``starts`` reaching it, ``first_start``), at most OPTIMA_SHOWN, best first, and where the
-    model's assumptions are known not to hold.  A maximised objective is grouped as its negative (best first)."""
+    """result.json ``solver.confidence``: the :class:`Confidence` fields of the distinct optimum *values* (starts
+    whose objectives tie are one optimum, whatever their designs), ``distinct_designs`` (the optima in the unit
+    box, :func:`distinct_optima`), the optima (``objective`` as the kind states it, ``starts`` reaching it,
+    ``first_start``, ``designs`` at it), at most OPTIMA_SHOWN, best first, and where the model's assumptions are
+    known not to hold.  A maximised objective is grouped as its negative (best first)."""
     sign = -1.0 if maximise else 1.0
-    optima = distinct_optima(sign * np.asarray(objectives, dtype=float), unit_designs, start_ids)
-    return {**confidence(optima).to_json(),
-            "optima": [{"objective": sign * o.objective, "starts": o.count, "first_start": o.starts[0]}
-                       for o in optima[:OPTIMA_SHOWN]],
-            "assumptions_not_met": list(assumptions_not_met)}
+    f = sign * np.asarray(objectives, dtype=float)
+    designs = distinct_optima(f, unit_designs, start_ids)
+    # the question is whether a better objective exists: optima of one objective at distinct designs (a valley of
+    # equal designs, as comb_finger's combing angle that only its alpha sets, or symmetric twins) are one level,
+    # else a flat valley's starts, each stopping somewhere along it, count as ever more optima never all found
+    optima = distinct_optima(f, unit_designs, start_ids, design_tolerance=math.inf)
+    notes = list(assumptions_not_met)
+    if len(designs) > len(optima):
+        notes.append(f"{len(designs)} optima at distinct designs share {len(optima)} objective value"
+                     f"{'' if len(optima) == 1 else 's'} (a flat valley or symmetric optima): counted as one optimum "
+                     f"per value")
+    level_of = {i: k for k, o in enumerate(optima) for i in o.starts}
+    return {**confidence(optima).to_json(), "distinct_designs": len(designs),
+            "optima": [{"objective": sign * o.objective, "starts": o.count, "first_start": o.starts[0],
+                        "designs": sum(1 for d in designs if level_of[d.starts[0]] == k)}
+                       for k, o in enumerate(optima[:OPTIMA_SHOWN])],
+            "assumptions_not_met": notes}
 
 
 def said(stated: dict) -> str:

@@ -1,0 +1,221 @@
+"""solver.confidence in every solve's result and ``--starts auto`` (synthesis/core/confidence.py, core/solve.py
+AutoStarts; docs/ARCHITECTURE.md "result.json")."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from conftest import LIBRARY
+from solving import agrisynth
+from synthesis import kinds
+from synthesis.core import startlog
+from synthesis.core.solve import AutoStarts, run_solve
+from synthesis.kinds import solve_spec
+from synthesis.spec import load_spec
+
+TOY = """kind = "toy_disc"
+name = "toy"
+x = {{ init = 0.0, bounds = [-20.0, 20.0] }}
+y = {{ init = 1.0, bounds = [-20.0, 20.0] }}
+radius = 10.0
+y_min = -5.0
+target = [30.0, 40.0]
+[solver]
+starts = {starts}
+"""
+
+
+@pytest.fixture
+def toy():
+    import toy_kind
+
+    kinds.register(toy_kind.KIND)
+    yield toy_kind.KIND
+    kinds.unregister("toy_disc")
+
+
+def _toy(tmp_path, starts="20"):
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(starts=starts))
+    return load_spec(path)
+
+
+def test_the_toy_kinds_one_optimum_gives_the_closed_form_statement(tmp_path, toy):
+    """The toy (nearest point of a disc to a target outside it) has one optimum; every one of 20 starts reaches it:
+    W = 1, N = 20, so P(best is global) = (N - W - 1) / (N - 1) = 18/19, E[K] = W (N - 1) / (N - W - 2) = 19/17,
+    unseen basin share W (W + 1) / (N (N - 1)) = 2/380, and the stopping rule holds (19/17 - 1 < 0.5)."""
+    result, _, _ = run_solve(toy, _toy(tmp_path), workers=1)
+    stated = json.loads(json.dumps(result.to_json()))["solver"]["confidence"]
+    assert result.to_json()["schema_version"] == 5
+    assert (stated["starts_counted"], stated["distinct_optima"], stated["starts_at_best"]) == (20, 1, 20)
+    assert stated["probability_best_is_global"] == pytest.approx(18 / 19, rel=1e-15)
+    assert stated["expected_optima"] == pytest.approx(19 / 17, rel=1e-15)
+    assert stated["unseen_basin_share"] == pytest.approx(2 / 380, rel=1e-15)
+    assert stated["stopping_rule_met"] is True and stated["distinct_designs"] == 1
+    assert stated["optima"] == [{"objective": stated["optima"][0]["objective"], "starts": 20, "first_start": 0,
+                                 "designs": 1}]
+    assert stated["optima"][0]["objective"] == pytest.approx(40.0**2, rel=1e-7) and stated["assumptions_not_met"] == []
+
+
+def test_a_library_spec_with_several_local_optima_says_how_many_and_how_sure():
+    """crank_rocker_max_transmission's 8 starts (problems/picker): counted only where IPOPT converged with every rule
+    held; numbers as the closed forms give them for the W and N found."""
+    result, reports, _ = solve_spec(load_spec(LIBRARY / "picker" / "crank_rocker_max_transmission.toml"), workers=1)
+    stated = result.solver["confidence"]
+    n = sum(1 for r in reports if r.satisfied and r.outcome.success and r.outcome.return_status == "Solve_Succeeded")
+    w = stated["distinct_optima"]
+    assert stated["starts_counted"] == n and sum(o["starts"] for o in stated["optima"]) == n
+    assert stated["probability_best_is_global"] == pytest.approx((n - w - 1) / (n - 1), rel=1e-15)
+    assert stated["optima"][0]["objective"] == pytest.approx(result.objective["value"], rel=1e-6)
+
+
+def test_a_flat_valley_of_equal_objectives_is_one_optimum_not_eight():
+    """comb_finger's largest combing angle depends on alpha alone: its 8 starts end at 8 designs of one objective
+    (to 1e-9).  Counted per design the estimate would say P(global) undefined and expect ever more optima; counted per
+    objective value it is one optimum reached by all 8: P = 6/7, and the note says why."""
+    result, _, _ = solve_spec(load_spec(LIBRARY / "comb_finger" / "redesign_tip_speed.toml"), workers=1)
+    stated = result.solver["confidence"]
+    assert (stated["starts_counted"], stated["distinct_optima"], stated["distinct_designs"]) == (8, 1, 8)
+    assert stated["probability_best_is_global"] == pytest.approx(6 / 7, rel=1e-15)
+    assert stated["assumptions_not_met"] == ["8 optima at distinct designs share 1 objective value (a flat valley or "
+                                             "symmetric optima): counted as one optimum per value"]
+
+
+def test_fourbar_path_says_its_starts_are_not_uniform():
+    """A kind that builds its own (screened) starts: the statement names the assumption it breaks."""
+    from synthesis.core.solve import _not_uniform
+    from synthesis.core.kind import Setting
+
+    loaded = load_spec(LIBRARY / "fourbar_path" / "picking_arc.toml")
+    solving = kinds.get("fourbar_path").solving()
+    nlp = solving.build(Setting(loaded.model, 0, solving.prepare(loaded.model)), False)
+    assert "the kind builds its own starts (screened), not uniform in the box" in _not_uniform(nlp)
+
+
+def test_auto_stops_by_the_rule_on_a_unimodal_problem_after_the_minimum_and_equals_that_many_fixed_starts(tmp_path,
+                                                                                                          toy):
+    """One optimum: the first batch (16 starts, all converged) meets the rule (E[unseen] = 15/13 - 1 < 0.5) with the
+    minimum of 16 converged; the answer is --starts 16's to the bit."""
+    loaded = _toy(tmp_path)
+    auto, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts())
+    fixed, _, _ = run_solve(toy, loaded, starts=16, workers=1)
+    assert auto.solver["auto"]["stopped_by"] == "rule" and auto.solver["auto"]["batches"] == [16]
+    assert auto.solver["starts"] == 16 == auto.solver["starts_run"]
+    assert auto.objective["value"] == fixed.objective["value"] and auto.design == fixed.design
+    assert auto.solver["confidence"] == fixed.solver["confidence"]
+    assert [s["objective"] for s in auto.starts] == [s["objective"] for s in fixed.starts]
+
+
+def test_auto_below_its_minimum_grows_by_whole_batches_and_stops_at_the_fixed_run_of_its_total(tmp_path, toy):
+    """min_converged 20 is not met by the first batch of 16: the second batch is the whole --starts 32 run (its own
+    Latin hypercube), start 0 carried; every start of the first batch is reported to on_start, then 32 more."""
+    loaded = _toy(tmp_path)
+    batches, seen = [], []
+    auto, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=batches.append,
+                           on_start=lambda report, best: seen.append(report.outcome.start))
+    fixed, _, _ = run_solve(toy, loaded, starts=32, workers=1)
+    assert batches == [16, 32] and auto.solver["auto"]["batches"] == [16, 32]
+    assert seen == list(range(16)) + list(range(32))
+    assert auto.solver["auto"]["stopped_by"] == "rule" and auto.solver["starts"] == 32
+    assert auto.objective["value"] == fixed.objective["value"] and auto.design == fixed.design
+    assert [s["design"] for s in auto.starts] == [s["design"] for s in fixed.starts]
+
+
+def _combing(tmp_path, starts: str):
+    """comb_finger's redesign_max_combing (an 8-start solve of a tenth of a second) with [solver] starts = STARTS."""
+    text = (LIBRARY / "comb_finger" / "redesign_max_combing.toml").read_text()
+    assert "\nstarts = 8\n" in text
+    spec = tmp_path / "combing.toml"
+    spec.write_text(text.replace("\nstarts = 8\n", f"\nstarts = {starts}\n"))
+    return spec
+
+
+def test_auto_stops_by_max_starts(tmp_path):
+    """--starts auto --max-starts 8: one batch of 8 (7 Latin-hypercube starts and the given design): not the 16
+    converged starts the rule needs, so the budget stops it -- through the command line, result.json says so.  The
+    8 starts end at 5 designs of one combing angle: one optimum, P = 6/7."""
+    spec = _combing(tmp_path, "4")
+    run = agrisynth("solve", spec, "--starts", "auto", "--max-starts", "8", "--workers", "1", "--out", tmp_path / "o")
+    assert run.returncode == 0, run.stderr
+    data = json.loads((tmp_path / "o" / "redesign_max_combing" / "result.json").read_text())
+    assert data["solver"]["auto"] == {"stopped_by": "max_starts", "batches": [8], "max_starts": 8,
+                                      "time_limit_s": None, "min_converged": 16, "first": 16}
+    assert data["solver"]["starts"] == 8 and data["solver"]["confidence"]["starts_counted"] == 8
+    said = " ".join(run.stdout.split())
+    assert "confidence: 1 distinct optimum in 8 converged starts, best reached by 8; P(best is global) ~ 0.86" in said
+    assert "--starts auto: 8 starts, stopped by max_starts" in said
+    assert "global optimum (how sure)" in (tmp_path / "o" / "redesign_max_combing" / "report.html").read_text()
+
+
+def test_a_spec_may_ask_for_auto_and_budgets_need_auto(tmp_path):
+    spec = _combing(tmp_path, '"auto"')
+    loaded = load_spec(spec)
+    assert loaded.model.solver.starts_auto and loaded.model.solver.starts == 8      # the kind's default
+    run = agrisynth("solve", spec, "--max-starts", "8", "--workers", "1", "--out", tmp_path / "o")
+    assert run.returncode == 0, run.stderr
+    assert json.loads((tmp_path / "o" / "redesign_max_combing" / "result.json").read_text())["solver"]["auto"][
+        "stopped_by"] == "max_starts"
+    spec = _combing(tmp_path, "4")
+    run = agrisynth("solve", spec, "--max-starts", "8", "--workers", "1", "--out", tmp_path / "p")
+    assert run.returncode == 2 and "--max-starts and --time-limit are budgets of --starts auto" in run.stderr
+    run = agrisynth("solve", spec, "--starts", "often", "--workers", "1", "--out", tmp_path / "p")
+    assert run.returncode == 2 and "'often' is neither a whole number" in run.stderr
+
+
+def test_auto_gives_the_same_answer_and_count_on_one_and_two_workers(tmp_path, toy):
+    loaded = _toy(tmp_path)
+    one, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20))
+    two, _, _ = run_solve(toy, loaded, workers=2, auto=AutoStarts(min_converged=20))
+    assert one.solver["auto"] == two.solver["auto"] and one.solver["starts"] == two.solver["starts"] == 32
+    assert one.objective["value"] == two.objective["value"] and one.design == two.design
+    assert one.solver["confidence"] == two.solver["confidence"]
+
+
+def test_an_interrupted_auto_run_resumed_gives_the_uninterrupted_answer(tmp_path):
+    """The run folder of an auto run cut after 5 starts of its first batch (its starts.jsonl: header, the batch's
+    line, 5 starts) is finished by --resume: the same answer, statement and count."""
+    spec = _combing(tmp_path, "4")
+    whole = agrisynth("solve", spec, "--starts", "auto", "--workers", "1", "--out", tmp_path / "whole")
+    assert whole.returncode == 0, whole.stderr
+    folder = tmp_path / "whole" / "redesign_max_combing"
+    lines = (folder / startlog.FILENAME).read_text().splitlines()
+    assert json.loads(lines[1]) == {startlog.BATCH: 16}
+    (folder / startlog.FILENAME).write_text("\n".join(lines[:7]) + "\n")
+    before = json.loads((folder / "result.json").read_text())
+    resumed = agrisynth("solve", spec, "--resume", folder, "--workers", "1")
+    assert resumed.returncode == 0, resumed.stderr
+    after = json.loads((folder / "result.json").read_text())
+    assert "resumed: 5 finished start(s)" in " ".join(resumed.stdout.split())
+    assert before["solver"]["auto"]["batches"] == [16]
+    for key in ("confidence", "auto", "starts", "best_start"):
+        assert after["solver"][key] == before["solver"][key]
+    assert after["objective"]["value"] == before["objective"]["value"] and after["design"] == before["design"]
+
+
+def test_a_resumed_auto_run_continues_the_batch_it_was_in(tmp_path, toy):
+    """Core: an auto run stopped inside its second batch (32) resumes there with that batch's finished starts: the
+    first batch is not solved again and the answer is the uninterrupted one."""
+    loaded = _toy(tmp_path)
+    kept = []
+    whole, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append)
+    second = {out.start: out for out in kept[16:16 + 7]}
+    seen = []
+    resumed, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), finished=second,
+                              resumed_batch=32, on_start=lambda report, best: seen.append(report.outcome.start))
+    assert seen == list(range(32))
+    assert resumed.solver["auto"] == whole.solver["auto"] and resumed.solver["confidence"] == whole.solver["confidence"]
+    assert resumed.objective["value"] == whole.objective["value"] and resumed.design == whole.design
+
+
+@pytest.mark.slow
+def test_auto_on_a_library_crank_rocker_equals_the_fixed_run_of_its_count():
+    """crank_rocker_max_transmission: the first batch of 16 has fewer than 16 converged starts, the second (32)
+    meets the rule; the answer is --starts 32's to the bit (about 20 s)."""
+    loaded = load_spec(LIBRARY / "picker" / "crank_rocker_max_transmission.toml")
+    auto, _, _ = run_solve(kinds.solving_kind_for(loaded), loaded, workers=1, auto=AutoStarts())
+    fixed, _, _ = solve_spec(loaded, starts=auto.solver["starts"], workers=1)
+    assert auto.solver["auto"]["batches"] == [16, 32] and auto.solver["auto"]["stopped_by"] == "rule"
+    assert auto.objective["value"] == fixed.objective["value"] and auto.design == fixed.design
+    assert auto.solver["confidence"] == fixed.solver["confidence"]
