@@ -28,7 +28,6 @@ that go either way.  The core transcribes it (back-off, elastic form) and runs I
 
 from __future__ import annotations
 
-import contextvars
 import functools
 import math
 
@@ -244,9 +243,8 @@ class PathNLP(KindNLP):
         form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
                              opts, spec.solver.max_iter)
         self.configuration = ConfigurationNLP(*form(options))
-        if POLISH_MU_INIT is not None:      # the polisher's arguments and context now, its build on first use
-            self._polisher_settings = (form({**options, "ipopt.mu_init": POLISH_MU_INIT}),
-                                       contextvars.copy_context())
+        if POLISH_MU_INIT is not None:      # the polisher's arguments now, its build on first use
+            self._polisher_settings = form({**options, "ipopt.mu_init": POLISH_MU_INIT})
 
     @property
     def _open_in_configuration(self) -> bool:
@@ -260,8 +258,7 @@ class PathNLP(KindNLP):
         settings captured when this NLP was built."""
         if self._polisher_settings is None:
             return self.configuration
-        args, context = self._polisher_settings
-        return context.run(ConfigurationNLP, *args)
+        return ConfigurationNLP(*self._polisher_settings)
 
     def _ipopt_options(self, spec) -> dict:
         out = {"ipopt.mu_strategy": spec.solver.mu_strategy, **({"ipopt.mu_init": MU_INIT} if MU_INIT else {})}
