@@ -338,3 +338,24 @@ def test_the_classic_train_of_three_identical_elliptic_gears():
     swing = np.degrees(np.ptp(sum(c * np.cos(k * fine) + s * np.sin(k * fine)
                                   for k, (c, s) in enumerate(zip(planet_cos, planet_sin), start=1))))
     assert 0.5 * swing == pytest.approx(math.degrees(4 * e), rel=0.02)
+
+
+@pytest.mark.slow
+def test_a_single_idler_is_one_pitch_curve(tmp_path):
+    """single_idler_redesign: the idler's curve towards the sun (pair 1 driven) and towards the planet (pair 2
+    driver), read back from pitch_curves.csv, are one curve: at each polar angle of idler gear 2 the radius of idler
+    gear 1 there (periodic interpolation in its own samples) is the same within the rule's 0.01 mm."""
+    from synthesis.kinds import solve_spec
+
+    result, _, _ = solve_spec(load_spec(LIBRARY / "rotary_planetary/single_idler_redesign.toml"), workers=1)
+    assert result.status == "optimal"
+    write_pitch_curves_csv(result, tmp_path / "pitch_curves.csv")
+    with open(tmp_path / "pitch_curves.csv", newline="") as f:
+        rows = list(csv.DictReader(f))[:-1]         # one turn: the last row repeats the first
+    one = np.array([[float(r["pair1_driven_deg"]), float(r["pair1_driven_radius_mm"])] for r in rows])
+    two = np.array([[float(r["pair2_driver_deg"]), float(r["pair2_driver_radius_mm"])] for r in rows])
+    order = np.argsort(one[:, 0] % 360.0)
+    at = np.interp(two[:, 0] % 360.0, (one[order, 0] % 360.0), one[order, 1], period=360.0)
+    assert np.max(np.abs(two[:, 1] - at)) < 0.0101
+    # and the idler is not a circle: both pairs are non-circular
+    assert np.ptp(one[:, 1]) > 1.0

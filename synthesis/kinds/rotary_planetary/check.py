@@ -15,7 +15,8 @@ from constraints.base import Rule
 from synthesis.core.verdict import FINE
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (
-    Train, claw_attitude, is_symbolic, ops_of, pairs, tip, tip_curvature_rate, tip_rate, train_from_design, turn_grid,
+    Train, claw_attitude, idler_turn, is_symbolic, ops_of, pairs, tip, tip_curvature_rate, tip_rate, train_from_design,
+    turn_grid,
 )
 from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
 from synthesis.result import Result
@@ -51,6 +52,8 @@ class Angles:
     exit: Any = None
     poses: dict = field(default_factory=dict)
     missing: str | None = None
+    #: with a single idler: per grid angle phi_j, the carrier angle where the idler had turned half a turn less
+    half_turn: Any = None
 
 
 def omega(spec: RotaryPlanetarySpec) -> float:
@@ -121,13 +124,23 @@ def pose_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> list[
     return out
 
 
+def single_idler_rules(spec: RotaryPlanetarySpec, train: Train, grid, half_turn) -> list[Rule]:
+    """With a single idler: its radius towards the planet at carrier angle phi', where its polar angle is the one
+    it met the sun with at phi_j (theta2(phi') = theta2(phi_j) - pi), against that radius towards the sun."""
+    if not spec.rules.single_idler:
+        return []
+    towards_sun = pairs(train, grid)[0].driven.radius[0]
+    towards_planet = pairs(train, half_turn)[1].driver.radius[0]
+    return [R.single_idler_rule(towards_planet - towards_sun, spec.rules.single_idler_tolerance)]
+
+
 def rules_of(spec: RotaryPlanetarySpec, train: Train, angles: Angles, grid, soil_samples: int) -> list[Rule]:
     """Every rule of the spec, on floats (angles found on the grid) or symbols (angles the NLP's variables)."""
     _, y_top = tip(train, angles.top)
     _, y_bottom = tip(train, angles.bottom)
     _, y_grid = tip(train, grid)
     lim = spec.rules
-    return [*gear_rules(spec, train, grid),
+    return [*gear_rules(spec, train, grid), *single_idler_rules(spec, train, grid, angles.half_turn),
             R.trajectory_height_rule(y_top, y_bottom, lim.trajectory_height_min),
             *R.planting_depth_rules(soil_y(spec), y_bottom, y_grid, lim.planting_depth),
             *soil_rules(spec, train, angles, soil_samples),
@@ -167,8 +180,21 @@ def _pose_distance(train: Train, pose, phi: float) -> float:
     return math.hypot(float(px) - pose.x, float(py) - pose.y)
 
 
-def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES) -> Angles:
-    """The loop's extremes, soil entry and exit and the key poses' carrier angles of a numeric design."""
+def half_turn_angles(train: Train, grid) -> np.ndarray:
+    """Per grid angle phi_j, the carrier angle phi' in (phi_j - 2 pi, phi_j) where the idler had turned half a turn
+    less: theta2(phi') = theta2(phi_j) - pi (theta2 - target is -pi at phi_j - 2 pi and +pi at phi_j: a root)."""
+    def root(phi: float) -> float:
+        target = float(idler_turn(train, phi)) - math.pi
+        return brentq(lambda q: float(idler_turn(train, q)) - target, phi - 2.0 * math.pi, phi, xtol=1e-14,
+                      rtol=1e-15)
+
+    return np.array([root(float(phi)) for phi in grid])
+
+
+def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES, grid_n: int | None = None
+                ) -> Angles:
+    """The loop's extremes, soil entry and exit and the key poses' carrier angles of a numeric design (and, with a
+    single idler, the half-turn angles of the rules' grid of ``grid_n`` angles, default ``n``)."""
     grid = turn_grid(n)
     h = grid[1]
     x, y = tip(train, grid)
@@ -186,6 +212,8 @@ def find_angles(spec: RotaryPlanetarySpec, train: Train, n: int = CHECK_SAMPLES)
         # the pose is read where the tip is nearest its target (the NLP pins its angle there too)
         poses[name] = _refine(miss, float(grid[np.argmin((x - pose.x) ** 2 + (y - pose.y) ** 2)]), h)
     angles = Angles(top, bottom, poses=poses)
+    if spec.rules.single_idler:
+        angles.half_turn = half_turn_angles(train, turn_grid(grid_n or n))
     level = soil_y(spec)
     lowest = _y(train, bottom)
     if lowest >= level:

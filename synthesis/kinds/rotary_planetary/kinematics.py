@@ -113,6 +113,11 @@ def idler_law(train: Train, phi, order: int = 0):
     return fourier(o, train.idler_cos, train.idler_sin, o.angles(phi), order)
 
 
+def idler_turn(train: Train, phi):
+    """theta2 = phi + G(phi): the idler's rotation relative to the carrier, rad."""
+    return ops_of(train, phi).angles(phi) + idler_law(train, phi)
+
+
 def tip(train: Train, phi):
     """The claw tip (x, y), mm, machine frame, at carrier angle(s) phi (rad)."""
     o = ops_of(train, phi)

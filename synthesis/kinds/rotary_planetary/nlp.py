@@ -23,7 +23,7 @@ from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.kinds.rotary_planetary.check import (
     Angles, find_angles, rules_of, soil_y, train_of,
 )
-from synthesis.kinds.rotary_planetary.kinematics import tip, tip_rate, turn_grid
+from synthesis.kinds.rotary_planetary.kinematics import idler_turn, tip, tip_rate, turn_grid
 from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
 from synthesis.spec.common import design_box
 
@@ -60,7 +60,9 @@ def problem(setting: Setting) -> Declared:
     names = list(variables)
     bounds, init = design_box(variables, names)
     free_poses = [n for n, p in spec.key_poses.items() if p.carrier_angle is None]
-    n_design, n_aux = len(names), 4 + len(free_poses)
+    samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
+    n_half = samples if spec.rules.single_idler else 0
+    n_design, n_aux = len(names), 4 + len(free_poses) + n_half
     z = ca.SX.sym("z", n_design + n_aux)
     design = {n: z[i] for i, n in enumerate(names)}
     top, bottom, entry, exit_ = (z[n_design + i] for i in range(4))
@@ -68,10 +70,14 @@ def problem(setting: Setting) -> Declared:
     poses.update({n: p.carrier_angle * math.pi / 180.0 for n, p in spec.key_poses.items()
                   if p.carrier_angle is not None})
     train = train_of(spec, design)
-    samples, soil_n = spec.solver.samples_per_turn, spec.solver.in_soil_samples
-    angles = Angles(top, bottom, entry, exit_, poses)
+    half = z[n_design + 4 + len(free_poses):] if n_half else None
+    angles = Angles(top, bottom, entry, exit_, poses, half_turn=half)
     rules = rules_of(spec, train, angles, turn_grid(samples), soil_n)
     structural = structural_rows(spec, train, angles, free_poses)
+    if n_half:
+        # each half-turn angle pinned where the idler had turned half a turn less than at its grid angle
+        structural.insert(4 + len(free_poses), (idler_turn(train, half) - idler_turn(train, turn_grid(samples))
+                                                + math.pi, 0.0, 0.0))
     if spec.objective.name == "key_pose_miss":
         misses = pose_miss(rules)
         f = ca.sum1(ca.vertcat(*misses)) if misses else ca.SX(0.0)
@@ -83,13 +89,13 @@ def problem(setting: Setting) -> Declared:
     declared = Problem("rotary_planetary", z, lbx, ubx, structural, rules, ObjectiveParts(f=f / 100.0),
                        x_units=["mm" if n in lengths else "deg" for n in names] + ["rad"] * n_aux,
                        structural_units=["mm/rad", "mm/rad", "mm", "mm"] + ["mm^2/rad"] * len(free_poses)
-                       + ["mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
+                       + ["rad"] * bool(n_half) + ["mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
                        objective_unit="mm^2" if spec.objective.name == "key_pose_miss" else "deg^2",
                        max_iter=spec.solver.max_iter)
 
     def start(x_design: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
         x_design = np.clip(np.asarray(x_design, dtype=float), bounds[:, 0], bounds[:, 1])
-        return np.concatenate([x_design, aux_guess(spec, names, free_poses, x_design)]), None
+        return np.concatenate([x_design, aux_guess(spec, names, free_poses, x_design, samples)]), None
 
     def reported(out, design: dict, elastic: bool) -> float:
         return out.objective * 100.0
@@ -124,11 +130,14 @@ def structural_rows(spec: RotaryPlanetarySpec, train, angles: Angles, free_poses
             (y_stroke - level, None, 0.0)]
 
 
-def aux_guess(spec: RotaryPlanetarySpec, names: list[str], free_poses: list[str], x_design: np.ndarray) -> np.ndarray:
-    """A start's carrier angles: its loop's extremes, soil crossings and the poses' best angles on a 0.5 deg grid."""
+def aux_guess(spec: RotaryPlanetarySpec, names: list[str], free_poses: list[str], x_design: np.ndarray,
+              samples: int) -> np.ndarray:
+    """A start's carrier angles: its loop's extremes, soil crossings and the poses' best angles on a 0.5 deg grid,
+    and with a single idler the half-turn angle of each of the ``samples`` grid angles."""
     design = dict(zip(names, (float(v) for v in x_design)))
     with np.errstate(divide="ignore", invalid="ignore"):
-        angles = find_angles(spec, train_of(spec, design), 720)
+        angles = find_angles(spec, train_of(spec, design), 720, samples)
     entry = angles.entry if angles.entry is not None else angles.bottom - 0.3
     exit_ = angles.exit if angles.exit is not None else angles.bottom + 0.3
-    return np.array([angles.top, angles.bottom, entry, exit_, *(angles.poses[n] for n in free_poses)])
+    half = [] if angles.half_turn is None else list(angles.half_turn)
+    return np.array([angles.top, angles.bottom, entry, exit_, *(angles.poses[n] for n in free_poses), *half])

@@ -17,6 +17,8 @@ import casadi as ca
 from constraints.base import Rule, not_evaluated
 
 DEG = 180.0 / math.pi
+#: the fraction of its tolerance the NLP holds the single-idler gap to on its samples
+BACKED_OFF = 0.9
 
 
 def pair_ratio_rule(ratios, lo: float, hi: float) -> Rule:
@@ -97,3 +99,13 @@ def pose_rules(name: str, dx, dy, tolerance: float, attitude_miss_deg=None, atti
         rules.append(Rule(f"pose_{name}_attitude", attitude_miss_deg, -attitude_tolerance, attitude_tolerance,
                           "deg", 1.0, where))
     return rules
+
+
+def single_idler_rule(radius_gap, tolerance: float) -> Rule:
+    """A single idler gear (the common three-gear train) meets the sun and the planet with one pitch curve: at each
+    polar angle of the idler, its radius towards the planet equals its radius towards the sun (read half an idler
+    turn apart), within ``tolerance``.  The NLP holds it on its samples a tenth inside the tolerance: where the rule
+    binds, the gap's extreme falls between samples (by 1 % of the tolerance at 72 and 180 samples a turn)."""
+    rows = ((radius_gap, -BACKED_OFF * tolerance, BACKED_OFF * tolerance),)
+    return Rule("single_idler", radius_gap, -tolerance, tolerance, "mm", 0.1, "idler's two pitch curves over a turn",
+                nlp_rows=rows)

@@ -111,6 +111,11 @@ class Rules(StrictModel):
                                                               "while in the soil, mm/s (0: never pushes forward)")
     plant_spacing: tuple[float, float] = Field(description="[min, max] plant spacing (two plants per carrier "
                                                            "turn), mm")
+    single_idler: bool = Field(False, description="true: the idler is one gear meshing with both sun and planet (the "
+                                                  "common three-gear train), its two pitch curves one curve; false: a "
+                                                  "compound idler (two gears on one shaft)")
+    single_idler_tolerance: float = Field(0.01, gt=0, description="with single_idler: largest difference of the "
+                                                                  "idler's two pitch radii at one polar angle, mm")
 
     @model_validator(mode="after")
     def _ordered(self) -> "Rules":
