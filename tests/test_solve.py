@@ -264,7 +264,7 @@ def test_infeasible_rule_set_exits_3_naming_the_conflict_cli(tmp_path):
     assert "Rules out of reach" in proc.stderr and "transmission_angle_min" in proc.stderr
     data = json.loads((tmp_path / "infeasible_deep_planting" / "result.json").read_text())
     assert data["status"] == "infeasible"          # the run's result is kept, not lost
-    assert data["schema_version"] == 4 and "transmission_angle_min" in data["elastic"]["conflicting"]
+    assert data["schema_version"] == 5 and "transmission_angle_min" in data["elastic"]["conflicting"]
     assert "precision_points" in data["facts"]
 
 

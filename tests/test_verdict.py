@@ -117,9 +117,14 @@ def edited_spec(tmp_path: Path, source: str, replacements: list[tuple[str, str]]
     return path
 
 
+#: solving kinds with no published design in the library yet (nothing to refuse as "nothing free"): the rotary
+#: planetary train (problems/rotary_planetary/NOTES.md says why none is reproduced)
+NO_PUBLISHED_DESIGN = {"rotary_planetary"}
+
+
 def test_every_solving_kind_is_covered():
     solving = {k.name for k in kinds.all_kinds() if k.solves}
-    assert set(NOTHING_FREE) | {"planting_fourbar", "fourbar_path"} == solving
+    assert set(NOTHING_FREE) | {"planting_fourbar", "fourbar_path"} | NO_PUBLISHED_DESIGN == solving
 
 
 @pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.slow) if k == "guide_way" else k
@@ -199,7 +204,7 @@ def test_failed_run_exits_3_with_result_and_message(tmp_path):
     err = " ".join(proc.stderr.split())
     assert "IPOPT found no design" in err and "Maximum_Iterations_Exceeded" in err
     data = json.loads((tmp_path / "out" / "cai2020_delta2" / "result.json").read_text())
-    assert data["schema_version"] == 4
+    assert data["schema_version"] == 5
     assert data["status"] == "failed" and data["elastic"]["relaxed"] == []
 
 
