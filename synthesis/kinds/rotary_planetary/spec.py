@@ -162,6 +162,8 @@ class RotaryPlanetarySpec(ProblemSpec):
         for name in poses:
             if not name.replace("_", "").isalnum():
                 raise ValueError(f"key pose name {name!r}: letters, digits and _ only")
+            if name.endswith("_attitude"):        # its rule would be named as another pose's attitude rule
+                raise ValueError(f"key pose name {name!r} may not end in _attitude")
         return poses
 
     @property
