@@ -20,7 +20,8 @@ A kind that solves returns a :class:`Solving` from ``solving()``: the pieces the
     build(setting, elastic)    the kind's NLP (a :class:`KindNLP`): ``names``, ``bounds``
                                (n x 2), ``init``, ``compiled`` (the :class:`~synthesis.core.ipopt.CompiledNLP` an
                                elastic diagnosis reads) and ``solve(start, x_design) -> StartOutcome``; built once
-                               per process
+                               per process.  Usually the core's: ``declared(problem)``, the kind declaring its
+                               problem and its design and start maps (:mod:`synthesis.core.declared`)
     recheck(setting, outcome)  the rules of a returned design on floats, 10x finer (a :class:`Recheck`)
     finish(setting, best)      the result's design, objective, trajectory and kind facts (:class:`Finished`)
     baseline_rules(setting)    the rule table of the spec's given design (or None if it cannot be evaluated)
