@@ -13,7 +13,8 @@ import pytest
 from conftest import LIBRARY
 from synthesis import kinds
 from synthesis.bench import BenchCase, markdown, run_case, summary
-from synthesis.bench.generic import (QUICK, measure, sample_fields, scaled_samples, slsqp_runner, tolerance)
+from synthesis.bench.generic import (QUICK, measure, sample_fields, scaled_samples, slsqp_runner, slsqp_with_budget,
+                                     tolerance)
 from synthesis.core import ipopt
 from synthesis.core.kind import Setting
 from synthesis.spec import load_spec
@@ -449,3 +450,22 @@ def test_the_sample_sweep_plot_is_fitted_and_names_each_count_on_its_top_axis():
     assert all(_no_overlap(boxes) for boxes in _tick_label_boxes(fig))
     import matplotlib.pyplot as plt
     plt.close(fig)
+
+
+def test_a_path_synthesis_configuration_form_and_its_polisher_solve_with_the_bench_s_method():
+    """fourbar_path's reduced (configuration) form and the polisher it builds on first use are solved as its
+    crank-angle form is: with the finite differences or the peer the bench's setting names (they were out of reach
+    of the method once the ContextVars were gone)."""
+    from synthesis.kinds.fourbar_path.inexact import inexact_spec
+    from synthesis.kinds.fourbar_path.nlp import PathNLP
+
+    spec = inexact_spec("stroke_lift14").model
+    peer = slsqp_with_budget(1.0)
+    nlp = PathNLP(spec, seed=0, setting=Setting(spec, 0, method=ipopt.SolveMethod(derivatives="finite_difference",
+                                                                                  runner=peer)))
+    assert nlp.configuration is not None and nlp.polisher is not nlp.configuration
+    for compiled in (nlp.compiled, nlp.configuration.compiled, nlp.polisher.compiled):
+        assert compiled.derivatives == "finite_difference" and compiled.method.runner is peer
+        assert compiled.scaling == "none"          # the kind's own choice stays
+    plain = PathNLP(spec, seed=0)
+    assert plain.polisher.compiled.method == ipopt.SolveMethod(scaling="none")

@@ -35,7 +35,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.ipopt import CompiledNLP
+from synthesis.core.ipopt import CompiledNLP, SolveMethod
 from synthesis.core.problem import ObjectiveParts, Problem, relative_backoff
 from synthesis.kinds.fourbar_path.construction import joint_positions
 from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_rules
@@ -51,7 +51,7 @@ class ConfigurationNLP:
 
     def __init__(self, spec: FourbarPathSpec, offset: np.ndarray, scale: np.ndarray, fixed: np.ndarray,
                  lbx: np.ndarray, ubx: np.ndarray, f_unit: float, backoff: float, ipopt_options: dict,
-                 max_iter: int):
+                 max_iter: int, method: SolveMethod | None = None):
         targets = np.array(spec.targets.points, dtype=float)
         n = len(targets)
         self.n = n
@@ -97,7 +97,7 @@ class ConfigurationNLP:
             parameters=sign, backoff=relative_backoff(backoff), ipopt="exact_fit", ipopt_options=ipopt_options,
             max_iter=max_iter, x_units=[""] * 9 + ["rad"] * (2 * n), structural_units=[""] * (2 * n),
             objective_unit="")
-        self.compiled = CompiledNLP(problem, False, scaling="none", watched=True)
+        self.compiled = CompiledNLP(problem, False, scaling="none", watched=True, method=method)
         self.n_x = 9 + n        # the crank-angle form's decision vector: the design and the crank angles
 
     def psi_of(self, design: np.ndarray, theta: np.ndarray) -> np.ndarray:

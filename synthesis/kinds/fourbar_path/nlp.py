@@ -240,8 +240,9 @@ class PathNLP(KindNLP):
         """grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION; not in a
         tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)."""
         options = self._ipopt_options(spec)
+        # solved as the crank-angle form is (its setting's method: a bench's finite differences or peer too)
         form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
-                             opts, spec.solver.max_iter)
+                             opts, spec.solver.max_iter, self.compiled.method)
         self.configuration = ConfigurationNLP(*form(options))
         if POLISH_MU_INIT is not None:      # the polisher's arguments now, its build on first use
             self._polisher_settings = form({**options, "ipopt.mu_init": POLISH_MU_INIT})
