@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
-    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, ResultTable, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -63,6 +63,20 @@ class RotaryPlanetary(Kind):
             lines.append(f"loop {motion['trajectory_height_mm']:.1f} mm tall, {motion['planting_depth_mm']:.1f} mm "
                          f"deep{hole}")
         return lines
+
+    def result_tables(self, result: Result) -> list[ResultTable]:
+        """Each key pose: its target, where the tip is nearest it (carrier angle, position, miss) and the claw's
+        attitude there."""
+        from synthesis.core.kind import ResultTable
+
+        poses = (((result.extra or {}).get("motion") or {}).get("poses")) or {}
+        if not poses:
+            return []
+        rows = tuple((name, p["target"]["x"], p["target"]["y"], p["target"]["attitude"], p["carrier_deg"], p["x"],
+                      p["y"], p["miss_mm"], p["attitude_deg"]) for name, p in poses.items())
+        return [ResultTable("Key poses: target and the tip where it is nearest", (
+            "pose", "target x, mm", "target y, mm", "target attitude, deg", "carrier angle, deg", "x, mm", "y, mm",
+            "miss, mm", "attitude, deg"), rows)]
 
     def coarse_check(self) -> CoarseCheck:
         from synthesis.kinds.rotary_planetary.coarse import COARSE
