@@ -359,3 +359,15 @@ def test_a_single_idler_is_one_pitch_curve(tmp_path):
     assert np.max(np.abs(two[:, 1] - at)) < 0.0101
     # and the idler is not a circle: both pairs are non-circular
     assert np.ptp(one[:, 1]) > 1.0
+
+
+def test_headline_and_key_pose_table(checked):
+    _, result, _ = checked
+    rules = {r["name"]: r for r in result.rules}
+    lines = KIND.headline(result)
+    assert lines[0] == f"pose at_60: tip {rules['pose_at_60']['value']:.3f} mm from target, attitude " \
+                       f"{-120.0 + rules['pose_at_60_attitude']['value']:.1f} deg (target -120)"
+    assert lines[1].startswith("loop ") and "mm deep" in lines[1]
+    (table,) = KIND.result_tables(result)
+    assert table.rows[0][0] == "at_60" and table.rows[0][4] == pytest.approx(60.0, abs=1e-12)
+    assert table.rows[0][7] == pytest.approx(rules["pose_at_60"]["value"], abs=1e-12)
