@@ -24,7 +24,7 @@ from sympy.physics.mechanics import Point, ReferenceFrame, dynamicsymbols, msubs
 from conftest import LIBRARY
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.fourbar import over_turn
-from synthesis.kinds.crank_rocker.check import rules_of
+from synthesis.kinds.crank_rocker.check import linkage_dynamics, rules_of
 from synthesis.kinds.planting.check import dynamics_facts_of
 from synthesis.kinds.planting.dynamics import arm_dynamics, arm_dynamics_rules
 from synthesis.kinds.planting.scene import PlantingScene
@@ -32,7 +32,7 @@ from synthesis.kinds.planting.spec import PlantingFourbarSpec
 from synthesis import kinds
 from synthesis.result import result_text
 from synthesis.spec import load_spec
-from synthesis.spec.dynamics import DynamicsLimits, ExternalLoad
+from synthesis.spec.dynamics import Counterweight, DynamicsLimits, ExternalLoad
 
 #: a lumped set of mass properties per link (kg, m, m, kg m^2), centres off the link lines so every term counts
 LUMPED = [0.30, 0.021, 0.004, 2.0e-4, 0.65, 0.050, -0.012, 1.4e-3, 0.45, 0.060, 0.008, 9.0e-4]
@@ -315,3 +315,29 @@ def test_the_dynamics_figure_is_drawn_from_the_result_alone(tmp_path):
     assert "dynamics.png" not in run_artifacts(kinds.get("crank_rocker").check(plain))
     with pytest.raises(ValueError, match="no facts.dynamics"):
         dynamics_figure(kinds.get("crank_rocker").check(plain), tmp_path / "none.png")
+
+
+def test_a_counterweight_changes_the_shaking_force_by_its_centrifugal_force_only():
+    """Gravity off, constant speed: a counterweight m at radius r opposite the crank pin leaves the input torque as it is
+    and adds m r omega^2 to the shaking force, pointing from the crank pivot away from the pin."""
+    loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")
+    plain = loaded.model.dynamics.model_copy(update={"gravity": (0.0, 0.0)})
+    weighted = plain.model_copy(update={"counterweight": Counterweight(mass=0.2, radius=40.0)})
+    lengths = (54.0, 107.6, 133.5, 140.0)
+    crank = np.radians(np.arange(0.0, 360.0, 15.0))
+    before, after = (linkage_dynamics(loaded.model.model_copy(update={"dynamics": t}), lengths).over_turn(crank)
+                     for t in (plain, weighted))
+    np.testing.assert_allclose(after["torque"], before["torque"], rtol=1e-12, atol=1e-12)
+    pull = 0.2 * 0.040 * (250 * 2 * math.pi / 60) ** 2                 # 5.48 N
+    expected = before["shaking_force"] - pull * np.vstack([np.cos(crank), np.sin(crank)])
+    np.testing.assert_allclose(after["shaking_force"], expected, rtol=1e-12, atol=1e-9)
+    assert np.abs(after["shaking_force"] - before["shaking_force"]).max() == pytest.approx(pull)
+
+
+def test_a_crank_rocker_refuses_a_free_counterweight():
+    import tomllib
+    from pydantic import ValidationError
+    data = tomllib.loads((LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml").read_text())
+    data["dynamics"]["counterweight"] = {"mass": {"init": 0.1, "bounds": [0.0, 1.0]}, "radius": 30.0}
+    with pytest.raises(ValidationError, match="frees only its lengths"):
+        kinds.get("crank_rocker").spec_model().model_validate(data)

@@ -35,11 +35,13 @@ class FourbarDynamics:
 
     @classmethod
     def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega,
-           tips: dict | None = None) -> "FourbarDynamics":
+           tips: dict | None = None, counterweight: tuple | None = None) -> "FourbarDynamics":
         """From a spec's ``[dynamics]`` table (:class:`synthesis.spec.dynamics.DynamicsSection`); ``bars``: each link's
         bars (start, end) in mm in its link frame, read for a link given as a bar; ``tips``: link -> the kind's traced
-        point on it (mm, link frame), where a point mass ``at = "tip"`` sits."""
-        return cls(branch, tuple(geometry), tuple(mass_properties.mass_vector(table, bars, LINKS, tips)),
+        point on it (mm, link frame), where a point mass ``at = "tip"`` sits; ``counterweight``: (kg, mm) on the
+        crank opposite its pin, numbers or the NLP's symbols."""
+        return cls(branch, tuple(geometry),
+                   tuple(mass_properties.mass_vector(table, bars, LINKS, tips, counterweight)),
                    tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity))
 
     def over_turn(self, crank) -> dict:

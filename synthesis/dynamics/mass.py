@@ -55,13 +55,18 @@ def link_properties(section, bars: list[tuple], point_masses, tip=None) -> tuple
     return combine(parts)
 
 
-def mass_vector(dynamics, bars: dict[str, list[tuple]], links: tuple[str, ...], tips: dict | None = None) -> list:
+def mass_vector(dynamics, bars: dict[str, list[tuple]], links: tuple[str, ...], tips: dict | None = None,
+                counterweight: tuple | None = None) -> list:
     """The 12 mass parameters (:data:`MASS_FIELDS` per link) of a ``[dynamics]`` table; ``bars``: link -> its bars
-    (start, end) in mm in the link frame, read when the link is given as a bar; ``tips``: link -> its traced point."""
+    (start, end) in mm in the link frame, read when the link is given as a bar; ``tips``: link -> its traced point;
+    ``counterweight``: (mass kg, radius mm) on the crank (the first link) opposite its pin, floats or symbols."""
     out: list = []
     for name in links:
         carried = [pm for pm in dynamics.point_masses if pm.link == name]
-        out += list(link_properties(getattr(dynamics, name), bars[name], carried, (tips or {}).get(name)))
+        props = link_properties(getattr(dynamics, name), bars[name], carried, (tips or {}).get(name))
+        if counterweight is not None and name == links[0]:
+            props = combine([props, point(counterweight[0], (-counterweight[1], 0.0))])
+        out += list(props)
     return out
 
 

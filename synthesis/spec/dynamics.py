@@ -16,7 +16,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import StrictModel
+from synthesis.spec.common import StrictModel, Variable, value_of
 
 #: the moving links of a four-bar, in the order the dynamics reads them
 LINKS = ("crank", "coupler", "rocker")
@@ -57,6 +57,28 @@ class ExternalLoad(StrictModel):
     note: str = Field("", description="where the value comes from (an assumption unless a paper gives it)")
 
 
+class Counterweight(StrictModel):
+    """A mass on the crank opposite its pin (at -radius along the crank), to balance the shaking force; a number fixes
+    a value, ``{init, bounds}`` frees it (planting_fourbar: design variables ``counterweight_mass``,
+    ``counterweight_radius``)."""
+
+    mass: Variable = Field(description="counterweight mass, kg")
+    radius: Variable = Field(description="its distance from the crank pivot, opposite the crank pin, mm")
+
+    @model_validator(mode="after")
+    def _not_negative(self) -> "Counterweight":
+        for name in ("mass", "radius"):
+            v = getattr(self, name)
+            low = v if isinstance(v, (int, float)) else v.bounds[0]
+            if low < 0.0:
+                raise ValueError(f"counterweight.{name}: expected >= 0, got {low:g}")
+        return self
+
+    def values(self) -> tuple[float, float]:
+        """(mass kg, radius mm) at the given (or start) values."""
+        return value_of(self.mass), value_of(self.radius)
+
+
 class DynamicsLimits(StrictModel):
     """Rules on the dynamics; a limit left out is no rule."""
 
@@ -79,6 +101,7 @@ class DynamicsSection(StrictModel):
                                                   "has its own crank speed reads that one")
     external_loads: list[ExternalLoad] = Field(default_factory=list,
                                                description="constant forces on the links (at most one per link)")
+    counterweight: Counterweight | None = Field(None, description="a counterweight on the crank, opposite its pin")
     samples: int = Field(360, ge=8, le=3600, description="crank angles of result.json's facts.dynamics over a turn")
     limits: DynamicsLimits = Field(default_factory=DynamicsLimits)
     assumption: str = Field("", description="which values are ours, not a paper's")

@@ -35,7 +35,8 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMP
 
 def with_dynamics(scene: PlantingScene, trace: Trace) -> Trace:
     """The trace with the dynamics rules' input when the spec's [dynamics] table sets a limit."""
-    trace.dynamics = arm_dynamics(scene.dynamics, scene.design.parameters(), scene.design.branch, scene.motion.omega)
+    trace.dynamics = arm_dynamics(scene.dynamics, scene.design.parameters(), scene.design.branch, scene.motion.omega,
+                                  scene.counterweight)
     return trace
 
 
@@ -113,7 +114,7 @@ def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float) -> dict:
     if scene.dynamics is None or assembly_status(scene.design) is not None:
         return {}
     d = scene.design
-    linkage = arm_linkage(scene.dynamics, d.parameters(), d.branch, scene.motion.omega)
+    linkage = arm_linkage(scene.dynamics, d.parameters(), d.branch, scene.motion.omega, scene.counterweight)
     return {"dynamics": dynamics_facts(linkage, scene.dynamics.samples, JOINTS, LINKS,
                                        crank_speed_rpm, scene.dynamics)}
 

@@ -22,7 +22,7 @@ from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Oper
                                     scaled_backoff)
 from synthesis.dynamics.linkage import peak_epigraph, peak_of
 from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES
-from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage
+from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage, counterweight_of
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
 from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
@@ -132,7 +132,7 @@ class PlantingNLP(KindNLP):
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
                      acc_scale=self.omega**2 * value_of(spec.arm.l2),
-                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega))
+                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v)))
 
     def _structural(self, v, p, theta, states, top=None) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
@@ -212,10 +212,12 @@ class PlantingNLP(KindNLP):
         """Minimise the peak input torque or shaking force over a turn (an epigraph variable, scaled by the given
         design's peak so the objective is about 1 at the start)."""
         spec, name, n = self.spec, self.spec.objective.name, self.spec.solver.samples_per_turn
-        given = PlantingScene.from_spec(spec).design.parameters()
-        peak = peak_of(arm_linkage(spec.dynamics, given, spec.arm.branch, self.omega), name, n)
+        given = PlantingScene.from_spec(spec)
+        peak = peak_of(arm_linkage(spec.dynamics, given.design.parameters(), spec.arm.branch, self.omega,
+                                   given.counterweight), name, n)
         self.peak_typical = peak if name == "min_peak_torque" else peak * peak
-        t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym), name, n)
+        t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym,
+                                                  counterweight_of(v)), name, n)
         return ObjectiveParts(f=t / self.peak_typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf],
                               extra_init=[self.peak_typical], rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
 
@@ -270,8 +272,8 @@ class PlantingNLP(KindNLP):
         theta = {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])}
         value = self.objective_value(out.objective)
         if self.spec.objective.name in PEAK_UNITS and not self.elastic:     # the design's own peak, check's grid
-            arm = PlantingScene.from_spec(self.spec, design).design.parameters()
-            value = peak_of(arm_linkage(self.spec.dynamics, arm, self.spec.arm.branch, self.omega),
-                            self.spec.objective.name, CHECK_TURN_SAMPLES)
+            scene = PlantingScene.from_spec(self.spec, design)
+            value = peak_of(arm_linkage(self.spec.dynamics, scene.design.parameters(), self.spec.arm.branch,
+                                        self.omega, scene.counterweight), self.spec.objective.name, CHECK_TURN_SAMPLES)
         return StartOutcome.of(out, design, value, solver_crank_deg=theta,
                                solver_objective=self.objective_value(out.objective))

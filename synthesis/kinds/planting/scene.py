@@ -53,6 +53,8 @@ class PlantingScene:
     reference_acc: float | None = None
     #: the spec's [dynamics] table (synthesis.spec.dynamics.DynamicsSection), or None
     dynamics: object = None
+    #: the design's counterweight on the crank (mass kg, radius mm), or None
+    counterweight: tuple | None = None
 
     @property
     def acc_scale(self) -> float:
@@ -68,8 +70,9 @@ class PlantingScene:
         bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
                       spec.seedbed.thickness, spec.seedbed.seedling_height)
         soil = v.get("soil_level") if spec.soil.level is not None else None
+        weight = (v["counterweight_mass"], v["counterweight_radius"]) if "counterweight_mass" in v else None
         return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2),
-                   spec.dynamics)
+                   spec.dynamics, weight)
 
 
 @dataclass

@@ -222,6 +222,9 @@ class PlantingFourbarSpec(ProblemSpec):
         out.update({f"seedbed_{n}": getattr(self.seedbed, n) for n in ("x", "y", "tilt")})
         if self.soil.level is not None:
             out["soil_level"] = self.soil.level
+        if self.dynamics is not None and self.dynamics.counterweight is not None:
+            out["counterweight_mass"] = self.dynamics.counterweight.mass
+            out["counterweight_radius"] = self.dynamics.counterweight.radius
         return out
 
     def design_values(self) -> dict[str, float]:
