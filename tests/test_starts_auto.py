@@ -219,3 +219,14 @@ def test_auto_on_a_library_crank_rocker_equals_the_fixed_run_of_its_count():
     assert auto.solver["auto"]["batches"] == [16, 32] and auto.solver["auto"]["stopped_by"] == "rule"
     assert auto.objective["value"] == fixed.objective["value"] and auto.design == fixed.design
     assert auto.solver["confidence"] == fixed.solver["confidence"]
+
+
+def test_auto_on_rules_no_start_meets_stops_after_one_batch(tmp_path, toy):
+    """The toy above y = 12 inside a disc of radius 10: no start meets every rule; auto stops after its first batch
+    of 16 (not 1008 starts to max_starts) and the elastic diagnosis names the conflict as for fixed starts."""
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY.format(starts=4).replace("y_min = -5.0", "y_min = 12.0"))
+    result, _, _ = run_solve(toy, load_spec(path), workers=1, auto=AutoStarts())
+    assert result.status == "infeasible" and set(result.elastic["conflicting"]) == {"inside_disc", "above_line"}
+    assert result.solver["auto"]["stopped_by"] == "none_converged" and result.solver["starts"] == 16
+    assert result.solver["confidence"]["starts_counted"] == 0 and result.solver["confidence"]["optima"] == []

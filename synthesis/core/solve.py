@@ -193,6 +193,10 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             stopped_by = "stop_at_objective"         # the kind's own early stop ended the batch
         elif stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged:
             stopped_by = "rule"
+        elif stated["starts_counted"] == 0 and totals[k] >= auto.min_converged:
+            # not one start met every rule: more starts of the same box rarely do (an infeasible spec ran 1008
+            # starts to max_starts for nothing); the elastic diagnosis says why
+            stopped_by = "none_converged"
         elif k == len(totals) - 1:
             stopped_by = "max_starts"
         elif (auto.time_limit_s is not None
