@@ -399,9 +399,15 @@ def confidence_statement(reports: list[StartReport], nlp, maximise: bool) -> dic
     lo, width = bounds[free, 0], bounds[free, 1] - bounds[free, 0]
     counted = [r for r in reports if r.satisfied and r.outcome.success and reached_optimum(r.outcome.return_status)
                and (r.outcome.details or {}).get("start_from") != FROM_ELASTIC]
-    units = [(nlp.x_of(r.outcome.design)[free] - lo) / width for r in counted]
-    return statement([r.outcome.objective for r in counted], np.reshape(units, (len(counted), int(free.sum()))),
-                     [r.outcome.start for r in counted], maximise=maximise, assumptions_not_met=_not_uniform(nlp))
+    notes = _not_uniform(nlp)
+    try:
+        units = np.reshape([(nlp.x_of(r.outcome.design)[free] - lo) / width for r in counted],
+                           (len(counted), int(free.sum())))
+    except (KeyError, ValueError, TypeError):     # a design without the NLP's variables: optima by value alone
+        units = np.zeros((len(counted), 1))
+        notes.append("the starts' designs could not be mapped to the box: distinct_designs not counted")
+    return statement([r.outcome.objective for r in counted], units, [r.outcome.start for r in counted],
+                     maximise=maximise, assumptions_not_met=notes)
 
 
 def _not_uniform(nlp) -> list[str]:
