@@ -230,3 +230,13 @@ def test_auto_on_rules_no_start_meets_stops_after_one_batch(tmp_path, toy):
     assert result.status == "infeasible" and set(result.elastic["conflicting"]) == {"inside_disc", "above_line"}
     assert result.solver["auto"]["stopped_by"] == "none_converged" and result.solver["starts"] == 16
     assert result.solver["confidence"]["starts_counted"] == 0 and result.solver["confidence"]["optima"] == []
+
+
+def test_auto_begins_no_batch_projected_past_its_time_limit(tmp_path, toy):
+    """A time limit of a millisecond: the first batch always runs whole; the second (32 starts, projected at twice
+    the first's time) would end past it, so the run stops there by time_limit with the first batch's answer."""
+    loaded = _toy(tmp_path)
+    result, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20, time_limit_s=1e-3))
+    fixed, _, _ = run_solve(toy, loaded, starts=16, workers=1)
+    assert result.solver["auto"]["stopped_by"] == "time_limit" and result.solver["auto"]["batches"] == [16]
+    assert result.solver["auto"]["time_limit_s"] == 1e-3 and result.objective["value"] == fixed.objective["value"]
