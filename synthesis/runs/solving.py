@@ -40,6 +40,7 @@ class _Plan:
     replaceable: Path | None = None
     auto: core.AutoStarts | None = None     # --starts auto (``starts`` is then its most starts)
     resumed_batch: int | None = None        # --starts auto resumed: the batch the interrupted run was solving
+    batch: int | None = None                # --starts auto: the batch being solved (an interrupted run's total)
 
 
 def staging_hint(folder: Path) -> str:
@@ -131,7 +132,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
         if isinstance(solved, core.Interrupted):
-            return _keep_interrupted(solved, output, kind, loaded, plan.starts)
+            return _keep_interrupted(solved, output, kind, loaded, plan.batch or plan.starts)
         # every start is done: a signal from here on is noted and the finished result written all the same
         with output.finishing(emit):
             emit(StartsDone())
@@ -167,6 +168,7 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
     def on_batch(starts: int) -> None:
         """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved."""
         nonlocal total
+        plan.batch = starts
         log_file.batch(starts)
         if starts != batches[first]:
             total += starts
