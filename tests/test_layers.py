@@ -20,6 +20,24 @@ def test_import_contracts_hold():
     assert "broken" not in proc.stdout.lower().replace("0 broken", "")
 
 
+def test_the_contracts_ignore_no_import_and_cover_every_layer():
+    """No contract carries an ``ignore_imports`` (a dependency the layers forbid is inverted, not excused), and each
+    of the core, kinds, run layer, tolerance, bench, reports and studio is the source of a forbidden contract."""
+    import tomllib
+
+    contracts = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+    assert [c["name"] for c in contracts if c.get("ignore_imports")] == []
+    sources = {m for c in contracts if c["type"] == "forbidden" for m in c["source_modules"]}
+    for layer in ("synthesis.core", "synthesis.kinds", "synthesis.runs", "synthesis.tolerance", "synthesis.bench",
+                  "synthesis.report", "synthesis.studio"):
+        assert layer in sources, layer
+    # the engine side of the bench plug-in: a kind's bench cases are the kind contract's type, not the bench's
+    from synthesis.bench import BenchCase, MethodRun
+    from synthesis.core import bench_case
+
+    assert (BenchCase, MethodRun) == (bench_case.BenchCase, bench_case.MethodRun)
+
+
 def test_every_kind_lives_in_one_folder_under_synthesis_kinds():
     """The layer contracts name the kinds as a whole (``synthesis.kinds.*``): they hold for a new kind only if its
     class is defined in a folder there, like every built-in one; and the folders are the list (each folder's

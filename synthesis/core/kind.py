@@ -40,6 +40,7 @@ import numpy as np
 if TYPE_CHECKING:
     from pydantic import BaseModel as SpecModel
 
+    from synthesis.core.bench_case import BenchCase
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -100,7 +101,7 @@ class Kind(ABC):
         """The overlay-figure writer of ``agrisynth compare``: (results, folder) -> the file names written."""
         return None
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase] | None:
         """A kind with bench methods of its own: its cases on the given specs (None: its default set).  None (the
         default): the bench's generic studies on the given specs or on :attr:`bench_specs`."""
         return None
@@ -197,7 +198,7 @@ class SolvingReplaced(Kind):
     def compare_figures(self) -> CompareWriter | None:
         return self.base.compare_figures()
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list | None:
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase] | None:
         return self.base.bench_cases(specs, seed)
 
     def bench_studies(self) -> dict[str, Callable[[], list[dict]]]:

@@ -9,6 +9,7 @@ from synthesis.core.kind import Kind
 if TYPE_CHECKING:
     import numpy as np
 
+    from synthesis.core.bench_case import BenchCase
     from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, ResultTable, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
@@ -55,7 +56,7 @@ class FourbarPath(Kind):
     def compare_figures(self) -> CompareWriter:
         return _parts().compare_coupler_curves
 
-    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list:
+    def bench_cases(self, specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase]:
         from synthesis.kinds.fourbar_path.bench import bench_cases
 
         return bench_cases(specs, seed)

@@ -52,7 +52,7 @@ except ImportError:          # not POSIX: the budget falls back to wall time x w
 import numpy as np
 from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_evolution
 
-from synthesis.bench import BenchCase, MethodRun
+from synthesis.core.bench_case import BenchCase, MethodRun
 from synthesis import kinds
 from synthesis.library import LIBRARY
 from synthesis.core.solve import run_solve
