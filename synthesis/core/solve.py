@@ -14,7 +14,7 @@ import functools
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -52,6 +52,15 @@ class Run:
     auto: dict | None = None
 
 
+def _solving(kind: Kind) -> Solving:
+    """The kind's solve side: this module runs only kinds that solve (``Kind.solves``; the CLI refuses the others
+    before a run begins), so a kind without one is a caller's error."""
+    solving = kind.solving()
+    if solving is None:
+        raise TypeError(f"kind {kind.name} does not solve")
+    return solving
+
+
 def _recheck(solving: Solving, setting: Setting, outcome):
     return solving.recheck(setting, outcome)
 
@@ -79,7 +88,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
 
     A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
     the :class:`Run` of the starts finished so far (None when none has)."""
-    solving = kind.solving()
+    solving = _solving(kind)
     # the wall time includes building the NLP, here and in each worker alike: it compares across worker counts
     t0 = time.perf_counter()
     nlp = solving.build(setting, False)           # built once here; also validates before any worker starts
@@ -131,10 +140,10 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
     ordered = [reports[o.start] for o in outcomes]       # the starts that count (an early stop: 0..k)
-    best = best_in_start_order(ordered, maximise)
-    if failure_of(best.outcome) is not None:             # ranked last: every start failed to run
+    winner = best_in_start_order(ordered, maximise)
+    if failure_of(winner.outcome) is not None:           # ranked last: every start failed to run
         raise SolverError(f"{kind.name}: no start could be solved: {_failures(ordered)}")
-    return Run(ordered, best, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp, build_s)
+    return Run(ordered, winner, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp, build_s)
 
 
 @dataclass(frozen=True)
@@ -177,7 +186,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total)`` is told as a batch begins (the
     run's starts.jsonl marks it); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
     starts (the earlier batches ended without stopping, so the run goes on from that one)."""
-    maximise = kind.solving().maximise(setting)
+    maximise = _solving(kind).maximise(setting)
     totals = auto.batches()
     first = totals.index(resumed_batch) if resumed_batch in totals else 0
     carried = dict(finished or {}) if resumed_batch in totals else {}
@@ -189,6 +198,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                              record=record, finished=carried)
         took = time.perf_counter() - began
         stated = confidence_statement(run.reports, run.nlp, maximise)
+        assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
         if len(run.reports) < totals[k]:
             stopped_by = "stop_at_objective"         # the kind's own early stop ended the batch
         elif stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged:
@@ -255,7 +265,7 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     ELASTIC_CONVERGED of them converge; the smallest of those relaxations is kept (each is a local minimum: a
     crank-rocker's transmission rule missed by 24.6 deg from one point, by 9.86 from another, the least any design
     misses it)."""
-    solving = kind.solving()
+    solving = _solving(kind)
     nlp = solving.build(setting, True)
     first = kept = None
     converged = 0
@@ -355,7 +365,7 @@ def start_from_elastic(kind: Kind, setting: Setting, run: Run, elastic: ElasticD
     a signal is discarded (``interrupt.pending()``), as the multistart discards one."""
     if not elastic.converged or elastic.relaxed or not elastic.design:
         return run
-    solving = kind.solving()
+    solving = _solving(kind)
     nlp = run.nlp if run.nlp is not None else solving.build(setting, False)
     if nlp.builds_its_own_starts:
         return run
@@ -452,7 +462,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
     (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
     no start had finished."""
     spec = loaded.model
-    solving = kind.solving()
+    solving = _solving(kind)
     starts = spec.solver.starts if starts is None else starts
     seed = spec.solver.seed if seed is None else seed
     setting = Setting(spec, seed, solving.prepare(spec))
@@ -482,10 +492,11 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
     if interrupt.pending() is not None:       # stopped inside the elastic re-solve: every start is kept
         with interrupt.deferred(reraise=False):
             kept = _result(kind, loaded, setting, run, "interrupted", None)
-        raise Interrupted(interrupt.pending(), (kept, run.reports, ipopt_log(run.reports)))
+        raise Interrupted(cast(int, interrupt.pending()), (kept, run.reports, ipopt_log(run.reports)))
     try:
         result = _result(kind, loaded, setting, run, status_of(best, elastic), elastic)
-        if result.status in ("infeasible", "failed"):     # the exit-3 message, kept with the run for its report
+        # the exit-3 message, kept with the run for its report (_result always fills ``solver``)
+        if result.status in ("infeasible", "failed") and result.solver is not None:
             result.solver["diagnosis"] = str(exit_error(kind, result, run.reports))
         # the answer is complete: a signal from here on is only noted (interrupt.pending), for the caller to say
         with interrupt.deferred(reraise=False):
@@ -500,7 +511,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
 
 def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic: ElasticDiagnosis | None) -> Result:
     spec = loaded.model
-    solving = kind.solving()
+    solving = _solving(kind)
     best = run.best
     try:
         finished = solving.finish(setting, best)
@@ -567,7 +578,7 @@ def _note(status: str, best: StartReport, run: Run) -> str | None:
 
 def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> SolverError:
     """The exit-3 error of a run with status infeasible or failed, from what the result says."""
-    solving = kind.solving()
+    solving = _solving(kind)
     elastic = None if result.elastic is None else ElasticDiagnosis.from_json(result.elastic)
     note = (result.solver or {}).get("status_note")
     if result.status == "failed" and elastic is None and note and "does not keep its promise" in note:
@@ -583,7 +594,7 @@ def exit_error(kind: Kind, result: Result, reports: list[StartReport]) -> Solver
 
 def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
     """The rule table of the spec's given design, for the side-by-side table (None: it cannot be evaluated)."""
-    solving = kind.solving()
+    solving = _solving(kind)
     spec = loaded.model
     setting = Setting(spec, spec.solver.seed, solving.prepare(spec))
     try:
