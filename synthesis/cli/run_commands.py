@@ -68,7 +68,8 @@ class SolveCommand(click.Command):
                    f"start 0 is the spec's design.  auto: batches of 16, 32, 64, ... starts, each the run --starts N "
                    f"would be, until fewer than half a local optimum is expected unseen (Boender & Rinnooy Kan) over "
                    f"at least 16 starts that converged with every rule held, or a budget is spent; the same seed "
-                   f"gives the same answer and N for any workers")
+                   f"gives the same answer and N for any workers; each batch solves its own starts (start 0 "
+                   f"carried), about twice the last batch's in all")
 @click.option("--max-starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
               help="--starts auto: the most starts (default 512)")
 @click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
