@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 from synthesis.errors import AgrisynthError, SolverError
 from synthesis.core.ipopt_log import reached_optimum
@@ -185,14 +185,14 @@ class ElasticDiagnosis:
         back, not the other rules (in the order of ``relaxed``).  Local, like the diagnosis: another region of the
         bounds may meet them."""
         return [n for n in self.relaxed
-                if self.alone.get(n) is not None and self.alone[n] > self.tol * self.scales[n]]
+                if (alone := self.alone.get(n)) is not None and alone > self.tol * self.scales[n]]
 
     @property
     def held_back(self) -> list[str]:
         """The rules given up on that the other rules hold back: re-solved alone they need less slack (or that
         re-solve did not converge, and nothing says otherwise)."""
         return [n for n in self.relaxed
-                if self.alone.get(n) is None or self.slacks[n] - self.alone[n] > self.tol * self.scales[n]]
+                if (alone := self.alone.get(n)) is None or self.slacks[n] - alone > self.tol * self.scales[n]]
 
     @property
     def conflicting(self) -> list[str]:
@@ -280,8 +280,9 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
                                   else "none evaluated")
     # the best start's own reason first (it is the one named above), else the first start that has one
     unevaluable = best if best is not None and best.why else next((r for r in reports if r.why), None)
-    cannot = f" Start {unevaluable.outcome.start}: {unevaluable.why.rstrip('.')}." if unevaluable else ""
+    cannot = f" Start {unevaluable.outcome.start}: {(unevaluable.why or '').rstrip('.')}." if unevaluable else ""
     if status == "infeasible":
+        assert elastic is not None, "an infeasible verdict is the elastic diagnosis's (status_of)"
         relaxed, out = elastic.relaxed, elastic.out_of_reach
 
         def unit(name: str) -> str:        # a rule the NLP holds as a ratio (unit "1") misses by a ratio
@@ -304,7 +305,8 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         if len(out) == len(relaxed):
             which = "Rules out of reach"
             # only those held back, by how much of their miss: the rest is the bounds' or the mechanism's
-            held = [f"{name} by {elastic.slacks[name] - elastic.alone[name]:.3g}{unit(name)} of its "
+            # every rule given up on is out of reach here, so each was re-solved alone (``alone`` holds a number)
+            held = [f"{name} by {elastic.slacks[name] - cast(float, elastic.alone[name]):.3g}{unit(name)} of its "
                     f"{elastic.slacks[name]:.3g}" for name in elastic.held_back]
             against = (f"; {', '.join(holding)} {'holds' if len(holding) == 1 else 'hold'} back {', '.join(held)} "
                        f"(binding there)" if holding and held else "")
