@@ -7,6 +7,7 @@ import signal
 import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from synthesis import kinds
 from synthesis.core import interrupt, startlog
@@ -84,8 +85,9 @@ def _auto_of(request: SolveRequest, loaded, earlier: dict) -> core.AutoStarts | 
                              "[solver] starts = \"auto\") or leave them out", "--max-starts")
         return None
     base = core.AutoStarts(**{k: v for k, v in (was or {}).items() if k in core.AutoStarts.__dataclass_fields__})
-    return replace(base, **{k: v for k, v in (("max_starts", request.max_starts),
-                                              ("time_limit_s", request.time_limit)) if v is not None})
+    budgets: dict[str, Any] = {k: v for k, v in (("max_starts", request.max_starts),
+                                                 ("time_limit_s", request.time_limit)) if v is not None}
+    return replace(base, **budgets)
 
 
 def _plan(request: SolveRequest, loaded) -> _Plan:
@@ -98,12 +100,13 @@ def _plan(request: SolveRequest, loaded) -> _Plan:
         starts = earlier.get("starts") if starts is None and isinstance(earlier.get("starts"), int) else starts
         seed = earlier.get("seed") if seed is None and isinstance(earlier.get("seed"), int) else seed
     auto = _auto_of(request, loaded, earlier)
-    n = auto.max_starts if auto is not None else starts or loaded.model.solver.starts
+    fixed = None if auto is not None or isinstance(starts, str) else starts    # "auto" is ``auto`` by now
+    n = auto.max_starts if auto is not None else fixed or loaded.model.solver.starts
     the_seed = loaded.model.solver.seed if seed is None else seed
     settings, fingerprint = startlog.fingerprint(loaded.kind, loaded.name, loaded.sha256, n, the_seed,
                                                  None if auto is None else auto.settings())
     out = Path("results") if request.out is None else request.out
-    plan = _Plan(n, None if auto is not None else starts, seed, settings, fingerprint, out, loaded.name, auto=auto)
+    plan = _Plan(n, fixed, seed, settings, fingerprint, out, loaded.name, auto=auto)
     if resume is not None:
         plan.finished = startlog.read(resume, fingerprint)
         plan.resumed_batch = startlog.last_batch(resume) if auto is not None else None

@@ -4,6 +4,7 @@ OUT/<name>-tolerance/."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from synthesis import kinds
 from synthesis.errors import ResultError, SpecError
@@ -54,7 +55,7 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     loaded = load_spec(design_file(request.target, emit))
     tolerance_names_known(loaded)
     kind = kinds.solving_kind(loaded.kind)
-    spec = loaded.model
+    spec: Any = loaded.model        # the kind's own spec model: a kind that analyses tolerances has [tolerance]
     tol = spec.tolerance
     length = request.length if request.length is not None else (tol.length if tol else None)
     angle = request.angle if request.angle is not None else (tol.angle if tol else None)
