@@ -11,12 +11,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
 from synthesis.errors import AssemblyError
-from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, link_angles, tip_derivatives, tip_positions,
-                                                 tip_state)
+from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, scalar_function, tip_accelerations_y,
+                                                 tip_derivatives, tip_heights, tip_position, tip_positions, tip_state,
+                                                 transmission_angles)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
 from synthesis.spec.common import value_of
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -148,17 +150,23 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
     P1 the last of the seedling-top line before P2.
     """
     d, m, bed = scene.design, scene.motion, scene.seedbed
-    f = tip_derivatives(d.branch)
-    p = d.parameters()
+    # the root finders' functions: only the row each reads, p converted once (a re-check is a Monte-Carlo sample)
+    p = ca.DM(d.parameters())
+    y_at, vy_at = scalar_function(tip_position, d.branch, 0, (1,)), scalar_function(tip_derivatives, d.branch, 1, (1,))
+    pos_at = scalar_function(tip_position, d.branch, 0, (0, 1))
 
     def y(th):
-        return float(f(th, p)[0][1])
+        return float(y_at(th, p))
 
     def vy(th):
-        return float(f(th, p)[1][1])
+        return float(vy_at(th, p))
+
+    def height(th):
+        x_, y_ = pos_at(th, p).elements()
+        return float(bed.height((x_, y_)))
 
     coarse = np.linspace(0.0, TWO_PI, grid, endpoint=False)
-    ys = tip_positions(d, coarse)[1]
+    ys = tip_heights(d, coarse)
     k = int(np.argmin(ys))
     h = coarse[1]
     # the lowest point: vy changes sign from - to + around the grid minimum
@@ -202,7 +210,7 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
                     problems[later] = f"{later} not searched: {problems[name]}"
                 break
             i = idx[-1]
-            theta[name] = _refine(lambda t, lv=level: float(bed.height(f(t, p)[0])) - lv, cycle[i], cycle[i + 1])
+            theta[name] = _refine(lambda t, lv=level: height(t) - lv, cycle[i], cycle[i + 1])
             end = theta[name]
     else:
         for name in ("P1", "P2", "P3"):
@@ -245,17 +253,18 @@ def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int =
     d, m = scene.design, scene.motion
     found = [n for n in POINTS if pts.theta[n] is not None]
     theta = {n: pts.theta[n] for n in found}
-    at = {n: tip_state(d, m, theta[n]) for n in found}
+    at = tip_state(d, m, [theta[n] for n in found]) if found else None   # one call for every point found
     accel = {}
     for phase, (a, b) in PHASES.items():
         if a in theta and b in theta:
-            accel[phase] = tip_state(d, m, phase_grid(*phase_bounds(theta, phase), phase_samples)).acc[1]
-    return Trace(theta=theta, pos={n: tuple(at[n].pos[:, 0]) for n in found},
-                 vel={n: tuple(at[n].vel[:, 0]) for n in found}, accel_y=accel, links=(d.l1, d.l2, d.l3, d.l4),
+            accel[phase] = tip_accelerations_y(d, m, phase_grid(*phase_bounds(theta, phase), phase_samples))
+    return Trace(theta=theta, pos={n: tuple(at.pos[:, k]) for k, n in enumerate(found)},
+                 vel={n: tuple(at.vel[:, k]) for k, n in enumerate(found)}, accel_y=accel,
+                 links=(d.l1, d.l2, d.l3, d.l4),
                  mu_deg=None if turn_missing else transmission_angles_deg(d, turn_samples), omega=m.omega,
                  forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
                  turn_missing=turn_missing)
 
 
 def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:
-    return np.degrees(link_angles(d, np.linspace(0.0, TWO_PI, samples, endpoint=False))["mu"])
+    return np.degrees(transmission_angles(d, np.linspace(0.0, TWO_PI, samples, endpoint=False)))
