@@ -12,7 +12,7 @@ from synthesis.dynamics.linkage import dynamics_facts
 from synthesis.kinds.planting.dynamics import JOINTS, LINKS, arm_dynamics, arm_linkage
 from synthesis.kinds.planting.rule_set import Trace, planting_rules
 from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
-                                      find_precision_points, float_trace)
+                                      find_precision_points, float_trace, turn_scan)
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -28,8 +28,10 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMP
     """All rules of the scene; a crank that cannot complete a turn leaves the path rules unevaluated."""
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:
-        pts = find_precision_points(scene)
-        return planting_rules(with_dynamics(scene, float_trace(scene, pts, phase_samples, turn_samples)), limits), pts
+        scan = turn_scan(scene.design, turn_samples)    # P5's search and the transmission rule: one pass of a turn
+        pts = find_precision_points(scene, scan=scan)
+        trace = float_trace(scene, pts, phase_samples, turn_samples, scan=scan)
+        return planting_rules(with_dynamics(scene, trace), limits), pts
     return unevaluated(scene, limits, why), None
 
 

@@ -134,56 +134,72 @@ def tip_position(branch: int) -> ca.Function:
 
 def tip_positions(design: ArmDesign, theta: np.ndarray) -> np.ndarray:
     """Positions (2, N) of C at the crank angles theta (rad), mm: :func:`tip_state`'s ``pos``, bit for bit."""
-    return _on_grid(tip_position, 0, (0, 1), design, theta)
+    return _on_grid(((tip_position, 0, (0, 1)),), design, theta)
 
 
-def tip_heights(design: ArmDesign, theta: np.ndarray) -> np.ndarray:
-    """Y (N,) of C at the crank angles theta (rad), mm: :func:`tip_positions`' second row, bit for bit, without X."""
-    return _on_grid(tip_position, 0, (1,), design, theta)[0]
+def tip_heights_and_transmission(design: ArmDesign, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Y (N,) of C, mm, and the transmission angle mu (N,), rad, at the crank angles theta (rad): :func:`tip_positions`'
+    second row and :func:`transmission_angles`, bit for bit, in one pass sharing the four-bar's closure (a re-check
+    scans the claw's Y for P5 on the very turn grid its transmission rule samples)."""
+    y, mu = _on_grid(((tip_position, 0, (1,)), (link_function, 0, (0,))), design, theta)
+    return y, mu
 
 
 def tip_accelerations_y(design: ArmDesign, motion: Motion, theta: np.ndarray) -> np.ndarray:
     """a_y (N,) of C at the crank angles theta (rad), mm/s^2: :func:`tip_state`'s ``acc[1]``, bit for bit, without
     the position, velocity and a_x it also computes (a re-check reads a_y alone over each acceleration phase)."""
-    return _on_grid(tip_derivatives, 2, (1,), design, theta)[0] * motion.omega**2
+    return _on_grid(((tip_derivatives, 2, (1,)),), design, theta)[0] * motion.omega**2
 
 
 #: the largest grid evaluated through :func:`_expanded` (its SX function holds every angle's operations, so its
 #: build grows with the grid: a larger one, as a plot may ask, goes through ``.map``)
 EXPANDED_MAX = 20_000
 
+#: what :func:`_expanded` evaluates: (function of a branch, its output's index, the rows of that output) per part
+Parts = tuple[tuple[object, int, tuple[int, ...]], ...]
 
-def _on_grid(function, output: int, rows: tuple[int, ...], design: ArmDesign, theta) -> np.ndarray:
-    """Rows ``rows`` of output ``output`` of ``function(design.branch)`` at crank angles theta: (len(rows), N)."""
+
+def _on_grid(parts: Parts, design: ArmDesign, theta) -> np.ndarray:
+    """The rows of ``parts`` stacked, at crank angles theta: (rows, N)."""
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    p = design.parameters()
     if theta.size > EXPANDED_MAX:
-        full = _mapped(function, design.branch, theta.size).call([theta.reshape(1, -1), design.parameters()])[output]
-        return np.asarray(full)[list(rows)]
-    values = _expanded(function, design.branch, theta.size, output, rows)(theta.reshape(1, -1), design.parameters())
-    return np.asarray(values).reshape(len(rows), -1)
+        return np.vstack([np.asarray(_mapped(function, design.branch, theta.size).call([theta.reshape(1, -1), p])[
+            output])[list(rows)] for function, output, rows in parts])
+    values = _expanded(parts, design.branch, theta.size)(theta.reshape(1, -1), p)
+    return np.asarray(values).reshape(-1, theta.size)
 
 
 @lru_cache(maxsize=16)
-def _expanded(function, branch: int, n: int, output: int, rows: tuple[int, ...]) -> ca.Function:
-    """Rows ``rows`` of output ``output`` of ``function(branch).map(n)`` as one SX Function (theta (1, n), p) ->
-    (len(rows), n), built once per process.
+def _expanded(parts: Parts, branch: int, n: int) -> ca.Function:
+    """The rows of ``parts`` (stacked) at n crank angles as one SX Function (theta (1, n), p) -> (rows, n), built once
+    per process.
 
-    The map expanded into its SX operations: every angle's operations are the map's own, so the numbers are the
-    map's to the bit, but CasADi's SX virtual machine runs them in one call instead of one call per angle (2.5x
-    faster on 3,600 angles), and only the operations the chosen rows need are kept (a precision-point search reads
-    the claw's Y over a turn, an acceleration rule a_y alone): the float re-check is the Monte-Carlo's sample.
+    Per angle, the chosen rows' operations alone, once each: common subexpressions merged (``ca.cse``: the
+    claw's Y and the transmission angle share the four-bar's closure, a_y repeats terms of its AD), then the map
+    over the grid expanded into SX, so CasADi's virtual machine runs the whole grid in one call instead of one call
+    per angle (2.5x faster on 3,600 angles).  Merging a repeated operation and running it once per angle leave
+    every operation and its inputs as they were, so the numbers are the full functions' to the bit (compared over
+    designs near the library in tests/test_planting_recheck_speed.py).
     """
-    theta = ca.SX.sym("theta", 1, n)
+    theta = ca.SX.sym("theta")
     p = ca.SX.sym("p", len(PARAMETERS))
-    values = function(branch).map(n).call([theta, p])[output]
-    return ca.Function(f"{function(branch).name()}_{output}_{'_'.join(map(str, rows))}_on_{n}", [theta, p],
-                       [values[list(rows), :]], ["theta", "p"], ["values"])
+    rows = ca.vertcat(*[function(branch).call([theta, p])[output][list(picked), :]
+                        for function, output, picked in parts])
+    name = "_".join(f"{function.__name__}{output}r{''.join(map(str, picked))}" for function, output, picked in parts)
+    one = ca.Function(f"{name}_branch{'p' if branch > 0 else 'm'}", [theta, p], [ca.cse(rows)], ["theta", "p"],
+                      ["values"])
+    if n == 1:
+        return one
+    grid = ca.SX.sym("theta", 1, n)
+    return ca.Function(f"{one.name()}_on_{n}", [grid, p], [one.map(n).call([grid, p])[0]], ["theta", "p"],
+                       ["values"])
 
 
 def scalar_function(function, branch: int, output: int, rows: tuple[int, ...]) -> ca.Function:
     """Rows ``rows`` of output ``output`` of ``function(branch)`` alone, (theta, p) -> (len(rows), 1): a root
     finder's function (the full function's operations, so its numbers to the bit, with only those it needs)."""
-    return _expanded(function, branch, 1, output, rows)
+    return _expanded(((function, output, rows),), branch, 1)
 
 
 @lru_cache(maxsize=64)
@@ -215,7 +231,7 @@ def link_angles(design: ArmDesign, theta) -> dict[str, np.ndarray]:
 def transmission_angles(design: ArmDesign, theta) -> np.ndarray:
     """Transmission angle mu (N,) at crank angles theta (rad), rad: :func:`link_angles`' ``mu``, bit for bit, without
     the assembly margin."""
-    return _on_grid(link_function, 0, (0,), design, theta)[0]
+    return _on_grid(((link_function, 0, (0,)),), design, theta)[0]
 
 
 def joint_positions(design: ArmDesign, theta) -> dict[str, np.ndarray]:

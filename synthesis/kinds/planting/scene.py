@@ -17,8 +17,8 @@ from scipy.optimize import brentq
 
 from synthesis.errors import AssemblyError
 from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, scalar_function, tip_accelerations_y,
-                                                 tip_derivatives, tip_heights, tip_position, tip_positions, tip_state,
-                                                 transmission_angles)
+                                                 tip_derivatives, tip_heights_and_transmission, tip_position,
+                                                 tip_positions, tip_state, transmission_angles)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
 from synthesis.spec.common import value_of
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -134,6 +134,21 @@ def _refine(fun, a: float, b: float) -> float:
     return brentq(fun, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps, maxiter=200)
 
 
+@dataclass(frozen=True)
+class TurnScan:
+    """The claw's Y (mm) and the transmission angle mu (rad) at ``theta``: a turn from crank angle 0, its end
+    excluded, evaluated in one pass (P5's search scans Y on the very grid the transmission rule samples)."""
+
+    theta: np.ndarray
+    y: np.ndarray
+    mu: np.ndarray
+
+
+def turn_scan(design: ArmDesign, samples: int) -> TurnScan:
+    theta = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+    return TurnScan(theta, *tip_heights_and_transmission(design, theta))
+
+
 def _crossings(values: np.ndarray, level: float, downward: bool) -> np.ndarray:
     """Indices k with values[k] and values[k+1] on opposite sides of level, in the given direction."""
     above = values >= level
@@ -142,12 +157,13 @@ def _crossings(values: np.ndarray, level: float, downward: bool) -> np.ndarray:
     return np.flatnonzero(~above[:-1] & above[1:])
 
 
-def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPoints:
+def find_precision_points(scene: PlantingScene, grid: int = 3600, scan: TurnScan | None = None) -> PrecisionPoints:
     """P5 = lowest point (vy = 0), P4/P6 = soil crossings around it, P3/P2/P1 = seedbed crossings.
 
     One cycle is scanned from P5: P5 < P6 < P1 < P2 < P3 < P4 < P5 + 360 deg.  P3 is the last
     downward crossing of the seedbed bottom before P4, P2 the last of the seedbed top before P3,
-    P1 the last of the seedling-top line before P2.
+    P1 the last of the seedling-top line before P2.  ``scan``: the turn already scanned (used when it has ``grid``
+    samples).
     """
     d, m, bed = scene.design, scene.motion, scene.seedbed
     # the root finders' functions: only the row each reads, p converted once (a re-check is a Monte-Carlo sample)
@@ -165,8 +181,9 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600) -> PrecisionPo
         x_, y_ = pos_at(th, p).elements()
         return float(bed.height((x_, y_)))
 
-    coarse = np.linspace(0.0, TWO_PI, grid, endpoint=False)
-    ys = tip_heights(d, coarse)
+    if scan is None or scan.theta.size != grid:
+        scan = turn_scan(d, grid)
+    coarse, ys = scan.theta, scan.y
     k = int(np.argmin(ys))
     h = coarse[1]
     # the lowest point: vy changes sign from - to + around the grid minimum
@@ -245,10 +262,11 @@ def phase_grid(a: float, b: float, n: int) -> np.ndarray:
 
 
 def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int = 400, turn_samples: int = 3600,
-                turn_missing: str | None = None) -> Trace:
+                turn_missing: str | None = None, scan: TurnScan | None = None) -> Trace:
     """The rules' trace of a numeric design: the found precision points, phases and a turn sampled.
 
-    ``turn_missing`` says why the crank cannot complete a turn (then the turn rules are unevaluated).
+    ``turn_missing`` says why the crank cannot complete a turn (then the turn rules are unevaluated); ``scan``: the
+    turn already scanned (its transmission angles are the turn's when it has ``turn_samples`` samples).
     """
     d, m = scene.design, scene.motion
     found = [n for n in POINTS if pts.theta[n] is not None]
@@ -261,7 +279,9 @@ def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int =
     return Trace(theta=theta, pos={n: tuple(at.pos[:, k]) for k, n in enumerate(found)},
                  vel={n: tuple(at.vel[:, k]) for k, n in enumerate(found)}, accel_y=accel,
                  links=(d.l1, d.l2, d.l3, d.l4),
-                 mu_deg=None if turn_missing else transmission_angles_deg(d, turn_samples), omega=m.omega,
+                 mu_deg=None if turn_missing else (np.degrees(scan.mu) if scan is not None and scan.theta.size ==
+                                                   turn_samples else transmission_angles_deg(d, turn_samples)),
+                 omega=m.omega,
                  forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
                  turn_missing=turn_missing)
 
