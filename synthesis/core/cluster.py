@@ -11,7 +11,7 @@ import struct
 import threading
 import time
 import uuid
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 import msgpack
 import numpy as np
@@ -33,7 +33,8 @@ class _SolverPlugin(WorkerPlugin):
     """
 
     def __init__(self, factory: Callable[[], Any], name: str):
-        self.factory, self.name, self.solver = factory, name, None
+        self.factory, self.name = factory, name
+        self.solver: Any = None           # the factory's solver, built on the worker (setup)
         self.lock: threading.Lock | None = None
 
     def setup(self, worker) -> None:
@@ -41,12 +42,15 @@ class _SolverPlugin(WorkerPlugin):
         self.lock = threading.Lock()
 
     def solve(self, index: int, x0: np.ndarray):
+        if self.lock is None:
+            raise RuntimeError(f"{self.name}: a solver plug-in solves only on a dask worker that set it up")
         with self.lock:
             return self.solver.solve(index, x0)
 
 
 def _solve_on_dask_worker(plugin_name: str, index: int, x0: np.ndarray):
-    return get_worker().plugins[plugin_name].solve(index, x0)
+    plugin = cast(_SolverPlugin, get_worker().plugins[plugin_name])      # the one this module registered
+    return plugin.solve(index, x0)
 
 
 def _worker_failed(scheduler: str, exc: Exception) -> AgrisynthError:

@@ -42,10 +42,11 @@ def compile_problem(setting: Setting, problem: Problem, elastic: bool = False, *
     """The problem as the setting transforms it, compiled: held in its tolerance box (the robust extras started at
     each start), without an IPOPT instance where it is only evaluated.  ``options``: CompiledNLP's (scaling,
     watched)."""
-    robust = setting.tolerance is not None
-    if robust:
-        problem = held_in_box(problem, setting.tolerance)
-    return CompiledNLP(problem, elastic, with_solver=setting.solver, robust_start=robust, method=setting.method,
+    tolerance = setting.tolerance
+    if tolerance is not None:
+        problem = held_in_box(problem, tolerance)
+    return CompiledNLP(problem, elastic, with_solver=setting.solver, robust_start=tolerance is not None,
+                       method=setting.method,
                        **options)
 
 

@@ -307,7 +307,7 @@ class _PoolRound:
 
     def accept_finished(self) -> None:
         """Keep every start whose future finished without raising and is not yet kept."""
-        for fut in sorted(self.futures, key=self.futures.get):
+        for fut in sorted(self.futures, key=self.futures.__getitem__):
             if fut.done() and not fut.cancelled() and fut.exception() is None:
                 self.multistart.accept(fut.result())
 
@@ -324,7 +324,7 @@ class _PoolRound:
             with interrupt.deferred(reraise=False):
                 done, waiting = wait(waiting, timeout=0.5, return_when=FIRST_COMPLETED)
                 _drain(self.began_q, self.began)
-                for fut in sorted(done, key=self.futures.get):
+                for fut in sorted(done, key=self.futures.__getitem__):
                     self.keep(fut)
                 if run.stop_at + 1 < cancelled_after:       # an early stop: the later starts are not needed
                     for later in range(run.stop_at + 1, cancelled_after):

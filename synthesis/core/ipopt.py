@@ -63,11 +63,12 @@ import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator, Sequence
 
 import casadi as ca
 import numpy as np
 
+from constraints.base import Rule
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
@@ -237,7 +238,7 @@ class CompiledNLP:
         self.problem = problem
         self.elastic = elastic
         self.watched = watched
-        changes = {k: v for k, v in (("derivatives", derivatives), ("scaling", scaling),
+        changes: dict[str, Any] = {k: v for k, v in (("derivatives", derivatives), ("scaling", scaling),
                                      ("length_factor", length_factor)) if v is not None}
         method = EXACT if method is None else method
         self.method = dataclasses.replace(method, **changes) if changes else method
@@ -310,10 +311,10 @@ class CompiledNLP:
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
         self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts) if self.with_solver else None
-        self._scaled_solver = None         # built on the first start solved in another length unit
+        self._scaled_solver: ca.Function | None = None         # built on the first start solved in another length unit
         self._ipopt_s = time.perf_counter() - t0
 
-    def scaled_solver(self):
+    def scaled_solver(self) -> ca.Function:
         """IPOPT on z with w = s * z, s (the nominal values) appended to the problem's parameters; built once,
         its build time added to ``build_s``."""
         if self._scaled_solver is None:
@@ -333,7 +334,7 @@ class CompiledNLP:
         return self._scaled_solver
 
     @property
-    def rules(self) -> list:
+    def rules(self) -> Sequence[Rule]:
         return self.problem.rules
 
     @property
@@ -376,6 +377,8 @@ class CompiledNLP:
         solver = self.solver
         if s is not None:
             solver = self.scaled_solver()
+        if solver is None:
+            raise ValueError(f"problem {self.problem.name}: built with_solver=False, so it is evaluated, never solved")
             args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, lbg=args["lbg"] / sg,
                         ubg=args["ubg"] / sg, p=np.concatenate([p, s, [sf], sg]))
         elif p.size:

@@ -219,14 +219,14 @@ class Problem:
         bad = [i for i, (e, _, _) in enumerate(self.structural) if depends(e)]
         if bad:
             raise ValueError(f"problem {self.name}: structural rows {bad} depend on a condition the envelope "
-                             f"samples ({', '.join(envelope.samples)}); write them free of it (the auxiliaries "
+                             f"samples ({', '.join(envelope.samples if envelope else ())}); write them free of it (the auxiliaries "
                              f"they pin are shared by every scenario)")
         source_structural = tuple(self.structural)
         self.structural = list(rows_at(self.structural, nominal))
         rules, hard, sources = [], list(self.hard_in_elastic), []
         for rule in self.rules:
             varies = (any(depends(e) for e, _, _ in (*rule.rows(), *rule.box_rows)) or depends(rule.expr))
-            if not varies:
+            if not varies or envelope is None:      # (a rule varies only with a condition the envelope samples)
                 rules.append(dataclasses.replace(rule, expr=at(rule.expr, nominal),
                                                  nlp_rows=rows_at(rule.nlp_rows, nominal),
                                                  box_rows=rows_at(rule.box_rows, nominal)))
@@ -261,7 +261,7 @@ def _objective_over(objective: ObjectiveParts, at, depends, envelope: Envelope |
     rows, units = [], []
     declared = objective.row_units
     for i, row in enumerate(objective.rows):
-        scenarios = envelope.scenarios() if depends(row[0]) else [{}]
+        scenarios = envelope.scenarios() if envelope is not None and depends(row[0]) else [{}]
         rows += [(at(row[0], {**nominal, **sc}), row[1], row[2]) for sc in scenarios]
         units += [declared[i]] * len(scenarios) if declared is not None else []
     return dataclasses.replace(objective, f=at(objective.f, nominal), rows=rows,

@@ -199,7 +199,8 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
                 if header is None:
                     header = line
                 if line.get("fingerprint") != print_:
-                    settings = line.get("settings") if isinstance(line.get("settings"), dict) else {}
+                    given = line.get("settings")
+                    settings = given if isinstance(given, dict) else {}
                     mine = ", ".join(f"{k} {v}" for k, v in sorted(settings.items()) if k != "spec_sha256")
                     raise OutputError(f"--resume {folder}: that run had other settings or another spec file "
                                       f"({mine or 'unknown'}; spec sha256 {str(settings.get('spec_sha256'))[:12]}); "

@@ -50,7 +50,7 @@ class _Robust:
         self.extra = [ca.vec(self.S)]
         self.lb = [-np.inf] * (na * self.n)
         self.derivs: list[ca.SX] = []
-        self._start = None
+        self._start: ca.Function | None = None
         self._hjac = ca.Function("pinning_jacobians", [x, problem.parameters],
                                  [ca.jacobian(h, a) if na else ca.SX(0, 0), ca.jacobian(h, z) if na else ca.SX(0, self.n)])
 
@@ -192,12 +192,12 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
     tol = problem.tolerance
     robust = None if tol is None else _Robust(problem, tol)
     in_box = robust is not None
-    hold = robust.hold if in_box else (lambda rule, rows: rows)
+    hold = robust.hold if robust is not None else (lambda rule, rows: rows)
     hard = [elastic and rule.name in problem.hard_in_elastic for rule in problem.rules]
     g = _Rows()
     held = set(problem.robust_structural) if in_box else set()
     for i, row in enumerate(problem.structural):       # in their order: a nominal NLP's rows are as they were
-        g.add(robust.hold_rows(f"structural_{i}", [row]) if i in held else [row])
+        g.add(robust.hold_rows(f"structural_{i}", [row]) if robust is not None and i in held else [row])
     if elastic:
         slack = ca.SX.sym("slack", len(problem.rules))
         for k, rule in enumerate(problem.rules):

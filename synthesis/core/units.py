@@ -60,7 +60,9 @@ def rule_factor(rule, factor: float, problem: str = "") -> float:
 
 
 def _numel(expr) -> int:
-    return int(ca.SX(expr).numel()) if isinstance(expr, (ca.SX, ca.MX)) else int(np.size(expr))
+    if isinstance(expr, (ca.SX, ca.MX)):
+        return int(ca.SX(expr).numel())  # type: ignore[arg-type]  # casadi's stubs give SX() no MX; kept as it was
+    return int(np.size(expr))
 
 
 def variable_factors(problem, factor: float, n_w: int, elastic: bool) -> np.ndarray:
