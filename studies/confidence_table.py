@@ -4,7 +4,7 @@ markdown table of the distinct optima among the converged starts, the starts rea
 Kan's P(best is global) (synthesis/core/confidence.py), and what ``auto`` used (starts solved, batches, why it
 stopped, time) against the fixed default.
 
-    python studies/confidence_table.py OUT.md [--all] [--only SUBSTRING ...]
+    python studies/confidence_table.py OUT.md [--all] [--max-starts N] [--only SUBSTRING ...]
 
 A study, not part of the installed tool or the test suite.  Wall times are of one worker on whatever else the
 machine is doing at the time: compare them within a row, not across runs.
@@ -21,7 +21,7 @@ LIBRARY = Path(__file__).resolve().parents[1] / "problems"
 SLOW = ("robust_", "envelope_", "mu_envelope")
 
 
-def _row(path: Path) -> str | None:
+def _row(path: Path, max_starts: int) -> str | None:
     from synthesis import kinds
     from synthesis.core.solve import AutoStarts, run_solve
     from synthesis.errors import AgrisynthError
@@ -38,7 +38,7 @@ def _row(path: Path) -> str | None:
         fixed_s = time.perf_counter() - t0
         solved = []
         t0 = time.perf_counter()
-        auto = run_solve(kind, loaded, workers=1, auto=AutoStarts(),
+        auto = run_solve(kind, loaded, workers=1, auto=AutoStarts(max_starts=max_starts),
                          on_start=lambda report, best: solved.append(report.outcome.start))[0]
         auto_s = time.perf_counter() - t0
     except AgrisynthError as err:
@@ -61,6 +61,7 @@ def main(argv: list[str]) -> int:
     out = Path(argv[0])
     every = "--all" in argv
     only = argv[argv.index("--only") + 1:] if "--only" in argv else []
+    max_starts = int(argv[argv.index("--max-starts") + 1]) if "--max-starts" in argv else 512
     lines = ["| spec | kind | status | fixed starts | converged | distinct optima | starts at best | P(global) | "
              "fixed s | auto starts (solved, stopped by) | auto optima / P(global) | auto s | same objective |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -68,7 +69,7 @@ def main(argv: list[str]) -> int:
         if (not every and any(s in path.name for s in SLOW)) or (only and not any(o in str(path) for o in only)):
             continue
         try:
-            row = _row(path)
+            row = _row(path, max_starts)
         except Exception as exc:          # a spec that is not a problem (a data file) or cannot be loaded
             row = f"| {path.relative_to(LIBRARY)} | not solved: {type(exc).__name__} |" + " |" * 11
         if row is not None:
