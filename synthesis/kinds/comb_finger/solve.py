@@ -16,7 +16,7 @@ def recheck(setting: Setting, outcome) -> Recheck:
     """The rules of a returned design on floats, the finger's turn sampled 10x finer; theta measured anew."""
     spec = setting.spec
     rules, tr = evaluate(spec, dict(outcome.design))          # check's grid: >= 10x the solver's
-    return Recheck(rules, tr, lambda report, tr=tr: math.degrees(tr.theta))
+    return Recheck(rules, tr, lambda report: math.degrees(tr.theta))
 
 
 def finish(setting: Setting, best: StartReport) -> Finished:

@@ -4,6 +4,8 @@ diagnosis are the core's (:mod:`synthesis.core.solve`)."""
 
 from __future__ import annotations
 
+from typing import cast
+
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.errors import AgrisynthError
@@ -44,7 +46,8 @@ def finish(setting: Setting, best: StartReport) -> Finished:
         (scene, pts), rules = best.context, None
     else:       # the linkage never assembles: only the link-length rules can be evaluated
         scene, pts = PlantingScene.from_spec(spec, design), None
-        rules = [r.record().to_json() for r in unevaluated(scene, spec.rules, best.why)]
+        # a start without context is one the verdict could not evaluate, which always says why
+        rules = [r.record().to_json() for r in unevaluated(scene, spec.rules, cast(str, best.why))]
     return Finished(
         design={**design, "branch": spec.arm.branch},
         objective={"name": spec.objective.name, "value": best.outcome.objective,
