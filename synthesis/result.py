@@ -354,6 +354,20 @@ class RunFolder:
         for filename, writer in artifacts.items():
             writer(self.staging / filename)
 
+    def fill(self, write: Callable[[Path], None], *, retire: bool = False) -> bool:
+        """The one writer of run folders (check, solve, tolerance, bench, compare): ``write(staging)`` puts the run's
+        files into the staging folder, then :meth:`commit` moves it into place; returns whether an earlier run was
+        replaced.  Any failure but an OutputError discards the staging folder (an OutputError keeps it: its message
+        names where the run is kept)."""
+        try:
+            write(self.staging)
+            return self.commit(retire=retire)
+        except OutputError:
+            raise
+        except BaseException:
+            self.discard()
+            raise
+
     def commit(self, retire: bool = False) -> bool:
         """Move the staging folder to ``final``; returns whether an earlier run was replaced.  ``retire`` (a
         complete result): remove the killed run's staging folder a ``--resume`` read its starts from
@@ -549,14 +563,10 @@ def write_run(out_root: Path, result: Result, artifacts: dict[str, Callable[[Pat
 
     if folder is None:
         return write_folder(Path(out_root) / result.name, {"result.json": result_json, **artifacts}, force=force)
-    try:
-        folder.write({"result.json": result_json, **artifacts})
-        return folder.final, folder.commit(retire=result.status != "interrupted")
-    except OutputError:
-        raise
-    except BaseException:
-        folder.discard()
-        raise
+    opened = folder
+    replaced = opened.fill(lambda staging: opened.write({"result.json": result_json, **artifacts}),
+                           retire=result.status != "interrupted")
+    return opened.final, replaced
 
 
 def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]], *, force: bool = False,
@@ -564,14 +574,7 @@ def write_folder(final: Path, artifacts: dict[str, Callable[[Path], None]], *, f
     """Write the run folder ``final`` (one file per artifact writer, called in order) through a staging
     folder; replaces an earlier agrisynth run there only with ``force``.  Returns (final, replaced)."""
     folder = open_run_folder(final.parent, final.name, force=force, spec=spec)
-    try:
-        folder.write(artifacts)
-        return final, folder.commit()
-    except OutputError:
-        raise
-    except BaseException:
-        folder.discard()
-        raise
+    return final, folder.fill(lambda staging: folder.write(artifacts))
 
 
 def atomic_write_text(path: Path, text: str) -> None:

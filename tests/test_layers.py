@@ -38,6 +38,22 @@ def test_the_contracts_ignore_no_import_and_cover_every_layer():
     assert (BenchCase, MethodRun) == (bench_case.BenchCase, bench_case.MethodRun)
 
 
+def test_run_folders_have_one_writer():
+    """Every command's run folder (check, solve, tolerance, bench, compare) is moved into place by one function,
+    ``RunFolder.fill`` (write into the staging folder, commit, discard on failure): no other code commits one."""
+    import ast
+
+    commits = []
+    for path in sorted((ROOT / "synthesis").rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for func in ast.walk(tree):
+            if isinstance(func, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                commits += [(path.relative_to(ROOT).as_posix(), func.name) for node in ast.walk(func)
+                            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                            and node.func.attr == "commit"]
+    assert commits == [("synthesis/result.py", "fill")]
+
+
 def test_every_kind_lives_in_one_folder_under_synthesis_kinds():
     """The layer contracts name the kinds as a whole (``synthesis.kinds.*``): they hold for a new kind only if its
     class is defined in a folder there, like every built-in one; and the folders are the list (each folder's

@@ -24,14 +24,16 @@ from synthesis import kinds
 from synthesis.bench.case import (NOT_REACHED, PEERS, TARGET_NOT_REACHED, BenchCase, MethodRun, reached, run_case,
                                   time_ratio, time_to_target)
 from synthesis.bench.generic import FULL, LIBRARY, QUICK, StudySettings, case_for, library_cases
-from synthesis.bench.output import COUNT_COLUMNS, _write_bench_files, machine, markdown, summary, sweep_plot_name, write_bench
+from synthesis.bench.output import (COUNT_COLUMNS, _write_bench_files, machine, markdown, summary, sweep_plot_name,
+                                    write_bench, write_bench_files)
 from synthesis.report.bench_plots import best_so_far, plot_error_vs_time, plot_sample_sweep
 from synthesis.spec import load_spec
 
 __all__ = ["NOT_REACHED", "PEERS", "TARGET_NOT_REACHED", "BenchCase", "MethodRun", "reached", "run_case", "time_ratio",
            "time_to_target", "FULL", "QUICK", "StudySettings", "COUNT_COLUMNS", "machine", "markdown", "summary",
            "sweep_plot_name", "write_bench", "best_so_far", "plot_error_vs_time", "plot_sample_sweep",
-           "study_settings", "kinds_with_bench", "cases_for", "OWN_CASES_IN_EVERY_KIND_RUN", "_write_bench_files"]
+           "study_settings", "kinds_with_bench", "cases_for", "OWN_CASES_IN_EVERY_KIND_RUN", "_write_bench_files",
+           "write_bench_files"]
 
 
 def study_settings(quick: bool = False) -> StudySettings:

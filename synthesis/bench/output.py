@@ -11,7 +11,6 @@ import platform
 import re
 from pathlib import Path
 
-from synthesis.errors import OutputError
 from synthesis.report.bench_plots import plot_error_vs_time, plot_sample_sweep
 from synthesis.result import atomic_write_drawn, atomic_write_text, open_run_folder, versions
 
@@ -23,18 +22,13 @@ def write_bench(out: Path, results: list[dict], settings: dict, extreme: list[di
     check and solve do: an earlier bench there is replaced only with ``force``, anything else is never
     replaced (OutputError, exit 2).  ``run_folder``: that folder opened already (the CLI opens it first)."""
     run_folder = open_run_folder(out, "bench", force=force) if run_folder is None else run_folder
-    try:
-        _write_bench_files(run_folder.staging, results, settings, extreme)
-        run_folder.commit()
-    except OutputError:
-        raise
-    except BaseException:
-        run_folder.discard()
-        raise
+    run_folder.fill(lambda staging: write_bench_files(staging, results, settings, extreme))
     return run_folder.final
 
 
-def _write_bench_files(folder: Path, results: list[dict], settings: dict, extreme: list[dict] | None) -> None:
+def write_bench_files(folder: Path, results: list[dict], settings: dict, extreme: list[dict] | None) -> None:
+    """bench.json, bench.md and the plots, written into ``folder`` (a run folder's staging folder: the writer of
+    run folders, ``RunFolder.fill``, moves it into place)."""
     rows = [row for res in results for row in res["rows"]]
     data = {"settings": settings, "versions": versions(), "machine": machine(), "problems": [
         {k: v for k, v in res.items() if k != "rows"} for res in results], "rows": rows,
@@ -269,3 +263,7 @@ def _json_safe(x):
     if isinstance(x, (list, tuple)):
         return [_json_safe(v) for v in x]
     return x
+
+
+#: the earlier name of :func:`write_bench_files` (tests write a bench's files into a plain folder with it)
+_write_bench_files = write_bench_files

@@ -110,28 +110,26 @@ def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None
     ``folder``: the :class:`~synthesis.result.RunFolder` already opened for ``out`` (the CLI opens it
     before reading anything, so a refusal comes before any work)."""
     folder = open_output_folder(out, force) if folder is None else folder
-    staging = folder.staging
-    try:
-        figures, notes = comparison_figures(cands, staging)
-        notes = _different_targets(cands) + notes
-        if bench:
-            from synthesis.report.bench_plots import plot_error_vs_time
-
-            try:
-                plot_error_vs_time(bench, staging / "error_vs_time.png")
-                figures.append(("error_vs_time.png", "error against run time (agrisynth bench): objective gap "
-                                                     "and worst fine-grid violation against wall time"))
-            except Exception as exc:    # noqa: BLE001 - the table still shows the bench; say why the plot is missing
-                notes.append(f"error_vs_time.png not drawn: {type(exc).__name__}: {exc}")
-        title = "compare: " + " vs ".join(c.label for c in cands)
-        atomic_write_text(staging / "compare.html", render(cands, figures, notes, title, bench))
-        folder.commit()
-    except OutputError:
-        raise
-    except BaseException:
-        folder.discard()
-        raise
+    folder.fill(lambda staging: write_comparison_files(cands, staging, bench))
     return Path(out) / "compare.html"
+
+
+def write_comparison_files(cands: list[Candidate], staging: Path, bench: list[dict] | None = None) -> None:
+    """compare.html and its figures, written into ``staging`` (a run folder's staging folder: the writer of run
+    folders, ``RunFolder.fill``, moves it into place)."""
+    figures, notes = comparison_figures(cands, staging)
+    notes = _different_targets(cands) + notes
+    if bench:
+        from synthesis.report.bench_plots import plot_error_vs_time
+
+        try:
+            plot_error_vs_time(bench, staging / "error_vs_time.png")
+            figures.append(("error_vs_time.png", "error against run time (agrisynth bench): objective gap "
+                                                 "and worst fine-grid violation against wall time"))
+        except Exception as exc:    # noqa: BLE001 - the table still shows the bench; say why the plot is missing
+            notes.append(f"error_vs_time.png not drawn: {type(exc).__name__}: {exc}")
+    title = "compare: " + " vs ".join(c.label for c in cands)
+    atomic_write_text(staging / "compare.html", render(cands, figures, notes, title, bench))
 
 
 def open_output_folder(out: Path, force: bool = False):

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from synthesis import bench as benchmod
 from synthesis.bench.extreme import extreme_matrix
-from synthesis.result import open_run_folder
 from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
+from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
 from synthesis.spec import KINDS, load_spec
 
@@ -59,8 +59,8 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
     repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
     by_kind = problems_by_kind(request)
-    run_folder = open_run_folder(request.out, "bench", force=request.force)   # refused (exit 2) before any benching
-    try:
+    # refused (exit 2) before any benching; the staging folder is discarded if the bench stops
+    with RunOutput(request.out, "bench", force=request.force) as output:
         cases = _cases(request, by_kind, emit)
         extreme_on = not request.no_extreme and not (request.problems or request.spec_files) and not request.quick
         emit(BenchStarted(sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)))
@@ -74,7 +74,5 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
         study = dataclasses.asdict(benchmod.study_settings(request.quick))
         settings = {"repeats": repeats, "quick": request.quick, "study": study, "problems": [c.problem for c in cases],
                     "wall_s": round(time.perf_counter() - t0, 1)}
-        folder = benchmod.write_bench(request.out, results, settings, extreme, run_folder=run_folder)
-    finally:
-        run_folder.discard()       # the staging folder, if the bench stopped (moved into place: nothing left)
+        folder, _ = output.fill(lambda staging: benchmod.write_bench_files(staging, results, settings, extreme))
     return Outcome(0, folder=folder, details=BenchRows(results, repeats, settings))

@@ -7,9 +7,10 @@ from pathlib import Path
 
 from synthesis.errors import OutputError
 from synthesis.report.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
-                                      write_comparison)
+                                      write_comparison_files)
 from synthesis.result import is_run_folder
 from synthesis.runs.events import Subscriber
+from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import CompareRequest, Comparison, Outcome
 
 
@@ -29,13 +30,11 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     """Write OUT/compare.html and its figures; ``details``: :class:`Comparison` (the candidates, the first the
     baseline; the page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
     refuse_overlap(request.results, request.out)
-    folder = open_output_folder(request.out, request.force)          # refused (exit 2) before anything is read
-    try:
+    # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
+    with RunOutput.around(open_output_folder(request.out, request.force)) as output:
         cands = load_candidates([p for p in request.results if not is_bench(p)])
         bench = [res for p in request.results if is_bench(p)
                  for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
-    except BaseException:
-        folder.discard()
-        raise
-    page = write_comparison(cands, request.out, bench, folder=folder)
+        output.fill(lambda staging: write_comparison_files(cands, staging, bench))
+    page = Path(request.out) / "compare.html"
     return Outcome(0, folder=page.parent, details=Comparison(cands, page))

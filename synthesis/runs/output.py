@@ -1,18 +1,21 @@
 """A run's folder from opening to written, in one place: opened before any work (a folder that must be kept is
 refused, exit 2, before anything runs), the result and its artifacts written atomically into it under the
 deferral that keeps a finished answer (docs/ARCHITECTURE.md, "Run folders" and "Interrupts"), discarded when the
-run ends any other way."""
+run ends any other way.  Every command's folder goes through it (check, solve, tolerance, bench, compare), and it
+writes through the one writer of run folders, :meth:`synthesis.result.RunFolder.fill`, which the bench's and the
+report's own ``write_bench`` and ``write_comparison`` use as well."""
 
 from __future__ import annotations
 
 import contextlib
 import signal
 from pathlib import Path
+from typing import Callable
 
 from synthesis.core import interrupt
 from synthesis.errors import OutputError
 from synthesis.report import run_artifacts
-from synthesis.result import atomic_write_text, open_run_folder, write_run
+from synthesis.result import RunFolder, atomic_write_text, open_run_folder, write_run
 from synthesis.runs.events import ResultWritten, SignalAfterResult, Subscriber
 
 
@@ -32,6 +35,13 @@ class RunOutput:
                                       resumed_from=resumed_from)
         self.written = False
 
+    @classmethod
+    def around(cls, folder: RunFolder) -> RunOutput:
+        """The output of a folder opened already (compare's: ``--out`` names the folder itself)."""
+        output = cls.__new__(cls)
+        output.out, output.folder, output.written = folder.final.parent, folder, False
+        return output
+
     def __enter__(self) -> "RunOutput":
         return self
 
@@ -50,6 +60,17 @@ class RunOutput:
         folder, replaced = write_run(self.out, result, artifacts, folder=self.folder)
         self.written = True
         return folder, replaced
+
+    def fill(self, write: Callable[[Path], None]) -> tuple[Path, bool]:
+        """``write(staging)`` puts the run's files in the staging folder, then moved into place; returns (folder,
+        replaced an earlier run)."""
+        replaced = self.folder.fill(write)
+        self.written = True
+        return self.folder.final, replaced
+
+    def write_files(self, files: dict[str, Callable[[Path], None]]) -> tuple[Path, bool]:
+        """``files`` (name: writer), moved into place; returns (folder, replaced an earlier run)."""
+        return self.fill(lambda staging: self.folder.write(files))
 
     @contextlib.contextmanager
     def finishing(self, emit: Subscriber):

@@ -9,8 +9,9 @@ from typing import Any
 from synthesis import kinds
 from synthesis.errors import ResultError, SpecError
 from synthesis.files import read_json
-from synthesis.result import MAX_RESULT_BYTES, write_folder
+from synthesis.result import MAX_RESULT_BYTES
 from synthesis.runs.events import MonteCarloPlan, Subscriber
+from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
 from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables
 from synthesis.spec import load_spec
@@ -73,8 +74,8 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
                     seed=seed)
     name = spec.name.removesuffix("_solved")
-    folder, _ = write_folder(request.out / f"{name}-tolerance", artifacts(kind.name, name, loaded.sha256, facts),
-                             force=request.force)
+    with RunOutput(request.out, f"{name}-tolerance", force=request.force) as output:
+        folder, _ = output.write_files(artifacts(kind.name, name, loaded.sha256, facts))
     # the rows result.json holds decide, so a reader of it sees why: the design's own rules and, per rule, every
     # Monte-Carlo sample holding it (--samples 0: its linearised worst case in the box)
     failed = [r for r in facts["nominal_rules"] + verdict_rows(facts) if not r["satisfied"]]
