@@ -11,7 +11,8 @@ from conftest import LIBRARY
 from solving import agrisynth
 from synthesis import kinds
 from synthesis.core import startlog
-from synthesis.core.solve import AutoStarts, run_solve
+from synthesis.core.kind import Setting
+from synthesis.core.solve import AutoStarts, _not_uniform, run_solve
 from synthesis.kinds import solve_spec
 from synthesis.spec import load_spec
 
@@ -85,9 +86,6 @@ def test_a_flat_valley_of_equal_objectives_is_one_optimum_not_eight():
 
 def test_fourbar_path_says_its_starts_are_not_uniform():
     """A kind that builds its own (screened) starts: the statement names the assumption it breaks."""
-    from synthesis.core.solve import _not_uniform
-    from synthesis.core.kind import Setting
-
     loaded = load_spec(LIBRARY / "fourbar_path" / "picking_arc.toml")
     solving = kinds.get("fourbar_path").solving()
     nlp = solving.build(Setting(loaded.model, 0, solving.prepare(loaded.model)), False)
