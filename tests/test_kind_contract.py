@@ -297,8 +297,13 @@ def test_a_plugin_that_cannot_load_is_left_out_with_a_warning_naming_it(tmp_path
 
 def test_the_kind_contract_type_checks():
     """mypy checks every kind's class against synthesis.core.kind.Kind (a method's signature or return type that
-    breaks the contract fails here, before any run), the registry and the toy kind; files and options:
-    pyproject.toml [tool.mypy]."""
+    breaks the contract fails here, before any run), the registry and the toy kind, and type-checks the whole core,
+    the run layer and every kind's parts.py and solve.py; files and options: pyproject.toml [tool.mypy]."""
+    import tomllib
+
+    files = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mypy"]["files"])
+    assert {"synthesis/core", "synthesis/runs", "synthesis/kinds/*/__init__.py", "synthesis/kinds/*/parts.py",
+            "synthesis/kinds/*/solve.py"} <= files
     proc = subprocess.run([sys.executable, "-m", "mypy", "--no-incremental"], cwd=ROOT, capture_output=True,
                           text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr

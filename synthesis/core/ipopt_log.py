@@ -7,12 +7,13 @@ import os
 import sys
 import tempfile
 from contextlib import contextmanager
+from typing import Callable, Iterator
 
 from synthesis.core.library_log import captured_warnings
 
 
 @contextmanager
-def captured_stdout():
+def captured_stdout() -> Iterator[Callable[[], str]]:
     """Send fd 1 (where IPOPT prints) to a temporary file; yields a callable returning the text.  CasADi's
     warnings (written to ``sys.stderr``) and Python warnings raised meanwhile are appended to it
     (:mod:`synthesis.core.library_log`): they belong in the run's log, not on the terminal."""

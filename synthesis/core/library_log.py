@@ -13,6 +13,7 @@ import io
 import sys
 import warnings
 from contextlib import contextmanager
+from typing import Callable, Iterator
 
 
 def _format(w: warnings.WarningMessage) -> str:
@@ -20,7 +21,7 @@ def _format(w: warnings.WarningMessage) -> str:
 
 
 @contextmanager
-def captured_warnings():
+def captured_warnings() -> Iterator[Callable[[], str]]:
     """Record Python warnings and text written to ``sys.stderr`` inside the block; yields ``text()``."""
     buffer = io.StringIO()
     saved = sys.stderr

@@ -93,9 +93,9 @@ def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = No
     x, params = problem.x, problem.parameters
     n = x.numel()
     free = problem.ubx > problem.lbx
-    rows = [_as_sx(e) for e, lb, ub in problem.structural if lb is not None and ub is not None and lb == ub]
+    equalities = [_as_sx(e) for e, lb, ub in problem.structural if lb is not None and ub is not None and lb == ub]
     # rows that read a parameter are left out (what they pin is not judged: the parameters' values are the kind's)
-    rows = [r for r in rows if r is not None and not (params.numel() and ca.depends_on(r, params))]
+    rows = [r for r in equalities if r is not None and not (params.numel() and ca.depends_on(r, params))]
     h = ca.vertcat(*rows) if rows else ca.SX(0, 1)
     # a free entry no equality row reads: a rule that reads it is moved by it (its Jacobian column cannot be a
     # combination of the rows' zeros), so the numeric test needs only the rules reading none such
