@@ -377,12 +377,12 @@ class CompiledNLP:
         solver = self.solver
         if s is not None:
             solver = self.scaled_solver()
-        if solver is None:
-            raise ValueError(f"problem {self.problem.name}: built with_solver=False, so it is evaluated, never solved")
             args.update(x0=args["x0"] / s, lbx=args["lbx"] / s, ubx=args["ubx"] / s, lbg=args["lbg"] / sg,
                         ubg=args["ubg"] / sg, p=np.concatenate([p, s, [sf], sg]))
         elif p.size:
             args["p"] = p
+        if solver is None:
+            raise ValueError(f"problem {self.problem.name}: built with_solver=False, so it is evaluated, never solved")
         watcher = None
         if self._watch is not None:
             watcher = self._watch if solver is self.solver else self._scaled_watch
