@@ -68,7 +68,7 @@ def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
     assert _table(kinds.checker(kind_name)(again).rules) == _table(result.rules)
     # result.json's design_variables list the variables solved.toml fixes: every one the solve could move, free
     # (guide_way's fitted control points were missing: its spec leaves them to the kind)
-    from synthesis.cli import _described
+    from synthesis.runs.specs import described as _described
 
     # (and the list-valued design values, each at its path: fourbar_path's crank angles, at [design] crank_deg)
     listed = _described(result, loaded).design_variables
