@@ -151,9 +151,10 @@ def tip_accelerations_y(design: ArmDesign, motion: Motion, theta: np.ndarray) ->
     return _on_grid(((tip_derivatives, 2, (1,)),), design, theta)[0] * motion.omega**2
 
 
-#: the largest grid evaluated through :func:`_expanded` (its SX function holds every angle's operations, so its
-#: build grows with the grid: a larger one, as a plot may ask, goes through ``.map``)
-EXPANDED_MAX = 20_000
+#: the largest grid evaluated through :func:`_expanded`: the check's turn (3,600 angles, 3,601 from P5) and phases;
+#: its SX function holds every angle's operations (some 50 MB and 0.2 s to build for a_y on 3,600 angles), so a
+#: finer grid (a spec's samples_per_turn above 400 re-checked 10x finer, a plot) goes through ``.map``
+EXPANDED_MAX = 4000
 
 #: what :func:`_expanded` evaluates: (function of a branch, its output's index, the rows of that output) per part
 Parts = tuple[tuple[object, int, tuple[int, ...]], ...]
