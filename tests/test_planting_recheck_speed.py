@@ -17,11 +17,12 @@ import time
 
 import numpy as np
 import pytest
-
 from conftest import PLANTING
+
 from synthesis import kinds
 from synthesis.core.kind import Setting
 from synthesis.core.outcome import StartOutcome
+from synthesis.errors import AgrisynthError
 from synthesis.kinds.planting import kinematics
 from synthesis.kinds.planting.scene import PlantingScene
 from synthesis.spec import load_spec
@@ -97,7 +98,7 @@ def test_recheck_of_designs_near_each_library_spec_is_what_it_was_to_the_bit(nam
     for i, design in enumerate(designs_near(loaded.model.design_values(), DESIGNS_PER_SPEC)):
         try:
             rows.append(_row(recheck(i, design)))
-        except Exception as exc:   # none of the recorded designs raised: a raise is a difference too
+        except (AgrisynthError, ValueError, ArithmeticError) as exc:   # as the Monte-Carlo counts a sample's raise
             rows.append({"raised": f"{type(exc).__name__}: {exc}"})
     assert any(rule[4] for r in rows for rule in r.get("rules", []))   # notes (of points not found) compared too
     assert hashlib.sha256(json.dumps(rows, sort_keys=True).encode()).hexdigest()[:20] == RECORDED[name]

@@ -165,7 +165,7 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600, scan: TurnScan
     P1 the last of the seedling-top line before P2.  ``scan``: the turn already scanned (used when it has ``grid``
     samples).
     """
-    d, m, bed = scene.design, scene.motion, scene.seedbed
+    d, bed = scene.design, scene.seedbed
     # the root finders' functions: only the row each reads, p converted once (a re-check is a Monte-Carlo sample)
     p = ca.DM(d.parameters())
     y_at, vy_at = scalar_function(tip_position, d.branch, 0, (1,)), scalar_function(tip_derivatives, d.branch, 1, (1,))
