@@ -60,16 +60,19 @@ def test_the_toy_kinds_one_optimum_gives_the_closed_form_statement(tmp_path, toy
     assert stated["optima"][0]["objective"] == pytest.approx(40.0**2, rel=1e-7) and stated["assumptions_not_met"] == []
 
 
-def test_a_library_spec_with_several_local_optima_says_how_many_and_how_sure():
-    """crank_rocker_max_transmission's 8 starts (problems/picker): counted only where IPOPT converged with every rule
-    held; numbers as the closed forms give them for the W and N found."""
-    result, reports, _ = solve_spec(load_spec(LIBRARY / "picker" / "crank_rocker_max_transmission.toml"), workers=1)
+def test_a_library_spec_with_two_local_optima_says_how_many_and_how_sure():
+    """picker_double_crank_redesign's 8 starts (problems/picker) all converge with every rule held, at two objective
+    values: 0.0978 mm (starts 3.., 4 starts, at two designs) and 0.2113 mm (4 starts from start 0).  N = 8, W = 2:
+    P(best is global) = 5/7, E[K] = 2 x 7 / 4 = 3.5, unseen share 6/56; the rule is not met (1.5 unseen)."""
+    result, _, _ = solve_spec(load_spec(LIBRARY / "picker" / "picker_double_crank_redesign.toml"), workers=1)
     stated = result.solver["confidence"]
-    n = sum(1 for r in reports if r.satisfied and r.outcome.success and r.outcome.return_status == "Solve_Succeeded")
-    w = stated["distinct_optima"]
-    assert stated["starts_counted"] == n and sum(o["starts"] for o in stated["optima"]) == n
-    assert stated["probability_best_is_global"] == pytest.approx((n - w - 1) / (n - 1), rel=1e-15)
-    assert stated["optima"][0]["objective"] == pytest.approx(result.objective["value"], rel=1e-6)
+    assert (stated["starts_counted"], stated["distinct_optima"], stated["starts_at_best"]) == (8, 2, 4)
+    assert stated["probability_best_is_global"] == pytest.approx(5 / 7, rel=1e-15)
+    assert stated["expected_optima"] == pytest.approx(3.5, rel=1e-15) and stated["stopping_rule_met"] is False
+    assert stated["unseen_basin_share"] == pytest.approx(6 / 56, rel=1e-15) and stated["distinct_designs"] == 3
+    assert [(o["starts"], o["first_start"], o["designs"]) for o in stated["optima"]] == [(4, 3, 2), (4, 0, 1)]
+    assert stated["optima"][0]["objective"] == pytest.approx(0.09784125335134168, rel=1e-9)
+    assert stated["optima"][1]["objective"] == pytest.approx(0.211294181602809, rel=1e-6)
 
 
 def test_a_flat_valley_of_equal_objectives_is_one_optimum_not_eight():
