@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -128,12 +128,13 @@ def declared(declare: Callable[[Setting], Declared]) -> DeclaredBuild:
     return DeclaredBuild(declare)
 
 
-def named(names: list[str]) -> Callable[[np.ndarray], dict]:
+def named(names: Sequence[str]) -> Callable[[np.ndarray], dict]:
     """The design map of a decision vector whose first entries are the design variables ``names`` themselves."""
     return lambda x: {n: float(v) for n, v in zip(names, x)}
 
 
-def binding(out: NLPOutcome, compiled: CompiledNLP, names: list[str], bounds: np.ndarray, relative: float) -> dict:
+def binding(out: NLPOutcome, compiled: CompiledNLP, names: Sequence[str], bounds: np.ndarray,
+            relative: float) -> dict:
     """A start's limits that bind: the rules whose multipliers are non-zero (none in the elastic form) and the free
     design variables within ``relative`` x max(1, |value|) of a bound."""
     xs = out.x[:len(names)]

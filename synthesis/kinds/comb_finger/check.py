@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -213,7 +213,7 @@ def facts(spec: CombFingerSpec, design: dict) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(CombFingerSpec, loaded.model)       # load_spec validated it with this kind's model
     design = spec.design_values()
     rules, _ = evaluate(spec, design)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,

@@ -7,13 +7,14 @@ check's tip circle), and the drum's wall, a circle of radius rho about S, as an 
 from __future__ import annotations
 
 import math
+from typing import Any, TypeGuard
 
 from synthesis.core.kind import Poses, pose_mm
 
 DRUM_POINTS = 48
 
 
-def _pair(v) -> bool:
+def _pair(v: Any) -> TypeGuard[list[float]]:
     return isinstance(v, list) and len(v) == 2 and all(
         isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) for c in v)
 

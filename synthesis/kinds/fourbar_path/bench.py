@@ -43,11 +43,12 @@ import math
 import multiprocessing
 import time
 import warnings
+from typing import cast
 
 try:
     import resource
 except ImportError:          # not POSIX: the budget falls back to wall time x workers
-    resource = None
+    resource = None  # type: ignore[assignment]  # mypy types the module name as the module
 
 import numpy as np
 from scipy.optimize import LinearConstraint, NonlinearConstraint, differential_evolution
@@ -65,6 +66,7 @@ from synthesis.kinds.fourbar_path.synthetic import truth_spec
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
+from synthesis.result import Result
 
 FOURBAR_PATH_LIBRARY = LIBRARY / "fourbar_path"
 DEFAULT_SYNTHETIC = [(1, n, timed) for n in (6, 10, 18) for timed in (False, True)]
@@ -108,7 +110,7 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
     """The multistart as ``agrisynth solve`` runs it.  ``spent``: each run appends its CPU seconds (every
     worker's), the budget of differential_evolution at equal budget."""
     def run(target: float) -> MethodRun:
-        spec = loaded.model
+        spec = cast(FourbarPathSpec, loaded.model)      # a fourbar_path spec (its kind's bench)
         solver = spec.solver.model_copy(update={"stop_at_objective": target})
         staged = dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver}))
         trace: list[tuple[float, float]] = []
@@ -130,8 +132,8 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
             cpu, basis = wall * workers, "wall x workers"
         if spent is not None:
             spent.append(cpu)
-        s = result.solver
-        objective, violation = result.objective["value"], result.fine_grid_worst_violation
+        solved, s = _solved(result)
+        objective, violation = solved["value"], result.fine_grid_worst_violation
         return MethodRun(math.inf if objective is None else objective, math.inf if violation is None else violation,
                          trace, {"starts": s["starts"], "starts_run": s["starts_run"],
                                  "starts_needed": s["starts_needed"], "best_start": s["best_start"],
@@ -144,12 +146,19 @@ def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | 
 def reference_objective(loaded: LoadedSpec) -> float:
     """The best known objective of a library spec: the full multistart (every start, no early stop),
     untimed, seeded apart from the timed runs (seed + REFERENCE_SEED_OFFSET)."""
-    spec = loaded.model
+    spec = cast(FourbarPathSpec, loaded.model)
     solver = spec.solver.model_copy(update={"stop_at_objective": None,
                                             "seed": spec.solver.seed + REFERENCE_SEED_OFFSET})
     result, _, _ = run_solve(kinds.get("fourbar_path"),
                              dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver})), workers=1)
-    return result.objective["value"]
+    return _solved(result)[0]["value"]
+
+
+def _solved(result: Result) -> tuple[dict, dict]:
+    """A solve's result.json ``objective`` and ``solver`` records (a check's result has neither)."""
+    if result.objective is None or result.solver is None:
+        raise TypeError(f"{result.name}: not the result of a solve")
+    return result.objective, result.solver
 
 
 # ---------------------------------------------------------------------------- differential evolution
@@ -176,8 +185,8 @@ class DEProblem:
     def signs(self) -> tuple[float, ...]:
         return SIGNS[self.spec.rules.direction]
 
-    def bounds(self) -> list[tuple[float, float]]:
-        b = [tuple(x) for x in self.spec.bounds_array()]
+    def bounds(self) -> list[tuple[float, ...]]:
+        b: list[tuple[float, ...]] = [tuple(x) for x in self.spec.bounds_array()]
         if self.ordered:
             b += [(0.0, 360.0)] + [(0.0, 1.0)] * self.n + ([(-1.0, 1.0)] if len(self.signs) > 1 else [])
         elif self.free_timing:
@@ -238,7 +247,7 @@ def differential_evolution_method(loaded: LoadedSpec, budget: list[float] | None
     (ipopt_multistart's ``spent``; it runs first in every round of the bench).  DE then also stops when its
     own CPU seconds reach the latest of them, with no generation limit and no polish (scipy's polish runs
     after the stop and would spend past the budget); the result is DE's best member at that moment."""
-    spec = loaded.model
+    spec = cast(FourbarPathSpec, loaded.model)
     problem = DEProblem(spec)
 
     def run(target: float) -> MethodRun:
