@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
@@ -166,19 +165,19 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600, scan: TurnScan
     samples).
     """
     d, bed = scene.design, scene.seedbed
-    # the root finders' functions: only the row each reads, p converted once (a re-check is a Monte-Carlo sample)
-    p = ca.DM(d.parameters())
+    # the root finders' functions: only the row each reads (a re-check is a Monte-Carlo sample)
+    p = d.parameters()
     y_at, vy_at = scalar_function(tip_position, d.branch, 0, (1,)), scalar_function(tip_derivatives, d.branch, 1, (1,))
     pos_at = scalar_function(tip_position, d.branch, 0, (0, 1))
 
     def y(th):
-        return float(y_at(th, p))
+        return y_at.scalar(th, p)
 
     def vy(th):
-        return float(vy_at(th, p))
+        return vy_at.scalar(th, p)
 
     def height(th):
-        x_, y_ = pos_at(th, p).elements()
+        x_, y_ = pos_at.values(th, p)[:, 0].tolist()
         return float(bed.height((x_, y_)))
 
     if scan is None or scan.theta.size != grid:
