@@ -3,11 +3,10 @@ multistart) gives the numbers it gave before it was made faster, to the bit.
 
 The digests below were recorded at commit 835ab78, before the grids were evaluated by expanded SX functions
 called through CasADi's buffer interface (synthesis.kinds.planting.kinematics._expanded, Evaluator): per library
-spec, 50 designs near its given design (25 within
-+-0.5, 25 within +-4 in every design variable's unit; the counterweight's mass +-0.01 kg), re-checked through
-the kind's ``Solving.recheck`` as the Monte-Carlo calls it; every precision point's crank angle and every rule's
-value, margin, verdict and note, floats as hex, hashed.  Half of the designs miss P1 or more, so the notes of
-the points not found are compared too.
+spec, 50 designs near its given design (25 within +-0.5, 25 within +-4 in every design variable's unit; the
+counterweight's mass +-0.01 kg), re-checked through the kind's ``Solving.recheck`` as the Monte-Carlo and the
+multistart call it; every precision point's crank angle and every rule's value, margin, verdict and note, floats
+as hex, hashed.  Many designs miss P1 or more, so the notes of the points not found are compared too.
 """
 
 from __future__ import annotations
