@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import casadi as ca
 import numpy as np
@@ -61,7 +62,7 @@ class Trace:
 
     @property
     def max_error_deg(self) -> float | None:
-        return None if self.alpha_deg is None else float(np.abs(self.error_deg).max())
+        return None if self.alpha_deg is None else float(np.abs(self.alpha_deg - self.ackermann_deg).max())
 
 
 def dead_centre(spec: SteeringSpec, r: float, gamma: float, upto_deg: float) -> float | None:
@@ -142,17 +143,18 @@ def facts(spec: SteeringSpec, design: dict[str, float], tr: Trace, table12: dict
         "dead_centre_inside_deg": tr.dead_centre_deg,
     }
     if tr.alpha_deg is not None:
-        k = int(np.argmax(np.abs(tr.error_deg)))
-        mu = np.minimum(np.concatenate([tr.mu_outer_deg, tr.mu_inner_deg]),
-                        180.0 - np.concatenate([tr.mu_outer_deg, tr.mu_inner_deg]))
+        error, mu_outer, mu_inner = tr.error_deg, tr.mu_outer_deg, tr.mu_inner_deg
+        assert error is not None and mu_outer is not None and mu_inner is not None, "evaluated with the outside angle"
+        k = int(np.argmax(np.abs(error)))
+        mu = np.minimum(np.concatenate([mu_outer, mu_inner]), 180.0 - np.concatenate([mu_outer, mu_inner]))
         out.update({
             "max_steering_error_deg": tr.max_error_deg, "max_error_at_inside_deg": float(tr.beta_deg[k]),
             "outside_at_max_lock_deg": float(tr.alpha_deg[-1]),
             "ackermann_at_max_lock_deg": float(tr.ackermann_deg[-1]),
             "min_transmission_angle_deg": float(mu.min()),
             "curve": {"inside_deg": tr.beta_deg.tolist(), "outside_deg": tr.alpha_deg.tolist(),
-                      "ackermann_deg": tr.ackermann_deg.tolist(), "error_deg": tr.error_deg.tolist(),
-                      "mu_outer_deg": tr.mu_outer_deg.tolist(), "mu_inner_deg": tr.mu_inner_deg.tolist()},
+                      "ackermann_deg": tr.ackermann_deg.tolist(), "error_deg": error.tolist(),
+                      "mu_outer_deg": mu_outer.tolist(), "mu_inner_deg": mu_inner.tolist()},
         })
     out["positions"] = [j for j in (joints(spec, design, b) for b in DRAWN_LOCKS if b <= req.max_inside_lock + 1e-9)
                         if j is not None]
@@ -169,7 +171,7 @@ def facts(spec: SteeringSpec, design: dict[str, float], tr: Trace, table12: dict
 def run_check(loaded: LoadedSpec) -> Result:
     from synthesis.kinds.steering_linkage.table12 import explain
 
-    spec = loaded.model
+    spec = cast(SteeringSpec, loaded.model)         # load_spec validated it with this kind's model
     design = spec.design_values()
     rules, tr = evaluate(spec, design, FINE * spec.solver.samples)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,

@@ -55,7 +55,7 @@ class Trapezoid(StrictModel):
 
 
 def _range(v: Variable) -> tuple[float, float]:
-    return tuple(v.bounds) if isinstance(v, FreeVariable) else (float(v), float(v))
+    return v.bounds if isinstance(v, FreeVariable) else (float(v), float(v))
 
 
 def _text(v: Variable) -> str:

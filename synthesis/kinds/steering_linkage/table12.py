@@ -10,6 +10,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -108,7 +109,7 @@ def concavity_gap(rows: list[Row]) -> dict | None:
     these locks): the largest drop of a row below the chord of its neighbours (in beta order), and the
     smallest amount by which any concave curve must miss one of the three rows (half that drop)."""
     pts = sorted((r.inside, r.actual) for r in rows)
-    worst = None
+    worst: dict[str, Any] | None = None
     for (b0, a0), (b1, a1), (b2, a2) in zip(pts, pts[1:], pts[2:]):
         chord = a0 + (b1 - b0) / (b2 - b0) * (a2 - a0)
         drop = chord - a1
@@ -173,7 +174,7 @@ def explain(spec) -> dict:
     fit["arm_length_identification"] = identification
     ours_acc = np.degrees([float(ackermann_outer(r_.inside * DEG, w / L)) for r_ in rows])
     trap = trapezoid_outer_deg([r_.inside for r_ in rows], w, r, spec.design_values()["base_angle"])
-    table = []
+    table: list[dict[str, Any]] = []
     for i, row in enumerate(rows):
         table.append({
             "inside_deg": row.inside, "accurate_printed_deg": row.accurate, "actual_printed_deg": row.actual,

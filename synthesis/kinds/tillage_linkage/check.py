@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 from scipy.optimize import brentq
@@ -120,7 +121,8 @@ def motion(spec: TillageSpec, design: dict[str, float], samples: int, soil_sampl
         m.windows = [(0.0, TWO_PI)]
     elif y_low < ground:
         f = lambda w: _y(p, w) - ground     # noqa: E731
-        entries, exits = [], []
+        entries: list[float] = []
+        exits: list[float] = []
         for k in range(samples):
             g0, g1 = g[k], g[(k + 1) % samples]
             if (g0 > 0.0) != (g1 > 0.0):
@@ -256,7 +258,7 @@ def facts(spec: TillageSpec, design: dict[str, float], m: Motion) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(TillageSpec, loaded.model)          # load_spec validated it with this kind's model
     design = spec.design_values()
     s = spec.solver
     rules, m = evaluate(spec, design, FINE * s.samples, FINE * s.soil_samples)

@@ -11,13 +11,17 @@ linkage.dxf  the linkage at the first position (flywheel centre A and roller pai
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Sequence
 
 from synthesis.report import exports
 from synthesis.result import Result
 
 
 def _same_grid(result: Result) -> tuple[dict, dict]:
-    tr, c = result.trajectory, result.extra["curve"]
+    tr, extra = result.trajectory, result.extra
+    if tr is None or extra is None:
+        raise ValueError("the exports need the result's trajectory and facts")
+    c = extra["curve"]
     if len(tr["crank_deg"]) != len(c["crank_deg"]) or any(abs(a - b) > 1e-9 for a, b in
                                                           zip(tr["crank_deg"], c["crank_deg"])):
         raise ValueError("the machine-frame curve and the trajectory are sampled on different crank angles")
@@ -34,9 +38,9 @@ def write_paths_csv(result: Result, path: Path) -> None:
 
 def write_linkage_dxf(result: Result, path: Path) -> None:
     tr, c = _same_grid(result)
-    f = result.extra
+    f = result.extra or {}          # _same_grid has made sure it is there
     pos = f["positions"][0]
-    joints = {k: tuple(pos[k]) for k in ("A", "B", "C", "D")}
+    joints: dict[str, Sequence[float]] = {k: tuple(pos[k]) for k in ("A", "B", "C", "D")}
     ground = -f["height_c_mm"]
     xs = list(c["x"]) + list(tr["x"])
     exports.write_linkage_dxf(

@@ -93,6 +93,8 @@ def _problem(spec: TillageSpec, bounds: np.ndarray, operating_symbols: bool) -> 
     operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.crank_speed, "r/min"),
                   Operating("forward_speed", ca.SX.sym("forward_speed"), spec.operation.forward_speed, "m/s")]
                  if operating_symbols else [])
+    rate: ca.SX | float
+    forward: ca.SX | float
     if operating:
         rate, forward = operating[0].symbol * TWO_PI / 60.0, operating[1].symbol
     else:

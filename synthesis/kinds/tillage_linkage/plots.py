@@ -48,6 +48,7 @@ def _machine(ax, result: Result) -> None:
 
 def _ground(ax, result: Result) -> None:
     tr = result.trajectory
+    assert tr is not None, "the figures are drawn from a result with its trajectory"
     x, y = np.array(tr["x"]), np.array(tr["y"])
     advance = result.extra["operation"]["advance_per_turn_mm"]
     for k in range(TURNS):

@@ -23,7 +23,7 @@ NAMES = ("a", "b", "c", "theta", "height_c")
 
 
 def _range(v: Variable) -> tuple[float, float]:
-    return tuple(v.bounds) if isinstance(v, FreeVariable) else (float(v), float(v))
+    return v.bounds if isinstance(v, FreeVariable) else (float(v), float(v))
 
 
 class Linkage(StrictModel):
