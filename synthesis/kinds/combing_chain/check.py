@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -78,6 +78,7 @@ def trace(spec: CombingChainSpec, design: dict, beta_samples: int, speed_samples
     CasADi symbols, ``{"machine_speed": (lo, hi), "plant_angle": (lo, hi)}``, so the rules have derivatives w.r.t.
     them; the grid is then written as lo + (hi - lo) i / (n - 1), the numbers' linspace to rounding."""
     c = spec.chain
+    betas: Any          # an array of floats, or with the operating range's symbols a list of CasADi expressions
     if operation is None:
         betas = np.linspace(*spec.operation.plant_angle, beta_samples)
         ranges = gear_ranges(spec, design)
@@ -239,8 +240,8 @@ def published_facts(spec: CombingChainSpec, design: dict) -> list[dict]:
         ours = _ours(spec, p.quantity, p.beta, p.machine_speed, p.chain_speed)
         tol = TOLERANCE[p.quantity]
         pairs = [(vs, vr) for vs in (vlo, vhi) for vr in (chain_speeds if p.quantity == "delta" else [None])]
-        at_pairs = [{"machine_speed": vs, "chain_speed": vr, "ours": _ours(spec, p.quantity, p.beta, vs, vr)}
-                    for vs, vr in pairs]
+        at_pairs: list[dict[str, Any]] = [
+            {"machine_speed": vs, "chain_speed": vr, "ours": _ours(spec, p.quantity, p.beta, vs, vr)} for vs, vr in pairs]
         values = [a["ours"] for a in at_pairs]       # extremes over the operating set: at its corners (monotone)
         lo, hi = min(values), max(values)
         reproduced = abs(ours - p.value) <= tol
@@ -291,7 +292,7 @@ def facts(spec: CombingChainSpec, design: dict, tr: Trace) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(CombingChainSpec, loaded.model)     # load_spec validated it with this kind's model
     design = spec.design_values()
     rules, tr = evaluate(spec, design)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,

@@ -63,7 +63,7 @@ def problem(setting: Setting) -> Declared:
     rules = rules_of(spec, tr)
     speeds = [design[n] for n in spec.speed_names()]
     margin_objective = spec.objective.name == "max_window_margin" and window is not None
-    if margin_objective:
+    if margin_objective and window is not None:       # (margin_objective says it is)
         lo, hi = window
         m = ca.SX.sym("window_margin")
         deltas = ca.vertcat(*[d for gt in tr.gears for row in gt.delta for d in row])
