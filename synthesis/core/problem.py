@@ -219,8 +219,8 @@ class Problem:
         bad = [i for i, (e, _, _) in enumerate(self.structural) if depends(e)]
         if bad:
             raise ValueError(f"problem {self.name}: structural rows {bad} depend on a condition the envelope "
-                             f"samples ({', '.join(envelope.samples if envelope else ())}); write them free of it (the auxiliaries "
-                             f"they pin are shared by every scenario)")
+                             f"samples ({', '.join(envelope.samples if envelope else ())}); write them free of it "
+                             f"(the auxiliaries they pin are shared by every scenario)")
         source_structural = tuple(self.structural)
         self.structural = list(rows_at(self.structural, nominal))
         rules, hard, sources = [], list(self.hard_in_elastic), []

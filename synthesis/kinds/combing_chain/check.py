@@ -241,7 +241,8 @@ def published_facts(spec: CombingChainSpec, design: dict) -> list[dict]:
         tol = TOLERANCE[p.quantity]
         pairs = [(vs, vr) for vs in (vlo, vhi) for vr in (chain_speeds if p.quantity == "delta" else [None])]
         at_pairs: list[dict[str, Any]] = [
-            {"machine_speed": vs, "chain_speed": vr, "ours": _ours(spec, p.quantity, p.beta, vs, vr)} for vs, vr in pairs]
+            {"machine_speed": vs, "chain_speed": vr, "ours": _ours(spec, p.quantity, p.beta, vs, vr)}
+            for vs, vr in pairs]
         values = [a["ours"] for a in at_pairs]       # extremes over the operating set: at its corners (monotone)
         lo, hi = min(values), max(values)
         reproduced = abs(ours - p.value) <= tol
