@@ -39,6 +39,9 @@ EXPECTED: dict[str, dict] = {
     "picker/cai2020_picker.toml": {"check": 0},
     "picker/crank_rocker_max_transmission.toml": {"check": 0, "solve": ("optimal", 40.67131217449928)},
     "picker/crank_rocker_torque_limited.toml": {"check": 1, "solve": ("optimal", 447.39285225876324)},
+    "rotary_planetary/key_pose_redesign.toml": {"check": 1, "solve": ("optimal", 148.80967492502646)},
+    "rotary_planetary/single_idler_redesign.toml": {"check": 1, "solve": ("optimal", 128.51384489500933)},
+    "rotary_planetary/smooth_loop_redesign.toml": {"check": 1, "solve": ("optimal", 93.71826484839778)},
     "picker/crank_rocker_min_peak_torque.toml": {"check": 1, "solve": ("optimal", 0.27659068689431826)},
     "picker/picker_double_crank_redesign.toml": {"check": 0, "solve": ("optimal", 0.09784125335134168)},
     "picker/picker_double_crank_retrofit.toml": {"check": 0, "solve": ("optimal", 0.23508496015782593)},
@@ -129,12 +132,14 @@ SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "fourbar_path/picking_arc.
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
-        "planting_arm/counterweight_min_shaking_from_example1.toml"}
+        "planting_arm/counterweight_min_shaking_from_example1.toml",
+        "rotary_planetary/key_pose_redesign.toml", "rotary_planetary/single_idler_redesign.toml"}
 #: solves of 10 s or more (started first: tests/conftest.py)
 LONG = {"fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
-        "planting_arm/counterweight_min_shaking_from_example1.toml"}
+        "planting_arm/counterweight_min_shaking_from_example1.toml",
+        "rotary_planetary/key_pose_redesign.toml", "rotary_planetary/single_idler_redesign.toml"}
 #: the studies CI runs with the slow tests (`pytest -m 'slow or fuzz'`): the six envelope redesigns, 80 s of solves in
 #: all on a loaded 2-core machine (2026-11-28); the five tolerance-robust ones (measured there: 130-420 s each, example
 #: 2 about 900 s) stay with `pytest -m benchmark`
