@@ -430,7 +430,7 @@ def test_at_bounds_names_the_free_variables_on_a_bound_by_their_result_names():
 def test_a_start_line_names_what_stands_in_the_way_of_an_infinite_violation():
     """The terminal printed "worst violation inf" for a start with a rule not evaluated and no reason at all."""
     from constraints import not_evaluated
-    from synthesis.cli import _violation_text
+    from synthesis.runs.events import violation_text as _violation_text
 
     outcome = SimpleNamespace(start=11, return_status="Solve_Succeeded", success=True)
     missing = not_evaluated("p1p3_distance", 100, 120, "mm", "machine frame", "P1 not found: the claw does not cross")

@@ -82,20 +82,6 @@ def cli() -> None:
     """
 
 
-#: names read from here before the commands had modules of their own: where each lives now
-_MOVED = {"_objectives_help": "synthesis.cli.options:objectives_help",
-          "_violation_text": "synthesis.runs.events:violation_text", "_described": "synthesis.runs.specs:described",
-          "rule_table": "synthesis.cli.views:rule_table", "comparison_table": "synthesis.cli.views:comparison_table",
-          "bench_table": "synthesis.cli.views:bench_table"}
-
-
-def __getattr__(name: str):
-    if name in _MOVED:
-        module, attribute = _MOVED[name].split(":")
-        return getattr(importlib.import_module(module), attribute)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def ends_process() -> bool:
     """Whether the running command is the last thing its process does (run by :func:`main`)."""
     ctx = click.get_current_context(silent=True)
