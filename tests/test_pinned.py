@@ -122,3 +122,40 @@ def test_a_fixed_design_variable_is_named_with_its_spec_path(tmp_path):
         run_solve(kinds.get(loaded.kind), loaded, workers=1)
     assert ("frame_point_x_a = 25 mm is fixed by [linkage] x_a, given as a number (no design variable moves it); "
             "the rule asks >= 40 mm: give [linkage] x_a bounds, or change the rule's limits") in str(caught.value)
+
+
+def test_a_row_with_a_nonzero_target_is_read_as_expression_minus_target():
+    """Four angles summing to 360 (written with its target, as clamp_cam writes its timing row), three fixed: the
+    fourth is 100 wherever the row holds, so 'fourth >= 90' holds and 'fourth >= 120' is pinned and violated at 100."""
+    x = ca.SX.sym("x", 4)
+    rules = [Rule("fourth_min_90", x[3], 90.0, None, "deg", 1.0), Rule("fourth_min_120", x[3], 120.0, None, "deg", 1.0)]
+    problem = Problem("angles", x, np.array([100.0, 80.0, 80.0, 0.0]), np.array([100.0, 80.0, 80.0, 300.0]),
+                      [(ca.sum1(x), 360.0, 360.0)], rules, ObjectiveParts(f=x[3] ** 2))
+    found = {r.name: r for r in pinned.pinned_rules(problem)}
+    assert found["fourth_min_90"].value == pytest.approx(100.0, abs=1e-9) and not found["fourth_min_90"].violated
+    assert found["fourth_min_120"].value == pytest.approx(100.0, abs=1e-9) and found["fourth_min_120"].violated
+
+
+def test_a_rule_with_a_branch_that_moves_elsewhere_in_the_bounds_is_not_pinned():
+    """b - a = 0 and the rule fmax(b, 5) >= 8: below b = 5 its Jacobian is 0 (explained by no row), above it b moves it;
+    the rule's value differs between the points drawn, so it is left to the solve (b in [8, 9] meets it)."""
+    x = ca.SX.sym("x", 2)
+    rules = [Rule("branch", ca.fmax(x[1], 5.0), 8.0, None, "mm", 1.0)]
+    problem = Problem("branch", x, np.zeros(2), np.full(2, 9.0), [(x[1] - x[0], 0.0, 0.0)], rules,
+                      ObjectiveParts(f=x[0] ** 2))
+    assert pinned.pinned_rules(problem) == []
+
+
+def test_a_clamp_cam_with_a_free_dwell_is_solved_not_refused(tmp_path):
+    """opening_cam_redesign with its far dwell free: the timing row (rise + far dwell + return + near dwell = 360)
+    has a target of 360; the hold rules it fixes are met, so no rule is refused before the starts."""
+    path = edited(tmp_path, "clamp_cam/opening_cam_redesign.toml", [])
+    text = path.read_text()
+    import re
+    text, n = re.subn(r"far_dwell = [0-9.]+", "far_dwell = {init = 160, bounds = [100, 200]}", text, count=1)
+    if n == 0:
+        pytest.skip("the library spec gives no plain far_dwell number to free")
+    path.write_text(text)
+    kind, loaded, nlp = built(path)
+    violated = [r for r in pinned.pinned_rules(nlp.compiled.problem) if r.violated]
+    assert violated == []

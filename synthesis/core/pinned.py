@@ -8,8 +8,10 @@ finds out after the whole multistart (39 s for a planting spec asking a 45 mm de
 The test reads the kind's :class:`~synthesis.core.problem.Problem`: a rule is *pinned* when, on the manifold the
 structural equality rows define, its value does not change with any free decision variable.  Written with exact
 Jacobians (CasADi's automatic differentiation, no finite differences): the rule's Jacobian w.r.t. the free entries
-of x is a constant combination ``C`` of the equality rows' Jacobians at every point sampled, so ``rule - C rows``
-is a constant -- the rule's value wherever the rows hold, read at any point of the bounds.  (A rule that reads no
+of x is a constant combination ``C`` of the equality rows' Jacobians at every point sampled, and ``rule - C rows``
+(each row written as expression - target) has the same value at every one of them -- the rule's value wherever the
+rows hold.  The points are up to 12 drawn in the bounds (seeded): a rule with a branch (fmax, if_else) whose other
+side is active at none of them can still be taken for a pinned one -- sampling, not a proof.  (A rule that reads no
 free variable at all is the case ``C = 0``.)  A rule whose value depends on the NLP's parameters is not judged.
 docs/ARCHITECTURE.md, "Exit codes": a violated pinned rule is bad input, exit 2, before anything is solved.
 """
@@ -25,8 +27,8 @@ import numpy as np
 from synthesis.errors import SpecError
 from synthesis.spec.design_info import describe
 
-#: points of the bounds a rule's Jacobian is compared at (each one where the model evaluates it) ...
-POINTS = 3
+#: points of the bounds a rule's Jacobian and value are compared at (each one where the model evaluates it) ...
+POINTS = 12
 #: ... of this many drawn (a design where the linkage cannot assemble evaluates to NaN), the first the bounds' middle
 DRAWS = 12
 #: the rule's Jacobian equals C x the rows' Jacobian to this relative accuracy (float round-off of equal graphs)
@@ -93,7 +95,8 @@ def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = No
     x, params = problem.x, problem.parameters
     n = x.numel()
     free = problem.ubx > problem.lbx
-    equalities = [_as_sx(e) for e, lb, ub in problem.structural if lb is not None and ub is not None and lb == ub]
+    # each row as "expression - target", zero where it holds (a row 'sum of the angles = 360' reads 0 there, not 360)
+    equalities = [_row(e, lb) for e, lb, ub in problem.structural if lb is not None and ub is not None and lb == ub]
     # rows that read a parameter are left out (what they pin is not judged: the parameters' values are the kind's)
     rows = [r for r in equalities if r is not None and not (params.numel() and ca.depends_on(r, params))]
     h = ca.vertcat(*rows) if rows else ca.SX(0, 1)
@@ -137,6 +140,11 @@ def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = No
             continue
         used = np.any(c != 0.0, axis=0)
         values = points[0][0][rows_k].ravel() - c[:, used] @ points[0][2].ravel()[used]
+        # the value on the rows' manifold must be the same at every point too: a rule with a branch (fmax, if_else)
+        # inactive at the first point may move at another, where its Jacobian alone could have been matched
+        if not all(_same(values, p[0][rows_k].ravel() - c[:, used] @ p[2].ravel()[used], rule.scale)
+                   for p in points[1:]):
+            continue
         je, jh = points[0][1][rows_k], points[0][3]
         fixed_read = [] if columns is not free else [
             i for i in range(n) if not free[i] and not _explained(je[:, [i]], c, jh[:, [i]])]
@@ -144,6 +152,17 @@ def pinned_rules(problem, design_columns: dict[int, tuple[str, ...]] | None = No
         out.append(PinnedRule(rule.name, _worst(values, rule.lower, rule.upper), rule.lower, rule.upper, rule.unit,
                               rule.scale, names))
     return out
+
+
+def _row(expr, target) -> ca.SX | None:
+    row = _as_sx(expr)
+    return None if row is None else row - ca.vec(ca.DM(target))
+
+
+def _same(a: np.ndarray, b: np.ndarray, scale: float) -> bool:
+    """Two readings of a pinned rule's value agree (to round-off of the value and its scale)."""
+    size = max(float(np.max(np.abs(a), initial=0.0)), float(np.max(np.abs(b), initial=0.0)), abs(scale))
+    return float(np.max(np.abs(a - b), initial=0.0)) <= JACOBIAN_RTOL * max(size, 1e-300)
 
 
 def _combination(je: np.ndarray, jh: np.ndarray, m: int) -> np.ndarray:
