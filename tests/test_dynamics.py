@@ -341,3 +341,21 @@ def test_a_crank_rocker_refuses_a_free_counterweight():
     data["dynamics"]["counterweight"] = {"mass": {"init": 0.1, "bounds": [0.0, 1.0]}, "radius": 30.0}
     with pytest.raises(ValidationError, match="frees only its lengths"):
         kinds.get("crank_rocker").spec_model().model_validate(data)
+
+
+def test_a_peak_objective_stays_finite_when_the_given_design_cannot_turn(tmp_path):
+    """crank_rocker_min_peak_torque with l7 = 150 (no crank-rocker: the given design's peak is NaN): the objective's
+    scale falls back to 1 N m, so f = t / scale is finite (before, t / NaN failed every start)."""
+    import casadi as ca
+
+    from synthesis.kinds.crank_rocker.nlp import _peak_objective
+    from synthesis.spec import load_spec
+
+    text = (LIBRARY / "picker" / "crank_rocker_min_peak_torque.toml").read_text()
+    assert "l7 = { init = 50.0," in text
+    path = tmp_path / "bad_init.toml"
+    path.write_text(text.replace("l7 = { init = 50.0,", "l7 = { init = 150.0,"))
+    spec = load_spec(path).model
+    parts = _peak_objective(spec, ca.SX.sym("p", 4))
+    f = ca.Function("f", [parts.extra], [parts.f])
+    assert float(f(2.0)) == pytest.approx(2.0)

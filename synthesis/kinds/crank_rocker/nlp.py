@@ -122,6 +122,9 @@ def _peak_objective(spec, p) -> ObjectiveParts:
     name = spec.objective.name
     given = peak_of(linkage_dynamics(spec, [spec.design_values()[k] for k in NAMES]), name, n)
     t, rows, unit = peak_epigraph(linkage_dynamics(spec, [p[i] for i in range(4)]), name, n)
+    # a given design that cannot turn (NaN) or moves no mass (0) gives no scale: 1 in the rule's unit then, so the
+    # objective stays finite from every start
+    given = float(given) if math.isfinite(float(given)) and float(given) > 0.0 else 1.0
     typical = given if name == "min_peak_torque" else given * given
     return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
                           rows=rows, extra_units=[unit], row_units=[unit] * len(rows))

@@ -213,8 +213,11 @@ class PlantingNLP(KindNLP):
         design's peak so the objective is about 1 at the start)."""
         spec, name, n = self.spec, self.spec.objective.name, self.spec.solver.samples_per_turn
         given = PlantingScene.from_spec(spec)
-        peak = peak_of(arm_linkage(spec.dynamics, given.design.parameters(), spec.arm.branch, self.omega,
-                                   given.counterweight), name, n)
+        peak = float(peak_of(arm_linkage(spec.dynamics, given.design.parameters(), spec.arm.branch, self.omega,
+                                         given.counterweight), name, n))
+        # a given design that cannot turn (NaN) or moves no mass (0) gives no scale: 1 in the rule's unit then, so
+        # the objective stays finite from every start
+        peak = peak if math.isfinite(peak) and peak > 0.0 else 1.0
         self.peak_typical = peak if name == "min_peak_torque" else peak * peak
         t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym,
                                                   counterweight_of(v)), name, n)
