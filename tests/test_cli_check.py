@@ -122,7 +122,7 @@ def test_missing_file_and_unknown_kind(tmp_path):
     (("solve", "{spec}", "--seed", str(2**53 + 1)), "error: Invalid value for '--seed'"),    # as [solver] seed
     # click's IntRange said "'1e9' is not a valid integer range", as if a range were asked for
     (("solve", "{spec}", "--starts", "1e9"),
-     "error: Invalid value for '--starts': '1e9' is not a whole number (1<=x<=10000)"),
+     "error: Invalid value for '--starts': '1e9' is neither a whole number (1<=x<=10000) nor auto"),
     (("solve",), "error: Missing argument 'SPEC'. (see `agrisynth solve --help`)"),
     (("frob",), "error: No such command 'frob'. (see `agrisynth --help`)"),
 ])

@@ -149,9 +149,9 @@ def confidence(optima: list[Optimum]) -> Confidence:
     best = optima[0].count if optima else 0
     if w == 0:
         return Confidence(0, 0, 0, None, None, None, None, None, False)
-    share = w * (w + 1) / (n * (n - 1)) if n >= 2 else None
     if n < w + 2:             # the posterior is improper: every start found a new optimum, or nearly
-        return Confidence(n, w, best, None, None, share, 0.0, None, False)
+        return Confidence(n, w, best, None, None, None, None, None, False)
+    share = w * (w + 1) / (n * (n - 1))
     # the posterior mean of W / K is (N - W - 1) / (N - 1) (the sum of posterior_mean(n, w, -1) in closed form;
     # tests/test_confidence.py checks the two agree)
     p_global = (n - w - 1) / (n - 1)

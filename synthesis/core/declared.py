@@ -97,6 +97,10 @@ class DeclaredNLP(KindNLP):
         return self.declared.design_names or self.names
 
     @property
+    def maps_its_starts(self) -> bool:     # type: ignore[override]  # a class attribute of KindNLP, read-only here
+        return self.declared.start is not _given
+
+    @property
     def problem(self) -> Problem:
         """The problem as the kind declared it (before any transform)."""
         return self.declared.problem

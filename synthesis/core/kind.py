@@ -316,6 +316,9 @@ class KindNLP(ABC):
     #: a second, reduced form of the problem the kind solves first where it applies (None: none); a transform
     #: that needs the whole problem (the tolerance box) drops it with :meth:`whole_problem_only`
     configuration: Any = None
+    #: True when a start's design is mapped before it is solved (e.g. pulled into the region where the linkage
+    #: assembles), so the starts IPOPT solves from are not the uniform draws the confidence statement assumes
+    maps_its_starts: bool = False
 
     @property
     def design_names(self) -> list[str]:

@@ -429,6 +429,9 @@ def _not_uniform(nlp) -> list[str]:
         notes.append("each start first solves a reduced form of the problem")
     if list(nlp.design_names) != list(nlp.names):
         notes.append("the decision variables are not the design's own (the design map is not the identity)")
+    if nlp.maps_its_starts:
+        notes.append("the kind maps each start before solving it (its design may leave the uniform draw, e.g. "
+                     "pulled into the region where the mechanism assembles)")
     return notes
 
 

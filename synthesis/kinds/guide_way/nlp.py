@@ -92,6 +92,8 @@ PULLS = 6
 
 
 class GuideNLP(KindNLP):
+    maps_its_starts = True      # a start is moved before it is solved (see its start map)
+
     def __init__(self, spec, fit, elastic: bool = False, setting: Setting | None = None):
         setting = setting or Setting(spec)
         s = spec.spline

@@ -49,6 +49,7 @@ def grashof_slacks(x: np.ndarray) -> np.ndarray:
 
 class PickerNLP(KindNLP):
     """Built once per spec (least-squares stage and, for eq 4, the exact epigraph stage); reused for every start."""
+    maps_its_starts = True      # a start is moved before it is solved (see its start map)
 
     def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False, setting: Setting | None = None):
         setting = setting or Setting(spec)
