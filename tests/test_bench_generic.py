@@ -452,6 +452,7 @@ def test_the_sample_sweep_plot_is_fitted_and_names_each_count_on_its_top_axis():
     plt.close(fig)
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_path_synthesis_configuration_form_and_its_polisher_solve_with_the_bench_s_method():
     """fourbar_path's reduced (configuration) form and the polisher it builds on first use are solved as its
     crank-angle form is: with the finite differences or the peer the bench's setting names (they were out of reach

@@ -148,6 +148,7 @@ def test_other_schemes_are_refused_and_a_real_scheduler_passes_the_probe():
         probe_scheduler(c.scheduler_address, timeout=5)
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_solve_with_an_http_peer_as_scheduler_exits_2_in_one_line(tmp_path):
     from synthesis.core import interrupt
     from test_run_folders import cli_in_process

@@ -276,6 +276,7 @@ FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.ki
              "synthesis.kinds.guide_way", "synthesis.kinds.steering_linkage", "synthesis.kinds.tillage_linkage", "cvxpy", "ezdxf")
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_comb_finger_run_imports_no_other_kind(tmp_path):
     code = f"""
 import sys

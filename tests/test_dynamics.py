@@ -94,6 +94,7 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
     geometry, branch = CASES[case]
     thetas = np.radians([0.0, 47.0, 133.0, 200.0, 291.0])

@@ -354,6 +354,7 @@ def test_the_recorded_best_known_designs_hold_every_rule_and_reproduce_their_obj
     assert np.all(values >= lo) and np.all(values <= hi)
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_start_stopped_at_max_iter_is_resumed_once_and_kept_only_when_it_converges(monkeypatch):
     """A fresh IPOPT run from where a promising start reached max_iter (path error within RESUME_WITHIN x the
     reference): egg16 with max_iter 60, its pool start 1 stops at 60 iterations, and resumed it converges in 11

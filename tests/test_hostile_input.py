@@ -374,6 +374,7 @@ def test_a_sigterm_during_start_up_is_exit_143_and_one_line(tmp_path, module):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_studio_through_the_entry_point_keeps_its_signals(tmp_path):
     """The start-up handlers give way when the studio serves: started ignoring SIGINT (a script's `&`), SIGINT leaves
     it serving, and SIGTERM ends it by the signal, as `agrisynth studio` documents."""

@@ -88,6 +88,7 @@ pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
 
 
 @pytest.mark.long
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_uninterrupted_run(tmp_path):
     """--workers 1: IPOPT runs in this process and CasADi swallows the KeyboardInterrupt; it must still stop."""
     proc = cli("solve", SPEC, "--out", tmp_path / "a", "--starts", 24, "--workers", 1, cwd=tmp_path)
@@ -122,6 +123,7 @@ def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_unin
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGKILL, -9)])
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_two_workers_stop_with_the_run_and_none_outlives_it(tmp_path, sig, code):
     proc = cli("solve", SPEC, "--out", tmp_path, "--starts", 400, "--workers", 2, cwd=tmp_path)
     wait_for_starts(proc, tmp_path, 2)
@@ -172,6 +174,7 @@ main()
 """
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_signal_inside_the_pools_wait_stops_the_run(tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", SIGNAL_INSIDE_WAIT, "solve", str(SPEC), "--out", str(tmp_path),
                              "--starts", "400", "--workers", "2"], cwd=tmp_path, stdout=subprocess.PIPE,
@@ -255,6 +258,7 @@ def test_resume_refuses_another_spec_or_other_settings(tmp_path):
     pytest.param(("solve", SPEC, "--starts", 2, "--workers", 1), "rich.progress:Progress:exit", 0,
                  marks=pytest.mark.slow),
 ])
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_signal_once_every_start_has_finished_keeps_the_result_and_its_exit_code(tmp_path, command, where, code):
     """A Ctrl-C after the last start, while the answer is being written or its summary printed: the run is
     complete, so it is written and the exit code is the result's (it was 130, which the contract keeps for

@@ -295,6 +295,7 @@ def test_a_plugin_that_cannot_load_is_left_out_with_a_warning_naming_it(tmp_path
         kinds._installed.cache_clear()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_kind_contract_type_checks():
     """mypy checks every kind's class against synthesis.core.kind.Kind (a method's signature or return type that
     breaks the contract fails here, before any run), the registry and the toy kind, and type-checks the whole core,

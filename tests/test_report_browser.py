@@ -112,6 +112,7 @@ def test_compare_page_in_headless_chromium(tmp_path, sync_playwright):
     assert len({c.result.spec_sha256 for c in cands}) == 3
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_solve_report_in_headless_chromium(tmp_path, sync_playwright):
     """A solve's report: the given design beside the solution, with units, bounds and at-bound marks, on
     screen and on A4 without overflow."""

@@ -120,6 +120,7 @@ def test_a_folder_agrisynth_did_not_write_is_never_replaced(tmp_path, force):
 
 @pytest.mark.parametrize("command, file, name", [("check", "myspec-check", "myspec"),
                                                   ("solve", "myspec.toml", "myspec.toml")])
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_spec_file_itself_is_never_replaced(tmp_path, command, file, name):
     """A spec whose run folder would be its own file (check writes OUT/<name>-check/, solve OUT/<name>/)."""
     spec = tmp_path / file

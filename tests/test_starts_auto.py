@@ -174,6 +174,7 @@ def test_auto_gives_the_same_answer_and_count_on_one_and_two_workers(tmp_path, t
     assert one.solver["confidence"] == two.solver["confidence"]
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_an_interrupted_auto_run_resumed_gives_the_uninterrupted_answer(tmp_path):
     """The run folder of an auto run cut after 5 starts of its first batch (its starts.jsonl: header, the batch's
     line, 5 starts) is finished by --resume: the same answer, statement and count."""

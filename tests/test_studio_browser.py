@@ -64,6 +64,7 @@ def fmt4(v) -> str:
     return str(int(x)) if x.is_integer() else repr(x)
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
     """Drag l4 of the planting arm: coarse tables while dragging, the fine one on release, the drawing redrawn;
     red exactly where the check of the saved spec says violated; compare, animate, reset."""
@@ -155,6 +156,7 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         assert row["value"] == fmt4(rule["value"]), (row, rule["value"])
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwright):
     """Type a start value, solve from here (one start: the page runs `agrisynth solve` in a worker process) and get
     what the same solve gets run again from the spec the page wrote; then "save spec" and `agrisynth check` on it
@@ -311,6 +313,7 @@ def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright)
         (r["name"], fmt4(r["value"]), not r["satisfied"]) for r in again["rules"]]
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_cam_page_turns_the_cam_against_its_roller(tmp_path, sync_playwright):
     """clamp_cam's page draws the cam's working profile and the roller as outlines placed in each pose; animated,
     the cam turns (its outline's points change) while no request leaves 127.0.0.1 and nothing logs an error."""
@@ -328,6 +331,7 @@ def test_the_cam_page_turns_the_cam_against_its_roller(tmp_path, sync_playwright
     assert not seen["left"] and not seen["errors"]
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_an_operating_range_s_verdict_line_names_the_nominal_point(tmp_path, sync_playwright):
     """On an envelope spec the page's verdict is the nominal point's, and it says so (a trial: "every rule
     satisfied" for a design that misses the entry angle at the range's top speed)."""
@@ -371,6 +375,7 @@ def round_step(step: float) -> bool:
     return any(abs(mantissa - m) < 1e-6 for m in (1, 2, 5))
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_drawing_reads_at_a_glance(tmp_path, sync_playwright):
     """planting_fourbar in a 1280 px wide window: the drawing panel at least 60 % of the window, every label at
     least 11 px on screen, axes in mm with ticks at round values and a scale bar that is as long as it says, the

@@ -47,6 +47,7 @@ def _page(url: str) -> str:
     return urllib.request.urlopen(url, timeout=30).read().decode()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_bad_input_is_one_line_and_exit_2(tmp_path):
     missing = agrisynth("studio", str(tmp_path / "nowhere.toml"), cwd=tmp_path)
     assert missing.returncode == 2 and "nowhere.toml" in missing.stderr
@@ -148,6 +149,7 @@ def test_a_signal_to_the_studio_cancels_its_solve_and_keeps_the_finished_starts(
 
 
 @pytest.mark.parametrize("sig", [signal.SIGHUP, signal.SIGINT])
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_signal_the_studio_was_started_ignoring_leaves_it_serving(tmp_path, sig):
     """`nohup agrisynth studio ... &` ignores SIGHUP so that the studio outlives its terminal, and a script's
     `agrisynth studio ... &` ignores SIGINT: that signal then leaves the studio serving (SIGHUP once stopped it, and

@@ -376,6 +376,7 @@ def test_only_one_of_simultaneous_solves_starts(tmp_path):
         assert len(list(s.out.glob("*_solve_*.toml"))) == 1
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_cancel_answers_at_once_and_kills_a_worker_that_does_not_stop(tmp_path):
     """A worker that cannot answer SIGTERM (stopped here with SIGSTOP): cancel answers "cancelling" without
     waiting for it, and after the grace period the worker's process group is killed."""

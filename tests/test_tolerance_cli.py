@@ -57,6 +57,7 @@ def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, optio
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_half_width_that_reaches_no_design_variable_is_refused(tmp_path):
     """guide_tube's design variables are its two wall angles: `--length 1` toleranced nothing and the report
     showed an empty box's zero losses without a word.  Refused (exit 2), naming the variables and their units;
