@@ -58,6 +58,7 @@ def test_bench_cli_compares_both_methods_at_equal_tolerance(tmp_path):
     assert (tmp_path / "cmp" / "error_vs_time.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_bench_help_teaches_and_bad_problem_exits_2(tmp_path):
     help_text = cli("bench", "--help", cwd=tmp_path).stdout
     for phrase in ("PROBLEM is a kind name", "differential_evolution", "error_vs_time.png", "Examples", "--repeats"):

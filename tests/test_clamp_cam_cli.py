@@ -161,6 +161,7 @@ def test_bad_spec_exits_2_without_traceback(tmp_path):
     assert "clamp_cam.motion.stroke: expected > 0, got -3" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_timing_window_the_cam_misses_is_a_violated_rule_in_check(tmp_path):
     """Fig. 8c of seed 001: the clamp stays closed until the drop at 0.44 s; Table 1's dwells open it
     12.4 deg (0.034 s) earlier when the return ends at the pick."""

@@ -640,6 +640,7 @@ def test_which_targets_are_one():
     assert same_targets(arc + [[0.0, 0.0]], [0.0, 90.0, 180.0, 360.0]) == [(0, 3, 0.0)]
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_signal_inside_a_casadi_call_of_any_command_is_interrupted_not_a_traceback(tmp_path):
     """With the handlers installed at start-up a signal reaches every command; inside a CasADi call its
     KeyboardInterrupt comes out as NotImplementedError.  Here it lands in `agrisynth tolerance`'s linearisation:

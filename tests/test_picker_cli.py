@@ -56,6 +56,7 @@ def _parts_described(tmp_path: Path, data: dict):
         assert described[angle] == {"path": f"installation.{angle}", "unit": "deg", "bounds": None, "free": False}
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_solve_of_the_combined_picker_is_bad_input(tmp_path):
     proc = run("solve", str(PICKER / "cai2020_picker.toml"), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 2

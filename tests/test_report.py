@@ -116,6 +116,7 @@ def test_bad_result_files_are_named_with_what_is_wrong(runs, tmp_path):
         load_result(tmp_path / "nowhere")
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_compare_cli_exit_codes(runs, tmp_path):
     good = json.loads((runs[0][0] / "result.json").read_text())
     other = dict(good, kind="clamp_cam", name="a-cam")

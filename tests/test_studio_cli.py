@@ -76,6 +76,7 @@ def test_a_port_in_use_is_one_line_and_leaves_no_folder(tmp_path):
     assert not (tmp_path / "new").exists()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_prints_the_address_serves_it_and_stops_on_ctrl_c(tmp_path):
     proc = _studio(tmp_path)
     try:

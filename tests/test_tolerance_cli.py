@@ -173,6 +173,7 @@ def test_a_folder_without_a_solved_design_says_why_in_one_line(tmp_path, status,
         assert said in " ".join(run.stderr.split())
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_the_tolerance_result_json_holds_the_rows_its_exit_code_reads(tmp_path):
     """`agrisynth tolerance` exits 1 when a Monte-Carlo sample misses a rule (--samples 0: when a linearised worst case
     misses); its result.json said every rule held (only the design's own rules), so `compare` showed the analysis as
