@@ -55,12 +55,12 @@ def list_library(library_dir: Path) -> None:
                                        [(col, "left") for col in ("kind", "mechanism", "commands", "try")])
     for kind, summary, commands, example in library.kind_rows():
         kinds_table.add_row(kind, escape(summary), commands, example)
-    terminal.print_table(console, kinds_table)
+    console.print(kinds_table)
     table = terminal.add_columns(Table(title=f"problem library: {library_dir}", title_justify="left"),
                                  [(col, "left") for col in ("kind", "name", "file", "source")])
     for entry in library.library_entries(library_dir):
         table.add_row(escape(entry.kind), escape(entry.name), escape(entry.file), escape(entry.unread or entry.source))
-    terminal.print_table(console, table)
+    console.print(table)
     console.print("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
                   "copy one to edit: agrisynth problems --copy FILE", soft_wrap=True)
 
