@@ -28,8 +28,9 @@ SCHEMA_VERSION = 5
 #: numbers -- a design no longer holds ``branch`` as the assembly's name (a string), which its
 #: ``facts.branch`` holds (as it did in version 2); version 4: ``facts.dynamics`` (the inverse dynamics of a spec with a
 #: ``[dynamics]`` table, docs/ARCHITECTURE.md "result.json"), nothing else changed; version 5: ``solver.confidence``
-#: (how sure the best is the global optimum) and, for ``--starts auto``, ``solver.auto``.  Versions 1 to 4 are still read
-#: (:meth:`Result.from_json`)
+#: (how sure the best is the global optimum) and, for ``--starts auto``, ``solver.auto``.  Every version from 1 is
+#: read (:meth:`Result.from_json`).  Keys added without a version change (a reader ignores a key it does not know):
+#: ``elastic.fixed_by`` (the spec field fixing a rule no design variable moves)
 RUN_KEYS = ("starts", "elastic", "baseline_design", "fine_grid_worst_violation")
 
 
