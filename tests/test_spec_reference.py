@@ -79,7 +79,9 @@ def test_reference_lists_every_field(kind_name):
     assert result.exit_code == 0, result.output
     for e in specref.entries(model):
         assert (e.heading if e.section else e.path) in result.output
-        assert e.description in result.output          # piped: never cut or wrapped
+        # piped: folded at 120 characters, never cut (the description's words in order, whatever the line breaks)
+        assert " ".join(e.description.split()) in " ".join(result.output.split())
+    assert max(len(line) for line in result.output.splitlines()) <= 120
 
 
 def test_docs_specs_md_is_current():
@@ -145,6 +147,8 @@ def test_piped_problems_table_never_cuts_a_file_name():
     for path in sorted(specref.LIBRARY.rglob("*.toml")):
         assert str(path.relative_to(specref.LIBRARY)) in proc.stdout
     assert "…" not in proc.stdout
+    # piped: folded at 120 characters ($COLUMNS unset), a file name kept whole on its line
+    assert max(len(line) for line in proc.stdout.splitlines()) <= 120
 
 
 def _documented_ranges(model):

@@ -51,6 +51,10 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
 
 
 def list_library(library_dir: Path) -> None:
+    width = terminal.table_width(console.file)
+    if width is not None:           # piped: a line per entry, folded at the width, every file name whole
+        _list_piped(library_dir, width)
+        return
     kinds_table = terminal.add_columns(Table(title="kinds", title_justify="left"),
                                        [(col, "left") for col in ("kind", "mechanism", "commands", "try")])
     for kind, summary, commands, example in library.kind_rows():
@@ -63,6 +67,32 @@ def list_library(library_dir: Path) -> None:
     console.print(table)
     console.print("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
                   "copy one to edit: agrisynth problems --copy FILE", soft_wrap=True)
+
+
+def _list_piped(library_dir: Path, width: int) -> None:
+    lines = ["kinds"]
+    for kind, summary, commands, example in library.kind_rows():
+        lines += [terminal.wrapped(f"{kind} ({commands}): {summary}", width, 2),
+                  terminal.wrapped(f"try: {example}", width, 6)]
+    lines += ["", f"problem library: {library_dir}"]
+    for entry in library.library_entries(library_dir):
+        lines += [terminal.wrapped(f"{entry.file}  [{entry.kind}] {entry.name}", width, 2),
+                  terminal.wrapped(entry.unread or entry.source, width, 6)]
+    lines += ["", terminal.wrapped("check or solve one by its file as listed (agrisynth check "
+                                   "planting_arm/taiwan_example1.toml); copy one to edit: agrisynth problems --copy "
+                                   "FILE", width, 0)]
+    click.echo("\n".join(lines))
+
+
+def _reference_piped(kind: str, summary: str, entries, width: int) -> None:
+    lines = [terminal.wrapped(f"{kind}: {summary}", width, 0),
+             "  TOML path | type | unit | default | range, then what it means"]
+    for e in entries:
+        default = "required" if e.required else e.default
+        head = e.heading if e.section else e.path
+        fields = " | ".join(x for x in (head, "" if e.section else e.type, e.unit, default, e.range))
+        lines += [terminal.wrapped(fields, width, 2), terminal.wrapped(e.description, width, 6)]
+    click.echo("\n".join(lines))
 
 
 @click.command("spec")
@@ -84,6 +114,10 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
     if target is not None and not template:
         raise click.BadParameter("--out writes a template: give --template too", param_hint="--out")
     if not template:
+        width = terminal.table_width()
+        if width is not None:       # piped: a field per entry, folded at the width, nothing cut
+            _reference_piped(kind, description.summary, specref.kind_entries(kind), width)
+            return
         terminal.console_for().print(terminal.reference_table(kind, description.summary, specref.kind_entries(kind)))
         return
     if target is None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import textwrap
 
 from rich.console import Console
 from rich.markup import escape
@@ -33,6 +34,14 @@ def table_width(stream=None) -> int | None:
 def print_table(console: Console, table: Table) -> None:
     """``table`` on ``console`` at :func:`table_width` (a long cell folds within its column, never cut)."""
     console.print(table, width=table_width(console.file))
+
+
+def wrapped(text: str, width: int, indent: int) -> str:
+    """``text`` folded to ``width`` at spaces, every line indented by ``indent``; a word longer than a line (a file
+    name) is kept whole on a line of its own, never cut."""
+    pad = " " * indent
+    return textwrap.fill(text, width=width, initial_indent=pad, subsequent_indent=pad, break_long_words=False,
+                         break_on_hyphens=False)
 
 
 def console_for(stream=None, *, stderr: bool = False) -> Console:
