@@ -176,14 +176,18 @@ def test_timing_window_the_cam_misses_is_a_violated_rule_in_check(tmp_path):
 
 
 @pytest.mark.slow
-def test_timing_window_no_design_can_meet_exits_3_naming_the_rule(tmp_path):
+def test_rules_the_free_timing_cannot_move_are_refused_before_a_start_naming_their_fields(tmp_path):
+    """Only rise_start free: the published cam's return pressure angle (-56.19 deg against +-45) and its undercut are
+    fixed by numbers the spec gives, so solve refuses at once (exit 2) naming those fields, instead of a multistart
+    that can only end infeasible (it exited 3 naming them as conflicting)."""
     path = spec_with(tmp_path, ("rise_start = 146.0", "rise_start = { init = 146.0, bounds = [140.0, 150.0] }"),
                      ("hold_near = [[0.0, 146.0]]", "hold_near = [[0.0, 160.0]]"),
                      ("[operation]", "[solver]\nstarts = 2\n\n[operation]"))
     proc = run("solve", str(path), "--out", str(tmp_path / "out"), "--workers", "1", cwd=tmp_path)
-    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert proc.returncode == 2, proc.stdout + proc.stderr
     text = " ".join(proc.stderr.split())
-    assert "Rules that conflict" in text and "timing_hold_near[0]" in text
+    assert "pressure_angle_return = -56.19 deg is fixed by [cam] base_radius, [follower] offset and [motion] return" in text
+    assert "no start was solved" in text and not (tmp_path / "out" / "opening_cam").exists()
 
 
 def test_optimised_law_that_cannot_meet_an_acceleration_cap_exits_3(tmp_path):

@@ -216,10 +216,17 @@ def test_guide_tube_envelope_keeps_the_stated_error_at_every_mu_where_the_nomina
 def test_envelope_run_folder_through_the_cli(tmp_path):
     """`agrisynth solve` of an envelope spec: exit 0, result.json with facts.envelope (every re-check point of mu)
     and the @envelope rows for the solution and the given design, envelope.png beside the report."""
-    from solving import agrisynth, strict_json
+    import os
+    import subprocess
+    import sys
 
-    run = agrisynth("solve", str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
-                    "--starts", "1", cwd=tmp_path)
+    from solving import strict_json
+
+    # a process of its own: what the terminal shows is read as a user sees it, whatever earlier in-process runs left
+    run = subprocess.run([sys.executable, "-m", "synthesis.cli", "solve",
+                          str(LIBRARY / "guide_tube/uniform_spacing_mu_envelope.toml"), "--out", str(tmp_path),
+                          "--starts", "1"], cwd=tmp_path, capture_output=True, text=True, timeout=600,
+                         env={k: v for k, v in os.environ.items() if k != "COLUMNS"})   # piped: 120 wide
     assert run.returncode == 0, run.stderr
     folder = tmp_path / "uniform_spacing_mu_envelope"
     assert (folder / "envelope.png").stat().st_size > 0 and "envelope.png" in (folder / "report.html").read_text()

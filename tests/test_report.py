@@ -180,7 +180,10 @@ def test_a_figure_that_fails_costs_the_run_nothing(tmp_path, monkeypatch):
     def broken(result, path):
         raise RuntimeError("out of ink")
 
+    from synthesis.kinds.planting import parts
+
     monkeypatch.setattr(plots, "trajectory_figure", broken)
+    monkeypatch.setattr(parts, "trajectory_figure", broken)     # the Kind class hands out its parts' binding
     folder, _ = checked_run(PLANTING / "taiwan_example1.toml", tmp_path)
     page = (folder / "report.html").read_text()
     assert (folder / "result.json").exists() and not (folder / "trajectory.png").exists()

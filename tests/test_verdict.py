@@ -397,7 +397,10 @@ def test_a_signal_while_the_answer_is_finished_keeps_every_start(tmp_path, monke
         raise KeyboardInterrupt
 
     monkeypatch.setattr(interrupt, "_pending", None)
+    from synthesis.tolerance import robust
+
     monkeypatch.setattr(analysis, "monte_carlo", interrupted_check)
+    monkeypatch.setattr(robust, "monte_carlo", interrupted_check)       # robust's own name of it (imported there)
     with pytest.raises(interrupt.Interrupted) as caught:
         run_solve(load_spec(path), starts=2, workers=1)
     kept, reports, _ = caught.value.partial
