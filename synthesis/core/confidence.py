@@ -90,34 +90,32 @@ def _log_posterior_terms(n: int, w: int, k: np.ndarray) -> np.ndarray:
     return gammaln(k + 1) + gammaln(k) - gammaln(k - w + 1) - gammaln(n + k)
 
 
-def posterior_mean(n: int, w: int, power: float, k_max: int | None = None) -> float:
-    """E[K^power | N = n starts, W = w optima] under the uniform prior on K (on w..k_max when given, a test's
-    proper prior; else on every k >= w, the sum's tail past its last term added in closed form: the terms fall as
-    k^(w - n) (Stirling), so the sum converges when n >= w + 2 + power)."""
+def _terms(n: int, w: int, k_max: int | None) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """(k, the posterior's terms over its first, log of the first term, their sum with the tail): the one place the
+    sum is cut (at k_max, a test's proper prior; else past _TERMS terms, its tail added in closed form: the terms
+    fall as k^(w - n) (Stirling))."""
     last = k_max if k_max is not None else w + _TERMS
     k = np.arange(w, last + 1, dtype=float)
-    p = np.exp(_log_posterior_terms(n, w, k) - _log_posterior_terms(n, w, k[:1])[0])
-    total, moment = p.sum(), np.sum(p * k ** power)
+    logp = _log_posterior_terms(n, w, k)
+    p = np.exp(logp - logp[0])
+    total = p.sum() + (p[-1] * k[-1] / (n - w - 1) if k_max is None else 0.0)
+    return k, p, float(logp[0]), float(total)
+
+
+def posterior_mean(n: int, w: int, power: float, k_max: int | None = None) -> float:
+    """E[K^power | N = n starts, W = w optima] under the uniform prior on K (on w..k_max when given; else on every
+    k >= w: the sum converges when n >= w + 2 + power)."""
+    k, p, _, total = _terms(n, w, k_max)
+    moment = np.sum(p * k ** power)
     if k_max is None:
-        end = k[-1]
-        total += p[-1] * end / (n - w - 1)
-        moment += p[-1] * end ** power * end / (n - w - 1 - power)
+        moment += p[-1] * k[-1] ** power * k[-1] / (n - w - 1 - power)
     return float(moment / total)
 
 
 def probability_k(n: int, w: int, k: int, k_max: int | None = None) -> float:
     """P(K = k | N = n, W = w) (the prior as in :func:`posterior_mean`)."""
-    return float(np.exp(_log_posterior_terms(n, w, np.array([float(k)]))[0] - _log_normaliser(n, w, k_max)))
-
-
-def _log_normaliser(n: int, w: int, k_max: int | None) -> float:
-    last = k_max if k_max is not None else w + _TERMS
-    k = np.arange(w, last + 1, dtype=float)
-    logp = _log_posterior_terms(n, w, k)
-    scale = logp[0]
-    p = np.exp(logp - scale)
-    total = p.sum() + (p[-1] * k[-1] / (n - w - 1) if k_max is None else 0.0)
-    return float(scale + np.log(total))
+    _, _, log_first, total = _terms(n, w, k_max)
+    return float(np.exp(_log_posterior_terms(n, w, np.array([float(k)]))[0] - (log_first + np.log(total))))
 
 
 @dataclass(frozen=True)
