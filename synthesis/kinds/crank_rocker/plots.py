@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from synthesis.report.legends import legend_below  # noqa: E402
+from synthesis.report.legends import legend_below, save_overlay  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 EXTREME_STYLE = {"folded": ("tab:blue", "folded extreme"), "extended": ("tab:red", "extended extreme")}
@@ -89,11 +89,4 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_ylabel("rocker angle above its minimum, deg")
     ax2.set_xlabel("crank angle, deg")
     ax2.set_ylabel("transmission angle mu, deg")
-    for a in (ax, ax2):
-        a.grid(alpha=0.3)
-        legend_below(a, ncol=2, fontsize=7)
-    fig.tight_layout()
-    name = "compare_crank_rocker.png"
-    fig.savefig(folder / name, dpi=110)
-    plt.close(fig)
-    return [name]
+    return save_overlay(fig, (ax, ax2), folder, "compare_crank_rocker.png")

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.report.gif import save_gif  # noqa: E402
-from synthesis.report.legends import legend_below  # noqa: E402
+from synthesis.report.legends import legend_below, save_overlay  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 DOUBLE_CRANK = (("A", "B"), ("B", "C"), ("C", "D"), ("A", "D"), ("C", "M"))
@@ -98,14 +98,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_ylabel("y, mm")
     ax2.set_xlabel("target point (1 = M1)")
     ax2.set_ylabel("|M - target|, mm (log)")
-    for a in (ax, ax2):
-        a.grid(alpha=0.3)
-        legend_below(a, ncol=2, fontsize=7)
-    fig.tight_layout()
-    name = "compare_picker_double_crank.png"
-    fig.savefig(folder / name, dpi=110)
-    plt.close(fig)
-    return [name]
+    return save_overlay(fig, (ax, ax2), folder, "compare_picker_double_crank.png")
 
 
 def picker_figure(result: Result, path: Path) -> None:

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.kinds.rotary_planetary.export import pitch_curve_columns  # noqa: E402
-from synthesis.report.legends import legend_below  # noqa: E402
+from synthesis.report.legends import legend_below, save_overlay  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 #: claw attitude ticks drawn along the loop, and their length (mm)
@@ -115,11 +115,4 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
     ax.set_ylabel("y (up), mm")
     ax2.set_xlabel("carrier angle, deg")
     ax2.set_ylabel("claw attitude, deg from +x")
-    for a in (ax, ax2):
-        a.grid(alpha=0.3)
-        legend_below(a, ncol=2, fontsize=7)
-    fig.tight_layout()
-    name = "compare_rotary_planetary.png"
-    fig.savefig(folder / name, dpi=110)
-    plt.close(fig)
-    return [name]
+    return save_overlay(fig, (ax, ax2), folder, "compare_rotary_planetary.png")
