@@ -8,6 +8,8 @@ byte for byte::
     ... change the code ...
     python studies/library_answers.py after.json [--all] && cmp before.json after.json
 
+``--only TEXT`` records only the specs whose path under problems/ contains TEXT (e.g. ``--only picker/``).
+
 Without ``--all`` the tolerance-robust and envelope specs (minutes each) are left out.  A study, not part of the
 installed tool or the test suite.
 """
@@ -54,9 +56,12 @@ def answers(spec_path: Path, solve: bool) -> dict:
 def main(argv: list[str]) -> int:
     out = Path(argv[0])
     every = "--all" in argv
+    only = argv[argv.index("--only") + 1] if "--only" in argv else ""
     record = {}
     for path in sorted(LIBRARY.rglob("*.toml")):
         name = str(path.relative_to(LIBRARY))
+        if only not in name:
+            continue
         solve = every or not any(s in path.name for s in SLOW)
         print(name, "check + solve" if solve else "check", file=sys.stderr, flush=True)
         record[name] = answers(path, solve)
