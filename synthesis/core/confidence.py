@@ -176,7 +176,7 @@ def statement(objectives, unit_designs, start_ids, *, maximise: bool = False,
     f = sign * np.asarray(objectives, dtype=float)
     designs = distinct_optima(f, unit_designs, start_ids)
     # the question is whether a better objective exists: optima of one objective at distinct designs (a valley of
-    # equal designs, as comb_finger's combing angle that only its alpha sets, or symmetric twins) are one level,
+    # equal designs, as an angle that only one of its variables sets, or symmetric twins) are one level,
     # else a flat valley's starts, each stopping somewhere along it, count as ever more optima never all found
     optima = distinct_optima(f, unit_designs, start_ids, design_tolerance=math.inf)
     notes = list(assumptions_not_met)

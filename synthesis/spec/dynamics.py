@@ -1,9 +1,10 @@
 """The optional ``[dynamics]`` table of a four-bar kind's spec: mass properties, gravity, crank speed, loads, limits.
 
-Shared by the kinds whose mechanism is a planar four-bar driven at its crank (``crank_rocker``, ``planting_fourbar``;
-docs/ARCHITECTURE.md "Dynamics").  Each moving link (crank, coupler, rocker) is given either as a **bar** of a
-material density and a cross-section area (its mass and inertia then follow the link's length, and change with it in
-the NLP) or as **lumped** mass properties (mass, centre of mass in the link frame, inertia about the centre of mass).
+Shared by the kinds whose mechanism is a planar four-bar driven at its crank (the crank-rocker drive and the
+planting arm; docs/ARCHITECTURE.md "Dynamics").  Each moving link (crank, coupler, rocker) is given either as a
+**bar** of a material density and a cross-section area (its mass and inertia then follow the link's length, and
+change with it in the NLP) or as **lumped** mass properties (mass, centre of mass in the link frame, inertia about
+the centre of mass).
 
 The link frame of each link: origin at its first joint (crank: the crank pivot; coupler: the crank pin; rocker: the
 rocker pivot), x towards its second joint (the crank pin; the coupler-rocker joint; the coupler-rocker joint), y
@@ -44,7 +45,7 @@ class PointMass(StrictModel):
     mass: float = Field(gt=0.0, le=1000.0, description="mass, kg")
     at: tuple[float, float] | Literal["tip"] = Field(
         description="position in the link frame, mm; or \"tip\": the kind's traced point on that link, which "
-                    "moves with the design (planting_fourbar: the claw tip C on the coupler)")
+                    "moves with the design (the planting arm's: the claw tip C on the coupler)")
     note: str = Field("", description="what it is and where its value comes from")
 
 
@@ -59,7 +60,7 @@ class ExternalLoad(StrictModel):
 
 class Counterweight(StrictModel):
     """A mass on the crank opposite its pin (at -radius along the crank), to balance the shaking force; a number fixes
-    a value, ``{init, bounds}`` frees it (planting_fourbar: design variables ``counterweight_mass``,
+    a value, ``{init, bounds}`` frees it (the planting arm's design variables ``counterweight_mass``,
     ``counterweight_radius``)."""
 
     mass: Variable = Field(description="counterweight mass, kg")
@@ -91,7 +92,7 @@ class DynamicsSection(StrictModel):
     """Mass properties and loads for the inverse dynamics at constant crank speed (docs/ARCHITECTURE.md "Dynamics")."""
 
     crank: BarLink | LumpedLink = Field(description="the crank: a bar {density, area} or {mass, com, inertia}")
-    coupler: BarLink | LumpedLink = Field(description="the coupler (planting_fourbar: a bar is AB and the claw arm "
+    coupler: BarLink | LumpedLink = Field(description="the coupler (the planting arm's: a bar is AB and the claw arm "
                                                       "AC of the same section): a bar or {mass, com, inertia}")
     rocker: BarLink | LumpedLink = Field(description="the rocker: a bar {density, area} or {mass, com, inertia}")
     point_masses: list[PointMass] = Field(default_factory=list, description="masses carried by the links")
