@@ -9,6 +9,7 @@ working swing.  The arc error is the objective of ``solve``; ``check`` reports i
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -125,7 +126,7 @@ def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(PickerDoubleCrankSpec, loaded.model)     # load_spec validated it with this kind's model
     dc = linkage(spec)
     try:
         rules = evaluate(spec, dc)

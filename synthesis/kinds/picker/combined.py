@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Protocol, cast
 
 import casadi as ca
 import numpy as np
@@ -30,12 +31,23 @@ from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_
 from synthesis.kinematics.crank_rocker import joints as crank_rocker_joints
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_point, joint_positions
 from synthesis.kinds.picker import check as double_crank_check
+from synthesis.kinds.picker.spec import Installation, PickerDoubleCrankSpec, PickerSpec
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec, load_spec
 
 TWO_PI = 2.0 * math.pi
 TRAJECTORY_SAMPLES = 361
 ANIMATION_FRAMES = 40
+
+
+class CrankRockerPart(Protocol):
+    """What the picker reads of its drive's spec, a crank_rocker one (that kind's model, which this kind does not
+    import: kinds know nothing of each other)."""
+
+    name: str
+    branch: int
+
+    def design_values(self) -> dict[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -64,7 +76,7 @@ class Drive:
         return abs(self.beta_drop - self.beta_pick)
 
 
-def make_drive(spec, cr: CrankRocker, dc: DoubleCrank, phi10_deg: float) -> Drive:
+def make_drive(spec: PickerSpec, cr: CrankRocker, dc: DoubleCrank, phi10_deg: float) -> Drive:
     inst = spec.installation
     q = quick_return(cr)
     ex = q.extremes
@@ -130,7 +142,7 @@ def _prefixed(prefix: str, rules: list[Rule]) -> list[dict]:
 
 
 def _load_part(loaded: LoadedSpec, field: str, kind: str) -> LoadedSpec:
-    path = loaded.model.part_path(loaded.path, field)
+    path = cast(PickerSpec, loaded.model).part_path(loaded.path, field)     # load_spec validated the picker spec
     try:
         part = load_spec(path)
     except SpecError as exc:
@@ -141,10 +153,11 @@ def _load_part(loaded: LoadedSpec, field: str, kind: str) -> LoadedSpec:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(PickerSpec, loaded.model)       # load_spec validated it with this kind's model
     cr_loaded = _load_part(loaded, "crank_rocker", "crank_rocker")
     dc_loaded = _load_part(loaded, "double_crank", "picker_double_crank")
-    cr_spec, dc_spec = cr_loaded.model, dc_loaded.model
+    # _load_part has made sure of each part's kind, whose model load_spec validated it with
+    cr_spec, dc_spec = cast(CrankRockerPart, cr_loaded.model), cast(PickerDoubleCrankSpec, dc_loaded.model)
     v = cr_spec.design_values()
     cr = CrankRocker(v["l7"], v["l8"], v["l9"], v["l10"], cr_spec.branch)
     dc = double_crank_check.linkage(dc_spec)
@@ -206,7 +219,8 @@ def run_check(loaded: LoadedSpec) -> Result:
     )
 
 
-def _instant_table(spec, dc_spec, drive: Drive, instants: dict[str, float]) -> dict:
+def _instant_table(spec: PickerSpec, dc_spec: PickerDoubleCrankSpec, drive: Drive,
+                   instants: dict[str, float]) -> dict:
     """The clamp point at picking, dropping and picking again: where it is, how fast, how far from its target."""
     at = states(drive, list(instants.values()))
     speed = np.hypot(*at["V"]) / 1000.0
@@ -224,19 +238,21 @@ def _instant_table(spec, dc_spec, drive: Drive, instants: dict[str, float]) -> d
     return instant_table
 
 
-def _design_of(spec, cr_loaded: LoadedSpec, dc_loaded: LoadedSpec) -> tuple[dict, dict]:
+def _design_of(spec: PickerSpec, cr_loaded: LoadedSpec, dc_loaded: LoadedSpec) -> tuple[dict, dict]:
     """The picker's design (both parts' variables, prefixed, and the installation angles) and its description."""
-    cr_spec, dc_spec, inst = cr_loaded.model, dc_loaded.model, spec.installation
+    # the parts run_check loaded: _load_part has made sure of their kinds
+    cr_spec, dc_spec = cast(CrankRockerPart, cr_loaded.model), cast(PickerDoubleCrankSpec, dc_loaded.model)
+    inst = spec.installation
     design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
     design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
     design.update({"theta1": inst.theta1, "theta2": inst.theta2})
-    described = describe_part("crank_rocker", cr_spec, str(cr_loaded.path))
+    described = describe_part("crank_rocker", cr_loaded.model, str(cr_loaded.path))
     described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
     described.update(describe_fixed(spec, {"theta1": "installation.theta1", "theta2": "installation.theta2"}))
     return design, described
 
 
-def _installation_facts(inst, dc_spec, drive: Drive, theta1: float) -> dict:
+def _installation_facts(inst: Installation, dc_spec: PickerDoubleCrankSpec, drive: Drive, theta1: float) -> dict:
     ae_pick = math.degrees(drive.theta2) + math.degrees(drive.mount * (drive.beta_pick - math.pi))
     return {"picking_extreme": inst.picking_extreme, "theta1_published_deg": inst.theta1,
             "theta1_computed_deg": theta1, "theta2_deg": inst.theta2,

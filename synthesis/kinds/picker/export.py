@@ -40,6 +40,7 @@ def write_double_crank_dxf(result: Result, path: Path) -> None:
 
 def write_picker_csv(result: Result, path: Path) -> None:
     tr = result.trajectory
+    assert tr is not None, "a picker result carries its trajectory (combined.run_check writes it)"
     exports.write_csv(path, {"t_s": tr["t"], "crank_gf_deg": tr["crank_deg"], "crank_ab_deg": tr["crank_ab_deg"],
                              "x_mm": tr["x"], "y_mm": tr["y"], "vx_mm_s": tr["vx"], "vy_mm_s": tr["vy"],
                              "ax_mm_s2": tr["ax"], "ay_mm_s2": tr["ay"]})
@@ -47,6 +48,7 @@ def write_picker_csv(result: Result, path: Path) -> None:
 
 def write_picker_dxf(result: Result, path: Path) -> None:
     tr, frame = result.trajectory, result.extra["frames"][0]
+    assert tr is not None, "a picker result carries its trajectory (combined.run_check writes it)"
     exports.write_linkage_dxf(
         path, {k: tuple(v) for k, v in frame["joints"].items()}, ground=("A", "D", "G"), links=DOUBLE_CRANK + DRIVE,
         couplers=[("B", "C", "M"), ("A", "B", "E")], curves={"PATH_M": [list(zip(tr["x"], tr["y"]))]},

@@ -17,6 +17,8 @@ Reported objectives are always the exact eq (4) (or sum of squares) of the desig
 from __future__ import annotations
 
 import math
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
@@ -70,12 +72,15 @@ class PickerNLP(KindNLP):
         self.residuals = ca.Function("residuals", [z], [r])
         samples = swing_angles(spec, spec.solver.samples) * DEG
         mu = ca.vec(f.map(len(samples))(samples.reshape(1, -1), p)[3]) / DEG
-        rules = rules_of(spec, *(x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4")), mu)
+        x_a, l1, l2, l3, l4 = (x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4"))
+        rules = rules_of(spec, x_a, l1, l2, l3, l4, mu)
         lb, ub = self.bounds[:, 0], self.bounds[:, 1]
-        common = dict(max_iter=spec.solver.max_iter, backoff=scaled_backoff(spec.solver.backoff), ipopt="tight",
-                      hard_in_elastic=("grashof_double_crank",),
-                      # z: x_a, y_a, l2 and the slacks, l5 (mm), phi3, phi4 (deg); rows: three lengths' bounds
-                      x_units=["mm"] * 7 + ["deg"] * 2, structural_units=["mm"] * 3)
+        # Problem's keyword arguments both stages share
+        common: dict[str, Any] = dict(
+            max_iter=spec.solver.max_iter, backoff=scaled_backoff(spec.solver.backoff), ipopt="tight",
+            hard_in_elastic=("grashof_double_crank",),
+            # z: x_a, y_a, l2 and the slacks, l5 (mm), phi3, phi4 (deg); rows: three lengths' bounds
+            x_units=["mm"] * 7 + ["deg"] * 2, structural_units=["mm"] * 3)
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
         shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
         self.stages = [compile_problem(setting, Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0),

@@ -104,6 +104,7 @@ def compare_figure(results: list[Result], folder: Path) -> list[str]:
 def picker_figure(result: Result, path: Path) -> None:
     """Clamp path over one crank turn with the target arc, and the clamp speed against time."""
     tr, ex = result.trajectory, result.extra
+    assert tr is not None, "a picker result carries its trajectory (combined.run_check writes it)"
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12.5, 5.2))
     _target_arc(ax, ex["target_arc"])
     _draw_links(ax, ex["frames"][0]["joints"], DOUBLE_CRANK, "tab:blue", 1.6, 0.8)
@@ -139,6 +140,7 @@ def picker_figure(result: Result, path: Path) -> None:
 def picker_animation(result: Result, path: Path) -> None:
     """One cycle of the combined picker as an animated GIF (report.gif)."""
     tr, ex = result.trajectory, result.extra
+    assert tr is not None, "a picker result carries its trajectory (combined.run_check writes it)"
     frames = ex["frames"]
     xs = [p[0] for f in frames for p in f["joints"].values()] + tr["x"]
     ys = [p[1] for f in frames for p in f["joints"].values()] + tr["y"]
