@@ -160,7 +160,7 @@ def fit_optimised_law(stroke: float, segments_deg: dict[str, float], omega: floa
             free_fit = fit_optimised_law(stroke, segments_deg, omega, "acceleration", spans, degree, samples_per_span)
             need = {name: stroke * omega**2 * getattr(free_fit, attr).peaks["acceleration"]
                     / math.radians(segments_deg[name]) ** 2 for name, attr in (("rise", "rise"), ("return", "return_"))}
-            worst = max(need, key=need.get)
+            worst = max(need, key=need.__getitem__)
             raise SolverError(
                 f"rules.max_acceleration: the optimised law cannot meet the timing: the {worst} window of "
                 f"{segments_deg[worst]:g} deg needs a peak follower acceleration of at least {need[worst]:.6g} "

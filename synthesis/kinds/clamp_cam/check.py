@@ -7,6 +7,8 @@ follower motion over a turn, and the pitch curve and working profile in the cam 
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 from scipy.optimize import minimize_scalar
 
@@ -14,6 +16,7 @@ from synthesis.kinds.clamp_cam.motion import SEGMENT_NAMES
 from synthesis.kinds.clamp_cam.scene import (CamScene, evaluate, law_warning, stroke_unit, to_report_units,
                                        window_degrees)
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.kinds.clamp_cam.spec import ClampCamSpec
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -167,8 +170,8 @@ def profile(scene: CamScene) -> dict:
     return out
 
 
-def describe(scene: CamScene) -> dict:
-    """The kind-specific part of result.json."""
+def describe(scene: CamScene) -> tuple[dict, dict]:
+    """(the kind-specific part of result.json, the trajectory)."""
     trajectory, follower = follower_motion(scene)
     warning = law_warning(scene)
     return {"source": scene.spec.source, "cam": cam_facts(scene), "follower": follower, "profile": profile(scene),
@@ -176,7 +179,7 @@ def describe(scene: CamScene) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(ClampCamSpec, loaded.model)        # load_spec validated it with this kind's model
     scene = CamScene.from_spec(spec)
     rules, _ = evaluate(scene, FINE * spec.solver.samples_per_segment)
     extra, trajectory = describe(scene)

@@ -14,6 +14,7 @@ profile.dxf  the working profile as a closed LWPOLYLINE on layer PROFILE, the pi
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -46,7 +47,7 @@ def write_csv(result: Result, path: Path) -> None:
             "pitch_radius_of_curvature_mm": rho, "working_radius_of_curvature_mm": rho_w,
             f"s_{unit}": fol["s"], f"v_{unit}_s": fol["v"], f"a_{unit}_s2": fol["a"],
             "pressure_angle_deg": fol["pressure_angle_deg"]}
-    out = {}
+    out: dict[str, Sequence[Any]] = {}
     for k, v in cols.items():
         v = list(v)
         out[k] = v if k == "cam_angle_deg" else [v[i] for i in close]

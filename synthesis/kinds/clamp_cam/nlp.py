@@ -128,7 +128,7 @@ class _CamProblem:
     def _structural(self, v) -> list[Row]:
         """The segments fill one turn; the follower geometry exists (real s0, the arm reaches the cam)."""
         spec = self.spec
-        rows = [(v["rise"] + v["far_dwell"] + v["return"] + v["near_dwell"], 360.0, 360.0)]
+        rows: list[Row] = [(v["rise"] + v["far_dwell"] + v["return"] + v["near_dwell"], 360.0, 360.0)]
         r0 = v["base_radius"]
         if spec.follower.type == "translating":
             rows.append((v["offset"] ** 2 - (0.9 * r0) ** 2, None, 0.0))

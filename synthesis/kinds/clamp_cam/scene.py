@@ -106,7 +106,8 @@ def timing_rules(spec: ClampCamSpec, timing: Timing, reference: Timing | None = 
     rules = []
     for kind, dwell in (("hold_near", "near_dwell"), ("hold_far", "far_dwell")):
         lo, hi = timing.span(dwell)
-        ref_span = tuple(float(x) for x in ref.span(dwell))
+        ref_start, ref_end = ref.span(dwell)
+        ref_span = (float(ref_start), float(ref_end))
         for i, (w, w0) in enumerate(zip(windows[kind], nominal[kind])):
             if crank_speed is None:
                 rules.append(timing_rule(kind, i, unwrap_window(w, ref_span), lo, hi))

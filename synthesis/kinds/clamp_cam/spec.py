@@ -9,7 +9,7 @@ follower and in degrees (arm swing) for an oscillating one.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, get_args
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
@@ -21,7 +21,8 @@ from synthesis.spec.common import (
 KIND = "clamp_cam"
 SEGMENTS = ("rise", "far_dwell", "return", "near_dwell")
 #: closed-form motion law families, plus the B-spline law fitted by cvxpy
-LAWS = ("cycloidal", "poly345", "modified_trapezoid", "modified_sine", "optimised")
+Law = Literal["cycloidal", "poly345", "modified_trapezoid", "modified_sine", "optimised"]
+LAWS = get_args(Law)
 
 
 def _lo(v: Variable) -> float:
@@ -33,7 +34,9 @@ def _hi(v: Variable) -> float:
 
 
 def _fmt(v: Variable) -> str:
-    return f"{v.init:g} (free in [{v.bounds[0]:g}, {v.bounds[1]:g}])" if is_free(v) else f"{float(v):g}"
+    if isinstance(v, FreeVariable):
+        return f"{v.init:g} (free in [{v.bounds[0]:g}, {v.bounds[1]:g}])"
+    return f"{float(v):g}"
 
 
 class CamSection(StrictModel):
@@ -103,7 +106,7 @@ class FollowerSection(StrictModel):
 class MotionSection(StrictModel):
     """Motion law and timing of one turn: rise, far dwell, return, near dwell (seed 001 Table 1)."""
 
-    law: Literal[LAWS] = Field("cycloidal", description="motion law of the rise and the return: " + ", ".join(LAWS))
+    law: Law = Field("cycloidal", description="motion law of the rise and the return: " + ", ".join(LAWS))
     stroke: float = Field(gt=0, description="follower stroke: mm (translating) or deg of arm swing (oscillating)")
     rise_start: Variable = Field(0.0, json_schema_extra=WITHIN_A_TURN, description="crank angle at which the rise begins, deg on the picker's "
                                                   "clock (0 = the pick; -360 to 360)")
@@ -241,6 +244,7 @@ class ClampCamSpec(ProblemSpec):
                 raise ValueError(f"follower.offset: expected |offset| < 0.9 x base_radius ({0.9 * r0:g} mm), "
                                  f"got {e:g}")
         else:
+            assert f.pivot_distance is not None and f.arm_length is not None, "an oscillating follower has both"
             a, l = value_of(f.pivot_distance), value_of(f.arm_length)
             if not abs(a - l) < r0 < a + l:
                 raise ValueError(f"follower: the arm cannot reach the base circle: need |pivot_distance - "
@@ -273,6 +277,7 @@ class ClampCamSpec(ProblemSpec):
         if f.type == "translating":
             out["offset"] = 0.0 if f.offset is None else f.offset
         else:
+            assert f.pivot_distance is not None and f.arm_length is not None, "an oscillating follower has both"
             out["pivot_distance"] = f.pivot_distance
             out["arm_length"] = f.arm_length
         out["rise_start"] = self.motion.rise_start

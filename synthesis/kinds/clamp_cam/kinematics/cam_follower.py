@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -38,6 +38,12 @@ def _symbolic(*xs) -> bool:
 
 class _Ops:
     """The math functions of the backend the arguments live in."""
+
+    sin: Callable[..., Any]
+    cos: Callable[..., Any]
+    sqrt: Callable[..., Any]
+    acos: Callable[..., Any]
+    atan2: Callable[..., Any]
 
     def __init__(self, symbolic: bool):
         self.sin, self.cos, self.sqrt = (ca.sin, ca.cos, ca.sqrt) if symbolic else (np.sin, np.cos, np.sqrt)
