@@ -4,6 +4,7 @@ the report draws (phase breakdown, row-spacing sweep, mu / v_L sensitivity, clos
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -14,6 +15,7 @@ from synthesis.kinds.guide_tube.drop import DropPhases, Physics, SeedlingSticks,
 from synthesis.kinds.guide_tube.ode import simulate
 from synthesis.kinds.guide_tube.scene import MM, GuideTubeScene
 from synthesis.kinds.guide_tube.slope import landing_time_slope
+from synthesis.kinds.guide_tube.spec import GuideTubeSpec
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -92,7 +94,7 @@ def _rules(scene: GuideTubeScene, design: list[DropPhases], swept: list[list[Dro
                                        f"over row spacings {min(grid):g}-{max(grid):g} mm", stuck_on_grid))
     at_all = [design] + swept
     for i, t in enumerate(scene.tubes):
-        if t.name in (stuck_tubes or {}):
+        if stuck_tubes is not None and t.name in stuck_tubes:
             rules.append(not_evaluated(f"wall_exit_speed_{t.name}", limits.min_exit_speed, None, "m/s",
                                        "at the wall end, every sampled row spacing",
                                        f"{stuck_tubes[t.name]} (it never reaches the wall end)"))
@@ -119,7 +121,8 @@ def _phase_table(d: DropPhases) -> dict:
 
 
 def _worst(values: list[float | None]) -> float | None:
-    return None if any(v is None for v in values) else max(values)
+    known = [v for v in values if v is not None]
+    return None if len(known) < len(values) else max(known)
 
 
 def scene_facts(spec, scene: GuideTubeScene, angles: dict[str, float], samples: int) -> dict:
@@ -186,7 +189,7 @@ def run_check(loaded: LoadedSpec) -> Result:
     """The given angles against every rule.  A design whose seedling sticks on a wall is checked too, and fails:
     its wall rules are evaluated, its landing-time rules are not (no seedling lands), and its facts name where it
     sticks instead of the drop phases."""
-    spec = loaded.model
+    spec = cast(GuideTubeSpec, loaded.model)       # load_spec validated it with this kind's model
     scene = GuideTubeScene.from_spec(spec)
     angles = spec.given_angles()
     samples = FINE * spec.solver.samples

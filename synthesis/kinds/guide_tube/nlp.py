@@ -59,7 +59,7 @@ def problem(setting: Setting) -> Declared:
     forward = ca.SX.sym("forward_speed") if wanted else None
     scene = dataclasses.replace(scene, physics=scene.physics.with_(mu=mu), forward_speed=forward)
     operating = ([Operating("mu", mu, nominal_mu, "-")] if symbolic else []) + (
-        [Operating("forward_speed", forward, nominal_speed, "m/s")] if wanted else [])
+        [Operating("forward_speed", forward, nominal_speed, "m/s")] if forward is not None else [])
     names = [t.name for t in free]
     uniform = spec.objective.name == "uniform"
     delta = ca.SX.sym("delta_deg", len(free))

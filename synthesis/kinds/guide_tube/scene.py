@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -10,6 +11,7 @@ from synthesis.errors import SpecError
 from synthesis.kinds.guide_tube.calibrate import MuCalibration, calibrate_mu
 from synthesis.kinds.guide_tube.drop import Physics, Tube
 from synthesis.spec.common import value_of
+from synthesis.spec.operating import OperatingRange
 from synthesis.kinds.guide_tube.spec import GuideTubeSpec, RowsSection, TubeSection
 
 MM = 1e-3
@@ -28,12 +30,14 @@ class GuideTubeScene:
     rows: RowsSection
     calibration: MuCalibration | None
     #: the forward speed (m/s) as a CasADi symbol when the NLP declares it an operating condition; None: rows'
-    forward_speed: object = None
+    forward_speed: Any = None
 
     @classmethod
     def from_spec(cls, spec: GuideTubeSpec) -> "GuideTubeScene":
+        mu = spec.friction.mu
+        assert not isinstance(mu, OperatingRange), "validation keeps a range aside and leaves its nominal value"
         physics = Physics(spec.drop.height * MM, spec.drop.gravity, spec.drop.terminal_speed,
-                          spec.friction.mu if spec.friction.mu is not None else 0.0)
+                          mu if mu is not None else 0.0)
         scene = cls(physics, tuple(spec.tubes), spec.rows, None)
         cal = spec.friction.calibrate
         if cal is None:
