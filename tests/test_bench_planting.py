@@ -7,7 +7,7 @@ import pytest
 from conftest import PLANTING
 from synthesis import kinds
 from synthesis.core.solve import run_solve
-from synthesis.kinds.planting.nlp import PlantingNLP
+from synthesis.core.kind import Setting
 from synthesis.spec import load_spec
 
 pytestmark = pytest.mark.benchmark
@@ -15,7 +15,7 @@ pytestmark = pytest.mark.benchmark
 
 def test_bench_one_local_solve(benchmark):
     spec = load_spec(PLANTING / "redesign_from_example1.toml").model
-    nlp = PlantingNLP(spec)
+    nlp = kinds.get("planting_fourbar").solving().build(Setting(spec))
     out = benchmark(nlp.solve, 0, nlp.init)
     benchmark.extra_info["iterations"] = out.iterations
     assert out.success

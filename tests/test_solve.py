@@ -15,10 +15,10 @@ import pytest
 from conftest import PLANTING
 from solving import agrisynth, same_solve, solved_library_spec
 from synthesis import kinds
+from synthesis.core.kind import Setting
 from synthesis.core.solve import baseline_rules, exit_error, run_solve
 from synthesis.errors import SolverError, SpecError
 from synthesis.kinds.planting.check import evaluate
-from synthesis.kinds.planting.nlp import PlantingNLP
 from synthesis.kinds.planting.scene import PlantingScene
 from synthesis.spec import LoadedSpec, load_spec
 
@@ -84,9 +84,9 @@ def test_same_spec_and_seed_give_the_same_design():
 
 def test_constraint_jacobian_matches_central_differences():
     spec = load_spec(PLANTING / "redesign_from_example1.toml").model
-    nlp = PlantingNLP(spec)
+    nlp = kinds.get("planting_fourbar").solving().build(Setting(spec))
     t = nlp.compiled.t
-    x = np.concatenate([nlp.init, nlp.theta_guess(dict(zip(nlp.names, nlp.init))), t.extra_init])
+    x = np.concatenate([nlp.declared.start(nlp.init, False)[0], t.extra_init])
     jac = ca.Function("J", [t.w], [ca.jacobian(t.g, t.w)])
     J = np.asarray(jac(x))
     g = lambda z: np.asarray(nlp.compiled.g_function(z, [])).ravel()  # noqa: E731
@@ -105,8 +105,8 @@ def test_solver_and_check_read_the_same_rules():
     """One rule set from a trace: the NLP's rules, evaluated at the given design with the crank angles of
     its root-found precision points, equal the check's rules on the solver's sample grids."""
     spec = load_spec(PLANTING / "redesign_from_example1.toml").model
-    nlp = PlantingNLP(spec)
-    x = np.concatenate([nlp.init, nlp.theta_guess(dict(zip(nlp.names, nlp.init)))])
+    nlp = kinds.get("planting_fourbar").solving().build(Setting(spec))
+    x = nlp.declared.start(nlp.init, False)[0]        # the crank angles of P1-P6: the kind's start map
     floats, _ = evaluate(PlantingScene.from_spec(spec), spec.rules, phase_samples=spec.solver.samples_per_phase,
                          turn_samples=spec.solver.samples_per_turn)
     symbolic = nlp.problem.rules

@@ -428,15 +428,16 @@ def _rows_at_start(kind, spec, aux_guess):
     """(nlp, g, lbg, x): the kind's NLP for ``spec`` built without IPOPT, its auxiliaries pinned by the structural
     equalities from the start design and ``nlp.<aux_guess>(design)`` (or ``aux_guess(spec, design)``), and every
     row g (with its lower bounds) there, the epigraph variables of a tolerance box at their start (1.01 |dg/dd| +
-    1e-9)."""
+    1e-9).  ``aux_guess`` None: the kind's own start map guesses them."""
     from synthesis.core.sensitivity import Sensitivity
 
     solving = kind.solving()
     nlp = solving.build(Setting(spec, 0, solving.prepare(spec), solver=False), False)
     t = nlp.compiled.t
     design = dict(zip(nlp.names, (float(v) for v in nlp.init)))
-    guess = getattr(nlp, aux_guess) if isinstance(aux_guess, str) else (lambda d: aux_guess(spec, d))
-    x = Sensitivity(nlp.problem, len(nlp.names)).pin(np.concatenate([nlp.init, guess(design)]))
+    start = (nlp.declared.start(nlp.init, False)[0] if aux_guess is None
+             else np.concatenate([nlp.init, aux_guess(spec, design)]))
+    x = Sensitivity(nlp.problem, len(nlp.names)).pin(start)
     g = np.asarray(ca.Function("g", [t.w], [t.g])(np.concatenate([x, t.full_extra(None, x)])), float).ravel()
     return nlp, g, t.lbg, x
 
@@ -454,7 +455,7 @@ def test_planting_seedling_clearance_is_held_at_its_worst_case_in_the_tolerance_
     spec = loaded.model
     rows = {}
     for label, kind in (("robust", kinds.solving_kind_for(loaded)), ("nominal", kinds.solving_kind(loaded.kind))):
-        nlp, g, lbg, x = _rows_at_start(kind, spec, "theta_guess")
+        nlp, g, lbg, x = _rows_at_start(kind, spec, None)
         k = nlp.problem.robust_structural[-1]        # the clearance row: the last of the rows held in a box
         rows[label] = (g, lbg, x)
     x = rows["robust"][2]
@@ -495,14 +496,15 @@ def test_planting_point_order_is_held_at_its_worst_case_in_the_tolerance_box():
     (find_precision_points, a grid and brentq on the kinematics), its derivatives by central differences.  The robust
     row is that angle minus sum_j |d angle / d d_j| tol_j (the epigraph variables at their start, 1.01 |dg/dd| +
     1e-9), its lower bound the point gap; the nominal NLP's row is the angle itself."""
+    from synthesis.kinds.planting.nlp import PlantingProblem
     from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
 
     loaded = load_spec(LIBRARY / "planting_arm/robust_redesign_from_example1.toml")
     spec = loaded.model
     rows = {}
     for label, kind in (("robust", kinds.solving_kind_for(loaded)), ("nominal", kinds.solving_kind(loaded.kind))):
-        nlp, g, lbg, x = _rows_at_start(kind, spec, "theta_guess")
-        k = nlp.order_rows["P3-P4"]
+        nlp, g, lbg, x = _rows_at_start(kind, spec, None)
+        k = PlantingProblem(spec).order_rows["P3-P4"]
         rows[label] = (g[k], lbg[k], k in nlp.problem.robust_structural, x[:len(nlp.names)], list(nlp.names))
     names = rows["robust"][4]
 

@@ -82,6 +82,10 @@ class Declared:
     design_names: list[str] | None = None
     #: CompiledNLP options (scaling, watched)
     options: dict = field(default_factory=dict)
+    #: True when ``start`` moves the design itself (e.g. pulls it into the region where the linkage assembles),
+    #: not only guesses the auxiliaries: the starts IPOPT solves from are then not the uniform draws the confidence
+    #: statement assumes
+    moves_the_design: bool = False
 
 
 class DeclaredNLP(KindNLP):
@@ -98,7 +102,7 @@ class DeclaredNLP(KindNLP):
 
     @property
     def maps_its_starts(self) -> bool:     # type: ignore[override]  # a class attribute of KindNLP, read-only here
-        return self.declared.start is not _given
+        return self.declared.moves_the_design
 
     @property
     def problem(self) -> Problem:

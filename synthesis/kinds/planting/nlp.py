@@ -6,6 +6,9 @@ structural equalities on their crank angles, so IPOPT sees smooth rows instead o
 samples.  The lowest point is stationary (vy = 0) and no sample of the turn lies lower.  The rules
 are :func:`synthesis.kinds.planting.rule_set.planting_rules` of the symbolic trace; back-off, the elastic
 form and the robust objective's epigraph are :mod:`synthesis.core.transcribe`'s.
+
+:class:`PlantingProblem` builds the problem and its maps; :func:`declare` hands them to the core as a
+:class:`~synthesis.core.declared.Declared`, which compiles it and solves each start.
 """
 
 from __future__ import annotations
@@ -15,9 +18,9 @@ import math
 import casadi as ca
 import numpy as np
 
-from synthesis.core.declared import compile_problem
-from synthesis.core.kind import KindNLP, Setting
-from synthesis.core.outcome import StartOutcome
+from synthesis.core.declared import Declared
+from synthesis.core.ipopt import CompiledNLP, NLPOutcome
+from synthesis.core.kind import Setting
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
 from synthesis.dynamics.linkage import peak_epigraph, peak_of
@@ -39,13 +42,19 @@ HARD_IN_ELASTIC = ("grashof_crank_rocker",)
 PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
 
 
-class PlantingNLP(KindNLP):
-    """Built once per spec and process; :meth:`solve` runs one IPOPT solve from a design."""
+def declare(setting: Setting) -> Declared:
+    """The planting problem of the setting's spec, with its start map (the crank angles of P1-P6 guessed from the
+    start design's numeric points), its objective in report units and each start's solver crank angles."""
+    return PlantingProblem(setting.spec, setting).declared()
 
-    def __init__(self, spec: PlantingFourbarSpec, elastic: bool = False, setting: Setting | None = None):
+
+class PlantingProblem:
+    """The problem of a planting_fourbar spec as a setting sees it (operating conditions as symbols or numbers),
+    and the maps the core solves it through."""
+
+    def __init__(self, spec: PlantingFourbarSpec, setting: Setting | None = None):
         setting = setting or Setting(spec)
         self.spec = spec
-        self.elastic = elastic
         variables = spec.variables()
         self.names = list(variables)
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
@@ -95,7 +104,10 @@ class PlantingNLP(KindNLP):
             x_units=[*units_of(spec, self.names), *["rad"] * th.numel()],
             structural_units=self._structural_units(), objective_unit="",
         )
-        self.compiled = compile_problem(setting, self.problem, elastic)
+
+    def declared(self) -> Declared:
+        return Declared(self.problem, self.names, self.bounds, self.init, design=self.design, start=self.start,
+                        objective=self.reported, details=self.details)
 
     # ------------------------------------------------------------------ the declaration
 
@@ -222,7 +234,8 @@ class PlantingNLP(KindNLP):
         t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym,
                                                   counterweight_of(v)), name, n)
         return ObjectiveParts(f=t / self.peak_typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf],
-                              extra_init=[self.peak_typical], rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
+                              extra_init=[self.peak_typical], rows=rows, extra_units=[unit],
+                              row_units=[unit] * len(rows))
 
     def _smooth_scale(self) -> float:
         return (self.omega**2 * 100.0) ** 2
@@ -250,10 +263,10 @@ class PlantingNLP(KindNLP):
             out.append(float(grid[int(np.argmax(scene.seedbed.height(np.asarray(pos, float))))]))
         return np.array(out)
 
-    def objective_value(self, f: float) -> float:
+    def objective_value(self, f: float, elastic: bool) -> float:
         """The NLP's objective in report units: nearest as solved, robust as the smallest normalised
         margin at the solver's samples (the fine-grid re-check replaces it), smooth as peak |a| in mm/s^2."""
-        if self.elastic:
+        if elastic:
             return f
         if self.spec.objective.name == "robust":
             return -f
@@ -265,18 +278,25 @@ class PlantingNLP(KindNLP):
             return math.sqrt(max(f * self.peak_typical, 0.0))
         return f
 
-    def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
-        """One IPOPT run from a design, the crank angles of P1-P6 guessed from its numeric points."""
+    def start(self, x_design: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
+        """The decision vector of a start: its design and the crank angles of P1-P6 guessed from its numeric
+        points."""
         x_design = np.asarray(x_design, dtype=float)
-        theta0 = self.theta_guess(dict(zip(self.names, x_design)))
-        out = self.compiled.solve(start, np.concatenate([x_design, theta0]))
-        n = len(self.names)
-        design = dict(zip(self.names, (float(v) for v in out.x[:n])))
-        theta = {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])}
-        value = self.objective_value(out.objective)
-        if self.spec.objective.name in PEAK_UNITS and not self.elastic:     # the design's own peak, check's grid
+        return np.concatenate([x_design, self.theta_guess(dict(zip(self.names, x_design)))]), None
+
+    def design(self, x: np.ndarray) -> dict:
+        return dict(zip(self.names, (float(v) for v in x[:len(self.names)])))
+
+    def reported(self, out: NLPOutcome, design: dict, elastic: bool) -> float:
+        """A start's objective in report units; a peak objective is the design's own peak on the check's grid."""
+        if self.spec.objective.name in PEAK_UNITS and not elastic:
             scene = PlantingScene.from_spec(self.spec, design)
-            value = peak_of(arm_linkage(self.spec.dynamics, scene.design.parameters(), self.spec.arm.branch,
-                                        self.omega, scene.counterweight), self.spec.objective.name, CHECK_TURN_SAMPLES)
-        return StartOutcome.of(out, design, value, solver_crank_deg=theta,
-                               solver_objective=self.objective_value(out.objective))
+            return peak_of(arm_linkage(self.spec.dynamics, scene.design.parameters(), self.spec.arm.branch,
+                                       self.omega, scene.counterweight), self.spec.objective.name, CHECK_TURN_SAMPLES)
+        return self.objective_value(out.objective, elastic)
+
+    def details(self, out: NLPOutcome, compiled: CompiledNLP) -> dict:
+        """A start's crank angles of P1-P6 (deg) and the objective at the solver's own samples."""
+        n = len(self.names)
+        return {"solver_crank_deg": {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])},
+                "solver_objective": self.objective_value(out.objective, compiled.elastic)}

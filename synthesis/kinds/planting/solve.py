@@ -6,20 +6,17 @@ from __future__ import annotations
 
 from typing import cast
 
+from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.errors import AgrisynthError
 from synthesis.kinds.planting.check import (CHECK_PHASE_SAMPLES, CHECK_TURN_SAMPLES, evaluate, scene_facts, trajectory,
                                       unevaluated)
-from synthesis.kinds.planting.nlp import PlantingNLP
+from synthesis.kinds.planting.nlp import declare
 from synthesis.kinds.planting.scene import PlantingScene
 
 OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2", "min_peak_torque": "N m",
                    "min_peak_shaking_force": "N"}
-
-
-def build(setting: Setting, elastic: bool = False) -> PlantingNLP:
-    return PlantingNLP(setting.spec, elastic=elastic, setting=setting)
 
 
 def smallest_margin(report: StartReport) -> float:
@@ -74,5 +71,5 @@ def maximise(setting: Setting) -> bool:
     return setting.spec.objective.name == "robust"
 
 
-SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
+SOLVING = Solving(build=declared(declare), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   samples_hint="[solver] samples_per_phase / samples_per_turn or [solver] backoff")
