@@ -7,6 +7,7 @@ extreme positions, and the smallest transmission angle over a turn.
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -63,6 +64,8 @@ def linkage_dynamics(spec: CrankRockerSpec, lengths) -> FourbarDynamics:
     frame l10, crank l7, coupler l8, rocker l9 and the frame along +x (synthesis.kinematics.crank_rocker)."""
     l7, l8, l9, l10 = lengths
     table = spec.dynamics
+    # called only with a [dynamics] table, whose crank speed CrankRockerSpec's validator requires
+    assert table is not None and table.crank_speed is not None
     bars = {"crank": [((0.0, 0.0), (l7, 0.0))], "coupler": [((0.0, 0.0), (l8, 0.0))],
             "rocker": [((0.0, 0.0), (l9, 0.0))]}
     counterweight = None if table.counterweight is None else table.counterweight.values()
@@ -137,9 +140,11 @@ def facts(spec: CrankRockerSpec, cr: CrankRocker, q: QuickReturn | None) -> dict
     req = spec.requirements
     extra = {}
     if spec.dynamics is not None and q is not None:
+        crank_speed = spec.dynamics.crank_speed
+        assert crank_speed is not None           # CrankRockerSpec's validator requires it with a [dynamics] table
         extra["dynamics"] = dynamics_facts(linkage_dynamics(spec, (cr.l7, cr.l8, cr.l9, cr.l10)),
                                            spec.dynamics.samples, DYNAMICS_JOINTS, DYNAMICS_LINKS,
-                                           spec.dynamics.crank_speed, spec.dynamics)
+                                           crank_speed, spec.dynamics)
     return {"source": spec.source, "branch": spec.branch,
             "requirements": {"time_ratio": req.time_ratio, "rocker_swing_deg": req.rocker_swing,
                              "min_transmission_angle_deg": req.min_transmission_angle},
@@ -148,7 +153,7 @@ def facts(spec: CrankRockerSpec, cr: CrankRocker, q: QuickReturn | None) -> dict
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(CrankRockerSpec, loaded.model)      # load_spec validated it with this kind's model
     cr = mechanism(spec)
     rules, q = evaluate(spec, cr)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",

@@ -28,8 +28,9 @@ def _crank_pin(result: Result, crank_deg) -> tuple[np.ndarray, np.ndarray]:
 def write_paths_csv(result: Result, path: Path) -> None:
     c = result.extra["motion"]["curve"]
     fx, fy = _crank_pin(result, c["crank_deg"])
+    # as lists, the column type write_csv takes: the same float64 values, written alike
     exports.write_csv(path, {"crank_deg": c["crank_deg"], "rocker_deg": c["rocker_deg"],
-                             "transmission_deg": c["transmission_deg"], "F_x_mm": fx, "F_y_mm": fy,
+                             "transmission_deg": c["transmission_deg"], "F_x_mm": fx.tolist(), "F_y_mm": fy.tolist(),
                              "E_x_mm": c["E_x"], "E_y_mm": c["E_y"]})
 
 

@@ -130,9 +130,10 @@ def _peak_objective(spec, p) -> ObjectiveParts:
                           rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
 
 
-def extremes_guess(spec, lengths: np.ndarray) -> np.ndarray:
+def extremes_guess(spec: CrankRockerSpec, lengths: np.ndarray) -> np.ndarray:
     """phi_a, phi_b of a start: its simulated extremes, the quick stroke from a to b."""
-    cr = CrankRocker(*lengths, branch=spec.branch)
+    l7, l8, l9, l10 = lengths
+    cr = CrankRocker(l7, l8, l9, l10, branch=spec.branch)
     if cr.crank_turns():
         try:
             q = quick_return(cr)
