@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -299,7 +299,7 @@ def facts(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(RotaryPlanetarySpec, loaded.model)  # load_spec validated it with this kind's model
     design = spec.design_values()
     rules, train, angles = evaluate(spec, design, *check_grid(spec))
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,

@@ -12,6 +12,7 @@ pitch_curves.dxf  the four pitch curves in mesh at carrier angle 0 (sun at the o
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -39,10 +40,12 @@ def pitch_curve_columns(design: dict, samples: int = CSV_SAMPLES) -> dict[str, n
 
 
 def write_pitch_curves_csv(result: Result, path: Path) -> None:
-    exports.write_csv(path, pitch_curve_columns(result.design), digits=CSV_DIGITS)
+    # as lists, the column type write_csv takes: the same float64 values, written alike
+    columns = {name: values.tolist() for name, values in pitch_curve_columns(result.design).items()}
+    exports.write_csv(path, columns, digits=CSV_DIGITS)
 
 
-def _placed(angle_deg, radius, centre, turn: float) -> list:
+def _placed(angle_deg, radius, centre, turn: float) -> list[tuple[float, float]]:
     """A pitch curve's points in the machine frame: the gear's frame turned by ``turn`` rad about ``centre``."""
     a = np.radians(angle_deg) + turn
     return list(zip(centre[0] + radius * np.cos(a), centre[1] + radius * np.sin(a)))
@@ -56,10 +59,11 @@ def write_pitch_curves_dxf(result: Result, path: Path) -> None:
     sun, idler, planet = (0.0, 0.0), (a1, 0.0), (a1 + a2, 0.0)
     # at carrier angle 0 the idler has turned G(0), the planet F(0) relative to the carrier (NOTES.md)
     g0, f0 = float(idler_law(train, 0.0)), float(planet_law(train, 0.0))
-    curves = {"SUN": [_placed(c["pair1_driver_deg"], c["pair1_driver_radius_mm"], sun, 0.0)],
-              "IDLER_1": [_placed(c["pair1_driven_deg"], c["pair1_driven_radius_mm"], idler, g0)],
-              "IDLER_2": [_placed(c["pair2_driver_deg"], c["pair2_driver_radius_mm"], idler, g0)],
-              "PLANET": [_placed(c["pair2_driven_deg"], c["pair2_driven_radius_mm"], planet, f0)]}
+    curves: dict[str, Sequence[Sequence[Sequence[float]]]] = {
+        "SUN": [_placed(c["pair1_driver_deg"], c["pair1_driver_radius_mm"], sun, 0.0)],
+        "IDLER_1": [_placed(c["pair1_driven_deg"], c["pair1_driven_radius_mm"], idler, g0)],
+        "IDLER_2": [_placed(c["pair2_driver_deg"], c["pair2_driver_radius_mm"], idler, g0)],
+        "PLANET": [_placed(c["pair2_driven_deg"], c["pair2_driven_radius_mm"], planet, f0)]}
     exports.write_linkage_dxf(
         path, {"O": sun, "A": idler, "B": planet}, ground=("O", "A", "B"), links=(("O", "A"), ("A", "B")),
         curves=curves, closed=tuple(curves),
