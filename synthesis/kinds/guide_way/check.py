@@ -10,12 +10,14 @@ centre line, both walls of the groove).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import conics as cn
 from synthesis.kinds.guide_way import scene as sc
+from synthesis.kinds.guide_way.spec import GuideWaySpec
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -128,12 +130,13 @@ def _extreme(scene: sc.Scene, values, pick) -> dict:
 def key_angles(scene: sc.Scene) -> dict:
     """Arm angle theta (deg, 0..360) at every key point of the controlled path, from each stretch that has it."""
     keys = sc.controlled_keys(scene.spec)
-    out = {}
+    out: dict[str, dict[str, float]] = {}
     for k, a in enumerate(scene.arms):
         th = _theta_deg(a)
         out.setdefault(keys[k], {})["leaving"] = float(th[0])
         out.setdefault(keys[k + 1], {})["arriving"] = float(th[-1])
     if scene.fold_theta is not None:        # a spline's stretches stop short of the fold: its own angle
+        assert scene.fold is not None       # the scenes give the fold's arm angles with the fold
         out[scene.fold["point"]] = {"arriving": math.degrees(scene.fold_theta[0]) % 360.0,
                                     "leaving": math.degrees(scene.fold_theta[1]) % 360.0}
     return out
@@ -144,8 +147,10 @@ IK_BRANCH_NAMES = {-1: "minus", 1: "plus"}
 
 
 def conic_facts(scene: sc.Scene) -> list[dict]:
+    pieces, segments = scene.pieces, scene.spec.conic
+    assert pieces is not None and segments is not None, "the facts of a conic path's scene"
     out = []
-    for piece, seg in zip(scene.pieces, scene.spec.conic):
+    for piece, seg in zip(pieces, segments):
         a = seg.coefficients
         entry = {"name": seg.name, "from": seg.start, "to": seg.end, "coefficients": list(a),
                  "type": "hyperbola" if piece.conic.hyperbola else "ellipse", "ik_branch": IK_BRANCH_NAMES[seg.branch],
@@ -202,7 +207,8 @@ def describe(scene: sc.Scene) -> dict:
 def spline_facts(scene: sc.Scene) -> dict:
     from synthesis.kinds.guide_way import spline as sp
 
-    path = scene.spline
+    path, closing = scene.spline, scene.closing
+    assert path is not None and closing is not None, "the facts of a spline path's scene"
     c = np.asarray(path.control, float)
     met = sc.key_misses(path)
     tol = scene.spec.rules.key_point
@@ -215,7 +221,7 @@ def spline_facts(scene: sc.Scene) -> dict:
     return {"control_points": [[float(x), float(y)] for x, y in c], "keys": met,
             "control_polygon": {"x": _r(closed[:, 0]), "y": _r(closed[:, 1])},
             "energy": float(c[:, 0] @ h @ c[:, 0] + c[:, 1] @ h @ c[:, 1]),
-            "uncontrolled_claw": {"x": _r(scene.closing[:, 0]), "y": _r(scene.closing[:, 1])}}
+            "uncontrolled_claw": {"x": _r(closing[:, 0]), "y": _r(closing[:, 1])}}
 
 
 def result_of(spec, sha: str, scene: sc.Scene, status: str = "evaluated") -> Result:
@@ -253,7 +259,7 @@ def whose_path(spec) -> str:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(GuideWaySpec, loaded.model)         # load_spec validated it with this kind's model
     try:
         scene = scene_for(spec, control_to_check(spec))
     except SpecError as exc:
@@ -267,7 +273,7 @@ def explicit_design(loaded: LoadedSpec, data: dict) -> dict:
     """The spec file's ``data`` with the control points written out when it leaves them to the convex fit: each
     coordinate ``{init = fit, bounds = [fit - move, fit + move]}``, the very start and box ``solve`` uses then,
     so the spec solves and checks as before, and the studio and ``solved.toml`` have a place for each point."""
-    spec = loaded.model
+    spec = cast(GuideWaySpec, loaded.model)         # load_spec validated it with this kind's model
     if spec.spline is None or spec.spline.control is not None:
         return data
     from synthesis.kinds.guide_way.fit import fit_path

@@ -15,6 +15,7 @@ paper's y(x) forms (2), which the check still compares against (``on_form``).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,8 +125,12 @@ class CentralConic:
             u = [np.cosh, np.sinh][order % 2](t) * self.branch
             v = [np.sinh, np.cosh][order % 2](t)
         else:
-            u = [np.cos, lambda z: -np.sin(z), lambda z: -np.cos(z)][order](t)
-            v = [np.sin, np.cos, lambda z: -np.sin(z)][order](t)
+            # cos t and sin t, then their first and second derivatives
+            cos_derivatives: list[Callable[[np.ndarray], np.ndarray]] = [np.cos, lambda z: -np.sin(z),
+                                                                          lambda z: -np.cos(z)]
+            sin_derivatives: list[Callable[[np.ndarray], np.ndarray]] = [np.sin, np.cos, lambda z: -np.sin(z)]
+            u = cos_derivatives[order](t)
+            v = sin_derivatives[order](t)
         (e1x, e1y), (e2x, e2y) = self.axes
         u, v = self.p * u, self.q * v
         x0, y0 = (self.centre if order == 0 else (0.0, 0.0))

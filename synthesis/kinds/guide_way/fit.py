@@ -36,6 +36,13 @@ class Fit:
     status: str
 
 
+def _solved(variable: cp.Variable) -> np.ndarray:
+    """A variable's value after a solve that ended optimal (cvxpy then sets every variable of the problem)."""
+    value = variable.value
+    assert value is not None, "an optimal solve sets every variable's value"
+    return value
+
+
 def fit_path(spec) -> Fit:
     s = spec.spline
     n = s.control_points
@@ -72,8 +79,8 @@ def fit_path(spec) -> Fit:
     if problem.status not in ("optimal", "optimal_inaccurate") or qx.value is None:
         raise SolverError(f"spline fit: the key points and tangents admit no spline ({problem.status}); "
                           f"check [spline] keys and tangents, or raise control_points")
-    speeds = {k: float(v.value) * scale for k, v in lam.items()}
-    control = _exact(keys, n, np.column_stack([qx.value, qy.value]) * scale, speeds)
+    speeds = {k: float(_solved(v)) * scale for k, v in lam.items()}
+    control = _exact(keys, n, np.column_stack([_solved(qx), _solved(qy)]) * scale, speeds)
     h = sp.energy_matrix(n)
     energy = float(control[:, 0] @ h @ control[:, 0] + control[:, 1] @ h @ control[:, 1])
     return Fit(control, energy, speeds, problem.status)

@@ -21,6 +21,7 @@ claw is on after folding through |OM| = R - d.  alpha = atan2(x_M + R sin theta,
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -32,6 +33,14 @@ def _symbolic(*xs) -> bool:
 
 
 class _Ops:
+    """The functions of either world: CasADi's on symbols, numpy's on numbers."""
+
+    sin: Callable[[Any], Any]
+    cos: Callable[[Any], Any]
+    sqrt: Callable[[Any], Any]
+    acos: Callable[[Any], Any]
+    atan2: Callable[[Any, Any], Any]
+
     def __init__(self, symbolic: bool):
         self.sin, self.cos, self.sqrt = (ca.sin, ca.cos, ca.sqrt) if symbolic else (np.sin, np.cos, np.sqrt)
         self.acos = ca.acos if symbolic else np.arccos

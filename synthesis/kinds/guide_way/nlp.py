@@ -23,7 +23,7 @@ import numpy as np
 from synthesis.core.declared import compile_problem
 from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Problem, per_rule_backoff
+from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backoff
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import scene as sc
 from synthesis.kinds.guide_way.check import whose_path
@@ -48,7 +48,8 @@ def names_of(n: int) -> list[str]:
 def control_of(x, n: int):
     """(n, 2) control points from the decision vector (x coordinates first)."""
     if isinstance(x, (ca.SX, ca.MX)):
-        return ca.horzcat(x[:n], x[n:])
+        # both halves are of x's one type (mypy sees each as SX or MX, a pair casadi's stubs have no overload for)
+        return ca.horzcat(x[:n], x[n:])  # type: ignore[arg-type]
     x = np.asarray(x, float)
     return np.column_stack([x[:n], x[n:]])
 
@@ -192,7 +193,8 @@ class GuideNLP(KindNLP):
     def _structural(self, control) -> list:
         keys = self.keys
         v_min = self.spec.spline.min_speed * keys.length
-        rows, units = [], []
+        rows: list[Row] = []
+        units: list[str] = []
         for name, u, (kx, ky) in zip(keys.names, keys.u, keys.points):
             m = ca.mtimes(ca.DM(sp.basis(self.n, u)), control)
             rows += [(m[0] - kx, 0.0, 0.0), (m[1] - ky, 0.0, 0.0)]

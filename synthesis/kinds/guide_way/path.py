@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,9 @@ from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import conics as cn
 from synthesis.kinds.guide_way import spline as sp
 from synthesis.kinds.guide_way.trace import Stretch
+
+if TYPE_CHECKING:
+    import casadi as ca
 
 #: the inverse-kinematics branch's sign by its name (theta = gamma + sign * phi); a conic's spec writes the sign
 BRANCH = {"minus": -1.0, "plus": 1.0}
@@ -84,10 +88,11 @@ def conic_pieces(spec) -> list[ConicPiece]:
 
 @dataclass
 class SplinePath:
-    """A periodic spline path: its keys and control points (numbers or an SX n x 2 matrix)."""
+    """A periodic spline path: its keys and control points (numbers or an SX n x 2 matrix; None in a path made
+    for its keys alone, which has no stretches)."""
 
     keys: sp.Keys
-    control: object
+    control: np.ndarray | ca.SX | None
     n: int
 
     def stretches(self, samples: int) -> list[Stretch]:
@@ -119,6 +124,7 @@ class SplinePath:
             return Stretch(name, branch, u, *(b @ c for b in ms))
         import casadi as ca
 
+        assert c is not None, "a spline path made for its keys alone has no stretches"
         return Stretch(name, branch, u, *((ca.DM(b) @ c).T for b in ms))
 
     def near_fold(self, side: int, delta: float) -> Stretch:

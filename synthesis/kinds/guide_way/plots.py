@@ -187,8 +187,9 @@ def animation(result: Result, path: Path, frames: int = ANIMATION_FRAMES) -> Non
     roller = plt.Circle((0, 0), rr, fill=False, color="tab:purple", lw=1.5)
     ax.add_patch(roller)
     text = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10)
-    if ax.get_legend():
-        ax.get_legend().remove()
+    legend = ax.get_legend()
+    if legend:
+        legend.remove()
 
     def frame(k):
         i = idx[k]

@@ -8,7 +8,9 @@ one rules function: a trace (the arms of every stretch) in, rules out, floats or
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import overload
 
 import casadi as ca
 import numpy as np
@@ -19,6 +21,7 @@ from synthesis.kinds.guide_way import path as pth
 from synthesis.kinds.guide_way import spline as sp
 from synthesis.kinds.guide_way.trace import Arm, Stretch, arm_vector, evaluate
 from synthesis.kinds.guide_way import kinematics as ra
+from synthesis.kinds.guide_way.spec import GuideWaySpec
 
 
 def arm_of(spec) -> list[float]:
@@ -59,6 +62,7 @@ def pressure_masks(spec, arms: list[Arm], fold_theta: tuple[float, float] | None
     masks = [np.ones(np.asarray(a.theta).size, bool) for a in arms]
     before, after = fold_stretches(spec)
     if w > 0 and before >= 0:
+        assert fold_theta is not None           # a path with a fold has its arm angles there
         for side, (k, i) in enumerate(((before, -1), (after, 0))):
             th = np.degrees(np.unwrap(np.asarray(arms[k].theta, float)))
             masks[k] = np.abs(th - nearest_turn(math.degrees(fold_theta[side]), th[i])) >= w - EDGE_TOLERANCE
@@ -142,7 +146,15 @@ def fold_arm_angles(m: tuple[float, float], R: float, d: float) -> tuple[float, 
     return gamma + pth.BRANCH["plus"] * phi, gamma + pth.BRANCH["minus"] * phi
 
 
-def fold_direction(m) -> float:
+@overload
+def fold_direction(m: Sequence[float]) -> float: ...
+
+
+@overload
+def fold_direction(m: ca.SX) -> ca.SX: ...
+
+
+def fold_direction(m: Sequence[float] | ca.SX) -> float | ca.SX:
     """The arm angle (rad) with the claw tip at a spline's fold point ``m`` on |OM| = R - d, where the arriving and
     leaving arm angles meet (phi = 0 in :func:`fold_arm_angles`): the fold window's centre.  Off that circle the
     two part by +-phi, a square root of the distance to it, with no derivative on the circle where every drivable
@@ -152,7 +164,7 @@ def fold_direction(m) -> float:
     return ca.atan2(-x, -y) if isinstance(x, (ca.SX, ca.MX)) else math.atan2(-x, -y)
 
 
-def rules_of(spec, arms: list[Arm], masks: list[np.ndarray], edge_arms: list[Arm] = ()) -> list:
+def rules_of(spec, arms: list[Arm], masks: list[np.ndarray], edge_arms: Sequence[Arm] = ()) -> list:
     """The sampled rules over the controlled path (floats or symbols): reach, arm direction, undercut, pressure
     angle (at the samples ``masks`` keep: :attr:`Scene.pressure_masks` of the numeric path, and at the fold
     window's edges ``edge_arms``: the NLP's, where the edge moves with the design)."""
@@ -233,7 +245,7 @@ class Joint:
 
 @dataclass
 class Scene:
-    spec: object
+    spec: GuideWaySpec
     arms: list[Arm]
     joints: list[Joint]
     fold: dict | None                    # {point, excess_mm, tangent_error_deg, ...}
@@ -357,7 +369,8 @@ def spline_scene(spec, samples: int, control: np.ndarray, edge_samples: bool = T
         arms.append(a)
     keys = path.keys
     fold_u = keys.u[keys.index(keys.fold)]
-    m = tuple(float(v) for v in (sp.basis(path.n, fold_u) @ path.control)[0])
+    fold_point = (sp.basis(path.n, fold_u) @ path.control)[0]
+    m = (float(fold_point[0]), float(fold_point[1]))
     t = (sp.basis(path.n, fold_u, 1) @ path.control)[0]
     fold = _fold_of(keys.fold, m, [math.degrees(math.atan2(t[1], t[0]))], spec.arm.radius, spec.arm.claw)
     before = evaluate(path.near_fold(-1, pth.FOLD_OFFSET), arm)

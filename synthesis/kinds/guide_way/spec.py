@@ -178,6 +178,7 @@ class GuideWaySpec(ProblemSpec):
                 raise ValueError(f"fold: {self.fold!r} is not a joint between two segments")
         else:
             sp = self.spline
+            assert sp is not None       # the first check above: exactly one of conic and spline
             named = [(f"keys[{i}]", k) for i, k in enumerate(sp.keys)] + [(f"tangents.{k}", k) for k in sp.tangents]
             for field, key in named + [("fold", sp.fold)]:
                 if key not in names:
