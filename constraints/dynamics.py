@@ -1,5 +1,5 @@
-"""Rules on a linkage's dynamics over a turn: peak input torque and peak shaking force (docs/ARCHITECTURE.md
-"Dynamics").  Functions of sampled values, floats or CasADi symbols alike, like every rule."""
+"""Rules on a linkage's dynamics over a turn: peak input torque, peak shaking force and peak shaking moment
+(docs/ARCHITECTURE.md "Dynamics").  Functions of sampled values, floats or CasADi symbols alike, like every rule."""
 
 from __future__ import annotations
 
@@ -27,3 +27,13 @@ def peak_shaking_force_rule(force_x, force_y, limit: float, where: str = "over a
     squared = force_x * force_x + force_y * force_y
     return Rule("peak_shaking_force", ca.sqrt(squared), None, limit, "N", limit, where,
                 nlp_rows=((squared, None, limit * limit),), row_unit="N^2")
+
+
+def peak_shaking_moment_rule(moment_samples, limit: float, where: str = "over a turn, about the crank pivot",
+                             missing: str | None = None) -> Rule:
+    """max |shaking moment| <= limit (N m, the moment the frame feels about the crank pivot).  Value: the worst
+    |moment|; NLP rows: -limit <= moment <= limit at every sample."""
+    if missing:
+        return not_evaluated("peak_shaking_moment", None, limit, "N m", where, missing)
+    return Rule("peak_shaking_moment", ca.fabs(moment_samples), None, limit, "N m", limit, where,
+                nlp_rows=((moment_samples, -limit, limit),))

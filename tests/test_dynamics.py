@@ -3,7 +3,8 @@
 * An independent multibody formulation (sympy.physics.mechanics: frames, points, accelerations by differentiating
   position vectors in time, the loop's velocity and acceleration from its constraint equations, and the 9 x 9
   Newton-Euler system about each link's centre of mass solved by sympy) gives the same input torque, joint forces and
-  shaking force as synthesis.dynamics (closed form about the pivots, CasADi derivatives) to 1e-6 relative.
+  shaking force as synthesis.dynamics (closed form about the pivots, CasADi derivatives) to 1e-6 relative, and the
+  same shaking moment about the crank pivot from the links' angular momentum alone.
 * Energy balance from result.json alone: the input work over each sample interval (the periodic power integrated
   spectrally) equals the change of kinetic plus potential energy of the links; over a turn the net work is zero.
 * The rules' AD derivatives equal central differences of the same rules on floats.
@@ -77,6 +78,12 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
     fo, fa, fb, fp = (f[0] * frame.x + f[1] * frame.y, f[2] * frame.x + f[3] * frame.y,
                       f[4] * frame.x + f[5] * frame.y, f[6] * frame.x + f[7] * frame.y)
     g = gravity[0] * frame.x + gravity[1] * frame.y
+    # the shaking moment about O from the links' angular momentum alone (no reaction enters): the frame feels minus
+    # the moment about O of what it and the motor apply, which is d/dt of the angular momentum about O less gravity's
+    # moment, sum_k r_k x m_k (a_k - g) + I_k alpha_k
+    spin_rate = sum((coms[k].pos_from(o).cross(mass[4 * k] * (coms[k].pos_from(o).dt(frame).dt(frame) - g))
+                     + mass[4 * k + 3] * alpha[k] * frame.z for k in range(3)), 0 * frame.z)
+    shaking_moment = -float(sp.N(msubs(spin_rate.dot(frame.z), kin, values), 20))
     # (forces at points, torque) on each link: frame on crank at O and the motor, crank on coupler at A, ...
     loads = [([(fo, o), (-fa, a)], f[8]), ([(fa, a), (-fb, b)], 0), ([(fb, b), (fp, o_rocker)], 0)]
     equations = []
@@ -90,7 +97,7 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
     solution = sp.solve(numeric, f)
     s = np.array([float(solution[x]) for x in f])
     reactions = s[:8].reshape(4, 2).T
-    return s[8], reactions, -(reactions[:, 0] + reactions[:, 3])
+    return s[8], reactions, -(reactions[:, 0] + reactions[:, 3]), shaking_moment
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
@@ -100,15 +107,17 @@ def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
     thetas = np.radians([0.0, 47.0, 133.0, 200.0, 291.0])
     ours = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, OMEGA, GRAVITY)
     for i, theta in enumerate(thetas):
-        torque, reactions, shaking = sympy_newton_euler(geometry, LUMPED, OMEGA, GRAVITY, theta,
+        torque, reactions, shaking, moment = sympy_newton_euler(geometry, LUMPED, OMEGA, GRAVITY, theta,
                                                         [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
         scale = np.abs(reactions).max()
         assert ours["torque"][i] == pytest.approx(torque, rel=1e-6, abs=1e-9 * scale)
         np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-6, atol=1e-9 * scale)
         np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-6, atol=1e-9 * scale)
+        assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-6, abs=1e-9 * scale)
     # not a trivial agreement: the torque changes sign over the turn and the forces are tens of newtons
     assert ours["torque"].min() < 0 < ours["torque"].max()
     assert np.abs(ours["reactions"]).max() > 10.0
+    assert ours["shaking_moment"].min() < 0 < ours["shaking_moment"].max()
 
 
 def test_planting_coupler_bars_combine_by_the_parallel_axis_theorem():
@@ -178,11 +187,12 @@ def test_rule_derivatives_equal_central_differences():
     loaded = load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml")
     spec = loaded.model.model_copy(update={"dynamics": loaded.model.dynamics.model_copy(
         update={"limits": loaded.model.dynamics.limits.model_copy(update={"peak_input_torque": 1.0,
-                                                                          "peak_shaking_force": 20.0})})})
+                                                                          "peak_shaking_force": 20.0,
+                                                                          "peak_shaking_moment": 2.0})})})
     x0 = np.array([54.0, 107.6, 133.5, 140.0])
     z = ca.SX.sym("z", 4)
     mu = ca.SX.sym("mu", 72)            # the rows read only the lengths; a stand-in for the transmission samples
-    names = ("peak_input_torque", "peak_shaking_force")
+    names = ("peak_input_torque", "peak_shaking_force", "peak_shaking_moment")
 
     def rows(lengths):
         rules = {r.name: r for r in rules_of(spec, [lengths[i] for i in range(4)], 1.0, (1.0, 0.0), (0.0, 1.0), mu)}
@@ -197,7 +207,7 @@ def test_rule_derivatives_equal_central_differences():
         central = (np.asarray(f(x0 + step, np.full(72, 60.0))[0]) - np.asarray(f(x0 - step, np.full(72, 60.0))[0])) / (2 * h)
         scale = np.abs(jac[:, i]).max()
         np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * scale)
-    assert values.shape == (144, 1) and np.abs(jac).max() > 1e-3
+    assert values.shape == (216, 1) and np.abs(jac).max() > 1e-3
 
 
 def test_energy_balance_of_the_planting_arm_result():
@@ -360,3 +370,21 @@ def test_a_peak_objective_stays_finite_when_the_given_design_cannot_turn(tmp_pat
     parts = _peak_objective(spec, ca.SX.sym("p", 4))
     f = ca.Function("f", [parts.extra], [parts.f])
     assert float(f(2.0)) == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("path", ["planting_arm/taiwan_example1_dynamics.toml",
+                                  "picker/cai2020_crank_rocker_dynamics.toml"])
+def test_a_shaking_moment_limit_is_a_rule_of_the_check(tmp_path, path):
+    """[dynamics.limits] peak_shaking_moment: a rule of both four-bar kinds whose value is the peak |shaking moment|
+    about the crank pivot; set at half the design's peak it is violated by that much, and the peak agrees with
+    result.json's facts.dynamics (360 samples) to 1 % (the rule reads the kind's own grid)."""
+    text = (LIBRARY / path).read_text()
+    assert "[dynamics.limits]" not in text
+    peak = max(abs(m) for m in checked_json(LIBRARY / path)["facts"]["dynamics"]["shaking_moment_Nm"])
+    spec = tmp_path / "moment.toml"
+    spec.write_text(f"{text}\n[dynamics.limits]\npeak_shaking_moment = {0.5 * peak!r}\n")
+    rules = {r["name"]: r for r in checked_json(spec)["rules"]}
+    rule = rules["peak_shaking_moment"]
+    assert rule["unit"] == "N m" and rule["limit"][0] is None and rule["limit"][1] == pytest.approx(0.5 * peak)
+    assert rule["value"] == pytest.approx(peak, rel=1e-2) and rule["satisfied"] is False
+    assert peak > 0.1            # a real moment: tenths of a newton metre and more

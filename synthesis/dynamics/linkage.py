@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule
+from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn, peaks
 
@@ -67,8 +67,10 @@ def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: s
             rules.append(peak_input_torque_rule(None, limits.peak_input_torque, missing=missing))
         if limits.peak_shaking_force is not None:
             rules.append(peak_shaking_force_rule(None, None, limits.peak_shaking_force, missing=missing))
+        if limits.peak_shaking_moment is not None:
+            rules.append(peak_shaking_moment_rule(None, limits.peak_shaking_moment, missing=missing))
         return rules
-    if limits.peak_input_torque is None and limits.peak_shaking_force is None:
+    if limits.peak_input_torque is None and limits.peak_shaking_force is None and limits.peak_shaking_moment is None:
         return []
     out = dyn.over_turn(turn(samples))
     if limits.peak_input_torque is not None:
@@ -76,33 +78,53 @@ def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: s
     if limits.peak_shaking_force is not None:
         force = out["shaking_force"]
         rules.append(peak_shaking_force_rule(_column(force[0, :]), _column(force[1, :]), limits.peak_shaking_force))
+    if limits.peak_shaking_moment is not None:
+        rules.append(peak_shaking_moment_rule(_column(out["shaking_moment"]), limits.peak_shaking_moment))
     return rules
 
 
+#: the min-peak objectives a four-bar kind with a ``[dynamics]`` table offers: name -> (unit, what it minimises)
+PEAK_OBJECTIVES = {
+    "min_peak_torque": ("N m", "smallest peak |input torque| over a turn, N m ([dynamics] needed)"),
+    "min_peak_shaking_force": ("N", "smallest peak shaking force on the frame over a turn, N ([dynamics] needed)"),
+    "min_peak_shaking_moment": ("N m", "smallest peak |shaking moment| on the frame over a turn, about the crank "
+                                       "pivot, N m ([dynamics] needed)"),
+}
+
+
 def sampled(dyn: FourbarDynamics, samples: int) -> tuple:
-    """(input torque N m, shaking force x, y N) at ``samples`` crank angles of a turn, as columns: the samples a
-    min-peak objective's epigraph rows read (floats or symbols)."""
+    """(input torque N m, shaking force x, y N, shaking moment N m) at ``samples`` crank angles of a turn, as
+    columns: the samples a min-peak objective's epigraph rows read (floats or symbols)."""
     out = dyn.over_turn(turn(samples))
     force = out["shaking_force"]
-    return _column(out["torque"]), _column(force[0, :]), _column(force[1, :])
+    return _column(out["torque"]), _column(force[0, :]), _column(force[1, :]), _column(out["shaking_moment"])
 
 
 def peak_epigraph(dyn: FourbarDynamics, which: str, samples: int):
     """The epigraph of a min-peak objective (smooth, as the core's other max-type objectives): a variable t with rows
-    t - torque >= 0 and t + torque >= 0 (``min_peak_torque``, t in N m) or t - (fx^2 + fy^2) >= 0
-    (``min_peak_shaking_force``, t in N^2) at every sample, t to be minimised.  Returns (t, rows, unit)."""
-    torque, fx, fy = sampled(dyn, samples)
+    t - s >= 0 and t + s >= 0 at every sample s of the input torque (``min_peak_torque``, t in N m) or of the
+    shaking moment (``min_peak_shaking_moment``, t in N m), or t - (fx^2 + fy^2) >= 0 (``min_peak_shaking_force``,
+    t in N^2), t to be minimised.  Returns (t, rows, unit)."""
+    torque, fx, fy, moment = sampled(dyn, samples)
     if which == "min_peak_torque":
         t = ca.SX.sym("peak_torque")
         return t, [(t - torque, 0.0, None), (t + torque, 0.0, None)], "N m"
+    if which == "min_peak_shaking_moment":
+        t = ca.SX.sym("peak_shaking_moment")
+        return t, [(t - moment, 0.0, None), (t + moment, 0.0, None)], "N m"
     t = ca.SX.sym("peak_shaking_force_sq")
     return t, [(t - (fx * fx + fy * fy), 0.0, None)], "N^2"
 
 
 def peak_of(dyn: FourbarDynamics, which: str, samples: int) -> float:
-    """The peak a min-peak objective minimises, on floats: |torque| N m or |shaking force| N over ``samples``."""
-    torque, fx, fy = sampled(dyn, samples)
-    return float(np.abs(torque).max() if which == "min_peak_torque" else np.hypot(fx, fy).max())
+    """The peak a min-peak objective minimises, on floats: |torque| N m, |shaking force| N or |shaking moment| N m
+    over ``samples``."""
+    torque, fx, fy, moment = sampled(dyn, samples)
+    if which == "min_peak_torque":
+        return float(np.abs(torque).max())
+    if which == "min_peak_shaking_moment":
+        return float(np.abs(moment).max())
+    return float(np.hypot(fx, fy).max())
 
 
 def dynamics_facts(dyn: FourbarDynamics, samples: int, joint_names: tuple[str, ...], link_names: tuple[str, ...],

@@ -86,6 +86,9 @@ class DynamicsLimits(StrictModel):
     peak_input_torque: float | None = Field(None, gt=0.0, description="largest |input torque| over a turn, N m")
     peak_shaking_force: float | None = Field(None, gt=0.0,
                                              description="largest shaking force on the frame over a turn, N")
+    peak_shaking_moment: float | None = Field(None, gt=0.0,
+                                              description="largest |shaking moment| on the frame over a turn, about "
+                                                          "the crank pivot, N m")
 
 
 class DynamicsSection(StrictModel):
@@ -117,4 +120,6 @@ class DynamicsSection(StrictModel):
         return self
 
     def has_rules(self) -> bool:
-        return self.limits.peak_input_torque is not None or self.limits.peak_shaking_force is not None
+        limits = self.limits
+        return any(v is not None for v in (limits.peak_input_torque, limits.peak_shaking_force,
+                                           limits.peak_shaking_moment))
