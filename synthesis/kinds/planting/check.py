@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, Preci
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
+from synthesis.kinds.planting.spec import PlantingFourbarSpec
 
 
 #: the grid `check` evaluates on: samples of each acceleration phase and of a crank turn
@@ -76,7 +78,7 @@ def precision_point_table(scene: PlantingScene, pts: PrecisionPoints | None) -> 
         return {}
     m = scene.motion
     start = pts.theta["P6"] if pts.theta["P6"] is not None else 0.0
-    table = {}
+    table: dict[str, dict[str, bool | float | str | None]] = {}
     for n in POINTS:
         th = pts.theta[n]
         if th is None:
@@ -122,7 +124,7 @@ def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float) -> dict:
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec = loaded.model
+    spec = cast(PlantingFourbarSpec, loaded.model)  # load_spec validated it with this kind's model
     scene = PlantingScene.from_spec(spec)
     rules, pts = evaluate(scene, spec.rules)
     records = [r.record().to_json() for r in rules]

@@ -39,7 +39,7 @@ def _label(result: Result, i: int, n: int = 2) -> str:
 
 def _design(result: Result) -> ArmDesign:
     d = result.design
-    return ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
+    return ArmDesign.of_result(d)
 
 
 def paths_figure(results: list[Result], path: Path) -> None:

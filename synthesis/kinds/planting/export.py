@@ -10,7 +10,9 @@ linkage.dxf  the linkage in the machine frame at the trajectory's first sample (
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, cast
 
 from synthesis.report import exports
 from synthesis.result import Result
@@ -18,8 +20,13 @@ from synthesis.result import Result
 LINKS = (("O", "O'"), ("O", "A"), ("O'", "B"), ("A", "B"), ("A", "C"), ("B", "C"))
 
 
+def _trajectory(result: Result) -> dict[str, Any]:
+    # a result without one (a crank that cannot turn) fails at the first read, a TypeError the report notes
+    return cast(dict[str, Any], result.trajectory)
+
+
 def write_paths_csv(result: Result, path: Path) -> None:
-    tr = result.trajectory
+    tr = _trajectory(result)
     m = tr["machine"]
     exports.write_csv(path, {"t_s": tr["t"], "crank_deg": tr["crank_deg"],
                      "machine_x_mm": m["x"], "machine_y_mm": m["y"],
@@ -29,18 +36,18 @@ def write_paths_csv(result: Result, path: Path) -> None:
                      "ax_mm_s2": tr["ax"], "ay_mm_s2": tr["ay"]})
 
 
-def joints_at(result: Result, crank_deg: float) -> dict[str, tuple[float, float]]:
+def joints_at(result: Result, crank_deg: float) -> dict[str, Sequence[float]]:
     """Pivots and joints of the result's design at one crank angle (machine frame, mm)."""
     from synthesis.kinds.planting.kinematics import ArmDesign, joint_positions
 
     d = result.design
-    design = ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
+    design = ArmDesign.of_result(d)
     j = joint_positions(design, math.radians(crank_deg))
     return {n: (float(j[n][0, 0]), float(j[n][1, 0])) for n in ("O", "O'", "A", "B", "C")}
 
 
 def write_linkage_dxf(result: Result, path: Path) -> None:
-    tr = result.trajectory
+    tr = _trajectory(result)
     crank = float(tr["crank_deg"][0])
     exports.write_linkage_dxf(path, joints_at(result, crank), ground=("O", "O'"), links=LINKS, couplers=[("A", "B", "C")],
                       curves={"PATH_MACHINE": [list(zip(tr["machine"]["x"], tr["machine"]["y"]))],

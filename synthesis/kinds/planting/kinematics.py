@@ -18,8 +18,10 @@ constant.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -71,6 +73,12 @@ class ArmDesign:
     zeta: float
     phi: float
     branch: int = -1
+
+    @classmethod
+    def of_result(cls, design: Mapping[str, Any]) -> ArmDesign:
+        """The arm of a result.json design: its seven values and its assembly branch."""
+        l1, l2, l3, l4, l5, zeta, phi = (float(design[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi"))
+        return cls(l1, l2, l3, l4, l5, zeta, phi, branch=int(design["branch"]))
 
     def parameters(self) -> np.ndarray:
         """p for :func:`claw_tip`: lengths in mm, angles in rad."""
@@ -158,7 +166,7 @@ def tip_accelerations_y(design: ArmDesign, motion: Motion, theta: np.ndarray) ->
 EXPANDED_MAX = 4000
 
 #: what :func:`_expanded` evaluates: (function of a branch, its output's index, the rows of that output) per part
-Parts = tuple[tuple[object, int, tuple[int, ...]], ...]
+Parts = tuple[tuple[Callable[[int], ca.Function], int, tuple[int, ...]], ...]
 
 
 def _on_grid(parts: Parts, design: ArmDesign, theta) -> np.ndarray:
@@ -183,9 +191,11 @@ class Evaluator:
         self._out = np.zeros(function.nnz_out(0))
         self._rows = function.size1_out(0)
         self._buffer, self._evaluate = function.buffer()
-        self._buffer.set_arg(0, memoryview(self._theta))
-        self._buffer.set_arg(1, memoryview(self._p))
-        self._buffer.set_res(0, memoryview(self._out))
+        # stub gaps: casadi's stubs ask for a size the binding reads off the buffer itself, and numpy's give
+        # ndarray no __buffer__ before Python 3.12
+        self._buffer.set_arg(0, memoryview(self._theta))  # type: ignore[call-arg, arg-type]
+        self._buffer.set_arg(1, memoryview(self._p))  # type: ignore[call-arg, arg-type]
+        self._buffer.set_res(0, memoryview(self._out))  # type: ignore[call-arg, arg-type]
         self._lock = threading.Lock()
 
     def values(self, theta, p) -> np.ndarray:

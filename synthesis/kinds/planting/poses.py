@@ -18,7 +18,7 @@ def frames(result, most: int) -> list[dict]:
     if not traj:
         return []
     d = result.design
-    design = ArmDesign(*(float(d[k]) for k in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")), branch=int(d["branch"]))
+    design = ArmDesign.of_result(d)
     crank = traj["crank_deg"]
     step = -(-len(crank) // most)
     theta = [math.radians(c) for c in crank[::step]]

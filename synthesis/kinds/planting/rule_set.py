@@ -14,6 +14,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import casadi as ca
+
 from constraints import Rule
 from synthesis.kinds.planting.rules.acceleration import acceleration_sign_rule
 from synthesis.kinds.planting.rules.angles import entry_angle_rule
@@ -48,8 +50,8 @@ class Trace:
     accel_y: dict[str, Any]
     links: tuple                      # l1, l2, l3, l4, mm
     mu_deg: Any
-    omega: float                      # crank speed, rad/s
-    forward: float                    # machine speed, mm/s
+    omega: float | ca.SX              # crank speed, rad/s
+    forward: float | ca.SX            # machine speed, mm/s
     acc_scale: float
     problems: dict[str, str] = field(default_factory=dict)
     turn_missing: str | None = None
@@ -101,7 +103,7 @@ def planting_rules(tr: Trace, limits) -> list[Rule]:
     return rules
 
 
-def phase_bounds(theta: dict[str, Any], phase: str) -> tuple:
+def phase_bounds(theta: dict[str, Any], phase: str) -> tuple[Any, Any]:
     """Crank angles at the start and end of an acceleration phase (the end one turn on for throw)."""
     a, b = PHASES[phase]
     return theta[a], theta[b] + (TWO_PI if b == "P5" else 0.0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 from scipy.optimize import brentq
@@ -20,6 +21,7 @@ from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, scalar_funct
                                                  tip_positions, tip_state, transmission_angles)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
 from synthesis.spec.common import value_of
+from synthesis.spec.dynamics import DynamicsSection
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
 
 
@@ -52,8 +54,8 @@ class PlantingScene:
     #: typical |a_y| normalising the acceleration margins (mm/s^2): omega^2 x the spec's *given* crank
     #: length, the same number the NLP uses; None: omega^2 x this design's crank length
     reference_acc: float | None = None
-    #: the spec's [dynamics] table (synthesis.spec.dynamics.DynamicsSection), or None
-    dynamics: object = None
+    #: the spec's [dynamics] table, or None
+    dynamics: DynamicsSection | None = None
     #: the design's counterweight on the crank (mass kg, radius mm), or None
     counterweight: tuple | None = None
 
@@ -66,8 +68,9 @@ class PlantingScene:
         """The scene at the spec's given values, or at ``values`` (design-variable name -> value)."""
         v = spec.design_values() if values is None else values
         arm = ArmDesign(v["l1"], v["l2"], v["l3"], v["l4"], v["l5"], v["zeta"], v["phi"], spec.arm.branch)
-        motion = Motion(omega=spec.operation.crank_speed * TWO_PI / 60.0,
-                        forward=spec.operation.forward_speed * 1000.0)
+        # numbers once validated: resolve_ranges puts a range's nominal value in its place
+        crank_speed, forward_speed = cast(float, spec.operation.crank_speed), cast(float, spec.operation.forward_speed)
+        motion = Motion(omega=crank_speed * TWO_PI / 60.0, forward=forward_speed * 1000.0)
         bed = Seedbed((v["seedbed_x"], v["seedbed_y"]), math.radians(v["seedbed_tilt"]),
                       spec.seedbed.thickness, spec.seedbed.seedling_height)
         soil = v.get("soil_level") if spec.soil.level is not None else None
@@ -211,23 +214,25 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600, scan: TurnScan
     if theta["P4"] is not None:
         s = bed.height(positions)
         end = theta["P4"]
+        exit_ = theta["P6"]
+        assert exit_ is not None          # found with P4, the soil's other crossing
         levels = (("P3", 0.0), ("P2", bed.thickness), ("P1", bed.seedling_height))
         for k, (name, level) in enumerate(levels):
             idx = [i for i in _crossings(s, level, downward=True)
-                   if theta["P6"] < cycle[i] and cycle[i + 1] <= end]
+                   if exit_ < cycle[i] and cycle[i + 1] <= end]
             if not idx:
                 what = {"P1": "[seedbed] seedling_height", "P2": "[seedbed] thickness"}.get(name)
                 hint = (f" (that line is {what} = {level:g} mm: lower it, or give the arm a taller loop)"
                         if what else "")
                 problems[name] = (f"{name} not found: the claw does not cross the line {level:g} mm above the "
                                   f"seedbed bottom on its way down between soil exit and entry{hint}" if what else
-                                  f"{name} not found: {_misses_the_bottom(s, cycle, theta['P6'], end)}")
+                                  f"{name} not found: {_misses_the_bottom(s, cycle, exit_, end)}")
                 for later, _ in levels[k + 1:]:      # searched before `name` on the way down: its reason is theirs
                     problems[later] = f"{later} not searched: {problems[name]}"
                 break
             i = idx[-1]
-            theta[name] = _refine(lambda t, lv=level: height(t) - lv, cycle[i], cycle[i + 1])
-            end = theta[name]
+            end = _refine(lambda t, lv=level: height(t) - lv, cycle[i], cycle[i + 1])
+            theta[name] = end
     else:
         for name in ("P1", "P2", "P3"):
             problems[name] = problems["P4"]
@@ -270,13 +275,17 @@ def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int =
     d, m = scene.design, scene.motion
     found = [n for n in POINTS if pts.theta[n] is not None]
     theta = {n: pts.theta[n] for n in found}
-    at = tip_state(d, m, [theta[n] for n in found]) if found else None   # one call for every point found
+    pos: dict[str, tuple] = {}
+    vel: dict[str, tuple] = {}
+    if found:
+        at = tip_state(d, m, [theta[n] for n in found])       # one call for every point found
+        pos = {n: tuple(at.pos[:, k]) for k, n in enumerate(found)}
+        vel = {n: tuple(at.vel[:, k]) for k, n in enumerate(found)}
     accel = {}
     for phase, (a, b) in PHASES.items():
         if a in theta and b in theta:
             accel[phase] = tip_accelerations_y(d, m, phase_grid(*phase_bounds(theta, phase), phase_samples))
-    return Trace(theta=theta, pos={n: tuple(at.pos[:, k]) for k, n in enumerate(found)},
-                 vel={n: tuple(at.vel[:, k]) for k, n in enumerate(found)}, accel_y=accel,
+    return Trace(theta=theta, pos=pos, vel=vel, accel_y=accel,
                  links=(d.l1, d.l2, d.l3, d.l4),
                  mu_deg=None if turn_missing else (np.degrees(scan.mu) if scan is not None and scan.theta.size ==
                                                    turn_samples else transmission_angles_deg(d, turn_samples)),

@@ -174,7 +174,7 @@ class PlantingFourbarSpec(ProblemSpec):
     dynamics: DynamicsSection | None = Field(
         None, description="mass properties and limits for the inverse dynamics at the [operation] crank speed "
                           "(docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no dynamics rules")
-    _derived: tuple = PrivateAttr(default=())          # rule limits filled in from the inputs
+    _derived: tuple[str, ...] = PrivateAttr(default=())          # rule limits filled in from the inputs
 
     @model_validator(mode="after")
     def _one_crank_speed(self) -> "PlantingFourbarSpec":
@@ -206,11 +206,14 @@ class PlantingFourbarSpec(ProblemSpec):
     def derived_limits(self) -> dict[str, str]:
         """How each limit that was not written in the spec follows from the inputs (for the report)."""
         out = {}
+        # a derived limit is one _limits_follow_the_inputs filled in
         if "p1p3" in self._derived:
+            assert self.rules.p1p3 is not None
             lo, hi = self.rules.p1p3
             out["p1p3"] = (f"[{lo:.4g}, {hi:.4g}] mm = [105/110, 115/110] x seedling height "
                            f"{self.seedbed.seedling_height:g} mm (seed 000: [105, 115] mm for 110 mm)")
         if "p2p3" in self._derived:
+            assert self.rules.p2p3 is not None
             lo, hi = self.rules.p2p3
             out["p2p3"] = (f"[{lo:.4g}, {hi:.4g}] mm = [21/22, 23/22] x seedbed thickness "
                            f"{self.seedbed.thickness:g} mm (seed 000: about 22 mm for a 22 mm mat)")
