@@ -14,6 +14,7 @@ form and the robust objective's epigraph are :mod:`synthesis.core.transcribe`'s.
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import casadi as ca
 import numpy as np
@@ -59,7 +60,8 @@ class PlantingProblem:
         self.names = list(variables)
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
-        self.omega = spec.operation.crank_speed * TWO_PI / 60.0
+        # a range given in the spec is its nominal value here once validated (ranges_of keeps the range)
+        self.omega = cast(float, spec.operation.crank_speed) * TWO_PI / 60.0
         # an operating condition given as a range is a symbol (the core holds the rules that read it once per
         # sampled value: an envelope); with any range, or when the sensitivity analysis asks, both conditions are
         # symbols, resolved at their numbers where not sampled (so `agrisynth tolerance` has every rule's derivative
@@ -69,7 +71,7 @@ class PlantingProblem:
         self.operating = [Operating(n, ca.SX.sym(n), getattr(spec.operation, n), unit)
                           for n, unit in (("forward_speed", "m/s"), ("crank_speed", "r/min")) if symbolic]
         op = {o.name: o.symbol for o in self.operating}
-        self.forward_speed = op.get("forward_speed", spec.operation.forward_speed)       # m/s
+        self.forward_speed = op.get("forward_speed", cast(float, spec.operation.forward_speed))       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
         x = ca.SX.sym("x", len(self.names))
         # a seedling clearance adds the crank angle of the loop's top before P1 (see _structural)
@@ -188,8 +190,8 @@ class PlantingProblem:
                      (height(q) - spec.seedbed.seedling_height, self.clearance, None)]
             existence += [len(rows) - 3, len(rows) - 2, len(rows) - 1]
         self._existence_rows = tuple(existence)
-        n = spec.solver.samples_per_turn
-        samples = [theta["P5"] + TWO_PI * k / n for k in range(1, n)]
+        per_turn = spec.solver.samples_per_turn
+        samples = [theta["P5"] + TWO_PI * k / per_turn for k in range(1, per_turn)]
         ys = tip_derivatives(spec.arm.branch).map(len(samples))(ca.horzcat(*samples), p)[0][1, :]
         rows.append((ca.vec(ys) - pos["P5"][1], 0.0, None))
         return rows
@@ -248,6 +250,7 @@ class PlantingProblem:
         try:
             pts = find_precision_points(scene)
             th5 = pts.theta["P5"]
+            assert th5 is not None        # the lowest point of a turn always exists where the linkage assembles
         except Exception:   # noqa: BLE001 - a start that does not assemble: spread the points over the turn
             pts, th5 = None, 0.0
         spread = {"P5": 0.0, "P6": 0.6, "P1": 2.5, "P2": 3.2, "P3": 3.6, "P4": 5.4}
