@@ -29,7 +29,9 @@ class CrankRocker(Kind):
                   "max_transmission_angle": "largest smallest transmission angle over a turn, deg",
                   "min_peak_torque": "smallest peak |input torque| over a turn, N m ([dynamics] needed)",
                   "min_peak_shaking_force": "smallest peak shaking force on the frame over a turn, N ([dynamics] "
-                                            "needed)"}
+                                            "needed)",
+                  "min_peak_shaking_moment": "smallest peak |shaking moment| on the frame over a turn, about the "
+                                             "crank pivot, N m ([dynamics] needed)"}
     example = "picker/cai2020_crank_rocker_synthesis.toml"
     bench_specs = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/crank_rocker_max_transmission.toml")
 

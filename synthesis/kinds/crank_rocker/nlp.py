@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
-from synthesis.dynamics.linkage import peak_epigraph, peak_of
+from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_epigraph, peak_of
 from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, linkage_dynamics, rules_of
 from synthesis.core.declared import Declared
 from synthesis.core.kind import Setting
@@ -80,7 +80,8 @@ def problem(setting: Setting) -> Declared:
 
     def reported(out, design: dict, elastic: bool) -> float:
         """Total length (mm) of the design itself, the smallest transmission angle (deg) the epigraph
-        variable reached, or the peak torque (N m) or shaking force (N) of the design itself on the check's grid."""
+        variable reached, or the peak torque (N m), shaking force (N) or shaking moment (N m) of the design itself on
+        the check's grid."""
         if peak:
             return peak_of(linkage_dynamics(spec, [design[n] for n in NAMES]), spec.objective.name, CHECK_SAMPLES)
         return sum(design.values()) if total_length else -out.objective * 10.0
@@ -99,8 +100,8 @@ def _design(z: np.ndarray) -> dict:
     return {n: float(v) for n, v in zip(NAMES, x[:4])}
 
 
-#: the min-peak objectives and the unit of each (synthesis.dynamics.linkage.PEAK_OBJECTIVES)
-PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
+#: the min-peak objectives and the unit of each
+PEAK_UNITS = {name: unit for name, (unit, _) in PEAK_OBJECTIVES.items()}
 
 
 def _objective(spec, p, mu) -> ObjectiveParts:
@@ -117,8 +118,8 @@ def _objective(spec, p, mu) -> ObjectiveParts:
 
 
 def _peak_objective(spec, p) -> ObjectiveParts:
-    """Minimise the peak torque or shaking force over the solver's samples (an epigraph variable, scaled by the given
-    design's peak so the objective is about 1 at the start)."""
+    """Minimise the peak torque, shaking force or shaking moment over the solver's samples (an epigraph variable,
+    scaled by the given design's peak so the objective is about 1 at the start; the force's epigraph is in N^2)."""
     n = spec.solver.samples_per_turn
     name = spec.objective.name
     given = peak_of(linkage_dynamics(spec, [spec.design_values()[k] for k in NAMES]), name, n)
@@ -126,7 +127,7 @@ def _peak_objective(spec, p) -> ObjectiveParts:
     # a given design that cannot turn (NaN) or moves no mass (0) gives no scale: 1 in the rule's unit then, so the
     # objective stays finite from every start
     given = float(given) if math.isfinite(float(given)) and float(given) > 0.0 else 1.0
-    typical = given if name == "min_peak_torque" else given * given
+    typical = given * given if name == "min_peak_shaking_force" else given
     return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
                           rows=rows, extra_units=[unit], row_units=[unit] * len(rows))
 

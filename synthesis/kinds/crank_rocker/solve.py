@@ -9,11 +9,12 @@ from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.crank_rocker.check import evaluate, facts, mechanism
 from synthesis.kinds.crank_rocker.closed_form import solve_paper_equations
 from synthesis.core.coordinates import outside_bounds
+from synthesis.dynamics.linkage import PEAK_OBJECTIVES
 from synthesis.kinds.crank_rocker.nlp import NAMES, problem
 from synthesis.spec.common import design_box, is_free
 
-OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg", "min_peak_torque": "N m",
-                   "min_peak_shaking_force": "N"}
+OBJECTIVE_UNITS = {"min_total_length": "mm", "max_transmission_angle": "deg",
+                   **{name: unit for name, (unit, _) in PEAK_OBJECTIVES.items()}}
 
 
 def recheck(setting: Setting, outcome) -> Recheck:

@@ -52,12 +52,14 @@ class LinkSection(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the designs that satisfy every requirement."""
 
-    name: Literal["min_total_length", "max_transmission_angle", "min_peak_torque", "min_peak_shaking_force"] = Field(
+    name: Literal["min_total_length", "max_transmission_angle", "min_peak_torque", "min_peak_shaking_force",
+                  "min_peak_shaking_moment"] = Field(
         "min_total_length",
         description="min_total_length: shortest l7 + l8 + l9 + l10 meeting every requirement (the published "
                     "design at l10 = 140 mm); max_transmission_angle: largest minimum transmission angle for "
-                    "the given K and psi; min_peak_torque, min_peak_shaking_force: smallest peak input torque "
-                    "(N m) or shaking force (N) over a turn (a [dynamics] table needed)")
+                    "the given K and psi; min_peak_torque, min_peak_shaking_force, min_peak_shaking_moment: "
+                    "smallest peak input torque (N m), shaking force (N) or shaking moment about the crank pivot "
+                    "(N m) over a turn (a [dynamics] table needed)")
 
 
 class SolverSection(MultistartSettings):

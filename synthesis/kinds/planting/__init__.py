@@ -28,7 +28,9 @@ class PlantingFourbar(Kind):
                   "smooth": "smallest peak claw acceleration over a turn, mm/s^2",
                   "min_peak_torque": "smallest peak |input torque| over a turn, N m ([dynamics] needed)",
                   "min_peak_shaking_force": "smallest peak shaking force on the frame over a turn, N ([dynamics] "
-                                            "needed)"}
+                                            "needed)",
+                  "min_peak_shaking_moment": "smallest peak |shaking moment| on the frame over a turn, about the "
+                                             "crank pivot, N m ([dynamics] needed)"}
     example = "planting_arm/redesign_from_example1.toml"
     bench_specs = ("planting_arm/redesign_from_example1.toml", "planting_arm/redesign_from_example3.toml")
     #: with [soil] analysis_depth the soil is placed that far above the lowest point: the depth is that number

@@ -24,7 +24,7 @@ from synthesis.core.ipopt import CompiledNLP, NLPOutcome
 from synthesis.core.kind import Setting
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
-from synthesis.dynamics.linkage import peak_epigraph, peak_of
+from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_epigraph, peak_of
 from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES
 from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage, counterweight_of
 from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
@@ -40,7 +40,7 @@ THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
 #: the rules without which the kinematics is undefined stay hard in the elastic diagnosis
 HARD_IN_ELASTIC = ("grashof_crank_rocker",)
 #: the min-peak objectives (synthesis.dynamics.linkage.peak_epigraph) and their units
-PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
+PEAK_UNITS = {name: unit for name, (unit, _) in PEAK_OBJECTIVES.items()}
 
 
 def declare(setting: Setting) -> Declared:
@@ -223,8 +223,8 @@ class PlantingProblem:
                               extra_units=[""], row_units=[""])
 
     def _peak_objective(self, v) -> ObjectiveParts:
-        """Minimise the peak input torque or shaking force over a turn (an epigraph variable, scaled by the given
-        design's peak so the objective is about 1 at the start)."""
+        """Minimise the peak input torque, shaking force or shaking moment over a turn (an epigraph variable, scaled
+        by the given design's peak so the objective is about 1 at the start; the force's epigraph is in N^2)."""
         spec, name, n = self.spec, self.spec.objective.name, self.spec.solver.samples_per_turn
         given = PlantingScene.from_spec(spec)
         peak = float(peak_of(arm_linkage(spec.dynamics, given.design.parameters(), spec.arm.branch, self.omega,
@@ -232,7 +232,7 @@ class PlantingProblem:
         # a given design that cannot turn (NaN) or moves no mass (0) gives no scale: 1 in the rule's unit then, so
         # the objective stays finite from every start
         peak = peak if math.isfinite(peak) and peak > 0.0 else 1.0
-        self.peak_typical = peak if name == "min_peak_torque" else peak * peak
+        self.peak_typical = peak * peak if name == "min_peak_shaking_force" else peak
         t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym,
                                                   counterweight_of(v)), name, n)
         return ObjectiveParts(f=t / self.peak_typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf],
@@ -268,14 +268,15 @@ class PlantingProblem:
 
     def objective_value(self, f: float, elastic: bool) -> float:
         """The NLP's objective in report units: nearest as solved, robust as the smallest normalised
-        margin at the solver's samples (the fine-grid re-check replaces it), smooth as peak |a| in mm/s^2."""
+        margin at the solver's samples (the fine-grid re-check replaces it), smooth as peak |a| in mm/s^2, a peak
+        objective as its peak at the solver's samples (N m for the torque and the moment, N for the force)."""
         if elastic:
             return f
         if self.spec.objective.name == "robust":
             return -f
         if self.spec.objective.name == "smooth":
             return math.sqrt(max(f, 0.0)) * self.omega**2 * 100.0
-        if self.spec.objective.name == "min_peak_torque":          # N m at the solver's samples
+        if self.spec.objective.name in ("min_peak_torque", "min_peak_shaking_moment"):   # N m at the solver's samples
             return f * self.peak_typical
         if self.spec.objective.name == "min_peak_shaking_force":   # N at the solver's samples
             return math.sqrt(max(f * self.peak_typical, 0.0))

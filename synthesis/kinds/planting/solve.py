@@ -9,14 +9,15 @@ from typing import cast
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
+from synthesis.dynamics.linkage import PEAK_OBJECTIVES
 from synthesis.errors import AgrisynthError
 from synthesis.kinds.planting.check import (CHECK_PHASE_SAMPLES, CHECK_TURN_SAMPLES, evaluate, scene_facts, trajectory,
                                       unevaluated)
 from synthesis.kinds.planting.nlp import declare
 from synthesis.kinds.planting.scene import PlantingScene
 
-OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2", "min_peak_torque": "N m",
-                   "min_peak_shaking_force": "N"}
+OBJECTIVE_UNITS = {"nearest": "-", "robust": "-", "smooth": "mm/s^2",
+                   **{name: unit for name, (unit, _) in PEAK_OBJECTIVES.items()}}
 
 
 def smallest_margin(report: StartReport) -> float:

@@ -134,11 +134,13 @@ class RulesSection(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the designs that satisfy every rule."""
 
-    name: Literal["nearest", "robust", "smooth", "min_peak_torque", "min_peak_shaking_force"] = Field(
+    name: Literal["nearest", "robust", "smooth", "min_peak_torque", "min_peak_shaking_force",
+                  "min_peak_shaking_moment"] = Field(
         "nearest", description="nearest: smallest change from the given design (default); robust: maximise the "
                                "smallest normalised rule margin; smooth: minimise the peak claw acceleration; "
-                               "min_peak_torque, min_peak_shaking_force: minimise the peak input torque (N m) or "
-                               "shaking force (N) over a turn (a [dynamics] table needed)")
+                               "min_peak_torque, min_peak_shaking_force, min_peak_shaking_moment: minimise the peak "
+                               "input torque (N m), shaking force (N) or shaking moment about the crank pivot (N m) "
+                               "over a turn (a [dynamics] table needed)")
 
 
 class SolverSection(MultistartSettings):
