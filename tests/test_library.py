@@ -44,6 +44,9 @@ EXPECTED: dict[str, dict] = {
     "rotary_planetary/smooth_loop_redesign.toml": {"check": 1, "solve": ("optimal", 93.71826484839778)},
     "picker/crank_rocker_min_peak_torque.toml": {"check": 1, "solve": ("optimal", 0.27659068689431826)},
     "picker/picker_double_crank_redesign.toml": {"check": 0, "solve": ("optimal", 0.09784125335134168)},
+    "picker/picker_double_crank_torque_limited.toml": {"check": 0, "solve": ("optimal", 6.239538045510953)},
+    "picker/picker_double_crank_min_peak_torque.toml": {"check": 0, "solve": ("optimal", 0.13956083597633298)},
+    "picker/cai2020_double_crank_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
     "picker/picker_double_crank_retrofit.toml": {"check": 0, "solve": ("optimal", 0.23508496015782593)},
     "guide_tube/cai2020_delta2.toml": {"check": 1, "solve": ("optimal", 39.61725222028692)},
     "guide_tube/cai2020_tubes.toml": {"check": 1, "solve": ("exit", 2)},
@@ -128,7 +131,8 @@ SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_examp
 #: solves of seconds: run with the slow tests (`pytest -m slow`); the default suite keeps a solve of every kind
 #: (planting_arm: redesign_from_example4)
 SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml",
-        "picker/picker_double_crank_redesign.toml",
+        "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
+        "picker/picker_double_crank_min_peak_torque.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",

@@ -26,7 +26,11 @@ class PickerDoubleCrank(Kind):
     name = "picker_double_crank"
     summary = "double crank whose clamp point follows the picking arc (seed 001 §2.1.2)"
     objectives = {"sum_of_distances": "seed 001 eq (4): sum of distances of the clamp point to the arc points, mm",
-                  "sum_of_squares": "sum of squared distances, mm^2"}
+                  "sum_of_squares": "sum of squared distances, mm^2",
+                  "min_peak_torque": "smallest peak |input torque| on AB over the working swing, N m ([dynamics] and "
+                                     "[rules] max_arc_error needed)",
+                  "min_peak_shaking_force": "smallest peak shaking force on the frame over the working swing, N "
+                                            "([dynamics] and [rules] max_arc_error needed)"}
     example = "picker/picker_double_crank_redesign.toml"
     bench_specs = ("picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_retrofit.toml")
 

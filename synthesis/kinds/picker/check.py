@@ -3,7 +3,9 @@
 The target points lie evenly by arc length on the picking arc; the crank angles are evenly spaced over
 the working swing, the i-th point paired with the i-th angle (M1 at phi10).  Rules: Grashof double
 crank with the frame AD shortest (eq 5-6), x_A > 0 (eq 7) and the transmission angle at C over the
-working swing.  The arc error is the objective of ``solve``; ``check`` reports it in ``arc_error``.
+working swing; with ``[rules] max_arc_error`` the largest miss of a target point, and with a ``[dynamics]`` table's
+limits the peak input torque, shaking force or moment over the working swing (synthesis/kinds/picker/dynamics.py).
+The arc error is the objective of ``solve`` (unless a min-peak objective is); ``check`` reports it in ``arc_error``.
 """
 
 from __future__ import annotations
@@ -15,7 +17,8 @@ import numpy as np
 
 from constraints import Rule
 from constraints.grashof import grashof_double_crank_rule
-from synthesis.kinds.picker.rules import frame_point_rule
+from synthesis.kinds.picker.dynamics import double_crank_dynamics, dynamics_facts, dynamics_rules
+from synthesis.kinds.picker.rules import arc_error_rule, frame_point_rule
 from constraints.transmission import acute_transmission_rule
 from synthesis.errors import AssemblyError
 from synthesis.kinematics import fourbar
@@ -85,16 +88,27 @@ def evaluate(spec: PickerDoubleCrankSpec, dc: DoubleCrank, samples: int = CHECK_
     """Every rule of the spec; raises AssemblyError when the loop breaks inside the working swing."""
     require_assembly(spec, dc)
     mu = clamp_states(dc, swing_angles(spec, samples))["mu"]
-    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu)
+    misses = clamp_states(dc, target_angles(spec))["M"] - target_points(spec).T
+    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu, tuple(float(v) for v in dc.parameters()), misses)
 
 
-def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu) -> list[Rule]:
+def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu, p=None, misses=None) -> list[Rule]:
     """Every rule of the spec on a trace of floats or CasADi symbols: pivot A's x, the links l1..l4 (l4 the
-    frame AD) and the transmission angles at C (deg) over the working swing.  Used by check, the NLP
-    and the re-check."""
-    return [grashof_double_crank_rule(l4, l1, l2, l3),
-            frame_point_rule(x_a, spec.rules.x_a_min),
-            acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
+    frame AD), the transmission angles at C (deg) over the working swing, the parameters p (PARAMETERS: mm, rad)
+    and the misses (2 x targets, clamp point - target, mm).  Used by check, the NLP and the re-check.  p and the
+    misses are read only by the rules a spec adds ([rules] max_arc_error, [dynamics.limits]): without them the list
+    is eq (5)-(7) and the transmission angle, as it always was."""
+    rules = [grashof_double_crank_rule(l4, l1, l2, l3),
+             frame_point_rule(x_a, spec.rules.x_a_min),
+             acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
+    if spec.rules.max_arc_error is not None:
+        rules.append(arc_error_rule(misses[0, :].T, misses[1, :].T, spec.rules.max_arc_error))
+    if spec.dynamics is not None and spec.dynamics.has_rules():
+        # sampled on the transmission angle's grid (the solver's samples, the check's, the re-check's)
+        crank = np.radians(swing_angles(spec, mu.numel() if hasattr(mu, "numel") else len(mu)))
+        rules += dynamics_rules(double_crank_dynamics(spec.dynamics, p, spec.linkage.branch), spec.dynamics.limits,
+                                crank)
+    return rules
 
 
 def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
@@ -122,7 +136,18 @@ def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
                  "transmission_deg": mu.tolist()},
         "coupler_curve": {"crank_deg": full_ok, "x": m_full[0].tolist(), "y": m_full[1].tolist()},
         "positions": [{"crank_deg": float(a), "joints": joint_positions(dc, float(a))} for a in target_angles(spec)],
+        **dynamics_of(spec, dc),
     }
+
+
+def dynamics_of(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
+    """``{"dynamics": facts.dynamics}`` over the working swing at the table's ``samples`` crank angles (ends
+    included), or nothing without a [dynamics] table."""
+    if spec.dynamics is None:
+        return {}
+    dyn = double_crank_dynamics(spec.dynamics, tuple(float(v) for v in dc.parameters()), dc.branch)
+    crank = np.radians(swing_angles(spec, spec.dynamics.samples))
+    return {"dynamics": dynamics_facts(dyn, crank, (dc.x_a, dc.y_a), spec.dynamics)}
 
 
 def run_check(loaded: LoadedSpec) -> Result:

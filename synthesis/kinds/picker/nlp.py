@@ -11,7 +11,10 @@ r_i) allowed are exactly t_i >= |r_i|; the polar factor u_i keeps the rows' grad
 r_i = 0, where the plain cone t_i^2 >= |r_i|^2 has none and IPOPT stalls).  That stage is
 warm-started from the least-squares fit, which IPOPT solves fast and reliably.  A start is
 "converged" only if the stage of the spec's objective converged; both stages' statuses are kept.
-Reported objectives are always the exact eq (4) (or sum of squares) of the design.
+Reported objectives are always the exact eq (4) (or sum of squares) of the design.  The min-peak objectives
+(``min_peak_torque``, ``min_peak_shaking_force``) are a second stage like eq (4)'s, from the least-squares fit: an
+epigraph over the working swing's samples (synthesis/kinds/picker/dynamics.py), reported as the design's own peak on
+the check's grid, with the arc held by ``[rules] max_arc_error``.
 """
 
 from __future__ import annotations
@@ -28,8 +31,10 @@ from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
+from synthesis.kinds.picker.dynamics import PEAK_UNITS, double_crank_dynamics, peak_epigraph, peak_of, sampled
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_function
-from synthesis.kinds.picker.check import arc_error, linkage, rules_of, swing_angles, target_angles, target_points
+from synthesis.kinds.picker.check import (CHECK_SAMPLES, arc_error, linkage, rules_of, swing_angles, target_angles,
+                                          target_points)
 from synthesis.spec.common import design_box
 from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
 
@@ -50,7 +55,8 @@ def grashof_slacks(x: np.ndarray) -> np.ndarray:
 
 
 class PickerNLP(KindNLP):
-    """Built once per spec (least-squares stage and, for eq 4, the exact epigraph stage); reused for every start."""
+    """Built once per spec (least-squares stage and, for eq 4 or a min-peak objective, its epigraph stage); reused for
+    every start."""
     maps_its_starts = True      # a start is moved before it is solved (see its start map)
 
     def __init__(self, spec: PickerDoubleCrankSpec, elastic: bool = False, setting: Setting | None = None):
@@ -73,7 +79,7 @@ class PickerNLP(KindNLP):
         samples = swing_angles(spec, spec.solver.samples) * DEG
         mu = ca.vec(f.map(len(samples))(samples.reshape(1, -1), p)[3]) / DEG
         x_a, l1, l2, l3, l4 = (x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4"))
-        rules = rules_of(spec, x_a, l1, l2, l3, l4, mu)
+        rules = rules_of(spec, x_a, l1, l2, l3, l4, mu, p, r)
         lb, ub = self.bounds[:, 0], self.bounds[:, 1]
         # Problem's keyword arguments both stages share
         common: dict[str, Any] = dict(
@@ -91,12 +97,26 @@ class PickerNLP(KindNLP):
             self.stages.append(compile_problem(setting, Problem("picker_eq4", *shape, _sum_of_distances(r),
                                                                 objective_unit="mm", **common)))
             self.stage_names.append("sum_of_distances")
+        if spec.objective.name in PEAK_UNITS and not elastic:
+            objective, self.peak_start = _peak_objective(spec, p, z)
+            self.stages.append(compile_problem(setting, Problem(f"picker_{spec.objective.name}", *shape, objective,
+                                                                objective_unit=PEAK_UNITS[spec.objective.name],
+                                                                **common)))
+            self.stage_names.append(spec.objective.name)
         # the elastic diagnosis reads the least-squares stage (the only one in elastic mode)
         self.compiled = self.stages[0]
 
     def exact_objective(self, design: dict[str, float]) -> float:
+        """The spec's objective of a design: eq (4) or the sum of squares (mm, mm^2), or a min-peak objective's peak
+        (N m, N) on the check's grid over the working swing."""
+        name = self.spec.objective.name
+        if name in PEAK_UNITS:
+            dc = linkage(self.spec, design)
+            assert self.spec.dynamics is not None        # the spec's validator requires it with a min-peak objective
+            dyn = double_crank_dynamics(self.spec.dynamics, tuple(float(v) for v in dc.parameters()), dc.branch)
+            return peak_of(dyn, name, np.radians(swing_angles(self.spec, CHECK_SAMPLES)))
         err = arc_error(self.spec, linkage(self.spec, design))
-        return err["eq4_sum_mm"] if self.spec.objective.name == "sum_of_distances" else err["sum_of_squares_mm2"]
+        return err["eq4_sum_mm"] if name == "sum_of_distances" else err["sum_of_squares_mm2"]
 
     def start_coordinates(self, x0: np.ndarray) -> np.ndarray:
         """The coordinates z of a start design, moved into the Grashof region along the way to the given
@@ -109,6 +129,14 @@ class PickerNLP(KindNLP):
         t = 1.01 * np.hypot(r[0], r[1]) + 1e-3
         return np.concatenate([t, (r / t).T.ravel()])
 
+    def extra_start(self, stage: str, z: np.ndarray) -> np.ndarray | None:
+        """The start of a stage's epigraph variables at coordinates z (None: the least-squares stage has none)."""
+        if stage == "sum_of_distances":
+            return self.epigraph_start(z)
+        if stage in PEAK_UNITS:
+            return np.atleast_1d(np.asarray(self.peak_start(z), dtype=float)).ravel()
+        return None
+
     def solve(self, start: int, x0: np.ndarray) -> StartOutcome:
         """Least squares, then (eq 4) the exact sum of distances from there.  The start's design is the
         last stage's unless the least-squares design has the lower exact objective (the last stage may
@@ -117,7 +145,7 @@ class PickerNLP(KindNLP):
         z = self.start_coordinates(x0)
         stages, logs, candidates, raws = [], [], [], []
         for k, (name, stage) in enumerate(zip(self.stage_names, self.stages)):
-            out = stage.solve(start, z, self.epigraph_start(z) if name == "sum_of_distances" else None)
+            out = stage.solve(start, z, self.extra_start(name, z))
             logs.append(f"----- stage {name}\n{out.log}")
             z = out.x[:9]
             design = {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))}
@@ -134,6 +162,28 @@ class PickerNLP(KindNLP):
         return StartOutcome(start, design, objective, last["return_status"], success,
                             sum(s["iterations"] for s in stages), sum(s["wall_s"] for s in stages), "\n".join(logs),
                             raws[-1], {"stages": stages})
+
+
+def _peak_objective(spec: PickerDoubleCrankSpec, p, z) -> tuple[ObjectiveParts, ca.Function]:
+    """Minimise the peak torque or shaking force over the solver's samples of the working swing (an epigraph variable
+    t, scaled by the given design's peak so the objective is about 1 at the start); and t's start at coordinates z:
+    1 % above the peak there, so every epigraph row starts inside."""
+    assert spec.dynamics is not None                 # the spec's validator requires it with a min-peak objective
+    name = spec.objective.name
+    crank = np.radians(swing_angles(spec, spec.solver.samples))
+    dc = linkage(spec)
+    given = peak_of(double_crank_dynamics(spec.dynamics, tuple(float(v) for v in dc.parameters()), dc.branch), name,
+                    crank)
+    dyn = double_crank_dynamics(spec.dynamics, [p[i] for i in range(9)], spec.linkage.branch)
+    t, rows, unit = peak_epigraph(dyn, name, crank)
+    # a given design that moves no mass (0) or whose loop breaks (NaN) gives no scale: 1 in the rule's unit then
+    given = given if math.isfinite(given) and given > 0.0 else 1.0
+    typical = given if name == "min_peak_torque" else given * given
+    torque, fx, fy, _ = sampled(dyn, crank)
+    peak = ca.mmax(ca.fabs(torque)) if name == "min_peak_torque" else ca.mmax(fx * fx + fy * fy)
+    start = ca.Function("peak_start", [z], [1.01 * peak])
+    return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
+                          rows=rows, extra_units=[unit], row_units=[unit] * len(rows)), start
 
 
 def _rounded(objective: float) -> float:

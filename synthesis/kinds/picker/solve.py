@@ -10,7 +10,8 @@ from synthesis.kinds.picker.check import evaluate, facts, linkage
 from synthesis.kinds.picker.nlp import NAMES, PickerNLP
 from synthesis.spec.common import design_box
 
-OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2"}
+OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2", "min_peak_torque": "N m",
+                   "min_peak_shaking_force": "N"}
 
 
 def build(setting: Setting, elastic: bool = False) -> PickerNLP:

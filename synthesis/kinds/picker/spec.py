@@ -13,6 +13,7 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
+from synthesis.spec.dynamics import DynamicsSection
 from synthesis.spec.common import (
     POSITIVE, WITHIN_A_TURN, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive_fields,
     starts_field, value_of, within_a_turn,
@@ -69,14 +70,21 @@ class PickerRules(StrictModel):
     min_transmission_angle: float = Field(40.0, gt=0.0, lt=90.0,
                                           description="smallest transmission angle at C over the working swing, deg")
     x_a_min: float = Field(0.0, description="eq (7): the pivot A lies between the frame and the tray, x_A > x_a_min, mm")
+    max_arc_error: float | None = Field(
+        None, gt=0.0, description="largest distance allowed between a target point and the clamp point at its crank "
+                                  "angle, mm (ours, not the paper's); left out: no rule.  Needed by the min-peak "
+                                  "objectives, which would otherwise let the clamp leave the arc")
 
 
 class PickerObjective(StrictModel):
     """What `solve` minimises: how far the clamp point misses the target points."""
 
-    name: Literal["sum_of_distances", "sum_of_squares"] = Field(
+    name: Literal["sum_of_distances", "sum_of_squares", "min_peak_torque", "min_peak_shaking_force"] = Field(
         "sum_of_distances", description="sum_of_distances: seed 001 eq (4), sum of |M_i - target_i| (mm); "
-                                        "sum_of_squares: sum of |M_i - target_i|^2 (mm^2)")
+                                        "sum_of_squares: sum of |M_i - target_i|^2 (mm^2); min_peak_torque, "
+                                        "min_peak_shaking_force: smallest peak input torque on AB (N m) or shaking "
+                                        "force (N) over the working swing (a [dynamics] table and "
+                                        "[rules] max_arc_error needed)")
 
 
 class PickerSolver(MultistartSettings):
@@ -95,6 +103,39 @@ class PickerDoubleCrankSpec(ProblemSpec):
     rules: PickerRules = Field(default_factory=PickerRules)
     objective: PickerObjective = Field(default_factory=PickerObjective)
     solver: PickerSolver = Field(default_factory=PickerSolver)
+    # seed 001 prints no section, mass or clamp weight: every number of this table is an assumption of the spec's
+    # author, to be said in its `assumption` (the library's picker specs: steel flat bars, the paper's 60 r/min)
+    dynamics: DynamicsSection | None = Field(
+        None, description="mass properties, crank speed and limits for the inverse dynamics of the double crank "
+                          "(docs/ARCHITECTURE.md \"Dynamics\"): crank AB, coupler BC (a bar is BC and the clamp arm "
+                          "CM of the same section; a point mass at = \"tip\" sits at the clamp point M), follower CD; "
+                          "AB turns at the constant crank_speed over the working swing (phi10 to phi10 + psi, ends "
+                          "included; samples spread there, not over a turn), though in the picker the crank-rocker "
+                          "drives it at a varying speed.  Seed 001 gives no masses: every value is an assumption, "
+                          "say which in `assumption`.  Left out: no dynamics, no dynamics rules")
+
+    @model_validator(mode="after")
+    def _dynamics_can_be_evaluated(self) -> "PickerDoubleCrankSpec":
+        objective = self.objective.name
+        if objective.startswith("min_peak") and self.dynamics is None:
+            raise ValueError(f"objective.name = {objective!r} needs a [dynamics] table (mass properties and crank "
+                             f"speed)")
+        if objective.startswith("min_peak") and self.rules.max_arc_error is None:
+            raise ValueError(f"objective.name = {objective!r} needs rules.max_arc_error (mm): without it the clamp "
+                             f"need not follow the picking arc at all")
+        if self.dynamics is None:
+            return self
+        if self.dynamics.crank_speed is None:
+            raise ValueError("dynamics.crank_speed: a picker_double_crank has no crank speed of its own; give AB's "
+                             "in r/min")
+        weight = self.dynamics.counterweight
+        if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
+            raise ValueError("dynamics.counterweight: a picker_double_crank's solve frees only its linkage; give the "
+                             "counterweight's mass (kg) and radius (mm) as numbers")
+        if any(pm.at == "tip" and pm.link != "coupler" for pm in self.dynamics.point_masses):
+            raise ValueError("dynamics.point_masses: at = \"tip\" is the clamp point M, on the coupler; on the crank "
+                             "or the follower give the position in the link frame, mm")
+        return self
 
     def variables(self) -> dict[str, Variable]:
         return {n: getattr(self.linkage, n) for n in ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")}
