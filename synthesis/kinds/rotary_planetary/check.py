@@ -12,6 +12,8 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from constraints.base import Rule
+from constraints.poses import attitude_miss_deg
+from constraints.poses import pose_rules as shared_pose_rules
 from synthesis.core.verdict import FINE
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (
@@ -80,10 +82,6 @@ def _cat(parts):
     return np.concatenate([np.ravel(np.asarray(p, dtype=float)) for p in parts])
 
 
-def _wrap_deg(d):
-    return ca.atan2(ca.sin(d * RAD), ca.cos(d * RAD)) * DEG
-
-
 def gear_rules(spec: RotaryPlanetarySpec, train: Train, grid) -> list[Rule]:
     o = ops_of(train, grid)
     p1, p2 = pairs(train, grid)
@@ -119,8 +117,8 @@ def pose_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> list[
         x, y = tip(train, angles.poses[name])
         miss = None
         if pose.attitude is not None:
-            miss = _wrap_deg(claw_attitude(train, angles.poses[name]) * DEG - pose.attitude)
-        out += R.pose_rules(name, x - pose.x, y - pose.y, pose.tolerance, miss, pose.attitude_tolerance)
+            miss = attitude_miss_deg(claw_attitude(train, angles.poses[name]) * DEG, pose.attitude)
+        out += shared_pose_rules(name, x - pose.x, y - pose.y, pose.tolerance, miss, pose.attitude_tolerance)
     return out
 
 

@@ -17,6 +17,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from constraints.poses import nearest_row
 from synthesis.core.declared import Declared, named
 from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem
@@ -122,7 +123,7 @@ def structural_rows(spec: RotaryPlanetarySpec, train, angles: Angles, free_poses
     for name in free_poses:
         (px, py), (dx, dy) = tip(train, angles.poses[name]), tip_rate(train, angles.poses[name])
         pose = spec.key_poses[name]
-        nearest.append(((px - pose.x) * dx + (py - pose.y) * dy, 0.0, 0.0))
+        nearest.append((nearest_row(px - pose.x, py - pose.y, dx, dy), 0.0, 0.0))
     return [(tip_rate(train, angles.top)[1], 0.0, 0.0), (tip_rate(train, angles.bottom)[1], 0.0, 0.0),
             (tip(train, entry)[1] - level, 0.0, 0.0), (tip(train, exit_)[1] - level, 0.0, 0.0), *nearest,
             (tip_rate(train, entry)[1], None, 0.0), (tip_rate(train, exit_)[1], 0.0, None),

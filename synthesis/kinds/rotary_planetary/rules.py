@@ -5,7 +5,8 @@ the NLP).  Where a rule's limit comes from and which are our assumptions: proble
 A rule whose value is a maximum or a minimum over the turn is written for the optimiser with auxiliary carrier
 angles the NLP owns (the loop's top and bottom, soil entry and exit, each key pose's angle): "there is a bottom
 at least this deep" is one smooth row at the bottom's angle, "every point no deeper than that" is a row per
-sample.  On floats the caller passes the extremes it found on its grid.
+sample.  On floats the caller passes the extremes it found on its grid.  The key poses' rules are the shared ones
+(:mod:`constraints.poses`).
 """
 
 from __future__ import annotations
@@ -86,19 +87,6 @@ def in_soil_speed_rule(forward_speeds, maximum: float, missing: str | None = Non
 def plant_spacing_rule(spacing, limits: tuple[float, float]) -> Rule:
     """Forward travel per plant: two arms plant twice per carrier turn."""
     return Rule("plant_spacing", spacing, limits[0], limits[1], "mm", 10.0, "forward speed, two plants per turn")
-
-
-def pose_rules(name: str, dx, dy, tolerance: float, attitude_miss_deg=None, attitude_tolerance: float = 0.0
-               ) -> list[Rule]:
-    """Tip within ``tolerance`` of the pose (the NLP row: squared distance) and, if the pose gives one, the claw's
-    attitude within ``attitude_tolerance`` (``attitude_miss_deg`` already wrapped into (-180, 180])."""
-    where = f"key pose {name}"
-    rules = [Rule(f"pose_{name}", ca.sqrt(dx * dx + dy * dy), None, tolerance, "mm", 1.0, where,
-                  nlp_rows=((dx * dx + dy * dy, None, tolerance * tolerance),), row_unit="mm^2")]
-    if attitude_miss_deg is not None:
-        rules.append(Rule(f"pose_{name}_attitude", attitude_miss_deg, -attitude_tolerance, attitude_tolerance,
-                          "deg", 1.0, where))
-    return rules
 
 
 def single_idler_rule(radius_gap, tolerance: float) -> Rule:

@@ -4,7 +4,8 @@ non-circular planetary gear trains (problems/rotary_planetary/NOTES.md).
 A design is the two pairs' centre distances, the Fourier laws of the idler and the planet (deg per harmonic),
 and the arm (tip distance and direction on the planet, the claw's direction relative to it).  A number fixes a
 design variable, ``{init, bounds}`` frees it for ``solve``.  Key poses are what a designer writes: the claw tip's
-position and, optionally, the claw's attitude at picking, carrying, pushing out and leaving the soil.
+position and, optionally, the claw's attitude at picking, carrying, pushing out and leaving the soil (the
+``[key_poses]`` table shared with the planting arm: :mod:`synthesis.spec.poses`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from synthesis.spec.common import (
     POSITIVE, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive_fields,
     starts_field, value_of, within_a_turn,
 )
+from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 
 KIND = "rotary_planetary"
 #: harmonics a law may have (a law's shape beyond a dozen harmonics is a tooth-scale ripple, not a design)
@@ -77,16 +79,13 @@ class Operation(StrictModel):
     axis_height: float = Field(gt=0, description="carrier axis above the soil surface, mm")
 
 
-class KeyPose(StrictModel):
+class KeyPose(ClawPose):
     """A pose the claw must pass through: its tip within ``tolerance`` of (x, y) and, if given, its attitude
     within ``attitude_tolerance`` of ``attitude``, at a carrier angle the solver finds (or ``carrier_angle``)."""
 
     x: float = Field(description="tip x (rearwards), machine frame, mm")
     y: float = Field(description="tip y (up), machine frame, mm")
-    tolerance: float = Field(1.0, gt=0, description="largest tip distance from (x, y), mm")
-    attitude: float | None = Field(None, ge=-180, le=180,
-                                   description="claw attitude, from +x counter-clockwise (pointing down: -90), deg")
-    attitude_tolerance: float = Field(2.0, gt=0, le=90, description="largest attitude miss, deg")
+    attitude: float | None = attitude_field("claw attitude, from +x counter-clockwise (pointing down: -90), deg")
     carrier_angle: float | None = Field(None, ge=-360, le=360,
                                         description="carrier angle of the pose, deg (absent: the solver's choice)")
 
@@ -150,21 +149,13 @@ class RotaryPlanetarySpec(ProblemSpec):
     gears: GearSection
     arm: ArmSection
     operation: Operation
-    key_poses: dict[str, KeyPose] = Field(default_factory=dict, max_length=20,
+    key_poses: dict[str, KeyPose] = Field(default_factory=dict, max_length=MAX_POSES,
                                           description="named poses, e.g. [key_poses.picking]")
     rules: Rules
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
 
-    @field_validator("key_poses")
-    @classmethod
-    def _pose_names(cls, poses: dict) -> dict:
-        for name in poses:
-            if not name.replace("_", "").isalnum():
-                raise ValueError(f"key pose name {name!r}: letters, digits and _ only")
-            if name.endswith("_attitude"):        # its rule would be named as another pose's attitude rule
-                raise ValueError(f"key pose name {name!r} may not end in _attitude")
-        return poses
+    _pose_names = field_validator("key_poses")(pose_names)
 
     @property
     def harmonics(self) -> tuple[int, int]:
