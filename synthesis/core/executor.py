@@ -136,6 +136,19 @@ def _end_workers(pool: ProcessPoolExecutor) -> None:
             proc.kill()
 
 
+def _pool_context():
+    """The process pools' start method: fork where the platform has it, so a worker begins with this process's
+    memory (its imports and the solver already built here), else the platform's default."""
+    methods = multiprocessing.get_all_start_methods()
+    return multiprocessing.get_context("fork" if "fork" in methods else None)
+
+
+def workers_inherit_memory() -> bool:
+    """True when a pool worker starts as a copy of this process (fork): a solver built here needs no rebuilding
+    there, and its factory need not be picklable."""
+    return _pool_context().get_start_method() == "fork"
+
+
 def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
                on_done: Callable[[Any], None] = lambda outcome: None,
                stop_when: Callable[[Any], bool] | None = None, scheduler: str | None = None,
@@ -284,7 +297,7 @@ class _PoolRound:
 
     def __init__(self, run: _Multistart, indices: list[int], n_workers: int):
         self.multistart, self.indices = run, indices
-        ctx = multiprocessing.get_context()
+        ctx = _pool_context()
         self.began_q = ctx.SimpleQueue()
         self.pool = ProcessPoolExecutor(max_workers=min(n_workers, len(indices)), mp_context=ctx,
                                         initializer=_init_worker, initargs=(run.factory, os.getpid(), self.began_q))

@@ -20,7 +20,7 @@ import numpy as np
 
 from synthesis.core import interrupt
 from synthesis.core.confidence import statement
-from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts
+from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts, workers_inherit_memory
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.ipopt_log import reached_optimum
 from synthesis.core.kind import Kind, Setting, Solving
@@ -122,8 +122,10 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         out.design = {n: float(v) for n, v in zip(nlp.names, x_starts[index])}
         return out
 
-    local = workers <= 1 and scheduler is None
-    factory = (lambda: nlp) if local else functools.partial(solving.build, setting, False)
+    # a worker forked from here starts with the NLP built above (building it is a tenth of a planting multistart);
+    # a dask worker, or a spawned one, builds its own from the picklable recipe
+    shared = scheduler is None and (workers <= 1 or workers_inherit_memory())
+    factory = (lambda: nlp) if shared else functools.partial(solving.build, setting, False)
     try:
         outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler, finished=finished,
                               stop_when=None if stop is None else (lambda out: stop(reports[out.start])),
