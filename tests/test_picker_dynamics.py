@@ -269,3 +269,29 @@ def test_dynamics_tables_that_cannot_hold_are_refused(change, message):
         data[key] = {k: v for k, v in {**data.get(key, {}), **value}.items() if v is not None}
     with pytest.raises(ValidationError, match=re.escape(message)):
         kinds.get("picker_double_crank").spec_model().model_validate(data)
+
+
+def test_every_peak_objective_is_listed_in_its_unit():
+    from synthesis.dynamics.linkage import PEAK_OBJECTIVES
+    from synthesis.kinds.picker.solve import OBJECTIVE_UNITS
+
+    assert set(PEAK_OBJECTIVES) <= set(kinds.get("picker_double_crank").objectives)
+    assert all(OBJECTIVE_UNITS[name] == unit for name, (unit, _) in PEAK_OBJECTIVES.items())
+
+
+@pytest.mark.slow         # about 4 s each: two starts of both stages
+@pytest.mark.parametrize("objective, summary", [("min_peak_shaking_force", "shaking_force_N"),
+                                                ("min_peak_shaking_moment", "shaking_moment_Nm")])
+def test_the_shaking_objectives_lower_the_given_designs_peak_with_every_rule_held(objective, summary):
+    loaded = load_spec(PICKER / "picker_double_crank_min_peak_torque.toml")
+    model = loaded.model
+    spec = model.model_copy(update={"objective": model.objective.model_copy(update={"name": objective}),
+                                    "solver": model.solver.model_copy(update={"starts": 2})})
+    loaded = type(loaded)(**{**loaded.__dict__, "model": spec})
+    before = json.loads(result_text(kinds.get("picker_double_crank").check(loaded)))["facts"]["dynamics"]["summary"]
+    result, _, _ = solve_spec(loaded, workers=1)
+    assert result.status == "optimal" and result.objective["name"] == objective
+    data = json.loads(result_text(result))
+    assert result.objective["value"] < before[summary]["peak"]
+    assert all(r["satisfied"] for r in data["rules"]), [r for r in data["rules"] if not r["satisfied"]]
+    assert data["facts"]["dynamics"]["summary"][summary]["peak"] == pytest.approx(result.objective["value"], rel=1e-3)

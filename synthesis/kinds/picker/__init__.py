@@ -30,7 +30,9 @@ class PickerDoubleCrank(Kind):
                   "min_peak_torque": "smallest peak |input torque| on AB over the working swing, N m ([dynamics] and "
                                      "[rules] max_arc_error needed)",
                   "min_peak_shaking_force": "smallest peak shaking force on the frame over the working swing, N "
-                                            "([dynamics] and [rules] max_arc_error needed)"}
+                                            "([dynamics] and [rules] max_arc_error needed)",
+                  "min_peak_shaking_moment": "smallest peak |shaking moment| on the frame over the working swing, "
+                                             "about A, N m ([dynamics] and [rules] max_arc_error needed)"}
     example = "picker/picker_double_crank_redesign.toml"
     bench_specs = ("picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_retrofit.toml")
 

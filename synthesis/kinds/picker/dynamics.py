@@ -37,8 +37,8 @@ JOINTS = ("A", "B", "C", "D")
 LINKS = ("crank AB", "coupler BC with clamp arm CM", "follower CD")
 #: where the rules are evaluated
 WHERE = "over the working swing"
-#: the min-peak objectives and the unit of each
-PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N"}
+#: the min-peak objectives and the unit of each (the turn-based kinds': synthesis.dynamics.linkage.PEAK_OBJECTIVES)
+PEAK_UNITS = {"min_peak_torque": "N m", "min_peak_shaking_force": "N", "min_peak_shaking_moment": "N m"}
 
 
 def crank_speed_radps(table: DynamicsSection) -> float:
@@ -88,22 +88,36 @@ def dynamics_rules(dyn: FourbarDynamics, limits: DynamicsLimits, crank: np.ndarr
     return rules
 
 
-def peak_epigraph(dyn: FourbarDynamics, which: str, crank: np.ndarray) -> tuple:
-    """The epigraph of a min-peak objective (smooth): a variable t with rows t - torque >= 0 and t + torque >= 0
-    (``min_peak_torque``, t in N m) or t - (fx^2 + fy^2) >= 0 (``min_peak_shaking_force``, t in N^2) at every crank
-    angle, t to be minimised.  Returns (t, rows, unit)."""
-    torque, fx, fy, _ = sampled(dyn, crank)
+def peak_sampled(dyn: FourbarDynamics, which: str, crank: np.ndarray):
+    """What a min-peak objective bounds at each crank angle, floats or symbols: the input torque or the shaking moment
+    (N m, bounded in absolute value), or the squared shaking force (N^2, smooth where the force vanishes)."""
+    torque, fx, fy, moment = sampled(dyn, crank)
     if which == "min_peak_torque":
-        t = ca.SX.sym("peak_torque")
-        return t, [(t - torque, 0.0, None), (t + torque, 0.0, None)], "N m"
-    t = ca.SX.sym("peak_shaking_force_sq")
-    return t, [(t - (fx * fx + fy * fy), 0.0, None)], "N^2"
+        return torque
+    if which == "min_peak_shaking_moment":
+        return moment
+    return fx * fx + fy * fy
+
+
+def peak_epigraph(dyn: FourbarDynamics, which: str, crank: np.ndarray) -> tuple:
+    """The epigraph of a min-peak objective (smooth): a variable t with rows t - s >= 0 and t + s >= 0 at every
+    sample s of the input torque (``min_peak_torque``) or the shaking moment (``min_peak_shaking_moment``), t in N m,
+    or t - (fx^2 + fy^2) >= 0 (``min_peak_shaking_force``, t in N^2), t to be minimised.  Returns (t, rows, unit)."""
+    s = peak_sampled(dyn, which, crank)
+    if which == "min_peak_shaking_force":
+        t = ca.SX.sym("peak_shaking_force_sq")
+        return t, [(t - s, 0.0, None)], "N^2"
+    t = ca.SX.sym("peak_torque" if which == "min_peak_torque" else "peak_shaking_moment")
+    return t, [(t - s, 0.0, None), (t + s, 0.0, None)], "N m"
 
 
 def peak_of(dyn: FourbarDynamics, which: str, crank: np.ndarray) -> float:
-    """The peak a min-peak objective minimises, on floats: |torque| N m or |shaking force| N at ``crank``."""
-    torque, fx, fy, _ = sampled(dyn, crank)
-    return float(np.abs(torque).max() if which == "min_peak_torque" else np.hypot(fx, fy).max())
+    """The peak a min-peak objective minimises, on floats: |torque| N m, |shaking force| N or |shaking moment| N m
+    at ``crank``."""
+    torque, fx, fy, moment = sampled(dyn, crank)
+    if which == "min_peak_shaking_force":
+        return float(np.hypot(fx, fy).max())
+    return float(np.abs(torque if which == "min_peak_torque" else moment).max())
 
 
 def dynamics_facts(dyn: FourbarDynamics, crank: np.ndarray, pivot_mm: tuple[float, float], table: DynamicsSection

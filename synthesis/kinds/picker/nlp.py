@@ -12,7 +12,7 @@ r_i = 0, where the plain cone t_i^2 >= |r_i|^2 has none and IPOPT stalls).  That
 warm-started from the least-squares fit, which IPOPT solves fast and reliably.  A start is
 "converged" only if the stage of the spec's objective converged; both stages' statuses are kept.
 Reported objectives are always the exact eq (4) (or sum of squares) of the design.  The min-peak objectives
-(``min_peak_torque``, ``min_peak_shaking_force``) are a second stage like eq (4)'s, from the least-squares fit: an
+(``min_peak_torque``, ``min_peak_shaking_force``, ``min_peak_shaking_moment``) are a second stage like eq (4)'s, from the least-squares fit: an
 epigraph over the working swing's samples (synthesis/kinds/picker/dynamics.py), reported as the design's own peak on
 the check's grid, with the arc held by ``[rules] max_arc_error``.
 """
@@ -31,7 +31,7 @@ from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
-from synthesis.kinds.picker.dynamics import PEAK_UNITS, double_crank_dynamics, peak_epigraph, peak_of, sampled
+from synthesis.kinds.picker.dynamics import PEAK_UNITS, double_crank_dynamics, peak_epigraph, peak_of, peak_sampled
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_function
 from synthesis.kinds.picker.check import (CHECK_SAMPLES, arc_error, linkage, rules_of, swing_angles, target_angles,
                                           target_points)
@@ -165,9 +165,9 @@ class PickerNLP(KindNLP):
 
 
 def _peak_objective(spec: PickerDoubleCrankSpec, p, z) -> tuple[ObjectiveParts, ca.Function]:
-    """Minimise the peak torque or shaking force over the solver's samples of the working swing (an epigraph variable
-    t, scaled by the given design's peak so the objective is about 1 at the start); and t's start at coordinates z:
-    1 % above the peak there, so every epigraph row starts inside."""
+    """Minimise the peak torque, shaking force or moment over the solver's samples of the working swing (an epigraph
+    variable t, scaled by the given design's peak so the objective is about 1 at the start); and t's start at
+    coordinates z: 1 % above the peak there, so every epigraph row starts inside."""
     assert spec.dynamics is not None                 # the spec's validator requires it with a min-peak objective
     name = spec.objective.name
     crank = np.radians(swing_angles(spec, spec.solver.samples))
@@ -178,10 +178,8 @@ def _peak_objective(spec: PickerDoubleCrankSpec, p, z) -> tuple[ObjectiveParts, 
     t, rows, unit = peak_epigraph(dyn, name, crank)
     # a given design that moves no mass (0) or whose loop breaks (NaN) gives no scale: 1 in the rule's unit then
     given = given if math.isfinite(given) and given > 0.0 else 1.0
-    typical = given if name == "min_peak_torque" else given * given
-    torque, fx, fy, _ = sampled(dyn, crank)
-    peak = ca.mmax(ca.fabs(torque)) if name == "min_peak_torque" else ca.mmax(fx * fx + fy * fy)
-    start = ca.Function("peak_start", [z], [1.01 * peak])
+    typical = given * given if name == "min_peak_shaking_force" else given        # t is N^2 for the force
+    start = ca.Function("peak_start", [z], [1.01 * ca.mmax(ca.fabs(peak_sampled(dyn, name, crank)))])
     return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
                           rows=rows, extra_units=[unit], row_units=[unit] * len(rows)), start
 

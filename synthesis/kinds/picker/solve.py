@@ -7,11 +7,11 @@ from synthesis.core.coordinates import outside_bounds
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.picker.check import evaluate, facts, linkage
+from synthesis.kinds.picker.dynamics import PEAK_UNITS
 from synthesis.kinds.picker.nlp import NAMES, PickerNLP
 from synthesis.spec.common import design_box
 
-OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2", "min_peak_torque": "N m",
-                   "min_peak_shaking_force": "N"}
+OBJECTIVE_UNITS = {"sum_of_distances": "mm", "sum_of_squares": "mm^2", **PEAK_UNITS}
 
 
 def build(setting: Setting, elastic: bool = False) -> PickerNLP:

@@ -79,12 +79,13 @@ class PickerRules(StrictModel):
 class PickerObjective(StrictModel):
     """What `solve` minimises: how far the clamp point misses the target points."""
 
-    name: Literal["sum_of_distances", "sum_of_squares", "min_peak_torque", "min_peak_shaking_force"] = Field(
+    name: Literal["sum_of_distances", "sum_of_squares", "min_peak_torque", "min_peak_shaking_force",
+                  "min_peak_shaking_moment"] = Field(
         "sum_of_distances", description="sum_of_distances: seed 001 eq (4), sum of |M_i - target_i| (mm); "
                                         "sum_of_squares: sum of |M_i - target_i|^2 (mm^2); min_peak_torque, "
-                                        "min_peak_shaking_force: smallest peak input torque on AB (N m) or shaking "
-                                        "force (N) over the working swing (a [dynamics] table and "
-                                        "[rules] max_arc_error needed)")
+                                        "min_peak_shaking_force, min_peak_shaking_moment: smallest peak input torque "
+                                        "on AB (N m), shaking force (N) or shaking moment about A (N m) over the "
+                                        "working swing (a [dynamics] table and [rules] max_arc_error needed)")
 
 
 class PickerSolver(MultistartSettings):
