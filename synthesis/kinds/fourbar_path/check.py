@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -90,7 +91,7 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
         raise ValueError(f"the design is not a number at {', '.join(bad)}")
     branch = BRANCHES[spec.branch]
     targets = np.array(spec.targets.points, dtype=float)
-    if spec.timed:
+    if spec.targets.crank_deg is not None:          # timed: the targets prescribe every crank angle
         crank_deg, timing = list(spec.targets.crank_deg), "prescribed"
     elif crank_deg is None:
         nearest = np.degrees(nearest_crank_angles(design, targets, branch))
@@ -185,13 +186,14 @@ def result_branch(result: Result) -> int:
 
 
 def result_design(design: dict, crank_deg: list[float]) -> dict:
-    out = {n: float(design[n]) if math.isfinite(design[n]) else None for n in VARIABLES}   # JSON has no NaN
+    out: dict[str, float | None | list[float | None]] = {
+        n: float(design[n]) if math.isfinite(design[n]) else None for n in VARIABLES}         # JSON has no NaN
     out["crank_deg"] = [float(a) if math.isfinite(a) else None for a in crank_deg]     # None: not found
     return out            # the assembly (spec.branch) is a fact (path_facts), not a design value: schema version 3
 
 
 def run_check(loaded: LoadedSpec) -> Result:
-    spec: FourbarPathSpec = loaded.model
+    spec = cast(FourbarPathSpec, loaded.model)     # load_spec validated it with this kind's model
     design = spec.design_values()
     ev = evaluate(spec, design, spec.design.crank_deg)
     records = [r.record().to_json() for r in ev.rules]

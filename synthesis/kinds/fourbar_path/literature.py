@@ -33,6 +33,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -157,7 +158,7 @@ def evaluate_competitor(name: str, competitor: Competitor | str, timing: str = "
     A competitor of the other assembly than the spec's is scored on its own branch (its ``branch``)."""
     p = PROBLEMS[name]
     c = competitor if isinstance(competitor, Competitor) else next(x for x in p.competitors if x.label == competitor)
-    spec: FourbarPathSpec = literature_spec(name).model
+    spec = cast(FourbarPathSpec, literature_spec(name).model)      # literature_spec validated it with this model
     if c.branch != spec.linkage.branch:
         spec = spec.model_copy(update={"linkage": spec.linkage.model_copy(update={"branch": c.branch})})
     if spec.timed:

@@ -36,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP, SolveMethod
-from synthesis.core.problem import ObjectiveParts, Problem, relative_backoff
+from synthesis.core.problem import ObjectiveParts, Problem, Row, relative_backoff
 from synthesis.kinds.fourbar_path.construction import joint_positions
 from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_rules
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
@@ -65,7 +65,8 @@ class ConfigurationNLP:
         sign = ca.SX.sym("direction")
         size2 = float(scale[0]) ** 2           # rows in units of the targets' size squared
         turn_c, turn_s = ca.cos(v["theta0"] * math.pi / 180.0), ca.sin(v["theta0"] * math.pi / 180.0)
-        res, structural = [], []
+        res: list[ca.SX] = []
+        structural: list[Row] = []
         for i in range(n):
             ax, ay = v["r2"] * ca.cos(theta[i]), v["r2"] * ca.sin(theta[i])
             ux, uy = ca.cos(psi[i]), ca.sin(psi[i])

@@ -171,7 +171,8 @@ class PathNLP(KindNLP):
         self.fixed = np.array([not isinstance(given[n], FreeVariable) for n in self.names])
         v = {n: float(self.bounds[i, 0]) if self.fixed[i] else self.offset[i] + self.scale[i] * x[i]
              for i, n in enumerate(self.names)}
-        if spec.timed:
+        thetas: list[float] | list[ca.SX]
+        if spec.targets.crank_deg is not None:          # timed: the targets prescribe every crank angle
             theta = ca.SX(0, 1)
             thetas = [math.radians(a) for a in spec.targets.crank_deg]
         else:
@@ -230,8 +231,8 @@ class PathNLP(KindNLP):
                                         watched=self.watched)
         # the path error of a decision vector: the objective of a normal solve, a fact of an elastic one
         self.fit = ca.Function("fit", [decision, sign], [f])
-        self.configuration = None
-        self._polisher_settings = None
+        self.configuration: ConfigurationNLP | None = None
+        self._polisher_settings: tuple | None = None
         if (CONFIGURATION and spec.rules.grashof == "any" and self.starts.screening and not elastic
                 and setting.tolerance is None and not setting.operating_symbols):
             self._configuration_form(spec, lbx, ubx, f_unit)
@@ -335,6 +336,7 @@ class PathNLP(KindNLP):
             w0, first = self._fit_at_start_timing(index, w0, sp.sign)
         resumed = None
         if in_configuration:
+            assert self.configuration is not None, "_open_in_configuration holds only where that form was built"
             out = self.configuration.solve(index, w0, self.design_of(w0[:9]), sp.sign, watch=watch)
             if self._resumable(out, sp.sign):
                 out, resumed = self._resume(index, out, sp.sign, "configuration")
@@ -406,7 +408,9 @@ class PathNLP(KindNLP):
             limit = CONFIGURATION_RESUME_ITERATIONS
         cap = lambda iteration, f: iteration >= limit      # noqa: E731
         if form == "configuration":
-            second = self.polisher.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
+            polisher = self.polisher
+            assert polisher is not None, "a resume in the configuration form runs only where that form was built"
+            second = polisher.solve(index, x1, self.design_of(x1[:9]), sign, watch=cap)
             what = ("polished in the configuration form" if polish
                     else "resumed in the configuration form from where it reached max_iter")
         else:
@@ -448,7 +452,7 @@ class PathNLP(KindNLP):
                  timing_first: dict | None = None) -> StartOutcome:
         xs = out.x[: len(self.lbx)]
         design = dict(zip(self.names, (float(a) for a in self.design_of(xs[: len(self.names)]))))
-        if self.spec.timed:
+        if self.spec.targets.crank_deg is not None:          # timed: the targets prescribe every crank angle
             crank = [float(a) for a in self.spec.targets.crank_deg]
             direction = "given"
         else:

@@ -9,6 +9,7 @@ coupler_curves.png  ``agrisynth compare``: several results' curves and targets o
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -25,7 +26,7 @@ from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 GIF_FRAMES = 36
-LINK = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
+LINK: dict[str, Any] = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
 
 
 def _design(result: Result) -> tuple[dict, int]:

@@ -100,6 +100,7 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
         return [f(th, *lengths) for th in angles]
 
     rules: list[Rule] = []
+    motion: list | None
     if thetas is None:
         motion = list(np.linspace(0.0, 2.0 * math.pi, TURN_SAMPLES, endpoint=False))
     elif lim.grashof == "any" and len(thetas) > 1:
@@ -114,6 +115,7 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
             rules += transmission_turn_rules(cos_transmission(0.0, r1, r2, r3, r4),
                                              cos_transmission(math.pi, r1, r2, r3, r4), lim.transmission_angle)
     elif motion is None:            # the exact form: each gap's shortest and longest diagonal (motion_extremes)
+        assert thetas is not None, "only the targets' crank angles leave the motion to the exact form"
         extremes = motion_extremes(thetas)
         nearest, farthest = extremes[0::2], extremes[1::2]
         rules.append(assembly_extremes_rule([diagonal_sq(th, r1, r2) for th in nearest],

@@ -162,9 +162,13 @@ def rocking_runs(shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     idx, first, last = [], [], []
     one = usable & (at_zero | at_pi)
     k = np.flatnonzero(one & at_zero)
-    idx.append(k), first.append(-b[k] + inset), last.append(b[k] - inset)
+    idx.append(k)
+    first.append(-b[k] + inset)
+    last.append(b[k] - inset)
     k = np.flatnonzero(one & at_pi)
-    idx.append(k), first.append(a[k] + inset), last.append(TWO_PI - a[k] - inset)
+    idx.append(k)
+    first.append(a[k] + inset)
+    last.append(TWO_PI - a[k] - inset)
     k = np.flatnonzero(usable & ~at_zero & ~at_pi)
     idx += [k, k]
     first += [a[k] + inset, -b[k] + inset]
@@ -343,7 +347,7 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
     the bounds (see the module docstring)."""
     rng = np.random.default_rng([seed, SEED_TAG])
     long = int(round(LONG_SHARE * shapes)) if grashof in ("crank-rocker", "any") else 0
-    cand = []
+    families: list[np.ndarray] = []
     for family, wanted in ((lambda k: sample_shapes(rng, k, grashof), shapes - long),
                            (lambda k: sample_long_shapes(rng, k), long)):
         blocks, count = [], 0
@@ -352,8 +356,8 @@ def screen(targets: np.ndarray, bounds: np.ndarray, branch: int, grashof: str, s
                 break
             blocks.append(family(wanted))
             count += len(blocks[-1])
-        cand += [np.concatenate(blocks)[:wanted]] if blocks else []
-    cand = np.concatenate(cand)
+        families += [np.concatenate(blocks)[:wanted]] if blocks else []
+    cand = np.concatenate(families)
     t = targets[:, 0] + 1j * targets[:, 1]
     cand, a, b, res = _fit_family(cand, shape_curves(cand, branch, GRID)[1], t,
                                   trial_fractions(fractions, signs, closed), bounds, closed_curve=True)

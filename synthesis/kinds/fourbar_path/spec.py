@@ -345,7 +345,8 @@ def old_form_message(data: dict) -> str:
     """A line per first-spec form in ``data``, naming it and its new spelling ("" when there is none)."""
     fixes: list[str] = []
     bounds = data.get("bounds")
-    design = data.get("design") if isinstance(data.get("design"), dict) else {}
+    given_design = data.get("design")
+    design: dict = given_design if isinstance(given_design, dict) else {}
     moved = [n for n in VARIABLES if n in design]
     if bounds is not None:
         entries = bounds.items() if isinstance(bounds, dict) else ()
@@ -360,7 +361,8 @@ def old_form_message(data: dict) -> str:
                      f"the variable under [linkage]: {moved[0]} = {{init = {init}, bounds = [lo, hi]}}")
     if "branch" in data:
         old = data["branch"]
-        new = {"open": 1, "crossed": -1}.get(old, old) if isinstance(old, (str, int)) else old
+        numbered: dict[str | int, int] = {"open": 1, "crossed": -1}
+        new = numbered.get(old, old) if isinstance(old, (str, int)) else old
         fixes.append(f"branch: {json_text(old)} is no longer read at the top; write branch = {json_text(new)} under "
                      f"[linkage] (+1: B left of A -> O', the open assembly; -1: the crossed one)")
     linkage = data.get("linkage")

@@ -260,6 +260,7 @@ def align(curve: np.ndarray, targets: np.ndarray, signs: tuple, timed_idx: np.nd
             res, sim = _fit(curve, idx, targets)
             if best is None or res < best[0]:
                 best = (res, idx, sim)
+    assert best is not None, "SIGNS gives every direction at least one turning sense"
     _, idx, sim = best
     for _ in range(ICP_ROUNDS):
         s, a, t = sim
@@ -433,12 +434,12 @@ class StartMaker:
         self.targets = np.array(spec.targets.points, dtype=float)
         self.branch = BRANCHES[spec.branch]
         self.anchor = grashof_anchor(self.bounds, spec.rules.grashof)
-        self.timed_theta = None if not spec.timed else np.radians(spec.targets.crank_deg)
+        self.timed_theta = None if spec.targets.crank_deg is None else np.radians(spec.targets.crank_deg)
         self.closed = is_closed_loop(self.targets)
         self.pool_grashof = "crank-rocker" if spec.rules.grashof == "any" else spec.rules.grashof
         self.pool_anchor = grashof_anchor(self.bounds, self.pool_grashof)
-        self._ranked = None
-        self._screened = None
+        self._ranked: np.ndarray | None = None
+        self._screened: tuple[np.ndarray, np.ndarray] | None = None
         self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
 
     def in_class(self, design: np.ndarray) -> np.ndarray:

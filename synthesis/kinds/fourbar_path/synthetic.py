@@ -17,6 +17,7 @@ import hashlib
 import json
 import math
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -41,7 +42,7 @@ def random_crank_rocker(seed: int) -> tuple[dict[str, float], float]:
     rng = np.random.default_rng(seed)
     while True:
         r = rng.uniform(10.0, 55.0, 4)
-        if min(crank_rotation_slacks(*r).values()) < 2.0:
+        if min(cast(dict[str, float], crank_rotation_slacks(*r)).values()) < 2.0:      # floats in, floats out
             continue
         mu_min = math.degrees(math.acos(cos_transmission(0.0, *r)))
         mu_max = math.degrees(math.acos(cos_transmission(math.pi, *r)))

@@ -20,9 +20,9 @@ def assembly_rule(d2, r3, r4, where: str) -> Rule:
     values in the same order, and one vector row per side."""
     if isinstance(d2, np.ndarray):
         d = np.sqrt(np.fmax(d2, 0.0))        # fmax as ca.fmax: a NaN sample reads 0, as in the list form
-        values = np.column_stack([d - abs(r3 - r4), r3 + r4 - d]).ravel()
-        rows = ((d2 - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - d2, 0.0, None))
-        return Rule("assembly", values, 0.0, None, "mm", 1.0, where, nlp_rows=rows, row_unit="mm^2")
+        margins = np.column_stack([d - abs(r3 - r4), r3 + r4 - d]).ravel()
+        sides = ((d2 - (r3 - r4) ** 2, 0.0, None), ((r3 + r4) ** 2 - d2, 0.0, None))
+        return Rule("assembly", margins, 0.0, None, "mm", 1.0, where, nlp_rows=sides, row_unit="mm^2")
     values, rows = [], []
     for q in d2:
         d = ca.sqrt(ca.fmax(q, 0.0))        # d^2 >= (r1 - r2)^2 >= 0; fmax only guards the last digit
