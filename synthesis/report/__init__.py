@@ -11,8 +11,8 @@ import dataclasses
 from pathlib import Path
 
 from synthesis import kinds
-from synthesis.core.library_log import captured_warnings
 from synthesis.errors import NothingToDraw
+from synthesis.report.drawing import Drawn, draw_all
 from synthesis.report.page import render
 from synthesis.report.tables import Candidate, candidates
 from synthesis.result import Result, atomic_write_text
@@ -53,17 +53,27 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
     failed: list[str] = []
     said: list[str] = []            # library warnings while drawing (matplotlib's): for the run's log
 
+    def keep(drawn: list[Drawn]) -> None:
+        for d in drawn:
+            if d.error is None:
+                said.append(d.said)
+                written.append(d.name)
+            else:
+                failed.append(f"{d.name} not written: {d.error}")
+
     def guarded(name: str, writer):
+        return lambda path: keep(draw_all({name: writer}, path.parent, cores=1))
+
+    def together(writers: dict) -> dict:
+        """Every writer drawn at once, side by side (synthesis.report.drawing), when the run folder asks for the
+        first of them; the others are then already written."""
+        pending = [True]
+
         def write(path: Path) -> None:
-            try:
-                with captured_warnings() as text:
-                    writer(path)
-                said.append(text())
-                written.append(name)
-            except Exception as exc:    # noqa: BLE001 - reported on the page, the run's result is kept
-                path.unlink(missing_ok=True)
-                failed.append(f"{name} not written: {type(exc).__name__}: {exc}")
-        return write
+            if pending:
+                pending.clear()
+                keep(draw_all(writers, path.parent))
+        return {name: write for name in writers}
 
     def report(path: Path) -> None:
         _log_drawing_warnings(path.parent, "".join(said), written)
@@ -84,7 +94,7 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         from synthesis.report.dynamics_plots import dynamics_figure
 
         writers["dynamics.png"] = lambda path: dynamics_figure(result, path)
-    artifacts = {name: guarded(name, w) for name, w in writers.items()}
+    artifacts = together(writers)
     artifacts["report.html"] = report
     return artifacts
 
