@@ -306,8 +306,8 @@ BASE = (PLANTING / "redesign_from_example1.toml").read_text()
     ("l2 = { init = 35, bounds = [28, 42] }", "l2 = { init = 50, bounds = [28, 42] }",
      "planting_fourbar.arm.l2: init 50 lies outside its bounds [28, 42]"),
     ('name = "nearest"', 'name = "fastest"',
-     "planting_fourbar.objective.name: expected 'nearest', 'robust', 'smooth', 'min_peak_torque' or "
-     "'min_peak_shaking_force'"),
+     "planting_fourbar.objective.name: expected 'nearest', 'robust', 'smooth', 'min_peak_torque', "
+     "'min_peak_shaking_force' or 'min_peak_shaking_moment'"),
 ])
 def test_bad_solve_specs(tmp_path, old, new, message):
     assert old in BASE
