@@ -328,6 +328,24 @@ def test_the_dynamics_figure_is_drawn_from_the_result_alone(tmp_path):
         dynamics_figure(kinds.get("crank_rocker").check(plain), tmp_path / "none.png")
 
 
+def test_compare_overlays_the_dynamics_of_the_candidates_that_have_them(tmp_path):
+    """compare of a result with facts.dynamics and one without: dynamics.png overlays the one (the other named as
+    left out) and the page shows it; of two without, no dynamics figure."""
+    from matplotlib.image import imread
+
+    from synthesis.report import comparison_figures
+    from synthesis.report.tables import candidates
+
+    with_table = kinds.get("crank_rocker").check(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker_dynamics.toml"))
+    plain = kinds.get("crank_rocker").check(load_spec(LIBRARY / "picker" / "cai2020_crank_rocker.toml"))
+    figures, notes = comparison_figures(candidates([with_table, plain]), tmp_path)
+    assert "dynamics.png" in [name for name, _ in figures] and not notes
+    assert imread(tmp_path / "dynamics.png").shape[0] > 500         # three panels drawn
+    (tmp_path / "dynamics.png").unlink()
+    figures, _ = comparison_figures(candidates([plain, plain]), tmp_path)
+    assert "dynamics.png" not in [name for name, _ in figures] and not (tmp_path / "dynamics.png").exists()
+
+
 def test_a_counterweight_changes_the_shaking_force_by_its_centrifugal_force_only():
     """Gravity off, constant speed: a counterweight m at radius r opposite the crank pin leaves the input torque as it is
     and adds m r omega^2 to the shaking force, pointing from the crank pivot away from the pin."""

@@ -23,13 +23,30 @@ def _caption(name: str) -> str:
 
 
 def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple[str, str]], list[str]]:
-    """Draw the kind's overlay figures of the candidates into ``folder``: ([(file, caption)], notes)."""
-    writer = kinds.compare_figures(cands[0].result.kind)
+    """Draw the kind's overlay figures of the candidates into ``folder``, and their dynamics where any has them:
+    ([(file, caption)], notes)."""
+    # figures name each candidate by its column label, which is unique even when spec names repeat
+    labelled = [dataclasses.replace(c.result, name=c.label) for c in cands]
+    figures, notes = _kind_overlays(labelled, folder)
+    if any((r.extra or {}).get("dynamics") for r in labelled):
+        # the inverse dynamics, the same figure for every kind that has them (docs/ARCHITECTURE.md "Dynamics")
+        from synthesis.report.dynamics_plots import dynamics_overlay
+
+        try:
+            dynamics_overlay(labelled, folder / "dynamics.png")
+            figures.append(("dynamics.png", "input torque, shaking force and shaking moment over the crank angle, "
+                                            "every candidate with a [dynamics] table"))
+        except Exception as exc:    # noqa: BLE001 - a figure is never worth losing the page: say why instead
+            notes.append(f"dynamics.png not drawn: {type(exc).__name__}: {exc}")
+    return figures, notes
+
+
+def _kind_overlays(results: list[Result], folder: Path) -> tuple[list[tuple[str, str]], list[str]]:
+    writer = kinds.compare_figures(results[0].kind)
     if writer is None:
         return [], []
     try:
-        # figures name each candidate by its column label, which is unique even when spec names repeat
-        written = writer([dataclasses.replace(c.result, name=c.label) for c in cands], folder)
+        written = writer(results, folder)
     except Exception as exc:    # noqa: BLE001 - a figure is never worth losing the page: say why instead
         # NothingToDraw is the kind's own word on why (e.g. no candidate has a design its model could evaluate);
         # anything else is data the figures need and did not find
