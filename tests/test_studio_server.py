@@ -654,3 +654,25 @@ def test_the_missing_extra_message_names_the_install_at_hand(tmp_path):
     assert install_command(site / "synthesis") == "pip install 'agrisynth[studio]'"
     assert missing_extra_text("uvicorn", site / "synthesis") == (
         "agrisynth studio needs the studio extra (uvicorn is missing): pip install 'agrisynth[studio]'")
+
+
+def test_the_drive_torque_follows_the_sliders():
+    """A spec with a [dynamics] table: the page gets the input torque and shaking moment (N m) and the shaking force
+    (N) over the crank angle, equal to check's facts.dynamics at those values (thinned to the page's points); moving
+    the crank length changes the torque curve."""
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+    from synthesis.studio.session import Session
+    from conftest import LIBRARY
+
+    path = LIBRARY / "picker" / "crank_rocker_torque_limited.toml"
+    session = Session.open(path)
+    given = session.evaluate({}, "fine")["drawing"]["charts"]
+    assert [(c["name"], c["unit"]) for c in given[:2]] == [("drive", "N m"), ("frame", "N")]
+    facts = kinds.get("crank_rocker").check(load_spec(path)).extra["dynamics"]
+    torque = dict(zip(given[0]["x"], given[0]["series"][0]["y"]))
+    for crank, value in list(zip(facts["crank_deg"], facts["input_torque_Nm"]))[::45]:
+        assert torque[round(crank, 3)] == pytest.approx(value, abs=1e-3)
+    moved = session.evaluate({"l7": session.given()["l7"] * 1.1}, "fine")["drawing"]["charts"]
+    peak = lambda chart: max(abs(v) for v in chart["series"][0]["y"])  # noqa: E731
+    assert abs(peak(moved[0]) - peak(given[0])) > 0.01 * peak(given[0])

@@ -153,7 +153,26 @@ def drawing(result: Result) -> dict[str, Any]:
         step = max(1, -(-len(frames) // MOST_FRAMES))
         frames, bars = frames[::step], None
     return {"main": {"lines": lines, "points": points}, "ground": ground,
-            "mechanism": {"frames": frames, "bars": bars, "shapes": shapes}, "charts": charts}
+            "mechanism": {"frames": frames, "bars": bars, "shapes": shapes},
+            "charts": _dynamics_charts(result.extra.get("dynamics")) + charts}
+
+
+def _dynamics_charts(dyn: Any) -> list[dict]:
+    """A result with ``facts.dynamics`` (docs/ARCHITECTURE.md "Dynamics"): the input torque and shaking moment (N m)
+    and the shaking force (N) over the crank angle, as the sliders move them."""
+    if not isinstance(dyn, dict) or not _numbers(dyn.get("crank_deg")) or not _numbers(dyn.get("input_torque_Nm")):
+        return []
+    crank = dyn["crank_deg"]
+    force = dyn.get("shaking_force_N") or []
+    magnitude = [math.hypot(*f) if _pair(f) else None for f in force]
+    moments = {"input torque": dyn["input_torque_Nm"], "shaking moment": dyn.get("shaking_moment_Nm")}
+    charts = [{"name": "drive", "x_name": "crank_deg", "unit": "N m", "x": _thin(crank, crank)[0],
+               "series": [{"name": k, "y": _thin(crank, v)[1]} for k, v in moments.items()
+                          if _numbers(v) and len(v) == len(crank)]}]
+    if len(magnitude) == len(crank):
+        charts.append({"name": "frame", "x_name": "crank_deg", "unit": "N", "x": _thin(crank, crank)[0],
+                       "series": [{"name": "|shaking force|", "y": _thin(crank, magnitude)[1]}]})
+    return charts
 
 
 def _kind_poses(kind: str):

@@ -582,7 +582,8 @@ function renderCharts(charts, ghosts) {
       box.append(panelBox);
       resized.observe(panelBox.querySelector("svg"));
     }
-    panelBox.querySelector("h3").textContent = `${chart.name}: deg over ${chart.x_name}`;
+    const unit = chart.unit || "deg";       // the facts' angle charts are in deg; the dynamics say their unit
+    panelBox.querySelector("h3").textContent = `${chart.name}: ${unit} over ${chart.x_name}`;
     const ghost = ghosts && ghosts[i] && ghosts[i].name === chart.name ? ghosts[i] : null;
     const all = [chart, ghost].filter(Boolean);
     const xs = all.flatMap((c) => c.x).filter((v) => v !== null);
@@ -593,7 +594,7 @@ function renderCharts(charts, ghosts) {
     const f = frameOf(root, [x0, y0 - 0.05 * h, x1, y1 + 0.05 * h], false);
     root.setAttribute("viewBox", `0 0 ${f.width} ${f.height}`);
     root.replaceChildren();
-    drawAxes(root, f, `${chart.x_name}`, "deg");
+    drawAxes(root, f, `${chart.x_name}`, unit);
     for (const [c, grey] of [[ghost, true], [chart, false]]) {
       if (!c) continue;
       c.series.forEach((s, k) => root.append(svg("path", { d: pathOf(c.x, s.y, f), fill: "none", "data-series": s.name,
