@@ -12,7 +12,7 @@ from conftest import LIBRARY
 from synthesis.kinds.crank_rocker.check import evaluate, mechanism, run_check
 from synthesis.kinds.crank_rocker.closed_form import residuals, solve_paper_equations
 from solving import diagnose_infeasible, recheck_rules, run_solve
-from synthesis.kinematics.crank_rocker import (CrankRocker, acute, extreme_positions, quick_return, rocker_curve,
+from synthesis.kinematics.rocker_drive import (CrankRocker, acute, extreme_positions, quick_return, rocker_curve,
                                               transmission_angles_deg)
 from synthesis.spec import load_spec
 
@@ -138,7 +138,7 @@ def test_a_crank_too_short_to_find_the_extremes_is_not_evaluated_not_a_crash(tmp
     reaches the kinematics some other way gets K, swing and transmission reported as not evaluated, with the
     reason, instead of a ValueError."""
     from synthesis.errors import SpecError
-    from synthesis.kinematics.crank_rocker import CrankRocker
+    from synthesis.kinematics.rocker_drive import CrankRocker
 
     text = (PICKER / "cai2020_crank_rocker_synthesis.toml").read_text()
     path = tmp_path / "tiny.toml"

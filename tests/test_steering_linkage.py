@@ -311,7 +311,7 @@ def test_bad_input_exits_2_naming_the_field(tmp_path, old, new, message):
 FORBIDDEN = ("synthesis.kinds.tillage_linkage", "synthesis.kinds.tillage_linkage.kinematics", "synthesis.kinds.tillage_linkage.rules",
              "synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.fourbar_path", "synthesis.kinds.crank_rocker",
              "synthesis.kinds.clamp_cam", "synthesis.kinds.guide_tube", "synthesis.kinds.planting.kinematics",
-             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.kinds.combing_chain",
+             "synthesis.kinematics.fourbar", "synthesis.kinematics.rocker_drive", "synthesis.kinds.combing_chain",
              "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 

@@ -271,7 +271,7 @@ def test_free_bounds_that_let_the_crank_reach_the_rollers_are_bad_input(tmp_path
 FORBIDDEN = ("synthesis.kinds.steering_linkage", "synthesis.kinds.steering_linkage.kinematics", "synthesis.kinds.steering_linkage.rules",
              "synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.fourbar_path", "synthesis.kinds.crank_rocker",
              "synthesis.kinds.clamp_cam", "synthesis.kinds.guide_tube", "synthesis.kinds.planting.kinematics",
-             "synthesis.kinematics.fourbar", "synthesis.kinematics.crank_rocker", "synthesis.kinds.combing_chain",
+             "synthesis.kinematics.fourbar", "synthesis.kinematics.rocker_drive", "synthesis.kinds.combing_chain",
              "synthesis.kinds.comb_finger", "synthesis.kinds.guide_way", "cvxpy")    # ezdxf: the run writes linkage.dxf
 
 

@@ -106,9 +106,9 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
     "required"), allowed range and meaning.  The same for every kind: docs/specs.md.
 
     \b
-    Examples:
-      agrisynth spec planting_fourbar
-      agrisynth spec clamp_cam --template --out my_cam.toml && agrisynth check my_cam.toml
+    Examples (KIND: a name `agrisynth problems` lists):
+      agrisynth spec KIND
+      agrisynth spec KIND --template --out my_design.toml && agrisynth check my_design.toml
     """
     description = kinds.get(kind)           # SpecError (exit 2) naming the known kinds
     if target is not None and not template:

@@ -153,7 +153,7 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
     \b
     Examples:
       agrisynth bench --quick
-      agrisynth bench clamp_cam guide_tube
+      agrisynth bench KIND [KIND ...]       (the kinds `agrisynth problems` lists)
       agrisynth bench --problems problems/planting_arm/redesign_from_example1.toml
     """
     request = BenchRequest(problems, spec_files, out, repeats, quick, no_extreme, force)

@@ -13,7 +13,7 @@ import pytest
 
 from synthesis.kinds.crank_rocker.check import mechanism
 from solving import agrisynth, recheck_rules, run_solve
-from synthesis.kinematics.crank_rocker import acute, quick_return, transmission_angles_deg
+from synthesis.kinematics.rocker_drive import acute, quick_return, transmission_angles_deg
 from synthesis.core.solve import starts_table
 from synthesis.core.verdict import measured, report_of
 from synthesis.spec import load_spec

@@ -18,7 +18,7 @@ import pytest
 
 from constraints.grashof import grashof_rule
 from synthesis import kinds
-from synthesis.kinematics.crank_rocker import CrankRocker, acute, rocker_curve, transmission_angles_deg
+from synthesis.kinematics.rocker_drive import CrankRocker, acute, rocker_curve, transmission_angles_deg
 from synthesis.spec import load_spec
 
 ROOT = Path(__file__).resolve().parents[2]

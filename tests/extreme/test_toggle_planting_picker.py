@@ -27,7 +27,7 @@ import math
 import numpy as np
 import pytest
 
-from synthesis.kinematics.crank_rocker import acute
+from synthesis.kinematics.rocker_drive import acute
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_states, joint_positions as picker_joints
 from synthesis.kinds.planting.kinematics import ArmDesign, joint_positions, link_angles
 from synthesis.kinds.planting.scene import transmission_angles_deg

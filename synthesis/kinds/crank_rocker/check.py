@@ -15,7 +15,7 @@ from constraints import Rule
 from constraints.grashof import grashof_rule
 from synthesis.kinds.crank_rocker.rules import rocker_swing_rule, time_ratio_rule
 from constraints.transmission import acute_transmission_rule
-from synthesis.kinematics.crank_rocker import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
+from synthesis.kinematics.rocker_drive import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
                                               transmission_angles_deg, turn_grid)
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules
 from synthesis.core.kind import figure_text
@@ -61,7 +61,7 @@ DYNAMICS_LINKS = ("crank GF", "coupler FE", "rocker AE")
 
 def linkage_dynamics(spec: CrankRockerSpec, lengths) -> FourbarDynamics:
     """The inverse dynamics' inputs of the lengths (l7, l8, l9, l10: floats or symbols): the shared four-bar with
-    frame l10, crank l7, coupler l8, rocker l9 and the frame along +x (synthesis.kinematics.crank_rocker)."""
+    frame l10, crank l7, coupler l8, rocker l9 and the frame along +x (synthesis.kinematics.rocker_drive)."""
     l7, l8, l9, l10 = lengths
     table = spec.dynamics
     # called only with a [dynamics] table, whose crank speed CrankRockerSpec's validator requires

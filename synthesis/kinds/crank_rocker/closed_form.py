@@ -8,7 +8,7 @@
 
 With l10 given these are four equations in l7, l8, l9 and theta1 (the angle G-A-E at the folded
 extreme).  They have several roots; each is returned with what the *simulated* mechanism does
-(:mod:`synthesis.kinematics.crank_rocker`), because eq (10) is only one of the two candidate
+(:mod:`synthesis.kinematics.rocker_drive`), because eq (10) is only one of the two candidate
 minima of the transmission angle (crank along the frame; the other is the crank against it).
 """
 
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import root
 
-from synthesis.kinematics.crank_rocker import CrankRocker, acute, quick_return, transmission_angles_deg
+from synthesis.kinematics.rocker_drive import CrankRocker, acute, quick_return, transmission_angles_deg
 
 
 def extreme_crank_angle(time_ratio: float) -> float:

@@ -23,7 +23,7 @@ from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem
 from synthesis.core.starts import pull_inside
 from synthesis.kinematics import fourbar
-from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function, turn_grid
+from synthesis.kinematics.rocker_drive import CrankRocker, quick_return, rocker_function, turn_grid
 from synthesis.spec.common import design_box
 from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
 

@@ -27,8 +27,8 @@ from constraints.base import Rule
 from synthesis import kinds
 from synthesis.spec.design_info import describe_fixed, describe_part
 from synthesis.errors import AssemblyError, SpecError
-from synthesis.kinematics.crank_rocker import CrankRocker, quick_return, rocker_function
-from synthesis.kinematics.crank_rocker import joints as crank_rocker_joints
+from synthesis.kinematics.rocker_drive import CrankRocker, quick_return, rocker_function
+from synthesis.kinematics.rocker_drive import joints as crank_rocker_joints
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_point, joint_positions
 from synthesis.kinds.picker import check as double_crank_check
 from synthesis.kinds.picker.spec import Installation, PickerDoubleCrankSpec, PickerSpec

@@ -47,7 +47,7 @@ def rocker_function(branch: int) -> ca.Function:
     ddbeta = ca.jacobian(dbeta, phi)
     mu = fourbar.transmission_angle(phi, l10, l7, l8, l9, 0.0, branch)
     tip = ca.vertcat(*rocker_tip(phi, p, branch))
-    return ca.Function(f"crank_rocker_{'p' if branch > 0 else 'm'}", [phi, p], [beta, dbeta, ddbeta, mu, tip],
+    return ca.Function(f"rocker_drive_{'p' if branch > 0 else 'm'}", [phi, p], [beta, dbeta, ddbeta, mu, tip],
                        ["phi", "p"], ["beta", "dbeta", "ddbeta", "mu", "tip"])
 
 
