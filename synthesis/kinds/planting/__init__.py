@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 from synthesis.core.kind import FixedBy, Kind
 
 if TYPE_CHECKING:
-    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, Solving, SpecModel
+    from synthesis.core.kind import CoarseCheck, CompareWriter, FigureWriter, Poses, ResultTable, Solving, SpecModel
     from synthesis.result import Result
     from synthesis.spec import LoadedSpec
 
@@ -45,7 +45,12 @@ class PlantingFourbar(Kind):
         return _parts().run_check(loaded)
 
     def headline(self, result: Result) -> list[str]:
+        """Entry angle, depth and hole, the seedling pick, the point rules' misses and, with [key_poses], each
+        pose's miss."""
         return _parts().headline(result)
+
+    def result_tables(self, result: Result) -> list[ResultTable]:
+        return _parts().result_tables(result)
 
     def solving(self) -> Solving:
         return _parts().SOLVING

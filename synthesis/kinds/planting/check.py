@@ -8,13 +8,14 @@ from typing import cast
 import numpy as np
 
 from constraints import Rule
-from synthesis.kinds.planting.kinematics import tip_state
+from constraints.poses import attitude_miss_deg
+from synthesis.kinds.planting.kinematics import claw_attitudes, tip_state
 from synthesis.dynamics.linkage import dynamics_facts
 from synthesis.kinds.planting.dynamics import JOINTS, LINKS, arm_dynamics, arm_linkage
 from synthesis.kinds.planting.rule_set import Trace, planting_rules
 from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
-                                      find_precision_points, float_trace, turn_scan)
-from synthesis.core.kind import figure_text
+                                      find_precision_points, float_trace, locate_poses, pose_key, turn_scan)
+from synthesis.core.kind import ResultTable, figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -31,7 +32,7 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMP
     why = assembly_status(scene.design)   # raises AssemblyError if it never assembles
     if why is None:
         scan = turn_scan(scene.design, turn_samples)    # P5's search and the transmission rule: one pass of a turn
-        pts = find_precision_points(scene, scan=scan)
+        pts = locate_poses(scene, find_precision_points(scene, scan=scan), turn_samples)
         trace = float_trace(scene, pts, phase_samples, turn_samples, scan=scan)
         return planting_rules(with_dynamics(scene, trace), limits), pts
     return unevaluated(scene, limits, why), None
@@ -109,7 +110,45 @@ def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict
         # rule limits the spec did not write, and how they follow from its inputs
         "rule_limits_from_inputs": spec.derived_limits(),
         **dynamics_facts_of(scene, spec.operation.crank_speed),
+        **key_pose_facts(scene, pts),
     }
+
+
+#: what the planting arm's claw attitude is (result.json's facts.key_poses, the spec's [key_poses] attitude)
+ATTITUDE_READING = ("direction of the claw arm A -> C (crank pin A to the claw tip C, rigid on the coupler), deg from "
+                    "+X (forward) counter-clockwise, in (-180, 180]")
+
+
+def key_pose_facts(scene: PlantingScene, pts: PrecisionPoints | None) -> dict:
+    """``{"key_poses": ...}`` when the spec has a [key_poses] table (else nothing): the claw's attitude at each
+    precision point found, and at each pose its crank angle, the tip and the claw there and their misses."""
+    if not scene.key_poses:
+        return {}
+    d, m = scene.design, scene.motion
+    points: dict[str, float | None] = {}
+    poses: dict[str, dict] = {}
+    if pts is not None:
+        points = {n: None if pts.theta[n] is None else math.degrees(float(claw_attitudes(d, [pts.theta[n]])[0]))
+                  for n in POINTS}
+    for name, pose in scene.key_poses.items():
+        target = {"x": pose.x, "y": pose.y, "tolerance": pose.tolerance, "attitude": pose.attitude,
+                  "attitude_tolerance": pose.attitude_tolerance}
+        theta = None if pts is None else pts.poses.get(name)
+        if theta is None:
+            why = ("the crank does not complete a turn" if pts is None
+                   else pts.problems.get(pose_key(name), f"key pose {name} not located"))
+            poses[name] = {"at": pose.at, "found": False, "why": why, "target": target}
+            continue
+        st = tip_state(d, m, theta)
+        x, y = float(st.pos[0, 0]), float(st.pos[1, 0])
+        attitude = math.degrees(float(claw_attitudes(d, [theta])[0]))
+        poses[name] = {"at": pose.at, "found": True, "crank_deg": math.degrees(theta) % 360.0, "x": x, "y": y,
+                       "miss_mm": None if pose.tip is None else math.hypot(x - pose.tip[0], y - pose.tip[1]),
+                       "attitude_deg": attitude,
+                       "attitude_miss_deg": (None if pose.attitude is None
+                                             else float(attitude_miss_deg(attitude, pose.attitude))),
+                       "target": target}
+    return {"key_poses": {"attitude": ATTITUDE_READING, "claw_attitude_at_points_deg": points, "poses": poses}}
 
 
 def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float) -> dict:
@@ -162,4 +201,39 @@ def headline(result: Result) -> list[str]:
     misses = [f"{name} by {figure_text(-rules[name]['margin'], rules[name].get('unit', ''))}" for name in POINT_RULES
               if name in rules and not rules[name].get("satisfied") and rules[name].get("margin") is not None]
     lines.append(f"P1-P6 misses: {'; '.join(misses)}" if misses else "P1-P6: every point rule holds")
+    return lines + pose_headline((result.extra or {}).get("key_poses") or {}, rules)
+
+
+def pose_headline(facts: dict, rules: dict) -> list[str]:
+    """A line per key pose: where it is read, the claw's attitude and the tip there against the targets, and which
+    of its rules miss (none without a [key_poses] table)."""
+    lines = []
+    for name, pose in (facts.get("poses") or {}).items():
+        where = f" at {pose['at']}" if pose.get("at") else ""
+        if not pose.get("found"):
+            lines.append(f"pose {name}{where}: not read ({pose.get('why')})")
+            continue
+        target, parts = pose.get("target") or {}, []
+        if target.get("attitude") is not None:
+            parts.append(f"attitude {pose['attitude_deg']:.1f} deg, {pose['attitude_miss_deg']:+.2f} deg from "
+                         f"{target['attitude']:g} (within {target['attitude_tolerance']:g})")
+        if pose.get("miss_mm") is not None:
+            parts.append(f"tip {pose['miss_mm']:.2f} mm from ({target['x']:g}, {target['y']:g}) (within "
+                         f"{target['tolerance']:g})")
+        missed = [n for n in (f"pose_{name}", f"pose_{name}_attitude")
+                  if n in rules and not rules[n].get("satisfied")]
+        lines.append(f"pose {name}{where}: {'; '.join(parts)}" + (f" -- MISSED ({', '.join(missed)})" if missed else ""))
     return lines
+
+
+def result_tables(result: Result) -> list[ResultTable]:
+    """The key poses (none without a [key_poses] table): each one's target and the claw where it is read."""
+    poses = (((result.extra or {}).get("key_poses") or {}).get("poses")) or {}
+    if not poses:
+        return []
+    rows = tuple((name, p.get("at") or "-", p.get("crank_deg"), p["target"]["attitude"], p.get("attitude_deg"),
+                  p.get("attitude_miss_deg"), p["target"]["x"], p["target"]["y"], p.get("x"), p.get("y"),
+                  p.get("miss_mm")) for name, p in poses.items())
+    return [ResultTable("Key poses: target and the claw where the pose is read (attitude: claw arm A -> C)", (
+        "pose", "at", "crank angle, deg", "target attitude, deg", "attitude, deg", "attitude miss, deg",
+        "target x, mm", "target y, mm", "x, mm", "y, mm", "tip miss, mm"), rows)]

@@ -32,12 +32,27 @@ from synthesis.kinematics import fourbar
 PARAMETERS = ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")
 
 
+def claw_arm(theta, p, branch: int) -> tuple[fourbar.Point, fourbar.Point]:
+    """(A, u): the crank pin A (mm) and the unit vector u along the claw arm A -> C, the direction AB turned
+    clockwise by phi, for the parameter vector p = (l1, l2, l3, l4, l5, zeta, phi) (mm, rad)."""
+    l1, l2, l3, l4, _, zeta, phi = (p[i] for i in range(7))
+    (ax, ay), (bx, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
+    return (ax, ay), fourbar.rotate(((bx - ax) / l3, (by - ay) / l3), -phi)
+
+
 def claw_tip(theta, p, branch: int) -> fourbar.Point:
     """C(theta) for the parameter vector p = (l1, l2, l3, l4, l5, zeta, phi) (mm, rad)."""
-    l1, l2, l3, l4, l5, zeta, phi = (p[i] for i in range(7))
-    (ax, ay), (bx, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
-    ux, uy = fourbar.rotate(((bx - ax) / l3, (by - ay) / l3), -phi)
+    (ax, ay), (ux, uy) = claw_arm(theta, p, branch)
+    l5 = p[4]
     return (ax + l5 * ux, ay + l5 * uy)
+
+
+def claw_attitude(theta, p, branch: int):
+    """The claw's attitude: the direction of the claw arm A -> C (crank pin A to the claw tip C, rigid on the
+    coupler), rad from +X counter-clockwise in (-pi, pi] (pointing straight down: -pi/2).  One expression for floats
+    and CasADi symbols: the check reads it through :func:`attitude_function`, the NLP on its own symbols."""
+    _, (ux, uy) = claw_arm(theta, p, branch)
+    return ca.atan2(uy, ux)
 
 
 @lru_cache(maxsize=4)
@@ -129,6 +144,30 @@ def tip_state(design: ArmDesign, motion: Motion, theta) -> TipState:
     pos, dpos, ddpos = f(theta.reshape(1, -1), design.parameters())
     pos, dpos, ddpos = (np.asarray(v).reshape(2, -1) for v in (pos, dpos, ddpos))
     return TipState(theta, pos, dpos * motion.omega, ddpos * motion.omega**2)
+
+
+@lru_cache(maxsize=4)
+def attitude_function(branch: int) -> ca.Function:
+    """CasADi Function (theta, p) -> the claw's attitude (rad, :func:`claw_attitude`)."""
+    theta = ca.SX.sym("theta")
+    p = ca.SX.sym("p", len(PARAMETERS))
+    return ca.Function(f"claw_attitude_branch{'p' if branch > 0 else 'm'}", [theta, p],
+                       [claw_attitude(theta, p, branch)], ["theta", "p"], ["attitude"])
+
+
+def claw_attitudes(design: ArmDesign, theta) -> np.ndarray:
+    """The claw's attitude (N,) at the crank angles theta (rad), rad (:func:`claw_attitude`).  Through the mapped
+    function: a few angles (the precision points, the key poses), for which no expanded grid is worth building."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    return np.asarray(_mapped(attitude_function, design.branch, theta.size)(theta.reshape(1, -1),
+                                                                             design.parameters())).ravel()
+
+
+def path_positions(design: ArmDesign, theta) -> np.ndarray:
+    """Positions (2, N) of C at the crank angles theta (rad), mm, through the mapped function (no expanded grid
+    built): a key pose's search for where the tip comes nearest its target."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    return np.asarray(_mapped(tip_position, design.branch, theta.size)(theta.reshape(1, -1), design.parameters()))
 
 
 @lru_cache(maxsize=4)

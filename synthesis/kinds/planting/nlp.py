@@ -1,6 +1,7 @@
 """The planting-arm problem: every rule of a planting_fourbar spec, declared for the solve core.
 
-Decision variables: the design variables (fixed ones get lo = hi) and the crank angles of P1-P6.
+Decision variables: the design variables (fixed ones get lo = hi), the crank angles of P1-P6 and, with a
+``[key_poses]`` table, the crank angle of each free pose (pinned where the tip comes nearest its target).
 The precision points are where the path meets the seedbed lines and the soil, written as
 structural equalities on their crank angles, so IPOPT sees smooth rows instead of min/max over
 samples.  The lowest point is stationary (vy = 0) and no sample of the turn lies lower.  The rules
@@ -27,8 +28,9 @@ from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Oper
 from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_epigraph, peak_of
 from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES
 from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage, counterweight_of
-from synthesis.kinds.planting.kinematics import link_function, tip_derivatives
-from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds, planting_rules
+from constraints.poses import nearest_row
+from synthesis.kinds.planting.kinematics import claw_attitude, link_function, path_positions, tip_derivatives
+from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds, planting_rules
 from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
 from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
@@ -74,9 +76,12 @@ class PlantingProblem:
         self.forward_speed = op.get("forward_speed", cast(float, spec.operation.forward_speed))       # m/s
         self.omega_sym = op["crank_speed"] * TWO_PI / 60.0 if "crank_speed" in op else self.omega
         x = ca.SX.sym("x", len(self.names))
-        # a seedling clearance adds the crank angle of the loop's top before P1 (see _structural)
+        # a seedling clearance adds the crank angle of the loop's top before P1 (see _structural), each free key pose
+        # its own crank angle after those (see _poses)
         self.clearance = float(spec.solver.seedling_clearance)
-        th = ca.SX.sym("theta", 7 if self.clearance > 0.0 else 6)
+        self.free_poses = [n for n, pose in spec.key_poses.items() if pose.at is None and pose.crank_angle is None]
+        self.pose_offset = 7 if self.clearance > 0.0 else 6
+        th = ca.SX.sym("theta", self.pose_offset + len(self.free_poses))
         v = {n: x[i] for i, n in enumerate(self.names)}
         theta = dict(zip(POINTS, (th[i] for i in range(6))))
         p = self._arm(v)
@@ -88,6 +93,8 @@ class PlantingProblem:
         # the nominal only (robust_redesign_from_example1 without them: P3 fell after P4, soil entry, in 2 of 2,000
         # Monte-Carlo samples, and the five rules that read P1-P3 could not be evaluated there)
         structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
+        poses, nearest = self._poses(p, theta, states, th)
+        structural += nearest
         self.problem = Problem(
             name="planting",
             x=ca.vertcat(x, th),
@@ -95,7 +102,7 @@ class PlantingProblem:
             ubx=np.concatenate([self.bounds[:, 1], np.full(th.numel(), THETA_BOUNDS[1])]),
             structural=structural,
             robust_structural=self._existence_rows,
-            rules=planting_rules(self._trace(v, p, theta, states), spec.rules),
+            rules=planting_rules(self._trace(v, p, theta, states, poses), spec.rules),
             objective=self._objective(x, v),
             backoff=scaled_backoff(spec.solver.backoff),
             hard_in_elastic=HARD_IN_ELASTIC,
@@ -128,7 +135,25 @@ class PlantingProblem:
         vel = dpos * self.omega_sym
         return pos, vel, (vel if isinstance(self.omega_sym, float) else dpos * self.omega)
 
-    def _trace(self, v, p, theta, states) -> Trace:
+    def _poses(self, p, theta, states, th) -> tuple[list[PoseReading], list]:
+        """The claw at each key pose on decision variables -- at its precision point's crank angle, at its
+        prescribed one, or at its own (a free pose) -- and the rows pinning each free pose's angle where the tip
+        comes nearest its target (the check's reading: synthesis.kinds.planting.scene.nearest_crank_angle)."""
+        branch, readings, rows = self.spec.arm.branch, [], []
+        tip = tip_derivatives(branch)
+        for name, pose in self.spec.key_poses.items():
+            if pose.at is not None:
+                angle, pos = theta[pose.at], states[pose.at][0]
+            else:
+                angle = (th[self.pose_offset + self.free_poses.index(name)] if pose.crank_angle is None
+                         else math.radians(pose.crank_angle))
+                pos, dpos, _ = tip(angle, p)
+                if pose.crank_angle is None:
+                    rows.append((nearest_row(pos[0] - pose.x, pos[1] - pose.y, dpos[0], dpos[1]), 0.0, 0.0))
+            readings.append(PoseReading(name, pose, angle, (pos[0], pos[1]), claw_attitude(angle, p, branch)))
+        return readings, rows
+
+    def _trace(self, v, p, theta, states, poses: list[PoseReading]) -> Trace:
         """The rules' trace on decision variables, sampled as ``[solver]`` says."""
         spec, omega = self.spec, self.omega_sym
         n = spec.solver.samples_per_phase
@@ -146,7 +171,7 @@ class PlantingProblem:
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
                      acc_scale=self.omega**2 * value_of(spec.arm.l2),
-                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v)))
+                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v)), poses=poses)
 
     def _structural(self, v, p, theta, states, top=None) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
@@ -201,7 +226,7 @@ class PlantingProblem:
         units = ["mm", "mm", "mm/s", "mm", "mm", "mm", "mm/s", "mm/s"] + ["mm/s"] * 3 + ["rad"] * 6
         if self.clearance > 0.0:
             units += ["mm/rad", "rad", "rad", "mm"]
-        return units + ["mm"]
+        return units + ["mm"] + ["mm^2/rad"] * len(self.free_poses)
 
     def _objective(self, x, v) -> ObjectiveParts | MaxMinMargin:
         name = self.spec.objective.name
@@ -264,7 +289,18 @@ class PlantingProblem:
             pos = tip_derivatives(self.spec.arm.branch).map(len(grid))(grid.reshape(1, -1),
                                                                        scene.design.parameters())[0]
             out.append(float(grid[int(np.argmax(scene.seedbed.height(np.asarray(pos, float))))]))
+        for name in self.free_poses:     # a free pose: the nearest sample of the start design's path
+            out.append(self.nearest_sample(scene, self.spec.key_poses[name].tip))
         return np.array(out)
+
+    @staticmethod
+    def nearest_sample(scene: PlantingScene, target, samples: int = 720) -> float:
+        """The crank angle (rad) of the sample of a turn where the start design's tip comes nearest ``target`` (mm);
+        0 where it assembles nowhere on the turn."""
+        grid = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+        pos = path_positions(scene.design, grid)
+        distance = (pos[0] - target[0]) ** 2 + (pos[1] - target[1]) ** 2
+        return float(grid[int(np.nanargmin(distance))]) if np.isfinite(distance).any() else 0.0
 
     def objective_value(self, f: float, elastic: bool) -> float:
         """The NLP's objective in report units: nearest as solved, robust as the smallest normalised
@@ -300,7 +336,11 @@ class PlantingProblem:
         return self.objective_value(out.objective, elastic)
 
     def details(self, out: NLPOutcome, compiled: CompiledNLP) -> dict:
-        """A start's crank angles of P1-P6 (deg) and the objective at the solver's own samples."""
+        """A start's crank angles of P1-P6 and of the free key poses (deg), and the objective at the solver's own
+        samples."""
         n = len(self.names)
-        return {"solver_crank_deg": {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])},
-                "solver_objective": self.objective_value(out.objective, compiled.elastic)}
+        crank = {k: math.degrees(float(t)) for k, t in zip(POINTS, out.x[n:n + 6])}
+        first = n + self.pose_offset
+        crank.update({f"key pose {name}": math.degrees(float(t))
+                      for name, t in zip(self.free_poses, out.x[first:first + len(self.free_poses)])})
+        return {"solver_crank_deg": crank, "solver_objective": self.objective_value(out.objective, compiled.elastic)}

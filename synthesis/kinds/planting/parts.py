@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from synthesis.kinds.planting.check import headline, run_check
+from synthesis.kinds.planting.check import headline, result_tables, run_check
 from synthesis.kinds.planting.coarse import COARSE
 from synthesis.kinds.planting.compare_plots import animation_of_one, kinematics_of_one, linkage_of_one, overlay_figures
 from synthesis.kinds.planting.export import write_linkage_dxf, write_paths_csv

@@ -2,9 +2,9 @@
 
 A trace holds what the rules read: the crank angle, position and velocity of P1-P6, the claw's
 Y acceleration sampled over the hold, throw and release phases, the link lengths and the
-transmission angle sampled over a turn.  ``check`` and the solver's fine-grid re-check build it on
-floats (root-found precision points, fine grids: :func:`synthesis.kinds.planting.scene.float_trace`),
-the NLP on CasADi symbols (the crank angles of P1-P6 are decision variables:
+transmission angle sampled over a turn, and the claw at each key pose.  ``check`` and the solver's fine-grid
+re-check build it on floats (root-found precision points, fine grids: :func:`synthesis.kinds.planting.scene.float_trace`),
+the NLP on CasADi symbols (the crank angles of P1-P6 and of the free key poses are decision variables:
 :mod:`synthesis.kinds.planting.nlp`); :func:`planting_rules` turns either into the same named rules.
 """
 
@@ -17,6 +17,7 @@ from typing import Any
 import casadi as ca
 
 from constraints import Rule
+from constraints.poses import attitude_miss_deg, pose_attitude_rule, pose_tip_rule
 from synthesis.kinds.planting.rules.acceleration import acceleration_sign_rule
 from synthesis.kinds.planting.rules.angles import entry_angle_rule
 from synthesis.kinds.planting.rules.depth import depth_rule
@@ -30,6 +31,42 @@ TWO_PI = 2.0 * math.pi
 POINTS = ("P1", "P2", "P3", "P4", "P5", "P6")
 #: acceleration phases: name -> (from, to); the cycle runs from P5, so throw ends at P5 one turn on
 PHASES = {"hold": ("P3", "P4"), "throw": ("P4", "P5"), "release": ("P5", "P6")}
+DEG = 180.0 / math.pi
+
+
+@dataclass
+class PoseReading:
+    """The claw at one key pose: the pose (the spec's ``[key_poses]`` entry), its crank angle (rad), the tip's
+    position (mm) and the claw's attitude (rad, :func:`synthesis.kinds.planting.kinematics.claw_attitude`) there,
+    floats or CasADi symbols; ``missing`` says why the pose could not be read (its point not found, the crank not
+    turning), and then the other fields are None."""
+
+    name: str
+    pose: Any
+    theta: Any = None
+    pos: tuple | None = None
+    attitude: Any = None
+    missing: str | None = None
+
+    @property
+    def where(self) -> str:
+        at = getattr(self.pose, "at", None)
+        return f"key pose {self.name}" + (f", at {at}" if at is not None else "")
+
+
+def pose_rules(readings: list[PoseReading]) -> list[Rule]:
+    """Per key pose, in the spec's order: the tip within its tolerance of (x, y) if the pose gives them
+    (``pose_<name>``), the claw's attitude within its tolerance if the pose gives one (``pose_<name>_attitude``)."""
+    rules = []
+    for r in readings:
+        pose, missing = r.pose, r.missing
+        if pose.tip is not None:
+            dx, dy = (None, None) if r.pos is None else (r.pos[0] - pose.tip[0], r.pos[1] - pose.tip[1])
+            rules.append(pose_tip_rule(r.name, dx, dy, pose.tolerance, r.where, missing))
+        if pose.attitude is not None:
+            miss = None if r.attitude is None else attitude_miss_deg(r.attitude * DEG, pose.attitude)
+            rules.append(pose_attitude_rule(r.name, miss, pose.attitude_tolerance, r.where, missing))
+    return rules
 
 
 @dataclass
@@ -58,6 +95,8 @@ class Trace:
     #: the inverse dynamics and its limits when the spec's [dynamics] table sets one
     #: (synthesis.kinds.planting.dynamics.ArmDynamics), else None: no dynamics rule
     dynamics: Any = None
+    #: the claw at each of the spec's key poses, in its order (none without a [key_poses] table)
+    poses: list[PoseReading] = field(default_factory=list)
 
     def missing(self, *names: str) -> str | None:
         """Why any of ``names`` is absent (the first reason), or None when all exist."""
@@ -100,7 +139,7 @@ def planting_rules(tr: Trace, limits) -> list[Rule]:
     if tr.dynamics is not None:      # on the transmission angle's grid over the turn
         samples = 0 if tr.mu_deg is None else (tr.mu_deg.numel() if hasattr(tr.mu_deg, "numel") else len(tr.mu_deg))
         rules += arm_dynamics_rules(tr.dynamics, samples, tr.turn_missing)
-    return rules
+    return rules + pose_rules(tr.poses)
 
 
 def phase_bounds(theta: dict[str, Any], phase: str) -> tuple[Any, Any]:

@@ -15,11 +15,13 @@ from typing import cast
 import numpy as np
 from scipy.optimize import brentq
 
+from constraints.poses import nearest_row
 from synthesis.errors import AssemblyError
-from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, scalar_function, tip_accelerations_y,
-                                                 tip_derivatives, tip_heights_and_transmission, tip_position,
-                                                 tip_positions, tip_state, transmission_angles)
-from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, Trace, phase_bounds
+from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, attitude_function, path_positions,
+                                                 scalar_function, tip_accelerations_y, tip_derivatives,
+                                                 tip_heights_and_transmission, tip_position, tip_positions, tip_state,
+                                                 transmission_angles)
+from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds
 from synthesis.spec.common import value_of
 from synthesis.spec.dynamics import DynamicsSection
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
@@ -58,6 +60,8 @@ class PlantingScene:
     dynamics: DynamicsSection | None = None
     #: the design's counterweight on the crank (mass kg, radius mm), or None
     counterweight: tuple | None = None
+    #: the spec's [key_poses]: name -> pose (synthesis.kinds.planting.spec.KeyPose); empty without the table
+    key_poses: dict = field(default_factory=dict)
 
     @property
     def acc_scale(self) -> float:
@@ -76,7 +80,7 @@ class PlantingScene:
         soil = v.get("soil_level") if spec.soil.level is not None else None
         weight = (v["counterweight_mass"], v["counterweight_radius"]) if "counterweight_mass" in v else None
         return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2),
-                   spec.dynamics, weight)
+                   spec.dynamics, weight, dict(spec.key_poses))
 
 
 @dataclass
@@ -86,6 +90,9 @@ class PrecisionPoints:
     theta: dict[str, float | None]
     soil_level: float | None
     problems: dict[str, str] = field(default_factory=dict)
+    #: each key pose's crank angle (rad; None where it cannot be read, ``problems[pose_key(name)]`` says why),
+    #: filled in by :func:`locate_poses`
+    poses: dict[str, float | None] = field(default_factory=dict)
 
     def missing(self, *names: str) -> str | None:
         """Why any of ``names`` is absent (the first reason), or None when all exist."""
@@ -258,6 +265,66 @@ def _misses_the_bottom(heights: np.ndarray, cycle: np.ndarray, exit_: float, ent
     return "the claw crosses the seedbed bottom only on its way up between soil exit and entry, never down"
 
 
+# ----------------------------------------------------------------------------- key poses
+
+def pose_key(name: str) -> str:
+    """The key of a pose's reason in :attr:`PrecisionPoints.problems` (apart from P1-P6's own)."""
+    return f"key pose {name}"
+
+
+def nearest_crank_angle(design: ArmDesign, target: tuple[float, float], samples: int) -> float:
+    """The crank angle (rad, in [0, 2 pi)) where the claw tip comes nearest ``target`` (mm): the nearest of
+    ``samples`` angles over a turn, then the root of (C - target) . dC/dtheta between its neighbours (the row the NLP
+    pins a free pose's angle with, :func:`constraints.poses.nearest_row`)."""
+    grid = np.linspace(0.0, TWO_PI, samples, endpoint=False)
+    pos = path_positions(design, grid)
+    k = int(np.argmin((pos[0] - target[0]) ** 2 + (pos[1] - target[1]) ** 2))
+    h, p, f = grid[1], design.parameters(), tip_derivatives(design.branch)
+
+    def row(th: float) -> float:
+        c, dc, _ = f(th, p)
+        return float(nearest_row(float(c[0]) - target[0], float(c[1]) - target[1], float(dc[0]), float(dc[1])))
+
+    lo, hi = grid[k] - h, grid[k] + h
+    return _refine(row, lo, hi) if row(lo) < 0.0 < row(hi) else float(grid[k])
+
+
+def locate_poses(scene: PlantingScene, pts: PrecisionPoints, samples: int = 3600) -> PrecisionPoints:
+    """Each key pose's crank angle into ``pts.poses``: its precision point's (None where that point was not found,
+    with the reason), its prescribed crank angle, or where the tip comes nearest its target on a turn of
+    ``samples`` angles (:func:`nearest_crank_angle`)."""
+    for name, pose in scene.key_poses.items():
+        theta: float | None
+        if pose.at is not None:
+            theta = pts.theta[pose.at]
+            if theta is None:
+                pts.problems[pose_key(name)] = f"{pose.at}: {pts.problems.get(pose.at, f'{pose.at} not found')}"
+        elif pose.crank_angle is not None:
+            theta = math.radians(pose.crank_angle)
+        else:
+            theta = nearest_crank_angle(scene.design, pose.tip, samples)
+        pts.poses[name] = theta
+    return pts
+
+
+def float_poses(scene: PlantingScene, pts: PrecisionPoints, turn_missing: str | None = None) -> list[PoseReading]:
+    """The claw at each key pose of a numeric design, at the crank angles :func:`locate_poses` found."""
+    if not scene.key_poses:
+        return []
+    d, out = scene.design, []
+    attitude = attitude_function(d.branch)
+    for name, pose in scene.key_poses.items():
+        theta = None if turn_missing else pts.poses.get(name)
+        if theta is None:
+            why = turn_missing or pts.problems.get(pose_key(name), f"key pose {name} not located")
+            out.append(PoseReading(name, pose, missing=why))
+            continue
+        at = tip_state(d, scene.motion, theta)
+        out.append(PoseReading(name, pose, theta, (float(at.pos[0, 0]), float(at.pos[1, 0])),
+                               float(attitude(theta, d.parameters()))))
+    return out
+
+
 # ----------------------------------------------------------------------------- rules
 
 def phase_grid(a: float, b: float, n: int) -> np.ndarray:
@@ -291,7 +358,7 @@ def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int =
                                                    turn_samples else transmission_angles_deg(d, turn_samples)),
                  omega=m.omega,
                  forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
-                 turn_missing=turn_missing)
+                 turn_missing=turn_missing, poses=float_poses(scene, pts, turn_missing))
 
 
 def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:

@@ -16,6 +16,7 @@ from typing import Annotated, Literal
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from synthesis.spec.dynamics import DynamicsSection
+from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
     POSITIVE, WITHIN_A_TURN, Interval, documented_range, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
@@ -131,6 +132,34 @@ class RulesSection(StrictModel):
         return self
 
 
+class KeyPose(ClawPose):
+    """A pose the claw must pass through: its attitude and/or its tip's position, read at a precision point
+    (``at``) or, for a free pose, where the tip comes nearest (x, y) (or at ``crank_angle``)."""
+
+    at: Literal["P1", "P2", "P3", "P4", "P5", "P6"] | None = Field(
+        None, description="the precision point the pose is read at (P1 seedling top, P2 seedbed top, P3 seedbed "
+                          "bottom, P4 soil entry, P5 lowest point, P6 soil exit): the claw's attitude there and, if "
+                          "x and y are given, the tip within tolerance of them; absent: a free pose at x, y")
+    x: float | None = Field(None, description="tip X (forward), machine frame, mm")
+    y: float | None = Field(None, description="tip Y (up), machine frame, mm")
+    attitude: float | None = attitude_field(
+        "claw attitude: the direction of the claw arm A -> C (crank pin A to the claw tip C, rigid on the coupler) "
+        "from +X (forward) counter-clockwise, deg (pointing straight down: -90, backwards: 180)")
+    crank_angle: float | None = Field(
+        None, ge=-360, le=360, description="crank angle of a free pose, deg from the frame line O -> O' "
+                                           "(absent: where the tip comes nearest (x, y), the solver's choice)")
+
+    @model_validator(mode="after")
+    def _where(self) -> "KeyPose":
+        if self.at is not None and self.crank_angle is not None:
+            raise ValueError(f"crank_angle: a pose at {self.at} is read at that point's crank angle; give at or "
+                             f"crank_angle, not both")
+        if self.at is None and self.crank_angle is None and self.tip is None:
+            raise ValueError("a free pose (no at, no crank_angle) is read where the tip comes nearest its target: "
+                             "give x and y (mm)")
+        return self
+
+
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the designs that satisfy every rule."""
 
@@ -176,6 +205,12 @@ class PlantingFourbarSpec(ProblemSpec):
     dynamics: DynamicsSection | None = Field(
         None, description="mass properties and limits for the inverse dynamics at the [operation] crank speed "
                           "(docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no dynamics rules")
+    key_poses: dict[str, KeyPose] = Field(
+        default_factory=dict, max_length=MAX_POSES,
+        description="named poses, e.g. [key_poses.entry] at = \"P4\", attitude = -100: the claw's attitude (and "
+                    "optionally the tip's position) at a precision point, or a free pose at x, y; each adds the "
+                    "rules pose_<name> (tip) and pose_<name>_attitude")
+    _pose_names = field_validator("key_poses")(pose_names)
     _derived: tuple[str, ...] = PrivateAttr(default=())          # rule limits filled in from the inputs
 
     @model_validator(mode="after")
