@@ -64,6 +64,7 @@ EXPECTED: dict[str, dict] = {
     # the depth is the analysis depth (25 mm) for every design: refused before any start (synthesis.core.pinned)
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
+    "planting_arm/key_pose_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5731995611015128)},
     "planting_arm/crank_speed_envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/envelope_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5695780708252276)},
     "planting_arm/envelope_redesign_from_example2.toml": {"check": 1, "solve": ("optimal", 1.3882984310732636)},
@@ -136,7 +137,7 @@ SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "fourbar_path/picking_arc.
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
-        "planting_arm/counterweight_min_shaking_from_example1.toml",
+        "planting_arm/counterweight_min_shaking_from_example1.toml", "planting_arm/key_pose_redesign_from_example1.toml",
         "rotary_planetary/key_pose_redesign.toml", "rotary_planetary/single_idler_redesign.toml"}
 #: solves of 10 s or more (started first: tests/conftest.py)
 LONG = {"fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml",
