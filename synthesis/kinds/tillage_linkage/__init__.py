@@ -30,7 +30,9 @@ class TillageLinkage(Kind):
     name = "tillage_linkage"
     summary = "distorted rotary tillage linkage: crank, bar through a roller pair, tool path (seed 002 eq 3-11)"
     objectives = {"min_bar_length": "shortest tillage bar c meeting every rule, mm",
-                  "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)"}
+                  "max_margin": "largest smallest normalised rule margin (the design deepest inside every rule)",
+                  "min_peak_torque": "smallest peak |input torque| on the flywheel over a turn, N m ([dynamics] "
+                                     "needed)"}
     example = "tillage/tillage_redesign.toml"
     bench_specs = ("tillage/tillage_redesign.toml",)
 

@@ -2,7 +2,8 @@
 
 Rules (one function, :func:`rules_of`, on floats or CasADi symbols): the tool tip's working depth and
 lift (exact extremes), its rearward motion relative to the soil while in it (sampled over the in-soil
-phase), the bar's angle to the roller slot and its engagement in the rollers (closed forms).  On floats
+phase), the bar's angle to the roller slot and its engagement in the rollers (closed forms), and with a
+``[dynamics]`` table's limits the peak input torque, shaking force and moment over a turn (dynamics.py).  On floats
 the extremes and the soil entry/exit are root-found on the AD derivatives of eq 7.
 """
 
@@ -19,6 +20,7 @@ from constraints import Rule
 from synthesis.kinds.tillage_linkage.rules import (bar_engagement_rule, bar_slot_angle_rule, lift_height_rule, rearward_in_soil_rule,
                                  working_depth_rule)
 from synthesis.core.verdict import FINE
+from synthesis.kinds.tillage_linkage.dynamics import TillageDynamics, dynamics_facts, dynamics_rules, turn
 from synthesis.kinds.tillage_linkage.kinematics import (acceleration, bar_angle, direction, joints, path_function, speed)
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
@@ -31,16 +33,38 @@ DEG = math.pi / 180.0
 CURVE_SAMPLES = 361
 
 
-def rules_of(spec: TillageSpec, a, b, c, depth, lift, vx_soil, missing: str | None = None) -> list[Rule]:
+def rules_of(spec: TillageSpec, a, b, c, depth, lift, vx_soil, missing: str | None = None,
+             dynamics: list[Rule] | None = None) -> list[Rule]:
     """Every rule of the spec on a trace of floats or symbols: the lengths, the depth and lift of the tool
     tip's extremes (mm), and its ground-frame speed along the travel (m/s) at the sampled in-soil crank
-    angles.  Used by check, the NLP and the re-check."""
+    angles; then the ``[dynamics.limits]`` rules (:func:`dynamics_rules_of`) when given.  Used by check, the NLP
+    and the re-check."""
     req = spec.requirements
     return [working_depth_rule(depth, req.depth),
             lift_height_rule(lift, req.lift),
             rearward_in_soil_rule(vx_soil, req.min_rearward_speed, missing),
             bar_slot_angle_rule(a, b, req.max_slot_angle),
-            bar_engagement_rule(a, b, c, req.min_engagement)]
+            bar_engagement_rule(a, b, c, req.min_engagement),
+            *(dynamics or [])]
+
+
+def linkage_dynamics(spec: TillageSpec, a, b, c, theta_rad, height_c, rate=None, forward=None) -> TillageDynamics:
+    """The inverse dynamics' inputs of a design (floats or symbols) at the flywheel speed ``rate`` (rad/s) and the
+    forward speed ``forward`` (m/s), by default the spec's ``[operation]``.  Needs a ``[dynamics]`` table."""
+    assert spec.dynamics is not None
+    return TillageDynamics.of(spec.dynamics, a, b, c, theta_rad, height_c,
+                              crank_rate(spec) if rate is None else rate,
+                              spec.operation.forward_speed if forward is None else forward)
+
+
+def dynamics_rules_of(spec: TillageSpec, a, b, c, theta_rad, height_c, samples: int, rate=None, forward=None
+                      ) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules on ``samples`` crank angles of a turn (floats or symbols); none without a
+    ``[dynamics]`` table or without a limit, so such a spec's rules are what they were."""
+    if spec.dynamics is None or not spec.dynamics.has_rules():
+        return []
+    return dynamics_rules(linkage_dynamics(spec, a, b, c, theta_rad, height_c, rate, forward), spec.dynamics.limits,
+                          turn(samples))
 
 
 def params(design: dict[str, float]) -> list[float]:
@@ -152,7 +176,18 @@ def evaluate(spec: TillageSpec, design: dict[str, float], samples: int, soil_sam
     m = motion(spec, design, samples, soil_samples)
     a, b, c = design["a"], design["b"], design["c"]
     missing = None if m.in_soil else never_in_soil(m)
-    return rules_of(spec, a, b, c, m.depth, m.lift, m.vx_soil if m.in_soil else None, missing), m
+    dynamics = dynamics_rules_of(spec, a, b, c, design["theta"] * DEG, design["height_c"], samples)
+    return rules_of(spec, a, b, c, m.depth, m.lift, m.vx_soil if m.in_soil else None, missing, dynamics), m
+
+
+def dynamics_of(spec: TillageSpec, design: dict[str, float]) -> dict:
+    """``{"dynamics": facts.dynamics}`` over a turn at the table's ``samples`` crank angles, or nothing without a
+    ``[dynamics]`` table."""
+    if spec.dynamics is None:
+        return {}
+    a, b, c, th = params(design)
+    dyn = linkage_dynamics(spec, a, b, c, th, design["height_c"])
+    return {"dynamics": dynamics_facts(dyn, spec.dynamics.samples, spec.operation.crank_speed, spec.dynamics)}
 
 
 def printed_relations(design: dict[str, float], samples: int = 720) -> dict:
@@ -254,6 +289,7 @@ def facts(spec: TillageSpec, design: dict[str, float], m: Motion) -> dict:
         # A, B, C, D at crank angles 45 deg apart (Fig. 18's positions 1-8)
         "positions": [{"crank_deg": k * 45.0, **{n: list(v) for n, v in joints(k * 45.0 * DEG, a, b, c, th).items()}}
                       for k in range(8)],
+        **dynamics_of(spec, design),
     }
 
 
@@ -268,14 +304,20 @@ def run_check(loaded: LoadedSpec) -> Result:
 
 
 def headline(result: Result) -> list[str]:
-    """Working depth and lift, the ground speed in the soil (rearward is negative) and the bar's slot angle, from
-    result.json facts."""
+    """Working depth and lift, the ground speed in the soil (rearward is negative) and the bar's slot angle, and with
+    a [dynamics] table the peak input torque, mean power and peak shaking force, from result.json facts."""
     facts = result.extra or {}
     low, high = facts.get("lowest_point") or {}, facts.get("highest_point") or {}
     if not low:
         return []
+    dyn = (facts.get("dynamics") or {}).get("summary") or {}
+    drive = []
+    if dyn:
+        drive = [f"peak input torque {figure_text((dyn.get('input_torque_Nm') or {}).get('peak'), 'N m')}, mean power "
+                 f"{figure_text(dyn.get('mean_power_W'), 'W')}, peak shaking force "
+                 f"{figure_text((dyn.get('shaking_force_N') or {}).get('peak'), 'N')}"]
     return [f"working depth {figure_text(low.get('depth_mm'), 'mm', 4)}, lift "
             f"{figure_text(high.get('lift_mm'), 'mm', 4)}",
             f"ground speed in the soil at most {figure_text(facts.get('max_ground_speed_in_soil_m_s'), 'm/s')}, bar slot "
             f"angle max {figure_text(facts.get('bar_slot_angle_max_deg'), 'deg')}, peak speed "
-            f"{figure_text(facts.get('peak_speed_m_s'), 'm/s')}"]
+            f"{figure_text(facts.get('peak_speed_m_s'), 'm/s')}", *drive]

@@ -1,7 +1,8 @@
 """The tillage linkage's check on the studio's coarse grid.  The check also measures, at the design, how far the
 paper's printed equations 3-11 are from the constructed geometry (four fifths of its time); that is a fact about
 the paper, not a rule, so the coarse grid leaves it out: the rules are the check's, on the [solver] samples (the
-check's are 10x), with the curve and the poses the page draws."""
+check's are 10x), with the curve and the poses the page draws, and with a [dynamics] table the check's facts.dynamics
+(the studio's torque and shaking charts)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ POSE_STEP_DEG = 45.0
 
 
 def evaluate(loaded) -> Result:
-    from synthesis.kinds.tillage_linkage.check import curves, evaluate as rules_at, joints, params
+    from synthesis.kinds.tillage_linkage.check import curves, dynamics_of, evaluate as rules_at, joints, params
 
     spec = loaded.model
     design = spec.design_values()
@@ -27,7 +28,7 @@ def evaluate(loaded) -> Result:
              for k in range(int(360 / POSE_STEP_DEG))]
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated", design=design,
                   rules=[r.record().to_json() for r in rules], trajectory=trajectory,
-                  extra={"curve": machine, "positions": poses})
+                  extra={"curve": machine, "positions": poses, **dynamics_of(spec, design)})
 
 
 def note(spec) -> str:

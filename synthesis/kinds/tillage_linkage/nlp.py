@@ -10,6 +10,10 @@ exact through structural rows on the AD derivatives of eq 7:
 
 Depth and lift are then exact; the rearward-motion rule is sampled on soil_samples + 1 crank angles
 spread over [omega_in, omega_out] (they move with the design) and backed off to hold between them.
+
+With a ``[dynamics]`` table, its limits are rules on the inverse dynamics at the ``samples`` crank angles of a
+turn (backed off like the rearward rule), and ``min_peak_torque`` minimises an epigraph variable t >= |input
+torque| at those angles; the soil force is the check's exact one (dynamics.py says why a kink is harmless).
 """
 
 from __future__ import annotations
@@ -26,10 +30,13 @@ from synthesis.core.problem import (MaxMinMargin, ObjectiveParts, Operating, Pro
 from synthesis.kinds.tillage_linkage.kinematics import path_function
 from synthesis.spec.common import design_box
 from synthesis.kinds.tillage_linkage.spec import NAMES, TillageSpec
-from synthesis.kinds.tillage_linkage.check import TWO_PI, crank_rate, motion, rules_of
+from synthesis.kinds.tillage_linkage.check import (TWO_PI, crank_rate, dynamics_rules_of, linkage_dynamics, motion,
+                                                   params, rules_of)
+from synthesis.kinds.tillage_linkage.dynamics import peak_epigraph, peak_torque, turn
+from synthesis.core.verdict import FINE
 
 DEG = math.pi / 180.0
-SAMPLED = ("rearward_in_soil",)
+SAMPLED = ("rearward_in_soil", "peak_input_torque", "peak_shaking_force", "peak_shaking_moment")
 #: least crank angle (rad) between the soil entry, the lowest point and the exit
 GAP = 0.02
 #: rows in mm are divided by this, so that IPOPT sees numbers of order one
@@ -46,6 +53,7 @@ def problem(setting: Setting) -> Declared:
     bounds, init = design_box(spec.variables(), NAMES)
     declared = _problem(spec, bounds, setting.operating_symbols)
     shortest = spec.objective.name == "min_bar_length"
+    peak = spec.objective.name == "min_peak_torque"
 
     def start(x0: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
         return np.concatenate([x0, angles_guess(spec, {n: float(v) for n, v in zip(NAMES, x0)})]), None
@@ -54,9 +62,21 @@ def problem(setting: Setting) -> Declared:
         return {"crank_deg": {k: math.degrees(float(v)) for k, v in
                               zip(("lowest", "highest", "soil_entry", "soil_exit"), out.x[5:9])}}
 
+    def reported(out, design: dict, elastic: bool) -> float:
+        """The bar length (mm), the design's own peak torque on the check's grid (N m), or the smallest margin."""
+        if peak:
+            return given_peak_torque(spec, design)
+        return design["c"] if shortest else -out.objective
+
     return Declared(declared, list(NAMES), bounds, init, design=named(list(NAMES)), start=start,
-                    objective=lambda out, design, elastic: design["c"] if shortest else -out.objective,
-                    details=crank_deg)
+                    objective=reported, details=crank_deg)
+
+
+def given_peak_torque(spec: TillageSpec, design: dict[str, float], samples: int | None = None) -> float:
+    """The peak |input torque| (N m) of a design on ``samples`` crank angles of a turn (default: the check's)."""
+    a, b, c, th = params(design)
+    n = FINE * spec.solver.samples if samples is None else samples
+    return peak_torque(linkage_dynamics(spec, a, b, c, th, design["height_c"]), turn(n))
 
 
 def _problem(spec: TillageSpec, bounds: np.ndarray, operating_symbols: bool) -> Problem:
@@ -100,9 +120,12 @@ def _problem(spec: TillageSpec, bounds: np.ndarray, operating_symbols: bool) -> 
     else:
         rate, forward = crank_rate(spec), spec.operation.forward_speed
     vx_soil = rate * dx_soil / 1000.0 + forward
-    rules = rules_of(spec, a, b, c, ground - y_low, y_top - ground, vx_soil)
+    dynamics = dynamics_rules_of(spec, a, b, c, theta_deg * DEG, h, s.samples, rate, forward)
+    rules = rules_of(spec, a, b, c, ground - y_low, y_top - ground, vx_soil, dynamics=dynamics)
     if spec.objective.name == "min_bar_length":
         objective: ObjectiveParts | MaxMinMargin = ObjectiveParts(f=c / MM)
+    elif spec.objective.name == "min_peak_torque":
+        objective = _peak_objective(spec, a, b, c, theta_deg * DEG, h, rate, forward)
     else:
         objective = MaxMinMargin()
     lbx = np.concatenate([bounds[:, 0], [-TWO_PI] * 4])
@@ -125,11 +148,24 @@ def _problem(spec: TillageSpec, bounds: np.ndarray, operating_symbols: bool) -> 
                    # and so is the objective c / MM -- declared "" once, which left them at mm size
                    # under a length-unit change (tests/extreme/test_scale.py), the angle gaps in rad
                    x_units=["mm", "mm", "mm", "deg", "mm"] + ["rad"] * 4,
-                   structural_units=["mm"] * 6 + ["rad"] * 3, objective_unit="mm", operating=operating,
+                   structural_units=["mm"] * 6 + ["rad"] * 3,
+                   objective_unit="N m" if spec.objective.name == "min_peak_torque" else "mm", operating=operating,
                    # in a tolerance box, what makes entry and exit exist -- the crossings' directions and
                    # the order entry < lowest < exit -- is held at its linearised worst case like a rule,
                    # so every design in the box has them (as planting's precision points)
                    robust_structural=EXISTENCE_ROWS)
+
+
+def _peak_objective(spec: TillageSpec, a, b, c, theta_rad, h, rate, forward) -> ObjectiveParts:
+    """Minimise the peak |input torque| over the ``samples`` crank angles of a turn: an epigraph variable t (N m),
+    scaled by the given design's peak on the same angles so the objective is about 1 at the start."""
+    n = spec.solver.samples
+    given = given_peak_torque(spec, spec.design_values(), n)
+    # a given design that moves no mass against no soil (0) gives no scale: 1 N m then
+    typical = given if math.isfinite(given) and given > 0.0 else 1.0
+    t, rows = peak_epigraph(linkage_dynamics(spec, a, b, c, theta_rad, h, rate, forward), turn(n))
+    return ObjectiveParts(f=t / typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf], extra_init=[typical],
+                          rows=rows, extra_units=["N m"], row_units=["N m"] * len(rows))
 
 
 def angles_guess(spec: TillageSpec, design: dict[str, float]) -> np.ndarray:

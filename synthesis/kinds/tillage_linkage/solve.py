@@ -9,7 +9,7 @@ from synthesis.core.verdict import FINE, Recheck, StartReport
 from synthesis.kinds.tillage_linkage.check import curves, evaluate, facts
 from synthesis.kinds.tillage_linkage.nlp import problem
 
-OBJECTIVE_UNITS = {"min_bar_length": "mm", "max_margin": "normalised margin"}
+OBJECTIVE_UNITS = {"min_bar_length": "mm", "max_margin": "normalised margin", "min_peak_torque": "N m"}
 
 
 def fine(spec, design: dict[str, float]):

@@ -5,6 +5,11 @@ Linkage (mm, deg): crank radius a = AB, b = AC (flywheel centre A to roller pair
 depression angle theta of C seen from A, and the height of C above the ground.  Operation: flywheel
 speed (r/min, counter-clockwise) and forward speed (m/s).  ``check`` evaluates the given linkage over a
 crank turn; ``solve`` frees the variables written as ``{init, bounds}``.
+
+An optional ``[dynamics]`` table (:class:`TillageDynamicsSection`) gives the moving links' mass properties, gravity,
+the soil force on the tool and limits for the inverse dynamics at the constant flywheel speed of ``[operation]``
+(synthesis/kinds/tillage_linkage/dynamics.py).  Link frames: the crank's origin at the flywheel centre A, x towards
+the crank pin B; the bar's origin at B, x towards the tool D (along the bar, through the rollers C).
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from synthesis.spec.common import (
     POSITIVE, FreeVariable, documented_range, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
+from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
 
 KIND = "tillage_linkage"
 NAMES = ("a", "b", "c", "theta", "height_c")
@@ -81,9 +87,67 @@ class Requirements(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the linkages that satisfy every rule."""
 
-    name: Literal["min_bar_length", "max_margin"] = Field(
+    name: Literal["min_bar_length", "max_margin", "min_peak_torque"] = Field(
         "min_bar_length", description="min_bar_length: the shortest bar c meeting every rule (a compact, light "
-                                      "tool); max_margin: the largest smallest normalised rule margin")
+                                      "tool); max_margin: the largest smallest normalised rule margin; "
+                                      "min_peak_torque: the smallest peak |input torque| on the flywheel over a turn, "
+                                      "N m (a [dynamics] table needed)")
+
+
+class TillagePointMass(StrictModel):
+    """A mass carried by a moving link (the tool, a crank pin, a counterweight), its own inertia neglected."""
+
+    link: Literal["crank", "bar"] = Field(description="the link that carries it: the crank (flywheel) or the bar")
+    mass: float = Field(gt=0.0, le=1000.0, description="mass, kg")
+    at: tuple[float, float] | Literal["tip"] = Field(
+        description="position in the link frame, mm; or \"tip\": the tool tip D at the bar's end (moves with c)")
+    note: str = Field("", description="what it is and where its value comes from")
+
+
+class SoilForce(StrictModel):
+    """The soil's resistance on the tool at D while D is below the ground (depth d = -height_c - y_D > 0): a force
+    of magnitude f0 + k d opposing D's velocity relative to the soil (ground frame: the machine travels at
+    ``[operation] forward_speed``), zero above the ground."""
+
+    f0: float = Field(0.0, ge=0.0, le=1.0e5, description="the force at zero depth, N (a jump at soil entry and exit "
+                                                          "when > 0)")
+    k: float = Field(ge=0.0, le=1.0e4, description="its growth with depth, N/mm")
+    source: str = Field(min_length=1, description="where f0 and k come from: a cited figure, or say that they are "
+                                                  "an assumption and how they were estimated")
+
+
+class TillageDynamicsSection(StrictModel):
+    """Mass properties, soil force and limits for the inverse dynamics at the constant flywheel speed of
+    ``[operation] crank_speed`` (synthesis/kinds/tillage_linkage/dynamics.py)."""
+
+    crank: BarLink | LumpedLink = Field(
+        description="the flywheel with its crank AB: a bar {density, area} from A to B, or {mass, com, inertia} in the "
+                    "crank frame (origin A, x towards B; a balanced flywheel: com = [0, 0])")
+    bar: BarLink | LumpedLink = Field(
+        description="the tillage bar BD: a bar {density, area} of length c (mass and inertia follow c), or {mass, com, "
+                    "inertia} in the bar frame (origin B, x towards D)")
+    point_masses: list[TillagePointMass] = Field(default_factory=list,
+                                                 description="masses carried by the links (the tool: at = \"tip\")")
+    gravity: tuple[float, float] = Field((0.0, -9.81), description="gravity in the machine frame, m/s^2 (0 allowed)")
+    soil: SoilForce | None = Field(None, description="the soil force on the tool; left out: none")
+    roller_friction: float = Field(0.0, ge=0.0, le=1.0,
+                                   description="Coulomb friction coefficient of the bar in the roller pair C "
+                                               "(dimensionless; 0: the roller force is normal to the bar)")
+    samples: int = Field(360, ge=8, le=3600, description="crank angles of result.json's facts.dynamics over a turn")
+    limits: DynamicsLimits = Field(default_factory=DynamicsLimits)
+    assumption: str = Field("", description="which values are ours, not a paper's")
+
+    def has_rules(self) -> bool:
+        limits = self.limits
+        return any(v is not None for v in (limits.peak_input_torque, limits.peak_shaking_force,
+                                           limits.peak_shaking_moment))
+
+    @model_validator(mode="after")
+    def _tip_on_the_bar(self) -> "TillageDynamicsSection":
+        if any(pm.at == "tip" and pm.link != "bar" for pm in self.point_masses):
+            raise ValueError("point_masses: at = \"tip\" is the tool tip D, on the bar; on the crank give the "
+                             "position in the crank frame, mm")
+        return self
 
 
 class SolverSection(MultistartSettings):
@@ -104,6 +168,18 @@ class TillageSpec(ProblemSpec):
     requirements: Requirements
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    dynamics: TillageDynamicsSection | None = Field(
+        None, description="mass properties, the soil force on the tool and limits for the inverse dynamics at the "
+                          "constant flywheel speed (input torque, pin reaction at B, roller reaction at C, shaking "
+                          "force and moment, power).  Seed 002 prints no masses or soil forces: say which values are "
+                          "assumptions in `assumption` and `soil.source`.  Left out: no dynamics, no dynamics rules")
+
+    @model_validator(mode="after")
+    def _dynamics_for_the_objective(self) -> "TillageSpec":
+        if self.objective.name == "min_peak_torque" and self.dynamics is None:
+            raise ValueError("objective.name = 'min_peak_torque' needs a [dynamics] table (mass properties and the "
+                             "soil force)")
+        return self
 
     def variables(self) -> dict[str, Variable]:
         return {n: getattr(self.linkage, n) for n in NAMES}
