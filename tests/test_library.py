@@ -25,10 +25,12 @@ RTOL = 1e-6
 #: spec (relative to problems/) -> {"check": exit code, "solve": (status, objective) | ("exit", code)}
 EXPECTED: dict[str, dict] = {
     "clamp_cam/opening_cam.toml": {"check": 1, "solve": ("exit", 2)},
+    "clamp_cam/opening_cam_follower_dynamics.toml": {"check": 1, "solve": ("exit", 2)},
     "clamp_cam/opening_cam_optimised_law.toml": {"check": 1, "solve": ("exit", 2)},
     "clamp_cam/opening_cam_redesign.toml": {"check": 1, "solve": ("optimal", 71.07573306690672)},
     "clamp_cam/opening_cam_redesign_modified_sine.toml": {"check": 1, "solve": ("optimal", 68.56927256227823)},
     "clamp_cam/opening_cam_redesign_return.toml": {"check": 1, "solve": ("optimal", 0.03613260744254505)},
+    "clamp_cam/opening_cam_redesign_spring_dynamics.toml": {"check": 0, "solve": ("optimal", 7.504091302805729)},
     "clamp_cam/opening_cam_robust_redesign.toml": {"check": 1, "solve": ("optimal", 71.63263722569987)},
     "clamp_cam/rotating_cam.toml": {"check": 1, "solve": ("exit", 2)},
     "clamp_cam/rotating_cam_redesign.toml": {"check": 1, "solve": ("optimal", 50.83704406389)},
@@ -131,7 +133,8 @@ def test_every_library_spec_is_recorded():
 SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3, 4))}
 #: solves of seconds: run with the slow tests (`pytest -m slow`); the default suite keeps a solve of every kind
 #: (planting_arm: redesign_from_example4)
-SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml",
+SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_redesign_spring_dynamics.toml",
+        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml",
         "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
         "picker/picker_double_crank_min_peak_torque.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",

@@ -25,7 +25,9 @@ class ClampCam(Kind):
     summary = "clamp cams: motion law, roller-follower profile, pressure angle, undercut (seed 001 §2.2)"
     objectives = {"base_radius": "smallest base-circle radius, mm",
                   "pressure_angle": "smallest peak pressure angle (measured on the fine grid), deg",
-                  "nearest": "smallest change from the given cam"}
+                  "nearest": "smallest change from the given cam",
+                  "spring_force": "smallest peak spring load on the follower (preload + stiffness x stroke), N "
+                                  "(N m for an oscillating follower); needs [dynamics]"}
     example = "clamp_cam/opening_cam_redesign_modified_sine.toml"
     bench_specs = ("clamp_cam/opening_cam_redesign.toml", "clamp_cam/rotating_cam_redesign.toml")
 

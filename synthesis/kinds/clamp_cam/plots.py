@@ -1,6 +1,7 @@
 """Figures of a clamp_cam result, drawn from result.json alone (never re-solving).
 
-motion.png   follower displacement, velocity, acceleration and pressure angle over a turn
+motion.png   follower displacement, velocity, acceleration and pressure angle over a turn (and, with a [dynamics]
+             table, the contact force)
 profile.png  working profile, pitch curve, base circle and the roller at the segment starts
 compare      the same, several results overlaid (baseline first) for ``agrisynth compare``
 """
@@ -37,8 +38,10 @@ def _shade_segments(ax, follower: dict) -> None:
             start = i
 
 
-def _motion_axes(results: list[Result], title: str):
-    fig, axes = plt.subplots(4, 1, figsize=(9, 9.5), sharex=True)
+def _motion_axes(results: list[Result], title: str, contact: bool = False):
+    """Follower s, v, a and pressure angle over a turn; ``contact``: a fifth panel, the first result's contact force
+    (facts.dynamics of a spec with a [dynamics] table)."""
+    fig, axes = plt.subplots(5 if contact else 4, 1, figsize=(9, 11.5 if contact else 9.5), sharex=True)
     unit = results[0].extra["follower"]["unit"]
     labels = (f"s, {unit}", f"v, {unit}/s", f"a, {unit}/s$^2$", "pressure angle, deg")
     keys = ("s", "v", "a", "pressure_angle_deg")
@@ -60,6 +63,8 @@ def _motion_axes(results: list[Result], title: str):
                                 label=text if sign == 1 else None)
     legend_below(axes[3], fontsize=7)
     legend_right(axes[0], fontsize=7)
+    if contact:
+        _contact_panel(axes[4], results[0])
     axes[-1].set_xlabel("crank angle on the picker's clock, deg (0 = pick)")
     axes[-1].set_xlim(0, 360)
     axes[-1].set_xticks(np.arange(0, 361, 30))
@@ -68,10 +73,37 @@ def _motion_axes(results: list[Result], title: str):
     return fig
 
 
+def _contact_panel(ax, result: Result) -> None:
+    """Contact force between roller and cam over the turn, with its limit and the spring's load."""
+    dyn = result.extra["dynamics"]
+    crank = dyn["crank_deg"]
+    ax.plot(crank, dyn["contact_force_N"], lw=1.3, color="C0", label="contact force, N")
+    spring = dyn.get("spring_force_N")
+    if spring is not None:
+        ax.plot(crank, spring, lw=1.0, ls=":", color="C2", label="spring force, N")
+    jump = dyn.get("jump_speed_rpm")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    least = _lower_limit(result, "contact_force_min")
+    if least is not None:
+        ax.axhline(least, ls="--", lw=0.9, color="tab:red", label=f"min contact force {least:g} N")
+    ax.set_ylabel("contact force, N")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"jump speed {'never' if jump is None else f'{jump:.4g} r/min'}", fontsize=8, loc="left")
+    legend_below(ax, fontsize=7)
+
+
+def _lower_limit(result: Result, name: str):
+    for r in result.rules:
+        if r["name"] == name:
+            return r["limit"][0]
+    return None
+
+
 def motion_figure(result: Result, path: Path) -> None:
     cam = result.extra["cam"]
+    contact = isinstance((result.extra or {}).get("dynamics"), dict) and "contact_force_N" in result.extra["dynamics"]
     fig = _motion_axes([result], f"{result.name}: {cam['law']} law, {cam['stroke']:g} {cam['stroke_unit']} stroke, "
-                                 f"{cam['crank_speed_rpm']:g} r/min")
+                                 f"{cam['crank_speed_rpm']:g} r/min", contact=contact)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

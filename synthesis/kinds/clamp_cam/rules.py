@@ -76,6 +76,47 @@ def timing_rule(kind: str, index: int, window_deg: tuple, dwell_start, dwell_end
     return Rule(name, np.array(margins, dtype=float), 0.0, None, "deg", 1.0, where)
 
 
+#: where the dynamics rules are evaluated
+_OVER_A_TURN = "over a turn (rise, dwells, return)"
+
+
+def contact_force_rule(force, minimum: float) -> Rule:
+    """Contact force between roller and cam (N, along the common normal) >= ``minimum`` at every sample of the turn
+    at the crank speed: the spring keeps the roller on the cam with that margin."""
+    where = f"{_OVER_A_TURN} at the crank speed"
+    return Rule("contact_force_min", force, minimum, None, "N", max(minimum, 1.0), where)
+
+
+def hertz_stress_rule(stress, limit: float, force=None, allowed_force=None, reference_force: float = 1.0) -> Rule:
+    """Hertz stress between roller and cam (MPa) <= ``limit`` at every sample of the turn.
+
+    On symbols the NLP holds the smooth form ``force <= allowed_force`` (the contact force at which the stress
+    reaches the limit, linear in the relative radius of curvature, so smooth through F = 0 where the stress is
+    not), scaled by limit / (2 ``reference_force``) so that near the limit a row reads about stress - limit, MPa.
+    """
+    where = f"{_OVER_A_TURN}, roller on the working profile (line contact)"
+    if _symbolic(stress) or _symbolic(force):
+        row = (force - allowed_force) * (limit / (2.0 * reference_force))
+        return Rule("hertz_stress_max", stress, None, limit, "MPa", limit / 10.0, where,
+                    nlp_rows=((row, None, 0.0),))
+    return Rule("hertz_stress_max", stress, None, limit, "MPa", limit / 10.0, where)
+
+
+def jump_speed_rule(speeds_rpm, minimum: float, force_at_minimum=None, rpm_per_newton: float = 1.0) -> Rule:
+    """Jump speed (r/min) >= ``minimum``: the follower stays on the cam up to that cam speed.
+
+    ``speeds_rpm``: the speed at which the contact force vanishes at each sample where the spring must decelerate
+    the follower (the rule's value is their smallest, the jump speed).  On symbols the NLP holds the contact force
+    at the ``minimum`` speed >= 0 at every sample (``force_at_minimum``, N): smooth, and it also holds where no
+    sample decelerates (the spring must hold the follower at rest).  ``rpm_per_newton`` scales those rows so that
+    near the limit they read about jump speed - minimum, r/min (1 / (2 |dF/d omega^2| omega) at the given design)."""
+    where = "the cam speed at which the contact force first reaches zero over a turn"
+    if _symbolic(speeds_rpm) or _symbolic(force_at_minimum):
+        return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where,
+                    nlp_rows=((force_at_minimum * rpm_per_newton, 0.0, None),))
+    return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where)
+
+
 def acceleration_rule(acc_samples, limit: float, unit: str) -> Rule:
     """|follower acceleration| <= limit at every sample of the rise and the return."""
     if _symbolic(acc_samples):

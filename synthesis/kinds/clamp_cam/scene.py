@@ -12,22 +12,26 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from constraints.base import Rule
-from synthesis.kinds.clamp_cam.rules import acceleration_rule, pressure_angle_rule, timing_rule, undercut_rule
+from synthesis.kinds.clamp_cam.rules import (acceleration_rule, contact_force_rule, hertz_stress_rule, jump_speed_rule,
+                                             pressure_angle_rule, timing_rule, undercut_rule)
 from synthesis.kinds.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing
 from synthesis.errors import AssemblyError
 from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
+from synthesis.kinds.clamp_cam.kinematics import follower_dynamics as fd
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
 from synthesis.kinds.clamp_cam.spec import ClampCamSpec
+from synthesis.spec.common import value_of
 
 TWO_PI = 2.0 * math.pi
 
 
 def omega_of(spec: ClampCamSpec) -> float:
     """Cam speed, rad/s."""
-    return spec.operation.crank_speed * TWO_PI / 60.0
+    return spec.operation.speed * TWO_PI / 60.0
 
 
 def stroke_of(spec: ClampCamSpec) -> float:
@@ -79,7 +83,7 @@ def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:
 def window_degrees(spec: ClampCamSpec, crank_speed=None) -> dict[str, list[tuple]]:
     """Timing windows in crank degrees (a clock in seconds is converted at the crank speed: the spec's, or
     ``crank_speed``, a CasADi symbol of the tolerance analysis's build)."""
-    n = spec.operation.crank_speed if crank_speed is None else crank_speed
+    n = spec.operation.speed if crank_speed is None else crank_speed
     factor = 1.0 if spec.timing.clock == "deg" else 360.0 * n / 60.0
     return {kind: [(lo * factor, hi * factor) for lo, hi in getattr(spec.timing, kind)]
             for kind in ("hold_near", "hold_far")}
@@ -225,12 +229,13 @@ def cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
 
 
 def rules_of(spec: ClampCamSpec, alpha_driven, alpha_return, kappa, roller_radius, timing: Timing, acceleration,
-             reference: Timing | None = None, crank_speed=None) -> list[Rule]:
+             reference: Timing | None = None, crank_speed=None, dynamics: DynamicsTrace | None = None) -> list[Rule]:
     """Every rule of the spec on a trace of floats or CasADi symbols: the pressure angles (deg) while the
     cam drives (rise and dwells) and on the return, the pitch curvature, the roller radius, the timing,
     and the follower acceleration while it moves (report units per s^2).  Used by check, the NLP and
     the fine-grid re-check; ``reference`` (numbers) unwraps symbolic timing windows like their start;
-    ``crank_speed`` (a symbol, the tolerance analysis's) converts windows timed in seconds."""
+    ``crank_speed`` (a symbol: the tolerance analysis's, an operating envelope's) converts windows timed in
+    seconds; ``dynamics`` (with a [dynamics] table) the follower's loads over the turn, for its limits."""
     lim = spec.rules
     rules = [pressure_angle_rule("rise", alpha_driven, lim.pressure_angle_rise),
              pressure_angle_rule("return", alpha_return, lim.pressure_angle_return),
@@ -240,6 +245,8 @@ def rules_of(spec: ClampCamSpec, alpha_driven, alpha_return, kappa, roller_radiu
     rules += timing_rules(spec, timing, reference, crank_speed)
     if lim.max_acceleration is not None:
         rules.append(acceleration_rule(acceleration, lim.max_acceleration, f"{stroke_unit(spec)}/s^2"))
+    if dynamics is not None:
+        rules += dynamics_rules(spec, dynamics)
     return rules
 
 
@@ -249,7 +256,123 @@ def _cam_rules(scene: CamScene, g: Geometry) -> list[Rule]:
     moving = g.where("rise") | g.where("return")
     acc = to_report_units(spec, g.samples.dds[moving]) * scene.omega**2
     return rules_of(spec, g.alpha_deg[driven], g.alpha_deg[g.where("return")], g.kappa, scene.roller_radius,
-                    scene.motion.timing, acc)
+                    scene.motion.timing, acc, dynamics=dynamics_trace(scene, g))
+
+
+# ------------------------------------------------------------------ follower dynamics ([dynamics])
+
+def body_of(spec: ClampCamSpec, v: dict[str, Any]) -> fd.FollowerBody | None:
+    """The follower's mass, spring and gravity of design values ``v`` (floats or CasADi symbols; the spring's
+    preload and stiffness are design variables), or None without a [dynamics] table."""
+    d = spec.dynamics
+    if d is None:
+        return None
+    if spec.follower.type == "translating":
+        return fd.FollowerBody(d.mass, v["spring_preload"], v["spring_stiffness"], d.gravity, d.mass, 1.0)
+    return fd.FollowerBody(d.inertia, v["spring_preload_torque"], v["spring_torsional_stiffness"], d.gravity,
+                           d.arm_mass, d.com_distance * fd.MM)
+
+
+def effective_modulus(spec: ClampCamSpec) -> float:
+    """E* of roller and cam, MPa."""
+    d = spec.dynamics
+    assert d is not None, "only with a [dynamics] table"
+    return fd.effective_modulus(d.roller_modulus, d.roller_poisson, d.cam_modulus, d.cam_poisson)
+
+
+def generalised_unit(spec: ClampCamSpec) -> str:
+    """The unit of the follower's generalised loads (spring, inertia, gravity): N (translating) or N m."""
+    return "N" if spec.follower.type == "translating" else "N m"
+
+
+@dataclass(frozen=True)
+class DynamicsTrace:
+    """The follower's loads at the samples of a turn (floats or CasADi symbols), the cam speed they are read at
+    (rad/s, a number or the operating symbol), the pitch curvature and roller radius there (Hertz), and which samples
+    the spring must decelerate (``pulled``: q'' < 0, numbers: the motion law's sign, whatever the design)."""
+
+    loads: fd.ContactLoads
+    omega: Any
+    kappa: Any
+    roller_radius: Any
+    pulled: np.ndarray
+    #: the largest |dF/d omega^2| (N s^2) at the given design, a number: scales the jump speed's NLP rows
+    reference_per_omega2: float = 1.0
+
+
+def dynamics_trace(scene: CamScene, g: Geometry) -> DynamicsTrace | None:
+    """The trace of a design's samples (numbers), None without a [dynamics] table."""
+    body = body_of(scene.spec, scene.design)
+    if body is None:
+        return None
+    loads = fd.contact_loads(scene.follower, body, g.centre, g.samples.s, g.samples.dds)
+    return DynamicsTrace(loads, scene.omega, g.kappa, scene.roller_radius, decelerating(g.samples.dds))
+
+
+def decelerating(dds) -> np.ndarray:
+    """Where the spring must decelerate the follower, q'' < 0 (numbers): beyond round-off of the law's zero
+    crossings (a cycloid's 2 pi sin(2 pi u) at u = 1/2 is 1e-16, not 0), whose ratio could never be the least."""
+    values = np.asarray(dds, dtype=float)
+    return values < -1e-9 * float(np.max(np.abs(values), initial=0.0))
+
+
+def _select(values, mask: np.ndarray):
+    """The entries of a vector (numbers or a CasADi column) where ``mask`` holds."""
+    index = [int(i) for i in np.flatnonzero(mask)]
+    if isinstance(values, (ca.SX, ca.MX, ca.DM)):
+        return values[index]
+    return np.asarray(values)[index]
+
+
+def sample_jump_speeds(trace: DynamicsTrace):
+    """At each sample the spring must decelerate, the cam speed (r/min) at which the contact force reaches zero,
+    sqrt(held / -(I q'')); on numbers 0 where the spring does not hold the follower at rest, [inf] when no sample
+    decelerates (the follower never leaves).  Their smallest is the jump speed (follower_dynamics docstring)."""
+    loads = trace.loads
+    held = loads.spring - loads.gravity
+    to_rpm = 60.0 / TWO_PI
+    if fd.is_symbolic(held, loads.inertia_per_omega2):
+        pulled = _select(loads.inertia_per_omega2, trace.pulled)
+        return to_rpm * ca.sqrt(ca.fmax(_select(held + 0.0 * loads.inertia_per_omega2, trace.pulled), 0.0) / -pulled)
+    held_n = np.asarray(held + 0.0 * np.asarray(loads.inertia_per_omega2), dtype=float)
+    b = np.asarray(loads.inertia_per_omega2, dtype=float)
+    out = [to_rpm * math.sqrt(max(h, 0.0) / -bb) for h, bb, p in zip(held_n, b, trace.pulled) if p]
+    if np.any(held_n <= 0.0):
+        out.append(0.0)
+    return np.array(out or [math.inf])
+
+
+def dynamics_rules(spec: ClampCamSpec, trace: DynamicsTrace) -> list[Rule]:
+    """The [dynamics.limits] rules on a trace (numbers or CasADi symbols): contact force, Hertz stress, jump speed,
+    in that order, each only where its limit is given."""
+    d = spec.dynamics
+    assert d is not None, "only with a [dynamics] table"
+    lim, rules = d.limits, []
+    force = trace.loads.force(trace.omega)
+    if lim.min_contact_force is not None:
+        rules.append(contact_force_rule(force, lim.min_contact_force))
+    if lim.max_hertz_stress is not None:
+        assert d.roller_width is not None, "validation asks for roller_width with a stress limit"
+        e_star, width = effective_modulus(spec), d.roller_width
+        radius = fd.relative_radius(trace.kappa, trace.roller_radius)
+        stress = fd.hertz_stress(force, width, radius, e_star)
+        if fd.is_symbolic(force, radius):
+            limit = lim.max_hertz_stress
+            reference = fd.hertz_force(limit, width, value_of(spec.cam.roller_radius), e_star)
+            rules.append(hertz_stress_rule(stress, limit, force, fd.hertz_force(limit, width, radius, e_star),
+                                           reference))
+        else:
+            rules.append(hertz_stress_rule(stress, lim.max_hertz_stress))
+    if lim.min_jump_speed is not None:
+        speeds = sample_jump_speeds(trace)
+        omega_min = lim.min_jump_speed * TWO_PI / 60.0
+        at_minimum = trace.loads.force(omega_min)
+        if fd.is_symbolic(at_minimum):
+            rpm_per_newton = (60.0 / TWO_PI) / (2.0 * trace.reference_per_omega2 * omega_min)
+            rules.append(jump_speed_rule(speeds, lim.min_jump_speed, at_minimum, rpm_per_newton))
+        else:
+            rules.append(jump_speed_rule(speeds, lim.min_jump_speed))
+    return rules
 
 
 def evaluate(scene: CamScene, per_motion_segment: int) -> tuple[list[Rule], Geometry]:

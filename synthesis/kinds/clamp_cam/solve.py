@@ -4,7 +4,7 @@ and the result facts.  An optimised (B-spline) law is fitted once per run (cvxpy
 from __future__ import annotations
 
 from synthesis.kinds.clamp_cam.check import FINE, describe
-from synthesis.kinds.clamp_cam.nlp import OBJECTIVE_UNITS, problem
+from synthesis.kinds.clamp_cam.nlp import objective_unit, problem
 from synthesis.kinds.clamp_cam.scene import CamScene, evaluate, fit_law
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
@@ -40,7 +40,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     kind_facts, trajectory = describe(scene)
     return Finished(design=dict(scene.design),
                     objective={"name": spec.objective.name, "value": best.outcome.objective,
-                               "unit": OBJECTIVE_UNITS[spec.objective.name]},
+                               "unit": objective_unit(spec)},
                     facts=kind_facts, trajectory=trajectory,
                     solver_settings={"samples_per_segment": spec.solver.samples_per_segment})
 

@@ -9,14 +9,15 @@ follower and in degrees (arm swing) for an oscillating one.
 
 from __future__ import annotations
 
-from typing import Literal, get_args
+from typing import Annotated, Literal, get_args
 
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from synthesis.spec.common import (
     WITHIN_A_TURN, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, Sign, starts_field, value_of, within_a_turn,
 )
+from synthesis.spec.operating import OperatingRange, resolve_ranges
 
 KIND = "clamp_cam"
 SEGMENTS = ("rise", "far_dwell", "return", "near_dwell")
@@ -183,10 +184,26 @@ class TimingSection(StrictModel):
 
 
 class OperationSection(StrictModel):
-    """Operating condition: the cam speed (turns the timing in seconds into crank degrees)."""
+    """Operating condition: the cam speed (turns the timing in seconds into crank degrees).  It may be given as a
+    range ``{range = [lo, hi], samples = N}``: the solve then holds every rule that reads it (the follower's
+    acceleration and dynamics, windows timed in seconds) at each sampled speed (an operating envelope, one shared
+    design) and re-checks the answer on a finer grid of the range."""
 
-    crank_speed: float = Field(gt=0, le=2000, description="cam speed, r/min: the cams turn once per picker crank "
-                                                          "turn (seed 001: 60)")
+    crank_speed: Annotated[float, Field(gt=0, le=2000)] | OperatingRange = Field(
+        description="cam speed, r/min: the cams turn once per picker crank turn (seed 001: 60); or a range "
+                    "{range = [lo, hi], samples = 4, nominal = (lo+hi)/2, step = re-check spacing}")
+    _operating_ranges: dict = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _nominal(self) -> "OperationSection":
+        resolve_ranges(self, {"crank_speed": "> 0, <= 2000"})
+        return self
+
+    @property
+    def speed(self) -> float:
+        """The cam speed, r/min (a range's nominal value once validated)."""
+        assert not isinstance(self.crank_speed, OperatingRange), "validation leaves a range's nominal value"
+        return self.crank_speed
 
 
 class RulesSection(StrictModel):
@@ -207,10 +224,86 @@ class RulesSection(StrictModel):
 class ObjectiveSection(StrictModel):
     """What `solve` optimises among the cams that satisfy every rule."""
 
-    name: Literal["base_radius", "pressure_angle", "nearest"] = Field(
+    name: Literal["base_radius", "pressure_angle", "nearest", "spring_force"] = Field(
         "base_radius", description="base_radius: smallest pitch base circle (compact cam); pressure_angle: "
                                    "smallest peak |pressure angle| on rise and return; nearest: smallest change "
-                                   "of the free variables from the given design")
+                                   "of the free variables from the given design; spring_force: smallest peak "
+                                   "spring load on the follower, preload + stiffness x stroke (needs [dynamics])")
+
+
+class DynamicsLimits(StrictModel):
+    """Rules on the follower dynamics; a limit left out is no rule."""
+
+    min_contact_force: float | None = Field(
+        None, ge=0, le=1.0e5, description="smallest contact force between roller and cam over a turn at the crank "
+                                          "speed (at every speed of an operating range), N")
+    max_hertz_stress: float | None = Field(
+        None, gt=0, le=1.0e5, description="largest Hertz contact stress between roller and cam over a turn at the "
+                                          "crank speed, MPa (needs roller_width)")
+    min_jump_speed: float | None = Field(
+        None, gt=0, le=20000, description="the follower must stay on the cam up to this cam speed: the jump speed "
+                                          "(the speed at which the contact force first reaches zero) at least this, "
+                                          "r/min")
+
+
+#: the fields of each follower type (the others are refused)
+_BODY_FIELDS = {"translating": ("mass", "spring_preload", "spring_stiffness"),
+                "oscillating": ("inertia", "spring_preload_torque", "spring_torsional_stiffness")}
+
+
+class DynamicsSection(StrictModel):
+    """The follower's mass and spring and the roller's contact with the cam: the contact force over a turn at the
+    crank speed, the jump speed and the Hertz stress (synthesis/kinds/clamp_cam/kinematics/follower_dynamics.py).
+    Friction and the roller's spin inertia are left out."""
+
+    mass: float | None = Field(None, gt=0, le=1000, description="translating: mass of everything that moves with "
+                                                                "the follower (slider, roller, and the pull wire's "
+                                                                "and clamp's mass reflected to it), kg")
+    spring_preload: Variable | None = Field(None, description="translating: spring force pressing the follower "
+                                                              "onto the cam at rest (s = 0, the near dwell), N")
+    spring_stiffness: Variable | None = Field(None, description="translating: spring rate along the follower, N/mm")
+    inertia: float | None = Field(None, gt=0, le=1000, description="oscillating: moment of inertia of the arm and "
+                                                                   "roller about the arm pivot, kg m^2")
+    spring_preload_torque: Variable | None = Field(None, description="oscillating: torque of the torsional spring "
+                                                                     "about the pivot pressing the roller onto the "
+                                                                     "cam at rest (psi = 0), N m")
+    spring_torsional_stiffness: Variable | None = Field(None, description="oscillating: rate of the torsional "
+                                                                          "spring about the pivot, N m/rad")
+    arm_mass: float = Field(0.0, ge=0, le=1000, description="oscillating: mass of the arm and roller, for gravity "
+                                                            "only (inertia gives the dynamics), kg")
+    com_distance: float = Field(0.0, ge=0, le=1.0e4, description="oscillating: pivot to the arm's centre of mass, "
+                                                                 "on the line to the roller centre, mm (gravity only)")
+    gravity: tuple[float, float] = Field((0.0, 0.0), description="gravity in the cam's ground frame (cam centre at "
+                                                                 "the origin, the follower along +X), m/s^2; "
+                                                                 "default none: the mounting is not given")
+    roller_width: float | None = Field(None, gt=0, le=1000, description="length of the line contact: the roller's "
+                                                                        "width (the cam's thickness if narrower), mm")
+    roller_modulus: float = Field(206000.0, gt=0, le=2.0e6, description="roller's elastic modulus, MPa "
+                                                                        "(default steel, 206000)")
+    roller_poisson: float = Field(0.3, ge=0, lt=0.5, description="roller's Poisson ratio (dimensionless; default "
+                                                                 "steel, 0.3)")
+    cam_modulus: float = Field(206000.0, gt=0, le=2.0e6, description="cam's elastic modulus, MPa (default steel, "
+                                                                     "206000)")
+    cam_poisson: float = Field(0.3, ge=0, lt=0.5, description="cam's Poisson ratio (dimensionless; default steel, "
+                                                              "0.3)")
+    limits: DynamicsLimits = Field(default_factory=DynamicsLimits)
+    assumption: str = Field("", description="which values are ours, not a paper's")
+
+    @model_validator(mode="after")
+    def _springs_not_negative(self) -> "DynamicsSection":
+        for name in ("spring_preload", "spring_stiffness", "spring_preload_torque", "spring_torsional_stiffness"):
+            v = getattr(self, name)
+            if v is not None and _lo(v) < 0:
+                raise ValueError(f"{name}: expected >= 0, got {_fmt(v)}"
+                                 + (" (its lower bound)" if is_free(v) else ""))
+        if self.limits.max_hertz_stress is not None and self.roller_width is None:
+            raise ValueError("limits.max_hertz_stress: the Hertz stress needs roller_width (the contact length, mm)")
+        return self
+
+    def body_fields(self, follower_type: str) -> tuple[str, str, str]:
+        """(inertia, preload, stiffness) field names of a follower type."""
+        a, b, c = _BODY_FIELDS[follower_type]
+        return a, b, c
 
 
 class SolverSection(MultistartSettings):
@@ -231,6 +324,8 @@ class ClampCamSpec(ProblemSpec):
     timing: TimingSection = Field(default_factory=TimingSection)
     operation: OperationSection
     rules: RulesSection = Field(default_factory=RulesSection)
+    dynamics: DynamicsSection | None = Field(None, description="the follower's mass and spring, the roller's "
+                                                               "contact: contact force, jump speed, Hertz stress")
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
 
@@ -255,8 +350,35 @@ class ClampCamSpec(ProblemSpec):
         return self
 
     @model_validator(mode="after")
+    def _one_law_over_a_speed_range(self) -> "ClampCamSpec":
+        if self.operation._operating_ranges and self.motion.law == "optimised":
+            raise ValueError("operation.crank_speed: a range needs a closed-form motion law (the optimised law is "
+                             "fitted once, at one speed)")
+        return self
+
+    @model_validator(mode="after")
+    def _dynamics_of_the_follower(self) -> "ClampCamSpec":
+        d, kind = self.dynamics, self.follower.type
+        if d is None:
+            if self.objective.name == "spring_force":
+                raise ValueError("objective.name = \"spring_force\" needs a [dynamics] table (the follower's spring)")
+            return self
+        other = "oscillating" if kind == "translating" else "translating"
+        for name in _BODY_FIELDS[other]:
+            if getattr(d, name) is not None:
+                raise ValueError(f"dynamics.{name}: only for a follower of type = \"{other}\" (this one is {kind}; "
+                                 f"give {', '.join(_BODY_FIELDS[kind])})")
+        for name in _BODY_FIELDS[kind]:
+            if getattr(d, name) is None:
+                raise ValueError(f"dynamics.{name}: missing required field for a {kind} follower")
+        if kind == "translating" and (d.arm_mass or d.com_distance):
+            raise ValueError("dynamics.arm_mass, com_distance: only for an oscillating follower (a translating "
+                             "follower's mass is dynamics.mass)")
+        return self
+
+    @model_validator(mode="after")
     def _windows_apart(self) -> "ClampCamSpec":
-        turn = 360.0 if self.timing.clock == "deg" else 60.0 / self.operation.crank_speed
+        turn = 360.0 if self.timing.clock == "deg" else 60.0 / self.operation.speed
         unit = "deg" if self.timing.clock == "deg" else "s"
         windows = {k: getattr(self.timing, k) for k in ("hold_near", "hold_far")}
         for kind, ws in windows.items():
@@ -282,6 +404,12 @@ class ClampCamSpec(ProblemSpec):
             out["arm_length"] = f.arm_length
         out["rise_start"] = self.motion.rise_start
         out.update(self.motion.segments())
+        if self.dynamics is not None:
+            _, preload, stiffness = self.dynamics.body_fields(f.type)
+            for name in (preload, stiffness):
+                value = getattr(self.dynamics, name)
+                assert value is not None, "validation requires the follower type's spring"
+                out[name] = value
         return out
 
     def design_values(self) -> dict[str, float]:
