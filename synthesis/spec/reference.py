@@ -100,6 +100,18 @@ def _section_of(tp) -> tuple[type[BaseModel] | None, bool]:
     return None, False
 
 
+def _named_sections(tp) -> type[BaseModel] | None:
+    """The model of a table of named tables (``dict[str, Model]``), else None."""
+    tp, _ = _unwrap(tp)
+    tp, _ = _optional(tp)
+    tp, _ = _unwrap(tp)
+    if get_origin(tp) is dict:
+        value, _ = _unwrap(get_args(tp)[1])
+        if _is_model(value) and value is not FreeVariable:
+            return value
+    return None
+
+
 def type_text(tp, meta: list | None = None) -> tuple[str, bool]:
     """How a value of annotation ``tp`` is written in TOML, and whether it is a quantity (has a unit)."""
     tp, more = _unwrap(tp)
@@ -204,6 +216,13 @@ def entries(model: type[BaseModel], prefix: str = "") -> list[Entry]:
                          default, _range_text(field.metadata), field.is_required(), desc, False)
             sections.append(head)
             sections += entries(sub, f"{path}[]." if many else f"{path}.")
+            continue
+        named = _named_sections(field.annotation)
+        if named is not None:            # a table of named tables ([key_poses.<name>]): each name's fields below
+            sections.append(Entry(path, True, False, "table of named tables", "", default,
+                                  _range_text(field.metadata), field.is_required(),
+                                  _one_line(field.description) or _doc(named), False))
+            sections += entries(named, f"{path}.<name>.")
             continue
         text, numeric = type_text(field.annotation, field.metadata)
         desc = _one_line(field.description)
@@ -315,7 +334,7 @@ def _table(model, data, prefix, lines, *, commented, documented, rewrite, path_p
     by_path = {e.path: e for e in entries(model, path_prefix)}
     for name, field in model.model_fields.items():
         key = field.alias or name
-        if _section_of(field.annotation)[0] is not None:
+        if _section_of(field.annotation)[0] is not None or _named_sections(field.annotation) is not None:
             continue
         e = by_path[f"{path_prefix}{key}"]
         given = data is not None and key in data
@@ -328,6 +347,11 @@ def _table(model, data, prefix, lines, *, commented, documented, rewrite, path_p
             lines.append(f"# {toml_key(key)} = {e.default if e.default not in ('', 'unset') else '<' + e.type + '>'}")
     for name, field in model.model_fields.items():
         key = field.alias or name
+        named = _named_sections(field.annotation)
+        if named is not None:
+            _named_tables(named, key, field, data, prefix, lines, by_path[f"{path_prefix}{key}"],
+                          commented=commented, documented=documented, rewrite=rewrite, path_prefix=path_prefix)
+            continue
         sub, many = _section_of(field.annotation)
         if sub is None:
             continue
@@ -355,6 +379,24 @@ def _table(model, data, prefix, lines, *, commented, documented, rewrite, path_p
             lines.append(f"{'# ' if off else ''}[{table_path}]")
             _table(sub, given, f"{table_path}.", lines, commented=off, documented=documented, rewrite=rewrite,
                    path_prefix=f"{path_prefix}{key}.")
+
+
+def _named_tables(model, key, field, data, prefix, lines, e, *, commented, documented, rewrite, path_prefix) -> None:
+    """A table of named tables ([key_poses.<name>]): each name the data gives as its own table; none given, one
+    commented out under the placeholder NAME."""
+    given = data.get(key) if data is not None else None
+    if not given and not documented:
+        return
+    items = dict(given) if given else {"NAME": None}
+    for i, (name, item) in enumerate(items.items()):
+        lines.append("")
+        if documented and i == 0:
+            lines += _comment(f"[{e.path}.<name>]: {e.description}" + ("" if e.required else " (optional)"))
+        off = commented or item is None
+        table_path = f"{prefix}{toml_key(key)}.{toml_key(name)}"
+        lines.append(f"{'# ' if off else ''}[{table_path}]")
+        _table(model, item, f"{table_path}.", lines, commented=off, documented=documented and i == 0,
+               rewrite=rewrite, path_prefix=f"{path_prefix}{key}.<name>.")
 
 
 def _item_rewrite(rewrite: dict, list_path: str, index: int) -> dict:
