@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import PLANTING
 from synthesis import kinds
 from synthesis.spec import load_spec
 
@@ -179,3 +180,18 @@ def test_cam_csv_has_angles_radii_motion_and_the_dxf_a_centre_mark(tmp_path):
     r = np.hypot(rows[:, 4], rows[:, 5]).max()
     assert box.extmax.x == pytest.approx(np.max(rows[:, 4]), abs=1e-3) or box.extmax.x <= r + 1e-6
     assert max(box.size.x, box.size.y) <= 2 * r + 1e-6
+
+
+def test_a_planting_result_without_a_trajectory_says_why_it_has_no_exports(tmp_path):
+    """A linkage that does not assemble over a whole turn has no trajectory: its paths.csv and linkage.dxf are
+    refused with that reason (the report shows it), not a TypeError from reading a missing path."""
+    import dataclasses
+
+    from synthesis.kinds.planting.export import write_linkage_dxf, write_paths_csv
+
+    result = kinds.get("planting_fourbar").check(load_spec(PLANTING / "taiwan_example1.toml"))
+    broken = dataclasses.replace(result, trajectory=None)
+    for writer, name in ((write_paths_csv, "paths.csv"), (write_linkage_dxf, "linkage.dxf")):
+        with pytest.raises(ValueError, match="no trajectory: the linkage does not assemble over a whole crank turn"):
+            writer(broken, tmp_path / name)
+        assert not (tmp_path / name).exists()

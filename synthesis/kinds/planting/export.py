@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from synthesis.report import exports
 from synthesis.result import Result
@@ -21,8 +21,11 @@ LINKS = (("O", "O'"), ("O", "A"), ("O'", "B"), ("A", "B"), ("A", "C"), ("B", "C"
 
 
 def _trajectory(result: Result) -> dict[str, Any]:
-    # a result without one (a crank that cannot turn) fails at the first read, a TypeError the report notes
-    return cast(dict[str, Any], result.trajectory)
+    """The result's trajectory; a result without one (a linkage that does not assemble over a whole turn) has no
+    path to export, which the report notes as the file's reason."""
+    if not isinstance(result.trajectory, dict):
+        raise ValueError("the result has no trajectory: the linkage does not assemble over a whole crank turn")
+    return result.trajectory
 
 
 def write_paths_csv(result: Result, path: Path) -> None:
