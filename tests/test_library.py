@@ -61,7 +61,10 @@ EXPECTED: dict[str, dict] = {
     "steering/steering_redesign_27.toml": {"check": 0, "solve": ("optimal", 0.13654497462629323)},
     "steering/steering_redesign_40.toml": {"check": 0, "solve": ("optimal", 0.5227832580093121)},
     "tillage/hwang_tillage_baseline.toml": {"check": 0, "solve": ("exit", 2)},
+    "tillage/hwang_tillage_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
+    "tillage/tillage_min_peak_torque.toml": {"check": 0, "solve": ("optimal", 60.229309185033316)},
     "tillage/tillage_redesign.toml": {"check": 0, "solve": ("optimal", 373.06012290551644)},
+    "tillage/tillage_torque_limited.toml": {"check": 1, "solve": ("optimal", 390.4884460620757)},
     "fourbar_path/picking_arc.toml": {"check": 1, "solve": ("feasible", 1.0293447294002422e-4)},
     # the depth is the analysis depth (25 mm) for every design: refused before any start (synthesis.core.pinned)
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("exit", 2)},
@@ -138,12 +141,14 @@ SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_red
         "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
         "picker/picker_double_crank_min_peak_torque.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",
+        "tillage/tillage_min_peak_torque.toml", "tillage/tillage_torque_limited.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
         "planting_arm/counterweight_min_shaking_from_example1.toml", "planting_arm/key_pose_redesign_from_example1.toml",
         "rotary_planetary/key_pose_redesign.toml", "rotary_planetary/single_idler_redesign.toml"}
 #: solves of 10 s or more (started first: tests/conftest.py)
-LONG = {"fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml",
+LONG = {"tillage/tillage_min_peak_torque.toml", "tillage/tillage_torque_limited.toml",   # 22 s, 16 s on one worker
+        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
         "planting_arm/counterweight_min_shaking_from_example1.toml",

@@ -45,7 +45,11 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from constraints.dynamics import (
+    peak_input_torque_rule,
+    peak_shaking_force_rule,
+    peak_shaking_moment_rule,
+)
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.fourbar import peaks
 from synthesis.kinds.tillage_linkage.kinematics import tool_point
@@ -156,7 +160,7 @@ class TillageDynamics:
 
     @classmethod
     def of(cls, table: TillageDynamicsSection, a, b, c, theta_rad, height_c, crank_rate, forward_speed
-           ) -> "TillageDynamics":
+           ) -> TillageDynamics:
         """From a spec's ``[dynamics]`` table at the design (a, b, c, height_c mm, theta rad: floats or symbols), the
         flywheel speed (rad/s) and the forward speed (m/s).  A link given as a bar is the segment between its joints
         (crank A -> B, length a; bar B -> D, length c); a point mass at ``"tip"`` sits at D."""
