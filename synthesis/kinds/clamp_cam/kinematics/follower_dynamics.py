@@ -41,7 +41,8 @@ cam at the smallest such speed over the turn:
 nothing ever pulls it off: omega_jump = infinity.
 
 **Hertz stress.**  Roller (radius r, width L) on the cam's working profile: two cylinders in line contact
-(K. L. Johnson, Contact Mechanics, Cambridge 1985, section 4.3, eq 4.45: a^2 = 4 P R / (pi E*), p0 = 2 P / (pi a)),
+(K. L. Johnson, Contact Mechanics, Cambridge 1985, section 4.3, contact of cylinders: half-width
+a^2 = 4 P R / (pi E*), peak pressure p0 = 2 P / (pi a), P the load per unit length),
 the peak pressure
 
     sigma_max = p0 = sqrt(F E* / (pi L R*)),   1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2,   1/R* = 1/r + 1/rho_w
