@@ -129,10 +129,11 @@ def test_a_cam_run_imports_no_linkage_no_drop_model_and_cvxpy_only_for_the_optim
      "clamp_cam.cam.roller_radius: expected below the smallest base_radius its bounds allow, 20 mm, got 3.5 (free in "
      "[0.5, 60]) mm (its upper bound 60 mm)"),
     ((("return = 14.0", "return = 0.0"),), "clamp_cam.motion: return: expected > 0, got 0"),
-    # an operating range where the kind takes one value says so (planting's forward_speed takes one)
-    ((("crank_speed = 60.0", "crank_speed = { range = [50, 90], samples = 3 }"),),
-     "clamp_cam.operation.crank_speed: expected a number in r/min, got {'range': [50, 90], 'samples': 3}: this field "
-     "takes one value, not an operating range"),
+    # an operating range (the follower's contact over a speed range) with a law fitted at one speed says so
+    ((("crank_speed = 60.0", "crank_speed = { range = [50, 90], samples = 3 }"),
+      ("law = \"cycloidal\"", "law = \"optimised\"")),
+     "clamp_cam.operation.crank_speed: a range needs a closed-form motion law (the optimised law is fitted once, at "
+     "one speed)"),
     ((("hold_far = [[186.0, 346.0]]", "hold_far = [[140.0, 346.0]]"),),
      "clamp_cam.timing: hold_near[0] [0, 146] overlaps hold_far[0] [140, 346] deg"),
     ((("offset = 0.0", "offset = 0.0\narm_length = 60"),),

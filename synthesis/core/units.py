@@ -31,6 +31,8 @@ LENGTH_POWER: dict[str, int] = {
     "1/mm": -1, "deg/mm": -1,
     "deg": 0, "rad": 0, "deg^2": 0, "deg/s^2": 0, "s": 0, "ms": 0, "r/min": 0, "rad/s": 0,
     "1": 0, "-": 0, "": 0, "%": 0,
+    # forces, torques and stresses are SI whatever the length unit: a follower's spring rate is per length
+    "N": 0, "N^2": 0, "N m": 0, "N m/rad": 0, "MPa": 0, "N/mm": -1,
 }
 
 

@@ -18,6 +18,13 @@ from synthesis.report.tables import Candidate, candidates
 from synthesis.result import Result, atomic_write_text
 
 
+def has_dynamics(result: Result) -> bool:
+    """Whether the result holds a driven linkage's inverse dynamics (an input torque over the crank angle): the
+    shared dynamics figures draw those; a cam follower's contact dynamics, under the same key, are its kind's own."""
+    dyn = (result.extra or {}).get("dynamics")
+    return isinstance(dyn, dict) and "input_torque_Nm" in dyn
+
+
 def _caption(name: str) -> str:
     return Path(name).stem.replace("_", " ")
 
@@ -28,7 +35,7 @@ def comparison_figures(cands: list[Candidate], folder: Path) -> tuple[list[tuple
     # figures name each candidate by its column label, which is unique even when spec names repeat
     labelled = [dataclasses.replace(c.result, name=c.label) for c in cands]
     figures, notes = _kind_overlays(labelled, folder)
-    if any((r.extra or {}).get("dynamics") for r in labelled):
+    if any(has_dynamics(r) for r in labelled):
         # the inverse dynamics, the same figure for every kind that has them (docs/ARCHITECTURE.md "Dynamics")
         from synthesis.report.dynamics_plots import dynamics_overlay
 
@@ -106,7 +113,7 @@ def run_artifacts(result: Result, files: dict | None = None, given_rules: list |
         from synthesis.tolerance.envelope import plot
 
         writers["envelope.png"] = lambda path: plot(result, path)
-    if isinstance((result.extra or {}).get("dynamics"), dict):
+    if has_dynamics(result):
         # a [dynamics] table: input torque, power and shaking force over a turn (docs/ARCHITECTURE.md "Dynamics")
         from synthesis.report.dynamics_plots import dynamics_figure
 

@@ -12,20 +12,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from synthesis.report import has_dynamics  # noqa: E402
 from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
-
-
-def has_dynamics(result: Result) -> bool:
-    return bool((result.extra or {}).get("dynamics"))
 
 
 def dynamics_figure(result: Result, path: Path) -> None:
     """Four panels over the crank angle: input torque (N m), power (W), shaking force (x, y, magnitude, N), shaking
     moment about the crank pivot (N m)."""
-    dyn = (result.extra or {}).get("dynamics")
-    if not dyn:
-        raise ValueError("the result holds no facts.dynamics (the spec has no [dynamics] table)")
+    if not has_dynamics(result):
+        raise ValueError("the result holds no facts.dynamics of a driven linkage (the spec has no [dynamics] table, "
+                         "or its kind's dynamics have a figure of their own)")
+    dyn = result.extra["dynamics"]
     crank = np.asarray(dyn["crank_deg"], float)
     torque, power = np.asarray(dyn["input_torque_Nm"], float), np.asarray(dyn["power_W"], float)
     force = np.asarray(dyn["shaking_force_N"], float).reshape(-1, 2)
@@ -60,7 +58,8 @@ def dynamics_overlay(results: list[Result], path: Path) -> None:
     the crank angle, each candidate's peak in its legend; a candidate without them is named as left out."""
     shown = [r for r in results if has_dynamics(r)]
     if not shown:
-        raise ValueError("no candidate holds facts.dynamics (none of the specs has a [dynamics] table)")
+        raise ValueError("no candidate holds a driven linkage's facts.dynamics (none of the specs has a [dynamics] "
+                         "table)")
     fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.4), sharex=True)
     labels = ("input torque, N m", "|shaking force|, N", "shaking moment, N m")
     for i, r in enumerate(shown):

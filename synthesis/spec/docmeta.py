@@ -9,7 +9,8 @@ import re
 
 #: the units of specs (docs/ARCHITECTURE.md, "Units"), longest first so "m/s^2" is not read as "m/s"
 UNITS = ("mm/s^2", "m/s^2", "deg/s^2", "mm/s", "m/s", "r/min", "mm^2", "1/mm", "mm", "deg", "s",
-         "kg/m^3", "kg m^2", "kg", "N m", "N")     # the last five: the [dynamics] table's
+         # the [dynamics] tables': the longer unit first where one begins another (N m/rad before N m before N)
+         "kg/m^3", "kg m^2", "kg", "N m/rad", "N m", "N/mm", "N", "MPa")
 _UNIT = re.compile(r"(?<![\w/^.'-])(" + "|".join(re.escape(u) for u in UNITS) + r")(?![\w/^'-])")
 
 
