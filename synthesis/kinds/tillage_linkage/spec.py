@@ -111,7 +111,7 @@ class SoilForce(StrictModel):
 
     f0: float = Field(0.0, ge=0.0, le=1.0e5, description="the force at zero depth, N (a jump at soil entry and exit "
                                                           "when > 0)")
-    k: float = Field(ge=0.0, le=1.0e4, description="its growth with depth: N per mm of depth (N/mm)")
+    k: float = Field(ge=0.0, le=1.0e4, description="its growth with depth, N/mm")
     source: str = Field(min_length=1, description="where f0 and k come from: a cited figure, or say that they are "
                                                   "an assumption and how they were estimated")
 
