@@ -185,7 +185,7 @@ def _with(tmp_path, edit) -> str:
 
 @pytest.mark.parametrize("edit, message", [
     (lambda d: d["targets"].update(points=d["targets"]["points"][:2], crank_deg=[0.0, 60.0]),
-     "fourbar_path.targets.points: expected 3 to 100 points, got 2"),
+     "fourbar_path.targets.points: expected 3 to 1000 points, got 2"),
     (lambda d: d["targets"].update(crank_deg=d["targets"]["crank_deg"][:5]),
      "fourbar_path.targets.crank_deg: expected one angle per point (6), got 5"),
     (lambda d: d["targets"]["points"].__setitem__(3, [float("nan"), 1.0]),
@@ -223,9 +223,12 @@ def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
 
 
 def test_too_many_points(tmp_path):
+    """Above MAX_POINTS (1,000) targets a spec is refused on one line naming the field, the range and the count."""
     def edit(d):
-        d["targets"] = {"points": [[float(i), float(i * i % 7)] for i in range(101)]}
-    assert "fourbar_path.targets.points: expected 3 to 100 points, got 101" in _with(tmp_path, edit)
+        d["targets"] = {"points": [[float(i), float(i * i % 7)] for i in range(1001)]}
+    message = _with(tmp_path, edit)
+    assert "fourbar_path.targets.points: expected 3 to 1000 points, got 1001" in message
+    assert len([line for line in message.splitlines() if "points" in line]) == 1
 
 
 @pytest.mark.parametrize("edit, message", [

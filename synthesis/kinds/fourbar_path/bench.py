@@ -29,7 +29,10 @@ re-checked as every solver start is (check.evaluate: the kind's rules on floats)
 
 Problems: the library specs given, or by default the picking arc, six synthetic-truth problems
 (mechanism 1 with 6, 10, 18 points, timing free and prescribed), the ten inexact-target problems of
-the free-timing study (inexact.py) and the literature's target sets (literature.py).  Best known: 0 for the synthetic
+the free-timing study (inexact.py), the literature's target sets (literature.py) and the many-target case: a
+coupler curve digitised with 0.2 mm noise at 1,000 points, solved with every start, with the study ``many_targets``
+(the CPU seconds of the screen, the NLP's build, a start's solve and the whole ``agrisynth solve`` at 25, 100, 250
+and 1,000 targets, timing free and prescribed, and the slope of log(time) against log(n) of each).  Best known: 0 for the synthetic
 problems (zero error by construction, tolerance 1e-8 mm^2); for a library spec the objective of
 an untimed reference multistart (all starts, no early stop) with a *different* seed (the spec's
 seed + REFERENCE_SEED_OFFSET), so the target does not come from the very IPOPT run being timed;
@@ -39,11 +42,16 @@ tolerance 1e-6 relative.  A method that misses the target has no time ratio (syn
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import multiprocessing
+import subprocess
+import sys
+import tempfile
 import time
 import warnings
-from typing import cast
+from pathlib import Path
+from typing import Any, Callable, cast
 
 try:
     import resource
@@ -61,10 +69,13 @@ from synthesis.kinds.fourbar_path.check import evaluate
 from synthesis.kinds.fourbar_path.construction import joint_positions
 from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_spec
 from synthesis.kinds.fourbar_path import literature
-from synthesis.kinds.fourbar_path.starts import CLASS_ROWS
-from synthesis.kinds.fourbar_path.synthetic import truth_spec
+from synthesis.core.kind import Setting
+from synthesis.kinds.fourbar_path.nlp import PathNLP
+from synthesis.kinds.fourbar_path.starts import CLASS_ROWS, StartMaker, forget_screened
+from synthesis.kinds.fourbar_path.synthetic import loaded_spec, noisy_truth_data, truth_spec
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
 from synthesis.spec import LoadedSpec, load_spec
+from synthesis.spec.reference import write_toml
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 from synthesis.result import Result
 
@@ -106,12 +117,15 @@ def cpu_seconds() -> float | None:
     return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
 
 
-def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | None = None):
+def ipopt_multistart(loaded: LoadedSpec, workers: int = 1, spent: list[float] | None = None,
+                     stop_at_target: bool = True):
     """The multistart as ``agrisynth solve`` runs it.  ``spent``: each run appends its CPU seconds (every
-    worker's), the budget of differential_evolution at equal budget."""
+    worker's), the budget of differential_evolution at equal budget.  ``stop_at_target`` False: every start is run
+    (a case with no best known, whose target is only known after its runs)."""
     def run(target: float) -> MethodRun:
         spec = cast(FourbarPathSpec, loaded.model)      # a fourbar_path spec (its kind's bench)
-        solver = spec.solver.model_copy(update={"stop_at_objective": target})
+        stop = target if stop_at_target else spec.solver.stop_at_objective
+        solver = spec.solver.model_copy(update={"stop_at_objective": stop})
         staged = dataclasses.replace(loaded, model=spec.model_copy(update={"solver": solver}))
         trace: list[tuple[float, float]] = []
         cpu0 = cpu_seconds()
@@ -335,6 +349,7 @@ def bench_cases(specs: list[LoadedSpec] | None, seed: int = 0) -> list[BenchCase
     if inexact:
         cases += inexact_cases(seed)
         cases += literature_cases(seed)
+        cases.append(many_targets_case(seed))
     return cases
 
 
@@ -388,3 +403,128 @@ def literature_cases(seed: int = 0, names=None) -> list[BenchCase]:
         case.single_runs = {"published"}
         cases.append(case)
     return cases
+
+
+# ---------------------------------------------------------------------------- many targets
+
+#: the many-target study: a noisy coupler curve (synthetic.noisy_truth_data: a digitiser's 0.2 mm) of synthetic
+#: mechanism MANY_TARGETS_SEED with each of these target counts, timing free and prescribed
+MANY_TARGET_COUNTS = (25, 100, 250, 1000)
+MANY_TARGETS_SEED = 1
+TIMINGS = {"free": False, "prescribed": True}
+#: the starts the study solves one at a time on each set: start 0 (the given design), then the screened, pool and
+#: hypercube starts of free timing in turn (the hypercube and placed ones of prescribed timing)
+STUDY_STARTS = 8
+#: the study's columns whose growth with the target count is fitted (slope of log(value) against log(n))
+GROWTH_COLUMNS = ("build_cpu_s", "screen_and_starts_cpu_s", "start_cpu_s", "per_iteration_ms", "whole_solve_s",
+                  "whole_solve_cpu_s")
+
+
+def many_targets_data(n: int, timed: bool, seed: int = 0) -> dict:
+    """The spec data of the study's set of ``n`` targets (the solver's seed ``seed``, every other setting the
+    spec's default: 64 starts)."""
+    return noisy_truth_data(MANY_TARGETS_SEED, n, timed, solver={"seed": seed})
+
+
+def _median_cpu(job: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    """(median CPU seconds of this process, every thread's, over ``repeats`` runs of job(), the last run's value)."""
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = job()
+        times.append(time.process_time() - t0)
+    return float(np.median(times)), out
+
+
+def whole_solve(data: dict) -> dict:
+    """``agrisynth solve`` of the spec ``data`` on one worker, in a child process (imports, the multistart, the
+    report and figures all counted): its wall seconds, its CPU seconds (None where they cannot be read), exit code,
+    objective and rms target error."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "spec.toml"
+        path.write_text("\n".join(write_toml(FourbarPathSpec, data, documented=False)) + "\n")
+        before = None if resource is None else resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-m", "synthesis.program", "solve", str(path), "--workers", "1",
+                               "--out", tmp], capture_output=True, text=True, check=False)
+        wall = time.perf_counter() - t0
+        cpu = None
+        if resource is not None and before is not None:
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+        written = Path(tmp) / data["name"] / "result.json"
+        result = json.loads(written.read_text()) if written.exists() else {}
+    error = (result.get("facts") or {}).get("path_error") or {}
+    return {"whole_solve_s": wall, "whole_solve_cpu_s": cpu, "exit_code": proc.returncode,
+            "objective_mm2": (result.get("objective") or {}).get("value"), "rms_mm": error.get("rms_mm")}
+
+
+def many_targets_row(data: dict, repeats: int = 3, whole: bool = True) -> dict:
+    """One set's row of the study: CPU seconds (median of ``repeats``) of the screen and the first STUDY_STARTS
+    start points (a fresh screen each time), of the NLP's build (its screen already made), then each of those
+    starts solved once as the multistart solves it (median seconds and iterations per start, CPU per iteration
+    over them all), and with ``whole`` the whole command (:func:`whole_solve`)."""
+    loaded = loaded_spec(data)
+    spec = cast(FourbarPathSpec, loaded.model)
+    seed = spec.solver.seed
+    bounds = np.array(spec.bounds_array(), dtype=float)
+    rng = np.random.default_rng([seed, len(spec.targets.points)])
+    designs = bounds[:, 0] + rng.random((STUDY_STARTS, len(bounds))) * (bounds[:, 1] - bounds[:, 0])
+
+    def screen_and_starts() -> list:
+        forget_screened()
+        maker = StartMaker(spec, seed)
+        return [maker(k, designs[k]) for k in range(STUDY_STARTS)]
+
+    screen_s, _ = _median_cpu(screen_and_starts, repeats)
+    build_s, nlp = _median_cpu(lambda: PathNLP(spec, seed, setting=Setting(spec, seed)), repeats)
+    seconds, iterations = [], []
+    for k in range(STUDY_STARTS):
+        t0 = time.process_time()
+        out = nlp.solve(k, designs[k])
+        seconds.append(time.process_time() - t0)
+        iterations.append(out.iterations)
+    row = {"timing": "prescribed" if spec.timed else "free", "targets": len(spec.targets.points),
+           "build_cpu_s": build_s, "screen_and_starts_cpu_s": screen_s, "start_cpu_s": float(np.median(seconds)),
+           "iterations": float(np.median(iterations)), "per_iteration_ms": 1e3 * sum(seconds) / max(sum(iterations), 1)}
+    if whole:
+        row.update(whole_solve(data))
+    return row
+
+
+def growth_slopes(rows: list[dict]) -> dict:
+    """Per column of GROWTH_COLUMNS the least-squares slope of log(value) against log(target count) over ``rows``
+    (1: linear growth, 2: quadratic; None where a value is missing or not positive)."""
+    n = np.log([r["targets"] for r in rows])
+    out: dict[str, float | None] = {}
+    for column in GROWTH_COLUMNS:
+        values = [r.get(column) for r in rows]
+        ok = all(isinstance(v, (int, float)) and v > 0 for v in values) and len(values) > 1
+        out[column] = float(np.polyfit(n, np.log(np.asarray(values, dtype=float)), 1)[0]) if ok else None
+    return out
+
+
+def many_targets_rows(counts: tuple[int, ...] = MANY_TARGET_COUNTS, timings: tuple[str, ...] = tuple(TIMINGS),
+                      repeats: int = 3, whole: bool = True, seed: int = 0) -> list[dict]:
+    """The many-target study: a row per timing and target count (:func:`many_targets_row`), then per timing a row of
+    the slopes (:func:`growth_slopes`, ``targets`` "slope").  Times are CPU seconds of this process (the screen's
+    threads included) where the name says cpu, so a shared machine's other load changes them little; the whole
+    command's wall seconds too."""
+    out: list[dict] = []
+    for timing in timings:
+        rows = [many_targets_row(many_targets_data(n, TIMINGS[timing], seed), repeats, whole) for n in counts]
+        out += rows + [{"timing": timing, "targets": "slope", **growth_slopes(rows)}]
+    return out
+
+
+def many_targets_case(seed: int = 0) -> BenchCase:
+    """The largest set of the many-target study (MANY_TARGET_COUNTS[-1] targets, free timing) solved with every start
+    on INEXACT_WORKERS workers (no best known: its target is the best any run reached), and the study's table."""
+    loaded = loaded_spec(many_targets_data(MANY_TARGET_COUNTS[-1], False, seed))
+    return BenchCase(problem=loaded.name, kind="fourbar_path",
+                     methods={"ipopt_multistart": ipopt_multistart(loaded, INEXACT_WORKERS, stop_at_target=False)},
+                     best_known=None, tolerance=lambda best: LIBRARY_RELATIVE_TOLERANCE * abs(best),
+                     note="many targets: a coupler curve digitised with 0.2 mm noise; study many_targets: CPU seconds "
+                          "of each part against the target count and their growth (slope of log t against log n)",
+                     single_runs={"ipopt_multistart"},
+                     studies={"many_targets": lambda: many_targets_rows(seed=seed)})

@@ -15,6 +15,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
 import numpy as np  # noqa: E402
 
 from synthesis.kinds.fourbar_path.check import result_branch  # noqa: E402
@@ -26,6 +27,11 @@ from synthesis.report.legends import legend_below  # noqa: E402
 from synthesis.result import Result  # noqa: E402
 
 GIF_FRAMES = 36
+#: the coupler-curve figure numbers at most about this many targets (every k-th of a longer set, target 1 first):
+#: a digitised curve's hundreds of numbers would hide the curve, and each costs its drawing time
+NUMBERED_TARGETS = 30
+#: above this many targets their crosses are drawn smaller, so a dense set still shows the curve between them
+SMALL_MARKS_ABOVE = 100
 LINK: dict[str, Any] = dict(color="0.25", lw=2.2, solid_capstyle="round", zorder=4)
 
 
@@ -106,12 +112,17 @@ def coupler_curve_figure(result: Result, path: Path) -> None:
     x, y = _curve(result)
     ax.plot(x, y, color="tab:blue", lw=1.4, label="coupler curve", zorder=2)
     at_targets = joint_positions(design, crank, branch)["P"] if crank.size else np.zeros(0)
-    for i, (t, p) in enumerate(zip(targets, at_targets)):
-        if np.isfinite(p):
-            ax.plot([t[0], p.real], [t[1], p.imag], color="tab:red", lw=0.8, zorder=3)
-        ax.annotate(str(i + 1), t, textcoords="offset points", xytext=(4, 4), fontsize=8)
+    # each target's error segment, all in one collection (one artist, not one per target)
+    segments = [[(t[0], t[1]), (p.real, p.imag)] for t, p in zip(targets, at_targets) if np.isfinite(p)]
+    if segments:
+        ax.add_collection(LineCollection(segments, colors="tab:red", linewidths=0.8, zorder=3))
+    every = -(-len(targets) // NUMBERED_TARGETS)           # ceil: 1 up to NUMBERED_TARGETS targets
+    for i in range(0, len(targets), max(every, 1)):
+        ax.annotate(str(i + 1), targets[i], textcoords="offset points", xytext=(4, 4), fontsize=8)
     if targets.size:
-        ax.plot(targets[:, 0], targets[:, 1], "x", color="tab:red", ms=7, mew=1.6, label="targets", zorder=3)
+        small = len(targets) > SMALL_MARKS_ABOVE
+        ax.plot(targets[:, 0], targets[:, 1], "x", color="tab:red", ms=3 if small else 7, mew=0.8 if small else 1.6,
+                label="targets" if every <= 1 else f"targets (every {every}th numbered)", zorder=3)
     joints = joint_positions(design, crank[:1] if crank.size else np.zeros(1), branch)
     if all(np.isfinite(v[0]) for v in joints.values()):
         _linkage_lines(ax, joints)

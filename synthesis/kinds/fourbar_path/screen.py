@@ -43,13 +43,17 @@ PHASES = 24            # trial phases of the arc-length correspondence
 SPANS = (0.2, 0.35, 0.5, 0.7)   # open target arcs: trial fractions of the curve they cover
 ICP_ROUNDS = 4         # nearest-point / similarity alternations on the coarse curves
 SEED_TAG = 1919        # the shapes' generator is seeded by [seed, SEED_TAG]
-CHUNK = 512            # shapes per vectorised block (memory: CHUNK x targets x GRID)
+#: shapes per vectorised block (memory: CHUNK x targets x GRID complex numbers).  Each shape's row is computed by the
+#: same operations whatever block holds it, so the list is the same for any CHUNK; 64 keeps a block's arrays (13 MB at
+#: the 100 targets the screen ranks at most: starts.RANKING_TARGETS) near the cache: 512 took twice the CPU seconds at
+#: 100 targets (5.3 s against 2.7 s) and 1.4 times at 25 (1.05 s against 0.76 s)
+CHUNK = 64
 #: threads that screen the blocks (None: the CPUs this process may use, at most MAX_THREADS; 1 in a worker process,
 #: whose sibling workers hold the other cores).  The screen runs in the main process before the workers start, so
 #: alone it held the run's other cores idle (0.55-1.6 s of the ten inexact problems' 2.2-8 s runs on 2 cores); numpy
 #: releases the GIL in its array loops, and each block is computed by the same operations on the same rows whatever
 #: thread runs it, so the list is the same for any thread count (tests/test_fourbar_path_inexact.py).  Each thread
-#: holds one block (about 55 MB for kidney25's 25 targets): hence the cap
+#: holds one block (CHUNK)
 THREADS: int | None = None
 MAX_THREADS = 4
 TWO_PI = 2.0 * math.pi

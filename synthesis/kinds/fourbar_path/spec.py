@@ -2,7 +2,7 @@
 
 ::
 
-    [targets]  points = [[x, y], ...]  (mm, 3 to 100)   crank_deg = [...]  (optional: timing)
+    [targets]  points = [[x, y], ...]  (mm, 3 to 1000)   crank_deg = [...]  (optional: timing)
     [linkage]  r1 r2 r3 r4 rcx rcy x0 y0 theta0: a number fixes a variable, {init, bounds} frees it
                (as in every kind); branch = 1 | -1
     [design]   crank_deg = [...]  (free timing: the given design's crank angle at each target)
@@ -35,7 +35,9 @@ from synthesis.spec.common import (
 )
 
 KIND = "fourbar_path"
-MAX_POINTS = 100
+#: the most targets a spec may give: a digitised curve or a high-speed video's trace has hundreds of points; every
+#: part of a solve grows no faster than linearly with their number (problems/fourbar_path/INEXACT.md, "Many targets")
+MAX_POINTS = 1000
 #: largest |coordinate|, |bound|, |design value| (mm or deg): beyond it the squared errors and closure
 #: polynomials overflow a float (1e300^2), and no machine of the field is a kilometre long
 MAX_MAGNITUDE = 1e6
@@ -69,7 +71,7 @@ Finite = Annotated[float, BeforeValidator(lambda v: _number(v, "value"))]
 class TargetsSection(StrictModel):
     """The points the coupler point must pass through, and optionally when (the crank angles)."""
 
-    points: list[Point] = Field(description="target points [[x, y], ...], mm; 3 to 100, at least 3 distinct")
+    points: list[Point] = Field(description="target points [[x, y], ...], mm; 3 to 1000, at least 3 distinct")
     crank_deg: list[Angle] | None = Field(
         None, description="prescribed crank angle of each point (deg, from the frame line O -> O', "
                           "counter-clockwise); omit to leave the timing free")
@@ -127,22 +129,45 @@ def same_target_mm(points) -> float:
 
 
 def same_targets(points, crank_deg=None) -> list[tuple[int, int, float]]:
-    """(i, j, distance in mm), i < j, of every two targets that are one: at most :func:`same_target_mm` apart and,
-    when the timing is prescribed, at one crank angle (within :data:`SAME_ANGLE_DEG`); at most 100 points, so
-    every pair is looked at."""
+    """(i, j, distance in mm), i < j in that order, of every two targets that are one: at most
+    :func:`same_target_mm` apart and, when the timing is prescribed, at one crank angle (within
+    :data:`SAME_ANGLE_DEG`).  Only the pairs in neighbouring cells of a grid twice that distance wide are measured
+    (:func:`_near_pairs`), so a set of 1,000 points costs milliseconds, not the half a million pairs of them all."""
     limit = same_target_mm(points)
     out = []
-    for i in range(len(points)):
-        for j in range(i + 1, len(points)):
-            d = math.hypot(float(points[i][0]) - float(points[j][0]), float(points[i][1]) - float(points[j][1]))
-            if d > limit:
+    for i, j in _near_pairs(points, limit):
+        d = math.hypot(float(points[i][0]) - float(points[j][0]), float(points[i][1]) - float(points[j][1]))
+        if d > limit:
+            continue
+        if crank_deg is not None:
+            turn = abs(float(crank_deg[i]) - float(crank_deg[j])) % 360.0
+            if min(turn, 360.0 - turn) > SAME_ANGLE_DEG:
                 continue
-            if crank_deg is not None:
-                turn = abs(float(crank_deg[i]) - float(crank_deg[j])) % 360.0
-                if min(turn, 360.0 - turn) > SAME_ANGLE_DEG:
-                    continue
-            out.append((i, j, d))
+        out.append((i, j, d))
     return out
+
+
+def _near_pairs(points, limit: float) -> list[tuple[int, int]]:
+    """(i, j), i < j, sorted, a superset of the pairs of ``points`` at most ``limit`` apart: those whose cells of a
+    grid 2 x ``limit`` wide (from the points' lowest corner, so the cell numbers stay below 1e6) touch.  Two points
+    that close differ by less than one cell in x and in y whatever the rounding of their cell numbers; a
+    ``limit`` of 0 (every point at one place) groups equal points."""
+    xy = [(float(p[0]), float(p[1])) for p in points]
+    if not xy:
+        return []
+    x_min, y_min = min(x for x, _ in xy), min(y for _, y in xy)
+    cell = 2.0 * limit
+    cells: dict[tuple, list[int]] = {}
+    for k, (x, y) in enumerate(xy):
+        key = (math.floor((x - x_min) / cell), math.floor((y - y_min) / cell)) if cell > 0 else (x, y)
+        cells.setdefault(key, []).append(k)
+    steps = [(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1)] if cell > 0 else [(0, 0)]
+    pairs = []
+    for (cx, cy), members in cells.items():
+        for a, b in steps:
+            others = cells.get((cx + a, cy + b), ()) if cell > 0 else members
+            pairs += [(i, j) for i in members for j in others if i < j]
+    return sorted(pairs)
 
 
 def _merged(points, crank_deg=None) -> set[int]:

@@ -80,6 +80,12 @@ SCREEN_MIN_TARGETS = 12
 DISTINCT = 0.05        # screened starts closer than this (nominal units: D, rad) to a better one are skipped
 REFIT_ROUNDS = 4       # alternations of the linear refit of (x0, y0, rcx, rcy) and the nearest angles
 CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this x the median gap
+#: the screen (screen.py) and the pool rank their shapes against at most this many of the targets, spread evenly
+#: through their order (ranking_targets); every start is then placed and finished on all of them.  The screen's
+#: coarse curves have screen.GRID = 128 samples, so more targets than this refine no ranking, they only cost time
+#: and memory: a 1,000-point set screened whole took 99 s and 4.3 GB (INEXACT.md, "Many targets").  A set of at
+#: most this many is ranked on every target, as it always was
+RANKING_TARGETS = 100
 
 #: the Grashof class as rows  A @ (r1, r2, r3, r4) >= 0  (synthesis.kinds.fourbar_path.rules.grashof_class)
 CLASS_ROWS = {
@@ -333,6 +339,14 @@ def is_closed_loop(targets: np.ndarray) -> bool:
     return bool(np.hypot(*(targets[0] - targets[-1])) <= CLOSING_GAP * np.median(gaps))
 
 
+def ranking_targets(targets: np.ndarray) -> np.ndarray:
+    """The targets the screen and the pool rank shapes against: all of them up to RANKING_TARGETS, else
+    RANKING_TARGETS of them evenly spread through the given order, the first and the last among them."""
+    if len(targets) <= RANKING_TARGETS:
+        return targets
+    return targets[np.round(np.linspace(0.0, len(targets) - 1.0, RANKING_TARGETS)).astype(int)]
+
+
 def arc_fractions(targets: np.ndarray, closed: bool) -> np.ndarray:
     """Each target's fraction of the arc length along the polygon of the targets (closed: of the loop)."""
     pts = np.vstack([targets, targets[:1]]) if closed else targets
@@ -405,6 +419,11 @@ def pool_residuals(curves: np.ndarray, targets: np.ndarray, u: np.ndarray, s_lo:
 _SCREENED: dict = {}      # the last screened list of this process (StartMaker.screened)
 
 
+def forget_screened() -> None:
+    """Drop this process's screened list, so the next StartMaker screens afresh (a study timing the screen)."""
+    _SCREENED.clear()
+
+
 def distinct(designs: np.ndarray, residuals: np.ndarray, size: float,
              keep: int = 512) -> tuple[np.ndarray, np.ndarray]:
     """The first ``keep`` designs (in the given order) each farther than DISTINCT (max-norm, nominal units:
@@ -436,6 +455,7 @@ class StartMaker:
         self.anchor = grashof_anchor(self.bounds, spec.rules.grashof)
         self.timed_theta = None if spec.targets.crank_deg is None else np.radians(spec.targets.crank_deg)
         self.closed = is_closed_loop(self.targets)
+        self.ranking = ranking_targets(self.targets)      # what the screen and the pool rank shapes against
         self.pool_grashof = "crank-rocker" if spec.rules.grashof == "any" else spec.rules.grashof
         self.pool_anchor = grashof_anchor(self.bounds, self.pool_grashof)
         self._ranked: np.ndarray | None = None
@@ -481,8 +501,8 @@ class StartMaker:
             designs = np.array([self.pool_class(lo + rng.random(len(lo)) * (hi - lo)) for _ in range(POOL)])
             curves = pool_curves(designs, self.branch)
             s_lo, s_hi = scale_limits(designs, self.bounds)
-            u = correspondences(self.targets, SIGNS[self.spec.rules.direction], self.closed)
-            res = pool_residuals(curves, self.targets, u, s_lo, s_hi)
+            u = correspondences(self.ranking, SIGNS[self.spec.rules.direction], self.closed)
+            res = pool_residuals(curves, self.ranking, u, s_lo, s_hi)
             order = np.argsort(res, kind="stable")
             self._ranked = designs[order[np.isfinite(res[order])]]
             if len(self._ranked) == 0:
@@ -491,15 +511,15 @@ class StartMaker:
 
     @property
     def screened(self) -> tuple[np.ndarray, np.ndarray]:
-        """(designs, residual mm^2) of the best distinct screened shapes, best first (screen.py; one list per
-        spec and seed, cached per process: a forked worker inherits its parent's)."""
+        """(designs, residual mm^2 on the ranking targets) of the best distinct screened shapes, best first (screen.py
+        on ``ranking``; one list per spec and seed, cached per process: a forked worker inherits its parent's)."""
         if self._screened is None:
             key = (self.targets.tobytes(), self.bounds.tobytes(), self.branch, self.spec.rules.grashof,
                    self.spec.rules.direction, self.seed)
             if key not in _SCREENED:
-                designs, res = screen.screen(self.targets, self.bounds, self.branch, self.spec.rules.grashof,
+                designs, res = screen.screen(self.ranking, self.bounds, self.branch, self.spec.rules.grashof,
                                              SIGNS[self.spec.rules.direction], self.closed,
-                                             arc_fractions(self.targets, self.closed), self.seed)
+                                             arc_fractions(self.ranking, self.closed), self.seed)
                 _SCREENED.clear()
                 _SCREENED[key] = distinct(designs, res, float(np.max(np.ptp(self.targets, axis=0))) or 1.0)
             self._screened = _SCREENED[key]

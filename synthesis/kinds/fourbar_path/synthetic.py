@@ -87,7 +87,32 @@ def truth_data(seed: int, n: int, timed: bool, solver: dict | None = None, span_
 
 def truth_spec(seed: int, n: int, timed: bool, solver: dict | None = None, span_deg: float = 360.0) -> LoadedSpec:
     """The problem as a loaded spec (what ``agrisynth solve`` would see)."""
-    data = truth_data(seed, n, timed, solver, span_deg)
+    return loaded_spec(truth_data(seed, n, timed, solver, span_deg))
+
+
+def loaded_spec(data: dict) -> LoadedSpec:
+    """A spec's data (as TOML-like data) as a loaded spec (what ``agrisynth solve`` would see)."""
     model = validate(FourbarPathSpec, data, prefix="fourbar_path")
     sha = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
     return LoadedSpec(model, Path(f"<{data['name']}>"), sha)
+
+
+#: a digitiser's noise (mm, the standard deviation of each coordinate of each target): a curve traced from a drawing
+#: or a point tracked on high-speed video is a fifth of a millimetre off, so no four-bar passes through its targets
+DIGITISER_NOISE_MM = 0.2
+NOISE_SEED_TAG = 7       # the noise is drawn by numpy's generator seeded [seed, n, NOISE_SEED_TAG]
+
+
+def noisy_truth_data(seed: int, n: int, timed: bool, noise_mm: float = DIGITISER_NOISE_MM,
+                     solver: dict | None = None) -> dict:
+    """:func:`truth_data` over the whole turn, every target then moved by a seeded normal offset of ``noise_mm`` in
+    x and in y: a digitised coupler curve of a known linkage, as many points as a designer brings (the many-target
+    study of bench.py and its tests).  The crank angles (timed) are the true ones."""
+    data = truth_data(seed, n, timed, solver)
+    rng = np.random.default_rng([seed, n, NOISE_SEED_TAG])
+    points = np.asarray(data["targets"]["points"], dtype=float) + rng.normal(0.0, noise_mm, (n, 2))
+    data["targets"]["points"] = points.tolist()
+    data["name"] = f"noisy{seed}_n{n}_{'timed' if timed else 'free'}"
+    data["source"] = (f"synthetic: {n} coupler points of random crank-rocker {seed}, each moved by a normal "
+                      f"digitiser error of {noise_mm:g} mm in x and y (synthesis.kinds.fourbar_path.synthetic)")
+    return data
