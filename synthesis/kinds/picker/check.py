@@ -3,8 +3,9 @@
 The target points lie evenly by arc length on the picking arc; the crank angles are evenly spaced over
 the working swing, the i-th point paired with the i-th angle (M1 at phi10).  Rules: Grashof double
 crank with the frame AD shortest (eq 5-6), x_A > 0 (eq 7) and the transmission angle at C over the
-working swing; with ``[rules] max_arc_error`` the largest miss of a target point, and with a ``[dynamics]`` table's
-limits the peak input torque, shaking force or moment over the working swing (synthesis/kinds/picker/dynamics.py).
+working swing; with ``[rules] max_arc_error`` the largest miss of a target point, with a ``[dynamics]`` table's
+limits the peak input torque, shaking force or moment over the working swing (synthesis/kinds/picker/dynamics.py),
+and with a ``[key_poses]`` table the clamp's attitude and position at each pose (synthesis/kinds/picker/poses.py).
 The arc error is the objective of ``solve`` (unless a min-peak objective is); ``check`` reports it in ``arc_error``.
 """
 
@@ -24,6 +25,7 @@ from synthesis.errors import AssemblyError
 from synthesis.kinematics import fourbar
 from synthesis.kinds.picker.kinematics.arc import arc_through, points_on_arc
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, assembles, clamp_states, joint_positions
+from synthesis.kinds.picker.poses import float_poses, key_pose_facts, pose_headline, pose_rules
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -89,15 +91,17 @@ def evaluate(spec: PickerDoubleCrankSpec, dc: DoubleCrank, samples: int = CHECK_
     require_assembly(spec, dc)
     mu = clamp_states(dc, swing_angles(spec, samples))["mu"]
     misses = clamp_states(dc, target_angles(spec))["M"] - target_points(spec).T
-    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu, tuple(float(v) for v in dc.parameters()), misses)
+    return rules_of(spec, dc.x_a, dc.l1, dc.l2, dc.l3, dc.l4, mu, tuple(float(v) for v in dc.parameters()), misses,
+                    float_poses(spec, dc))
 
 
-def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu, p=None, misses=None) -> list[Rule]:
+def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu, p=None, misses=None, poses=None) -> list[Rule]:
     """Every rule of the spec on a trace of floats or CasADi symbols: pivot A's x, the links l1..l4 (l4 the
-    frame AD), the transmission angles at C (deg) over the working swing, the parameters p (PARAMETERS: mm, rad)
-    and the misses (2 x targets, clamp point - target, mm).  Used by check, the NLP and the re-check.  p and the
-    misses are read only by the rules a spec adds ([rules] max_arc_error, [dynamics.limits]): without them the list
-    is eq (5)-(7) and the transmission angle, as it always was."""
+    frame AD), the transmission angles at C (deg) over the working swing, the parameters p (PARAMETERS: mm, rad),
+    the misses (2 x targets, clamp point - target, mm) and the clamp at each key pose (synthesis/kinds/picker/poses.py
+    PoseReading).  Used by check, the NLP and the re-check.  p, the misses and the poses are read only by the rules a
+    spec adds ([rules] max_arc_error, [dynamics.limits], [key_poses]): without them the list is eq (5)-(7) and the
+    transmission angle, as it always was."""
     rules = [grashof_double_crank_rule(l4, l1, l2, l3),
              frame_point_rule(x_a, spec.rules.x_a_min),
              acute_transmission_rule(mu, spec.rules.min_transmission_angle, "at C, over the working swing")]
@@ -108,7 +112,7 @@ def rules_of(spec: PickerDoubleCrankSpec, x_a, l1, l2, l3, l4, mu, p=None, misse
         crank = np.radians(swing_angles(spec, mu.numel() if hasattr(mu, "numel") else len(mu)))
         rules += dynamics_rules(double_crank_dynamics(spec.dynamics, p, spec.linkage.branch), spec.dynamics.limits,
                                 crank)
-    return rules
+    return rules + pose_rules(poses or [])
 
 
 def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
@@ -137,6 +141,7 @@ def facts(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> dict:
         "coupler_curve": {"crank_deg": full_ok, "x": m_full[0].tolist(), "y": m_full[1].tolist()},
         "positions": [{"crank_deg": float(a), "joints": joint_positions(dc, float(a))} for a in target_angles(spec)],
         **dynamics_of(spec, dc),
+        **key_pose_facts(spec, dc),
     }
 
 
@@ -164,8 +169,8 @@ def run_check(loaded: LoadedSpec) -> Result:
 
 
 def headline(result: Result) -> list[str]:
-    """The clamp's miss of its target arc (rms, maximum, eq 4's sum) and the smallest transmission angle, from
-    result.json facts and rules."""
+    """The clamp's miss of its target arc (rms, maximum, eq 4's sum) and the smallest transmission angle, and with
+    [key_poses] a line per pose, from result.json facts and rules."""
     arc = (result.extra or {}).get("arc_error") or {}
     rules = {r["name"]: r for r in result.rules}
     if not arc:
@@ -175,12 +180,13 @@ def headline(result: Result) -> list[str]:
     return [f"arc error over {len(points)} points: rms {figure_text(arc.get('rms_mm'), 'mm')}, max "
             f"{figure_text(arc.get('max_mm'), 'mm')} (eq 4 sum {figure_text(arc.get('eq4_sum_mm'), 'mm')})",
             f"path off the circle at most {figure_text(arc.get('path_off_circle_max_mm'), 'mm')}, transmission angle "
-            f"min {figure_text(mu.get('value'), 'deg')}"]
+            f"min {figure_text(mu.get('value'), 'deg')}",
+            *pose_headline((result.extra or {}).get("key_poses") or {}, rules)]
 
 
 def combined_headline(result: Result) -> list[str]:
-    """The combined picker (drive and linkage): how near the clamp picks and drops to its targets and when, and its
-    peak speed, from result.json facts."""
+    """The combined picker (drive and linkage): how near the clamp picks and drops to its targets and when, its peak
+    speed and, with [key_poses], a line per pose, from result.json facts."""
     facts = result.extra or {}
     instants = facts.get("instants") or {}
     lines = []
@@ -191,4 +197,4 @@ def combined_headline(result: Result) -> list[str]:
                          f"t = {figure_text(at.get('t'), 's')} (published {figure_text(at.get('published_t'), 's')})")
     if facts.get("peak_speed_m_s") is not None:
         lines.append(f"peak clamp speed {figure_text(facts.get('peak_speed_m_s'), 'm/s')}")
-    return lines
+    return lines + pose_headline(facts.get("key_poses") or {}, {r["name"]: r for r in result.rules})

@@ -11,6 +11,11 @@ Readings (problems/picker/PICKER.md): t = 0 when the rocker is at its picking ex
 stroke the ``installation.holding_stroke`` one; theta1 is the angle G-A-E at the picking extreme (a
 property of the crank-rocker, checked against the published value) and theta2 the direction of the
 frame A -> G from the +x axis, which only places the crank-rocker in the drawing.
+
+With a ``[key_poses]`` table the clamp's attitude (the direction of the clamp arm C -> M, the double crank's) and
+position are asked at the picking or dropping instant, at an angle of the crank GF, or where the clamp point comes
+nearest a target over a turn: the rules ``pose_<name>`` and ``pose_<name>_attitude`` of the double crank's poses
+(synthesis/kinds/picker/poses.py), on the combined motion.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from typing import Protocol, cast
 
 import casadi as ca
 import numpy as np
+from scipy.optimize import brentq
 
 from constraints.base import Rule
 from synthesis import kinds
@@ -29,15 +35,20 @@ from synthesis.spec.design_info import describe_fixed, describe_part
 from synthesis.errors import AssemblyError, SpecError
 from synthesis.kinematics.rocker_drive import CrankRocker, quick_return, rocker_function
 from synthesis.kinematics.rocker_drive import joints as crank_rocker_joints
-from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_point, joint_positions
+from constraints.poses import nearest_row
+from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, attitude_function, clamp_point, joint_positions
 from synthesis.kinds.picker import check as double_crank_check
-from synthesis.kinds.picker.spec import Installation, PickerDoubleCrankSpec, PickerSpec
+from synthesis.kinds.picker.poses import PoseReading, free_target, pose_rules, reading_facts
+from synthesis.kinds.picker.spec import CLAMP_ATTITUDE, Installation, PickerDoubleCrankSpec, PickerSpec
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec, load_spec
 
 TWO_PI = 2.0 * math.pi
 TRAJECTORY_SAMPLES = 361
 ANIMATION_FRAMES = 40
+#: instants over a turn on which a free key pose's nearest point is looked for (then refined to the root of the
+#: nearest-point row between the neighbours of the nearest sample)
+POSE_SEARCH_SAMPLES = 3600
 
 
 class CrankRockerPart(Protocol):
@@ -185,6 +196,8 @@ def run_check(loaded: LoadedSpec) -> Result:
     t = np.linspace(0.0, period, TRAJECTORY_SAMPLES)
     s = states(drive, t)
     instants = {"picking": 0.0, "dropping": drive.holding_angle / drive.omega, "picking_again": period}
+    poses = pose_readings(spec, drive, instants)
+    rules += [r.record().to_json() for r in pose_rules([reading for reading, _ in poses])]
     instant_table = _instant_table(spec, dc_spec, drive, instants)
     speeds = np.hypot(*s["V"]) / 1000.0
     ab = np.degrees(s["phi1"])
@@ -215,8 +228,67 @@ def run_check(loaded: LoadedSpec) -> Result:
             "target_arc": double_crank_check.facts(dc_spec, dc)["target_arc"],
             "frames": [{"t": float(ft), "joints": machine_joints(drive, float(a), float(c))}
                        for ft, a, c in zip(frames_t, frames["phi1"], frames["phi7"])],
+            **key_pose_facts(spec, drive, instants, poses),
         },
     )
+
+
+def pose_instant(drive: Drive, target: tuple[float, float], samples: int = POSE_SEARCH_SAMPLES) -> float:
+    """The instant (s, in [0, period)) where the clamp point comes nearest ``target`` (mm) over a turn: the nearest
+    of ``samples`` instants, then the root of (M - target) . dM/dt between its neighbours (the shared nearest-point
+    row, constraints.poses.nearest_row).  The clamp passes each point of its path twice a turn in the same pose
+    (AB swings there and back): the first nearest sample is taken."""
+    grid = np.linspace(0.0, drive.period, samples, endpoint=False)
+    m = states(drive, grid)["M"]
+    k = int(np.argmin((m[0] - target[0]) ** 2 + (m[1] - target[1]) ** 2))
+    motion = clamp_motion(drive)
+
+    def row(tt: float) -> float:
+        pos, vel = (np.asarray(v, dtype=float).ravel() for v in motion(tt)[:2])
+        return float(nearest_row(pos[0] - target[0], pos[1] - target[1], vel[0], vel[1]))
+
+    h = grid[1]
+    lo, hi = grid[k] - h, grid[k] + h
+    found = brentq(row, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps) if row(lo) < 0.0 < row(hi) else grid[k]
+    return float(found) % drive.period
+
+
+def pose_readings(spec: PickerSpec, drive: Drive, instants: dict[str, float]) -> list[tuple[PoseReading, float]]:
+    """(the clamp at each key pose, its instant in s): at the picking or dropping instant, at the prescribed angle of
+    the crank GF since picking, or where the clamp point comes nearest its target (:func:`pose_instant`)."""
+    if not spec.key_poses:
+        return []
+    attitude, p = attitude_function(drive.dc.branch), drive.dc.parameters()
+    out = []
+    for name, pose in spec.key_poses.items():
+        if pose.at is not None:
+            tt = instants[pose.at]
+        elif pose.crank_angle is not None:
+            tt = math.radians(pose.crank_angle) / drive.omega
+        else:
+            tt = pose_instant(drive, free_target(pose))
+        at = states(drive, [tt])
+        phi1 = float(at["phi1"][0])
+        out.append((PoseReading(name, pose, phi1, (float(at["M"][0, 0]), float(at["M"][1, 0])),
+                                float(attitude(phi1, p)), pose.at), tt))
+    return out
+
+
+def key_pose_facts(spec: PickerSpec, drive: Drive, instants: dict[str, float],
+                   poses: list[tuple[PoseReading, float]]) -> dict:
+    """``{"key_poses": ...}`` when the spec has a [key_poses] table (else nothing): the clamp's attitude at picking
+    and dropping, and at each pose its instant, the crank angles GF and AB, the clamp point and the attitude there and
+    their misses."""
+    if not spec.key_poses:
+        return {}
+    attitude, p = attitude_function(drive.dc.branch), drive.dc.parameters()
+    at = states(drive, [instants["picking"], instants["dropping"]])
+    points = {name: math.degrees(float(attitude(float(phi1), p))) for name, phi1 in zip(("picking", "dropping"),
+                                                                                        at["phi1"])}
+    return {"key_poses": {
+        "attitude": CLAMP_ATTITUDE, "clamp_attitude_at_instants_deg": points,
+        "poses": {r.name: reading_facts(r, {"t": tt, "crank_deg": math.degrees(drive.omega * tt),
+                                            "crank_ab_deg": math.degrees(r.angle)}) for r, tt in poses}}}
 
 
 def _instant_table(spec: PickerSpec, dc_spec: PickerDoubleCrankSpec, drive: Drive,

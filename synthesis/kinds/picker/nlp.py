@@ -14,7 +14,9 @@ warm-started from the least-squares fit, which IPOPT solves fast and reliably.  
 Reported objectives are always the exact eq (4) (or sum of squares) of the design.  The min-peak objectives
 (``min_peak_torque``, ``min_peak_shaking_force``, ``min_peak_shaking_moment``) are a second stage like eq (4)'s, from the least-squares fit: an
 epigraph over the working swing's samples (synthesis/kinds/picker/dynamics.py), reported as the design's own peak on
-the check's grid, with the arc held by ``[rules] max_arc_error``.
+the check's grid, with the arc held by ``[rules] max_arc_error``.  With a ``[key_poses]`` table each free pose adds
+its crank angle AB (rad, within the working swing) after the nine coordinates, held where the clamp point comes
+nearest its target by a structural row (synthesis/kinds/picker/poses.py); every stage carries them.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from synthesis.core.problem import ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
 from synthesis.kinds.picker.dynamics import PEAK_UNITS, double_crank_dynamics, peak_epigraph, peak_of, peak_sampled
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, clamp_function
+from synthesis.kinds.picker.poses import free_poses, start_angles, symbolic_poses
 from synthesis.kinds.picker.check import (CHECK_SAMPLES, arc_error, linkage, rules_of, swing_angles, target_angles,
                                           target_points)
 from synthesis.spec.common import design_box
@@ -79,16 +82,30 @@ class PickerNLP(KindNLP):
         samples = swing_angles(spec, spec.solver.samples) * DEG
         mu = ca.vec(f.map(len(samples))(samples.reshape(1, -1), p)[3]) / DEG
         x_a, l1, l2, l3, l4 = (x[NAMES.index(n)] for n in ("x_a", "l1", "l2", "l3", "l4"))
-        rules = rules_of(spec, x_a, l1, l2, l3, l4, mu, p, r)
+        # each free key pose's crank angle AB (rad), after the coordinates z: w = (z, angles)
+        self.free_poses = free_poses(spec)
+        angles_of_poses = ca.SX.sym("phi_pose", len(self.free_poses))
+        poses, nearest = symbolic_poses(spec, p, {n: angles_of_poses[i] for i, n in enumerate(self.free_poses)})
+        rules = rules_of(spec, x_a, l1, l2, l3, l4, mu, p, r, poses)
         lb, ub = self.bounds[:, 0], self.bounds[:, 1]
+        lbw, ubw = COORDINATES.bounds(lb, ub)
+        w = z
+        if self.free_poses:
+            w = ca.vertcat(z, angles_of_poses)
+            swing = np.radians([spec.drive.start, spec.drive.start + spec.drive.swing])
+            lbw = np.concatenate([lbw, np.full(len(self.free_poses), swing[0])])
+            ubw = np.concatenate([ubw, np.full(len(self.free_poses), swing[1])])
+        self.n_w = w.numel()
         # Problem's keyword arguments both stages share
         common: dict[str, Any] = dict(
             max_iter=spec.solver.max_iter, backoff=scaled_backoff(spec.solver.backoff), ipopt="tight",
             hard_in_elastic=("grashof_double_crank",),
-            # z: x_a, y_a, l2 and the slacks, l5 (mm), phi3, phi4 (deg); rows: three lengths' bounds
-            x_units=["mm"] * 7 + ["deg"] * 2, structural_units=["mm"] * 3)
+            # z: x_a, y_a, l2 and the slacks, l5 (mm), phi3, phi4 (deg), the free poses' crank angles (rad); rows:
+            # three lengths' bounds, the free poses' nearest-point rows
+            x_units=["mm"] * 7 + ["deg"] * 2 + ["rad"] * len(self.free_poses),
+            structural_units=["mm"] * 3 + ["mm^2/rad"] * len(self.free_poses))
         # the loop must close for the path to exist: Grashof stays hard in the elastic diagnosis
-        shape = (z, *COORDINATES.bounds(lb, ub), COORDINATES.length_rows(x, lb, ub), rules)
+        shape = (w, lbw, ubw, COORDINATES.length_rows(x, lb, ub) + nearest, rules)
         self.stages = [compile_problem(setting, Problem("picker_lsq", *shape, ObjectiveParts(f=ca.sumsqr(r) / 100.0),
                                                         objective_unit="mm^2", **common),
                                        elastic)]
@@ -123,6 +140,15 @@ class PickerNLP(KindNLP):
         design when that one is inside (IPOPT moves any start inside its bounds anyway)."""
         return COORDINATES.coordinates(pull_inside(np.asarray(x0, float), self.init, grashof_slacks, START_MARGIN))
 
+    def start_vector(self, x0: np.ndarray) -> np.ndarray:
+        """The decision vector w of a start design: its coordinates z (:meth:`start_coordinates`) and, with free key
+        poses, each one's crank angle where that design's clamp point comes nearest its target."""
+        z = self.start_coordinates(x0)
+        if not self.free_poses:
+            return z
+        dc = linkage(self.spec, {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))})
+        return np.concatenate([z, start_angles(self.spec, dc)])
+
     def epigraph_start(self, z: np.ndarray) -> np.ndarray:
         """(t, u) of the eq (4) stage at coordinates z: t_i a little above |r_i|, u_i = r_i / t_i (inside)."""
         r = np.asarray(self.residuals(z), dtype=float)
@@ -142,12 +168,13 @@ class PickerNLP(KindNLP):
         last stage's unless the least-squares design has the lower exact objective (the last stage may
         stop early on this flat landscape); the start counts as converged only if the last stage did
         and its design is the one kept."""
-        z = self.start_coordinates(x0)
-        stages, logs, candidates, raws = [], [], [], []
+        w = self.start_vector(x0)
+        stages, logs, candidates, raws, pose_angles = [], [], [], [], []
         for k, (name, stage) in enumerate(zip(self.stage_names, self.stages)):
-            out = stage.solve(start, z, self.extra_start(name, z))
+            out = stage.solve(start, w, self.extra_start(name, w[:9]))
             logs.append(f"----- stage {name}\n{out.log}")
-            z = out.x[:9]
+            w = out.x[:self.n_w]
+            z = w[:9]
             design = {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))}
             objective = self.exact_objective(design)
             if not math.isfinite(objective):     # the loop breaks somewhere: the re-check rejects it
@@ -156,12 +183,17 @@ class PickerNLP(KindNLP):
                            "wall_s": out.wall_s, "objective": objective if math.isfinite(objective) else None})
             candidates.append((objective, -k, design, out.success and k == len(self.stages) - 1))
             raws.append(out)
+            pose_angles.append(w[9:])
         # the last stage's design unless an earlier one is better by more than rounding
-        objective, _, design, success = min(candidates, key=lambda c: (_rounded(c[0]), c[1]))
+        objective, kept, design, success = min(candidates, key=lambda c: (_rounded(c[0]), c[1]))
         last = stages[-1]
+        details: dict[str, Any] = {"stages": stages}
+        if self.free_poses:     # the crank angles of the free poses where the kept design's stage left them
+            details["key_pose_crank_deg"] = {n: math.degrees(float(a))
+                                             for n, a in zip(self.free_poses, pose_angles[-kept])}
         return StartOutcome(start, design, objective, last["return_status"], success,
                             sum(s["iterations"] for s in stages), sum(s["wall_s"] for s in stages), "\n".join(logs),
-                            raws[-1], {"stages": stages})
+                            raws[-1], details)
 
 
 def _peak_objective(spec: PickerDoubleCrankSpec, p, z) -> tuple[ObjectiveParts, ca.Function]:

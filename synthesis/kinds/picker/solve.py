@@ -33,11 +33,13 @@ def finish(setting: Setting, best: StartReport) -> Finished:
         kind_facts = facts(spec, linkage(spec, best.outcome.design))
     except Exception as exc:   # noqa: BLE001 - a broken best design still gets a result (status infeasible)
         kind_facts = {"source": spec.source, "facts_error": str(exc)}
+    settings = {"stages": best.outcome.details.get("stages"), "samples": spec.solver.samples}
+    if "key_pose_crank_deg" in best.outcome.details:     # free key poses: where the solver held them
+        settings["key_pose_crank_deg"] = best.outcome.details["key_pose_crank_deg"]
     return Finished(design=design,
                     objective={"name": spec.objective.name, "value": best.outcome.objective,
                                "unit": OBJECTIVE_UNITS[spec.objective.name]},
-                    facts=kind_facts,
-                    solver_settings={"stages": best.outcome.details.get("stages"), "samples": spec.solver.samples})
+                    facts=kind_facts, solver_settings=settings)
 
 
 def baseline_rules(setting: Setting) -> list[dict] | None:

@@ -2,7 +2,8 @@
 
 Units: mm, deg, r/min.  Our reading of the paper's symbols is in problems/picker/PICKER.md; in short:
 l1 = crank AB, l2 = coupler BC, l3 = follower CD, l4 = frame AD (the shortest link, eq 5-6), l5 = CM,
-phi3 = frame AD below the +x axis, phi4 = CM turned counter-clockwise from BC.
+phi3 = frame AD below the +x axis, phi4 = CM turned counter-clockwise from BC.  The clamp's attitude (a key pose's)
+is the direction of the clamp arm C -> M, from +x counter-clockwise.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
 from synthesis.spec.dynamics import DynamicsSection
+from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.common import (
     POSITIVE, WITHIN_A_TURN, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive_fields,
     starts_field, value_of, within_a_turn,
@@ -96,6 +98,46 @@ class PickerSolver(MultistartSettings):
                                                              "backoff x 10 deg, so it holds between samples too (dimensionless)")
 
 
+#: what the clamp's attitude is (the spec's [key_poses] attitude, result.json's facts.key_poses)
+CLAMP_ATTITUDE = ("clamp attitude: the direction of the clamp arm C -> M (fixed on the coupler BC, turned from it "
+                  "counter-clockwise by phi4; the clamp and its seedling turn with it), from +x (towards the tray) "
+                  "counter-clockwise, deg (up: 90)")
+
+
+def _where(pose: ClawPose, at, crank_angle) -> None:
+    """A pose is read at a named point, at a prescribed crank angle or, free, where the clamp point comes nearest
+    its target: not two of them, and a free pose needs the target."""
+    if at is not None and crank_angle is not None:
+        raise ValueError(f"crank_angle: a pose at {at} is read at that point's crank angle; give at or crank_angle, "
+                         f"not both")
+    if at is None and crank_angle is None and pose.tip is None:
+        raise ValueError("a free pose (no at, no crank_angle) is read where the clamp point comes nearest its "
+                         "target: give x and y (mm)")
+
+
+class ClampPose(ClawPose):
+    """A pose the double crank's clamp must pass through: its attitude and/or the clamp point's position, read at the
+    picking point M1 or the drop point M2 (``at``) or, for a free pose, where the clamp point comes nearest (x, y)
+    over the working swing (or at ``crank_angle``)."""
+
+    at: Literal["M1", "M2"] | None = Field(
+        None, description="the named point the pose is read at: M1, the picking point (crank angle phi10, the first "
+                          "target point), or M2, the drop point (phi10 + psi, the last): the clamp's attitude there "
+                          "and, if x and y are given, the clamp point within tolerance of them; absent: a free pose")
+    x: float | None = Field(None, description="clamp point M x (towards the tray), machine frame, mm")
+    y: float | None = Field(None, description="clamp point M y (up), machine frame, mm")
+    attitude: float | None = attitude_field(CLAMP_ATTITUDE)
+    crank_angle: float | None = Field(
+        None, ge=-360, le=360, description="crank angle phi1 of a free pose, deg from AD, within the working swing "
+                                           "(absent: where the clamp point comes nearest (x, y) over the swing, the "
+                                           "solver's choice)")
+
+    @model_validator(mode="after")
+    def _read_somewhere(self) -> ClampPose:
+        _where(self, self.at, self.crank_angle)
+        return self
+
+
 class PickerDoubleCrankSpec(ProblemSpec):
     kind: Literal["picker_double_crank"] = Field(description="the problem kind (picker_double_crank)")
     target: TargetArc
@@ -114,6 +156,22 @@ class PickerDoubleCrankSpec(ProblemSpec):
                           "included; samples spread there, not over a turn), though in the picker the crank-rocker "
                           "drives it at a varying speed.  Seed 001 gives no masses: every value is an assumption, "
                           "say which in `assumption`.  Left out: no dynamics, no dynamics rules")
+    key_poses: dict[str, ClampPose] = Field(
+        default_factory=dict, max_length=MAX_POSES,
+        description="named poses, e.g. [key_poses.pick] at = \"M1\", attitude = 40: the clamp's attitude (and "
+                    "optionally the clamp point's position) at the picking point M1 or the drop point M2, or a free "
+                    "pose at x, y over the working swing; each adds the rules pose_<name> (clamp point) and "
+                    "pose_<name>_attitude")
+    _pose_names = field_validator("key_poses")(pose_names)
+
+    @model_validator(mode="after")
+    def _poses_within_the_swing(self) -> PickerDoubleCrankSpec:
+        lo, hi = self.drive.start, self.drive.start + self.drive.swing
+        for name, pose in self.key_poses.items():
+            if pose.crank_angle is not None and not lo <= pose.crank_angle <= hi:
+                raise ValueError(f"key_poses.{name}.crank_angle = {pose.crank_angle:g} deg: the clamp moves only over "
+                                 f"the working swing, crank angles {lo:g} to {hi:g} deg")
+        return self
 
     @model_validator(mode="after")
     def _dynamics_can_be_evaluated(self) -> "PickerDoubleCrankSpec":
@@ -171,6 +229,31 @@ class Published(StrictModel):
     instants: tuple[float, float, float] | None = Field(None, description="picking, dropping, picking again, s")
 
 
+class PickerPose(ClawPose):
+    """A pose the combined picker's clamp must pass through: its attitude and/or the clamp point's position, read at
+    the picking or the dropping instant (``at``) or, for a free pose, where the clamp point comes nearest (x, y)
+    over a turn of the crank GF (or at ``crank_angle``)."""
+
+    at: Literal["picking", "dropping"] | None = Field(
+        None, description="the instant the pose is read at: picking (t = 0, the rocker at its picking extreme, the "
+                          "clamp at M1) or dropping (the other extreme, the clamp near M2): the clamp's attitude "
+                          "there and, if x and y are given, the clamp point within tolerance of them; absent: a free "
+                          "pose")
+    x: float | None = Field(None, description="clamp point M x (towards the tray), machine frame, mm")
+    y: float | None = Field(None, description="clamp point M y (up), machine frame, mm")
+    attitude: float | None = attitude_field(CLAMP_ATTITUDE)
+    crank_angle: float | None = Field(
+        None, ge=0, lt=360, description="angle turned by the crank GF since picking, deg, of a free pose (absent: "
+                                        "where the clamp point comes nearest (x, y) over a turn; the clamp passes "
+                                        "each point of its path twice, holding and returning, in the same pose: the "
+                                        "first is taken)")
+
+    @model_validator(mode="after")
+    def _read_somewhere(self) -> PickerPose:
+        _where(self, self.at, self.crank_angle)
+        return self
+
+
 class PickerSpec(ProblemSpec):
     kind: Literal["picker"] = Field(description="the problem kind (picker)")
     crank_rocker: Annotated[str, SPEC_FILE] = Field(description="crank_rocker spec file of the drive, relative to "
@@ -180,6 +263,13 @@ class PickerSpec(ProblemSpec):
     installation: Installation
     operation: Operation
     published: Published = Field(default_factory=Published)
+    key_poses: dict[str, PickerPose] = Field(
+        default_factory=dict, max_length=MAX_POSES,
+        description="named poses of the combined motion, e.g. [key_poses.drop] at = \"dropping\", attitude = 60: "
+                    "the clamp's attitude (and optionally the clamp point's position) at the picking or dropping "
+                    "instant, or a free pose at x, y; each adds the rules pose_<name> (clamp point) and "
+                    "pose_<name>_attitude.  The double crank's own [key_poses] (at M1, M2) are its part's rules")
+    _pose_names = field_validator("key_poses")(pose_names)
 
     def part_path(self, spec_path: Path, field: str) -> Path:
         return (spec_path.parent / getattr(self, field)).resolve()

@@ -10,6 +10,8 @@ phi4:
 Links: l1 = AB (crank, driven), l2 = BC (coupler), l3 = CD (follower crank), l4 = AD (frame).  This is
 :mod:`synthesis.kinematics.fourbar` with O = A, O' = D, (l1, l2, l3, l4) -> (l4, l1, l2, l3) and
 zeta = -phi3; machine frame: origin at the power-output bar O, x towards the tray, y up (mm).
+
+The clamp's attitude (a key pose's, ``[key_poses]``) is the direction of the clamp arm C -> M, angle(BC) + phi4.
 """
 
 from __future__ import annotations
@@ -27,15 +29,32 @@ from synthesis.kinematics import fourbar
 PARAMETERS = ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")
 
 
-def joints(phi1, p, branch: int) -> dict[str, fourbar.Point]:
-    """A, B, C, D, M at crank angle phi1 (rad, from AD); p in mm and rad (:data:`PARAMETERS`)."""
+def loop(phi1, p, branch: int) -> tuple[fourbar.Point, fourbar.Point, fourbar.Point, fourbar.Point, fourbar.Point]:
+    """(A, B - A, C - A, D - A, M - C) at crank angle phi1 (rad, from AD): the pivot A in the machine frame, the
+    other joints from A, and the clamp arm C -> M (BC turned counter-clockwise by phi4, length l5); p in mm and rad
+    (:data:`PARAMETERS`)."""
     xa, ya, l1, l2, l3, l4, l5, phi3, phi4 = (p[i] for i in range(9))
     (bx, by), (cx, cy) = fourbar.coupler_joint(phi1, l4, l1, l2, l3, -phi3, branch)
     dx, dy = fourbar.rocker_pivot(l4, -phi3)
     bc = fourbar.link_direction((bx, by), (cx, cy))
-    mx, my = fourbar.polar(l5, bc + phi4)
+    return (xa, ya), (bx, by), (cx, cy), (dx, dy), fourbar.polar(l5, bc + phi4)
+
+
+def joints(phi1, p, branch: int) -> dict[str, fourbar.Point]:
+    """A, B, C, D, M at crank angle phi1 (rad, from AD); p in mm and rad (:data:`PARAMETERS`)."""
+    (xa, ya), (bx, by), (cx, cy), (dx, dy), (mx, my) = loop(phi1, p, branch)
     return {"A": (xa, ya), "B": (xa + bx, ya + by), "C": (xa + cx, ya + cy), "D": (xa + dx, ya + dy),
             "M": (xa + cx + mx, ya + cy + my)}
+
+
+def clamp_attitude(phi1, p, branch: int):
+    """The clamp's attitude: the direction of the clamp arm C -> M (rigid on the coupler BC, turned from it by phi4),
+    rad from +x counter-clockwise in (-pi, pi].  The clamp and the seedling it holds are fixed to the coupler while
+    the linkage moves (seed 001 §2.1.2), so every line on them turns with CM: a target for the jaws or the seedling
+    is a target for CM plus a fixed angle.  One expression for floats and CasADi symbols (the check reads it through
+    :func:`attitude_function`, the NLP on its own symbols)."""
+    mx, my = loop(phi1, p, branch)[4]
+    return ca.atan2(my, mx)
 
 
 def clamp_point(phi1, p, branch: int) -> fourbar.Point:
@@ -54,6 +73,15 @@ def clamp_function(branch: int) -> ca.Function:
     mu = fourbar.transmission_angle(phi1, p[5], p[2], p[3], p[4], -p[7], branch)
     return ca.Function(f"clamp_{'p' if branch > 0 else 'm'}", [phi1, p], [m, dm, ddm, mu],
                        ["phi1", "p"], ["M", "dM", "ddM", "mu"])
+
+
+@lru_cache(maxsize=4)
+def attitude_function(branch: int) -> ca.Function:
+    """(phi1, p) -> the clamp's attitude (rad, :func:`clamp_attitude`)."""
+    phi1 = ca.SX.sym("phi1")
+    p = ca.SX.sym("p", len(PARAMETERS))
+    return ca.Function(f"clamp_attitude_{'p' if branch > 0 else 'm'}", [phi1, p], [clamp_attitude(phi1, p, branch)],
+                       ["phi1", "p"], ["attitude"])
 
 
 @dataclass(frozen=True)
@@ -86,6 +114,13 @@ def clamp_states(dc: DoubleCrank, phi1_deg) -> dict[str, np.ndarray]:
     f = clamp_function(dc.branch).map(phi.size)
     m, dm, ddm, mu = (np.asarray(v) for v in f(phi.reshape(1, -1), dc.parameters()))
     return {"M": m.reshape(2, -1), "dM": dm.reshape(2, -1), "ddM": ddm.reshape(2, -1), "mu": np.degrees(mu.ravel())}
+
+
+def clamp_attitudes(dc: DoubleCrank, phi1_deg) -> np.ndarray:
+    """The clamp's attitude (N,) at crank angles phi1 (deg), deg in (-180, 180] (:func:`clamp_attitude`)."""
+    phi = np.radians(np.atleast_1d(np.asarray(phi1_deg, dtype=float)))
+    f = attitude_function(dc.branch).map(phi.size)
+    return np.degrees(np.asarray(f(phi.reshape(1, -1), dc.parameters()), dtype=float).ravel())
 
 
 def joint_positions(dc: DoubleCrank, phi1_deg: float) -> dict[str, list[float]]:
