@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 from scipy.optimize import brentq
@@ -20,12 +20,14 @@ from constraints import Rule
 from synthesis.kinds.tillage_linkage.rules import (bar_engagement_rule, bar_slot_angle_rule, lift_height_rule, rearward_in_soil_rule,
                                  working_depth_rule)
 from synthesis.core.verdict import FINE
-from synthesis.kinds.tillage_linkage.dynamics import TillageDynamics, dynamics_facts, dynamics_rules, turn
 from synthesis.kinds.tillage_linkage.kinematics import (acceleration, bar_angle, direction, joints, path_function, speed)
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.tillage_linkage.spec import TillageSpec
+
+if TYPE_CHECKING:
+    from synthesis.kinds.tillage_linkage.dynamics import TillageDynamics
 
 TWO_PI = 2.0 * math.pi
 DEG = math.pi / 180.0
@@ -51,6 +53,9 @@ def rules_of(spec: TillageSpec, a, b, c, depth, lift, vx_soil, missing: str | No
 def linkage_dynamics(spec: TillageSpec, a, b, c, theta_rad, height_c, rate=None, forward=None) -> TillageDynamics:
     """The inverse dynamics' inputs of a design (floats or symbols) at the flywheel speed ``rate`` (rad/s) and the
     forward speed ``forward`` (m/s), by default the spec's ``[operation]``.  Needs a ``[dynamics]`` table."""
+    # imported here: a spec without [dynamics] imports nothing of the dynamics (nor its shared rules)
+    from synthesis.kinds.tillage_linkage.dynamics import TillageDynamics
+
     assert spec.dynamics is not None
     return TillageDynamics.of(spec.dynamics, a, b, c, theta_rad, height_c,
                               crank_rate(spec) if rate is None else rate,
@@ -63,6 +68,8 @@ def dynamics_rules_of(spec: TillageSpec, a, b, c, theta_rad, height_c, samples: 
     ``[dynamics]`` table or without a limit, so such a spec's rules are what they were."""
     if spec.dynamics is None or not spec.dynamics.has_rules():
         return []
+    from synthesis.kinds.tillage_linkage.dynamics import dynamics_rules, turn
+
     return dynamics_rules(linkage_dynamics(spec, a, b, c, theta_rad, height_c, rate, forward), spec.dynamics.limits,
                           turn(samples))
 
@@ -185,6 +192,8 @@ def dynamics_of(spec: TillageSpec, design: dict[str, float]) -> dict:
     ``[dynamics]`` table."""
     if spec.dynamics is None:
         return {}
+    from synthesis.kinds.tillage_linkage.dynamics import dynamics_facts
+
     a, b, c, th = params(design)
     dyn = linkage_dynamics(spec, a, b, c, th, design["height_c"])
     return {"dynamics": dynamics_facts(dyn, spec.dynamics.samples, spec.operation.crank_speed, spec.dynamics)}

@@ -51,7 +51,6 @@ from constraints.dynamics import (
     peak_shaking_moment_rule,
 )
 from synthesis.dynamics import mass as mass_properties
-from synthesis.dynamics.fourbar import peaks
 from synthesis.kinds.tillage_linkage.kinematics import tool_point
 from synthesis.kinds.tillage_linkage.spec import TillageDynamicsSection
 
@@ -194,6 +193,16 @@ class TillageDynamics:
                     "external_power", "friction_power", "sliding_speed"):
             arrays[key] = arrays[key].ravel()
         return arrays
+
+
+def peaks(values: np.ndarray, crank: np.ndarray) -> dict:
+    """Peak |value|, its crank angle (deg), and the RMS of a sampled quantity over a turn (the four-bar kinds'
+    summary, synthesis.dynamics.fourbar.peaks; not imported from there, which would bring the four-bar's kinematics
+    into a tillage run)."""
+    values = np.asarray(values, float)
+    k = int(np.argmax(np.abs(values)))
+    return {"peak": float(abs(values[k])), "peak_at_crank_deg": float(np.degrees(crank[k])),
+            "rms": float(np.sqrt(np.mean(values ** 2)))}
 
 
 def turn(samples: int) -> np.ndarray:

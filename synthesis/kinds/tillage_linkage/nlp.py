@@ -32,7 +32,6 @@ from synthesis.spec.common import design_box
 from synthesis.kinds.tillage_linkage.spec import NAMES, TillageSpec
 from synthesis.kinds.tillage_linkage.check import (TWO_PI, crank_rate, dynamics_rules_of, linkage_dynamics, motion,
                                                    params, rules_of)
-from synthesis.kinds.tillage_linkage.dynamics import peak_epigraph, peak_torque, turn
 from synthesis.core.verdict import FINE
 
 DEG = math.pi / 180.0
@@ -74,6 +73,8 @@ def problem(setting: Setting) -> Declared:
 
 def given_peak_torque(spec: TillageSpec, design: dict[str, float], samples: int | None = None) -> float:
     """The peak |input torque| (N m) of a design on ``samples`` crank angles of a turn (default: the check's)."""
+    from synthesis.kinds.tillage_linkage.dynamics import peak_torque, turn
+
     a, b, c, th = params(design)
     n = FINE * spec.solver.samples if samples is None else samples
     return peak_torque(linkage_dynamics(spec, a, b, c, th, design["height_c"]), turn(n))
@@ -159,6 +160,8 @@ def _problem(spec: TillageSpec, bounds: np.ndarray, operating_symbols: bool) -> 
 def _peak_objective(spec: TillageSpec, a, b, c, theta_rad, h, rate, forward) -> ObjectiveParts:
     """Minimise the peak |input torque| over the ``samples`` crank angles of a turn: an epigraph variable t (N m),
     scaled by the given design's peak on the same angles so the objective is about 1 at the start."""
+    from synthesis.kinds.tillage_linkage.dynamics import peak_epigraph, turn
+
     n = spec.solver.samples
     given = given_peak_torque(spec, spec.design_values(), n)
     # a given design that moves no mass against no soil (0) gives no scale: 1 N m then
