@@ -8,7 +8,7 @@ One rule function (:func:`rules_of`) serves check, the NLP and the fine-grid re-
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
@@ -46,6 +46,7 @@ class Trace:
     lowest: Any
     tip_speed: Any               # m/s
     theta: Any                   # rad
+    dynamics: list = field(default_factory=list)   # the [dynamics.limits] rules on the turn grid (none: no limits)
 
 
 def turn_grid(n: int) -> np.ndarray:
@@ -73,7 +74,27 @@ def trace(spec: CombFingerSpec, d: dict, turn_samples: int, machine_speed=None) 
     exact = g.sqrt((rx - other[0]) ** 2 + (ry - other[1]) ** 2) - r - rho
     return Trace(r, e, alpha, omega, b, rho, turn, clearance, exact, g.root_clearance(r, e, alpha, b),
                  g.cone_distance(r, e, alpha) - 2.0 * rho, [r - rx, -sx + rho], g.lowest_tip(r, e, alpha, b),
-                 r * omega / 1000.0, g.combing_angle(r, e, alpha, b, omega, vs))
+                 r * omega / 1000.0, g.combing_angle(r, e, alpha, b, omega, vs),
+                 dynamics_rules_of(spec, r, e, alpha, b, omega, turn))
+
+
+def finger_dynamics(spec: CombFingerSpec, r, e, alpha_rad, b, omega):
+    """The inverse dynamics' inputs of a design (floats or symbols; omega rad/s).  Needs a ``[dynamics]`` table."""
+    # imported here: a spec without [dynamics] imports nothing of the dynamics (nor its shared rules)
+    from synthesis.kinds.comb_finger.dynamics import FingerDynamics
+
+    assert spec.dynamics is not None
+    return FingerDynamics.of(spec.dynamics, r, e, alpha_rad, b, omega)
+
+
+def dynamics_rules_of(spec: CombFingerSpec, r, e, alpha_rad, b, omega, turn: np.ndarray) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules on the turn angles ``turn`` (floats or symbols); none without a ``[dynamics]``
+    table or without a limit, so such a spec's rules are what they were."""
+    if spec.dynamics is None or not spec.dynamics.has_rules():
+        return []
+    from synthesis.kinds.comb_finger.dynamics import dynamics_rules
+
+    return dynamics_rules(finger_dynamics(spec, r, e, alpha_rad, b, omega), spec.dynamics.limits, turn)
 
 
 def rules_of(spec: CombFingerSpec, tr: Trace) -> list[Rule]:
@@ -88,7 +109,7 @@ def rules_of(spec: CombFingerSpec, tr: Trace) -> list[Rule]:
              tip_reaches_ground_rule(tr.lowest, q.ground_reach)]
     if q.max_tip_speed is not None:
         rules.append(tip_speed_rule(tr.tip_speed, q.max_tip_speed))
-    return rules
+    return rules + tr.dynamics
 
 
 def fine_samples(spec: CombFingerSpec) -> int:
@@ -208,8 +229,21 @@ def trajectory(spec: CombFingerSpec, design: dict) -> dict:
     }
 
 
+def dynamics_of(spec: CombFingerSpec, design: dict) -> dict:
+    """``{"dynamics": facts.dynamics}`` over a turn at the table's ``samples`` turn angles, or nothing without a
+    ``[dynamics]`` table."""
+    if spec.dynamics is None:
+        return {}
+    from synthesis.kinds.comb_finger.dynamics import dynamics_facts
+
+    r, e, alpha, b, omega, _ = working_units(spec, design)
+    dyn = finger_dynamics(spec, r, e, alpha, b, omega)
+    return {"dynamics": dynamics_facts(dyn, spec.dynamics.samples, design["omega"], spec.dynamics)}
+
+
 def facts(spec: CombFingerSpec, design: dict) -> dict:
-    return {"source": spec.source, "row_spacing_mm": spec.operation.row_spacing, **geometry_facts(spec, design)}
+    return {"source": spec.source, "row_spacing_mm": spec.operation.row_spacing, **geometry_facts(spec, design),
+            **dynamics_of(spec, design)}
 
 
 def run_check(loaded: LoadedSpec) -> Result:
@@ -231,4 +265,14 @@ def headline(result: Result) -> list[str]:
             f"{figure_text(facts.get('units_gap_mm'), 'mm')}",
             f"combing angle {figure_text(facts.get('combing_angle_theta_deg'), 'deg')} over a "
             f"{figure_text(facts.get('combing_turn_deg'), 'deg')} turn, lift "
-            f"{figure_text(facts.get('combing_lift_l_mm'), 'mm')}"]
+            f"{figure_text(facts.get('combing_lift_l_mm'), 'mm')}", *_dynamics_line(facts)]
+
+
+def _dynamics_line(facts: dict) -> list[str]:
+    """With a [dynamics] table: the peak drive torque, the mean power and the peak shaking force."""
+    summary = (facts.get("dynamics") or {}).get("summary") or {}
+    if not summary:
+        return []
+    return [f"drive torque peak {figure_text(summary['input_torque_Nm']['peak'], 'N m')}, mean power "
+            f"{figure_text(summary['mean_power_W'], 'W')}, shaking force peak "
+            f"{figure_text(summary['shaking_force_N']['peak'], 'N')}"]
