@@ -10,10 +10,11 @@ one core is all there is, the writers run here in order; the files and notes are
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import os
-import pickle
 import signal
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -100,7 +101,8 @@ def _child(group: list[str], writers: dict, folder: Path, read: int, write: int)
         # the run's process decides what a signal means; the child only ends with it
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        data = pickle.dumps([_draw(n, writers[n], folder / n) for n in group])
+        # plain JSON: what a file's drawing sent back is data, never code to run
+        data = json.dumps([dataclasses.asdict(_draw(n, writers[n], folder / n)) for n in group]).encode()
         with os.fdopen(write, "wb") as pipe:
             pipe.write(data)
         code = 0
@@ -113,7 +115,7 @@ def _collected(pid: int, read: int, group: list[str]) -> dict[str, Drawn]:
         data = pipe.read()
     _, status = os.waitpid(pid, 0)
     if data:
-        return {d.name: d for d in pickle.loads(data)}
+        return {d["name"]: Drawn(**d) for d in json.loads(data)}
     why = f"the drawing process ended ({_status_text(status)}) before it reported"
     return {n: Drawn(n, f"RuntimeError: {why}", "") for n in group}
 
