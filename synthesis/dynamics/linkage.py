@@ -16,9 +16,13 @@ import numpy as np
 from constraints import Rule
 from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
-from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn, peaks
+from synthesis.dynamics.facts import link_facts, sampled_facts
+from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn
 
 TWO_PI = 2.0 * math.pi
+CONVENTIONS = ("reaction at a joint: force of the link nearer the frame on the next (N, machine frame); input torque: "
+               "the motor's on the crank, counter-clockwise positive; shaking force and moment (about the crank "
+               "pivot): what the moving links put on the frame, gravity included")
 
 
 @dataclass(frozen=True)
@@ -133,41 +137,10 @@ def dynamics_facts(dyn: FourbarDynamics, samples: int, joint_names: tuple[str, .
     mass and angle, so the energy balance can be re-checked from the file alone (docs/ARCHITECTURE.md "result.json")."""
     crank = turn(samples)
     out = dyn.over_turn(crank)
-    torque, omega = out["torque"], float(dyn.omega)
-    power = torque * omega
-    force = out["shaking_force"]
-    magnitude = np.hypot(force[0], force[1])
-    links = []
-    for k, name in enumerate(link_names):
-        links.append({"name": name, "role": LINKS[k], "mass_kg": float(dyn.mass[4 * k]),
-                      "inertia_kgm2": float(dyn.mass[4 * k + 3]),
-                      "com_mm": (out["com"][:, k, :].T * 1000.0).tolist(),
-                      "angle_deg": np.degrees(np.unwrap(out["angle"][k])).tolist(),
-                      "com_velocity_mps": out["com_velocity"][:, k, :].T.tolist(),
-                      "angular_velocity_radps": out["angular_velocity"][k].tolist()})
     loads: bool | dict = False
     if table.external_loads:
         loads = {"loads": [load.model_dump() for load in table.external_loads],
                  "external_power_W": out["external_power"].tolist()}
-    return {
-        "crank_deg": np.degrees(crank).tolist(),
-        "crank_speed_rpm": crank_speed_rpm,
-        "input_torque_Nm": torque.tolist(),
-        "power_W": power.tolist(),
-        "shaking_force_N": force.T.tolist(),
-        "shaking_moment_Nm": out["shaking_moment"].tolist(),
-        "joints": {joint_names[j]: out["reactions"][:, j, :].T.tolist() for j in range(len(JOINTS))},
-        "joint_roles": dict(zip(joint_names, JOINTS)),
-        "links": links,
-        "gravity_mps2": [float(v) for v in dyn.gravity],
-        "external_loads": loads,
-        "summary": {"input_torque_Nm": peaks(torque, crank), "power_W": peaks(power, crank),
-                    "shaking_force_N": peaks(magnitude, crank),
-                    "shaking_moment_Nm": peaks(out["shaking_moment"], crank),
-                    "joints_N": {joint_names[j]: peaks(np.hypot(*out["reactions"][:, j, :]), crank)
-                                 for j in range(len(JOINTS))}},
-        "conventions": "reaction at a joint: force of the link nearer the frame on the next (N, machine frame); "
-                       "input torque: the motor's on the crank, counter-clockwise positive; shaking force and moment "
-                       "(about the crank pivot): what the moving links put on the frame, gravity included",
-        "assumption": table.assumption,
-    }
+    return sampled_facts(crank, out, float(dyn.omega), crank_speed_rpm, joint_names, JOINTS,
+                         link_facts(out, dyn.mass, link_names, LINKS), dyn.gravity, loads, CONVENTIONS,
+                         table.assumption)
