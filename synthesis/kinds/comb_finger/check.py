@@ -273,6 +273,6 @@ def _dynamics_line(facts: dict) -> list[str]:
     summary = (facts.get("dynamics") or {}).get("summary") or {}
     if not summary:
         return []
-    return [f"drive torque peak {figure_text(summary['input_torque_Nm']['peak'], 'N m')}, mean power "
-            f"{figure_text(summary['mean_power_W'], 'W')}, shaking force peak "
-            f"{figure_text(summary['shaking_force_N']['peak'], 'N')}"]
+    return [(f"drive torque peak {figure_text(summary['input_torque_Nm']['peak'], 'N m')}, mean power "
+             f"{figure_text(summary['mean_power_W'], 'W')}, shaking force peak "
+             f"{figure_text(summary['shaking_force_N']['peak'], 'N')}")]

@@ -43,7 +43,11 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from constraints.dynamics import (
+    peak_input_torque_rule,
+    peak_shaking_force_rule,
+    peak_shaking_moment_rule,
+)
 from synthesis.dynamics import mass as mass_properties
 from synthesis.kinds.comb_finger import geometry as g
 from synthesis.kinds.comb_finger.spec import CombFingerDynamicsSection

@@ -17,11 +17,11 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
 from synthesis.spec.common import (
     ACUTE, POSITIVE, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
+from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
 
 KIND = "comb_finger"
 NAMES = ("r", "e", "alpha", "omega", "b", "rho")
@@ -137,7 +137,7 @@ class CombFingerDynamicsSection(StrictModel):
                                            limits.peak_shaking_moment))
 
     @model_validator(mode="after")
-    def _tip_on_a_finger(self) -> "CombFingerDynamicsSection":
+    def _tip_on_a_finger(self) -> CombFingerDynamicsSection:
         if any(pm.at == "tip" and pm.link != "finger" for pm in self.point_masses):
             raise ValueError("point_masses: at = \"tip\" is the finger tip, on a finger; on the rotor give the "
                              "position in the rotor frame, mm")
