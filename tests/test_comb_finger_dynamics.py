@@ -293,6 +293,19 @@ def test_a_spec_without_the_table_has_no_dynamics():
         assert [r["name"] for r in result["rules"]] == names + speed
 
 
+@pytest.mark.slow            # two fresh processes, about 5 s
+def test_a_run_without_the_table_imports_no_dynamics(tmp_path):
+    from solving import modules_after_runs
+
+    plain = modules_after_runs(tmp_path, [["check", str(LIBRARY / "comb_finger" / "peanut_baseline.toml"), "--out",
+                                           str(tmp_path)]])
+    assert not [m for m in plain if m.startswith(("synthesis.dynamics", "constraints.dynamics",
+                                                  "synthesis.kinds.comb_finger.dynamics"))]
+    with_table = modules_after_runs(tmp_path, [["check", str(DYNAMICS_SPEC), "--out", str(tmp_path)]])
+    assert "synthesis.kinds.comb_finger.dynamics" in with_table
+    assert not [m for m in with_table if m.startswith(("synthesis.kinematics", "synthesis.dynamics.fourbar"))]
+
+
 def test_a_table_without_limits_reports_the_facts_and_adds_no_rule(tmp_path):
     text = DYNAMICS_SPEC.read_text()
     text = text[:text.index("\n[dynamics.limits]")]
