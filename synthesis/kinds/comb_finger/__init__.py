@@ -1,6 +1,7 @@
 """Kind comb_finger: the eccentric rotating comb fingers of seed 002 §四.3 (eq 14-22, Fig. 26-28).
 
 geometry.py  the front view of Fig. 28b reconstructed, eq 17-22 derived and as printed (floats, CasADi)
+dynamics.py  the inverse dynamics of one unit at constant speed (an optional [dynamics] table; imported only then)
 check.py, nlp.py, solve.py, plots.py: the kind of the CLI
 """
 
