@@ -27,7 +27,7 @@ from constraints import Rule
 from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics.fourbar import JOINTS as ROLES
 from synthesis.dynamics.fourbar import LINKS as LINK_ROLES
-from synthesis.dynamics.fourbar import peaks
+from synthesis.dynamics.facts import link_facts, sampled_facts
 from synthesis.dynamics.linkage import FourbarDynamics
 from synthesis.spec.dynamics import DynamicsSection, DynamicsLimits
 
@@ -120,6 +120,12 @@ def peak_of(dyn: FourbarDynamics, which: str, crank: np.ndarray) -> float:
     return float(np.abs(torque if which == "min_peak_torque" else moment).max())
 
 
+CONVENTIONS = ("crank AB at constant speed over the working swing, counter-clockwise (picking -> dropping); reaction "
+               "at a joint: force of the link nearer the frame on the next (N, machine frame); input torque: the "
+               "motor's on AB, counter-clockwise positive; shaking force and moment (about the crank pivot A): what "
+               "the moving links put on the frame, gravity included")
+
+
 def dynamics_facts(dyn: FourbarDynamics, crank: np.ndarray, pivot_mm: tuple[float, float], table: DynamicsSection
                    ) -> dict:
     """result.json's ``facts.dynamics`` over the working swing, with the keys of the turn-based four-bar kinds
@@ -128,44 +134,11 @@ def dynamics_facts(dyn: FourbarDynamics, crank: np.ndarray, pivot_mm: tuple[floa
     from the file alone; ``span``: the working swing, not a turn (the power's integral over it is not zero)."""
     assert table.crank_speed is not None         # PickerDoubleCrankSpec's validator requires it with the table
     out = dyn.over_turn(crank)
-    torque, omega = out["torque"], crank_speed_radps(table)
-    power = torque * omega
-    force = out["shaking_force"]
-    magnitude = np.hypot(force[0], force[1])
-    pivot = np.asarray(pivot_mm, float)
-    links = []
-    for k, name in enumerate(LINKS):
-        links.append({"name": name, "role": LINK_ROLES[k], "mass_kg": float(dyn.mass[4 * k]),
-                      "inertia_kgm2": float(dyn.mass[4 * k + 3]),
-                      "com_mm": (out["com"][:, k, :].T * 1000.0 + pivot).tolist(),
-                      "angle_deg": np.degrees(np.unwrap(out["angle"][k])).tolist(),
-                      "com_velocity_mps": out["com_velocity"][:, k, :].T.tolist(),
-                      "angular_velocity_radps": out["angular_velocity"][k].tolist()})
+    links = link_facts(out, dyn.mass, LINKS, LINK_ROLES, np.asarray(pivot_mm, float))
     loads: bool | dict = False
     if table.external_loads:
         loads = {"loads": [load.model_dump() for load in table.external_loads],
                  "external_power_W": out["external_power"].tolist()}
-    return {
-        "span": "working swing",
-        "crank_deg": np.degrees(crank).tolist(),
-        "crank_speed_rpm": table.crank_speed,
-        "input_torque_Nm": torque.tolist(),
-        "power_W": power.tolist(),
-        "shaking_force_N": force.T.tolist(),
-        "shaking_moment_Nm": out["shaking_moment"].tolist(),
-        "joints": {JOINTS[j]: out["reactions"][:, j, :].T.tolist() for j in range(len(ROLES))},
-        "joint_roles": dict(zip(JOINTS, ROLES)),
-        "links": links,
-        "gravity_mps2": [float(v) for v in dyn.gravity],
-        "external_loads": loads,
-        "summary": {"input_torque_Nm": peaks(torque, crank), "power_W": peaks(power, crank),
-                    "shaking_force_N": peaks(magnitude, crank),
-                    "shaking_moment_Nm": peaks(out["shaking_moment"], crank),
-                    "joints_N": {JOINTS[j]: peaks(np.hypot(*out["reactions"][:, j, :]), crank)
-                                 for j in range(len(ROLES))}},
-        "conventions": "crank AB at constant speed over the working swing, counter-clockwise (picking -> dropping); "
-                       "reaction at a joint: force of the link nearer the frame on the next (N, machine frame); "
-                       "input torque: the motor's on AB, counter-clockwise positive; shaking force and moment (about "
-                       "the crank pivot A): what the moving links put on the frame, gravity included",
-        "assumption": table.assumption,
-    }
+    return {"span": "working swing",
+            **sampled_facts(crank, out, crank_speed_radps(table), table.crank_speed, JOINTS, ROLES, links,
+                            dyn.gravity, loads, CONVENTIONS, table.assumption)}
