@@ -57,6 +57,7 @@ EXPECTED: dict[str, dict] = {
     "guide_tube/uniform_spacing.toml": {"check": 1, "solve": ("optimal", 8.758766813306126)},
     "guide_tube/uniform_spacing_mu_envelope.toml": {"check": 1, "solve": ("optimal", 5.68133024913431)},
     "guide_way/liang_2z.toml": {"check": 1, "solve": ("exit", 2)},
+    "guide_way/liang_2z_dynamics.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.987279662651457)},
     "steering/hwang_model3_steering.toml": {"check": 0, "solve": ("exit", 2)},
     "steering/steering_redesign_27.toml": {"check": 0, "solve": ("optimal", 0.13654497462629323)},

@@ -201,6 +201,11 @@ def describe(scene: sc.Scene) -> dict:
         facts["conics"] = conic_facts(scene)
     if scene.spline is not None:
         facts["spline"] = spline_facts(scene)
+    if spec.dynamics is not None:
+        # imported here: a spec without [dynamics] imports nothing of the dynamics (nor its shared rules)
+        from synthesis.kinds.guide_way.dynamics import dynamics_facts
+
+        facts["dynamics"] = dynamics_facts(scene)
     return facts
 
 
@@ -225,8 +230,13 @@ def spline_facts(scene: sc.Scene) -> dict:
 
 
 def result_of(spec, sha: str, scene: sc.Scene, status: str = "evaluated") -> Result:
+    rules = scene.rules
+    if spec.dynamics is not None and spec.dynamics.has_rules():
+        from synthesis.kinds.guide_way.dynamics import dynamics_rules
+
+        rules = rules + dynamics_rules(scene)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=sha, status=status, design=dict(spec.design_values()),
-                  rules=[r.record().to_json() for r in scene.rules], extra=describe(scene))
+                  rules=[r.record().to_json() for r in rules], extra=describe(scene))
 
 
 def given_control(spec) -> np.ndarray | None:

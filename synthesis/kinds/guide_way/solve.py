@@ -14,6 +14,10 @@ from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP, control_of, name
 
 def prepare(spec):
     """The convex fit of a spline path (None for the paper's conics: nothing to optimise)."""
+    if spec.dynamics is not None and spec.dynamics.has_rules():
+        raise SpecError("[dynamics.limits]: the guide way's dynamics rules are check only (the NLP does not hold "
+                        "them); `agrisynth check` the design, or leave the limits out to solve and read "
+                        "facts.dynamics")
     if spec.spline is None:
         return None
     from synthesis.kinds.guide_way.fit import fit_path     # cvxpy: imported by a spline path's solve only

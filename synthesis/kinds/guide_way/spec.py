@@ -18,6 +18,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.common import FreeVariable, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, value_of
+from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
 
 KIND = "guide_way"
 Point = tuple[float, float]
@@ -136,6 +137,54 @@ class SolverSection(MultistartSettings):
     starts: int = Field(2, ge=1, le=10000, description="multistart starts (start 0 = the convex fit)")
 
 
+class GuideWayPointMass(StrictModel):
+    """A mass carried by the arm or the claw body (a seedling, the roller, a counterweight), its own inertia
+    neglected."""
+
+    link: Literal["arm", "claw"] = Field(description="the body that carries it: the arm OP or the claw body (claw "
+                                                     "PM and crank arm PN)")
+    mass: float = Field(gt=0.0, le=1000.0, description="mass, kg")
+    at: tuple[float, float] | Literal["tip", "roller"] = Field(
+        description="position in the body's frame, mm (arm: origin O, x towards P; claw: origin P, x towards M); "
+                    "or \"tip\" (the claw tip M) or \"roller\" (the roller centre N) on the claw")
+    note: str = Field("", description="what it is and where its value comes from")
+
+    @model_validator(mode="after")
+    def _named_point_on_claw(self) -> "GuideWayPointMass":
+        if isinstance(self.at, str) and self.link != "claw":
+            raise ValueError(f"at: {self.at!r} is a point of the claw body; on the arm give [x, y] in mm")
+        if not isinstance(self.at, str) and not all(math.isfinite(v) for v in self.at):
+            raise ValueError(f"at: expected finite coordinates, got {list(self.at)}")
+        return self
+
+
+class GuideWayDynamics(StrictModel):
+    """Mass properties for the inverse dynamics at constant arm speed over the controlled path (check only)."""
+
+    arm: BarLink | LumpedLink = Field(description="the arm OP: a bar {density, area} along OP or {mass, com, "
+                                                  "inertia} (frame: origin O, x towards P)")
+    claw: BarLink | LumpedLink = Field(description="the claw body: bars PM and PN of one section {density, area} or "
+                                                   "{mass, com, inertia} (frame: origin P, x towards M)")
+    point_masses: list[GuideWayPointMass] = Field(default_factory=list, description="masses carried by the bodies")
+    gravity: tuple[float, float] = Field((0.0, -9.81), description="gravity in the machine frame, m/s^2 (0 allowed)")
+    arm_speed: float = Field(gt=0.0, le=5000.0, description="constant arm speed, r/min (theta growing)")
+    samples: int = Field(360, ge=8, le=3600, description="samples of the controlled path in result.json's "
+                                                         "facts.dynamics, spread evenly over its stretches")
+    limits: DynamicsLimits = Field(default_factory=DynamicsLimits,
+                                   description="rules on the dynamics (check only: `solve` refuses them)")
+    assumption: str = Field("", description="which values are ours, not a paper's")
+
+    @model_validator(mode="after")
+    def _finite(self) -> "GuideWayDynamics":
+        if not all(math.isfinite(v) for v in self.gravity):
+            raise ValueError(f"gravity: expected finite numbers, got {list(self.gravity)}")
+        return self
+
+    def has_rules(self) -> bool:
+        lim = self.limits
+        return any(v is not None for v in (lim.peak_input_torque, lim.peak_shaking_force, lim.peak_shaking_moment))
+
+
 class GuideWaySpec(ProblemSpec):
     kind: Literal["guide_way"] = Field(description="the problem kind (guide_way)")
     arm: ArmSection
@@ -146,6 +195,8 @@ class GuideWaySpec(ProblemSpec):
     rules: RulesSection = Field(default_factory=RulesSection)
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    dynamics: GuideWayDynamics | None = Field(None, description="mass properties, gravity and arm speed for the "
+                                                                "inverse dynamics (optional; none: no dynamics)")
 
     @classmethod
     def old_forms(cls, data: dict) -> str:
