@@ -3,16 +3,31 @@
 Every kind with an input torque writes the same keys (docs/ARCHITECTURE.md "result.json"): the crank angles, the
 input torque and power, the shaking force and moment, each joint's reaction with its role, each moving link's mass,
 inertia, centre of mass, angle and velocities, gravity and the loads, and a summary of peaks; a kind adds its own
-keys beside them.  Enough to re-check the energy balance from the file alone.
+keys beside them.  Enough to re-check the energy balance from the file alone.  Numbers only (no kinematics): a
+kind with a mechanism of its own imports it without the four-bar's.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
-from synthesis.dynamics.fourbar import peaks
+TWO_PI = 2.0 * math.pi
+
+
+def turn(samples: int) -> np.ndarray:
+    """``samples`` crank angles evenly over a turn from 0 (rad)."""
+    return np.linspace(0.0, TWO_PI, samples, endpoint=False)
+
+
+def peaks(values: np.ndarray, crank: np.ndarray) -> dict:
+    """Peak |value|, its crank angle (deg), and the RMS of a sampled quantity over a turn."""
+    values = np.asarray(values, float)
+    k = int(np.argmax(np.abs(values)))
+    return {"peak": float(abs(values[k])), "peak_at_crank_deg": float(np.degrees(crank[k])),
+            "rms": float(np.sqrt(np.mean(values ** 2)))}
 
 
 def link_facts(out: dict, mass, names: tuple[str, ...], roles: tuple[str, ...],

@@ -128,10 +128,3 @@ def over_turn(branch: int, crank: np.ndarray, geometry, mass, loads, omega, grav
         arrays[k] = arrays[k].ravel()
     return arrays
 
-
-def peaks(values: np.ndarray, crank: np.ndarray) -> dict:
-    """Peak |value|, its crank angle (deg), and the RMS of a sampled quantity over a turn."""
-    values = np.asarray(values, float)
-    k = int(np.argmax(np.abs(values)))
-    return {"peak": float(abs(values[k])), "peak_at_crank_deg": float(np.degrees(crank[k])),
-            "rms": float(np.sqrt(np.mean(values ** 2)))}

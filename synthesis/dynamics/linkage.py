@@ -16,7 +16,7 @@ import numpy as np
 from constraints import Rule
 from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
-from synthesis.dynamics.facts import link_facts, sampled_facts
+from synthesis.dynamics.facts import link_facts, sampled_facts, turn
 from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn
 
 TWO_PI = 2.0 * math.pi
@@ -50,11 +50,6 @@ class FourbarDynamics:
 
     def over_turn(self, crank) -> dict:
         return over_turn(self.branch, crank, self.geometry, self.mass, self.loads, self.omega, self.gravity)
-
-
-def turn(samples: int) -> np.ndarray:
-    """``samples`` crank angles evenly over a turn from 0 (rad)."""
-    return np.linspace(0.0, TWO_PI, samples, endpoint=False)
 
 
 def _column(values):

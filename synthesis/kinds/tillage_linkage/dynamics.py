@@ -51,6 +51,7 @@ from constraints.dynamics import (
     peak_shaking_moment_rule,
 )
 from synthesis.dynamics import mass as mass_properties
+from synthesis.dynamics.facts import link_facts, peaks, sampled_facts, turn
 from synthesis.kinds.tillage_linkage.kinematics import tool_point
 from synthesis.kinds.tillage_linkage.spec import TillageDynamicsSection
 
@@ -195,21 +196,6 @@ class TillageDynamics:
         return arrays
 
 
-def peaks(values: np.ndarray, crank: np.ndarray) -> dict:
-    """Peak |value|, its crank angle (deg), and the RMS of a sampled quantity over a turn (the four-bar kinds'
-    summary, synthesis.dynamics.fourbar.peaks; not imported from there, which would bring the four-bar's kinematics
-    into a tillage run)."""
-    values = np.asarray(values, float)
-    k = int(np.argmax(np.abs(values)))
-    return {"peak": float(abs(values[k])), "peak_at_crank_deg": float(np.degrees(crank[k])),
-            "rms": float(np.sqrt(np.mean(values ** 2)))}
-
-
-def turn(samples: int) -> np.ndarray:
-    """``samples`` crank angles evenly over a turn from 0 (rad)."""
-    return np.linspace(0.0, TWO_PI, samples, endpoint=False)
-
-
 def _column(values):
     """Sampled values as a column: a CasADi vector for symbols, a flat numpy array for numbers."""
     return np.ravel(values) if isinstance(values, np.ndarray) else ca.vec(values)
@@ -253,24 +239,21 @@ def peak_torque(dyn: TillageDynamics, crank: np.ndarray) -> float:
     return float(np.abs(torque).max())
 
 
+CONVENTIONS = ("flywheel (crank AB) at constant speed, counter-clockwise; reaction at a joint: force of the link "
+               "nearer the frame on the next (N, machine frame): A frame on crank, B crank on bar, C rollers on bar "
+               "(normal to the bar, plus friction along it when roller_friction > 0; roller_normal_N: along the bar "
+               "direction B -> D turned +90 deg); input torque: the motor's on the flywheel, counter-clockwise "
+               "positive; shaking force and moment (about A): what the moving links put on the frame through A and "
+               "C, gravity and the soil force included; powers in the machine frame (the soil's: force . D's "
+               "velocity relative to the machine)")
+
+
 def dynamics_facts(dyn: TillageDynamics, samples: int, crank_speed_rpm: float, table: TillageDynamicsSection) -> dict:
     """result.json's ``facts.dynamics`` over a turn, with the four-bar kinds' keys
     (synthesis.dynamics.linkage.dynamics_facts) and the tillage's own: the roller's normal force, the soil force and
     depth, the roller friction's power; enough to re-check the energy balance from the file alone."""
     crank = turn(samples)
     out = dyn.over(crank)
-    torque, omega = out["torque"], float(dyn.omega)
-    power = torque * omega
-    force = out["shaking_force"]
-    magnitude = np.hypot(force[0], force[1])
-    links = []
-    for j, name in enumerate(LINK_NAMES):
-        links.append({"name": name, "role": LINKS[j], "mass_kg": float(dyn.mass[4 * j]),
-                      "inertia_kgm2": float(dyn.mass[4 * j + 3]),
-                      "com_mm": (out["com"][:, j, :].T * 1000.0).tolist(),
-                      "angle_deg": np.degrees(np.unwrap(out["angle"][j])).tolist(),
-                      "com_velocity_mps": out["com_velocity"][:, j, :].T.tolist(),
-                      "angular_velocity_radps": out["angular_velocity"][j].tolist()})
     loads: bool | dict = False
     soil_force = out["soil_force"]
     if table.soil is not None:
@@ -281,37 +264,14 @@ def dynamics_facts(dyn: TillageDynamics, samples: int, crank_speed_rpm: float, t
                  "external_power_W": out["external_power"].tolist(),
                  "force_N": soil_force.T.tolist(),
                  "depth_mm": out["depth"].tolist()}
-    friction = table.roller_friction > 0.0
-    return {
-        "crank_deg": np.degrees(crank).tolist(),
-        "crank_speed_rpm": crank_speed_rpm,
-        "input_torque_Nm": torque.tolist(),
-        "power_W": power.tolist(),
-        "shaking_force_N": force.T.tolist(),
-        "shaking_moment_Nm": out["shaking_moment"].tolist(),
-        "joints": {JOINTS[j]: out["reactions"][:, j, :].T.tolist() for j in range(len(JOINTS))},
-        "joint_roles": JOINT_ROLES,
-        "roller_normal_N": out["roller_normal"].tolist(),
-        "links": links,
-        "gravity_mps2": [float(v) for v in dyn.gravity],
-        "external_loads": loads,
-        **({"roller_friction": table.roller_friction, "friction_power_W": out["friction_power"].tolist()}
-           if friction else {}),
-        "summary": {"input_torque_Nm": peaks(torque, crank), "power_W": peaks(power, crank),
-                    "shaking_force_N": peaks(magnitude, crank),
-                    "shaking_moment_Nm": peaks(out["shaking_moment"], crank),
-                    "joints_N": {JOINTS[j]: peaks(np.hypot(*out["reactions"][:, j, :]), crank)
-                                 for j in range(len(JOINTS))},
-                    "mean_power_W": float(np.mean(power)),
-                    **({"soil_force_N": peaks(np.hypot(*soil_force), crank),
-                        "mean_soil_power_W": float(np.mean(out["external_power"]))} if table.soil is not None
-                       else {})},
-        "conventions": "flywheel (crank AB) at constant speed, counter-clockwise; reaction at a joint: force of the "
-                       "link nearer the frame on the next (N, machine frame): A frame on crank, B crank on bar, C "
-                       "rollers on bar (normal to the bar, plus friction along it when roller_friction > 0; "
-                       "roller_normal_N: along the bar direction B -> D turned +90 deg); input torque: the motor's on "
-                       "the flywheel, counter-clockwise positive; shaking force and moment (about A): what the moving "
-                       "links put on the frame through A and C, gravity and the soil force included; powers in the "
-                       "machine frame (the soil's: force . D's velocity relative to the machine)",
-        "assumption": table.assumption,
-    }
+    facts = sampled_facts(crank, out, float(dyn.omega), crank_speed_rpm, JOINTS, tuple(JOINT_ROLES.values()),
+                          link_facts(out, dyn.mass, LINK_NAMES, LINKS), dyn.gravity, loads, CONVENTIONS,
+                          table.assumption)
+    facts["roller_normal_N"] = out["roller_normal"].tolist()
+    if table.roller_friction > 0.0:
+        facts |= {"roller_friction": table.roller_friction, "friction_power_W": out["friction_power"].tolist()}
+    facts["summary"]["mean_power_W"] = float(np.mean(out["torque"] * float(dyn.omega)))
+    if table.soil is not None:
+        facts["summary"] |= {"soil_force_N": peaks(np.hypot(*soil_force), crank),
+                             "mean_soil_power_W": float(np.mean(out["external_power"]))}
+    return facts
