@@ -49,6 +49,7 @@ from constraints.dynamics import (
     peak_shaking_moment_rule,
 )
 from synthesis.dynamics import mass as mass_properties
+from synthesis.dynamics.facts import link_facts, sampled_facts, turn
 from synthesis.kinds.comb_finger import geometry as g
 from synthesis.kinds.comb_finger.spec import CombFingerDynamicsSection
 
@@ -187,21 +188,6 @@ class FingerDynamics:
         return arrays
 
 
-def peaks(values: np.ndarray, turn_angles: np.ndarray) -> dict:
-    """Peak |value|, its turn angle (deg), and the RMS of a sampled quantity over a turn (the four-bar kinds' summary,
-    synthesis.dynamics.fourbar.peaks; not imported from there, which would bring the four-bar's kinematics into a
-    comb-finger run)."""
-    values = np.asarray(values, float)
-    k = int(np.argmax(np.abs(values)))
-    return {"peak": float(abs(values[k])), "peak_at_crank_deg": float(np.degrees(turn_angles[k])),
-            "rms": float(np.sqrt(np.mean(values ** 2)))}
-
-
-def turn(samples: int) -> np.ndarray:
-    """``samples`` turn angles evenly over a turn from 0 (rad)."""
-    return np.linspace(0.0, TWO_PI, samples, endpoint=False)
-
-
 def _column(values):
     """Sampled values as a column: a CasADi vector for symbols, a flat numpy array for numbers."""
     return np.ravel(values) if isinstance(values, np.ndarray) else ca.vec(values)
@@ -225,6 +211,15 @@ def dynamics_rules(dyn: FingerDynamics, limits, turn_angles: np.ndarray) -> list
     return rules
 
 
+CONVENTIONS = ("one unit (the left; the right is its mirror image in the row's centre line, turning the other way); "
+               "crank_deg: the turn angle phi of the first finger from straight down; the drum and the fingers turn "
+               "counter-clockwise at omega; reaction at a joint: the frame's force on the moving body (N, machine "
+               "frame, front view): S the drum bearing on the drum, R the eccentric on all the fingers; "
+               "finger_torque_Nm: the couple the drum puts on each finger (N x n); input torque: the motor's on the "
+               "drum, counter-clockwise positive; shaking force and moment (about S): what the moving bodies put on "
+               "the frame, gravity included; the loads' power in the machine frame")
+
+
 def dynamics_facts(dyn: FingerDynamics, samples: int, speed_rpm: float, table: CombFingerDynamicsSection) -> dict:
     """result.json's ``facts.dynamics`` over a turn, with the four-bar kinds' keys
     (synthesis.dynamics.linkage.dynamics_facts; ``crank_deg`` is the turn angle phi) and the unit's own: each
@@ -232,19 +227,9 @@ def dynamics_facts(dyn: FingerDynamics, samples: int, speed_rpm: float, table: C
     the file alone."""
     angles = turn(samples)
     out = dyn.over(angles)
-    torque, omega = out["torque"], float(dyn.omega)
-    power = torque * omega
-    force = out["shaking_force"]
-    names = ["drum (rotor) about S"] + [f"finger {k + 1} about R" for k in range(dyn.fingers)]
-    roles = ["crank"] + ["finger"] * dyn.fingers
-    links = []
-    for j, name in enumerate(names):
-        props = dyn.rotor if j == 0 else dyn.finger
-        links.append({"name": name, "role": roles[j], "mass_kg": float(props[0]), "inertia_kgm2": float(props[3]),
-                      "com_mm": (out["com"][:, j, :].T * 1000.0).tolist(),
-                      "angle_deg": np.degrees(np.unwrap(out["angle"][j])).tolist(),
-                      "com_velocity_mps": out["com_velocity"][:, j, :].T.tolist(),
-                      "angular_velocity_radps": out["angular_velocity"][j].tolist()})
+    names = ("drum (rotor) about S",) + tuple(f"finger {k + 1} about R" for k in range(dyn.fingers))
+    roles = ("crank",) + ("finger",) * dyn.fingers
+    mass = [v for j in range(len(names)) for v in (dyn.rotor if j == 0 else dyn.finger)[:4]]
     loads: bool | dict = False
     load_force = out["load_force"]                                   # (2, n, N)
     if table.combing_load is not None:
@@ -256,33 +241,10 @@ def dynamics_facts(dyn: FingerDynamics, samples: int, speed_rpm: float, table: C
                  "external_power_W": out["external_power"].tolist(),
                  "force_N": load_force.sum(axis=1).T.tolist(),
                  "tips_in_zone": np.asarray(out["in_zone"]).sum(axis=0).astype(int).tolist()}
-    return {
-        "crank_deg": np.degrees(angles).tolist(),
-        "crank_speed_rpm": speed_rpm,
-        "input_torque_Nm": torque.tolist(),
-        "power_W": power.tolist(),
-        "shaking_force_N": force.T.tolist(),
-        "shaking_moment_Nm": out["shaking_moment"].tolist(),
-        "joints": {JOINTS[j]: out["reactions"][:, j, :].T.tolist() for j in range(len(JOINTS))},
-        "joint_roles": JOINT_ROLES,
-        "finger_torque_Nm": out["finger_torque"].T.tolist(),
-        "links": links,
-        "gravity_mps2": [float(v) for v in dyn.gravity],
-        "external_loads": loads,
-        "summary": {"input_torque_Nm": peaks(torque, angles), "power_W": peaks(power, angles),
-                    "shaking_force_N": peaks(np.hypot(force[0], force[1]), angles),
-                    "shaking_moment_Nm": peaks(out["shaking_moment"], angles),
-                    "joints_N": {JOINTS[j]: peaks(np.hypot(*out["reactions"][:, j, :]), angles)
-                                 for j in range(len(JOINTS))},
-                    "mean_power_W": float(np.mean(power)),
-                    **({"mean_load_power_W": float(np.mean(out["external_power"]))}
-                       if table.combing_load is not None else {})},
-        "conventions": "one unit (the left; the right is its mirror image in the row's centre line, turning the other "
-                       "way); crank_deg: the turn angle phi of the first finger from straight down; the drum and the "
-                       "fingers turn counter-clockwise at omega; reaction at a joint: the frame's force on the moving "
-                       "body (N, machine frame, front view): S the drum bearing on the drum, R the eccentric on all "
-                       "the fingers; finger_torque_Nm: the couple the drum puts on each finger (N x n); input torque: "
-                       "the motor's on the drum, counter-clockwise positive; shaking force and moment (about S): what "
-                       "the moving bodies put on the frame, gravity included; the loads' power in the machine frame",
-        "assumption": table.assumption,
-    }
+    facts = sampled_facts(angles, out, float(dyn.omega), speed_rpm, JOINTS, tuple(JOINT_ROLES.values()),
+                          link_facts(out, mass, names, roles), dyn.gravity, loads, CONVENTIONS, table.assumption)
+    facts["finger_torque_Nm"] = out["finger_torque"].T.tolist()
+    facts["summary"]["mean_power_W"] = float(np.mean(out["torque"] * float(dyn.omega)))
+    if table.combing_load is not None:
+        facts["summary"]["mean_load_power_W"] = float(np.mean(out["external_power"]))
+    return facts
