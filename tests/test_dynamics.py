@@ -23,6 +23,7 @@ import sympy as sp
 from sympy.physics.mechanics import Point, ReferenceFrame, dynamicsymbols, msubs
 
 from conftest import LIBRARY
+from dynamics_support import energy_residuals
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.fourbar import over_turn
 from synthesis.kinds.crank_rocker.check import linkage_dynamics, rules_of
@@ -136,35 +137,6 @@ def test_planting_coupler_bars_combine_by_the_parallel_axis_theorem():
     assert m == pytest.approx(total, rel=1e-12)
     assert (cx, cy) == pytest.approx(tuple(centre), rel=1e-9)
     assert inertia == pytest.approx(spread, rel=1e-8)
-
-
-def energy_residuals(dyn: dict) -> tuple[np.ndarray, np.ndarray, float]:
-    """From result.json's facts.dynamics alone: per sample interval, the input work (the periodic power integrated
-    exactly by its Fourier series: spectral, no trapezoid error) and the change of kinetic + potential energy; the
-    net work of the turn."""
-    crank = np.radians(dyn["crank_deg"])
-    omega = dyn["crank_speed_rpm"] * 2 * math.pi / 60
-    power = np.array(dyn["power_W"])
-    if dyn["external_loads"]:
-        power = power + np.array(dyn["external_loads"]["external_power_W"])
-    n = power.size
-    c = np.fft.rfft(power) / n
-    k = np.arange(c.size)
-    # antiderivative in theta of sum c_k e^{ik theta} (+ conjugates): c_0 theta + sum 2 Re(c_k e^{ik theta} / (ik))
-    def antiderivative(theta):
-        waves = np.exp(1j * np.outer(theta, k[1:])) / (1j * k[1:])
-        weight = np.where(k[1:] == n // 2, 1.0, 2.0) if n % 2 == 0 else 2.0
-        return c[0].real * theta + (waves * c[1:] * weight).real.sum(1)
-    ends = np.append(crank, crank[0] + 2 * math.pi)
-    work = np.diff(antiderivative(ends)) / omega
-    g = np.array(dyn["gravity_mps2"])
-    energy = np.zeros(n)
-    for link in dyn["links"]:
-        v = np.array(link["com_velocity_mps"])
-        energy += (0.5 * link["mass_kg"] * (v ** 2).sum(1)
-                   + 0.5 * link["inertia_kgm2"] * np.array(link["angular_velocity_radps"]) ** 2
-                   - link["mass_kg"] * (np.array(link["com_mm"]) / 1000.0) @ g)
-    return work, np.diff(np.append(energy, energy[0])), c[0].real * 2 * math.pi / omega
 
 
 def checked_json(path) -> dict:

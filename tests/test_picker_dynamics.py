@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
+from dynamics_support import swing_energy_residuals
 from synthesis import kinds
 from synthesis.kinds import solve_spec
 from synthesis.kinds.picker.check import (linkage, rules_of, swing_angles, target_angles, target_points)
@@ -95,34 +96,6 @@ def test_double_crank_inverse_dynamics_equals_an_independent_multibody_formulati
         np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-12, atol=1e-13 * scale)
         assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-12, abs=1e-13 * scale)
     assert np.abs(ours["reactions"]).max() > 1.0 and np.abs(ours["torque"]).max() > 0.1
-
-
-def swing_energy_residuals(dyn: dict) -> tuple[np.ndarray, np.ndarray]:
-    """From result.json's facts.dynamics alone: per sample interval of the working swing, the input work (the power
-    integrated over the interval by the polynomial through the 6 nearest samples, exact to O(h^7)) and the change of
-    kinetic + potential energy of the links."""
-    crank = np.radians(dyn["crank_deg"])
-    omega = dyn["crank_speed_rpm"] * 2 * math.pi / 60
-    power = np.array(dyn["power_W"])
-    if dyn["external_loads"]:
-        power = power + np.array(dyn["external_loads"]["external_power_W"])
-    n, order = power.size, 6
-    work = np.empty(n - 1)
-    for i in range(n - 1):
-        first = min(max(i - order // 2 + 1, 0), n - order)
-        window = slice(first, first + order)
-        h = crank[i + 1] - crank[i]
-        x = (crank[window] - crank[i]) / h                        # the interval is [0, 1] in x
-        antiderivative = np.polyint(np.polyfit(x, power[window], order - 1))
-        work[i] = (np.polyval(antiderivative, 1.0) - np.polyval(antiderivative, 0.0)) * h / omega
-    g = np.array(dyn["gravity_mps2"])
-    energy = np.zeros(n)
-    for link in dyn["links"]:
-        v = np.array(link["com_velocity_mps"])
-        energy += (0.5 * link["mass_kg"] * (v ** 2).sum(1)
-                   + 0.5 * link["inertia_kgm2"] * np.array(link["angular_velocity_radps"]) ** 2
-                   - link["mass_kg"] * (np.array(link["com_mm"]) / 1000.0) @ g)
-    return work, np.diff(energy)
 
 
 def test_energy_balance_of_the_published_double_crank_result():

@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from conftest import LIBRARY
+from dynamics_support import energy_residuals
 
 from synthesis import kinds
 from synthesis.errors import SpecError
@@ -190,38 +191,6 @@ def checked_json(spec_text: str | None = None, tmp_path=None) -> dict:
     return json.loads(result_text(kinds.get(loaded.model.kind).check(loaded)))
 
 
-def energy_from_file(dyn: dict) -> tuple[np.ndarray, np.ndarray, float]:
-    """From result.json's facts.dynamics alone: per sample interval, the work of the input, the soil and the roller
-    friction together, and the change of kinetic + potential energy; the net work of the turn.  Each power alone
-    kinks where the tool enters or leaves the soil, but their sum is d(energy)/dt, a smooth periodic function of the
-    crank angle: its samples are integrated exactly by their Fourier series (spectral, no trapezoid error)."""
-    omega = dyn["crank_speed_rpm"] * 2 * math.pi / 60
-    power = np.array(dyn["power_W"])
-    if dyn["external_loads"]:
-        power = power + np.array(dyn["external_loads"]["external_power_W"])
-    if "friction_power_W" in dyn:
-        power = power + np.array(dyn["friction_power_W"])
-    crank = np.radians(dyn["crank_deg"])
-    n = power.size
-    c = np.fft.rfft(power) / n
-    k = np.arange(c.size)
-
-    def antiderivative(theta):
-        waves = np.exp(1j * np.outer(theta, k[1:])) / (1j * k[1:])
-        weight = np.where(k[1:] == n // 2, 1.0, 2.0) if n % 2 == 0 else 2.0
-        return c[0].real * theta + (waves * c[1:] * weight).real.sum(1)
-
-    work = np.diff(antiderivative(np.append(crank, crank[0] + 2 * math.pi))) / omega
-    g = np.array(dyn["gravity_mps2"])
-    energy = np.zeros(n)
-    for link in dyn["links"]:
-        v = np.array(link["com_velocity_mps"])
-        energy += (0.5 * link["mass_kg"] * (v ** 2).sum(1)
-                   + 0.5 * link["inertia_kgm2"] * np.array(link["angular_velocity_radps"]) ** 2
-                   - link["mass_kg"] * (np.array(link["com_mm"]) / 1000.0) @ g)
-    return work, np.diff(np.append(energy, energy[0])), c[0].real * 2 * math.pi / omega
-
-
 def test_energy_balance_from_the_result_alone(tmp_path):
     """The library baseline, and the same with roller friction 0.1: every interval's work of the input, the soil and
     the friction equals its change of energy, and over a turn their net work is zero; the input's mean power is what
@@ -231,7 +200,7 @@ def test_energy_balance_from_the_result_alone(tmp_path):
         dyn = checked_json(None if friction == 0.0 else text.replace(
             "samples = 360", f"samples = 360\nroller_friction = {friction}"), tmp_path)["facts"]["dynamics"]
         assert ("friction_power_W" in dyn) == (friction > 0.0)
-        work, change, net = energy_from_file(dyn)
+        work, change, net = energy_residuals(dyn)
         peak = np.abs(work).max()
         assert peak > 0.1
         assert np.abs(work - change).max() <= 1e-9 * peak
