@@ -26,8 +26,10 @@ from conftest import LIBRARY
 from synthesis import kinds
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import path as pth
+from synthesis.kinds.guide_way import spline as spl
+from synthesis.kinds.guide_way.check import given_control
 from synthesis.kinds.guide_way.dynamics import along, mass_vector
-from synthesis.kinds.guide_way.scene import arm_of
+from synthesis.kinds.guide_way.scene import arm_of, spline_path
 from synthesis.result import result_text
 from synthesis.spec import load_spec
 
@@ -76,46 +78,90 @@ def _lagrangian(spec):
             sp.lambdify(args, list(N.diff(A))))
 
 
-def _path_angles(piece, branch: float, R: float, d: float):
-    """s -> (theta, theta', theta'', alpha, alpha', alpha'') on a conic piece, sympy's exact derivatives of the
-    inverse kinematics on the conic written from its centre, axes and semi-axes (mm -> m)."""
+def _conic_tip(piece):
+    """(s, x(s), y(s)) of a conic piece, mm, written from its centre, axes and semi-axes."""
     s = sp.symbols("s")
     c = piece.conic
     t = piece.t0 + s * (piece.t1 - piece.t0)
     u, v = (c.p * c.branch * sp.cosh(t), c.q * sp.sinh(t)) if c.hyperbola else (c.p * sp.cos(t), c.q * sp.sin(t))
     (e1x, e1y), (e2x, e2y) = c.axes
-    x, y = (c.centre[0] + e1x * u + e2x * v) / 1e3, (c.centre[1] + e1y * u + e2y * v) / 1e3
+    return s, c.centre[0] + e1x * u + e2x * v, c.centre[1] + e1y * u + e2y * v
+
+
+def _spline_tip(path, u0: float):
+    """(h, x(h), y(h)) of a spline path near u0, mm: the cubic through four of its points on u0's knot span (the
+    spline is one cubic there), in h = u - u0."""
+    n = path.n
+    j = min(int(math.floor(u0 * n)), n - 1)
+    hs = (j + np.array([0.1, 0.4, 0.6, 0.9])) / n - u0
+    points = spl.basis(n, u0 + hs) @ np.asarray(path.control, float)
+    h = sp.symbols("h")
+    coefficients = [np.polyfit(hs, points[:, axis], 3) for axis in (0, 1)]
+    return h, *(sum(float(c) * h ** (3 - k) for k, c in enumerate(cs)) for cs in coefficients)
+
+
+def _path_angles(s, x_mm, y_mm, branch: float, R: float, d: float):
+    """s -> (theta, theta', theta'', alpha, alpha', alpha'') along a claw-tip curve (x(s), y(s)) in mm: sympy's exact
+    derivatives of the inverse kinematics (eq 7) written out again (m)."""
+    x, y = x_mm / 1e3, y_mm / 1e3
     rho = sp.sqrt(x * x + y * y)
     theta = sp.atan2(-x, -y) + branch * sp.acos((R * R + rho * rho - d * d) / (2 * R * rho))
     alpha = sp.atan2(x + R * sp.sin(theta), -(y + R * sp.cos(theta)))
     return sp.lambdify(s, [theta, theta.diff(s), theta.diff(s, 2), alpha, alpha.diff(s), alpha.diff(s, 2)])
 
 
+def _lagrange_forces(equations, angles, s: float, omega: float) -> tuple[float, float, np.ndarray]:
+    """(drive torque, groove force, groove normal) from both Lagrange equations of the free chain at the path's
+    parameter ``s``, with the drive torque on theta and the groove force's generalised forces n . dN/dtheta and
+    n . dN/dalpha."""
+    eq_theta, eq_alpha, n_theta, n_alpha = equations
+    th, th1, th2, al, al1, al2 = (float(v) for v in angles(s))
+    a_t = al1 / th1
+    a_tt = (al2 * th1 - al1 * th2) / th1 ** 3
+    args = (th, al, omega, a_t * omega, a_tt * omega ** 2)
+    tangent = np.array(n_theta(*args)) * th1 + np.array(n_alpha(*args)) * al1
+    normal = np.array([-tangent[1], tangent[0]]) / np.hypot(*tangent)
+    force = eq_alpha(*args) / (normal @ np.array(n_alpha(*args)))
+    torque = eq_theta(*args) - force * (normal @ np.array(n_theta(*args)))
+    return torque, force, normal
+
+
 @pytest.mark.slow
 def test_torque_and_groove_force_equal_the_lagrangian():
-    """Both Lagrange equations of the free chain, with the drive torque on theta and the groove force's generalised
-    forces n . dN/dtheta and n . dN/dalpha: solved for the two, they equal the model's at 7 samples of every
-    published stretch to 1e-9 (the torque relative to its peak, the force to the larger of 1 N and itself)."""
+    """The published conics (both elbows) at 7 samples of every stretch: the model's drive torque and groove force
+    equal the Lagrangian's to 1e-9 (of the larger of 1 and the value: N m, N), its normal to 1e-12."""
     spec = load_spec(DYNAMICS_SPEC).model
     table = spec.dynamics
     omega = table.arm_speed * 2.0 * math.pi / 60.0
-    eq_theta, eq_alpha, n_theta, n_alpha = _lagrangian(spec)
+    equations = _lagrangian(spec)
     for piece in pth.conic_pieces(spec):
-        angles = _path_angles(piece, piece.branch, spec.arm.radius / 1e3, spec.arm.claw / 1e3)
+        angles = _path_angles(*_conic_tip(piece), piece.branch, spec.arm.radius / 1e3, spec.arm.claw / 1e3)
         st = piece.stretch(9)
         out = along(st, arm_of(spec), mass_vector(spec), omega, table.gravity)
         for k, s in enumerate(st.u[1:-1], 1):
-            th, th1, th2, al, al1, al2 = (float(v) for v in angles(s))
-            a_t = al1 / th1
-            a_tt = (al2 * th1 - al1 * th2) / th1 ** 3
-            args = (th, al, omega, a_t * omega, a_tt * omega ** 2)
-            tangent = np.array(n_theta(*args)) * th1 + np.array(n_alpha(*args)) * al1
-            normal = np.array([-tangent[1], tangent[0]]) / np.hypot(*tangent)
-            force = eq_alpha(*args) / (normal @ np.array(n_alpha(*args)))
-            torque = eq_theta(*args) - force * (normal @ np.array(n_theta(*args)))
+            torque, force, normal = _lagrange_forces(equations, angles, s, omega)
             assert out["torque"][k] == pytest.approx(torque, abs=1e-9 * max(1.0, abs(torque)))
             assert out["groove_force"][k] == pytest.approx(force, abs=1e-9 * max(1.0, abs(force)))
             assert np.allclose(out["normal"][:, k], normal, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_the_spline_path_equals_the_lagrangian():
+    """The solved smooth redesign (a spline: the claw tip a cubic on each knot span, refitted here from four of its
+    points) at 3 samples of every stretch, the one before the fold on the plus elbow: drive torque and groove force
+    as the Lagrangian's to 1e-7 (the refit's rounding)."""
+    spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign_dynamics.toml").model
+    table = spec.dynamics
+    omega = table.arm_speed * 2.0 * math.pi / 60.0
+    equations = _lagrangian(spec)
+    path = spline_path(spec, given_control(spec))
+    for st in path.stretches(5):
+        out = along(st, arm_of(spec), mass_vector(spec), omega, table.gravity)
+        for k, u in enumerate(st.u[1:-1], 1):
+            angles = _path_angles(*_spline_tip(path, float(u)), st.branch, spec.arm.radius / 1e3, spec.arm.claw / 1e3)
+            torque, force, _ = _lagrange_forces(equations, angles, 0.0, omega)
+            assert out["torque"][k] == pytest.approx(torque, abs=1e-7 * max(1.0, abs(torque))), st.name
+            assert out["groove_force"][k] == pytest.approx(force, abs=1e-7 * max(1.0, abs(force))), st.name
 
 
 def energy_from_file(dyn: dict) -> np.ndarray:

@@ -59,6 +59,7 @@ EXPECTED: dict[str, dict] = {
     "guide_way/liang_2z.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/liang_2z_dynamics.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.987279662651457)},
+    "guide_way/smooth_redesign_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
     "steering/hwang_model3_steering.toml": {"check": 0, "solve": ("exit", 2)},
     "steering/steering_redesign_27.toml": {"check": 0, "solve": ("optimal", 0.13654497462629323)},
     "steering/steering_redesign_40.toml": {"check": 0, "solve": ("optimal", 0.5227832580093121)},

@@ -315,4 +315,14 @@ def headline(result: Result) -> list[str]:
     if fold:
         lines.append(f"fold at {fold.get('point', '-')}: claw tip {figure_text(fold.get('distance_mm'), 'mm', 4)} "
                      f"from the centre, {figure_text(fold.get('excess_mm'), 'mm')} beyond the fold radius")
+    dyn = facts.get("dynamics") or {}
+    summary = dyn.get("summary") or {}
+    if summary:
+        torque, groove = summary.get("input_torque_Nm") or {}, summary.get("groove_force_N") or {}
+        outside = (summary.get("groove_force_outside_fold_window_N") or {}).get("peak")
+        lines.append(f"dynamics at {figure_text(dyn.get('crank_speed_rpm'), 'r/min')}: peak drive torque "
+                     f"{figure_text(torque.get('peak'), 'N m')} ({torque.get('stretch', '-')}), groove force "
+                     f"{figure_text(groove.get('peak'), 'N')} ({groove.get('stretch', '-')})"
+                     + (f", {figure_text(outside, 'N')} outside the fold window" if outside is not None else "")
+                     + f", the roller changes wall {summary.get('wall_changes', '-')} times")
     return lines
