@@ -231,13 +231,33 @@ def test_a_spec_without_the_table_has_no_dynamics():
         assert not any(r["name"].startswith("peak_") for r in result["rules"])
 
 
-def test_solve_refuses_the_check_only_rules():
-    from synthesis.kinds.guide_way.solve import prepare
+def test_the_nlp_rules_are_the_check_model_on_symbols():
+    """The NLP's dynamics columns on the spline's control points as symbols, evaluated at the solved redesign's, equal
+    the float model's at the same samples (torque, shaking force, shaking moment) to 1e-10 of the peak (the samples next to the fold: 8e-12); and a limit makes rules
+    of both, the NLP's with rows at every sample."""
+    import casadi as ca
 
-    spec = load_spec(DYNAMICS_SPEC).model
-    with pytest.raises(SpecError) as err:
-        prepare(spec)
-    assert err.value.exit_code == 2 and "[dynamics.limits]" in str(err.value)
+    from synthesis.kinds.guide_way.dynamics import along, limit_rules, symbolic_samples
+
+    spec = load_spec(LIBRARY / "guide_way" / "smooth_redesign_dynamics.toml").model
+    control = given_control(spec)
+    x = ca.SX.sym("x", control.size)
+    symbolic = ca.reshape(x, control.shape[1], control.shape[0]).T
+    columns = ca.Function("columns", [x], list(symbolic_samples(spec, symbolic, 7)))
+    values = [np.ravel(v) for v in columns(control.ravel())]
+    omega = spec.dynamics.arm_speed * 2.0 * math.pi / 60.0
+    parts = [along(st, arm_of(spec), mass_vector(spec), omega, spec.dynamics.gravity)
+             for st in spline_path(spec, control).stretches(7)]
+    torque = np.concatenate([p["torque"] for p in parts])
+    force = np.concatenate([p["shaking_force"] for p in parts], axis=1)
+    moment = np.concatenate([p["shaking_moment"] for p in parts])
+    for got, want in zip(values, (torque, force[0], force[1], moment)):
+        assert np.abs(got - want).max() <= 1e-10 * np.abs(want).max(), np.abs(got - want).max()
+    limits = spec.dynamics.limits.model_copy(update={"peak_input_torque": 1.0})
+    limited = spec.model_copy(update={"dynamics": spec.dynamics.model_copy(update={"limits": limits})})
+    rules = limit_rules(limited, *symbolic_samples(limited, symbolic, 7))
+    assert [r.name for r in rules] == ["peak_input_torque"]
+    assert rules[0].nlp_rows[0][0].shape[0] == torque.size
 
 
 @pytest.mark.parametrize("old, new, field", [

@@ -60,6 +60,7 @@ EXPECTED: dict[str, dict] = {
     "guide_way/liang_2z_dynamics.toml": {"check": 1, "solve": ("exit", 2)},
     "guide_way/smooth_redesign.toml": {"check": 1, "solve": ("optimal", 0.987279662651457)},
     "guide_way/smooth_redesign_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
+    "guide_way/smooth_torque_limited.toml": {"check": 1, "solve": ("optimal", 0.9956433893792382)},
     "steering/hwang_model3_steering.toml": {"check": 0, "solve": ("exit", 2)},
     "steering/steering_redesign_27.toml": {"check": 0, "solve": ("optimal", 0.13654497462629323)},
     "steering/steering_redesign_40.toml": {"check": 0, "solve": ("optimal", 0.5227832580093121)},
@@ -141,7 +142,7 @@ SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_examp
 #: solves of seconds: run with the slow tests (`pytest -m slow`); the default suite keeps a solve of every kind
 #: (planting_arm: redesign_from_example4)
 SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_redesign_spring_dynamics.toml",
-        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml",
+        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "guide_way/smooth_torque_limited.toml",
         "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
         "picker/picker_double_crank_min_peak_torque.toml", "picker/picker_double_crank_key_pose.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",

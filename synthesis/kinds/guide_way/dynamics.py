@@ -315,27 +315,62 @@ def _keys(scene) -> list[str]:
     return controlled_keys(scene.spec)
 
 
-def torque_samples(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(input torque N m, shaking force (2, N) N, shaking moment N m) over the controlled path: what the rules read."""
-    out = over_path(scene)
-    return out["torque"], out["shaking_force"], out["shaking_moment"]
+def symbolic_samples(spec, control, samples: int) -> tuple:
+    """(input torque, shaking force x, y, shaking moment) as SX columns over a spline path whose control points are
+    the NLP's symbols, ``samples`` per stretch: the same Function as on floats, mapped over the symbolic samples."""
+    from synthesis.kinds.guide_way.scene import arm_of, spline_path
+
+    table = spec.dynamics
+    omega = table.arm_speed * 2.0 * math.pi / 60.0
+    mass, arm = ca.DM(mass_vector(spec)), ca.DM(arm_of(spec))
+    torque, fx, fy, moment = [], [], [], []
+    for st in spline_path(spec, control).stretches(samples):
+        f = inverse_dynamics(float(st.branch)).map(np.asarray(st.u).size)
+        out = dict(zip(OUTPUTS, f(st.m, st.m1, st.m2, arm, mass, omega, ca.DM(list(table.gravity)))))
+        torque.append(out["torque"].T)
+        fx.append(out["shaking_force"][0, :].T)
+        fy.append(out["shaking_force"][1, :].T)
+        moment.append(out["shaking_moment"].T)
+    return tuple(ca.vertcat(*v) for v in (torque, fx, fy, moment))
 
 
-def dynamics_rules(scene) -> list:
-    """The ``[dynamics.limits]`` rules over the controlled path (check only: the NLP does not hold them)."""
+def limit_rules(spec, torque, fx, fy, moment) -> list:
+    """The ``[dynamics.limits]`` rules on sampled columns (floats or symbols)."""
     from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 
-    table = scene.spec.dynamics
-    if table is None or not table.has_rules():
-        return []
+    table = spec.dynamics
     limits = table.limits
-    torque, force, moment = torque_samples(scene)
-    where = f"over the controlled path {'-'.join(_keys(scene))} at {table.arm_speed:g} r/min"
+    where = f"over the controlled path {'-'.join(_spec_keys(spec))} at {table.arm_speed:g} r/min"
     rules = []
     if limits.peak_input_torque is not None:
         rules.append(peak_input_torque_rule(torque, limits.peak_input_torque, where))
     if limits.peak_shaking_force is not None:
-        rules.append(peak_shaking_force_rule(force[0], force[1], limits.peak_shaking_force, where))
+        rules.append(peak_shaking_force_rule(fx, fy, limits.peak_shaking_force, where))
     if limits.peak_shaking_moment is not None:
         rules.append(peak_shaking_moment_rule(moment, limits.peak_shaking_moment, where + ", about O"))
     return rules
+
+
+def _spec_keys(spec) -> list[str]:
+    from synthesis.kinds.guide_way.scene import controlled_keys
+
+    return controlled_keys(spec)
+
+
+def dynamics_rules(scene) -> list:
+    """The ``[dynamics.limits]`` rules over the controlled path of a numeric scene at the table's samples (check,
+    re-check); none without a limit."""
+    table = scene.spec.dynamics
+    if table is None or not table.has_rules():
+        return []
+    out = over_path(scene)
+    force = out["shaking_force"]
+    return limit_rules(scene.spec, out["torque"], force[0], force[1], out["shaking_moment"])
+
+
+def nlp_rules(spec, control, samples: int) -> list:
+    """The same rules on the NLP's symbolic spline path, ``samples`` per stretch; none without a limit."""
+    table = spec.dynamics
+    if table is None or not table.has_rules():
+        return []
+    return limit_rules(spec, *symbolic_samples(spec, control, samples))

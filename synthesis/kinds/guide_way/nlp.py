@@ -32,7 +32,10 @@ from synthesis.kinds.guide_way import spline as sp
 
 #: back-off of each sampled rule, x its scale, so the rules hold between the samples too (reach: none,
 #: it is met with equality at the fold by construction)
-BACKOFF = {"reach": 0.0, "arm_turns_forward": 0.01, "no_undercut": 0.01, "pressure_angle": 0.02}
+BACKOFF = {"reach": 0.0, "arm_turns_forward": 0.01, "no_undercut": 0.01, "pressure_angle": 0.02,
+           # [dynamics.limits]: the re-check samples the path more finely than the NLP (the peak torque came 0.2 %
+           # over its limit between the NLP's samples near the fold, where the arm turns fast along the path)
+           "peak_input_torque": 0.01, "peak_shaking_force": 0.01, "peak_shaking_moment": 0.01}
 
 #: IPOPT's monotone barrier: with the window's edges held, the adaptive one raised mu to 10 within a few iterations
 #: from the fit at some pressure-angle limits and lost the path (smooth_redesign from start 0: 82, 81.5 and 70 deg
@@ -120,6 +123,10 @@ class GuideNLP(KindNLP):
         edge_arms = [sc.symbolic_edge_arm(spec, control, self.stretches[e.k], u_edge[i])
                      for i, e in enumerate(self.edges)]
         rules = sc.rules_of(spec, sc.symbolic_arms(spec, control, samples), masks, edge_arms)
+        if spec.dynamics is not None and spec.dynamics.has_rules():
+            from synthesis.kinds.guide_way.dynamics import nlp_rules     # a spec without limits imports none of it
+
+            rules += nlp_rules(spec, control, samples)
         h = sp.energy_matrix(n)
         energy = ca.bilin(ca.DM(h), control[:, 0], control[:, 0]) + ca.bilin(ca.DM(h), control[:, 1], control[:, 1])
         key_rows = self._structural(control)

@@ -14,10 +14,6 @@ from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP, control_of, name
 
 def prepare(spec):
     """The convex fit of a spline path (None for the paper's conics: nothing to optimise)."""
-    if spec.dynamics is not None and spec.dynamics.has_rules():
-        raise SpecError("[dynamics.limits]: the guide way's dynamics rules are check only (the NLP does not hold "
-                        "them); `agrisynth check` the design, or leave the limits out to solve and read "
-                        "facts.dynamics")
     if spec.spline is None:
         return None
     from synthesis.kinds.guide_way.fit import fit_path     # cvxpy: imported by a spline path's solve only
@@ -42,7 +38,17 @@ def _control(spec, design: dict):
 def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     scene = scene_for(spec, _control(spec, outcome.design), FINE * spec.solver.samples_per_segment)
-    return Recheck(scene.rules, scene)
+    return Recheck(scene.rules + _dynamics_rules(scene), scene)
+
+
+def _dynamics_rules(scene) -> list:
+    """The ``[dynamics.limits]`` rules of a numeric scene (none without a limit: nothing of the dynamics imported)."""
+    table = scene.spec.dynamics
+    if table is None or not table.has_rules():
+        return []
+    from synthesis.kinds.guide_way.dynamics import dynamics_rules
+
+    return dynamics_rules(scene)
 
 
 def finish(setting: Setting, best: StartReport) -> Finished:
@@ -77,7 +83,7 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
         return None
     given = given_control(setting.spec)
     scene = scene_for(setting.spec, setting.data.control if given is None else given)
-    return [r.record().to_json() for r in scene.rules]
+    return [r.record().to_json() for r in scene.rules + _dynamics_rules(scene)]
 
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
