@@ -8,7 +8,7 @@
 * Energy balance from result.json alone: over each stretch of the controlled path the work of the drive torque is
   the change of kinetic plus potential energy, the energy rebuilt from the links' masses, inertias, centres and
   velocities in the file.
-* The wall changes are where the groove force changes sign; the rules are check only (``solve`` refuses them).
+* The wall changes are where the groove force changes sign; the NLP's dynamics columns on symbols are the floats'.
 * A spec without [dynamics] has neither dynamics rules nor facts (its library answers are unchanged: measured with
   studies/library_answers.py); tables that cannot hold are refused with exit 2 naming the field.
 """
@@ -92,7 +92,7 @@ def _spline_tip(path, u0: float):
     """(h, x(h), y(h)) of a spline path near u0, mm: the cubic through four of its points on u0's knot span (the
     spline is one cubic there), in h = u - u0."""
     n = path.n
-    j = min(int(math.floor(u0 * n)), n - 1)
+    j = min(math.floor(u0 * n), n - 1)
     hs = (j + np.array([0.1, 0.4, 0.6, 0.9])) / n - u0
     points = spl.basis(n, u0 + hs) @ np.asarray(path.control, float)
     h = sp.symbols("h")

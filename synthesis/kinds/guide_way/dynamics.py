@@ -21,6 +21,9 @@ Then, without a matrix solve:
   arm's;
 * the drive torque from the arm's moments about O.
 
+The same Function serves the check and the re-check (numbers) and the NLP of a spline path (mapped over its
+symbolic samples, the control points as symbols): the ``[dynamics.limits]`` rules are one model on both.
+
 Sign conventions: a joint's force is the one the body nearer the frame exerts on the next (frame on arm at O, arm
 on claw at P, groove on roller at N); the input torque is the motor's on the arm, positive in the arm's direction
 of turning (theta growing), so power = torque x omega; the shaking force and moment (about O) are what the moving

@@ -159,7 +159,8 @@ class GuideWayPointMass(StrictModel):
 
 
 class GuideWayDynamics(StrictModel):
-    """Mass properties for the inverse dynamics at constant arm speed over the controlled path (check only)."""
+    """Mass properties for the inverse dynamics at constant arm speed over the controlled path (GUIDE_WAY.md
+    "Dynamics")."""
 
     arm: BarLink | LumpedLink = Field(description="the arm OP: a bar {density, area} along OP or {mass, com, "
                                                   "inertia} (frame: origin O, x towards P)")
@@ -171,7 +172,8 @@ class GuideWayDynamics(StrictModel):
     samples: int = Field(360, ge=8, le=3600, description="samples of the controlled path in result.json's "
                                                          "facts.dynamics, spread evenly over its stretches")
     limits: DynamicsLimits = Field(default_factory=DynamicsLimits,
-                                   description="rules on the dynamics (check only: `solve` refuses them)")
+                                   description="rules on the dynamics over the controlled path (check, re-check "
+                                               "and, on a spline path, the NLP)")
     assumption: str = Field("", description="which values are ours, not a paper's")
 
     @model_validator(mode="after")
