@@ -40,8 +40,10 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.kinds.guide_way import kinematics as ra
+from synthesis.kinds.guide_way.scene import arm_of, controlled_keys, fold_stretches, nearest_turn, spline_path
 
 #: the moving bodies, in the order of the mass vector
 BODIES = ("arm", "claw")
@@ -181,7 +183,6 @@ def stretches_of(scene, samples: int) -> list:
 def over_path(scene) -> dict:
     """The inverse dynamics over the controlled path of a numeric scene: per sample in time order, every output of
     :func:`inverse_dynamics` (samples last), with ``stretch`` (the stretch's name) and ``claw_tip`` (N x 2, mm)."""
-    from synthesis.kinds.guide_way.scene import arm_of
 
     spec = scene.spec
     table = spec.dynamics
@@ -204,7 +205,6 @@ def over_path(scene) -> dict:
 def outside_fold_window(scene, out: dict) -> np.ndarray:
     """Per sample of :func:`over_path`: whether it lies outside ``[rules] fold_window`` deg of arm angle about the
     fold, on the fold's two stretches (the check's own window: its centre the fold's arm angle, or direction)."""
-    from synthesis.kinds.guide_way.scene import fold_stretches, nearest_turn
 
     spec = scene.spec
     keep = np.ones(out["theta"].size, bool)
@@ -313,7 +313,6 @@ def dynamics_facts(scene) -> dict:
 
 
 def _keys(scene) -> list[str]:
-    from synthesis.kinds.guide_way.scene import controlled_keys
 
     return controlled_keys(scene.spec)
 
@@ -321,7 +320,6 @@ def _keys(scene) -> list[str]:
 def symbolic_samples(spec, control, samples: int) -> tuple:
     """(input torque, shaking force x, y, shaking moment) as SX columns over a spline path whose control points are
     the NLP's symbols, ``samples`` per stretch: the same Function as on floats, mapped over the symbolic samples."""
-    from synthesis.kinds.guide_way.scene import arm_of, spline_path
 
     table = spec.dynamics
     omega = table.arm_speed * 2.0 * math.pi / 60.0
@@ -339,7 +337,6 @@ def symbolic_samples(spec, control, samples: int) -> tuple:
 
 def limit_rules(spec, torque, fx, fy, moment) -> list:
     """The ``[dynamics.limits]`` rules on sampled columns (floats or symbols)."""
-    from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 
     table = spec.dynamics
     limits = table.limits
@@ -355,7 +352,6 @@ def limit_rules(spec, torque, fx, fy, moment) -> list:
 
 
 def _spec_keys(spec) -> list[str]:
-    from synthesis.kinds.guide_way.scene import controlled_keys
 
     return controlled_keys(spec)
 
