@@ -62,3 +62,31 @@ def test_side_by_side_gives_what_drawing_in_turn_gives(tmp_path, cores):
     out = {d.name: d for d in draw_all(dying, tmp_path / "dying", cores=2)}
     assert out["a.png"].error is None
     assert out["e.gif"].error.startswith("RuntimeError: the drawing process ended (exit code 3)")
+
+
+def test_a_group_whose_process_cannot_start_is_drawn_here(tmp_path, monkeypatch):
+    """No process or pipe left (fork fails): every file is still drawn, in turn, and nothing is lost."""
+    def no_fork():
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", no_fork)
+    writers = {k: v for k, v in _writers().items() if k not in ("c.csv", "e.dxf")}
+    out = draw_all(writers, tmp_path, cores=2)
+    assert [(d.name, d.error) for d in out] == [("a.png", None), ("b.gif", None), ("d.svg", None)]
+    assert (tmp_path / "b.gif").read_text() == "B"
+
+
+def test_a_drawing_process_that_dies_mid_group_keeps_what_it_finished(tmp_path):
+    """Files are reported one by one: those written before the process died count; the one it died on is named
+    with why and nothing of it is left, not even an atomic write's temporary file."""
+    def dies_after_a_temporary(path):
+        (path.parent / f".{path.name}.tmp123{path.suffix}").write_text("partial")
+        os._exit(5)
+
+    writers = {"x.gif": _writers()["b.gif"], "y.gif": dies_after_a_temporary, "a.png": _writers()["a.png"]}
+    # cores=2: the two animations share the forked group, the png is drawn here
+    assert groups(list(writers), 2) == [["x.gif", "y.gif"], ["a.png"]]
+    out = {d.name: d for d in draw_all(writers, tmp_path, cores=2)}
+    assert out["x.gif"].error is None and (tmp_path / "x.gif").read_text() == "B"
+    assert out["y.gif"].error.startswith("RuntimeError: the drawing process ended (exit code 5)")
+    assert not list(tmp_path.glob("*y.gif*")) and out["a.png"].error is None

@@ -287,3 +287,19 @@ def test_a_pose_name_that_would_clash_is_refused(tmp_path):
     path = with_poses(tmp_path, PUBLISHED, "[key_poses.pick_attitude]\nat = \"M1\"\nattitude = 40.0")
     proc = agrisynth("check", path, "--out", tmp_path / "out")
     assert proc.returncode == 2 and "may not end in _attitude" in proc.stderr
+
+
+def test_a_pose_crank_angle_in_a_swing_past_a_whole_turn_is_held():
+    """A swing from 330 to 380 deg holds the crank angle 10 deg (= 370) and its end 20 deg (= 380): accepted; 25 deg
+    (= 385) is past the swing and refused naming the field."""
+    from synthesis.kinds.picker.spec import PickerDoubleCrankSpec
+
+    data = load_spec(PUBLISHED).file_data()
+    data["drive"] |= {"start": 330.0, "swing": 50.0}
+    data["key_poses"] = {"late": {"crank_angle": 10.0, "attitude": 0.0, "attitude_tolerance": 90.0}}
+    PickerDoubleCrankSpec.model_validate(data)
+    data["key_poses"]["late"]["crank_angle"] = 20.0
+    PickerDoubleCrankSpec.model_validate(data)
+    data["key_poses"]["late"]["crank_angle"] = 25.0
+    with pytest.raises(ValueError, match=r"key_poses.late.crank_angle = 25 deg.*330 to 380 deg"):
+        PickerDoubleCrankSpec.model_validate(data)

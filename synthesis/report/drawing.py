@@ -10,11 +10,13 @@ one core is all there is, the writers run here in order; the files and notes are
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import dataclasses
 import json
 import multiprocessing
 import os
 import signal
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -69,67 +71,120 @@ def groups(names: list[str], cores: int) -> list[list[str]]:
 
 
 def draw_all(writers: dict[str, Callable[[Path], None]], folder: Path, cores: int | None = None) -> list[Drawn]:
-    """Run every writer on ``folder / name``; returns the outcomes in the writers' order."""
+    """Run every writer on ``folder / name``; returns the outcomes in the writers' order.  A group whose process
+    cannot be started (no process or pipe left) is drawn here, in turn."""
     names = list(writers)
     parts = groups(names, cores or _cores())
-    forks = "fork" in multiprocessing.get_all_start_methods() and len(parts) > 1
-    if not forks:
-        return [_draw(n, writers[n], folder / n) for n in names]
-    children = []
+    outcomes: dict[str, Drawn] = {}
+    children: list[_Child] = []
     try:
-        for group in parts[:-1]:
-            read, write = os.pipe()
-            pid = os.fork()
-            if pid == 0:                                    # the child: draw, report, leave without cleanup
-                _child(group, writers, folder, read, write)
-            os.close(write)
-            children.append((pid, read, group))
-        outcomes = {d.name: d for d in (_draw(n, writers[n], folder / n) for n in parts[-1])}
-        for pid, read, group in children:
-            outcomes.update(_collected(pid, read, group))
-        children.clear()
+        if "fork" in multiprocessing.get_all_start_methods():
+            for group in parts[:-1]:
+                child = _Child.start(group, writers, folder)
+                if child is None:
+                    outcomes.update((n, _draw(n, writers[n], folder / n)) for n in group)
+                else:
+                    children.append(child)
+        else:
+            parts = [names]
+        outcomes.update((n, _draw(n, writers[n], folder / n)) for n in parts[-1])
+        while children:
+            outcomes.update(children.pop(0).collect(folder))
     finally:
-        for pid, read, _ in children:                       # an interrupt here: the children go with the run
-            _end(pid, read)
+        for child in children:                  # an interrupt or error here: the drawing ends with the run
+            child.end()
     return [outcomes[n] for n in names]
+
+
+class _Child:
+    """A forked process drawing one group: it sends one JSON line per file as it finishes it."""
+
+    def __init__(self, pid: int, read: int, group: list[str]):
+        self.pid, self.read, self.group = pid, read, group
+
+    @classmethod
+    def start(cls, group: list[str], writers: dict, folder: Path) -> "_Child | None":
+        """The group's drawing process, or None when none can be started (the caller draws the group itself)."""
+        try:
+            read, write = os.pipe()
+        except OSError:
+            return None
+        try:
+            pid = os.fork()
+        except OSError:
+            os.close(read)
+            os.close(write)
+            return None
+        if pid == 0:                                        # the child: draw, report, leave without cleanup
+            _child(group, writers, folder, read, write)
+        os.close(write)
+        return cls(pid, read, group)
+
+    def collect(self, folder: Path) -> dict[str, Drawn]:
+        """Each file's outcome as the process reported it; a file it never reported (it died first) is named with
+        why, and whatever it left of that file is removed."""
+        try:
+            with os.fdopen(self.read, "rb") as pipe:
+                data = pipe.read()
+        finally:
+            self.read = -1
+            _, status = os.waitpid(self.pid, 0)
+            self.pid = -1
+        out: dict[str, Drawn] = {}
+        for line in data.decode(errors="replace").splitlines():
+            try:
+                drawn = Drawn(**json.loads(line))
+            except (ValueError, TypeError):     # a line cut short as the process died: that file is not reported
+                continue
+            if drawn.name in self.group:
+                out[drawn.name] = drawn
+        why = f"RuntimeError: the drawing process ended ({_status_text(status)}) before it reported"
+        for name in self.group:
+            if name not in out:
+                (folder / name).unlink(missing_ok=True)
+                for left in folder.glob(f".{name}.*"):      # an atomic write's temporary file
+                    left.unlink(missing_ok=True)
+                out[name] = Drawn(name, why, "")
+        return out
+
+    def end(self) -> None:
+        """Kill and reap the process (still running: the run is being interrupted) and close its pipe."""
+        if self.pid > 0:
+            with contextlib.suppress(OSError):
+                os.kill(self.pid, signal.SIGKILL)
+            with contextlib.suppress(OSError):
+                os.waitpid(self.pid, 0)
+        if self.read >= 0:
+            with contextlib.suppress(OSError):
+                os.close(self.read)
 
 
 def _child(group: list[str], writers: dict, folder: Path, read: int, write: int) -> None:
     code = 1
     try:
         os.close(read)
-        # the run's process decides what a signal means; the child only ends with it
+        # the run's process decides what a signal means: the child ignores both and ends only with it
         signal.signal(signal.SIGINT, signal.SIG_IGN)
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        # plain JSON: what a file's drawing sent back is data, never code to run
-        data = json.dumps([dataclasses.asdict(_draw(n, writers[n], folder / n)) for n in group]).encode()
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        _die_with_parent()
         with os.fdopen(write, "wb") as pipe:
-            pipe.write(data)
+            for name in group:
+                # plain JSON, a line per file as it is done: what a drawing sent back is data, never code to run
+                pipe.write(json.dumps(dataclasses.asdict(_draw(name, writers[name], folder / name))).encode() + b"\n")
+                pipe.flush()
         code = 0
     finally:
         os._exit(code)          # never run the parent's exit handlers, atexit or finally blocks in the child
 
 
-def _collected(pid: int, read: int, group: list[str]) -> dict[str, Drawn]:
-    with os.fdopen(read, "rb") as pipe:
-        data = pipe.read()
-    _, status = os.waitpid(pid, 0)
-    if data:
-        return {d["name"]: Drawn(**d) for d in json.loads(data)}
-    why = f"the drawing process ended ({_status_text(status)}) before it reported"
-    return {n: Drawn(n, f"RuntimeError: {why}", "") for n in group}
+def _die_with_parent() -> None:
+    """Linux's PR_SET_PDEATHSIG: the kernel kills this process when the run's process dies (even by SIGKILL), so no
+    drawing goes on writing into a run that no longer exists; elsewhere the run's interrupt kills it."""
+    with contextlib.suppress(OSError, AttributeError, TypeError):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG = 1
 
 
 def _status_text(status: int) -> str:
     if os.WIFSIGNALED(status):
         return f"signal {os.WTERMSIG(status)}"
     return f"exit code {os.WEXITSTATUS(status)}"
-
-
-def _end(pid: int, read: int) -> None:
-    try:
-        os.kill(pid, signal.SIGKILL)
-        os.waitpid(pid, 0)
-    except (ProcessLookupError, ChildProcessError):
-        pass
-    os.close(read)

@@ -39,6 +39,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from scipy.integrate import trapezoid       # numpy's own is numpy >= 2 only
 
 from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
@@ -270,7 +271,7 @@ def dynamics_facts(scene) -> dict:
     changes = wall_changes(out)
     joints = {name: out["reactions"][:, j, :].T.tolist() for j, name in enumerate(JOINTS)}
     summary = {"input_torque_Nm": _peak(torque, crank, out), "power_W": _peak(power, crank, out),
-               "mean_power_W": float(np.trapezoid(power, crank) / (crank[-1] - crank[0])) if crank[-1] != crank[0]
+               "mean_power_W": float(trapezoid(power, crank) / (crank[-1] - crank[0])) if crank[-1] != crank[0]
                else 0.0,
                "shaking_force_N": _peak(np.hypot(force[0], force[1]), crank, out),
                "shaking_moment_Nm": _peak(out["shaking_moment"], crank, out),

@@ -168,7 +168,8 @@ class PickerDoubleCrankSpec(ProblemSpec):
     def _poses_within_the_swing(self) -> PickerDoubleCrankSpec:
         lo, hi = self.drive.start, self.drive.start + self.drive.swing
         for name, pose in self.key_poses.items():
-            if pose.crank_angle is not None and not lo <= pose.crank_angle <= hi:
+            # a turn is 360 deg: a swing past 360 (330 to 380) holds 10 deg as well as 370
+            if pose.crank_angle is not None and not (pose.crank_angle - lo) % 360.0 <= hi - lo:
                 raise ValueError(f"key_poses.{name}.crank_angle = {pose.crank_angle:g} deg: the clamp moves only over "
                                  f"the working swing, crank angles {lo:g} to {hi:g} deg")
         return self
