@@ -185,4 +185,4 @@ def test_the_bench_runs_the_published_linkage_beside_the_solvers():
     assert run.details["all_competitors"]["HCDJ (Nguyen-Van et al. 2022)"]["objective"] == pytest.approx(1.9239387e-06,
                                                                                                          rel=1e-7)
     names = [c.problem for c in bench_cases(None, 0)]
-    assert names[-3:] == [f"literature_{n}" for n in NAMES]
+    assert [n for n in names if n.startswith("literature_")] == [f"literature_{n}" for n in NAMES]

@@ -57,17 +57,17 @@ def test_repeated_targets_share_one_crank_angle(tmp_path, record_property):
                               f"objective {out['objective']['value']:.1e} mm^2")
 
 
-def test_200_targets_are_refused_with_the_allowed_count(tmp_path, record_property):
-    """200 coupler points of a known crank-rocker: more than the spec allows (100, each adds a crank-angle
+def test_1001_targets_are_refused_with_the_allowed_count(tmp_path, record_property):
+    """1,001 coupler points of a known crank-rocker: more than the spec allows (1,000, each adds a crank-angle
     variable and its rows); solve exits 2 at once naming the field, the count and the range."""
-    data = truth_data(0, 200, timed=False, solver={"starts": 2})
+    data = truth_data(0, 1001, timed=False, solver={"starts": 2})
     proc = cli("solve", str(write_spec(tmp_path, data)), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path,
                timeout=60)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     message = " ".join(proc.stderr.split())
-    assert "targets.points" in message and "expected 3 to 100 points, got 200" in message
+    assert "targets.points" in message and "expected 3 to 1000 points, got 1001" in message
     assert "Traceback" not in proc.stderr
-    record_property("figure", "exit 2: 'targets.points: expected 3 to 100 points, got 200'")
+    record_property("figure", "exit 2: 'targets.points: expected 3 to 1000 points, got 1001'")
 
 
 def test_check_of_a_linkage_that_never_closes_reports_it_without_nan(tmp_path, record_property):
