@@ -143,7 +143,8 @@ SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_examp
 #: solves of seconds: run with the slow tests (`pytest -m slow`); the default suite keeps a solve of every kind
 #: (planting_arm: redesign_from_example4)
 SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_redesign_spring_dynamics.toml",
-        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "guide_way/smooth_redesign_dynamics.toml", "guide_way/smooth_torque_limited.toml",
+        "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "guide_way/smooth_redesign_dynamics.toml",
+        "guide_way/smooth_torque_limited.toml",
         "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
         "picker/picker_double_crank_min_peak_torque.toml", "picker/picker_double_crank_key_pose.toml",
         *(f"planting_arm/redesign_from_example{k}.toml" for k in (1, 2, 3)), "tillage/tillage_redesign.toml",
