@@ -181,9 +181,10 @@ def stretches_of(scene, samples: int) -> list:
     return scene.spline.stretches(per)
 
 
-def over_path(scene) -> dict:
+def over_path(scene, samples: int | None = None) -> dict:
     """The inverse dynamics over the controlled path of a numeric scene: per sample in time order, every output of
-    :func:`inverse_dynamics` (samples last), with ``stretch`` (the stretch's name) and ``claw_tip`` (N x 2, mm)."""
+    :func:`inverse_dynamics` (samples last), with ``stretch`` (the stretch's name) and ``claw_tip`` (N x 2, mm);
+    ``samples`` over the whole path (default ``[dynamics] samples``)."""
 
     spec = scene.spec
     table = spec.dynamics
@@ -193,7 +194,7 @@ def over_path(scene) -> dict:
     names: list[str] = []
     index = []
     tips = []
-    for k, st in enumerate(stretches_of(scene, table.samples)):
+    for k, st in enumerate(stretches_of(scene, samples or table.samples)):
         parts.append(along(st, arm_of(spec), mass, omega, table.gravity))
         names += [st.name] * np.asarray(st.u).size
         index += [k] * np.asarray(st.u).size
@@ -357,13 +358,13 @@ def _spec_keys(spec) -> list[str]:
     return controlled_keys(spec)
 
 
-def dynamics_rules(scene) -> list:
-    """The ``[dynamics.limits]`` rules over the controlled path of a numeric scene at the table's samples (check,
-    re-check); none without a limit."""
+def dynamics_rules(scene, samples: int | None = None) -> list:
+    """The ``[dynamics.limits]`` rules over the controlled path of a numeric scene at ``samples`` (default the
+    table's: the check; a solve's re-check asks at least as many as its other rules read); none without a limit."""
     table = scene.spec.dynamics
     if table is None or not table.has_rules():
         return []
-    out = over_path(scene)
+    out = over_path(scene, samples)
     force = out["shaking_force"]
     return limit_rules(scene.spec, out["torque"], force[0], force[1], out["shaking_moment"])
 

@@ -38,17 +38,22 @@ def _control(spec, design: dict):
 def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     scene = scene_for(spec, _control(spec, outcome.design), FINE * spec.solver.samples_per_segment)
-    return Recheck(scene.rules + _dynamics_rules(scene), scene)
+    # the dynamics rules on the re-check's grid too: as many samples per stretch as its other rules read, and never
+    # fewer than the table asks
+    fine = max(spec.dynamics.samples, FINE * spec.solver.samples_per_segment * len(scene.arms)) \
+        if spec.dynamics is not None else None
+    return Recheck(scene.rules + _dynamics_rules(scene, fine), scene)
 
 
-def _dynamics_rules(scene) -> list:
-    """The ``[dynamics.limits]`` rules of a numeric scene (none without a limit: nothing of the dynamics imported)."""
+def _dynamics_rules(scene, samples: int | None = None) -> list:
+    """The ``[dynamics.limits]`` rules of a numeric scene at ``samples`` over its path (default the table's; none
+    without a limit: nothing of the dynamics imported)."""
     table = scene.spec.dynamics
     if table is None or not table.has_rules():
         return []
     from synthesis.kinds.guide_way.dynamics import dynamics_rules
 
-    return dynamics_rules(scene)
+    return dynamics_rules(scene, samples)
 
 
 def finish(setting: Setting, best: StartReport) -> Finished:
