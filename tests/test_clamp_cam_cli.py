@@ -72,7 +72,11 @@ def test_check_writes_result_plots_and_workshop_files(tmp_path):
 
 
 SCENE_CHECK = """
+import os
 import sys
+# one core: the figures are drawn in this process, not side by side in forked ones, so what drawing them imports
+# (ezdxf for the DXF) is among this process's modules
+os.sched_setaffinity(0, {{min(os.sched_getaffinity(0))}})
 from synthesis.cli import main
 sys.argv = ["agrisynth", "{command}", "{spec}", "--out", "{out}"] + {extra}
 try:
