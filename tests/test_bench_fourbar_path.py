@@ -130,6 +130,43 @@ def test_partial_arc_free_timing_study():
     print("\n".join(lines))
 
 
+@pytest.mark.benchmark
+def test_many_targets_time_grows_no_faster_than_their_number():
+    """The many-target study (bench.many_targets_rows, `agrisynth bench fourbar_path`'s study many_targets): CPU
+    seconds of the screen, the NLP's build, a start's solve and the whole `agrisynth solve` (64 starts, one worker)
+    at 25, 100, 250 and 1,000 targets of a coupler curve digitised with 0.2 mm noise, timing free and prescribed,
+    and per timing the slope of log(time) against log(n).  Printed; asserted only loosely -- the slopes below 1.3
+    (measured 0.28-1.01; a part growing as n^2 over these sizes gives 1.5 or more), each whole solve exiting 0 with
+    the rms target error within the noise -- for a shared machine's timings are noisy."""
+    from synthesis.kinds.fourbar_path.bench import GROWTH_COLUMNS, many_targets_rows
+
+    rows = many_targets_rows()
+    columns = ["timing", "targets", *GROWTH_COLUMNS, "iterations", "objective_mm2", "rms_mm"]
+    print("\n".join(" | ".join(f"{r.get(c):.4g}" if isinstance(r.get(c), float) else str(r.get(c, "")) for c in columns)
+                    for r in [dict(zip(columns, columns)), *rows]))
+    for row in rows:
+        if row["targets"] == "slope":
+            assert all(row[c] is not None and row[c] < 1.3 for c in GROWTH_COLUMNS), row
+        else:
+            assert row["exit_code"] == 0 and 0.1 < row["rms_mm"] < 0.3, row
+
+
+def test_many_targets_study_fits_the_growth_and_benches_the_largest_set():
+    """The study's slope is the least-squares slope of log(time) on log(n) (1 for time proportional to n, 2 for
+    n^2), none where a time is missing; its case solves the largest set, free timing, with every start."""
+    from synthesis.kinds.fourbar_path.bench import GROWTH_COLUMNS, MANY_TARGET_COUNTS, growth_slopes, many_targets_case
+
+    rows = [{"targets": n, **{c: 0.01 * n ** (1 + k % 2) for k, c in enumerate(GROWTH_COLUMNS)}} for n in (25, 100, 1000)]
+    rows[1]["whole_solve_cpu_s"] = None
+    slopes = growth_slopes(rows)
+    assert slopes["build_cpu_s"] == pytest.approx(1.0) and slopes["screen_and_starts_cpu_s"] == pytest.approx(2.0)
+    assert slopes["whole_solve_cpu_s"] is None
+    case = many_targets_case(seed=3)
+    assert list(case.methods) == ["ipopt_multistart"] and case.single_runs == {"ipopt_multistart"}
+    assert case.best_known is None and set(case.studies) == {"many_targets"}
+    assert case.problem == f"noisy1_n{MANY_TARGET_COUNTS[-1]}_free"
+
+
 def test_differential_evolution_at_equal_budget_stops_at_the_multistart_cpu_seconds():
     """The equal-budget peer takes its budget from the multistart run of the same round (the list it appends
     to) and stops at the first generation past it: a budget of 0 s is one generation, unpolished, and the

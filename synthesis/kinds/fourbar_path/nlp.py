@@ -147,6 +147,24 @@ SCREEN_TOL: tuple[float, float] | None = (1e-9, 1e-7)
 #: at the best known on 6 / 4 of 10 against 5 / 5 (egg16, s_curve12 gained, square24 lost on seed 0; triangle18 lost
 #: on seed 1); 300 and 3000 and no scaling measured too (INEXACT.md)
 SCREEN_SCALING: dict | None = {"ipopt.nlp_scaling_max_gradient": 1000.0}
+#: IPOPT's pivot tolerance of its linear solver MUMPS for sets of more than SPARSE_PIVOTING_ABOVE targets (IPOPT's
+#: default 1e-6 up to it; None: the default for every set).  Where many rows that read the design alone are nearly
+#: active -- the continuation's first phase (TIMING_FIRST: the crank angles held, 9 variables under 2n closure rows),
+#: a prescribed timing's fit -- their pivots fall below 1e-6 of their column, MUMPS delays each into the front of the
+#: design, and that front grows dense with them (IPOPT's log: "MUMPS returned INFO(1) = -9 and requires more memory").
+#: The first phase's CPU per iteration (30 Latin-hypercube starts of the 0.2 mm noisy curve, INEXACT.md "Many
+#: targets"): 1.4, 3.3, 9.3, 50 ms at 100, 250, 500, 1,000 targets, 59 of the 126 CPU seconds of a 1,000-target
+#: solve; at 1e-12 (pivots chosen for sparsity) 10.5 ms at 1,000, no front grown.  IPOPT raises the tolerance
+#: itself (towards mumps_pivtolmax) when a step comes out inaccurate.  Every set of at most 100 targets (all the tool
+#: took before) keeps the default, and its answers
+SPARSE_PIVOT_TOLERANCE: float | None = 1e-12
+SPARSE_PIVOTING_ABOVE = 100
+#: the configuration form (natural.py) of those sets also perturbs every step's constraint block (IPOPT's
+#: perturb_always_cd; by default only where it finds the iteration matrix singular).  Its closure rows are
+#: equalities, whose zero diagonal MUMPS must pivot on in pairs: at a start far from the targets (IPOPT's Hessian
+#: regularisation climbing to 1e16) it delayed them into one dense front, 5-8 s for the 30 iterations of a start cut
+#: at 100 targets, 80-90 s at 500 and 1,000; perturbed, 0.6 s at 1,000 (INEXACT.md, "Many targets")
+PERTURBED_CONFIGURATION = True
 
 
 class PathNLP(KindNLP):
@@ -241,6 +259,8 @@ class PathNLP(KindNLP):
         """grashof = "any" on a screened free-timing target set: the configuration form too (CONFIGURATION; not in a
         tolerance box or the tolerance analysis, whose sensitivities read this crank-angle form)."""
         options = self._ipopt_options(spec)
+        if PERTURBED_CONFIGURATION and len(spec.targets.points) > SPARSE_PIVOTING_ABOVE:
+            options["ipopt.perturb_always_cd"] = "yes"
         # solved as the crank-angle form is (its setting's method: a bench's finite differences or peer too)
         form = lambda opts: (spec, self.offset, self.scale, self.fixed, lbx, ubx, f_unit, BACKOFF,  # noqa: E731
                              opts, spec.solver.max_iter, self.compiled.method)
@@ -268,6 +288,8 @@ class PathNLP(KindNLP):
             out.update({"ipopt.tol": SCREEN_TOL[0], "ipopt.acceptable_tol": SCREEN_TOL[1]})
         if SCREEN_SCALING is not None and self.starts.screening:
             out.update(SCREEN_SCALING)
+        if SPARSE_PIVOT_TOLERANCE is not None and len(spec.targets.points) > SPARSE_PIVOTING_ABOVE:
+            out["ipopt.mumps_pivtol"] = SPARSE_PIVOT_TOLERANCE
         return out
 
     @property
