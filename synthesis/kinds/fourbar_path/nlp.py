@@ -163,7 +163,8 @@ SPARSE_PIVOTING_ABOVE = 100
 #: perturb_always_cd; by default only where it finds the iteration matrix singular).  Its closure rows are
 #: equalities, whose zero diagonal MUMPS must pivot on in pairs: at a start far from the targets (IPOPT's Hessian
 #: regularisation climbing to 1e16) it delayed them into one dense front, 5-8 s for the 30 iterations of a start cut
-#: at 100 targets, 80-90 s at 500 and 1,000; perturbed, 0.6 s at 1,000 (INEXACT.md, "Many targets")
+#: at 100 targets, 80-90 s at 500 and 1,000; perturbed, 0.6 s at 1,000.  64 starts on a 120 deg arc: 1,338 -> 164
+#: CPU s at 1,000 targets, 200 -> 51 at 250, the best 0.1-0.8 % higher (INEXACT.md, "Many targets")
 PERTURBED_CONFIGURATION = True
 
 
