@@ -69,7 +69,7 @@ def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: s
         if limits.peak_shaking_moment is not None:
             rules.append(peak_shaking_moment_rule(None, limits.peak_shaking_moment, missing=missing))
         return rules
-    if limits.peak_input_torque is None and limits.peak_shaking_force is None and limits.peak_shaking_moment is None:
+    if not limits.any_given():
         return []
     out = dyn.over_turn(turn(samples))
     if limits.peak_input_torque is not None:

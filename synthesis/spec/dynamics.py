@@ -90,6 +90,10 @@ class DynamicsLimits(StrictModel):
                                               description="largest |shaking moment| on the frame over a turn, about "
                                                           "the crank pivot, N m")
 
+    def any_given(self) -> bool:
+        """Whether any limit is given (each is a rule; none given, no dynamics rule)."""
+        return any(v is not None for v in (self.peak_input_torque, self.peak_shaking_force, self.peak_shaking_moment))
+
 
 class DynamicsSection(StrictModel):
     """Mass properties and loads for the inverse dynamics at constant crank speed (docs/ARCHITECTURE.md "Dynamics")."""
@@ -120,6 +124,4 @@ class DynamicsSection(StrictModel):
         return self
 
     def has_rules(self) -> bool:
-        limits = self.limits
-        return any(v is not None for v in (limits.peak_input_torque, limits.peak_shaking_force,
-                                           limits.peak_shaking_moment))
+        return self.limits.any_given()

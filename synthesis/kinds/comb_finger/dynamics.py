@@ -195,7 +195,7 @@ def _column(values):
 
 def dynamics_rules(dyn: FingerDynamics, limits, turn_angles: np.ndarray) -> list[Rule]:
     """The ``[dynamics.limits]`` rules at the turn angles (none without a limit)."""
-    if limits.peak_input_torque is None and limits.peak_shaking_force is None and limits.peak_shaking_moment is None:
+    if not limits.any_given():
         return []
     out = dyn.over(turn_angles)
     force = out["shaking_force"]

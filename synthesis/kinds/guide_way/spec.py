@@ -183,8 +183,7 @@ class GuideWayDynamics(StrictModel):
         return self
 
     def has_rules(self) -> bool:
-        lim = self.limits
-        return any(v is not None for v in (lim.peak_input_torque, lim.peak_shaking_force, lim.peak_shaking_moment))
+        return self.limits.any_given()
 
 
 class GuideWaySpec(ProblemSpec):

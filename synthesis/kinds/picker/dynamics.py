@@ -75,7 +75,7 @@ def sampled(dyn: FourbarDynamics, crank: np.ndarray) -> tuple:
 
 def dynamics_rules(dyn: FourbarDynamics, limits: DynamicsLimits, crank: np.ndarray) -> list[Rule]:
     """The ``[dynamics.limits]`` rules at the crank angles ``crank`` of the working swing (none without a limit)."""
-    if limits.peak_input_torque is None and limits.peak_shaking_force is None and limits.peak_shaking_moment is None:
+    if not limits.any_given():
         return []
     torque, fx, fy, moment = sampled(dyn, crank)
     rules = []

@@ -211,7 +211,7 @@ def sampled(dyn: TillageDynamics, crank: np.ndarray) -> tuple:
 
 def dynamics_rules(dyn: TillageDynamics, limits, crank: np.ndarray) -> list[Rule]:
     """The ``[dynamics.limits]`` rules at the crank angles ``crank`` (none without a limit)."""
-    if limits.peak_input_torque is None and limits.peak_shaking_force is None and limits.peak_shaking_moment is None:
+    if not limits.any_given():
         return []
     torque, fx, fy, moment = sampled(dyn, crank)
     rules = []

@@ -138,9 +138,7 @@ class TillageDynamicsSection(StrictModel):
     assumption: str = Field("", description="which values are ours, not a paper's")
 
     def has_rules(self) -> bool:
-        limits = self.limits
-        return any(v is not None for v in (limits.peak_input_torque, limits.peak_shaking_force,
-                                           limits.peak_shaking_moment))
+        return self.limits.any_given()
 
     @model_validator(mode="after")
     def _tip_on_the_bar(self) -> "TillageDynamicsSection":
