@@ -45,9 +45,13 @@ OMEGA = 250 * 2 * math.pi / 60
 GRAVITY = (0.3, -9.81)
 
 
-def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
+def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess, crank_alpha=0.0, moments=(0.0, 0.0, 0.0),
+                       soil=None):
     """Torque, reactions (frame-crank, crank-coupler, coupler-rocker, frame-rocker) and shaking force at crank angle
-    theta, by sympy.physics.mechanics: link angles q1 (crank, absolute), q2, q3 with the loop closed numerically."""
+    theta, by sympy.physics.mechanics: link angles q1 (crank, absolute), q2, q3 with the loop closed numerically.
+    ``crank_alpha``: the crank's angular acceleration; ``moments``: a couple on each link; ``soil``: (f0, k,
+    surface_y mm, forward speed, at_x, at_y mm on the coupler): the soil law written here from the point's sympy
+    position and velocity."""
     l1, l2, l3, l4, zeta = geometry
     q1, q2, q3 = dynamicsymbols("q1 q2 q3")
     t = dynamicsymbols._t
@@ -67,11 +71,11 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
     d2 = [sp.diff(c, t, 2) for c in closure]
     first = {q1.diff(t): omega}
     u = sp.solve([msubs(e, first, values) for e in d1], [q2.diff(t), q3.diff(t)])
-    second = {q1.diff(t, 2): 0.0, q2.diff(t, 2): sp.Symbol("a2"), q3.diff(t, 2): sp.Symbol("a3")}
+    second = {q1.diff(t, 2): crank_alpha, q2.diff(t, 2): sp.Symbol("a2"), q3.diff(t, 2): sp.Symbol("a3")}
     known = {**first, q2.diff(t): u[q2.diff(t)], q3.diff(t): u[q3.diff(t)]}
     acc = sp.solve([msubs(e, second, known, values) for e in d2], [sp.Symbol("a2"), sp.Symbol("a3")])
-    alpha = [0.0, acc[sp.Symbol("a2")], acc[sp.Symbol("a3")]]
-    kin = {q1.diff(t, 2): 0.0, q2.diff(t, 2): acc[sp.Symbol("a2")], q3.diff(t, 2): acc[sp.Symbol("a3")], **known}
+    alpha = [crank_alpha, acc[sp.Symbol("a2")], acc[sp.Symbol("a3")]]
+    kin = {q1.diff(t, 2): crank_alpha, q2.diff(t, 2): acc[sp.Symbol("a2")], q3.diff(t, 2): acc[sp.Symbol("a3")], **known}
     origins = (o, a, o_rocker)
     coms = [origins[k].locatenew(f"G{k}", mass[4 * k + 1] * links[k].x + mass[4 * k + 2] * links[k].y)
             for k in range(3)]
@@ -79,14 +83,26 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess):
     fo, fa, fb, fp = (f[0] * frame.x + f[1] * frame.y, f[2] * frame.x + f[3] * frame.y,
                       f[4] * frame.x + f[5] * frame.y, f[6] * frame.x + f[7] * frame.y)
     g = gravity[0] * frame.x + gravity[1] * frame.y
+    soil_force, soil_point = 0 * frame.x, a
+    if soil is not None:
+        f0, k, surface, forward, sx, sy = soil
+        soil_point = a.locatenew("C", sx / 1000 * links[1].x + sy / 1000 * links[1].y)
+        p = soil_point.pos_from(o)
+        depth = surface - 1000 * float(sp.N(msubs(p.dot(frame.y), values)))
+        rel = [float(sp.N(msubs(p.dt(frame).dot(e), kin, values))) + v for e, v in ((frame.x, forward), (frame.y, 0))]
+        scale = -(f0 + k * depth) / math.sqrt(rel[0] ** 2 + rel[1] ** 2 + 1e-6) if depth > 0 else 0.0
+        soil_force = scale * rel[0] * frame.x + scale * rel[1] * frame.y
     # the shaking moment about O from the links' angular momentum alone (no reaction enters): the frame feels minus
     # the moment about O of what it and the motor apply, which is d/dt of the angular momentum about O less gravity's
     # moment, sum_k r_k x m_k (a_k - g) + I_k alpha_k
     spin_rate = sum((coms[k].pos_from(o).cross(mass[4 * k] * (coms[k].pos_from(o).dt(frame).dt(frame) - g))
                      + mass[4 * k + 3] * alpha[k] * frame.z for k in range(3)), 0 * frame.z)
+    # less what the agents that are not the frame apply: the couples and the soil force
+    spin_rate = spin_rate - sum(moments) * frame.z - soil_point.pos_from(o).cross(soil_force)
     shaking_moment = -float(sp.N(msubs(spin_rate.dot(frame.z), kin, values), 20))
     # (forces at points, torque) on each link: frame on crank at O and the motor, crank on coupler at A, ...
-    loads = [([(fo, o), (-fa, a)], f[8]), ([(fa, a), (-fb, b)], 0), ([(fb, b), (fp, o_rocker)], 0)]
+    loads = [([(fo, o), (-fa, a)], f[8] + moments[0]), ([(fa, a), (-fb, b), (soil_force, soil_point)], moments[1]),
+             ([(fb, b), (fp, o_rocker)], moments[2])]
     equations = []
     for k, (forces, torque) in enumerate(loads):
         m, inertia = mass[4 * k], mass[4 * k + 3]
@@ -119,6 +135,52 @@ def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
     assert ours["torque"].min() < 0 < ours["torque"].max()
     assert np.abs(ours["reactions"]).max() > 10.0
     assert ours["shaking_moment"].min() < 0 < ours["shaking_moment"].max()
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+def test_a_fluctuating_crank_with_couples_and_soil_equals_the_independent_formulation():
+    """The general four-bar: per-sample crank speed and acceleration, a couple on every link and the soil law on a
+    coupler point below the surface, against sympy (the soil force written there from the point's own motion)."""
+    geometry, branch = CASES["planting_arm"]
+    thetas = np.radians([0.0, 47.0, 133.0, 200.0, 291.0])
+    omega = OMEGA * (1.0 + 0.08 * np.sin(thetas))
+    alpha = omega * OMEGA * 0.08 * np.cos(thetas)            # omega d(omega)/d(theta)
+    moments = np.array([[0.4], [-0.7], [1.1]]) * np.ones((1, thetas.size))
+    soil = (6.0, 0.35, -20.0, 0.6, 180.0, -90.0)              # the point 200 mm out on the coupler, below y = -20
+    ours = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, omega, GRAVITY, alpha=alpha, moments=moments,
+                     soil=soil)
+    assert (ours["soil_depth"] > 0).sum() >= 2 and (ours["soil_depth"] < 0).sum() >= 1   # in and out of the soil
+    for i, theta in enumerate(thetas):
+        torque, reactions, shaking, moment = sympy_newton_euler(
+            geometry, LUMPED, float(omega[i]), GRAVITY, theta,
+            [float(ours["angle"][1, i]), float(ours["angle"][2, i])], float(alpha[i]), tuple(moments[:, i]), soil)
+        scale = np.abs(reactions).max()
+        assert ours["torque"][i] == pytest.approx(torque, rel=1e-6, abs=1e-9 * scale)
+        np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-6, atol=1e-9 * scale)
+        np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-6, atol=1e-9 * scale)
+        assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-6, abs=1e-9 * scale)
+    constant = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, OMEGA, GRAVITY)
+    assert np.abs(ours["torque"] - constant["torque"]).max() > 0.1      # the extras are not negligible here
+
+
+def test_power_balance_of_the_general_four_bar_at_every_sample():
+    """d(kinetic + potential)/dt = torque omega + the external power (couples and soil), pointwise over a turn at a
+    fluctuating speed; the energy's rate by spectral differentiation in theta times omega."""
+    geometry, branch = CASES["planting_arm"]
+    n = 512
+    thetas = 2 * np.pi * np.arange(n) / n
+    omega = OMEGA * (1.0 + 0.08 * np.sin(thetas))
+    alpha = omega * OMEGA * 0.08 * np.cos(thetas)
+    moments = np.vstack([0.4 * np.ones(n), -0.7 * np.cos(thetas), 1.1 * np.ones(n)])
+    # f0 = 0: the soil force is continuous in the depth, so the energy stays smooth enough for spectral derivatives
+    out = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, omega, GRAVITY, alpha=alpha, moments=moments,
+                    soil=(0.0, 0.02, -60.0, 0.6, 180.0, -90.0))
+    energy = out["kinetic_energy"] + out["potential_energy"]
+    wavenumbers = np.fft.rfftfreq(n, 1.0 / n)
+    rate = np.fft.irfft(1j * wavenumbers * np.fft.rfft(energy), n) * omega
+    power = out["torque"] * omega + out["external_power"]
+    assert np.abs(out["soil_force"]).max() > 0.5                   # the soil works on part of the turn
+    np.testing.assert_allclose(power, rate, atol=2e-4 * np.abs(power).max())
 
 
 def test_planting_coupler_bars_combine_by_the_parallel_axis_theorem():

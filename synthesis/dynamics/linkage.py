@@ -28,7 +28,10 @@ CONVENTIONS = ("reaction at a joint: force of the link nearer the frame on the n
 @dataclass(frozen=True)
 class FourbarDynamics:
     """Everything the inverse dynamics reads: geometry (mm, rad), mass and load vectors (SI), crank speed (rad/s),
-    gravity (m/s^2).  Geometry, mass and crank speed may be CasADi symbols."""
+    gravity (m/s^2); and, for a crank whose speed is not constant or a link another linkage loads, the crank's
+    angular acceleration and per-link couples (one value or one per sample, :func:`synthesis.dynamics.fourbar.
+    over_turn`), and a soil law on a coupler point (:data:`synthesis.dynamics.fourbar.SOIL`).  Geometry, mass and
+    crank speed may be CasADi symbols."""
 
     branch: int
     geometry: tuple
@@ -36,6 +39,9 @@ class FourbarDynamics:
     loads: tuple
     omega: object
     gravity: tuple
+    alpha: object = None
+    moments: object = None
+    soil: tuple | None = None
 
     @classmethod
     def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega,
@@ -49,7 +55,8 @@ class FourbarDynamics:
                    tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity))
 
     def over_turn(self, crank) -> dict:
-        return over_turn(self.branch, crank, self.geometry, self.mass, self.loads, self.omega, self.gravity)
+        return over_turn(self.branch, crank, self.geometry, self.mass, self.loads, self.omega, self.gravity,
+                         self.alpha, self.moments, self.soil)
 
 
 def _column(values):
