@@ -59,12 +59,14 @@ class ExternalLoad(StrictModel):
 
 
 class Counterweight(StrictModel):
-    """A mass on the crank opposite its pin (at -radius along the crank), to balance the shaking force; a number fixes
-    a value, ``{init, bounds}`` frees it (the planting arm's design variables ``counterweight_mass``,
-    ``counterweight_radius``)."""
+    """A mass on the crank opposite its pin (at -radius along the crank), or on the rocker opposite the
+    coupler-rocker joint, to balance the shaking force; a number fixes a value, ``{init, bounds}`` frees it (the
+    planting arm's design variables ``counterweight_mass``, ``counterweight_radius`` and, on the rocker,
+    ``rocker_counterweight_mass``, ``rocker_counterweight_radius``)."""
 
     mass: Variable = Field(description="counterweight mass, kg")
-    radius: Variable = Field(description="its distance from the crank pivot, opposite the crank pin, mm")
+    radius: Variable = Field(description="its distance from the link's pivot (crank: the crank pivot, opposite the "
+                                         "crank pin; rocker: the rocker pivot, opposite the coupler-rocker joint), mm")
 
     @model_validator(mode="after")
     def _not_negative(self) -> "Counterweight":
@@ -78,6 +80,27 @@ class Counterweight(StrictModel):
     def values(self) -> tuple[float, float]:
         """(mass kg, radius mm) at the given (or start) values."""
         return value_of(self.mass), value_of(self.radius)
+
+
+class Drive(StrictModel):
+    """The crank shaft's drive, for its speed fluctuation: the motor's torque is taken constant (the mean the turn
+    needs), so the crank slows where the linkage takes energy and speeds up where it gives it back, the more so the
+    smaller the inertia turning with the shaft.  Give the inertia to get the fluctuation, or a fluctuation to get the
+    flywheel that keeps it (or both)."""
+
+    flywheel_inertia: float | None = Field(None, gt=0.0, le=1.0e4,
+                                           description="moment of inertia of everything turning with the crank shaft "
+                                                       "(flywheel, gears and motor rotor reflected to it), kg m^2")
+    speed_fluctuation: float | None = Field(None, gt=0.0, lt=1.0,
+                                            description="a coefficient of speed fluctuation (omega_max - omega_min) / "
+                                                        "omega_mean to size the flywheel for (0.02-0.05 is usual for "
+                                                        "agricultural drives), dimensionless")
+
+    @model_validator(mode="after")
+    def _something_given(self) -> "Drive":
+        if self.flywheel_inertia is None and self.speed_fluctuation is None:
+            raise ValueError("drive: give flywheel_inertia (kg m^2), speed_fluctuation (a coefficient), or both")
+        return self
 
 
 class DynamicsLimits(StrictModel):
@@ -110,6 +133,11 @@ class DynamicsSection(StrictModel):
     external_loads: list[ExternalLoad] = Field(default_factory=list,
                                                description="constant forces on the links (at most one per link)")
     counterweight: Counterweight | None = Field(None, description="a counterweight on the crank, opposite its pin")
+    rocker_counterweight: Counterweight | None = Field(None, description="a counterweight on the rocker, opposite the "
+                                                                         "coupler-rocker joint")
+    drive: Drive | None = Field(None, description="the crank shaft's flywheel inertia and/or a speed fluctuation to "
+                                                  "size it for: facts.dynamics then reports the crank's speed "
+                                                  "fluctuation over a turn (the motor torque constant)")
     samples: int = Field(360, ge=8, le=3600, description="crank angles of result.json's facts.dynamics over a turn")
     limits: DynamicsLimits = Field(default_factory=DynamicsLimits)
     assumption: str = Field("", description="which values are ours, not a paper's")
