@@ -21,7 +21,6 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable
 
 import numpy as np
-from scipy.stats import qmc
 
 from synthesis.core import interrupt
 from synthesis.core.outcome import StartOutcome
@@ -50,13 +49,26 @@ def _raised(exc: BaseException) -> tuple[str, str]:
     return f"{START_RAISED}: {type(exc).__name__}", f"the start raised {type(exc).__name__}: {text or '(no message)'}"
 
 
+def unit_latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
+    """(n, d) points of a scrambled Latin hypercube in [0, 1): each column one point in each of its n strata, at a
+    uniform place within it.  The draws are scipy's ``qmc.LatinHypercube(d=d, seed=np.random.default_rng(seed))
+    .random(n)``, to the bit (its generator is a child spawned from default_rng's seed sequence, the jitter drawn
+    before the strata are shuffled column by column), without importing scipy.stats: 0.3 to 0.6 s of a solve's
+    start-up."""
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed).spawn(1)[0]))
+    jitter = rng.uniform(size=(n, d))
+    strata = np.tile(np.arange(1, n + 1), (d, 1))
+    for column in strata:
+        rng.shuffle(column)
+    return (strata.T - jitter) / n
+
+
 def latin_hypercube_starts(bounds: np.ndarray, init: np.ndarray, n: int, seed: int) -> np.ndarray:
     """(n, d) start points: row 0 = init, rows 1.. a Latin hypercube in [lo, hi] (fixed dims = lo)."""
     lo, hi = bounds[:, 0], bounds[:, 1]
     starts = np.tile(init, (n, 1)).astype(float)
     if n > 1:
-        unit = qmc.LatinHypercube(d=len(lo), seed=np.random.default_rng(seed)).random(n - 1)
-        starts[1:] = lo + unit * (hi - lo)
+        starts[1:] = lo + unit_latin_hypercube(len(lo), n - 1, seed) * (hi - lo)
     return starts
 
 
