@@ -573,3 +573,34 @@ def _toml(data: dict) -> str:
     for k, v in tables:
         out += f"\n[{k}]\n" + "".join(f"{kk} = {value(vv)}\n" for kk, vv in v.items())
     return out
+
+
+@pytest.mark.parametrize("which", ["translating", "oscillating"])
+def test_an_oscillating_arm_under_gravity_is_held_at_rest_in_the_nlp_too(tmp_path, which):
+    """Where the arm accelerates (q'' > 0) inertia presses it on, so the contact force at the minimum jump speed can
+    be positive while the spring alone does not hold the arm against gravity at standstill, which the value on floats
+    counts as a jump speed of 0.  The NLP holds the standstill force >= 0 as well, on an oscillating arm under
+    gravity: its rows equal the float standstill force times the rule's scale.  A translating follower's weakest
+    standstill force is at its dwell, already a row at the minimum speed: no rows added (its NLP as before)."""
+    loaded = load_spec(CHECKED) if which == "translating" else oscillating_spec(tmp_path, free=True)
+    spec = loaded.model
+    cam = _CamProblem(spec, None, False)
+    rule = next(r for r in cam.problem.rules if r.name == "jump_speed_min")
+    blocks = list(rule.rows())
+    if which == "translating":
+        assert len(blocks) == 1
+        return
+    assert len(blocks) == 2
+    at_rest = np.asarray(ca.Function("r", [cam.problem.x], [ca.vec(ca.SX(blocks[1][0]))])(cam.init), float).ravel()
+    at_minimum = np.asarray(ca.Function("m", [cam.problem.x], [ca.vec(ca.SX(blocks[0][0]))])(cam.init), float).ravel()
+    trace = _float_trace_on_the_nlp_grid(loaded)
+    static = np.asarray(trace.loads.static, float).ravel()
+    scale = at_rest / static
+    np.testing.assert_allclose(scale, scale[0], rtol=1e-12)          # one positive scale for every row
+    assert scale[0] > 0.0
+    # the two blocks differ exactly by the inertia's share, which is positive where the arm accelerates
+    inertia_share = (at_minimum - at_rest) / scale[0]
+    np.testing.assert_allclose(inertia_share, np.asarray(trace.loads.force(spec.dynamics.limits.min_jump_speed
+                                                                           * 2 * math.pi / 60.0), float).ravel()
+                               - static, rtol=1e-9, atol=1e-12)
+    assert inertia_share.max() > 0.0 > inertia_share.min()

@@ -102,18 +102,27 @@ def hertz_stress_rule(stress, limit: float, force=None, allowed_force=None, refe
     return Rule("hertz_stress_max", stress, None, limit, "MPa", limit / 10.0, where)
 
 
-def jump_speed_rule(speeds_rpm, minimum: float, force_at_minimum=None, rpm_per_newton: float = 1.0) -> Rule:
+def jump_speed_rule(speeds_rpm, minimum: float, force_at_minimum=None, rpm_per_newton: float = 1.0,
+                    force_at_rest=None) -> Rule:
     """Jump speed (r/min) >= ``minimum``: the follower stays on the cam up to that cam speed.
 
     ``speeds_rpm``: the speed at which the contact force vanishes at each sample where the spring must decelerate
     the follower (the rule's value is their smallest, the jump speed).  On symbols the NLP holds the contact force
     at the ``minimum`` speed >= 0 at every sample (``force_at_minimum``, N): smooth, and it also holds where no
     sample decelerates (the spring must hold the follower at rest).  ``rpm_per_newton`` scales those rows so that
-    near the limit they read about jump speed - minimum, r/min (1 / (2 |dF/d omega^2| omega) at the given design)."""
+    near the limit they read about jump speed - minimum, r/min (1 / (2 |dF/d omega^2| omega) at the given design).
+
+    Where the follower accelerates (q'' > 0) inertia presses it on, so the force at the minimum speed can be
+    positive while the spring alone cannot hold it against gravity at rest; the value on floats then says 0 r/min
+    (it leaves the cam as the cam slows to a stop).  ``force_at_rest`` (N, the contact force at standstill) adds
+    those rows, >= 0 at every sample: needed only where gravity's load varies with the follower's position (an
+    oscillating arm), since a translating follower's weakest standstill force is at its dwell, already a row."""
     where = "the cam speed at which the contact force first reaches zero over a turn"
     if _symbolic(speeds_rpm) or _symbolic(force_at_minimum):
-        return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where,
-                    nlp_rows=((force_at_minimum * rpm_per_newton, 0.0, None),))
+        rows = ((force_at_minimum * rpm_per_newton, 0.0, None),)
+        if force_at_rest is not None:
+            rows += ((force_at_rest * rpm_per_newton, 0.0, None),)
+        return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where, nlp_rows=rows)
     return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where)
 
 

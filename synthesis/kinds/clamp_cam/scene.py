@@ -369,7 +369,9 @@ def dynamics_rules(spec: ClampCamSpec, trace: DynamicsTrace) -> list[Rule]:
         at_minimum = trace.loads.force(omega_min)
         if fd.is_symbolic(at_minimum):
             rpm_per_newton = (60.0 / TWO_PI) / (2.0 * trace.reference_per_omega2 * omega_min)
-            rules.append(jump_speed_rule(speeds, lim.min_jump_speed, at_minimum, rpm_per_newton))
+            oscillating_with_gravity = spec.follower.type == "oscillating" and any(g != 0.0 for g in d.gravity)
+            at_rest = trace.loads.static if oscillating_with_gravity else None
+            rules.append(jump_speed_rule(speeds, lim.min_jump_speed, at_minimum, rpm_per_newton, at_rest))
         else:
             rules.append(jump_speed_rule(speeds, lim.min_jump_speed))
     return rules
