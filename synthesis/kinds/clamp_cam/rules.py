@@ -119,10 +119,11 @@ def jump_speed_rule(speeds_rpm, minimum: float, force_at_minimum=None, rpm_per_n
     oscillating arm), since a translating follower's weakest standstill force is at its dwell, already a row."""
     where = "the cam speed at which the contact force first reaches zero over a turn"
     if _symbolic(speeds_rpm) or _symbolic(force_at_minimum):
-        rows = ((force_at_minimum * rpm_per_newton, 0.0, None),)
+        rows = [(force_at_minimum * rpm_per_newton, 0.0, None)]
         if force_at_rest is not None:
-            rows += ((force_at_rest * rpm_per_newton, 0.0, None),)
-        return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where, nlp_rows=rows)
+            rows.append((force_at_rest * rpm_per_newton, 0.0, None))
+        return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where,
+                    nlp_rows=tuple(rows))
     return Rule("jump_speed_min", speeds_rpm, minimum, None, "r/min", minimum / 10.0, where)
 
 
