@@ -18,6 +18,7 @@ from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.facts import link_facts, sampled_facts, turn
 from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn
+from synthesis.errors import SpecError
 
 TWO_PI = 2.0 * math.pi
 CONVENTIONS = ("reaction at a joint: force of the link nearer the frame on the next (N, machine frame); input torque: "
@@ -45,14 +46,24 @@ class FourbarDynamics:
 
     @classmethod
     def of(cls, table, branch: int, geometry: tuple, bars: dict[str, list[tuple]], omega,
-           tips: dict | None = None, counterweight: tuple | None = None) -> "FourbarDynamics":
+           tips: dict | None = None, counterweight: tuple | None = None, rocker_counterweight: tuple | None = None,
+           soil: tuple | None = None) -> "FourbarDynamics":
         """From a spec's ``[dynamics]`` table (:class:`synthesis.spec.dynamics.DynamicsSection`); ``bars``: each link's
         bars (start, end) in mm in its link frame, read for a link given as a bar; ``tips``: link -> the kind's traced
         point on it (mm, link frame), where a point mass ``at = "tip"`` sits; ``counterweight``: (kg, mm) on the
-        crank opposite its pin, numbers or the NLP's symbols."""
+        crank opposite its pin, ``rocker_counterweight`` on the rocker opposite the coupler-rocker joint, numbers or
+        the NLP's symbols; ``soil``: the :data:`synthesis.dynamics.fourbar.SOIL` vector of a kind whose coupler
+        works the soil.
+
+        A table with a rocker counterweight the kind did not pass is refused (SpecError): a kind that does not read
+        the field would otherwise report the dynamics of another machine without a word."""
+        if rocker_counterweight is None and getattr(table, "rocker_counterweight", None) is not None:
+            raise SpecError("dynamics.rocker_counterweight: this kind does not read a counterweight on the rocker; "
+                            "leave the field out")
         return cls(branch, tuple(geometry),
-                   tuple(mass_properties.mass_vector(table, bars, LINKS, tips, counterweight)),
-                   tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity))
+                   tuple(mass_properties.mass_vector(table, bars, LINKS, tips, counterweight, rocker_counterweight)),
+                   tuple(mass_properties.load_vector(table, LINKS)), omega, tuple(table.gravity),
+                   soil=None if soil is None else tuple(soil))
 
     def over_turn(self, crank) -> dict:
         return over_turn(self.branch, crank, self.geometry, self.mass, self.loads, self.omega, self.gravity,

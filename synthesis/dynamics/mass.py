@@ -56,16 +56,20 @@ def link_properties(section, bars: list[tuple], point_masses, tip=None) -> tuple
 
 
 def mass_vector(dynamics, bars: dict[str, list[tuple]], links: tuple[str, ...], tips: dict | None = None,
-                counterweight: tuple | None = None) -> list:
+                counterweight: tuple | None = None, rocker_counterweight: tuple | None = None) -> list:
     """The 12 mass parameters (:data:`MASS_FIELDS` per link) of a ``[dynamics]`` table; ``bars``: link -> its bars
     (start, end) in mm in the link frame, read when the link is given as a bar; ``tips``: link -> its traced point;
-    ``counterweight``: (mass kg, radius mm) on the crank (the first link) opposite its pin, floats or symbols."""
+    ``counterweight``: (mass kg, radius mm) on the crank (the first link) opposite its pin, ``rocker_counterweight``
+    the same on the rocker (the last link) opposite the coupler-rocker joint: a point mass at (-radius, 0) in the
+    link's frame, added by the parallel-axis sum; floats or symbols."""
     out: list = []
+    weights = {links[0]: counterweight, links[-1]: rocker_counterweight}
     for name in links:
         carried = [pm for pm in dynamics.point_masses if pm.link == name]
         props = link_properties(getattr(dynamics, name), bars[name], carried, (tips or {}).get(name))
-        if counterweight is not None and name == links[0]:
-            props = combine([props, point(counterweight[0], (-counterweight[1], 0.0))])
+        weight = weights.get(name)
+        if weight is not None:
+            props = combine([props, point(weight[0], (-weight[1], 0.0))])
         out += list(props)
     return out
 
