@@ -14,7 +14,7 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator, model_validator
 
 from synthesis.spec.docmeta import SPEC_FILE
-from synthesis.spec.dynamics import DynamicsSection
+from synthesis.spec.dynamics import BarLink, DynamicsLimits, DynamicsSection, LumpedLink, PointMass
 from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.common import (
     POSITIVE, WITHIN_A_TURN, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive_fields,
@@ -255,6 +255,50 @@ class PickerPose(ClawPose):
         return self
 
 
+class PartMasses(StrictModel):
+    """One linkage's moving links in the combined picker's ``[dynamics]``: each a bar {density, area} along its joints
+    or lumped {mass, com, inertia} in its link frame (origin at its first joint, x towards its second), with the
+    masses it carries."""
+
+    crank: BarLink | LumpedLink = Field(description="the crank: a bar or {mass, com, inertia}")
+    coupler: BarLink | LumpedLink = Field(description="the coupler: a bar or {mass, com, inertia}")
+    rocker: BarLink | LumpedLink = Field(description="the rocker (the double crank's: the follower CD, origin D, x "
+                                                     "towards C): a bar or {mass, com, inertia}")
+    point_masses: list[PointMass] = Field(default_factory=list, description="masses carried by these links")
+
+
+class PickerDynamicsSection(StrictModel):
+    """Mass properties, gravity and limits for the inverse dynamics of the combined picker over a turn of the crank GF
+    at ``[operation] crank_speed`` (synthesis/kinds/picker/combined_dynamics.py).  The rocker AE and the crank AB are
+    one rigid body turning about A: its mass is given in two halves, AE as the crank-rocker's rocker and AB as the
+    double crank's crank, each in its own link frame."""
+
+    crank_rocker: PartMasses = Field(description="the drive AEFG: crank GF (origin G, x towards F), coupler FE (origin "
+                                                 "F, x towards E), rocker AE (origin A, x towards E: the rigid body's "
+                                                 "part on the drive's side)")
+    double_crank: PartMasses = Field(description="the double crank ABCD: crank AB (origin A, x towards B: the rigid "
+                                                 "body's other part), coupler BC (a bar is BC and the clamp arm CM of "
+                                                 "the same section; a point mass at = \"tip\" sits at the clamp "
+                                                 "point M), rocker = the follower CD (origin D, x towards C)")
+    gravity: tuple[float, float] = Field((0.0, -9.81), description="gravity in the machine frame, m/s^2 (0 allowed)")
+    samples: int = Field(360, ge=8, le=3600, description="instants of result.json's facts.dynamics over a turn of the "
+                                                         "crank GF, evenly from picking")
+    limits: DynamicsLimits = Field(default_factory=DynamicsLimits,
+                                   description="peak_input_torque: the motor's on GF; peak_shaking_force: the sum "
+                                               "over the frame pivots G, A and D; peak_shaking_moment: about G")
+    assumption: str = Field("", description="which values are ours, not a paper's")
+
+    @model_validator(mode="after")
+    def _tip_is_the_clamp(self) -> "PickerDynamicsSection":
+        if any(pm.at == "tip" for pm in self.crank_rocker.point_masses):
+            raise ValueError("crank_rocker.point_masses: at = \"tip\" is the clamp point M, on the double crank's "
+                             "coupler; on the drive give the position in the link frame, mm")
+        if any(pm.at == "tip" and pm.link != "coupler" for pm in self.double_crank.point_masses):
+            raise ValueError("double_crank.point_masses: at = \"tip\" is the clamp point M, on the coupler; on the "
+                             "crank or the follower give the position in the link frame, mm")
+        return self
+
+
 class PickerSpec(ProblemSpec):
     kind: Literal["picker"] = Field(description="the problem kind (picker)")
     crank_rocker: Annotated[str, SPEC_FILE] = Field(description="crank_rocker spec file of the drive, relative to "
@@ -271,6 +315,12 @@ class PickerSpec(ProblemSpec):
                     "instant, or a free pose at x, y; each adds the rules pose_<name> (clamp point) and "
                     "pose_<name>_attitude.  The double crank's own [key_poses] (at M1, M2) are its part's rules")
     _pose_names = field_validator("key_poses")(pose_names)
+    # seed 001 prints no section or mass: every number of this table is an assumption of the spec's author
+    dynamics: PickerDynamicsSection | None = Field(
+        None, description="mass properties, gravity and limits for the inverse dynamics of the whole picker over a "
+                          "turn of the crank GF at [operation] crank_speed: the drive at constant speed, the double "
+                          "crank driven through the rigid body AE + AB at the speed the rocker gives it "
+                          "(docs/ARCHITECTURE.md \"Dynamics\").  Left out: no dynamics, no dynamics rules")
 
     def part_path(self, spec_path: Path, field: str) -> Path:
         return (spec_path.parent / getattr(self, field)).resolve()
