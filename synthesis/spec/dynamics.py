@@ -103,6 +103,20 @@ class Drive(StrictModel):
         return self
 
 
+class SoilForce(StrictModel):
+    """The soil's resistance on a tool point while it is below the soil surface (depth d > 0, mm): a force of
+    magnitude f0 + k d opposing the point's velocity relative to the soil (the machine travelling forward at
+    ``[operation] forward_speed``, the soil at rest in the ground frame), zero above the surface.  Which point and
+    where the surface lies are the kind's (the tillage linkage: the tool D below the ground line; the planting arm:
+    the claw tip C below the ``[soil]`` surface)."""
+
+    f0: float = Field(0.0, ge=0.0, le=1.0e5, description="the force at zero depth, N (a jump at soil entry and exit "
+                                                          "when > 0)")
+    k: float = Field(ge=0.0, le=1.0e4, description="its growth with depth, N/mm")
+    source: str = Field(min_length=1, description="where f0 and k come from: a cited figure, or say that they are "
+                                                  "an assumption and how they were estimated")
+
+
 class DynamicsLimits(StrictModel):
     """Rules on the dynamics; a limit left out is no rule."""
 

@@ -22,7 +22,7 @@ from synthesis.spec.common import (
     POSITIVE, FreeVariable, documented_range, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
-from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
+from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink, SoilForce
 
 KIND = "tillage_linkage"
 NAMES = ("a", "b", "c", "theta", "height_c")
@@ -104,18 +104,6 @@ class TillagePointMass(StrictModel):
     note: str = Field("", description="what it is and where its value comes from")
 
 
-class SoilForce(StrictModel):
-    """The soil's resistance on the tool at D while D is below the ground (depth d = -height_c - y_D > 0): a force
-    of magnitude f0 + k d opposing D's velocity relative to the soil (ground frame: the machine travels at
-    ``[operation] forward_speed``), zero above the ground."""
-
-    f0: float = Field(0.0, ge=0.0, le=1.0e5, description="the force at zero depth, N (a jump at soil entry and exit "
-                                                          "when > 0)")
-    k: float = Field(ge=0.0, le=1.0e4, description="its growth with depth, N/mm")
-    source: str = Field(min_length=1, description="where f0 and k come from: a cited figure, or say that they are "
-                                                  "an assumption and how they were estimated")
-
-
 class TillageDynamicsSection(StrictModel):
     """Mass properties, soil force and limits for the inverse dynamics at the constant flywheel speed of
     ``[operation] crank_speed`` (synthesis/kinds/tillage_linkage/dynamics.py)."""
@@ -129,7 +117,9 @@ class TillageDynamicsSection(StrictModel):
     point_masses: list[TillagePointMass] = Field(default_factory=list,
                                                  description="masses carried by the links (the tool: at = \"tip\")")
     gravity: tuple[float, float] = Field((0.0, -9.81), description="gravity in the machine frame, m/s^2 (0 allowed)")
-    soil: SoilForce | None = Field(None, description="the soil force on the tool; left out: none")
+    soil: SoilForce | None = Field(None, description="the soil force on the tool D while D is below the ground (depth "
+                                                     "d = -height_c - y_D > 0, mm), opposing D's velocity relative to "
+                                                     "the soil; left out: none")
     roller_friction: float = Field(0.0, ge=0.0, le=1.0,
                                    description="Coulomb friction coefficient of the bar in the roller pair C "
                                                "(dimensionless; 0: the roller force is normal to the bar)")
