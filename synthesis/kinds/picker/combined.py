@@ -38,6 +38,7 @@ from synthesis.kinematics.rocker_drive import joints as crank_rocker_joints
 from constraints.poses import nearest_row
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, attitude_function, clamp_point, joint_positions
 from synthesis.kinds.picker import check as double_crank_check
+from synthesis.kinds.picker.combined_dynamics import dynamics_facts, dynamics_rules, picker_dynamics
 from synthesis.kinds.picker.poses import PoseReading, free_target, pose_rules, reading_facts
 from synthesis.kinds.picker.spec import CLAMP_ATTITUDE, Installation, PickerDoubleCrankSpec, PickerSpec
 from synthesis.result import Result
@@ -198,6 +199,7 @@ def run_check(loaded: LoadedSpec) -> Result:
     instants = {"picking": 0.0, "dropping": drive.holding_angle / drive.omega, "picking_again": period}
     poses = pose_readings(spec, drive, instants)
     rules += [r.record().to_json() for r in pose_rules([reading for reading, _ in poses])]
+    rules += [r.record().to_json() for r in dynamics_rules_of(spec, drive)]
     instant_table = _instant_table(spec, dc_spec, drive, instants)
     speeds = np.hypot(*s["V"]) / 1000.0
     ab = np.degrees(s["phi1"])
@@ -229,8 +231,23 @@ def run_check(loaded: LoadedSpec) -> Result:
             "frames": [{"t": float(ft), "joints": machine_joints(drive, float(a), float(c))}
                        for ft, a, c in zip(frames_t, frames["phi1"], frames["phi7"])],
             **key_pose_facts(spec, drive, instants, poses),
+            **dynamics_of(spec, drive),
         },
     )
+
+
+def dynamics_rules_of(spec: PickerSpec, drive: Drive) -> list[Rule]:
+    """The ``[dynamics.limits]`` rules on the check's grid of a turn (none without a [dynamics] table or a limit)."""
+    return [] if spec.dynamics is None else dynamics_rules(picker_dynamics(spec.dynamics, drive), spec.dynamics)
+
+
+def dynamics_of(spec: PickerSpec, drive: Drive) -> dict:
+    """``{"dynamics": facts.dynamics}`` over a turn of the crank GF at [dynamics] samples instants, or nothing without
+    a [dynamics] table."""
+    if spec.dynamics is None:
+        return {}
+    return {"dynamics": dynamics_facts(picker_dynamics(spec.dynamics, drive), spec.dynamics,
+                                       spec.operation.crank_speed)}
 
 
 def pose_instant(drive: Drive, target: tuple[float, float], samples: int = POSE_SEARCH_SAMPLES) -> float:
