@@ -116,22 +116,45 @@ def kinematics_figure(results: list[Result], path: Path) -> None:
     plt.close(fig)
 
 
-def _draw_linkage(ax, joints: dict[str, np.ndarray], k: int, colour: str, alpha: float = 1.0):
-    """Frame O-O', crank O-A, coupler triangle A-B-C, rocker O'-B at sample k; returns the artists."""
+#: the line style of each link :func:`_linkage_segments` gives, in its order
+LINK_STYLES = (":", "-", "-", "-", "-", "-")
+
+
+def _linkage_segments(joints: dict[str, np.ndarray], k: int) -> list[tuple[list, list]]:
+    """The (xs, ys) of every line of the linkage at sample k: frame O-O', crank O-A, coupler triangle A-B-C,
+    rocker O'-B (LINK_STYLES), then the two pivots and the joints A, B (markers)."""
     o, op, a, b, c = (joints[n][:, k] for n in ("O", "O'", "A", "B", "C"))
+    pairs = ((o, op), (o, a), (a, b), (op, b), (a, c), (b, c), (o, op), (a, b))
+    return [([p[0], q[0]], [p[1], q[1]]) for p, q in pairs]
+
+
+def _draw_linkage(ax, joints: dict[str, np.ndarray], k: int, colour: str, alpha: float = 1.0):
+    """Frame O-O', crank O-A, coupler triangle A-B-C, rocker O'-B at sample k; returns the artists
+    (:func:`_move_linkage` puts them at another sample)."""
+    segments = _linkage_segments(joints, k)
     lines = []
-    for p, q, style in ((o, op, ":"), (o, a, "-"), (a, b, "-"), (op, b, "-"), (a, c, "-"), (b, c, "-")):
-        lines += ax.plot([p[0], q[0]], [p[1], q[1]], style, color=colour, lw=1.6, alpha=alpha)
-    lines += ax.plot([o[0], op[0]], [o[1], op[1]], "^", color="k", ms=6)
-    lines += ax.plot([a[0], b[0]], [a[1], b[1]], "o", color=colour, ms=3.5, alpha=alpha)
+    for (xs, ys), style in zip(segments, LINK_STYLES):
+        lines += ax.plot(xs, ys, style, color=colour, lw=1.6, alpha=alpha)
+    lines += ax.plot(*segments[6], "^", color="k", ms=6)
+    lines += ax.plot(*segments[7], "o", color=colour, ms=3.5, alpha=alpha)
     return lines
+
+
+def _move_linkage(lines: list, joints: dict[str, np.ndarray], k: int) -> None:
+    """The artists of :func:`_draw_linkage` put at sample k."""
+    for line, (xs, ys) in zip(lines, _linkage_segments(joints, k), strict=True):
+        line.set_data(xs, ys)
+
+
+#: the joints annotate_linkage letters, in its order
+JOINT_NAMES = ("O", "O'", "A", "B", "C")
 
 
 def annotate_linkage(ax, joints: dict[str, np.ndarray], k: int = 0, lengths: bool = True, colour: str = "k",
                      fontsize: float = 8) -> list:
     """Joint letters at sample k and (``lengths``) each link's length, mm, at its middle; returns the artists."""
     artists = []
-    for name in ("O", "O'", "A", "B", "C"):
+    for name in JOINT_NAMES:
         x, y = joints[name][:, k]
         artists.append(ax.annotate(name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=fontsize,
                                    fontweight="bold", color=colour, zorder=8))
@@ -196,18 +219,21 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
     fig.tight_layout()                  # room for the legend under the drawing
     counter = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=10,
                       bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.8"))
-    drawn: list = []
+    # every frame moves the same artists, made at the first (after the counter: the order a full redraw keeps)
+    linkages: list[list] = []
+    letters: list = []
 
     def frame(k: int):
-        for artist in drawn:
-            artist.remove()
-        drawn.clear()
-        for i, joints in enumerate(all_joints):
-            drawn.extend(_draw_linkage(ax, joints, k, _colour(i)))
-        if len(all_joints) == 1:
-            drawn.extend(annotate_linkage(ax, all_joints[0], k, lengths=False, fontsize=9))
+        if not linkages:
+            linkages.extend(_draw_linkage(ax, joints, k, _colour(i)) for i, joints in enumerate(all_joints))
+            if len(all_joints) == 1:
+                letters.extend(annotate_linkage(ax, all_joints[0], k, lengths=False, fontsize=9))
+        for lines, joints in zip(linkages, all_joints):
+            _move_linkage(lines, joints, k)
+        for letter, name in zip(letters, JOINT_NAMES):
+            letter.xy = tuple(all_joints[0][name][:, k])
         counter.set_text(f"frame {k + 1}/{frames}, crank {np.degrees(theta[k]):.0f} deg")
-        return drawn + [counter]
+        return [line for lines in linkages for line in lines] + letters + [counter]
 
     save_gif(fig, frame, frames, path, fps=12, dpi=90)
     plt.close(fig)
