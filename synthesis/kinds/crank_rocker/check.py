@@ -69,8 +69,9 @@ def linkage_dynamics(spec: CrankRockerSpec, lengths) -> FourbarDynamics:
     bars = {"crank": [((0.0, 0.0), (l7, 0.0))], "coupler": [((0.0, 0.0), (l8, 0.0))],
             "rocker": [((0.0, 0.0), (l9, 0.0))]}
     counterweight = None if table.counterweight is None else table.counterweight.values()
+    rocker_counterweight = None if table.rocker_counterweight is None else table.rocker_counterweight.values()
     return FourbarDynamics.of(table, spec.branch, (l10, l7, l8, l9, 0.0), bars, table.crank_speed * 2 * math.pi / 60,
-                              counterweight=counterweight)
+                              counterweight=counterweight, rocker_counterweight=rocker_counterweight)
 
 
 def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLES

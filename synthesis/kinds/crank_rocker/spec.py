@@ -90,10 +90,11 @@ class CrankRockerSpec(ProblemSpec):
                              f"crank speed)")
         if self.dynamics is not None and self.dynamics.crank_speed is None:
             raise ValueError("dynamics.crank_speed: a crank_rocker has no crank speed of its own; give it in r/min")
-        weight = self.dynamics.counterweight if self.dynamics is not None else None
-        if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
-            raise ValueError("dynamics.counterweight: a crank_rocker's solve frees only its lengths; give the "
-                             "counterweight's mass (kg) and radius (mm) as numbers")
+        for field in ("counterweight", "rocker_counterweight"):
+            weight = getattr(self.dynamics, field) if self.dynamics is not None else None
+            if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
+                raise ValueError(f"dynamics.{field}: a crank_rocker's solve frees only its lengths; give the "
+                                 f"counterweight's mass (kg) and radius (mm) as numbers")
         if self.dynamics is not None and any(pm.at == "tip" for pm in self.dynamics.point_masses):
             raise ValueError("dynamics.point_masses: at = \"tip\" names a traced point, which a crank_rocker has "
                              "not; give the position in the link frame, mm")
