@@ -4,7 +4,8 @@ Both evaluate the spec's rules with :func:`synthesis.kinds.fourbar_path.rule_set
 NLP builds its constraints from, here on floats: the Grashof class (exact, linear), closure at the
 targets, the transmission angle at its exact extremes over a full turn, the order of the crank angles;
 for grashof = "any" closure and transmission along the crank's motion from target to target, 10x
-more finely sampled than the NLP.  The coupler point is the closed form of
+more finely sampled than the NLP; the [dynamics.limits] over a turn on 10x the NLP's crank angles, and with a
+[dynamics] table result.json's ``facts.dynamics`` (dynamics.py).  The coupler point is the closed form of
 ``kinematics.coupler_point``.  The textbook complex-number construction
 (:mod:`synthesis.kinds.fourbar_path.construction`) is the tests' independent oracle of both.
 
@@ -26,6 +27,7 @@ from scipy.optimize import minimize_scalar
 
 from constraints import Rule
 from synthesis.core.verdict import FINE
+from synthesis.kinds.fourbar_path.dynamics import dynamics_facts_of
 from synthesis.kinds.fourbar_path.rule_set import path_rules
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES, coupler_function, design_parameters
 from synthesis.core.kind import ResultTable, figure_text
@@ -106,7 +108,7 @@ def evaluate(spec: FourbarPathSpec, design: dict, crank_deg: list[float] | None 
             direction = _direction(spec.rules.direction, list(crank_deg))[1]
         sign = 1.0 if direction == "ccw" else -1.0
     rules = path_rules(spec, {n: float(design[n]) for n in VARIABLES}, list(thetas) if located else None, sign,
-                       FINE * spec.solver.samples)
+                       FINE * spec.solver.samples, FINE * spec.solver.dynamics_samples)
     return Evaluation(rules, [float(a) for a in crank_deg], errors, timing, direction)
 
 
@@ -197,7 +199,8 @@ def run_check(loaded: LoadedSpec) -> Result:
     design = spec.design_values()
     ev = evaluate(spec, design, spec.design.crank_deg)
     records = [r.record().to_json() for r in ev.rules]
-    facts = path_facts(spec, ev)
+    sign = _direction("either", ev.crank_deg)[0]
+    facts = {**path_facts(spec, ev), **dynamics_facts_of(spec, design, sign)}
     notes = [spec.targets.same_targets_note()]
     if not all(np.isfinite(ev.errors_mm)):
         open_at = [i for i, e in enumerate(ev.errors_mm) if not math.isfinite(e)]
@@ -206,7 +209,7 @@ def run_check(loaded: LoadedSpec) -> Result:
         facts["note"] = "; ".join(n for n in notes if n)
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=result_design(design, ev.crank_deg), rules=records,
-                  trajectory=trajectory(spec, design, ev.crank_deg, _direction("either", ev.crank_deg)[0]),
+                  trajectory=trajectory(spec, design, ev.crank_deg, sign),
                   extra=facts)
 
 

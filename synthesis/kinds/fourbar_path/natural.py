@@ -36,9 +36,9 @@ import casadi as ca
 import numpy as np
 
 from synthesis.core.ipopt import CompiledNLP, SolveMethod
-from synthesis.core.problem import ObjectiveParts, Problem, Row, relative_backoff
+from synthesis.core.problem import ObjectiveParts, Problem, Row
 from synthesis.kinds.fourbar_path.construction import joint_positions
-from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_rules
+from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_backoff, path_rules
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
@@ -95,7 +95,7 @@ class ConfigurationNLP:
         problem = Problem(
             "fourbar_path_configuration", decision, self.lbx, self.ubx, structural=structural,
             rules=path_rules(spec, v, thetas, sign, EXTREMES), objective=ObjectiveParts(f / f_unit),
-            parameters=sign, backoff=relative_backoff(backoff), ipopt="exact_fit", ipopt_options=ipopt_options,
+            parameters=sign, backoff=path_backoff(spec, backoff), ipopt="exact_fit", ipopt_options=ipopt_options,
             max_iter=max_iter, x_units=[""] * 9 + ["rad"] * (2 * n), structural_units=[""] * (2 * n),
             objective_unit="")
         self.compiled = CompiledNLP(problem, False, scaling="none", watched=True, method=method)

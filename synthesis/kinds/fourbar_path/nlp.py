@@ -38,9 +38,9 @@ from synthesis.kinds.fourbar_path.rules.sequence import sequence_slacks
 from synthesis.core.declared import compile_problem
 from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
-from synthesis.core.problem import ObjectiveParts, Operating, Problem, relative_backoff
+from synthesis.core.problem import ObjectiveParts, Operating, Problem
 from synthesis.kinds.fourbar_path.natural import ConfigurationNLP
-from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_rules
+from synthesis.kinds.fourbar_path.rule_set import EXTREMES, path_backoff, path_rules
 from synthesis.kinds.fourbar_path.starts import StartMaker, StartPoint
 from synthesis.kinds.fourbar_path.kinematics import BRANCHES, VARIABLES, coupler_point, design_parameters
 from synthesis.spec.common import FreeVariable
@@ -168,6 +168,20 @@ SPARSE_PIVOTING_ABOVE = 100
 PERTURBED_CONFIGURATION = True
 
 
+def operating_speed(spec: FourbarPathSpec, setting: Setting) -> list[Operating]:
+    """The tolerance analysis's build only: the crank speed a symbol.  Only the [dynamics.limits] read it (elsewhere
+    it only scales the trajectory's time), so without them the analysis reports d rule / d crank speed = 0 rather
+    than leaving it out."""
+    if not setting.operating_symbols:
+        return []
+    return [Operating("crank_speed", ca.SX.sym("crank_speed"), spec.crank_speed, "r/min")]
+
+
+def speed_of(operating: list[Operating]):
+    """The crank speed (r/min) the rules read: the tolerance analysis's symbol, else None (the spec's number)."""
+    return operating[0].symbol if operating else None
+
+
 class PathNLP(KindNLP):
     """Built once per spec and seed; :meth:`solve` runs one IPOPT solve from a start design."""
 
@@ -211,16 +225,13 @@ class PathNLP(KindNLP):
         lbx = np.concatenate([self.nominal(self.bounds[:, 0]), np.full(self.n_theta, THETA_RANGE[0])])
         ubx = np.concatenate([self.nominal(self.bounds[:, 1]), np.full(self.n_theta, THETA_RANGE[1])])
 
-        # the tolerance analysis's build only: the crank speed a symbol, though no rule reads it (it only scales the
-        # trajectory's time), so the analysis reports d rule / d crank speed = 0 rather than leaving it out
-        operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.crank_speed, "r/min")]
-                     if setting.operating_symbols else [])
+        operating = operating_speed(spec, setting)
 
         def problem(samples: int) -> Problem:
             out = Problem(
                 "fourbar_path", decision, lbx, ubx,
-                structural=(), rules=path_rules(spec, v, thetas, sign, samples),
-                objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=relative_backoff(BACKOFF),
+                structural=(), rules=path_rules(spec, v, thetas, sign, samples, crank_speed_rpm=speed_of(operating)),
+                objective=ObjectiveParts(f / f_unit), parameters=sign, backoff=path_backoff(spec, BACKOFF),
                 # tol 1e-12: a zero-error fit must come out below 1e-8 mm^2; the monotone barrier reaches the
                 # global optimum from more starts on the whole-turn synthetic-truth study (starts.py);
                 # "adaptive" is the spec's choice for targets on a short arc (tests/test_bench_fourbar_path.py)

@@ -12,6 +12,9 @@ What each rule reads:
     transmission_angle_min/max  cos mu at theta2 = 0 and 180 deg, its exact extremes over a full turn;
                               or along the motion (grashof = "any": as assembly)
     sequence                  the targets met in order within one turn (free timing, [rules] order)
+    peak_input_torque, peak_shaking_force, peak_shaking_moment
+                              [dynamics.limits]: the inverse dynamics over a turn at crank_speed (dynamics.py),
+                              at [solver] dynamics_samples crank angles (check and the re-check: 10x as many)
 
 The only sampled rules are those of grashof = "any": the check samples ``[solver] samples`` angles per gap
 between targets, the re-check 10x more.  The NLP holds them exactly instead (``samples = EXTREMES``): both rules
@@ -28,6 +31,8 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule, not_evaluated
+from synthesis.core.problem import Backoff, relative_backoff
+from synthesis.kinds.fourbar_path.dynamics import path_dynamics_rules
 from synthesis.kinds.fourbar_path.rules.assembly import assembly_extremes_rule, assembly_rule
 from synthesis.kinds.fourbar_path.rules.grashof_class import grashof_class_rule
 from synthesis.kinds.fourbar_path.rules.sequence import sequence_rule, sequence_slacks
@@ -81,10 +86,12 @@ def _direction_text(sign, direction: str) -> str:
     return direction
 
 
-def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, samples: int) -> list[Rule]:
+def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, samples: int,
+               dynamics_samples: int | None = None, crank_speed_rpm=None) -> list[Rule]:
     """Every rule of the spec on the design ``v`` (r1..theta0), the crank angle (rad) of each target and
     the crank direction ``sign`` (+1 counter-clockwise, -1 clockwise); ``samples`` per gap between
-    targets for the sampled rules of grashof = "any".
+    targets for the sampled rules of grashof = "any"; the [dynamics.limits] at ``dynamics_samples`` crank angles of
+    a turn (None: [solver] dynamics_samples, the NLP's) and ``crank_speed_rpm`` (None: the spec's).
 
     ``thetas`` None (floats only): the targets have no crank angle, the loop closing at none; closure
     and transmission are then evaluated over a turn and the sequence is not evaluated."""
@@ -140,7 +147,42 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
         else:
             rule = sequence_rule([t * DEG for t in thetas], sign, direction)
             rules.append(dataclasses.replace(rule, note=_shared_angle(spec, thetas, sign)) if numeric else rule)
+    turn = spec.solver.dynamics_samples if dynamics_samples is None else dynamics_samples
+    rules += path_dynamics_rules(spec, v, turn, crank_speed_rpm)
     return rules
+
+
+#: the [dynamics.limits] rules, sampled at [solver] dynamics_samples crank angles in the NLP
+DYNAMICS_RULES = ("peak_input_torque", "peak_shaking_force", "peak_shaking_moment")
+#: the NLP holds each [dynamics.limits] peak this share of its limit inside it at 72 [solver] dynamics_samples, so
+#: that the peak between its samples holds too on the re-check's 10x finer grid; at N samples the share is this x
+#: (72 / N)^2, as the miss between samples of a smooth periodic peak falls with the square of their spacing.
+#: picking_arc_torque_limited's starts held only at the kind's relative 1e-9 came to rest up to 1.2 % over the limit
+#: between two of 72 samples (54 of its 64 starts: 0.4553 N m against 0.45 at worst)
+DYNAMICS_BACKOFF_AT_72 = 0.02
+
+
+def dynamics_backoff(samples: int) -> float:
+    """The share of its limit inside which the NLP holds a [dynamics.limits] peak at ``samples`` crank angles."""
+    return DYNAMICS_BACKOFF_AT_72 * (72.0 / samples) ** 2
+
+
+def path_backoff(spec: FourbarPathSpec, fraction: float) -> Backoff:
+    """The NLP's back-off: every row ``fraction`` x max(1, |limit|) inside its limit (the core's relative back-off,
+    the one rule for a spec without [dynamics.limits]); the rows of the [dynamics.limits] so that each peak is
+    :func:`dynamics_backoff` of its limit inside it (the shaking force's row is its square: 1 - (1 - b)^2 of the
+    row's limit)."""
+    general = relative_backoff(fraction)
+    if spec.dynamics is None or not spec.dynamics.has_rules():
+        return general
+    share = dynamics_backoff(spec.solver.dynamics_samples)
+    squared = 1.0 - (1.0 - share) ** 2
+
+    def backoff(rule: Rule, limit: float) -> float:
+        if rule.name not in DYNAMICS_RULES:
+            return general(rule, limit)
+        return (squared if rule.name == "peak_shaking_force" else share) * abs(limit)
+    return backoff
 
 
 #: two targets whose crank angles differ by less than this (deg) share one coupler pose

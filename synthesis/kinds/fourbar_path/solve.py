@@ -18,6 +18,7 @@ from constraints import not_evaluated
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.kinds.fourbar_path.check import evaluate, path_facts, result_design, trajectory
+from synthesis.kinds.fourbar_path.dynamics import dynamics_facts_of
 from synthesis.kinds.fourbar_path.nlp import PathNLP
 from synthesis.kinds.fourbar_path.rule_set import path_rules
 from synthesis.kinds.fourbar_path.starts import grashof_anchor
@@ -60,7 +61,9 @@ def finish(setting: Setting, best: StartReport) -> Finished:
     out = best.outcome
     crank, direction = out.details["crank_deg"], out.details["direction"]
     ev = best.context          # None: the design could not be evaluated (best.why says why)
-    facts = {**(path_facts(spec, ev) if ev is not None else {}), "crank_direction": direction}
+    sign = -1.0 if direction == "cw" else 1.0
+    facts = {**(path_facts(spec, ev) if ev is not None else {}), "crank_direction": direction,
+             **dynamics_facts_of(spec, out.design, sign)}
     room = grashof_room(spec)
     if room is not None:
         facts["grashof_in_bounds"] = room
@@ -68,7 +71,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
         design=result_design(out.design, crank),
         objective={"name": OBJECTIVE, "value": out.objective, "unit": "mm^2"},
         facts=facts,
-        trajectory=trajectory(spec, out.design, crank, -1.0 if direction == "cw" else 1.0),
+        trajectory=trajectory(spec, out.design, crank, sign),
         solver_settings={"stop_at_objective": spec.solver.stop_at_objective, "samples": spec.solver.samples,
                          "mu_strategy": spec.solver.mu_strategy},
         rules=None if ev is not None else unevaluated(spec, best.why),

@@ -8,7 +8,8 @@
     [design]   crank_deg = [...]  (free timing: the given design's crank angle at each target)
     [rules]    grashof = "crank_rocker" | "double_crank" | "any";  transmission_angle = [lo, hi];
                order = true | false;  direction = "either" | "counter_clockwise" | "clockwise"
-    [solver]   starts = 64, seed = 0, stop_at_objective, max_iter, mu_strategy, samples
+    [solver]   starts = 64, seed = 0, stop_at_objective, max_iter, mu_strategy, samples, dynamics_samples
+    [dynamics] optional: mass properties and limits of the inverse dynamics at crank_speed (dynamics.py)
 
 The kind's first spec form wrote the variables in a ``[bounds]`` table (``[lo, hi]`` frees, a number fixes, the given
 design in ``[design]``), the branch as "open"/"crossed", the Grashof classes with hyphens and the
@@ -29,6 +30,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from synthesis.kinds.fourbar_path.kinematics import VARIABLES
+from synthesis.spec.dynamics import DynamicsSection
 from synthesis.spec.common import (
     POSITIVE, Sign, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, documented_range,
     is_free, max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
@@ -292,16 +294,48 @@ class SolverSection(MultistartSettings):
     samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion per gap for the check of "
                                                          "the sampled rules (grashof = \"any\"; the solve holds "
                                                          "them exactly); the re-check is 10x finer")
+    dynamics_samples: int = Field(72, ge=8, le=3600, multiple_of=2,
+                                  description="crank angles over a turn at which the NLP holds the [dynamics.limits] "
+                                              "(even: includes the crank along and against the frame); check and "
+                                              "the re-check evaluate them on 10x as many")
 
 
 class FourbarPathSpec(ProblemSpec):
     kind: Literal["fourbar_path"] = Field(description="the problem kind (fourbar_path)")
-    crank_speed: float = Field(60.0, gt=0, le=10000, description="r/min; only the time scale of the trajectory")
+    crank_speed: float = Field(60.0, gt=0, le=10000,
+                               description="r/min; the time scale of the trajectory and, with a [dynamics] table "
+                                           "(which then needs it written here), the constant crank speed of the "
+                                           "inverse dynamics")
     targets: TargetsSection
     linkage: LinkageSection
     design: DesignSection = Field(default_factory=DesignSection)
     rules: RulesSection = Field(default_factory=RulesSection)
     solver: SolverSection = Field(default_factory=SolverSection)
+    dynamics: DynamicsSection | None = Field(
+        None, description="mass properties and limits for the inverse dynamics over a crank turn at crank_speed "
+                          "(docs/ARCHITECTURE.md \"Dynamics\"; the coupler's bar is AB and the arm AP to the traced "
+                          "point, of one section); left out: no dynamics, no dynamics rules")
+
+    @model_validator(mode="after")
+    def _dynamics_fits_the_kind(self) -> "FourbarPathSpec":
+        table = self.dynamics
+        if table is None:
+            return self
+        if table.crank_speed is not None:
+            raise ValueError("dynamics.crank_speed: a fourbar_path turns at its own crank_speed (r/min, at the top of "
+                             "the spec); leave it out here")
+        if "crank_speed" not in self.model_fields_set:
+            # the inertia forces grow with its square: the default, a time scale of the trajectory only, would be a
+            # speed nobody chose
+            raise ValueError("crank_speed: a spec with a [dynamics] table gives its crank speed (r/min) at the top of "
+                             "the spec; the default 60 r/min sets only the trajectory's time scale")
+        if any(pm.at == "tip" and pm.link != "coupler" for pm in table.point_masses):
+            raise ValueError("dynamics.point_masses: at = \"tip\" is the traced coupler point P, on the coupler")
+        weight = table.counterweight
+        if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
+            raise ValueError("dynamics.counterweight: a fourbar_path's solve frees only its linkage; give the "
+                             "counterweight's mass (kg) and radius (mm) as numbers")
+        return self
 
     @classmethod
     def old_forms(cls, data: dict) -> str:
