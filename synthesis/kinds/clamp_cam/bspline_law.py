@@ -83,8 +83,11 @@ class OptimisedLaw:
     minimise: str
     status: str
     solver: str
-    #: peak of the minimised derivative divided by the cycloidal law's, per segment
+    #: peak of the minimised derivative divided by the cycloidal law's, per segment (the acceleration's for the
+    #: spring-shaped law)
     ratio_to_cycloidal: dict[str, float] = field(default_factory=dict)
+    #: the spring-shaped law's fitted spring (preload, stiffness, force at full stroke), None for the others
+    spring: dict | None = None
 
     @property
     def warning(self) -> str | None:
@@ -95,9 +98,12 @@ class OptimisedLaw:
                 f"accuracy ({self.status}): its end conditions and bounds hold to that accuracy only")
 
     def to_json(self) -> dict:
-        return {"minimise": self.minimise, "status": self.status, "solver": self.solver,
-                "accurate": self.warning is None, "ratio_to_cycloidal": self.ratio_to_cycloidal,
-                "rise": self.rise.to_json(), "return": self.return_.to_json()}
+        out = {"minimise": self.minimise, "status": self.status, "solver": self.solver,
+               "accurate": self.warning is None, "ratio_to_cycloidal": self.ratio_to_cycloidal,
+               "rise": self.rise.to_json(), "return": self.return_.to_json()}
+        if self.spring is not None:
+            out["fitted_spring"] = dict(self.spring)
+        return out
 
 
 def _knots(spans: int, degree: int) -> np.ndarray:

@@ -94,6 +94,12 @@ class _CamProblem:
         self.names = list(variables)
         self.bounds = np.array([bounds_of(v) for v in variables.values()], dtype=float)
         self.init = np.array([value_of(v) for v in variables.values()], dtype=float)
+        if spec.motion.law == "optimised" and optimised.spring is not None:
+            # the spring-shaped law's fit found a spring for it: the NLP starts there, free as the spec says
+            assert spec.dynamics is not None, "validation asks the spring-shaped law for a [dynamics] table"
+            _, preload, stiffness = spec.dynamics.body_fields(spec.follower.type)
+            for name, value in ((preload, optimised.spring["preload"]), (stiffness, optimised.spring["stiffness"])):
+                self.init[self.names.index(name)] = value
         x = ca.SX.sym("x", len(self.names))
         self.x = x
         v = {n: x[i] for i, n in enumerate(self.names)}
@@ -103,12 +109,14 @@ class _CamProblem:
             rise_law = return_law = closed_form_law(spec.motion.law)
         # the tolerance analysis's build only: the crank speed a symbol (resolved at its value by the core), for
         # d rule / d crank speed (the acceleration's omega^2, windows timed in seconds).  Not with an optimised law
-        # under an acceleration cap: that law is refitted (cvxpy) at each speed, a change the NLP cannot see
+        # under an acceleration cap or shaped for the spring: that law is refitted (cvxpy) at each speed, a change
+        # the NLP cannot see
         # an operating envelope (a crank-speed range: validation allows it with a closed-form law only) samples it
         ranges = ranges_of(spec)
+        refitted_per_speed = spec.motion.law == "optimised" and (spec.rules.max_acceleration is not None
+                                                                 or spec.bspline.minimise == "spring_force")
         self.operating = ([Operating("crank_speed", ca.SX.sym("crank_speed"), spec.operation.speed, "r/min")]
-                          if ranges or (operating_symbols and not (spec.motion.law == "optimised"
-                                                                   and spec.rules.max_acceleration is not None))
+                          if ranges or (operating_symbols and not refitted_per_speed)
                           else [])
         alpha, kappa, acc = self._sampled(v, rise_law, return_law)
         self.alpha_function = ca.Function("alpha", [x], [ca.vertcat(alpha["rise"], alpha["return"])])
@@ -181,10 +189,16 @@ class _CamProblem:
         c = cf.roller_centre(follower, s_all, ca.vertcat(*ds), dds_all)
         loads = fd.contact_loads(follower, body, c, s_all, dds_all)
         # |dF/d omega^2| at the given design, for the jump rows' scale: the loads' numbers at the start values
-        given = ca.Function("given", [self.x], [loads.per_omega2])(self.init)
-        reference = max(float(np.max(np.abs(np.asarray(given, dtype=float)))), 1e-12)
-        return DynamicsTrace(loads, omega_of(spec), cf.pitch_curvature(c), v["roller_radius"], np.concatenate(pulled),
-                             reference)
+        given = np.abs(np.asarray(ca.Function("given", [self.x], [loads.per_omega2])(self.init), dtype=float)).ravel()
+        pulled_all = np.concatenate(pulled)
+        if spec.motion.law == "optimised" and spec.bspline.minimise == "spring_force" and pulled_all.any():
+            # where a jump row can bind: the spring-shaped law lands on the near dwell with |q''| many times the
+            # deceleration its spring holds, which would make each row's backoff worth that many times more force
+            # (the symmetric laws' two peaks differ by their cos alpha only; they keep the scale they were solved
+            # with)
+            given = given[pulled_all]
+        reference = max(float(np.max(given)), 1e-12)
+        return DynamicsTrace(loads, omega_of(spec), cf.pitch_curvature(c), v["roller_radius"], pulled_all, reference)
 
     def _structural(self, v) -> list[Row]:
         """The segments fill one turn; the follower geometry exists (real s0, the arm reaches the cam)."""

@@ -10,7 +10,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
@@ -24,7 +24,10 @@ from synthesis.kinds.clamp_cam.kinematics import cam_follower as cf
 from synthesis.kinds.clamp_cam.kinematics import follower_dynamics as fd
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import law as closed_form_law
 from synthesis.kinds.clamp_cam.spec import ClampCamSpec
-from synthesis.spec.common import value_of
+from synthesis.spec.common import bounds_of, value_of
+
+if TYPE_CHECKING:
+    from synthesis.kinds.clamp_cam.spring_shaped_law import SpringShaping
 
 TWO_PI = 2.0 * math.pi
 
@@ -58,6 +61,10 @@ def fit_law(spec: ClampCamSpec):
     if cap is not None and spec.follower.type == "oscillating":
         cap = math.radians(cap)
     b = spec.bspline
+    if b.minimise == "spring_force":
+        return _spring_shaped_law(stroke_of(spec), seg["rise"], seg["return"], spring_shaping(spec), b.spans,
+                                  b.degree, b.samples_per_span, None if cap is None else cap - _margin(
+                                      spec, acceleration_rule(np.zeros(1), cap, "")))
     return _fitted_law(stroke_of(spec), seg["rise"], seg["return"], omega_of(spec), b.minimise, b.spans, b.degree,
                        b.samples_per_span, cap)
 
@@ -71,6 +78,48 @@ def _fitted_law(stroke: float, rise_deg: float, return_deg: float, omega: float,
 
     return fit_optimised_law(stroke, {"rise": rise_deg, "return": return_deg}, omega, minimise, spans, degree,
                              samples_per_span, cap)
+
+
+def _margin(spec: ClampCamSpec, rule: Rule) -> float:
+    """How much tighter than its limit the NLP holds a sampled rule: the backoff x the rule's scale."""
+    return spec.solver.backoff * rule.scale
+
+
+def spring_shaping(spec: ClampCamSpec) -> SpringShaping:
+    """What the spring-shaped law's fit reads of a spec (translating follower, given cam, [dynamics]: validated),
+    every limit tightened by the margin the NLP holds it with, so the NLP finds the fitted law within its rows.
+    The stiffness is its value, or a free stiffness's lower bound (why: spring_shaped_law's docstring)."""
+    from synthesis.kinds.clamp_cam.spring_shaped_law import SpringShaping
+
+    d = spec.dynamics
+    assert d is not None and d.mass is not None and d.spring_preload is not None and d.spring_stiffness is not None, \
+        "validation asks for a translating follower's [dynamics]"
+    lim, rules = d.limits, spec.rules
+    jump = None
+    if lim.min_jump_speed is not None:
+        jump = (lim.min_jump_speed + _margin(spec, jump_speed_rule(np.zeros(1), lim.min_jump_speed))) * TWO_PI / 60.0
+    contact = None
+    if lim.min_contact_force is not None:
+        contact = lim.min_contact_force + _margin(spec, contact_force_rule(np.zeros(1), lim.min_contact_force))
+    pressure = tuple(limit - _margin(spec, pressure_angle_rule(segment, np.zeros(1), limit))
+                     for segment, limit in (("rise", rules.pressure_angle_rise),
+                                            ("return", rules.pressure_angle_return)))
+    lo, hi = bounds_of(d.spring_preload)
+    return SpringShaping(mass=d.mass, gravity_load=d.mass * d.gravity[0], stiffness=bounds_of(d.spring_stiffness)[0],
+                         preload_bounds=(lo, hi), jump_speed=jump, operating_speed=omega_of(spec),
+                         min_contact_force=contact, base_radius=value_of(spec.cam.base_radius),
+                         offset=0.0 if spec.follower.offset is None else value_of(spec.follower.offset),
+                         pressure_angle_deg=(pressure[0], pressure[1]), nlp_samples=spec.solver.samples_per_segment)
+
+
+@lru_cache(maxsize=8)
+def _spring_shaped_law(stroke: float, rise_deg: float, return_deg: float, shaping: SpringShaping, spans: int, degree: int,
+                       samples_per_span: int, cap: float | None):
+    """One spring-shaped fit per set of inputs and process, as :func:`_fitted_law`."""
+    from synthesis.kinds.clamp_cam.spring_shaped_law import fit_spring_shaped_law
+
+    return fit_spring_shaped_law(stroke, {"rise": rise_deg, "return": return_deg}, shaping, spans, degree,
+                                 samples_per_span, cap)
 
 
 def follower_of(spec: ClampCamSpec, v: dict[str, Any]) -> cf.Follower:

@@ -147,8 +147,12 @@ class MotionSection(StrictModel):
 class BSplineSection(StrictModel):
     """The optimised law (motion.law = "optimised"): B-spline displacement fitted by one convex problem."""
 
-    minimise: Literal["acceleration", "jerk"] = Field("acceleration", description="peak follower acceleration "
-                                                                                  "or peak jerk")
+    minimise: Literal["acceleration", "jerk", "spring_force"] = Field(
+        "acceleration", description="peak follower acceleration, peak jerk, or spring_force: the least spring "
+                                    "force at full stroke (preload + stiffness x stroke) that holds the "
+                                    "[dynamics.limits] jump speed and contact force, the law fitted with the spring "
+                                    "(a translating follower on a given cam; the stiffness at its value or its lower "
+                                    "bound; the NLP then sizes the spring for the law)")
     spans: int = Field(32, ge=4, le=400, description="uniform knot spans in each of the rise and the return")
     degree: int = Field(5, ge=3, le=7, description="spline degree (>= 3: continuity to the acceleration, C2)")
     samples_per_span: int = Field(8, ge=2, le=50, description="points per span where the peak is bounded")
@@ -354,6 +358,26 @@ class ClampCamSpec(ProblemSpec):
         if self.operation._operating_ranges and self.motion.law == "optimised":
             raise ValueError("operation.crank_speed: a range needs a closed-form motion law (the optimised law is "
                              "fitted once, at one speed)")
+        return self
+
+    @model_validator(mode="after")
+    def _spring_shaped_law(self) -> "ClampCamSpec":
+        if self.motion.law != "optimised" or self.bspline.minimise != "spring_force":
+            return self
+        why = "bspline.minimise = \"spring_force\" fits the law with a translating follower's spring on a given cam"
+        if self.follower.type != "translating":
+            raise ValueError(f"follower.type: {why}; an oscillating follower is not supported (give minimise = "
+                             "\"acceleration\" or \"jerk\")")
+        for field, value in (("cam.base_radius", self.cam.base_radius), ("follower.offset", self.follower.offset)):
+            if is_free(value):
+                raise ValueError(f"{field}: {why}, whose pressure angle it holds: give a number")
+        if self.dynamics is None:
+            raise ValueError("bspline.minimise: \"spring_force\" needs a [dynamics] table (the follower's mass "
+                             "and spring)")
+        limits = self.dynamics.limits
+        if limits.min_jump_speed is None and limits.min_contact_force is None:
+            raise ValueError("bspline.minimise: \"spring_force\" needs dynamics.limits.min_jump_speed or "
+                             "min_contact_force (what the spring must hold the follower against)")
         return self
 
     @model_validator(mode="after")
