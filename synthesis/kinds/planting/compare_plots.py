@@ -235,7 +235,7 @@ def animation_figure(results: list[Result], path: Path, frames: int = ANIMATION_
         counter.set_text(f"frame {k + 1}/{frames}, crank {np.degrees(theta[k]):.0f} deg")
         return [line for lines in linkages for line in lines] + letters + [counter]
 
-    save_gif(fig, frame, frames, path, fps=12, dpi=90)
+    save_gif(fig, frame, frames, path, fps=12, dpi=90, shared_palette=True)
     plt.close(fig)
 
 
