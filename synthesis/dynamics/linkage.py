@@ -17,6 +17,7 @@ from constraints import Rule
 from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.facts import link_facts, sampled_facts, turn
+from synthesis.dynamics.fluctuation import speed_fluctuation_facts
 from synthesis.dynamics.fourbar import JOINTS, LINKS, over_turn
 from synthesis.errors import SpecError
 
@@ -147,13 +148,19 @@ def peak_of(dyn: FourbarDynamics, which: str, samples: int) -> float:
 def dynamics_facts(dyn: FourbarDynamics, samples: int, joint_names: tuple[str, ...], link_names: tuple[str, ...],
                    crank_speed_rpm: float, table) -> dict:
     """result.json's ``facts.dynamics``: every sampled quantity over a turn, and each link's mass, inertia, centre of
-    mass and angle, so the energy balance can be re-checked from the file alone (docs/ARCHITECTURE.md "result.json")."""
+    mass and angle, so the energy balance can be re-checked from the file alone (docs/ARCHITECTURE.md "result.json");
+    with a ``drive`` in the table, ``speed_fluctuation``: the crank's speed over the turn when the motor's torque is
+    constant, and the same samples' torque and shaking force at that speed."""
     crank = turn(samples)
     out = dyn.over_turn(crank)
     loads: bool | dict = False
     if table.external_loads:
         loads = {"loads": [load.model_dump() for load in table.external_loads],
                  "external_power_W": out["external_power"].tolist()}
-    return sampled_facts(crank, out, float(dyn.omega), crank_speed_rpm, joint_names, JOINTS,
-                         link_facts(out, dyn.mass, link_names, LINKS), dyn.gravity, loads, CONVENTIONS,
-                         table.assumption)
+    facts = sampled_facts(crank, out, float(dyn.omega), crank_speed_rpm, joint_names, JOINTS,
+                          link_facts(out, dyn.mass, link_names, LINKS), dyn.gravity, loads, CONVENTIONS,
+                          table.assumption)
+    if getattr(table, "drive", None) is not None:
+        # the same samples at the speed a constant motor torque and the flywheel give (synthesis.dynamics.fluctuation)
+        facts["speed_fluctuation"] = speed_fluctuation_facts(dyn, crank, table.drive, joint_names)
+    return facts

@@ -188,6 +188,9 @@ class PickerDoubleCrankSpec(ProblemSpec):
         if self.dynamics.crank_speed is None:
             raise ValueError("dynamics.crank_speed: a picker_double_crank has no crank speed of its own; give AB's "
                              "in r/min")
+        if self.dynamics.drive is not None:
+            raise ValueError("dynamics.drive: a picker_double_crank's dynamics cover its working swing, not a full "
+                             "turn, so it has no steady speed fluctuation; leave the field out")
         weight = self.dynamics.counterweight
         if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
             raise ValueError("dynamics.counterweight: a picker_double_crank's solve frees only its linkage; give the "
