@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import cast
 
 import numpy as np
@@ -10,11 +11,13 @@ import numpy as np
 from constraints import Rule
 from constraints.poses import attitude_miss_deg
 from synthesis.kinds.planting.kinematics import claw_attitudes, tip_state
-from synthesis.dynamics.linkage import dynamics_facts
-from synthesis.kinds.planting.dynamics import JOINTS, LINKS, arm_dynamics, arm_linkage
+from synthesis.dynamics.facts import peaks, turn
+from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts
+from synthesis.kinds.planting.dynamics import (JOINTS, LINKS, SoilContact, arm_dynamics, arm_linkage,
+                                               unevaluated_arm_dynamics)
 from synthesis.kinds.planting.rule_set import Trace, planting_rules
 from synthesis.kinds.planting.scene import (POINTS, TWO_PI, PlantingScene, PrecisionPoints, assembly_status,
-                                      find_precision_points, float_trace, locate_poses, pose_key, turn_scan)
+                                            find_precision_points, float_trace, locate_poses, pose_key, turn_scan)
 from synthesis.core.kind import ResultTable, figure_text
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
@@ -34,21 +37,32 @@ def evaluate(scene: PlantingScene, limits, phase_samples: int = CHECK_PHASE_SAMP
         scan = turn_scan(scene.design, turn_samples)    # P5's search and the transmission rule: one pass of a turn
         pts = locate_poses(scene, find_precision_points(scene, scan=scan), turn_samples)
         trace = float_trace(scene, pts, phase_samples, turn_samples, scan=scan)
-        return planting_rules(with_dynamics(scene, trace), limits), pts
+        return planting_rules(with_dynamics(scene, trace, pts), limits), pts
     return unevaluated(scene, limits, why), None
 
 
-def with_dynamics(scene: PlantingScene, trace: Trace) -> Trace:
+def soil_contact(scene: PlantingScene, pts: PrecisionPoints | None = None) -> SoilContact | None:
+    """Where the claw meets the soil (the surface the precision points were found with, ``pts``'s or found here, and
+    the forward speed in m/s), when the spec's [dynamics] table has a soil law; else None."""
+    if scene.dynamics is None or getattr(scene.dynamics, "soil", None) is None:
+        return None
+    surface = (pts if pts is not None else find_precision_points(scene)).soil_level
+    return SoilContact(surface, scene.motion.forward / 1000.0)
+
+
+def with_dynamics(scene: PlantingScene, trace: Trace, pts: PrecisionPoints) -> Trace:
     """The trace with the dynamics rules' input when the spec's [dynamics] table sets a limit."""
     trace.dynamics = arm_dynamics(scene.dynamics, scene.design.parameters(), scene.design.branch, scene.motion.omega,
-                                  scene.counterweight)
+                                  scene.counterweight, scene.rocker_counterweight, soil_contact(scene, pts))
     return trace
 
 
 def unevaluated(scene: PlantingScene, limits, why: str) -> list[Rule]:
     """The rules of a design whose crank cannot turn: only those of the link lengths evaluated."""
     nowhere = PrecisionPoints({n: None for n in POINTS}, None, {n: why for n in POINTS})
-    return planting_rules(with_dynamics(scene, float_trace(scene, nowhere, turn_missing=why)), limits)
+    trace = float_trace(scene, nowhere, turn_missing=why)
+    trace.dynamics = unevaluated_arm_dynamics(scene.dynamics)
+    return planting_rules(trace, limits)
 
 
 def trajectory(scene: PlantingScene, pts: PrecisionPoints | None, samples: int = 361) -> dict | None:
@@ -109,7 +123,7 @@ def scene_facts(spec, scene: PlantingScene, pts: PrecisionPoints | None) -> dict
                     "thickness": seedbed.thickness, "seedling_height": seedbed.seedling_height},
         # rule limits the spec did not write, and how they follow from its inputs
         "rule_limits_from_inputs": spec.derived_limits(),
-        **dynamics_facts_of(scene, spec.operation.crank_speed),
+        **dynamics_facts_of(scene, spec.operation.crank_speed, pts),
         **key_pose_facts(scene, pts),
     }
 
@@ -151,15 +165,44 @@ def key_pose_facts(scene: PlantingScene, pts: PrecisionPoints | None) -> dict:
     return {"key_poses": {"attitude": ATTITUDE_READING, "claw_attitude_at_points_deg": points, "poses": poses}}
 
 
-def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float) -> dict:
+def dynamics_facts_of(scene: PlantingScene, crank_speed_rpm: float, pts: PrecisionPoints | None = None) -> dict:
     """``{"dynamics": ...}``: the arm's inverse dynamics over a turn (docs/ARCHITECTURE.md "result.json"), when the
-    spec has a [dynamics] table and the crank turns; else nothing."""
+    spec has a [dynamics] table and the crank turns; else nothing.  ``pts``: the precision points found, whose soil
+    surface the soil law reads (found here when not given)."""
     if scene.dynamics is None or assembly_status(scene.design) is not None:
         return {}
     d = scene.design
-    linkage = arm_linkage(scene.dynamics, d.parameters(), d.branch, scene.motion.omega, scene.counterweight)
-    return {"dynamics": dynamics_facts(linkage, scene.dynamics.samples, JOINTS, LINKS,
-                                       crank_speed_rpm, scene.dynamics)}
+    contact = soil_contact(scene, pts)
+    linkage = arm_linkage(scene.dynamics, d.parameters(), d.branch, scene.motion.omega, scene.counterweight,
+                          scene.rocker_counterweight, contact)
+    facts = dynamics_facts(linkage, scene.dynamics.samples, JOINTS, LINKS, crank_speed_rpm, scene.dynamics)
+    if contact is not None:
+        with_soil_facts(facts, linkage, scene.dynamics, contact)
+    return {"dynamics": facts}
+
+
+#: the soil law on the claw as result.json states it
+SOIL_MODEL = ("while the claw tip C is below the soil surface (depth d > 0, mm): magnitude f0 + k d, opposing C's "
+              "velocity relative to the soil (the machine travelling forward, +X, at the forward speed), the "
+              "direction blended to zero below 1 mm/s; zero above the surface")
+
+
+def with_soil_facts(facts: dict, linkage: FourbarDynamics, table, contact: SoilContact) -> None:
+    """``facts`` (:func:`synthesis.dynamics.linkage.dynamics_facts`) with the soil on the claw, as the tillage kind
+    writes it: in ``external_loads`` the law, the force at each sample (``force_N``, N x 2), C's depth below the
+    surface (``depth_mm``, negative above it) and the loads' power with the soil's (``external_power_W``, so the
+    energy balance closes from the file); in the summary the peak soil force and the soil's mean power."""
+    crank = turn(table.samples)
+    out = linkage.over_turn(crank)
+    without = replace(linkage, soil=None).over_turn(crank)          # the constant loads' power alone
+    given = facts["external_loads"]["loads"] if facts["external_loads"] else []
+    soil = {"name": "soil force on the claw tip C", "link": "coupler", "at": "tip", "model": SOIL_MODEL,
+            "surface_y_mm": float(contact.surface), "forward_speed_m_s": float(contact.forward_speed),
+            **table.soil.model_dump()}
+    facts["external_loads"] = {"loads": [*given, soil], "external_power_W": out["external_power"].tolist(),
+                               "force_N": out["soil_force"].T.tolist(), "depth_mm": out["soil_depth"].tolist()}
+    facts["summary"] |= {"soil_force_N": peaks(np.hypot(*out["soil_force"]), crank),
+                         "mean_soil_power_W": float(np.mean(out["external_power"] - without["external_power"]))}
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -26,12 +26,14 @@ from synthesis.core.kind import Setting
 from synthesis.core.problem import (Envelope, MaxMinMargin, ObjectiveParts, Operating, Problem,
                                     scaled_backoff)
 from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_epigraph, peak_of
-from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES
-from synthesis.kinds.planting.dynamics import arm_dynamics, arm_linkage, counterweight_of
+from synthesis.errors import AssemblyError
+from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES, soil_contact
+from synthesis.kinds.planting.dynamics import (SoilContact, arm_dynamics, arm_linkage, counterweight_of,
+                                               rocker_counterweight_of)
 from constraints.poses import nearest_row
 from synthesis.kinds.planting.kinematics import claw_attitude, link_function, path_positions, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds, planting_rules
-from synthesis.kinds.planting.scene import PlantingScene, find_precision_points
+from synthesis.kinds.planting.scene import PlantingScene, assembly_status, find_precision_points
 from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.spec.operating import ranges_of
@@ -41,6 +43,9 @@ MIN_GAP = math.radians(1.0)          # smallest crank-angle gap between consecut
 THETA_BOUNDS = (-4 * math.pi, 6 * math.pi)
 #: the rules without which the kinematics is undefined stay hard in the elastic diagnosis
 HARD_IN_ELASTIC = ("grashof_crank_rocker",)
+#: the design variables no design may take below zero (a mass, a radius)
+NOT_NEGATIVE = ("counterweight_mass", "counterweight_radius", "rocker_counterweight_mass",
+                "rocker_counterweight_radius")
 #: the min-peak objectives (synthesis.dynamics.linkage.peak_epigraph) and their units
 PEAK_UNITS = {name: unit for name, (unit, _) in PEAK_OBJECTIVES.items()}
 
@@ -93,6 +98,10 @@ class PlantingProblem:
         # the nominal only (robust_redesign_from_example1 without them: P3 fell after P4, soil entry, in 2 of 2,000
         # Monte-Carlo samples, and the five rules that read P1-P3 could not be evaluated there)
         structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
+        # the soil law's surface: the [soil] level (a number or a design variable) or the analysis depth above P5,
+        # whose crank angle is a decision variable, as the structural rows place it
+        self.contact = (SoilContact(self._soil_surface(v, states), self.forward_speed)
+                        if spec.dynamics is not None and spec.dynamics.soil is not None else None)
         poses, nearest = self._poses(p, theta, states, th)
         structural += nearest
         self.problem = Problem(
@@ -171,7 +180,14 @@ class PlantingProblem:
                      accel_y=accel, links=(v["l1"], v["l2"], v["l3"], v["l4"]),
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
                      acc_scale=self.omega**2 * value_of(spec.arm.l2),
-                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v)), poses=poses)
+                     dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v),
+                                           rocker_counterweight_of(v), self.contact), poses=poses)
+
+    def _soil_surface(self, v, states):
+        """Y of the soil surface (mm, machine frame) on decision variables: the [soil] level or the analysis depth
+        above the lowest point P5."""
+        spec = self.spec
+        return v["soil_level"] if spec.soil.level is not None else states["P5"][0][1] + spec.soil.analysis_depth
 
     def _structural(self, v, p, theta, states, top=None) -> list:
         """Definitions of P1-P6 (equalities, crossing directions, order) and the lowest-point bound; with a
@@ -187,7 +203,7 @@ class PlantingProblem:
         def height(q):
             return normal[0] * (q[0] - v["seedbed_x"]) + normal[1] * (q[1] - v["seedbed_y"])
 
-        soil = v["soil_level"] if spec.soil.level is not None else pos["P5"][1] + spec.soil.analysis_depth
+        soil = self._soil_surface(v, states)
         rows = [
             (pos["P4"][1] - soil, 0.0, 0.0), (pos["P6"][1] - soil, 0.0, 0.0),        # on the soil line
             (vel["P5"][1], 0.0, 0.0),                                                  # lowest: vy = 0
@@ -251,21 +267,38 @@ class PlantingProblem:
         """Minimise the peak input torque, shaking force or shaking moment over a turn (an epigraph variable, scaled
         by the given design's peak so the objective is about 1 at the start; the force's epigraph is in N^2)."""
         spec, name, n = self.spec, self.spec.objective.name, self.spec.solver.samples_per_turn
-        given = PlantingScene.from_spec(spec)
-        peak = float(peak_of(arm_linkage(spec.dynamics, given.design.parameters(), spec.arm.branch, self.omega,
-                                         given.counterweight), name, n))
+        peak = self.float_peak(PlantingScene.from_spec(spec), n)
         # a given design that cannot turn (NaN) or moves no mass (0) gives no scale: 1 in the rule's unit then, so
         # the objective stays finite from every start
         peak = peak if math.isfinite(peak) and peak > 0.0 else 1.0
         self.peak_typical = peak * peak if name == "min_peak_shaking_force" else peak
         t, rows, unit = peak_epigraph(arm_linkage(spec.dynamics, self._arm(v), spec.arm.branch, self.omega_sym,
-                                                  counterweight_of(v)), name, n)
+                                                  counterweight_of(v), rocker_counterweight_of(v), self.contact),
+                                      name, n)
         return ObjectiveParts(f=t / self.peak_typical, extra=t, extra_lb=[0.0], extra_ub=[math.inf],
                               extra_init=[self.peak_typical], rows=rows, extra_units=[unit],
                               row_units=[unit] * len(rows))
 
     def _smooth_scale(self) -> float:
         return (self.omega**2 * 100.0) ** 2
+
+    def float_peak(self, scene: PlantingScene, samples: int) -> float:
+        """The min-peak objective's peak of a numeric design over ``samples`` crank angles, at the nominal operating
+        condition (NaN where the crank cannot turn; with a soil law its surface is found from the design's own lowest
+        point, which a crank that does not turn has not)."""
+        table = self.spec.dynamics
+        assert table is not None             # a min-peak objective needs the table (the spec's validator)
+        contact = None
+        if table.soil is not None:
+            try:
+                if assembly_status(scene.design) is not None:
+                    return math.nan
+            except AssemblyError:
+                return math.nan
+            contact = soil_contact(scene)
+        return float(peak_of(arm_linkage(table, scene.design.parameters(), self.spec.arm.branch, self.omega,
+                                         scene.counterweight, scene.rocker_counterweight, contact),
+                             self.spec.objective.name, samples))
 
     # ------------------------------------------------------------------ solving
 
@@ -325,14 +358,19 @@ class PlantingProblem:
         return np.concatenate([x_design, self.theta_guess(dict(zip(self.names, x_design)))]), None
 
     def design(self, x: np.ndarray) -> dict:
-        return dict(zip(self.names, (float(v) for v in x[:len(self.names)])))
+        """The design variables of a solution; a counterweight's mass or radius at its lower bound 0 comes back from
+        IPOPT up to its bound relaxation (1e-8) below it, which the spec would refuse as negative (its solved.toml
+        could not be checked): those are taken at 0."""
+        design = dict(zip(self.names, (float(v) for v in x[:len(self.names)])))
+        for name in NOT_NEGATIVE:
+            if name in design and design[name] < 0.0:
+                design[name] = 0.0
+        return design
 
     def reported(self, out: NLPOutcome, design: dict, elastic: bool) -> float:
         """A start's objective in report units; a peak objective is the design's own peak on the check's grid."""
         if self.spec.objective.name in PEAK_UNITS and not elastic:
-            scene = PlantingScene.from_spec(self.spec, design)
-            return peak_of(arm_linkage(self.spec.dynamics, scene.design.parameters(), self.spec.arm.branch,
-                                       self.omega, scene.counterweight), self.spec.objective.name, CHECK_TURN_SAMPLES)
+            return self.float_peak(PlantingScene.from_spec(self.spec, design), CHECK_TURN_SAMPLES)
         return self.objective_value(out.objective, elastic)
 
     def details(self, out: NLPOutcome, compiled: CompiledNLP) -> dict:

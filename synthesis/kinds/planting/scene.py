@@ -62,6 +62,8 @@ class PlantingScene:
     counterweight: tuple | None = None
     #: the spec's [key_poses]: name -> pose (synthesis.kinds.planting.spec.KeyPose); empty without the table
     key_poses: dict = field(default_factory=dict)
+    #: the design's counterweight on the rocker (mass kg, radius mm), or None
+    rocker_counterweight: tuple | None = None
 
     @property
     def acc_scale(self) -> float:
@@ -79,8 +81,10 @@ class PlantingScene:
                       spec.seedbed.thickness, spec.seedbed.seedling_height)
         soil = v.get("soil_level") if spec.soil.level is not None else None
         weight = (v["counterweight_mass"], v["counterweight_radius"]) if "counterweight_mass" in v else None
+        rocker_weight = ((v["rocker_counterweight_mass"], v["rocker_counterweight_radius"])
+                         if "rocker_counterweight_mass" in v else None)
         return cls(arm, motion, bed, soil, spec.soil.analysis_depth, motion.omega**2 * value_of(spec.arm.l2),
-                   spec.dynamics, weight, dict(spec.key_poses))
+                   spec.dynamics, weight, dict(spec.key_poses), rocker_weight)
 
 
 @dataclass

@@ -15,7 +15,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
-from synthesis.spec.dynamics import DynamicsSection
+from synthesis.spec.dynamics import DynamicsSection, SoilForce
 from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
@@ -193,6 +193,16 @@ class SolverSection(MultistartSettings):
                                        "clearance is held at its linearised worst case in the box, as the rules are")
 
 
+class PlantingDynamicsSection(DynamicsSection):
+    """The four-bar's ``[dynamics]`` table with the planting arm's own load: the soil on the claw tip C."""
+
+    soil: SoilForce | None = Field(
+        None, description="the soil's resistance on the claw tip C while C is below the [soil] surface (depth d, mm): "
+                          "magnitude f0 + k d opposing C's velocity relative to the soil (the machine travelling "
+                          "forward at [operation] forward_speed; the direction blended to zero below 1 mm/s, "
+                          "synthesis/dynamics/fourbar.py); left out: no soil force")
+
+
 class PlantingFourbarSpec(ProblemSpec):
     kind: Literal["planting_fourbar"] = Field(description="the problem kind (planting_fourbar)")
     arm: ArmSection
@@ -202,9 +212,10 @@ class PlantingFourbarSpec(ProblemSpec):
     rules: RulesSection = Field(default_factory=RulesSection)
     objective: ObjectiveSection = Field(default_factory=ObjectiveSection)
     solver: SolverSection = Field(default_factory=SolverSection)
-    dynamics: DynamicsSection | None = Field(
-        None, description="mass properties and limits for the inverse dynamics at the [operation] crank speed "
-                          "(docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no dynamics rules")
+    dynamics: PlantingDynamicsSection | None = Field(
+        None, description="mass properties, the soil on the claw and limits for the inverse dynamics at the "
+                          "[operation] crank speed (docs/ARCHITECTURE.md \"Dynamics\"); left out: no dynamics, no "
+                          "dynamics rules")
     key_poses: dict[str, KeyPose] = Field(
         default_factory=dict, max_length=MAX_POSES,
         description="named poses, e.g. [key_poses.entry] at = \"P4\", attitude = -100: the claw's attitude (and "
@@ -265,6 +276,9 @@ class PlantingFourbarSpec(ProblemSpec):
         if self.dynamics is not None and self.dynamics.counterweight is not None:
             out["counterweight_mass"] = self.dynamics.counterweight.mass
             out["counterweight_radius"] = self.dynamics.counterweight.radius
+        if self.dynamics is not None and self.dynamics.rocker_counterweight is not None:
+            out["rocker_counterweight_mass"] = self.dynamics.rocker_counterweight.mass
+            out["rocker_counterweight_radius"] = self.dynamics.rocker_counterweight.radius
         return out
 
     def design_values(self) -> dict[str, float]:
