@@ -220,7 +220,8 @@ class FlywheelSizing:
 class _Turn:
     """solve_ivp's answer over the turn, gathered over the pieces between the model's breaks."""
 
-    status: int                      # 0: the whole turn; 1: a terminal event stopped it
+    status: int                      # 0: the whole turn; 1: a terminal event or a failed step stopped it
+    t_end: float                     # where it stopped (2 pi for the whole turn)
     y_end: np.ndarray
     t_edges: np.ndarray              # 0, the breaks and 2 pi (as far as the integration went)
     y_edges: np.ndarray              # the state there, one column each
@@ -255,7 +256,7 @@ def _integrate(fun, y0, breaks=(), events=None, t_eval=None, atol=None) -> _Turn
             t_events[j] += list(run.t_events[j])
             y_events[j] += list(run.y_events[j])
         if run.status != 0:
-            status = 1
+            status, stop = 1, float(run.t[-1])
             break
         y = run.y[:, -1]
         t_edges.append(stop)
@@ -264,7 +265,7 @@ def _integrate(fun, y0, breaks=(), events=None, t_eval=None, atol=None) -> _Turn
             kept = np.isin(run.t, here)
             ts.append(run.t[kept])
             ys.append(run.y[:, kept])
-    return _Turn(status, y, np.asarray(t_edges), np.column_stack(y_edges), np.concatenate(ts) if ts else np.zeros(0),
+    return _Turn(status, stop, y, np.asarray(t_edges), np.column_stack(y_edges), np.concatenate(ts) if ts else np.zeros(0),
                  np.concatenate(ys, axis=1) if ys else np.zeros((len(y0), 0)),
                  [np.asarray(t) for t in t_events], [np.asarray(v).reshape(-1, len(y0)) for v in y_events])
 
@@ -329,11 +330,14 @@ def steady_speed(model: CrankModel, flywheel_inertia: float, omega_mean: float, 
         return _integrate(rhs, [0.0, 0.0, 0.0], model.breaks, events=[stalled] + (events or []), t_eval=t_eval,
                           atol=atol)
 
+    stalls = []
+
     def residuals(x):
         omega0 = omega_mean * x[0]
         motor = constant.mean_load_torque if model.speed_independent_loads else x[1] * torque_scale
         run = turn(omega0, motor)
-        if run.status == 1:                      # stalled: no turn at this start
+        if run.status == 1:                      # stalled: no turn from this start
+            stalls.append(run.t_end)
             return [math.nan] * len(x)
         mean = TWO_PI / run.y_end[1]
         out = [mean / omega_mean - 1.0]
@@ -345,9 +349,11 @@ def steady_speed(model: CrankModel, flywheel_inertia: float, omega_mean: float, 
     x0 = [1.0] if model.speed_independent_loads else [1.0, constant.mean_load_torque / torque_scale]
     found = root(residuals, x0, method="hybr", options={"xtol": 1.0e-12})
     if not found.success or not np.all(np.isfinite(found.fun)) or np.abs(found.fun).max() > 1.0e-8:
+        why = (f"the crank all but stops within the turn (below {STALL_FRACTION:.1%} of the mean speed): the inertia "
+               f"turning with it cannot carry it through the turn's energy swing at this speed" if stalls
+               else "scipy's root: " + " ".join(found.message.split()))
         raise NoSteadySpeed(f"no periodic crank speed with mean {omega_mean:.6g} rad/s and flywheel "
-                            f"{flywheel_inertia:.6g} kg m^2 ({found.message.strip()}): the crank may stall within a "
-                            f"turn")
+                            f"{flywheel_inertia:.6g} kg m^2: {why}")
     omega0 = omega_mean * float(found.x[0])
     motor = constant.mean_load_torque if model.speed_independent_loads else float(found.x[1]) * torque_scale
 
