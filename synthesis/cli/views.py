@@ -18,8 +18,7 @@ from rich.table import Table
 from constraints.base import limit_text
 from synthesis.cli.terminal import PIPED_WIDTH, add_columns, design_table, print_table
 from synthesis.core import interrupt
-from synthesis.core.confidence import said
-from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, objective_text, solved_heading
+from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, objective_text, said, solved_heading
 from synthesis.runs import events
 from synthesis.runs.requests import CheckWritten, SolveWritten, Stopped
 from synthesis.tolerance.output import monte_carlo_lines

@@ -190,17 +190,3 @@ def statement(objectives, unit_designs, start_ids, *, maximise: bool = False,
                         "designs": sum(1 for d in designs if level_of[d.starts[0]] == k)}
                        for k, o in enumerate(optima[:OPTIMA_SHOWN])],
             "assumptions_not_met": notes}
-
-
-def said(stated: dict) -> str:
-    """One line: "3 distinct optima in 28 converged starts, best reached by 19; P(best is global) ~ 0.89
-    (Boender & Rinnooy Kan; assumes uniform starts)"."""
-    n, w = stated.get("starts_counted", 0), stated.get("distinct_optima", 0)
-    if not n:
-        return "no start converged with every rule held: no statement on the global optimum"
-    p = stated.get("probability_best_is_global")
-    chance = (f"P(best is global) ~ {p:.2f}" if p is not None
-              else "P(best is global) not defined (too few starts for the optima seen)")
-    caveat = "; ".join(["assumes uniform starts", *(stated.get("assumptions_not_met") or [])])
-    return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, best reached "
-            f"by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")

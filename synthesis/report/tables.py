@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from synthesis import kinds
-from synthesis.core.confidence import said
 from synthesis.core.kind import ResultTable
 from synthesis.errors import AgrisynthError
 from synthesis.result import Result
@@ -279,6 +278,22 @@ def _starts_text(solver: dict | None):
     if ran is None or ran == asked:
         return asked
     return f"{asked} + 1 from the elastic re-solve" if ran > asked else f"{ran} of {asked} run"
+
+
+def said(stated: dict) -> str:
+    """result.json ``solver.confidence`` (:func:`synthesis.core.confidence.statement`) in one line: "3 distinct optima
+    in 28 converged starts, best reached by 19; P(best is global) ~ 0.89 (Boender & Rinnooy Kan; assumes uniform
+    starts)".  Here, not beside the statement, so a report or the command line reads one without importing the
+    posterior's mathematics (scipy.special)."""
+    n, w = stated.get("starts_counted", 0), stated.get("distinct_optima", 0)
+    if not n:
+        return "no start converged with every rule held: no statement on the global optimum"
+    p = stated.get("probability_best_is_global")
+    chance = (f"P(best is global) ~ {p:.2f}" if p is not None
+              else "P(best is global) not defined (too few starts for the optima seen)")
+    caveat = "; ".join(["assumes uniform starts", *(stated.get("assumptions_not_met") or [])])
+    return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, best reached "
+            f"by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")
 
 
 def _confidence_text(solver: dict | None) -> str | None:
