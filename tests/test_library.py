@@ -71,6 +71,8 @@ EXPECTED: dict[str, dict] = {
     "tillage/tillage_redesign.toml": {"check": 0, "solve": ("optimal", 373.06012290551644)},
     "tillage/tillage_torque_limited.toml": {"check": 1, "solve": ("optimal", 390.4884460620757)},
     "fourbar_path/picking_arc.toml": {"check": 1, "solve": ("feasible", 1.0293447294002422e-4)},
+    "fourbar_path/picking_arc_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
+    "fourbar_path/picking_arc_torque_limited.toml": {"check": 1, "solve": ("feasible", 0.0005694713779289107)},
     # the depth is the analysis depth (25 mm) for every design: refused before any start (synthesis.core.pinned)
     "planting_arm/infeasible_deep_planting.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.5611548410639178)},
@@ -147,6 +149,7 @@ SHARED = {"guide_way/smooth_redesign.toml", *(f"planting_arm/redesign_from_examp
 #: (planting_arm: redesign_from_example4)
 SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_redesign_spring_dynamics.toml",
         "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "guide_way/smooth_redesign_dynamics.toml",
+        "fourbar_path/picking_arc_torque_limited.toml",
         "guide_way/smooth_torque_limited.toml",
         "picker/picker_double_crank_redesign.toml", "picker/picker_double_crank_torque_limited.toml",
         "picker/picker_double_crank_min_peak_torque.toml", "picker/picker_double_crank_key_pose.toml",
@@ -160,6 +163,7 @@ SLOW = {"clamp_cam/opening_cam_robust_redesign.toml", "clamp_cam/opening_cam_red
 #: solves of 10 s or more (started first: tests/conftest.py)
 LONG = {"tillage/tillage_min_peak_torque.toml", "tillage/tillage_torque_limited.toml",   # 22 s, 16 s on one worker
         "fourbar_path/picking_arc.toml", "guide_way/smooth_redesign.toml", "planting_arm/redesign_from_example2.toml",
+        "fourbar_path/picking_arc_torque_limited.toml",
         "picker/crank_rocker_torque_limited.toml", "planting_arm/torque_redesign_from_example1.toml",
         "picker/crank_rocker_min_peak_torque.toml", "planting_arm/min_peak_torque_from_example1.toml",
         "planting_arm/counterweight_min_shaking_from_example1.toml",
