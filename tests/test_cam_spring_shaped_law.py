@@ -129,7 +129,24 @@ def test_the_shaped_law_needs_less_spring_than_the_acceleration_optimal_one(shap
     assert 1.0 - shaped_force / acceleration_optimal == pytest.approx(0.4716, abs=5e-4)
 
 
-@pytest.mark.slow
+def test_gravity_along_the_follower_shifts_the_preload_by_its_weight_and_nothing_else(shaped):
+    """Gravity along the follower, g = (-9.81, 0) m/s^2 (towards the cam centre), is a constant load m g . d on a
+    translating follower: every row moves by it, so the fitted preload falls by exactly 0.05 x 9.81 N and the law
+    is the same; the kind's float model (its own gravity) on the fine grid agrees that the jump speed holds."""
+    from synthesis.kinds.clamp_cam.scene import _spring_shaped_law
+
+    spec, law = shaped
+    heavy = spec.model_copy(update={"dynamics": spec.dynamics.model_copy(update={"gravity": (-9.81, 0.0)})})
+    shaping = spring_shaping(heavy)
+    assert shaping.gravity_load == pytest.approx(-0.05 * 9.81, rel=1e-15)
+    fitted = _spring_shaped_law(10.0, 40.0, 14.0, shaping, 32, 5, 8, None)
+    assert fitted.spring["preload"] == pytest.approx(law.spring["preload"] - 0.05 * 9.81, abs=1e-6)
+    np.testing.assert_allclose(fitted.return_.coefficients, law.return_.coefficients, atol=1e-6)
+    design = {"spring_preload": fitted.spring["preload"], "spring_stiffness": fitted.spring["stiffness"]}
+    rules, _ = evaluate(CamScene.from_spec(heavy, design, fitted), FINE * spec.solver.samples_per_segment)
+    assert next(r for r in rules if r.name == "jump_speed_min").record().value >= 135.0
+
+
 def test_a_stiffer_spring_never_does_better():
     """The fit holds the stiffness at a free stiffness's lower bound: any spring can trade stiffness for preload at
     the same force at full stroke, so a stiffer one given as a number reaches no lower force (0.3 and 0.5 N/mm)."""

@@ -369,7 +369,7 @@ class ClampCamSpec(ProblemSpec):
             raise ValueError(f"follower.type: {why}; an oscillating follower is not supported (give minimise = "
                              "\"acceleration\" or \"jerk\")")
         for field, value in (("cam.base_radius", self.cam.base_radius), ("follower.offset", self.follower.offset)):
-            if is_free(value):
+            if value is not None and is_free(value):
                 raise ValueError(f"{field}: {why}, whose pressure angle it holds: give a number")
         if self.dynamics is None:
             raise ValueError("bspline.minimise: \"spring_force\" needs a [dynamics] table (the follower's mass "

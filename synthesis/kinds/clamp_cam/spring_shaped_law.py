@@ -191,7 +191,7 @@ def fit_spring_shaped_law(stroke: float, segments_deg: dict[str, float], shaping
         coef[3:n - 3] = np.asarray(c.value, dtype=float)
         laws[name] = SplineLaw("optimised_spring_force", tuple(knots.tolist()), tuple(coef.tolist()), degree)
     ratio = {name: laws[name].peaks["acceleration"] / reference for name in laws}
-    f0 = float(preload.value)
+    f0 = float(np.asarray(preload.value, dtype=float))
     spring = {"preload": f0, "stiffness": k, "force_at_full_stroke": f0 + k * h, "unit": "N",
               "ratio_to_cycloidal_of": "acceleration"}
     return OptimisedLaw(laws["rise"], laws["return"], "spring_force", str(problem.status), "CLARABEL", ratio, spring)
