@@ -244,6 +244,7 @@ def test_a_spec_without_a_drive_has_no_speed_fluctuation():
                                                   "swing, not a full turn"),
     ("tillage/hwang_tillage_dynamics.toml", "dynamics.drive"),
     ("comb_finger/peanut_baseline_dynamics.toml", "dynamics.drive"),
+    ("picker/cai2020_picker_dynamics.toml", "dynamics.drive"),          # the combined picker: its own table
 ])
 def test_a_drive_where_the_dynamics_are_not_over_a_crank_turn_is_refused_in_one_line(tmp_path, path, said):
     from synthesis.errors import SpecError
