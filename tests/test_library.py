@@ -31,6 +31,7 @@ EXPECTED: dict[str, dict] = {
     "clamp_cam/opening_cam_redesign_modified_sine.toml": {"check": 1, "solve": ("optimal", 68.56927256227823)},
     "clamp_cam/opening_cam_redesign_return.toml": {"check": 1, "solve": ("optimal", 0.03613260744254505)},
     "clamp_cam/opening_cam_redesign_jump_1p5.toml": {"check": 0, "solve": ("optimal", 7.728914070969081)},
+    "clamp_cam/opening_cam_redesign_jump_1p5_shaped.toml": {"check": 0, "solve": ("optimal", 4.095400632470909)},
     "clamp_cam/opening_cam_redesign_spring_dynamics.toml": {"check": 0, "solve": ("optimal", 7.504091302805729)},
     "clamp_cam/opening_cam_robust_redesign.toml": {"check": 1, "solve": ("optimal", 71.63263722569987)},
     "clamp_cam/rotating_cam.toml": {"check": 1, "solve": ("exit", 2)},
