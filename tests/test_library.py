@@ -94,6 +94,8 @@ EXPECTED: dict[str, dict] = {
     "planting_arm/taiwan_example1.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example1_dynamics.toml": {"check": 1, "solve": ("exit", 2)},
     "planting_arm/taiwan_example1_soil.toml": {"check": 1, "solve": ("exit", 2)},
+    "planting_arm/taiwan_example1_flywheel.toml": {"check": 1, "solve": ("exit", 2)},
+    "picker/cai2020_crank_rocker_flywheel.toml": {"check": 0, "solve": ("exit", 2)},
     "planting_arm/two_counterweights_min_shaking_from_example1.toml": {"check": 1,
                                                                        "solve": ("optimal", 7.871960269063893)},
     "planting_arm/torque_redesign_from_example1.toml": {"check": 1, "solve": ("optimal", 0.6003234227529245)},
