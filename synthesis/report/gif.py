@@ -106,6 +106,13 @@ def _box(artist: Artist, renderer, dpi: float) -> Bbox | None:
     return box.padded(max(widths) * dpi / 72.0 + MARGIN_PX)
 
 
+def _clip_box(artist: Artist) -> Bbox | None:
+    """The rectangle ``artist`` is clipped to (its axes' box, for a line plotted there), widened by the pixel its
+    edge rounds into: it colours nothing outside, wherever it moves; None when it is not clipped to one."""
+    box = artist.get_clip_box() if artist.get_clip_on() and artist.get_clip_path() is None else None
+    return None if box is None else Bbox(box.get_points()).padded(1.0)
+
+
 def _overlaps(a: Bbox, b: Bbox) -> bool:
     return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
 
@@ -124,7 +131,7 @@ def _near_moving(fig: Figure, canvas: FigureCanvasAgg, draw_frame: Callable[[int
         for artist in draw_frame(k):
             if not artist.get_visible():
                 continue
-            reach = _box(artist, renderer, fig.dpi)
+            reach = _clip_box(artist) or _box(artist, renderer, fig.dpi)
             near |= {id(a) for a in above if id(a) not in near
                      and (reach is None or _overlaps(reach, boxes[id(a)]))}    # type: ignore[arg-type]
     return [a for a in above if id(a) in near]
