@@ -26,18 +26,24 @@ import mpmath
 import numpy as np
 import pytest
 import sympy as sp
-
 from conftest import LIBRARY
 from dynamics_support import energy_residuals, mechanical_energy
+
 from synthesis import kinds
-from synthesis.dynamics.fourbar import over_turn
 from synthesis.dynamics.facts import turn
-from synthesis.kinematics.rocker_drive import CrankRocker
+from synthesis.dynamics.fourbar import over_turn
 from synthesis.kinds.picker import check as double_crank_check
 from synthesis.kinds.picker import combined
-from synthesis.kinds.picker.combined_dynamics import (JOINTS, PARAMETERS, PickerDynamics, dynamics_rules,
-                                                      parameters, picker_dynamics)
+from synthesis.kinds.picker.combined_dynamics import (
+    JOINTS,
+    PARAMETERS,
+    PickerDynamics,
+    dynamics_rules,
+    parameters,
+    picker_dynamics,
+)
 from synthesis.kinds.picker.dynamics import double_crank_dynamics
+from synthesis.kinematics.rocker_drive import CrankRocker
 from synthesis.result import result_text
 from synthesis.spec import load_spec
 from synthesis.spec.dynamics import DynamicsLimits, DynamicsSection, PointMass

@@ -40,13 +40,17 @@ import casadi as ca
 import numpy as np
 
 from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from constraints.dynamics import (
+    peak_input_torque_rule,
+    peak_shaking_force_rule,
+    peak_shaking_moment_rule,
+)
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.facts import link_facts, peaks, sampled_facts, turn
 from synthesis.dynamics.fourbar import LINKS as PART_LINKS
 from synthesis.dynamics.fourbar import inverse_dynamics
-from synthesis.kinematics.rocker_drive import rocker_function
 from synthesis.kinds.picker.spec import PickerDynamicsSection
+from synthesis.kinematics.rocker_drive import rocker_function
 
 if TYPE_CHECKING:
     from synthesis.kinds.picker.combined import Drive

@@ -292,7 +292,7 @@ class PickerDynamicsSection(StrictModel):
     assumption: str = Field("", description="which values are ours, not a paper's")
 
     @model_validator(mode="after")
-    def _tip_is_the_clamp(self) -> "PickerDynamicsSection":
+    def _tip_is_the_clamp(self) -> PickerDynamicsSection:
         if any(pm.at == "tip" for pm in self.crank_rocker.point_masses):
             raise ValueError("crank_rocker.point_masses: at = \"tip\" is the clamp point M, on the double crank's "
                              "coupler; on the drive give the position in the link frame, mm")
