@@ -41,6 +41,7 @@ EXPECTED: dict[str, dict] = {
     "picker/cai2020_crank_rocker_synthesis.toml": {"check": 1, "solve": ("optimal", 435.13428762281086)},
     "picker/cai2020_double_crank.toml": {"check": 0, "solve": ("exit", 2)},
     "picker/cai2020_picker.toml": {"check": 0},
+    "picker/cai2020_picker_dynamics.toml": {"check": 0},
     "picker/crank_rocker_max_transmission.toml": {"check": 0, "solve": ("optimal", 40.67131217449928)},
     "picker/crank_rocker_torque_limited.toml": {"check": 1, "solve": ("optimal", 447.39285225876324)},
     "rotary_planetary/key_pose_redesign.toml": {"check": 1, "solve": ("optimal", 148.80967492502646)},
