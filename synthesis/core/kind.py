@@ -364,6 +364,9 @@ class Setting:
     #: how the problems are solved (:class:`~synthesis.core.ipopt.SolveMethod`: finite differences, another length
     #: unit, a peer method instead of IPOPT: the bench's and tests' studies); None: IPOPT, exact derivatives
     method: Any = None
+    #: the starts are a ``--starts auto`` run's in the kind's own auto order (:attr:`Solving.auto_order`); False:
+    #: the fixed order of ``--starts N``
+    auto_order: bool = False
 
 
 @dataclass(frozen=True)
@@ -395,6 +398,10 @@ def _no_early_stop(setting):
     return None
 
 
+def _no_auto_order(setting) -> bool:
+    return False
+
+
 @dataclass(frozen=True)
 class Solving:
     """The solve side of a kind (see the module docstring)."""
@@ -410,6 +417,11 @@ class Solving:
     #: (setting) -> predicate on a StartReport that ends the multistart at the first start (in start
     #: order) meeting it, or None
     stop_when: Callable[[Setting], Callable[[Any], bool] | None] = _no_early_stop
+    #: (setting) -> True: a ``--starts auto`` run numbers its starts in an order of the kind's own, in which start i
+    #: is the same whatever the batch (its NLP is built with ``Setting.auto_order``; a start's decision-variable row
+    #: is drawn for its index alone), so each batch solves only its new starts and the cheap starts can come first
+    #: (:class:`synthesis.core.solve.AutoStarts`); False: every batch is the whole ``--starts N`` run
+    auto_order: Callable[[Setting], bool] = _no_auto_order
     samples_hint: str = "[solver] samples"
     relax_hint: str = "Loosen those requirements or widen the bounds of the design variables."
     #: (result of a run with status infeasible or failed) -> more words for its exit-3 message, or None

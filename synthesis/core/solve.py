@@ -82,9 +82,12 @@ def _written_at(spec, name: str) -> str:
 
 def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
                    on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
-                   record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None) -> Run:
+                   record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
+                   rows_by_index: bool = False) -> Run:
     """The multistart of every kind.  ``record(outcome)`` sees each finished start first (the run's
-    ``starts.jsonl``); ``finished``: starts already solved by an interrupted run (not solved again).
+    ``starts.jsonl``); ``finished``: starts already solved by an interrupted run (not solved again);
+    ``rows_by_index``: each start's decision-variable row drawn for its index alone (:func:`rows_of_indices`,
+    a kind's auto order) instead of a Latin hypercube of ``starts`` points.
 
     A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
     the :class:`Run` of the starts finished so far (None when none has)."""
@@ -98,8 +101,8 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
                         f"{_written_at(setting.spec, nlp.names[0])} = {{init = ..., bounds = [lo, hi]}}); every one "
                         f"is fixed, so use `agrisynth check`")
     refuse_violated(kind, setting.spec, nlp)     # a violated rule no design variable moves: exit 2 before any start
-    x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
-                                      setting.seed)
+    x_starts = (rows_of_indices if rows_by_index else latin_hypercube_starts)(
+        np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts, setting.seed)
     maximise = solving.maximise(setting)
     recheck = functools.partial(_recheck, solving, setting)
     stop = solving.stop_when(setting)
@@ -148,6 +151,20 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     return Run(ordered, winner, starts, setting.seed, None if scheduler else workers, scheduler, wall, nlp, build_s)
 
 
+#: the random stream of :func:`rows_of_indices` (apart from the streams a kind draws from the seed itself)
+ROWS_STREAM = 0x6175746F
+
+
+def rows_of_indices(bounds: np.ndarray, init: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """(n, d) start points: row 0 = init, row i >= 1 uniform in [lo, hi] (fixed dims = lo) from a generator seeded
+    by (seed, i) alone, so row i is the same for any n (a kind's auto order: batches that grow by appending)."""
+    lo, hi = bounds[:, 0], bounds[:, 1]
+    rows = np.tile(init, (n, 1)).astype(float)
+    for i in range(1, n):
+        rows[i] = lo + np.random.default_rng([seed, ROWS_STREAM, i]).random(len(lo)) * (hi - lo)
+    return rows
+
+
 @dataclass(frozen=True)
 class AutoStarts:
     """``--starts auto``: the multistart grows in batches until Boender and Rinnooy Kan's stopping rule holds
@@ -160,7 +177,14 @@ class AutoStarts:
     batch) is carried from batch to batch; the starts solved in all are at most about twice the last batch's.  The
     decision is taken on whole batches, so the answer and N are the same for any worker count or a cluster -- except
     with ``time_limit_s``: a batch whose projected time (the last batch's, scaled by its size) would end past the
-    limit is not begun, and the count then depends on the machine."""
+    limit is not begun, and the count then depends on the machine.
+
+    A kind whose :attr:`~synthesis.core.kind.Solving.auto_order` holds for the spec numbers an auto run's starts in
+    an order of its own (e.g. its cheap screened starts first) in which start i is the same in every batch: its rows
+    are drawn per index (:func:`rows_of_indices`), every finished start is carried to the next batch and only the new
+    ones are solved (at most ``max_starts`` starts in all).  Such a run that stops after N starts is not
+    ``--starts N`` (another order, other rows) but ``--starts auto --max-starts N`` to the bit, whatever the
+    budget it was given: its first N starts do not depend on the batches after them."""
 
     max_starts: int = 512
     time_limit_s: float | None = None
@@ -188,16 +212,22 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total)`` is told as a batch begins (the
     run's starts.jsonl marks it); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
     starts (the earlier batches ended without stopping, so the run goes on from that one)."""
-    maximise = _solving(kind).maximise(setting)
+    solving = _solving(kind)
+    maximise = solving.maximise(setting)
+    nested = solving.auto_order(setting)
+    if nested:
+        setting = replace(setting, auto_order=True)
     totals = auto.batches()
     first = totals.index(resumed_batch) if resumed_batch in totals else 0
+    # a nested run's interrupted batch: every start it had finished (the carried ones were recorded again after the
+    # batch's mark, so the log holds them all)
     carried = dict(finished or {}) if resumed_batch in totals else {}
     t0 = time.perf_counter()
     for k in range(first, len(totals)):
         on_batch(totals[k])
         began = time.perf_counter()
         run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler, on_start=on_start,
-                             record=record, finished=carried)
+                             record=record, finished=carried, rows_by_index=nested)
         took = time.perf_counter() - began
         stated = confidence_statement(run.reports, run.nlp, maximise)
         assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
@@ -214,12 +244,16 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         elif (auto.time_limit_s is not None
               and time.perf_counter() - t0 + took * totals[k + 1] / totals[k] > auto.time_limit_s):
             stopped_by = "time_limit"
+        elif nested:      # the next batch appends to this one: every start that ran is kept
+            carried = {r.outcome.start: r.outcome for r in run.reports if failure_of(r.outcome) is None}
+            continue
         else:
             zero = run.reports[0].outcome
             carried = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
             continue
         return replace(run, wall_s=time.perf_counter() - t0,
-                       auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings()})
+                       auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings(),
+                             **({"order": "kind"} if nested else {})})
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
@@ -608,5 +642,5 @@ def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
         return None
 
 
-__all__ = ["Run", "AutoStarts", "run_auto", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
+__all__ = ["Run", "AutoStarts", "rows_of_indices", "run_auto", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
            "starts_table", "reaching_best", "ipopt_log"]

@@ -244,7 +244,7 @@ class PathNLP(KindNLP):
             return out
 
         self.f_unit = f_unit
-        self.starts = StartMaker(spec, seed)
+        self.starts = StartMaker(spec, seed, auto_order=setting is not None and setting.auto_order)
         # the early cut and the resume: free timing, not elastic; their reference is the best screened start's path
         # error, screened here, when the NLP is built (the main process builds it first: forked workers inherit it)
         self.referenced = not elastic and self.starts.screening

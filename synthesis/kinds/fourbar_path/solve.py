@@ -21,7 +21,7 @@ from synthesis.kinds.fourbar_path.check import evaluate, path_facts, result_desi
 from synthesis.kinds.fourbar_path.dynamics import dynamics_facts_of
 from synthesis.kinds.fourbar_path.nlp import PathNLP
 from synthesis.kinds.fourbar_path.rule_set import path_rules
-from synthesis.kinds.fourbar_path.starts import grashof_anchor
+from synthesis.kinds.fourbar_path.starts import grashof_anchor, takes_auto_order
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 
 OBJECTIVE = "sum_squared_distance"
@@ -101,5 +101,10 @@ def stop_when(setting: Setting):
     return None if target is None else functools.partial(reached, target)
 
 
+def auto_order(setting: Setting) -> bool:
+    """``--starts auto`` takes the screened starts first (starts.auto_role) where the spec is screened."""
+    return takes_auto_order(setting.spec)
+
+
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, stop_when=stop_when,
-                  samples_hint='[solver] samples (grashof = "any")')
+                  samples_hint='[solver] samples (grashof = "any")', auto_order=auto_order)

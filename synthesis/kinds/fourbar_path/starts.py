@@ -44,6 +44,15 @@ becomes an IPOPT start as follows.
    grashof = "any": screen.py) takes the nearest points within one interval of its motion
    (``nearest_in_run``), never across a dead position.
 
+4. *The auto order* (``--starts auto``, a screened set only: ``takes_auto_order``).  An auto run's batches grow by
+   appending (synthesis.core.solve.AutoStarts), and its start i is the start of fixed index ``auto_role(i)``: the
+   same kinds of start, in another order, the cheap ones first.  Start 0 is the given design and 1 .. AUTO_SCREENED
+   the best screened shapes (placed, refitted: they converge in few iterations, and a problem whose screened shapes
+   all fall into a few optima stops after the first batch); from AUTO_SCREENED + 1 on, in blocks of four, the next
+   screened shape, a hypercube row (with the continuation), the next of the pool, another hypercube row.  The
+   hypercube rows are the core's per-index rows (uniform, not a Latin hypercube of the run's size), so start i does
+   not depend on how many starts the run solves.
+
 Measured: problems/fourbar_path/PATH.md (the synthetic-truth problems) and INEXACT.md (the
 inexact set; the start mixes tried instead of this one).
 """
@@ -86,6 +95,9 @@ CLOSING_GAP = 2.5      # targets form a loop when last -> first is at most this 
 #: and memory: a 1,000-point set screened whole took 99 s and 4.3 GB (INEXACT.md, "Many targets").  A set of at
 #: most this many is ranked on every target, as it always was
 RANKING_TARGETS = 100
+#: the auto order (``auto_role``): starts 1 .. AUTO_SCREENED are the best screened shapes, the auto run's first batch
+#: (AutoStarts.first = 16) the given design and these only
+AUTO_SCREENED = 15
 
 #: the Grashof class as rows  A @ (r1, r2, r3, r4) >= 0  (synthesis.kinds.fourbar_path.rules.grashof_class)
 CLASS_ROWS = {
@@ -416,6 +428,26 @@ def pool_residuals(curves: np.ndarray, targets: np.ndarray, u: np.ndarray, s_lo:
 
 # ---------------------------------------------------------------------------- the starts
 
+def takes_auto_order(spec: FourbarPathSpec) -> bool:
+    """Whether ``--starts auto`` numbers this spec's starts in the auto order (``auto_role``): free timing with
+    at least SCREEN_MIN_TARGETS targets, the sets that are screened (StartMaker.screening)."""
+    return spec.targets.crank_deg is None and len(spec.targets.points) >= SCREEN_MIN_TARGETS
+
+
+def auto_role(index: int) -> int:
+    """The fixed-order index whose kind of start the auto order's start ``index`` is (module docstring, 4): 0 the
+    given design; 1 .. AUTO_SCREENED the screened shapes of rank 1 .. AUTO_SCREENED (fixed 3, 7, ...); then blocks of
+    four: the next screened shape, a hypercube start, the next of the pool (fixed 1, 5, ...), a hypercube start (the
+    k-th hypercube start of the auto order is fixed index 2 (k + 1), its crank direction alternating as there)."""
+    if index <= AUTO_SCREENED:
+        return 4 * index - 1 if index > 0 else 0
+    block, slot = divmod(index - AUTO_SCREENED - 1, 4)
+    if slot == 0:
+        return 4 * (AUTO_SCREENED + 1 + block) - 1
+    if slot == 2:
+        return 4 * block + 1
+    return 2 * (2 * block + (slot == 3) + 1)
+
 _SCREENED: dict = {}      # the last screened list of this process (StartMaker.screened)
 
 
@@ -446,7 +478,7 @@ def distinct(designs: np.ndarray, residuals: np.ndarray, size: float,
 class StartMaker:
     """Turns a Latin-hypercube row into an IPOPT start; built once per spec and seed."""
 
-    def __init__(self, spec: FourbarPathSpec, seed: int):
+    def __init__(self, spec: FourbarPathSpec, seed: int, auto_order: bool = False):
         self.spec = spec
         self.seed = seed
         self.bounds = np.array(spec.bounds_array(), dtype=float)
@@ -461,6 +493,8 @@ class StartMaker:
         self._ranked: np.ndarray | None = None
         self._screened: tuple[np.ndarray, np.ndarray] | None = None
         self.screening = self.timed_theta is None and len(self.targets) >= SCREEN_MIN_TARGETS
+        #: an auto run's starts (``auto_role``): only where ``takes_auto_order`` (the screened sets)
+        self.auto_order = auto_order and takes_auto_order(spec)
 
     def in_class(self, design: np.ndarray) -> np.ndarray:
         out = np.array(design, dtype=float)
@@ -473,6 +507,8 @@ class StartMaker:
         return out
 
     def __call__(self, index: int, x: np.ndarray) -> StartPoint:
+        if self.auto_order and index > 0:         # the auto order's start is this kind of the fixed order's
+            index = auto_role(index)
         design = self.in_class(x)
         if index == 0 and self.spec.design.crank_deg is not None:
             given = np.radians(self.spec.design.crank_deg)

@@ -1,0 +1,166 @@
+"""``--starts auto`` in a kind's own start order (synthesis/core/solve.py AutoStarts, Solving.auto_order) and
+fourbar_path's auto order (synthesis/kinds/fourbar_path/starts.py auto_role): batches that grow by appending, the
+same answer for any worker count, a resumed run's answer the uninterrupted one."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from conftest import LIBRARY
+from synthesis import kinds
+from synthesis.core.solve import AutoStarts, rows_of_indices, run_solve
+from synthesis.kinds import solving_kind_for
+from synthesis.kinds.fourbar_path.inexact import inexact_spec
+from synthesis.kinds.fourbar_path.starts import AUTO_SCREENED, StartMaker, auto_role, takes_auto_order
+from synthesis.spec import load_spec
+
+TOY = """kind = "toy_disc"
+name = "toy"
+x = { init = 0.0, bounds = [-20.0, 20.0] }
+y = { init = 1.0, bounds = [-20.0, 20.0] }
+radius = 10.0
+y_min = -5.0
+target = [30.0, 40.0]
+[solver]
+starts = 20
+"""
+
+
+@pytest.fixture
+def nested_toy():
+    """The toy kind (one optimum) with an auto order of its own: its starts are the core's rows by index."""
+    import toy_kind
+
+    kinds.register(toy_kind.KIND)
+    yield toy_kind.KIND.solving_with(dataclasses.replace(toy_kind.KIND.solving(), auto_order=lambda setting: True))
+    kinds.unregister("toy_disc")
+
+
+def _toy(tmp_path):
+    path = tmp_path / "toy.toml"
+    path.write_text(TOY)
+    return load_spec(path)
+
+
+# ---------------------------------------------------------------------------- the core: nested batches
+
+def test_rows_by_index_do_not_depend_on_the_run_size():
+    """Row i is drawn for (seed, i) alone: the first 5 rows of 40 are the 5 rows of 5; row 0 is the given design;
+    every row is within the bounds and a fixed variable stays at its bound; another seed draws other rows."""
+    bounds = np.array([[-2.0, 3.0], [1.0, 1.0], [0.0, 10.0]])
+    init = np.array([0.5, 1.0, 4.0])
+    forty, five = rows_of_indices(bounds, init, 40, 7), rows_of_indices(bounds, init, 5, 7)
+    assert np.array_equal(forty[:5], five) and np.array_equal(forty[0], init)
+    assert np.all(forty[1:, 1] == 1.0)
+    assert np.all(forty >= bounds[:, 0]) and np.all(forty <= bounds[:, 1])
+    assert len({tuple(r) for r in forty}) == 40
+    assert not np.array_equal(rows_of_indices(bounds, init, 5, 8)[1:], five[1:])
+    # 39 uniform draws per variable: their mean is within 4 standard errors of the box's middle
+    for j in (0, 2):
+        lo, hi = bounds[j]
+        assert abs(forty[1:, j].mean() - 0.5 * (lo + hi)) < 4 * (hi - lo) / np.sqrt(12 * 39)
+
+
+def test_a_nested_auto_run_solves_each_start_once_and_gives_the_same_answer_on_one_and_two_workers(tmp_path,
+                                                                                                   nested_toy):
+    """The toy's batches 16 and 32 (min_converged 20): 32 starts solved in all (the first batch's 16 carried, not
+    solved again: the second batch replays the very same outcomes), against 48 for the fixed order; one and two
+    workers give the same answer, count and statement; result.json says the order was the kind's."""
+    loaded = _toy(tmp_path)
+    runs = {}
+    for workers in (1, 2):
+        kept = []
+        result, reports, _ = run_solve(nested_toy, loaded, workers=workers, auto=AutoStarts(min_converged=20),
+                                       record=kept.append)
+        runs[workers] = result
+        assert result.solver["auto"]["batches"] == [16, 32] and result.solver["auto"]["order"] == "kind"
+        assert len({id(out) for out in kept}) == 32 and [r.outcome.start for r in reports] == list(range(32))
+    one, two = runs[1], runs[2]
+    assert one.solver["auto"] == two.solver["auto"] and one.solver["starts"] == two.solver["starts"] == 32
+    assert one.objective["value"] == two.objective["value"] and one.design == two.design
+    assert one.solver["confidence"] == two.solver["confidence"]
+    assert [s["design"] for s in one.starts] == [s["design"] for s in two.starts]
+
+
+def test_a_nested_auto_run_resumed_inside_its_second_batch_gives_the_uninterrupted_answer(tmp_path, nested_toy):
+    """What starts.jsonl keeps after the last batch's mark (startlog.read drops everything before it) is every start
+    of a nested run, the carried ones recorded again: resumed from 7 of them in batch 32, the run solves the other
+    25 only and gives the uninterrupted answer."""
+    loaded = _toy(tmp_path)
+    kept = []
+    marks = []
+    whole, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append,
+                            on_batch=lambda total: marks.append(len(kept)))
+    after_last_mark = kept[marks[-1]:]
+    assert sorted(out.start for out in after_last_mark) == list(range(32))
+    cut = {out.start: out for out in after_last_mark[:7]}
+    solved = []
+    resumed, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), finished=cut,
+                              resumed_batch=32, record=solved.append)
+    assert len({id(out) for out in solved} - {id(out) for out in cut.values()}) == 25
+    assert resumed.solver["auto"] == whole.solver["auto"] and resumed.solver["confidence"] == whole.solver["confidence"]
+    assert resumed.objective["value"] == whole.objective["value"] and resumed.design == whole.design
+
+
+# ---------------------------------------------------------------------------- fourbar_path's auto order
+
+def test_the_auto_order_is_the_given_design_then_the_screened_shapes_then_blocks_of_four():
+    """auto_role maps the auto order one to one onto the fixed order's indices: 0 itself; 1..15 the screened
+    shapes of rank 1..15 (fixed 3, 7, ..., 59); then each block of four one screened shape (next rank), one pool
+    start (next rank) and two hypercube starts (the next two, so their crank directions alternate cw, ccw as the
+    fixed order's 2, 4, ...).  The first 512 are 512 distinct fixed indices."""
+    roles = [auto_role(i) for i in range(512)]
+    assert len(set(roles)) == 512 and roles[0] == 0
+    assert roles[1:AUTO_SCREENED + 1] == [4 * r - 1 for r in range(1, AUTO_SCREENED + 1)]
+    rest = roles[AUTO_SCREENED + 1:]
+    screened = [j for j in rest if j % 4 == 3]
+    pool = [j for j in rest if j % 4 == 1]
+    hypercube = [j for j in rest if j % 2 == 0]
+    assert screened == [4 * r - 1 for r in range(AUTO_SCREENED + 1, AUTO_SCREENED + 1 + len(screened))]
+    assert pool == [4 * q + 1 for q in range(len(pool))] and hypercube == [2 * (h + 1) for h in range(len(hypercube))]
+    assert len(screened) == len(pool) == len(hypercube) // 2 == (512 - AUTO_SCREENED - 1) // 4
+    for block in range(len(rest) // 4):
+        screened_one, hyper_one, pool_one, hyper_two = rest[4 * block:4 * block + 4]
+        assert (screened_one % 4, pool_one % 4, hyper_one % 2, hyper_two % 2) == (3, 1, 0, 0)
+        assert hyper_two == hyper_one + 2
+
+
+def test_only_the_screened_sets_take_the_auto_order():
+    """The inexact set (free timing, 12-25 targets) takes it; the library's picking arc (10 targets: no screen)
+    keeps the fixed order, and a StartMaker asked for the auto order there builds the fixed order's starts."""
+    assert takes_auto_order(inexact_spec("egg16").model)
+    arc = load_spec(LIBRARY / "fourbar_path" / "picking_arc.toml").model
+    assert not takes_auto_order(arc) and not StartMaker(arc, 0, auto_order=True).auto_order
+
+
+def test_an_auto_order_start_is_the_fixed_orders_start_of_its_role():
+    """Start i of the auto order is fixed start auto_role(i) (the screened and pool starts, which ignore the row, to
+    the bit; a hypercube start from the same row also to the bit, its continuation flag set)."""
+    spec = inexact_spec("s_curve12").model
+    fixed, auto = StartMaker(spec, 0), StartMaker(spec, 0, auto_order=True)
+    rng = np.random.default_rng(3)
+    lo, hi = fixed.bounds[:, 0], fixed.bounds[:, 1]
+    for i in (1, 2, 15, 16, 17, 18, 19):
+        x = lo + rng.random(len(lo)) * (hi - lo)
+        a, f = auto(i, x), fixed(auto_role(i), x)
+        assert np.array_equal(a.design, f.design) and np.array_equal(a.theta, f.theta) and a.sign == f.sign
+        assert a.timing_first == f.timing_first == (auto_role(i) % 2 == 0)
+
+
+@pytest.mark.slow         # about 10 s: two auto runs of 32 starts of an inexact problem
+def test_an_inexact_auto_run_is_the_same_on_one_and_two_workers_and_its_prefix_is_the_smaller_budgets_run():
+    """egg16, seed 0, max_starts 32: one and two workers give the same answer and starts; the run with max_starts
+    16 is the first batch of it to the bit (the auto order's start i does not depend on the budget)."""
+    loaded = inexact_spec("egg16", {"seed": 0})
+    kind = solving_kind_for(loaded)
+    one, _, _ = run_solve(kind, loaded, workers=1, auto=AutoStarts(max_starts=32))
+    two, _, _ = run_solve(kind, loaded, workers=2, auto=AutoStarts(max_starts=32))
+    assert one.solver["auto"]["order"] == "kind" and one.solver["starts"] == two.solver["starts"]
+    assert one.objective["value"] == two.objective["value"] and one.design == two.design
+    assert [s["objective"] for s in one.starts] == [s["objective"] for s in two.starts]
+    small, _, _ = run_solve(kind, loaded, workers=1, auto=AutoStarts(max_starts=16))
+    assert [s["objective"] for s in small.starts] == [s["objective"] for s in one.starts[:16]]
+    assert [s["design"] for s in small.starts] == [s["design"] for s in one.starts[:16]]
