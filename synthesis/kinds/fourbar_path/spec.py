@@ -335,6 +335,9 @@ class FourbarPathSpec(ProblemSpec):
         if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
             raise ValueError("dynamics.counterweight: a fourbar_path's solve frees only its linkage; give the "
                              "counterweight's mass (kg) and radius (mm) as numbers")
+        if table.rocker_counterweight is not None:
+            raise ValueError("dynamics.rocker_counterweight: a fourbar_path reads a counterweight on its crank only; "
+                             "leave the field out")
         return self
 
     @classmethod

@@ -195,6 +195,9 @@ class PickerDoubleCrankSpec(ProblemSpec):
         if weight is not None and not all(isinstance(v, (int, float)) for v in (weight.mass, weight.radius)):
             raise ValueError("dynamics.counterweight: a picker_double_crank's solve frees only its linkage; give the "
                              "counterweight's mass (kg) and radius (mm) as numbers")
+        if self.dynamics.rocker_counterweight is not None:
+            raise ValueError("dynamics.rocker_counterweight: a picker_double_crank reads a counterweight on its input "
+                             "crank AB only; leave the field out")
         if any(pm.at == "tip" and pm.link != "coupler" for pm in self.dynamics.point_masses):
             raise ValueError("dynamics.point_masses: at = \"tip\" is the clamp point M, on the coupler; on the crank "
                              "or the follower give the position in the link frame, mm")
