@@ -82,7 +82,7 @@ def test_the_fitted_law_and_spring_hold_the_jump_speed_on_the_fine_grid(shaped):
 def test_the_fitted_preload_is_the_least_the_rows_allow(shaped):
     """The fit's rows recomputed from the law's numbers on the fit's samples: at the fitted preload the weakest jump
     row is zero (to the solver's tolerance) and so is the weakest contact row at 90 r/min (the law is shaped until
-    both bind); 1 % less preload breaks a jump row.  The stiffness is the free stiffness's lower bound."""
+    both bind), so any less preload breaks a jump row.  The stiffness is the free stiffness's lower bound."""
     spec, law = shaped
     shaping = spring_shaping(spec)
     assert law.spring["stiffness"] == shaping.stiffness == 0.2
@@ -90,7 +90,6 @@ def test_the_fitted_preload_is_the_least_the_rows_allow(shaped):
     preload = law.spring["preload"]
     assert preload == pytest.approx(need["jump"], abs=1e-6)
     assert preload == pytest.approx(need["contact"], abs=1e-6)
-    assert 0.99 * preload < need["jump"]
     assert law.spring["force_at_full_stroke"] == pytest.approx(4.09516, abs=5e-5)
 
 
@@ -202,6 +201,8 @@ def test_the_shaped_redesign_keeps_contact_up_to_1p5_times_its_speed():
     ((r"offset = -6.30 [^\n]*", "offset = { init = -6.3, bounds = [-10.0, 0.0] }"), "follower.offset"),
     ((r"min_contact_force = 2.0 [^\n]*\n(max_hertz_stress = [^\n]*\n)min_jump_speed = [^\n]*", r"\1"),
      "dynamics.limits.min_jump_speed"),
+    ((r"spring_preload = \{ init = 5.0, bounds = \[0.0, 50.0\] \} [^\n]*", "spring_preload = 2.07"),
+     "dynamics.spring_preload"),
 ])
 def test_what_it_cannot_fit_is_refused_on_one_line_naming_the_field(tmp_path, edit, field):
     pattern, replacement = edit

@@ -283,6 +283,9 @@ def constant_speed_energy(model: CrankModel, omega: float) -> ConstantSpeedEnerg
     scale = max(float(np.abs(model.at(np.linspace(0.0, TWO_PI, 64, endpoint=False), omega)["load_torque"]).max()),
                 1.0e-12)
     whole = _integrate(first, [0.0, 0.0], model.breaks, atol=[RTOL * scale, RTOL * 1.0e-6])
+    if whole.status != 0:
+        raise NoSteadySpeed(f"the load torque could not be integrated over the turn at constant speed (stopped at "
+                            f"{math.degrees(whole.stop):.1f} deg)")
     mean_torque = -float(whole.y_end[0]) / TWO_PI
     mean_inertia = float(whole.y_end[1]) / TWO_PI
 
@@ -293,6 +296,9 @@ def constant_speed_energy(model: CrankModel, omega: float) -> ConstantSpeedEnerg
         return mean_torque - call(theta, omega, 0.0, 0.0)[5]
 
     run = _integrate(surplus, [0.0], model.breaks, events=[turning], atol=RTOL * scale)
+    if run.status != 0:
+        raise NoSteadySpeed(f"the energy surplus could not be integrated over the turn at constant speed (stopped at "
+                            f"{math.degrees(run.stop):.1f} deg)")
     # the extremes: where T_load = T_m (the events), or at a break, where T_load may jump across T_m
     at = np.concatenate([run.t_edges, run.t_events[0]])
     values = np.concatenate([run.y_edges[0], run.y_events[0][:, 0]])
@@ -429,7 +435,10 @@ def speed_fluctuation_facts(linkage, crank: np.ndarray, drive, joint_names: tupl
     except NoSteadySpeed as exc:
         return {**out, "found": False, "why": str(exc)}
     at_speed = replace(linkage, omega=speed.omega, alpha=speed.alpha).over_turn(crank)
-    torque, force, moment = at_speed["torque"], at_speed["shaking_force"], at_speed["shaking_moment"]
+    torque, force = at_speed["torque"], at_speed["shaking_force"]
+    # the shared Function counts minus the crank's torque as its driver's reaction on the frame; here the driver is
+    # the shaft with its flywheel, and the frame holds only the motor's stator: -T_m = -(shaft torque) - J_f alpha
+    moment = at_speed["shaking_moment"] - speed.flywheel_inertia * speed.alpha
     return {**out, "found": True,
             "flywheel_inertia_kgm2": speed.flywheel_inertia, "flywheel_inertia_from": given,
             "motor_torque_Nm": speed.motor_torque,
@@ -438,9 +447,9 @@ def speed_fluctuation_facts(linkage, crank: np.ndarray, drive, joint_names: tupl
             "omega_min_radps": speed.omega_min, "omega_min_at_crank_deg": math.degrees(speed.omega_min_at),
             "omega_max_radps": speed.omega_max, "omega_max_at_crank_deg": math.degrees(speed.omega_max_at),
             "periodicity_residual_radps": speed.periodicity_residual, "turn_time_s": speed.turn_time,
-            "input_torque_Nm": torque.tolist(), "shaking_force_N": force.T.tolist(),
+            "shaft_torque_Nm": torque.tolist(), "shaking_force_N": force.T.tolist(),
             "shaking_moment_Nm": moment.tolist(),
-            "summary": {"input_torque_Nm": peaks(torque, crank),
+            "summary": {"shaft_torque_Nm": peaks(torque, crank),
                         "shaking_force_N": peaks(np.hypot(force[0], force[1]), crank),
                         "shaking_moment_Nm": peaks(moment, crank),
                         "joints_N": {name: peaks(np.hypot(*at_speed["reactions"][:, k, :]), crank)

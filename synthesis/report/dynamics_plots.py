@@ -54,7 +54,7 @@ def dynamics_figure(result: Result, path: Path) -> None:
     ax.plot(crank, magnitude, color="C0", label=f"|shaking force|, peak {magnitude.max():.3g} N")
     ax.set_ylabel("shaking force, N")
     if speed_panel:
-        shaft = np.asarray(fluctuation["input_torque_Nm"], float)
+        shaft = np.asarray(fluctuation["shaft_torque_Nm"], float)
         axes[0].plot(crank, shaft, "--", color="C4", label=f"at the fluctuating speed, peak {np.abs(shaft).max():.3g}")
         slow = np.asarray(fluctuation["shaking_force_N"], float).reshape(-1, 2)
         slow_magnitude = np.hypot(slow[:, 0], slow[:, 1])

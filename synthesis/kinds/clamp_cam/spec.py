@@ -378,6 +378,12 @@ class ClampCamSpec(ProblemSpec):
         if limits.min_jump_speed is None and limits.min_contact_force is None:
             raise ValueError("bspline.minimise: \"spring_force\" needs dynamics.limits.min_jump_speed or "
                              "min_contact_force (what the spring must hold the follower against)")
+        preload, stiffness = self.dynamics.spring_preload, self.dynamics.spring_stiffness
+        if preload is not None and stiffness is not None and not is_free(preload) and is_free(stiffness):
+            # the fit holds the stiffness at its lower bound, which loses nothing only if the preload may rise
+            raise ValueError("dynamics.spring_preload: bspline.minimise = \"spring_force\" fits the preload with the "
+                             "stiffness at its lower bound; free the preload too ({init, bounds}) or give the "
+                             "stiffness as a number")
         return self
 
     @model_validator(mode="after")

@@ -40,8 +40,11 @@ angles differ) reached 4.040 N at full stroke against this fit's 4.095 N, where 
 The stiffness is a number: the spec's, or the lower bound of a free stiffness.  With both F0 and k free the rows
 hold the product k s of two unknowns; holding k at its lower bound loses nothing for these rows: from any
 feasible (F0, k), (F0 + (k - k_lo) h, k_lo) is feasible (its spring force F0 + k s + (k - k_lo)(h - s) is no
-smaller at any s <= h) with the same force at full stroke.  (It is larger below full stroke, which only an
-upper limit on the force, the Hertz stress, could mind; the NLP keeps both spring variables and re-checks it.)
+smaller at any s <= h) with the same force at full stroke -- provided the preload may rise by (k - k_lo) h: a
+preload given as a number with a free stiffness is refused by the spec, and when the preload's upper bound is what
+makes the fit infeasible its message says to widen it or to give the stiffness as a number.  (The force is larger
+below full stroke, which only an upper limit on the force, the Hertz stress, could mind; the NLP keeps both spring
+variables and re-checks it.)
 
 The secondary term, SECONDARY x the existing fit's objective (each segment's peak |S''| relative to the
 cycloidal law's, plus its tiny tie-break): the rows only bind where the spring decelerates the follower, so many
@@ -180,7 +183,9 @@ def fit_spring_shaped_law(stroke: float, segments_deg: dict[str, float], shaping
                 "bspline.minimise = 'spring_force': no law of this spline meets the spring's rows on the given cam "
                 f"with the preload within [{lo:g}, {hi:g}] N (the pressure angle limits, the jump speed, the "
                 f"contact force{', the acceleration limit' if max_acceleration is not None else ''}); widen the "
-                f"preload's bounds, lengthen the return or the rise, or enlarge the cam (cvxpy/CLARABEL said: "
+                f"preload's bounds (the fit holds the stiffness at {k:g} N/mm, its lower bound: a stiffer spring needs "
+                f"room above the preload), give the stiffness as a number, lengthen the return or the rise, or "
+                f"enlarge the cam (cvxpy/CLARABEL said: "
                 f"{problem.status})")
         raise SolverError(f"the spring-shaped law's convex problem failed: cvxpy/CLARABEL said {problem.status}")
 

@@ -294,10 +294,12 @@ class SolverSection(MultistartSettings):
     samples: int = Field(36, ge=4, le=3600, description="samples of the crank motion per gap for the check of "
                                                          "the sampled rules (grashof = \"any\"; the solve holds "
                                                          "them exactly); the re-check is 10x finer")
-    dynamics_samples: int = Field(72, ge=8, le=3600, multiple_of=2,
+    dynamics_samples: int = Field(72, ge=36, le=3600, multiple_of=2,
                                   description="crank angles over a turn at which the NLP holds the [dynamics.limits] "
-                                              "(even: includes the crank along and against the frame); check and "
-                                              "the re-check evaluate them on 10x as many")
+                                              "(even: includes the crank along and against the frame; at least 36, "
+                                              "as the NLP holds each peak 2 % x (72 / N)^2 of its limit inside it to "
+                                              "cover the miss between samples, 8 % at 36); check and the re-check "
+                                              "evaluate them on 10x as many")
 
 
 class FourbarPathSpec(ProblemSpec):
