@@ -56,6 +56,9 @@ RECORDED = {
     "taiwan_example4": "bf31f8cfc42f665b2f7c",
     "torque_redesign_from_example1": "db0a5e82bdb33333b2cf",
 }
+#: rules added after the recording (a counterweight's clearance above the soil): left out of the digest, which so
+#: proves every recorded rule unchanged (their values: tests/test_planting_soil_and_counterweights.py)
+ADDED_SINCE = ("counterweight_clearance", "rocker_counterweight_clearance")
 #: run by default: the Monte-Carlo's subject and the spec with a counterweight and dynamics rules; the rest: -m slow
 QUICK = ("redesign_from_example1", "counterweight_min_shaking_from_example1")
 
@@ -88,19 +91,22 @@ def _row(recheck) -> dict:
     return {"theta": None if pts is None else {k: _hex(v) for k, v in pts.theta.items()},
             "problems": None if pts is None else pts.problems,
             "rules": [[r.name, _hex(r.value), _hex(r.margin), bool(r.satisfied), getattr(r, "note", None)]
-                      for r in (q.record() for q in recheck.rules)]}
+                      for r in (q.record() for q in recheck.rules) if r.name not in ADDED_SINCE]}
 
 
 @pytest.mark.parametrize("name", [n if n in QUICK else pytest.param(n, marks=pytest.mark.slow) for n in RECORDED])
 def test_recheck_of_designs_near_each_library_spec_is_what_it_was_to_the_bit(name):
     loaded, recheck = _recheck(name)
-    rows = []
+    rows, added = [], set()
     for i, design in enumerate(designs_near(loaded.model.design_values(), DESIGNS_PER_SPEC)):
         try:
-            rows.append(_row(recheck(i, design)))
+            checked = recheck(i, design)
+            added |= {r.name for r in checked.rules if r.name in ADDED_SINCE}
+            rows.append(_row(checked))
         except (AgrisynthError, ValueError, ArithmeticError) as exc:   # as the Monte-Carlo counts a sample's raise
             rows.append({"raised": f"{type(exc).__name__}: {exc}"})
     assert any(rule[4] for r in rows for rule in r.get("rules", []))   # notes (of points not found) compared too
+    assert added == ({"counterweight_clearance"} if "counterweight" in name else set())
     assert hashlib.sha256(json.dumps(rows, sort_keys=True).encode()).hexdigest()[:20] == RECORDED[name]
 
 

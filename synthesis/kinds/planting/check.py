@@ -191,7 +191,10 @@ def with_soil_facts(facts: dict, linkage: FourbarDynamics, table, contact: SoilC
     """``facts`` (:func:`synthesis.dynamics.linkage.dynamics_facts`) with the soil on the claw, as the tillage kind
     writes it: in ``external_loads`` the law, the force at each sample (``force_N``, N x 2), C's depth below the
     surface (``depth_mm``, negative above it) and the loads' power with the soil's (``external_power_W``, so the
-    energy balance closes from the file); in the summary the peak soil force and the soil's mean power."""
+    energy balance closes from the file); in the summary the peak soil force, the soil force's mean power through the
+    crank (``mean_soil_power_W``: F . v_C in the machine frame, negative: the motor supplies it) and the mean power
+    the soil dissipates (``mean_soil_dissipation_W``: -F . v_rel in the ground frame, v_rel = v_C + the forward speed;
+    the tractor's drawbar supplies the difference, -F_x x the forward speed)."""
     crank = turn(table.samples)
     out = linkage.over_turn(crank)
     without = replace(linkage, soil=None).over_turn(crank)          # the constant loads' power alone
@@ -201,8 +204,12 @@ def with_soil_facts(facts: dict, linkage: FourbarDynamics, table, contact: SoilC
             **table.soil.model_dump()}
     facts["external_loads"] = {"loads": [*given, soil], "external_power_W": out["external_power"].tolist(),
                                "force_N": out["soil_force"].T.tolist(), "depth_mm": out["soil_depth"].tolist()}
+    # through the crank, machine frame: F . v_C
+    through_crank = float(np.mean(out["external_power"] - without["external_power"]))
+    # in the soil, ground frame: -F . (v_C + v_f), the rest of it the drawbar's -F_x v_f
+    dissipated = -(through_crank + float(contact.forward_speed) * float(np.mean(out["soil_force"][0])))
     facts["summary"] |= {"soil_force_N": peaks(np.hypot(*out["soil_force"]), crank),
-                         "mean_soil_power_W": float(np.mean(out["external_power"] - without["external_power"]))}
+                         "mean_soil_power_W": through_crank, "mean_soil_dissipation_W": dissipated}
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -33,9 +33,11 @@ from synthesis.kinds.planting.dynamics import (SoilContact, arm_dynamics, arm_li
 from constraints.poses import nearest_row
 from synthesis.kinds.planting.kinematics import claw_attitude, link_function, path_positions, tip_derivatives
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds, planting_rules
+from synthesis.kinds.planting.rules.counterweight import (CounterweightReading, declared,
+                                                          rocker_counterweight_y_function)
 from synthesis.kinds.planting.scene import PlantingScene, assembly_status, find_precision_points
 from synthesis.spec.design_info import units_of
-from synthesis.spec.common import bounds_of, value_of
+from synthesis.spec.common import bounds_of, is_free, value_of
 from synthesis.spec.operating import ranges_of
 from synthesis.kinds.planting.spec import PlantingFourbarSpec
 
@@ -98,9 +100,10 @@ class PlantingProblem:
         # the nominal only (robust_redesign_from_example1 without them: P3 fell after P4, soil entry, in 2 of 2,000
         # Monte-Carlo samples, and the five rules that read P1-P3 could not be evaluated there)
         structural = self._structural(v, p, theta, states, th[6] if self.clearance > 0.0 else None)
+        self.surface = self._soil_surface(v, states)
         # the soil law's surface: the [soil] level (a number or a design variable) or the analysis depth above P5,
         # whose crank angle is a decision variable, as the structural rows place it
-        self.contact = (SoilContact(self._soil_surface(v, states), self.forward_speed)
+        self.contact = (SoilContact(self.surface, self.forward_speed)
                         if spec.dynamics is not None and spec.dynamics.soil is not None else None)
         poses, nearest = self._poses(p, theta, states, th)
         structural += nearest
@@ -181,7 +184,24 @@ class PlantingProblem:
                      mu_deg=ca.vec(mu) * (180.0 / math.pi), omega=omega, forward=self.forward_speed * 1000.0,
                      acc_scale=self.omega**2 * value_of(spec.arm.l2),
                      dynamics=arm_dynamics(spec.dynamics, p, spec.arm.branch, omega, counterweight_of(v),
-                                           rocker_counterweight_of(v), self.contact), poses=poses)
+                                           rocker_counterweight_of(v), self.contact), poses=poses,
+                     counterweights=self._counterweights(v, p, turn))
+
+    def _counterweights(self, v, p, turn: np.ndarray) -> list[CounterweightReading]:
+        """Each counterweight whose mass is free or not zero, its heights above the soil surface (mm): the crank's
+        at its lowest point exactly (-radius: it circles the origin O), the rocker's at the turn's samples."""
+        table, out = self.spec.dynamics, []
+        if table is None:
+            return out
+        for name, weight, heights in (
+                ("counterweight", table.counterweight, lambda r: -r - self.surface),
+                ("rocker_counterweight", table.rocker_counterweight,
+                 lambda r: ca.vec(rocker_counterweight_y_function(self.spec.arm.branch).map(turn.size)(
+                     turn, p, r)) - self.surface)):
+            if weight is None or not declared((value_of(weight.mass), None), is_free(weight.mass)):
+                continue
+            out.append(CounterweightReading(name, heights(v[f"{name}_radius"]), table.counterweight_clearance))
+        return out
 
     def _soil_surface(self, v, states):
         """Y of the soil surface (mm, machine frame) on decision variables: the [soil] level or the analysis depth

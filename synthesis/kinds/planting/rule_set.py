@@ -20,6 +20,7 @@ from constraints import Rule
 from constraints.poses import attitude_miss_deg, pose_attitude_rule, pose_tip_rule
 from synthesis.kinds.planting.rules.acceleration import acceleration_sign_rule
 from synthesis.kinds.planting.rules.angles import entry_angle_rule
+from synthesis.kinds.planting.rules.counterweight import counterweight_clearance_rule
 from synthesis.kinds.planting.rules.depth import depth_rule
 from constraints.grashof import grashof_rule
 from synthesis.kinds.planting.rules.precision_points import p4p6_rule, seedbed_rules
@@ -97,6 +98,9 @@ class Trace:
     dynamics: Any = None
     #: the claw at each of the spec's key poses, in its order (none without a [key_poses] table)
     poses: list[PoseReading] = field(default_factory=list)
+    #: each counterweight's heights above the soil surface
+    #: (synthesis.kinds.planting.rules.counterweight.CounterweightReading; none without a counterweight)
+    counterweights: list = field(default_factory=list)
 
     def missing(self, *names: str) -> str | None:
         """Why any of ``names`` is absent (the first reason), or None when all exist."""
@@ -139,6 +143,7 @@ def planting_rules(tr: Trace, limits) -> list[Rule]:
     if tr.dynamics is not None:      # on the transmission angle's grid over the turn
         samples = 0 if tr.mu_deg is None else (tr.mu_deg.numel() if hasattr(tr.mu_deg, "numel") else len(tr.mu_deg))
         rules += arm_dynamics_rules(tr.dynamics, samples, tr.turn_missing)
+    rules += [counterweight_clearance_rule(reading) for reading in tr.counterweights]
     return rules + pose_rules(tr.poses)
 
 

@@ -22,9 +22,10 @@ from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, attitude_fun
                                                  tip_heights_and_transmission, tip_position, tip_positions, tip_state,
                                                  transmission_angles)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds
+from synthesis.kinds.planting.rules.counterweight import (CounterweightReading, declared, longer_than_link,
+                                                          lowest_rocker_counterweight_y)
 from synthesis.spec.common import value_of
-from synthesis.spec.dynamics import DynamicsSection
-from synthesis.kinds.planting.spec import PlantingFourbarSpec
+from synthesis.kinds.planting.spec import PlantingDynamicsSection, PlantingFourbarSpec
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ class PlantingScene:
     #: length, the same number the NLP uses; None: omega^2 x this design's crank length
     reference_acc: float | None = None
     #: the spec's [dynamics] table, or None
-    dynamics: DynamicsSection | None = None
+    dynamics: PlantingDynamicsSection | None = None
     #: the design's counterweight on the crank (mass kg, radius mm), or None
     counterweight: tuple | None = None
     #: the spec's [key_poses]: name -> pose (synthesis.kinds.planting.spec.KeyPose); empty without the table
@@ -362,7 +363,34 @@ def float_trace(scene: PlantingScene, pts: PrecisionPoints, phase_samples: int =
                                                    turn_samples else transmission_angles_deg(d, turn_samples)),
                  omega=m.omega,
                  forward=m.forward, acc_scale=scene.acc_scale, problems=dict(pts.problems),
-                 turn_missing=turn_missing, poses=float_poses(scene, pts, turn_missing))
+                 turn_missing=turn_missing, poses=float_poses(scene, pts, turn_missing),
+                 counterweights=float_counterweights(scene, pts, turn_samples, turn_missing))
+
+
+def float_counterweights(scene: PlantingScene, pts: PrecisionPoints, turn_samples: int,
+                         turn_missing: str | None = None) -> list[CounterweightReading]:
+    """Each counterweight of the design with a mass (crank's, then rocker's) at its lowest point over a turn, its
+    height above the soil surface the precision points were found with: the crank's exactly (it circles the origin O:
+    -radius), the rocker's on ``turn_samples`` crank angles refined (rules.counterweight)."""
+    if scene.dynamics is None:
+        return []
+    clearance = scene.dynamics.counterweight_clearance
+    d, out = scene.design, []
+    for name, weight, length in (("counterweight", scene.counterweight, d.l2),
+                                 ("rocker_counterweight", scene.rocker_counterweight, d.l4)):
+        if not declared(weight, free=False):
+            continue
+        assert weight is not None            # declared: a counterweight with a mass
+        radius = float(weight[1])
+        note = longer_than_link(name, radius, length)
+        if turn_missing is not None or pts.soil_level is None:
+            why = turn_missing or "the soil surface is not found"
+            out.append(CounterweightReading(name, None, clearance, note, why))
+            continue
+        lowest = (-radius if name == "counterweight"
+                  else lowest_rocker_counterweight_y(d.parameters(), radius, d.branch, turn_samples))
+        out.append(CounterweightReading(name, lowest - pts.soil_level, clearance, note))
+    return out
 
 
 def transmission_angles_deg(d: ArmDesign, samples: int) -> np.ndarray:

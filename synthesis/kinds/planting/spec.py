@@ -201,6 +201,13 @@ class PlantingDynamicsSection(DynamicsSection):
                           "magnitude f0 + k d opposing C's velocity relative to the soil (the machine travelling "
                           "forward at [operation] forward_speed; the direction blended to zero below 1 mm/s, "
                           "synthesis/dynamics/fourbar.py); left out: no soil force")
+    counterweight_clearance: float = Field(
+        10.0, ge=0, description="mm: the lowest point of each counterweight (crank's, rocker's) over a turn at least "
+                                "this far above the [soil] surface (rules counterweight_clearance, "
+                                "rocker_counterweight_clearance, when the counterweight's mass is free or not zero); "
+                                "10 mm: the planting-depth band (20-30 mm about the 25 mm analysis depth) admits a "
+                                "surface 5 mm above the analysis one, and the counterweight, a point mass here, "
+                                "reaches about 5 mm below its centre as a plate 10 mm deep")
 
 
 class PlantingFourbarSpec(ProblemSpec):
