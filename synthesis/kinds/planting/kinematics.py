@@ -25,6 +25,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from synthesis.kinematics import fourbar
 
@@ -333,3 +334,34 @@ def joint_positions(design: ArmDesign, theta) -> dict[str, np.ndarray]:
     pivot = np.array(fourbar.rocker_pivot(l1, zeta), float).reshape(2, 1)
     n = theta.size
     return {"O": np.zeros((2, n)), "O'": np.repeat(pivot, n, axis=1), "A": a, "B": b, "C": c.reshape(2, n)}
+
+
+def rocker_counterweight_y(theta, p, radius, branch: int):
+    """Y (mm, machine frame) of the rocker's counterweight at crank angle theta, for the arm parameters
+    p = (l1, l2, l3, l4, l5, zeta, phi) (mm, rad) and its radius (mm): O' - radius (B - O') / l4; floats, arrays or
+    CasADi symbols."""
+    l1, l2, l3, l4, zeta = p[0], p[1], p[2], p[3], p[5]
+    _, (_, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
+    _, oy = fourbar.rocker_pivot(l1, zeta)
+    return oy - radius * (by - oy) / l4
+
+
+@lru_cache(maxsize=4)
+def rocker_counterweight_y_function(branch: int) -> ca.Function:
+    """CasADi Function (theta, p, radius) -> Y of the rocker's counterweight (mm)."""
+    theta, p, radius = ca.SX.sym("theta"), ca.SX.sym("p", 7), ca.SX.sym("radius")
+    return ca.Function("rocker_counterweight_y", [theta, p, radius],
+                       [rocker_counterweight_y(theta, p, radius, branch)])
+
+
+def lowest_rocker_counterweight_y(p, radius: float, branch: int, samples: int) -> float:
+    """The lowest Y (mm) of the rocker's counterweight over a turn: ``samples`` crank angles, then a bounded
+    minimisation between the neighbours of the lowest (to 1e-10 rad), for a crank that completes a turn."""
+    f = rocker_counterweight_y_function(branch)
+    grid = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
+    ys = np.asarray(_mapped(rocker_counterweight_y_function, branch, samples)(grid.reshape(1, -1), p, radius),
+                    float).ravel()
+    k, step = int(np.argmin(ys)), grid[1]
+    found = minimize_scalar(lambda t: float(f(t, p, radius)), bounds=(grid[k] - step, grid[k] + step),
+                            method="bounded", options={"xatol": 1e-10})
+    return float(min(found.fun, ys[k]))

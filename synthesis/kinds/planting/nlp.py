@@ -31,10 +31,10 @@ from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES, soil_contact
 from synthesis.kinds.planting.dynamics import (SoilContact, arm_dynamics, arm_linkage, counterweight_of,
                                                rocker_counterweight_of)
 from constraints.poses import nearest_row
-from synthesis.kinds.planting.kinematics import claw_attitude, link_function, path_positions, tip_derivatives
+from synthesis.kinds.planting.kinematics import (claw_attitude, link_function, path_positions,
+                                                 rocker_counterweight_y_function, tip_derivatives)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds, planting_rules
-from synthesis.kinds.planting.rules.counterweight import (CounterweightReading, declared,
-                                                          rocker_counterweight_y_function)
+from synthesis.kinds.planting.rules.counterweight import CounterweightReading, declared
 from synthesis.kinds.planting.scene import PlantingScene, assembly_status, find_precision_points
 from synthesis.spec.design_info import units_of
 from synthesis.spec.common import bounds_of, is_free, value_of
@@ -190,7 +190,8 @@ class PlantingProblem:
     def _counterweights(self, v, p, turn: np.ndarray) -> list[CounterweightReading]:
         """Each counterweight whose mass is free or not zero, its heights above the soil surface (mm): the crank's
         at its lowest point exactly (-radius: it circles the origin O), the rocker's at the turn's samples."""
-        table, out = self.spec.dynamics, []
+        table = self.spec.dynamics
+        out: list[CounterweightReading] = []
         if table is None:
             return out
         for name, weight, heights in (

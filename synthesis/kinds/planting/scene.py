@@ -17,13 +17,12 @@ from scipy.optimize import brentq
 
 from constraints.poses import nearest_row
 from synthesis.errors import AssemblyError
-from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, attitude_function, path_positions,
-                                                 scalar_function, tip_accelerations_y, tip_derivatives,
+from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, attitude_function, lowest_rocker_counterweight_y,
+                                                 path_positions, scalar_function, tip_accelerations_y, tip_derivatives,
                                                  tip_heights_and_transmission, tip_position, tip_positions, tip_state,
                                                  transmission_angles)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds
-from synthesis.kinds.planting.rules.counterweight import (CounterweightReading, declared, longer_than_link,
-                                                          lowest_rocker_counterweight_y)
+from synthesis.kinds.planting.rules.counterweight import CounterweightReading, declared, longer_than_link
 from synthesis.spec.common import value_of
 from synthesis.kinds.planting.spec import PlantingDynamicsSection, PlantingFourbarSpec
 

@@ -9,22 +9,17 @@ negative: below the surface), the limit ``[dynamics] counterweight_clearance``.
 
 The crank's counterweight circles the crank pivot O (the origin) at its radius, so its lowest point is exactly
 -radius, on floats and in the NLP alike.  The rocker's swings with the rocker: the check takes the lowest point of a
-fine grid of the turn refined by a bounded minimisation (:func:`lowest_rocker_counterweight_y`), the NLP one row per
-sample of its turn (:func:`rocker_counterweight_y_function`).
+fine grid of the turn refined by a bounded minimisation
+(:func:`synthesis.kinds.planting.kinematics.lowest_rocker_counterweight_y`), the NLP one row per sample of its turn
+(:func:`synthesis.kinds.planting.kinematics.rocker_counterweight_y_function`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
-import casadi as ca
-import numpy as np
-from scipy.optimize import minimize_scalar
-
 from constraints.base import Rule, not_evaluated
-from synthesis.kinematics import fourbar
 
 #: the typical size of a clearance margin, mm (normalised margins; the NLP's back-off is a fraction of it)
 CLEARANCE_SCALE = 10.0
@@ -68,33 +63,3 @@ def longer_than_link(field: str, radius: float, length: float) -> str | None:
     link = COUNTERWEIGHTS[field][0]
     return (f"radius {radius:.4g} mm is longer than the {link} itself ({length:.4g} mm): the counterweight needs an "
             f"arm of its own beyond the {link}'s length")
-
-
-def rocker_counterweight_y(theta, p, radius, branch: int):
-    """Y (mm, machine frame) of the rocker's counterweight at crank angle theta, for the arm parameters
-    p = (l1, l2, l3, l4, l5, zeta, phi) (mm, rad) and its radius (mm): O' - radius (B - O') / l4; floats, arrays or
-    CasADi symbols."""
-    l1, l2, l3, l4, zeta = p[0], p[1], p[2], p[3], p[5]
-    _, (_, by) = fourbar.coupler_joint(theta, l1, l2, l3, l4, zeta, branch)
-    _, oy = fourbar.rocker_pivot(l1, zeta)
-    return oy - radius * (by - oy) / l4
-
-
-@lru_cache(maxsize=4)
-def rocker_counterweight_y_function(branch: int) -> ca.Function:
-    """CasADi Function (theta, p, radius) -> Y of the rocker's counterweight (mm)."""
-    theta, p, radius = ca.SX.sym("theta"), ca.SX.sym("p", 7), ca.SX.sym("radius")
-    return ca.Function("rocker_counterweight_y", [theta, p, radius],
-                       [rocker_counterweight_y(theta, p, radius, branch)])
-
-
-def lowest_rocker_counterweight_y(p, radius: float, branch: int, samples: int) -> float:
-    """The lowest Y (mm) of the rocker's counterweight over a turn: ``samples`` crank angles, then a bounded
-    minimisation between the neighbours of the lowest (to 1e-10 rad), for a crank that completes a turn."""
-    f = rocker_counterweight_y_function(branch)
-    grid = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
-    ys = np.asarray(f.map(samples)(grid.reshape(1, -1), p, radius), float).ravel()
-    k, step = int(np.argmin(ys)), grid[1]
-    found = minimize_scalar(lambda t: float(f(t, p, radius)), bounds=(grid[k] - step, grid[k] + step),
-                            method="bounded", options={"xatol": 1e-10})
-    return float(min(found.fun, ys[k]))
