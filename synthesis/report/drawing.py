@@ -2,10 +2,10 @@
 
 A check or solve draws five to eight files from the result alone; one of them, an animation, takes two to three
 times a still figure's time.  Drawn one after another they are most of a check's wall time; shared out by how long
-each takes (:func:`groups`), the groups end about together.  A forked process starts with this
-process's imports (matplotlib is loaded once) and the result in memory, so nothing is pickled or imported again:
-each group writes its files into the run's folder and sends back, per file, whether it was written and what the
-libraries said while drawing it.  This process draws the last group itself.  Where the platform cannot fork, or
+each takes (:func:`groups`), the groups end about together.  A forked process starts with this process's imports
+(matplotlib is loaded once) and the result in memory, so nothing is pickled or imported again: each group writes
+its files into the run's folder and sends back, per file, whether it was written and what the libraries said while
+drawing it.  This process draws the last group itself.  Where the platform cannot fork, or
 one core is all there is, the writers run here in order; the files and notes are the same either way.
 """
 
@@ -24,8 +24,8 @@ from typing import Callable
 
 from synthesis.core.library_log import captured_warnings
 
-#: the files that take longest, an animation: each gets a forked group of its own (never this process's: a crash in
-#: native code while drawing one costs that file, not the run)
+#: the files that take longest, an animation: each starts a group of its own, drawn in a forked process whenever
+#: there are other files for this process to draw
 SLOW_SUFFIXES = (".gif",)
 #: how long a file takes to draw, by suffix, in still figures (planting's: an animation 0.5 s, a figure 0.15 to 0.35
 #: s, the DXF 0.2 s with ezdxf's import); anything else (text: a log, a CSV) is nearly free
