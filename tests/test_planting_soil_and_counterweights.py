@@ -49,7 +49,7 @@ from synthesis.spec.dynamics import Counterweight, DynamicsLimits
 SOIL_SPEC = LIBRARY / "planting_arm" / "taiwan_example1_soil.toml"
 #: the crank-only counterweight redesign's peak shaking force with its counterweight clear of the soil, N
 #: (tests/test_library.py's record of its solve)
-CRANK_ONLY_PEAK = 12.396999267198673
+CRANK_ONLY_PEAK = 12.396999267196685
 #: the designs an independent review found with a counterweight underground (the two redesigns solved before the
 #: clearance rule), to 4 decimals: the crank-only one, 0.163 kg at 60 mm on the crank; the two-counterweight one,
 #: 0.291 kg at 60 mm on the rocker (its crank counterweight 0 kg)
@@ -402,3 +402,18 @@ def test_kinds_without_a_rocker_counterweight_refuse_it_at_load(tmp_path, spec_p
         load_spec(path)
     path.write_text((LIBRARY / spec_path).read_text())
     load_spec(path)                      # the spec itself loads
+
+
+@pytest.mark.parametrize("name", ["counterweight", "rocker_counterweight"])
+def test_a_free_counterweight_mass_allowed_down_to_zero_is_refused_naming_it(tmp_path, name):
+    """The clearance rows hold a counterweight that exists: a free mass down to 0 kg would let the NLP call
+    infeasible what a 0 kg counterweight (none) satisfies, so the spec asks for a lower bound above 0."""
+    text = (LIBRARY / "planting_arm" / "two_counterweights_min_shaking_from_example1.toml").read_text()
+    line = f"{name} = {{ mass = {{ init = 0.05, bounds = [0.01, 0.5] }}"
+    assert line in text
+    path = tmp_path / "zero.toml"
+    path.write_text(text.replace(line, f"{name} = {{ mass = {{ init = 0.05, bounds = [0.0, 0.5] }}"))
+    with pytest.raises(SpecError) as refused:
+        load_spec(path)
+    message = str(refused.value)
+    assert f"{name}.mass" in message and "above 0 kg" in message and "\n" not in message.strip()

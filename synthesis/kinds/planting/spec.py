@@ -19,7 +19,7 @@ from synthesis.spec.dynamics import DynamicsSection, SoilForce
 from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.operating import OperatingRange, resolve_ranges
 from synthesis.spec.common import (
-    POSITIVE, WITHIN_A_TURN, Interval, documented_range, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
+    POSITIVE, WITHIN_A_TURN, Interval, documented_range, is_free, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
     max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
 )
 
@@ -208,6 +208,19 @@ class PlantingDynamicsSection(DynamicsSection):
                                 "10 mm: the planting-depth band (20-30 mm about the 25 mm analysis depth) admits a "
                                 "surface 5 mm above the analysis one, and the counterweight, a point mass here, "
                                 "reaches about 5 mm below its centre as a plate 10 mm deep")
+
+    @model_validator(mode="after")
+    def _a_free_counterweight_exists(self) -> "PlantingDynamicsSection":
+        # The clearance rows hold a counterweight that exists; "no counterweight unless one clears" is not a smooth
+        # row, so a free mass allowed down to 0 would let the NLP call infeasible what a 0 kg counterweight (none)
+        # satisfies, a false verdict.
+        for name in ("counterweight", "rocker_counterweight"):
+            weight = getattr(self, name)
+            if weight is not None and is_free(weight.mass) and weight.mass.bounds[0] <= 0.0:
+                raise ValueError(f"{name}.mass: a free counterweight mass needs a lower bound above 0 kg (the "
+                                 f"clearance rule holds a counterweight that exists); leave the counterweight out "
+                                 f"for none")
+        return self
 
 
 class PlantingFourbarSpec(ProblemSpec):
