@@ -164,3 +164,28 @@ def test_an_inexact_auto_run_is_the_same_on_one_and_two_workers_and_its_prefix_i
     small, _, _ = run_solve(kind, loaded, workers=1, auto=AutoStarts(max_starts=16))
     assert [s["objective"] for s in small.starts] == [s["objective"] for s in one.starts[:16]]
     assert [s["design"] for s in small.starts] == [s["design"] for s in one.starts[:16]]
+
+
+@pytest.mark.parametrize("nested", [True, False])
+def test_the_time_limit_projects_the_next_batch_by_the_starts_it_would_solve(tmp_path, nested_toy, monkeypatch,
+                                                                            nested):
+    """A clock that moves 1 s per start solved (a replayed start costs nothing), a 40 s limit.  After the first
+    batch (16 s) a nested run's next batch solves 16 new starts: projected to end at 32 s, it is begun (the toy
+    then stops by the rule at 32); the fixed order's next batch solves all 32: projected at 48 s, not begun."""
+    import types
+
+    import synthesis.core.solve as core_solve
+
+    clock, seen = [0.0], set()
+
+    def tick(report, best):
+        if report.outcome.start not in seen or not nested:
+            clock[0] += 1.0
+        seen.add(report.outcome.start)
+
+    monkeypatch.setattr(core_solve, "time", types.SimpleNamespace(perf_counter=lambda: clock[0]))
+    kind = nested_toy if nested else nested_toy.base
+    result, _, _ = run_solve(kind, _toy(tmp_path), workers=1, on_start=tick,
+                             auto=AutoStarts(min_converged=20, time_limit_s=40.0))
+    assert result.solver["auto"]["batches"] == ([16, 32] if nested else [16])
+    assert result.solver["auto"]["stopped_by"] == ("rule" if nested else "time_limit")

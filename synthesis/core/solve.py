@@ -226,6 +226,8 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     for k in range(first, len(totals)):
         on_batch(totals[k])
         began = time.perf_counter()
+        # the starts this batch solves, and the next one would: all of them, or (nested) the new ones only
+        solving_now = totals[k] - len(carried) if nested else totals[k]
         run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler, on_start=on_start,
                              record=record, finished=carried, rows_by_index=nested)
         took = time.perf_counter() - began
@@ -242,7 +244,8 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         elif k == len(totals) - 1:
             stopped_by = "max_starts"
         elif (auto.time_limit_s is not None
-              and time.perf_counter() - t0 + took * totals[k + 1] / totals[k] > auto.time_limit_s):
+              and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
+              / max(solving_now, 1) > auto.time_limit_s):
             stopped_by = "time_limit"
         elif nested:      # the next batch appends to this one: every start that ran is kept
             carried = {r.outcome.start: r.outcome for r in run.reports if failure_of(r.outcome) is None}
