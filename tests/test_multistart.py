@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 
 from synthesis.core.executor import latin_hypercube_starts, run_starts
 
@@ -99,3 +100,18 @@ def test_among_tied_objectives_a_converged_start_wins():
     reports[1] = rep(3, 11.85407, "Maximum_Iterations_Exceeded")          # 6e-7 lower: not a tie
     best = best_in_start_order(reports, maximise=False)
     assert best.outcome.start == 3 and status_of(best, None) == "feasible"
+
+
+@pytest.mark.parametrize("d, n, seed", [(1, 1, 0), (2, 7, 3), (9, 31, 0), (12, 255, 17), (4, 64, 2**31 - 1)])
+def test_the_latin_hypercube_is_scipys_to_the_bit(d, n, seed):
+    """executor.unit_latin_hypercube draws without importing scipy.stats (a solve's start-up) exactly what
+    scipy.stats.qmc.LatinHypercube(d, seed=default_rng(seed)).random(n) draws, so the starts of every spec stay the
+    ones recorded; and each column holds one point in each of its n strata."""
+    from scipy.stats import qmc
+
+    from synthesis.core.executor import unit_latin_hypercube
+
+    ours = unit_latin_hypercube(d, n, seed)
+    theirs = qmc.LatinHypercube(d=d, seed=np.random.default_rng(seed)).random(n)
+    assert np.array_equal(ours, theirs)
+    assert all(sorted(np.floor(ours[:, j] * n).astype(int)) == list(range(n)) for j in range(d))

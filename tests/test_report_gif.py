@@ -86,3 +86,40 @@ def test_no_frame_is_refused(tmp_path):
         save_gif(fig, frame, 0, tmp_path / "none.gif", fps=5, dpi=80)
     plt.close(fig)
     assert not (tmp_path / "none.gif").exists()
+
+
+def _drawn_frames(replace_artists: bool) -> list[np.ndarray]:
+    """Each frame as the canvas draws it in full (RGB, no palette): what a GIF approximates."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    fig, frame = _figure(replace_artists)
+    fig.set_dpi(80)
+    canvas = FigureCanvasAgg(fig)
+    out = []
+    for k in range(FRAMES):
+        frame(k)
+        canvas.draw()
+        out.append(np.asarray(canvas.buffer_rgba())[..., :3].copy())
+    plt.close(fig)
+    return out
+
+
+@pytest.mark.parametrize("replace_artists", [False, True])
+def test_a_shared_palette_keeps_the_frames_colours_and_never_flickers_a_still_pixel(tmp_path, replace_artists):
+    """save_gif(shared_palette=True): one palette for every frame.  Against the frames drawn in full, the colours
+    are off by at most a palette's rounding (mean below 1/255 of full scale, no pixel by more than 64 of 255), and a
+    pixel that two consecutive drawn frames share is the same in the two GIF frames (per-frame palettes may shade
+    it differently)."""
+    fig, frame = _figure(replace_artists)
+    save_gif(fig, frame, FRAMES, tmp_path / "shared.gif", fps=5, dpi=80, shared_palette=True)
+    plt.close(fig)
+    drawn, shared = _drawn_frames(replace_artists), _frames(tmp_path / "shared.gif")
+    assert len(shared) == FRAMES
+    for k, (a, b) in enumerate(zip(drawn, shared)):
+        assert a.shape == b.shape
+        error = np.abs(a.astype(int) - b.astype(int))
+        assert error.mean() < 1.0 and error.max() <= 64, f"frame {k}"
+    for k in range(FRAMES - 1):
+        still = np.all(drawn[k] == drawn[k + 1], axis=2)
+        assert still.mean() > 0.5                                   # most of the picture stays
+        assert np.array_equal(shared[k][still], shared[k + 1][still]), f"frames {k} and {k + 1}"
+    assert len({f.tobytes() for f in shared}) == FRAMES
