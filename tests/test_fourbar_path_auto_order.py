@@ -93,7 +93,7 @@ def test_a_nested_auto_run_resumed_inside_its_second_batch_gives_the_uninterrupt
     kept = []
     marks = []
     whole, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append,
-                            on_batch=lambda total: marks.append(len(kept)))
+                            on_batch=lambda total, nested: marks.append(len(kept)))
     after_last_mark = kept[marks[-1]:]
     assert sorted(out.start for out in after_last_mark) == list(range(32))
     cut = {out.start: out for out in after_last_mark[:7]}
@@ -189,3 +189,42 @@ def test_the_time_limit_projects_the_next_batch_by_the_starts_it_would_solve(tmp
                              auto=AutoStarts(min_converged=20, time_limit_s=40.0))
     assert result.solver["auto"]["batches"] == ([16, 32] if nested else [16])
     assert result.solver["auto"]["stopped_by"] == ("rule" if nested else "time_limit")
+
+
+def test_a_nested_run_is_not_stopped_by_the_rule_on_its_first_batch(tmp_path, nested_toy):
+    """A kind's own first batch is its picks (fourbar_path: the best screened shapes), not starts drawn over the box
+    as the stopping rule assumes: the toy's one optimum meets the rule at 16 starts, yet a nested run goes on to the
+    next batch and stops there; the same toy in the core's order stops at 16."""
+    loaded = _toy(tmp_path)
+    batches: list[int] = []
+    nested, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(),
+                             on_batch=lambda total, is_nested: batches.append(total))
+    assert batches == [16, 32]
+    assert nested.solver["auto"]["stopped_by"] == "rule" and nested.solver["auto"]["order"] == "kind"
+    import toy_kind
+    plain, _, _ = run_solve(toy_kind.KIND, loaded, workers=1, auto=AutoStarts())
+    assert plain.solver["auto"]["batches"] == [16] and plain.solver["auto"]["stopped_by"] == "rule"
+
+
+def test_a_nested_batch_mark_keeps_the_earlier_batches_starts_on_resume(tmp_path, nested_toy):
+    """Cut just after a nested batch's mark, before its carried starts were written again, starts.jsonl still holds
+    them before the mark: startlog.read keeps them (start i is the same in every batch), where a mark of the core's
+    order (its batches' starts another run's) drops them."""
+    from synthesis.core import startlog
+
+    loaded = _toy(tmp_path)
+    kept: list = []
+    run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append)
+    first_batch = kept[:16]
+    assert sorted(out.start for out in first_batch) == list(range(16))
+    for nested, expected in ((True, list(range(16))), (False, [])):
+        folder = tmp_path / f"nested_{nested}"
+        folder.mkdir()
+        settings, print_ = startlog.fingerprint("toy_disc", loaded.name, loaded.sha256, 512, 0, AutoStarts().settings())
+        log = startlog.StartLog(folder / startlog.FILENAME, settings, print_)
+        log.batch(16, nested)
+        for out in first_batch:
+            log.append(out)
+        log.batch(32, nested)                  # cut here: none of the carried starts written again yet
+        log.close()
+        assert sorted(startlog.read(folder, print_)) == expected

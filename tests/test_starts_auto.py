@@ -114,7 +114,8 @@ def test_auto_below_its_minimum_grows_by_whole_batches_and_stops_at_the_fixed_ru
     Latin hypercube), start 0 carried; every start of the first batch is reported to on_start, then 32 more."""
     loaded = _toy(tmp_path)
     batches, seen = [], []
-    auto, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=batches.append,
+    auto, _, _ = run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20),
+                           on_batch=lambda total, nested: batches.append(total),
                            on_start=lambda report, best: seen.append(report.outcome.start))
     fixed, _, _ = run_solve(toy, loaded, starts=32, workers=1)
     assert batches == [16, 32] and auto.solver["auto"]["batches"] == [16, 32]

@@ -50,7 +50,7 @@ def _raised(exc: BaseException) -> tuple[str, str]:
 
 
 def unit_latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
-    """(n, d) points of a scrambled Latin hypercube in [0, 1): each column one point in each of its n strata, at a
+    """(n, d) points of a scrambled Latin hypercube in (0, 1]: each column one point in each of its n strata, at a
     uniform place within it.  The draws are scipy's ``qmc.LatinHypercube(d=d, seed=np.random.default_rng(seed))
     .random(n)``, to the bit (its generator is a child spawned from default_rng's seed sequence, the jitter drawn
     before the strata are shuffled column by column), without importing scipy.stats: 0.3 to 0.6 s of a solve's

@@ -419,7 +419,7 @@ class Solving:
     stop_when: Callable[[Setting], Callable[[Any], bool] | None] = _no_early_stop
     #: (setting) -> True: a ``--starts auto`` run numbers its starts in an order of the kind's own, in which start i
     #: is the same whatever the batch (its NLP is built with ``Setting.auto_order``; a start's decision-variable row
-    #: is drawn for its index alone), so each batch solves only its new starts and the cheap starts can come first
+    #: is drawn for its index alone), so each batch solves only its new starts and the kind decides which come first
     #: (:class:`synthesis.core.solve.AutoStarts`); False: every batch is the whole ``--starts N`` run
     auto_order: Callable[[Setting], bool] = _no_auto_order
     samples_hint: str = "[solver] samples"

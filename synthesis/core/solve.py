@@ -180,7 +180,7 @@ class AutoStarts:
     limit is not begun, and the count then depends on the machine.
 
     A kind whose :attr:`~synthesis.core.kind.Solving.auto_order` holds for the spec numbers an auto run's starts in
-    an order of its own (e.g. its cheap screened starts first) in which start i is the same in every batch: its rows
+    an order of its own (e.g. its screened starts first) in which start i is the same in every batch: its rows
     are drawn per index (:func:`rows_of_indices`), every finished start is carried to the next batch and only the new
     ones are solved (at most ``max_starts`` starts in all).  Such a run that stops after N starts is not
     ``--starts N`` (another order, other rows) but ``--starts auto --max-starts N`` to the bit, whatever the
@@ -207,10 +207,11 @@ class AutoStarts:
 def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, scheduler: str | None = None,
              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
              record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
-             on_batch: Callable[[int], None] = lambda total: None, resumed_batch: int | None = None) -> Run:
+             on_batch: Callable[[int, bool], None] = lambda total, nested: None,
+             resumed_batch: int | None = None) -> Run:
     """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
-    ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total)`` is told as a batch begins (the
-    run's starts.jsonl marks it); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
+    ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total, nested)`` is told as a batch
+    begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
     starts (the earlier batches ended without stopping, so the run goes on from that one)."""
     solving = _solving(kind)
     maximise = solving.maximise(setting)
@@ -224,7 +225,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     carried = dict(finished or {}) if resumed_batch in totals else {}
     t0 = time.perf_counter()
     for k in range(first, len(totals)):
-        on_batch(totals[k])
+        on_batch(totals[k], nested)
         began = time.perf_counter()
         # the starts this batch solves, and the next one would: all of them, or (nested) the new ones only
         solving_now = totals[k] - len(carried) if nested else totals[k]
@@ -235,7 +236,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
         if len(run.reports) < totals[k]:
             stopped_by = "stop_at_objective"         # the kind's own early stop ended the batch
-        elif stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged:
+        elif (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
+              and not (nested and k == 0)):
+            # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
+            # construction; the rule assumes starts drawn over the box, so it may stop a nested run only once a
+            # later batch has brought such starts in
             stopped_by = "rule"
         elif stated["starts_counted"] == 0 and totals[k] >= auto.min_converged:
             # not one start met every rule: more starts of the same box rarely do (an infeasible spec ran 1008
@@ -493,7 +498,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
               on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
               scheduler: str | None = None, record: Callable[[Any], None] | None = None,
               finished: dict[int, Any] | None = None, auto: AutoStarts | None = None,
-              on_batch: Callable[[int], None] = lambda total: None,
+              on_batch: Callable[[int, bool], None] = lambda total, nested: None,
               resumed_batch: int | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 

@@ -37,7 +37,8 @@ MAX_LINE_BYTES = 64 * 1024**2
 
 
 #: a ``--starts auto`` run's line before each batch's starts: ``{"auto_batch": total}`` (those starts are of a run of
-#: that many; a resumed run reads the last batch's only)
+#: that many; a resumed run reads the last batch's only) or, in a kind's own order, ``{"auto_batch": total, "nested":
+#: true}`` (start i is the same in every batch, so a resumed run keeps the earlier batches' starts too)
 BATCH = "auto_batch"
 
 
@@ -127,9 +128,9 @@ class StartLog:
             data = {"unrecorded": getattr(outcome, "start", None), "why": str(exc)}
         self._line(data)
 
-    def batch(self, total: int) -> None:
-        """A ``--starts auto`` run begins its batch of ``total`` starts."""
-        self._line({BATCH: int(total)})
+    def batch(self, total: int, nested: bool = False) -> None:
+        """A ``--starts auto`` run begins its batch of ``total`` starts (``nested``: in the kind's own order)."""
+        self._line({BATCH: int(total), "nested": True} if nested else {BATCH: int(total)})
 
     def close(self) -> None:
         self.fh.close()
@@ -208,9 +209,10 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
                 continue
             if header is None:
                 raise OutputError(f"--resume {folder}: {FILENAME} has no header line; not written by agrisynth")
-            if BATCH in line:             # an auto run's next batch: its starts are another run's
-                finished.clear()
-                continue
+            if BATCH in line:             # an auto run's next batch: its starts are another run's ...
+                if not line.get("nested"):
+                    finished.clear()
+                continue                  # ... unless nested: start i is the same in every batch
             if "outcome" in line:
                 try:
                     out = decode(line)

@@ -168,11 +168,11 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
         done += 1
         emit(start_finished(report, best, done, total))
 
-    def on_batch(starts: int) -> None:
+    def on_batch(starts: int, nested: bool = False) -> None:
         """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved."""
         nonlocal total
         plan.batch = starts
-        log_file.batch(starts)
+        log_file.batch(starts, nested)
         if starts != batches[first]:
             total += starts
             emit(SolveStarted(loaded.name, total))
