@@ -668,3 +668,21 @@ def test_a_signal_inside_a_casadi_call_of_any_command_is_interrupted_not_a_trace
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert proc.returncode == 143 and proc.stderr.strip() == "interrupted", (proc.returncode, proc.stderr[-2000:])
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name", ['"a\\u0000b.toml"', '""', '"   "'])
+def test_a_picker_part_file_that_names_no_file_is_refused_on_one_line(tmp_path, name):
+    """The fuzz campaign's find: a NUL in the drive's file name reached the operating system as 'embedded null byte'
+    from pathlib, a traceback; it is the spec's field now, named, at load."""
+    import re
+
+    from synthesis.errors import SpecError
+    from synthesis.spec import load_spec
+
+    text = (LIBRARY / "picker" / "cai2020_picker.toml").read_text()
+    path = tmp_path / "picker.toml"
+    path.write_text(re.sub(r'crank_rocker = "[^"]*"', lambda m: f"crank_rocker = {name}", text, count=1))
+    with pytest.raises(SpecError) as refused:
+        load_spec(path)
+    message = str(refused.value)
+    assert "picker.crank_rocker" in message and "spec file" in message and "\n" not in message.strip()

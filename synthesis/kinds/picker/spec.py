@@ -314,6 +314,14 @@ class PickerSpec(ProblemSpec):
     installation: Installation
     operation: Operation
     published: Published = Field(default_factory=Published)
+
+    @field_validator("crank_rocker", "double_crank")
+    @classmethod
+    def _a_file_name(cls, value: str) -> str:
+        # a NUL or an empty name is no file: said here, not as the operating system's error when the part is read
+        if not value.strip() or "\x00" in value:
+            raise ValueError(f"expected the name of a spec file, got {value!r}")
+        return value
     key_poses: dict[str, PickerPose] = Field(
         default_factory=dict, max_length=MAX_POSES,
         description="named poses of the combined motion, e.g. [key_poses.drop] at = \"dropping\", attitude = 60: "
