@@ -64,6 +64,15 @@ def _in_frame(origin, toward, x, y):
     return ca.vertcat(origin[0] + x * ux - y * uy, origin[1] + x * uy + y * ux)
 
 
+def _soil_law(soil, at, velocity):
+    """(depth mm, force N) of the soil on the point ``at`` (m, machine frame) moving at ``velocity`` (m/s, machine
+    frame): :data:`SOIL`'s law, the direction regularised by :data:`SOIL_SPEED_EPS`."""
+    depth = soil[2] - at[1] * 1000.0
+    relative = velocity + ca.vertcat(soil[3], 0.0)
+    blended = relative / ca.sqrt(ca.dot(relative, relative) + SOIL_SPEED_EPS ** 2)
+    return depth, ca.if_else(depth > 0.0, -(soil[0] + soil[1] * depth) * blended, ca.DM.zeros(2))
+
+
 @lru_cache(maxsize=8)
 def inverse_dynamics(branch: int, varying: bool = False, with_soil: bool = False) -> ca.Function:
     """(theta rad, geometry (5), mass (12), loads (12), omega rad/s, alpha rad/s^2, moments (3) N m, soil (6), gravity
@@ -71,14 +80,12 @@ def inverse_dynamics(branch: int, varying: bool = False, with_soil: bool = False
 
     ``mass``: per link mass kg, centre of mass (m, link frame), inertia about it kg m^2; ``loads``: per link a
     constant force N (machine frame) at a point (m, link frame); ``moments``: per link an external moment N m
-    (counter-clockwise), read with ``alpha`` only when ``varying``; ``soil``: :data:`SOIL`, read only ``with_soil``.
-    Without either the graph is the constant-speed one, operation for operation, so every answer that does not use
-    them stays the same to the bit (an added zero would already be exact, but a larger Jacobian can order AD's
-    sums differently).  Outputs: torque N m; reactions (2, 4) N in
-    :data:`JOINTS` order; shaking force (2) N; shaking moment N m about O; com (2, 3) m and angle (3) rad of each
-    link; their velocities m/s and rad/s; kinetic and potential energy J; the external loads' power W (forces,
-    moments and soil); the soil force (2) N and the loaded point's depth mm (zero and 0 without soil).
-    """
+    (counter-clockwise), read with ``alpha`` only when ``varying``; ``soil``: :data:`SOIL`, read only ``with_soil``;
+    without either, the constant-speed graph operation for operation (an added zero is exact, but a larger Jacobian
+    can order AD's sums differently).  Outputs: torque N m; reactions (2, 4) N in :data:`JOINTS` order; shaking
+    force (2) N and moment N m about O; com (2, 3) m and angle (3) rad of each link; their velocities m/s and rad/s;
+    kinetic and potential energy J; the external loads' power W (forces, moments, soil); the soil force (2) N and
+    the loaded point's depth mm (zero and 0 without soil)."""
     theta, omega, alpha = ca.SX.sym("theta"), ca.SX.sym("omega"), ca.SX.sym("alpha")
     geom, mass, loads, g = ca.SX.sym("geometry", 5), ca.SX.sym("mass", 12), ca.SX.sym("loads", 12), ca.SX.sym("g", 2)
     moments, soil = ca.SX.sym("moments", 3), ca.SX.sym("soil", len(SOIL))
@@ -103,10 +110,7 @@ def inverse_dynamics(branch: int, varying: bool = False, with_soil: bool = False
     force = [loads[4 * k:4 * k + 2] for k in range(3)]
     if with_soil:
         soil_vel = vel[15:17]
-        depth = soil[2] - soil_at[1] * 1000.0
-        relative = soil_vel + ca.vertcat(soil[3], 0.0)
-        blended = relative / ca.sqrt(ca.dot(relative, relative) + SOIL_SPEED_EPS ** 2)
-        soil_force = ca.if_else(depth > 0.0, -(soil[0] + soil[1] * depth) * blended, ca.DM.zeros(2))
+        depth, soil_force = _soil_law(soil, soil_at, soil_vel)
         force[1] = force[1] + soil_force
     else:
         depth, soil_force = ca.SX(0.0), ca.SX.zeros(2)
