@@ -417,3 +417,26 @@ def test_a_free_counterweight_mass_allowed_down_to_zero_is_refused_naming_it(tmp
         load_spec(path)
     message = str(refused.value)
     assert f"{name}.mass" in message and "above 0 kg" in message and "\n" not in message.strip()
+
+
+def test_clearance_rows_derivatives_equal_central_differences():
+    """The two clearance rules' NLP rows, by AD in every NLP variable (the arm, the seedbed, both counterweights and
+    the precision points' crank angles), against central differences at the review's two-counterweight design."""
+    spec = load_spec(LIBRARY / "planting_arm" / "two_counterweights_min_shaking_from_example1.toml").model
+    problem = PlantingProblem(spec)
+    x = problem.problem.x
+    rules = {r.name: r for r in problem.problem.rules}
+    rows = ca.vertcat(*[ca.vec(ca.SX(rules[n].rows()[0][0]))
+                        for n in ("counterweight_clearance", "rocker_counterweight_clearance")])
+    f = ca.Function("rows", [x], [rows, ca.jacobian(rows, x)])
+    x0 = np.concatenate([[TWO_UNDERGROUND[n] for n in problem.names], problem.theta_guess(TWO_UNDERGROUND)])
+    x0[problem.names.index("counterweight_mass")] = 0.1             # the review's 0 kg moved inside the bounds
+    jac = np.asarray(f(x0)[1])
+    for i in range(x0.size):
+        h = 1e-6 * max(1.0, abs(x0[i]))
+        step = np.zeros(x0.size)
+        step[i] = h
+        central = (np.asarray(f(x0 + step)[0]) - np.asarray(f(x0 - step)[0])) / (2 * h)
+        np.testing.assert_allclose(jac[:, i:i + 1], central, rtol=1e-6, atol=1e-6 * max(np.abs(jac).max(), 1.0),
+                                   err_msg=f"variable {i}")
+    assert np.count_nonzero(np.abs(jac).max(axis=0)) >= 6      # the rows move with the arm and both counterweights
