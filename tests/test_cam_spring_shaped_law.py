@@ -168,7 +168,7 @@ def test_the_shaped_redesign_keeps_contact_up_to_1p5_times_its_speed():
     follower): it stays on the cam at 1.45 x and 1.49 x 90 r/min, leaves it 2 % above its reported jump speed (at
     least 135 r/min), keeps 2 N at 90 r/min, and needs 47 % less spring at full stroke than the acceleration-optimal
     law's 7.729 N."""
-    from test_cam_dynamics import TabulatedLawFollower, simulate_turn
+    from test_cam_dynamics import assert_contact_kept_up_to_1p5_times_90_rpm
     from synthesis.kinds import solve_spec
 
     loaded = load_spec(SHAPED)
@@ -180,15 +180,7 @@ def test_the_shaped_redesign_keeps_contact_up_to_1p5_times_its_speed():
     force = result.objective["value"]
     assert force == pytest.approx(4.0954, abs=1e-4)
     assert 1.0 - force / ACCELERATION_OPTIMAL_FORCE == pytest.approx(0.470, abs=5e-4)
-    jump = next(r for r in result.rules if r["name"] == "jump_speed_min")["value"]
-    assert jump >= 135.0
-    follower = TabulatedLawFollower(loaded.model, result.design)
-    for factor in (1.45, 1.49):
-        kept = simulate_turn(follower, factor * 90.0)
-        assert not kept["left"] and kept["least_cam_force"] > 0.0, factor
-    lost = simulate_turn(follower, 1.02 * jump)
-    assert lost["left"] and lost["largest_gap"] > 0.0
-    assert simulate_turn(follower, 90.0)["least_cam_force"] >= 2.0
+    assert_contact_kept_up_to_1p5_times_90_rpm(loaded, result)
 
 
 # --------------------------------------------------------------------------- what it refuses

@@ -179,6 +179,16 @@ def test_soil_rule_derivatives_equal_central_differences():
     assert np.abs(jac[:, 7]).max() > 1e-2 and np.abs(jac[:, 8]).max() > 1e-2     # the surface and speed count
 
 
+def point_mass_load(position, crank, omega: float, mass: float, gravity) -> tuple[np.ndarray, np.ndarray]:
+    """(m (a - g) N, velocity m/s) of a point mass whose position (m) is ``position(crank angle)``, the crank turning
+    at ``omega``: its motion by five-point differences in the crank angle, independent of the dynamics' AD."""
+    h = 1e-3
+    p = [position(crank + k * h) for k in (-2, -1, 0, 1, 2)]
+    velocity = (p[0] - 8 * p[1] + 8 * p[3] - p[4]) / (12 * h) * omega
+    acceleration = (-p[0] + 16 * p[1] - 30 * p[2] + 16 * p[3] - p[4]) / (12 * h * h) * omega ** 2
+    return mass * (acceleration - np.array(gravity).reshape(2, 1)), velocity
+
+
 def test_rocker_counterweight_by_the_parallel_axis_sum():
     """A steel bar rocker (7850 kg/m^3, 100 mm^2, 80 mm) with 0.2 kg at 50 mm opposite B, by hand:
     bar 0.0628 kg at x = 40 mm, inertia 0.0628 x 0.08^2 / 12 = 3.349333e-5 kg m^2; together 0.2628 kg at
@@ -212,11 +222,7 @@ def test_rocker_counterweight_moves_the_shaking_force_and_torque_by_its_own_moti
         pivot, b = joints["O'"], joints["B"]
         return (pivot - radius * (b - pivot) / design.l4) / 1000.0
 
-    h = 1e-3
-    p = [position(crank + k * h) for k in (-2, -1, 0, 1, 2)]
-    velocity = (p[0] - 8 * p[1] + 8 * p[3] - p[4]) / (12 * h) * omega
-    acceleration = (-p[0] + 16 * p[1] - 30 * p[2] + 16 * p[3] - p[4]) / (12 * h * h) * omega ** 2
-    need = mass * (acceleration - np.array(table.gravity).reshape(2, 1))
+    need, velocity = point_mass_load(position, crank, omega, mass, table.gravity)
     scale = np.abs(need).max()
     assert scale > 1.0
     np.testing.assert_allclose(weighted["shaking_force"] - base["shaking_force"], -need, atol=2e-6 * scale)
@@ -376,11 +382,7 @@ def test_crank_rocker_rocker_counterweight_by_its_own_motion():
     def position(phi):                      # m, the mechanism's frame
         return (pivot - radius * (rocker_curve(cr, phi)["tip"] - pivot) / cr.l9) / 1000.0
 
-    h = 1e-3
-    p = [position(crank + k * h) for k in (-2, -1, 0, 1, 2)]
-    velocity = (p[0] - 8 * p[1] + 8 * p[3] - p[4]) / (12 * h) * omega
-    acceleration = (-p[0] + 16 * p[1] - 30 * p[2] + 16 * p[3] - p[4]) / (12 * h * h) * omega ** 2
-    need = mass * (acceleration - np.array(table.gravity).reshape(2, 1))
+    need, velocity = point_mass_load(position, crank, omega, mass, table.gravity)
     scale = np.abs(need).max()
     assert scale > 1.0
     shaking = np.array(weighted["shaking_force_N"]).T - np.array(base["shaking_force_N"]).T

@@ -121,6 +121,14 @@ def _basis(knots: np.ndarray, degree: int, u: np.ndarray, order: int) -> np.ndar
 _ORDER = {"acceleration": 2, "jerk": 3}
 
 
+def joined_to_the_dwells(inner):
+    """A segment's whole coefficient vector from its inner ones: the first three 0 and the last three 1, so S, S'
+    and S'' join the dwells (C2).  ``inner``: a cvxpy variable (an expression back) or its values (numpy)."""
+    if isinstance(inner, np.ndarray):
+        return np.concatenate([np.zeros(3), inner, np.ones(3)])
+    return cp.hstack([np.zeros(3), inner, np.ones(3)])
+
+
 def fit_optimised_law(stroke: float, segments_deg: dict[str, float], omega: float, minimise: str = "acceleration",
                       spans: int = 32, degree: int = 5, samples_per_span: int = 8,
                       max_acceleration: float | None = None) -> OptimisedLaw:
@@ -139,14 +147,11 @@ def fit_optimised_law(stroke: float, segments_deg: dict[str, float], omega: floa
     Bnext = _basis(knots, degree, u, order + 1)
     reference = cycloidal().peaks[minimise]
 
-    fixed = np.zeros(n)
-    fixed[n - 3:] = 1.0                                   # c0 = c1 = c2 = 0, last three = 1: C2 joins
-    free = slice(3, n - 3)
     problem_parts, coefficient_vars, peaks = [], {}, {}
     constraints = []
     for name in ("rise", "return"):
         c = cp.Variable(n - 6, name=f"c_{name}")
-        full = cp.hstack([np.zeros(3), c, np.ones(3)])
+        full = joined_to_the_dwells(c)
         peak = cp.Variable(name=f"peak_{name}", nonneg=True)
         constraints += [B0 @ full >= 0.0, B0 @ full <= 1.0, B1 @ full >= 0.0,
                         cp.abs(Bk @ full) <= peak]
@@ -176,8 +181,7 @@ def fit_optimised_law(stroke: float, segments_deg: dict[str, float], omega: floa
 
     laws = {}
     for name, c in coefficient_vars.items():
-        coef = fixed.copy()
-        coef[free] = np.asarray(c.value, dtype=float)
+        coef = joined_to_the_dwells(np.asarray(c.value, dtype=float))
         laws[name] = SplineLaw(f"optimised_{minimise}", tuple(knots.tolist()), tuple(coef.tolist()), degree)
     ratio = {name: laws[name].peaks[minimise] / reference for name in laws}
     return OptimisedLaw(laws["rise"], laws["return"], minimise, str(problem.status), "CLARABEL", ratio)

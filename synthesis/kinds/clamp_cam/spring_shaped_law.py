@@ -62,7 +62,8 @@ import cvxpy as cp
 import numpy as np
 
 from synthesis.errors import SolverError
-from synthesis.kinds.clamp_cam.bspline_law import TIE_BREAK, OptimisedLaw, SplineLaw, _basis, _knots
+from synthesis.kinds.clamp_cam.bspline_law import (TIE_BREAK, OptimisedLaw, SplineLaw, _basis, _knots,
+                                                   joined_to_the_dwells)
 from synthesis.kinds.clamp_cam.kinematics.motion_laws import cycloidal
 
 #: weight of the existing fit's objective next to the spring force (relative to SpringShaping.force_scale)
@@ -151,7 +152,7 @@ def fit_spring_shaped_law(stroke: float, segments_deg: dict[str, float], shaping
                                   ("return", -1.0, shaping.pressure_angle_deg[1])):
         beta = math.radians(segments_deg[name])
         c = cp.Variable(n - 6, name=f"c_{name}")
-        full = cp.hstack([np.zeros(3), c, np.ones(3)])
+        full = joined_to_the_dwells(c)
         S, dS, ddS = B0 @ full, B1 @ full, B2 @ full
         s = h * S if sign > 0 else h * (1.0 - S)
         ds, dds = sign * h * dS / beta, sign * h * ddS / beta**2
@@ -191,9 +192,7 @@ def fit_spring_shaped_law(stroke: float, segments_deg: dict[str, float], shaping
 
     laws = {}
     for name, c in coefficient_vars.items():
-        coef = np.zeros(n)
-        coef[n - 3:] = 1.0
-        coef[3:n - 3] = np.asarray(c.value, dtype=float)
+        coef = joined_to_the_dwells(np.asarray(c.value, dtype=float))
         laws[name] = SplineLaw("optimised_spring_force", tuple(knots.tolist()), tuple(coef.tolist()), degree)
     ratio = {name: laws[name].peaks["acceleration"] / reference for name in laws}
     f0 = float(np.asarray(preload.value, dtype=float))
