@@ -117,6 +117,17 @@ def sympy_newton_euler(geometry, mass, omega, gravity, theta, angles_guess, cran
     return s[8], reactions, -(reactions[:, 0] + reactions[:, 3]), shaking_moment
 
 
+def assert_sample_agrees(ours: dict, i: int, independent: tuple, rel: float, share: float) -> None:
+    """Sample i of over_turn's outputs against an independent (torque, reactions, shaking force, shaking moment):
+    relative ``rel``, absolute ``share`` of the largest joint force there."""
+    torque, reactions, shaking, moment = independent
+    scale = np.abs(reactions).max()
+    assert ours["torque"][i] == pytest.approx(torque, rel=rel, abs=share * scale)
+    np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=rel, atol=share * scale)
+    np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=rel, atol=share * scale)
+    assert ours["shaking_moment"][i] == pytest.approx(moment, rel=rel, abs=share * scale)
+
+
 @pytest.mark.parametrize("case", sorted(CASES))
 @pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
@@ -124,13 +135,9 @@ def test_inverse_dynamics_equals_an_independent_multibody_formulation(case):
     thetas = np.radians([0.0, 47.0, 133.0, 200.0, 291.0])
     ours = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, OMEGA, GRAVITY)
     for i, theta in enumerate(thetas):
-        torque, reactions, shaking, moment = sympy_newton_euler(geometry, LUMPED, OMEGA, GRAVITY, theta,
-                                                        [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
-        scale = np.abs(reactions).max()
-        assert ours["torque"][i] == pytest.approx(torque, rel=1e-6, abs=1e-9 * scale)
-        np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-6, atol=1e-9 * scale)
-        np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-6, atol=1e-9 * scale)
-        assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-6, abs=1e-9 * scale)
+        independent = sympy_newton_euler(geometry, LUMPED, OMEGA, GRAVITY, theta,
+                                         [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
+        assert_sample_agrees(ours, i, independent, 1e-6, 1e-9)
     # not a trivial agreement: the torque changes sign over the turn and the forces are tens of newtons
     assert ours["torque"].min() < 0 < ours["torque"].max()
     assert np.abs(ours["reactions"]).max() > 10.0
@@ -151,14 +158,10 @@ def test_a_fluctuating_crank_with_couples_and_soil_equals_the_independent_formul
                      soil=soil)
     assert (ours["soil_depth"] > 0).sum() >= 2 and (ours["soil_depth"] < 0).sum() >= 1   # in and out of the soil
     for i, theta in enumerate(thetas):
-        torque, reactions, shaking, moment = sympy_newton_euler(
+        independent = sympy_newton_euler(
             geometry, LUMPED, float(omega[i]), GRAVITY, theta,
             [float(ours["angle"][1, i]), float(ours["angle"][2, i])], float(alpha[i]), tuple(moments[:, i]), soil)
-        scale = np.abs(reactions).max()
-        assert ours["torque"][i] == pytest.approx(torque, rel=1e-6, abs=1e-9 * scale)
-        np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-6, atol=1e-9 * scale)
-        np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-6, atol=1e-9 * scale)
-        assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-6, abs=1e-9 * scale)
+        assert_sample_agrees(ours, i, independent, 1e-6, 1e-9)
     constant = over_turn(branch, thetas, geometry, LUMPED, [0.0] * 12, OMEGA, GRAVITY)
     assert np.abs(ours["torque"] - constant["torque"]).max() > 0.1      # the extras are not negligible here
 

@@ -33,7 +33,7 @@ from synthesis.kinds.fourbar_path.rule_set import path_rules
 from synthesis.result import result_text
 from synthesis.spec import LoadedSpec, load_spec
 from synthesis.spec.dynamics import DynamicsLimits, ExternalLoad
-from test_dynamics import sympy_newton_euler
+from test_dynamics import assert_sample_agrees, sympy_newton_euler
 
 FOURBAR_PATH = LIBRARY / "fourbar_path"
 BASELINE = FOURBAR_PATH / "picking_arc_dynamics.toml"
@@ -105,15 +105,9 @@ def test_inverse_dynamics_equals_an_independent_multibody_formulation(branch):
     v = spec.design_values()
     assert dyn.geometry == (v["r1"], v["r2"], v["r3"], v["r4"], math.radians(v["theta0"])) and dyn.branch == branch
     for i, theta in enumerate(thetas):
-        torque, reactions, shaking, moment = sympy_newton_euler(
-            dyn.geometry, list(dyn.mass), float(dyn.omega), gravity, theta,
-            [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
-        scale = np.abs(reactions).max()
-        # measured: 2e-14 relative at most
-        assert ours["torque"][i] == pytest.approx(torque, rel=1e-9, abs=1e-12 * scale)
-        np.testing.assert_allclose(ours["reactions"][:, :, i], reactions, rtol=1e-9, atol=1e-12 * scale)
-        np.testing.assert_allclose(ours["shaking_force"][:, i], shaking, rtol=1e-9, atol=1e-12 * scale)
-        assert ours["shaking_moment"][i] == pytest.approx(moment, rel=1e-9, abs=1e-12 * scale)
+        independent = sympy_newton_euler(dyn.geometry, list(dyn.mass), float(dyn.omega), gravity, theta,
+                                         [float(ours["angle"][1, i]), float(ours["angle"][2, i])])
+        assert_sample_agrees(ours, i, independent, 1e-9, 1e-12)      # measured: 2e-14 relative at most
     # not a trivial agreement: the torque changes sign over the turn, the joints carry tens of newtons
     assert ours["torque"].min() < 0 < ours["torque"].max()
     assert np.abs(ours["reactions"]).max() > 10.0
