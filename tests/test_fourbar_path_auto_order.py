@@ -86,23 +86,83 @@ def test_a_nested_auto_run_solves_each_start_once_and_gives_the_same_answer_on_o
 
 
 def test_a_nested_auto_run_resumed_inside_its_second_batch_gives_the_uninterrupted_answer(tmp_path, nested_toy):
-    """What starts.jsonl keeps after the last batch's mark (startlog.read drops everything before it) is every start
-    of a nested run, the carried ones recorded again: resumed from 7 of them in batch 32, the run solves the other
-    25 only and gives the uninterrupted answer."""
+    """A nested run's starts.jsonl, cut 7 starts into batch 32 (header, mark 16, starts 0-15, mark 32, 7 starts):
+    startlog keeps all 23 (start i is the same in every batch) and names the batch, nested; resumed from them, the
+    run solves the other 9 only and gives the uninterrupted answer."""
+    from synthesis.core import startlog
+
     loaded = _toy(tmp_path)
-    kept = []
-    marks = []
-    whole, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append,
-                            on_batch=lambda total, nested: marks.append(len(kept)))
-    after_last_mark = kept[marks[-1]:]
-    assert sorted(out.start for out in after_last_mark) == list(range(32))
-    cut = {out.start: out for out in after_last_mark[:7]}
+    auto = AutoStarts(min_converged=20)
+    settings, print_ = startlog.fingerprint("toy_disc", loaded.name, loaded.sha256, auto.max_starts, 0,
+                                            auto.settings())
+    log = startlog.StartLog(tmp_path / startlog.FILENAME, settings, print_)
+    whole, _, _ = run_solve(nested_toy, loaded, workers=1, auto=auto, record=log.append, on_batch=log.batch)
+    log.close()
+    lines = (tmp_path / startlog.FILENAME).read_text().splitlines()
+    assert len(lines) == 1 + 1 + 16 + 1 + 16          # each start written once, after its own batch's mark
+    (tmp_path / startlog.FILENAME).write_text("\n".join(lines[:1 + 1 + 16 + 1 + 7]) + "\n")
+    cut = startlog.read(tmp_path, print_)
+    assert sorted(cut) == list(range(23)) and startlog.last_batch(tmp_path) == (32, True)
     solved = []
-    resumed, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), finished=cut,
-                              resumed_batch=32, record=solved.append)
-    assert len({id(out) for out in solved} - {id(out) for out in cut.values()}) == 25
+    resumed, _, _ = run_solve(nested_toy, loaded, workers=1, auto=auto, finished=cut, resumed_batch=32,
+                              resumed_nested=True, record=solved.append)
+    fresh = {id(out) for out in cut.values()}      # the resumed ones are recorded again (the new run's log)
+    assert sorted(out.start for out in solved if id(out) not in fresh) == list(range(23, 32))
     assert resumed.solver["auto"] == whole.solver["auto"] and resumed.solver["confidence"] == whole.solver["confidence"]
     assert resumed.objective["value"] == whole.objective["value"] and resumed.design == whole.design
+
+
+def test_a_nested_run_tells_and_rechecks_each_start_once(tmp_path, nested_toy, monkeypatch):
+    """Batches 16 and 32: the progress hears of each of the 32 starts once, and the fine-grid re-check runs once
+    per start (the second batch counts the first one's reports as they were)."""
+    from synthesis.core import solve as core
+
+    loaded = _toy(tmp_path)
+    rechecked: list[int] = []
+    real = core._recheck
+    monkeypatch.setattr(core, "_recheck", lambda solving, setting, out: rechecked.append(out.start) or
+                        real(solving, setting, out))
+    told: list[int] = []
+    result, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20),
+                             on_start=lambda report, best: told.append(report.outcome.start))
+    assert result.solver["auto"]["batches"] == [16, 32]
+    assert sorted(told) == list(range(32)) and sorted(rechecked) == list(range(32))
+
+
+def test_a_run_interrupted_in_the_other_order_is_not_resumed(tmp_path, nested_toy):
+    """An auto run's batch mark says whether its starts were in the kind's order: resuming one in the other order
+    (the code's order changed since) is refused, naming both, not silently mixed."""
+    from synthesis.errors import OutputError
+
+    loaded = _toy(tmp_path)
+    with pytest.raises(OutputError, match="fixed's order and this code numbers them in the kind's"):
+        run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(), finished={}, resumed_batch=32,
+                  resumed_nested=False)
+
+
+def test_ctrl_c_between_two_nested_batches_keeps_every_finished_start(tmp_path, nested_toy):
+    """A signal as batch 32 begins (before any of its starts): the run stops Interrupted with the first batch's 16
+    reports and their best, status interrupted."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    first, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(max_starts=16))
+
+    def on_batch(total, nested):
+        if total == 32:
+            interrupt.simulate(signal.SIGINT)
+            raise KeyboardInterrupt
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=on_batch)
+    finally:
+        interrupt.uninstall()
+    kept, reports, _ = caught.value.partial
+    assert kept.status == "interrupted" and [r.outcome.start for r in reports] == list(range(16))
+    assert kept.design == first.design and kept.objective["value"] == first.objective["value"]
 
 
 # ---------------------------------------------------------------------------- fourbar_path's auto order

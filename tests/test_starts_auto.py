@@ -212,6 +212,31 @@ def test_a_resumed_auto_run_continues_the_batch_it_was_in(tmp_path, toy):
     assert resumed.objective["value"] == whole.objective["value"] and resumed.design == whole.design
 
 
+def test_ctrl_c_between_two_batches_keeps_the_finished_batch(tmp_path, toy):
+    """A signal as batch 32 begins (its NLP not yet built): the run stops Interrupted, keeping batch 16 whole --
+    status interrupted, the design and starts of --starts 16 -- where it used to end with nothing kept."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    fixed, _, _ = solve_spec(loaded, starts=16, workers=1)
+
+    def on_batch(total, nested):
+        if total == 32:
+            interrupt.simulate(signal.SIGINT)
+            raise KeyboardInterrupt
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=on_batch)
+    finally:
+        interrupt.uninstall()
+    kept, reports, _ = caught.value.partial
+    assert kept.status == "interrupted" and len(reports) == 16 and caught.value.exit_code == 130
+    assert kept.design == fixed.design and kept.objective["value"] == fixed.objective["value"]
+
+
 @pytest.mark.slow
 def test_auto_on_a_library_crank_rocker_equals_the_fixed_run_of_its_count():
     """crank_rocker_max_transmission: the first batch of 16 has fewer than 16 converged starts, the second (32)

@@ -28,7 +28,7 @@ from synthesis.core.pinned import fixed_fields, of_nlp, refuse_violated
 from synthesis.core.verdict import (FINE, SLACK_TOL, TIE, ElasticDiagnosis, StartReport, best_in_start_order, better,
                                     diagnosis_of, failure_of, measured, report_of, status_note, status_of,
                                     unsatisfied_error)
-from synthesis.errors import AgrisynthError, SolverError, SpecError
+from synthesis.errors import AgrisynthError, OutputError, SolverError, SpecError
 from synthesis.result import Result
 from synthesis.spec.design_info import at_bound, describe
 
@@ -83,11 +83,13 @@ def _written_at(spec, name: str) -> str:
 def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
                    on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
                    record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
-                   rows_by_index: bool = False) -> Run:
+                   rows_by_index: bool = False, carried: dict[int, StartReport] | None = None) -> Run:
     """The multistart of every kind.  ``record(outcome)`` sees each finished start first (the run's
     ``starts.jsonl``); ``finished``: starts already solved by an interrupted run (not solved again);
     ``rows_by_index``: each start's decision-variable row drawn for its index alone (:func:`rows_of_indices`,
-    a kind's auto order) instead of a Latin hypercube of ``starts`` points.
+    a kind's auto order) instead of a Latin hypercube of ``starts`` points; ``carried``: the reports of starts
+    an earlier batch of a nested auto run finished (neither solved, recorded, re-checked nor told to ``on_start``
+    again: they count as they were).
 
     A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
     the :class:`Run` of the starts finished so far (None when none has)."""
@@ -108,8 +110,14 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     stop = solving.stop_when(setting)
     reports: dict[int, StartReport] = {}
     best: list[StartReport] = []
+    earlier = dict(carried or {})
 
     def done(outcome) -> None:
+        if outcome.start in earlier:     # an earlier batch's report, as it was
+            reports[outcome.start] = rep = earlier[outcome.start]
+            if not best or better(rep, best[0], maximise):
+                best[:] = [rep]
+            return
         with interrupt.deferred():       # a start is kept whole or not at all
             if record is not None:
                 record(outcome)
@@ -130,7 +138,8 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     shared = scheduler is None and (workers <= 1 or workers_inherit_memory())
     factory = (lambda: nlp) if shared else functools.partial(solving.build, setting, False)
     try:
-        outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler, finished=finished,
+        outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler,
+                              finished={**(finished or {}), **{i: r.outcome for i, r in earlier.items()}},
                               stop_when=None if stop is None else (lambda out: stop(reports[out.start])),
                               failure=failed)
     except (KeyboardInterrupt, SystemError) as exc:
@@ -208,61 +217,98 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
              record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
              on_batch: Callable[[int, bool], None] = lambda total, nested: None,
-             resumed_batch: int | None = None) -> Run:
+             resumed_batch: int | None = None, resumed_nested: bool | None = None) -> Run:
     """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total, nested)`` is told as a batch
-    begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``: an interrupted auto run's batch and its finished
-    starts (the earlier batches ended without stopping, so the run goes on from that one)."""
+    begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``:
+    an interrupted auto run's batch and its finished starts (the earlier batches ended without stopping, so the run
+    goes on from that one); ``resumed_nested``: whether that batch was marked nested (a run interrupted in the other
+    order is refused: its starts are not this order's).
+
+    Interrupted (SIGINT/SIGTERM) anywhere, inside a batch or between two: raises :class:`Interrupted` whose
+    ``partial`` is the better of the batch in progress (its finished starts; a nested one's include the earlier
+    batches') and the last batch that finished, or None when neither has a start to keep."""
     solving = _solving(kind)
     maximise = solving.maximise(setting)
     nested = solving.auto_order(setting)
+    if resumed_batch is not None and resumed_nested is not None and resumed_nested != nested:
+        raise OutputError(f"{kind.name}: the run being resumed numbered its starts in "
+                        f"{'the kind' if resumed_nested else 'the fixed'}'s order and this code numbers them in "
+                        f"{'the kind' if nested else 'the fixed'}'s: its starts are not this run's; start it afresh")
     if nested:
         setting = replace(setting, auto_order=True)
     totals = auto.batches()
     first = totals.index(resumed_batch) if resumed_batch in totals else 0
-    # a nested run's interrupted batch: every start it had finished (the carried ones were recorded again after the
-    # batch's mark, so the log holds them all)
-    carried = dict(finished or {}) if resumed_batch in totals else {}
+    # a nested run's interrupted batch: every start it had finished (the log keeps the earlier batches' starts too)
+    resumed = dict(finished or {}) if resumed_batch in totals else {}
+    carried: dict[int, StartReport] = {}     # nested: the reports of the batches before, counted as they were
     t0 = time.perf_counter()
-    for k in range(first, len(totals)):
-        on_batch(totals[k], nested)
-        began = time.perf_counter()
-        # the starts this batch solves, and the next one would: all of them, or (nested) the new ones only
-        solving_now = totals[k] - len(carried) if nested else totals[k]
-        run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler, on_start=on_start,
-                             record=record, finished=carried, rows_by_index=nested)
-        took = time.perf_counter() - began
-        stated = confidence_statement(run.reports, run.nlp, maximise)
-        assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
-        if len(run.reports) < totals[k]:
-            stopped_by = "stop_at_objective"         # the kind's own early stop ended the batch
-        elif (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
-              and not (nested and k == 0)):
-            # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
-            # construction; the rule assumes starts drawn over the box, so it may stop a nested run only once a
-            # later batch has brought such starts in
-            stopped_by = "rule"
-        elif stated["starts_counted"] == 0 and totals[k] >= auto.min_converged:
-            # not one start met every rule: more starts of the same box rarely do (an infeasible spec ran 1008
-            # starts to max_starts for nothing); the elastic diagnosis says why
-            stopped_by = "none_converged"
-        elif k == len(totals) - 1:
-            stopped_by = "max_starts"
-        elif (auto.time_limit_s is not None
-              and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
-              / max(solving_now, 1) > auto.time_limit_s):
-            stopped_by = "time_limit"
-        elif nested:      # the next batch appends to this one: every start that ran is kept
-            carried = {r.outcome.start: r.outcome for r in run.reports if failure_of(r.outcome) is None}
-            continue
-        else:
-            zero = run.reports[0].outcome
-            carried = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
-            continue
-        return replace(run, wall_s=time.perf_counter() - t0,
-                       auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings(),
-                             **({"order": "kind"} if nested else {})})
+    last: Run | None = None
+    try:
+        for k in range(first, len(totals)):
+            on_batch(totals[k], nested)
+            began = time.perf_counter()
+            run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler,
+                                 on_start=on_start, record=record, finished=resumed, rows_by_index=nested,
+                                 carried=carried)
+            last = run
+            took = time.perf_counter() - began
+            # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
+            solved_now = totals[k] - len(carried) - len(resumed) if nested else totals[k]
+            stopped_by = _auto_stop(run, auto, totals, k, nested, maximise)
+            if (stopped_by is None and auto.time_limit_s is not None
+                    and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
+                    / max(solved_now, 1) > auto.time_limit_s):
+                stopped_by = "time_limit"
+            if stopped_by is not None:
+                return replace(run, wall_s=time.perf_counter() - t0,
+                               auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings(),
+                                     **({"order": "kind"} if nested else {})})
+            if nested:      # the next batch appends to this one: every start that ran is kept
+                carried = {r.outcome.start: r for r in run.reports if failure_of(r.outcome) is None}
+                resumed = {}
+            else:
+                zero = run.reports[0].outcome
+                resumed = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
+    except Interrupted as exc:
+        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0)) from None
+    except (KeyboardInterrupt, SystemError) as exc:      # between two batches, or building the next one's NLP
+        if not interrupt.caused_by_signal(exc):
+            raise
+        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0)) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
+
+
+def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bool, maximise: bool) -> str | None:
+    """Why an auto run stops after batch ``k`` (not for its time limit, which the caller projects), or None."""
+    stated = confidence_statement(run.reports, run.nlp, maximise)
+    assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
+    if len(run.reports) < totals[k]:
+        return "stop_at_objective"         # the kind's own early stop ended the batch
+    if (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
+            and not (nested and k == 0)):
+        # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
+        # construction; the rule assumes starts drawn over the box, so it may stop a nested run only once a
+        # later batch has brought such starts in
+        return "rule"
+    if stated["starts_counted"] == 0 and totals[k] >= auto.min_converged:
+        # not one start met every rule: more starts of the same box rarely do (an infeasible spec ran 1008
+        # starts to max_starts for nothing); the elastic diagnosis says why
+        return "none_converged"
+    if k == len(totals) - 1:
+        return "max_starts"
+    return None
+
+
+def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: float) -> Run | None:
+    """What an interrupted auto run keeps: the batch in progress (its finished starts) or the last finished batch,
+    whichever has the better best (the finished batch on a tie: it has every one of its starts), its wall the whole
+    run's; None when neither has one."""
+    kept = [r for r in (last, partial) if r is not None]
+    if not kept:
+        return None
+    chosen = kept[0] if len(kept) == 1 or not better(kept[1].best, kept[0].best, maximise) else kept[1]
+    return replace(chosen, wall_s=time.perf_counter() - t0)
 
 
 def _failures(reports: list[StartReport], shown: int = 3) -> str:
@@ -499,12 +545,13 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
               scheduler: str | None = None, record: Callable[[Any], None] | None = None,
               finished: dict[int, Any] | None = None, auto: AutoStarts | None = None,
               on_batch: Callable[[int, bool], None] = lambda total, nested: None,
-              resumed_batch: int | None = None) -> tuple[Result, list[StartReport], str]:
+              resumed_batch: int | None = None,
+              resumed_nested: bool | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 
     ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
     to run the starts on instead of ``workers`` local processes; ``record``/``finished``: see
-    :func:`run_multistart`; ``auto`` (then ``starts`` is not used), ``on_batch``, ``resumed_batch``: see
+    :func:`run_multistart`; ``auto`` (then ``starts`` is not used), ``on_batch``, ``resumed_batch``/``_nested``: see
     :func:`run_auto`.  Interrupted (SIGINT/SIGTERM): raises :class:`Interrupted` whose ``partial`` is
     (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
     no start had finished."""
@@ -519,7 +566,8 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
                                  on_start=on_start, record=record, finished=finished)
         else:
             run = run_auto(kind, setting, auto, workers=workers, scheduler=scheduler, on_start=on_start,
-                           record=record, finished=finished, on_batch=on_batch, resumed_batch=resumed_batch)
+                           record=record, finished=finished, on_batch=on_batch, resumed_batch=resumed_batch,
+                           resumed_nested=resumed_nested)
     except Interrupted as exc:
         if exc.partial is None:
             raise

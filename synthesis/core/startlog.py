@@ -148,8 +148,9 @@ def settings_of(folder: Path) -> dict:
     return settings if isinstance(settings, dict) else {}
 
 
-def last_batch(folder: Path) -> int | None:
-    """The batch a ``--starts auto`` run was solving (its last ``auto_batch`` line; None: none there)."""
+def last_batch(folder: Path) -> tuple[int, bool] | None:
+    """The batch a ``--starts auto`` run was solving and whether it was nested (its last ``auto_batch`` line; None:
+    none there)."""
     path = Path(folder) / FILENAME
     last = None
     try:
@@ -159,7 +160,7 @@ def last_batch(folder: Path) -> int | None:
                     with contextlib.suppress(OutputError):
                         line = parse_json(text, path, OutputError)
                         if isinstance(line, dict) and isinstance(line.get(BATCH), int):
-                            last = line[BATCH]
+                            last = (line[BATCH], line.get("nested") is True)
     except (OSError, OutputError):
         return None
     return last

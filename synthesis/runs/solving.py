@@ -41,6 +41,7 @@ class _Plan:
     replaceable: Path | None = None
     auto: core.AutoStarts | None = None     # --starts auto (``starts`` is then its most starts)
     resumed_batch: int | None = None        # --starts auto resumed: the batch the interrupted run was solving
+    resumed_nested: bool | None = None      # ... and whether it was in the kind's own order
     batch: int | None = None                # --starts auto: the batch being solved (an interrupted run's total)
 
 
@@ -109,7 +110,8 @@ def _plan(request: SolveRequest, loaded) -> _Plan:
     plan = _Plan(n, fixed, seed, settings, fingerprint, out, loaded.name, auto=auto)
     if resume is not None:
         plan.finished = startlog.read(resume, fingerprint)
-        plan.resumed_batch = startlog.last_batch(resume) if auto is not None else None
+        mark = startlog.last_batch(resume) if auto is not None else None
+        plan.resumed_batch, plan.resumed_nested = mark if mark is not None else (None, None)
         where = resume.resolve()
         plan.out = where.parent
         # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
@@ -169,12 +171,13 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
         emit(start_finished(report, best, done, total))
 
     def on_batch(starts: int, nested: bool = False) -> None:
-        """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved."""
+        """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved (a nested
+        batch tells only its new starts: the earlier ones count as they were)."""
         nonlocal total
         plan.batch = starts
         log_file.batch(starts, nested)
         if starts != batches[first]:
-            total += starts
+            total = starts if nested else total + starts
             emit(SolveStarted(loaded.name, total))
 
     solved = None         # (result, reports, log) once every start has finished
@@ -184,7 +187,8 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
         with captured_warnings() as said:   # scipy/CasADi warnings: into ipopt.log, not the terminal
             solved = core.run_solve(kind, loaded, plan.asked, plan.seed, workers, on_start, request.scheduler,
                                     record=log_file.append, finished=plan.finished, auto=plan.auto,
-                                    on_batch=on_batch, resumed_batch=plan.resumed_batch)
+                                    on_batch=on_batch, resumed_batch=plan.resumed_batch,
+                                    resumed_nested=plan.resumed_nested)
     except (SpecError, AssemblyError) as exc:
         # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is said as check says it:
         # the file first
