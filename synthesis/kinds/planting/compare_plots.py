@@ -191,7 +191,9 @@ def linkage_figure(results: list[Result], path: Path) -> None:
     handles = [plt.Line2D([], [], color=_colour(i), label=_label(r, i, len(results))) for i, r in enumerate(results)]
     fig.legend(handles=handles, loc="lower center", ncol=min(4, len(results)), fontsize=8)
     fig.suptitle("linkage at the precision points (machine frame, mm)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.97))
+    # fixed margins, not tight_layout: the six panels share their axes, so only the outer ones carry tick labels,
+    # and measuring every panel's ticks for the layout was half the figure's time
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.11, top=0.92, wspace=0.06, hspace=0.14)
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
