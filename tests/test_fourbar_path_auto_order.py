@@ -162,6 +162,8 @@ def test_ctrl_c_between_two_nested_batches_keeps_every_finished_start(tmp_path, 
         interrupt.uninstall()
     kept, reports, _ = caught.value.partial
     assert kept.status == "interrupted" and [r.outcome.start for r in reports] == list(range(16))
+    assert kept.solver["auto"] == {**AutoStarts(min_converged=20).settings(), "stopped_by": "interrupted",
+                                   "batches": [16, 32], "order": "kind"}
     assert kept.design == first.design and kept.objective["value"] == first.objective["value"]
 
 

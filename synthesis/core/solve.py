@@ -244,6 +244,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     carried: dict[int, StartReport] = {}     # nested: the reports of the batches before, counted as they were
     t0 = time.perf_counter()
     last: Run | None = None
+    k = first
     try:
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
@@ -271,11 +272,15 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                 zero = run.reports[0].outcome
                 resumed = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
     except Interrupted as exc:
-        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0)) from None
+        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, {
+            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
+            **({"order": "kind"} if nested else {})})) from None
     except (KeyboardInterrupt, SystemError) as exc:      # between two batches, or building the next one's NLP
         if not interrupt.caused_by_signal(exc):
             raise
-        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0)) from None
+        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
+            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
+            **({"order": "kind"} if nested else {})})) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
@@ -300,15 +305,16 @@ def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bo
     return None
 
 
-def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: float) -> Run | None:
+def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: float, auto: dict) -> Run | None:
     """What an interrupted auto run keeps: the batch in progress (its finished starts) or the last finished batch,
     whichever has the better best (the finished batch on a tie: it has every one of its starts), its wall the whole
-    run's; None when neither has one."""
+    run's and ``auto`` (stopped by "interrupted", the batches begun) its result's ``solver.auto``; None when
+    neither has one."""
     kept = [r for r in (last, partial) if r is not None]
     if not kept:
         return None
     chosen = kept[0] if len(kept) == 1 or not better(kept[1].best, kept[0].best, maximise) else kept[1]
-    return replace(chosen, wall_s=time.perf_counter() - t0)
+    return replace(chosen, wall_s=time.perf_counter() - t0, auto=auto)
 
 
 def _failures(reports: list[StartReport], shown: int = 3) -> str:
