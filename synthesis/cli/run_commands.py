@@ -69,7 +69,10 @@ class SolveCommand(click.Command):
                    f"would be, until fewer than half a local optimum is expected unseen (Boender & Rinnooy Kan) over "
                    f"at least 16 starts that converged with every rule held, or a budget is spent; the same seed "
                    f"gives the same answer and N for any workers; each batch solves its own starts (start 0 "
-                   f"carried), about twice the last batch's in all")
+                   f"carried), about twice the last batch's in all -- except where the kind orders the starts itself "
+                   f"(fourbar_path on 12 or more free-timing targets: its screened shapes first), whose batches "
+                   f"append, each start solved once.  Ctrl-C keeps the better of the batch in progress and the "
+                   f"last finished one; --resume goes on from the batch it was in")
 @click.option("--max-starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
               help="--starts auto: the most starts (default 512)")
 @click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
