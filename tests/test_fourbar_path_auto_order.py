@@ -167,6 +167,33 @@ def test_ctrl_c_between_two_nested_batches_keeps_every_finished_start(tmp_path, 
     assert kept.design == first.design and kept.objective["value"] == first.objective["value"]
 
 
+def test_ctrl_c_inside_a_nested_batch_keeps_the_earlier_batches_and_its_own_finished_starts(tmp_path, nested_toy):
+    """A signal 3 starts into nested batch 32: the kept result holds starts 0-18 (the first batch's 16, told once,
+    and the 3 new ones), not only the last finished batch's 16."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    batches: list[int] = []
+    told: list[int] = []
+
+    def on_start(report, best):
+        told.append(report.outcome.start)
+        if batches == [16, 32] and len(told) == 16 + 3:
+            interrupt.simulate(signal.SIGINT)
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_start=on_start,
+                      on_batch=lambda total, nested: batches.append(total))
+    finally:
+        interrupt.uninstall()
+    kept, reports, _ = caught.value.partial
+    assert sorted(told) == list(range(19)) and [r.outcome.start for r in reports] == list(range(19))
+    assert kept.solver["starts"] == 32 and kept.solver["auto"]["stopped_by"] == "interrupted"
+
+
 # ---------------------------------------------------------------------------- fourbar_path's auto order
 
 def test_the_auto_order_is_the_given_design_then_the_screened_shapes_then_blocks_of_four():

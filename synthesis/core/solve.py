@@ -274,13 +274,13 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     except Interrupted as exc:
         raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, {
             "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
-            **({"order": "kind"} if nested else {})})) from None
+            **({"order": "kind"} if nested else {})}, nested)) from None
     except (KeyboardInterrupt, SystemError) as exc:      # between two batches, or building the next one's NLP
         if not interrupt.caused_by_signal(exc):
             raise
         raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
             "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
-            **({"order": "kind"} if nested else {})})) from None
+            **({"order": "kind"} if nested else {})}, nested)) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
@@ -305,15 +305,19 @@ def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bo
     return None
 
 
-def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: float, auto: dict) -> Run | None:
-    """What an interrupted auto run keeps: the batch in progress (its finished starts) or the last finished batch,
-    whichever has the better best (the finished batch on a tie: it has every one of its starts), its wall the whole
-    run's and ``auto`` (stopped by "interrupted", the batches begun) its result's ``solver.auto``; None when
-    neither has one."""
+def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: float, auto: dict,
+                 nested: bool) -> Run | None:
+    """What an interrupted auto run keeps: a nested run, the batch in progress (it holds every earlier start too)
+    or else the last finished batch; otherwise whichever of the two has the better best (the finished batch on a
+    tie: it has every one of its starts).  Its wall is the whole run's and ``auto`` (stopped by "interrupted", the
+    batches begun) its result's ``solver.auto``; None when neither has a start to keep."""
     kept = [r for r in (last, partial) if r is not None]
     if not kept:
         return None
-    chosen = kept[0] if len(kept) == 1 or not better(kept[1].best, kept[0].best, maximise) else kept[1]
+    if nested:
+        chosen = kept[-1]
+    else:
+        chosen = kept[0] if len(kept) == 1 or not better(kept[1].best, kept[0].best, maximise) else kept[1]
     return replace(chosen, wall_s=time.perf_counter() - t0, auto=auto)
 
 
