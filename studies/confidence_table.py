@@ -66,7 +66,7 @@ def _row(path: Path, max_starts: int) -> str | None:
 def main(argv: list[str]) -> int:
     if not argv or argv[0].startswith("-"):
         print(__doc__.split("\n\n")[1].strip() if __doc__ else "", file=sys.stderr)
-        return 2
+        return 0 if argv[:1] in (["-h"], ["--help"]) else 2
     out = Path(argv[0])
     every = "--all" in argv
     only = argv[argv.index("--only") + 1:] if "--only" in argv else []

@@ -135,7 +135,8 @@ def test_a_run_interrupted_in_the_other_order_is_not_resumed(tmp_path, nested_to
     from synthesis.errors import OutputError
 
     loaded = _toy(tmp_path)
-    with pytest.raises(OutputError, match="fixed's order and this code numbers them in the kind's"):
+    with pytest.raises(OutputError, match="numbered its starts in the fixed order, this version of agrisynth "
+                                          "numbers them in the kind's own order"):
         run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(), finished={}, resumed_batch=32,
                   resumed_nested=False)
 
@@ -317,3 +318,107 @@ def test_a_nested_batch_mark_keeps_the_earlier_batches_starts_on_resume(tmp_path
         log.batch(32, nested)                  # cut here: none of the carried starts written again yet
         log.close()
         assert sorted(startlog.read(folder, print_)) == expected
+
+
+# ---------------------------------------------------------------------------- the core's auto batches, edge cases
+
+def test_a_failed_start_of_a_nested_batch_is_carried_not_solved_again(tmp_path, nested_toy, monkeypatch):
+    """Start 3 raises in batch 16: it stays that start's failure in batch 32 (recorded and told once, 32 records
+    in all), so each start is solved once whatever the budget."""
+    from synthesis.core import solve as core
+
+    loaded = _toy(tmp_path)
+    real = core.run_starts
+
+    class Raising:
+        def __init__(self, inner):
+            self.inner = inner
+
+        def solve(self, i, x):
+            if i == 3:
+                raise RuntimeError("boom in start 3")
+            return self.inner.solve(i, x)
+
+        def __getattr__(self, name):
+            return getattr(self.inner, name)
+
+    monkeypatch.setattr(core, "run_starts", lambda factory, *a, **k: real(lambda: Raising(factory()), *a, **k))
+    recorded: list = []
+    told: list[int] = []
+    result, reports, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20),
+                                   record=recorded.append, on_start=lambda report, best: told.append(report.outcome.start))
+    assert result.solver["auto"]["batches"] == [16, 32]
+    assert sorted(out.start for out in recorded) == list(range(32)) and sorted(told) == list(range(32))
+    assert reports[3].outcome.return_status.startswith("Start_Raised")
+
+
+def test_a_signal_while_a_resumed_run_counts_its_finished_starts_keeps_them_all(tmp_path, nested_toy):
+    """Resumed from 23 finished starts, a signal after the 5th is counted: the kept run still has all 23 (the
+    finished starts are counted all or none), so it can replace the interrupted run without losing any."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    recorded: list = []
+    run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(max_starts=32, min_converged=100), record=recorded.append)
+    finished = {out.start: out for out in recorded[:23]}
+    told: list[int] = []
+
+    def on_start(report, best):
+        told.append(report.outcome.start)
+        if len(told) == 5:
+            interrupt.simulate(signal.SIGINT)
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(max_starts=32, min_converged=100),
+                      finished=finished, resumed_batch=32, resumed_nested=True, on_start=on_start)
+    finally:
+        interrupt.uninstall()
+    _, reports, _ = caught.value.partial
+    assert [r.outcome.start for r in reports] == list(range(23))
+
+
+@pytest.mark.parametrize("nested", [False, True])
+def test_the_kinds_early_stop_at_a_batchs_last_start_ends_the_auto_run(tmp_path, nested):
+    """The kind's early stop met by start 15, the first batch's last: the run stops there (stop_at_objective)
+    with 16 starts solved, not a second batch."""
+    import toy_kind
+
+    kinds.register(toy_kind.KIND)
+    try:
+        solving = dataclasses.replace(toy_kind.KIND.solving(),
+                                      stop_when=lambda setting: (lambda report: report.outcome.start == 15),
+                                      **({"auto_order": lambda setting: True} if nested else {}))
+        kind = toy_kind.KIND.solving_with(solving)
+        solved: list = []
+        result, reports, _ = run_solve(kind, _toy(tmp_path), workers=1, auto=AutoStarts(min_converged=100),
+                                       record=solved.append)
+    finally:
+        kinds.unregister("toy_disc")
+    assert result.solver["auto"]["stopped_by"] == "stop_at_objective" and result.solver["auto"]["batches"] == [16]
+    assert len(solved) == 16 and len(reports) == 16
+
+
+def test_an_interrupted_batch_tying_the_finished_one_keeps_the_finished_batch_whole():
+    """Core: the batch in progress reached the finished batch's optimum at a lower start index (1 against 5): a
+    tie, so the finished batch's 16 starts are kept, not the 3 of the batch in progress; a strictly better
+    partial best is kept."""
+    from types import SimpleNamespace
+
+    from synthesis.core.solve import Run, _kept_so_far
+    from synthesis.core.verdict import StartReport
+
+    def report(start, objective):
+        return StartReport(SimpleNamespace(start=start, objective=objective, success=True,
+                                           return_status="Solve_Succeeded"), True, 0.0)
+
+    finished = [report(i, 2.0) for i in range(16)]
+    finished[5] = report(5, 1.0)
+    last = Run(finished, finished[5], 16, 0, 1, None, 1.0)
+    for best_in_progress, kept_starts in ((1.0, 16), (0.5, 3)):
+        progress = [report(0, 2.0), report(1, best_in_progress), report(2, 2.0)]
+        partial = Run(progress, progress[1], 32, 0, 1, None, 0.5)
+        kept = _kept_so_far(partial, last, False, 0.0, {}, nested=False)
+        assert kept is not None and len(kept.reports) == kept_starts

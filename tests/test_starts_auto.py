@@ -266,6 +266,24 @@ def test_ctrl_c_inside_a_batch_keeps_the_better_of_it_and_the_last_finished_batc
     assert kept.design == fixed.design and kept.objective["value"] == fixed.objective["value"]
 
 
+@pytest.mark.slow         # seconds: two commands
+def test_resume_in_the_other_start_order_is_refused_before_any_folder_is_made(tmp_path):
+    """An auto run's starts.jsonl whose last batch mark says "nested" (the kind's own order) while this kind numbers
+    comb_finger's starts in the fixed order: --resume exits 2 naming both orders, and leaves no staging folder."""
+    spec = _combing(tmp_path, "4")
+    out = tmp_path / "out"
+    first = agrisynth("solve", spec, "--starts", "auto", "--max-starts", "16", "--workers", "1", "--out", out)
+    assert first.returncode == 0, first.stderr
+    folder = out / "redesign_max_combing"
+    log = folder / startlog.FILENAME
+    log.write_text(log.read_text().replace('{"auto_batch":16}', '{"auto_batch":16,"nested":true}'))
+    resumed = agrisynth("solve", spec, "--resume", folder, "--workers", "1")
+    said = " ".join(resumed.stderr.split())
+    assert resumed.returncode == 2 and "numbered its starts in the kind's own order" in said, resumed.stderr
+    assert "in the fixed order" in said and "Traceback" not in resumed.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["redesign_max_combing"]
+
+
 @pytest.mark.slow
 def test_auto_on_a_library_crank_rocker_equals_the_fixed_run_of_its_count():
     """crank_rocker_max_transmission: the first batch of 16 has fewer than 16 converged starts, the second (32)

@@ -108,15 +108,16 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     maximise = solving.maximise(setting)
     recheck = functools.partial(_recheck, solving, setting)
     stop = solving.stop_when(setting)
-    reports: dict[int, StartReport] = {}
-    best: list[StartReport] = []
     earlier = dict(carried or {})
+    # an earlier batch's reports count as they were, all at once (one dict copy: no signal can fall in between)
+    reports: dict[int, StartReport] = dict(earlier)
+    best: list[StartReport] = []
+    for i in sorted(earlier):
+        if not best or better(earlier[i], best[0], maximise):
+            best[:] = [earlier[i]]
 
     def done(outcome) -> None:
-        if outcome.start in earlier:     # an earlier batch's report, as it was
-            reports[outcome.start] = rep = earlier[outcome.start]
-            if not best or better(rep, best[0], maximise):
-                best[:] = [rep]
+        if outcome.start in earlier:     # counted above
             return
         with interrupt.deferred():       # a start is kept whole or not at all
             if record is not None:
@@ -231,12 +232,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     solving = _solving(kind)
     maximise = solving.maximise(setting)
     nested = solving.auto_order(setting)
-    if resumed_batch is not None and resumed_nested is not None and resumed_nested != nested:
-        raise OutputError(f"{kind.name}: the run being resumed numbered its starts in "
-                        f"{'the kind' if resumed_nested else 'the fixed'}'s order and this code numbers them in "
-                        f"{'the kind' if nested else 'the fixed'}'s: its starts are not this run's; start it afresh")
+    if resumed_batch is not None and resumed_nested is not None:
+        refuse_other_order(kind, resumed_nested, nested)
     if nested:
         setting = replace(setting, auto_order=True)
+    stop = solving.stop_when(setting)
     totals = auto.batches()
     first = totals.index(resumed_batch) if resumed_batch in totals else 0
     # a nested run's interrupted batch: every start it had finished (the log keeps the earlier batches' starts too)
@@ -256,7 +256,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             took = time.perf_counter() - began
             # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
             solved_now = totals[k] - len(carried) - len(resumed) if nested else totals[k]
-            stopped_by = _auto_stop(run, auto, totals, k, nested, maximise)
+            stopped_by = _auto_stop(run, auto, totals, k, nested, maximise, stop)
             if (stopped_by is None and auto.time_limit_s is not None
                     and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
                     / max(solved_now, 1) > auto.time_limit_s):
@@ -265,8 +265,8 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                 return replace(run, wall_s=time.perf_counter() - t0,
                                auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings(),
                                      **({"order": "kind"} if nested else {})})
-            if nested:      # the next batch appends to this one: every start that ran is kept
-                carried = {r.outcome.start: r for r in run.reports if failure_of(r.outcome) is None}
+            if nested:      # the next batch appends to this one: every start is kept (a failed one too: each
+                carried = {r.outcome.start: r for r in run.reports}      # start is solved once, whatever the budget)
                 resumed = {}
             else:
                 zero = run.reports[0].outcome
@@ -275,7 +275,14 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, {
             "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
             **({"order": "kind"} if nested else {})}, nested)) from None
-    except (KeyboardInterrupt, SystemError) as exc:      # between two batches, or building the next one's NLP
+    except Exception as exc:      # between two batches, or building the next one's NLP (KeyboardInterrupt, or
+        # what a signal inside a CasADi call comes out as: SystemError, NotImplementedError ...)
+        if interrupt.pending() is None or interrupt.deferring():
+            raise
+        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
+            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
+            **({"order": "kind"} if nested else {})}, nested)) from None
+    except KeyboardInterrupt as exc:
         if not interrupt.caused_by_signal(exc):
             raise
         raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
@@ -284,12 +291,29 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
-def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bool, maximise: bool) -> str | None:
+def takes_auto_order(kind: Kind, spec, seed: int) -> bool:
+    """Whether ``--starts auto`` on ``spec`` numbers its starts in the kind's own order (nested batches)."""
+    solving = _solving(kind)
+    return bool(solving.auto_order(Setting(spec, seed, solving.prepare(spec))))
+
+
+def refuse_other_order(kind: Kind, resumed_nested: bool, nested: bool) -> None:
+    """OutputError (exit 2) when an interrupted auto run being resumed numbered its starts in the other order (this
+    version of the kind orders them otherwise): its finished starts are not this run's."""
+    if resumed_nested != nested:
+        order = {True: "the kind's own order", False: "the fixed order"}
+        raise OutputError(f"{kind.name}: the interrupted run numbered its starts in {order[resumed_nested]}, this "
+                          f"version of agrisynth numbers them in {order[nested]}: its finished starts are not this "
+                          f"run's; solve again without --resume")
+
+
+def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bool, maximise: bool,
+               stop: Callable[[StartReport], bool] | None) -> str | None:
     """Why an auto run stops after batch ``k`` (not for its time limit, which the caller projects), or None."""
     stated = confidence_statement(run.reports, run.nlp, maximise)
     assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
-    if len(run.reports) < totals[k]:
-        return "stop_at_objective"         # the kind's own early stop ended the batch
+    if len(run.reports) < totals[k] or (stop is not None and any(stop(r) for r in run.reports)):
+        return "stop_at_objective"         # the kind's own early stop ended the batch (at its last start, too)
     if (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
             and not (nested and k == 0)):
         # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
@@ -314,10 +338,10 @@ def _kept_so_far(partial: Run | None, last: Run | None, maximise: bool, t0: floa
     kept = [r for r in (last, partial) if r is not None]
     if not kept:
         return None
-    if nested:
+    if nested or len(kept) == 1:
         chosen = kept[-1]
-    else:
-        chosen = kept[0] if len(kept) == 1 or not better(kept[1].best, kept[0].best, maximise) else kept[1]
+    else:     # the batch in progress only if its best beats the finished batch's for more than its start index
+        chosen = kept[1] if better(kept[1].best, kept[0].best, maximise, by_index=False) else kept[0]
     return replace(chosen, wall_s=time.perf_counter() - t0, auto=auto)
 
 
@@ -708,5 +732,5 @@ def baseline_rules(kind: Kind, loaded) -> list[dict] | None:
         return None
 
 
-__all__ = ["Run", "AutoStarts", "rows_of_indices", "run_auto", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
+__all__ = ["Run", "AutoStarts", "rows_of_indices", "run_auto", "takes_auto_order", "refuse_other_order", "run_solve", "exit_error", "baseline_rules", "run_multistart", "elastic_diagnosis",
            "starts_table", "reaching_best", "ipopt_log"]

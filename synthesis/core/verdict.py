@@ -99,13 +99,13 @@ def failure_of(outcome) -> str | None:
     return details.get("failure") if isinstance(details, dict) else None
 
 
-def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
+def better(a: StartReport, b: StartReport, maximise: bool, by_index: bool = True) -> bool:
     """Feasible first; among feasible ones the objective (ties within TIE: a start IPOPT finished at its full
     tolerances before one it did not -- the same design, but only the first makes the run's "optimal" true --
     then the lower start index);
     among infeasible ones the smaller worst violation (ties within TIE -- starts held at the same bound miss
     it alike, to float noise -- the objective, then the lower start index), a start that could not be solved at
-    all last."""
+    all last.  ``by_index=False``: a tie down to the start index is not "better" (starts of two runs)."""
     if a.satisfied != b.satisfied:
         return a.satisfied
     if not a.satisfied:
@@ -121,8 +121,8 @@ def better(a: StartReport, b: StartReport, maximise: bool) -> bool:
     if maximise:
         fa, fb = -fa, -fb
     tie = TIE * max(1.0, abs(fb))
-    return fa < fb - tie or (abs(fa - fb) <= tie and (not _converged(a), a.outcome.start)
-                             < (not _converged(b), b.outcome.start))
+    return fa < fb - tie or (abs(fa - fb) <= tie and (not _converged(a), a.outcome.start if by_index else 0)
+                             < (not _converged(b), b.outcome.start if by_index else 0))
 
 
 def _converged(report: StartReport) -> bool:

@@ -91,7 +91,7 @@ def _auto_of(request: SolveRequest, loaded, earlier: dict) -> core.AutoStarts | 
     return replace(base, **budgets)
 
 
-def _plan(request: SolveRequest, loaded) -> _Plan:
+def _plan(request: SolveRequest, loaded, kind) -> _Plan:
     starts, seed, resume = request.starts, request.seed, request.resume
     earlier: dict = {}
     if resume is not None:
@@ -112,6 +112,8 @@ def _plan(request: SolveRequest, loaded) -> _Plan:
         plan.finished = startlog.read(resume, fingerprint)
         mark = startlog.last_batch(resume) if auto is not None else None
         plan.resumed_batch, plan.resumed_nested = mark if mark is not None else (None, None)
+        if mark is not None:      # refused before any folder is made
+            core.refuse_other_order(kind, mark[1], core.takes_auto_order(kind, loaded.model, the_seed))
         where = resume.resolve()
         plan.out = where.parent
         # the result replaces RUN_DIR itself, whatever its name (a renamed run too); a staging folder left by a
@@ -131,7 +133,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)
-    plan = _plan(request, loaded)
+    plan = _plan(request, loaded, kind)
     with RunOutput(plan.out, plan.folder_name, force=request.force, spec=loaded.path, replaceable=plan.replaceable,
                    resumed_from=request.resume) as output:     # a killed run's staging folder: removed once complete
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
@@ -222,4 +224,6 @@ def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, n:
     with interrupt.deferred(reraise=False):
         folder, _ = output.write(result, {"ipopt.log": text_file(log)}, given_rules=core.baseline_rules(kind, loaded),
                                  figures=False)
-    return Outcome(exc.exit_code, result, folder, stopped=Stopped(name, len(reports), n, folder, loaded.path))
+    # of the run kept: an auto run interrupted early in a batch may keep the whole batch before it
+    of = (result.solver or {}).get("starts", n)
+    return Outcome(exc.exit_code, result, folder, stopped=Stopped(name, len(reports), of, folder, loaded.path))
