@@ -78,7 +78,8 @@ class SolveCommand(click.Command):
 @click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
               help="--starts auto: begin no batch that would end past this many seconds (default: none).  A "
                    "time-limited run is not deterministic in its count: how many starts it reaches depends on the "
-                   "machine (result.json solver.auto.stopped_by says time_limit when it stopped it)")
+                   "machine (result.json solver.auto.stopped_by says time_limit when it stopped it); a resumed run counts "
+                   "its time afresh")
 @click.option("--seed", type=WholeNumber(min=0, max=2**53), default=None,
               help="seed of the Latin-hypercube starts (default: the spec's [solver] seed)")
 @click.option("--workers", type=WholeNumber(min=1, max=MAX_WORKERS), default=None,

@@ -255,7 +255,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             last = run
             took = time.perf_counter() - began
             # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
-            solved_now = totals[k] - len(carried) - len(resumed) if nested else totals[k]
+            solved_now = totals[k] - len(carried) - len(resumed)
             stopped_by = _auto_stop(run, auto, totals, k, nested, maximise, stop)
             if (stopped_by is None and auto.time_limit_s is not None
                     and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
