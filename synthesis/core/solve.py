@@ -245,6 +245,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     t0 = time.perf_counter()
     last: Run | None = None
     k = first
+
+    def interrupted() -> dict:
+        """The kept result's ``solver.auto``: stopped by the signal, the batches begun."""
+        return {"stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
+                **({"order": "kind"} if nested else {})}
     try:
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
@@ -272,22 +277,14 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                 zero = run.reports[0].outcome
                 resumed = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
     except Interrupted as exc:
-        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, {
-            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
-            **({"order": "kind"} if nested else {})}, nested)) from None
-    except Exception as exc:      # between two batches, or building the next one's NLP (KeyboardInterrupt, or
-        # what a signal inside a CasADi call comes out as: SystemError, NotImplementedError ...)
-        if interrupt.pending() is None or interrupt.deferring():
+        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, interrupted(), nested)) from None
+    except (Exception, KeyboardInterrupt) as exc:
+        # between two batches, or building the next one's NLP: KeyboardInterrupt, or what a signal inside a CasADi
+        # call comes out as (SystemError, NotImplementedError ...); any other error is the run's own
+        if not isinstance(exc, KeyboardInterrupt) and (interrupt.pending() is None or interrupt.deferring()):
             raise
-        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
-            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
-            **({"order": "kind"} if nested else {})}, nested)) from None
-    except KeyboardInterrupt as exc:
-        if not interrupt.caused_by_signal(exc):
-            raise
-        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, {
-            "stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
-            **({"order": "kind"} if nested else {})}, nested)) from None
+        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, interrupted(),
+                                                                 nested)) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
