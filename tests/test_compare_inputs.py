@@ -151,6 +151,18 @@ def test_compare_cli_refuses_a_fifo_and_non_utf8_in_one_line_and_writes_nothing(
     assert not (tmp_path / "cmp").exists()
 
 
+@pytest.mark.slow          # a whole comparison page: seconds
+@pytest.mark.parametrize("where", ["operation", "vehicle", "envelope", "cam"])
+def test_a_result_whose_condition_table_is_not_a_table_compares_without_it(good, tmp_path, where):
+    """facts.<where> = true (a hand-edited file; the fuzz campaign's find for `operation`): the page is written, the
+    other candidate's conditions shown, no traceback."""
+    path, base = good
+    bad = tmp_path / "bad.json"
+    bad.write_bytes(_edit(base, lambda data: data["facts"].__setitem__(where, True)))
+    page = write_comparison(load_candidates([path, bad]), tmp_path / "cmp")
+    assert "forward speed" in page.read_text()
+
+
 @pytest.mark.slow
 def test_compare_never_writes_over_or_into_a_result_it_compares(tmp_path):
     """--out naming a RESULT folder (with --force, which replaces an agrisynth folder) or a folder inside it is refused

@@ -209,13 +209,13 @@ def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
             rows.setdefault((label, unit), [None] * len(cands))[i] = value
 
     for i, c in enumerate(cands):
-        facts = c.result.extra or {}
+        facts = _table(c.result.extra)
         # a design solved over an operating range (facts.envelope) holds over the range, not at its nominal value
         ranges = {(cond.get("section"), name): cond.get("range")
-                  for name, cond in ((facts.get("envelope") or {}).get("conditions") or {}).items()
+                  for name, cond in _table(_table(facts.get("envelope")).get("conditions")).items()
                   if isinstance(cond, dict)}
         for section in ("operation", "vehicle"):
-            for key, value in (facts.get(section) or {}).items():
+            for key, value in _table(facts.get(section)).items():
                 span = next((r for (sec, name), r in ranges.items()
                              if sec == section and (key == name or key.startswith(name + "_"))), None)
                 if (isinstance(span, list) and len(span) == 2 and isinstance(value, (int, float))
@@ -225,13 +225,19 @@ def operating_conditions(cands: list[Candidate]) -> list[tuple[str, str, list]]:
         for key, (label, unit) in TOP_LEVEL_CONDITIONS.items():
             if key in facts:
                 put(label, unit, i, facts[key])
-        cam = facts.get("cam") or {}
+        cam = _table(facts.get("cam"))
         if "crank_speed_rpm" in cam:
             put("crank speed", "r/min", i, cam["crank_speed_rpm"])
-        tr = c.result.trajectory or {}
+        tr = _table(c.result.trajectory)
         if "crank_speed_rpm" in tr:
             put("crank speed", "r/min", i, tr["crank_speed_rpm"])
     return [(label, unit, values) for (label, unit), values in rows.items()]
+
+
+def _table(value) -> dict:
+    """A result's table as read, or {} where the file holds something else there (a hand-edited or damaged
+    result.json is compared without its conditions, never a traceback)."""
+    return value if isinstance(value, dict) else {}
 
 
 @dataclass(frozen=True)
