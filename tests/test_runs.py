@@ -31,6 +31,35 @@ def test_the_runs_import_neither_click_nor_rich_nor_the_studio():
     assert proc.stdout.split() == ["[]", "[]"]
 
 
+@pytest.mark.slow         # three short solves
+def test_a_resume_stopped_while_it_recounts_the_finished_starts_leaves_the_run_it_resumed_as_it_was(tmp_path):
+    """A run of 8 starts interrupted after 4, resumed, and the resume stopped (SIGTERM) as it counts the 2nd of
+    those 4 again: nothing is replaced -- the interrupted run's result.json and starts.jsonl are byte for byte as
+    they were, no staging folder is left -- and the outcome names that folder with its 4 starts; resuming it then
+    finishes the run."""
+    folder = tmp_path / "cai2020_crank_rocker_synthesis"
+
+    def stop_after(k):
+        def subscriber(event) -> None:
+            if isinstance(event, events.StartFinished) and event.done == k:
+                interrupt.simulate(signal.SIGTERM)
+        return subscriber
+
+    try:
+        first = runs.solve(SolveRequest(ROCKER, tmp_path, starts=8, workers=1), stop_after(4))
+        assert first.exit_code == 143 and first.stopped is not None and first.stopped.finished == 4
+        before = {name: (folder / name).read_bytes() for name in ("result.json", "starts.jsonl")}
+        again = runs.solve(SolveRequest(ROCKER, resume=folder, workers=1), stop_after(2))
+    finally:
+        interrupt.uninstall()
+    assert again.exit_code == 143 and again.stopped is not None
+    assert again.stopped.kept == folder and again.stopped.finished == 4 and again.stopped.total == 8
+    assert {name: (folder / name).read_bytes() for name in before} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]
+    done = runs.solve(SolveRequest(ROCKER, resume=folder, workers=1), lambda event: None)
+    assert done.exit_code in (0, 1) and json.loads((folder / "result.json").read_text())["status"] != "interrupted"
+
+
 def test_help_imports_neither_casadi_nor_matplotlib():
     code = ("import sys\nsys.argv = ['agrisynth', '--help']\nfrom synthesis.program import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"

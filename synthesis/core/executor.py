@@ -192,10 +192,7 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     are the caller's to keep.
     """
     run = _Multistart(factory, starts, on_done, stop_when, failure)
-    # all of them or none: a signal while they are counted would leave a partial run with fewer starts than the
-    # interrupted run had kept, which would then replace it
-    with interrupt.deferred():
-        run.replay(finished or {})
+    run.replay(finished or {})
     todo = [i for i in range(run.stop_at + 1) if i not in run.outcomes]
     if scheduler is not None:
         return run.on_cluster(todo, scheduler)

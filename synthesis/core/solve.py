@@ -149,9 +149,12 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         wall = time.perf_counter() - t0
         kept = [reports[i] for i in sorted(reports)]
         best_kept = best_in_start_order(kept, maximise) if kept else None
+        # stopped while a resumed run's finished starts were being counted again: keeping fewer than it had would
+        # replace the interrupted run with less, so nothing is kept (the interrupted run stays as it was)
+        recounted = all(i in reports for i in (finished or {}) if i < starts)
         partial = (Run(kept, best_kept, starts, setting.seed, None if scheduler else workers, scheduler, wall,
                        nlp, build_s)
-                   if best_kept is not None and failure_of(best_kept.outcome) is None else None)
+                   if recounted and best_kept is not None and failure_of(best_kept.outcome) is None else None)
         raise Interrupted(interrupt.signal_of(exc), partial) from None
     wall = time.perf_counter() - t0
     ordered = [reports[o.start] for o in outcomes]       # the starts that count (an early stop: 0..k)
@@ -281,7 +284,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     except (Exception, KeyboardInterrupt) as exc:
         # between two batches, or building the next one's NLP: KeyboardInterrupt, or what a signal inside a CasADi
         # call comes out as (SystemError, NotImplementedError ...); any other error is the run's own
-        if not isinstance(exc, KeyboardInterrupt) and (interrupt.pending() is None or interrupt.deferring()):
+        if not isinstance(exc, KeyboardInterrupt) and interrupt.pending() is None:
             raise
         raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, interrupted(),
                                                                  nested)) from None
