@@ -216,3 +216,37 @@ def modules_after_runs(tmp_path, runs: list[list[str]]) -> list[str]:
     proc = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     return json.loads(out.read_text())
+
+
+def interrupted_auto_run(kind, loaded, *, after_told: int | None = None):
+    """``--starts auto`` (min_converged 20: the toy goes on to batch 32) stopped by a SIGINT in its second batch: as
+    the batch begins (``after_told`` None, the handler raising as it would) or once ``after_told`` starts of the run
+    have been told to the progress.  Returns (the :class:`Interrupted` raised, the starts told in order)."""
+    import signal
+
+    import pytest
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+    from synthesis.core.solve import AutoStarts, run_solve as run_core
+
+    batches: list[int] = []
+    told: list[int] = []
+
+    def on_batch(total, nested):
+        batches.append(total)
+        if total == 32 and after_told is None:
+            interrupt.simulate(signal.SIGINT)
+            raise KeyboardInterrupt
+
+    def on_start(report, best):
+        told.append(report.outcome.start)
+        if batches == [16, 32] and len(told) == after_told:
+            interrupt.simulate(signal.SIGINT)
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_core(kind, loaded, workers=1, auto=AutoStarts(min_converged=20), on_start=on_start,
+                     on_batch=on_batch)
+    finally:
+        interrupt.uninstall()
+    return caught.value, told

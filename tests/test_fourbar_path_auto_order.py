@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
+from solving import interrupted_auto_run
 from synthesis import kinds
 from synthesis.core.solve import AutoStarts, rows_of_indices, run_solve
 from synthesis.kinds import solving_kind_for
@@ -144,24 +145,10 @@ def test_a_run_interrupted_in_the_other_order_is_not_resumed(tmp_path, nested_to
 def test_ctrl_c_between_two_nested_batches_keeps_every_finished_start(tmp_path, nested_toy):
     """A signal as batch 32 begins (before any of its starts): the run stops Interrupted with the first batch's 16
     reports and their best, status interrupted."""
-    import signal
-
-    from synthesis.core import interrupt
-    from synthesis.core.interrupt import Interrupted
-
     loaded = _toy(tmp_path)
     first, _, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(max_starts=16))
-
-    def on_batch(total, nested):
-        if total == 32:
-            interrupt.simulate(signal.SIGINT)
-            raise KeyboardInterrupt
-    try:
-        with pytest.raises(Interrupted) as caught:
-            run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=on_batch)
-    finally:
-        interrupt.uninstall()
-    kept, reports, _ = caught.value.partial
+    caught, _ = interrupted_auto_run(nested_toy, loaded)
+    kept, reports, _ = caught.partial
     assert kept.status == "interrupted" and [r.outcome.start for r in reports] == list(range(16))
     assert kept.solver["auto"] == {**AutoStarts(min_converged=20).settings(), "stopped_by": "interrupted",
                                    "batches": [16, 32], "order": "kind"}
@@ -171,26 +158,8 @@ def test_ctrl_c_between_two_nested_batches_keeps_every_finished_start(tmp_path, 
 def test_ctrl_c_inside_a_nested_batch_keeps_the_earlier_batches_and_its_own_finished_starts(tmp_path, nested_toy):
     """A signal 3 starts into nested batch 32: the kept result holds starts 0-18 (the first batch's 16, told once,
     and the 3 new ones), not only the last finished batch's 16."""
-    import signal
-
-    from synthesis.core import interrupt
-    from synthesis.core.interrupt import Interrupted
-
-    loaded = _toy(tmp_path)
-    batches: list[int] = []
-    told: list[int] = []
-
-    def on_start(report, best):
-        told.append(report.outcome.start)
-        if batches == [16, 32] and len(told) == 16 + 3:
-            interrupt.simulate(signal.SIGINT)
-    try:
-        with pytest.raises(Interrupted) as caught:
-            run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_start=on_start,
-                      on_batch=lambda total, nested: batches.append(total))
-    finally:
-        interrupt.uninstall()
-    kept, reports, _ = caught.value.partial
+    caught, told = interrupted_auto_run(nested_toy, _toy(tmp_path), after_told=16 + 3)
+    kept, reports, _ = caught.partial
     assert sorted(told) == list(range(19)) and [r.outcome.start for r in reports] == list(range(19))
     assert kept.solver["starts"] == 32 and kept.solver["auto"]["stopped_by"] == "interrupted"
 
@@ -346,7 +315,8 @@ def test_a_failed_start_of_a_nested_batch_is_carried_not_solved_again(tmp_path, 
     recorded: list = []
     told: list[int] = []
     result, reports, _ = run_solve(nested_toy, loaded, workers=1, auto=AutoStarts(min_converged=20),
-                                   record=recorded.append, on_start=lambda report, best: told.append(report.outcome.start))
+                                   record=recorded.append,
+                                   on_start=lambda report, best: told.append(report.outcome.start))
     assert result.solver["auto"]["batches"] == [16, 32]
     assert sorted(out.start for out in recorded) == list(range(32)) and sorted(told) == list(range(32))
     assert reports[3].outcome.return_status.startswith("Start_Raised")

@@ -8,7 +8,7 @@ import json
 import pytest
 
 from conftest import LIBRARY
-from solving import agrisynth
+from solving import agrisynth, interrupted_auto_run
 from synthesis import kinds
 from synthesis.core import startlog
 from synthesis.core.kind import Setting
@@ -215,25 +215,11 @@ def test_a_resumed_auto_run_continues_the_batch_it_was_in(tmp_path, toy):
 def test_ctrl_c_between_two_batches_keeps_the_finished_batch(tmp_path, toy):
     """A signal as batch 32 begins (its NLP not yet built): the run stops Interrupted, keeping batch 16 whole --
     status interrupted, the design and starts of --starts 16 -- where it used to end with nothing kept."""
-    import signal
-
-    from synthesis.core import interrupt
-    from synthesis.core.interrupt import Interrupted
-
     loaded = _toy(tmp_path)
     fixed, _, _ = solve_spec(loaded, starts=16, workers=1)
-
-    def on_batch(total, nested):
-        if total == 32:
-            interrupt.simulate(signal.SIGINT)
-            raise KeyboardInterrupt
-    try:
-        with pytest.raises(Interrupted) as caught:
-            run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_batch=on_batch)
-    finally:
-        interrupt.uninstall()
-    kept, reports, _ = caught.value.partial
-    assert kept.status == "interrupted" and len(reports) == 16 and caught.value.exit_code == 130
+    caught, _ = interrupted_auto_run(toy, loaded)
+    kept, reports, _ = caught.partial
+    assert kept.status == "interrupted" and len(reports) == 16 and caught.exit_code == 130
     assert kept.solver["auto"]["stopped_by"] == "interrupted" and kept.solver["auto"]["batches"] == [16, 32]
     assert kept.design == fixed.design and kept.objective["value"] == fixed.objective["value"]
 
@@ -241,27 +227,10 @@ def test_ctrl_c_between_two_batches_keeps_the_finished_batch(tmp_path, toy):
 def test_ctrl_c_inside_a_batch_keeps_the_better_of_it_and_the_last_finished_batch(tmp_path, toy):
     """A signal 3 starts into batch 32: those 3 starts' best ties batch 16's (the toy's one optimum), so the kept
     result is batch 16 whole (every one of its starts); the batches begun are both."""
-    import signal
-
-    from synthesis.core import interrupt
-    from synthesis.core.interrupt import Interrupted
-
     loaded = _toy(tmp_path)
     fixed, _, _ = solve_spec(loaded, starts=16, workers=1)
-    batches: list[int] = []
-    told: list[int] = []
-
-    def on_start(report, best):
-        told.append(report.outcome.start)
-        if batches == [16, 32] and len(told) == 16 + 3:
-            interrupt.simulate(signal.SIGINT)
-    try:
-        with pytest.raises(Interrupted) as caught:
-            run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), on_start=on_start,
-                      on_batch=lambda total, nested: batches.append(total))
-    finally:
-        interrupt.uninstall()
-    kept, reports, _ = caught.value.partial
+    caught, told = interrupted_auto_run(toy, loaded, after_told=16 + 3)
+    kept, reports, _ = caught.partial
     assert len(told) == 16 + 3 and len(reports) == 16 and kept.solver["auto"]["batches"] == [16, 32]
     assert kept.design == fixed.design and kept.objective["value"] == fixed.objective["value"]
 

@@ -111,10 +111,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
     earlier = dict(carried or {})
     # an earlier batch's reports count as they were, all at once (one dict copy: no signal can fall in between)
     reports: dict[int, StartReport] = dict(earlier)
-    best: list[StartReport] = []
-    for i in sorted(earlier):
-        if not best or better(earlier[i], best[0], maximise):
-            best[:] = [earlier[i]]
+    best: list[StartReport] = [best_in_start_order([earlier[i] for i in sorted(earlier)], maximise)] if earlier else []
 
     def done(outcome) -> None:
         if outcome.start in earlier:     # counted above
