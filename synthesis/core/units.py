@@ -27,12 +27,14 @@ from synthesis.core.problem import MaxMinMargin, ObjectiveParts
 #: carry one length; "1", "-" and "" are plain numbers (ratios, normalised margins)
 LENGTH_POWER: dict[str, int] = {
     "mm": 1, "m": 1, "mm/s": 1, "m/s": 1, "mm/s^2": 1, "m/s^2": 1, "mm/rad": 1,
-    "mm^2": 2, "m^2": 2, "mm^2/s^2": 2, "m^2/s^2": 2,
+    "mm^2": 2, "m^2": 2, "mm^2/s^2": 2, "m^2/s^2": 2, "mm^2/rad": 2,
     "1/mm": -1, "deg/mm": -1,
     "deg": 0, "rad": 0, "deg^2": 0, "deg/s^2": 0, "s": 0, "ms": 0, "r/min": 0, "rad/s": 0,
     "1": 0, "-": 0, "": 0, "%": 0,
     # forces, torques and stresses are SI whatever the length unit: a follower's spring rate is per length
     "N": 0, "N^2": 0, "N m": 0, "N m/rad": 0, "MPa": 0, "N/mm": -1,
+    # so are masses and moments of inertia (a counterweight's kg, a flywheel's kg m^2)
+    "kg": 0, "kg m^2": 0,
 }
 
 

