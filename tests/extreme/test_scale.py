@@ -366,6 +366,12 @@ KNOWN_FAILING: dict[str, str] = {
     "tillage/tillage_min_peak_torque.toml": "its starts are chaotic at the last digit in mm itself (a start moved by "
                                             "1e-15 relative ends elsewhere in mm); the metres NLP started at the mm "
                                             "best stays there (moves 6e-9)"}
+#: the every-start study's: its rows take all of a spec's starts, where tillage_torque_limited's chaos shows too
+#: (2026-11-29: its rows in metres and x 1e3 differ from mm; its 4-start bench row passes, as above)
+KNOWN_FAILING_EVERY_START: dict[str, str] = {
+    **KNOWN_FAILING,
+    "tillage/tillage_torque_limited.toml": "its starts are chaotic at the last digit in mm itself (its start 3 at "
+                                           "403.18 ends at 602.80 and 395.38 when moved by 1e-15 relative)"}
 
 
 def _library_params():
@@ -412,11 +418,12 @@ def test_every_library_problem_every_start(record_property):
         lines.append(f"iteration ratio ({what}) over {len(rows)} problems x 2 units: median "
                      f"{statistics.median(ratios):.2f}, worst {max(ratios):.2f}, best {min(ratios):.2f}")
     lines.append(f"refused (tolerance box): {', '.join(refused)}")
-    # the rows known to fail (KNOWN_FAILING, with their measured cause) are shown, not held to the bench's tolerances
-    lines.append(f"known to fail (not asserted): {', '.join(p for p in rows if p in KNOWN_FAILING) or 'none'}")
+    # the rows known to fail (KNOWN_FAILING_EVERY_START, with their cause) are shown, not held to the tolerances
+    lines.append(f"known to fail (not asserted): "
+                 f"{', '.join(p for p in rows if p in KNOWN_FAILING_EVERY_START) or 'none'}")
     record_property("figure", "\n".join(lines))
     print("\n".join(lines))
-    bad = [(p, f) for p, r in rows.items() if p not in KNOWN_FAILING for f in FACTORS
+    bad = [(p, f) for p, r in rows.items() if p not in KNOWN_FAILING_EVERY_START for f in FACTORS
            if not (same(r, f) and comparable_iterations(r, f))]
     assert not bad, bad
 
