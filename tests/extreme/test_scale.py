@@ -125,7 +125,9 @@ def compare(relative: str, starts: int) -> dict:
     loaded = load_spec(LIBRARY / relative)
     try:
         mm = solve_in(loaded, 1.0, starts)
-    except SpecError as exc:       # refused before any start (a rule no design variable moves): so in each unit
+    # refused before any start (a rule no design variable moves, judged on the kind's own problem, so the message
+    # cannot differ by unit): the row says only that the build in each unit refuses alike and does not fail otherwise
+    except SpecError as exc:
         return {"kind": loaded.kind, "refused": str(exc), **{f: {"refused": _refusal(loaded, f, starts)}
                                                               for f in FACTORS}}
     runs = {1.0: mm, **{f: solve_in(loaded, f, starts) for f in FACTORS}}
@@ -166,9 +168,10 @@ def _refusal(loaded, factor: float, starts: int) -> str | None:
 
 def own_accuracy(loaded, best, starts: int) -> float | None:
     """How far the mm design itself is from the optimum IPOPT's tolerance leaves it: the move of the best start's
-    design when IPOPT solves again from it in mm with tol 1e-11 (None for a kind that does not declare its problem
-    to the core, or when the tight solve does not converge).  From the design, not from the start: a start whose
-    trajectory is chaotic would end at another optimum, a move that says nothing of the tolerance."""
+    design when IPOPT solves again from its decision variables in mm with tol 1e-11.  None -- no allowance -- for a
+    kind that does not declare its problem to the core, when the tight solve does not converge, or when it ends at
+    another objective (beyond 1e-6 relative): then it left for another optimum, a move that says nothing of the
+    tolerance (tillage_torque_limited's best, Solved_To_Acceptable_Level at 403.18, goes to 390.49 and moves 0.2)."""
     import dataclasses
 
     from synthesis.core.declared import DeclaredNLP
@@ -177,14 +180,15 @@ def own_accuracy(loaded, best, starts: int) -> float | None:
     setting = Setting(loaded.model, loaded.model.solver.seed, solving.prepare(loaded.model))
     nlp = solving.build(setting, False)
     declared = getattr(nlp, "declared", None)
-    if declared is None:
+    if declared is None or best.raw is None:
         return None
     problem = declared.problem
     tight = dataclasses.replace(declared, problem=dataclasses.replace(
         problem, ipopt_options={**problem.ipopt_options, **TIGHT}))
-    x = np.array([best.design[n] for n in nlp.names], float)
-    out = DeclaredNLP(tight, setting).solve(best.start, x)
-    return design_difference(out.design, best.design) if out.success else None
+    out = DeclaredNLP(tight, setting).solve(best.start, np.asarray(best.raw.x[:len(nlp.names)], float))
+    if not out.success or abs(out.objective - best.objective) > DESIGN_TOLERANCE * max(1.0, abs(best.objective)):
+        return None
+    return design_difference(out.design, best.design)
 
 
 def conflicting_rules(loaded, factor: float, starts: int) -> list[str]:
@@ -257,7 +261,7 @@ def test_length_power_table_and_an_unknown_unit():
 def test_every_library_problem_declares_units_the_table_knows(relative):
     """Every quantity of every library problem the kinds build (variables, structural rows, rules, objective and its
     extras) has a unit in the length-power table, so the problem can be handed to IPOPT in metres: the benchmark
-    above solves them, this builds them (no IPOPT instance: a few hundredths of a second each).  A counterweight's
+    above solves them, this builds them (no IPOPT instance: at most about half a second each).  A counterweight's
     kg and the rotary planetary kind's mm^2/rad were missing until 2026-11-29, found only by that benchmark."""
     loaded = load_spec(LIBRARY / relative)
     if getattr(loaded.model, "tolerance", None) is not None:
@@ -354,24 +358,23 @@ def test_start_0_in_metres_and_x1e3_reaches_the_mm_design(relative, record_prope
 BENCH_STARTS = 4
 
 
-#: rows known to fail, with the measured cause (strict: the row fails the day it passes, so this is re-read)
-#: tillage_min_peak_torque: its starts are chaotic at the last digit in mm itself, so no unit change can agree with
-#: them.  Measured 2026-11-29: each of its first 4 starts moved by 1e-15 relative ends elsewhere in mm (start 3, the
-#: best: 358 -> 663 and 902 iterations, the last Infeasible_Problem_Detected), while the metres NLP is the same
-#: problem (started at the mm best it stays: moves 6e-9 in 97 iterations, objective within 4e-10).
-#: tillage_torque_limited is as chaotic (its start 3 at 403.18 ends at 602.80 and 395.38 when moved by 1e-15) but
-#: passes: its mm best is Solved_To_Acceptable_Level and moves 0.21 when solved again from itself at tol 1e-11, so
-#: its row's design tolerance is 3 x 0.21 (the figure shows it).
-KNOWN_FAILING: dict[str, str] = {
-    "tillage/tillage_min_peak_torque.toml": "its starts are chaotic at the last digit in mm itself (a start moved by "
-                                            "1e-15 relative ends elsewhere in mm); the metres NLP started at the mm "
-                                            "best stays there (moves 6e-9)"}
-#: the every-start study's: its rows take all of a spec's starts, where tillage_torque_limited's chaos shows too
-#: (2026-11-29: its rows in metres and x 1e3 differ from mm; its 4-start bench row passes, as above)
-KNOWN_FAILING_EVERY_START: dict[str, str] = {
-    **KNOWN_FAILING,
-    "tillage/tillage_torque_limited.toml": "its starts are chaotic at the last digit in mm itself (its start 3 at "
-                                           "403.18 ends at 602.80 and 395.38 when moved by 1e-15 relative)"}
+#: tillage's two torque redesigns.  Measured 2026-11-29: their starts are sensitive at the last digit in mm itself
+#: -- moved by +-1e-15 relative, tillage_min_peak_torque's start 1 ends at 74.06 / 89.62 / 73.87 and its best,
+#: start 3, once Infeasible_Problem_Detected after 902 iterations; tillage_torque_limited's start 3 (its best, 403.18,
+#: Solved_To_Acceptable_Level) at 602.80 / 395.38 -- while the metres NLP is the same problem (started at
+#: min_peak_torque's mm best it stays: moves 6e-9 in 97 iterations, objective within 4e-10).  In metres no start of
+#: min_peak_torque's first 4 converges (2 in mm; start 0, stable in mm, reaches max_iter): the unit change moves the
+#: trajectories by more than the rounding above, not investigated further.
+_TILLAGE_TORQUE = ("its starts end elsewhere when moved by 1e-15 relative in mm itself, and the metres NLP started "
+                   "at the mm best stays there (moves 6e-9): its trajectories, not its units (see the comment)")
+#: rows known to fail, with the measured cause (strict xfail: the row fails the day it passes, so this is re-read)
+KNOWN_FAILING: dict[str, str] = {"tillage/tillage_min_peak_torque.toml": _TILLAGE_TORQUE,
+                                 "tillage/tillage_torque_limited.toml": _TILLAGE_TORQUE}
+#: the every-start study's (shown there, not asserted; not strict)
+KNOWN_FAILING_EVERY_START: dict[str, str] = dict(KNOWN_FAILING)
+#: (tillage_redesign was one until 2026-11-24: its start 0 was chaotic at the last digit -- moved by 1e-15 relative
+#: in mm it ended at 393.27 mm instead of 373.06, and so did its metres round trip -- on a degenerate optimum;
+#: the kind now relaxes bounds by 1e-10 (synthesis/kinds/tillage_linkage/nlp.py) and every such start ends at 373.06)
 
 
 def _library_params():
@@ -415,7 +418,7 @@ def test_every_library_problem_every_start(record_property):
     lines = [f"{p}: " + figure(r) for p, r in rows.items()]
     for key, what in (("ratio", "total"), ("converged_ratio", "over starts converging in both units")):
         ratios = [r[f][key] for r in rows.values() if "refused" not in r for f in FACTORS]
-        lines.append(f"iteration ratio ({what}) over {len(rows)} problems x 2 units: median "
+        lines.append(f"iteration ratio ({what}) over {len(ratios) // len(FACTORS)} problems x 2 units: median "
                      f"{statistics.median(ratios):.2f}, worst {max(ratios):.2f}, best {min(ratios):.2f}")
     lines.append(f"refused (tolerance box): {', '.join(refused)}")
     # the rows known to fail (KNOWN_FAILING_EVERY_START, with their cause) are shown, not held to the tolerances
