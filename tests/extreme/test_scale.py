@@ -36,8 +36,8 @@ FACTORS = (1e-3, 1e3)
 
 #: one problem per kind whose start 0 (the spec's own design) is cheap and converges in mm: the default suite
 #: solves it in mm, in metres and x 1e3 (about 10 s in all); every library problem and all its starts are the
-#: benchmark study below.  Left to the study: guide_way (a 20 s build of its IPOPT solver), fourbar_path (start 0 of picking_arc
-#: stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of tillage_redesign
+#: benchmark study below.  Left to the study: guide_way (a 20 s build of its IPOPT solver), fourbar_path (start 0
+#: of picking_arc stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of tillage_redesign
 #: takes 631 iterations in mm and is sensitive at the last digit (tillage_linkage/nlp.py): a start that far from
 #: the optimum tests the multistart, which the study compares).
 FAST = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/picker_double_crank_redesign.toml",
@@ -363,7 +363,8 @@ BENCH_STARTS = 4
 
 
 #: rows known to fail, with the measured cause (strict xfail of an AssertionError: the row fails the day it passes or
-#: fails otherwise, so this is re-read).  tillage's two torque redesigns, measured 2026-11-29 (first 4 starts, spec's seed).  tillage_min_peak_torque: its
+#: fails otherwise, so this is re-read).
+#: tillage's two torque redesigns, measured 2026-11-29 (first 4 starts, spec's seed).  tillage_min_peak_torque: its
 #: starts moved by +-1e-15 relative end elsewhere in mm itself (start 1 at 74.06 / 89.62 / 73.87; start 3, 60.229,
 #: the best of the 4 in mm, once Infeasible_Problem_Detected after 902 iterations; start 0 only when moved by 1e-14;
 #: start 2 not at all), while started at the mm best design the metres NLP stays there (moves 6e-9 in 97
