@@ -37,9 +37,9 @@ FACTORS = (1e-3, 1e3)
 #: one problem per kind whose start 0 (the spec's own design) is cheap and converges in mm: the default suite
 #: solves it in mm, in metres and x 1e3 (about 10 s in all); every library problem and all its starts are the
 #: benchmark study below.  Left to the study: guide_way (a 20 s build of its IPOPT solver), fourbar_path (start 0
-#: of picking_arc stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of tillage_redesign
-#: takes 631 iterations in mm and is sensitive at the last digit (tillage_linkage/nlp.py): a start that far from
-#: the optimum tests the multistart, which the study compares).
+#: of picking_arc stops at max_iter in mm too, so there is nothing to compare) and tillage_linkage (start 0 of
+#: tillage_redesign takes 631 iterations in mm and is sensitive at the last digit (tillage_linkage/nlp.py): a start
+#: that far from the optimum tests the multistart, which the study compares).
 FAST = ("picker/cai2020_crank_rocker_synthesis.toml", "picker/picker_double_crank_redesign.toml",
         "clamp_cam/opening_cam_redesign.toml", "comb_finger/redesign_max_combing.toml",
         "combing_chain/redesign_window_80_100.toml", "guide_tube/uniform_spacing.toml",
