@@ -139,7 +139,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
         if isinstance(solved, core.Interrupted):
-            return _keep_interrupted(solved, output, kind, loaded, plan.batch or plan.starts, plan, request.resume)
+            return _keep_interrupted(solved, output, kind, loaded, plan, request.resume)
         # every start is done: a signal from here on is noted and the finished result written all the same
         with output.finishing(emit):
             emit(StartsDone())
@@ -210,14 +210,14 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
     return solved, said
 
 
-def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, n: int, plan: _Plan,
+def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, plan: _Plan,
                       resumed: Path | None) -> Outcome:
     """The one place an interrupted run is kept: its best-so-far result (status interrupted), its report and
     starts.jsonl written, no figures (the run ends within seconds of the signal; --resume draws them), the rule
     table of the given design beside it as in a finished solve's report; nothing is written (and nothing
     replaced) when no start had finished, or a resumed run was stopped before it had counted its finished starts
     again (the run it resumed then stays as it was, to be resumed again)."""
-    name = signal.Signals(exc.signum).name
+    name, n = signal.Signals(exc.signum).name, plan.batch or plan.starts
     if exc.partial is None:
         output.folder.discard()
         if resumed is not None and plan.finished:

@@ -15,6 +15,7 @@ relative difference, absolute below 1 unit).  Iterations: IPOPT's, summed over t
 
 from __future__ import annotations
 
+import functools
 import statistics
 from pathlib import Path
 
@@ -85,7 +86,8 @@ def _guide_way_spline_free(model) -> bool:
     return any(not isinstance(v, (int, float)) for point in spline.control for v in point)
 
 
-def library_problems() -> list[str]:
+@functools.cache
+def library_problems() -> tuple[str, ...]:
     """Every library spec (relative to problems/) whose kind solves and that has a free design variable."""
     out = []
     for path in sorted(LIBRARY.rglob("*.toml")):
@@ -99,7 +101,7 @@ def library_problems() -> list[str]:
             free = _guide_way_spline_free(loaded.model)
         if free:
             out.append(str(path.relative_to(LIBRARY)))
-    return out
+    return tuple(out)
 
 
 def solve_in(loaded, factor: float, starts: int):
@@ -178,8 +180,8 @@ def own_accuracy(loaded, best, starts: int) -> float | None:
 
     solving = kinds.solving_kind_for(loaded).solving()
     setting = Setting(loaded.model, loaded.model.solver.seed, solving.prepare(loaded.model))
-    nlp = solving.build(setting, False)
-    declared = getattr(nlp, "declared", None)
+    # built without an IPOPT instance: only its declared problem is read, and IPOPT is built once, below, tight
+    declared = getattr(solving.build(dataclasses.replace(setting, solver=False), False), "declared", None)
     if declared is None or best.raw is None:
         return None
     problem = declared.problem
