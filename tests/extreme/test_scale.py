@@ -27,6 +27,7 @@ from synthesis import kinds
 from synthesis.core import ipopt, units
 from synthesis.core.kind import Setting
 from synthesis.core.solve import run_multistart, run_solve as run_core_solve
+from synthesis.core.transcribe import transcribe
 from synthesis.spec.design_info import describe
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
@@ -268,7 +269,9 @@ def test_every_library_problem_declares_units_the_table_knows(relative):
     """Every quantity of every library problem the kinds build (variables, structural rows, rules, objective and its
     extras) has a unit in the length-power table, so the problem can be handed to IPOPT in metres: the benchmark
     above solves them, this builds them (no IPOPT instance: at most about half a second each).  A counterweight's
-    kg and the rotary planetary kind's mm^2/rad were missing until 2026-11-29, found only by that benchmark."""
+    kg and the rotary planetary kind's mm^2/rad were missing until 2026-11-29, found only by that benchmark.  Each
+    problem is checked as solved and in its elastic form; the polisher a path synthesis builds on first use is its
+    configuration form's problem with other IPOPT options, so the same units."""
     loaded = load_spec(LIBRARY / relative)
     if getattr(loaded.model, "tolerance", None) is not None:
         pytest.skip("a tolerance box is refused in another unit (its sensitivity variables mix units)")
@@ -277,10 +280,12 @@ def test_every_library_problem_declares_units_the_table_knows(relative):
     compiled = ipopt.compiled_in(nlp)
     assert compiled
     for c in compiled:
-        n_w = c.t.w.numel()
-        assert units.variable_factors(c.problem, 1e-3, n_w, c.elastic).shape == (n_w,)
-        assert units.row_factors(c.problem, 1e-3, c.t.owner, c.elastic).shape == (c.t.g.numel(),)
-        assert units.objective_factor(c.problem, 1e-3, c.elastic) > 0
+        # the problem as solved, and its elastic form (an infeasible run's diagnosis, solved in the same unit)
+        for elastic, t in ((c.elastic, c.t), (True, transcribe(c.problem, elastic=True))):
+            n_w = t.w.numel()
+            assert units.variable_factors(c.problem, 1e-3, n_w, elastic).shape == (n_w,)
+            assert units.row_factors(c.problem, 1e-3, t.owner, elastic).shape == (t.g.numel(),)
+            assert units.objective_factor(c.problem, 1e-3, elastic) > 0
 
 
 def _crank_rocker_spec(tmp_path, k: float):
