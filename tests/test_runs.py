@@ -157,3 +157,22 @@ def test_the_studio_worker_tells_the_page_progress_and_lines_not_printed_text():
     assert message(start) == {"done": 1, "total": 4, "line": start.line()}
     assert message(events.Note("l2 looks like metres")) == {"line": "note: l2 looks like metres"}
     assert message(events.StartsDone()) is None and message(events.SolverLog("ipopt")) is None
+
+
+def test_bench_takes_a_library_spec_by_name_as_check_and_solve_do(tmp_path, monkeypatch):
+    """From a folder without the spec (an installed tool's user), bench finds the library's spec of that name and
+    says so; a file of that name in the working folder is taken before it."""
+    from synthesis.runs.benching import problems_by_kind
+    from synthesis.runs.requests import BenchRequest
+
+    monkeypatch.chdir(tmp_path)
+    told: list = []
+    by_kind = problems_by_kind(BenchRequest(("planting_arm/redesign_from_example1.toml",)), told.append)
+    [loaded] = by_kind["planting_fourbar"]
+    assert loaded.path == LIBRARY / "planting_arm" / "redesign_from_example1.toml"
+    assert [type(e).__name__ for e in told] == ["SpecFromLibrary"]
+    own = tmp_path / "planting_arm" / "redesign_from_example1.toml"
+    own.parent.mkdir()
+    own.write_text(loaded.path.read_text().replace('name = "redesign_from_example1"', 'name = "mine"'))
+    [mine] = problems_by_kind(BenchRequest((), (Path("planting_arm/redesign_from_example1.toml"),)))["planting_fourbar"]
+    assert mine.model.name == "mine"

@@ -123,7 +123,8 @@ def compare_command(results: tuple[Path, ...], out: Path, force: bool) -> None:
 @click.command("bench")
 @click.argument("problems", nargs=-1, metavar="[PROBLEM]...")
 @click.option("--problems", "spec_files", multiple=True, type=click.Path(dir_okay=False, path_type=Path),
-              metavar="SPEC", help="a spec file to bench (repeatable; instead of its kind's default set)")
+              metavar="SPEC", help="a spec file to bench, or a library spec by name (repeatable; instead of its "
+                                   "kind's default set)")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
 @click.option("--repeats", type=WholeNumber(min=1), default=None,
@@ -140,8 +141,8 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
     """Error against run time for every kind that solves, side by side in one run.
 
     \b
-    PROBLEM is a kind name (its default bench set: library redesigns) or a spec file; none: every
-    kind that solves.
+    PROBLEM is a kind name (its default bench set: library redesigns) or a spec file (a library
+    spec as `agrisynth problems` lists it, where no such file is here); none: every kind that solves.
     Per problem: IPOPT multistart with exact (CasADi) derivatives against the same NLP with
     finite differences and a limited-memory Hessian, scipy SLSQP and differential_evolution
     (each timed to the first moment it reaches the target: best known + tolerance, every rule on the

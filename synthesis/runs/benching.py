@@ -12,12 +12,15 @@ from synthesis.bench.extreme import extreme_matrix
 from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
+from synthesis.runs.specs import spec_file
 from synthesis.spec import KINDS, load_spec
 
 
-def problems_by_kind(request: BenchRequest) -> dict[str, list | None]:
+def problems_by_kind(request: BenchRequest, emit: Subscriber = lambda event: None) -> dict[str, list | None]:
     """{kind: its spec files to bench, or None for its default set} of the request's problems (none: every kind
-    with a bench); a kind without bench cases or a name that is neither is a :class:`BadRequest` of PROBLEM."""
+    with a bench); a spec is a file, or the library's spec of that name where no such file is here (as check and
+    solve take it, told as ``SpecFromLibrary``); a kind without bench cases or a name that is neither is a
+    :class:`BadRequest` of PROBLEM."""
     known = benchmod.kinds_with_bench()
     by_kind: dict[str, list | None] = {}
     items = [*request.problems, *(str(f) for f in request.spec_files)]
@@ -27,7 +30,7 @@ def problems_by_kind(request: BenchRequest) -> dict[str, list | None]:
         elif item in KINDS:
             raise BadRequest(f"kind {item!r} has no bench cases (kinds with a bench: {', '.join(known)})", "PROBLEM")
         elif item.endswith(".toml") or Path(item).exists():
-            loaded = load_spec(item)
+            loaded = load_spec(spec_file(Path(item), emit))
             if loaded.kind not in known:
                 raise BadRequest(f"{item}: kind {loaded.kind!r} has no bench cases "
                                  f"(kinds with a bench: {', '.join(known)})", "PROBLEM")
@@ -58,7 +61,7 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     """Bench, write OUT/bench/; ``details``: :class:`BenchRows`.  Progress as
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
     repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
-    by_kind = problems_by_kind(request)
+    by_kind = problems_by_kind(request, emit)
     # refused (exit 2) before any benching; the staging folder is discarded if the bench stops
     with RunOutput(request.out, "bench", force=request.force) as output:
         cases = _cases(request, by_kind, emit)
