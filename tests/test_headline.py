@@ -98,6 +98,12 @@ def test_planting_headline_is_its_rule_table_with_the_misses(checked):
     assert lines[-1] == (f"P1-P6 misses: p1p2p3_collinearity by {missed['p1p2p3_collinearity']:.3g} deg; entry_angle "
                          f"by {missed['entry_angle']:.3g} deg") == \
         "P1-P6 misses: p1p2p3_collinearity by 8.44 deg; entry_angle by 0.736 deg"
+    # a point rule that could not be evaluated (P1 not found: no value, no margin) is a miss too, never "holds"
+    unevaluated = [{**r, "value": None, "margin": None, "satisfied": False} if r["name"] == "p1p3_distance" else r
+                   for r in result.rules]
+    lines = kinds.get("planting_fourbar").headline(dataclasses.replace(result, rules=unevaluated))
+    assert lines[-1] == ("P1-P6 misses: p1p3_distance not evaluated; p1p2p3_collinearity by 8.44 deg; entry_angle by "
+                         "0.736 deg")
 
 
 def test_crank_rocker_headline_is_its_stroke_time_ratio_and_transmission_angle(checked):

@@ -686,3 +686,32 @@ def test_a_picker_part_file_that_names_no_file_is_refused_on_one_line(tmp_path, 
         load_spec(path)
     message = str(refused.value)
     assert "picker.crank_rocker" in message and "spec file" in message and "\n" not in message.strip()
+
+
+# --- rule limits the solver cannot be handed ------------------------------------------------------------------------
+
+def test_a_rule_range_narrower_than_the_solvers_back_off_is_refused_in_one_line(tmp_path):
+    """[rules] depth = [24.95, 25.05] mm: the back-off holds each side 0.1 mm inside, which leaves the row a lower limit
+    above its upper; every IPOPT start failed on it with CasADi's "Ill-posed problem detected" (exit 3)."""
+    spec = tmp_path / "narrow.toml"
+    spec.write_text((LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text()
+                    .replace("[objective]", "[rules]\ndepth = [24.95, 25.05]\n\n[objective]", 1))
+    line = _one_line_error(agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out",
+                                     str(tmp_path / "out"), cwd=tmp_path))
+    assert "rule planting_depth: its limits [24.95, 25.05] mm are closer together than the solver's back-off" in line
+    assert "0.1 mm" in line and "[solver] backoff" in line
+    assert not (tmp_path / "out").exists()
+    # wide enough for its back-offs, the same spec solves
+    spec.write_text(spec.read_text().replace("[24.95, 25.05]", "[24.5, 25.5]"))
+    assert agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path / "out"),
+                     cwd=tmp_path).returncode == 0
+
+
+def test_a_planting_rule_range_of_one_value_is_refused_at_load(tmp_path):
+    """depth = [25, 25]: no computed depth is 25 to the last digit (25.00000000000072 with analysis_depth = 25), so
+    check and solve failed it, and solve advised more samples."""
+    spec = tmp_path / "single.toml"
+    spec.write_text((LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text()
+                    .replace("[objective]", "[rules]\ndepth = [25, 25]\n\n[objective]", 1))
+    line = _one_line_error(agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path))
+    assert "depth: [25, 25] is one value; give a range lo < hi" in line

@@ -25,6 +25,7 @@ import numpy as np
 
 from synthesis.core.problem import MaxMinMargin, ObjectiveParts, Problem, Row, Tolerance
 from synthesis.core.sensitivity import pinning_rows, total_jacobian
+from synthesis.errors import SpecError
 
 class _Robust:
     """The robust rows of a problem's rules in a tolerance box, with their extra variables."""
@@ -160,13 +161,23 @@ def _rows_of(rule, robust: bool) -> tuple:
 
 
 def _backed_off(problem: Problem, rule, robust: bool = False) -> list[Row]:
+    """The rule's rows, each inequality moved inside its limits by the problem's back-off.  A range narrower than its
+    two back-offs is refused (SpecError): IPOPT would be handed a row whose lower limit is above its upper, and every
+    start would fail on it."""
     rows = []
     for expr, lb, ub in _rows_of(rule, robust):
         if lb is not None and ub is not None and lb == ub:
             rows.append((expr, lb, ub))
-        else:
-            rows.append((expr, None if lb is None else lb + problem.backoff(rule, lb),
-                         None if ub is None else ub - problem.backoff(rule, ub)))
+            continue
+        low = None if lb is None else lb + problem.backoff(rule, lb)
+        high = None if ub is None else ub - problem.backoff(rule, ub)
+        if low is not None and high is not None and low > high:
+            unit = rule.row_unit or rule.unit
+            raise SpecError(f"rule {rule.name}: its limits [{lb:g}, {ub:g}] {unit} are closer together than the "
+                            f"solver's back-off allows (it holds each side {problem.backoff(rule, lb):g} {unit} "
+                            f"inside, so a returned design meets the limit when re-checked): widen the rule's "
+                            f"limits, or lower [solver] backoff where the spec has it")
+        rows.append((expr, low, high))
     return rows
 
 

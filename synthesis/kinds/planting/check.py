@@ -248,8 +248,9 @@ def headline(result: Result) -> list[str]:
     lost = [name for name, p in points.items() if isinstance(p, dict) and not p.get("found", True)]
     if lost:
         lines.append(f"not found on the path: {', '.join(lost)}")
-    misses = [f"{name} by {figure_text(-rules[name]['margin'], rules[name].get('unit', ''))}" for name in POINT_RULES
-              if name in rules and not rules[name].get("satisfied") and rules[name].get("margin") is not None]
+    failed = [name for name in POINT_RULES if name in rules and not rules[name].get("satisfied")]
+    misses = [f"{name} by {figure_text(-rules[name]['margin'], rules[name].get('unit', ''))}"
+              if rules[name].get("margin") is not None else f"{name} not evaluated" for name in failed]
     lines.append(f"P1-P6 misses: {'; '.join(misses)}" if misses else "P1-P6: every point rule holds")
     return lines + pose_headline((result.extra or {}).get("key_poses") or {}, rules)
 

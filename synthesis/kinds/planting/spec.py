@@ -129,6 +129,9 @@ class RulesSection(StrictModel):
             lo, hi = getattr(self, name)
             if lo > hi:
                 raise ValueError(f"{name}: [{lo:g}, {hi:g}] has lo > hi")
+            if lo == hi:        # an equality no computed value meets to the last digit: every check would fail it
+                raise ValueError(f"{name}: [{lo:g}, {hi:g}] is one value; give a range lo < hi (a computed value "
+                                 f"meets a single number only to rounding, so the rule would never hold)")
         return self
 
 
