@@ -165,7 +165,8 @@ class ProblemSpec(StrictModel):
 
 
 def starts_field(default: int):
-    return Field(default, ge=1, le=10000, description="multistart starts (start 0 = the given design)")
+    return Field(default, ge=1, le=10000, description='multistart starts (start 0 = the given design), or "auto": '
+                                                      'batches until the confidence rule holds (`--starts auto`)')
 
 
 def max_iter_field(default: int, note: str = ""):
