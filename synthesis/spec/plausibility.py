@@ -32,7 +32,9 @@ def _numbers(value: Any) -> Iterator[float]:
 
 
 def fields_with_units(model: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, Any]]:
-    """(dotted path, unit, value) of every field of ``model`` whose description names exactly one unit."""
+    """(dotted path, unit, value) of every field of ``model`` whose description names exactly one unit and that the
+    spec gives: a default the user never wrote says nothing of the unit they wrote in (a cam in metres kept its
+    3 mm default working radius, which hid the note)."""
     for name, field in type(model).model_fields.items():
         value = getattr(model, name, None)
         path = f"{prefix}{name}"
@@ -45,7 +47,7 @@ def fields_with_units(model: BaseModel, prefix: str = "") -> Iterator[tuple[str,
         elif isinstance(value, list) and value and all(isinstance(v, BaseModel) for v in value):
             for k, item in enumerate(value):
                 yield from fields_with_units(item, f"{path}.{k}.")
-        else:
+        elif name in model.model_fields_set:
             units = units_in(field.description)
             if len(units) == 1:
                 yield path, units[0], value
