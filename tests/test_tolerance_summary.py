@@ -178,3 +178,20 @@ def test_the_summary_of_a_real_analysis_names_its_failing_rule_and_what_to_tight
     assert "report.md" in lines[-1] + lines[-2]
     first = next(x for x in facts["stack_up"] if x["name"] in missed)
     assert first["drivers"][0]["variable"] in text.split("Tighten first")[1].split("\n")[0]
+
+
+def test_a_linear_worst_margin_in_the_nlps_terms_is_marked_in_the_terminal_as_in_the_report():
+    """A cam's no_undercut: its re-check in mm, its stack-up in the NLP's ratio (unit 1).  The terminal showed
+    "mm  margin -2.228  lin. worst -0.546" -- a worst case that read better than the nominal -- where report.md says
+    "(NLP's terms, 1)"."""
+    facts = _facts_with(3, 1, 0)
+    facts["stack_up"][0].update(name="no_undercut", unit="1", recheck_unit="mm", same_terms=False,
+                                recheck_margin=-2.228, linear_worst_margin=-0.546)
+    lines = table(facts).splitlines()
+    row = next(line for line in lines if line.startswith("no_undercut"))
+    assert " mm " in row and "-2.228" in row and "-0.546*" in row
+    assert "* lin. worst in the NLP's terms of the rule, not the unit shown: no_undercut (1)" in lines
+    assert "| no_undercut | mm | -2.228 | -0.546 (NLP's terms, 1) |" in full_table(facts)
+    assert max(len(line) for line in lines) <= WIDTH
+    others = [line for line in lines if line.startswith("a_rather_long_rule_name")]
+    assert others and not any("*" in line for line in others)

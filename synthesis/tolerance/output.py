@@ -235,15 +235,22 @@ def _rule_lines(shown: list[dict], failing: dict, samples: int) -> list[str]:
     width = max([len("rule")] + [len(r["name"]) for r in shown])
     head = f"{'rule':<{width}}  {'':4} {'unit':<7}{'margin':>9} {'lin. worst':>10} {'MC pass':>8} {'MC worst':>9}  "
     lines = [head + ("drivers (loss share)" if len(head) + 20 <= WIDTH else "drivers")]
+    other_terms = []        # rows whose linear worst margin is in the NLP's terms, not the unit shown (report.md's note)
     for r in shown:
         unit = r.get("recheck_unit") or r["unit"]
+        linear = _num(r.get('linear_worst_margin'))
+        if not (r.get("same_terms", True) or r["unit"] == unit):
+            other_terms.append(f"{r['name']} ({r['unit'] or '-'})")
+            linear += "*"
         cells = (f"{r['name']:<{width}}  {'FAIL' if r['name'] in failing else 'ok':4} {unit or '-':<7}"
-                 f"{_num(r.get('recheck_margin')):>9} {_num(r.get('linear_worst_margin')):>10} "
+                 f"{_num(r.get('recheck_margin')):>9} {linear:>10} "
                  f"{_num(r.get('mc_pass_rate'), '{:.1%}') if samples else '-':>8} {_num(r.get('mc_worst_margin')):>9}  ")
         drivers = [f"{v} {100 * s:.0f}%" for v, s in _shares(r)[:3]]
         while drivers and len(cells + ", ".join(drivers)) > WIDTH:
             drivers.pop()
         lines.append(cells + ", ".join(drivers))
+    if other_terms:
+        lines.append(f"* lin. worst in the NLP's terms of the rule, not the unit shown: {', '.join(other_terms)}")
     return lines
 
 
