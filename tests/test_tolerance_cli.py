@@ -45,6 +45,25 @@ def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
         shown, key=lambda r: r["linear_worst_margin"] / r["scale"])]
 
 
+@pytest.mark.parametrize("options, widths", [
+    # --length over the spec's own entries of lengths (its [tolerance] variables: 0.2, 0.05, 0.2 mm)
+    (("--length", "5"), {"base_radius": 5.0, "roller_radius": 5.0, "offset": 5.0}),
+    # --tol over --length; the angles keep no width
+    (("--length", "5", "--tol", "roller_radius=0.1"), {"base_radius": 5.0, "roller_radius": 0.1, "offset": 5.0}),
+    # --angle leaves the spec's lengths standing
+    (("--angle", "1"), {"base_radius": 0.2, "roller_radius": 0.05, "offset": 0.2, "rise_start": 1.0, "rise": 1.0,
+                        "far_dwell": 1.0, "return": 1.0, "near_dwell": 1.0}),
+])
+def test_the_command_lines_widths_are_over_the_specs(tmp_path, options, widths):
+    """`agrisynth tolerance` takes its tolerances "from --length/--angle ... else the spec's [tolerance] table": a
+    spec listing its lengths one by one kept them, and --length 5 was dropped without a word."""
+    spec = LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml"
+    run = agrisynth("tolerance", str(spec), *options, "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    box = strict_json(tmp_path / "opening_cam_robust_redesign-tolerance" / "result.json")["facts"]["tolerance"]
+    assert {name: v["half_width"] for name, v in box["tolerance"].items() if v["half_width"]} == widths
+
+
 @pytest.mark.parametrize("option, said", [
     ("arm_len=0.2", "--tol: unknown design variable arm_len (known: arm_length, base_angle)"),
     ("arm_length=0", "--tol arm_length=0: the half-width must be a finite number > 0"),

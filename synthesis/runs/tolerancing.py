@@ -14,8 +14,9 @@ from synthesis.runs.events import MonteCarloPlan, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
 from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables
-from synthesis.spec import load_spec
+from synthesis.spec import design_info, load_spec
 from synthesis.tolerance.analysis import analyse
+from synthesis.tolerance.design import spec_keys
 from synthesis.tolerance.envelope import grid_of
 from synthesis.tolerance.output import artifacts, verdict_rows
 
@@ -49,6 +50,18 @@ def design_file(target: Path, emit: Subscriber) -> Path:
     return target
 
 
+def _spec_variables(spec, variables: dict[str, float], request: ToleranceRequest) -> dict[str, float]:
+    """The spec's [tolerance] half-widths of single variables that the command line leaves standing: --length
+    replaces those of the lengths and --angle those of the angles (the command line over the spec, as its help
+    says; --tol NAME=VALUE over both)."""
+    given = {unit for unit, width in (("mm", request.length), ("deg", request.angle)) if width is not None}
+    if not given or not variables:
+        return variables
+    info = design_info.describe(spec)
+    return {name: variables[name] for name, key in zip(variables, spec_keys(list(variables), info))
+            if (info.get(key) or {}).get("unit") not in given}
+
+
 def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     """Analyse and write result.json, report.md, tornado.png.  Exit code 0 when the design and every Monte-Carlo
     sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``:
@@ -60,7 +73,7 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     tol = spec.tolerance
     length = request.length if request.length is not None else (tol.length if tol else None)
     angle = request.angle if request.angle is not None else (tol.angle if tol else None)
-    per_variable = {**(dict(tol.variables) if tol else {}), **request.per_variable}
+    per_variable = {**_spec_variables(spec, dict(tol.variables) if tol else {}, request), **request.per_variable}
     if request.per_variable:               # an unknown name is bad input, said before any analysis
         unknown_design_variables(spec, list(request.per_variable), "--tol")
     if not (length or angle or any(per_variable.values())) and request.samples != 0:
