@@ -106,6 +106,21 @@ def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_pat
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+def test_a_box_reaching_zero_for_a_length_is_refused_in_one_line(tmp_path):
+    """+-1000 mm on a planting arm's 35-191 mm links: its samples had links of -1865 mm, and its rules were counted
+    (the depth held in 5 % of them).  A half-width reaching zero for a variable the kind holds > 0 is refused."""
+    spec = LIBRARY / "planting_arm" / "taiwan_example1.toml"
+    run = agrisynth("tolerance", str(spec), "--length", "1000", "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert run.stderr.strip() == ("error: tolerance: the box reaches -925 mm for l1 (75 mm +- 1000), which must be > 0: "
+                                  "give it a half-width below 75 mm")
+    assert not (tmp_path / "taiwan_example1-tolerance").exists()
+    # the same box with l1 and l2 held tighter passes that check (l2 = 35 mm: the next to reach zero)
+    run = agrisynth("tolerance", str(spec), "--length", "30", "--tol", "l1=1", "--samples", "0", "--out",
+                    str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+
+
 def test_samples_0_exits_on_the_design_and_its_linear_worst_cases(tmp_path):
     """--samples 0 runs no Monte-Carlo: the exit is the nominal rules' and the linear worst cases' verdict (the
     library design passes every rule with nothing toleranced: 0), and the report says no sample was drawn rather

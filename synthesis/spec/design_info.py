@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from synthesis.spec.common import FreeVariable
+from synthesis.spec.common import POSITIVE, FreeVariable
 from synthesis.spec.docmeta import units_in
 
 #: a value within this fraction of its bounds' width (at least this absolute, mm or deg) is "at the bound"
@@ -63,6 +63,17 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
             elif isinstance(v, (int, float)) and not isinstance(v, bool):
                 out[name] = _entry(path, field, None, False)
     return out
+
+
+def positive_variables(spec: BaseModel) -> set[str]:
+    """The design variables whose spec field is marked > 0 (:data:`~synthesis.spec.common.POSITIVE`: a link length,
+    a radius): no design of the kind has one at or below zero."""
+    variables = getattr(spec, "variables", None)
+    if not callable(variables):
+        return set()
+    field_of = {id(value): field for _, field, value in walk_fields(spec)}
+    return {name for name, v in variables().items()
+            if (field := field_of.get(id(v))) is not None and field.json_schema_extra == POSITIVE}
 
 
 def _fields_by_path(spec: BaseModel) -> dict:

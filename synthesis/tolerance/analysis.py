@@ -34,7 +34,8 @@ from synthesis.core.sensitivity import Sensitivity, linear_worst
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.common import value_of
 from synthesis.spec.operating import at_operating, ranges_of
-from synthesis.tolerance.design import DesignMap, box_of, design_map, fine, freed, kind_start, whole_problem
+from synthesis.tolerance.design import (DesignMap, box_of, design_map, fine, freed, kind_start, refuse_crossing_zero,
+                                        whole_problem)
 from synthesis.tolerance.envelope import SUFFIX, envelope_kind, grid_of
 
 
@@ -507,6 +508,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     Monte-Carlo on ``workers`` processes (None: one per core)."""
     lin = linearise(kind, spec, design, seed)
     box = box_of(lin.dmap, length, angle, per_variable or {})
+    refuse_crossing_zero(spec, lin.dmap, lin.design, box)
     rows = stack_up(lin, box)
     solving = kind.solving()
     nominal = _nominal_rules(solving, Setting(spec, seed, solving.prepare(spec)), lin)
