@@ -715,3 +715,15 @@ def test_a_planting_rule_range_of_one_value_is_refused_at_load(tmp_path):
                     .replace("[objective]", "[rules]\ndepth = [25, 25]\n\n[objective]", 1))
     line = _one_line_error(agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path))
     assert "depth: [25, 25] is one value; give a range lo < hi" in line
+
+
+@pytest.mark.parametrize("spec", ["planting_arm/redesign_from_example1.toml", "rotary_planetary/key_pose_redesign.toml"])
+def test_an_entry_angle_minimum_of_90_deg_is_refused_at_load(tmp_path, spec):
+    """The angle to the horizontal is at most 90 deg: a minimum of 90 asks for an exactly vertical entry that no
+    computed velocity meets to the last digit (a solve failed it, advising more samples)."""
+    text = (LIBRARY / spec).read_text()
+    path = tmp_path / "vertical.toml"
+    path.write_text(text.replace("[rules]\n", "[rules]\nentry_angle_min = 90\n", 1) if "[rules]\n" in text else
+                    text.replace("[objective]", "[rules]\nentry_angle_min = 90\n\n[objective]", 1))
+    line = _one_line_error(agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path))
+    assert line.endswith("rules.entry_angle_min: expected < 90, got 90"), line

@@ -113,7 +113,9 @@ class RulesSection(StrictModel):
                                                     "[21/22, 23/22] x t (seed 000: about 22 mm; [21, 23] mm)")
     collinearity: float = Field(5.0, gt=0, le=90, description="max turn of the claw path at P2 between "
                                                              "P1->P2 and P2->P3, deg (0 = collinear)")
-    entry_angle_min: float = Field(80.0, gt=0, le=90, description="min angle of the ground-frame velocity "
+    # below 90: the angle to the horizontal is at most 90, so a minimum of 90 asks for an exactly vertical entry, which
+    # no computed velocity meets to the last digit
+    entry_angle_min: float = Field(80.0, gt=0, lt=90, description="min angle of the ground-frame velocity "
                                                                   "at P4 to the horizontal, deg")
     depth: Interval = Field((20.0, 30.0), description="planting depth Y(P4) - Y(P5), mm")
     p4p6_min: float = Field(20.0, ge=0, description="min ground-frame distance P4-P6, mm")

@@ -102,7 +102,7 @@ class Rules(StrictModel):
     trajectory_height_min: float = Field(0.0, ge=0, description="smallest height of the tip's loop, mm")
     planting_depth: tuple[float, float] = Field(description="[min, max] depth of the lowest tip point below the "
                                                             "soil surface, mm")
-    entry_angle_min: float = Field(80.0, gt=0, le=90, description="min angle of the ground-frame tip velocity to "
+    entry_angle_min: float = Field(80.0, gt=0, lt=90, description="min angle of the ground-frame tip velocity to "
                                                                    "the horizontal at soil entry, deg")
     hole_width_max: float = Field(gt=0, description="largest ground-frame distance between the tip's soil entry "
                                                     "and exit, mm")
