@@ -701,6 +701,10 @@ def test_a_rule_range_narrower_than_the_solvers_back_off_is_refused_in_one_line(
     assert "rule planting_depth: its limits [24.95, 25.05] mm are closer together than the solver's back-off" in line
     assert "0.1 mm" in line and "[solver] backoff" in line
     assert not (tmp_path / "out").exists()
+    # evaluating it is fine: check (and the tolerance analysis) hand nothing to IPOPT
+    assert agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path).returncode in (0, 1)
+    assert agrisynth("tolerance", str(spec), "--length", "0.1", "--samples", "0", "--out", str(tmp_path / "out"),
+                     cwd=tmp_path).returncode in (0, 1)
     # wide enough for its back-offs, the same spec solves
     spec.write_text(spec.read_text().replace("[24.95, 25.05]", "[24.5, 25.5]"))
     assert agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path / "out"),

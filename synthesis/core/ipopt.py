@@ -70,7 +70,7 @@ import numpy as np
 
 from constraints.base import Rule
 from synthesis.core.problem import Problem
-from synthesis.core.transcribe import Transcription, transcribe
+from synthesis.core.transcribe import Transcription, refuse_empty_rows, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
 from synthesis.core.ipopt_log import captured_stdout
 
@@ -246,6 +246,8 @@ class CompiledNLP:
         self.with_solver = with_solver
         self.robust_start = robust_start and self.t.robust is not None
         self.discarded_s = 0.0      # seconds of IPOPT setups reconfigure() replaced (the bench leaves them out)
+        if with_solver:
+            refuse_empty_rows(problem, self.t)
         self._build_ipopt()
         self.f_function = ca.Function("f", [self.t.w, problem.parameters], [self.t.f])
         self.g_function = ca.Function("g", [self.t.w, problem.parameters], [self.t.g])

@@ -161,24 +161,34 @@ def _rows_of(rule, robust: bool) -> tuple:
 
 
 def _backed_off(problem: Problem, rule, robust: bool = False) -> list[Row]:
-    """The rule's rows, each inequality moved inside its limits by the problem's back-off.  A range narrower than its
-    two back-offs is refused (SpecError): IPOPT would be handed a row whose lower limit is above its upper, and every
-    start would fail on it."""
+    """The rule's rows, each inequality moved inside its limits by the problem's back-off (a range narrower than its
+    two back-offs comes out empty: :func:`refuse_empty_rows` says so before IPOPT is handed it)."""
     rows = []
     for expr, lb, ub in _rows_of(rule, robust):
         if lb is not None and ub is not None and lb == ub:
             rows.append((expr, lb, ub))
-            continue
-        low = None if lb is None else lb + problem.backoff(rule, lb)
-        high = None if ub is None else ub - problem.backoff(rule, ub)
-        if low is not None and high is not None and low > high:
-            unit = rule.row_unit or rule.unit
-            raise SpecError(f"rule {rule.name}: its limits [{lb:g}, {ub:g}] {unit} are closer together than the "
-                            f"solver's back-off allows (it holds each side {problem.backoff(rule, lb):g} {unit} "
-                            f"inside, so a returned design meets the limit when re-checked): widen the rule's "
-                            f"limits, or lower [solver] backoff where the spec has it")
-        rows.append((expr, low, high))
+        else:
+            rows.append((expr, None if lb is None else lb + problem.backoff(rule, lb),
+                         None if ub is None else ub - problem.backoff(rule, ub)))
     return rows
+
+
+def refuse_empty_rows(problem: Problem, t: "Transcription") -> None:
+    """SpecError naming the first rule whose backed-off rows leave no room (lower limit above upper): IPOPT would fail
+    every start on it ("Ill-posed problem detected").  Evaluating such a problem (a check, the tolerance analysis) is
+    fine; solving it is not."""
+    for row in np.flatnonzero(t.lbg > t.ubg):
+        owner = t.owner[row]
+        if owner is None:
+            continue
+        rule = problem.rules[owner]
+        lo, hi = rule.lower, rule.upper
+        width = "" if lo is None or hi is None else f" [{lo:g}, {hi:g}] {rule.unit}"
+        backoff = problem.backoff(rule, lo if lo is not None else hi)
+        raise SpecError(f"rule {rule.name}: its limits{width} are closer together than the solver's back-off allows "
+                        f"(it holds each side {backoff:g} {rule.row_unit or rule.unit} inside, so a returned design "
+                        f"meets the limits when re-checked): widen the rule's limits, or lower [solver] backoff where "
+                        f"the spec has it")
 
 
 def _max_min_margin(problem: Problem, objective: MaxMinMargin, hold=lambda rule, rows: rows,
