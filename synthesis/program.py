@@ -18,6 +18,8 @@ process ends the ordinary way.  :func:`main` raises ``SystemExit`` as before (a 
 from __future__ import annotations
 
 import atexit
+import contextlib
+import ctypes
 import multiprocessing
 import os
 import sys
@@ -56,6 +58,9 @@ def _end(code) -> NoReturn:
         sys.stderr.flush()
     except (OSError, ValueError):       # a closed pipe: said and ended as Python would
         sys.exit(status)
+    # and the C library's buffers, which os._exit leaves unwritten (native code's prints: CasADi, IPOPT)
+    with contextlib.suppress(OSError, AttributeError, TypeError):
+        ctypes.CDLL(None).fflush(None)
     os._exit(status & 0xFF)
 
 

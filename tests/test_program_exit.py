@@ -53,3 +53,12 @@ def test_a_thread_still_running_is_waited_for(tmp_path):
               "program.main = main\nprogram.program()\n")
     done = _run(script, tmp_path=tmp_path)
     assert done.returncode == 0 and done.stdout == "late\n", done.stderr
+
+
+def test_what_native_code_printed_reaches_a_pipe(tmp_path):
+    """C's stdout is block-buffered into a pipe: os._exit alone would drop what native code printed last."""
+    script = ("import ctypes\nimport synthesis.program as program\n"
+              "def main():\n    ctypes.CDLL(None).printf(b'from C\\n')\n"
+              "program.main = main\nprogram.program()\n")
+    done = _run(script, tmp_path=tmp_path)
+    assert done.returncode == 0 and done.stdout == "from C\n", (done.stdout, done.stderr)
