@@ -4,6 +4,7 @@ running is waited for as Python would."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -12,9 +13,9 @@ import pytest
 PROGRAM = "from synthesis.program import program\nimport sys\nsys.argv = ['agrisynth', *sys.argv[1:]]\n"
 
 
-def _run(code: str, *args: str, tmp_path) -> subprocess.CompletedProcess:
+def _run(code: str, *args: str, tmp_path, env=None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=120,
-                          cwd=tmp_path)
+                          cwd=tmp_path, env=env)
 
 
 def test_the_commands_exit_code_and_whole_output_reach_the_caller_and_the_exit_handlers_run(tmp_path):
@@ -56,9 +57,11 @@ def test_a_thread_still_running_is_waited_for(tmp_path):
 
 
 def test_what_native_code_printed_reaches_a_pipe(tmp_path):
-    """C's stdout is block-buffered into a pipe: os._exit alone would drop what native code printed last."""
+    """C's stdout is block-buffered into a pipe (unless PYTHONUNBUFFERED, which this run leaves out, makes Python
+    unbuffer it): os._exit alone would drop what native code printed last."""
     script = ("import ctypes\nimport synthesis.program as program\n"
               "def main():\n    ctypes.CDLL(None).printf(b'from C\\n')\n"
               "program.main = main\nprogram.program()\n")
-    done = _run(script, tmp_path=tmp_path)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    done = _run(script, tmp_path=tmp_path, env=env)
     assert done.returncode == 0 and done.stdout == "from C\n", (done.stdout, done.stderr)
