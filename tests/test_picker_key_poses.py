@@ -303,3 +303,21 @@ def test_a_pose_crank_angle_in_a_swing_past_a_whole_turn_is_held():
     data["key_poses"]["late"]["crank_angle"] = 25.0
     with pytest.raises(ValueError, match=r"key_poses.late.crank_angle = 25 deg.*330 to 380 deg"):
         PickerDoubleCrankSpec.model_validate(data)
+
+
+def test_an_unreachable_pose_is_diagnosed_in_its_rows_unit(tmp_path):
+    """A tip pose at (900, 900) mm, out of reach: the elastic diagnosis relaxes the pose's squared-distance row, so its
+    slack is in mm^2 -- the exit-3 message said "misses its limit by 2.03e+05 mm" of a pose the table shows 472 mm
+    off.  The slack is the row's miss, distance^2 - tolerance^2 at the elastic design."""
+    text = (LIBRARY / "picker" / "picker_double_crank_key_pose.toml").read_text()
+    spec = tmp_path / "far.toml"
+    spec.write_text(text.replace('[key_poses.pick]\nat = "M1"\n', '[key_poses.pick]\nx = 900.0\ny = 900.0\n'
+                                                                   'tolerance = 1.0\n', 1))
+    run = agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 3, run.stderr
+    elastic = json.loads((tmp_path / "picker_double_crank_key_pose" / "result.json").read_text())["elastic"]
+    assert elastic["units"]["pose_pick"] == "mm^2" and elastic["units"]["pose_pick_attitude"] == "deg"
+    slack = elastic["slacks"]["pose_pick"]
+    assert f"pose_pick (misses its limit by {slack:.3g} mm^2" in run.stderr
+    # a squared miss: the pose is hundreds of mm off (the table: 472 mm at the returned design), not 2e5 mm
+    assert 100.0 ** 2 < slack < 1000.0 ** 2
