@@ -307,12 +307,17 @@ def refuse_other_order(kind: Kind, resumed_nested: bool, nested: bool) -> None:
 def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bool, maximise: bool,
                stop: Callable[[StartReport], bool] | None) -> str | None:
     """Why an auto run stops after batch ``k`` (not for its time limit, which the caller projects), or None."""
-    stated = confidence_statement(run.reports, run.nlp, maximise)
+    stated = confidence_statement(run.reports, run.nlp, maximise, run.best)
     assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
     if len(run.reports) < totals[k] or (stop is not None and any(stop(r) for r in run.reports)):
         return "stop_at_objective"         # the kind's own early stop ended the batch (at its last start, too)
+    sign = -1.0 if maximise else 1.0
+    # an answer better than every counted optimum (a start that met every rule short of IPOPT's full tolerance) shows
+    # the counted best is not the global optimum, whatever the rule estimates of it
+    beyond = (not stated["answer_counted"] and bool(stated["optima"])
+              and sign * run.best.outcome.objective < sign * stated["optima"][0]["objective"])
     if (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
-            and not (nested and k == 0)):
+            and not (nested and k == 0) and not beyond):
         # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
         # construction; the rule assumes starts drawn over the box, so it may stop a nested run only once a
         # later batch has brought such starts in
@@ -518,11 +523,14 @@ def reaching_best(reports: list[StartReport], best: StartReport, maximise: bool)
     return {"starts_needed": min(hits) + 1, "starts_reaching_best": len(hits)}
 
 
-def confidence_statement(reports: list[StartReport], nlp, maximise: bool) -> dict | None:
+def confidence_statement(reports: list[StartReport], nlp, maximise: bool,
+                         answer: StartReport | None = None) -> dict | None:
     """result.json ``solver.confidence`` (:mod:`synthesis.core.confidence`): the starts that converged with every
     rule held (the starts an ``optimal`` verdict counts; the start from the elastic re-solve is no drawn start and is
-    left out) grouped into distinct optima in the unit box of the NLP's free variables.  None without the NLP (a
-    run interrupted before it was built)."""
+    left out) grouped into distinct optima in the unit box of the NLP's free variables.  ``answer``: the run's best
+    start; ``answer_counted`` says whether it is among the counted starts, and where it is not (it satisfies every
+    rule but ended short of IPOPT's full tolerance, or came from the elastic re-solve) a note says the figures are
+    the counted starts', not the answer's.  None without the NLP (a run interrupted before it was built)."""
     if nlp is None:
         return None
     bounds = np.asarray(nlp.bounds, float)
@@ -537,8 +545,19 @@ def confidence_statement(reports: list[StartReport], nlp, maximise: bool) -> dic
     except (KeyError, ValueError, TypeError):     # a design without the NLP's variables: optima by value alone
         units = np.zeros((len(counted), 1))
         notes.append("the starts' designs could not be mapped to the box: distinct_designs not counted")
-    return statement([r.outcome.objective for r in counted], units, [r.outcome.start for r in counted],
-                     maximise=maximise, assumptions_not_met=notes)
+    counted_starts = {r.outcome.start for r in counted}
+    outside = answer is not None and answer.satisfied and answer.outcome.start not in counted_starts
+    if outside:
+        assert answer is not None
+        how = ("comes from the elastic re-solve, no drawn start"
+               if (answer.outcome.details or {}).get("start_from") == FROM_ELASTIC
+               else f"ended {answer.outcome.return_status}, short of IPOPT's full tolerance")
+        sign = -1.0 if maximise else 1.0
+        above = counted and all(sign * r.outcome.objective > sign * answer.outcome.objective for r in counted)
+        notes.append(f"the answer (start {answer.outcome.start}) is not counted: it {how}; these figures are the "
+                     f"counted starts'{', every one of them worse than the answer' if above else ''}")
+    return {**statement([r.outcome.objective for r in counted], units, [r.outcome.start for r in counted],
+                        maximise=maximise, assumptions_not_met=notes), "answer_counted": not outside}
 
 
 def _not_uniform(nlp) -> list[str]:
@@ -668,7 +687,7 @@ def _result(kind: Kind, loaded, setting: Setting, run: Run, status: str, elastic
                 "scheduler": run.scheduler, "fine_grid_factor": FINE,
                 "status_note": _sentences(note or _note(status, best, run), finished.note),
                 **reaching_best(run.reports, best, solving.maximise(setting)), **finished.solver_settings,
-                "confidence": confidence_statement(run.reports, run.nlp, solving.maximise(setting)),
+                "confidence": confidence_statement(run.reports, run.nlp, solving.maximise(setting), best),
                 **({} if run.auto is None else {"auto": run.auto})},
         starts=starts_table(run.reports),
         elastic=None if elastic is None else elastic.to_json(),

@@ -298,8 +298,11 @@ def said(stated: dict) -> str:
     chance = (f"P(best is global) ~ {p:.2f}" if p is not None
               else "P(best is global) not defined (too few starts for the optima seen)")
     caveat = "; ".join(["assumes uniform starts", *(stated.get("assumptions_not_met") or [])])
-    return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, best reached "
-            f"by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")
+    # an answer outside the counted starts: "best" is the best counted optimum, not the design returned
+    best = "best" if stated.get("answer_counted", True) else "best counted"
+    chance = chance.replace("P(best is", f"P({best} is")
+    return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, {best} "
+            f"reached by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")
 
 
 def _confidence_text(solver: dict | None) -> str | None:
