@@ -271,6 +271,24 @@ def _bounds_text(at: list[dict]) -> str:
     return f" At the elastic design {' and '.join(parts)}." if parts else ""
 
 
+#: a violation below this many of its rule's scales is the solver's tolerance (IPOPT meets rows to ~1e-8), not a
+#: miss between samples
+SOLVER_TOLERANCE = 1e-6
+
+
+def _within_solver_tolerance(best: StartReport | None, violated: list[str]) -> str:
+    """"timing_hold_far[0] by 3.3e-09 deg" when every violated rule of ``best`` misses by at most
+    :data:`SOLVER_TOLERANCE` of its scale, else ""."""
+    if best is None or not violated:
+        return ""
+    records = {r.name: r for r in best.records}
+    misses = [records.get(name) for name in violated]
+    if any(r is None or r.normalised_margin is None or r.margin is None or r.normalised_margin < -SOLVER_TOLERANCE
+           for r in misses):
+        return ""
+    return ", ".join(f"{r.name} by {-r.margin:.2g} {r.unit}".rstrip() for r in misses if r is not None)
+
+
 def unsatisfied_error(status: str, violated: list[str], reports: list[StartReport],
                       elastic: ElasticDiagnosis | None, *, samples_hint: str,
                       relax_hint: str = "Loosen those requirements or widen the bounds of the design variables.",
@@ -332,6 +350,14 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
     # samples (a start that stopped infeasible misses them at the samples too)
     best_converged = best.outcome.success if best is not None else bool(converged)
     if best_converged and elastic is not None and elastic.converged:
+        slight = _within_solver_tolerance(best, violated)
+        if slight:
+            return SolverError(
+                f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
+                f"{why}, yet the best start misses {slight} only by the solver's tolerance: not between samples. "
+                f"Rules that hold a design variable at a single value from both sides (a hold window as long as its "
+                f"dwell, a range the other rules leave one point of) leave no room inside them: fix that variable "
+                f"at its value, or widen one of those rules.{cannot}")
         return SolverError(
             f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
             f"{why}: the rules hold at the solver's samples. Violated between samples: {bad}. Raise "
