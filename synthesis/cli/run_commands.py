@@ -76,7 +76,9 @@ class SolveCommand(click.Command):
 @click.option("--max-starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
               help="--starts auto: the most starts (default 512)")
 @click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
-              help="--starts auto: begin no batch that would end past this many seconds (default: none).  A "
+              help="--starts auto: begin no batch that would end past this many seconds (default: none); the "
+                   "first batch always runs (its time is what the next one's is projected from), so a run may end "
+                   "past a limit shorter than it.  A "
                    "time-limited run is not deterministic in its count: how many starts it reaches depends on the "
                    "machine (result.json solver.auto.stopped_by says time_limit when it stopped it); a resumed run counts "
                    "its time afresh")
