@@ -159,6 +159,18 @@ def load_result(path: str | Path) -> Result:
         raise ResultError(f"{path}: {exc}") from None
 
 
+def _numbers_only(value) -> bool:
+    """A number (not a boolean), null, or a list of such (nested lists too): a design entry of version 3 on."""
+    if isinstance(value, list):
+        return all(_numbers_only(v) for v in value)
+    return value is None or _number(value)
+
+
+def _shown(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def _shape_problem(data: dict) -> str | None:
     """What is wrong with the types of a parsed result.json, or None: readers rely on these."""
     for key in ("kind", "name", "spec_sha256", "status"):
@@ -183,7 +195,11 @@ def _shape_problem(data: dict) -> str | None:
             return "objective value must be a number or null"
         if not isinstance(objective.get("name"), str) or not isinstance(objective.get("unit"), (str, type(None))):
             return "objective needs a name (a string), and its unit must be a string"
+    numeric_design = isinstance(data.get("schema_version"), int) and data["schema_version"] >= 3
     for name, value in (data.get("design") or {}).items():
+        if numeric_design and not _numbers_only(value):
+            # version 3 on: every entry a number (null where not finite) or a list of them (README, "Version 3")
+            return f"design[{name[:60]!r}] must be a number or a list of numbers, got {_shown(value)}"
         if isinstance(value, dict) or (isinstance(value, str) and len(value) > MAX_NAME):
             return f"design[{name[:60]!r}] must be a number, a short string or a list"
     for name, info in (data.get("design_variables") or {}).items():

@@ -90,6 +90,10 @@ def malformed(base: dict) -> dict[str, bytes]:
         "schema_future": _edit(base, lambda d: d.update(schema_version=99)),
         "design_list": _edit(base, lambda d: d.update(design=[1, 2])),
         "design_nested": _edit(base, lambda d: d.update(design={k: {"a": [1]} for k in d["design"]})),
+        # version 3 on: every design entry a number or a list of numbers (compare showed "long" in the table)
+        "design_string": _edit(base, lambda d: d["design"].update(l2="long")),
+        "design_boolean": _edit(base, lambda d: d["design"].update(l2=True)),
+        "design_list_of_strings": _edit(base, lambda d: d["design"].update(l2=["a", 1])),
         "design_variables_numbers": _edit(base, lambda d: d.update(design_variables={"l1": 5})),
         "objective_string_value": _edit(base, lambda d: d.update(objective={"name": "x", "value": "low"})),
         "objective_list": _edit(base, lambda d: d.update(objective=[1])),
