@@ -184,7 +184,10 @@ def refuse_empty_rows(problem: Problem, t: "Transcription") -> None:
         rule = problem.rules[owner]
         lo, hi = rule.lower, rule.upper
         width = "" if lo is None or hi is None else f" [{lo:g}, {hi:g}] {rule.unit}"
-        backoff = problem.backoff(rule, lo if lo is not None else hi)
+        # the back-off of the rule's first two-sided row, in the rows' unit (a squared rule's is in its square)
+        row_lo = next((lb for _, lb, ub in rule.rows() if lb is not None and ub is not None),
+                      lo if lo is not None else hi)
+        backoff = problem.backoff(rule, row_lo)
         raise SpecError(f"rule {rule.name}: its limits{width} are closer together than the solver's back-off allows "
                         f"(it holds each side {backoff:g} {rule.row_unit or rule.unit} inside, so a returned design "
                         f"meets the limits when re-checked): widen the rule's limits, or lower [solver] backoff where "

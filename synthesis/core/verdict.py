@@ -354,7 +354,7 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         if slight:
             return SolverError(
                 f"no start satisfies every rule on the 10x finer check grid ({n} starts; IPOPT said: {said(reports)}), "
-                f"{why}, yet the best start misses {slight} only by the solver's tolerance: not between samples. "
+                f"{why}, yet the best start misses only by the solver's tolerance ({slight}): not between samples. "
                 f"Rules that hold a design variable at a single value from both sides (a hold window as long as its "
                 f"dwell, a range the other rules leave one point of) leave no room inside them: fix that variable "
                 f"at its value, or widen one of those rules.{cannot}")
