@@ -94,3 +94,18 @@ def test_instants_do_not_depend_on_which_extreme_is_picking(tmp_path):
     assert max(inst[k]["speed_m_s"] for k in inst) < 1e-9
     assert other.extra["installation"]["theta1_computed_deg"] == pytest.approx(72.39, abs=0.01)
     assert other.all_satisfied
+
+
+def test_published_instants_out_of_order_are_refused_at_load(tmp_path):
+    """[published] instants = [0, 1.44, 1.0]: a drop after the next pick, past the 1 s period, was printed as the
+    paper's number beside ours.  The part files are named by absolute path in the copy."""
+    from synthesis.errors import SpecError
+
+    text = (PICKER / "cai2020_picker.toml").read_text()
+    for part in ("cai2020_crank_rocker.toml", "cai2020_double_crank.toml"):
+        text = text.replace(f'"{part}"', f'"{PICKER / part}"', 1)
+    spec = tmp_path / "late_drop.toml"
+    spec.write_text(text.replace("instants = [0.0, 0.44, 1.0]", "instants = [0.0, 1.44, 1.0]", 1))
+    with pytest.raises(SpecError, match=r"instants: \[0, 1.44, 1\] s must be picking, dropping, picking again in "
+                                        r"that order"):
+        load_spec(spec)

@@ -235,6 +235,15 @@ class Published(StrictModel):
 
     instants: tuple[float, float, float] | None = Field(None, description="picking, dropping, picking again, s")
 
+    @model_validator(mode="after")
+    def _in_order(self) -> "Published":
+        if self.instants is not None:
+            pick, drop, again = self.instants
+            if not 0.0 <= pick < drop < again:
+                raise ValueError(f"instants: [{pick:g}, {drop:g}, {again:g}] s must be picking, dropping, picking "
+                                 f"again in that order (0 <= picking < dropping < picking again)")
+        return self
+
 
 class PickerPose(ClawPose):
     """A pose the combined picker's clamp must pass through: its attitude and/or the clamp point's position, read at
