@@ -20,6 +20,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import ctypes
+import errno
 import multiprocessing
 import os
 import sys
@@ -64,9 +65,70 @@ def _end(code) -> NoReturn:
     os._exit(status & 0xFF)
 
 
+class _ReaderMayLeave:
+    """A standard stream whose reader may leave (``| head``, a pager quit, a ``tee`` ended by the same Ctrl-C) or that
+    was never there (a closed descriptor): from the first broken pipe or bad descriptor on, what is written goes to
+    /dev/null, so the command goes on, keeps its files and exits with its own code.  (click turned a broken pipe into
+    exit 1 and the run's folder was discarded: a finished solve lost, an interrupted one's "interrupted" line and
+    exit 130 with it.)"""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except OSError as exc:
+            if exc.errno not in (errno.EPIPE, errno.EBADF):
+                raise
+            self._to_null()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except OSError as exc:
+            if exc.errno not in (errno.EPIPE, errno.EBADF):
+                raise
+            self._to_null()
+            with contextlib.suppress(OSError, ValueError):
+                self._stream.flush()        # what was waiting goes to /dev/null too
+
+    def _to_null(self) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self._stream.fileno())
+            os.close(null)
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
+def _standard_streams() -> None:
+    """Standard descriptors the process was started without (``>&-``, a daemon's) are /dev/null, so no file the
+    command opens takes their number (native code printing into it) and writing to them is no error (a traceback
+    from the first isatty(), exit 1); standard output and error are then guarded against a reader that leaves."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:
+                os.dup2(null, fd)
+                os.close(null)
+    for fd, name, mode in ((0, "stdin", "r"), (1, "stdout", "w"), (2, "stderr", "w")):
+        if getattr(sys, name) is None:       # Python had no stream for it: one on the descriptor just opened
+            setattr(sys, name, open(fd, mode, closefd=False))
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if not isinstance(stream, _ReaderMayLeave):
+            setattr(sys, name, _ReaderMayLeave(stream))
+
+
 def main() -> None:
     from synthesis.core import interrupt
 
+    _standard_streams()
     interrupt.install(keep_ignored=True)
     try:
         from synthesis.cli import main as run

@@ -4,6 +4,7 @@ running is waited for as Python would."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -65,3 +66,53 @@ def test_what_native_code_printed_reaches_a_pipe(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
     done = _run(script, tmp_path=tmp_path, env=env)
     assert done.returncode == 0 and done.stdout == "from C\n", (done.stdout, done.stderr)
+
+
+# --- standard streams: a reader that leaves, a descriptor never there -------------------------------------------------
+
+SPEC = "problems/steering/steering_redesign_27.toml"
+
+
+def _shell(command: str, tmp_path) -> subprocess.CompletedProcess:
+    return subprocess.run(["bash", "-c", f"set -o pipefail; {command}"], capture_output=True, text=True, timeout=180,
+                          cwd=tmp_path)
+
+
+def test_a_reader_that_leaves_costs_the_run_nothing(tmp_path):
+    """`agrisynth solve ... | head -1`: the broken pipe came out of a progress line inside the run; click made it exit 1
+    and the run's folder was discarded.  Now the solve finishes, keeps its folder and exits with its own code."""
+    from pathlib import Path
+
+    spec = Path(__file__).resolve().parents[1] / SPEC
+    done = _shell(f"{sys.executable} -m synthesis.program solve {spec} --out hp --workers 1 --starts 8 2>err.txt "
+                  f"| head -1; echo \"codes ${{PIPESTATUS[@]}}\" >&2", tmp_path)
+    assert "codes 0 0" in done.stderr, done.stderr
+    assert json.loads((tmp_path / "hp" / "steering_redesign_27" / "result.json").read_text())["status"] == "optimal"
+    assert "Traceback" not in (tmp_path / "err.txt").read_text()
+
+
+@pytest.mark.parametrize("closed, code", [(">&-", 0), ("2>&-", 0), (">&- 2>&-", 0)])
+def test_a_command_started_without_its_standard_streams_runs_and_exits_with_its_code(tmp_path, closed, code):
+    """`>&-` (a daemon, cron): the first isatty() raised a traceback (exit 1, nothing written); a bad spec exited 1,
+    not 2.  The closed descriptors are /dev/null."""
+    from pathlib import Path
+
+    spec = Path(__file__).resolve().parents[1] / SPEC
+    done = _shell(f"{sys.executable} -m synthesis.program check {spec} --out out {closed}; echo \"code $?\" > code.txt",
+                  tmp_path)
+    assert (tmp_path / "code.txt").read_text() == f"code {code}\n", done.stderr
+    assert (tmp_path / "out" / "steering_redesign_27-check" / "result.json").is_file()
+    _shell(f"{sys.executable} -m synthesis.program check no-such.toml {closed}; echo \"code $?\" > code.txt", tmp_path)
+    assert (tmp_path / "code.txt").read_text() == "code 2\n"
+
+
+def test_the_resume_line_is_quoted_for_the_shell(capsys):
+    """A spec and folder with spaces: the printed line, pasted, was split into more arguments."""
+    from pathlib import Path
+
+    from synthesis.cli.views import stopped_message
+    from synthesis.runs.requests import Stopped
+
+    stopped_message(Stopped("SIGINT", 3, 8, Path("sp ace/ü 1/my run"), Path("my spec.toml")))
+    err = capsys.readouterr().err
+    assert "agrisynth solve 'my spec.toml' --resume 'sp ace/ü 1/my run'" in err

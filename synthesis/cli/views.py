@@ -8,6 +8,7 @@ The runs (:mod:`synthesis.runs`) hand their events to :class:`Terminal`; a resul
 from __future__ import annotations
 
 import contextlib
+import shlex
 import sys
 
 from rich.console import Console
@@ -191,7 +192,9 @@ def stopped_message(stopped: Stopped) -> None:
         return
     err_console.print(f"interrupted by {stopped.signal_name} after {stopped.finished} of {stopped.total} starts: kept "
                       f"them and their best (status interrupted) in {escape(str(stopped.kept))}/; finish the run with\n"
-                      f"  agrisynth solve {escape(str(stopped.spec))} --resume {escape(str(stopped.kept))}",
+                      # quoted for the shell: a path with a space pasted as printed was two arguments
+                      f"  agrisynth solve {escape(shlex.quote(str(stopped.spec)))} --resume "
+                      f"{escape(shlex.quote(str(stopped.kept)))}",
                       soft_wrap=True)
 
 
