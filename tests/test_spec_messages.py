@@ -238,3 +238,15 @@ def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(t
     assert unit_notes(load_spec(radians).model) == [
         "linkage.theta bounds [0.17, 1.05] deg span under 2 deg: angles are in degrees ([9.74, 60.16] if those were "
         "radians)"]
+
+
+@pytest.mark.parametrize("name, said", [
+    ("compare", "name: may not be 'compare': agrisynth's compare command writes results/compare/, got 'compare'"),
+    ("bench", "name: may not be 'bench': agrisynth's bench command writes results/bench/, got 'bench'"),
+    ("studio", "name: may not be 'studio': agrisynth's studio command writes results/studio/, got 'studio'"),
+    ("x-check", "name: may not end in '-check': agrisynth names another command's run folder <name>-check, got "
+                "'x-check'"),
+])
+def test_a_spec_name_that_is_another_commands_folder_is_refused(tmp_path, name, said):
+    """A solve named "compare" wrote results/compare/, which `agrisynth compare --force` then replaced by its page."""
+    assert message(tmp_path, 'name = "redesign_from_example1"', f'name = "{name}"') == said

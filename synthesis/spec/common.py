@@ -125,6 +125,9 @@ def require_positive_fields(model: BaseModel) -> None:
 
 Interval = Annotated[tuple[float, float], Field(description="[lo, hi]")]
 
+#: the folders other commands write under results/ (compare's, bench's, the studio's): no spec's run folder
+RESERVED_RUN_NAMES = ("compare", "bench", "studio")
+
 #: a spec's name is its result folder's name: letters, digits and _ . - only
 RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 
@@ -161,6 +164,11 @@ class ProblemSpec(StrictModel):
             if name.endswith(suffix):
                 raise PydanticCustomError("run_name_suffix", "may not end in '{suffix}': agrisynth names another "
                                           "command's run folder <name>{suffix}", {"suffix": suffix})
+        # and compare, bench and the studio write results/compare/, results/bench/, results/studio/ (a solve named
+        # "compare" was replaced by a comparison page under --force)
+        if name in RESERVED_RUN_NAMES:
+            raise PydanticCustomError("run_name_reserved", "may not be '{name}': agrisynth's {name} command writes "
+                                      "results/{name}/", {"name": name})
         return name
 
 
