@@ -151,7 +151,7 @@ class ProblemSpec(StrictModel):
     """What every spec file has besides its ``kind`` and its own sections."""
 
     name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100,
-                      description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters")
+                      description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters; not compare, bench or studio, not ending in -check or -tolerance (other commands' folders)")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
     tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve")
 
