@@ -493,6 +493,14 @@ def _locked(folder: Path):
         os.close(fd)
 
 
+def _remove_made(created: list[Path]) -> None:
+    """The folders this run made (deepest first), each removed if it is still an empty folder: a refused --out leaves
+    nothing behind."""
+    for folder in created:
+        with contextlib.suppress(OSError):
+            folder.rmdir()
+
+
 def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Path | None = None,
                     replaceable: Path | None = None, suffix: str = "", resumed_from: Path | None = None) -> RunFolder:
     """Check that ``out_root/<name><suffix>`` may be written and make the run's staging folder (with its marker).
@@ -514,8 +522,10 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
     try:
         out_root.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
+        _remove_made(created)
         raise OutputError(f"--out {out_root}: not a folder") from None
     except OSError as exc:
+        _remove_made(created)       # the parents made before the one that could not be (a name too long)
         raise OutputError(f"--out {out_root}: cannot create the output folder ({exc.strerror})") from None
     if not out_root.is_dir():
         raise OutputError(f"--out {out_root}: not a folder")
@@ -528,6 +538,7 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
     try:
         folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
     except OSError as exc:
+        _remove_made(created)
         raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
     try:
         os.chmod(folder.staging, 0o777 & ~_UMASK)    # mkdtemp makes it private; a run folder is an ordinary one

@@ -285,3 +285,14 @@ def test_a_users_folder_where_a_command_would_write_is_kept_with_or_without_forc
     assert proc.returncode == 2 and "a folder agrisynth did not write" in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
     assert [p.name for p in tmp_path.iterdir()] == [mine.name] and [p.name for p in mine.iterdir()] == ["notes.txt"]
+
+
+def test_a_refused_out_leaves_none_of_the_folders_it_made(tmp_path):
+    """--out mk1/mk2/<300 characters>: refused (exit 2), but mk1/mk2 stayed, made on the way to the name the file
+    system refused."""
+    from synthesis.errors import OutputError
+    from synthesis.result import open_run_folder
+
+    with pytest.raises(OutputError, match="cannot create the output folder"):
+        open_run_folder(tmp_path / "mk1" / "mk2" / ("f" * 300), "spec")
+    assert list(tmp_path.iterdir()) == []
