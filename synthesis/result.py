@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import math
 import os
@@ -284,6 +285,44 @@ LEGACY_FILES = frozenset({
 LEGACY_FIGURES = (".png", ".svg", ".gif")
 
 
+def file_sums(folder: Path, names: list[str]) -> dict[str, str]:
+    """sha256 of each regular file (not a link) among ``names`` under ``folder``: what a run folder's marker records
+    at its commit, so a later run can tell a file it wrote from one a user changed since (an edited solved.toml)."""
+    sums = {}
+    for name in names:
+        path = folder / name
+        if path.is_file() and not path.is_symlink():
+            digest = hashlib.sha256()
+            with open(path, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    digest.update(block)
+            sums[name] = digest.hexdigest()
+    return sums
+
+
+def _changed(final: Path) -> list[str]:
+    """The files the marker of ``final`` records a sum of that are now something else: another content, a link, a
+    folder (one deleted since is no one's work to keep).  A marker without sums (an earlier version's): none."""
+    try:
+        sums = _marker(final).get("sha256")
+    except (OSError, ResultError, AttributeError):
+        return []
+    if not isinstance(sums, dict):
+        return []
+    changed = []
+    for name, digest in sums.items():
+        path = final / str(name)
+        if not os.path.lexists(path):
+            continue
+        try:
+            same = file_sums(final, [str(name)]).get(str(name)) == digest
+        except OSError:
+            same = False
+        if not same:
+            changed.append(f"{name} (changed since agrisynth wrote it)")
+    return changed
+
+
 def _listed(final: Path) -> list | None:
     """The contents the marker of ``final`` lists (None: it lists none, a folder of an earlier version)."""
     try:
@@ -294,14 +333,15 @@ def _listed(final: Path) -> list | None:
 
 
 def _foreign(final: Path) -> list[str]:
-    """The entries of the run folder ``final`` agrisynth cannot prove it wrote: those its marker does not list; for a
-    marker that lists none (an earlier version's), anything but a top-level regular file named as agrisynth names its
-    outputs (LEGACY_FILES, LEGACY_FIGURES).  OS metadata files (OS_CLUTTER) are never counted."""
+    """The entries of the run folder ``final`` agrisynth cannot prove it wrote: those its marker does not list, and
+    the files it lists whose content changed since (:func:`_changed`); for a marker that lists none (an earlier
+    version's), anything but a top-level regular file named as agrisynth names its outputs (LEGACY_FILES,
+    LEGACY_FIGURES).  OS metadata files (OS_CLUTTER) are never counted."""
     listed = _listed(final)
     have = [n for n in folder_contents(final) if Path(n).name not in OS_CLUTTER]
     if listed is not None:
         known = set(listed)
-        return [n for n in have if n not in known]
+        return [n for n in have if n not in known] + _changed(final)
 
     def ours(name: str) -> bool:
         path = final / name
@@ -401,7 +441,9 @@ class RunFolder:
             # the marker lists what this run wrote: a later run may replace the folder only while it holds no more
             marker = self.staging / RUN_MARKER
             data = _marker(self.staging)
-            atomic_write_text(marker, json.dumps({**data, "contents": folder_contents(self.staging)}) + "\n")
+            contents = folder_contents(self.staging)
+            atomic_write_text(marker, json.dumps({**data, "contents": contents,
+                                                  "sha256": file_sums(self.staging, contents)}) + "\n")
             if not replace:
                 os.rename(self.staging, self.final)
             else:
@@ -531,7 +573,10 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
         raise OutputError(f"--out {out_root}: not a folder")
     folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created, resumed_from)
     try:
-        folder.permitted()
+        # under the commits' lock: a run committing meanwhile swaps the folder and its marker between two reads, and
+        # a file's sum would then be checked against another run's marker
+        with _locked(out_root):
+            folder.permitted()
     except OutputError:
         folder.discard()
         raise

@@ -193,7 +193,15 @@ def test_compare_output_follows_the_run_folder_rules(tmp_path):
     assert page.is_file() and is_run_folder(tmp_path / "cmp")
     with pytest.raises(OutputError, match="holds an earlier agrisynth run; give --force"):
         write_comparison(cands, tmp_path / "cmp")
+    write_comparison(cands, tmp_path / "cmp", force=True)
+    assert page.is_file() and sorted(p.name for p in tmp_path.iterdir()) == ["cmp", "run"]
+    # a page changed since agrisynth wrote it is no longer provably its own: --force keeps it
     page.write_text("old")
+    with pytest.raises(OutputError, match=r"cannot prove it wrote there \(compare.html \(changed since agrisynth "
+                                          r"wrote it\)\)"):
+        write_comparison(cands, tmp_path / "cmp", force=True)
+    assert page.read_text() == "old"
+    page.unlink()
     write_comparison(cands, tmp_path / "cmp", force=True)
     assert page.read_text() != "old" and sorted(p.name for p in tmp_path.iterdir()) == ["cmp", "run"]
     mine = tmp_path / "mine"
@@ -296,3 +304,27 @@ def test_a_refused_out_leaves_none_of_the_folders_it_made(tmp_path):
     with pytest.raises(OutputError, match="cannot create the output folder"):
         open_run_folder(tmp_path / "mk1" / "mk2" / ("f" * 300), "spec")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_force_keeps_a_file_changed_since_agrisynth_wrote_it(tmp_path):
+    """DESIGN: a run "never deletes anything it cannot prove agrisynth wrote".  The marker listed names only, so an
+    edited solved.toml (the file the README invites you to check and edit) or a listed file replaced by a link was
+    deleted by `solve --force`; the marker now holds each file's sha256."""
+    spec = PLANTING.parent / "picker" / "cai2020_crank_rocker_synthesis.toml"
+    args = ("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path))
+    assert agrisynth(*args, cwd=tmp_path).returncode in (0, 1)
+    run = tmp_path / "cai2020_crank_rocker_synthesis"
+    marker = json.loads((run / RUN_MARKER).read_text())
+    assert set(marker["sha256"]) == {n for n in marker["contents"] if (run / n).is_file()}
+    solved = run / "solved.toml"
+    solved.write_text(solved.read_text() + "# tuned by hand\n")
+    again = agrisynth(*args, "--force", cwd=tmp_path)
+    assert again.returncode == 2 and "solved.toml (changed since agrisynth wrote it)" in again.stderr, again.stderr
+    assert solved.read_text().endswith("# tuned by hand\n")
+    solved.unlink()
+    (run / "result.json").unlink()
+    (run / "result.json").symlink_to(tmp_path / "elsewhere.json")
+    again = agrisynth(*args, "--force", cwd=tmp_path)
+    assert again.returncode == 2 and "result.json (changed since agrisynth wrote it)" in again.stderr, again.stderr
+    (run / "result.json").unlink()
+    assert agrisynth(*args, "--force", cwd=tmp_path).returncode in (0, 1)      # deleted files are no one's work
