@@ -40,17 +40,20 @@ def program() -> NoReturn:
 def _end(code) -> NoReturn:
     """End the process with ``code`` (``SystemExit``'s: None is 0, a message is said and is 1) without the
     interpreter's teardown, unless something still runs that the teardown would wait for or whose output could be
-    lost (a thread, a child process, a stream that cannot be flushed): then ``sys.exit`` ends it the ordinary way."""
+    lost (a thread, a child process, a stream that cannot be flushed), a tool runs this program and acts once it
+    returns (a profiler or coverage: ``python -m cProfile -m synthesis.program ...``), or the code is one Python
+    itself maps (outside 0-255): then ``sys.exit`` ends it the ordinary way."""
     from synthesis.core import interrupt
 
-    interrupt.ignore()      # the command's outcome is decided: a signal now changes nothing (as in the teardown)
     if code is not None and not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1
     status = 0 if code is None else code
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
-    if others or multiprocessing.active_children():
+    watched = sys.gettrace() is not None or sys.getprofile() is not None or "coverage" in sys.modules
+    if others or multiprocessing.active_children() or watched or not 0 <= status <= 255:
         sys.exit(status)
+    interrupt.ignore()      # the command's outcome is decided: a signal now changes nothing (as in the teardown)
     # what the interpreter runs first at exit (logging's flush, multiprocessing's finalizers, temporary folders'
     # clean-up); the teardown after them only frees memory the operating system takes back at once
     atexit._run_exitfuncs()
@@ -62,7 +65,7 @@ def _end(code) -> NoReturn:
     # and the C library's buffers, which os._exit leaves unwritten (native code's prints: CasADi, IPOPT)
     with contextlib.suppress(OSError, AttributeError, TypeError):
         ctypes.CDLL(None).fflush(None)
-    os._exit(status & 0xFF)
+    os._exit(status)
 
 
 class _ReaderMayLeave:

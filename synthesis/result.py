@@ -317,7 +317,8 @@ def _changed(final: Path) -> list[str]:
         try:
             same = file_sums(final, [str(name)]).get(str(name)) == digest
         except OSError:
-            same = False
+            changed.append(f"{name} (cannot be read, so not proven agrisynth's)")
+            continue
         if not same:
             changed.append(f"{name} (changed since agrisynth wrote it)")
     return changed
@@ -389,8 +390,9 @@ class RunFolder:
         if not os.path.lexists(self.final):
             return False
         if not is_run_folder(self.final):
-            # the check when a run opens its folder takes no lock: another run's commit may have moved the old
-            # run away (and perhaps its own in) between the looks -- look again before refusing
+            # both checks run under the commits' lock, but where the platform has no flock they do not: another
+            # run's commit may have moved the old run away (and perhaps its own in) between the looks -- look again
+            # before refusing
             if not os.path.lexists(self.final):
                 return False                # nothing there now; the locked commit looks again
             if not is_run_folder(self.final):
@@ -398,7 +400,9 @@ class RunFolder:
         if self.force or (self.replaceable is not None and _same(self.final, self.replaceable)):
             foreign = _foreign(self.final)
             if foreign:
-                tops = list(dict.fromkeys(n.split("/")[0] + ("/" if (self.final / n.split("/")[0]).is_dir() else "")
+                # a file not listed by its top-level entry; a listed one changed since, by its own name and why
+                tops = list(dict.fromkeys(n if n.endswith(")") else
+                                          n.split("/")[0] + ("/" if (self.final / n.split("/")[0]).is_dir() else "")
                                           for n in foreign))
                 shown = ", ".join(tops[:3]) + (f" and {len(tops) - 3} more" if len(tops) > 3 else "")
                 raise OutputError(f"{self.final} holds what agrisynth cannot prove it wrote there ({shown}): "

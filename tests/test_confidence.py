@@ -121,3 +121,32 @@ def test_an_answer_outside_the_counted_starts_is_said_and_keeps_an_auto_run_goin
     assert _auto_stop(counted_only, AutoStarts(), [16, 32], 0, False, False, None) == "rule"
     with_answer = SimpleNamespace(reports=reports, nlp=nlp, best=reports[-1])
     assert _auto_stop(with_answer, AutoStarts(), [16, 32], 0, False, False, None) is None
+
+
+def test_an_answer_a_hair_below_the_counted_optimum_is_that_optimum():
+    """A start at the counted optimum's design that stopped at IPOPT's acceptable level 1e-8 lower: within the
+    statement's grouping tolerance (1e-6 relative), so it is no better optimum -- the note does not say the counted
+    ones are worse, and the rule may still stop an auto run (it kept such a run going to its budget)."""
+    from types import SimpleNamespace
+
+    from synthesis.core.solve import AutoStarts, _auto_stop, confidence_statement
+
+    nlp, reports = _answer_outside_the_counted_starts(30)
+    reports[-1].outcome.objective = 2.0 - 1e-8
+    stated = confidence_statement(reports, nlp, False, reports[-1])
+    assert stated["answer_counted"] is False
+    assert not any("worse than the answer" in note for note in stated["assumptions_not_met"])
+    run = SimpleNamespace(reports=reports, nlp=nlp, best=reports[-1])
+    assert _auto_stop(run, AutoStarts(), [16, 32], 0, False, False, None) == "rule"
+
+
+def test_an_answer_that_misses_a_rule_is_not_counted_and_says_nothing_more():
+    from dataclasses import replace
+
+    from synthesis.core.solve import confidence_statement
+
+    nlp, reports = _answer_outside_the_counted_starts(0)
+    failing = replace(reports[0], satisfied=False)
+    stated = confidence_statement([failing], nlp, False, failing)
+    assert stated["answer_counted"] is False and stated["starts_counted"] == 0
+    assert not any("the answer" in note for note in stated["assumptions_not_met"])

@@ -14,9 +14,14 @@ import pytest
 PROGRAM = "from synthesis.program import program\nimport sys\nsys.argv = ['agrisynth', *sys.argv[1:]]\n"
 
 
+#: without PYTHONUNBUFFERED (set where these tests were written): Python then buffers its standard streams into a pipe,
+#: so an exit that skipped their flush would lose what was written
+BUFFERED = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+
+
 def _run(code: str, *args: str, tmp_path, env=None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=120,
-                          cwd=tmp_path, env=env)
+                          cwd=tmp_path, env=BUFFERED if env is None else env)
 
 
 def test_the_commands_exit_code_and_whole_output_reach_the_caller_and_the_exit_handlers_run(tmp_path):
@@ -26,8 +31,9 @@ def test_the_commands_exit_code_and_whole_output_reach_the_caller_and_the_exit_h
             f"{PROGRAM}program()\n")
     done = _run(code, "problems", tmp_path=tmp_path)
     assert done.returncode == 0, done.stderr
-    listing = subprocess.run([sys.executable, "-m", "synthesis.program", "problems"], capture_output=True, text=True,
-                             timeout=120, cwd=tmp_path).stdout
+    # the same command ended the ordinary way (main() and the interpreter's teardown, which flushes every stream)
+    listing = _run("from synthesis.program import main\nimport sys\nsys.argv = ['agrisynth', 'problems']\nmain()\n",
+                   tmp_path=tmp_path).stdout
     assert done.stdout == listing and "taiwan_example1" in done.stdout       # every line, to the last
     assert marker.read_text() == "ran"
     bad = _run(code, "check", "no-such-spec.toml", tmp_path=tmp_path)
@@ -63,8 +69,7 @@ def test_what_native_code_printed_reaches_a_pipe(tmp_path):
     script = ("import ctypes\nimport synthesis.program as program\n"
               "def main():\n    ctypes.CDLL(None).printf(b'from C\\n')\n"
               "program.main = main\nprogram.program()\n")
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
-    done = _run(script, tmp_path=tmp_path, env=env)
+    done = _run(script, tmp_path=tmp_path)
     assert done.returncode == 0 and done.stdout == "from C\n", (done.stdout, done.stderr)
 
 
@@ -116,3 +121,11 @@ def test_the_resume_line_is_quoted_for_the_shell(capsys):
     stopped_message(Stopped("SIGINT", 3, 8, Path("sp ace/ü 1/my run"), Path("my spec.toml")))
     err = capsys.readouterr().err
     assert "agrisynth solve 'my spec.toml' --resume 'sp ace/ü 1/my run'" in err
+
+
+def test_a_profiler_running_the_program_gets_its_output(tmp_path):
+    """`python -m cProfile -o prof.out -m synthesis.program problems` wrote no prof.out: the profiler saves after the
+    program returns, which the fast end never did.  Under a profiler or tracer the process ends the ordinary way."""
+    done = subprocess.run([sys.executable, "-m", "cProfile", "-o", "prof.out", "-m", "synthesis.program", "problems"],
+                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert done.returncode == 0 and (tmp_path / "prof.out").stat().st_size > 1000, done.stderr

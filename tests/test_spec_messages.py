@@ -244,6 +244,8 @@ def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(t
     ("compare", "name: may not be 'compare': agrisynth's compare command writes results/compare/, got 'compare'"),
     ("bench", "name: may not be 'bench': agrisynth's bench command writes results/bench/, got 'bench'"),
     ("studio", "name: may not be 'studio': agrisynth's studio command writes results/studio/, got 'studio'"),
+    # a file system that ignores case (macOS, Windows) writes results/bench/ for it too
+    ("Bench", "name: may not be 'Bench': agrisynth's bench command writes results/bench/, got 'Bench'"),
     ("x-check", "name: may not end in '-check': agrisynth names another command's run folder <name>-check, got "
                 "'x-check'"),
 ])

@@ -19,7 +19,7 @@ from typing import Any, Callable, cast
 import numpy as np
 
 from synthesis.core import interrupt
-from synthesis.core.confidence import statement
+from synthesis.core.confidence import OBJECTIVE_TOLERANCE, statement
 from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts, workers_inherit_memory
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.ipopt_log import reached_optimum
@@ -311,11 +311,10 @@ def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bo
     assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
     if len(run.reports) < totals[k] or (stop is not None and any(stop(r) for r in run.reports)):
         return "stop_at_objective"         # the kind's own early stop ended the batch (at its last start, too)
-    sign = -1.0 if maximise else 1.0
     # an answer better than every counted optimum (a start that met every rule short of IPOPT's full tolerance) shows
     # the counted best is not the global optimum, whatever the rule estimates of it
-    beyond = (not stated["answer_counted"] and bool(stated["optima"])
-              and sign * run.best.outcome.objective < sign * stated["optima"][0]["objective"])
+    beyond = (not stated["answer_counted"] and run.best.satisfied
+              and answer_beyond(run.best, [o["objective"] for o in stated["optima"]], maximise))
     if (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
             and not (nested and k == 0) and not beyond):
         # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
@@ -546,18 +545,28 @@ def confidence_statement(reports: list[StartReport], nlp, maximise: bool,
         units = np.zeros((len(counted), 1))
         notes.append("the starts' designs could not be mapped to the box: distinct_designs not counted")
     counted_starts = {r.outcome.start for r in counted}
-    outside = answer is not None and answer.satisfied and answer.outcome.start not in counted_starts
-    if outside:
-        assert answer is not None
+    outside = answer is not None and answer.outcome.start not in counted_starts
+    if outside and answer is not None and answer.satisfied:     # (one that misses a rule: no start is counted)
         how = ("comes from the elastic re-solve, no drawn start"
                if (answer.outcome.details or {}).get("start_from") == FROM_ELASTIC
                else f"ended {answer.outcome.return_status}, short of IPOPT's full tolerance")
-        sign = -1.0 if maximise else 1.0
-        above = counted and all(sign * r.outcome.objective > sign * answer.outcome.objective for r in counted)
+        above = answer_beyond(answer, [r.outcome.objective for r in counted], maximise)
         notes.append(f"the answer (start {answer.outcome.start}) is not counted: it {how}; these figures are the "
                      f"counted starts'{', every one of them worse than the answer' if above else ''}")
     return {**statement([r.outcome.objective for r in counted], units, [r.outcome.start for r in counted],
                         maximise=maximise, assumptions_not_met=notes), "answer_counted": not outside}
+
+
+def answer_beyond(answer: StartReport, counted: list[float], maximise: bool) -> bool:
+    """Whether the answer is better than every counted optimum by more than the statement's grouping tolerance
+    (relative :data:`~synthesis.core.confidence.OBJECTIVE_TOLERANCE`): a start at the same optimum that stopped a
+    hair lower (IPOPT's acceptable level) is not a better one."""
+    if not counted:
+        return False
+    sign = -1.0 if maximise else 1.0
+    best = min(sign * f for f in counted)
+    mine = sign * answer.outcome.objective
+    return mine < best - OBJECTIVE_TOLERANCE * max(1.0, abs(best))
 
 
 def _not_uniform(nlp) -> list[str]:

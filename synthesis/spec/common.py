@@ -161,14 +161,14 @@ class ProblemSpec(StrictModel):
         # check writes OUT/<name>-check/ and tolerance OUT/<name>-tolerance/: a spec named so would meet another
         # spec's run folder
         for suffix in ("-check", "-tolerance"):
-            if name.endswith(suffix):
+            if name.lower().endswith(suffix):       # (a file system that ignores case meets X-Check too)
                 raise PydanticCustomError("run_name_suffix", "may not end in '{suffix}': agrisynth names another "
                                           "command's run folder <name>{suffix}", {"suffix": suffix})
         # and compare, bench and the studio write results/compare/, results/bench/, results/studio/ (a solve named
         # "compare" was replaced by a comparison page under --force)
-        if name in RESERVED_RUN_NAMES:
-            raise PydanticCustomError("run_name_reserved", "may not be '{name}': agrisynth's {name} command writes "
-                                      "results/{name}/", {"name": name})
+        if name.lower() in RESERVED_RUN_NAMES:
+            raise PydanticCustomError("run_name_reserved", "may not be '{name}': agrisynth's {command} command "
+                                      "writes results/{command}/", {"name": name, "command": name.lower()})
         return name
 
 
