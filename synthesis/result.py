@@ -206,6 +206,12 @@ def _shape_problem(data: dict) -> str | None:
     for name, info in (data.get("design_variables") or {}).items():
         if not isinstance(info, dict):
             return f"design_variables[{name[:60]!r}] must be an object"
+        bounds = info.get("bounds")
+        if bounds is not None and not (isinstance(bounds, list) and len(bounds) == 2 and all(map(_number, bounds))):
+            # the reports read [lo, hi] (the design table's at-bound marks): a fuzzed [0] crashed compare
+            return f"design_variables[{name[:60]!r}].bounds must be [lo, hi] (two numbers) or null, got {_shown(bounds)}"
+        if not isinstance(info.get("free", False), bool) or not isinstance(info.get("unit", ""), (str, type(None))):
+            return f"design_variables[{name[:60]!r}]: free must be true/false and unit a string"
     if not isinstance(data["rules"], list):
         return f"rules must be a list, got {type(data['rules']).__name__}"
     for i, rule in enumerate(data["rules"]):

@@ -95,6 +95,11 @@ def malformed(base: dict) -> dict[str, bytes]:
         "design_boolean": _edit(base, lambda d: d["design"].update(l2=True)),
         "design_list_of_strings": _edit(base, lambda d: d["design"].update(l2=["a", 1])),
         "design_variables_numbers": _edit(base, lambda d: d.update(design_variables={"l1": 5})),
+        # the fuzz campaign's find: bounds of one number crashed the design table's at-bound marks
+        "design_variables_one_bound": _edit(base, lambda d: d.update(
+            design_variables={"l2": {"path": "arm.l2", "unit": "mm", "bounds": [0], "free": True}})),
+        "design_variables_string_free": _edit(base, lambda d: d.update(
+            design_variables={"l2": {"path": "arm.l2", "unit": "mm", "bounds": None, "free": "yes"}})),
         "objective_string_value": _edit(base, lambda d: d.update(objective={"name": "x", "value": "low"})),
         "objective_list": _edit(base, lambda d: d.update(objective=[1])),
         "solver_list": _edit(base, lambda d: d.update(solver=[1])),

@@ -14,6 +14,7 @@ from synthesis.core import startlog
 from synthesis.core.kind import Setting
 from synthesis.core.solve import AutoStarts, _not_uniform, run_solve
 from synthesis.kinds import solve_spec
+from synthesis.result import RUN_MARKER, file_sums
 from synthesis.spec import load_spec
 
 TOY = """kind = "toy_disc"
@@ -186,6 +187,10 @@ def test_an_interrupted_auto_run_resumed_gives_the_uninterrupted_answer(tmp_path
     lines = (folder / startlog.FILENAME).read_text().splitlines()
     assert json.loads(lines[1]) == {startlog.BATCH: 16}
     (folder / startlog.FILENAME).write_text("\n".join(lines[:7]) + "\n")
+    # as an interrupted run's own commit would record it: the marker's sum of the starts.jsonl it wrote
+    marker = json.loads((folder / RUN_MARKER).read_text())
+    marker["sha256"].update(file_sums(folder, [startlog.FILENAME]))
+    (folder / RUN_MARKER).write_text(json.dumps(marker) + "\n")
     before = json.loads((folder / "result.json").read_text())
     resumed = agrisynth("solve", spec, "--resume", folder, "--workers", "1")
     assert resumed.returncode == 0, resumed.stderr
