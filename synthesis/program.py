@@ -45,6 +45,9 @@ def _end(code) -> NoReturn:
     itself maps (outside 0-255): then ``sys.exit`` ends it the ordinary way."""
     from synthesis.core import interrupt
 
+    # the command's outcome is decided: a signal now changes nothing, on either way out (in the teardown or the wait
+    # for a thread it would be a KeyboardInterrupt traceback; agrisynth's own threads are daemons, none is waited for)
+    interrupt.ignore()
     if code is not None and not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1
@@ -53,7 +56,6 @@ def _end(code) -> NoReturn:
     watched = sys.gettrace() is not None or sys.getprofile() is not None or "coverage" in sys.modules
     if others or multiprocessing.active_children() or watched or not 0 <= status <= 255:
         sys.exit(status)
-    interrupt.ignore()      # the command's outcome is decided: a signal now changes nothing (as in the teardown)
     # what the interpreter runs first at exit (logging's flush, multiprocessing's finalizers, temporary folders'
     # clean-up); the teardown after them only frees memory the operating system takes back at once
     atexit._run_exitfuncs()

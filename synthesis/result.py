@@ -306,6 +306,10 @@ def file_sums(folder: Path, names: list[str]) -> dict[str, str]:
     return sums
 
 
+#: how a listed file that is no longer provably agrisynth's is named in a refusal
+_NOT_PROVEN = ("(changed since agrisynth wrote it)", "(cannot be read, so not proven agrisynth's)")
+
+
 def _changed(final: Path) -> list[str]:
     """The files the marker of ``final`` records a sum of that are now something else: another content, a link, a
     folder (one deleted since is no one's work to keep).  A marker without sums (an earlier version's): none."""
@@ -323,10 +327,10 @@ def _changed(final: Path) -> list[str]:
         try:
             same = file_sums(final, [str(name)]).get(str(name)) == digest
         except OSError:
-            changed.append(f"{name} (cannot be read, so not proven agrisynth's)")
+            changed.append(f"{name} {_NOT_PROVEN[1]}")
             continue
         if not same:
-            changed.append(f"{name} (changed since agrisynth wrote it)")
+            changed.append(f"{name} {_NOT_PROVEN[0]}")
     return changed
 
 
@@ -407,7 +411,7 @@ class RunFolder:
             foreign = _foreign(self.final)
             if foreign:
                 # a file not listed by its top-level entry; a listed one changed since, by its own name and why
-                tops = list(dict.fromkeys(n if n.endswith(")") else
+                tops = list(dict.fromkeys(n if n.endswith(_NOT_PROVEN) else
                                           n.split("/")[0] + ("/" if (self.final / n.split("/")[0]).is_dir() else "")
                                           for n in foreign))
                 shown = ", ".join(tops[:3]) + (f" and {len(tops) - 3} more" if len(tops) > 3 else "")
