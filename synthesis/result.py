@@ -298,11 +298,8 @@ def file_sums(folder: Path, names: list[str]) -> dict[str, str]:
     for name in names:
         path = folder / name
         if path.is_file() and not path.is_symlink():
-            digest = hashlib.sha256()
             with open(path, "rb") as fh:
-                for block in iter(lambda: fh.read(1 << 20), b""):
-                    digest.update(block)
-            sums[name] = digest.hexdigest()
+                sums[name] = hashlib.file_digest(fh, "sha256").hexdigest()
     return sums
 
 
@@ -310,13 +307,10 @@ def file_sums(folder: Path, names: list[str]) -> dict[str, str]:
 _NOT_PROVEN = ("(changed since agrisynth wrote it)", "(cannot be read, so not proven agrisynth's)")
 
 
-def _changed(final: Path) -> list[str]:
-    """The files the marker of ``final`` records a sum of that are now something else: another content, a link, a
-    folder (one deleted since is no one's work to keep).  A marker without sums (an earlier version's): none."""
-    try:
-        sums = _marker(final).get("sha256")
-    except (OSError, ResultError, AttributeError):
-        return []
+def _changed(final: Path, sums) -> list[str]:
+    """The files of ``final`` its marker records a sum of (``sums``) that are now something else: another content, a
+    link, a folder (one deleted since is no one's work to keep).  A marker without sums (an earlier version's):
+    none."""
     if not isinstance(sums, dict):
         return []
     changed = []
@@ -334,13 +328,13 @@ def _changed(final: Path) -> list[str]:
     return changed
 
 
-def _listed(final: Path) -> list | None:
-    """The contents the marker of ``final`` lists (None: it lists none, a folder of an earlier version)."""
+def _read_marker(final: Path) -> dict:
+    """The parsed marker of ``final``, or {} where it cannot be read as an object."""
     try:
-        listed = _marker(final).get("contents")
-    except (OSError, ResultError, AttributeError):
-        return None
-    return listed if isinstance(listed, list) else None
+        data = _marker(final)
+    except (OSError, ResultError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 def _foreign(final: Path) -> list[str]:
@@ -348,11 +342,12 @@ def _foreign(final: Path) -> list[str]:
     the files it lists whose content changed since (:func:`_changed`); for a marker that lists none (an earlier
     version's), anything but a top-level regular file named as agrisynth names its outputs (LEGACY_FILES,
     LEGACY_FIGURES).  OS metadata files (OS_CLUTTER) are never counted."""
-    listed = _listed(final)
+    marker = _read_marker(final)
+    listed = marker.get("contents")
     have = [n for n in folder_contents(final) if Path(n).name not in OS_CLUTTER]
-    if listed is not None:
+    if isinstance(listed, list):        # (none: a folder of an earlier version)
         known = set(listed)
-        return [n for n in have if n not in known] + _changed(final)
+        return [n for n in have if n not in known] + _changed(final, marker.get("sha256"))
 
     def ours(name: str) -> bool:
         path = final / name
@@ -549,14 +544,6 @@ def _locked(folder: Path):
         os.close(fd)
 
 
-def _remove_made(created: list[Path]) -> None:
-    """The folders this run made (deepest first), each removed if it is still an empty folder: a refused --out leaves
-    nothing behind."""
-    for folder in created:
-        with contextlib.suppress(OSError):
-            folder.rmdir()
-
-
 def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Path | None = None,
                     replaceable: Path | None = None, suffix: str = "", resumed_from: Path | None = None) -> RunFolder:
     """Check that ``out_root/<name><suffix>`` may be written and make the run's staging folder (with its marker).
@@ -575,17 +562,17 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
     while not os.path.lexists(missing) and missing != missing.parent:
         created.append(missing)
         missing = missing.parent
+    folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created, resumed_from)
     try:
         out_root.mkdir(parents=True, exist_ok=True)
     except FileExistsError:
-        _remove_made(created)
+        folder.discard()
         raise OutputError(f"--out {out_root}: not a folder") from None
     except OSError as exc:
-        _remove_made(created)       # the parents made before the one that could not be (a name too long)
+        folder.discard()        # the parents made before the one that could not be (a name too long)
         raise OutputError(f"--out {out_root}: cannot create the output folder ({exc.strerror})") from None
     if not out_root.is_dir():
         raise OutputError(f"--out {out_root}: not a folder")
-    folder = RunFolder(out_root / name, Path(), force, replaceable, spec, created, resumed_from)
     try:
         # under the commits' lock: a run committing meanwhile swaps the folder and its marker between two reads, and
         # a file's sum would then be checked against another run's marker
@@ -597,7 +584,7 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
     try:
         folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
     except OSError as exc:
-        _remove_made(created)
+        folder.discard()
         raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
     try:
         os.chmod(folder.staging, 0o777 & ~_UMASK)    # mkdtemp makes it private; a run folder is an ordinary one

@@ -358,15 +358,11 @@ def test_a_rule_missed_only_by_the_solvers_tolerance_is_not_called_a_miss_betwee
     """The opening cam with its rise and near dwell freed: its hold windows as long as the dwells leave rise exactly
     40 deg, which IPOPT meets to 4e-9 deg.  The message sent the user to raise samples_per_segment (which changes
     nothing: the timing rule is exact); it now says the miss is the solver's tolerance and what causes it."""
-    from solving import agrisynth
+    from solving import agrisynth, spec_with
 
-    text = (LIBRARY / "clamp_cam" / "opening_cam_redesign.toml").read_text()
-    for old, new in (("rise = 40.0", "rise = { init = 40.0, bounds = [20, 60] }"),
-                     ("near_dwell = 146.0", "near_dwell = { init = 146.0, bounds = [120, 170] }")):
-        assert old in text
-        text = text.replace(old, new, 1)
-    spec = tmp_path / "free_dwells.toml"
-    spec.write_text(text)
+    spec = spec_with(tmp_path, LIBRARY / "clamp_cam" / "opening_cam_redesign.toml", [
+        ("rise = 40.0", "rise = { init = 40.0, bounds = [20, 60] }"),
+        ("near_dwell = 146.0", "near_dwell = { init = 146.0, bounds = [120, 170] }")], "free_dwells.toml")
     run = agrisynth("solve", str(spec), "--workers", "1", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 3, run.stderr
     assert "misses only by the solver's tolerance (timing_hold_far[0] by " in run.stderr
