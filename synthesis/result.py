@@ -389,6 +389,9 @@ class RunFolder:
     #: the folder a ``--resume`` read its starts from; when that is a killed run's staging folder, it is removed
     #: once this run's complete result is in place (:meth:`commit` with ``retire``)
     resumed_from: Path | None = None
+    #: a descriptor of ``staging`` holding a flock on it while this process writes there: another run into the same
+    #: folder sees a live writer (:func:`_live_writer`), and the kernel drops the lock with a killed process
+    held: int | None = None
 
     def permitted(self) -> bool:
         """May ``final`` be written now?  Raises OutputError when something there must be kept."""
@@ -462,11 +465,20 @@ class RunFolder:
                 shutil.rmtree(old, ignore_errors=True)
             if retire and self.resumed_from is not None:
                 _retire_staging(Path(self.resumed_from), self.final)
+            self.release()
             return replace
+
+    def release(self) -> None:
+        """Let go of the staging folder's lock (the run there is finished or gone)."""
+        if self.held is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.held)
+            self.held = None
 
     def discard(self) -> None:
         """Remove the staging folder (only ever one this process made), and the output folders this run
         created when they are empty again."""
+        self.release()
         if self.staging != Path():
             shutil.rmtree(self.staging, ignore_errors=True)
         for folder in self.created:
@@ -506,6 +518,50 @@ def _agrisynths_file(name: str) -> bool:
     if name == RUN_MARKER or name in LEGACY_FILES or name.endswith(LEGACY_FIGURES):
         return True
     return name.startswith(".") and any(name.startswith(f".{known}.") for known in (*LEGACY_FILES, RUN_MARKER))
+
+
+def _hold(folder: Path) -> int | None:
+    """A descriptor of ``folder`` with an exclusive flock on it (None where flock or the descriptor is not had)."""
+    try:
+        import fcntl
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except (ImportError, OSError):
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return None
+    return fd
+
+
+def _live_writer(out_root: Path, name: str) -> Path | None:
+    """The staging folder of a run writing ``out_root/name`` now: one named as this name's staging folders are
+    whose flock (:attr:`RunFolder.held`) is taken.  A killed run's staging folder holds no lock (a ``--resume``
+    reads it)."""
+    try:
+        import fcntl
+        entries = list(os.scandir(out_root))
+    except (ImportError, OSError):
+        return None
+    prefix = f".{name}.run-"
+    for entry in entries:
+        if not (entry.name.startswith(prefix) and STAGING_NAME.match(entry.name)
+                and entry.is_dir(follow_symlinks=False)):
+            continue
+        try:
+            fd = os.open(entry.path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return Path(entry.path)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+    return None
 
 
 def _running(pid: int) -> bool:
@@ -575,17 +631,22 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
         raise OutputError(f"--out {out_root}: not a folder")
     try:
         # under the commits' lock: a run committing meanwhile swaps the folder and its marker between two reads, and
-        # a file's sum would then be checked against another run's marker
+        # a file's sum would then be checked against another run's marker; a run opening the same folder meanwhile
+        # finds this one's staging folder locked
         with _locked(out_root):
             folder.permitted()
+            live = None if force or replaceable is not None else _live_writer(out_root, name)
+            if live is not None:
+                raise OutputError(f"another agrisynth run is writing {folder.final} now (its files are in {live}); "
+                                  f"wait for it to finish and give --force to replace it, or --out another folder")
+            try:
+                folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
+            except OSError as exc:
+                raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
+            folder.held = _hold(folder.staging)
     except OutputError:
         folder.discard()
         raise
-    try:
-        folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
-    except OSError as exc:
-        folder.discard()
-        raise OutputError(f"--out {out_root}: cannot write there ({exc.strerror})") from None
     try:
         os.chmod(folder.staging, 0o777 & ~_UMASK)    # mkdtemp makes it private; a run folder is an ordinary one
         atomic_write_text(folder.staging / RUN_MARKER, json.dumps(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import re
 from pathlib import Path
 
 import pytest
@@ -328,3 +329,24 @@ def test_force_keeps_a_file_changed_since_agrisynth_wrote_it(tmp_path):
     assert again.returncode == 2 and "result.json (changed since agrisynth wrote it)" in again.stderr, again.stderr
     (run / "result.json").unlink()
     assert agrisynth(*args, "--force", cwd=tmp_path).returncode in (0, 1)      # deleted files are no one's work
+
+
+def test_a_second_run_into_a_folder_being_written_is_refused_before_any_work(tmp_path):
+    """Two runs started into one new folder: the second is refused at once (exit 2, naming the first's staging
+    folder), not after its work; --force lets it run (the last to finish wins, as above); a killed run's staging
+    folder holds no lock, so it does not stop the next run (a --resume reads it)."""
+    first = open_run_folder(tmp_path, "run")
+    with pytest.raises(OutputError, match=r"another agrisynth run is writing .*run now \(its files are in "
+                                          rf".*{re.escape(first.staging.name)}\)"):
+        open_run_folder(tmp_path, "run")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [first.staging.name]      # nothing made by the refusal
+    forced = open_run_folder(tmp_path, "run", force=True)
+    forced.discard()
+    other = open_run_folder(tmp_path, "other")          # another name is another folder
+    other.discard()
+    first.release()                                     # as a SIGKILL leaves it: the folder, no lock
+    later = open_run_folder(tmp_path, "run")
+    assert first.staging.is_dir() and later.staging != first.staging
+    later.write(artifacts("b"))
+    assert later.commit() is False and (tmp_path / "run" / "report.html").read_text() == "b"
+    assert later.held is None
