@@ -443,3 +443,38 @@ def test_the_drawing_reads_at_a_glance(tmp_path, sync_playwright):
                                "document.querySelector('#panel-main svg').getBoundingClientRect().width) < 0.5")
         assert page.locator("#panel-main").bounding_box()["width"] >= 0.6 * 1600
         assert seen["left"] == [] and seen["errors"] == []
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+def test_a_typed_value_the_page_cannot_take_is_refused_in_words_and_a_stopped_server_is_said(tmp_path,
+                                                                                           sync_playwright):
+    """An empty number box (the browser's value "", which Number() reads as 0) or one outside the bounds keeps the
+    page's value and says why: no evaluation at 0, nothing saved at 0.  An empty starts box reaches the server as
+    text, not as 0.  When the server stops, the page says so and shows no solve as running."""
+    spec = STUDIO_SPECS["planting_fourbar"]
+    with running_studio(spec, tmp_path / "studio") as studio, studio_page(sync_playwright, studio) as (page, seen):
+        count = int(page.get_attribute("body", "data-evaluations"))
+        before = page.input_value("#number-seedbed_y")
+        assert float(before) != 0.0
+        page.fill("#number-seedbed_y", "")
+        page.press("#number-seedbed_y", "Tab")
+        assert page.inner_text("#error") == f"seedbed_y: the typed value is not a number; kept {before} mm"
+        assert page.input_value("#number-seedbed_y") == before
+        page.fill("#number-l2", "50")
+        page.press("#number-l2", "Tab")
+        assert page.inner_text("#error").startswith("l2: 50 lies outside its bounds [28, 42]; kept 35 mm")
+        page.wait_for_timeout(300)
+        assert int(page.get_attribute("body", "data-evaluations")) == count      # nothing evaluated
+        page.fill("#starts", "")
+        page.click("#solve")
+        page.wait_for_function("() => !document.getElementById('error').hidden && "
+                               "document.getElementById('error').textContent.startsWith('starts')", timeout=10_000)
+        assert "got '(empty)'" in page.inner_text("#error"), page.inner_text("#error")
+        studio.stop()
+        page.fill("#number-l2", "36")
+        page.press("#number-l2", "Tab")
+        page.wait_for_function("() => document.body.dataset.solve === 'gone'", timeout=10_000)
+        assert "is not answering" in page.inner_text("#error")
+        assert page.inner_text("#solve-state").startswith("server stopped")
+        assert page.is_disabled("#solve") and page.is_disabled("#cancel")
+        assert not seen["left"]

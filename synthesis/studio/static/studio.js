@@ -18,10 +18,29 @@ async function api(path, body) {
     options.headers["Content-Type"] = "application/json";
     options.body = JSON.stringify(body);
   }
-  const response = await fetch(path, options);
+  let response;
+  try {
+    response = await fetch(path, options);
+  } catch (err) {       // no answer at all: the server was stopped (Ctrl-C, SIGTERM) or the machine is gone
+    serverGone();
+    throw new Error(`the studio server at ${location.host} is not answering (stopped?): nothing on this page is ` +
+                    `evaluated or solved any more; start \`agrisynth studio\` again and reload`);
+  }
   const data = await response.json();
   if (!response.ok) throw new Error(data.error || response.statusText);
   return data;
+}
+
+// the page can do nothing without its server: a solve it showed as running is no longer known to run
+function serverGone() {
+  clearTimeout(state.polling);
+  state.solving = false;
+  document.body.dataset.solve = "gone";
+  for (const id of ["solve", "cancel"]) document.getElementById(id).disabled = true;
+  const line = document.getElementById("solve-state");
+  if (!line.textContent.startsWith("server stopped")) {
+    line.textContent = `server stopped: the last state it sent was "${line.textContent}"`;
+  }
 }
 
 function el(tag, attrs, text) {
@@ -105,8 +124,19 @@ function buildSliders() {
     range.addEventListener("input", () => { setValue(v.name, Number(range.value)); request("coarse"); });
     range.addEventListener("change", () => { setValue(v.name, Number(range.value)); request("fine"); });
     number.addEventListener("change", () => {
-      const x = Number(number.value);
-      if (!Number.isFinite(x) || x < v.bounds[0] || x > v.bounds[1]) { number.value = state.values[v.name]; return; }
+      // an empty box or one the browser cannot read ("-", "1e") has value "", which Number() reads as 0: refused
+      // like a value outside the bounds, the page's value kept and the reason shown
+      const typed = number.value.trim();
+      const x = typed === "" || number.validity.badInput ? NaN : Number(typed);
+      const why = !Number.isFinite(x) ? "is not a number"
+        : (x < v.bounds[0] || x > v.bounds[1]) ? `${typed} lies outside its bounds [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]`
+        : null;
+      if (why) {
+        number.value = state.values[v.name];
+        showError(`${v.name}: ${why === "is not a number" ? "the typed value is not a number" : why}; kept ` +
+                  `${fmt(state.values[v.name])}${v.unit ? " " + v.unit : ""}`);
+        return;
+      }
       setValue(v.name, x); request("fine");
     });
     row.append(range, number, el("span", { class: "unit" }, v.unit || ""));
@@ -698,7 +728,11 @@ function poll() {
 
 async function solve() {
   try {
-    const starts = Number(document.getElementById("starts").value);
+    const box = document.getElementById("starts");
+    const typed = box.value.trim();
+    // sent as typed when it is no number (the server names the field and the text), never as Number("") = 0
+    const starts = typed !== "" && !box.validity.badInput && Number.isFinite(Number(typed)) ? Number(typed)
+      : (typed || "(empty)");
     showSolve(await api("/api/solve", { values: freeValues(), starts }));
     state.solving = true;
     poll();
