@@ -352,3 +352,25 @@ def test_the_tolerance_stack_up_of_a_max_at_its_kink_reads_each_branch(tmp_path)
     corner = (120.0 + 0.2) - (50.0 - 0.2) - (70.5 - 0.2)          # the first branch at the worst corner
     held = rows["finger_hides_in_drum@tolerance"]
     assert held["value"] == pytest.approx(-corner, abs=1e-9) and held["satisfied"] is False
+
+
+def test_a_drum_below_the_ground_line_fails_its_rule_though_the_tip_reaches_the_ground():
+    """r = 150, e = 100, alpha = 10 deg, b = r + e sin(alpha): the tip's lowest point on the ground line, and a drum
+    of 200 mm (the finger still protrudes 50 mm) whose lowest point, b - rho, is 32.6 mm under it: every other rule
+    holds, so only this rule tells the design ploughs."""
+    from synthesis.kinds.comb_finger.check import evaluate
+
+    b = 150.0 + 100.0 * math.sin(math.radians(10.0))
+    text = "\n".join(['kind = "comb_finger"', 'name = "drum_in_soil"', "[finger]", "r = 150.0", "e = 100.0",
+                      "alpha = 10.0", "omega = 60.0", f"b = {b!r}", "rho = 200.0", "[operation]",
+                      "machine_speed = 0.4", "row_spacing = 1000.0", "[requirements]", "root_clearance = 30.0",
+                      "units_gap = 60.0", "finger_clearance = 10.0", "protrusion = 40.0", "ground_reach = 10.0"])
+    import tomllib
+
+    from synthesis.kinds.comb_finger.spec import CombFingerSpec
+    spec = CombFingerSpec.model_validate(tomllib.loads(text))
+    rules = [r.record() for r in evaluate(spec, spec.design_values())[0]]
+    by_name = {r.name: r for r in rules}
+    assert [r.name for r in rules if not r.satisfied] == ["drum_above_ground"]
+    assert by_name["drum_above_ground"].value == pytest.approx(b - 200.0, abs=1e-12)
+    assert by_name["tip_reaches_ground"].value == pytest.approx(0.0, abs=1e-9)

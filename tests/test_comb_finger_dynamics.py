@@ -256,7 +256,7 @@ def test_a_torque_limit_binds_the_finger_length(tmp_path):
 
 def test_a_spec_without_the_table_has_no_dynamics():
     names = ["root_clearance", "units_gap", "finger_clear_of_other_unit", "unit_within_row", "finger_hides_in_drum",
-             "finger_protrudes", "tip_reaches_ground"]
+             "finger_protrudes", "tip_reaches_ground", "drum_above_ground"]
     for name, speed in (("peanut_baseline.toml", ["tip_speed"]), ("redesign_max_combing.toml", [])):
         loaded = load_spec(LIBRARY / "comb_finger" / name)
         result = json.loads(result_text(kinds.get("comb_finger").check(loaded)))

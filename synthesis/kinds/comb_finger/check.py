@@ -14,7 +14,7 @@ from typing import Any, cast
 import numpy as np
 
 from constraints import Rule
-from synthesis.kinds.comb_finger.rules import (finger_clear_rule, finger_hides_rule, finger_protrudes_rule, root_clearance_rule,
+from synthesis.kinds.comb_finger.rules import (drum_above_ground_rule, finger_clear_rule, finger_hides_rule, finger_protrudes_rule, root_clearance_rule,
                                      tip_reaches_ground_rule, tip_speed_rule, unit_within_row_rule, units_gap_rule)
 from synthesis.kinds.comb_finger import geometry as g
 from synthesis.core.kind import figure_text
@@ -106,7 +106,8 @@ def rules_of(spec: CombFingerSpec, tr: Trace) -> list[Rule]:
              unit_within_row_rule(tr.reaches, spec.operation.row_spacing / 2.0),
              finger_hides_rule(tr.r, tr.e, tr.rho, q.hub_inset),
              finger_protrudes_rule(tr.r + tr.e - tr.rho, q.protrusion),
-             tip_reaches_ground_rule(tr.lowest, q.ground_reach)]
+             tip_reaches_ground_rule(tr.lowest, q.ground_reach),
+             drum_above_ground_rule(tr.b, tr.rho)]
     if q.max_tip_speed is not None:
         rules.append(tip_speed_rule(tr.tip_speed, q.max_tip_speed))
     return rules + tr.dynamics

@@ -60,6 +60,13 @@ def finger_protrudes_rule(reach, minimum: float) -> Rule:
     return Rule("finger_protrudes", reach, minimum, None, "mm", LENGTH_SCALE, "at full extension (E)")
 
 
+def drum_above_ground_rule(b, rho) -> Rule:
+    """The drum's lowest point (b - rho: the axis height less the drum radius) on or above the ground line MN: a
+    drum below it would plough.  The tip rule does not imply it: the tip reaches lowest below the hub R, which
+    sits e sin(alpha) under the drum axis, and the drum radius is free up to r + e - protrusion."""
+    return Rule("drum_above_ground", b - rho, 0.0, None, "mm", LENGTH_SCALE, "the drum's lowest point, b - rho")
+
+
 def tip_reaches_ground_rule(lowest, tolerance: float) -> Rule:
     """0 <= lowest tip height <= tolerance, mm: the finger sweeps the ground line without digging in."""
     return Rule("tip_reaches_ground", lowest, 0.0, tolerance, "mm", max(tolerance, 1.0), "lowest point of the turn")
