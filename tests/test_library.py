@@ -114,7 +114,7 @@ EXPECTED: dict[str, dict] = {
     "combing_chain/redesign_window_80_100.toml": {"check": 1, "solve": ("optimal", 0.39935765897716635)},
     "comb_finger/peanut_baseline.toml": {"check": 0, "solve": ("exit", 2)},
     "comb_finger/peanut_baseline_dynamics.toml": {"check": 0, "solve": ("exit", 2)},
-    "comb_finger/redesign_max_combing.toml": {"check": 0, "solve": ("optimal", 56.90966723057299)},
+    "comb_finger/redesign_max_combing.toml": {"check": 0, "solve": ("optimal", 56.90966723057846)},
     "comb_finger/redesign_tip_speed.toml": {"check": 0, "solve": ("optimal", 61.10042140664076)},
 }
 
