@@ -362,6 +362,9 @@ def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp
     (ONE_GEAR, "window = [80.0, 100.0]", "", "solve", "combing_chain: solve needs requirements.window"),
     (TWO_SPEED, "switch_speed = { init = 0.5, bounds = [0.4, 0.62] }", "switch_speed = 0.8", "solve",
      "combing_chain.chain.switch_speed: expected within operation.machine_speed [0.4, 0.62] m/s, got 0.8"),
+    # two gears each held to the whole range: check evaluates it, a solve would drive both to one speed
+    (TWO_SPEED, "switch_speed = { init = 0.5, bounds = [0.4, 0.62] }", "", "solve",
+     "combing_chain.chain.switch_speed: solve of two chain gears needs the machine speed at which gear 2 takes over"),
 ])
 def test_bad_input_exits_2_naming_the_field(tmp_path, source, old, new, command, message):
     text = source.read_text()

@@ -31,6 +31,11 @@ def require_window(spec: CombingChainSpec) -> tuple[float, float] | None:
         raise SpecError(f"{spec.kind}: solve needs requirements.window = [lo, hi] (deg), the plant angles "
                         f"acceptable before the cut")
     c = spec.chain
+    if len(c.speeds) == 2 and c.switch_speed is None:
+        # each gear would be held to the whole machine-speed range: the same rows twice, the second gear of no use
+        raise SpecError(f"{spec.kind}.chain.switch_speed: solve of two chain gears needs the machine speed at which "
+                        f"gear 2 takes over (a value or {{init, bounds}}, m/s); without it every gear must serve the "
+                        f"whole range, which `agrisynth check` evaluates")
     inf, sup = g.delta_limits(c.h, c.theta, c.e)
     lo, hi = window
     if hi <= inf or lo >= sup:

@@ -68,4 +68,5 @@ def maximise(setting: Setting) -> bool:
 SOLVING = Solving(build=declared(problem), recheck=recheck, finish=finish, baseline_rules=baseline_rules, maximise=maximise,
                   samples_hint="[solver] beta_samples and speed_samples",
                   relax_hint="Widen the window, narrow the plant-angle or machine-speed range, widen the chain-speed "
-                             "bounds, or add a second chain gear (speeds = [gear 1, gear 2] with a switch_speed).")
+                             "bounds, or (one chain gear) add a second: speeds = [gear 1, gear 2] with a "
+                             "switch_speed; (two gears) free the switch_speed or widen its bounds.")
