@@ -338,6 +338,18 @@ def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp
     # the closed form agrees: 0.62 x K(110, 100) > 0.4 x K(70, 80)
     cf = data["facts"]["closed_form"]
     assert not cf["one_gear_feasible"] and cf["one_gear_chain_speed_interval"][0] > cf["one_gear_chain_speed_interval"][1]
+    # the elastic re-solve's design, which the message's misses are of, is written as the spec started there: its
+    # check evaluates exactly that design
+    assert "the misses named above are its; not the least violated start the table shows) is written as " \
+           "elastic.toml" in err
+    elastic = tmp_path / "one_gear_too_wide" / "elastic.toml"
+    assert elastic.read_text().startswith("# one_gear_too_wide: no start of `agrisynth solve` satisfied every rule "
+                                          "(status infeasible).\n# The elastic re-solve's design (the smallest relaxation it found, giving way on ")
+    proc = agrisynth("check", str(elastic), "--out", str(tmp_path), cwd=tmp_path, timeout=300)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    checked = json.loads((tmp_path / "one_gear_too_wide_elastic-check" / "result.json").read_text())
+    free = [n for n, v in data["design_variables"].items() if v["free"]]
+    assert free and all(checked["design"][n] == data["elastic"]["design"][n] for n in free)
 
 
 @pytest.mark.parametrize("source, old, new, command, message", [

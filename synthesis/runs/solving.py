@@ -20,7 +20,7 @@ from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscribe
 from synthesis.runs.output import RunOutput, text_file
 from synthesis.runs.requests import BadRequest, Outcome, SolveRequest, SolveWritten, Stopped
 from synthesis.runs.specs import described, loaded_spec
-from synthesis.spec.solved import FILENAME as SOLVED_SPEC, solved_toml
+from synthesis.spec.solved import ELASTIC_FILENAME as ELASTIC_SPEC, FILENAME as SOLVED_SPEC, elastic_said, elastic_toml, solved_toml
 
 #: most worker processes a run starts
 MAX_WORKERS = 256
@@ -152,10 +152,19 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
                 emit(SolverLog(log))
             baseline = core.baseline_rules(kind, loaded)
             files = {"ipopt.log": text_file(log), SOLVED_SPEC: text_file(solved_toml(loaded, result))}
+            elastic = elastic_toml(loaded, result) if result.status in ("infeasible", "failed") else None
+            if elastic is not None:
+                files[ELASTIC_SPEC] = text_file(elastic)
             details = SolveWritten(baseline, workers, request.scheduler, len(plan.finished or ()), request.resume,
                                    kind.headline(result))
             folder, _ = output.finish(emit, result, files, given_rules=baseline, details=details)
             error = core.exit_error(kind, result, reports) if result.status in ("infeasible", "failed") else None
+            if error is not None and elastic is not None:
+                # the message's figures are the relaxation's; the table beside it shows the least violated start
+                its = "; the misses named above are its" if result.status == "infeasible" else ""
+                error = type(error)(f"{error} The elastic re-solve's design ({elastic_said(result.elastic or {})}{its}; "
+                                    f"not the least violated start the table shows) is written as {ELASTIC_SPEC}, the "
+                                    f"spec started there: `agrisynth check` it, or `agrisynth solve` from it.")
     return Outcome(3 if error else 1 if result.violated() else 0, result, folder, error=error)
 
 

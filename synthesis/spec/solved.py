@@ -63,6 +63,64 @@ def solved_data(loaded, result) -> dict[str, Any]:
     return data
 
 
+#: the spec started at the elastic re-solve's design (a run no start of which satisfied every rule)
+ELASTIC_FILENAME = "elastic.toml"
+
+
+def elastic_toml(loaded, result) -> str | None:
+    """The spec file with every free variable *started* at the elastic re-solve's design (``result.elastic.design``;
+    bounds kept, so ``agrisynth solve`` starts there and ``agrisynth check`` evaluates it), named
+    ``<name>_elastic``; None when the run has no such design or it cannot be written as this spec.
+
+    The relaxation's design is where the rules give way least (or, needing no slack, hold at the solver's
+    samples): often much nearer a design that meets them than the least violated start (a guide way's start broke
+    seven rules where the elastic design missed one by 0.02 mm)."""
+    design = (result.elastic or {}).get("design")
+    if not isinstance(design, dict) or not design:
+        return None
+    try:
+        loaded, data = kinds.explicit_design(loaded)
+        info = describe(loaded.model)
+        for name, var in info.items():
+            if not var["free"]:
+                continue
+            value = design.get(name)
+            if var["path"] is None or not isinstance(value, (int, float)):
+                return None
+            *head, last = path_parts(var["path"])
+            node = data
+            for part in head:
+                node = node[part]
+            entry = node[last]
+            if not isinstance(entry, dict) or "init" not in entry:
+                return None
+            lo, hi = var["bounds"]
+            # IPOPT ends within its bound relaxation (~1e-8 relative) of a bound: a start must lie inside
+            entry["init"] = float(min(max(float(value), lo), hi))
+        data["name"] = f"{loaded.name}_elastic"
+        validate(type(loaded.model), data, prefix=loaded.kind)
+    except (SpecError, KeyError, IndexError, TypeError, ValueError):
+        return None
+    elastic = result.elastic
+    needed = elastic_said(elastic)
+    head_lines = [f"# {result.name}: no start of `agrisynth solve` satisfied every rule (status {result.status}).",
+                  f"# The elastic re-solve's design ({needed})",
+                  f"# as the start of every free design variable of {loaded.path.name}, bounds kept:",
+                  f"#   agrisynth check {ELASTIC_FILENAME}   evaluates it on the 10x finer grid;",
+                  f"#   agrisynth solve {ELASTIC_FILENAME}   solves from it (start 0).",
+                  f"# spec sha256 {loaded.sha256}", ""]
+    return "\n".join(head_lines + write_toml(type(loaded.model), data, documented=False)) + "\n"
+
+
+def elastic_said(elastic: dict) -> str:
+    """What the elastic re-solve's design is, in a few words (result.json ``elastic``)."""
+    if not elastic.get("converged"):
+        return f"where it stopped, not converged: {elastic.get('return_status')}"
+    if elastic.get("relaxed"):
+        return f"the smallest relaxation it found, giving way on {', '.join(elastic['relaxed'])}"
+    return "it needed no slack: every rule holds at the solver's samples"
+
+
 def _given_design(loaded, result, data: dict) -> None:
     """A ``[design]`` table (the given design a kind reads, e.g. a path synthesis', with free timing its crank
     angles too): each of its fields the result has is set to the solution, where the spec allows it (a
