@@ -246,3 +246,19 @@ def test_no_mutated_result_file_crashes_compare(good, tmp_path):
         assert "NaN" not in shown
 
     run()
+
+
+def test_candidates_of_different_agrisynth_versions_are_said_on_the_terminal_and_the_page(good, tmp_path):
+    path, base = good
+    other = tmp_path / "other.json"
+    other.write_bytes(_edit(base, lambda data: data["versions"].__setitem__("agrisynth", "9.9.9")))
+    same = tmp_path / "same.json"
+    same.write_bytes(_edit(base, lambda data: None))
+    proc = agrisynth("compare", str(path), str(other), "--out", str(tmp_path / "cmp"), cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    said = " ".join((proc.stdout + proc.stderr).split())
+    version = base["versions"]["agrisynth"]
+    assert re.search(rf"written by different versions of agrisynth \(.*: {re.escape(version)}, .*: 9\.9\.9\)", said), said
+    assert "different versions of agrisynth" in (tmp_path / "cmp" / "compare.html").read_text()
+    proc = agrisynth("compare", str(path), str(same), "--out", str(tmp_path / "cmp2"), cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0 and "different versions" not in proc.stdout + proc.stderr

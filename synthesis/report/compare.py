@@ -102,6 +102,19 @@ def _different_targets(cands: list[Candidate]) -> list[str]:
             f"its own targets, so they do not compare"]
 
 
+def different_versions(cands: list[Candidate]) -> list[str]:
+    """A note when the candidates were written by different versions of agrisynth or CasADi (``versions``): a rule's
+    model, a default or the solver may have changed between them, so a difference on the page may be the tool's."""
+    notes = []
+    for package in ("agrisynth", "casadi"):
+        seen = {c.label: (c.result.versions or {}).get(package) for c in cands}
+        if len(cands) >= 2 and len({v for v in seen.values()}) > 1:
+            shown = ", ".join(f"{label}: {v if v is not None else 'not recorded'}" for label, v in seen.items())
+            notes.append(f"the candidates were written by different versions of {package} ({shown}): a difference "
+                         f"between them may be the tool's, not the design's")
+    return notes
+
+
 def write_comparison(cands: list[Candidate], out: Path, bench: list[dict] | None = None, *, force: bool = False,
                      folder=None) -> Path:
     """Write the folder ``out`` (compare.html and its figures) as a run folder (``.agrisynth-run``
@@ -118,7 +131,7 @@ def write_comparison_files(cands: list[Candidate], staging: Path, bench: list[di
     """compare.html and its figures, written into ``staging`` (a run folder's staging folder: the writer of run
     folders, ``RunFolder.fill``, moves it into place)."""
     figures, notes = comparison_figures(cands, staging)
-    notes = _different_targets(cands) + notes
+    notes = different_versions(cands) + _different_targets(cands) + notes
     if bench:
         from synthesis.report.bench_plots import plot_error_vs_time
 

@@ -6,10 +6,10 @@ import os
 from pathlib import Path
 
 from synthesis.errors import OutputError
-from synthesis.report.compare import (bench_of_kind, is_bench, load_bench, load_candidates, open_output_folder,
+from synthesis.report.compare import (bench_of_kind, different_versions, is_bench, load_bench, load_candidates, open_output_folder,
                                       write_comparison_files)
 from synthesis.result import is_run_folder
-from synthesis.runs.events import Subscriber
+from synthesis.runs.events import Note, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import CompareRequest, Comparison, Outcome
 
@@ -33,6 +33,8 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
     with RunOutput.around(open_output_folder(request.out, request.force)) as output:
         cands = load_candidates([p for p in request.results if not is_bench(p)])
+        for text in different_versions(cands):
+            emit(Note(text))
         bench = [res for p in request.results if is_bench(p)
                  for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
         output.fill(lambda staging: write_comparison_files(cands, staging, bench))
