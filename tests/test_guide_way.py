@@ -677,3 +677,18 @@ def test_a_start_the_arm_cannot_drive_is_moved_onto_the_key_points_and_towards_t
         else:
             assert np.array_equal(x, x0)
     assert repaired >= 4            # most Latin-hypercube starts of this box are not drivable as drawn
+
+
+def test_the_headline_s_whole_path_pressure_angle_is_told_from_the_rule_s_outside_the_fold():
+    """The largest pressure angle of the whole path often sits at the fold, which the pressure_angle rule leaves out
+    (a passing 82 deg rule printed under "max 89.9 deg" read as a contradiction): the line names both."""
+    from synthesis import kinds
+    from synthesis.kinds.guide_way.check import headline
+
+    result = kinds.checker("guide_way")(load_spec(LIBRARY / "guide_way" / "smooth_redesign.toml"))
+    whole = result.extra["pressure_angle_max"]["value"]
+    rule = next(r for r in result.rules if r["name"] == "pressure_angle")
+    assert whole > rule["value"] + 1.0          # the whole path's largest is inside the fold window
+    line = headline(result)[0]
+    assert line.startswith(f"pressure angle max over the whole path {whole:.3g} deg (")
+    assert f"outside the fold window, the pressure_angle rule's: {rule['value']:.3g} deg)" in line

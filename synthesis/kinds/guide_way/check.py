@@ -304,7 +304,15 @@ def headline(result: Result) -> list[str]:
     pressure, radius = facts.get("pressure_angle_max") or {}, facts.get("smallest_radius") or {}
     if not pressure and not radius:
         return []
-    lines = [f"pressure angle max {figure_text(pressure.get('value'), 'deg')} ({pressure.get('stretch', '-')}), "
+    # the largest over the whole path: the pressure_angle rule leaves out a window about the fold, where the largest
+    # often is (the arm at its dead point), so the line says where it is and points at the rule's own value
+    where = pressure.get("stretch", "-")
+    if isinstance(pressure.get("theta_deg"), (int, float)):
+        where += f", arm angle {pressure['theta_deg']:.1f} deg"
+    rule = next((r for r in result.rules if r.get("name") == "pressure_angle"), None)
+    if rule is not None and "fold" in str(rule.get("where", "")):
+        where += f"; outside the fold window, the pressure_angle rule's: {figure_text(rule.get('value'), 'deg')}"
+    lines = [f"pressure angle max over the whole path {figure_text(pressure.get('value'), 'deg')} ({where}), "
              f"smallest radius {figure_text(radius.get('value'), 'mm')} ({radius.get('stretch', '-')})"]
     joints = facts.get("joints") or {}
     jumps = [f"{name} {figure_text(j.get('position_jump_mm'), 'mm')} / {figure_text(j.get('tangent_jump_deg'), 'deg')}"
