@@ -676,3 +676,18 @@ def test_the_drive_torque_follows_the_sliders():
     moved = session.evaluate({"l7": session.given()["l7"] * 1.1}, "fine")["drawing"]["charts"]
     peak = lambda chart: max(abs(v) for v in chart["series"][0]["y"])  # noqa: E731
     assert abs(peak(moved[0]) - peak(given[0])) > 0.01 * peak(given[0])
+
+
+def test_an_evaluation_error_is_said_of_the_page_s_values_not_of_the_spec_file():
+    """A guide-way control point moved where the arm cannot reach: the reason begins "at the page's values", not
+    with the (untouched) spec file's path."""
+    from synthesis.studio.session import Session
+
+    session = Session.open(STUDIO_SPECS["guide_way"])
+    values = {v.name: v.value for v in session.free}
+    p6 = next(v for v in session.free if v.name == "P6_x")
+    values["P6_x"] = p6.bounds[1]
+    out = session.evaluate(values, "fine")
+    assert out["error"].startswith("at the page's values: [spline] control: segment ED: the arm cannot reach"), \
+        out["error"]
+    assert str(STUDIO_SPECS["guide_way"]) not in out["error"]

@@ -209,7 +209,13 @@ class Session:
             loaded = self.loaded_with(values)
             result = grids.evaluator(self.kind, grid)(loaded)
         except AgrisynthError as exc:        # e.g. a linkage that does not assemble at these values
-            return {"grid": grid, "values": values, "error": str(exc), "rules": [], "drawing": None,
+            # the values at fault are the page's, not the spec file's the message may begin with
+            text = str(exc)
+            for prefix in (f"{self.loaded.path}: ", f"{self.loaded.path.name}: "):
+                if text.startswith(prefix):
+                    text = "at the page's values: " + text[len(prefix):]
+                    break
+            return {"grid": grid, "values": values, "error": text, "rules": [], "drawing": None,
                     "ms": 1e3 * (time.perf_counter() - began)}
         rules = [{k: r.get(k) for k in ("name", "value", "limit", "unit", "margin", "satisfied")}
                  | {"note": r.get("note") or r.get("where") or ""} for r in result.rules]

@@ -313,9 +313,14 @@ def _unreachable(spec, stretch_name: str, arm: Arm) -> None:
         i = int(bad[0])
         a = spec.arm
         x, y = float(arm.m[0][i]), float(arm.m[1][i])
+        reach, lo, hi = math.hypot(x, y), a.radius - a.claw, a.radius + a.claw
+        # as many digits as tell the reach from the bound it passes (20.3 "outside" 20.32 read as a contradiction)
+        digits = 4
+        while digits < 12 and float(f"{reach:.{digits}g}") in (float(f"{lo:.{digits}g}"), float(f"{hi:.{digits}g}")):
+            digits += 1
         raise SpecError(f"segment {stretch_name}: the arm cannot reach the claw tip at ({x:.4g}, {y:.4g}) mm: "
-                        f"|OM| = {math.hypot(x, y):.4g} mm lies outside [R - d, R + d] = "
-                        f"[{a.radius - a.claw:.4g}, {a.radius + a.claw:.4g}] mm")
+                        f"|OM| = {reach:.{digits}g} mm lies outside [R - d, R + d] = "
+                        f"[{lo:.{digits}g}, {hi:.{digits}g}] mm")
 
 
 def _fold_of(point: str, m: tuple[float, float], tangents_deg: list[float], R: float, d: float) -> dict:
