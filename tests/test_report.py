@@ -390,3 +390,17 @@ def test_a_result_its_kind_cannot_read_has_no_headline_and_keeps_its_page(runs):
     odd = dataclasses.replace(result, extra={**result.extra, "precision_points": ["not", "a", "table"]})
     (head,) = headlines(candidates([odd]))
     assert head.lines == [] and head.tables == []
+
+
+def test_a_bounds_cell_names_each_text_once_with_the_candidates_that_have_it():
+    """Where the specs disagree, the candidates that share bounds share one line (the cell listed every candidate's
+    name with the same bounds)."""
+    from types import SimpleNamespace
+
+    from synthesis.report.page import _bounds_cell
+
+    cands = [SimpleNamespace(label=label) for label in ("published", "redesign", "redesign_4", "wider")]
+    row = SimpleNamespace(per_candidate=[(False, None), (True, [28.0, 42.0]), (True, [28.0, 42.0]),
+                                         (True, [20.0, 50.0])], free=None, bounds=None)
+    assert _bounds_cell(row, cands) == ("<td class='note'>published: fixed<br>redesign, redesign_4: [28, 42]<br>"
+                                        "wider: [20, 50]</td>")

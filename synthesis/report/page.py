@@ -87,9 +87,11 @@ def _bounds_text(free, bounds) -> str:
 
 
 def _bounds_cell(row, cands: list[Candidate]) -> str:
-    if row.per_candidate is not None:        # the specs disagree: each candidate's own, by its heading
-        lines = [f"{html.escape(c.label)}: {_bounds_text(free, bounds)}"
-                 for c, (free, bounds) in zip(cands, row.per_candidate)]
+    if row.per_candidate is not None:        # the specs disagree: each text once, with the headings that have it
+        said: dict[str, list[str]] = {}
+        for c, (free, bounds) in zip(cands, row.per_candidate):
+            said.setdefault(_bounds_text(free, bounds), []).append(c.label)
+        lines = [f"{html.escape(', '.join(labels))}: {text}" for text, labels in said.items()]
         return f"<td class='note'>{'<br>'.join(lines)}</td>"
     text = _bounds_text(row.free, row.bounds)
     return f"<td class='{'limit' if row.free and row.bounds else 'note'}'>{text}</td>"
