@@ -325,6 +325,9 @@ def test_the_cam_page_turns_the_cam_against_its_roller(tmp_path, sync_playwright
         assert page.locator("#panel-main g.poses polyline[data-outline='roller']").count() == 1
         before = page.get_attribute(cam, "points")
         assert len(before.split()) == 721                       # the closed 720-point profile
+        # a chart of one curve is titled by it (the "follower" table holds only the pressure angle here)
+        titles = page.eval_on_selector_all(".panel.chart h3", "hs => hs.map(h => h.textContent)")
+        assert "follower: pressure_angle_deg (deg) over crank_deg" in titles, titles
         page.check("#animate")
         page.wait_for_function(f"() => document.querySelector(\"{cam}\").getAttribute('points') !== '{before}'",
                                timeout=10_000)

@@ -613,7 +613,9 @@ function renderCharts(charts, ghosts) {
       resized.observe(panelBox.querySelector("svg"));
     }
     const unit = chart.unit || "deg";       // the facts' angle charts are in deg; the dynamics say their unit
-    panelBox.querySelector("h3").textContent = `${chart.name}: ${unit} over ${chart.x_name}`;
+    // one curve: its own name says what is plotted (a cam's "follower" table holds only its pressure angle here)
+    const what = chart.series.length === 1 ? `${chart.series[0].name} (${unit})` : unit;
+    panelBox.querySelector("h3").textContent = `${chart.name}: ${what} over ${chart.x_name}`;
     const ghost = ghosts && ghosts[i] && ghosts[i].name === chart.name ? ghosts[i] : null;
     const all = [chart, ghost].filter(Boolean);
     const xs = all.flatMap((c) => c.x).filter((v) => v !== null);
