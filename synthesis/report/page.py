@@ -11,7 +11,7 @@ import math
 
 from constraints.base import limit_text
 from synthesis.report.tables import (GIVEN_HEADING, Candidate, Headline, RuleCell, design_rows, headlines, is_single_solve,
-                                     operating_conditions, rule_rows, run_facts, shows_given, shows_given_rules,
+                                     operating_conditions, rule_rows, run_facts, shows_given, shows_given_rules, worst_margin,
                                      solved_heading, worst_margins)
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif")
@@ -164,22 +164,19 @@ def _rule_cell(cell: RuleCell | None, row_limit) -> str:
             f"<span class='note'>margin {_num(cell.margin, 3)}{own_limit}</span></td>")
 
 
+def _worst_cell(w) -> str:
+    if w.rule is None:
+        return "<td>&ndash;</td>"
+    margin = "not evaluated" if w.normalised_margin is None else f"normalised margin {w.normalised_margin:.3g}"
+    tally = f"{w.violated} violated" if w.violated else "all pass"
+    return f"<td class='{'fail' if w.violated else 'pass'}'>{html.escape(w.rule)}: {margin}; {tally}</td>"
+
+
 def rule_table(cands: list[Candidate]) -> str:
     given = shows_given_rules(cands)
-    summary = []
-    for w in worst_margins(cands):
-        if w.rule is None:
-            summary.append("<td>&ndash;</td>")
-        else:
-            margin = "not evaluated" if w.normalised_margin is None else f"normalised margin {w.normalised_margin:.3g}"
-            tally = f"{w.violated} violated" if w.violated else "all pass"
-            summary.append(f"<td class='{'fail' if w.violated else 'pass'}'>{html.escape(w.rule)}: {margin}; {tally}</td>")
-    if given:
-        bad = [r for r in cands[0].given_rules if not r.get("satisfied")]
-        start = (f"<td class='{'fail' if bad else 'pass'}'>{len(bad)} violated</td>" if bad
-                 else "<td class='pass'>all pass</td>")
-    else:
-        start = ""
+    summary = [_worst_cell(w) for w in worst_margins(cands)]
+    # the given design's column says its tightest rule as the candidates' do
+    start = _worst_cell(worst_margin(cands[0].given_rules or [])) if given else ""
     rows = [f"<tr class='summary'><td>worst margin</td><td></td><td></td>{start}{''.join(summary)}</tr>"]
     for row in rule_rows(cands):
         first = _rule_cell(row.given, row.limit) if given and row.given is not None else (

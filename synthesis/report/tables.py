@@ -249,20 +249,22 @@ class WorstMargin:
 
 def worst_margins(cands: list[Candidate]) -> list[WorstMargin]:
     """Per candidate, its tightest (smallest normalised margin) rule: the first line of the rule table."""
-    out = []
-    for c in cands:
-        bad = sum(1 for r in c.result.rules if not r.get("satisfied"))
-        scored = [(r["normalised_margin"], r["name"]) for r in c.result.rules
-                  if r.get("normalised_margin") is not None and math.isfinite(r["normalised_margin"])]
-        unevaluated = [r["name"] for r in c.result.rules if r.get("value") is None]
-        if unevaluated:
-            out.append(WorstMargin(unevaluated[0], None, bad))
-        elif scored:
-            m, name = min(scored)
-            out.append(WorstMargin(name, m, bad))
-        else:
-            out.append(WorstMargin(None, None, bad))
-    return out
+    return [worst_margin(c.result.rules) for c in cands]
+
+
+def worst_margin(rules: list[dict]) -> WorstMargin:
+    """The tightest rule of a rule table (result.json ``rules`` records): a rule not evaluated first, else the one
+    of smallest normalised margin; and how many are violated."""
+    bad = sum(1 for r in rules if not r.get("satisfied"))
+    scored = [(r["normalised_margin"], r["name"]) for r in rules
+              if isinstance(r.get("normalised_margin"), (int, float)) and math.isfinite(r["normalised_margin"])]
+    unevaluated = [r["name"] for r in rules if r.get("value") is None]
+    if unevaluated:
+        return WorstMargin(unevaluated[0], None, bad)
+    if scored:
+        m, name = min(scored)
+        return WorstMargin(name, m, bad)
+    return WorstMargin(None, None, bad)
 
 
 def objective_text(objective: dict | None) -> str | None:
