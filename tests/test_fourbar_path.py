@@ -217,6 +217,12 @@ def _with(tmp_path, edit) -> str:
      "fourbar_path.linkage: r3.bounds: expected a magnitude of at most 1e+06 (mm or deg), got 1e+09"),
     (lambda d: d["linkage"].update(x0=-2e6),
      "fourbar_path.linkage: x0: expected a magnitude of at most 1e+06 (mm or deg), got -2e+06"),
+    # timed targets give every crank angle: a free-timing rule asking otherwise was dropped without a word
+    (lambda d: d.setdefault("rules", {}).update(order=False),
+     "fourbar_path.rules.order = false: only read with free timing; targets.crank_deg gives every target's crank "
+     "angle"),
+    (lambda d: d.setdefault("rules", {}).update(direction="clockwise"),
+     "fourbar_path.rules.direction = \"clockwise\": only read with free timing"),
 ])
 def test_bad_input_names_the_field_and_value(tmp_path, edit, message):
     assert message in _with(tmp_path, edit)

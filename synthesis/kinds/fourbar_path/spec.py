@@ -319,6 +319,21 @@ class FourbarPathSpec(ProblemSpec):
                           "point, of one section); left out: no dynamics, no dynamics rules")
 
     @model_validator(mode="after")
+    def _free_timing_rules_need_free_timing(self) -> "FourbarPathSpec":
+        # with targets.crank_deg every crank angle is given, so the order they are met in and the sense the crank
+        # turns are too: a rule that asks otherwise would be dropped without a word
+        if self.targets.crank_deg is None:
+            return self
+        if not self.rules.order:
+            raise ValueError("rules.order = false: only read with free timing; targets.crank_deg gives every target's "
+                             "crank angle, and so the order they are met in (leave order out, or drop crank_deg)")
+        if self.rules.crank_turns != "either":
+            raise ValueError(f"rules.direction = {json_text(self.rules.crank_turns)}: only read with free timing; "
+                             f"targets.crank_deg gives every target's crank angle, and so the sense the crank turns "
+                             f"in (leave direction out, or drop crank_deg)")
+        return self
+
+    @model_validator(mode="after")
     def _dynamics_fits_the_kind(self) -> "FourbarPathSpec":
         table = self.dynamics
         if table is None:
