@@ -635,10 +635,11 @@ def open_run_folder(out_root: Path, name: str, *, force: bool = False, spec: Pat
         # finds this one's staging folder locked
         with _locked(out_root):
             folder.permitted()
-            live = None if force or replaceable is not None else _live_writer(out_root, name)
+            # --force and --resume too: the run writing there would do all its work and then find its folder taken
+            live = _live_writer(out_root, name)
             if live is not None:
                 raise OutputError(f"another agrisynth run is writing {folder.final} now (its files are in {live}); "
-                                  f"wait for it to finish and give --force to replace it, or --out another folder")
+                                  f"wait for it to finish (then --force replaces it), or --out another folder")
             try:
                 folder.staging = Path(tempfile.mkdtemp(prefix=f".{name}.run-", dir=out_root))
             except OSError as exc:

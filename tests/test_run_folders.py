@@ -150,17 +150,23 @@ def test_a_name_that_is_not_a_slug_is_refused(tmp_path, name):
     assert list(tmp_path.iterdir()) == []
 
 
-def _race(out: str, who: str, n: int, errors) -> None:
+def _race(out: str, who: str, n: int, errors, wrote) -> None:
     for i in range(n):
         try:
             write_folder(Path(out) / "run", artifacts(f"{who}{i}"), force=True)
+            wrote.put(f"{who}{i}")
+        except OutputError as exc:      # the other is writing the folder right now: refused before any work
+            if "another agrisynth run is writing" not in str(exc):
+                errors.put(f"{who}{i}: {exc!r}")
         except Exception as exc:        # noqa: BLE001 -- counted by the test
             errors.put(f"{who}{i}: {exc!r}")
 
 
 def test_two_processes_racing_into_one_folder_leave_one_whole_run(tmp_path):
-    errors = multiprocessing.Queue()
-    procs = [multiprocessing.Process(target=_race, args=(str(tmp_path), who, 150, errors)) for who in "ab"]
+    """150 --force writes each, at once: each is either refused before any work (the other is writing) or leaves
+    the folder whole; the folder ends as one process's last write, with no staging or .old folder left."""
+    errors, wrote = multiprocessing.Queue(), multiprocessing.Queue()
+    procs = [multiprocessing.Process(target=_race, args=(str(tmp_path), who, 150, errors, wrote)) for who in "ab"]
     for p in procs:
         p.start()
     for p in procs:
@@ -170,10 +176,14 @@ def test_two_processes_racing_into_one_folder_leave_one_whole_run(tmp_path):
     while not errors.empty():
         failed.append(errors.get())
     assert failed == []
+    written = []
+    while not wrote.empty():
+        written.append(wrote.get())
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]        # no staging, no .old folders
     run = tmp_path / "run"
     token = json.loads((run / "result.json").read_text())["token"]
-    assert (run / "report.html").read_text() == token and token in ("a149", "b149")
+    last = {who: max((int(t[1:]) for t in written if t[0] == who), default=None) for who in "ab"}
+    assert (run / "report.html").read_text() == token and token in (f"{who}{i}" for who, i in last.items())
     assert sorted(p.name for p in run.iterdir()) == sorted([RUN_MARKER, "result.json", "report.html"])
 
 
@@ -333,15 +343,17 @@ def test_force_keeps_a_file_changed_since_agrisynth_wrote_it(tmp_path):
 
 def test_a_second_run_into_a_folder_being_written_is_refused_before_any_work(tmp_path):
     """Two runs started into one new folder: the second is refused at once (exit 2, naming the first's staging
-    folder), not after its work; --force lets it run (the last to finish wins, as above); a killed run's staging
-    folder holds no lock, so it does not stop the next run (a --resume reads it)."""
+    folder), not after its work, with --force too (the first would do all its work and then find its folder taken);
+    a killed run's staging folder holds no lock, so it does not stop the next run (a --resume reads it)."""
     first = open_run_folder(tmp_path, "run")
     with pytest.raises(OutputError, match=r"another agrisynth run is writing .*run now \(its files are in "
                                           rf".*{re.escape(first.staging.name)}\)"):
         open_run_folder(tmp_path, "run")
     assert sorted(p.name for p in tmp_path.iterdir()) == [first.staging.name]      # nothing made by the refusal
-    forced = open_run_folder(tmp_path, "run", force=True)
-    forced.discard()
+    with pytest.raises(OutputError, match="another agrisynth run is writing"):
+        open_run_folder(tmp_path, "run", force=True)
+    with pytest.raises(OutputError, match="another agrisynth run is writing"):
+        open_run_folder(tmp_path, "run", replaceable=tmp_path / "run")
     other = open_run_folder(tmp_path, "other")          # another name is another folder
     other.discard()
     first.release()                                     # as a SIGKILL leaves it: the folder, no lock

@@ -289,3 +289,57 @@ def test_auto_begins_no_batch_projected_past_its_time_limit(tmp_path, toy):
     fixed, _, _ = run_solve(toy, loaded, starts=16, workers=1)
     assert result.solver["auto"]["stopped_by"] == "time_limit" and result.solver["auto"]["batches"] == [16]
     assert result.solver["auto"]["time_limit_s"] == 1e-3 and result.objective["value"] == fixed.objective["value"]
+
+
+def test_an_interrupt_of_a_resumed_auto_run_keeps_the_batch_the_interrupted_run_had_finished(tmp_path, toy):
+    """Resumed in batch 32 with 3 of its starts and batch 16 finished: the resumed run logs batch 16 again (its
+    mark, its starts) and a signal 2 starts later keeps the better of the batch in progress and batch 16 -- as the
+    interrupted run would -- where it kept those 5 starts of batch 32 alone (batch 16 lost from the folder)."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    kept: list = []
+    run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append)
+    first = {out.start: out for out in kept[:16]}
+    second = {out.start: out for out in kept[16:16 + 3]}
+    fixed, _, _ = solve_spec(loaded, starts=16, workers=1)
+    logged: list = []
+    told: list = []
+
+    def on_start(report, best):
+        told.append(report.outcome.start)
+        if len(told) == 3 + 2:
+            interrupt.simulate(signal.SIGINT)
+    try:
+        with pytest.raises(Interrupted) as caught:
+            run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), finished=second, resumed_batch=32,
+                      previous=(16, first), on_start=on_start, record=lambda out: logged.append(out.start),
+                      on_batch=lambda total, nested: logged.append(f"batch {total}"))
+    finally:
+        interrupt.uninstall()
+    result, reports, _ = caught.value.partial
+    assert logged[:18] == ["batch 16", *range(16), "batch 32"]     # the new starts.jsonl holds batch 16 again
+    assert len(reports) == 16 and result.solver["auto"]["batches"] == [16, 32]
+    assert result.design == fixed.design and result.objective["value"] == fixed.objective["value"]
+
+
+def test_the_batch_before_the_one_an_auto_run_was_solving_is_read_back(tmp_path, toy):
+    loaded = _toy(tmp_path)
+    kept: list = []
+    run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append)
+    settings, print_ = startlog.fingerprint("toy", "toy", "0" * 64, 16, 0, {"min_converged": 20})
+    log = startlog.StartLog(tmp_path / startlog.FILENAME, settings, print_)
+    log.batch(16)
+    for out in kept[:16]:
+        log.append(out)
+    log.batch(32)
+    for out in kept[16:19]:
+        log.append(out)
+    log.close()
+    total, previous = startlog.previous_batch(tmp_path, print_)
+    assert total == 16 and sorted(previous) == list(range(16))
+    assert all(previous[i].objective == kept[i].objective for i in range(16))
+    assert sorted(startlog.read(tmp_path, print_)) == sorted(out.start for out in kept[16:19])

@@ -218,13 +218,16 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
              on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
              record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
              on_batch: Callable[[int, bool], None] = lambda total, nested: None,
-             resumed_batch: int | None = None, resumed_nested: bool | None = None) -> Run:
+             resumed_batch: int | None = None, resumed_nested: bool | None = None,
+             previous: tuple[int, dict[int, Any]] | None = None) -> Run:
     """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total, nested)`` is told as a batch
     begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``:
     an interrupted auto run's batch and its finished starts (the earlier batches ended without stopping, so the run
     goes on from that one); ``resumed_nested``: whether that batch was marked nested (a run interrupted in the other
-    order is refused: its starts are not this order's).
+    order is refused: its starts are not this order's); ``previous``: the interrupted run's last finished batch
+    before that one (total, its starts: :func:`~synthesis.core.startlog.previous_batch`), counted again without
+    solving and logged, so an interrupt of the resumed run keeps it as the interrupted run did.
 
     Interrupted (SIGINT/SIGTERM) anywhere, inside a batch or between two: raises :class:`Interrupted` whose
     ``partial`` is the better of the batch in progress (its finished starts; a nested one's include the earlier
@@ -251,6 +254,10 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         return {"stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
                 **({"order": "kind"} if nested else {})}
     try:
+        if previous is not None and not nested and first > 0 and previous[0] == totals[first - 1]:
+            on_batch(previous[0], nested)
+            last = run_multistart(kind, setting, starts=previous[0], workers=workers, scheduler=scheduler,
+                                  record=record, finished=previous[1])
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
             began = time.perf_counter()
@@ -605,12 +612,13 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
               finished: dict[int, Any] | None = None, auto: AutoStarts | None = None,
               on_batch: Callable[[int, bool], None] = lambda total, nested: None,
               resumed_batch: int | None = None,
-              resumed_nested: bool | None = None) -> tuple[Result, list[StartReport], str]:
+              resumed_nested: bool | None = None,
+              previous: tuple[int, dict[int, Any]] | None = None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 
     ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
     to run the starts on instead of ``workers`` local processes; ``record``/``finished``: see
-    :func:`run_multistart`; ``auto`` (then ``starts`` is not used), ``on_batch``, ``resumed_batch``/``_nested``: see
+    :func:`run_multistart`; ``auto`` (then ``starts`` is not used), ``on_batch``, ``resumed_batch``/``_nested``, ``previous``: see
     :func:`run_auto`.  Interrupted (SIGINT/SIGTERM): raises :class:`Interrupted` whose ``partial`` is
     (result with status ``interrupted`` -- the best of the finished starts --, reports, log), or None when
     no start had finished."""
@@ -626,7 +634,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
         else:
             run = run_auto(kind, setting, auto, workers=workers, scheduler=scheduler, on_start=on_start,
                            record=record, finished=finished, on_batch=on_batch, resumed_batch=resumed_batch,
-                           resumed_nested=resumed_nested)
+                           resumed_nested=resumed_nested, previous=previous)
     except Interrupted as exc:
         if exc.partial is None:
             raise

@@ -184,10 +184,23 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
     """The finished starts recorded in ``folder/starts.jsonl`` of a run with fingerprint ``print_``.
 
     OutputError (exit 2) when there is no such file or it belongs to a run with other settings."""
+    return _read(folder, print_)[0]
+
+
+def previous_batch(folder: Path, print_: str) -> tuple[int, dict[int, StartOutcome]] | None:
+    """A ``--starts auto`` run's last *finished* batch before the one it was solving: (its total, its starts), when
+    the batches are not nested (a nested run's log keeps every batch's starts in the last one's); None otherwise.
+    A resumed run keeps it as the interrupted run did: the result an interrupt leaves is the better of the two."""
+    return _read(folder, print_)[1]
+
+
+def _read(folder: Path, print_: str) -> tuple[dict[int, StartOutcome], tuple[int, dict[int, StartOutcome]] | None]:
     path = Path(folder) / FILENAME
     if not os.path.lexists(path):
         raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)")
     finished: dict[int, StartOutcome] = {}
+    total: int | None = None                  # the batch being read (an auto run's), and the one before it
+    previous: tuple[int, dict[int, StartOutcome]] | None = None
     with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
         header = None
         for text in _lines(fh):
@@ -212,7 +225,10 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
                 raise OutputError(f"--resume {folder}: {FILENAME} has no header line; not written by agrisynth")
             if BATCH in line:             # an auto run's next batch: its starts are another run's ...
                 if not line.get("nested"):
+                    # a batch is begun only when the one before has finished without stopping the run
+                    previous = (total, dict(finished)) if total is not None and finished else None
                     finished.clear()
+                total = line.get(BATCH) if isinstance(line.get(BATCH), int) else None
                 continue                  # ... unless nested: start i is the same in every batch
             if "outcome" in line:
                 try:
@@ -222,4 +238,4 @@ def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
                 finished[out.start] = out
     if header is None:
         raise OutputError(f"--resume {folder}: {FILENAME} is empty")
-    return finished
+    return finished, previous

@@ -42,6 +42,7 @@ class _Plan:
     auto: core.AutoStarts | None = None     # --starts auto (``starts`` is then its most starts)
     resumed_batch: int | None = None        # --starts auto resumed: the batch the interrupted run was solving
     resumed_nested: bool | None = None      # ... and whether it was in the kind's own order
+    previous: tuple[int, dict] | None = None  # ... and the last batch it finished before that one (not nested)
     batch: int | None = None                # --starts auto: the batch being solved (an interrupted run's total)
 
 
@@ -112,6 +113,7 @@ def _plan(request: SolveRequest, loaded, kind) -> _Plan:
         plan.finished = startlog.read(resume, fingerprint)
         mark = startlog.last_batch(resume) if auto is not None else None
         plan.resumed_batch, plan.resumed_nested = mark if mark is not None else (None, None)
+        plan.previous = startlog.previous_batch(resume, fingerprint) if auto is not None else None
         if mark is not None:      # refused before any folder is made
             core.refuse_other_order(kind, mark[1], core.takes_auto_order(kind, loaded.model, the_seed))
         where = resume.resolve()
@@ -187,7 +189,8 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
         nonlocal total
         plan.batch = starts
         log_file.batch(starts, nested)
-        if starts != batches[first]:
+        # a later batch than the one the run began with (a resumed run first logs again the batch before it)
+        if starts in batches and batches.index(starts) > first:
             total = starts if nested else total + starts
             emit(SolveStarted(loaded.name, total))
 
@@ -199,7 +202,7 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
             solved = core.run_solve(kind, loaded, plan.asked, plan.seed, workers, on_start, request.scheduler,
                                     record=log_file.append, finished=plan.finished, auto=plan.auto,
                                     on_batch=on_batch, resumed_batch=plan.resumed_batch,
-                                    resumed_nested=plan.resumed_nested)
+                                    resumed_nested=plan.resumed_nested, previous=plan.previous)
     except (SpecError, AssemblyError) as exc:
         # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is said as check says it:
         # the file first
