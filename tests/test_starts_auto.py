@@ -343,3 +343,18 @@ def test_the_batch_before_the_one_an_auto_run_was_solving_is_read_back(tmp_path,
     assert total == 16 and sorted(previous) == list(range(16))
     assert all(previous[i].objective == kept[i].objective for i in range(16))
     assert sorted(startlog.read(tmp_path, print_)) == sorted(out.start for out in kept[16:19])
+
+
+def test_starts_auto_in_a_spec_is_read_in_any_case_as_the_option_is_and_another_word_is_named(tmp_path):
+    from synthesis.errors import SpecError
+
+    text = (LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text()
+    assert "\nstarts = 16" in text
+    for word, auto in (('"AUTO"', True), ('" Auto"', True)):
+        path = tmp_path / "spec.toml"
+        path.write_text(text.replace("\nstarts = 16", f"\nstarts = {word}"))
+        assert load_spec(path).model.solver.starts_auto is auto
+    path.write_text(text.replace("\nstarts = 16", '\nstarts = "all"'))
+    with pytest.raises(SpecError, match=r'planting_fourbar\.solver: starts: expected a whole number 1\.\.10000 or '
+                                        r'"auto", got "all"'):
+        load_spec(path)

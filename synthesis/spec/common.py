@@ -194,7 +194,11 @@ class MultistartSettings(StrictModel):
     @model_validator(mode="wrap")
     @classmethod
     def _auto_starts(cls, data, handler):
-        auto = isinstance(data, dict) and data.get("starts") == "auto"
+        given = data.get("starts") if isinstance(data, dict) else None
+        # spelled as --starts takes it (any case); another word is not a number of starts
+        auto = isinstance(given, str) and given.strip().lower() == "auto"
+        if isinstance(given, str) and not auto:
+            raise ValueError(f'starts: expected a whole number 1..10000 or "auto", got {json.dumps(given[:20])}')
         model = handler({k: v for k, v in data.items() if k != "starts"} if auto else data)
         if auto:
             model._starts_auto = True
