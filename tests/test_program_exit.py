@@ -129,3 +129,17 @@ def test_a_profiler_running_the_program_gets_its_output(tmp_path):
     done = subprocess.run([sys.executable, "-m", "cProfile", "-o", "prof.out", "-m", "synthesis.program", "problems"],
                           capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert done.returncode == 0 and (tmp_path / "prof.out").stat().st_size > 1000, done.stderr
+
+
+def test_an_auto_run_kept_at_its_last_finished_batch_says_the_batch_it_had_begun(capsys):
+    """Stopped 3 starts into batch 32, which did no better than batch 16: "after 16 of 16 starts" alone hid that a
+    batch had begun and that its finished starts are kept for --resume."""
+    from pathlib import Path
+
+    from synthesis.cli.views import stopped_message
+    from synthesis.runs.requests import Stopped
+
+    stopped_message(Stopped("SIGINT", 16, 16, Path("results/run"), Path("spec.toml"), begun=(32, 3)))
+    err = " ".join(capsys.readouterr().err.split())
+    assert ("interrupted by SIGINT after 16 of 16 starts (the batch of 32 starts it had begun, 3 of them finished, "
+            "did no better: its starts are kept too): kept them") in err

@@ -190,8 +190,14 @@ def stopped_message(stopped: Stopped) -> None:
     if stopped.kept is None:
         err_console.print(f"interrupted by {stopped.signal_name} before any start finished; nothing written")
         return
-    err_console.print(f"interrupted by {stopped.signal_name} after {stopped.finished} of {stopped.total} starts: kept "
-                      f"them and their best (status interrupted) in {escape(str(stopped.kept))}/; finish the run with\n"
+    begun = ""
+    if stopped.begun is not None:       # --starts auto: the batch in progress did no better than the one kept
+        total, done = stopped.begun
+        begun = (f" (the batch of {total} starts it had begun, {done} of them finished, did no better: its starts "
+                 f"are kept too)")
+    err_console.print(f"interrupted by {stopped.signal_name} after {stopped.finished} of {stopped.total} starts{begun}: "
+                      f"kept them and their best (status interrupted) in {escape(str(stopped.kept))}/; finish the run "
+                      f"with\n"
                       # quoted for the shell: a path with a space pasted as printed was two arguments
                       f"  agrisynth solve {escape(shlex.quote(str(stopped.spec)))} --resume "
                       f"{escape(shlex.quote(str(stopped.kept)))}",

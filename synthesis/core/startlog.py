@@ -113,6 +113,8 @@ class StartLog:
 
     def __init__(self, path: Path, settings: dict, print_: str):
         self.path = path
+        #: the starts appended since the last batch mark (an auto run's batch in progress)
+        self.since_batch = 0
         self.fh = open(path, "a", encoding="utf-8")
         self._line({"agrisynth_starts": FORMAT, "fingerprint": print_, "settings": settings})
 
@@ -127,10 +129,12 @@ class StartLog:
         except (TypeError, ValueError) as exc:        # kept as a note; a resumed run solves this start again
             data = {"unrecorded": getattr(outcome, "start", None), "why": str(exc)}
         self._line(data)
+        self.since_batch += 1
 
     def batch(self, total: int, nested: bool = False) -> None:
         """A ``--starts auto`` run begins its batch of ``total`` starts (``nested``: in the kind's own order)."""
         self._line({BATCH: int(total), "nested": True} if nested else {BATCH: int(total)})
+        self.since_batch = 0
 
     def close(self) -> None:
         self.fh.close()

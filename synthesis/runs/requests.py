@@ -131,6 +131,9 @@ class Stopped:
     total: int
     kept: Path | None
     spec: Path
+    #: --starts auto stopped in a batch whose starts so far did no better than the batch before, which is the one
+    #: kept: (that batch's total, its finished starts, kept in starts.jsonl for --resume); None otherwise
+    begun: tuple[int, int] | None = None
 
 
 @dataclass(frozen=True)

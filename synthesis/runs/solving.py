@@ -141,7 +141,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
         if isinstance(solved, core.Interrupted):
-            return _keep_interrupted(solved, output, kind, loaded, plan, request.resume)
+            return _keep_interrupted(solved, output, kind, loaded, plan, request.resume, log_file.since_batch)
         # every start is done: a signal from here on is noted and the finished result written all the same
         with output.finishing(emit):
             emit(StartsDone())
@@ -223,7 +223,7 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
 
 
 def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, plan: _Plan,
-                      resumed: Path | None) -> Outcome:
+                      resumed: Path | None, in_batch: int = 0) -> Outcome:
     """The one place an interrupted run is kept: its best-so-far result (status interrupted), its report and
     starts.jsonl written, no figures (the run ends within seconds of the signal; --resume draws them), the rule
     table of the given design beside it as in a finished solve's report; nothing is written (and nothing
@@ -242,4 +242,6 @@ def _keep_interrupted(exc: core.Interrupted, output: RunOutput, kind, loaded, pl
                                  figures=False)
     # of the run kept: an auto run interrupted early in a batch may keep the whole batch before it
     of = (result.solver or {}).get("starts", n)
-    return Outcome(exc.exit_code, result, folder, stopped=Stopped(name, len(reports), of, folder, loaded.path))
+    begun = (n, in_batch) if plan.auto is not None and plan.batch is not None and of != plan.batch else None
+    return Outcome(exc.exit_code, result, folder,
+                   stopped=Stopped(name, len(reports), of, folder, loaded.path, begun))
