@@ -68,9 +68,15 @@ def test_the_command_lines_widths_are_over_the_specs(tmp_path, options, widths):
     ("arm_len=0.2", "--tol: unknown design variable arm_len (known: arm_length, base_angle)"),
     ("arm_length=0", "--tol arm_length=0: the half-width must be a finite number > 0"),
     ("base_angle=inf", "--tol base_angle=inf: the half-width must be a finite number > 0"),
+    # beyond what --angle and --length take for a variable of that unit (--angle 91 was refused, --tol 100 not)
+    ("base_angle=100", "--tol base_angle=100: a half-width in deg is at most 90 (as --angle takes it)"),
+    ("arm_length=1001", "--tol arm_length=1001: a half-width in mm is at most 1000 (as --length takes it)"),
+    (("--length", "0", "--angle", "0"), "tolerance: every half-width given is 0 (--length 0, --angle 0): give one "
+                                        "above 0, or --samples 0 for the sensitivities alone"),
 ])
 def test_tol_refuses_an_unknown_variable_or_a_non_positive_value(tmp_path, option, said):
-    run = agrisynth("tolerance", str(STEERING), "--tol", option, "--out", str(tmp_path), cwd=tmp_path)
+    options = ("--tol", option) if isinstance(option, str) else option
+    run = agrisynth("tolerance", str(STEERING), *options, "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip() == f"error: {said}"
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
