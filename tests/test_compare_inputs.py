@@ -262,3 +262,17 @@ def test_candidates_of_different_agrisynth_versions_are_said_on_the_terminal_and
     assert "different versions of agrisynth" in (tmp_path / "cmp" / "compare.html").read_text()
     proc = agrisynth("compare", str(path), str(same), "--out", str(tmp_path / "cmp2"), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0 and "different versions" not in proc.stdout + proc.stderr
+
+
+def test_compare_of_bench_folders_alone_says_they_are_benches(tmp_path):
+    """Two bench folders and no run: "needs at least one RESULT" read as if the paths given were not seen."""
+    for name in ("b1", "b2"):
+        (tmp_path / name / "bench").mkdir(parents=True)
+        (tmp_path / name / "bench" / "bench.json").write_text("{}")
+    proc = agrisynth("compare", str(tmp_path / "b1"), str(tmp_path / "b2"), "--out", str(tmp_path / "cmp"),
+                     cwd=tmp_path, timeout=120)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    said = " ".join(proc.stderr.split())
+    assert "compare needs at least one RESULT (a run folder or its result.json)" in said
+    assert f"{tmp_path / 'b1'}, {tmp_path / 'b2'} are benches, which compare shows beside a run of their kind" in said
+    assert not (tmp_path / "cmp").exists()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from synthesis.errors import OutputError
+from synthesis.errors import OutputError, ResultError
 from synthesis.report.compare import (bench_of_kind, different_versions, is_bench, load_bench, load_candidates, open_output_folder,
                                       write_comparison_files)
 from synthesis.result import is_run_folder
@@ -32,7 +32,13 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     refuse_overlap(request.results, request.out)
     # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
     with RunOutput.around(open_output_folder(request.out, request.force)) as output:
-        cands = load_candidates([p for p in request.results if not is_bench(p)])
+        results = [p for p in request.results if not is_bench(p)]
+        if not results:       # only bench folders: a bench is shown beside a run of its kind, never alone
+            benches = ", ".join(str(p) for p in request.results)
+            raise ResultError(f"compare needs at least one RESULT (a run folder or its result.json): {benches} "
+                              f"{'is a bench' if len(request.results) == 1 else 'are benches'}, which compare shows "
+                              f"beside a run of their kind")
+        cands = load_candidates(results)
         for text in different_versions(cands):
             emit(Note(text))
         bench = [res for p in request.results if is_bench(p)
