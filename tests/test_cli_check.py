@@ -179,3 +179,13 @@ def test_help_teaches_every_command_and_every_kind_that_solves(tmp_path):
     compare_help = run("compare", "--help", cwd=tmp_path).stdout
     for phrase in ("first RESULT is the baseline", "offline", "bench", "Example"):
         assert phrase in compare_help
+
+
+@pytest.mark.parametrize("command", [("check", str(PLANTING / "taiwan_example1.toml")),
+                                     ("solve", str(PLANTING / "taiwan_example1.toml")),
+                                     ("compare", str(PLANTING / "taiwan_example1.toml"))])
+def test_an_empty_out_is_refused_not_read_as_the_working_folder(tmp_path, command):
+    proc = agrisynth(*command, "--out", "", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "Invalid value for '--out': an empty path" in proc.stderr and "Traceback" not in proc.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -6,6 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+
+from synthesis.cli.options import NamedPath
 from rich.markup import escape
 from rich.table import Table
 
@@ -23,7 +25,7 @@ from synthesis.spec import reference as specref
 @click.option("--copy", "name", metavar="NAME", default=None,
               help="copy the library spec NAME (its file as listed, e.g. planting_arm/taiwan_example1.toml, or its "
                    "file name alone) into the working folder to edit it, with the spec files it names")
-@click.option("--out", "target", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "target", type=NamedPath(path_type=Path), default=None,
               help="with --copy: the file (or folder) to write [default: the spec's file name, here]")
 @click.option("--force", is_flag=True, help="with --copy: replace a file of that name (without it an existing "
                                             "file is kept and the command exits 2)")
@@ -99,7 +101,7 @@ def _reference_piped(kind: str, summary: str, entries, width: int) -> None:
 @click.argument("kind")
 @click.option("--template", is_flag=True, help="write a commented starting spec of KIND (the library example's "
                                                "values, every field described) instead of the reference")
-@click.option("--out", "target", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--out", "target", type=NamedPath(dir_okay=False, path_type=Path), default=None,
               help="with --template: write it to this new file (default: print it)")
 def spec_command(kind: str, template: bool, target: Path | None) -> None:
     """The spec reference of KIND: every field with its TOML path, type, unit, default (or

@@ -73,6 +73,15 @@ class HalfWidth(click.FloatRange):
 
 
 #: the spec's [tolerance] limits (spec.common.ToleranceSpec): the options take what a spec may say
+class NamedPath(click.Path):
+    """A path the user names (--out): an empty one is refused, not read as the working folder."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail("an empty path: give a folder or file name (\".\" for the working folder)", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 LENGTH_HALF_WIDTH = HalfWidth(min=0, max=1e3)
 ANGLE_HALF_WIDTH = HalfWidth(min=0, max=90)
 

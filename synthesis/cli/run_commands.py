@@ -9,7 +9,7 @@ import click
 
 from synthesis import runs
 from synthesis.cli import ends_process
-from synthesis.cli.options import (FORCE_HELP, MAX_STARTS, MAX_WORKERS, Seconds, StartsCount, WholeNumber,
+from synthesis.cli.options import (FORCE_HELP, NamedPath, MAX_STARTS, MAX_WORKERS, Seconds, StartsCount, WholeNumber,
                                    objectives_help, scheduler_address)
 from synthesis.cli.views import Terminal, stopped_message
 from synthesis.runs.requests import CheckRequest, Outcome, SolveRequest
@@ -27,7 +27,7 @@ def finish(outcome: Outcome) -> None:
 
 @click.command("check")
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"),
+@click.option("--out", "out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results"),
               show_default=True, help="output folder; the run writes OUT/<spec name>-check/")
 @click.option("--force", is_flag=True, help=FORCE_HELP.replace("OUT/<name>/", "OUT/<name>-check/"))
 def check_command(spec: Path, out: Path, force: bool) -> None:
@@ -56,7 +56,7 @@ class SolveCommand(click.Command):
 
 @click.command("solve", cls=SolveCommand)
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=None,
               help="output folder; the run writes OUT/<spec name>/  [default: results]")
 @click.option("--force", is_flag=True, help=FORCE_HELP)
 @click.option("--resume", "resume", type=click.Path(file_okay=False, path_type=Path), default=None, metavar="RUN_DIR",

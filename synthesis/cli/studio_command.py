@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 from rich.markup import escape
 
-from synthesis.cli.options import WholeNumber
+from synthesis.cli.options import NamedPath, WholeNumber
 from synthesis.cli.views import Terminal, console
 from synthesis.errors import AgrisynthError
 from synthesis.runs.specs import spec_file
@@ -17,7 +17,7 @@ from synthesis.studio import missing_extra_text
 
 @click.command("studio")
 @click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/studio"),
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results/studio"),
               show_default=True, help="the one folder the page writes into (saved specs, solve runs)")
 @click.option("--port", type=WholeNumber(min=0, max=65535), default=0, show_default=True,
               help="port on 127.0.0.1 (0: any free one)")

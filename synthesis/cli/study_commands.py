@@ -10,7 +10,7 @@ import click
 from rich.markup import escape
 
 from synthesis import runs
-from synthesis.cli.options import ANGLE_HALF_WIDTH, FORCE_HELP, LENGTH_HALF_WIDTH, WholeNumber
+from synthesis.cli.options import ANGLE_HALF_WIDTH, FORCE_HELP, LENGTH_HALF_WIDTH, NamedPath, WholeNumber
 from synthesis.cli.terminal import print_table
 from synthesis.cli.views import Terminal, bench_table, console
 from synthesis.errors import SpecError
@@ -40,7 +40,7 @@ def per_variable_tolerances(tols: tuple[str, ...]) -> dict[str, float]:
 
 @click.command("tolerance")
 @click.argument("target", metavar="RESULT|SPEC", type=click.Path(path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="writes OUT/<name>-tolerance/")
 @click.option("--length", type=LENGTH_HALF_WIDTH, default=None, help="half-width for every length, mm (0 to 1000)")
 @click.option("--angle", type=ANGLE_HALF_WIDTH, default=None, help="half-width for every angle, deg (0 to 90)")
@@ -84,7 +84,7 @@ def tolerance_command(target: Path, out: Path, length: float | None, angle: floa
 
 @click.command("compare")
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/compare"),
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results/compare"),
               show_default=True, help="folder for compare.html and its figures (an agrisynth output folder)")
 @click.option("--force", is_flag=True, help="replace OUT when it holds an earlier agrisynth output (without --force "
                                             "it is kept and the command exits 2; a folder agrisynth did not write "
@@ -125,7 +125,7 @@ def compare_command(results: tuple[Path, ...], out: Path, force: bool) -> None:
 @click.option("--problems", "spec_files", multiple=True, type=click.Path(dir_okay=False, path_type=Path),
               metavar="SPEC", help="a spec file to bench, or a library spec by name (repeatable; instead of its "
                                    "kind's default set)")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
               help="output folder; the bench writes OUT/bench/ (bench.json, bench.md, plots)")
 @click.option("--repeats", type=WholeNumber(min=1), default=None,
               help="runs of each IPOPT method per problem (median wall time) [default: 3; --quick: 1]")
