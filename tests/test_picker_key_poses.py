@@ -318,6 +318,9 @@ def test_an_unreachable_pose_is_diagnosed_in_its_rows_unit(tmp_path):
     elastic = json.loads((tmp_path / "picker_double_crank_key_pose" / "result.json").read_text())["elastic"]
     assert elastic["units"]["pose_pick"] == "mm^2" and elastic["units"]["pose_pick_attitude"] == "deg"
     slack = elastic["slacks"]["pose_pick"]
-    assert f"pose_pick (misses its limit by {slack:.3g} mm^2" in run.stderr
+    said = " ".join(run.stderr.split())
+    # ... and, in the rule table's unit, the elastic design's distance beyond the tolerance: sqrt(1 + s) - 1
+    assert f"pose_pick (misses its limit by {slack:.3g} mm^2, {(1.0 + slack) ** 0.5 - 1.0:.3g} mm beyond its 1 mm" \
+        in said, said
     # a squared miss: the pose is hundreds of mm off (the table: 472 mm at the returned design), not 2e5 mm
     assert 100.0 ** 2 < slack < 1000.0 ** 2

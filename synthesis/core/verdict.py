@@ -308,8 +308,20 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         def unit(name: str) -> str:        # a rule the NLP holds as a ratio (unit "1") misses by a ratio
             return " (a ratio of its NLP row)" if elastic.units[name] == "1" else f" {elastic.units[name]}"
 
+        def in_rule_unit(name: str) -> str:
+            """A squared row's slack (value^2 <= limit^2 + s: a key pose's distance, a force's magnitude) as the
+            rule's own miss: sqrt(limit^2 + s) - limit, in the unit of its rule table."""
+            row_unit = elastic.units[name]
+            record = next((r for r in (best.records if best is not None else []) if r.name == name), None)
+            upper = record.limit[1] if record is not None and isinstance(record.limit, (list, tuple)) else None
+            slack = elastic.slacks[name]
+            if (not row_unit.endswith("^2") or record is None or record.unit != row_unit[:-2]
+                    or not isinstance(upper, (int, float)) or upper < 0 or not slack > 0):
+                return ""
+            return f", {math.sqrt(upper * upper + slack) - upper:.3g} {record.unit} beyond its {upper:g} {record.unit}"
+
         def misses(name: str) -> str:
-            text = f"{name} (misses its limit by {elastic.slacks[name]:.3g}{unit(name)}"
+            text = f"{name} (misses its limit by {elastic.slacks[name]:.3g}{unit(name)}{in_rule_unit(name)}"
             if name in out:
                 kept = f" but {', '.join(elastic.hard)}" if elastic.hard else ""
                 # a rule the spec's inputs fix: the field to change, not the bounds (core.pinned)
