@@ -150,3 +150,17 @@ def test_an_answer_that_misses_a_rule_is_not_counted_and_says_nothing_more():
     stated = confidence_statement([failing], nlp, False, failing)
     assert stated["answer_counted"] is False and stated["starts_counted"] == 0
     assert not any("the answer" in note for note in stated["assumptions_not_met"])
+
+
+def test_the_line_says_how_many_starts_met_every_rule_at_the_answer_s_objective_when_more_than_counted():
+    """picking_arc: 13 starts meet every rule at the answer's objective, 11 of them at IPOPT's acceptable level, so
+    the statement counts 2 at its best; side by side with solver.starts_reaching_best (13) the two read as a
+    contradiction unless the line says why."""
+    from synthesis.report.tables import said
+
+    stated = {"starts_counted": 23, "distinct_optima": 10, "starts_at_best": 2, "probability_best_is_global": 0.55,
+              "answer_counted": True}
+    assert said(stated, 13).startswith("10 distinct optima in 23 converged starts, best reached by 2 (13 starts met "
+                                       "every rule at the answer's objective, those IPOPT stopped short of its full "
+                                       "tolerance not counted); P(best is global) ~ 0.55")
+    assert "met every rule" not in said(stated, 2) and "met every rule" not in said(stated)

@@ -166,7 +166,7 @@ def solve_summary(result, folder, replaced: bool, details: SolveWritten) -> None
         print_table(console, design_table(rows, f"design: {GIVEN_HEADING} vs {answer}", answer))
     console.print(_solver_line(result, details))
     if isinstance(result.solver.get("confidence"), dict):
-        console.print(escape(f"confidence: {said(result.solver['confidence'])}{_auto_text(result.solver)}"))
+        console.print(escape(f"confidence: {said(result.solver['confidence'], result.solver.get('starts_reaching_best'))}{_auto_text(result.solver)}"))
     mc = ((result.extra or {}).get("tolerance") or {}).get("monte_carlo")
     if isinstance(mc, dict):        # a tolerance-robust solve: the Monte-Carlo check of the answer
         console.print(escape("\n".join(monte_carlo_lines(mc))))

@@ -288,7 +288,7 @@ def _starts_text(solver: dict | None):
     return f"{asked} + 1 from the elastic re-solve" if ran > asked else f"{ran} of {asked} run"
 
 
-def said(stated: dict) -> str:
+def said(stated: dict, reaching: int | None = None) -> str:
     """result.json ``solver.confidence`` (:func:`synthesis.core.confidence.statement`) in one line: "3 distinct optima
     in 28 converged starts, best reached by 19; P(best is global) ~ 0.89 (Boender & Rinnooy Kan; assumes uniform
     starts)".  Here, not beside the statement, so a report or the command line reads one without importing the
@@ -303,8 +303,14 @@ def said(stated: dict) -> str:
     # an answer outside the counted starts: "best" is the best counted optimum, not the design returned
     best = "best" if stated.get("answer_counted", True) else "best counted"
     chance = chance.replace("P(best is", f"P({best} is")
+    # ``reaching`` (solver.starts_reaching_best): starts that met every rule at the best objective, counted or not --
+    # more than the statement's when some stopped short of IPOPT's full tolerance, which the statement leaves out
+    at_best = stated.get("starts_at_best")
+    more = (f" ({reaching} starts met every rule at the answer's objective, those IPOPT stopped short of its full "
+            f"tolerance not counted)" if isinstance(reaching, int) and isinstance(at_best, int) and reaching > at_best
+            else "")
     return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, {best} "
-            f"reached by {stated.get('starts_at_best')}; {chance} (Boender & Rinnooy Kan; {caveat})")
+            f"reached by {at_best}{more}; {chance} (Boender & Rinnooy Kan; {caveat})")
 
 
 def _confidence_text(solver: dict | None) -> str | None:
@@ -316,7 +322,7 @@ def _confidence_text(solver: dict | None) -> str | None:
     auto = (solver or {}).get("auto")
     stopped = (f"; --starts auto stopped by {auto.get('stopped_by')} after {solver.get('starts')} starts"
                if isinstance(auto, dict) else "")
-    return said(stated) + stopped
+    return said(stated, (solver or {}).get("starts_reaching_best")) + stopped
 
 
 def _objectives(cands: list[Candidate]) -> list:
