@@ -326,6 +326,45 @@ def test_an_interrupt_of_a_resumed_auto_run_keeps_the_batch_the_interrupted_run_
     assert result.design == fixed.design and result.objective["value"] == fixed.objective["value"]
 
 
+@pytest.mark.parametrize("when", ["recounting", "building"])
+def test_an_interrupt_of_a_resumed_auto_run_before_its_batch_is_counted_again_keeps_nothing(tmp_path, toy, when):
+    """A signal while the resumed batch's 3 finished starts are counted again (at the 2nd), or as its NLP is built:
+    the batch replayed before it must not be kept -- the new starts.jsonl lacks finished starts of batch 32, and
+    the run being resumed would be replaced by one with fewer starts."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core import solve as core
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    kept: list = []
+    run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), record=kept.append)
+    first = {out.start: out for out in kept[:16]}
+    second = {out.start: out for out in kept[16:16 + 3]}
+    told: list = []
+    batches: list = []
+
+    def on_start(report, best):
+        told.append(report.outcome.start)
+        if when == "recounting" and len(told) == 2:
+            interrupt.simulate(signal.SIGINT)
+
+    def on_batch(total, nested):
+        batches.append(total)
+        if when == "building" and total == 32:          # the replay done, batch 32 not yet built
+            interrupt.simulate(signal.SIGINT)
+            raise KeyboardInterrupt
+    try:
+        with pytest.raises(Interrupted) as caught:
+            core.run_auto(toy, Setting(loaded.model, 0, toy.solving().prepare(loaded.model)),
+                          AutoStarts(min_converged=20), workers=1, finished=second, resumed_batch=32,
+                          previous=(16, first), on_start=on_start, on_batch=on_batch)
+    finally:
+        interrupt.uninstall()
+    assert batches == [16, 32] and caught.value.partial is None
+
+
 def test_the_batch_before_the_one_an_auto_run_was_solving_is_read_back(tmp_path, toy):
     loaded = _toy(tmp_path)
     kept: list = []

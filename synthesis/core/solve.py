@@ -247,6 +247,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     carried: dict[int, StartReport] = {}     # nested: the reports of the batches before, counted as they were
     t0 = time.perf_counter()
     last: Run | None = None
+    replayed: Run | None = None               # the batch the interrupted run finished before this one, counted again
+    # the batch in progress holds starts the interrupted run finished that are not yet counted (and logged) again: a
+    # signal before they are keeps nothing, so the run resumed is never replaced by one with fewer starts
+    pending = bool(resumed)
+    in_batch = False                          # inside a batch's run_multistart (not the replay)
     k = first
 
     def interrupted() -> dict:
@@ -256,14 +261,16 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     try:
         if previous is not None and not nested and first > 0 and previous[0] == totals[first - 1]:
             on_batch(previous[0], nested)
-            last = run_multistart(kind, setting, starts=previous[0], workers=workers, scheduler=scheduler,
-                                  record=record, finished=previous[1])
+            replayed = run_multistart(kind, setting, starts=previous[0], workers=workers, scheduler=scheduler,
+                                      record=record, finished=previous[1])
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
             began = time.perf_counter()
+            in_batch = True
             run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler,
                                  on_start=on_start, record=record, finished=resumed, rows_by_index=nested,
                                  carried=carried)
+            in_batch, pending = False, False
             last = run
             took = time.perf_counter() - began
             # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
@@ -284,14 +291,20 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                 zero = run.reports[0].outcome
                 resumed = {0: zero} if zero.start == 0 and failure_of(zero) is None else {}
     except Interrupted as exc:
-        raise Interrupted(exc.signum, _kept_so_far(exc.partial, last, maximise, t0, interrupted(), nested)) from None
+        # a batch's partial holds its recounted starts (None before they are all counted again); the replay's is
+        # never kept on its own
+        partial = exc.partial if in_batch else None
+        if pending and partial is None:
+            raise Interrupted(exc.signum, None) from None
+        raise Interrupted(exc.signum, _kept_so_far(partial, last or replayed, maximise, t0, interrupted(),
+                                                   nested)) from None
     except (Exception, KeyboardInterrupt) as exc:
         # between two batches, or building the next one's NLP: KeyboardInterrupt, or what a signal inside a CasADi
         # call comes out as (SystemError, NotImplementedError ...); any other error is the run's own
         if not isinstance(exc, KeyboardInterrupt) and interrupt.pending() is None:
             raise
-        raise Interrupted(interrupt.signal_of(exc), _kept_so_far(None, last, maximise, t0, interrupted(),
-                                                                 nested)) from None
+        kept = None if pending else _kept_so_far(None, last or replayed, maximise, t0, interrupted(), nested)
+        raise Interrupted(interrupt.signal_of(exc), kept) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
 
