@@ -15,11 +15,13 @@ from __future__ import annotations
 import difflib
 import glob
 import os
+import re
+import tomllib
 from importlib.resources import files
 from pathlib import Path, PurePosixPath
 
 from synthesis.errors import OutputError, SpecError
-from synthesis.result import atomic_write_drawn
+from synthesis.result import RUN_NAME, atomic_write_drawn
 from synthesis.spec import load_spec
 from synthesis.spec.design_info import walk_fields
 from synthesis.spec.docmeta import SpecFile
@@ -96,14 +98,14 @@ def unknown_name_text(name: str | Path, library: Path = LIBRARY) -> str:
     return f"{str(name)[:120]}: no such library spec{hint} (`agrisynth problems` lists all {len(names)})"
 
 
-def copy_out(source: Path, target: Path, *, force: bool = False) -> list[Path]:
+def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = False) -> list[Path]:
     """Copy the library spec ``source`` to the file ``target`` (a folder: the spec's own file name in it), to be
     edited there, with the spec files it names (the combined picker's two linkages) beside it at the same relative
     paths, so the copy checks as the library spec does.  The files are copied byte for byte (comments kept).
 
     OutputError (exit 2, before anything is written) when a file to write exists and ``force`` is not given, when
     it is a library file itself, or when the folder to write in does not exist.  Returns the files written, the spec
-    first."""
+    first.  ``rename``: the copy's ``name`` is its file name's stem (:func:`with_name`)."""
     target = Path(target)
     if target.is_dir():
         target = target / source.name
@@ -129,8 +131,32 @@ def copy_out(source: Path, target: Path, *, force: bool = False) -> list[Path]:
             if copy.is_dir() or copy.is_symlink():
                 raise OutputError(f"{copy}: is a {'folder' if copy.is_dir() else 'link'}; agrisynth replaces only "
                                   f"a file")
-    for spec, copy in plan:
+    for k, (spec, copy) in enumerate(plan):
         copy.parent.mkdir(parents=True, exist_ok=True)      # a named spec file in a subfolder of the copy's
         data = spec.read_bytes()
+        if k == 0 and rename and copy.stem != source.stem:      # the user named the copy anew
+            data = with_name(data, copy.stem)
         atomic_write_drawn(copy, lambda tmp, data=data: tmp.write_bytes(data))
     return [copy for _, copy in plan]
+
+
+#: a spec's top-level ``name = "..."`` line (before any table)
+_NAME_LINE = re.compile(rb'^(?P<key>[ \t]*name[ \t]*=[ \t]*)"(?P<value>[^"\\\n]*)"', re.MULTILINE)
+
+
+def with_name(data: bytes, name: str) -> bytes:
+    """The spec file's bytes with its ``name`` set to ``name`` (a copy written as my_arm.toml runs as my_arm: its
+    run folders are the copy's own, not the library spec's), every other byte kept; unchanged when ``name`` is no
+    run name or the file does not say its name in one plain line before its first table."""
+    if not RUN_NAME.match(name) or name.lower().endswith(("-check", "-tolerance")):
+        return data
+    first_table = re.search(rb"^[ \t]*\[", data, re.MULTILINE)
+    match = _NAME_LINE.search(data, 0, first_table.start() if first_table else len(data))
+    if match is None:
+        return data
+    out = data[:match.start("value")] + name.encode() + data[match.end("value"):]
+    try:
+        before, after = tomllib.loads(data.decode("utf-8")), tomllib.loads(out.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return data
+    return out if after == {**before, "name": name} else data

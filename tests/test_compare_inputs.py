@@ -276,3 +276,29 @@ def test_compare_of_bench_folders_alone_says_they_are_benches(tmp_path):
     assert "compare needs at least one RESULT (a run folder or its result.json)" in said
     assert f"{tmp_path / 'b1'}, {tmp_path / 'b2'} are benches, which compare shows beside a run of their kind" in said
     assert not (tmp_path / "cmp").exists()
+
+
+def test_compare_without_out_writes_a_folder_per_comparison(good, tmp_path):
+    """The README's order of work compares twice (two examples, then its own runs): with one default folder the
+    second compare needed --force.  Each comparison has its own: results/compare/<A>_vs_<B>/."""
+    path, base = good
+    for name in ("arm_a", "arm_b", "arm_c"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "result.json").write_bytes(_edit(base, lambda data: None))
+    first = agrisynth("compare", "arm_a", "arm_b", cwd=tmp_path, timeout=300)
+    second = agrisynth("compare", "arm_a", "arm_c/result.json", cwd=tmp_path, timeout=300)
+    assert first.returncode == 0 and second.returncode == 0, first.stderr + second.stderr
+    assert (tmp_path / "results" / "compare" / "arm_a_vs_arm_b" / "compare.html").is_file()
+    assert (tmp_path / "results" / "compare" / "arm_a_vs_arm_c" / "compare.html").is_file()
+    again = agrisynth("compare", "arm_a", "arm_b", cwd=tmp_path, timeout=300)     # the same comparison: --force
+    assert again.returncode == 2 and "give --force to replace it" in again.stderr
+
+
+def test_the_default_compare_folder_of_many_results_keeps_to_a_folder_name():
+    from synthesis.runs.comparing import default_out
+
+    many = tuple(Path(f"results/redesign_from_example1_solve_{i}") for i in range(12))
+    out = default_out(many)
+    assert out.parent == Path("results/compare") and len(out.name) <= 100
+    assert out.name.startswith("redesign_from_example1_solve_0") and out.name.endswith("_and_11_more")
+    assert default_out((Path("a b/run 1/result.json"), Path("."))).name == f"run_1_vs_{Path.cwd().name}"

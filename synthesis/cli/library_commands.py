@@ -3,15 +3,15 @@ spec reference or a starting spec of it."""
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import click
-
-from synthesis.cli.options import NamedPath
 from rich.markup import escape
 from rich.table import Table
 
 from synthesis import kinds
+from synthesis.cli.options import NamedPath
 from synthesis.cli import terminal
 from synthesis.cli.views import console
 from synthesis.library import LIBRARY
@@ -47,9 +47,21 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
         return
     source, written = library.copy_spec(name, library_dir, target, force)
     also = f" (and {', '.join(escape(str(p)) for p in written[1:])}, the spec files it names)" if written[1:] else ""
+    copied, original = spec_name(written[0]), spec_name(source)
+    renamed = (f", named {escape(copied)} (its runs: results/{escape(copied)}/ and results/{escape(copied)}-check/)"
+               if copied and copied != original else "")
     console.print(f"wrote {escape(str(written[0]))}{also}: a copy of the library's "
-                  f"{escape(source.relative_to(library_dir).as_posix())} to edit; check it with  agrisynth check "
-                  f"{escape(str(written[0]))}", soft_wrap=True)
+                  f"{escape(source.relative_to(library_dir).as_posix())} to edit{renamed}; check it with "
+                  f"agrisynth check {escape(str(written[0]))}", soft_wrap=True)
+
+
+def spec_name(path: Path) -> str | None:
+    """The ``name`` a spec file gives (None when it cannot be read)."""
+    try:
+        name = tomllib.loads(path.read_text(encoding="utf-8")).get("name")
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+    return name if isinstance(name, str) else None
 
 
 def list_library(library_dir: Path) -> None:

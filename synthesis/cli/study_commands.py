@@ -84,12 +84,13 @@ def tolerance_command(target: Path, out: Path, length: float | None, angle: floa
 
 @click.command("compare")
 @click.argument("results", nargs=-1, required=True, type=click.Path(exists=False, path_type=Path))
-@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results/compare"),
-              show_default=True, help="folder for compare.html and its figures (an agrisynth output folder)")
+@click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=None,
+              help="folder for compare.html and its figures (an agrisynth output folder) [default: "
+                   "results/compare/<RESULT folder names joined by _vs_>, one per comparison]")
 @click.option("--force", is_flag=True, help="replace OUT when it holds an earlier agrisynth output (without --force "
                                             "it is kept and the command exits 2; a folder agrisynth did not write "
                                             "is never replaced)")
-def compare_command(results: tuple[Path, ...], out: Path, force: bool) -> None:
+def compare_command(results: tuple[Path, ...], out: Path | None, force: bool) -> None:
     """Compare RESULT... (run folders or result.json files of one kind) side by side.
 
     \b

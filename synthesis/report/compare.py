@@ -107,9 +107,12 @@ def different_versions(cands: list[Candidate]) -> list[str]:
     model, a default or the solver may have changed between them, so a difference on the page may be the tool's."""
     notes = []
     for package in ("agrisynth", "casadi"):
-        seen = {c.label: (c.result.versions or {}).get(package) for c in cands}
-        if len(cands) >= 2 and len({v for v in seen.values()}) > 1:
-            shown = ", ".join(f"{label}: {v if v is not None else 'not recorded'}" for label, v in seen.items())
+        # a hand-edited file may hold any JSON there: compared and shown as text
+        seen = {c.label: (c.result.versions if isinstance(c.result.versions, dict) else {}).get(package)
+                for c in cands}
+        texts = {label: "not recorded" if v is None else str(v) for label, v in seen.items()}
+        if len(cands) >= 2 and len(set(texts.values())) > 1:
+            shown = ", ".join(f"{label}: {text[:40]}" for label, text in texts.items())
             notes.append(f"the candidates were written by different versions of {package} ({shown}): a difference "
                          f"between them may be the tool's, not the design's")
     return notes

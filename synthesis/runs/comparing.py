@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 from synthesis.errors import OutputError, ResultError
@@ -26,12 +27,34 @@ def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
                               f"compares; write it to another folder")
 
 
+#: where compare writes without --out: a folder per comparison, so comparing other runs needs no --force
+COMPARE_ROOT = Path("results/compare")
+#: the longest folder name a run folder takes (synthesis.result.RUN_NAME)
+MAX_FOLDER_NAME = 100
+
+
+def default_out(results: tuple[Path, ...]) -> Path:
+    """results/compare/<A>_vs_<B>...: each RESULT by its run folder's name (a result.json by its folder's); more than
+    fits in a folder name: the first and how many more."""
+    names = []
+    for given in results:
+        path = Path(os.path.abspath(given))
+        folder = path.parent if path.name in ("result.json", "bench.json") else path
+        names.append(re.sub(r"[^A-Za-z0-9_.-]", "_", folder.name).lstrip("._-") or "run")
+    joined = "_vs_".join(names)
+    if len(joined) > MAX_FOLDER_NAME:
+        tail = f"_and_{len(names) - 1}_more"
+        joined = names[0][:MAX_FOLDER_NAME - len(tail)] + tail
+    return COMPARE_ROOT / joined
+
+
 def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     """Write OUT/compare.html and its figures; ``details``: :class:`Comparison` (the candidates, the first the
     baseline; the page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
-    refuse_overlap(request.results, request.out)
+    out = default_out(request.results) if request.out is None else request.out
+    refuse_overlap(request.results, out)
     # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
-    with RunOutput.around(open_output_folder(request.out, request.force)) as output:
+    with RunOutput.around(open_output_folder(out, request.force)) as output:
         results = [p for p in request.results if not is_bench(p)]
         if not results:       # only bench folders: a bench is shown beside a run of its kind, never alone
             benches = ", ".join(str(p) for p in request.results)
@@ -44,5 +67,5 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
         bench = [res for p in request.results if is_bench(p)
                  for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
         output.fill(lambda staging: write_comparison_files(cands, staging, bench))
-    page = Path(request.out) / "compare.html"
+    page = Path(out) / "compare.html"
     return Outcome(0, folder=page.parent, details=Comparison(cands, page))

@@ -54,7 +54,10 @@ def copy_spec(name: str, library: Path, target: Path | None, force: bool) -> tup
     source = library_spec(name, library)
     if source is None:
         raise SpecError(unknown_name_text(name, library))
-    return source, copy_out(source, Path(source.name) if target is None else target, force=force)
+    # a copy written under a name of the user's runs under that name (results/my_arm/ of my_arm.toml); the library's
+    # own file name keeps the library spec's name
+    return source, copy_out(source, Path(source.name) if target is None else target, force=force,
+                            rename=target is not None)
 
 
 def write_template(kind: str, target: Path) -> None:

@@ -71,7 +71,8 @@ class BenchRequest:
 @dataclass(frozen=True)
 class CompareRequest:
     results: tuple[Path, ...]
-    out: Path = Path("results/compare")
+    #: None: results/compare/<the results' folder names joined by "_vs_"> (:func:`synthesis.runs.comparing.default_out`)
+    out: Path | None = None
     force: bool = False
 
 
