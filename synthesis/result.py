@@ -449,6 +449,7 @@ class RunFolder:
             try:
                 replace = self.permitted()
             except OutputError as exc:
+                self.release()          # kept, not written any more: a --resume may read it
                 raise OutputError(f"{exc} (this run is kept in {self.staging})") from None
             # the marker lists what this run wrote: a later run may replace the folder only while it holds no more
             marker = self.staging / RUN_MARKER
@@ -471,8 +472,10 @@ class RunFolder:
     def release(self) -> None:
         """Let go of the staging folder's lock (the run there is finished or gone)."""
         if self.held is not None:
-            with contextlib.suppress(OSError):
-                os.close(self.held)
+            if self.held in _HELD:          # not already closed by a fork's child
+                _HELD.discard(self.held)
+                with contextlib.suppress(OSError):
+                    os.close(self.held)
             self.held = None
 
     def discard(self) -> None:
@@ -520,6 +523,23 @@ def _agrisynths_file(name: str) -> bool:
     return name.startswith(".") and any(name.startswith(f".{known}.") for known in (*LEGACY_FILES, RUN_MARKER))
 
 
+#: the descriptors holding a staging folder's lock in this process (:func:`_hold`)
+_HELD: set[int] = set()
+
+
+def _not_in_children() -> None:
+    """A process forked from a run (a pool worker, a figure's drawing) closes its copies of the lock's descriptors:
+    the lock is the run's, and goes with it even where such a process outlives it."""
+    for fd in list(_HELD):
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _HELD.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_not_in_children)
+
+
 def _hold(folder: Path) -> int | None:
     """A descriptor of ``folder`` with an exclusive flock on it (None where flock or the descriptor is not had)."""
     try:
@@ -532,6 +552,7 @@ def _hold(folder: Path) -> int | None:
     except OSError:
         os.close(fd)
         return None
+    _HELD.add(fd)
     return fd
 
 
@@ -544,10 +565,10 @@ def _live_writer(out_root: Path, name: str) -> Path | None:
         entries = list(os.scandir(out_root))
     except (ImportError, OSError):
         return None
-    prefix = f".{name}.run-"
+    # this name's staging folders only: ".a.run-x.run-XXXX" is a run named "a.run-x"'s, not "a"'s
+    own = re.compile(rf"^\.{re.escape(name)}\.run-[A-Za-z0-9_]+$")
     for entry in entries:
-        if not (entry.name.startswith(prefix) and STAGING_NAME.match(entry.name)
-                and entry.is_dir(follow_symlinks=False)):
+        if not (own.match(entry.name) and entry.is_dir(follow_symlinks=False)):
             continue
         try:
             fd = os.open(entry.path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))

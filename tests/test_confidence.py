@@ -161,6 +161,6 @@ def test_the_line_says_how_many_starts_met_every_rule_at_the_answer_s_objective_
     stated = {"starts_counted": 23, "distinct_optima": 10, "starts_at_best": 2, "probability_best_is_global": 0.55,
               "answer_counted": True}
     assert said(stated, 13).startswith("10 distinct optima in 23 converged starts, best reached by 2 (13 starts met "
-                                       "every rule at the answer's objective, those IPOPT stopped short of its full "
-                                       "tolerance not counted); P(best is global) ~ 0.55")
+                                       "every rule at the answer's objective; the statement counts only drawn starts "
+                                       "IPOPT finished at its full tolerance); P(best is global) ~ 0.55")
     assert "met every rule" not in said(stated, 2) and "met every rule" not in said(stated)

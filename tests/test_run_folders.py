@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import time
 import re
 from pathlib import Path
 
@@ -362,3 +363,24 @@ def test_a_second_run_into_a_folder_being_written_is_refused_before_any_work(tmp
     later.write(artifacts("b"))
     assert later.commit() is False and (tmp_path / "run" / "report.html").read_text() == "b"
     assert later.held is None
+
+
+def test_the_live_run_lock_is_its_own_name_s_and_not_held_by_a_forked_child(tmp_path):
+    """A run named "a.run-x" (staging .a.run-x.run-XXXX) does not block runs of "a"; a process forked from a run (a
+    pool worker, a figure's drawing) does not keep the run's lock once the run lets it go (it closes its copy)."""
+    other = open_run_folder(tmp_path, "a.run-x")
+    mine = open_run_folder(tmp_path, "a")
+    mine.discard()
+    other.discard()
+    run = open_run_folder(tmp_path, "run")
+    ctx = multiprocessing.get_context("fork")
+    child = ctx.Process(target=time.sleep, args=(30,))
+    child.start()
+    try:
+        run.release()                       # the run lets go (it ended) while the forked process lives on
+        later = open_run_folder(tmp_path, "run")
+        later.discard()
+    finally:
+        child.kill()
+        child.join()
+    run.discard()

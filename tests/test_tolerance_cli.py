@@ -604,3 +604,15 @@ def test_equal_times_in_a_tolerance_box_over_a_friction_range_are_held_at_each_s
     rows = {r["name"]: r for r in result["rules"]}
     assert {"landing_time_spread@mu=0.4848@tolerance", "landing_time_spread@mu=0.7271@tolerance"} <= set(rows)
     assert "the largest uniform scale these rules can be held at" in " ".join(run.stderr.split())
+
+
+@pytest.mark.parametrize("command", ["check", "tolerance"])
+def test_a_spec_tolerance_wider_than_the_options_take_is_refused_by_every_command(tmp_path, command):
+    """[tolerance] variables = { base_angle = 100 } passed check and failed tolerance (which --tol now limits as
+    --angle): every command reads the spec alike."""
+    spec = tmp_path / "wide.toml"
+    spec.write_text(STEERING.read_text() + "\n[tolerance]\nvariables = { base_angle = 100.0 }\n")
+    run = agrisynth(command, str(spec), "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert run.stderr.strip().endswith("tolerance.variables.base_angle = 100: a half-width in deg is at most 90 (as "
+                                       "--angle takes it)"), run.stderr

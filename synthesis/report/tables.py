@@ -304,11 +304,12 @@ def said(stated: dict, reaching: int | None = None) -> str:
     best = "best" if stated.get("answer_counted", True) else "best counted"
     chance = chance.replace("P(best is", f"P({best} is")
     # ``reaching`` (solver.starts_reaching_best): starts that met every rule at the best objective, counted or not --
-    # more than the statement's when some stopped short of IPOPT's full tolerance, which the statement leaves out
+    # more than the statement's when some stopped short of IPOPT's full tolerance (or one is the start from the
+    # elastic re-solve), which the statement leaves out
     at_best = stated.get("starts_at_best")
-    more = (f" ({reaching} starts met every rule at the answer's objective, those IPOPT stopped short of its full "
-            f"tolerance not counted)" if isinstance(reaching, int) and isinstance(at_best, int) and reaching > at_best
-            else "")
+    more = (f" ({reaching} starts met every rule at the answer's objective; the statement counts only drawn starts "
+            f"IPOPT finished at its full tolerance)" if isinstance(reaching, int) and isinstance(at_best, int)
+            and reaching > at_best else "")
     return (f"{w} distinct optim{'um' if w == 1 else 'a'} in {n} converged start{'' if n == 1 else 's'}, {best} "
             f"reached by {at_best}{more}; {chance} (Boender & Rinnooy Kan; {caveat})")
 

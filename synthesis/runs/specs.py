@@ -37,12 +37,31 @@ def unknown_design_variables(model, names: list[str], where: str) -> None:
         raise SpecError(f"{where}: unknown design variable {', '.join(unknown)} (known: {', '.join(info)})")
 
 
+#: the largest half-width --tol takes by the variable's unit: as --length and --angle take it
+TOL_MAX = {"mm": 1e3, "deg": 90.0}
+
+
+def within_option_ranges(spec, per_variable: dict[str, float], where: str = "--tol {name}={value:g}") -> None:
+    """SpecError for a half-width of one variable (--tol, or ``where`` names the spec's field) beyond what --length
+    or --angle takes for a variable of its unit (an angle of 100 deg either way spans more than a half turn)."""
+    info = design_info.describe(spec)
+    for name, key in zip(per_variable, spec_keys(list(per_variable), info)):
+        unit = (info.get(key) or {}).get("unit")
+        top = TOL_MAX.get(unit) if isinstance(unit, str) else None
+        if top is not None and per_variable[name] > top:
+            option = "--length" if unit == "mm" else "--angle"
+            raise SpecError(f"{where.format(name=name, value=per_variable[name])}: a half-width in {unit} is at "
+                            f"most {top:g} (as {option} takes it)")
+
+
 def tolerance_names_known(loaded) -> None:
-    """A [tolerance] variables entry naming no design variable is bad input in check too (solve and tolerance
-    refuse it; check ignored it)."""
+    """A [tolerance] variables entry naming no design variable, or wider than --length / --angle take for its unit,
+    is bad input in every command (solve and tolerance refuse it; check ignored it)."""
     tol = getattr(loaded.model, "tolerance", None)
     if tol is not None and tol.variables:
         unknown_design_variables(loaded.model, list(tol.variables), f"{loaded.path}: tolerance.variables")
+        within_option_ranges(loaded.model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = "
+                                                                f"{{value:g}}")
 
 
 def loaded_spec(spec: Path, emit: Subscriber):

@@ -13,7 +13,7 @@ from synthesis.result import MAX_RESULT_BYTES
 from synthesis.runs.events import MonteCarloPlan, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
-from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables
+from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables, within_option_ranges
 from synthesis.spec import design_info, load_spec
 from synthesis.tolerance.analysis import analyse
 from synthesis.tolerance.design import spec_keys
@@ -62,23 +62,6 @@ def _spec_variables(spec, variables: dict[str, float], request: ToleranceRequest
             if (info.get(key) or {}).get("unit") not in given}
 
 
-#: the largest half-width --tol takes by the variable's unit: as --length and --angle take it
-TOL_MAX = {"mm": 1e3, "deg": 90.0}
-
-
-def _within_option_ranges(spec, per_variable: dict[str, float], where: str = "--tol {name}={value:g}") -> None:
-    """SpecError for a half-width of one variable (--tol, or ``where`` names the spec's field) beyond what --length
-    or --angle takes for a variable of its unit (an angle of 100 deg either way spans more than a half turn)."""
-    info = design_info.describe(spec)
-    for name, key in zip(per_variable, spec_keys(list(per_variable), info)):
-        unit = (info.get(key) or {}).get("unit")
-        top = TOL_MAX.get(unit) if isinstance(unit, str) else None
-        if top is not None and per_variable[name] > top:
-            option = "--length" if unit == "mm" else "--angle"
-            raise SpecError(f"{where.format(name=name, value=per_variable[name])}: a half-width in {unit} is at "
-                            f"most {top:g} (as {option} takes it)")
-
-
 def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     """Analyse and write result.json, report.md, tornado.png.  Exit code 0 when the design and every Monte-Carlo
     sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``:
@@ -93,9 +76,7 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     per_variable = {**_spec_variables(spec, dict(tol.variables) if tol else {}, request), **request.per_variable}
     if request.per_variable:               # an unknown name is bad input, said before any analysis
         unknown_design_variables(spec, list(request.per_variable), "--tol")
-        _within_option_ranges(spec, request.per_variable)
-    if tol is not None and tol.variables:
-        _within_option_ranges(spec, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = {{value:g}}")
+        within_option_ranges(spec, request.per_variable)
     if not (length or angle or any(per_variable.values())) and request.samples != 0:
         given = [f"--{what} 0" for what, width in (("length", request.length), ("angle", request.angle))
                  if width == 0]

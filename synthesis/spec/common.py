@@ -142,7 +142,8 @@ class ToleranceSpec(StrictModel):
     # each > 0, as --tol NAME=VALUE takes it: a negative half-width made the linear worst case better than the nominal
     variables: dict[str, Annotated[float, Field(gt=0, le=1e3)]] = Field(
         default_factory=dict, description="half-width per design variable, in its own unit (mm for lengths, deg for "
-                                          "angles), each > 0 and <= 1000; overrides length/angle")
+                                          "angles), each > 0, at most 1000 for a length and 90 for an angle (as length and angle); "
+                                          "overrides length/angle")
     samples: int = Field(2000, ge=0, le=1_000_000, description="Monte-Carlo samples of the answer")
     seed: int = Field(0, ge=0, le=2**53, description="Monte-Carlo seed")
 

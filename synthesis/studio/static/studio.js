@@ -26,7 +26,16 @@ async function api(path, body) {
     throw new Error(`the studio server at ${location.host} is not answering (stopped?): nothing on this page is ` +
                     `evaluated or solved any more; start \`agrisynth studio\` again and reload`);
   }
-  const data = await response.json();
+  if (document.body.dataset.solve === "gone") {   // the server answers again (restarted, or a blip): resume
+    document.body.dataset.solve = "";
+    setTimeout(poll, 0);
+  }
+  let data;
+  try {
+    data = await response.json();
+  } catch (err) {       // not the studio's JSON (a proxy's or a crashed server's page)
+    throw new Error(`the server answered ${response.status} ${response.statusText} without a studio answer`);
+  }
   if (!response.ok) throw new Error(data.error || response.statusText);
   return data;
 }
