@@ -227,6 +227,11 @@ def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(t
     assert unit_notes(load_spec(cam).model) == [
         "every length is under 1 mm (the largest, cam.base_radius, is 0.15 mm): lengths are in mm; were they given in "
         "metres?"]
+    # one link in metres among lengths in mm: 11 rules violated and no word on units, before
+    arm = spec_with(tmp_path, LIBRARY / "planting_arm" / "taiwan_example1.toml", [("l5 = 191 ", "l5 = 0.191 ")],
+                    "arm.toml")
+    assert unit_notes(load_spec(arm).model) == [
+        "arm.l5 = 0.191 mm beside lengths up to 180.6 mm: lengths are in mm; was it given in metres?"]
     text = (LIBRARY / "tillage" / "tillage_redesign.toml").read_text()
     old = next(line for line in text.splitlines() if line.startswith("theta = {"))
     radians = tmp_path / "radians.toml"

@@ -14,6 +14,8 @@ from synthesis.spec.docmeta import units_in
 
 #: every length of a spec under this (mm) reads as metres: no mechanism of the library is smaller than 10 mm
 TINY_LENGTHS = 1.0
+#: a design length under TINY_LENGTHS beside one this many times larger reads as metres among mm
+OUT_OF_SCALE = 10.0
 #: a free angle whose bounds span less than this (deg), all within one radian turn, reads as radians
 NARROW_ANGLE_SPAN = 2.0
 
@@ -62,6 +64,16 @@ def unit_notes(model: BaseModel) -> list[str]:
         path, v = max(lengths, key=lambda pv: abs(pv[1]))
         notes.append(f"every length is under {TINY_LENGTHS:g} mm (the largest, {path}, is {v:g} mm): lengths are in "
                      f"mm; were they given in metres?")
+    elif lengths:
+        # one link given in metres among lengths in mm (l5 = 0.191): a design's length under 1 mm beside lengths of
+        # tens of mm and more is no link of a machine (a tolerance or a back-off of 0.2 mm is no design variable)
+        names = set(model.variables()) if hasattr(model, "variables") else set()
+        largest = max(abs(v) for _, v in lengths)
+        tiny = [(path, v) for path, v in lengths if abs(v) < TINY_LENGTHS and path.rsplit(".", 1)[-1] in names]
+        if tiny and largest >= OUT_OF_SCALE * TINY_LENGTHS:
+            shown = ", ".join(f"{path} = {v:g}" for path, v in tiny[:3]) + (" ..." if len(tiny) > 3 else "")
+            notes.append(f"{shown} mm beside lengths up to {largest:g} mm: lengths are in mm; "
+                         f"{'was it' if len(tiny) == 1 else 'were they'} given in metres?")
     for path, unit, value in fields:
         if unit == "deg" and isinstance(value, FreeVariable):
             lo, hi = value.bounds
