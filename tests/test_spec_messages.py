@@ -53,10 +53,15 @@ def test_unknown_top_level_key_suggests_nothing_unrelated(tmp_path):
         assert section in text
 
 
-@pytest.mark.parametrize("typo, meant", [("seedbd", "seedbed"), ("operations", "operation")])
-def test_unknown_key_close_to_a_field_suggests_it(tmp_path, typo, meant):
-    text = message(tmp_path, f"[{meant}]", f"[{typo}]", lines=2)      # and the section it meant is missing
-    assert text.startswith(f"{typo}: unknown field; did you mean '{meant}'?")
+@pytest.mark.parametrize("old, typo, meant", [("[seedbed]", "[seedbd]", "seedbd: unknown field; did you mean 'seedbed'?"),
+                                            ("[operation]", "[operations]",
+                                             "operations: unknown field; did you mean 'operation'?"),
+                                            ("crank_speed = 250", "crank_sped = 250",
+                                             "operation.crank_sped: unknown field; did you mean 'crank_speed'?")])
+def test_unknown_key_close_to_a_field_suggests_it(tmp_path, old, typo, meant):
+    """One line: the field it meant is missing too, which the suggestion says (the missing field's line came first,
+    being earlier in the file, and read as a second fault)."""
+    assert message(tmp_path, old, typo, lines=1) == meant
 
 
 def test_rule_key_named_as_in_the_output_suggests_the_spec_key(tmp_path):

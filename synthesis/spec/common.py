@@ -449,7 +449,18 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         seen = list(dict.fromkeys(f"{prefix}.{_describe(err, model)}"
                                   for err in sorted(exc.errors(), key=lambda e: _position(order, e["loc"]))))
         # a union of "number | table" yields one error per branch: keep the most specific ones
-        raise SpecError("\n".join(capped(_prune_union_noise(seen)))) from None
+        raise SpecError("\n".join(capped(_prune_union_noise(_misspelt_only(seen))))) from None
+
+
+def _misspelt_only(lines: list[str]) -> list[str]:
+    """Without "T.x: missing required field" where a line of the same table says "T.y: unknown field; did you mean
+    'x'?": one misspelt key read as two faults, the side effect first (it sits earlier in the file)."""
+    suggested = set()
+    for line in lines:
+        match = re.match(r"^(.*)\.[^.:]+: unknown field; did you mean '([^']+)'\?$", line)
+        if match:
+            suggested.add(f"{match.group(1)}.{match.group(2)}: missing required field")
+    return [line for line in lines if line not in suggested]
 
 
 def _file_order(data: Any, prefix: tuple = (), order: dict | None = None) -> dict[tuple, int]:
