@@ -108,5 +108,9 @@ def test_the_installed_agrisynth_works_from_any_folder(installed, tmp_path):
     assert bench.returncode == 0, bench.stdout[-2000:] + bench.stderr[-2000:]
     data = json.loads((work / "bench_out" / "bench" / "bench.json").read_text())
     assert data["extreme"] is None or data["extreme"] == []        # no tests/extreme in an installed copy
+    # ... and bench says why it is missing (here: a kind was named, which leaves it out anyway)
+    assert data["settings"]["extreme_not_run"] == "problems were named (it runs with none)"
+    assert "note: the extreme-case matrix is left out: problems were named" in " ".join(bench.stdout.split() +
+                                                                                         bench.stderr.split())
     assert [p["problem"] for p in data["problems"]] == ["opening_cam_redesign"]
     assert sorted(p.name for p in work.iterdir()) == ["bench_out", "my.toml", "results", "taiwan_example1.toml"]

@@ -160,6 +160,8 @@ def markdown(data: dict) -> str:
                              + _table(rows, [(k, k.replace("_", " ")) for k in rows[0]]))
     if data.get("extreme"):
         parts.append(_extreme_section(data["extreme"]))
+    elif isinstance(data["settings"], dict) and data["settings"].get("extreme_not_run"):
+        parts.append(f"## Extreme-case matrix\n\nNot run: {data['settings']['extreme_not_run']}.")
     parts.append("![error against run time](error_vs_time.png)")
     return "\n\n".join(parts) + "\n"
 

@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 from synthesis import bench as benchmod
-from synthesis.bench.extreme import extreme_matrix
-from synthesis.runs.events import BenchStarted, BenchStep, RunWarning, Subscriber
+from synthesis.bench.extreme import EXTREME, extreme_matrix
+from synthesis.runs.events import BenchStarted, BenchStep, Note, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
 from synthesis.runs.specs import spec_file
@@ -65,7 +65,13 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     # refused (exit 2) before any benching; the staging folder is discarded if the bench stops
     with RunOutput(request.out, "bench", force=request.force) as output:
         cases = _cases(request, by_kind, emit)
-        extreme_on = not request.no_extreme and not (request.problems or request.spec_files) and not request.quick
+        why_not = ("--no-extreme" if request.no_extreme else "problems were named (it runs with none)"
+                   if request.problems or request.spec_files else "--quick" if request.quick
+                   else None if EXTREME is not None and EXTREME.is_dir()
+                   else "no tests/extreme/ here: the matrix is the source tree's tests, run from a clone")
+        extreme_on = why_not is None
+        if why_not is not None and not request.no_extreme:     # the user asked for nothing: say why it is missing
+            emit(Note(f"the extreme-case matrix is left out: {why_not}"))
         emit(BenchStarted(sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)))
         t0 = time.perf_counter()
         results = [benchmod.run_case(case, repeats, lambda what: emit(BenchStep(what))) for case in cases]
@@ -76,6 +82,6 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
             emit(BenchStep(None))
         study = dataclasses.asdict(benchmod.study_settings(request.quick))
         settings = {"repeats": repeats, "quick": request.quick, "study": study, "problems": [c.problem for c in cases],
-                    "wall_s": round(time.perf_counter() - t0, 1)}
+                    "wall_s": round(time.perf_counter() - t0, 1), "extreme_not_run": why_not}
         folder, _ = output.fill(lambda staging: benchmod.write_bench_files(staging, results, settings, extreme))
     return Outcome(0, folder=folder, details=BenchRows(results, repeats, settings))
