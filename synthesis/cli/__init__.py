@@ -73,7 +73,7 @@ def cli() -> None:
       agrisynth bench KIND    compare methods: objective reached against wall time
       agrisynth problems      list the problem library
       agrisynth spec KIND     the spec reference of a kind (--template: a file to start from)
-      agrisynth tolerance SPEC  sensitivities, tolerance stack-up, Monte-Carlo check of a design
+      agrisynth tolerance RESULT|SPEC  sensitivities, tolerance stack-up, Monte-Carlo check of a design
       agrisynth studio SPEC   an interactive design page on 127.0.0.1 (the studio extra)
     Results go to results/<spec name>/ for solve, results/<spec name>-check/ for check
     (result.json, report.html, plots): check, solve, compare, check solved.toml need no --force.

@@ -117,7 +117,7 @@ def _reference_piped(kind: str, summary: str, entries, width: int) -> None:
               help="with --template: write it to this new file (default: print it)")
 def spec_command(kind: str, template: bool, target: Path | None) -> None:
     """The spec reference of KIND: every field with its TOML path, type, unit, default (or
-    "required"), allowed range and meaning.  The same for every kind: docs/specs.md.
+    "required"), allowed range and meaning.  Every kind's in one file: docs/specs.md in the source tree.
 
     \b
     Examples (KIND: a name `agrisynth problems` lists):

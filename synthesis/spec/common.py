@@ -22,7 +22,7 @@ from pydantic_core import PydanticCustomError
 
 from synthesis.errors import SpecError
 from synthesis.files import read_regular, shown
-from synthesis.spec.docmeta import units_in
+from synthesis.spec.docmeta import TomlType, units_in
 
 
 def _sign_not_a_bool(value: Any) -> Any:
@@ -173,6 +173,10 @@ class ProblemSpec(StrictModel):
         return name
 
 
+#: [solver] starts: a whole number, or the word "auto" (read by SolverSettings' validator, never stored here)
+Starts = Annotated[int, TomlType('integer | "auto"')]
+
+
 def starts_field(default: int):
     return Field(default, ge=1, le=10000, description='multistart starts (start 0 = the given design), or "auto": '
                                                       'batches until the confidence rule holds (`--starts auto`)')
@@ -185,7 +189,7 @@ def max_iter_field(default: int, note: str = ""):
 class MultistartSettings(StrictModel):
     """The [solver] settings of every kind that optimises; kinds add their sampling settings."""
 
-    starts: int = starts_field(16)
+    starts: Starts = starts_field(16)
     seed: int = Field(0, ge=0, le=2**53, description="seed of the Latin-hypercube starts")
     max_iter: int = max_iter_field(500)
     #: starts = "auto": the multistart grows until it is sure (synthesis.core.solve.AutoStarts); ``starts`` is then

@@ -442,7 +442,7 @@ def template(kind_name: str, directory: Path | None = None) -> str:
     head = [f"# A {kind_name} spec: {kind.summary}.",
             f"# Written by `agrisynth spec {kind_name} --template` from the library example problems/{kind.example};",
             "# fields left at their default are commented out.  The reference: `agrisynth spec "
-            f"{kind_name}` or docs/specs.md.",
+            f"{kind_name}` (docs/specs.md in the source tree).",
             *_comment(FREE_VARIABLE_NOTE), ""]
     return "\n".join(head + write_toml(model, data, rewrite=rewrite)) + "\n"
 

@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args
 
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     WITHIN_A_TURN, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, Sign, starts_field, value_of, within_a_turn,
 )
@@ -311,7 +311,7 @@ class DynamicsSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(4)
+    starts: Starts = starts_field(4)
     samples_per_segment: int = Field(100, ge=5, le=2000, description="samples of the rise and of the return in the "
                                                                     "NLP (the re-check uses 10x more)")
     max_iter: int = max_iter_field(500)

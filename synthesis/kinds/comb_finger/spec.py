@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     ACUTE, POSITIVE, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
@@ -82,7 +82,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     turn_samples: int = Field(72, ge=8, le=36000, description="finger turn angles sampled for the clearance to "
                                                               "the other unit over a turn")
     max_iter: int = max_iter_field(500)

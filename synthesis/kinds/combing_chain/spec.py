@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field, starts_field,
     value_of,
 )
@@ -118,7 +118,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(4)
+    starts: Starts = starts_field(4)
     beta_samples: int = Field(13, ge=2, le=2000, description="initial plant angles sampled over plant_angle "
                                                              "(the ends included)")
     speed_samples: int = Field(5, ge=2, le=2000, description="machine speeds sampled over each gear's range "

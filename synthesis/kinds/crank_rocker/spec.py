@@ -12,7 +12,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from synthesis.spec.dynamics import DynamicsSection
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, Sign, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive_fields,
     starts_field, value_of,
 )
@@ -63,7 +63,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     samples_per_turn: int = Field(72, ge=8, le=3600, multiple_of=2,
                                   description="crank angles sampled for the transmission angle (even: includes "
                                               "the crank along and against the frame, where its extremes lie)")

@@ -31,7 +31,7 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, mo
 
 from synthesis.kinds.fourbar_path.kinematics import VARIABLES
 from synthesis.spec.dynamics import DynamicsSection
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, Sign, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, documented_range,
     is_free, max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
 )
@@ -279,7 +279,7 @@ class RulesSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(64)
+    starts: Starts = starts_field(64)
     stop_at_objective: float | None = Field(
         None, ge=0, description="end the multistart at the first start (in start order) whose objective "
                                 "is at most this many mm^2 and that satisfies every rule; reported as "

@@ -17,7 +17,7 @@ from typing import Annotated, Literal
 from pydantic import Field, PrivateAttr, model_validator
 
 from synthesis.spec.operating import OperatingRange, resolve_ranges
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     ACUTE, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, starts_field, value_of,
 )
@@ -141,7 +141,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(4)
+    starts: Starts = starts_field(4)
     samples: int = Field(8, ge=2, le=200, description="row spacings sampled over rows.spacings in the NLP "
                                                       "(the check uses 10x as many)")
     max_iter: int = max_iter_field(200)

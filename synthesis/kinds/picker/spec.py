@@ -16,7 +16,7 @@ from pydantic import Field, field_validator, model_validator
 from synthesis.spec.docmeta import SPEC_FILE
 from synthesis.spec.dynamics import BarLink, DynamicsLimits, DynamicsSection, LumpedLink, PointMass
 from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, WITHIN_A_TURN, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, require_positive_fields,
     starts_field, value_of, within_a_turn,
 )
@@ -91,7 +91,7 @@ class PickerObjective(StrictModel):
 
 
 class PickerSolver(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     samples: int = Field(26, ge=2, le=2000, description="crank angles over the working swing for the transmission angle")
     max_iter: int = Field(3000, ge=1, description="IPOPT iteration limit per start and stage")
     backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission limit by "

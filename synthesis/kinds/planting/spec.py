@@ -18,7 +18,7 @@ from pydantic import Field, PrivateAttr, field_validator, model_validator
 from synthesis.spec.dynamics import DynamicsSection, SoilForce
 from synthesis.spec.poses import MAX_POSES, ClawPose, attitude_field, pose_names
 from synthesis.spec.operating import OperatingRange, resolve_ranges
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, WITHIN_A_TURN, Interval, documented_range, is_free, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable,
     max_iter_field, require_positive_fields, starts_field, value_of, within_a_turn,
 )
@@ -178,7 +178,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(16)
+    starts: Starts = starts_field(16)
     samples_per_phase: int = Field(16, ge=3, le=500, description="samples of each acceleration phase")
     samples_per_turn: int = Field(72, ge=12, le=3600, description="samples of a crank turn (transmission, lowest)")
     max_iter: int = max_iter_field(500)

@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field, require_positive_fields,
     starts_field, value_of, within_a_turn,
 )
@@ -137,7 +137,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     samples_per_turn: int = Field(72, ge=12, le=3600, description="carrier angles sampled over a turn for the "
                                                                    "gear and trajectory rules")
     in_soil_samples: int = Field(12, ge=3, le=1000, description="samples of the in-soil stroke for its speed rule")

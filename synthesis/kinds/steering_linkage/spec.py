@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     ACUTE, POSITIVE, FreeVariable, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
@@ -124,7 +124,7 @@ class ObjectiveSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     samples: int = Field(40, ge=4, le=2000, description="inside locks sampled over 0 .. max_inside_lock (the "
                                                         "re-check uses 10x as many)")
     backoff: float = Field(0.01, ge=0.0, le=1.0, description="the NLP tightens the sampled transmission-angle "

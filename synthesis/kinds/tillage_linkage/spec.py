@@ -18,7 +18,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import (
+from synthesis.spec.common import (Starts,
     POSITIVE, FreeVariable, documented_range, MultistartSettings, ProblemSpec, StrictModel, Variable, max_iter_field,
     require_positive_fields, starts_field, value_of,
 )
@@ -139,7 +139,7 @@ class TillageDynamicsSection(StrictModel):
 
 
 class SolverSection(MultistartSettings):
-    starts: int = starts_field(8)
+    starts: Starts = starts_field(8)
     samples: int = Field(72, ge=12, le=3600, description="crank angles over a turn on which the lowest and "
                                                         "highest points are checked global (re-check: 10x)")
     soil_samples: int = Field(24, ge=3, le=2000, description="crank angles sampled over the in-soil phase for "
