@@ -189,3 +189,16 @@ def test_an_empty_out_is_refused_not_read_as_the_working_folder(tmp_path, comman
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "Invalid value for '--out': an empty path" in proc.stderr and "Traceback" not in proc.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_folder_or_its_result_given_as_spec_is_refused_naming_its_solved_toml(tmp_path):
+    """check RESULT said "not valid TOML: Invalid statement" of a result.json and "is a directory" of a run folder."""
+    run = tmp_path / "results" / "my_arm"
+    run.mkdir(parents=True)
+    (run / "result.json").write_text("{}")
+    (run / "solved.toml").write_text("")
+    for given, what in ((run, "a folder"), (run / "result.json", "a JSON file (a run's result?)")):
+        proc = agrisynth("check", str(given), cwd=tmp_path)
+        assert proc.returncode == 2, proc.stdout + proc.stderr
+        assert " ".join(proc.stderr.split()) == (f"error: {given}: {what}, not a spec file: a solve's design is its "
+                                                 f"solved.toml, `agrisynth check {run / 'solved.toml'}`")

@@ -26,7 +26,7 @@ def finish(outcome: Outcome) -> None:
 
 
 @click.command("check")
-@click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("spec", type=click.Path(path_type=Path))
 @click.option("--out", "out", type=NamedPath(file_okay=False, path_type=Path), default=Path("results"),
               show_default=True, help="output folder; the run writes OUT/<spec name>-check/")
 @click.option("--force", is_flag=True, help=FORCE_HELP.replace("OUT/<name>/", "OUT/<name>-check/"))
@@ -55,7 +55,7 @@ class SolveCommand(click.Command):
 
 
 @click.command("solve", cls=SolveCommand)
-@click.argument("spec", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("spec", type=click.Path(path_type=Path))
 @click.option("--out", type=NamedPath(file_okay=False, path_type=Path), default=None,
               help="output folder; the run writes OUT/<spec name>/  [default: results]")
 @click.option("--force", is_flag=True, help=FORCE_HELP)

@@ -64,8 +64,23 @@ def tolerance_names_known(loaded) -> None:
                                                                 f"{{value:g}}")
 
 
+def not_a_result(spec: Path) -> None:
+    """SpecError when SPEC is a run's folder or its result.json (check and solve read a spec file, TOML): said with
+    the file that holds a run's design, its solved.toml, where there is one."""
+    path = Path(spec)
+    folder = path if path.is_dir() else path.parent if path.suffix.lower() == ".json" and path.is_file() else None
+    if folder is None:
+        return
+    solved = folder / "solved.toml"
+    what = "a folder" if path.is_dir() else "a JSON file (a run's result?)"
+    hint = (f": a solve's design is its solved.toml, `agrisynth check {solved}`" if solved.is_file()
+            else ": give a spec file (TOML)")
+    raise SpecError(f"{spec}: {what}, not a spec file{hint}")
+
+
 def loaded_spec(spec: Path, emit: Subscriber):
     """The spec a check or solve runs on: read, its tolerance names checked, its unit notes told."""
+    not_a_result(spec)
     loaded = load_spec(spec_file(spec, emit))
     tolerance_names_known(loaded)
     for note in unit_notes(loaded.model):
