@@ -202,3 +202,10 @@ def test_a_run_folder_or_its_result_given_as_spec_is_refused_naming_its_solved_t
         assert proc.returncode == 2, proc.stdout + proc.stderr
         assert " ".join(proc.stderr.split()) == (f"error: {given}: {what}, not a spec file: a solve's design is its "
                                                  f"solved.toml, `agrisynth check {run / 'solved.toml'}`")
+
+
+def test_a_misspelt_command_is_told_the_nearest_one(tmp_path):
+    proc = agrisynth("chek", "x.toml", cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: No such command 'chek'; did you mean 'check'?")
+    proc = agrisynth("xyzzy", cwd=tmp_path)
+    assert proc.returncode == 2 and "did you mean" not in proc.stderr

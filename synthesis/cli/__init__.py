@@ -10,6 +10,7 @@ Each command lives in its own module, imported only when that command runs or sh
 
 from __future__ import annotations
 
+import difflib
 import importlib
 import sys
 
@@ -52,6 +53,14 @@ class _LazyGroup(click.Group):
             return None
         module = importlib.import_module(COMMANDS[name][0])
         return getattr(module, f"{name}_command")
+
+    def resolve_command(self, ctx, args):
+        # a misspelt command gets the nearest ones, as a misspelt spec field does
+        if args and args[0] not in COMMANDS and not args[0].startswith("-"):
+            close = difflib.get_close_matches(args[0], sorted(COMMANDS), n=2, cutoff=0.6)
+            if close:
+                ctx.fail(f"No such command '{args[0]}'; did you mean {' or '.join(repr(c) for c in close)}?")
+        return super().resolve_command(ctx, args)
 
     def format_commands(self, ctx, formatter) -> None:
         limit = formatter.width - 6 - max(len(name) for name in COMMANDS)
