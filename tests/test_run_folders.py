@@ -365,6 +365,11 @@ def test_a_second_run_into_a_folder_being_written_is_refused_before_any_work(tmp
     assert later.held is None
 
 
+def _started_then_asleep(started) -> None:
+    started.set()
+    time.sleep(30)
+
+
 def test_the_live_run_lock_is_its_own_name_s_and_not_held_by_a_forked_child(tmp_path):
     """A run named "a.run-x" (staging .a.run-x.run-XXXX) does not block runs of "a"; a process forked from a run (a
     pool worker, a figure's drawing) does not keep the run's lock once the run lets it go (it closes its copy)."""
@@ -374,9 +379,11 @@ def test_the_live_run_lock_is_its_own_name_s_and_not_held_by_a_forked_child(tmp_
     other.discard()
     run = open_run_folder(tmp_path, "run")
     ctx = multiprocessing.get_context("fork")
-    child = ctx.Process(target=time.sleep, args=(30,))
+    started = ctx.Event()
+    child = ctx.Process(target=_started_then_asleep, args=(started,))
     child.start()
     try:
+        assert started.wait(30)             # past the fork's handlers: the child's own code runs
         run.release()                       # the run lets go (it ended) while the forked process lives on
         later = open_run_folder(tmp_path, "run")
         later.discard()
