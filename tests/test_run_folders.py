@@ -252,7 +252,7 @@ def test_bench_output_follows_the_run_folder_rules(tmp_path):
 def test_check_solve_compare_and_check_of_solved_toml_need_no_flag_and_keep_every_result(tmp_path):
     """The natural order of work on one spec, in a folder holding only that spec: check it, solve it, compare the two,
     check the solved design.  Each command writes its own run folder (check OUT/<name>-check/, solve OUT/<name>/,
-    compare OUT/compare/; solved.toml is named <name>_solved), so none needs --force and none replaces another's
+    compare OUT/compare/<A>_vs_<B>/; solved.toml is named <name>_solved), so none needs --force and none replaces another's
     result.  Running the same command of the same spec again still keeps the earlier run (exit 2 before any work)."""
     spec = tmp_path / "arm.toml"
     spec.write_text((PLANTING.parent / "steering" / "steering_redesign_27.toml").read_text()
@@ -273,7 +273,7 @@ def test_check_solve_compare_and_check_of_solved_toml_need_no_flag_and_keep_ever
 
     proc = agrisynth("compare", "results/arm-check", "results/arm", cwd=tmp_path, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    page = (results / "compare" / "compare.html").read_text()
+    page = (results / "compare" / "arm-check_vs_arm" / "compare.html").read_text()
     assert "arm (arm-check)" in page and "arm (arm)" in page        # the two runs of one name told apart
 
     proc = agrisynth("check", "results/arm/solved.toml", cwd=tmp_path, timeout=120)
