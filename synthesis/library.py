@@ -23,6 +23,7 @@ from pathlib import Path, PurePosixPath
 from synthesis.errors import OutputError, SpecError
 from synthesis.result import RUN_NAME, atomic_write_drawn
 from synthesis.spec import load_spec
+from synthesis.spec.common import RESERVED_RUN_NAMES
 from synthesis.spec.design_info import walk_fields
 from synthesis.spec.docmeta import SpecFile
 
@@ -101,7 +102,8 @@ def unknown_name_text(name: str | Path, library: Path = LIBRARY) -> str:
 def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = False) -> list[Path]:
     """Copy the library spec ``source`` to the file ``target`` (a folder: the spec's own file name in it), to be
     edited there, with the spec files it names (the combined picker's two linkages) beside it at the same relative
-    paths, so the copy checks as the library spec does.  The files are copied byte for byte (comments kept).
+    paths, so the copy checks as the library spec does.  The files are copied byte for byte (comments kept), but for
+    the ``name`` line of a copy the user named anew (``rename``).
 
     OutputError (exit 2, before anything is written) when a file to write exists and ``force`` is not given, when
     it is a library file itself, or when the folder to write in does not exist.  Returns the files written, the spec
@@ -122,6 +124,12 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
                 plan.append((named, copy.parent / relative))
     if not target.parent.is_dir():
         raise OutputError(f"{target}: no folder {target.parent} to write it in")
+    written = [os.path.abspath(copy) for _, copy in plan]
+    for k, ((spec, copy), where) in enumerate(zip(plan, written)):
+        if where in written[:k]:            # the copy named as a file it names: one would replace the other
+            other = plan[written.index(where)][0]
+            raise OutputError(f"{copy}: {other.name} and the spec file it names, {spec.name}, would be copied to this "
+                              f"one file; give --out another file name")
     for spec, copy in plan:
         if os.path.lexists(copy):
             if copy.exists() and os.path.samefile(copy, spec):
@@ -140,6 +148,12 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
     return [copy for _, copy in plan]
 
 
+def usable_name(name: str) -> bool:
+    """Whether a spec may be named ``name`` (its run folders' names: :class:`synthesis.spec.common.ProblemSpec`)."""
+    return (bool(RUN_NAME.match(name)) and not name.lower().endswith(("-check", "-tolerance"))
+            and name.lower() not in RESERVED_RUN_NAMES)
+
+
 #: a spec's top-level ``name = "..."`` line (before any table)
 _NAME_LINE = re.compile(rb'^(?P<key>[ \t]*name[ \t]*=[ \t]*)"(?P<value>[^"\\\n]*)"', re.MULTILINE)
 
@@ -148,7 +162,7 @@ def with_name(data: bytes, name: str) -> bytes:
     """The spec file's bytes with its ``name`` set to ``name`` (a copy written as my_arm.toml runs as my_arm: its
     run folders are the copy's own, not the library spec's), every other byte kept; unchanged when ``name`` is no
     run name or the file does not say its name in one plain line before its first table."""
-    if not RUN_NAME.match(name) or name.lower().endswith(("-check", "-tolerance")):
+    if not usable_name(name):
         return data
     first_table = re.search(rb"^[ \t]*\[", data, re.MULTILINE)
     match = _NAME_LINE.search(data, 0, first_table.start() if first_table else len(data))

@@ -292,6 +292,17 @@ def test_compare_without_out_writes_a_folder_per_comparison(good, tmp_path):
     assert (tmp_path / "results" / "compare" / "arm_a_vs_arm_c" / "compare.html").is_file()
     again = agrisynth("compare", "arm_a", "arm_b", cwd=tmp_path, timeout=300)     # the same comparison: --force
     assert again.returncode == 2 and "give --force to replace it" in again.stderr
+    # an earlier version's results/compare/ (a run folder itself): said, not written into
+    (tmp_path / "results" / "compare").rename(tmp_path / "kept")
+    (tmp_path / "results" / "compare").mkdir()
+    (tmp_path / "results" / "compare" / ".agrisynth-run").write_text(
+        (tmp_path / "kept" / "arm_a_vs_arm_b" / ".agrisynth-run").read_text())
+    old = agrisynth("compare", "arm_a", "arm_b", cwd=tmp_path, timeout=300)
+    assert old.returncode == 2 and "holds an earlier version's comparison (one folder for all)" in old.stderr
+    # a default folder inside a RESULT is named as the default, not as an --out never given
+    (tmp_path / "results" / "compare" / ".agrisynth-run").unlink()
+    inside = agrisynth("compare", "arm_a", ".", cwd=tmp_path, timeout=300)
+    assert inside.returncode == 2 and "the default output folder results/compare/" in inside.stderr
 
 
 def test_the_default_compare_folder_of_many_results_keeps_to_a_folder_name():
@@ -300,5 +311,9 @@ def test_the_default_compare_folder_of_many_results_keeps_to_a_folder_name():
     many = tuple(Path(f"results/redesign_from_example1_solve_{i}") for i in range(12))
     out = default_out(many)
     assert out.parent == Path("results/compare") and len(out.name) <= 100
-    assert out.name.startswith("redesign_from_example1_solve_0") and out.name.endswith("_and_11_more")
+    assert re.fullmatch(r"redesign_from_example1_solve_0_and_11_more_[0-9a-f]{8}", out.name), out.name
+    assert default_out(many[:1] + many[2:]) != out          # another comparison, however shortened
     assert default_out((Path("a b/run 1/result.json"), Path("."))).name == f"run_1_vs_{Path.cwd().name}"
+    # names alone that could name another comparison: a hash of the full paths tells them apart
+    assert default_out((Path("old/arm"), Path("new/arm"))) != default_out((Path("new/arm"), Path("other/arm")))
+    assert default_out((Path("a_vs_b"), Path("c"))) != default_out((Path("a"), Path("b_vs_c")))

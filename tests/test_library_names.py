@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 
 import pytest
 
@@ -148,3 +149,25 @@ def test_the_studio_worker_and_the_extreme_matrix_find_this_agrisynth():
 
     assert worker_env()["PYTHONPATH"].split(os.pathsep)[0] == str(IMPORT_ROOT)
     assert checkout() == IMPORT_ROOT and bench_extreme.EXTREME == IMPORT_ROOT / "tests" / "extreme"
+
+
+def test_a_copy_named_as_no_spec_may_be_keeps_its_name_and_says_so(tmp_path):
+    """compare.toml, "my arm.toml": no spec may be named so (a run folder's name, reserved for compare): the copy
+    keeps the library's name, and the line says its runs would be the library spec's folders."""
+    library_text = (LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text()
+    for out in ("compare.toml", "my arm.toml", "arm-check.toml"):
+        proc = agrisynth("problems", "--copy", "redesign_from_example1", "--out", out, cwd=tmp_path, timeout=60)
+        assert proc.returncode == 0, proc.stderr
+        assert (tmp_path / out).read_text() == library_text
+        said = " ".join(proc.stdout.split())
+        assert f"its name stays redesign_from_example1 ({Path(out).stem!r} is no spec name" in said, said
+
+
+@pytest.mark.slow
+def test_a_copy_named_as_a_file_it_names_is_refused_before_anything_is_written(tmp_path):
+    proc = agrisynth("problems", "--copy", "cai2020_picker", "--out", "cai2020_crank_rocker.toml", cwd=tmp_path,
+                     timeout=60)
+    assert proc.returncode == 2 and proc.stderr.strip() == (
+        "error: cai2020_crank_rocker.toml: cai2020_picker.toml and the spec file it names, cai2020_crank_rocker.toml, "
+        "would be copied to this one file; give --out another file name")
+    assert list(tmp_path.iterdir()) == []

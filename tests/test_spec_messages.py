@@ -237,6 +237,10 @@ def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(t
                     "arm.toml")
     assert unit_notes(load_spec(arm).model) == [
         "arm.l5 = 0.191 mm beside lengths up to 180.6 mm: lengths are in mm; was it given in metres?"]
+    # a bound of 0.5 mm is a designer's limit, not a link in metres: the value given (a free variable's init) is read
+    wide = spec_with(tmp_path, LIBRARY / "planting_arm" / "redesign_from_example1.toml",
+                     [("l2 = { init = 35, bounds = [28, 42] }", "l2 = { init = 35, bounds = [0.5, 42] }")], "wide.toml")
+    assert unit_notes(load_spec(wide).model) == []
     text = (LIBRARY / "tillage" / "tillage_redesign.toml").read_text()
     old = next(line for line in text.splitlines() if line.startswith("theta = {"))
     radians = tmp_path / "radians.toml"

@@ -56,7 +56,7 @@ class _LazyGroup(click.Group):
 
     def resolve_command(self, ctx, args):
         # a misspelt command gets the nearest ones, as a misspelt spec field does
-        if args and args[0] not in COMMANDS and not args[0].startswith("-"):
+        if args and args[0] not in COMMANDS and not args[0].startswith("-") and not ctx.resilient_parsing:
             close = difflib.get_close_matches(args[0], sorted(COMMANDS), n=2, cutoff=0.6)
             if close:
                 ctx.fail(f"No such command '{args[0]}'; did you mean {' or '.join(repr(c) for c in close)}?")

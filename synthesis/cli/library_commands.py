@@ -50,6 +50,11 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
     copied, original = spec_name(written[0]), spec_name(source)
     renamed = (f", named {escape(copied)} (its runs: results/{escape(copied)}/ and results/{escape(copied)}-check/)"
                if copied and copied != original else "")
+    if target is not None and copied == original and written[0].stem != original:
+        # the file's name is no spec name: the copy's runs would be the library spec's own folders
+        renamed = (f"; its name stays {escape(str(original))} ({escape(written[0].stem)!r} is no spec name: letters, "
+                   f"digits, _ . -, not compare, bench or studio, not ending in -check or -tolerance): edit its name "
+                   f"line to give its runs their own folders")
     console.print(f"wrote {escape(str(written[0]))}{also}: a copy of the library's "
                   f"{escape(source.relative_to(library_dir).as_posix())} to edit{renamed}; check it with "
                   f"agrisynth check {escape(str(written[0]))}", soft_wrap=True)

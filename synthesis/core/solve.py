@@ -250,9 +250,14 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     replayed: Run | None = None               # the batch the interrupted run finished before this one, counted again
     # the batch in progress holds starts the interrupted run finished that are not yet counted (and logged) again: a
     # signal before they are keeps nothing, so the run resumed is never replaced by one with fewer starts
-    pending = bool(resumed)
+    pending = set(i for i in resumed if i < totals[first])
     in_batch = False                          # inside a batch's run_multistart (not the replay)
     k = first
+
+    def counting(report: StartReport, best: StartReport) -> None:
+        """``on_start``, and the resumed batch's starts crossed off as they are counted (and logged) again."""
+        pending.discard(report.outcome.start)
+        on_start(report, best)
 
     def interrupted() -> dict:
         """The kept result's ``solver.auto``: stopped by the signal, the batches begun."""
@@ -268,9 +273,10 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             began = time.perf_counter()
             in_batch = True
             run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler,
-                                 on_start=on_start, record=record, finished=resumed, rows_by_index=nested,
+                                 on_start=counting, record=record, finished=resumed, rows_by_index=nested,
                                  carried=carried)
-            in_batch, pending = False, False
+            in_batch = False
+            pending.clear()
             last = run
             took = time.perf_counter() - began
             # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
@@ -294,7 +300,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         # a batch's partial holds its recounted starts (None before they are all counted again); the replay's is
         # never kept on its own
         partial = exc.partial if in_batch else None
-        if pending and partial is None:
+        if pending:
             raise Interrupted(exc.signum, None) from None
         raise Interrupted(exc.signum, _kept_so_far(partial, last or replayed, maximise, t0, interrupted(),
                                                    nested)) from None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 from pathlib import Path
@@ -15,7 +16,7 @@ from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import CompareRequest, Comparison, Outcome
 
 
-def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
+def refuse_overlap(results: tuple[Path, ...], out: Path, said: str = "--out") -> None:
     """--force would replace a result being compared: OUT may neither hold nor be inside a RESULT."""
     target = Path(os.path.realpath(out))              # realpath, not resolve(): a symlink loop is the loader's to name
     for given in results:
@@ -23,7 +24,7 @@ def refuse_overlap(results: tuple[Path, ...], out: Path) -> None:
         if read.name == "result.json" and is_run_folder(read.parent):
             read = read.parent                        # a run given as its result.json: the run folder is the result
         if read == target or target in read.parents or read in target.parents:
-            raise OutputError(f"--out {out} holds or is inside RESULT {given}: the page would replace what it "
+            raise OutputError(f"{said} {out} holds or is inside RESULT {given}: the page would replace what it "
                               f"compares; write it to another folder")
 
 
@@ -34,25 +35,34 @@ MAX_FOLDER_NAME = 100
 
 
 def default_out(results: tuple[Path, ...]) -> Path:
-    """results/compare/<A>_vs_<B>...: each RESULT by its run folder's name (a result.json by its folder's); more than
-    fits in a folder name: the first and how many more."""
-    names = []
+    """results/compare/<A>_vs_<B>...: each RESULT by its run folder's name (a result.json by its folder's).  Where the
+    names alone could name another comparison -- a name repeated (old/arm, new/arm), one holding "_vs_", more than
+    fit in a folder name (then the first and how many more) -- a short hash of the RESULTs' full paths is added."""
+    names, full = [], []
     for given in results:
         path = Path(os.path.abspath(given))
         folder = path.parent if path.name in ("result.json", "bench.json") else path
         names.append(re.sub(r"[^A-Za-z0-9_.-]", "_", folder.name).lstrip("._-") or "run")
+        full.append(os.path.realpath(given))
     joined = "_vs_".join(names)
-    if len(joined) > MAX_FOLDER_NAME:
+    ambiguous = len(set(names)) < len(names) or any("_vs_" in n for n in names)
+    digest = "_" + hashlib.sha256("\0".join(full).encode()).hexdigest()[:8]
+    if len(joined) > MAX_FOLDER_NAME - len(digest):
         tail = f"_and_{len(names) - 1}_more"
-        joined = names[0][:MAX_FOLDER_NAME - len(tail)] + tail
-    return COMPARE_ROOT / joined
+        joined = names[0][:MAX_FOLDER_NAME - len(tail) - len(digest)] + tail
+        ambiguous = True
+    return COMPARE_ROOT / (joined + (digest if ambiguous else ""))
 
 
 def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     """Write OUT/compare.html and its figures; ``details``: :class:`Comparison` (the candidates, the first the
     baseline; the page).  Nothing is re-solved: the page is built from the result files alone (no events)."""
     out = default_out(request.results) if request.out is None else request.out
-    refuse_overlap(request.results, out)
+    if request.out is None and is_run_folder(COMPARE_ROOT):
+        # an earlier version wrote every comparison into results/compare/ itself
+        raise OutputError(f"{COMPARE_ROOT} holds an earlier version's comparison (one folder for all); comparisons "
+                          f"are now written into folders inside it: move it away, or give --out")
+    refuse_overlap(request.results, out, "--out" if request.out is not None else "the default output folder")
     # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
     with RunOutput.around(open_output_folder(out, request.force)) as output:
         results = [p for p in request.results if not is_bench(p)]

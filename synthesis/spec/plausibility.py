@@ -69,7 +69,11 @@ def unit_notes(model: BaseModel) -> list[str]:
         # tens of mm and more is no link of a machine (a tolerance or a back-off of 0.2 mm is no design variable)
         names = set(model.variables()) if hasattr(model, "variables") else set()
         largest = max(abs(v) for _, v in lengths)
-        tiny = [(path, v) for path, v in lengths if abs(v) < TINY_LENGTHS and path.rsplit(".", 1)[-1] in names]
+        # the value given (a free variable's init): a bound of 0.5 mm is a designer's limit, not a link
+        given = [(path, value.init if isinstance(value, FreeVariable) else value) for path, unit, value in fields
+                 if unit == "mm" and path.rsplit(".", 1)[-1] in names]
+        tiny = [(path, v) for path, v in given
+                if isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < abs(v) < TINY_LENGTHS]
         if tiny and largest >= OUT_OF_SCALE * TINY_LENGTHS:
             shown = ", ".join(f"{path} = {v:g}" for path, v in tiny[:3]) + (" ..." if len(tiny) > 3 else "")
             notes.append(f"{shown} mm beside lengths up to {largest:g} mm: lengths are in mm; "

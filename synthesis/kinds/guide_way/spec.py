@@ -17,7 +17,8 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import FreeVariable, MultistartSettings, ProblemSpec, Sign, StrictModel, Variable, value_of
+from synthesis.spec.common import (FreeVariable, MultistartSettings, ProblemSpec, Sign, Starts, StrictModel, Variable,
+                                   value_of)
 from synthesis.spec.dynamics import BarLink, DynamicsLimits, LumpedLink
 
 KIND = "guide_way"
@@ -134,7 +135,8 @@ class ObjectiveSection(StrictModel):
 class SolverSection(MultistartSettings):
     samples_per_segment: int = Field(60, ge=5, le=5000, description="samples per conic segment or per key-to-key "
                                                                     "stretch of the spline (check: 10x)")
-    starts: int = Field(2, ge=1, le=10000, description="multistart starts (start 0 = the convex fit)")
+    starts: Starts = Field(2, ge=1, le=10000, description='multistart starts (start 0 = the convex fit), or "auto": '
+                                                        'batches until the confidence rule holds (`--starts auto`)')
 
 
 class GuideWayPointMass(StrictModel):
