@@ -124,7 +124,8 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
                 plan.append((named, copy.parent / relative))
     if not target.parent.is_dir():
         raise OutputError(f"{target}: no folder {target.parent} to write it in")
-    written = [os.path.abspath(copy) for _, copy in plan]
+    # one file however its name is cased (a case-blind disk: macOS, Windows)
+    written = [os.path.normcase(os.path.abspath(copy)).casefold() for _, copy in plan]
     for k, ((spec, copy), where) in enumerate(zip(plan, written)):
         if where in written[:k]:            # the copy named as a file it names: one would replace the other
             other = plan[written.index(where)][0]
@@ -150,7 +151,7 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
 
 def usable_name(name: str) -> bool:
     """Whether a spec may be named ``name`` (its run folders' names: :class:`synthesis.spec.common.ProblemSpec`)."""
-    return (bool(RUN_NAME.match(name)) and not name.lower().endswith(("-check", "-tolerance"))
+    return (bool(RUN_NAME.fullmatch(name)) and not name.lower().endswith(("-check", "-tolerance"))
             and name.lower() not in RESERVED_RUN_NAMES)
 
 

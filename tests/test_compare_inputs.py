@@ -298,7 +298,7 @@ def test_compare_without_out_writes_a_folder_per_comparison(good, tmp_path):
     (tmp_path / "results" / "compare" / ".agrisynth-run").write_text(
         (tmp_path / "kept" / "arm_a_vs_arm_b" / ".agrisynth-run").read_text())
     old = agrisynth("compare", "arm_a", "arm_b", cwd=tmp_path, timeout=300)
-    assert old.returncode == 2 and "holds an earlier version's comparison (one folder for all)" in old.stderr
+    assert old.returncode == 2 and "is itself a comparison's folder (an earlier version's default" in old.stderr
     # a default folder inside a RESULT is named as the default, not as an --out never given
     (tmp_path / "results" / "compare" / ".agrisynth-run").unlink()
     inside = agrisynth("compare", "arm_a", ".", cwd=tmp_path, timeout=300)
@@ -313,7 +313,15 @@ def test_the_default_compare_folder_of_many_results_keeps_to_a_folder_name():
     assert out.parent == Path("results/compare") and len(out.name) <= 100
     assert re.fullmatch(r"redesign_from_example1_solve_0_and_11_more_[0-9a-f]{8}", out.name), out.name
     assert default_out(many[:1] + many[2:]) != out          # another comparison, however shortened
-    assert default_out((Path("a b/run 1/result.json"), Path("."))).name == f"run_1_vs_{Path.cwd().name}"
+    # a name changed to fit ("run 1") could be another's ("run_1"): hashed too
+    assert re.fullmatch(rf"run_1_vs_{re.escape(Path.cwd().name)}_[0-9a-f]{{8}}",
+                        default_out((Path("a b/run 1/result.json"), Path("."))).name)
     # names alone that could name another comparison: a hash of the full paths tells them apart
     assert default_out((Path("old/arm"), Path("new/arm"))) != default_out((Path("new/arm"), Path("other/arm")))
     assert default_out((Path("a_vs_b"), Path("c"))) != default_out((Path("a"), Path("b_vs_c")))
+    assert default_out((Path("x/a_vs"), Path("y/b"))) != default_out((Path("x/a"), Path("y/vs_b")))
+    assert default_out((Path("a b"), Path("c"))) != default_out((Path("a_b"), Path("c")))
+    # a run given as its folder or as its result.json is one run: the same comparison, the same folder
+    assert default_out((Path("old/arm/result.json"), Path("new/arm"))) == default_out((Path("old/arm"),
+                                                                                      Path("new/arm")))
+    assert default_out((Path(os.fsdecode(b"arm\xff")), Path("b"))).name.startswith("arm__vs_b_")

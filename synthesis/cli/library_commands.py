@@ -14,7 +14,7 @@ from synthesis import kinds
 from synthesis.cli.options import NamedPath
 from synthesis.cli import terminal
 from synthesis.cli.views import console
-from synthesis.library import LIBRARY
+from synthesis.library import LIBRARY, usable_name
 from synthesis.runs import library
 from synthesis.spec import reference as specref
 
@@ -50,7 +50,7 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
     copied, original = spec_name(written[0]), spec_name(source)
     renamed = (f", named {escape(copied)} (its runs: results/{escape(copied)}/ and results/{escape(copied)}-check/)"
                if copied and copied != original else "")
-    if target is not None and copied == original and written[0].stem != original:
+    if target is not None and copied == original and written[0].stem != original and not usable_name(written[0].stem):
         # the file's name is no spec name: the copy's runs would be the library spec's own folders
         renamed = (f"; its name stays {escape(str(original))} ({escape(written[0].stem)!r} is no spec name: letters, "
                    f"digits, _ . -, not compare, bench or studio, not ending in -check or -tolerance): edit its name "

@@ -38,15 +38,18 @@ def default_out(results: tuple[Path, ...]) -> Path:
     """results/compare/<A>_vs_<B>...: each RESULT by its run folder's name (a result.json by its folder's).  Where the
     names alone could name another comparison -- a name repeated (old/arm, new/arm), one holding "_vs_", more than
     fit in a folder name (then the first and how many more) -- a short hash of the RESULTs' full paths is added."""
-    names, full = [], []
+    names, full, cleaned = [], [], False
     for given in results:
         path = Path(os.path.abspath(given))
         folder = path.parent if path.name in ("result.json", "bench.json") else path
-        names.append(re.sub(r"[^A-Za-z0-9_.-]", "_", folder.name).lstrip("._-") or "run")
-        full.append(os.path.realpath(given))
+        name = re.sub(r"[^A-Za-z0-9_.-]", "_", folder.name).lstrip("._-") or "run"
+        cleaned = cleaned or name != folder.name
+        names.append(name)
+        full.append(os.fsencode(os.path.realpath(folder)))      # a run as its folder or its result.json: one run
     joined = "_vs_".join(names)
-    ambiguous = len(set(names)) < len(names) or any("_vs_" in n for n in names)
-    digest = "_" + hashlib.sha256("\0".join(full).encode()).hexdigest()[:8]
+    # names alone name another comparison too: one repeated, one whose "_vs_" splits otherwise, one changed to fit
+    ambiguous = len(set(names)) < len(names) or joined.split("_vs_") != names or cleaned
+    digest = "_" + hashlib.sha256(b"\0".join(full)).hexdigest()[:8]
     if len(joined) > MAX_FOLDER_NAME - len(digest):
         tail = f"_and_{len(names) - 1}_more"
         joined = names[0][:MAX_FOLDER_NAME - len(tail) - len(digest)] + tail
@@ -60,8 +63,9 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
     out = default_out(request.results) if request.out is None else request.out
     if request.out is None and is_run_folder(COMPARE_ROOT):
         # an earlier version wrote every comparison into results/compare/ itself
-        raise OutputError(f"{COMPARE_ROOT} holds an earlier version's comparison (one folder for all); comparisons "
-                          f"are now written into folders inside it: move it away, or give --out")
+        raise OutputError(f"{COMPARE_ROOT} is itself a comparison's folder (an earlier version's default, or an "
+                          f"--out given so), where comparisons are now written into folders inside it: move it away, "
+                          f"or give --out")
     refuse_overlap(request.results, out, "--out" if request.out is not None else "the default output folder")
     # refused (exit 2) before anything is read; the staging folder is discarded if the comparison stops
     with RunOutput.around(open_output_folder(out, request.force)) as output:
