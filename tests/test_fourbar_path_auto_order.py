@@ -103,7 +103,7 @@ def test_a_nested_auto_run_resumed_inside_its_second_batch_gives_the_uninterrupt
     assert len(lines) == 1 + 1 + 16 + 1 + 16          # each start written once, after its own batch's mark
     (tmp_path / startlog.FILENAME).write_text("\n".join(lines[:1 + 1 + 16 + 1 + 7]) + "\n")
     cut = startlog.read(tmp_path, print_)
-    assert sorted(cut) == list(range(23)) and startlog.last_batch(tmp_path) == (32, True)
+    assert sorted(cut) == list(range(23)) and startlog.read_resumed(tmp_path, print_).last_batch == (32, True)
     solved = []
     resumed, _, _ = run_solve(nested_toy, loaded, workers=1, auto=auto, finished=cut, resumed_batch=32,
                               resumed_nested=True, record=solved.append)

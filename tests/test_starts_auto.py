@@ -378,10 +378,11 @@ def test_the_batch_before_the_one_an_auto_run_was_solving_is_read_back(tmp_path,
     for out in kept[16:19]:
         log.append(out)
     log.close()
-    total, previous = startlog.previous_batch(tmp_path, print_)
+    total, previous = startlog.read_resumed(tmp_path, print_).previous
     assert total == 16 and sorted(previous) == list(range(16))
     assert all(previous[i].objective == kept[i].objective for i in range(16))
     assert sorted(startlog.read(tmp_path, print_)) == sorted(out.start for out in kept[16:19])
+    assert startlog.read_resumed(tmp_path, print_).last_batch == (32, False)
 
 
 def test_starts_auto_in_a_spec_is_read_in_any_case_as_the_option_is_and_another_word_is_named(tmp_path):

@@ -226,7 +226,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     an interrupted auto run's batch and its finished starts (the earlier batches ended without stopping, so the run
     goes on from that one); ``resumed_nested``: whether that batch was marked nested (a run interrupted in the other
     order is refused: its starts are not this order's); ``previous``: the interrupted run's last finished batch
-    before that one (total, its starts: :func:`~synthesis.core.startlog.previous_batch`), counted again without
+    before that one (total, its starts: :attr:`~synthesis.core.startlog.Resumed.previous`), counted again without
     solving and logged, so an interrupt of the resumed run keeps it as the interrupted run did.
 
     Interrupted (SIGINT/SIGTERM) anywhere, inside a batch or between two: raises :class:`Interrupted` whose

@@ -11,13 +11,12 @@ A line that cannot be read (cut off by a crash) is skipped: that start is solved
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import math
 import os
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, NamedTuple
 
 import numpy as np
 
@@ -152,24 +151,6 @@ def settings_of(folder: Path) -> dict:
     return settings if isinstance(settings, dict) else {}
 
 
-def last_batch(folder: Path) -> tuple[int, bool] | None:
-    """The batch a ``--starts auto`` run was solving and whether it was nested (its last ``auto_batch`` line; None:
-    none there)."""
-    path = Path(folder) / FILENAME
-    last = None
-    try:
-        with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
-            for text in _lines(fh):
-                if text is not None and BATCH.encode() in text[:40]:
-                    with contextlib.suppress(OutputError):
-                        line = parse_json(text, path, OutputError)
-                        if isinstance(line, dict) and isinstance(line.get(BATCH), int):
-                            last = (line[BATCH], line.get("nested") is True)
-    except (OSError, OutputError):
-        return None
-    return last
-
-
 def _lines(fh) -> Iterator[bytes | None]:
     """The lines of ``fh``, None for one longer than MAX_LINE_BYTES (read past, never held whole)."""
     while True:
@@ -184,26 +165,34 @@ def _lines(fh) -> Iterator[bytes | None]:
         yield None
 
 
+class Resumed(NamedTuple):
+    """What a ``--resume`` reads of an interrupted run's starts.jsonl, in one pass."""
+
+    #: the finished starts of the batch it was solving (a fixed run's: all of them)
+    finished: dict[int, StartOutcome]
+    #: a ``--starts auto`` run's batch it was solving and whether it was nested (its last ``auto_batch`` line; None:
+    #: none there)
+    last_batch: tuple[int, bool] | None
+    #: its last *finished* batch before that one: (its total, its starts), when the batches are not nested (a nested
+    #: run's log keeps every batch's starts in the last one's); None otherwise.  A resumed run keeps it as the
+    #: interrupted run did: the result an interrupt leaves is the better of the two
+    previous: tuple[int, dict[int, StartOutcome]] | None
+
+
 def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
     """The finished starts recorded in ``folder/starts.jsonl`` of a run with fingerprint ``print_``.
 
     OutputError (exit 2) when there is no such file or it belongs to a run with other settings."""
-    return _read(folder, print_)[0]
+    return read_resumed(folder, print_).finished
 
 
-def previous_batch(folder: Path, print_: str) -> tuple[int, dict[int, StartOutcome]] | None:
-    """A ``--starts auto`` run's last *finished* batch before the one it was solving: (its total, its starts), when
-    the batches are not nested (a nested run's log keeps every batch's starts in the last one's); None otherwise.
-    A resumed run keeps it as the interrupted run did: the result an interrupt leaves is the better of the two."""
-    return _read(folder, print_)[1]
-
-
-def _read(folder: Path, print_: str) -> tuple[dict[int, StartOutcome], tuple[int, dict[int, StartOutcome]] | None]:
+def read_resumed(folder: Path, print_: str) -> Resumed:
+    """:func:`read`'s starts, and the batch marks around them (:class:`Resumed`)."""
     path = Path(folder) / FILENAME
     if not os.path.lexists(path):
         raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)")
     finished: dict[int, StartOutcome] = {}
-    total: int | None = None                  # the batch being read (an auto run's), and the one before it
+    mark: tuple[int, bool] | None = None      # the batch being read (an auto run's), and the one before it
     previous: tuple[int, dict[int, StartOutcome]] | None = None
     with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
         header = None
@@ -230,9 +219,9 @@ def _read(folder: Path, print_: str) -> tuple[dict[int, StartOutcome], tuple[int
             if BATCH in line:             # an auto run's next batch: its starts are another run's ...
                 if not line.get("nested"):
                     # a batch is begun only when the one before has finished without stopping the run
-                    previous = (total, dict(finished)) if total is not None and finished else None
+                    previous = (mark[0], dict(finished)) if mark is not None and finished else None
                     finished.clear()
-                total = line.get(BATCH) if isinstance(line.get(BATCH), int) else None
+                mark = (line[BATCH], line.get("nested") is True) if isinstance(line.get(BATCH), int) else None
                 continue                  # ... unless nested: start i is the same in every batch
             if "outcome" in line:
                 try:
@@ -242,4 +231,4 @@ def _read(folder: Path, print_: str) -> tuple[dict[int, StartOutcome], tuple[int
                 finished[out.start] = out
     if header is None:
         raise OutputError(f"--resume {folder}: {FILENAME} is empty")
-    return finished, previous
+    return Resumed(finished, mark, previous)

@@ -110,10 +110,11 @@ def _plan(request: SolveRequest, loaded, kind) -> _Plan:
     out = Path("results") if request.out is None else request.out
     plan = _Plan(n, fixed, seed, settings, fingerprint, out, loaded.name, auto=auto)
     if resume is not None:
-        plan.finished = startlog.read(resume, fingerprint)
-        mark = startlog.last_batch(resume) if auto is not None else None
+        log = startlog.read_resumed(resume, fingerprint)
+        plan.finished = log.finished
+        mark = log.last_batch if auto is not None else None
         plan.resumed_batch, plan.resumed_nested = mark if mark is not None else (None, None)
-        plan.previous = startlog.previous_batch(resume, fingerprint) if auto is not None else None
+        plan.previous = log.previous if auto is not None else None
         if mark is not None:      # refused before any folder is made
             core.refuse_other_order(kind, mark[1], core.takes_auto_order(kind, loaded.model, the_seed))
         where = resume.resolve()
