@@ -21,9 +21,9 @@ from importlib.resources import files
 from pathlib import Path, PurePosixPath
 
 from synthesis.errors import OutputError, SpecError
-from synthesis.result import RUN_NAME, atomic_write_drawn
+from synthesis.result import atomic_write_drawn
 from synthesis.spec import load_spec
-from synthesis.spec.common import RESERVED_RUN_NAMES
+from synthesis.spec.common import usable_name
 from synthesis.spec.design_info import walk_fields
 from synthesis.spec.docmeta import SpecFile
 
@@ -147,12 +147,6 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
             data = with_name(data, copy.stem)
         atomic_write_drawn(copy, lambda tmp, data=data: tmp.write_bytes(data))
     return [copy for _, copy in plan]
-
-
-def usable_name(name: str) -> bool:
-    """Whether a spec may be named ``name`` (its run folders' names: :class:`synthesis.spec.common.ProblemSpec`)."""
-    return (bool(RUN_NAME.fullmatch(name)) and not name.lower().endswith(("-check", "-tolerance"))
-            and name.lower() not in RESERVED_RUN_NAMES)
 
 
 #: a spec's top-level ``name = "..."`` line (before any table)

@@ -14,9 +14,10 @@ from synthesis import kinds
 from synthesis.cli.options import NamedPath
 from synthesis.cli import terminal
 from synthesis.cli.views import console
-from synthesis.library import LIBRARY, usable_name
+from synthesis.library import LIBRARY
 from synthesis.runs import library
 from synthesis.spec import reference as specref
+from synthesis.spec.common import usable_name
 
 
 @click.command("problems")

@@ -130,6 +130,7 @@ RESERVED_RUN_NAMES = ("compare", "bench", "studio")
 
 #: a spec's name is its result folder's name: letters, digits and _ . - only
 RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+MAX_NAME_LENGTH = 100
 
 
 class ToleranceSpec(StrictModel):
@@ -151,7 +152,7 @@ class ToleranceSpec(StrictModel):
 class ProblemSpec(StrictModel):
     """What every spec file has besides its ``kind`` and its own sections."""
 
-    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=100,
+    name: str = Field(pattern=RUN_NAME_PATTERN, max_length=MAX_NAME_LENGTH,
                       description="result folder name: letters, digits, _ . - (starting with a letter or digit), at most 100 characters; not compare, bench or studio, not ending in -check or -tolerance (other commands' folders)")
     source: str = Field("", description="where the numbers come from (paper, section, table)")
     tolerance: ToleranceSpec | None = Field(None, description="[tolerance] table: tolerance-robust solve")
@@ -159,18 +160,32 @@ class ProblemSpec(StrictModel):
     @field_validator("name")
     @classmethod
     def _not_another_commands_folder(cls, name: str) -> str:
-        # check writes OUT/<name>-check/ and tolerance OUT/<name>-tolerance/: a spec named so would meet another
-        # spec's run folder
-        for suffix in ("-check", "-tolerance"):
-            if name.lower().endswith(suffix):       # (a file system that ignores case meets X-Check too)
-                raise PydanticCustomError("run_name_suffix", "may not end in '{suffix}': agrisynth names another "
-                                          "command's run folder <name>{suffix}", {"suffix": suffix})
-        # and compare, bench and the studio write results/compare/, results/bench/, results/studio/ (a solve named
-        # "compare" was replaced by a comparison page under --force)
-        if name.lower() in RESERVED_RUN_NAMES:
-            raise PydanticCustomError("run_name_reserved", "may not be '{name}': agrisynth's {command} command "
-                                      "writes results/{command}/", {"name": name, "command": name.lower()})
+        taken = another_commands_folder(name)
+        if taken is not None:
+            raise taken
         return name
+
+
+def another_commands_folder(name: str) -> PydanticCustomError | None:
+    """Why no spec may be named ``name`` although it is a folder name: another command's run folder is named so."""
+    # check writes OUT/<name>-check/ and tolerance OUT/<name>-tolerance/: a spec named so would meet another
+    # spec's run folder
+    for suffix in ("-check", "-tolerance"):
+        if name.lower().endswith(suffix):       # (a file system that ignores case meets X-Check too)
+            return PydanticCustomError("run_name_suffix", "may not end in '{suffix}': agrisynth names another "
+                                       "command's run folder <name>{suffix}", {"suffix": suffix})
+    # and compare, bench and the studio write results/compare/, results/bench/, results/studio/ (a solve named
+    # "compare" was replaced by a comparison page under --force)
+    if name.lower() in RESERVED_RUN_NAMES:
+        return PydanticCustomError("run_name_reserved", "may not be '{name}': agrisynth's {command} command "
+                                   "writes results/{command}/", {"name": name, "command": name.lower()})
+    return None
+
+
+def usable_name(name: str) -> bool:
+    """Whether a spec may be named ``name``: what :class:`ProblemSpec` takes."""
+    return (len(name) <= MAX_NAME_LENGTH and re.fullmatch(RUN_NAME_PATTERN, name) is not None
+            and another_commands_folder(name) is None)
 
 
 #: [solver] starts: a whole number, or the word "auto" (read by SolverSettings' validator, never stored here)
