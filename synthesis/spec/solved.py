@@ -35,6 +35,13 @@ def path_parts(path: str) -> list[str | int]:
     return [int(i) if i else key for key, i in _PART.findall(path)]
 
 
+def at_path(data: Any, path: str) -> Any:
+    """What the TOML ``path`` of ``data`` holds (every container on the way must exist)."""
+    for part in path_parts(path):
+        data = data[part]
+    return data
+
+
 def set_at_path(data: Any, path: str, value: Any) -> None:
     """Put ``value`` at the TOML ``path`` of ``data`` (every container on the way must exist)."""
     *head, last = path_parts(path)
@@ -87,11 +94,7 @@ def elastic_toml(loaded, result) -> str | None:
             value = design.get(name)
             if var["path"] is None or not isinstance(value, (int, float)):
                 return None
-            *head, last = path_parts(var["path"])
-            node = data
-            for part in head:
-                node = node[part]
-            entry = node[last]
+            entry = at_path(data, var["path"])
             if not isinstance(entry, dict) or "init" not in entry:
                 return None
             lo, hi = var["bounds"]
