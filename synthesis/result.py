@@ -523,6 +523,8 @@ def _agrisynths_file(name: str) -> bool:
     return name.startswith(".") and any(name.startswith(f".{known}.") for known in (*LEGACY_FILES, RUN_MARKER))
 
 
+#: how a folder is opened to be locked (flock takes a descriptor; a folder opens read-only)
+_FOLDER_FLAGS = os.O_RDONLY | getattr(os, "O_DIRECTORY", 0)
 #: the descriptors holding a staging folder's lock in this process (:func:`_hold`)
 _HELD: set[int] = set()
 
@@ -544,7 +546,7 @@ def _hold(folder: Path) -> int | None:
     """A descriptor of ``folder`` with an exclusive flock on it (None where flock or the descriptor is not had)."""
     try:
         import fcntl
-        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        fd = os.open(folder, _FOLDER_FLAGS)
     except (ImportError, OSError):
         return None
     try:
@@ -571,7 +573,7 @@ def _live_writer(out_root: Path, name: str) -> Path | None:
         if not (own.match(entry.name) and entry.is_dir(follow_symlinks=False)):
             continue
         try:
-            fd = os.open(entry.path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+            fd = os.open(entry.path, _FOLDER_FLAGS)
         except OSError:
             continue
         try:
@@ -607,7 +609,7 @@ def _locked(folder: Path):
     """An exclusive flock on ``folder`` (a directory file descriptor); no lock where flock is unsupported."""
     try:
         import fcntl
-        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        fd = os.open(folder, _FOLDER_FLAGS)
     except (ImportError, OSError):
         yield
         return
