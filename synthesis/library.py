@@ -19,6 +19,7 @@ import re
 import tomllib
 from importlib.resources import files
 from pathlib import Path, PurePosixPath
+from typing import NamedTuple
 
 from synthesis.errors import OutputError, SpecError
 from synthesis.result import atomic_write_drawn
@@ -99,21 +100,32 @@ def unknown_name_text(name: str | Path, library: Path = LIBRARY) -> str:
     return f"{str(name)[:120]}: no such library spec{hint} (`agrisynth problems` lists all {len(names)})"
 
 
-def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = False) -> list[Path]:
+class Copied(NamedTuple):
+    """What :func:`copy_out` wrote: the files (the spec first), the copy's ``name`` and the library spec's."""
+
+    files: list[Path]
+    name: str
+    library_name: str
+
+
+def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = False) -> Copied:
     """Copy the library spec ``source`` to the file ``target`` (a folder: the spec's own file name in it), to be
     edited there, with the spec files it names (the combined picker's two linkages) beside it at the same relative
     paths, so the copy checks as the library spec does.  The files are copied byte for byte (comments kept), but for
     the ``name`` line of a copy the user named anew (``rename``).
 
     OutputError (exit 2, before anything is written) when a file to write exists and ``force`` is not given, when
-    it is a library file itself, or when the folder to write in does not exist.  Returns the files written, the spec
-    first.  ``rename``: the copy's ``name`` is its file name's stem (:func:`with_name`)."""
+    it is a library file itself, or when the folder to write in does not exist.  ``rename``: the copy's ``name`` is
+    its file name's stem (:func:`with_name`)."""
     target = Path(target)
     if target.is_dir():
         target = target / source.name
     plan = [(source, target)]
+    names = []
     for spec, copy in plan:                 # grows as it goes: a named spec file may name others
-        for _, info, value in walk_fields(load_spec(spec).model):
+        model = load_spec(spec).model
+        names.append(str(getattr(model, "name", "")))
+        for _, info, value in walk_fields(model):
             if not (isinstance(value, str) and any(isinstance(m, SpecFile) for m in info.metadata)):
                 continue
             relative = PurePosixPath(value.replace("\\", "/"))
@@ -140,13 +152,16 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
             if copy.is_dir() or copy.is_symlink():
                 raise OutputError(f"{copy}: is a {'folder' if copy.is_dir() else 'link'}; agrisynth replaces only "
                                   f"a file")
+    name = names[0]
     for k, (spec, copy) in enumerate(plan):
         copy.parent.mkdir(parents=True, exist_ok=True)      # a named spec file in a subfolder of the copy's
         data = spec.read_bytes()
         if k == 0 and rename and copy.stem != source.stem:      # the user named the copy anew
-            data = with_name(data, copy.stem)
+            renamed = with_name(data, copy.stem)
+            name = copy.stem if renamed != data else name
+            data = renamed
         atomic_write_drawn(copy, lambda tmp, data=data: tmp.write_bytes(data))
-    return [copy for _, copy in plan]
+    return Copied([copy for _, copy in plan], name, names[0])
 
 
 #: a spec's top-level ``name = "..."`` line (before any table)

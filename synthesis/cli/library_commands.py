@@ -3,7 +3,6 @@ spec reference or a starting spec of it."""
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import click
@@ -46,12 +45,12 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
                 raise click.UsageError(f"{option} goes with --copy NAME")
         list_library(library_dir)
         return
-    source, written = library.copy_spec(name, library_dir, target, force)
+    source, copied = library.copy_spec(name, library_dir, target, force)
+    written, original = copied.files, copied.library_name
     also = f" (and {', '.join(escape(str(p)) for p in written[1:])}, the spec files it names)" if written[1:] else ""
-    copied, original = spec_name(written[0]), spec_name(source)
-    renamed = (f", named {escape(copied)} (its runs: results/{escape(copied)}/ and results/{escape(copied)}-check/)"
-               if copied and copied != original else "")
-    if target is not None and copied == original and written[0].stem != original and not usable_name(written[0].stem):
+    renamed = (f", named {escape(copied.name)} (its runs: results/{escape(copied.name)}/ and "
+               f"results/{escape(copied.name)}-check/)" if copied.name != original else "")
+    if target is not None and copied.name == original and written[0].stem != original and not usable_name(written[0].stem):
         # the file's name is no spec name: the copy's runs would be the library spec's own folders
         renamed = (f"; its name stays {escape(str(original))} ({escape(written[0].stem)!r} is no spec name: letters, "
                    f"digits, _ . -, not compare, bench or studio, not ending in -check or -tolerance): edit its name "
@@ -60,14 +59,6 @@ def problems_command(library_dir: Path, name: str | None, target: Path | None, f
                   f"{escape(source.relative_to(library_dir).as_posix())} to edit{renamed}; check it with "
                   f"agrisynth check {escape(str(written[0]))}", soft_wrap=True)
 
-
-def spec_name(path: Path) -> str | None:
-    """The ``name`` a spec file gives (None when it cannot be read)."""
-    try:
-        name = tomllib.loads(path.read_text(encoding="utf-8")).get("name")
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return None
-    return name if isinstance(name, str) else None
 
 
 def list_library(library_dir: Path) -> None:

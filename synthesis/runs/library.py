@@ -8,7 +8,7 @@ from pathlib import Path
 
 from synthesis import kinds
 from synthesis.errors import OutputError, SpecError
-from synthesis.library import copy_out, library_spec, unknown_name_text
+from synthesis.library import Copied, copy_out, library_spec, unknown_name_text
 from synthesis.result import atomic_write_text
 from synthesis.spec import reference
 from synthesis.spec.common import read_toml
@@ -48,9 +48,9 @@ def library_entries(library: Path) -> list[LibraryEntry]:
     return entries
 
 
-def copy_spec(name: str, library: Path, target: Path | None, force: bool) -> tuple[Path, list[Path]]:
+def copy_spec(name: str, library: Path, target: Path | None, force: bool) -> tuple[Path, Copied]:
     """The library spec NAME copied (with the spec files it names) to ``target`` (default: its file name, here);
-    returns (the library's file, the files written)."""
+    returns (the library's file, what was written)."""
     source = library_spec(name, library)
     if source is None:
         raise SpecError(unknown_name_text(name, library))
