@@ -100,6 +100,13 @@ function containerOf(box, v) {
   return set;
 }
 
+// the number an input box holds, NaN for none: an empty box, or one the browser cannot read ("-", "1e"), has value
+// "", which Number() reads as 0
+function typedNumber(input) {
+  const typed = input.value.trim();
+  return typed === "" || input.validity.badInput ? NaN : Number(typed);
+}
+
 function buildSliders() {
   const box = document.getElementById("sliders");
   box.replaceChildren();
@@ -133,17 +140,15 @@ function buildSliders() {
     range.addEventListener("input", () => { setValue(v.name, Number(range.value)); request("coarse"); });
     range.addEventListener("change", () => { setValue(v.name, Number(range.value)); request("fine"); });
     number.addEventListener("change", () => {
-      // an empty box or one the browser cannot read ("-", "1e") has value "", which Number() reads as 0: refused
-      // like a value outside the bounds, the page's value kept and the reason shown
-      const typed = number.value.trim();
-      const x = typed === "" || number.validity.badInput ? NaN : Number(typed);
-      const why = !Number.isFinite(x) ? "is not a number"
-        : (x < v.bounds[0] || x > v.bounds[1]) ? `${typed} lies outside its bounds [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]`
-        : null;
+      // refused like a value outside the bounds: the page's value kept and the reason shown
+      const x = typedNumber(number);
+      const why = !Number.isFinite(x) ? "the typed value is not a number"
+        : (x < v.bounds[0] || x > v.bounds[1])
+          ? `${number.value.trim()} lies outside its bounds [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]`
+          : null;
       if (why) {
         number.value = state.values[v.name];
-        showError(`${v.name}: ${why === "is not a number" ? "the typed value is not a number" : why}; kept ` +
-                  `${fmt(state.values[v.name])}${v.unit ? " " + v.unit : ""}`);
+        showError(`${v.name}: ${why}; kept ${fmt(state.values[v.name])}${v.unit ? " " + v.unit : ""}`);
         return;
       }
       setValue(v.name, x); request("fine");
@@ -740,10 +745,8 @@ function poll() {
 async function solve() {
   try {
     const box = document.getElementById("starts");
-    const typed = box.value.trim();
     // sent as typed when it is no number (the server names the field and the text), never as Number("") = 0
-    const starts = typed !== "" && !box.validity.badInput && Number.isFinite(Number(typed)) ? Number(typed)
-      : (typed || "(empty)");
+    const starts = Number.isFinite(typedNumber(box)) ? typedNumber(box) : (box.value.trim() || "(empty)");
     showSolve(await api("/api/solve", { values: freeValues(), starts }));
     state.solving = true;
     poll();
