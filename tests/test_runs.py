@@ -70,6 +70,18 @@ def test_help_imports_neither_casadi_nor_matplotlib():
     assert proc.stderr.strip() == "[]"
 
 
+@pytest.mark.parametrize("argv", [["problems"], ["spec", "planting_fourbar"]])
+def test_commands_that_draw_nothing_import_no_matplotlib(argv):
+    """The terminal's views (every command's) read the tolerance module's Monte-Carlo lines; its figure's matplotlib
+    is imported by the figure alone (0.2-0.3 s of a listing)."""
+    code = (f"import sys\nsys.argv = ['agrisynth', *{argv!r}]\nfrom synthesis.program import main\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n"
+            "print(sorted({m.split('.')[0] for m in sys.modules} & {'matplotlib', 'PIL', 'ezdxf'}), file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stdout, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == "[]"
+
+
 def test_every_command_is_listed_with_its_own_short_help():
     """agrisynth --help lists the commands without importing them: its one-liners are the commands' own."""
     from synthesis.cli import COMMANDS, cli

@@ -8,13 +8,9 @@ import math
 import textwrap
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text, versions  # noqa: E402
+from synthesis.result import SCHEMA_VERSION, atomic_write_text, finite_json_text, versions
 
 
 def verdict_rows(facts: dict) -> list[dict]:
@@ -330,6 +326,11 @@ def tornado(facts: dict, path: Path) -> None:
     horizontal bar per driving variable from margin - |dg/dx_i| tol_i to margin + |dg/dx_i| tol_i, centred on the
     rule's nominal margin at its worst sample, largest at the top; the red line is the limit (margin 0), the dashed
     one the linear worst case (every bar's low end at once)."""
+    # imported here: the terminal's Monte-Carlo lines (every solve's views) need this module, not matplotlib
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     rows = tornado_rules(facts)
     tol = facts["tolerance"]
     if not rows:
