@@ -262,6 +262,9 @@ def test_a_spec_holding_the_fits_control_points_checks_and_solves_as_the_one_lea
     written = kinds.checker("guide_way")(written_out)
     assert [(r["name"], r["value"]) for r in written.rules] == [(r["name"], r["value"]) for r in given.rules]
     assert [written.design[n] for n in names_of(24)] == [*fit.control[:, 0], *fit.control[:, 1]]
+    # the spec leaving them to the fit: its check's design is the design evaluated, the fit's points named alike
+    assert [given.design[n] for n in names_of(24)] == [*fit.control[:, 0], *fit.control[:, 1]]
+    assert list(given.design) == list(written.design)
     # a fixed coordinate is a box of width 0; the others keep their own bounds
     fixed = _redesign_with_control([[float(x), {"init": float(y), "bounds": [float(y) - 1, float(y) + 2]}]
                                     for x, y in fit.control])

@@ -268,15 +268,25 @@ def whose_path(spec) -> str:
     return "[spline] (the convex fit through its key points)"
 
 
+def control_design(control: np.ndarray) -> dict[str, float]:
+    """(n, 2) control points as result.json's design names them: P0_x .. P{n-1}_x, then P0_y .. P{n-1}_y (the
+    decision vector's order)."""
+    return {f"P{j}_{c}": float(control[j, k]) for k, c in enumerate("xy") for j in range(len(control))}
+
+
 def run_check(loaded: LoadedSpec) -> Result:
     spec = cast(GuideWaySpec, loaded.model)         # load_spec validated it with this kind's model
     try:
-        scene = scene_for(spec, control_to_check(spec))
+        control = control_to_check(spec)
+        scene = scene_for(spec, control)
     except SpecError as exc:
         if spec.spline is None:
             raise
         raise SpecError(f"{loaded.path}: {whose_path(spec)}: {exc}") from None
-    return result_of(spec, loaded.sha256, scene)
+    result = result_of(spec, loaded.sha256, scene)
+    if control is not None:     # the design evaluated: the arm and every control point, as a solve writes it
+        result.design.update(control_design(control))
+    return result
 
 
 def explicit_design(loaded: LoadedSpec, data: dict) -> dict:

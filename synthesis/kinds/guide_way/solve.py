@@ -3,12 +3,10 @@ IPOPT stage on its control points, the fine-grid re-check without CasADi's NLP a
 
 from __future__ import annotations
 
-import numpy as np
-
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.errors import SpecError
-from synthesis.kinds.guide_way.check import FINE, describe, given_control, scene_for, whose_path
+from synthesis.kinds.guide_way.check import FINE, control_design, describe, given_control, scene_for, whose_path
 from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP, control_of, names_of
 
 
@@ -72,14 +70,9 @@ def finish(setting: Setting, best: StartReport) -> Finished:
 def _baseline_design(spec, fit) -> dict:
     """The given design: the arm and the spec's control points, else the convex fit's."""
     design = dict(spec.design_values())
-    for name, value in zip(*_fit_design(spec, fit)):
+    for name, value in control_design(fit.control).items():
         design.setdefault(name, value)
     return design
-
-
-def _fit_design(spec, fit):
-    return names_of(spec.spline.control_points), [float(v) for v in np.concatenate([fit.control[:, 0],
-                                                                                     fit.control[:, 1]])]
 
 
 def baseline_rules(setting: Setting) -> list[dict] | None:
