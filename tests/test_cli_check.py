@@ -48,6 +48,9 @@ def test_check_writes_result_json_report_and_plot(tmp_path):
     assert tr["units"] == {"t": "s", "crank_deg": "deg", "x": "mm", "y": "mm", "vx": "mm/s", "vy": "mm/s",
                            "ax": "mm/s^2", "ay": "mm/s^2"}
     assert data["design_variables"]["l2"] == {"path": "arm.l2", "unit": "mm", "bounds": None, "free": False}
+    # every design value is described, the assembly branch beside the variables too
+    assert data["design"]["branch"] == -1 and set(data["design_variables"]) == set(data["design"])
+    assert data["design_variables"]["branch"] == {"path": "arm.branch", "unit": "-", "bounds": None, "free": False}
     assert (folder / "trajectory.png").stat().st_size > 10_000
     assert "<table class='rules'>" in (folder / "report.html").read_text()
     # a second run keeps the first (exit 2 before any work) unless --force, which replaces it and says so

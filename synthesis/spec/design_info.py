@@ -92,6 +92,16 @@ def describe_lists(spec: BaseModel) -> dict[str, dict[str, Any]]:
     return {name: _entry(path, fields.get(path), None, free) for name, (path, free) in lists().items()}
 
 
+def describe_choices(spec: BaseModel) -> dict[str, dict[str, Any]]:
+    """design name -> {path, unit "-", bounds None, free False} of the discrete choices a spec's design holds beside
+    its variables (``choice_variables()``: name -> TOML path; an assembly branch +1 / -1): result.json's design
+    writes them, so a reader finds each design value's path and unit here.  Never a variable to move or tolerance."""
+    choices = getattr(spec, "choice_variables", None)
+    if not callable(choices):
+        return {}
+    return {name: {"path": path, "unit": "-", "bounds": None, "free": False} for name, path in choices().items()}
+
+
 def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str, Any]]:
     """describe() of a spec another spec names (the combined picker's drive and linkage): each name prefixed
     (``<prefix>.l7``), each path one in that part's file, named under ``file``."""
@@ -108,7 +118,8 @@ def describe_fixed(spec: BaseModel, paths: dict[str, str]) -> dict[str, dict[str
 def attach(result, spec: BaseModel):
     """``result`` told what its spec says of each design variable (result.json ``design_variables``); a kind
     whose spec declares none may have described its design itself (the combined picker, from its parts' specs)."""
-    result.design_variables = {**describe(spec), **describe_lists(spec)} or result.design_variables or None
+    result.design_variables = ({**describe(spec), **describe_lists(spec), **describe_choices(spec)}
+                               or result.design_variables or None)
     return result
 
 

@@ -203,6 +203,10 @@ class PickerDoubleCrankSpec(ProblemSpec):
                              "or the follower give the position in the link frame, mm")
         return self
 
+    def choice_variables(self) -> dict[str, str]:
+        """result.json's design holds the assembly branch beside the variables: its TOML path."""
+        return {"branch": "linkage.branch"}
+
     def variables(self) -> dict[str, Variable]:
         return {n: getattr(self.linkage, n) for n in ("x_a", "y_a", "l1", "l2", "l3", "l4", "l5", "phi3", "phi4")}
 

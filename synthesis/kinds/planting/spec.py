@@ -292,6 +292,10 @@ class PlantingFourbarSpec(ProblemSpec):
                            f"{self.seedbed.thickness:g} mm (seed 000: about 22 mm for a 22 mm mat)")
         return out
 
+    def choice_variables(self) -> dict[str, str]:
+        """result.json's design holds the assembly branch beside the variables: its TOML path."""
+        return {"branch": "arm.branch"}
+
     def variables(self) -> dict[str, Variable]:
         """Every design variable (spec units) by its result.json name."""
         out = {n: getattr(self.arm, n) for n in ("l1", "l2", "l3", "l4", "l5", "zeta", "phi")}
