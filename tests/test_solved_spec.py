@@ -73,7 +73,7 @@ def test_check_of_solved_toml_reproduces_the_solve(kind_name, tmp_path):
     # (and the list-valued design values, each at its path: fourbar_path's crank angles, at [design] crank_deg)
     listed = _described(result, loaded).design_variables
     lists = design_info.describe_lists(again.model)
-    assert set(listed) == set(described) | set(lists)
+    assert set(listed) == set(described) | set(lists) | set(design_info.describe_choices(again.model))
     assert all(again_value(again.model, v["path"]) == result.design[n] for n, v in lists.items())
     explicit = kinds.explicit_design(loaded, read_toml(loaded.path)[0])[0].model
     assert {n for n, v in listed.items() if v["free"]} == {n for n, v in {
