@@ -137,8 +137,8 @@ class RobustFinish:
                 # the interrupted run's result (written under a deferral): it keeps its starts now, within seconds of
                 # the signal, without the Monte-Carlo or the worst-case rows (a linearisation); the resumed run
                 # checks its answer in full
-                mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted "
-                      "(agrisynth tolerance RESULT runs it)", "pass_rate": None, "rules": {}}
+                mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted; "
+                      "`agrisynth solve SPEC --resume RUN_DIR` finishes the run, this check with it", "pass_rate": None, "rules": {}}
                 facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
                                       "held_at": "not checked: the solve was interrupted"}
                 return dataclasses.replace(finished, facts=facts)
