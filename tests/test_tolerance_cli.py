@@ -616,3 +616,44 @@ def test_a_spec_tolerance_wider_than_the_options_take_is_refused_by_every_comman
     assert run.returncode == 2, run.stdout + run.stderr
     assert run.stderr.strip().endswith("tolerance.variables.base_angle = 100: a half-width in deg is at most 90 (as "
                                        "--angle takes it)"), run.stderr
+
+
+def _with_tolerance(tmp_path, table: str, name: str) -> Path:
+    """A copy of guide_tube's uniform_spacing with the [tolerance] table ``table``, named ``name``."""
+    text = (LIBRARY / "guide_tube" / "uniform_spacing.toml").read_text()
+    assert "[tolerance]" not in text
+    text = re.sub(r'(?m)^name = ".*"$', f'name = "{name}"', text, count=1)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text + f"\n[tolerance]\n{table}\n")
+    return path
+
+
+def test_a_tolerance_table_naming_a_suffix_of_a_design_variable_is_refused_alike_by_every_command(tmp_path):
+    """guide_tube's NLP names its angles I and II, its spec delta_I and delta_II: `variables = { I = 0.1 }` was taken
+    by check, analysed by tolerance and refused by solve.  Every command now takes the result.json names alone."""
+    path = _with_tolerance(tmp_path, "variables = { I = 0.1, II = 0.1 }", "suffix")
+    said = f"error: {path}: tolerance.variables: unknown design variable I, II (known: delta_I, delta_II)"
+    for command in (["check"], ["tolerance", "--samples", "5"], ["solve", "--starts", "1", "--workers", "1"]):
+        run = agrisynth(command[0], str(path), *command[1:], "--out", str(tmp_path / command[0]), cwd=tmp_path)
+        assert run.returncode == 2 and run.stderr.strip() == said, (command, run.stderr)
+    on_the_line = agrisynth("tolerance", str(LIBRARY / "guide_tube" / "uniform_spacing.toml"), "--tol", "I=0.1",
+                            "--out", str(tmp_path / "line"), cwd=tmp_path)
+    assert on_the_line.returncode == 2
+    assert on_the_line.stderr.strip() == "error: --tol: unknown design variable I (known: delta_I, delta_II)"
+
+
+def test_a_tolerance_table_of_zero_half_widths_is_named_by_tolerance_and_refused_by_solve(tmp_path):
+    """length = 0, angle = 0: tolerance said "give --length and/or --angle (or a [tolerance] table in the spec)" of a
+    spec holding one, and solve ran a tolerance-robust solve of an empty box (the nominal one, called robust)."""
+    path = _with_tolerance(tmp_path, "length = 0\nangle = 0", "zeros")
+    tol = agrisynth("tolerance", str(path), "--out", str(tmp_path / "t"), cwd=tmp_path)
+    assert tol.returncode == 2 and tol.stderr.strip() == (
+        f"error: {path}: [tolerance] gives no half-width above 0 (tolerance.length = 0, tolerance.angle = 0): give one "
+        f"there or with --length, --angle or --tol NAME=VALUE, or --samples 0 for the sensitivities alone")
+    solve = agrisynth("solve", str(path), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "s"), cwd=tmp_path)
+    assert solve.returncode == 2 and "a tolerance-robust solve needs one" in solve.stderr
+    assert not (tmp_path / "s").exists()
+    # the command line gives the box: the spec's zeros stand aside, as for any spec without widths
+    wide = agrisynth("tolerance", str(path), "--angle", "0.1", "--samples", "5", "--out", str(tmp_path / "w"),
+                     cwd=tmp_path)
+    assert wide.returncode in (0, 1), wide.stderr

@@ -19,7 +19,7 @@ from synthesis.result import RUN_NAME, is_run_folder
 from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
 from synthesis.runs.output import RunOutput, text_file
 from synthesis.runs.requests import BadRequest, Outcome, SolveRequest, SolveWritten, Stopped
-from synthesis.runs.specs import described, loaded_spec
+from synthesis.runs.specs import described, loaded_spec, zero_tolerance_box
 from synthesis.spec.solved import ELASTIC_FILENAME as ELASTIC_SPEC, FILENAME as SOLVED_SPEC, elastic_said, elastic_toml, solved_toml
 
 #: most worker processes a run starts
@@ -133,6 +133,10 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     :class:`SolveWritten`); progress as ``SolveStarted``, ``StartFinished`` per start and ``StartsDone``."""
     interrupt.install(keep_ignored=True)     # a signal the process was started ignoring stays ignored
     loaded = loaded_spec(request.spec, emit)
+    zeros = zero_tolerance_box(loaded)
+    if zeros is not None:       # [tolerance] asks for a tolerance-robust solve: of an empty box, the nominal one
+        raise SpecError(f"{loaded.path}: [tolerance] gives no half-width above 0 ({zeros}): a tolerance-robust solve "
+                        f"needs one (length, angle or variables); leave the table out to solve the nominal design")
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)

@@ -12,7 +12,6 @@ from synthesis.library import LIBRARY, library_spec
 from synthesis.runs.events import Note, SpecFromLibrary, Subscriber
 from synthesis.spec import design_info, load_spec
 from synthesis.spec.plausibility import unit_notes
-from synthesis.tolerance.design import spec_keys
 
 
 def spec_file(spec: Path, emit: Subscriber) -> Path:
@@ -29,10 +28,12 @@ def spec_file(spec: Path, emit: Subscriber) -> Path:
 
 
 def unknown_design_variables(model, names: list[str], where: str) -> None:
-    """SpecError naming those of ``names`` that are no design variable of the spec (a variable's name in the kind's
-    NLP is taken too, as the analysis maps it: spec_keys); nothing is said of a kind that declares none."""
+    """SpecError naming those of ``names`` that are no design variable of the spec by its result.json name (not a
+    suffix of one, as the kind's NLP may name it: ``I`` for ``delta_I``, ``x`` for ``seedbed_x`` -- the robust
+    solve's box takes the full names alone, so every command takes those alone); nothing is said of a kind that
+    declares none."""
     info = design_info.describe(model)
-    unknown = [n for n, key in zip(names, spec_keys(names, info)) if key not in info]
+    unknown = [n for n in names if n not in info]
     if info and unknown:
         raise SpecError(f"{where}: unknown design variable {', '.join(unknown)} (known: {', '.join(info)})")
 
@@ -45,8 +46,8 @@ def within_option_ranges(spec, per_variable: dict[str, float], where: str = "--t
     """SpecError for a half-width of one variable (--tol, or ``where`` names the spec's field) beyond what --length
     or --angle takes for a variable of its unit (an angle of 100 deg either way spans more than a half turn)."""
     info = design_info.describe(spec)
-    for name, key in zip(per_variable, spec_keys(list(per_variable), info)):
-        unit = (info.get(key) or {}).get("unit")
+    for name in per_variable:
+        unit = (info.get(name) or {}).get("unit")
         top = TOL_MAX.get(unit) if isinstance(unit, str) else None
         if top is not None and per_variable[name] > top:
             option = "--length" if unit == "mm" else "--angle"
@@ -62,6 +63,16 @@ def tolerance_names_known(loaded) -> None:
         unknown_design_variables(loaded.model, list(tol.variables), f"{loaded.path}: tolerance.variables")
         within_option_ranges(loaded.model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = "
                                                                 f"{{value:g}}")
+
+
+def zero_tolerance_box(loaded) -> str | None:
+    """The spec's [tolerance] fields when it gives no half-width above 0 (``tolerance.length = 0, tolerance.angle =
+    0``), else None (no table, or one with a width)."""
+    tol = getattr(loaded.model, "tolerance", None)
+    if tol is None or tol.length or tol.angle or any(tol.variables.values()):
+        return None
+    given = [f"tolerance.{what} = 0" for what in ("length", "angle") if getattr(tol, what) == 0]
+    return ", ".join(given) if given else "no length, angle or variables"
 
 
 def not_a_result(spec: Path) -> None:

@@ -13,7 +13,8 @@ from synthesis.result import MAX_RESULT_BYTES
 from synthesis.runs.events import MonteCarloPlan, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
-from synthesis.runs.specs import spec_file, tolerance_names_known, unknown_design_variables, within_option_ranges
+from synthesis.runs.specs import (spec_file, tolerance_names_known, unknown_design_variables, within_option_ranges,
+                                   zero_tolerance_box)
 from synthesis.spec import design_info, load_spec
 from synthesis.tolerance.analysis import analyse
 from synthesis.tolerance.design import spec_keys
@@ -83,6 +84,10 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
         if given:
             raise SpecError(f"tolerance: every half-width given is 0 ({', '.join(given)}): give one above 0, or "
                             f"--samples 0 for the sensitivities alone")
+        zeros = zero_tolerance_box(loaded)
+        if zeros is not None:
+            raise SpecError(f"{loaded.path}: [tolerance] gives no half-width above 0 ({zeros}): give one there or "
+                            f"with --length, --angle or --tol NAME=VALUE, or --samples 0 for the sensitivities alone")
         raise SpecError("tolerance: give --length and/or --angle (or a [tolerance] table in the spec)")
     samples = request.samples if request.samples is not None else (tol.samples if tol else 1000)
     seed = request.seed if request.seed is not None else (tol.seed if tol else 0)
