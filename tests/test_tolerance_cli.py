@@ -657,3 +657,19 @@ def test_a_tolerance_table_of_zero_half_widths_is_named_by_tolerance_and_refused
     wide = agrisynth("tolerance", str(path), "--angle", "0.1", "--samples", "5", "--out", str(tmp_path / "w"),
                      cwd=tmp_path)
     assert wide.returncode in (0, 1), wide.stderr
+
+
+def test_tolerance_of_a_guide_way_of_published_conics_says_why_in_the_kinds_words(tmp_path):
+    """liang_2z's guide way is the paper's conics: the analysis said "the kind's NLP made no solve call to take its
+    start from"; now the kind's own reason.  A spline path left to the convex fit is analysed (its check names the
+    fit's control points: it said "the design has no value for P0_x, ...")."""
+    conics = agrisynth("tolerance", str(LIBRARY / "guide_way" / "liang_2z.toml"), "--length", "0.1", "--samples", "5",
+                       "--out", str(tmp_path), cwd=tmp_path)
+    assert conics.returncode == 2 and conics.stderr.strip() == (
+        "error: tolerance: guide_way: a guide way of published conics has no NLP to solve or linearise (a [spline] "
+        "path has; `agrisynth check` evaluates the conics)")
+    spline = agrisynth("tolerance", str(LIBRARY / "guide_way" / "smooth_redesign.toml"), "--length", "0.1",
+                       "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
+    assert spline.returncode in (0, 1), spline.stderr
+    facts = strict_json(tmp_path / "smooth_redesign-tolerance" / "result.json")["facts"]["tolerance"]
+    assert {f"P{j}_{c}" for j in range(24) for c in "xy"} <= set(facts["tolerance"])

@@ -145,12 +145,17 @@ def kind_start(nlp, x_design: np.ndarray):
         seen.append((compiled, np.array(w0, float), np.array(p, float)))
         return NLPOutcome(start, np.array(w0, float), 0.0, "captured", True, 0, 0.0, "")
 
+    refused: SpecError | None = None
     with answered_by(compiled_in(nlp), capture):
         try:
             nlp.solve(0, np.asarray(x_design, float))
+        except SpecError as exc:      # the kind refuses to solve this spec at all: its own words say why
+            refused = exc
         except Exception:   # noqa: BLE001 - only the captured start matters
             pass
     if not seen:
+        if refused is not None:
+            raise SpecError(f"tolerance: {refused}") from None
         raise SpecError("the kind's NLP made no solve call to take its start from")
     compiled, w0, p = seen[0]
     return compiled, w0[:compiled.problem.x.numel()], p

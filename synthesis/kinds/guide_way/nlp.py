@@ -87,8 +87,9 @@ class FixedGuide(KindNLP):
         self.bounds = np.column_stack([self.init, self.init])
 
     def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
-        raise SpecError("guide_way: a guide way of published conics has nothing to optimise (`agrisynth check` "
-                        "evaluates it)")
+        # solve refuses such a spec before any start (every variable fixed): the tolerance analysis meets this
+        raise SpecError("guide_way: a guide way of published conics has no NLP to solve or linearise (a [spline] "
+                        "path has; `agrisynth check` evaluates the conics)")
 
 
 #: how many times a start the arm cannot drive is pulled half-way towards start 0 (GuideNLP.drivable_start)
