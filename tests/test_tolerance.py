@@ -74,8 +74,8 @@ def _design(name, kind, loaded, solving, setting):
     if name in DESIGNS:
         return DESIGNS[name]
     if name == "guide_way":          # the redesign's design is the convex fit's control points (the spec gives none)
-        from synthesis.kinds.guide_way.solve import _fit_design
-        return dict(zip(*_fit_design(loaded.model, setting.data)))
+        from synthesis.kinds.guide_way.check import control_design
+        return control_design(setting.data.control)
     return kind.check(loaded).design
 
 
