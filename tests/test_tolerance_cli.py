@@ -47,7 +47,7 @@ def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
 
 @pytest.mark.parametrize("options, widths", [
     # --length over the spec's own entries of lengths (its [tolerance] variables: 0.2, 0.05, 0.2 mm)
-    (("--length", "5"), {"base_radius": 5.0, "roller_radius": 5.0, "offset": 5.0}),
+    (("--length", "3"), {"base_radius": 3.0, "roller_radius": 3.0, "offset": 3.0}),
     # --tol over --length; the angles keep no width
     (("--length", "5", "--tol", "roller_radius=0.1"), {"base_radius": 5.0, "roller_radius": 0.1, "offset": 5.0}),
     # --angle leaves the spec's lengths standing
@@ -396,23 +396,23 @@ def test_a_rule_the_nlp_writes_in_other_terms_shows_the_re_checks_unit_and_no_lo
 
 
 def test_samples_outside_the_cams_domain_are_unevaluable_not_read_as_designs(tmp_path):
-    """opening_cam with base_radius +-100 mm: the box reaches radii below 0, which the formulas read as |r0| (an
-    independent trial: counted as evaluated, 0 unevaluable); with offset +-60 mm, |offset| >= r0 = 50 mm took a
-    sqrt of a negative number (a RuntimeWarning on the terminal, an infinite corner margin in report.md).  Such
-    samples are unevaluable, each counted, and the count equals the samples drawn outside the domain (the same
-    default_rng draws, recomputed here)."""
+    """opening_cam with base_radius +-49.9 mm: the box keeps r0 > 0 (a box reaching 0 is refused: the radius must be
+    > 0), but a sample below the roller's 3.5 mm is no cam; with offset +-60 mm, |offset| >= r0 = 50 mm took a sqrt
+    of a negative number (a RuntimeWarning on the terminal, an infinite corner margin in report.md).  Such samples
+    are unevaluable, each counted, and the count equals the samples drawn outside the domain (the same default_rng
+    draws, recomputed here)."""
     import numpy as np
 
-    for option, width, outside in (("base_radius=100", 100.0, lambda d: 50.0 + d <= 3.5),
-                                   ("offset=60", 60.0, lambda d: abs(0.0 + d) >= 50.0)):
+    for option, width, outside, samples in (("base_radius=49.9", 49.9, lambda d: 50.0 + d <= 3.5, 200),
+                                            ("offset=60", 60.0, lambda d: abs(0.0 + d) >= 50.0, 50)):
         out = tmp_path / option.split("=")[0]
         run = agrisynth("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam.toml"), "--tol", option, "--samples",
-                        "50", "--out", str(out), cwd=tmp_path)
+                        str(samples), "--out", str(out), cwd=tmp_path)
         assert run.returncode == 1 and "RuntimeWarning" not in run.stderr + run.stdout, run.stderr
         facts = strict_json(out / "opening_cam-tolerance" / "result.json")["facts"]["tolerance"]
         keys = list(facts["tolerance"])
         j = keys.index(option.split("=")[0])
-        draws = np.random.default_rng(0).uniform(-1.0, 1.0, size=(50, len(keys)))[:, j] * width
+        draws = np.random.default_rng(0).uniform(-1.0, 1.0, size=(samples, len(keys)))[:, j] * width
         assert facts["monte_carlo"]["unevaluable"] == sum(bool(outside(d)) for d in draws) > 0
         cells = [c.strip() for c in (out / "opening_cam-tolerance" / "report.md").read_text().split("|")]
         assert "inf" not in cells and "-inf" not in cells and "nan" not in cells
@@ -673,3 +673,17 @@ def test_tolerance_of_a_guide_way_of_published_conics_says_why_in_the_kinds_word
     assert spline.returncode in (0, 1), spline.stderr
     facts = strict_json(tmp_path / "smooth_redesign-tolerance" / "result.json")["facts"]["tolerance"]
     assert {f"P{j}_{c}" for j in range(24) for c in "xy"} <= set(facts["tolerance"])
+
+
+def test_a_box_reaching_a_non_physical_cam_or_chain_is_refused_as_every_kinds_is(tmp_path):
+    """opening_cam's base radius +-100 mm reached -50 mm and the combing chain's speed +-1.5 m/s reached -0.5 m/s:
+    both were sampled, evaluated and counted in the pass rates (the fields were not marked > 0, so the planting
+    arm's and the comb finger's refusal never fired for them)."""
+    for spec, option, said in (
+            (LIBRARY / "clamp_cam" / "opening_cam.toml", "base_radius=100",
+             "the box reaches -50 mm for base_radius (50 mm +- 100), which must be > 0: give it a half-width below 50 mm"),
+            (LIBRARY / "combing_chain" / "redesign_window_80_100.toml", "chain_speed=1.5",
+             "the box reaches -0.5 m/s for chain_speed (1 m/s +- 1.5), which must be > 0: give it a half-width below "
+             "1 m/s")):
+        run = agrisynth("tolerance", str(spec), "--tol", option, "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
+        assert run.returncode == 2 and run.stderr.strip() == f"error: tolerance: {said}", run.stderr

@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from synthesis.spec.common import POSITIVE, FreeVariable
+from synthesis.spec.common import ACUTE, POSITIVE, FreeVariable
 from synthesis.spec.docmeta import units_in
 
 #: a value within this fraction of its bounds' width (at least this absolute, mm or deg) is "at the bound"
@@ -65,15 +65,30 @@ def describe(spec: BaseModel) -> dict[str, dict[str, Any]]:
     return out
 
 
+def _positive(field) -> bool:
+    """A field the spec takes only > 0: marked :data:`~synthesis.spec.common.POSITIVE` (a number or a free variable,
+    checked by a validator) or a number with a bound gt >= 0 (pydantic's ``Field(gt=0)``)."""
+    return field.json_schema_extra == POSITIVE or any(
+        getattr(m, "gt", None) is not None and m.gt >= 0 for m in field.metadata)
+
+
 def positive_variables(spec: BaseModel) -> set[str]:
-    """The design variables whose spec field is marked > 0 (:data:`~synthesis.spec.common.POSITIVE`: a link length,
-    a radius): no design of the kind has one at or below zero."""
+    """The design variables whose spec field takes only values > 0 (a link length, a radius, a speed): no design of
+    the kind has one at or below zero."""
+    return _marked(spec, _positive)
+
+
+def acute_variables(spec: BaseModel) -> set[str]:
+    """The design variables whose spec field is marked 0 < angle < 90 deg (:data:`~synthesis.spec.common.ACUTE`)."""
+    return _marked(spec, lambda field: field.json_schema_extra == ACUTE)
+
+
+def _marked(spec: BaseModel, test) -> set[str]:
     variables = getattr(spec, "variables", None)
     if not callable(variables):
         return set()
     field_of = {id(value): field for _, field, value in walk_fields(spec)}
-    return {name for name, v in variables().items()
-            if (field := field_of.get(id(v))) is not None and field.json_schema_extra == POSITIVE}
+    return {name for name, v in variables().items() if (field := field_of.get(id(v))) is not None and test(field)}
 
 
 def _fields_by_path(spec: BaseModel) -> dict:

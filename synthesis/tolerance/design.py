@@ -13,7 +13,7 @@ from pydantic import BaseModel
 from synthesis.core.ipopt import NLPOutcome, answered_by, compiled_in
 from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
-from synthesis.spec.design_info import describe, positive_variables
+from synthesis.spec.design_info import acute_variables, describe, positive_variables
 from synthesis.errors import SpecError
 from synthesis.spec.common import FreeVariable
 
@@ -118,15 +118,21 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
 
 
 def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -> None:
-    """A half-width that reaches zero or below for a variable the kind holds > 0 (a link length, a radius) is refused
+    """A half-width that reaches zero or below for a variable the kind holds > 0 (a link length, a radius, a speed),
+    or 90 deg or beyond for one it holds acute, is refused
     (SpecError naming it): such a sample is no design of the kind, yet its rules could be evaluated and counted (a
     planting arm at +-1000 mm had links of -1865 mm, and its depth held in 5 % of the samples)."""
-    positive = positive_variables(spec)
+    positive, acute = positive_variables(spec), acute_variables(spec)
     for name, key, unit, width in zip(dmap.names, dmap.keys, dmap.units, box):
         value = design.get(key)
-        if width > 0 and (key in positive or name in positive) and isinstance(value, float) and value - width <= 0:
+        if width <= 0 or not isinstance(value, float):
+            continue
+        if (key in positive or name in positive or key in acute or name in acute) and value - width <= 0:
             raise SpecError(f"tolerance: the box reaches {value - width:g} {unit} for {key} ({value:g} {unit} +- "
                             f"{width:g}), which must be > 0: give it a half-width below {value:g} {unit}")
+        if (key in acute or name in acute) and value + width >= 90:
+            raise SpecError(f"tolerance: the box reaches {value + width:g} {unit} for {key} ({value:g} {unit} +- "
+                            f"{width:g}), which must be < 90: give it a half-width below {90 - value:g} {unit}")
 
 
 def whole_problem(nlp) -> None:

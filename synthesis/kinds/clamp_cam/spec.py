@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args
 
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import (Starts,
+from synthesis.spec.common import (POSITIVE, Starts,
     WITHIN_A_TURN, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, Sign, starts_field, value_of, within_a_turn,
 )
@@ -43,9 +43,9 @@ def _fmt(v: Variable) -> str:
 class CamSection(StrictModel):
     """The cam disc and the roller."""
 
-    base_radius: Variable = Field(description="pitch base circle: smallest distance of the roller centre "
+    base_radius: Variable = Field(json_schema_extra=POSITIVE, description="pitch base circle: smallest distance of the roller centre "
                                               "from the cam centre, mm (seed 001 Table 1: 50)")
-    roller_radius: Variable = Field(description="roller radius, mm (seed 001 Table 1: 3.5)")
+    roller_radius: Variable = Field(json_schema_extra=POSITIVE, description="roller radius, mm (seed 001 Table 1: 3.5)")
     rotation: Literal["counter_clockwise", "clockwise"] = Field(
         "counter_clockwise", description="turning sense of the cam seen from the side the profile is drawn on; "
                                          "clockwise mirrors the exported profile (seed 001 eq 12 is counter-clockwise)")
@@ -112,9 +112,9 @@ class MotionSection(StrictModel):
     rise_start: Variable = Field(0.0, json_schema_extra=WITHIN_A_TURN, description="crank angle at which the rise begins, deg on the picker's "
                                                   "clock (0 = the pick; -360 to 360)")
     _angles_within_a_turn = field_validator("rise_start")(within_a_turn)
-    rise: Variable = Field(description="rise angle, deg")
+    rise: Variable = Field(json_schema_extra=POSITIVE, description="rise angle, deg")
     far_dwell: Variable = Field(description="far dwell angle, deg (follower held at the full stroke)")
-    return_: Variable = Field(alias="return", description="return angle, deg")
+    return_: Variable = Field(alias="return", json_schema_extra=POSITIVE, description="return angle, deg")
     near_dwell: Variable = Field(description="near dwell angle, deg (follower held at rest)")
 
     def segments(self) -> dict[str, Variable]:

@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from synthesis.spec.common import (Starts,
+from synthesis.spec.common import (POSITIVE, Starts,
     Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free, max_iter_field, starts_field,
     value_of,
 )
@@ -33,7 +33,7 @@ class ChainSection(StrictModel):
     h: float = Field(gt=0, description="height above the ground at which the tine meets the plant (h), mm")
     theta: float = Field(description="inclination of the chain to the ground (theta), deg, 0 < theta < 90")
     e: float = Field(gt=0, description="distance of that contact point ahead of the cut point (e), mm")
-    speeds: list[Variable] = Field(min_length=1, max_length=2,
+    speeds: list[Variable] = Field(min_length=1, max_length=2, json_schema_extra=POSITIVE,
                                    description="chain (tine) speed V_r of each gear, m/s: one gear, or two "
                                                "(gear 1 below switch_speed, gear 2 above)")
     switch_speed: Variable | None = Field(None, description="two gears: the machine speed at which gear 2 takes "
