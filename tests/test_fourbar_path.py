@@ -333,3 +333,18 @@ def test_the_new_spelling_reaches_the_kinematics_and_result_names():
     default = validate(FourbarPathSpec, {**data, "linkage": {k: v for k, v in data["linkage"].items()
                                                               if k != "theta0"}}, prefix="fourbar_path")
     assert default.linkage.theta0 == FreeVariable(init=180.0, bounds=(0.0, 360.0))
+
+
+def test_crank_angles_are_free_in_design_variables_only_where_a_solve_moves_them():
+    """picking_arc_dynamics fixes every linkage variable: solve refuses it ("every one is fixed"), yet its
+    design_variables called the free-timing crank angles free.  picking_arc, whose linkage is free, solves them."""
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+    from synthesis.spec.design_info import attach
+
+    fixed = load_spec(PATH_LIBRARY / "picking_arc_dynamics.toml")
+    free = load_spec(PATH_LIBRARY / "picking_arc.toml")
+    for loaded, expected in ((fixed, False), (free, True)):
+        result = attach(kinds.checker("fourbar_path")(loaded), loaded.model)
+        assert result.design_variables["crank_deg"] == {"path": "design.crank_deg", "unit": "deg", "bounds": None,
+                                                        "free": expected}

@@ -392,8 +392,11 @@ class FourbarPathSpec(ProblemSpec):
 
     def list_variables(self) -> dict[str, tuple[str, bool]]:
         """result.json design values that are lists, by name -> (TOML path, free): the crank angle of each target,
-        prescribed (targets.crank_deg, fixed) or, with free timing, solved (written to [design] crank_deg, free)."""
-        return {"crank_deg": ("targets.crank_deg", False) if self.timed else ("design.crank_deg", True)}
+        prescribed (targets.crank_deg, fixed) or, with free timing, solved (written to [design] crank_deg, free) --
+        unless every linkage variable is fixed: solve refuses such a spec, so its crank angles are only check's."""
+        if self.timed:
+            return {"crank_deg": ("targets.crank_deg", False)}
+        return {"crank_deg": ("design.crank_deg", any(isinstance(v, FreeVariable) for v in self.variables().values()))}
 
     def bounds_array(self) -> list[tuple[float, float]]:
         return [bounds_of(v) for v in self.variables().values()]
