@@ -120,7 +120,8 @@ def describe_choices(spec: BaseModel) -> dict[str, dict[str, Any]]:
 def describe_part(prefix: str, spec: BaseModel, file: str) -> dict[str, dict[str, Any]]:
     """describe() of a spec another spec names (the combined picker's drive and linkage): each name prefixed
     (``<prefix>.l7``), each path one in that part's file, named under ``file``."""
-    return {f"{prefix}.{name}": {**entry, "file": file} for name, entry in describe(spec).items()}
+    return {f"{prefix}.{name}": {**entry, "file": file}
+            for name, entry in {**describe(spec), **describe_choices(spec)}.items()}
 
 
 def describe_fixed(spec: BaseModel, paths: dict[str, str]) -> dict[str, dict[str, Any]]:

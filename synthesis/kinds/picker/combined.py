@@ -334,6 +334,7 @@ def _design_of(spec: PickerSpec, cr_loaded: LoadedSpec, dc_loaded: LoadedSpec) -
     inst = spec.installation
     design = {f"crank_rocker.{k}": v for k, v in cr_spec.design_values().items()}
     design.update({f"double_crank.{k}": v for k, v in dc_spec.design_values().items()})
+    design["double_crank.branch"] = dc_spec.linkage.branch      # as the double crank's own check writes it
     design.update({"theta1": inst.theta1, "theta2": inst.theta2})
     described = describe_part("crank_rocker", cr_loaded.model, str(cr_loaded.path))
     described.update(describe_part("double_crank", dc_spec, str(dc_loaded.path)))
