@@ -589,7 +589,8 @@ def test_the_combined_picker_shows_its_design_greyed():
     shown = {v.name: v for v in session.variables}
     assert shown["crank_rocker.l7"].value == 54.0 and shown["crank_rocker.l7"].unit == "mm"
     assert shown["double_crank.phi3"].unit == "deg" and shown["theta2"].unit == "deg"
-    assert len(shown) == 15 and not session.free
+    assert shown["double_crank.branch"].value == 1 and shown["double_crank.branch"].unit == "-"
+    assert len(shown) == 16 and not session.free
     assert session.describe()["variables"][0] == {
         "name": "crank_rocker.l7", "value": 54.0, "unit": "mm", "free": False, "bounds": None, "group": None,
         "note": "from the part's spec file (check only)"}

@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -73,6 +74,14 @@ from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, refuse_empty_rows, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
 from synthesis.core.ipopt_log import captured_stdout
+
+#: IPOPT's linear algebra (MUMPS on the OpenBLAS CasADi bundles) sums in another order with more than one thread,
+#: so a start's last digits -- and, from a flat optimum, its design -- depended on the machine's cores (a local
+#: solve differed from the same solve on a dask worker, whose nanny runs one thread).  One thread, read when the
+#: IPOPT plugin loads at the first ``nlpsol``: an answer is the same on any machine, in any worker.  (The small
+#: KKT systems here gain nothing from more threads.)
+BLAS_THREADS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+os.environ.update(BLAS_THREADS)
 
 #: named option presets; a problem picks one by name and may override single options
 PRESETS: dict[str, dict] = {
