@@ -188,3 +188,6 @@ def test_bench_takes_a_library_spec_by_name_as_check_and_solve_do(tmp_path, monk
     own.write_text(loaded.path.read_text().replace('name = "redesign_from_example1"', 'name = "mine"'))
     [mine] = problems_by_kind(BenchRequest((), (Path("planting_arm/redesign_from_example1.toml"),)))["planting_fourbar"]
     assert mine.model.name == "mine"
+    # the bare name check and solve take (no .toml, no folder): it was "neither a kind with a bench nor a spec file"
+    [bare] = problems_by_kind(BenchRequest(("steering_redesign_40",)))["steering_linkage"]
+    assert bare.path == LIBRARY / "steering" / "steering_redesign_40.toml"

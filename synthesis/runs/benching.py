@@ -12,6 +12,7 @@ from synthesis.bench.extreme import EXTREME, extreme_matrix
 from synthesis.runs.events import BenchStarted, BenchStep, Note, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
+from synthesis.library import library_spec
 from synthesis.runs.specs import spec_file
 from synthesis.spec import KINDS, load_spec
 
@@ -29,7 +30,7 @@ def problems_by_kind(request: BenchRequest, emit: Subscriber = lambda event: Non
             by_kind.setdefault(item, None)
         elif item in KINDS:
             raise BadRequest(f"kind {item!r} has no bench cases (kinds with a bench: {', '.join(known)})", "PROBLEM")
-        elif item.endswith(".toml") or Path(item).exists():
+        elif item.endswith(".toml") or Path(item).exists() or library_spec(item) is not None:
             loaded = load_spec(spec_file(Path(item), emit))
             if loaded.kind not in known:
                 raise BadRequest(f"{item}: kind {loaded.kind!r} has no bench cases "
