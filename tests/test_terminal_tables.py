@@ -84,3 +84,14 @@ def test_the_design_table_has_a_marks_column_only_when_a_variable_is_at_a_bound(
         text = printed(terminal.design_table(rows, "t"), 200)
         header = next(ln for ln in text.splitlines() if ln.startswith("┃"))
         assert header.count("┃") - 1 == columns, header
+
+
+def test_the_solve_line_says_how_many_starts_ran_as_result_json_does():
+    """[solver] stop_at_objective ended a run after 4 of 8 starts: the terminal said "best of 8 starts", result.json
+    (starts_run 4, stopped_early) and report.html "4 of 8 run"."""
+    from synthesis.cli.views import _starts_said
+
+    assert _starts_said({"starts": 8, "starts_run": 8, "stopped_early": False}) == "8 starts"
+    assert _starts_said({"starts": 8, "starts_run": 4, "stopped_early": True}) == (
+        "the 4 starts run of 8 (stopped early: [solver] stop_at_objective was reached)")
+    assert _starts_said({"starts": 8, "starts_run": 9}) == "8 starts and one from the elastic re-solve"

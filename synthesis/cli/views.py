@@ -135,11 +135,21 @@ def check_summary(result, folder, replaced: bool, details: CheckWritten) -> None
         console.print(f"[green]every rule satisfied{at}[/]")
 
 
+def _starts_said(s: dict) -> str:
+    """"8 starts", "8 starts and one from the elastic re-solve", or "the 4 starts run of 8 (stopped early: [solver]
+    stop_at_objective was reached)" -- as result.json's starts_run and stopped_early say."""
+    ran = s.get("starts_run", s["starts"])
+    if ran > s["starts"]:
+        return f"{s['starts']} starts and one from the elastic re-solve"
+    if s.get("stopped_early") and ran < s["starts"]:
+        return f"the {ran} starts run of {s['starts']} (stopped early: [solver] stop_at_objective was reached)"
+    return f"{s['starts']} starts"
+
+
 def _solver_line(result, details: SolveWritten) -> str:
     s = result.solver
     return (f"objective {objective_text(result.objective)}; IPOPT "
-            f"{s['return_status']} in {s['iterations']} iterations; best of {s['starts']} starts "
-            f"{'and one from the elastic re-solve ' if s.get('starts_run', 0) > s['starts'] else ''}"
+            f"{s['return_status']} in {s['iterations']} iterations; best of {_starts_said(s)} "
             f"(seed {s['seed']}) is start {s['best_start']}; {s['wall_s']:.2f} s on "
             f"{f'the cluster at {escape(details.scheduler)}' if details.scheduler else f'{details.workers} worker(s)'}"
             f"; "
