@@ -164,3 +164,18 @@ def test_solve_with_an_http_peer_as_scheduler_exits_2_in_one_line(tmp_path):
     assert "does not speak the dask protocol" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []          # refused before any output folder was made
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+def test_a_scheduler_without_workers_is_said_in_one_line_not_waited_on_for_ever(monkeypatch):
+    """A scheduler no worker had joined held `solve --scheduler` silently until a signal ended it."""
+    from synthesis.core import cluster as cluster_module
+    from synthesis.errors import AgrisynthError
+
+    monkeypatch.setattr(cluster_module._wait_for_a_worker, "__defaults__", (1.0,))
+    loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0", protocol="tcp") as c:
+        with pytest.raises(AgrisynthError) as raised:
+            run_solve(loaded, starts=2, seed=0, workers=1, scheduler=c.scheduler_address)
+    assert str(raised.value) == (f"--scheduler {c.scheduler_address}: no dask worker joined the scheduler within 1 s "
+                                 f"(start one: `dask worker {c.scheduler_address}`)")

@@ -18,10 +18,14 @@ import numpy as np
 from distributed import Client, WorkerPlugin, get_worker
 from distributed import as_completed as dask_completed
 
+from synthesis.core import interrupt
 from synthesis.core.executor import WORKER_CRASHED, _raised
 from synthesis.errors import AgrisynthError
 
 CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving up
+#: how long a scheduler without workers is waited for one to join: its starts would wait for ever, and the run with
+#: them, without a word
+WORKER_WAIT_S = 60.0
 
 
 class _SolverPlugin(WorkerPlugin):
@@ -192,6 +196,18 @@ def _connected_client(scheduler: str, timeout: float = CONNECT_TIMEOUT_S):
     return made["client"]
 
 
+def _wait_for_a_worker(client, scheduler: str, timeout: float = WORKER_WAIT_S) -> None:
+    """Return once the scheduler has a worker; AgrisynthError (exit 2) when none joins within ``timeout`` seconds.
+    A signal ends the wait (the scheduler's list is looked at every half second, a safe point each time)."""
+    deadline = time.monotonic() + timeout
+    while not client.scheduler_info().get("workers"):
+        if time.monotonic() >= deadline:
+            raise AgrisynthError(f"--scheduler {scheduler}: no dask worker joined the scheduler within {timeout:g} s "
+                                 f"(start one: `dask worker {scheduler}`)")
+        interrupt.check()
+        time.sleep(0.5)
+
+
 def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, scheduler: str,
                           on_done: Callable[[Any], None] = lambda outcome: None,
                           indices: list[int] | None = None,
@@ -209,6 +225,7 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
     probe_scheduler(scheduler)
     client = _connected_client(scheduler)
     with client:
+        _wait_for_a_worker(client, scheduler)
         name = f"agrisynth-solver-{uuid.uuid4().hex}"
         try:
             client.register_plugin(_SolverPlugin(factory, name), name=name)
