@@ -95,3 +95,18 @@ def test_the_solve_line_says_how_many_starts_ran_as_result_json_does():
     assert _starts_said({"starts": 8, "starts_run": 4, "stopped_early": True}) == (
         "the 4 starts run of 8 (stopped early: [solver] stop_at_objective was reached)")
     assert _starts_said({"starts": 8, "starts_run": 9}) == "8 starts and one from the elastic re-solve"
+
+
+def test_the_bench_table_says_a_gap_no_run_measured_as_bench_md_does():
+    """No run met every rule, so there is no best known: bench.json wrote null, bench.md "–", the terminal "-inf"."""
+    from rich.console import Console
+
+    from synthesis.cli.views import bench_table
+
+    row = {"problem": "steer_infeasible", "method": "ipopt_multistart", "objective": 9.165,
+           "objective_gap": float("-inf"), "worst_violation": 4.02, "median_s": 0.292, "time_to_target_text": None,
+           "time_ratio_text": "n/a", "details": {}}
+    console = Console(width=200, record=True)
+    console.print(bench_table([{"rows": [row, {**row, "objective_gap": None}]}], 1))
+    text = console.export_text()
+    assert "inf" not in text and text.count("–") >= 4

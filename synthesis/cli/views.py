@@ -8,6 +8,7 @@ The runs (:mod:`synthesis.runs`) hand their events to :class:`Terminal`; a resul
 from __future__ import annotations
 
 import contextlib
+import math
 import shlex
 import sys
 
@@ -63,6 +64,12 @@ def comparison_table(best: list[dict], baseline: list[dict] | None, title: str, 
     return table
 
 
+def _figure(value, spec: str) -> str:
+    """A bench figure as bench.md writes it: "–" where none was measured (no run met every rule: no best known,
+    so no gap) -- never "-inf" or "nan"."""
+    return format(value, spec) if isinstance(value, (int, float)) and math.isfinite(value) else "–"
+
+
 def bench_table(results: list[dict], repeats: int) -> Table:
     table = Table(title=f"bench: objective reached, median wall time and time to target (IPOPT methods: {repeats} "
                         f"runs)", title_justify="left")
@@ -73,8 +80,9 @@ def bench_table(results: list[dict], repeats: int) -> Table:
         for row in res["rows"]:
             details = row.get("details") if isinstance(row.get("details"), dict) else {}
             iters = details.get("median_iterations")
-            table.add_row(escape(row["problem"]), escape(row["method"]), f"{row['objective']:.4g}",
-                          f"{row['objective_gap']:.3g}", f"{row['worst_violation']:.3g}", f"{row['median_s']:.3f}",
+            table.add_row(escape(row["problem"]), escape(row["method"]), _figure(row["objective"], ".4g"),
+                          _figure(row["objective_gap"], ".3g"), _figure(row["worst_violation"], ".3g"),
+                          f"{row['median_s']:.3f}",
                           escape(row.get("time_to_target_text") or "–"),
                           "" if iters is None else f"{iters:g}", escape(row["time_ratio_text"]))
     return table
