@@ -103,7 +103,7 @@ def test_the_bench_table_says_a_gap_no_run_measured_as_bench_md_does():
 
     from synthesis.cli.views import bench_table
 
-    row = {"problem": "steer_infeasible", "method": "ipopt_multistart", "objective": 9.165,
+    row = {"problem": "steer_tight", "method": "ipopt_multistart", "objective": 9.165,
            "objective_gap": float("-inf"), "worst_violation": 4.02, "median_s": 0.292, "time_to_target_text": None,
            "time_ratio_text": "n/a", "details": {}}
     console = Console(width=200, record=True)
