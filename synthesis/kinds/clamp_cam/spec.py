@@ -321,6 +321,15 @@ class SolverSection(MultistartSettings):
 
 class ClampCamSpec(ProblemSpec):
     kind: Literal["clamp_cam"] = Field(description="the problem kind (clamp_cam)")
+
+    @classmethod
+    def old_forms(cls, data: dict) -> str:
+        """The hyphenated turning sense ("counter-clockwise"), with its new spelling (see spec.common.validate)."""
+        cam = data.get("cam")
+        rotation = cam.get("rotation") if isinstance(cam, dict) else None
+        if rotation != "counter-clockwise":
+            return ""
+        return 'cam.rotation: "counter-clockwise" is no longer read; write rotation = "counter_clockwise"'
     cam: CamSection
     follower: FollowerSection = Field(default_factory=FollowerSection)
     motion: MotionSection
