@@ -470,3 +470,16 @@ def test_a_path_synthesis_configuration_form_and_its_polisher_solve_with_the_ben
         assert compiled.scaling == "none"          # the kind's own choice stays
     plain = PathNLP(spec, seed=0)
     assert plain.polisher.compiled.method == ipopt.SolveMethod(scaling="none")
+
+
+def test_every_problem_of_a_default_bench_gets_a_colour_of_its_own():
+    """A default bench draws 12 to 19 problems: matplotlib's ten-colour cycle gave two problems one colour in
+    error_vs_time.png.  Up to 20 are distinct; the first ten are the default cycle's, as before."""
+    import matplotlib.colors as mcolors
+    import matplotlib.pyplot as plt
+
+    from synthesis.report.bench_plots import problem_colours
+
+    colours = problem_colours(20)
+    assert len({tuple(c) for c in colours}) == 20
+    assert [mcolors.to_hex(c) for c in colours[:10]] == [mcolors.to_hex(c) for c in plt.get_cmap("tab10").colors]

@@ -123,16 +123,24 @@ def _save(fig, path: Path) -> None:
     plt.close(fig)
 
 
+def problem_colours(n: int) -> list:
+    """A colour per problem, distinct for up to 20: matplotlib's ten (tab20's dark half, the default cycle), then
+    tab20's light half (a default bench has 12 to 19 problems: the ten-colour cycle gave two problems one colour)."""
+    tab20 = list(plt.get_cmap("tab20").colors)
+    order = tab20[0::2] + tab20[1::2]
+    return [order[p % len(order)] for p in range(n)]
+
+
 def error_figure(results: list[dict]):
     """Log-log: objective gap and worst violation against wall time, per problem (colour) and method
     (marker); every repeat a point, the median run's best-so-far trace a line."""
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = problem_colours(len(results))
     methods = list(dict.fromkeys(row["method"] for res in results for row in res["rows"]))
     fig, (ax_gap, ax_vio) = plt.subplots(1, 2, figsize=(13, 6))
     gaps, violations, times = _error_values(results)
     gap_floor, vio_floor = zero_floor(gaps), zero_floor(violations)
     for p, res in enumerate(results):
-        colour = colours[p % len(colours)]
+        colour = colours[p]
         for row in res["rows"]:
             k = methods.index(row["method"])
             m, fill = MARKERS[k % len(MARKERS)], (colour if k == 0 else "none")
