@@ -191,3 +191,9 @@ def test_bench_takes_a_library_spec_by_name_as_check_and_solve_do(tmp_path, monk
     # the bare name check and solve take (no .toml, no folder): it was "neither a kind with a bench nor a spec file"
     [bare] = problems_by_kind(BenchRequest(("steering_redesign_40",)))["steering_linkage"]
     assert bare.path == LIBRARY / "steering" / "steering_redesign_40.toml"
+    # one name twice (the same spec, or another spec of that name): one figure and indistinguishable rows, refused
+    from synthesis.runs.requests import BadRequest
+
+    for twice in (("steering_redesign_40", "steering/steering_redesign_40.toml"),):
+        with pytest.raises(BadRequest, match="a second problem named 'steering_redesign_40'"):
+            problems_by_kind(BenchRequest(twice))

@@ -35,6 +35,13 @@ def problems_by_kind(request: BenchRequest, emit: Subscriber = lambda event: Non
             if loaded.kind not in known:
                 raise BadRequest(f"{item}: kind {loaded.kind!r} has no bench cases "
                                  f"(kinds with a bench: {', '.join(known)})", "PROBLEM")
+            taken = next((other for specs in by_kind.values() for other in specs or ()
+                          if other.name == loaded.name), None)
+            if taken is not None:
+                # bench.json's rows, bench.md's sections and samples_<problem>.png are named by the spec's name
+                raise BadRequest(f"{item}: a second problem named {loaded.name!r} (the first: {taken.path}); bench "
+                                 f"names its rows and figures by the spec's name: give each problem once, each its "
+                                 f"own name", "PROBLEM")
             # a spec file replaces its kind's default set, also when the kind is named too (before or after it)
             by_kind[loaded.kind] = (by_kind.get(loaded.kind) or []) + [loaded]
         else:
