@@ -150,8 +150,8 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
     fine grid; "target not reached" otherwise, and ratios only of those times); the sample-count sweep (time, iterations, fine-grid violation, objective gap);
     build against solve time; kind studies (planting: seed 000's difference scheme); and the
     extreme-case matrix of tests/extreme/ (a source tree's; with no PROBLEM and without --quick).  Writes OUT/bench/bench.json, bench.md,
-    error_vs_time.png (log-log: objective gap and violation against wall time) and
-    samples_<problem>.png (`agrisynth compare ... OUT/bench` shows them).
+    error_vs_time.png (log-log: objective gap and violation against wall time; `agrisynth compare ... OUT/bench`
+    shows it beside runs) and samples_<problem>.png (bench.md shows them).
     \b
     Examples:
       agrisynth bench --quick
