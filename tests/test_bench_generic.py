@@ -483,3 +483,15 @@ def test_every_problem_of_a_default_bench_gets_a_colour_of_its_own():
     colours = problem_colours(20)
     assert len({tuple(c) for c in colours}) == 20
     assert [mcolors.to_hex(c) for c in colours[:10]] == [mcolors.to_hex(c) for c in plt.get_cmap("tab10").colors]
+
+
+def test_quick_on_a_named_spec_of_a_kind_with_its_own_bench_runs_the_generic_studies():
+    """`bench fourbar_path/picking_arc.toml --quick` ran the kind's own case (64 starts, a reference solve,
+    differential evolution: 40 s) while bench.json and bench.md said 1 start, no peers, no reference."""
+    from synthesis.bench import PEERS, cases_for
+
+    loaded = load_spec(LIBRARY / "fourbar_path" / "picking_arc.toml")
+    [quick] = cases_for("fourbar_path", [loaded], 0, quick=True)
+    assert set(quick.methods) == {"ipopt_multistart", "ipopt_finite_differences"} and not set(quick.methods) & PEERS
+    [full] = cases_for("fourbar_path", [loaded], 0)
+    assert "differential_evolution" in full.methods          # the kind's own case without --quick
