@@ -168,8 +168,8 @@ def test_rotation_is_spelled_with_an_underscore_and_result_json_keeps_its_name(t
 
     with pytest.raises(SpecError) as err:
         spec_text(tmp_path, OPENING, ("roller_radius = 3.5", 'roller_radius = 3.5\nrotation = "counter-clockwise"'))
-    assert str(err.value).endswith("clamp_cam.cam.rotation: expected 'counter_clockwise' or 'clockwise', "
-                                   "got 'counter-clockwise'")
+    assert str(err.value).endswith('clamp_cam.cam.rotation: "counter-clockwise" is no longer read; write rotation = '
+                                   '"counter_clockwise"')
     ccw = CamScene.from_spec(spec_text(tmp_path, OPENING, ("roller_radius = 3.5",
                                                            'roller_radius = 3.5\nrotation = "counter_clockwise"')).model)
     assert profile(ccw)["rotation"] == "counter-clockwise"
