@@ -204,14 +204,3 @@ def test_optimised_law_that_cannot_meet_an_acceleration_cap_exits_3(tmp_path):
     assert "rules.max_acceleration: the optimised law cannot meet the timing: the return window of 14 deg" in text
     assert "27379.7" in text               # the least peak any C2 B-spline of this size reaches, mm/s^2
 
-
-def test_the_hyphenated_turning_sense_is_refused_with_its_new_spelling(tmp_path):
-    """The README: earlier forms (... rotation = "counter-clockwise" ...) are refused with a message that spells the
-    file's own value the new way; clamp_cam's said only "expected 'counter_clockwise' or 'clockwise'"."""
-    text = (LIBRARY / "clamp_cam" / "opening_cam.toml").read_text()
-    old = tmp_path / "old.toml"
-    old.write_text(text.replace("roller_radius = 3.5 ", 'rotation = "counter-clockwise"\nroller_radius = 3.5 ', 1))
-    with pytest.raises(SpecError) as raised:
-        load_spec(old)
-    assert str(raised.value) == (f'{old}: clamp_cam.cam.rotation: "counter-clockwise" is no longer read; write '
-                                 f'rotation = "counter_clockwise"')
