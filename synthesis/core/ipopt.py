@@ -77,11 +77,24 @@ from synthesis.core.ipopt_log import captured_stdout
 
 #: IPOPT's linear algebra (MUMPS on the OpenBLAS CasADi bundles) sums in another order with more than one thread,
 #: so a start's last digits -- and, from a flat optimum, its design -- depended on the machine's cores (a local
-#: solve differed from the same solve on a dask worker, whose nanny runs one thread).  One thread, read when the
-#: IPOPT plugin loads at the first ``nlpsol``: an answer is the same on any machine, in any worker.  (The small
-#: KKT systems here gain nothing from more threads.)
-BLAS_THREADS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-os.environ.update(BLAS_THREADS)
+#: solve differed from the same solve on a dask worker, whose nanny runs one thread).  One thread: OpenBLAS reads
+#: this when the IPOPT plugin loads it, at the first ``nlpsol`` (:func:`_nlpsol`), so an answer is the same on any
+#: machine, in any worker.  (The small KKT systems here gain nothing from more threads.)
+BLAS_THREADS = "OPENBLAS_NUM_THREADS"
+
+
+def _nlpsol(*args):
+    """``ca.nlpsol(*args)`` with one BLAS thread asked for while it runs (the first call loads the plugin and its
+    OpenBLAS); the process's environment is left as it was, for whatever else it runs."""
+    before = os.environ.get(BLAS_THREADS)
+    os.environ[BLAS_THREADS] = "1"
+    try:
+        return ca.nlpsol(*args)
+    finally:
+        if before is None:
+            del os.environ[BLAS_THREADS]
+        else:
+            os.environ[BLAS_THREADS] = before
 
 #: named option presets; a problem picks one by name and may override single options
 PRESETS: dict[str, dict] = {
@@ -321,7 +334,7 @@ class CompiledNLP:
             self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
-        self.solver = ca.nlpsol(problem.name, "ipopt", nlp, opts) if self.with_solver else None
+        self.solver = _nlpsol(problem.name, "ipopt", nlp, opts) if self.with_solver else None
         self._scaled_solver: ca.Function | None = None         # built on the first start solved in another length unit
         self._ipopt_s = time.perf_counter() - t0
 
@@ -339,7 +352,7 @@ class CompiledNLP:
             if self._watch is not None:
                 self._scaled_watch = _Watch(n, self.t.g.numel(), nlp["p"].numel())
                 opts = {**opts, "iteration_callback": self._scaled_watch}
-            self._scaled_solver = ca.nlpsol(self.problem.name, "ipopt", nlp, opts)
+            self._scaled_solver = _nlpsol(self.problem.name, "ipopt", nlp, opts)
             self.build_s += time.perf_counter() - t0
             self._ipopt_s += time.perf_counter() - t0
         return self._scaled_solver
