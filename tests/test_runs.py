@@ -191,9 +191,16 @@ def test_bench_takes_a_library_spec_by_name_as_check_and_solve_do(tmp_path, monk
     # the bare name check and solve take (no .toml, no folder): it was "neither a kind with a bench nor a spec file"
     [bare] = problems_by_kind(BenchRequest(("steering_redesign_40",)))["steering_linkage"]
     assert bare.path == LIBRARY / "steering" / "steering_redesign_40.toml"
-    # one name twice (the same spec, or another spec of that name): one figure and indistinguishable rows, refused
+    # one name twice -- the same spec, another spec of that name, a spec named as a problem of a kind's default set:
+    # one figure and indistinguishable rows, refused naming both
+    from synthesis.runs.benching import _cases
     from synthesis.runs.requests import BadRequest
 
-    for twice in (("steering_redesign_40", "steering/steering_redesign_40.toml"),):
-        with pytest.raises(BadRequest, match="a second problem named 'steering_redesign_40'"):
-            problems_by_kind(BenchRequest(twice))
+    other = tmp_path / "other.toml"
+    other.write_text((LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text().replace(
+        'name = "redesign_from_example1"', 'name = "steering_redesign_40"'))
+    for twice in (("steering_redesign_40", "steering/steering_redesign_40.toml"),
+                  ("steering_redesign_40", str(other)), ("steering_linkage", str(other))):
+        request = BenchRequest(twice, quick=True)
+        with pytest.raises(BadRequest, match="two problems named 'steering_redesign_40'"):
+            _cases(request, problems_by_kind(request), lambda event: None)

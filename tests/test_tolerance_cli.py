@@ -687,3 +687,13 @@ def test_a_box_reaching_a_non_physical_cam_or_chain_is_refused_as_every_kinds_is
              "1 m/s")):
         run = agrisynth("tolerance", str(spec), "--tol", option, "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
         assert run.returncode == 2 and run.stderr.strip() == f"error: tolerance: {said}", run.stderr
+
+
+def test_an_acute_angles_box_is_advised_the_half_width_both_ends_allow(tmp_path):
+    """steering's base angle 72.4 deg +- 80 was advised "below 72.4 deg"; +- 70 then reached 142.4 deg."""
+    run = agrisynth("tolerance", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--tol", "base_angle=80",
+                    "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode == 2 and run.stderr.strip().endswith("must be > 0: give it a half-width below 17.6 deg")
+    fine = agrisynth("tolerance", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--tol", "base_angle=17",
+                     "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
+    assert fine.returncode in (0, 1), fine.stderr

@@ -35,19 +35,24 @@ def problems_by_kind(request: BenchRequest, emit: Subscriber = lambda event: Non
             if loaded.kind not in known:
                 raise BadRequest(f"{item}: kind {loaded.kind!r} has no bench cases "
                                  f"(kinds with a bench: {', '.join(known)})", "PROBLEM")
-            taken = next((other for specs in by_kind.values() for other in specs or ()
-                          if other.name == loaded.name), None)
-            if taken is not None:
-                # bench.json's rows, bench.md's sections and samples_<problem>.png are named by the spec's name
-                raise BadRequest(f"{item}: a second problem named {loaded.name!r} (the first: {taken.path}); bench "
-                                 f"names its rows and figures by the spec's name: give each problem once, each its "
-                                 f"own name", "PROBLEM")
             # a spec file replaces its kind's default set, also when the kind is named too (before or after it)
             by_kind[loaded.kind] = (by_kind.get(loaded.kind) or []) + [loaded]
         else:
             raise BadRequest(f"{item!r} is neither a kind with a bench ({', '.join(known)}) nor a spec file",
                              "PROBLEM")
     return by_kind
+
+
+def _refuse_one_name_twice(cases: list) -> None:
+    """Two cases of one problem name (a named spec beside a kind's default set holding its name): bench.json's rows,
+    bench.md's sections and samples_<problem>.png are named by it, so one would hide the other."""
+    seen: dict[str, str] = {}
+    for case in cases:
+        where = str(case.loaded.path) if case.loaded is not None else f"kind {case.kind}'s bench set"
+        if case.problem in seen:
+            raise BadRequest(f"two problems named {case.problem!r} ({seen[case.problem]} and {where}); bench names its "
+                             f"rows and figures by the problem's name: give each its own name", "PROBLEM")
+        seen[case.problem] = where
 
 
 def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
@@ -62,6 +67,7 @@ def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
                 raise
             emit(RunWarning(f"bench: kind {kind} left out: its bench cases could not be made "
                             f"({type(exc).__name__}: {exc})"))
+    _refuse_one_name_twice(cases)
     return cases
 
 

@@ -127,12 +127,15 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
         value = design.get(key)
         if width <= 0 or not isinstance(value, float):
             continue
-        if (key in positive or name in positive or key in acute or name in acute) and value - width <= 0:
+        is_acute = key in acute or name in acute
+        # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive value's 0
+        room = min(value, 90.0 - value) if is_acute else value
+        if (key in positive or name in positive or is_acute) and value - width <= 0:
             raise SpecError(f"tolerance: the box reaches {value - width:g} {unit} for {key} ({value:g} {unit} +- "
-                            f"{width:g}), which must be > 0: give it a half-width below {value:g} {unit}")
-        if (key in acute or name in acute) and value + width >= 90:
+                            f"{width:g}), which must be > 0: give it a half-width below {room:g} {unit}")
+        if is_acute and value + width >= 90:
             raise SpecError(f"tolerance: the box reaches {value + width:g} {unit} for {key} ({value:g} {unit} +- "
-                            f"{width:g}), which must be < 90: give it a half-width below {90 - value:g} {unit}")
+                            f"{width:g}), which must be < 90: give it a half-width below {room:g} {unit}")
 
 
 def whole_problem(nlp) -> None:
