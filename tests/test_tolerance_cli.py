@@ -697,3 +697,19 @@ def test_an_acute_angles_box_is_advised_the_half_width_both_ends_allow(tmp_path)
     fine = agrisynth("tolerance", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--tol", "base_angle=17",
                      "--samples", "5", "--out", str(tmp_path), cwd=tmp_path)
     assert fine.returncode in (0, 1), fine.stderr
+
+
+def test_a_robust_solve_whose_box_can_leave_the_acute_range_is_refused_before_any_start(tmp_path):
+    """steering_redesign_27 with [tolerance] angle = 30: the solve ended "optimal" at base_angle 86.7 deg and its
+    Monte-Carlo check said 100 % of 50 samples pass, counting designs up to 116.7 deg that the spec refuses;
+    `agrisynth tolerance` of that answer refused the same box."""
+    text = (LIBRARY / "steering" / "steering_redesign_27.toml").read_text()
+    spec = tmp_path / "st_rob.toml"
+    spec.write_text(re.sub(r'(?m)^name = ".*"$', 'name = "st_rob"', text, count=1)
+                    + "\n[tolerance]\nangle = 30.0\nsamples = 50\n")
+    run = agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path / "s"), cwd=tmp_path)
+    assert run.returncode == 2 and run.stderr.strip() == (
+        f"error: {spec}: [tolerance] +-30 deg on base_angle reaches 119 deg from its bounds ([55, 89] deg), which "
+        f"must be < 90: a tolerance-robust solve holds the box around every design it tries; give base_angle a "
+        f"half-width below 1 deg (tolerance.variables) or bounds further from the limit")
+    assert not (tmp_path / "s").exists()

@@ -19,7 +19,7 @@ from synthesis.result import RUN_NAME, is_run_folder
 from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
 from synthesis.runs.output import RunOutput, text_file
 from synthesis.runs.requests import BadRequest, Outcome, SolveRequest, SolveWritten, Stopped
-from synthesis.runs.specs import described, loaded_spec, zero_tolerance_box
+from synthesis.runs.specs import described, loaded_spec, refuse_robust_box_outside, zero_tolerance_box
 from synthesis.spec.solved import ELASTIC_FILENAME as ELASTIC_SPEC, FILENAME as SOLVED_SPEC, elastic_said, elastic_toml, solved_toml
 
 #: most worker processes a run starts
@@ -137,6 +137,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     if zeros is not None:       # [tolerance] asks for a tolerance-robust solve: of an empty box, the nominal one
         raise SpecError(f"{loaded.path}: [tolerance] gives no half-width above 0 ({zeros}): a tolerance-robust solve "
                         f"needs one (length, angle or variables); leave the table out to solve the nominal design")
+    refuse_robust_box_outside(loaded)
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)

@@ -11,6 +11,7 @@ from synthesis.errors import AgrisynthError, AssemblyError, SpecError
 from synthesis.library import LIBRARY, library_spec
 from synthesis.runs.events import Note, SpecFromLibrary, Subscriber
 from synthesis.spec import design_info, load_spec
+from synthesis.spec.common import value_of
 from synthesis.spec.plausibility import unit_notes
 
 
@@ -73,6 +74,40 @@ def zero_tolerance_box(loaded) -> str | None:
         return None
     given = [f"tolerance.{what} = 0" for what in ("length", "angle") if getattr(tol, what) == 0]
     return ", ".join(given) if given else "no length, angle or variables"
+
+
+def refuse_robust_box_outside(loaded) -> None:
+    """SpecError when a tolerance-robust solve's box ([tolerance]) around a design it may try -- any in a free
+    variable's bounds, a fixed one's value -- reaches 0 for a variable the spec holds > 0, or 0 or 90 deg for an
+    acute one: the answer's Monte-Carlo check would sample designs the spec refuses, count them, and could say every
+    rule holds (`agrisynth tolerance` of that answer refuses the same box)."""
+    tol = getattr(loaded.model, "tolerance", None)
+    if tol is None:
+        return
+    spec = loaded.model
+    info = design_info.describe(spec)
+    positive, acute = design_info.positive_variables(spec), design_info.acute_variables(spec)
+    values = spec.variables()
+    for name in [n for n in info if n in positive or n in acute]:
+        entry = info[name]
+        width = tol.variables.get(name) or {"mm": tol.length, "deg": tol.angle}.get(entry["unit"]) or 0.0
+        if not width:
+            continue
+        lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
+        where = "its bounds" if entry["free"] else "its value"
+        room = min(lo, 90.0 - hi) if name in acute else lo
+        reach = lo - width if lo - width <= 0 else hi + width if name in acute and hi + width >= 90 else None
+        if reach is not None:
+            limit = "> 0" if reach <= 0 else "< 90"
+            raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name} reaches {reach:g} "
+                            f"{entry['unit']} from {where} ({_span(lo, hi)} {entry['unit']}), which must be {limit}: "
+                            f"a tolerance-robust solve holds the box around every design it tries; give {name} a "
+                            f"half-width below {max(room, 0.0):g} {entry['unit']} (tolerance.variables) or "
+                            f"{'bounds' if entry['free'] else 'a value'} further from the limit")
+
+
+def _span(lo: float, hi: float) -> str:
+    return f"{lo:g}" if lo == hi else f"[{lo:g}, {hi:g}]"
 
 
 def not_a_result(spec: Path) -> None:
