@@ -713,3 +713,23 @@ def test_a_robust_solve_whose_box_can_leave_the_acute_range_is_refused_before_an
         f"must be < 90: a tolerance-robust solve holds the box around every design it tries; give base_angle a "
         f"half-width below 1 deg (tolerance.variables) or bounds further from the limit")
     assert not (tmp_path / "s").exists()
+
+
+def test_guide_ways_control_points_are_named_alike_by_every_command(tmp_path):
+    """smooth_redesign leaves its control points to the convex fit: `--tol P0_x=0.1` was "unknown" (the check of
+    names read the arm's five variables) and `--tol R=0.1` passed that check to be refused by the analysis, naming
+    the control points as the known ones.  The names are result.json's (the fit's points written out), and a design
+    variable the analysis does not vary is said so."""
+    smooth = LIBRARY / "guide_way" / "smooth_redesign.toml"
+    point = agrisynth("tolerance", str(smooth), "--tol", "P0_x=0.1", "--samples", "3", "--out", str(tmp_path / "p"),
+                      cwd=tmp_path)
+    assert point.returncode in (0, 1), point.stderr
+    arm = agrisynth("tolerance", str(smooth), "--tol", "R=0.1", "--samples", "3", "--out", str(tmp_path / "r"),
+                    cwd=tmp_path)
+    assert arm.returncode == 2 and arm.stderr.startswith("error: tolerance: R: no variable this kind's analysis "
+                                                         "varies (it varies P0_x, P1_x")
+    spec = tmp_path / "points.toml"
+    spec.write_text(re.sub(r'(?m)^name = ".*"$', 'name = "points"', smooth.read_text(), count=1)
+                    + "\n[tolerance]\nvariables = { P3_x = 0.1 }\n")
+    check = agrisynth("check", str(spec), "--out", str(tmp_path / "c"), cwd=tmp_path)
+    assert check.returncode in (0, 1) and "unknown design variable" not in check.stderr, check.stderr

@@ -61,9 +61,21 @@ def tolerance_names_known(loaded) -> None:
     is bad input in every command (solve and tolerance refuse it; check ignored it)."""
     tol = getattr(loaded.model, "tolerance", None)
     if tol is not None and tol.variables:
-        unknown_design_variables(loaded.model, list(tol.variables), f"{loaded.path}: tolerance.variables")
-        within_option_ranges(loaded.model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = "
-                                                                f"{{value:g}}")
+        model = named_model(loaded)
+        unknown_design_variables(model, list(tol.variables), f"{loaded.path}: tolerance.variables")
+        within_option_ranges(model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = {{value:g}}")
+
+
+def named_model(loaded):
+    """The spec model whose design variables are result.json's: with the part a kind leaves to itself written out
+    (guide_way's control points of the convex fit, ``Kind.explicit_design``), as a run's design_variables list
+    them; the loaded model where it cannot be (the error is the run's to say)."""
+    if kinds.get(loaded.kind).writes_explicit_design:
+        try:
+            return kinds.explicit_design(loaded)[0].model
+        except (AgrisynthError, OSError):
+            pass
+    return loaded.model
 
 
 def zero_tolerance_box(loaded) -> str | None:
@@ -139,12 +151,7 @@ def described(result, loaded):
     that leaves part of its design to the kind (a convex fit of its path's control points) is described with
     that part written out (``Kind.explicit_design``), as solved.toml and the studio write it: every variable the
     solve moved is listed, free, with the box it moved in."""
-    if kinds.get(loaded.kind).writes_explicit_design:
-        try:
-            loaded, _ = kinds.explicit_design(loaded)       # the file as the run read it
-        except (AgrisynthError, OSError):    # a description is not worth a run: described as loaded
-            pass
-    return design_info.attach(result, loaded.model)
+    return design_info.attach(result, named_model(loaded))
 
 
 def in_file(loaded, evaluate):

@@ -96,7 +96,8 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     known = set(dmap.names) | set(dmap.keys)
     unknown = sorted(set(per_variable) - known)
     if unknown:
-        raise SpecError(f"tolerance: unknown design variable(s) {', '.join(unknown)} (known: {', '.join(dmap.keys)})")
+        raise SpecError(f"tolerance: {', '.join(unknown)}: no variable this kind's analysis varies (it varies "
+                        f"{', '.join(dmap.keys)})")
     box = []
     for name, key, unit in zip(dmap.names, dmap.keys, dmap.units):
         if key in per_variable or name in per_variable:
