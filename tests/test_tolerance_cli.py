@@ -733,3 +733,28 @@ def test_guide_ways_control_points_are_named_alike_by_every_command(tmp_path):
                     + "\n[tolerance]\nvariables = { P3_x = 0.1 }\n")
     check = agrisynth("check", str(spec), "--out", str(tmp_path / "c"), cwd=tmp_path)
     assert check.returncode in (0, 1) and "unknown design variable" not in check.stderr, check.stderr
+
+
+def test_length_on_the_command_line_replaces_a_fitted_control_points_width_from_the_spec(tmp_path):
+    """--length replaces the spec's [tolerance] width of every length: a guide way's control point (named as
+    result.json names the fit's points) kept its 0.1 mm under --length 0.5."""
+    smooth = LIBRARY / "guide_way" / "smooth_redesign.toml"
+    spec = tmp_path / "gwp3.toml"
+    spec.write_text(re.sub(r'(?m)^name = ".*"$', 'name = "gwp3"', smooth.read_text(), count=1)
+                    + "\n[tolerance]\nvariables = { P3_x = 0.1 }\n")
+    run = agrisynth("tolerance", str(spec), "--length", "0.5", "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    box = strict_json(tmp_path / "gwp3-tolerance" / "result.json")["facts"]["tolerance"]["tolerance"]
+    assert box["P3_x"]["half_width"] == box["P4_x"]["half_width"] == 0.5
+
+
+def test_a_combined_picker_with_a_tolerance_table_is_refused_as_a_kind_that_does_not_solve(tmp_path):
+    """The robust box's domain check read the spec's variables(), which the combined picker has none of: a traceback
+    where solve said the kind has nothing to optimise."""
+    for name in ("cai2020_picker.toml", "cai2020_crank_rocker.toml", "cai2020_double_crank.toml"):
+        (tmp_path / name).write_text((LIBRARY / "picker" / name).read_text())
+    spec = tmp_path / "cai2020_picker.toml"
+    spec.write_text(spec.read_text() + "\n[tolerance]\nlength = 0.1\n")
+    run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert run.stderr.startswith("error: kind 'picker' has nothing to optimise")

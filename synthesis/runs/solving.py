@@ -137,8 +137,8 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     if zeros is not None:       # [tolerance] asks for a tolerance-robust solve: of an empty box, the nominal one
         raise SpecError(f"{loaded.path}: [tolerance] gives no half-width above 0 ({zeros}): a tolerance-robust solve "
                         f"needs one (length, angle or variables); leave the table out to solve the nominal design")
-    refuse_robust_box_outside(loaded)
     kind = kinds.solving_kind_for(loaded)       # [tolerance]: every rule at its linearised worst case
+    refuse_robust_box_outside(loaded)           # (after the kind has said whether it takes a [tolerance] at all)
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)
     plan = _plan(request, loaded, kind)

@@ -56,12 +56,13 @@ def within_option_ranges(spec, per_variable: dict[str, float], where: str = "--t
                             f"most {top:g} (as {option} takes it)")
 
 
-def tolerance_names_known(loaded) -> None:
+def tolerance_names_known(loaded, model=None) -> None:
     """A [tolerance] variables entry naming no design variable, or wider than --length / --angle take for its unit,
-    is bad input in every command (solve and tolerance refuse it; check ignored it)."""
+    is bad input in every command (solve and tolerance refuse it; check ignored it).  ``model``: the spec's
+    :func:`named_model` where the caller has it already (a convex fit's seconds, once)."""
     tol = getattr(loaded.model, "tolerance", None)
     if tol is not None and tol.variables:
-        model = named_model(loaded)
+        model = named_model(loaded) if model is None else model
         unknown_design_variables(model, list(tol.variables), f"{loaded.path}: tolerance.variables")
         within_option_ranges(model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = {{value:g}}")
 
@@ -94,15 +95,17 @@ def refuse_robust_box_outside(loaded) -> None:
     acute one: the answer's Monte-Carlo check would sample designs the spec refuses, count them, and could say every
     rule holds (`agrisynth tolerance` of that answer refuses the same box)."""
     tol = getattr(loaded.model, "tolerance", None)
-    if tol is None:
-        return
     spec = loaded.model
+    if tol is None or not callable(getattr(spec, "variables", None)):
+        return
     info = design_info.describe(spec)
     positive, acute = design_info.positive_variables(spec), design_info.acute_variables(spec)
     values = spec.variables()
+    design_unit = kinds.get(loaded.kind).design_unit        # as the robust box reads a variable of no unit
     for name in [n for n in info if n in positive or n in acute]:
         entry = info[name]
-        width = tol.variables.get(name) or {"mm": tol.length, "deg": tol.angle}.get(entry["unit"]) or 0.0
+        width = (tol.variables.get(name) or {"mm": tol.length, "deg": tol.angle}.get(entry["unit"] or design_unit)
+                 or 0.0)
         if not width:
             continue
         lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2

@@ -68,16 +68,18 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     sample pass every rule (--samples 0: every linear worst case holds), 1 otherwise; ``details``:
     :class:`ToleranceFacts` (the analysis' facts, the rows that decided a failure)."""
     loaded = load_spec(design_file(request.target, emit))
-    tolerance_names_known(loaded)
-    kind = kinds.solving_kind(loaded.kind)
     spec: Any = loaded.model        # the kind's own spec model: a kind that analyses tolerances has [tolerance]
     tol = spec.tolerance
+    # the variables by result.json's names (a guide way's fitted control points written out): once, a convex fit
+    named = named_model(loaded) if (tol and tol.variables) or request.per_variable else spec
+    tolerance_names_known(loaded, named)
+    kind = kinds.solving_kind(loaded.kind)
     length = request.length if request.length is not None else (tol.length if tol else None)
     angle = request.angle if request.angle is not None else (tol.angle if tol else None)
-    per_variable = {**_spec_variables(spec, dict(tol.variables) if tol else {}, request), **request.per_variable}
+    per_variable = {**_spec_variables(named, dict(tol.variables) if tol else {}, request), **request.per_variable}
     if request.per_variable:               # an unknown name is bad input, said before any analysis
-        unknown_design_variables(named_model(loaded), list(request.per_variable), "--tol")
-        within_option_ranges(named_model(loaded), request.per_variable)
+        unknown_design_variables(named, list(request.per_variable), "--tol")
+        within_option_ranges(named, request.per_variable)
     if not (length or angle or any(per_variable.values())) and request.samples != 0:
         given = [f"--{what} 0" for what, width in (("length", request.length), ("angle", request.angle))
                  if width == 0]
