@@ -642,6 +642,7 @@ def test_a_tolerance_table_naming_a_suffix_of_a_design_variable_is_refused_alike
     assert on_the_line.stderr.strip() == "error: --tol: unknown design variable I (known: delta_I, delta_II)"
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_tolerance_table_of_zero_half_widths_is_named_by_tolerance_and_refused_by_solve(tmp_path):
     """length = 0, angle = 0: tolerance said "give --length and/or --angle (or a [tolerance] table in the spec)" of a
     spec holding one, and solve ran a tolerance-robust solve of an empty box (the nominal one, called robust)."""
@@ -659,6 +660,7 @@ def test_a_tolerance_table_of_zero_half_widths_is_named_by_tolerance_and_refused
     assert wide.returncode in (0, 1), wide.stderr
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_tolerance_of_a_guide_way_of_published_conics_says_why_in_the_kinds_words(tmp_path):
     """liang_2z's guide way is the paper's conics: the analysis said "the kind's NLP made no solve call to take its
     start from"; now the kind's own reason.  A spline path left to the convex fit is analysed (its check names the
@@ -675,6 +677,7 @@ def test_tolerance_of_a_guide_way_of_published_conics_says_why_in_the_kinds_word
     assert {f"P{j}_{c}" for j in range(24) for c in "xy"} <= set(facts["tolerance"])
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_a_box_reaching_a_non_physical_cam_or_chain_is_refused_as_every_kinds_is(tmp_path):
     """opening_cam's base radius +-100 mm reached -50 mm and the combing chain's speed +-1.5 m/s reached -0.5 m/s:
     both were sampled, evaluated and counted in the pass rates (the fields were not marked > 0, so the planting
@@ -715,6 +718,7 @@ def test_a_robust_solve_whose_box_can_leave_the_acute_range_is_refused_before_an
     assert not (tmp_path / "s").exists()
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_guide_ways_control_points_are_named_alike_by_every_command(tmp_path):
     """smooth_redesign leaves its control points to the convex fit: `--tol P0_x=0.1` was "unknown" (the check of
     names read the arm's five variables) and `--tol R=0.1` passed that check to be refused by the analysis, naming
@@ -735,6 +739,7 @@ def test_guide_ways_control_points_are_named_alike_by_every_command(tmp_path):
     assert check.returncode in (0, 1) and "unknown design variable" not in check.stderr, check.stderr
 
 
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
 def test_length_on_the_command_line_replaces_a_fitted_control_points_width_from_the_spec(tmp_path):
     """--length replaces the spec's [tolerance] width of every length: a guide way's control point (named as
     result.json names the fit's points) kept its 0.1 mm under --length 0.5."""
