@@ -90,10 +90,10 @@ def zero_tolerance_box(loaded) -> str | None:
 
 
 def refuse_robust_box_outside(loaded) -> None:
-    """SpecError when a tolerance-robust solve's box ([tolerance]) around a design it may try -- any in a free
-    variable's bounds, a fixed one's value -- reaches 0 for a variable the spec holds > 0, or 0 or 90 deg for an
-    acute one: the answer's Monte-Carlo check would sample designs the spec refuses, count them, and could say every
-    rule holds (`agrisynth tolerance` of that answer refuses the same box)."""
+    """SpecError when no design a tolerance-robust solve may try keeps its box ([tolerance]) inside the range the spec
+    holds a variable to: > 0, or 0 < angle < 90 for an acute one -- a fixed variable's value, or every value in a free
+    one's bounds, within the half-width of a limit.  (Where some do, the solve runs; its answer's Monte-Carlo check is
+    not run if the answer's box crosses a limit: ``RobustFinish``.)"""
     tol = getattr(loaded.model, "tolerance", None)
     spec = loaded.model
     if tol is None or not callable(getattr(spec, "variables", None)):
@@ -109,20 +109,15 @@ def refuse_robust_box_outside(loaded) -> None:
         if not width:
             continue
         lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
-        where = "its bounds" if entry["free"] else "its value"
-        room = min(lo, 90.0 - hi) if name in acute else lo
-        reach = lo - width if lo - width <= 0 else hi + width if name in acute and hi + width >= 90 else None
-        if reach is not None:
-            limit = "> 0" if reach <= 0 else "< 90"
-            raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name} reaches {reach:g} "
-                            f"{entry['unit']} from {where} ({_span(lo, hi)} {entry['unit']}), which must be {limit}: "
-                            f"a tolerance-robust solve holds the box around every design it tries; give {name} a "
-                            f"half-width below {max(room, 0.0):g} {entry['unit']} (tolerance.variables) or "
-                            f"{'bounds' if entry['free'] else 'a value'} further from the limit")
-
-
-def _span(lo: float, hi: float) -> str:
-    return f"{lo:g}" if lo == hi else f"[{lo:g}, {hi:g}]"
+        top = 90.0 - width if name in acute else float("inf")
+        if max(lo, width) < min(hi, top) or (lo == hi and width < lo < top):
+            continue
+        where = f"its bounds [{lo:g}, {hi:g}]" if entry["free"] else f"its value {lo:g}"
+        inside = f"{width:g} and {top:g}" if name in acute else f"above {width:g}"
+        raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name}: no design in {where} "
+                        f"{entry['unit']} keeps the box inside {'(0, 90)' if name in acute else '> 0'} (the value "
+                        f"must lie {'between ' if name in acute else ''}{inside}): give {name} a smaller half-width "
+                        f"(tolerance.variables) or {'bounds' if entry['free'] else 'a value'} further from the limit")
 
 
 def not_a_result(spec: Path) -> None:

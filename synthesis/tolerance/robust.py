@@ -21,7 +21,7 @@ from synthesis.core.sensitivity import PinningError
 from synthesis.spec.design_info import describe, describe_lists
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.tolerance.analysis import corner_margins, linearise, monte_carlo, stack_up
-from synthesis.tolerance.design import DesignMap, box_of, spec_keys, whole_problem
+from synthesis.tolerance.design import DesignMap, box_of, refuse_crossing_zero, spec_keys, whole_problem
 
 
 def _box_text(spec, scale: float | None = None, units: set | None = None) -> str:
@@ -110,6 +110,16 @@ class RobustBuild:
         return nlp
 
 
+def _box_outside(spec, dmap: DesignMap, design: dict, box) -> str | None:
+    """Why the answer's box reaches beyond a limit the spec holds a variable to (> 0, an acute angle's (0, 90)),
+    in :func:`~synthesis.tolerance.design.refuse_crossing_zero`'s words; None when it stays inside."""
+    try:
+        refuse_crossing_zero(spec, dmap, design, box)
+    except SpecError as exc:
+        return str(exc).removeprefix("tolerance: ")
+    return None
+
+
 @dataclasses.dataclass(frozen=True)
 class RobustFinish:
     base: object
@@ -142,7 +152,11 @@ class RobustFinish:
                 facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
                                       "held_at": "not checked: the solve was interrupted"}
                 return dataclasses.replace(finished, facts=facts)
-            mc = monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed)
+            outside = _box_outside(spec, dmap, design, box)
+            # samples beyond a limit the spec holds a variable to are no designs of it: counted, they could pass
+            mc = ({"samples": 0, "seed": tol.seed, "distribution": f"not run: {outside}", "pass_rate": None,
+                   "rules": {}} if outside is not None
+                  else monte_carlo(self.kind, spec, design, dmap, box, tol.samples, tol.seed))
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
             # auxiliaries are (the crank angles of its targets, say: KindNLP.answer_start)
             design = {**best.outcome.details, **best.outcome.design, **design}
