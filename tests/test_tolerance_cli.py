@@ -770,3 +770,20 @@ def test_a_combined_picker_with_a_tolerance_table_is_refused_as_a_kind_that_does
     run = agrisynth("solve", str(spec), "--starts", "1", "--workers", "1", "--out", str(tmp_path / "o"), cwd=tmp_path)
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert run.stderr.startswith("error: kind 'picker' has nothing to optimise")
+
+
+def test_a_fixed_length_whose_robust_box_reaches_zero_is_refused_naming_its_value(tmp_path):
+    """The fixed-value side of the robust box's range check: l2 = 28.5 mm with a +-30 mm box can only sample links
+    of -1.5 mm and below."""
+    from synthesis.errors import SpecError
+    from synthesis.runs.specs import refuse_robust_box_outside
+    from synthesis.spec import load_spec
+
+    text = (LIBRARY / "planting_arm" / "robust_redesign_from_example1.toml").read_text()
+    spec = tmp_path / "fixed.toml"
+    spec.write_text(re.sub(r"(?m)^l2 = .*$", "l2 = 28.5", text, count=1).replace("length = 0.2", "length = 30.0"))
+    with pytest.raises(SpecError) as raised:
+        refuse_robust_box_outside(load_spec(spec))
+    assert str(raised.value) == (f"{spec}: [tolerance] +-30 mm on l2: its value 28.5 mm does not keep the box inside "
+                                 f"> 0 (the value must lie above 30): give l2 a smaller half-width (tolerance.variables) "
+                                 f"or a value further from the limit")

@@ -112,11 +112,12 @@ def refuse_robust_box_outside(loaded) -> None:
         top = 90.0 - width if name in acute else float("inf")
         if max(lo, width) < min(hi, top) or (lo == hi and width < lo < top):
             continue
-        where = f"its bounds [{lo:g}, {hi:g}]" if entry["free"] else f"its value {lo:g}"
+        which = (f"no design in its bounds [{lo:g}, {hi:g}] {entry['unit']} keeps" if entry["free"]
+                 else f"its value {lo:g} {entry['unit']} does not keep")
         inside = f"{width:g} and {top:g}" if name in acute else f"above {width:g}"
-        raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name}: no design in {where} "
-                        f"{entry['unit']} keeps the box inside {'(0, 90)' if name in acute else '> 0'} (the value "
-                        f"must lie {'between ' if name in acute else ''}{inside}): give {name} a smaller half-width "
+        raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
+                        f"{'(0, 90)' if name in acute else '> 0'} (the value must lie "
+                        f"{'between ' if name in acute else ''}{inside}): give {name} a smaller half-width "
                         f"(tolerance.variables) or {'bounds' if entry['free'] else 'a value'} further from the limit")
 
 
