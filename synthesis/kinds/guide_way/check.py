@@ -268,10 +268,15 @@ def whose_path(spec) -> str:
     return "[spline] (the convex fit through its key points)"
 
 
+def control_names(n: int) -> list[str]:
+    """The names of n control points' coordinates in result.json's design and the NLP's decision vector: P0_x ..
+    P{n-1}_x, then P0_y .. P{n-1}_y."""
+    return [f"P{j}_{c}" for c in ("x", "y") for j in range(n)]
+
+
 def control_design(control: np.ndarray) -> dict[str, float]:
-    """(n, 2) control points as result.json's design names them: P0_x .. P{n-1}_x, then P0_y .. P{n-1}_y (the
-    decision vector's order)."""
-    return {f"P{j}_{c}": float(control[j, k]) for k, c in enumerate("xy") for j in range(len(control))}
+    """(n, 2) control points as result.json's design names them (:func:`control_names`)."""
+    return dict(zip(control_names(len(control)), (float(v) for v in np.concatenate([control[:, 0], control[:, 1]]))))
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -26,7 +26,7 @@ from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import ObjectiveParts, Problem, Row, per_rule_backoff
 from synthesis.errors import SpecError
 from synthesis.kinds.guide_way import scene as sc
-from synthesis.kinds.guide_way.check import whose_path
+from synthesis.kinds.guide_way.check import control_names as names_of, whose_path
 from synthesis.spec.common import bounds_of, value_of
 from synthesis.kinds.guide_way import spline as sp
 
@@ -42,10 +42,6 @@ BACKOFF = {"reach": 0.0, "arm_turns_forward": 0.01, "no_undercut": 0.01, "pressu
 #: reached max_iter; monotone: 82 and 81.5 converge, 70 still does not; 85 ... 60 deg otherwise converge either
 #: way to the same smoothness; GUIDE_WAY.md)
 MU_STRATEGY = {"ipopt.mu_strategy": "monotone"}
-
-
-def names_of(n: int) -> list[str]:
-    return [f"P{j}_{c}" for c in ("x", "y") for j in range(n)]
 
 
 def control_of(x, n: int):
