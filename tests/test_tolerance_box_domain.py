@@ -45,3 +45,23 @@ def test_every_variable_the_spec_holds_positive_or_acute_is_one_the_box_may_not_
             assert name in acute, (name, said)
         else:
             assert name not in positive | acute or (at_zero and below), (name, said)
+
+
+def test_the_robust_refusal_reads_each_half_width_as_the_box_does(tmp_path):
+    """The robust solve's up-front refusal and the box it guards (`box_of`) read a variable's half-width by one
+    rule (`half_width`: its own entry first, else by unit) and test its range by one (`box_fits`)."""
+    from synthesis.errors import SpecError
+    from synthesis.tolerance.design import box_fits, half_width, refuse_box_outside_bounds
+    text = (LIBRARY / "steering" / "steering_redesign_27.toml").read_text()
+    spec = tmp_path / "st.toml"
+    spec.write_text(text + "\n[tolerance]\nangle = 50.0\nsamples = 50\n[tolerance.variables]\nbase_angle = 1.0\n")
+    refuse_box_outside_bounds(load_spec(spec).model, "mm", spec)          # nothing to refuse
+    spec.write_text(text + "\n[tolerance]\nangle = 50.0\nsamples = 50\n")
+    with pytest.raises(SpecError, match=r"\+-50 deg on base_angle: no design in its bounds \[55, 89\] deg"):
+        refuse_box_outside_bounds(load_spec(spec).model, "mm", spec)
+    assert half_width(("a", "b"), "deg", 1.0, 2.0, {"b": 0.0}) == 0.0
+    assert half_width(("a",), "deg", 1.0, 2.0, {}) == 2.0 and half_width(("a",), "m/s", 1.0, 2.0, {}) == 0.0
+    # one design (lo = hi) and an interval: strict at both ends of (0, 90)
+    assert box_fits(10.0, 10.0, 9.9, acute=True) and not box_fits(10.0, 10.0, 10.0, acute=True)
+    assert not box_fits(80.0, 80.0, 10.0, acute=True) and box_fits(5.0, 80.0, 10.0, acute=True)
+    assert box_fits(0.0, 1.0, 0.5, acute=False) and not box_fits(0.0, 0.5, 0.5, acute=False)

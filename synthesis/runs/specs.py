@@ -11,7 +11,6 @@ from synthesis.errors import AgrisynthError, AssemblyError, SpecError
 from synthesis.library import LIBRARY, library_spec
 from synthesis.runs.events import Note, SpecFromLibrary, Subscriber
 from synthesis.spec import design_info, load_spec
-from synthesis.spec.common import value_of
 from synthesis.spec.plausibility import unit_notes
 
 
@@ -90,35 +89,10 @@ def zero_tolerance_box(loaded) -> str | None:
 
 
 def refuse_robust_box_outside(loaded) -> None:
-    """SpecError when no design a tolerance-robust solve may try keeps its box ([tolerance]) inside the range the spec
-    holds a variable to: > 0, or 0 < angle < 90 for an acute one -- a fixed variable's value, or every value in a free
-    one's bounds, within the half-width of a limit.  (Where some do, the solve runs; its answer's Monte-Carlo check is
-    not run if the answer's box crosses a limit: ``RobustFinish``.)"""
-    tol = getattr(loaded.model, "tolerance", None)
-    spec = loaded.model
-    if tol is None or not callable(getattr(spec, "variables", None)):
-        return
-    info = design_info.describe(spec)
-    positive, acute = design_info.positive_variables(spec), design_info.acute_variables(spec)
-    values = spec.variables()
-    design_unit = kinds.get(loaded.kind).design_unit        # as the robust box reads a variable of no unit
-    for name in [n for n in info if n in positive or n in acute]:
-        entry = info[name]
-        width = (tol.variables.get(name) or {"mm": tol.length, "deg": tol.angle}.get(entry["unit"] or design_unit)
-                 or 0.0)
-        if not width:
-            continue
-        lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
-        top = 90.0 - width if name in acute else float("inf")
-        if max(lo, width) < min(hi, top) or (lo == hi and width < lo < top):
-            continue
-        which = (f"no design in its bounds [{lo:g}, {hi:g}] {entry['unit']} keeps" if entry["free"]
-                 else f"its value {lo:g} {entry['unit']} does not keep")
-        inside = f"{width:g} and {top:g}" if name in acute else f"above {width:g}"
-        raise SpecError(f"{loaded.path}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
-                        f"{'(0, 90)' if name in acute else '> 0'} (the value must lie "
-                        f"{'between ' if name in acute else ''}{inside}): give {name} a smaller half-width "
-                        f"(tolerance.variables) or {'bounds' if entry['free'] else 'a value'} further from the limit")
+    """SpecError when no design a tolerance-robust solve of the spec may try keeps its box inside the range the spec
+    holds a variable to (:func:`synthesis.tolerance.design.refuse_box_outside_bounds`)."""
+    from synthesis.tolerance.design import refuse_box_outside_bounds   # with casadi: not for the commands that list
+    refuse_box_outside_bounds(loaded.model, kinds.get(loaded.kind).design_unit, loaded.path)
 
 
 def not_a_result(spec: Path) -> None:

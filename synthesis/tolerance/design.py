@@ -15,7 +15,7 @@ from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
 from synthesis.spec.design_info import acute_variables, describe, positive_variables
 from synthesis.errors import SpecError
-from synthesis.spec.common import FreeVariable
+from synthesis.spec.common import FreeVariable, value_of
 
 
 def spec_keys(names, info) -> list[str]:
@@ -91,6 +91,20 @@ def design_map(kind: Kind, nlp, spec) -> DesignMap:
     return DesignMap(names, keys, units, d0, J)
 
 
+def half_width(names, unit: str, length: float | None, angle: float | None,
+               per_variable: dict[str, float]) -> float:
+    """One variable's half-width: ``per_variable``'s entry under any of its ``names`` (0 included: the variable held
+    exact), else ``length`` for a length in mm, ``angle`` for an angle in deg, else 0."""
+    for name in names:
+        if name in per_variable:
+            return float(per_variable[name])
+    if unit == "mm" and length is not None:
+        return float(length)
+    if unit == "deg" and angle is not None:
+        return float(angle)
+    return 0.0
+
+
 def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_variable: dict[str, float]) -> np.ndarray:
     """Half-width per design variable: by name (or result key) from ``per_variable``, else by unit."""
     known = set(dmap.names) | set(dmap.keys)
@@ -98,16 +112,8 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     if unknown:
         raise SpecError(f"tolerance: {', '.join(unknown)}: no variable this kind's analysis varies (it varies "
                         f"{', '.join(dmap.keys)})")
-    box = []
-    for name, key, unit in zip(dmap.names, dmap.keys, dmap.units):
-        if key in per_variable or name in per_variable:
-            box.append(float(per_variable.get(key, per_variable.get(name))))
-        elif unit == "mm" and length is not None:
-            box.append(float(length))
-        elif unit == "deg" and angle is not None:
-            box.append(float(angle))
-        else:
-            box.append(0.0)
+    box = [half_width((key, name), unit, length, angle, per_variable)
+           for name, key, unit in zip(dmap.names, dmap.keys, dmap.units)]
     if not any(box) and (length or angle):
         # a half-width that reaches no design variable would leave the box empty without a word
         given = " and ".join(f"{what} {w:g} {u}" for what, w, u in (("length", length, "mm"), ("angle", angle, "deg"))
@@ -118,6 +124,13 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     return np.array(box)
 
 
+def box_fits(lo: float, hi: float, width: float, acute: bool) -> bool:
+    """Whether some value in [lo, hi] keeps its box [v - width, v + width] inside the range the kind holds the
+    variable to: > 0, or (0, 90) deg for an acute one.  One design is lo = hi."""
+    top = 90.0 - width if acute else float("inf")
+    return max(lo, width) < min(hi, top) or (lo == hi and width < lo < top)
+
+
 def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -> None:
     """A half-width that reaches zero or below for a variable the kind holds > 0 (a link length, a radius, a speed),
     or 90 deg or beyond for one it holds acute, is refused
@@ -126,17 +139,44 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
     positive, acute = positive_variables(spec), acute_variables(spec)
     for name, key, unit, width in zip(dmap.names, dmap.keys, dmap.units, box):
         value = design.get(key)
-        if width <= 0 or not isinstance(value, float):
-            continue
         is_acute = key in acute or name in acute
+        if (width <= 0 or not isinstance(value, float) or not (is_acute or key in positive or name in positive)
+                or box_fits(value, value, width, is_acute)):
+            continue
         # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive value's 0
         room = min(value, 90.0 - value) if is_acute else value
-        if (key in positive or name in positive or is_acute) and value - width <= 0:
-            raise SpecError(f"tolerance: the box reaches {value - width:g} {unit} for {key} ({value:g} {unit} +- "
-                            f"{width:g}), which must be > 0: give it a half-width below {room:g} {unit}")
-        if is_acute and value + width >= 90:
-            raise SpecError(f"tolerance: the box reaches {value + width:g} {unit} for {key} ({value:g} {unit} +- "
-                            f"{width:g}), which must be < 90: give it a half-width below {room:g} {unit}")
+        low = value - width <= 0
+        raise SpecError(f"tolerance: the box reaches {value - width if low else value + width:g} {unit} for {key} "
+                        f"({value:g} {unit} +- {width:g}), which must be {'> 0' if low else '< 90'}: give it a "
+                        f"half-width below {room:g} {unit}")
+
+
+def refuse_box_outside_bounds(spec, design_unit: str, where) -> None:
+    """SpecError when no design a tolerance-robust solve may try keeps its box ([tolerance]) inside the range the spec
+    holds a variable to: > 0, or 0 < angle < 90 for an acute one -- a fixed variable's value, or every value in a free
+    one's bounds, within the half-width of a limit.  ``design_unit``: the unit of a variable the spec gives none (the
+    kind's).  (Where some design does, the solve runs; its answer's Monte-Carlo check is not run if the answer's box
+    crosses a limit: ``synthesis.tolerance.robust``.)"""
+    tol = getattr(spec, "tolerance", None)
+    if tol is None or not callable(getattr(spec, "variables", None)):
+        return
+    info = describe(spec)
+    positive, acute = positive_variables(spec), acute_variables(spec)
+    values = spec.variables()
+    for name in [n for n in info if n in positive or n in acute]:
+        entry = info[name]
+        unit = entry["unit"] or design_unit
+        width = half_width((name,), unit, tol.length, tol.angle, dict(tol.variables))
+        lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
+        if width <= 0 or box_fits(lo, hi, width, name in acute):
+            continue
+        which = (f"no design in its bounds [{lo:g}, {hi:g}] {entry['unit']} keeps" if entry["free"]
+                 else f"its value {lo:g} {entry['unit']} does not keep")
+        inside = f"between {width:g} and {90.0 - width:g}" if name in acute else f"above {width:g}"
+        raise SpecError(f"{where}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
+                        f"{'(0, 90)' if name in acute else '> 0'} (the value must lie {inside}): give {name} a smaller "
+                        f"half-width (tolerance.variables) or {'bounds' if entry['free'] else 'a value'} further from "
+                        f"the limit")
 
 
 def whole_problem(nlp) -> None:
