@@ -354,6 +354,7 @@ def test_the_cutter_floor_sizes_the_opening_cam(solved):
     assert result.design["base_radius"] - free.design["base_radius"] == pytest.approx(4.70, abs=0.01)
 
 
+@pytest.mark.slow
 def test_a_rule_missed_only_by_the_solvers_tolerance_is_not_called_a_miss_between_samples(tmp_path):
     """The opening cam with its rise and near dwell freed: its hold windows as long as the dwells leave rise exactly
     40 deg, which IPOPT meets to 4e-9 deg.  The message sent the user to raise samples_per_segment (which changes

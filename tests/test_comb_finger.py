@@ -332,6 +332,7 @@ def test_a_robust_redesign_keeps_its_promise_on_the_rows_the_nlp_held(tmp_path):
     assert result.to_json()["facts"]["tolerance"]["monte_carlo"]["pass_rate"] == 1.0
 
 
+@pytest.mark.slow
 def test_the_tolerance_stack_up_of_a_max_at_its_kink_reads_each_branch(tmp_path):
     """finger_hides_in_drum is max(r - e - rho, e + hub_inset - rho) <= 0; with r = 120, e = 50, rho = 70.5 both
     branches are -0.5 mm (an independent trial).  The derivative of the max() there averaged the branches and the

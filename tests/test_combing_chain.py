@@ -322,6 +322,7 @@ def test_a_rule_keeps_its_name_from_the_solve_to_the_check_of_its_solved_toml(tm
     assert f"V_s switch {switch:g} m/s" in top["where"]
 
 
+@pytest.mark.slow
 def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp_path):
     proc = agrisynth("solve", str(TOO_WIDE), "--out", str(tmp_path), "--workers", "1", cwd=tmp_path, timeout=300)
     assert proc.returncode == 3, proc.stdout + proc.stderr
@@ -414,6 +415,7 @@ print("LOADED", sorted(other))
     assert (tmp_path / "redesign_window_80_100" / "result.json").exists()
 
 
+@pytest.mark.slow
 def test_check_says_on_the_terminal_which_published_figures_do_not_reproduce(tmp_path):
     """The HD650R's rules all hold, yet three of Table 13's six figures do not reproduce (CHAIN.md): `check` said
     "every rule satisfied" and nothing else; the gap was in result.json's facts.published alone."""

@@ -248,6 +248,7 @@ def test_no_mutated_result_file_crashes_compare(good, tmp_path):
     run()
 
 
+@pytest.mark.slow
 def test_candidates_of_different_agrisynth_versions_are_said_on_the_terminal_and_the_page(good, tmp_path):
     path, base = good
     other = tmp_path / "other.json"
@@ -278,6 +279,7 @@ def test_compare_of_bench_folders_alone_says_they_are_benches(tmp_path):
     assert not (tmp_path / "cmp").exists()
 
 
+@pytest.mark.slow
 def test_compare_without_out_writes_a_folder_per_comparison(good, tmp_path):
     """The README's order of work compares twice (two examples, then its own runs): with one default folder the
     second compare needed --force.  Each comparison has its own: results/compare/<A>_vs_<B>/."""

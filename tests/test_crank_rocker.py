@@ -77,6 +77,7 @@ def test_closed_form_reproduces_the_published_lengths():
     assert any(d.min_transmission_deg is not None and d.min_transmission_deg < 30 for d in designs)
 
 
+@pytest.mark.slow
 def test_nlp_reproduces_the_published_lengths_and_the_closed_form():
     loaded = load_spec(PICKER / "cai2020_crank_rocker_synthesis.toml")
     result, _, _ = run_solve(loaded, starts=4, workers=1)
@@ -155,6 +156,7 @@ def test_a_crank_too_short_to_find_the_extremes_is_not_evaluated_not_a_crash(tmp
         assert "extreme positions cannot be found" in records[name].note + records[name].where
 
 
+@pytest.mark.slow
 def test_a_start_whose_fixed_frame_moved_is_no_design_and_never_reported_as_one(tmp_path):
     """The lengths' bounds are rows in the Grashof coordinates: a start IPOPT stops infeasible may leave them.  On
     requirements no crank-rocker meets (K = 1, swing 0.01 deg, transmission >= 89.99 deg) every start ended with the

@@ -37,8 +37,8 @@ def drawn_texts(monkeypatch, writer, results, folder) -> list[str]:
     return texts
 
 
-@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow) if k == "planting_fourbar" else k
-                                       for k in OVERLAID])
+@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow)
+                                       if k in ("planting_fourbar", "clamp_cam") else k for k in OVERLAID])
 def test_one_design_is_never_the_baseline(kind_name, tmp_path, monkeypatch):
     kind = kinds.get(kind_name)
     loaded = load_spec(LIBRARY / kind.example)
@@ -116,8 +116,8 @@ def legend_overlaps(fig: Figure) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow) if k == "planting_fourbar" else k
-                                       for k in RUN_FIGURES])
+@pytest.mark.parametrize("kind_name", [pytest.param(k, marks=pytest.mark.slow)
+                                       if k in ("planting_fourbar", "rotary_planetary") else k for k in RUN_FIGURES])
 def test_legends_stay_outside_the_drawing(kind_name, tmp_path, monkeypatch):
     """Every legend of every run figure lies beside the axes (below or right of them), never over a link, a label
     or a curve, and inside the figure: its bounding box meets no axes' data area (the coupler curve's legend covered

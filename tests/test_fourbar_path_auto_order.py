@@ -195,6 +195,7 @@ def test_only_the_screened_sets_take_the_auto_order():
     assert not takes_auto_order(arc) and not StartMaker(arc, 0, auto_order=True).auto_order
 
 
+@pytest.mark.slow
 def test_an_auto_order_start_is_the_fixed_orders_start_of_its_role():
     """Start i of the auto order is fixed start auto_role(i) (the screened and pool starts, which ignore the row, to
     the bit; a hypercube start from the same row also to the bit, its continuation flag set)."""

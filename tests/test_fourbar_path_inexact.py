@@ -394,6 +394,7 @@ def test_a_start_stopped_at_max_iter_is_resumed_once_and_kept_only_when_it_conve
     assert resumed.objective < plain1.objective and kept_first.objective == plain11.objective
 
 
+@pytest.mark.slow
 def test_a_resume_that_converges_higher_keeps_the_first_answer(monkeypatch):
     """A fresh IPOPT run need not stay below its start (its barrier and filter start again): a resumed run that
     converges at a higher path error is not kept.  The second solve is replaced by one that converges at a point

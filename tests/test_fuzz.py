@@ -158,8 +158,8 @@ def fuzz(kind: str, examples: int, tmp_path: Path, derandomize: bool = False) ->
 
 
 #: the kinds whose 100 documents take seconds: run with the slow tests (the study below fuzzes every kind)
-SLOW_TO_FUZZ = {"clamp_cam", "comb_finger", "combing_chain", "crank_rocker", "guide_way", "picker", "planting_fourbar",
-                "rotary_planetary", "steering_linkage", "tillage_linkage"}
+SLOW_TO_FUZZ = {"clamp_cam", "comb_finger", "combing_chain", "crank_rocker", "fourbar_path", "guide_way", "picker",
+                "planting_fourbar", "rotary_planetary", "steering_linkage", "tillage_linkage"}
 
 
 @pytest.mark.parametrize("kind", [pytest.param(k, marks=pytest.mark.slow) if k in SLOW_TO_FUZZ else k

@@ -217,6 +217,7 @@ def run(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return agrisynth(*args, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow
 def test_check_cli_writes_the_result_and_figures_and_fails_the_published_angles(tmp_path):
     proc = run("check", str(BASELINE), "--out", str(tmp_path), cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr

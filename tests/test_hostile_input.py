@@ -257,6 +257,7 @@ def test_a_real_dask_handshake_passes_the_probe():
 
 
 @pytest.mark.parametrize("second", [DASK_HANDSHAKE[:8], DASK_HANDSHAKE], ids=["length_only", "handshake_then_silence"])
+@pytest.mark.slow
 def test_a_peer_that_passes_the_probe_then_stops_answering_dask_is_refused_by_the_deadline(second):
     """dask's own connection reads the scheduler's handshake with no deadline: a peer that greets the probe and then
     sends a length and nothing more would hold Client() for ever; one that greets and then never answers is dask's
@@ -690,6 +691,7 @@ def test_a_picker_part_file_that_names_no_file_is_refused_on_one_line(tmp_path, 
 
 # --- rule limits the solver cannot be handed ------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_rule_range_narrower_than_the_solvers_back_off_is_refused_in_one_line(tmp_path):
     """[rules] depth = [24.95, 25.05] mm: the back-off holds each side 0.1 mm inside, which leaves the row a lower limit
     above its upper; every IPOPT start failed on it with CasADi's "Ill-posed problem detected" (exit 3)."""

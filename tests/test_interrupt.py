@@ -192,6 +192,7 @@ def test_a_signal_inside_the_pools_wait_stops_the_run(tmp_path):
     assert result["status"] == "interrupted" and result["solver"]["starts_run"] >= 2
 
 
+@pytest.mark.slow
 def test_in_process_interrupt_and_resume_give_the_uninterrupted_result_bit_for_bit():
     """The one multistart path of every kind: interrupted after k starts, resumed from the decoded
     starts.jsonl lines, equal to the uninterrupted run (designs compared as floats, exactly)."""

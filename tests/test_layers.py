@@ -8,6 +8,8 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
 from conftest import ROOT
 
 
@@ -38,6 +40,7 @@ def test_the_contracts_ignore_no_import_and_cover_every_layer():
     assert (BenchCase, MethodRun) == (bench_case.BenchCase, bench_case.MethodRun)
 
 
+@pytest.mark.slow
 def test_run_folders_have_one_writer():
     """Every command's run folder (check, solve, tolerance, bench, compare) is moved into place by one function,
     ``RunFolder.fill`` (write into the staging folder, commit, discard on failure): no other code commits one."""

@@ -113,6 +113,7 @@ def test_printed_labels_cannot_drive_the_swing():
     assert limit == pytest.approx(40.5, abs=0.05)
 
 
+@pytest.mark.slow
 def test_redesign_beats_the_published_objective_with_every_rule_on_a_fine_grid():
     loaded = load_spec(PICKER / "picker_double_crank_redesign.toml")
     result, _, _ = run_solve(loaded, starts=4, workers=1)
@@ -169,6 +170,7 @@ def test_a_start_whose_eq4_stage_stops_early_is_only_feasible():
     assert status_of(report, None) == "feasible"
 
 
+@pytest.mark.slow
 def test_a_given_double_crank_outside_the_grashof_region_still_solves(tmp_path):
     """Frame AD = 200 mm is not the shortest link: the given design's loop breaks inside the working swing
     (the float check raises AssemblyError).  The NLP works in Grashof coordinates, so every start

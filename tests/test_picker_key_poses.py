@@ -305,6 +305,7 @@ def test_a_pose_crank_angle_in_a_swing_past_a_whole_turn_is_held():
         PickerDoubleCrankSpec.model_validate(data)
 
 
+@pytest.mark.slow
 def test_an_unreachable_pose_is_diagnosed_in_its_rows_unit(tmp_path):
     """A tip pose at (900, 900) mm, out of reach: the elastic diagnosis relaxes the pose's squared-distance row, so its
     slack is in mm^2 -- the exit-3 message said "misses its limit by 2.03e+05 mm" of a pose the table shows 472 mm

@@ -83,6 +83,7 @@ def _shell(command: str, tmp_path) -> subprocess.CompletedProcess:
                           cwd=tmp_path)
 
 
+@pytest.mark.slow
 def test_a_reader_that_leaves_costs_the_run_nothing(tmp_path):
     """`agrisynth solve ... | head -1`: the broken pipe came out of a progress line inside the run; click made it exit 1
     and the run's folder was discarded.  Now the solve finishes, keeps its folder and exits with its own code."""
@@ -97,6 +98,7 @@ def test_a_reader_that_leaves_costs_the_run_nothing(tmp_path):
 
 
 @pytest.mark.parametrize("closed, code", [(">&-", 0), ("2>&-", 0), (">&- 2>&-", 0)])
+@pytest.mark.slow
 def test_a_command_started_without_its_standard_streams_runs_and_exits_with_its_code(tmp_path, closed, code):
     """`>&-` (a daemon, cron): the first isatty() raised a traceback (exit 1, nothing written); a bad spec exited 1,
     not 2.  The closed descriptors are /dev/null."""

@@ -231,6 +231,7 @@ def cli_in_process(*args: str) -> tuple[int, str]:
     return proc.returncode, proc.stderr
 
 
+@pytest.mark.slow
 def test_bench_output_follows_the_run_folder_rules(tmp_path):
     from synthesis.bench import write_bench
 
@@ -318,6 +319,7 @@ def test_a_refused_out_leaves_none_of_the_folders_it_made(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_force_keeps_a_file_changed_since_agrisynth_wrote_it(tmp_path):
     """DESIGN: a run "never deletes anything it cannot prove agrisynth wrote".  The marker listed names only, so an
     edited solved.toml (the file the README invites you to check and edit) or a listed file replaced by a link was

@@ -218,6 +218,7 @@ def test_infeasible_rule_set_names_the_rules_out_of_reach(tmp_path):
     assert "At the elastic design l2 (31.5), l3 (67.5)" in message
 
 
+@pytest.mark.slow
 def test_no_start_converging_is_a_failed_run_not_a_conflict(tmp_path):
     loaded = edited(tmp_path, [("[solver]", "[solver]\nmax_iter = 2")])
     result, reports, _ = solve(loaded, starts=2, workers=1)

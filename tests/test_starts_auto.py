@@ -61,6 +61,7 @@ def test_the_toy_kinds_one_optimum_gives_the_closed_form_statement(tmp_path, toy
     assert stated["optima"][0]["objective"] == pytest.approx(40.0**2, rel=1e-7) and stated["assumptions_not_met"] == []
 
 
+@pytest.mark.slow
 def test_a_library_spec_with_two_local_optima_says_how_many_and_how_sure():
     """picker_double_crank_redesign's 8 starts (problems/picker) all converge with every rule held, at two objective
     values: 0.0978 mm (starts 3.., 4 starts, at two designs) and 0.2113 mm (4 starts from start 0).  N = 8, W = 2:

@@ -351,6 +351,7 @@ def test_a_huge_integer_is_a_400_naming_the_field(planting_studio):
         assert status == 400 and answer["error"].startswith("values.l2: expected a finite number, got '1000"), answer
 
 
+@pytest.mark.slow
 def test_only_one_of_simultaneous_solves_starts(tmp_path):
     """Two solve requests at once, each held where it writes its spec until the other arrives there too (or,
     when the other cannot, as it must not, for 2 s): exactly one starts, the other is told a solve is running."""

@@ -112,6 +112,7 @@ def test_length_and_angle_refuse_a_value_that_is_not_a_finite_half_width(tmp_pat
     assert not (tmp_path / "steering_redesign_27-tolerance").exists()
 
 
+@pytest.mark.slow
 def test_a_box_reaching_zero_for_a_length_is_refused_in_one_line(tmp_path):
     """+-1000 mm on a planting arm's 35-191 mm links: its samples had links of -1865 mm, and its rules were counted
     (the depth held in 5 % of them).  A half-width reaching zero for a variable the kind holds > 0 is refused."""
