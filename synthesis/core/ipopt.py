@@ -64,12 +64,14 @@ import os
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 import casadi as ca
 import numpy as np
 
 from constraints.base import Rule
+from synthesis.core.compiled_code import library_for
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, refuse_empty_rows, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
@@ -132,6 +134,7 @@ class SolveMethod:
     scaling: str = "nominal"
     length_factor: float = 1.0
     runner: Callable | None = None
+    compiled: str | None = None     # a folder: IPOPT's functions compiled to C and cached there (compiled_code)
 
     def __post_init__(self):
         for what, mode, allowed in (("derivatives", self.derivatives, DERIVATIVES),
@@ -142,11 +145,14 @@ class SolveMethod:
         if not (math.isfinite(factor) and factor > 0.0):
             raise ValueError(f"length_factor: the factor must be a positive number, not {self.length_factor!r}")
         object.__setattr__(self, "length_factor", factor)
+        if self.compiled is not None and self.derivatives != "exact":
+            raise ValueError(f"compiled: the compiled functions are the exact derivatives, not {self.derivatives!r}")
 
     def builds_like(self, other: SolveMethod) -> bool:
         """Whether IPOPT's solver built for ``other`` serves this method too (the scaling and the runner are read
         per solve)."""
-        return self.derivatives == other.derivatives and self.length_factor == other.length_factor
+        return (self.derivatives == other.derivatives and self.length_factor == other.length_factor
+                and self.compiled == other.compiled)
 
 
 EXACT = SolveMethod()
@@ -268,6 +274,7 @@ class CompiledNLP:
         self.with_solver = with_solver
         self.robust_start = robust_start and self.t.robust is not None
         self.discarded_s = 0.0      # seconds of IPOPT setups reconfigure() replaced (the bench leaves them out)
+        self.compile_s = 0.0        # seconds of compiling IPOPT's functions to C (SolveMethod.compiled; in build_s)
         if with_solver:
             refuse_empty_rows(problem, self.t)
         self._build_ipopt()
@@ -334,9 +341,21 @@ class CompiledNLP:
             self._watch = _Watch(self.t.w.numel(), self.t.g.numel(), problem.parameters.numel())
             opts = {**opts, "iteration_callback": self._watch}
         self._opts = opts
-        self.solver = _nlpsol(problem.name, "ipopt", nlp, opts) if self.with_solver else None
+        self.solver = self._ipopt(nlp, opts) if self.with_solver else None
         self._scaled_solver: ca.Function | None = None         # built on the first start solved in another length unit
         self._ipopt_s = time.perf_counter() - t0
+
+    def _ipopt(self, nlp: dict, opts: dict) -> ca.Function:
+        """IPOPT's solver of ``nlp``: CasADi's interpreter evaluating its functions, or, with the method's
+        ``compiled`` folder, the library of them compiled to C there (:mod:`synthesis.core.compiled_code`; the
+        seconds of a compile are added to :attr:`compile_s`)."""
+        name = self.problem.name
+        if self.method.compiled is None:
+            return _nlpsol(name, "ipopt", nlp, opts)
+        path, seconds = library_for(name, nlp, opts, Path(self.method.compiled),
+                                    lambda n, o: _nlpsol(name, "ipopt", n, o))
+        self.compile_s += seconds
+        return _nlpsol(name, "ipopt", str(path), opts)
 
     def scaled_solver(self) -> ca.Function:
         """IPOPT on z with w = s * z, s (the nominal values) appended to the problem's parameters; built once,
@@ -352,7 +371,7 @@ class CompiledNLP:
             if self._watch is not None:
                 self._scaled_watch = _Watch(n, self.t.g.numel(), nlp["p"].numel())
                 opts = {**opts, "iteration_callback": self._scaled_watch}
-            self._scaled_solver = _nlpsol(self.problem.name, "ipopt", nlp, opts)
+            self._scaled_solver = self._ipopt(nlp, opts)
             self.build_s += time.perf_counter() - t0
             self._ipopt_s += time.perf_counter() - t0
         return self._scaled_solver

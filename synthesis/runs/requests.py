@@ -43,6 +43,7 @@ class SolveRequest:
     verbose: bool = False               # hand IPOPT's output over (SolverLog)
     max_starts: int | None = None       # starts "auto": its budget of starts (None: AutoStarts' default)
     time_limit: float | None = None     # starts "auto": its budget of seconds (None: none)
+    compiled: bool = False              # IPOPT's functions compiled to C, cached in OUT/.compiled/ (core.compiled_code)
 
 
 @dataclass(frozen=True)

@@ -12,11 +12,13 @@ from typing import Any
 from synthesis import kinds
 from synthesis.core import interrupt, startlog
 from synthesis.core import solve as core
+from synthesis.core.compiled_code import compiler
 from synthesis.core.executor import default_workers
+from synthesis.core.ipopt import solved_with_method
 from synthesis.core.library_log import captured_warnings
 from synthesis.errors import AgrisynthError, AssemblyError, OutputError, SpecError
 from synthesis.result import RUN_NAME, is_run_folder
-from synthesis.runs.events import SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
+from synthesis.runs.events import Note, SolverLog, SolveStarted, StartsDone, Subscriber, start_finished
 from synthesis.runs.output import RunOutput, text_file
 from synthesis.runs.requests import BadRequest, Outcome, SolveRequest, SolveWritten, Stopped
 from synthesis.runs.specs import described, loaded_spec, refuse_robust_box_outside, zero_tolerance_box
@@ -24,6 +26,8 @@ from synthesis.spec.solved import ELASTIC_FILENAME as ELASTIC_SPEC, FILENAME as 
 
 #: most worker processes a run starts
 MAX_WORKERS = 256
+#: where --compiled keeps its libraries, in the output folder (core.compiled_code)
+COMPILED_FOLDER = ".compiled"
 
 
 @dataclass
@@ -142,6 +146,8 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)
     plan = _plan(request, loaded, kind)
+    if request.compiled:
+        kind = _compiled(kind, plan.out, request.scheduler, emit)
     with RunOutput(plan.out, plan.folder_name, force=request.force, spec=loaded.path, replaceable=plan.replaceable,
                    resumed_from=request.resume) as output:     # a killed run's staging folder: removed once complete
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
@@ -174,6 +180,19 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
                                     f"not the least violated start the table shows) is written as {ELASTIC_SPEC}, the "
                                     f"spec started there: `agrisynth check` it, or `agrisynth solve` from it.")
     return Outcome(3 if error else 1 if result.violated() else 0, result, folder, error=error)
+
+
+def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
+    """The kind with IPOPT's functions compiled to C and cached in OUT/.compiled/ (before any folder is made: no
+    compiler, or a cluster, is said in one line)."""
+    if scheduler is not None:
+        raise SpecError("--compiled: the compiled functions are made on this machine and a cluster's workers build "
+                        "their own; solve on a cluster without --compiled")
+    compiler()
+    folder = out / COMPILED_FOLDER
+    emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
+              f"compiles it: seconds, about two minutes for a planting arm; a later solve of the same NLP loads it)"))
+    return solved_with_method(kind, compiled=str(folder))
 
 
 def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, log_file, emit: Subscriber):

@@ -1,0 +1,106 @@
+"""Compiled derivatives (`solve --compiled`, synthesis.core.compiled_code): the same answer as CasADi's interpreter to
+the bit, a library compiled once per NLP and found again, and a machine without a compiler told so in one line."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from conftest import LIBRARY
+from solving import agrisynth
+from constraints.base import Rule
+from synthesis.core.compiled_code import CompilerMissing, library_name
+from synthesis.core.ipopt import CompiledNLP, SolveMethod
+from synthesis.core.problem import ObjectiveParts, Problem
+
+pytestmark = pytest.mark.skipif(shutil.which(os.environ.get("CC") or "cc") is None, reason="no C compiler")
+
+
+def _rosenbrock_in_a_disc(radius: float = 1.2) -> Problem:
+    """min (1 - x)^2 + 100 (y - x^2)^2 s.t. x^2 + y^2 <= r^2: a curved valley, a Hessian that is not constant."""
+    x = ca.SX.sym("x", 2)
+    f = (1 - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2
+    return Problem("rosenbrock", x, [-2.0, -2.0], [2.0, 2.0], [],
+                   [Rule("disc", x[0] ** 2 + x[1] ** 2, None, radius ** 2, "mm^2", 1.0)], ObjectiveParts(f=f))
+
+
+def test_a_compiled_solve_is_the_interpreted_one_to_the_bit_and_its_library_is_found_again(tmp_path):
+    folder = tmp_path / "compiled"
+    interpreted = CompiledNLP(_rosenbrock_in_a_disc())
+    first = CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(folder)))
+    again = CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(folder)))
+    libraries = sorted(folder.glob("*.so"))
+    assert len(libraries) == 1 and first.compile_s > 0.0 and again.compile_s == 0.0
+    assert not [p for p in folder.iterdir() if p.name.startswith(".compiling-")]     # no temporary folder left
+    for x0 in ([-1.2, 1.0], [0.5, -1.5], [1.9, 1.9]):
+        a, b, c = (nlp.solve(0, np.array(x0)) for nlp in (interpreted, first, again))
+        assert a.return_status == "Solve_Succeeded" and a.iterations > 5
+        for other in (b, c):
+            assert other.x.tobytes() == a.x.tobytes() and other.lam_g.tobytes() == a.lam_g.tobytes()
+            assert other.iterations == a.iterations and other.objective == a.objective
+    # the optimum on the disc's edge: x^2 + y^2 = 1.44 (the unconstrained minimum (1, 1) lies outside)
+    assert math.isclose(float(np.sum(a.x ** 2)), 1.44, rel_tol=1e-7)
+
+
+def test_the_library_is_named_by_the_nlps_expressions_not_its_bounds(tmp_path):
+    """A bound (IPOPT's, not the NLP's functions) keeps the library; a constant in an expression makes another."""
+    cc = shutil.which(os.environ.get("CC") or "cc")
+    x = ca.SX.sym("x", 2)
+
+    def nlp(c):
+        return {"x": x, "f": (x[0] - c) ** 2 + x[1] ** 2, "g": x[0] * x[1]}
+    assert library_name("p", nlp(1.0), cc) == library_name("p", nlp(1.0), cc)
+    assert library_name("p", nlp(1.0), cc) != library_name("p", nlp(1.0 + 2e-16 * 8), cc)
+    method = SolveMethod(compiled=str(tmp_path))
+    wide = CompiledNLP(_rosenbrock_in_a_disc(1.2), method=method)
+    narrow = CompiledNLP(_rosenbrock_in_a_disc(1.1), method=method)        # the rule's limit: IPOPT's bound
+    assert wide.compile_s > 0.0 and narrow.compile_s == 0.0 and len(list(tmp_path.glob("*.so"))) == 1
+
+
+def test_compiled_derivatives_are_exact_derivatives():
+    with pytest.raises(ValueError, match="compiled: the compiled functions are the exact derivatives"):
+        SolveMethod(derivatives="finite_difference", compiled="somewhere")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spec", ["steering/steering_redesign_27.toml", "picker/cai2020_crank_rocker_synthesis.toml",
+                                  "guide_tube/uniform_spacing.toml"])
+def test_solve_compiled_writes_the_interpreted_runs_result(spec, tmp_path):
+    """`solve --compiled` against `solve`: every start's design and objective and the answer, to the bit."""
+    runs = {}
+    for how, extra in (("interpreted", ()), ("compiled", ("--compiled",))):
+        run = agrisynth("solve", str(LIBRARY / spec), "--starts", "4", "--workers", "1", "--out", str(tmp_path / how),
+                        *extra, cwd=tmp_path)
+        assert run.returncode in (0, 1), run.stderr
+        folder = next(p for p in (tmp_path / how).iterdir() if not p.name.startswith("."))
+        runs[how] = json.loads((folder / "result.json").read_text())
+    assert "compiled derivatives" in run.stderr + run.stdout
+    assert len(list((tmp_path / "compiled" / ".compiled").glob("*.so"))) >= 1
+    a, b = runs["interpreted"], runs["compiled"]
+    assert json.dumps(a["design"]) == json.dumps(b["design"]) and a["objective"] == b["objective"]
+    assert a["status"] == b["status"] and a["solver"]["iterations"] == b["solver"]["iterations"]
+    assert [json.dumps(s["design"]) for s in a["starts"]] == [json.dumps(s["design"]) for s in b["starts"]]
+
+
+def test_no_compiler_is_said_in_one_line_before_any_folder_is_made(tmp_path, monkeypatch):
+    monkeypatch.setenv("CC", "no-such-compiler-here")
+    run = agrisynth("solve", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--compiled", "--out",
+                    str(tmp_path / "out"), cwd=tmp_path)
+    assert run.returncode == 2
+    assert run.stderr.strip() == ("error: compiled derivatives need a C compiler, and 'no-such-compiler-here' was not "
+                                  "found ($CC): install gcc (Debian: apt-get install gcc) or set $CC, or solve without "
+                                  "--compiled")
+    assert not (tmp_path / "out").exists()
+    assert issubclass(CompilerMissing, Exception)
+
+
+def test_compiled_is_for_local_workers(tmp_path):
+    run = agrisynth("solve", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--compiled", "--scheduler",
+                    "tcp://127.0.0.1:1", cwd=tmp_path)
+    assert run.returncode == 2 and "--compiled" in run.stderr and "local workers only" in run.stderr
