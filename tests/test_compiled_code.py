@@ -104,3 +104,17 @@ def test_compiled_is_for_local_workers(tmp_path):
     run = agrisynth("solve", str(LIBRARY / "steering" / "steering_redesign_27.toml"), "--compiled", "--scheduler",
                     "tcp://127.0.0.1:1", cwd=tmp_path)
     assert run.returncode == 2 and "--compiled" in run.stderr and "local workers only" in run.stderr
+
+
+def test_a_library_folder_that_cannot_be_written_is_said_in_one_line(tmp_path):
+    """OUT/.compiled a file (or a full disk): exit 2 naming the folder, no traceback."""
+    spec = tmp_path / "steer.toml"
+    spec.write_text((LIBRARY / "steering" / "steering_redesign_27.toml").read_text())
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / ".compiled").write_text("not a folder")
+    run = agrisynth("solve", str(spec), "--compiled", "--starts", "1", "--workers", "1", "--out",
+                    str(tmp_path / "out"), cwd=tmp_path)
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "cannot write the library into" in lines[0]
+    assert str(tmp_path / "out" / ".compiled") in lines[0] and "Traceback" not in run.stderr

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from synthesis.errors import AgrisynthError
+from synthesis.errors import AgrisynthError, OutputError
 
 #: no reassociation, no fused multiply-add: the interpreter's operations in its order (module docstring)
 FLAGS = ("-O1", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
@@ -84,9 +84,14 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tup
     if path.is_file():
         return path, 0.0
     t0 = time.perf_counter()
-    folder.mkdir(parents=True, exist_ok=True)
-    solver = build(nlp, opts)
-    with tempfile.TemporaryDirectory(dir=folder, prefix=".compiling-") as tmp:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = tempfile.mkdtemp(dir=folder, prefix=".compiling-")
+    except OSError as exc:
+        raise OutputError(f"compiled derivatives: cannot write the library into {folder}: "
+                          f"{exc.strerror or exc}") from None
+    try:
+        solver = build(nlp, opts)
         code = ca.CodeGenerator("nlp_functions.c")
         code.add(solver.oracle())               # "nlp": (x, p) -> (f, g), which nlpsol reads first
         for name in solver.get_function():      # nlp_f, nlp_g, nlp_grad, nlp_grad_f, nlp_jac_g, nlp_hess_l
@@ -100,4 +105,9 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tup
             raise CompilerMissing(f"compiled derivatives: {cc} could not compile the NLP of {problem} (exit "
                                   f"{run.returncode}{': ' + said[-1] if said else ''}); solve without --compiled")
         os.replace(made, path)
+    except OSError as exc:          # the disk filled, the folder went away
+        raise OutputError(f"compiled derivatives: cannot write the library into {folder}: "
+                          f"{exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     return path, time.perf_counter() - t0

@@ -192,7 +192,7 @@ def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
     folder = out / COMPILED_FOLDER
     emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
               f"compiles it: seconds, about two minutes for a planting arm; a later solve of the same NLP loads it)"))
-    return solved_with_method(kind, compiled=str(folder))
+    return solved_with_method(kind, compiled=str(folder.resolve()))
 
 
 def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, log_file, emit: Subscriber):
