@@ -118,3 +118,20 @@ def test_a_library_folder_that_cannot_be_written_is_said_in_one_line(tmp_path):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and "cannot write the library into" in lines[0]
     assert str(tmp_path / "out" / ".compiled") in lines[0] and "Traceback" not in run.stderr
+
+
+@pytest.mark.slow
+def test_bench_compiled_times_the_same_runs_compiled_beside_the_interpreted(tmp_path):
+    run = agrisynth("bench", "--problems", "steering_redesign_40", "--quick", "--compiled", "--out", str(tmp_path),
+                    cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    data = json.loads((tmp_path / "bench" / "bench.json").read_text())
+    rows = {r["method"]: r for r in data["rows"]}
+    ad, compiled = rows["ipopt_multistart"], rows["ipopt_compiled"]
+    assert compiled["objective"] == ad["objective"]                 # the same runs, to the bit
+    assert compiled["details"]["median_iterations"] == ad["details"]["median_iterations"]
+    line = data["summary"][0]
+    assert line["compiled_median_s"] == compiled["median_s"] and line["compiled_ipopt_ratio"].endswith("x")
+    assert data["settings"]["study"]["compiled"] == str((tmp_path / ".compiled").resolve())
+    assert list((tmp_path / ".compiled").glob("*.so"))
+    assert "### Compiled derivatives (`--compiled`)" in (tmp_path / "bench" / "bench.md").read_text()

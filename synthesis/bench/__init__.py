@@ -20,6 +20,8 @@ exists only when every run of both methods reached it; otherwise ``time_ratio`` 
 
 from __future__ import annotations
 
+import dataclasses
+
 from synthesis import kinds
 from synthesis.bench.case import (NOT_REACHED, PEERS, TARGET_NOT_REACHED, BenchCase, MethodRun, reached, run_case,
                                   time_ratio, time_to_target)
@@ -36,9 +38,11 @@ __all__ = ["NOT_REACHED", "PEERS", "TARGET_NOT_REACHED", "BenchCase", "MethodRun
            "write_bench_files"]
 
 
-def study_settings(quick: bool = False) -> StudySettings:
-    """How much each generic study runs: ``--quick``'s settings or the full ones."""
-    return QUICK if quick else FULL
+def study_settings(quick: bool = False, compiled: str | None = None) -> StudySettings:
+    """How much each generic study runs: ``--quick``'s settings or the full ones; ``compiled`` (a folder): with the
+    compiled-derivatives method."""
+    settings = QUICK if quick else FULL
+    return settings if compiled is None else dataclasses.replace(settings, compiled=compiled)
 
 
 def kinds_with_bench() -> list[str]:
@@ -50,7 +54,8 @@ def kinds_with_bench() -> list[str]:
 OWN_CASES_IN_EVERY_KIND_RUN = 1
 
 
-def cases_for(kind: str, specs, seed: int, own_limit: int | None = None, quick: bool = False) -> list[BenchCase]:
+def cases_for(kind: str, specs, seed: int, own_limit: int | None = None, quick: bool = False,
+              compiled: str | None = None) -> list[BenchCase]:
     """The kind's bench cases on ``specs`` (None: its default set): its own (``Kind.bench_cases``), else the generic
     studies on the specs or its ``Kind.bench_specs`` (always the generic studies with ``quick`` on named specs).
 
@@ -58,13 +63,13 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None, quick: 
     (not the generic studies).  ``quick`` (``--quick``): the first case of a default set only (specs a user names
     all run), the generic studies at :data:`QUICK` settings, and a kind with its own methods and a library example
     runs only the generic studies on that example (its own cases -- reference solve, its peers -- are the slow
-    part; the case note says so)."""
+    part; the case note says so).  ``compiled`` (a folder): the generic studies add the method ipopt_compiled."""
     the_kind = kinds.get(kind)
     # --quick on specs a user names: the generic studies at QUICK settings for every kind (a kind's own cases on
     # them -- fourbar_path's 64 starts, reference solve and peers -- ran while the report said 1 start, no peers)
     cases = None if quick and specs is not None else the_kind.bench_cases(specs, seed)
     if cases is None:
-        cases = library_cases(specs, seed, list(the_kind.bench_specs), study_settings(quick),
+        cases = library_cases(specs, seed, list(the_kind.bench_specs), study_settings(quick, compiled),
                               studies=the_kind.bench_studies() or None)
     own = specs is None and the_kind.solves and not any(c.loaded is not None for c in cases)
     left_out = 0
@@ -78,7 +83,7 @@ def cases_for(kind: str, specs, seed: int, own_limit: int | None = None, quick: 
         for case in cases:      # peers (not IPOPT) run once in every case, as in the generic studies
             case.single_runs = set(case.single_runs) | (set(case.methods) & PEERS)
         if the_kind.example:     # a kind with its own bench methods: the generic studies too, on its library example
-            case = case_for(load_spec(LIBRARY / the_kind.example), study_settings(quick), seed)
+            case = case_for(load_spec(LIBRARY / the_kind.example), study_settings(quick, compiled), seed)
             case.problem = f"{case.problem} (generic studies)"
             if left_out:
                 case.note += (f"; {left_out} case(s) of the kind's own bench set not run here"

@@ -8,6 +8,8 @@ into a :class:`~synthesis.bench.BenchCase` whose methods all run the kind's own 
 ipopt_multistart          IPOPT with CasADi's exact derivatives (the reference of every ratio)
 ipopt_finite_differences  the same NLP with IPOPT fed function values only: forward differences of f
                           and g and a limited-memory Hessian (``SolveMethod(derivatives="finite_difference")``)
+ipopt_compiled            (``bench --compiled``) ipopt_multistart with the NLP's functions and exact derivatives
+                          compiled to C (``SolveMethod(compiled=...)``): the same runs, evaluated faster
 slsqp                     scipy.optimize.minimize(method="SLSQP") on the same transcribed NLP (the kind's
                           f and g as numeric CasADi Functions, scipy's finite differences, the rows as
                           scipy constraints, maxiter = the spec's max_iter, ftol 1e-9), from the same starts
@@ -86,6 +88,9 @@ class StudySettings:
     sweep_budget_s: float = 30.0
     reference: bool = True               # best known from an untimed multistart (the spec's starts, at most ...)
     reference_starts: int = 16           # ... this many)
+    #: a folder: the method ipopt_compiled too (IPOPT's functions compiled to C and cached there; the untimed
+    #: warm-up compiles them)
+    compiled: str | None = None
 
 
 FULL = StudySettings()
@@ -282,7 +287,7 @@ def watched_kind(kind, watch: TargetWatch, stop: bool):
 
 
 def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: Callable | None = None,
-            target: float = math.inf, stop_at_target: bool = False) -> MethodRun:
+            target: float = math.inf, stop_at_target: bool = False, compiled: str | None = None) -> MethodRun:
     """The kind's multistart on ``loaded`` (one worker), timed: objective (minimised), fine-grid worst
     violation, best-so-far trace of designs meeting every rule (its first point at or below ``target`` is the
     run's time to target), and the build/solve split and iterations in ``details``.
@@ -293,7 +298,8 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
     ``details["target_check_s"]``), and ``stop_at_target`` ends the peer's start at the first iterate meeting it
     and the multistart at that start.  IPOPT (no runner): a start's time to target is its end (re-check
     included), the time a multistart stopping at the first start meeting the target would take; the run itself
-    is not stopped."""
+    is not stopped.  ``compiled`` (a folder): IPOPT's functions compiled to C and cached there
+    (:mod:`synthesis.core.compiled_code`)."""
     kind = kinds.get(loaded.kind)
     solving = kind.solving()
     spec = loaded.model
@@ -302,6 +308,8 @@ def measure(loaded, starts: int, seed: int, derivatives: str = "exact", runner: 
     method: dict[str, Any] = {"derivatives": derivatives}
     if runner is not None:
         method["runner"] = _recording(runner, watch)
+    if compiled is not None:
+        method["compiled"] = compiled
     setting = Setting(spec, seed, solving.prepare(spec))
     watch.sign = -1.0 if solving.maximise(setting) else 1.0
     watch.recheck = lambda outcome: _recheck(solving, setting, outcome)
@@ -611,6 +619,8 @@ def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dic
     ad_runs: list[MethodRun] = []        # the sweep takes these for the spec's own sample counts
     methods = {"ipopt_multistart": _method(loaded, starts, spec_seed, ad_runs),
                "ipopt_finite_differences": _method(loaded, starts, spec_seed, derivatives="finite_difference")}
+    if settings.compiled is not None:
+        methods["ipopt_compiled"] = _method(loaded, starts, spec_seed, compiled=settings.compiled)
     if "slsqp" in settings.peers:
         methods["slsqp"] = _method(loaded, starts, spec_seed,
                                    runner=slsqp_with_budget(settings.slsqp_budget_s / max(starts, 1)))
@@ -632,12 +642,22 @@ def case_for(loaded, settings: StudySettings = FULL, seed: int = 0, studies: dic
                      + (f"; best known: an untimed multistart ({min(loaded.model.solver.starts, settings.reference_starts)}"
                         " starts, another seed)" if settings.reference
                         else "; best known: the best any run reached")
-                     + ("; peers (SLSQP, differential_evolution) not run" if not settings.peers else ""),
+                     + ("; peers (SLSQP, differential_evolution) not run" if not settings.peers else "")
+                     + ("; ipopt_compiled: the same IPOPT runs with the NLP's functions compiled to C (compiled in "
+                        "the untimed warm-up)" if settings.compiled is not None else ""),
                      loaded=loaded, single_runs={"slsqp", "differential_evolution"},
                      sweep=lambda tick: sample_sweep(loaded, settings, spec_seed, tick, reuse=lambda: ad_runs),
                      sweep_runs=len({tuple(sorted(scaled_samples(loaded.model, f).items())) for f in settings.factors}
                                     - {tuple(sorted(sample_settings(loaded.model).items()))}) * settings.sweep_repeats,
-                     studies=studies or {}, warmup=lambda: measure(loaded, 1, spec_seed))
+                     studies=studies or {}, warmup=lambda: _warm_up(loaded, spec_seed, settings.compiled))
+
+
+def _warm_up(loaded, seed: int, compiled: str | None) -> None:
+    """One untimed start of each IPOPT method's build: the imports and caches a first run would pay, and with
+    ``compiled`` the library compiled, so no timed run includes a compile."""
+    measure(loaded, 1, seed)
+    if compiled is not None:
+        measure(loaded, 1, seed, compiled=compiled)
 
 
 def library_cases(specs, seed: int, default: list[str], settings: StudySettings = FULL,
@@ -646,5 +666,5 @@ def library_cases(specs, seed: int, default: list[str], settings: StudySettings 
     (relative to problems/; the first only at :data:`QUICK` settings).  ``studies``: extra rows (name -> callable)
     the kind adds to its first case."""
     if specs is None:
-        specs = [load_spec(LIBRARY / f) for f in default[:1 if settings is QUICK else None]]
+        specs = [load_spec(LIBRARY / f) for f in default[:1 if dataclasses.replace(settings, compiled=None) == QUICK else None]]
     return [case_for(s, settings, seed, studies if i == 0 else None) for i, s in enumerate(specs)]

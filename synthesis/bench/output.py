@@ -90,6 +90,13 @@ def summary(results: list[dict]) -> list[dict]:
                      "fd_ipopt_ratio": (f"{fd['details']['ipopt_s'] / ad['details']['ipopt_s']:.1f}x"
                                         if fd["time_ratio_text"].endswith("x") and ad["details"]["ipopt_s"] > 0
                                         else None)}
+        compiled = _row(res, "ipopt_compiled")
+        if compiled is not None and "build_s" in (compiled.get("details") or {}):
+            line |= {"compiled_median_s": compiled["median_s"], "compiled_build_s": compiled["details"]["build_s"],
+                     "compiled_ipopt_s": compiled["details"]["ipopt_s"],
+                     "compiled_ratio": compiled["time_ratio_text"],
+                     "compiled_ipopt_ratio": (f"{compiled['details']['ipopt_s'] / ad['details']['ipopt_s']:.2f}x"
+                                              if ad["details"]["ipopt_s"] > 0 else None)}
         for peer in ("slsqp", "differential_evolution"):
             row = _row(res, peer)
             if row is not None:
@@ -213,7 +220,17 @@ def _summary_table(lines: list[dict]) -> str:
         ("slsqp_time_to_target", "SLSQP time to target (s)"), ("slsqp_ratio", "SLSQP / AD time to target"),
         ("differential_evolution_time_to_target", "DE time to target (s)"),
         ("differential_evolution_ratio", "DE / AD time to target"), ("build_s", "build s"), ("ipopt_s", "IPOPT s"),
-        ("recheck_s", "re-check s")])
+        ("recheck_s", "re-check s")]) + (_compiled_table(lines) if any("compiled_ratio" in line for line in lines) else "")
+
+
+def _compiled_table(lines: list[dict]) -> str:
+    """``bench --compiled``: the same IPOPT runs with the NLP's functions compiled to C, against the interpreted."""
+    return "\n\n### Compiled derivatives (`--compiled`)\n\n" + _table([line for line in lines if "compiled_ratio" in line], [
+        ("kind", "kind"), ("problem", "problem"), ("ad_median_s", "interpreted median s"),
+        ("compiled_median_s", "compiled median s"), ("compiled_ratio", "compiled / interpreted time to target"),
+        ("build_s", "interpreted build s"), ("compiled_build_s", "compiled build s (library found)"),
+        ("ipopt_s", "interpreted IPOPT s"), ("compiled_ipopt_s", "compiled IPOPT s"),
+        ("compiled_ipopt_ratio", "compiled / interpreted IPOPT s")])
 
 
 def _methods_table(rows: list[dict]) -> str:

@@ -137,8 +137,13 @@ def compare_command(results: tuple[Path, ...], out: Path | None, force: bool) ->
 @click.option("--force", is_flag=True, help="replace OUT/bench/ when it holds an earlier agrisynth bench (without "
                                             "--force it is kept and the command exits 2 before benching; a folder "
                                             "agrisynth did not write is never replaced)")
+@click.option("--compiled", is_flag=True,
+              help="add the method ipopt_compiled to every problem's generic studies: the IPOPT multistart with the "
+                   "NLP's functions and exact derivatives compiled to C (as `solve --compiled`: libraries in "
+                   "OUT/.compiled/, compiled in the untimed warm-up, which then takes seconds to minutes), timed "
+                   "against the interpreted one")
 def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: Path, repeats: int | None,
-                  quick: bool, no_extreme: bool, force: bool) -> None:
+                  quick: bool, no_extreme: bool, force: bool, compiled: bool) -> None:
     """Error against run time for every kind that solves, side by side in one run.
 
     \b
@@ -158,7 +163,7 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
       agrisynth bench KIND [KIND ...]       (the kinds `agrisynth problems` lists)
       agrisynth bench --problems problems/planting_arm/redesign_from_example1.toml
     """
-    request = BenchRequest(problems, spec_files, out, repeats, quick, no_extreme, force)
+    request = BenchRequest(problems, spec_files, out, repeats, quick, no_extreme, force, compiled)
     try:
         with Terminal() as terminal:
             outcome = runs.bench(request, terminal)

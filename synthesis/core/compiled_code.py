@@ -39,6 +39,8 @@ from synthesis.errors import AgrisynthError, OutputError
 FLAGS = ("-O1", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
 #: the compiler: $CC, else cc
 COMPILER_VARIABLE = "CC"
+#: the libraries' folder in a run's output folder (solve --compiled, bench --compiled)
+CACHE_FOLDER = ".compiled"
 
 
 class CompilerMissing(AgrisynthError):

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from synthesis import bench as benchmod
 from synthesis.bench.extreme import EXTREME, extreme_matrix
+from synthesis.core.compiled_code import CACHE_FOLDER, compiler
 from synthesis.runs.events import BenchStarted, BenchStep, Note, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
@@ -55,13 +56,22 @@ def _refuse_one_name_twice(cases: list) -> None:
         seen[case.problem] = where
 
 
+def _compiled_folder(request: BenchRequest) -> str | None:
+    """--compiled: the folder of the compiled libraries, OUT/.compiled/ as a solve's (the compiler is looked for at
+    once: none is said in one line before any benching)."""
+    if not request.compiled:
+        return None
+    compiler()
+    return str((request.out / CACHE_FOLDER).resolve())
+
+
 def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
     named = bool(request.problems or request.spec_files)
     cases = []
     for kind, specs in by_kind.items():
         try:
             cases += benchmod.cases_for(kind, specs, 0, None if named else benchmod.OWN_CASES_IN_EVERY_KIND_RUN,
-                                        quick=request.quick)
+                                        quick=request.quick, compiled=_compiled_folder(request))
         except Exception as exc:      # noqa: BLE001 - one kind's broken bench set must not stop the others
             if named:
                 raise
@@ -94,7 +104,7 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
             emit(BenchStep("extreme-case matrix (tests/extreme/)"))
             extreme = extreme_matrix()
             emit(BenchStep(None))
-        study = dataclasses.asdict(benchmod.study_settings(request.quick))
+        study = dataclasses.asdict(benchmod.study_settings(request.quick, _compiled_folder(request)))
         settings = {"repeats": repeats, "quick": request.quick, "study": study, "problems": [c.problem for c in cases],
                     "wall_s": round(time.perf_counter() - t0, 1), "extreme_not_run": why_not}
         folder, _ = output.fill(lambda staging: benchmod.write_bench_files(staging, results, settings, extreme))

@@ -67,6 +67,7 @@ class BenchRequest:
     quick: bool = False
     no_extreme: bool = False
     force: bool = False
+    compiled: bool = False              # the generic studies add ipopt_compiled (libraries in OUT/.compiled/)
 
 
 @dataclass(frozen=True)

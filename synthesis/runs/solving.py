@@ -12,7 +12,7 @@ from typing import Any
 from synthesis import kinds
 from synthesis.core import interrupt, startlog
 from synthesis.core import solve as core
-from synthesis.core.compiled_code import compiler
+from synthesis.core.compiled_code import CACHE_FOLDER, compiler
 from synthesis.core.executor import default_workers
 from synthesis.core.ipopt import solved_with_method
 from synthesis.core.library_log import captured_warnings
@@ -26,8 +26,6 @@ from synthesis.spec.solved import ELASTIC_FILENAME as ELASTIC_SPEC, FILENAME as 
 
 #: most worker processes a run starts
 MAX_WORKERS = 256
-#: where --compiled keeps its libraries, in the output folder (core.compiled_code)
-COMPILED_FOLDER = ".compiled"
 
 
 @dataclass
@@ -189,7 +187,7 @@ def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
         raise SpecError("--compiled: the compiled functions are made on this machine and a cluster's workers build "
                         "their own; solve on a cluster without --compiled")
     compiler()
-    folder = out / COMPILED_FOLDER
+    folder = out / CACHE_FOLDER
     emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
               f"compiles it: seconds, about two minutes for a planting arm; a later solve of the same NLP loads it)"))
     return solved_with_method(kind, compiled=str(folder.resolve()))
