@@ -92,10 +92,11 @@ class SolveCommand(click.Command):
                    "trust it as you trust this machine")
 @click.option("--compiled", is_flag=True,
               help="evaluate the NLP and its exact derivatives as C compiled by this machine's compiler ($CC, else "
-                   "cc) instead of CasADi's interpreter: the same answer to the bit, each start about 2-3x faster.  "
-                   "The first solve of an NLP compiles it into OUT/.compiled/ (seconds for a small NLP, about two "
-                   "minutes for a planting arm's); a later solve of the same NLP loads it -- a change of bounds or "
-                   "rule limits keeps it, one of the spec's constants or sample counts makes another.  Local "
+                   "cc) instead of CasADi's interpreter: the same answer to the bit, each start faster (2.4x a "
+                   "planting arm's multistart, 1.5x a path synthesis', measured).  The first solve of an NLP "
+                   "compiles it into OUT/.compiled/ (10-45 s for a small kind's NLP, about two minutes for a "
+                   "planting arm's; in solver.wall_s); a later solve of the same NLP loads it -- a change of bounds "
+                   "or rule limits keeps it, one of the spec's constants or sample counts makes another.  Local "
                    "workers only")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
 def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None, starts: int | str | None,

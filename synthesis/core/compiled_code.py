@@ -25,6 +25,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import shlex
 import shutil
 import subprocess
 import tempfile
@@ -43,73 +44,143 @@ COMPILER_VARIABLE = "CC"
 CACHE_FOLDER = ".compiled"
 
 
+#: a temporary compile folder this old was left by a killed run (a compile takes minutes at most): removed
+STALE_S = 24 * 3600.0
+#: nlpsol options that change which functions CasADi generates (the others -- IPOPT's tolerances, its barrier, the
+#: printing, the iteration callback -- are read at run time, so one library serves them all)
+GENERATION_OPTIONS = ("ipopt.hessian_approximation", "ipopt.gradient_approximation", "ipopt.jacobian_approximation")
+RUN_TIME_OPTIONS = ("print_time", "show_eval_warnings", "iteration_callback")
+
+_compiled_s = [0.0]     # seconds this process spent compiling (compile_seconds)
+
+
 class CompilerMissing(AgrisynthError):
     """Compiled derivatives were asked for and the machine has no C compiler to make them (exit 2)."""
 
 
-def compiler() -> str:
-    """The C compiler's path ($CC or cc), or CompilerMissing saying what to do."""
-    name = os.environ.get(COMPILER_VARIABLE) or "cc"
-    found = shutil.which(name)
+def compile_seconds() -> float:
+    """The seconds this process has spent compiling libraries so far (a run reads it before and after)."""
+    return _compiled_s[0]
+
+
+def compiler() -> list[str]:
+    """The C compiler's command ($CC -- its first word the program, as make reads it, e.g. "ccache gcc" -- or cc),
+    or CompilerMissing saying what to do."""
+    given = os.environ.get(COMPILER_VARIABLE, "").strip()
+    words = shlex.split(given) if given else ["cc"]
+    found = shutil.which(words[0])
     if found is None:
-        raise CompilerMissing(f"compiled derivatives need a C compiler, and {name!r} was not found"
-                              f"{' ($' + COMPILER_VARIABLE + ')' if os.environ.get(COMPILER_VARIABLE) else ''}: "
+        raise CompilerMissing(f"compiled derivatives need a C compiler, and {words[0]!r} was not found"
+                              f"{' ($' + COMPILER_VARIABLE + ')' if given else ''}: "
                               f"install gcc (Debian: apt-get install gcc) or set $CC, or solve without --compiled")
-    return found
+    return [found, *words[1:]]
 
 
 @functools.lru_cache(maxsize=None)
-def _compiler_identity(path: str) -> str:
+def _compiler_identity(command: tuple[str, ...]) -> str:
     """The compiler's version and target (a library made by another compiler is another library)."""
-    said = [subprocess.run([path, flag], capture_output=True, text=True, check=False).stdout.strip()
+    said = [subprocess.run([*command, flag], capture_output=True, text=True, check=False).stdout.strip()
             for flag in ("--version", "-dumpmachine")]
-    return "\n".join([path, *said])
+    return "\n".join([" ".join(command), *said])
 
 
-def library_name(problem: str, nlp: dict, cc: str) -> str:
-    """The library's file name for this NLP (module docstring: what its hash covers)."""
+def _generation_options(opts: dict) -> str:
+    return repr(sorted((k, repr(v)) for k, v in opts.items()
+                       if k in GENERATION_OPTIONS or not (k.startswith("ipopt.") or k in RUN_TIME_OPTIONS)))
+
+
+def library_name(problem: str, nlp: dict, command: list[str], opts: dict | None = None) -> str:
+    """The library's file name for this NLP (module docstring: what its hash covers; ``opts``: those of them that
+    change the generated functions)."""
     oracle = ca.Function("nlp", [nlp["x"], nlp.get("p", ca.SX(0, 1))], [nlp["f"], nlp["g"]])
     key = hashlib.sha256()
-    for part in (str(getattr(ca, "__version__")), _compiler_identity(cc), " ".join(FLAGS), oracle.serialize()):
+    for part in (str(getattr(ca, "__version__")), _compiler_identity(tuple(command)), " ".join(FLAGS),
+                 _generation_options(opts or {}), oracle.serialize()):
         key.update(part.encode())
         key.update(b"\0")
     safe = "".join(c if c.isalnum() or c == "_" else "_" for c in problem)
     return f"{safe}-{key.hexdigest()[:24]}{'.dll' if os.name == 'nt' else '.so'}"
 
 
-def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tuple[Path, float]:
-    """(the compiled library of the NLP, the seconds spent compiling it: 0 when it was there).  ``build(nlp, opts)``
-    makes the interpreted solver whose functions are generated (the exact derivatives CasADi would evaluate)."""
-    cc = compiler()
+def _cannot_write(folder: Path, exc: OSError) -> OutputError:
+    return OutputError(f"compiled derivatives: cannot write the library into {folder}: {exc.strerror or exc}")
+
+
+def _remove_stale(folder: Path) -> None:
+    """Temporary compile folders a killed run left (older than STALE_S)."""
+    now = time.time()
+    for left in folder.glob(".compiling-*"):
+        try:
+            if now - left.stat().st_mtime > STALE_S:
+                shutil.rmtree(left, ignore_errors=True)
+        except OSError:
+            continue
+
+
+def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> Path:
+    """The compiled library of the NLP in ``folder``, compiled there first when it is not (the seconds are added to
+    :func:`compile_seconds`).  ``build(nlp, opts)`` makes the interpreted solver whose functions are generated (the
+    exact derivatives CasADi would evaluate)."""
+    command = compiler()
     folder = Path(folder)
-    path = folder / library_name(problem, nlp, cc)
+    path = folder / library_name(problem, nlp, command, opts)
     if path.is_file():
-        return path, 0.0
+        return path
     t0 = time.perf_counter()
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        _remove_stale(folder)
         tmp = tempfile.mkdtemp(dir=folder, prefix=".compiling-")
     except OSError as exc:
-        raise OutputError(f"compiled derivatives: cannot write the library into {folder}: "
-                          f"{exc.strerror or exc}") from None
+        raise _cannot_write(folder, exc) from None
     try:
         solver = build(nlp, opts)
         code = ca.CodeGenerator("nlp_functions.c")
         code.add(solver.oracle())               # "nlp": (x, p) -> (f, g), which nlpsol reads first
         for name in solver.get_function():      # nlp_f, nlp_g, nlp_grad, nlp_grad_f, nlp_jac_g, nlp_hess_l
             code.add(solver.get_function(name))
-        source = Path(code.generate(tmp + os.sep))
+        # written here, not by CasADi, whose writer says nothing when the disk fills (a cut file, then gcc's
+        # syntax errors); gcc's own temporary files go into the same folder, under OUT, not $TMPDIR
+        source = Path(tmp) / "nlp_functions.c"
+        source.write_text(code.dump())
         made = Path(tmp) / path.name
-        run = subprocess.run([cc, *FLAGS, str(source), "-o", str(made), "-lm"], capture_output=True, text=True,
-                             check=False)
+        run = subprocess.run([*command, *FLAGS, str(source), "-o", str(made), "-lm"], capture_output=True,
+                             text=True, check=False, env={**os.environ, "TMPDIR": tmp})
         if run.returncode != 0 or not made.is_file():
             said = (run.stderr or run.stdout).strip().splitlines()
-            raise CompilerMissing(f"compiled derivatives: {cc} could not compile the NLP of {problem} (exit "
-                                  f"{run.returncode}{': ' + said[-1] if said else ''}); solve without --compiled")
+            first = next((line for line in said if "error" in line.lower()), said[0] if said else "")
+            raise CompilerMissing(f"compiled derivatives: {' '.join(command)} could not compile the NLP of {problem} "
+                                  f"(exit {run.returncode}{': ' + first.strip() if first else ''}); solve without "
+                                  f"--compiled")
+        with open(made, "rb") as handle:        # on disk before its name is: no empty library after a power loss
+            os.fsync(handle.fileno())
         os.replace(made, path)
     except OSError as exc:          # the disk filled, the folder went away
-        raise OutputError(f"compiled derivatives: cannot write the library into {folder}: "
-                          f"{exc.strerror or exc}") from None
+        raise _cannot_write(folder, exc) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    return path, time.perf_counter() - t0
+    _compiled_s[0] += time.perf_counter() - t0
+    return path
+
+
+def load(problem: str, nlp: dict, opts: dict, folder: Path, build, make) -> "ca.Function":
+    """IPOPT's solver on the compiled library of the NLP (:func:`library_for`): ``make(path)``.  A library that is
+    there but cannot be loaded (cut short, or on a folder that may not run code: a noexec mount) is compiled once
+    more; if that one cannot be loaded either, OutputError says so in one line."""
+    path = library_for(problem, nlp, opts, folder, build)
+    try:
+        return make(path)
+    except RuntimeError:
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            pass
+    path = library_for(problem, nlp, opts, folder, build)
+    try:
+        return make(path)
+    except RuntimeError as exc:
+        said = str(exc).strip().splitlines()
+        why = next((line.strip() for line in said if "cannot" in line.lower() or "error" in line.lower()), "")
+        raise OutputError(f"compiled derivatives: the library {path} was compiled but cannot be loaded"
+                          f"{' (' + why + ')' if why else ''}: is {folder} on a file system that may not run "
+                          f"code (noexec)?  Give another --out, or solve without --compiled") from None

@@ -71,7 +71,7 @@ import casadi as ca
 import numpy as np
 
 from constraints.base import Rule
-from synthesis.core.compiled_code import library_for
+from synthesis.core.compiled_code import compile_seconds, load as load_compiled
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, refuse_empty_rows, transcribe
 from synthesis.core.units import objective_factor, row_factors, variable_factors
@@ -352,10 +352,11 @@ class CompiledNLP:
         name = self.problem.name
         if self.method.compiled is None:
             return _nlpsol(name, "ipopt", nlp, opts)
-        path, seconds = library_for(name, nlp, opts, Path(self.method.compiled),
-                                    lambda n, o: _nlpsol(name, "ipopt", n, o))
-        self.compile_s += seconds
-        return _nlpsol(name, "ipopt", str(path), opts)
+        before = compile_seconds()
+        solver = load_compiled(name, nlp, opts, Path(self.method.compiled), lambda n, o: _nlpsol(name, "ipopt", n, o),
+                               lambda path: _nlpsol(name, "ipopt", str(path), opts))
+        self.compile_s += compile_seconds() - before
+        return solver
 
     def scaled_solver(self) -> ca.Function:
         """IPOPT on z with w = s * z, s (the nominal values) appended to the problem's parameters; built once,

@@ -12,7 +12,7 @@ from typing import Any
 from synthesis import kinds
 from synthesis.core import interrupt, startlog
 from synthesis.core import solve as core
-from synthesis.core.compiled_code import CACHE_FOLDER, compiler
+from synthesis.core.compiled_code import CACHE_FOLDER, compile_seconds, compiler
 from synthesis.core.executor import default_workers
 from synthesis.core.ipopt import solved_with_method
 from synthesis.core.library_log import captured_warnings
@@ -149,13 +149,19 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     with RunOutput(plan.out, plan.folder_name, force=request.force, spec=loaded.path, replaceable=plan.replaceable,
                    resumed_from=request.resume) as output:     # a killed run's staging folder: removed once complete
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
+        compiled_before = compile_seconds()
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
+        compiled = ({"folder": str(plan.out / CACHE_FOLDER), "compile_s": round(compile_seconds() - compiled_before, 3)}
+                    if request.compiled else None)
         if isinstance(solved, core.Interrupted):
+            if solved.partial is not None:
+                solved.partial[0].solver["compiled"] = compiled
             return _keep_interrupted(solved, output, kind, loaded, plan, request.resume, log_file.since_batch)
         # every start is done: a signal from here on is noted and the finished result written all the same
         with output.finishing(emit):
             emit(StartsDone())
             result, reports, log = solved
+            result.solver["compiled"] = compiled
             if said():
                 log += f"\n# library warnings outside the IPOPT runs\n{said()}"
             described(result, loaded)
@@ -189,7 +195,8 @@ def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
     compiler()
     folder = out / CACHE_FOLDER
     emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
-              f"compiles it: seconds, about two minutes for a planting arm; a later solve of the same NLP loads it)"))
+              f"compiles it: 10-45 s for a small kind, about two minutes for a planting arm; a later solve of the "
+              f"same NLP loads it)"))
     return solved_with_method(kind, compiled=str(folder.resolve()))
 
 
