@@ -15,11 +15,18 @@ import pytest
 from conftest import LIBRARY
 from solving import agrisynth
 from constraints.base import Rule
-from synthesis.core.compiled_code import CompilerMissing, library_name
+from synthesis.core.compiled_code import CompilerMissing, compiler, library_name
 from synthesis.core.ipopt import CompiledNLP, SolveMethod
 from synthesis.core.problem import ObjectiveParts, Problem
 
-pytestmark = pytest.mark.skipif(shutil.which(os.environ.get("CC") or "cc") is None, reason="no C compiler")
+def _compiler() -> list[str] | None:
+    try:
+        return compiler()
+    except CompilerMissing:
+        return None
+
+
+pytestmark = pytest.mark.skipif(_compiler() is None, reason="no C compiler")
 
 
 def _rosenbrock_in_a_disc(radius: float = 1.2) -> Problem:
@@ -50,7 +57,7 @@ def test_a_compiled_solve_is_the_interpreted_one_to_the_bit_and_its_library_is_f
 
 def test_the_library_is_named_by_the_nlps_expressions_not_its_bounds(tmp_path):
     """A bound (IPOPT's, not the NLP's functions) keeps the library; a constant in an expression makes another."""
-    cc = [shutil.which(os.environ.get("CC") or "cc")]
+    cc = compiler()
     x = ca.SX.sym("x", 2)
 
     def nlp(c):
@@ -161,6 +168,25 @@ def test_a_library_that_cannot_be_loaded_is_compiled_again(tmp_path):
 
 def test_cc_may_carry_arguments_as_make_reads_it(tmp_path, monkeypatch):
     """CC="cc -O1" (ccache gcc, gcc -std=c99, ...): the first word is the program, the rest its arguments."""
-    monkeypatch.setenv("CC", f"{shutil.which('cc') or 'gcc'} -O1")
+    monkeypatch.setenv("CC", f"{' '.join(compiler())} -O1")
     nlp = CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(tmp_path)))
     assert nlp.compile_s > 0.0 and nlp.solve(0, np.array([-1.2, 1.0])).return_status == "Solve_Succeeded"
+
+
+def test_a_cc_that_is_no_command_is_said_in_one_line(monkeypatch):
+    monkeypatch.setenv("CC", "gcc '-O1")
+    with pytest.raises(CompilerMissing, match=r"\$CC = .* is no command"):
+        compiler()
+
+
+def test_a_folder_that_may_not_run_code_is_refused_before_compiling(tmp_path, monkeypatch):
+    """A noexec mount would take the compile, then refuse to load its library: said before the compile."""
+    import synthesis.core.compiled_code as code
+
+    class NoExec:
+        f_flag = os.ST_NOEXEC
+    monkeypatch.setattr(code.os, "statvfs", lambda folder: NoExec())
+    from synthesis.errors import OutputError
+    with pytest.raises(OutputError, match="may not run code \\(noexec\\)"):
+        CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(tmp_path)))
+    assert not list(tmp_path.glob("*.so"))

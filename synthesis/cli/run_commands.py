@@ -94,8 +94,8 @@ class SolveCommand(click.Command):
               help="evaluate the NLP and its exact derivatives as C compiled by this machine's compiler ($CC, else "
                    "cc) instead of CasADi's interpreter: the same answer to the bit, each start faster (2.4x a "
                    "planting arm's multistart, 1.5x a path synthesis', measured).  The first solve of an NLP "
-                   "compiles it into OUT/.compiled/ (10-45 s for a small kind's NLP, about two minutes for a "
-                   "planting arm's; in solver.wall_s); a later solve of the same NLP loads it -- a change of bounds "
+                   "compiles it into OUT/.compiled/ (seconds to minutes: steering's 12 s, a crank-rocker's 45 s, a "
+                   "planting arm's about two and a half minutes; in solver.wall_s); a later solve of the same NLP loads it -- a change of bounds "
                    "or rule limits keeps it, one of the spec's constants or sample counts makes another.  Local "
                    "workers only")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")

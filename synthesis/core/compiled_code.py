@@ -4,16 +4,18 @@ the machine's C compiler into a shared library once per NLP, and loaded by every
 
 Why: CasADi evaluates an SX function by interpreting its instruction list; a start of the planting arm spends most
 of its IPOPT time in the Hessian of the Lagrangian (about 530,000 instructions).  Compiled, the same instructions
-run about 3x faster per start, and a build that finds its library skips the symbolic Hessian as well.  The price is
-the first compile: seconds for a small NLP, about two minutes for the planting arm's (gcc -O1 on 19 MB of C).
+make a planting start about 2.4x faster, and a build that finds its library skips the symbolic Hessian as well.  The price
+is the first compile: seconds to minutes (steering's 12 s, the planting arm's about two and a half minutes: gcc -O1
+on 19 MB of C).
 
 The answer is the interpreter's to the bit: the generated C performs the interpreter's operations in its order, and
 is compiled without reassociation or contraction of floating-point operations (``-O1 -ffp-contract=off``, no
 ``-ffast-math``), calling the same C math library (tests/test_compiled_code.py compares the two solves of library
 specs of several kinds, bit for bit).
 
-The library's name is a hash of what makes it: CasADi's version, the compiler's identity and flags, and the NLP's
-function (x, p) -> (f, g) serialised -- so a change of the spec that reaches the NLP's expressions (a constant, a
+The library's name is a hash of what makes it: CasADi's version, the compiler's identity and flags, the nlpsol
+options that change which functions are generated (``GENERATION_OPTIONS``), and the NLP's function (x, p) -> (f, g)
+serialised -- so a change of the spec that reaches the NLP's expressions (a constant, a
 sample count) is a new library, and one that does not (bounds, rule limits, which are IPOPT's bounds) finds the
 old one.  Libraries are written beside each other under one folder (the run's output folder's ``.compiled/``), each
 compiled in a temporary folder there and moved into place in one step, so two runs compiling the same NLP at once
@@ -22,6 +24,7 @@ leave one whole library.
 
 from __future__ import annotations
 
+import errno
 import functools
 import hashlib
 import os
@@ -67,7 +70,12 @@ def compiler() -> list[str]:
     """The C compiler's command ($CC -- its first word the program, as make reads it, e.g. "ccache gcc" -- or cc),
     or CompilerMissing saying what to do."""
     given = os.environ.get(COMPILER_VARIABLE, "").strip()
-    words = shlex.split(given) if given else ["cc"]
+    try:
+        words = shlex.split(given) if given else ["cc"]
+    except ValueError as exc:       # an unbalanced quote
+        raise CompilerMissing(f"compiled derivatives: ${COMPILER_VARIABLE} = {given!r} is no command ({exc})") from None
+    if not words:
+        words = ["cc"]
     found = shutil.which(words[0])
     if found is None:
         raise CompilerMissing(f"compiled derivatives need a C compiler, and {words[0]!r} was not found"
@@ -117,18 +125,22 @@ def _remove_stale(folder: Path) -> None:
             continue
 
 
-def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> Path:
-    """The compiled library of the NLP in ``folder``, compiled there first when it is not (the seconds are added to
-    :func:`compile_seconds`).  ``build(nlp, opts)`` makes the interpreted solver whose functions are generated (the
+def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tuple[Path, bool]:
+    """(the compiled library of the NLP in ``folder``, whether it was compiled now: it was not there; the seconds are
+    added to :func:`compile_seconds`).  ``build(nlp, opts)`` makes the interpreted solver whose functions are generated (the
     exact derivatives CasADi would evaluate)."""
     command = compiler()
     folder = Path(folder)
     path = folder / library_name(problem, nlp, command, opts)
     if path.is_file():
-        return path
+        return path, False
     t0 = time.perf_counter()
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        if os.statvfs(folder).f_flag & os.ST_NOEXEC:
+            raise OutputError(f"compiled derivatives: {folder} is on a file system that may not run code (noexec), "
+                              f"so a library compiled there could not be loaded: give another --out, or solve "
+                              f"without --compiled")
         _remove_stale(folder)
         tmp = tempfile.mkdtemp(dir=folder, prefix=".compiling-")
     except OSError as exc:
@@ -145,9 +157,11 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> Pat
         source.write_text(code.dump())
         made = Path(tmp) / path.name
         run = subprocess.run([*command, *FLAGS, str(source), "-o", str(made), "-lm"], capture_output=True,
-                             text=True, check=False, env={**os.environ, "TMPDIR": tmp})
+                             text=True, check=False, env={**os.environ, "TMPDIR": tmp, "LC_ALL": "C"})
         if run.returncode != 0 or not made.is_file():
             said = (run.stderr or run.stdout).strip().splitlines()
+            if any("No space left on device" in line for line in said):     # gcc's .s, .o or the library
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
             first = next((line for line in said if "error" in line.lower()), said[0] if said else "")
             raise CompilerMissing(f"compiled derivatives: {' '.join(command)} could not compile the NLP of {problem} "
                                   f"(exit {run.returncode}{': ' + first.strip() if first else ''}); solve without "
@@ -160,27 +174,34 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> Pat
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     _compiled_s[0] += time.perf_counter() - t0
-    return path
+    return path, True
 
 
 def load(problem: str, nlp: dict, opts: dict, folder: Path, build, make) -> "ca.Function":
-    """IPOPT's solver on the compiled library of the NLP (:func:`library_for`): ``make(path)``.  A library that is
-    there but cannot be loaded (cut short, or on a folder that may not run code: a noexec mount) is compiled once
-    more; if that one cannot be loaded either, OutputError says so in one line."""
-    path = library_for(problem, nlp, opts, folder, build)
+    """IPOPT's solver on the compiled library of the NLP (:func:`library_for`): ``make(path)``.  A library that was
+    there but cannot be loaded (cut short by a power loss) is compiled once more; one compiled now that cannot be
+    loaded is said in one line (OutputError)."""
+    path, compiled_now = library_for(problem, nlp, opts, folder, build)
     try:
         return make(path)
-    except RuntimeError:
+    except RuntimeError as exc:
+        if compiled_now:
+            raise _not_loadable(path, exc) from None
         try:
             path.unlink(missing_ok=True)
         except OSError:
             pass
-    path = library_for(problem, nlp, opts, folder, build)
+    path, _ = library_for(problem, nlp, opts, folder, build)
     try:
         return make(path)
     except RuntimeError as exc:
-        said = str(exc).strip().splitlines()
-        why = next((line.strip() for line in said if "cannot" in line.lower() or "error" in line.lower()), "")
-        raise OutputError(f"compiled derivatives: the library {path} was compiled but cannot be loaded"
-                          f"{' (' + why + ')' if why else ''}: is {folder} on a file system that may not run "
-                          f"code (noexec)?  Give another --out, or solve without --compiled") from None
+        raise _not_loadable(path, exc) from None
+
+
+def _not_loadable(path: Path, exc: RuntimeError) -> OutputError:
+    said = [line.strip() for line in str(exc).strip().splitlines()]
+    # CasADi says "Cannot load shared library ..." and, on a later line, the loader's own reason ("Error code: ...")
+    why = next((line for line in reversed(said) if line.startswith("Error code")),
+               next((line for line in said if "cannot" in line.lower()), ""))
+    return OutputError(f"compiled derivatives: the library {path} cannot be loaded{' (' + why + ')' if why else ''}: "
+                       f"give another --out, or solve without --compiled")

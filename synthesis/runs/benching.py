@@ -65,13 +65,13 @@ def _compiled_folder(request: BenchRequest) -> str | None:
     return str((request.out / CACHE_FOLDER).resolve())
 
 
-def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber) -> list:
+def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber, compiled: str | None) -> list:
     named = bool(request.problems or request.spec_files)
     cases = []
     for kind, specs in by_kind.items():
         try:
             cases += benchmod.cases_for(kind, specs, 0, None if named else benchmod.OWN_CASES_IN_EVERY_KIND_RUN,
-                                        quick=request.quick, compiled=_compiled_folder(request))
+                                        quick=request.quick, compiled=compiled)
         except Exception as exc:      # noqa: BLE001 - one kind's broken bench set must not stop the others
             if named:
                 raise
@@ -86,9 +86,10 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
     repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
     by_kind = problems_by_kind(request, emit)
+    compiled = _compiled_folder(request)
     # refused (exit 2) before any benching; the staging folder is discarded if the bench stops
     with RunOutput(request.out, "bench", force=request.force) as output:
-        cases = _cases(request, by_kind, emit)
+        cases = _cases(request, by_kind, emit, compiled)
         why_not = ("--no-extreme" if request.no_extreme else "problems were named (it runs with none)"
                    if request.problems or request.spec_files else "--quick" if request.quick
                    else None if EXTREME is not None and EXTREME.is_dir()
@@ -104,7 +105,7 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
             emit(BenchStep("extreme-case matrix (tests/extreme/)"))
             extreme = extreme_matrix()
             emit(BenchStep(None))
-        study = dataclasses.asdict(benchmod.study_settings(request.quick, _compiled_folder(request)))
+        study = dataclasses.asdict(benchmod.study_settings(request.quick, compiled))
         settings = {"repeats": repeats, "quick": request.quick, "study": study, "problems": [c.problem for c in cases],
                     "wall_s": round(time.perf_counter() - t0, 1), "extreme_not_run": why_not}
         folder, _ = output.fill(lambda staging: benchmod.write_bench_files(staging, results, settings, extreme))

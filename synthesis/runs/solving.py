@@ -151,7 +151,7 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         compiled_before = compile_seconds()
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
-        compiled = ({"folder": str(plan.out / CACHE_FOLDER), "compile_s": round(compile_seconds() - compiled_before, 3)}
+        compiled = ({"folder": str((plan.out / CACHE_FOLDER).resolve()), "compile_s": round(compile_seconds() - compiled_before, 3)}
                     if request.compiled else None)
         if isinstance(solved, core.Interrupted):
             if solved.partial is not None:
@@ -195,7 +195,7 @@ def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
     compiler()
     folder = out / CACHE_FOLDER
     emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
-              f"compiles it: 10-45 s for a small kind, about two minutes for a planting arm; a later solve of the "
+              f"compiles it: seconds to minutes, about two and a half for a planting arm; a later solve of the "
               f"same NLP loads it)"))
     return solved_with_method(kind, compiled=str(folder.resolve()))
 
