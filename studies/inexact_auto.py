@@ -3,7 +3,11 @@ best objective against the best known, the wall time, the starts solved and why 
 probability that the best found is the global optimum; then the calibration: of the runs that claim at least 95 %,
 how many found the best known.
 
-    python studies/inexact_auto.py OUT.md [--seeds 0,1,2] [--workers 2] [--max-starts 512] [--only NAME ...]
+    python studies/inexact_auto.py OUT.md [--seeds 0,1,2] [--workers 2] [--max-starts 512] [--compiled FOLDER]
+                                          [--only NAME ...]
+
+--compiled FOLDER: the NLPs' functions compiled to C and cached in FOLDER (``solve --compiled``); a row's
+``compile_s`` is the part of its wall spent compiling (0 once the libraries are there).
 
 A study, not part of the installed tool or the test suite: its wall times are of whatever else the machine is doing.
 """
@@ -15,6 +19,8 @@ import sys
 import time
 from pathlib import Path
 
+from synthesis.core.compiled_code import compile_seconds
+from synthesis.core.ipopt import solved_with_method
 from synthesis.core.solve import AutoStarts, run_solve
 from synthesis.kinds import solving_kind_for
 from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_spec
@@ -23,13 +29,18 @@ from synthesis.kinds.fourbar_path.inexact import BEST_KNOWN, NAMES, inexact_spec
 HIT = 1e-6
 
 
-def one(name: str, seed: int, workers: int, max_starts: int) -> dict:
+def one(name: str, seed: int, workers: int, max_starts: int, compiled: str | None = None) -> dict:
     loaded = inexact_spec(name, {"seed": seed})
     solved: list[int] = []
+    kind = solving_kind_for(loaded)
+    if compiled is not None:
+        kind = solved_with_method(kind, compiled=compiled)
+    compiling = compile_seconds()
     t0 = time.perf_counter()
-    result = run_solve(solving_kind_for(loaded), loaded, workers=workers, auto=AutoStarts(max_starts=max_starts),
+    result = run_solve(kind, loaded, workers=workers, auto=AutoStarts(max_starts=max_starts),
                        on_start=lambda report, best: solved.append(report.outcome.start))[0]
     wall = time.perf_counter() - t0
+    compiling = compile_seconds() - compiling
     value = result.objective.get("value")
     c = result.solver["confidence"] or {}
     best = BEST_KNOWN[name]
@@ -37,7 +48,7 @@ def one(name: str, seed: int, workers: int, max_starts: int) -> dict:
             "hit": value is not None and value <= best * (1 + HIT), "wall_s": wall, "starts": result.solver["starts"],
             "solved": len(solved), "stopped_by": result.solver["auto"]["stopped_by"],
             "distinct_optima": c.get("distinct_optima"), "starts_at_best": c.get("starts_at_best"),
-            "p_global": c.get("probability_best_is_global"), "status": result.status}
+            "p_global": c.get("probability_best_is_global"), "status": result.status, "compile_s": compiling}
 
 
 def main(argv: list[str]) -> int:
@@ -45,11 +56,12 @@ def main(argv: list[str]) -> int:
     seeds = [int(s) for s in argv[argv.index("--seeds") + 1].split(",")] if "--seeds" in argv else [0, 1, 2]
     workers = int(argv[argv.index("--workers") + 1]) if "--workers" in argv else 2
     max_starts = int(argv[argv.index("--max-starts") + 1]) if "--max-starts" in argv else 512
+    compiled = argv[argv.index("--compiled") + 1] if "--compiled" in argv else None
     only = argv[argv.index("--only") + 1:] if "--only" in argv else list(NAMES)
     rows = []
     for seed in seeds:
         for name in only:
-            row = one(name, seed, workers, max_starts)
+            row = one(name, seed, workers, max_starts, compiled)
             rows.append(row)
             print(json.dumps(row), flush=True)
             out.with_suffix(".jsonl").write_text("\n".join(json.dumps(r) for r in rows) + "\n")
