@@ -65,7 +65,7 @@ def _compiled_folder(request: BenchRequest) -> str | None:
     return str((request.out / CACHE_FOLDER).resolve())
 
 
-def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber, compiled: str | None) -> list:
+def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber, compiled: str | None = None) -> list:
     named = bool(request.problems or request.spec_files)
     cases = []
     for kind, specs in by_kind.items():
