@@ -114,6 +114,13 @@ def _cannot_write(folder: Path, exc: OSError) -> OutputError:
     return OutputError(f"compiled derivatives: cannot write the library into {folder}: {exc.strerror or exc}")
 
 
+def _no_exec(folder: Path) -> bool:
+    """Whether the folder's file system may not run code (mounted noexec; a platform without statvfs: not known,
+    False)."""
+    statvfs, flag = getattr(os, "statvfs", None), getattr(os, "ST_NOEXEC", 0)
+    return bool(statvfs is not None and flag and statvfs(folder).f_flag & flag)
+
+
 def _remove_stale(folder: Path) -> None:
     """Temporary compile folders a killed run left (older than STALE_S)."""
     now = time.time()
@@ -137,7 +144,7 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tup
     t0 = time.perf_counter()
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        if os.statvfs(folder).f_flag & os.ST_NOEXEC:
+        if _no_exec(folder):
             raise OutputError(f"compiled derivatives: {folder} is on a file system that may not run code (noexec), "
                               f"so a library compiled there could not be loaded: give another --out, or solve "
                               f"without --compiled")
