@@ -56,7 +56,7 @@ def main(argv: list[str]) -> int:
     seeds = [int(s) for s in argv[argv.index("--seeds") + 1].split(",")] if "--seeds" in argv else [0, 1, 2]
     workers = int(argv[argv.index("--workers") + 1]) if "--workers" in argv else 2
     max_starts = int(argv[argv.index("--max-starts") + 1]) if "--max-starts" in argv else 512
-    compiled = argv[argv.index("--compiled") + 1] if "--compiled" in argv else None
+    compiled = str(Path(argv[argv.index("--compiled") + 1]).resolve()) if "--compiled" in argv else None
     only = argv[argv.index("--only") + 1:] if "--only" in argv else list(NAMES)
     rows = []
     for seed in seeds:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
+import shlex
 
 import casadi as ca
 import numpy as np
@@ -168,7 +168,7 @@ def test_a_library_that_cannot_be_loaded_is_compiled_again(tmp_path):
 
 def test_cc_may_carry_arguments_as_make_reads_it(tmp_path, monkeypatch):
     """CC="cc -O1" (ccache gcc, gcc -std=c99, ...): the first word is the program, the rest its arguments."""
-    monkeypatch.setenv("CC", f"{' '.join(compiler())} -O1")
+    monkeypatch.setenv("CC", f"{shlex.join(compiler())} -O1")
     nlp = CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(tmp_path)))
     assert nlp.compile_s > 0.0 and nlp.solve(0, np.array([-1.2, 1.0])).return_status == "Solve_Succeeded"
 
@@ -182,11 +182,40 @@ def test_a_cc_that_is_no_command_is_said_in_one_line(monkeypatch):
 def test_a_folder_that_may_not_run_code_is_refused_before_compiling(tmp_path, monkeypatch):
     """A noexec mount would take the compile, then refuse to load its library: said before the compile."""
     import synthesis.core.compiled_code as code
-
-    class NoExec:
-        f_flag = os.ST_NOEXEC
-    monkeypatch.setattr(code.os, "statvfs", lambda folder: NoExec())
-    from synthesis.errors import OutputError
-    with pytest.raises(OutputError, match="may not run code \\(noexec\\)"):
+    monkeypatch.setattr(code, "_no_exec", lambda folder: True)
+    before = code.compile_seconds()
+    with pytest.raises(code.CompiledCodeError, match="may not run code \\(noexec\\)"):
         CompiledNLP(_rosenbrock_in_a_disc(), method=SolveMethod(compiled=str(tmp_path)))
-    assert not list(tmp_path.glob("*.so"))
+    assert not list(tmp_path.iterdir()) and code.compile_seconds() == before
+
+
+@pytest.mark.skipif(not (hasattr(os, "statvfs") and hasattr(os, "ST_NOEXEC")), reason="no statvfs / ST_NOEXEC")
+def test_the_noexec_check_reads_the_mount_flag(tmp_path):
+    import synthesis.core.compiled_code as code
+    executable = not (os.statvfs(tmp_path).f_flag & os.ST_NOEXEC)
+    assert code._no_exec(tmp_path) is not executable
+
+
+def test_a_library_that_cannot_be_loaded_is_said_with_the_loaders_reason(tmp_path):
+    """CasADi tries several search prefixes; the reason is the path's own (a cut file: "file too short"), not a
+    made-up path's "No such file"."""
+    import synthesis.core.compiled_code as code
+    cut = tmp_path / "cut.so"
+    cut.write_bytes(b"\0" * 10)
+    with pytest.raises(RuntimeError) as raised:
+        ca.external("nlp", str(cut))
+    said = str(code._not_loadable(cut, raised.value))
+    assert "\n" not in said and str(cut) in said and "file too short" in said and "No such file" not in said
+
+
+def test_a_compile_error_leaves_no_staging_folder(tmp_path):
+    """Compiled-code errors are no OutputError (whose run folder is kept to say where): nothing is left in OUT but
+    the library folder."""
+    spec = tmp_path / "steer.toml"
+    spec.write_text((LIBRARY / "steering" / "steering_redesign_27.toml").read_text())
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / ".compiled").write_text("not a folder")
+    run = agrisynth("solve", str(spec), "--compiled", "--starts", "1", "--workers", "1", "--out",
+                    str(tmp_path / "out"), cwd=tmp_path)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [".compiled"]

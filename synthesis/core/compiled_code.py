@@ -37,7 +37,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from synthesis.errors import AgrisynthError, OutputError
+from synthesis.errors import AgrisynthError
 
 #: no reassociation, no fused multiply-add: the interpreter's operations in its order (module docstring)
 FLAGS = ("-O1", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
@@ -57,7 +57,12 @@ RUN_TIME_OPTIONS = ("print_time", "show_eval_warnings", "iteration_callback")
 _compiled_s = [0.0]     # seconds this process spent compiling (compile_seconds)
 
 
-class CompilerMissing(AgrisynthError):
+class CompiledCodeError(AgrisynthError):
+    """Compiled derivatives were asked for and cannot be made or loaded here (exit 2).  Not an OutputError: the run
+    has nothing to keep, so its staging folder is discarded like any failed set-up's."""
+
+
+class CompilerMissing(CompiledCodeError):
     """Compiled derivatives were asked for and the machine has no C compiler to make them (exit 2)."""
 
 
@@ -73,9 +78,8 @@ def compiler() -> list[str]:
     try:
         words = shlex.split(given) if given else ["cc"]
     except ValueError as exc:       # an unbalanced quote
-        raise CompilerMissing(f"compiled derivatives: ${COMPILER_VARIABLE} = {given!r} is no command ({exc})") from None
-    if not words:
-        words = ["cc"]
+        raise CompilerMissing(f"compiled derivatives: ${COMPILER_VARIABLE} = {given!r} is no command ({exc}): set $CC "
+                              f"to a compiler (e.g. gcc), or solve without --compiled") from None
     found = shutil.which(words[0])
     if found is None:
         raise CompilerMissing(f"compiled derivatives need a C compiler, and {words[0]!r} was not found"
@@ -87,7 +91,8 @@ def compiler() -> list[str]:
 @functools.lru_cache(maxsize=None)
 def _compiler_identity(command: tuple[str, ...]) -> str:
     """The compiler's version and target (a library made by another compiler is another library)."""
-    said = [subprocess.run([*command, flag], capture_output=True, text=True, check=False).stdout.strip()
+    said = [subprocess.run([*command, flag], capture_output=True, text=True, check=False,
+                           env={**os.environ, "LC_ALL": "C"}).stdout.strip()
             for flag in ("--version", "-dumpmachine")]
     return "\n".join([" ".join(command), *said])
 
@@ -110,8 +115,8 @@ def library_name(problem: str, nlp: dict, command: list[str], opts: dict | None 
     return f"{safe}-{key.hexdigest()[:24]}{'.dll' if os.name == 'nt' else '.so'}"
 
 
-def _cannot_write(folder: Path, exc: OSError) -> OutputError:
-    return OutputError(f"compiled derivatives: cannot write the library into {folder}: {exc.strerror or exc}")
+def _cannot_write(folder: Path, exc: OSError) -> CompiledCodeError:
+    return CompiledCodeError(f"compiled derivatives: cannot write the library into {folder}: {exc.strerror or exc}")
 
 
 def _no_exec(folder: Path) -> bool:
@@ -145,7 +150,7 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tup
     try:
         folder.mkdir(parents=True, exist_ok=True)
         if _no_exec(folder):
-            raise OutputError(f"compiled derivatives: {folder} is on a file system that may not run code (noexec), "
+            raise CompiledCodeError(f"compiled derivatives: {folder} is on a file system that may not run code (noexec), "
                               f"so a library compiled there could not be loaded: give another --out, or solve "
                               f"without --compiled")
         _remove_stale(folder)
@@ -187,7 +192,7 @@ def library_for(problem: str, nlp: dict, opts: dict, folder: Path, build) -> tup
 def load(problem: str, nlp: dict, opts: dict, folder: Path, build, make) -> "ca.Function":
     """IPOPT's solver on the compiled library of the NLP (:func:`library_for`): ``make(path)``.  A library that was
     there but cannot be loaded (cut short by a power loss) is compiled once more; one compiled now that cannot be
-    loaded is said in one line (OutputError)."""
+    loaded is said in one line (CompiledCodeError)."""
     path, compiled_now = library_for(problem, nlp, opts, folder, build)
     try:
         return make(path)
@@ -205,10 +210,12 @@ def load(problem: str, nlp: dict, opts: dict, folder: Path, build, make) -> "ca.
         raise _not_loadable(path, exc) from None
 
 
-def _not_loadable(path: Path, exc: RuntimeError) -> OutputError:
+def _not_loadable(path: Path, exc: RuntimeError) -> CompiledCodeError:
     said = [line.strip() for line in str(exc).strip().splitlines()]
-    # CasADi says "Cannot load shared library ..." and, on a later line, the loader's own reason ("Error code: ...")
-    why = next((line for line in reversed(said) if line.startswith("Error code")),
-               next((line for line in said if "cannot" in line.lower()), ""))
-    return OutputError(f"compiled derivatives: the library {path} cannot be loaded{' (' + why + ')' if why else ''}: "
-                       f"give another --out, or solve without --compiled")
+    # CasADi tries the path under several search prefixes and says each loader's reason on an "Error code: ..." line;
+    # the one of the path itself is the reason (the others say that a made-up path does not exist)
+    codes = [line for line in said if line.startswith("Error code")]
+    why = next((line for line in codes if line.startswith(f"Error code: {path}:")),
+               next((line for line in codes if "No such file" not in line), ""))
+    return CompiledCodeError(f"compiled derivatives: the library {path} cannot be loaded"
+                             f"{' (' + why + ')' if why else ''}: give another --out, or solve without --compiled")
