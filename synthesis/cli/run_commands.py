@@ -93,11 +93,11 @@ class SolveCommand(click.Command):
 @click.option("--compiled", is_flag=True,
               help="evaluate the NLP and its exact derivatives as C compiled by this machine's compiler ($CC, else "
                    "cc) instead of CasADi's interpreter: the same answer to the bit, faster (measured: a planting "
-                   "arm's multistart 2.4x, a path synthesis' 1.05-1.5x).  The first solve of an NLP "
-                   "compiles it into OUT/.compiled/ (seconds to minutes: steering's 12 s, a crank-rocker's 45 s, a "
-                   "planting arm's about two and a half minutes; in solver.wall_s); a later solve of the same NLP loads it -- a change of bounds "
-                   "or rule limits keeps it, one of the spec's constants or sample counts makes another.  Local "
-                   "workers only")
+                   "arm's multistart 2.4x, a path synthesis' 1.05-1.5x).  The first solve of an NLP compiles it "
+                   "into OUT/.compiled/ (seconds to minutes: steering's 12 s, a crank-rocker's 45 s, a planting "
+                   "arm's about two and a half minutes; in solver.wall_s); a later solve of the same NLP loads it "
+                   "-- a change of bounds or rule limits keeps it, one of the spec's constants or sample counts "
+                   "makes another.  Local workers only")
 @click.option("--verbose", is_flag=True, help="print IPOPT's output (always kept in OUT/<name>/ipopt.log)")
 def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None, starts: int | str | None,
                   max_starts: int | None, time_limit: float | None, seed: int | None, workers: int | None,

@@ -151,8 +151,8 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         compiled_before = compile_seconds()
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
-        compiled = ({"folder": str((plan.out / CACHE_FOLDER).resolve()), "compile_s": round(compile_seconds() - compiled_before, 3)}
-                    if request.compiled else None)
+        compiled = ({"folder": str((plan.out / CACHE_FOLDER).resolve()),
+                     "compile_s": round(compile_seconds() - compiled_before, 3)} if request.compiled else None)
         if isinstance(solved, core.Interrupted):
             if solved.partial is not None:
                 solved.partial[0].solver["compiled"] = compiled
