@@ -3,10 +3,10 @@
 the machine's C compiler into a shared library once per NLP, and loaded by every later build of the same NLP.
 
 Why: CasADi evaluates an SX function by interpreting its instruction list; a start of the planting arm spends most
-of its IPOPT time in the Hessian of the Lagrangian (about 530,000 instructions).  Compiled, the same instructions
-make a planting start about 3x faster (98 -> 32 ms; its 32-start multistart 2.4x, since a build that finds its library
-skips the symbolic Hessian as well).  The price is the first compile: seconds to minutes (steering's 12 s, the planting arm's about two and a half minutes: gcc -O1
-on 19 MB of C).
+of its IPOPT time in the Hessian of the Lagrangian (about 530,000 instructions).  Compiled, a planting start takes
+32 ms instead of 98, and a build that finds its library skips the symbolic Hessian: the 32-start multistart is 2.4x
+faster.  The price is the first compile: seconds to minutes (steering's 12 s, the planting arm's about two and a half
+minutes: gcc -O1 on 19 MB of C).
 
 The answer is the interpreter's to the bit: the generated C performs the interpreter's operations in its order, and
 is compiled without reassociation or contraction of floating-point operations (``-O1 -ffp-contract=off``, no
