@@ -132,6 +132,8 @@ def test_a_library_folder_that_cannot_be_written_is_said_in_one_line(tmp_path):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and "cannot write the library into" in lines[0]
     assert str(tmp_path / "out" / ".compiled") in lines[0] and "Traceback" not in run.stderr
+    # a compiled-code error is no OutputError (whose run folder is kept, to say where): no staging folder is left
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [".compiled"]
 
 
 @pytest.mark.slow
@@ -175,7 +177,8 @@ def test_cc_may_carry_arguments_as_make_reads_it(tmp_path, monkeypatch):
 
 def test_a_cc_that_is_no_command_is_said_in_one_line(monkeypatch):
     monkeypatch.setenv("CC", "gcc '-O1")
-    with pytest.raises(CompilerMissing, match=r"\$CC = .* is no command"):
+    with pytest.raises(CompilerMissing, match=r"\$CC = .* is no command .*: set \$CC to a compiler \(e\.g\. gcc\), or "
+                                              r"solve without --compiled$"):
         compiler()
 
 
@@ -190,10 +193,15 @@ def test_a_folder_that_may_not_run_code_is_refused_before_compiling(tmp_path, mo
 
 
 @pytest.mark.skipif(not (hasattr(os, "statvfs") and hasattr(os, "ST_NOEXEC")), reason="no statvfs / ST_NOEXEC")
-def test_the_noexec_check_reads_the_mount_flag(tmp_path):
+def test_the_noexec_check_reads_the_mount_flag(tmp_path, monkeypatch):
+    import types
+
     import synthesis.core.compiled_code as code
     executable = not (os.statvfs(tmp_path).f_flag & os.ST_NOEXEC)
     assert code._no_exec(tmp_path) is not executable
+    for flags, said in ((os.ST_NOEXEC | os.ST_NOSUID, True), (os.ST_NOSUID, False)):
+        monkeypatch.setattr(code.os, "statvfs", lambda folder, f=flags: types.SimpleNamespace(f_flag=f))
+        assert code._no_exec(tmp_path) is said
 
 
 def test_a_library_that_cannot_be_loaded_is_said_with_the_loaders_reason(tmp_path):
@@ -206,16 +214,3 @@ def test_a_library_that_cannot_be_loaded_is_said_with_the_loaders_reason(tmp_pat
         ca.external("nlp", str(cut))
     said = str(code._not_loadable(cut, raised.value))
     assert "\n" not in said and str(cut) in said and "file too short" in said and "No such file" not in said
-
-
-def test_a_compile_error_leaves_no_staging_folder(tmp_path):
-    """Compiled-code errors are no OutputError (whose run folder is kept to say where): nothing is left in OUT but
-    the library folder."""
-    spec = tmp_path / "steer.toml"
-    spec.write_text((LIBRARY / "steering" / "steering_redesign_27.toml").read_text())
-    (tmp_path / "out").mkdir()
-    (tmp_path / "out" / ".compiled").write_text("not a folder")
-    run = agrisynth("solve", str(spec), "--compiled", "--starts", "1", "--workers", "1", "--out",
-                    str(tmp_path / "out"), cwd=tmp_path)
-    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [".compiled"]
