@@ -128,9 +128,6 @@ def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None
                                  "not both", param_hint="--workers/--scheduler")
     if resume is not None and out is not None:
         raise click.BadParameter("a resumed run is written where RUN_DIR is; leave out --out", param_hint="--out")
-    if compiled and scheduler is not None:
-        raise click.BadParameter("the compiled functions are made on this machine and a cluster's workers build "
-                                 "their own: give --compiled for local workers only", param_hint="--compiled")
     request = SolveRequest(spec, out, force, resume, starts, seed, workers, scheduler, verbose, max_starts, time_limit,
                            compiled)
     with Terminal(ends_process()) as terminal:

@@ -88,6 +88,13 @@ def compiler() -> list[str]:
     return [found, *words[1:]]
 
 
+def cache_folder(out: Path) -> Path:
+    """The libraries' folder of runs written into ``out`` (``out/.compiled``, absolute), once a compiler is found:
+    CompilerMissing before any folder is made (solve --compiled, bench --compiled)."""
+    compiler()
+    return (Path(out) / CACHE_FOLDER).resolve()
+
+
 @functools.lru_cache(maxsize=None)
 def _compiler_identity(command: tuple[str, ...]) -> str:
     """The compiler's version and target (a library made by another compiler is another library)."""

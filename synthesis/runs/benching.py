@@ -9,7 +9,7 @@ from pathlib import Path
 
 from synthesis import bench as benchmod
 from synthesis.bench.extreme import EXTREME, extreme_matrix
-from synthesis.core.compiled_code import CACHE_FOLDER, compiler
+from synthesis.core.compiled_code import cache_folder
 from synthesis.runs.events import BenchStarted, BenchStep, Note, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
@@ -56,15 +56,6 @@ def _refuse_one_name_twice(cases: list) -> None:
         seen[case.problem] = where
 
 
-def _compiled_folder(request: BenchRequest) -> str | None:
-    """--compiled: the folder of the compiled libraries, OUT/.compiled/ as a solve's (the compiler is looked for at
-    once: none is said in one line before any benching)."""
-    if not request.compiled:
-        return None
-    compiler()
-    return str((request.out / CACHE_FOLDER).resolve())
-
-
 def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber, compiled: str | None = None) -> list:
     named = bool(request.problems or request.spec_files)
     cases = []
@@ -86,7 +77,7 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
     repeats = request.repeats if request.repeats is not None else (1 if request.quick else 3)
     by_kind = problems_by_kind(request, emit)
-    compiled = _compiled_folder(request)
+    compiled = str(cache_folder(request.out)) if request.compiled else None     # no compiler: said now
     # refused (exit 2) before any benching; the staging folder is discarded if the bench stops
     with RunOutput(request.out, "bench", force=request.force) as output:
         cases = _cases(request, by_kind, emit, compiled)

@@ -12,7 +12,7 @@ from typing import Any
 from synthesis import kinds
 from synthesis.core import interrupt, startlog
 from synthesis.core import solve as core
-from synthesis.core.compiled_code import CACHE_FOLDER, compile_seconds, compiler
+from synthesis.core.compiled_code import CACHE_FOLDER, cache_folder, compile_seconds
 from synthesis.core.executor import default_workers
 from synthesis.core.ipopt import solved_with_method
 from synthesis.core.library_log import captured_warnings
@@ -134,6 +134,9 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     it (``stopped``: its finished starts kept).  The written result is handed over as ``ResultWritten`` (details:
     :class:`SolveWritten`); progress as ``SolveStarted``, ``StartFinished`` per start and ``StartsDone``."""
     interrupt.install(keep_ignored=True)     # a signal the process was started ignoring stays ignored
+    if request.compiled and request.scheduler is not None:
+        raise AgrisynthError("--compiled: the compiled functions are made on this machine and a cluster's workers "
+                             "build their own: give --compiled for local workers only")
     loaded = loaded_spec(request.spec, emit)
     zeros = zero_tolerance_box(loaded)
     if zeros is not None:       # [tolerance] asks for a tolerance-robust solve: of an empty box, the nominal one
@@ -144,15 +147,19 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
     _probe(request.scheduler)
     workers = min(request.workers or default_workers(), MAX_WORKERS)
     plan = _plan(request, loaded, kind)
-    if request.compiled:
-        kind = _compiled(kind, plan.out, request.scheduler, emit)
+    folder = cache_folder(plan.out) if request.compiled else None     # no compiler: said before any folder is made
+    if folder is not None:
+        emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {plan.out / CACHE_FOLDER}/ (the first "
+                  f"solve of an NLP compiles it: seconds to minutes, about two and a half for a planting arm; a later "
+                  f"solve of the same NLP loads it)"))
+        kind = solved_with_method(kind, compiled=str(folder))
     with RunOutput(plan.out, plan.folder_name, force=request.force, spec=loaded.path, replaceable=plan.replaceable,
                    resumed_from=request.resume) as output:     # a killed run's staging folder: removed once complete
         log_file = startlog.StartLog(output.staging / startlog.FILENAME, plan.settings, plan.fingerprint)
         compiled_before = compile_seconds()
         solved, said = _multistart(kind, loaded, request, plan, workers, log_file, emit)
-        compiled = ({"folder": str((plan.out / CACHE_FOLDER).resolve()),
-                     "compile_s": round(compile_seconds() - compiled_before, 3)} if request.compiled else None)
+        compiled = ({"folder": str(folder), "compile_s": round(compile_seconds() - compiled_before, 3)}
+                    if folder is not None else None)
         if isinstance(solved, core.Interrupted):
             if solved.partial is not None:
                 solved.partial[0].solver["compiled"] = compiled
@@ -184,20 +191,6 @@ def solve(request: SolveRequest, emit: Subscriber) -> Outcome:
                                     f"not the least violated start the table shows) is written as {ELASTIC_SPEC}, the "
                                     f"spec started there: `agrisynth check` it, or `agrisynth solve` from it.")
     return Outcome(3 if error else 1 if result.violated() else 0, result, folder, error=error)
-
-
-def _compiled(kind, out: Path, scheduler: str | None, emit: Subscriber):
-    """The kind with IPOPT's functions compiled to C and cached in OUT/.compiled/ (before any folder is made: no
-    compiler, or a cluster, is said in one line)."""
-    if scheduler is not None:
-        raise SpecError("--compiled: the compiled functions are made on this machine and a cluster's workers build "
-                        "their own; solve on a cluster without --compiled")
-    compiler()
-    folder = out / CACHE_FOLDER
-    emit(Note(f"compiled derivatives: IPOPT's functions compiled to C in {folder}/ (the first solve of an NLP "
-              f"compiles it: seconds to minutes, about two and a half for a planting arm; a later solve of the "
-              f"same NLP loads it)"))
-    return solved_with_method(kind, compiled=str(folder.resolve()))
 
 
 def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, log_file, emit: Subscriber):
