@@ -145,3 +145,24 @@ def test_an_auto_run_kept_at_its_last_finished_batch_says_the_batch_it_had_begun
     err = " ".join(capsys.readouterr().err.split())
     assert ("interrupted by SIGINT after 16 of 16 starts (the batch of 32 starts it had begun, 3 of them finished, "
             "did no better: its starts are kept too): kept them") in err
+
+
+def test_the_console_script_collects_garbage_fully_once_in_a_hundred_middle_collections(tmp_path):
+    """program() sets GC_THRESHOLDS before the command imports anything (no full collection during its imports),
+    and full collections still come: a cycle old enough to sit in the oldest generation, dropped, is freed once
+    enough new objects have survived (700 x 10 x 100 of them and a quarter of the old ones), with no gc.collect."""
+    script = ("import gc, sys, weakref\nimport synthesis.program as program\n"
+              "class Node:\n    pass\n"
+              "def main():\n"
+              "    print(gc.get_threshold())\n"
+              "    a, b = Node(), Node()\n    a.other, b.other = b, a\n    gone = weakref.ref(a)\n"
+              "    gc.collect()\n    assert gc.is_tracked(a) and gone() is not None\n"
+              "    del a, b\n"
+              "    before = gc.get_stats()[2]['collections']\n"
+              "    kept = [[None] for _ in range(1_500_000)]\n"
+              "    print(gone() is None, gc.get_stats()[2]['collections'] - before)\n"
+              "program.main = main\nprogram.program()\n")
+    done = _run(script, tmp_path=tmp_path)
+    assert done.returncode == 0, done.stderr
+    threshold, (freed, full) = done.stdout.split("\n")[0], done.stdout.split("\n")[1].split()
+    assert threshold == "(700, 10, 100)" and freed == "True" and int(full) >= 1
