@@ -230,3 +230,28 @@ def test_requirements_no_crank_rocker_meets_are_diagnosed_as_the_transmission_ru
     assert "<p class='diagnosis'>no start satisfies every rule" in page and "misses its limit by 9.8" in page
     # the answer column is not "solved": it is the least violated start's design (an independent trial)
     assert page.count("<th>least violated (infeasible)</th>") >= 2 and "<th>solved</th>" not in page
+
+
+def test_a_fixed_length_given_back_through_the_grashof_slacks_is_the_specs_to_the_bit():
+    """l10 = 140 mm fixed: the NLP holds it as a row on l7 + (s_frame + s_coupler) / 2, whose rounding gave a start's
+    design 139.99999999999997 (its starts row, and solved.toml had that start won).  A value within rounding of the
+    fixed one is the fixed one; one IPOPT left further off (1e-9 mm) stays, for the verdict to judge."""
+    from synthesis import kinds
+    from synthesis.core.kind import Setting
+    from synthesis.kinds.crank_rocker.nlp import COORDINATES
+
+    loaded = load_spec(PICKER / "crank_rocker_max_transmission.toml")
+    solving = kinds.get("crank_rocker").solving()
+    nlp = solving.build(Setting(loaded.model, 0, solving.prepare(loaded.model), solver=False), False)
+    assert [tuple(b) for b in nlp.bounds][3] == (140.0, 140.0)
+    rng = np.random.default_rng(0)
+    off_by_rounding = 0
+    for _ in range(200):
+        lengths = np.array([rng.uniform(30, 60), rng.uniform(100, 140), rng.uniform(110, 150), 140.0])
+        z = np.concatenate([COORDINATES.coordinates(np.concatenate([lengths, [0.0, 1.0]]))])
+        raw = float(COORDINATES.design(z)[3])
+        off_by_rounding += raw != 140.0
+        assert nlp.design(z)["l10"] == 140.0 and abs(raw - 140.0) <= 1e-13 * 140.0
+    assert off_by_rounding > 0          # the map does round: the case is exercised
+    z = COORDINATES.coordinates(np.array([50.0, 120.0, 130.0, 140.0 + 1e-9, 0.0, 1.0]))
+    assert nlp.design(z)["l10"] == pytest.approx(140.0 + 1e-9, abs=1e-12) and nlp.design(z)["l10"] != 140.0

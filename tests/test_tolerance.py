@@ -739,3 +739,77 @@ def test_fourbar_path_crank_speed_is_reported_with_derivative_zero_and_the_solve
     solved, again = nominal.solve(0, x0), symbolic.solve(0, x0)
     assert (solved.objective, solved.iterations) == (0.0007600964028870801, 1000)
     assert again.iterations == 1000 and again.objective == pytest.approx(solved.objective, rel=1e-12)
+
+
+def test_a_follower_moves_with_the_variables_it_follows_in_the_robust_transcription():
+    """min c s.t. a + b + c = 3 (c follows a and b: -1 each), c >= 0.5 held in a box of +-0.1 on a and b: the row's
+    worst case is c - 0.1 - 0.1 >= 0.5, so c = 0.7.  Without the follower the box would not move c at all (c = 0.5)."""
+    x = ca.SX.sym("x", 3)
+    moves = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, -1.0, 0.0]])
+    for tied, expected in ((moves, 0.7), (None, 0.5)):
+        problem = Problem("toy_follower", x, [-10.0] * 3, [10.0] * 3, [(x[0] + x[1] + x[2], 3.0, 3.0)],
+                          [Rule("floor", x[2], 0.5, None, "-", 1.0)], ObjectiveParts(f=x[2]),
+                          tolerance=Tolerance(3, np.array([0.1, 0.1, 0.0]), moves=tied))
+        nlp = CompiledNLP(problem)
+        x0 = np.array([1.0, 1.0, 1.0])
+        out = nlp.solve(0, x0, nlp.t.full_extra(None, x0))
+        assert out.success and out.x[2] == pytest.approx(expected, abs=1e-6) and sum(out.x[:3]) == pytest.approx(3.0)
+
+
+def test_a_cam_tolerance_box_moves_the_near_dwell_with_the_other_segments(monkeypatch):
+    """--angle 1 on the opening cam: rise_start, rise, far_dwell and return each +-1 deg, the near dwell what they
+    leave of the turn (+-3 deg): every Monte-Carlo sample and every linear worst corner is a cam whose segments
+    fill 360 deg.  The sensitivities stay each variable's own; the stack-up's is the chain rule's; a half-width of
+    the near dwell's own is refused."""
+    import synthesis.tolerance.analysis as analysis
+    from synthesis.errors import SpecError
+    from synthesis.tolerance.analysis import tolerance_table
+    from synthesis.tolerance.design import box_of
+
+    kind = kinds.get("clamp_cam")
+    loaded = load_spec(LIBRARY / "clamp_cam/opening_cam_redesign.toml")
+    lin = linearise(kind, loaded.model, kind.check(loaded).design)
+    keys = lin.dmap.keys
+    segments = [keys.index(k) for k in ("rise", "far_dwell", "return", "near_dwell")]
+    box = box_of(lin.dmap, None, 1.0, {})
+    near = keys.index("near_dwell")
+    assert box[near] == 0.0 and lin.dmap.spread(box)[near] == 3.0
+    assert [box[keys.index(k)] for k in ("rise_start", "rise", "far_dwell", "return")] == [1.0] * 4
+    table = tolerance_table(lin.dmap, box)
+    assert table["near_dwell"] == {"half_width": 3.0, "unit": "deg",
+                                   "follows": {"rise": -1.0, "far_dwell": -1.0, "return": -1.0}}
+    seen = []
+    real = analysis.check_samples
+
+    def spy(solving, setting, design, keys_, offsets, workers):
+        seen.append(np.array(offsets))
+        return real(solving, setting, design, keys_, offsets, workers)
+
+    monkeypatch.setattr(analysis, "check_samples", spy)
+    monte_carlo(kind, loaded.model, lin.design, lin.dmap, box, 64, seed=0)
+    offsets = seen[0]
+    assert np.all(np.abs(offsets[:, segments].sum(axis=1)) <= 1e-12)
+    assert np.all(np.abs(offsets[:, near]) <= 3.0) and np.max(np.abs(offsets[:, near])) > 1.0
+    rows = stack_up(lin, box)
+    for row in rows:
+        corner = np.array(row["corner"])
+        assert abs(corner[segments].sum()) <= 1e-12, row["name"]
+    # each rule's linear worst margin from its own derivatives at every sample: rise, far_dwell and return move the
+    # near dwell the other way (dg/dd_k - dg/dd_near_dwell), every other variable alone
+    checked = 0
+    for k, (rule, row) in enumerate(zip(lin.rules, rows)):
+        if rule.rows_are_the_rule:
+            continue
+        values, J = lin.rule_jacobian(k)
+        J = J.copy()
+        for other in ("rise", "far_dwell", "return"):
+            J[:, keys.index(other)] -= J[:, near]
+        J[:, near] = 0.0
+        lo = np.inf if rule.lower is None else values - rule.lower
+        hi = np.inf if rule.upper is None else rule.upper - values
+        worst = np.minimum(lo, hi) - np.abs(J) @ np.where(np.arange(len(keys)) == near, 0.0, box)
+        assert row["linear_worst_margin"] == pytest.approx(float(np.min(worst)), abs=1e-9), row["name"]
+        checked += 1
+    assert checked >= 3
+    with pytest.raises(SpecError, match="near_dwell follows rise, far_dwell, return"):
+        box_of(lin.dmap, None, 1.0, {"near_dwell": 0.5})

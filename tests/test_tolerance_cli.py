@@ -50,9 +50,10 @@ def test_tolerance_report_embeds_a_tornado_and_tol_sets_one_variable(tmp_path):
     (("--length", "3"), {"base_radius": 3.0, "roller_radius": 3.0, "offset": 3.0}),
     # --tol over --length; the angles keep no width
     (("--length", "5", "--tol", "roller_radius=0.1"), {"base_radius": 5.0, "roller_radius": 0.1, "offset": 5.0}),
-    # --angle leaves the spec's lengths standing
+    # --angle leaves the spec's lengths standing; the near dwell closes the turn: it moves by the other three
+    # segments' widths together (ClampCam.follows)
     (("--angle", "1"), {"base_radius": 0.2, "roller_radius": 0.05, "offset": 0.2, "rise_start": 1.0, "rise": 1.0,
-                        "far_dwell": 1.0, "return": 1.0, "near_dwell": 1.0}),
+                        "far_dwell": 1.0, "return": 1.0, "near_dwell": 3.0}),
 ])
 def test_the_command_lines_widths_are_over_the_specs(tmp_path, options, widths):
     """`agrisynth tolerance` takes its tolerances "from --length/--angle ... else the spec's [tolerance] table": a

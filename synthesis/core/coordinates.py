@@ -27,3 +27,20 @@ def outside_bounds(names, box: np.ndarray, design: dict) -> str | None:
                     f"that hold the link lengths, so this is no design of the spec")
     return None
 
+
+#: the rounding of a design map's arithmetic, relative: a few units in the last place of its terms (a length and
+#: slacks of up to a few times its size), far below any tolerance IPOPT works to
+FIXED_ROUNDING = 1e-13
+
+
+def fixed_as_given(names, box: np.ndarray, design: dict) -> dict:
+    """``design`` with each fixed variable of ``names`` (its row of ``box`` lo = hi, spec units) that lies within
+    :data:`FIXED_ROUNDING` of its value set to that value, in place.  A design map through other coordinates (the
+    Grashof slacks) gives a fixed length back through a sum, a unit in the last place off: 140 mm as
+    139.99999999999997 in a start's row and in solved.toml.  Further off is IPOPT's doing (its rows hold such a
+    length to 1e-8 and beyond) and stays, for the verdict (:func:`outside_bounds`) to judge."""
+    for name, (lo, hi) in zip(names, np.asarray(box, float)):
+        value = design.get(name)
+        if lo == hi and isinstance(value, float) and value != lo and abs(value - lo) <= FIXED_ROUNDING * abs(lo):
+            design[name] = float(lo)
+    return design

@@ -22,6 +22,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from synthesis.core.coordinates import fixed_as_given
 from synthesis.core.ipopt import CompiledNLP, NLPOutcome
 from synthesis.core.kind import Finished, KindNLP, Setting, Solving
 from synthesis.core.outcome import StartOutcome
@@ -110,14 +111,15 @@ class DeclaredNLP(KindNLP):
         return self.declared.problem
 
     def design(self, x: np.ndarray) -> dict:
-        """The result design of a decision vector (the kind's design map)."""
-        return self.declared.design(x)
+        """The result design of a decision vector (the kind's design map), a fixed variable as the spec gives it
+        (:func:`~synthesis.core.coordinates.fixed_as_given`: a map through other coordinates rounds it)."""
+        return fixed_as_given(self.design_names, self.bounds, self.declared.design(x))
 
     def solve(self, start: int, x_design: np.ndarray) -> StartOutcome:
         d, elastic = self.declared, self.compiled.elastic
         x0, extra0 = d.start(x_design, elastic)
         out = self.compiled.solve(start, x0, extra0=extra0)
-        design = d.design(out.x)
+        design = self.design(out.x)
         return StartOutcome.of(out, design, d.objective(out, design, elastic), **d.details(out, self.compiled))
 
 

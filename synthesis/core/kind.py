@@ -80,6 +80,11 @@ class Kind(ABC):
     #: (:mod:`synthesis.core.pinned`) and by the exit-3 message; a rule not named here is described by the fixed design
     #: variables it reads
     fixed_by: dict[str, FixedBy] = {}
+    #: design variables that others of the design determine, so a tolerance box (``agrisynth tolerance``, a robust
+    #: solve) moves each only with them, never alone: variable -> {other: d variable / d other}.  A box that moved the
+    #: clamp cam's four timing segments each alone drew cams whose segments do not fill one turn (no cam at all): its
+    #: near dwell closes the turn, -1 for each other segment.
+    follows: dict[str, dict[str, float]] = {}
 
     @abstractmethod
     def spec_model(self) -> type[SpecModel]:
@@ -181,7 +186,7 @@ class SolvingReplaced(Kind):
         self.name, self.summary, self.objectives, self.example = base.name, base.summary, base.objectives, base.example
         self.bench_specs = base.bench_specs
         self.design_unit, self.robust_refusal = base.design_unit, base.robust_refusal
-        self.fixed_by = base.fixed_by
+        self.fixed_by, self.follows = base.fixed_by, base.follows
 
     def spec_model(self) -> type[SpecModel]:
         return self.base.spec_model()

@@ -80,6 +80,9 @@ class Tolerance:
     n_design: int
     box: np.ndarray
     design_jacobian: np.ndarray | None = None
+    #: T (n x n): the design's offsets in the box are T u for the offsets u of the variables the box moves on their
+    #: own (a variable others determine moves with them, its own ``box`` entry 0); None: the identity
+    moves: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,10 @@ class _Robust:
         if self.box.shape != (self.n,) or np.any(self.box < 0):
             raise ValueError(f"problem {problem.name}: a tolerance box needs {self.n} half-widths >= 0")
         self.active = [j for j in range(self.n) if self.box[j] > 0]
+        # each active variable's column of D T: its own derivative and those of the variables that follow it
+        T = np.eye(self.n) if tol.moves is None else np.asarray(tol.moves, float)
+        self.carried = {k: [(i, float(T[i, k])) for i in range(self.n) if i != k and T[i, k] != 0.0]
+                        for k in self.active}
         x = problem.x
         z, a = x[:self.n], x[self.n:]
         na = a.numel()
@@ -55,6 +59,19 @@ class _Robust:
         self._hjac = ca.Function("pinning_jacobians", [x, problem.parameters],
                                  [ca.jacobian(h, a) if na else ca.SX(0, 0), ca.jacobian(h, z) if na else ca.SX(0, self.n)])
 
+    def _active_columns(self, D: ca.SX) -> ca.SX:
+        """The columns of D T of the variables the box moves on their own: each one's derivative and those of the
+        variables that follow it (times d follower / d it); D's own columns where none follows another."""
+        if not any(self.carried.values()):
+            return D[:, self.active]
+        columns = []
+        for k in self.active:
+            column = D[:, k]
+            for i, c in self.carried[k]:
+                column = column + c * D[:, i]
+            columns.append(column)
+        return ca.horzcat(*columns)
+
     def hold(self, rule, rows: Sequence[Row]) -> list[Row]:
         """``rows`` of ``rule`` held at their linearised worst case (equalities kept as they are)."""
         return self.hold_rows(rule.name, rows)
@@ -67,7 +84,7 @@ class _Robust:
                 out.append((expr, lb, ub))
                 continue
             e = ca.vec(ca.SX(expr))
-            D = total_jacobian(e, self.problem, self.n, self.S, self.J_inv)[:, self.active]
+            D = self._active_columns(total_jacobian(e, self.problem, self.n, self.S, self.J_inv))
             T = ca.SX.sym(f"abs_sensitivity_{name}", e.numel(), len(self.active))
             self.extra.append(ca.vec(T))
             self.lb += [0.0] * T.numel()

@@ -103,14 +103,21 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
     """Per rule: nominal margin on the analysis grid, linear worst-case margin, the derivative of the
     rule's value at its worst nominal sample w.r.t. every design variable, and the drivers of the worst."""
     rows = []
+    # a follower moves with the variables it follows (DesignMap.moves): the stack-up is over the variables the box
+    # moves on their own, each rule's derivative in them the chain rule's (J T); its sensitivities stay J's own
+    T = lin.dmap.moves if lin.dmap.followers else None
     for k, rule in enumerate(lin.rules):
         values, J = lin.rule_jacobian(k)
         lower, upper = rule.lower, rule.upper
+        i_nom = int(np.argmin(linear_worst(values, lower, upper, J, box)[0]))
+        gradient = J[i_nom]                                     # its derivative at its worst sample
+        if T is not None:
+            J = J @ T
         nominal, worst = linear_worst(values, lower, upper, J, box)
-        i_nom = int(np.argmin(nominal))
-        value, gradient = float(values[i_nom]), J[i_nom]          # the value at its worst sample, its derivative
+        value = float(values[i_nom])                               # the value at its worst sample
         if lin.held is not None and rule.rows_are_the_rule:        # the worst case on the rows the NLP holds
             values, J = lin.held[0][lin.held[2][k]], lin.held[1][lin.held[2][k]]
+            J = J if T is None else J @ T
             lower, upper = 0.0, None
             nominal, worst = linear_worst(values, lower, upper, J, box)
         i_lin = int(np.argmin(worst))
@@ -125,7 +132,7 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             "sensitivity": {key: float(gradient[j]) for j, key in enumerate(lin.dmap.keys)},
             # the box's corner the linear stack-up puts this rule's worst at (sign of dg/dd at its worst sample,
             # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
-            "corner": [float(c) for c in corner],
+            "corner": [float(c) for c in (corner if T is None else T @ corner)],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
             # every variable's linear change of the margin at that worst sample when it moves by +tol (its share of
             # the stack-up is the absolute value; the corner moves each variable the way that lowers the margin)
@@ -368,6 +375,8 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
     setting = Setting(spec, setting_seed, solving.prepare(spec))
     rng = np.random.default_rng(seed)
     offsets = rng.uniform(-1.0, 1.0, size=(samples, dmap.n)) * box
+    if dmap.followers:          # each follower where the variables it follows put it (DesignMap.moves)
+        offsets = offsets @ dmap.moves.T
     t0 = time.perf_counter()
     checked = check_samples(solving, setting, design, dmap.keys, offsets, workers)
     out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
@@ -501,6 +510,16 @@ def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
     row["gap_explanation"] = "not compared: the rule is not evaluated at the design" + (f" ({note})" if note else "")
 
 
+def tolerance_table(dmap: DesignMap, box: np.ndarray) -> dict:
+    """result.json ``tolerance``: each variable's half-width and unit; a follower's is how far the box moves it, with
+    ``follows`` (other -> d follower / d other)."""
+    spread = dmap.spread(box)
+    out: dict = {key: {"half_width": float(b), "unit": u} for key, b, u in zip(dmap.keys, spread, dmap.units)}
+    for j, others in dmap.followers.items():
+        out[dmap.keys[j]]["follows"] = {dmap.keys[k]: c for k, c in others.items()}
+    return out
+
+
 def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: float | None,
             per_variable: dict[str, float] | None = None, samples: int = 1000, seed: int = 0,
             workers: int | None = None) -> dict:
@@ -556,7 +575,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
         if r is not None and r.value is None:
             _not_evaluated_at_the_design(row, r.note)
     return {"design": lin.design, "nominal_rules": [r.to_json() for r in nominal],
-            "tolerance": {key: {"half_width": float(b), "unit": u} for key, b, u in zip(lin.dmap.keys, box, lin.dmap.units)},
+            "tolerance": tolerance_table(lin.dmap, box),
             "stack_up": rows, "monte_carlo": mc,
             **({"operating": {n: {"unit": u, "nominal": lin.operating[3][n]}
                               for n, u in zip(lin.operating[0], lin.operating[1])},

@@ -5,7 +5,7 @@ variables no unit declares theirs (``Kind.design_unit``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from pydantic import BaseModel
@@ -72,13 +72,44 @@ class DesignMap:
     units: list[str]
     d0: np.ndarray
     J: np.ndarray              # d = d0 + J x[:n]
+    #: the variables others determine (:attr:`Kind.follows`), by index: follower -> {other: d follower / d other}
+    followers: dict[int, dict[int, float]] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
         return len(self.names)
 
+    @property
+    def moves(self) -> np.ndarray:
+        """T (n x n): the offsets of a design in the box are T u for the offsets u of the variables it moves on their
+        own (a follower's entry of u is unused: its half-width is 0, :func:`box_of`); the identity without
+        followers."""
+        T = np.eye(self.n)
+        for j, others in self.followers.items():
+            T[j, :] = 0.0
+            for k, c in others.items():
+                T[j, k] = c
+        return T
+
+    def spread(self, box: np.ndarray) -> np.ndarray:
+        """Each variable's half-width in the box: its own, a follower's the sum of |d follower / d other| times the
+        others' (how far the design in the box moves it)."""
+        out = np.array(box, dtype=float)
+        for j, others in self.followers.items():
+            out[j] = sum(abs(c) * float(box[k]) for k, c in others.items())
+        return out
+
     def coordinates(self, d: np.ndarray) -> np.ndarray:
         return np.linalg.solve(self.J, np.asarray(d, float) - self.d0)
+
+
+def followers_of(kind: Kind, keys: list[str]) -> dict[int, dict[int, float]]:
+    """:attr:`Kind.follows` by index into ``keys`` (result keys), for the followers whose variables are all there."""
+    out = {}
+    for follower, others in kind.follows.items():
+        if follower in keys and all(k in keys for k in others):
+            out[keys.index(follower)] = {keys.index(k): float(c) for k, c in others.items()}
+    return out
 
 
 def design_map(kind: Kind, nlp, spec) -> DesignMap:
@@ -88,7 +119,7 @@ def design_map(kind: Kind, nlp, spec) -> DesignMap:
     keys = spec_keys(names, info)
     units = [info[k]["unit"] if k in info else kind.design_unit for k in keys]
     d0, J = kind.design_affine(spec, len(names))
-    return DesignMap(names, keys, units, d0, J)
+    return DesignMap(names, keys, units, d0, J, followers_of(kind, keys))
 
 
 def half_width(names, unit: str, length: float | None, angle: float | None,
@@ -112,8 +143,13 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     if unknown:
         raise SpecError(f"tolerance: {', '.join(unknown)}: no variable this kind's analysis varies (it varies "
                         f"{', '.join(dmap.keys)})")
-    box = [half_width((key, name), unit, length, angle, per_variable)
-           for name, key, unit in zip(dmap.names, dmap.keys, dmap.units)]
+    for j, others in dmap.followers.items():
+        given = [n for n in (dmap.keys[j], dmap.names[j]) if n in per_variable]
+        if given:
+            raise SpecError(f"tolerance: {given[0]} follows {', '.join(dmap.keys[k] for k in others)} (the kind holds "
+                            f"it to them): its half-width is theirs, so give theirs and not its own")
+    box = [0.0 if j in dmap.followers else half_width((key, name), unit, length, angle, per_variable)
+           for j, (name, key, unit) in enumerate(zip(dmap.names, dmap.keys, dmap.units))]
     if not any(box) and (length or angle):
         # a half-width that reaches no design variable would leave the box empty without a word
         given = " and ".join(f"{what} {w:g} {u}" for what, w, u in (("length", length, "mm"), ("angle", angle, "deg"))
@@ -137,7 +173,7 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
     (SpecError naming it): such a sample is no design of the kind, yet its rules could be evaluated and counted (a
     planting arm at +-1000 mm had links of -1865 mm, and its depth held in 5 % of the samples)."""
     positive, acute = positive_variables(spec), acute_variables(spec)
-    for name, key, unit, width in zip(dmap.names, dmap.keys, dmap.units, box):
+    for j, (name, key, unit, width) in enumerate(zip(dmap.names, dmap.keys, dmap.units, dmap.spread(box))):
         value = design.get(key)
         is_acute = key in acute or name in acute
         if (width <= 0 or not isinstance(value, float) or not (is_acute or key in positive or name in positive)
@@ -146,9 +182,11 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
         # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive value's 0
         room = min(value, 90.0 - value) if is_acute else value
         low = value - width <= 0
+        remedy = (f"give it a half-width below {room:g} {unit}" if j not in dmap.followers else
+                  f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
+                  f"{width:g} {unit} in the box: give them smaller half-widths")
         raise SpecError(f"tolerance: the box reaches {value - width if low else value + width:g} {unit} for {key} "
-                        f"({value:g} {unit} +- {width:g}), which must be {'> 0' if low else '< 90'}: give it a "
-                        f"half-width below {room:g} {unit}")
+                        f"({value:g} {unit} +- {width:g}), which must be {'> 0' if low else '< 90'}: {remedy}")
 
 
 def refuse_box_outside_bounds(spec, design_unit: str, where) -> None:

@@ -208,9 +208,12 @@ def _verdict_line(facts: dict, failing: dict, ranked: list[str]) -> str:
 def _box_line(tolerance: dict) -> str:
     groups: dict[tuple, list[str]] = {}
     for key, t in tolerance.items():
-        if t["half_width"]:
+        if t["half_width"] and "follows" not in t:
             groups.setdefault((t["half_width"], t["unit"]), []).append(key)
-    return "Box: " + "; ".join(f"±{w:g} {u}".rstrip() + f" on {', '.join(keys)}" for (w, u), keys in groups.items())
+    followers = [f"{key} follows {', '.join(t['follows'])} (±{t['half_width']:g} {t['unit']}".rstrip() + ")"
+                 for key, t in tolerance.items() if "follows" in t and t["half_width"]]
+    return "Box: " + "; ".join([f"±{w:g} {u}".rstrip() + f" on {', '.join(keys)}" for (w, u), keys in groups.items()]
+                               + followers)
 
 
 def _monte_carlo_line(mc: dict) -> str:

@@ -21,7 +21,8 @@ from synthesis.core.sensitivity import PinningError
 from synthesis.spec.design_info import describe, describe_lists
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.tolerance.analysis import corner_margins, linearise, monte_carlo, stack_up
-from synthesis.tolerance.design import DesignMap, box_of, refuse_crossing_zero, spec_keys, whole_problem
+from synthesis.tolerance.design import (DesignMap, box_of, followers_of, refuse_crossing_zero, spec_keys,
+                                        whole_problem)
 
 
 def _box_text(spec, scale: float | None = None, units: set | None = None) -> str:
@@ -60,7 +61,8 @@ class _Resolver:
             d0, J = self.kind.design_affine(self.spec, n)
         except AttributeError:        # a map the kind cannot give from the spec alone
             raise unsupported from None
-        dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names], d0, J)
+        dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names], d0, J,
+                         followers_of(self.kind, names))
         tol = self.spec.tolerance
         box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
         # a design entry nothing in the NLP reads (an NLP may keep a fixed variable's entry but compute with its
@@ -82,7 +84,7 @@ class _Resolver:
                             f"{', '.join(ignored)}: this kind's NLP takes a fixed variable as a number; give it as "
                             f"{{init = v, bounds = [v, v]}} to tolerance it (`agrisynth tolerance RESULT` analyses "
                             f"fixed dimensions as they are)")
-        return Tolerance(n, box, J)
+        return Tolerance(n, box, J, dmap.moves if dmap.followers else None)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -137,7 +139,7 @@ class RobustFinish:
             names = list(info)
             n = len(names)
             dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names],
-                             np.zeros(n), np.eye(n))
+                             np.zeros(n), np.eye(n), followers_of(self.kind, names))
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
             # a signal noted since the starts finished (swallowed inside a CasADi call) stops the run here, before
@@ -149,7 +151,7 @@ class RobustFinish:
                 # checks its answer in full
                 mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted; "
                       "`agrisynth solve SPEC --resume RUN_DIR` finishes the run, this check with it", "pass_rate": None, "rules": {}}
-                facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
+                facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, "monte_carlo": mc,
                                       "held_at": "not checked: the solve was interrupted"}
                 return dataclasses.replace(finished, facts=facts)
             outside = _box_outside(spec, dmap, design, box)
@@ -160,7 +162,7 @@ class RobustFinish:
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
             # auxiliaries are (the crank angles of its targets, say: KindNLP.answer_start)
             design = {**best.outcome.details, **best.outcome.design, **design}
-            facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, box)}, "monte_carlo": mc,
+            facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, "monte_carlo": mc,
                                   "held_at": "linearised worst case of every rule row in the box"}
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)

@@ -30,6 +30,9 @@ class ClampCam(Kind):
                                   "(N m for an oscillating follower); needs [dynamics]"}
     example = "clamp_cam/opening_cam_redesign_modified_sine.toml"
     bench_specs = ("clamp_cam/opening_cam_redesign.toml", "clamp_cam/rotating_cam_redesign.toml")
+    #: the four segments fill one turn (rise + far_dwell + return + near_dwell = 360 deg, the spec's and the NLP's
+    #: identity): in a tolerance box the near dwell takes what the others leave of it
+    follows = {"near_dwell": {"rise": -1.0, "far_dwell": -1.0, "return": -1.0}}
 
     def spec_model(self) -> type[SpecModel]:
         from synthesis.kinds.clamp_cam.spec import ClampCamSpec

@@ -28,6 +28,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
+from synthesis.core.coordinates import fixed_as_given
 from synthesis.core.declared import compile_problem
 from synthesis.core.kind import KindNLP, Setting
 from synthesis.core.outcome import StartOutcome
@@ -175,7 +176,7 @@ class PickerNLP(KindNLP):
             logs.append(f"----- stage {name}\n{out.log}")
             w = out.x[:self.n_w]
             z = w[:9]
-            design = {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))}
+            design = fixed_as_given(NAMES, self.bounds, {n: float(v) for n, v in zip(NAMES, COORDINATES.design(z))})
             objective = self.exact_objective(design)
             if not math.isfinite(objective):     # the loop breaks somewhere: the re-check rejects it
                 objective = math.inf
