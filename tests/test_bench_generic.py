@@ -495,3 +495,19 @@ def test_quick_on_a_named_spec_of_a_kind_with_its_own_bench_runs_the_generic_stu
     assert set(quick.methods) == {"ipopt_multistart", "ipopt_finite_differences"} and not set(quick.methods) & PEERS
     [full] = cases_for("fourbar_path", [loaded], 0)
     assert "differential_evolution" in full.methods          # the kind's own case without --quick
+
+
+def test_a_kinds_default_set_is_its_first_problem_at_quick_settings_compiled_or_not(tmp_path):
+    """--quick benches the first library problem of a kind's set, with or without --compiled (the settings then
+    differ from QUICK by their folder); the full settings bench them all."""
+    import dataclasses
+
+    from synthesis.bench.generic import FULL, library_cases
+
+    default = ["steering/steering_redesign_40.toml", "steering/steering_redesign_27.toml"]
+    for settings, names in ((QUICK, ["steering_redesign_40"]),
+                            (dataclasses.replace(QUICK, compiled=str(tmp_path)), ["steering_redesign_40"]),
+                            (FULL, ["steering_redesign_40", "steering_redesign_27"])):
+        cases = library_cases(None, 0, default, settings)
+        assert [c.loaded.model.name for c in cases] == names
+        assert ("ipopt_compiled" in cases[0].methods) == (settings.compiled is not None)

@@ -91,12 +91,15 @@ class StudySettings:
     #: a folder: the method ipopt_compiled too (IPOPT's functions compiled to C and cached there; the untimed
     #: warm-up compiles them)
     compiled: str | None = None
+    #: a kind's default set: its first library problem only (else all of :attr:`Kind.bench_specs`)
+    first_problem_only: bool = False
 
 
 FULL = StudySettings()
 #: --quick: one start, two sample counts (the spec's own is the AD run, not solved again), no peers, no
 #: reference solve, one run per method, the first problem of each kind, no extreme matrix
-QUICK = StudySettings(starts=1, factors=(0.5, 1.0), peers=(), reference=False, sweep_budget_s=30.0)
+QUICK = StudySettings(starts=1, factors=(0.5, 1.0), peers=(), reference=False, sweep_budget_s=30.0,
+                      first_problem_only=True)
 
 
 def tolerance(best: float) -> float:
@@ -663,8 +666,8 @@ def _warm_up(loaded, seed: int, compiled: str | None) -> None:
 def library_cases(specs, seed: int, default: list[str], settings: StudySettings = FULL,
                   studies: dict | None = None) -> list[BenchCase]:
     """The kind's bench cases: ``specs`` (LoadedSpec list) or, when None, the ``default`` library files
-    (relative to problems/; the first only at :data:`QUICK` settings).  ``studies``: extra rows (name -> callable)
-    the kind adds to its first case."""
+    (relative to problems/; the first only with ``settings.first_problem_only``, :data:`QUICK`'s).  ``studies``: extra
+    rows (name -> callable) the kind adds to its first case."""
     if specs is None:
-        specs = [load_spec(LIBRARY / f) for f in default[:1 if dataclasses.replace(settings, compiled=None) == QUICK else None]]
+        specs = [load_spec(LIBRARY / f) for f in default[:1 if settings.first_problem_only else None]]
     return [case_for(s, settings, seed, studies if i == 0 else None) for i, s in enumerate(specs)]
