@@ -454,7 +454,7 @@ def test_a_signal_inside_a_casadi_call_of_a_monte_carlo_sample_stops_the_run_aft
     solving = SimpleNamespace(prepare=lambda spec: None, recheck=recheck)
     monkeypatch.setattr(analysis, "envelope_kind", lambda kind, spec: SimpleNamespace(solving=lambda: solving))
     spec = load_spec(LIBRARY / "planting_arm" / "robust_redesign_from_example1.toml").model
-    dmap = SimpleNamespace(keys=["a", "b"], n=2)
+    dmap = SimpleNamespace(keys=["a", "b"], n=2, followers={})
     interrupt.install()
     try:
         with pytest.raises(KeyboardInterrupt):

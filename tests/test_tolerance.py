@@ -813,3 +813,43 @@ def test_a_cam_tolerance_box_moves_the_near_dwell_with_the_other_segments(monkey
     assert checked >= 3
     with pytest.raises(SpecError, match="near_dwell follows rise, far_dwell, return"):
         box_of(lin.dmap, None, 1.0, {"near_dwell": 0.5})
+
+
+def test_the_stack_up_moves_a_follower_by_the_chain_rule():
+    """A made-up linearisation whose rule reads the follower (clamp_cam's rules never do: d rule / d near_dwell = 0):
+    c = 3 - a - b follows a and b; g = a + 2 c >= 0 at g = 1, box +-0.1 on a and b.  d g / d a through c is
+    1 - 2 = -1, d g / d b is -2: the linear loss is 0.1 + 0.2 = 0.3, the worst corner (+0.1, +0.1) moves c by -0.2;
+    the sensitivities stay g's own (1, 0, 2)."""
+    from types import SimpleNamespace
+
+    from synthesis.tolerance.analysis import Linearised
+    from synthesis.tolerance.design import DesignMap
+
+    dmap = DesignMap(["a", "b", "c"], ["a", "b", "c"], ["mm"] * 3, np.zeros(3), np.eye(3), {2: {0: -1.0, 1: -1.0}})
+    rule = SimpleNamespace(name="g", unit="mm", scale=1.0, lower=0.0, upper=None, rows_are_the_rule=False)
+    lin = Linearised(dmap, {"a": 1.0, "b": 1.0, "c": 1.0}, [rule], [slice(0, 1)], np.array([1.0]),
+                     np.array([[1.0, 0.0, 2.0]]))
+    (row,) = stack_up(lin, np.array([0.1, 0.1, 0.0]))
+    assert row["linear_loss"] == pytest.approx(0.3) and row["linear_worst_margin"] == pytest.approx(0.7)
+    assert row["corner"] == pytest.approx([0.1, 0.1, -0.2])
+    assert row["sensitivity"] == {"a": 1.0, "b": 0.0, "c": 2.0}
+    assert row["contributions"] == pytest.approx({"a": -0.1, "b": -0.2, "c": 0.0})
+
+
+def test_a_near_dwell_the_box_takes_below_zero_is_refused():
+    """--angle 1 moves a 2 deg near dwell by +-3 deg: samples with rise + far_dwell + return > 360 deg, no cam, were
+    counted (and passed).  A dwell may be 0, never less: the box is refused, naming what moves it; at a 3 deg near
+    dwell it reaches 0 and stands."""
+    from synthesis.errors import SpecError
+    from synthesis.tolerance.design import box_of, refuse_crossing_zero
+
+    kind = kinds.get("clamp_cam")
+    loaded = load_spec(LIBRARY / "clamp_cam/opening_cam_redesign.toml")
+    lin = linearise(kind, loaded.model, kind.check(loaded).design)
+    box = box_of(lin.dmap, None, 1.0, {})
+    with pytest.raises(SpecError, match=r"reaches -1 deg for near_dwell \(2 deg \+- 3\), which must be >= 0: it "
+                                        r"follows rise, far_dwell, return"):
+        refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 2.0}, box)
+    refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 3.0}, box)
+    with pytest.raises(SpecError, match=r"reaches -0.5 deg for far_dwell \(0.5 deg \+- 1\), which must be >= 0"):
+        refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.5}, box)

@@ -789,3 +789,29 @@ def test_a_fixed_length_whose_robust_box_reaches_zero_is_refused_naming_its_valu
     assert str(raised.value) == (f"{spec}: [tolerance] +-30 mm on l2: its value 28.5 mm does not keep the box inside "
                                  f"> 0 (the value must lie above 30): give l2 a smaller half-width (tolerance.variables) "
                                  f"or a value further from the limit")
+
+
+def test_a_half_width_of_the_near_dwell_is_refused_by_every_command_and_a_solves_box_sees_it_follow(tmp_path):
+    """The near dwell closes the cam's turn: tolerance.variables or --tol giving it a half-width of its own is bad
+    input in check, solve and tolerance alike (check ran on, solve refused); a [tolerance] angle that would carry a
+    2 deg near dwell below 0 is refused before the solve, naming the segments that move it."""
+    robust = (LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml").read_text()
+    own = tmp_path / "own.toml"
+    own.write_text(robust.replace("variables = { base_radius = 0.2,", "variables = { near_dwell = 0.5, base_radius = 0.2,"))
+    said = "tolerance.variables: near_dwell follows rise, far_dwell, return (the kind holds it to them)"
+    for command in ("check", "solve"):
+        run = agrisynth(command, str(own), "--out", str(tmp_path / command), cwd=tmp_path)
+        assert run.returncode == 2 and said in run.stderr and "Traceback" not in run.stderr, run.stderr
+    run = agrisynth("tolerance", str(LIBRARY / "clamp_cam" / "opening_cam_redesign.toml"), "--tol", "near_dwell=0.5",
+                    "--out", str(tmp_path / "t"), cwd=tmp_path)
+    assert run.returncode == 2 and "--tol: near_dwell follows rise, far_dwell, return" in run.stderr, run.stderr
+    narrow = tmp_path / "narrow.toml"
+    narrow.write_text(robust.replace("far_dwell = 160.0", "far_dwell = 304.0").replace("near_dwell = 146.0",
+                                                                                      "near_dwell = 2.0")
+                      .replace("hold_far = [[186.0, 346.0]]", "hold_far = [[186.0, 300.0]]")
+                      .replace("hold_near = [[0.0, 146.0]]", "hold_near = [[0.0, 1.0]]")
+                      .replace("variables = {", "angle = 1.0\nvariables = {"))
+    run = agrisynth("solve", str(narrow), "--out", str(tmp_path / "n"), cwd=tmp_path)
+    assert run.returncode == 2, run.stderr
+    assert ("[tolerance] +-3 deg on near_dwell: its value 2 deg does not keep the box inside >= 0 (the value must lie "
+            "at or above 3): give rise, far_dwell, return (which near_dwell follows) smaller half-widths") in run.stderr

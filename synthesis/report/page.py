@@ -273,7 +273,9 @@ def tolerance_section(cands: list[Candidate]) -> str:
         if not isinstance(mc, dict):
             continue
         info = c.result.design_variables or {}
+        follows = tol.get("follows") or {}
         box = ", ".join(f"{k} ±{v:g}" + (f" {info[k]['unit']}" if (info.get(k) or {}).get("unit") else "")
+                        + (f" (follows {', '.join(follows[k])})" if k in follows else "")
                         for k, v in (tol.get("box") or {}).items() if v)
         rate = mc.get("pass_rate")
         rows = "".join(f"<tr><td>{html.escape(n)}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"

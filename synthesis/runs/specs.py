@@ -27,6 +27,17 @@ def spec_file(spec: Path, emit: Subscriber) -> Path:
     return found
 
 
+def followers_named(kind_name: str, names: list[str], where: str) -> None:
+    """SpecError for a half-width given to a variable the kind holds to others (:attr:`Kind.follows`: a cam's near
+    dwell closes the turn): the box moves it with them, so it takes none of its own."""
+    follows = kinds.get(kind_name).follows
+    named = [n for n in names if n in follows]
+    if named:
+        n = named[0]
+        raise SpecError(f"{where}: {n} follows {', '.join(follows[n])} (the kind holds it to them): its half-width is "
+                        f"theirs, so give theirs and not its own")
+
+
 def unknown_design_variables(model, names: list[str], where: str) -> None:
     """SpecError naming those of ``names`` that are no design variable of the spec by its result.json name (not a
     suffix of one, as the kind's NLP may name it: ``I`` for ``delta_I``, ``x`` for ``seedbed_x`` -- the robust
@@ -63,6 +74,7 @@ def tolerance_names_known(loaded, model=None) -> None:
     if tol is not None and tol.variables:
         model = named_model(loaded) if model is None else model
         unknown_design_variables(model, list(tol.variables), f"{loaded.path}: tolerance.variables")
+        followers_named(loaded.kind, list(tol.variables), f"{loaded.path}: tolerance.variables")
         within_option_ranges(model, dict(tol.variables), f"{loaded.path}: tolerance.variables.{{name}} = {{value:g}}")
 
 
@@ -92,7 +104,8 @@ def refuse_robust_box_outside(loaded) -> None:
     """SpecError when no design a tolerance-robust solve of the spec may try keeps its box inside the range the spec
     holds a variable to (:func:`synthesis.tolerance.design.refuse_box_outside_bounds`)."""
     from synthesis.tolerance.design import refuse_box_outside_bounds   # with casadi: not for the commands that list
-    refuse_box_outside_bounds(loaded.model, kinds.get(loaded.kind).design_unit, loaded.path)
+    kind = kinds.get(loaded.kind)
+    refuse_box_outside_bounds(loaded.model, kind.design_unit, loaded.path, kind.follows)
 
 
 def not_a_result(spec: Path) -> None:

@@ -13,7 +13,7 @@ from synthesis.result import MAX_RESULT_BYTES
 from synthesis.runs.events import MonteCarloPlan, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import Outcome, ToleranceFacts, ToleranceRequest
-from synthesis.runs.specs import (named_model, spec_file, tolerance_names_known, unknown_design_variables,
+from synthesis.runs.specs import (followers_named, named_model, spec_file, tolerance_names_known, unknown_design_variables,
                                    within_option_ranges, zero_tolerance_box)
 from synthesis.spec import design_info, load_spec
 from synthesis.tolerance.analysis import analyse
@@ -79,6 +79,7 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     per_variable = {**_spec_variables(named, dict(tol.variables) if tol else {}, request), **request.per_variable}
     if request.per_variable:               # an unknown name is bad input, said before any analysis
         unknown_design_variables(named, list(request.per_variable), "--tol")
+        followers_named(loaded.kind, list(request.per_variable), "--tol")
         within_option_ranges(named, request.per_variable)
     if not (length or angle or any(per_variable.values())) and request.samples != 0:
         given = [f"--{what} 0" for what, width in (("length", request.length), ("angle", request.angle))

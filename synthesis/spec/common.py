@@ -106,6 +106,8 @@ POSITIVE = documented_range("> 0")
 #: an angle variable :func:`within_a_turn` checks; an angle strictly between 0 and 90 deg (its own validator)
 WITHIN_A_TURN = documented_range(">= -360, <= 360")
 ACUTE = documented_range("> 0, < 90")
+#: a value >= 0 its own validator checks (a cam's dwell: none at all is a cam, less is not)
+NON_NEGATIVE = documented_range(">= 0")
 
 
 def require_positive(name: str, v: Variable) -> None:

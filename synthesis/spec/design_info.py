@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from synthesis.spec.common import ACUTE, POSITIVE, FreeVariable
+from synthesis.spec.common import ACUTE, NON_NEGATIVE, POSITIVE, FreeVariable
 from synthesis.spec.docmeta import units_in
 
 #: a value within this fraction of its bounds' width (at least this absolute, mm or deg) is "at the bound"
@@ -81,6 +81,12 @@ def positive_variables(spec: BaseModel) -> set[str]:
 def acute_variables(spec: BaseModel) -> set[str]:
     """The design variables whose spec field is marked 0 < angle < 90 deg (:data:`~synthesis.spec.common.ACUTE`)."""
     return _marked(spec, lambda field: field.json_schema_extra == ACUTE)
+
+
+def non_negative_variables(spec: BaseModel) -> set[str]:
+    """The design variables whose spec field is marked >= 0 (:data:`~synthesis.spec.common.NON_NEGATIVE`: a cam's
+    dwell, which may be none but never less)."""
+    return _marked(spec, lambda field: field.json_schema_extra == NON_NEGATIVE)
 
 
 def _marked(spec: BaseModel, test) -> set[str]:

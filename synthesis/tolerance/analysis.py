@@ -379,13 +379,15 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         offsets = offsets @ dmap.moves.T
     t0 = time.perf_counter()
     checked = check_samples(solving, setting, design, dmap.keys, offsets, workers)
-    out = {"samples": samples, "seed": seed, "distribution": "uniform in the tolerance box",
+    within = "uniform in the tolerance box" + "".join(
+        f" ({dmap.keys[j]} where {', '.join(dmap.keys[k] for k in others)} put it)" for j, others in dmap.followers.items())
+    out = {"samples": samples, "seed": seed, "distribution": within,
            **tally(checked, samples), "unevaluable_reasons": unevaluable_reasons(checked),
            "wall_s": time.perf_counter() - t0}
     if ranges:
         grid = grid_of(spec)
         span = ", ".join(f"{n} {r.range[0]:g}-{r.range[1]:g}" for n, (_, r) in ranges.items())
-        out["distribution"] = (f"uniform in the tolerance box, each design re-checked at the nominal operating point "
+        out["distribution"] = (f"{within}, each design re-checked at the nominal operating point "
                                f"and at every one of the {len(grid)} points of the re-check grid over {span}")
         out["envelope"] = {"conditions": {n: list(r.range) for n, (_, r) in ranges.items()}, "points": len(grid),
                            "pass_rate_at_nominal": out.pop("pass_rate_at_nominal")}

@@ -13,7 +13,7 @@ from pydantic import BaseModel
 from synthesis.core.ipopt import NLPOutcome, answered_by, compiled_in
 from synthesis.core.kind import Kind
 from synthesis.core.verdict import FINE
-from synthesis.spec.design_info import acute_variables, describe, positive_variables
+from synthesis.spec.design_info import acute_variables, describe, non_negative_variables, positive_variables
 from synthesis.errors import SpecError
 from synthesis.spec.common import FreeVariable, value_of
 
@@ -107,6 +107,8 @@ def followers_of(kind: Kind, keys: list[str]) -> dict[int, dict[int, float]]:
     """:attr:`Kind.follows` by index into ``keys`` (result keys), for the followers whose variables are all there."""
     out = {}
     for follower, others in kind.follows.items():
+        if any(k in kind.follows for k in others):     # a kind's definition, never a user's input
+            raise ValueError(f"kind {kind.name}: {follower} follows a variable that follows others")
         if follower in keys and all(k in keys for k in others):
             out[keys.index(follower)] = {keys.index(k): float(c) for k, c in others.items()}
     return out
@@ -160,9 +162,11 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     return np.array(box)
 
 
-def box_fits(lo: float, hi: float, width: float, acute: bool) -> bool:
+def box_fits(lo: float, hi: float, width: float, acute: bool, zero_allowed: bool = False) -> bool:
     """Whether some value in [lo, hi] keeps its box [v - width, v + width] inside the range the kind holds the
-    variable to: > 0, or (0, 90) deg for an acute one.  One design is lo = hi."""
+    variable to: > 0, >= 0 (``zero_allowed``: a dwell), or (0, 90) deg for an acute one.  One design is lo = hi."""
+    if zero_allowed:
+        return hi >= width
     top = 90.0 - width if acute else float("inf")
     return max(lo, width) < min(hi, top) or (lo == hi and width < lo < top)
 
@@ -172,49 +176,63 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
     or 90 deg or beyond for one it holds acute, is refused
     (SpecError naming it): such a sample is no design of the kind, yet its rules could be evaluated and counted (a
     planting arm at +-1000 mm had links of -1865 mm, and its depth held in 5 % of the samples)."""
-    positive, acute = positive_variables(spec), acute_variables(spec)
+    positive, acute, non_negative = positive_variables(spec), acute_variables(spec), non_negative_variables(spec)
     for j, (name, key, unit, width) in enumerate(zip(dmap.names, dmap.keys, dmap.units, dmap.spread(box))):
         value = design.get(key)
         is_acute = key in acute or name in acute
-        if (width <= 0 or not isinstance(value, float) or not (is_acute or key in positive or name in positive)
-                or box_fits(value, value, width, is_acute)):
+        zero_allowed = key in non_negative or name in non_negative
+        if (width <= 0 or not isinstance(value, float)
+                or not (is_acute or zero_allowed or key in positive or name in positive)
+                or box_fits(value, value, width, is_acute, zero_allowed)):
             continue
         # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive value's 0
         room = min(value, 90.0 - value) if is_acute else value
         low = value - width <= 0
-        remedy = (f"give it a half-width below {room:g} {unit}" if j not in dmap.followers else
+        remedy = (f"give it a half-width {'of at most' if zero_allowed else 'below'} {room:g} {unit}"
+                  if j not in dmap.followers else
                   f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
                   f"{width:g} {unit} in the box: give them smaller half-widths")
+        limit = ">= 0" if zero_allowed else "> 0" if low else "< 90"
         raise SpecError(f"tolerance: the box reaches {value - width if low else value + width:g} {unit} for {key} "
-                        f"({value:g} {unit} +- {width:g}), which must be {'> 0' if low else '< 90'}: {remedy}")
+                        f"({value:g} {unit} +- {width:g}), which must be {limit}: {remedy}")
 
 
-def refuse_box_outside_bounds(spec, design_unit: str, where) -> None:
+def refuse_box_outside_bounds(spec, design_unit: str, where, follows: dict[str, dict[str, float]] | None = None) -> None:
     """SpecError when no design a tolerance-robust solve may try keeps its box ([tolerance]) inside the range the spec
-    holds a variable to: > 0, or 0 < angle < 90 for an acute one -- a fixed variable's value, or every value in a free
-    one's bounds, within the half-width of a limit.  ``design_unit``: the unit of a variable the spec gives none (the
-    kind's).  (Where some design does, the solve runs; its answer's Monte-Carlo check is not run if the answer's box
-    crosses a limit: ``synthesis.tolerance.robust``.)"""
+    holds a variable to: > 0, >= 0, or 0 < angle < 90 for an acute one -- a fixed variable's value, or every value in
+    a free one's bounds, within the half-width of a limit.  ``design_unit``: the unit of a variable the spec gives
+    none (the kind's); ``follows``: the kind's :attr:`~synthesis.core.kind.Kind.follows` (a follower's half-width is
+    how far the others move it).  (Where some design does, the solve runs; its answer's Monte-Carlo check is not
+    run if the answer's box crosses a limit: ``synthesis.tolerance.robust``.)"""
     tol = getattr(spec, "tolerance", None)
     if tol is None or not callable(getattr(spec, "variables", None)):
         return
     info = describe(spec)
-    positive, acute = positive_variables(spec), acute_variables(spec)
+    positive, acute, non_negative = positive_variables(spec), acute_variables(spec), non_negative_variables(spec)
     values = spec.variables()
-    for name in [n for n in info if n in positive or n in acute]:
+    follows = {n: others for n, others in (follows or {}).items() if n in info and all(k in info for k in others)}
+
+    def width_of(name: str) -> float:
+        if name in follows:
+            return sum(abs(c) * width_of(k) for k, c in follows[name].items())
+        return half_width((name,), info[name]["unit"] or design_unit, tol.length, tol.angle, dict(tol.variables))
+
+    for name in [n for n in info if n in positive or n in acute or n in non_negative]:
         entry = info[name]
-        unit = entry["unit"] or design_unit
-        width = half_width((name,), unit, tol.length, tol.angle, dict(tol.variables))
+        width = width_of(name)
         lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
-        if width <= 0 or box_fits(lo, hi, width, name in acute):
+        if width <= 0 or box_fits(lo, hi, width, name in acute, name in non_negative):
             continue
         which = (f"no design in its bounds [{lo:g}, {hi:g}] {entry['unit']} keeps" if entry["free"]
                  else f"its value {lo:g} {entry['unit']} does not keep")
-        inside = f"between {width:g} and {90.0 - width:g}" if name in acute else f"above {width:g}"
+        inside = (f"between {width:g} and {90.0 - width:g}" if name in acute
+                  else f"at or above {width:g}" if name in non_negative else f"above {width:g}")
+        limit = "(0, 90)" if name in acute else ">= 0" if name in non_negative else "> 0"
+        remedy = (f"give {', '.join(follows[name])} (which {name} follows) smaller half-widths" if name in follows
+                  else f"give {name} a smaller half-width (tolerance.variables)")
         raise SpecError(f"{where}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
-                        f"{'(0, 90)' if name in acute else '> 0'} (the value must lie {inside}): give {name} a smaller "
-                        f"half-width (tolerance.variables) or {'bounds' if entry['free'] else 'a value'} further from "
-                        f"the limit")
+                        f"{limit} (the value must lie {inside}): {remedy} or {'bounds' if entry['free'] else 'a value'} "
+                        f"further from the limit")
 
 
 def whole_problem(nlp) -> None:

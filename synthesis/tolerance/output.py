@@ -81,7 +81,7 @@ def full_table(facts: dict) -> str:
     conditions, the explanation of every linear-vs-sampled gap and every reason a sample could not be evaluated."""
     mc = facts["monte_carlo"]
 
-    lines = [(f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
+    lines = [_box_line(facts["tolerance"]), "", (f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
               f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
               + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the "
                  "nominal point alone)" if mc.get("envelope") else "")) if mc["samples"] else

@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args
 
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
-from synthesis.spec.common import (POSITIVE, Starts,
+from synthesis.spec.common import (NON_NEGATIVE, POSITIVE, Starts,
     WITHIN_A_TURN, FreeVariable, Interval, MultistartSettings, ProblemSpec, StrictModel, Variable, bounds_of, is_free,
     max_iter_field, Sign, starts_field, value_of, within_a_turn,
 )
@@ -113,9 +113,9 @@ class MotionSection(StrictModel):
                                                   "clock (0 = the pick; -360 to 360)")
     _angles_within_a_turn = field_validator("rise_start")(within_a_turn)
     rise: Variable = Field(json_schema_extra=POSITIVE, description="rise angle, deg")
-    far_dwell: Variable = Field(description="far dwell angle, deg (follower held at the full stroke)")
+    far_dwell: Variable = Field(json_schema_extra=NON_NEGATIVE, description="far dwell angle, deg (follower held at the full stroke)")
     return_: Variable = Field(alias="return", json_schema_extra=POSITIVE, description="return angle, deg")
-    near_dwell: Variable = Field(description="near dwell angle, deg (follower held at rest)")
+    near_dwell: Variable = Field(json_schema_extra=NON_NEGATIVE, description="near dwell angle, deg (follower held at rest)")
 
     def segments(self) -> dict[str, Variable]:
         return {"rise": self.rise, "far_dwell": self.far_dwell, "return": self.return_,
