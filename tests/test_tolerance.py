@@ -851,5 +851,13 @@ def test_a_near_dwell_the_box_takes_below_zero_is_refused():
                                         r"follows rise, far_dwell, return"):
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 2.0}, box)
     refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 3.0}, box)
+    # a near dwell exactly as wide as the box moves it stands, though 0.1 + 0.1 + 0.1 is 0.30000000000000004
+    small = box_of(lin.dmap, None, 0.1, {})
+    assert lin.dmap.spread(small)[lin.dmap.keys.index("near_dwell")] > 0.3
+    refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 0.3}, small)
+    # a cam without a far dwell: no half-width for every angle holds it, and the message says what does
+    with pytest.raises(SpecError, match=r"a far_dwell of 0 cannot move down, so no half-width for every angle holds "
+                                        r"it: give the others theirs one by one \(--tol NAME=V, tolerance.variables\)"):
+        refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.0}, box)
     with pytest.raises(SpecError, match=r"reaches -0.5 deg for far_dwell \(0.5 deg \+- 1\), which must be >= 0"):
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.5}, box)

@@ -815,3 +815,32 @@ def test_a_half_width_of_the_near_dwell_is_refused_by_every_command_and_a_solves
     assert run.returncode == 2, run.stderr
     assert ("[tolerance] +-3 deg on near_dwell: its value 2 deg does not keep the box inside >= 0 (the value must lie "
             "at or above 3): give rise, far_dwell, return (which near_dwell follows) smaller half-widths") in run.stderr
+    # the library's robust cam: a box of lengths alone moves no segment, and nothing says the near dwell follows
+    run = agrisynth("solve", str(LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml"), "--starts", "1",
+                    "--out", str(tmp_path / "r"), cwd=tmp_path)
+    assert run.returncode in (0, 1), run.stderr
+    facts = strict_json(tmp_path / "r" / "opening_cam_robust_redesign" / "result.json")["facts"]["tolerance"]
+    assert "follows" not in facts and facts["box"]["near_dwell"] == 0.0
+    assert "put it" not in facts["monte_carlo"]["distribution"]
+
+
+@pytest.mark.parametrize("follows", [5, ["near_dwell"], "near_dwell", {"near_dwell": 5}, None,
+                                     {"near_dwell": {"rise": -1.0, "far_dwell": -1.0, "return": -1.0}}])
+@pytest.mark.parametrize("box", [5, {"base_radius": "x", "near_dwell": 3.0}, {"base_radius": 0.2, "near_dwell": 3.0}])
+def test_a_hand_edited_tolerance_box_or_follows_never_breaks_the_page(follows, box):
+    """`compare` takes hand-edited results: a box or follows that is not a table of numbers is left out of the
+    tolerance section (a TypeError traceback before), a well-formed one is shown."""
+    from synthesis.report.page import tolerance_section
+    from synthesis.report.tables import Candidate
+
+    tolerance = {"box": box, "monte_carlo": {"samples": 10, "seed": 0, "distribution": "uniform", "pass_rate": 1.0,
+                                             "rules": {}}}
+    if follows is not None:
+        tolerance["follows"] = follows
+    result = SimpleNamespace(extra={"tolerance": tolerance}, design_variables={})
+    text = tolerance_section([Candidate("a", result)])
+    assert "pass every rule" in text
+    if isinstance(box, dict) and box.get("base_radius") == 0.2:
+        assert "base_radius ±0.2" in text and "near_dwell ±3" in text
+    shown = isinstance(follows, dict) and isinstance(follows.get("near_dwell"), dict) and isinstance(box, dict)
+    assert ("(follows rise, far_dwell, return)" in text) == shown and ("(follows" in text) == shown

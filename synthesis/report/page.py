@@ -273,10 +273,12 @@ def tolerance_section(cands: list[Candidate]) -> str:
         if not isinstance(mc, dict):
             continue
         info = c.result.design_variables or {}
-        follows = tol.get("follows") or {}
+        # a hand-edited result may hold anything here: what is not a table of numbers is left out
+        follows = tol.get("follows") if isinstance(tol.get("follows"), dict) else {}
+        widths = tol.get("box") if isinstance(tol.get("box"), dict) else {}
         box = ", ".join(f"{k} ±{v:g}" + (f" {info[k]['unit']}" if (info.get(k) or {}).get("unit") else "")
-                        + (f" (follows {', '.join(follows[k])})" if k in follows else "")
-                        for k, v in (tol.get("box") or {}).items() if v)
+                        + (f" (follows {', '.join(map(str, follows[k]))})" if isinstance(follows.get(k), dict) else "")
+                        for k, v in widths.items() if isinstance(v, (int, float)) and not isinstance(v, bool) and v)
         rate = mc.get("pass_rate")
         rows = "".join(f"<tr><td>{html.escape(n)}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"
                        f"<td class='num'>{_num(r.get('worst_margin'))}</td></tr>"

@@ -379,8 +379,10 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         offsets = offsets @ dmap.moves.T
     t0 = time.perf_counter()
     checked = check_samples(solving, setting, design, dmap.keys, offsets, workers)
+    moved = dmap.spread(box)
     within = "uniform in the tolerance box" + "".join(
-        f" ({dmap.keys[j]} where {', '.join(dmap.keys[k] for k in others)} put it)" for j, others in dmap.followers.items())
+        f" ({dmap.keys[j]} where {', '.join(dmap.keys[k] for k in others)} put it)"
+        for j, others in dmap.followers.items() if moved[j] > 0)
     out = {"samples": samples, "seed": seed, "distribution": within,
            **tally(checked, samples), "unevaluable_reasons": unevaluable_reasons(checked),
            "wall_s": time.perf_counter() - t0}

@@ -165,15 +165,15 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
 def box_fits(lo: float, hi: float, width: float, acute: bool, zero_allowed: bool = False) -> bool:
     """Whether some value in [lo, hi] keeps its box [v - width, v + width] inside the range the kind holds the
     variable to: > 0, >= 0 (``zero_allowed``: a dwell), or (0, 90) deg for an acute one.  One design is lo = hi."""
-    if zero_allowed:
-        return hi >= width
+    if zero_allowed:        # a width summed from others' (a follower's) may carry their rounding: 0.1 x 3 > 0.3
+        return hi - width >= -1e-12 * max(1.0, width)
     top = 90.0 - width if acute else float("inf")
     return max(lo, width) < min(hi, top) or (lo == hi and width < lo < top)
 
 
 def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -> None:
     """A half-width that reaches zero or below for a variable the kind holds > 0 (a link length, a radius, a speed),
-    or 90 deg or beyond for one it holds acute, is refused
+    below zero for one it holds >= 0 (a cam's dwell), or 90 deg or beyond for one it holds acute, is refused
     (SpecError naming it): such a sample is no design of the kind, yet its rules could be evaluated and counted (a
     planting arm at +-1000 mm had links of -1865 mm, and its depth held in 5 % of the samples)."""
     positive, acute, non_negative = positive_variables(spec), acute_variables(spec), non_negative_variables(spec)
@@ -185,13 +185,17 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
                 or not (is_acute or zero_allowed or key in positive or name in positive)
                 or box_fits(value, value, width, is_acute, zero_allowed)):
             continue
-        # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive value's 0
+        # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive or non-negative value's 0
         room = min(value, 90.0 - value) if is_acute else value
         low = value - width <= 0
-        remedy = (f"give it a half-width {'of at most' if zero_allowed else 'below'} {room:g} {unit}"
-                  if j not in dmap.followers else
-                  f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
-                  f"{width:g} {unit} in the box: give them smaller half-widths")
+        if j in dmap.followers:
+            remedy = (f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
+                      f"{width:g} {unit} in the box: give them smaller half-widths")
+        elif zero_allowed and room == 0:     # no half-width of 0 is taken: the box must leave it out
+            remedy = (f"a {key} of 0 cannot move down, so no half-width for every {'angle' if unit == 'deg' else 'length'}"
+                      f" holds it: give the others theirs one by one (--tol NAME=V, tolerance.variables)")
+        else:
+            remedy = f"give it a half-width {'of at most' if zero_allowed else 'below'} {room:g} {unit}"
         limit = ">= 0" if zero_allowed else "> 0" if low else "< 90"
         raise SpecError(f"tolerance: the box reaches {value - width if low else value + width:g} {unit} for {key} "
                         f"({value:g} {unit} +- {width:g}), which must be {limit}: {remedy}")
@@ -229,6 +233,9 @@ def refuse_box_outside_bounds(spec, design_unit: str, where, follows: dict[str, 
                   else f"at or above {width:g}" if name in non_negative else f"above {width:g}")
         limit = "(0, 90)" if name in acute else ">= 0" if name in non_negative else "> 0"
         remedy = (f"give {', '.join(follows[name])} (which {name} follows) smaller half-widths" if name in follows
+                  else f"give the other variables their half-widths one by one (tolerance.variables) instead of "
+                       f"one for every {'angle' if entry['unit'] == 'deg' else 'length'}, leaving {name} (0 cannot "
+                       f"move down) out" if name in non_negative and hi == 0
                   else f"give {name} a smaller half-width (tolerance.variables)")
         raise SpecError(f"{where}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
                         f"{limit} (the value must lie {inside}): {remedy} or {'bounds' if entry['free'] else 'a value'} "

@@ -81,7 +81,8 @@ def full_table(facts: dict) -> str:
     conditions, the explanation of every linear-vs-sampled gap and every reason a sample could not be evaluated."""
     mc = facts["monte_carlo"]
 
-    lines = [_box_line(facts["tolerance"]), "", (f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
+    box = _box_line(facts["tolerance"])
+    lines = [*([box, ""] if box else []), (f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
               f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
               + (f" at every operating point ({100 * (mc['envelope']['pass_rate_at_nominal'] or 0):.2f} % at the "
                  "nominal point alone)" if mc.get("envelope") else "")) if mc["samples"] else
@@ -145,7 +146,8 @@ def table(facts: dict) -> str:
     mc, rows = facts["monte_carlo"], facts["stack_up"]
     failing = failing_rules(facts)
     shown = _shown_rules(rows, failing)
-    lines = [_verdict_line(facts, failing, [r["name"] for r in shown]), _box_line(facts["tolerance"]), _monte_carlo_line(mc), ""]
+    box = _box_line(facts["tolerance"])
+    lines = [_verdict_line(facts, failing, [r["name"] for r in shown]), *([box] if box else []), _monte_carlo_line(mc), ""]
     lines += _rule_lines(shown, failing, mc["samples"])
     if len(rows) > len(shown):
         lines.append(f"({len(rows) - len(shown)} more rule(s) in report.md)")
@@ -212,8 +214,8 @@ def _box_line(tolerance: dict) -> str:
             groups.setdefault((t["half_width"], t["unit"]), []).append(key)
     followers = [f"{key} follows {', '.join(t['follows'])} (±{t['half_width']:g} {t['unit']}".rstrip() + ")"
                  for key, t in tolerance.items() if "follows" in t and t["half_width"]]
-    return "Box: " + "; ".join([f"±{w:g} {u}".rstrip() + f" on {', '.join(keys)}" for (w, u), keys in groups.items()]
-                               + followers)
+    parts = [f"±{w:g} {u}".rstrip() + f" on {', '.join(keys)}" for (w, u), keys in groups.items()] + followers
+    return "Box: " + "; ".join(parts) if parts else ""
 
 
 def _monte_carlo_line(mc: dict) -> str:

@@ -112,17 +112,17 @@ class RobustBuild:
         return nlp
 
 
-def _follows(dmap: DesignMap) -> dict:
+def _follows(dmap: DesignMap, box) -> dict:
     """result.json ``facts.tolerance.follows`` where the box moves a variable only with others (its ``box`` entry is
-    how far they move it): variable -> {other: d variable / d other}; nothing without such a variable."""
-    if not dmap.followers:
-        return {}
-    return {"follows": {dmap.keys[j]: {dmap.keys[k]: c for k, c in others.items()}
-                        for j, others in dmap.followers.items()}}
+    how far they move it): variable -> {other: d variable / d other}; nothing where the box moves no such variable."""
+    moved = dmap.spread(box)
+    follows = {dmap.keys[j]: {dmap.keys[k]: c for k, c in others.items()}
+               for j, others in dmap.followers.items() if moved[j] > 0}
+    return {"follows": follows} if follows else {}
 
 
 def _box_outside(spec, dmap: DesignMap, design: dict, box) -> str | None:
-    """Why the answer's box reaches beyond a limit the spec holds a variable to (> 0, an acute angle's (0, 90)),
+    """Why the answer's box reaches beyond a limit the spec holds a variable to (> 0, >= 0, an acute angle's (0, 90)),
     in :func:`~synthesis.tolerance.design.refuse_crossing_zero`'s words; None when it stays inside."""
     try:
         refuse_crossing_zero(spec, dmap, design, box)
@@ -160,7 +160,7 @@ class RobustFinish:
                 # checks its answer in full
                 mc = {"samples": 0, "seed": tol.seed, "distribution": "not run: the solve was interrupted; "
                       "`agrisynth solve SPEC --resume RUN_DIR` finishes the run, this check with it", "pass_rate": None, "rules": {}}
-                facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, **_follows(dmap),
+                facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, **_follows(dmap, box),
                                       "monte_carlo": mc, "held_at": "not checked: the solve was interrupted"}
                 return dataclasses.replace(finished, facts=facts)
             outside = _box_outside(spec, dmap, design, box)
@@ -171,7 +171,7 @@ class RobustFinish:
             # the linearisation reads the rules at the answer: its design and whatever else it holds that the NLP's
             # auxiliaries are (the crank angles of its targets, say: KindNLP.answer_start)
             design = {**best.outcome.details, **best.outcome.design, **design}
-            facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, **_follows(dmap),
+            facts["tolerance"] = {"box": {k: float(b) for k, b in zip(names, dmap.spread(box))}, **_follows(dmap, box),
                                   "monte_carlo": mc, "held_at": "linearised worst case of every rule row in the box"}
             # the promise of a robust solve, checked on the answer: every rule at its linearised worst case
             # in the box (exact derivatives, the analysis grid); a miss makes the run "failed" (core)
