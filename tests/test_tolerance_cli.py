@@ -791,6 +791,7 @@ def test_a_fixed_length_whose_robust_box_reaches_zero_is_refused_naming_its_valu
                                  f"or a value further from the limit")
 
 
+@pytest.mark.slow         # 6 s: five commands and a solve
 def test_a_half_width_of_the_near_dwell_is_refused_by_every_command_and_a_solves_box_sees_it_follow(tmp_path):
     """The near dwell closes the cam's turn: tolerance.variables or --tol giving it a half-width of its own is bad
     input in check, solve and tolerance alike (check ran on, solve refused); a [tolerance] angle that would carry a
