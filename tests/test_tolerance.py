@@ -857,7 +857,8 @@ def test_a_near_dwell_the_box_takes_below_zero_is_refused():
     refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 0.3}, small)
     # a cam without a far dwell: no half-width for every angle holds it, and the message says what does
     with pytest.raises(SpecError, match=r"a far_dwell of 0 cannot move down, so no half-width for every angle holds "
-                                        r"it: give the others theirs one by one \(--tol NAME=V, tolerance.variables\)"):
+                                        r"it: leave it out of the box, giving the others theirs one by one \(--tol NAME=V, "
+                                        r"tolerance.variables\)"):
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.0}, box)
     with pytest.raises(SpecError, match=r"reaches -0.5 deg for far_dwell \(0.5 deg \+- 1\), which must be >= 0"):
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.5}, box)

@@ -192,8 +192,9 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
             remedy = (f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
                       f"{width:g} {unit} in the box: give them smaller half-widths")
         elif zero_allowed and room == 0:     # no half-width of 0 is taken: the box must leave it out
-            remedy = (f"a {key} of 0 cannot move down, so no half-width for every {'angle' if unit == 'deg' else 'length'}"
-                      f" holds it: give the others theirs one by one (--tol NAME=V, tolerance.variables)")
+            every = "angle" if unit == "deg" else "length"
+            remedy = (f"a {key} of 0 cannot move down, so no half-width for every {every} holds it: leave it out of "
+                      f"the box, giving the others theirs one by one (--tol NAME=V, tolerance.variables)")
         else:
             remedy = f"give it a half-width {'of at most' if zero_allowed else 'below'} {room:g} {unit}"
         limit = ">= 0" if zero_allowed else "> 0" if low else "< 90"
