@@ -5,6 +5,7 @@ with a closed-form answer."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import casadi as ca
@@ -855,6 +856,14 @@ def test_a_near_dwell_the_box_takes_below_zero_is_refused():
     small = box_of(lin.dmap, None, 0.1, {})
     assert lin.dmap.spread(small)[lin.dmap.keys.index("near_dwell")] > 0.3
     refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 0.3}, small)
+    # a cam without a near dwell: any width on the segments it follows moves it below 0, so they must stay out
+    with pytest.raises(SpecError, match=r"it follows rise, far_dwell, return, and a near_dwell of 0 cannot move down: "
+                                        r"leave them out of the box"):
+        refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "near_dwell": 0.0}, small)
+    # a box that moves no segment says nothing of the near dwell following them
+    from synthesis.tolerance.analysis import tolerance_table
+    lengths_only = box_of(lin.dmap, 0.2, None, {})
+    assert "follows" not in tolerance_table(lin.dmap, lengths_only)["near_dwell"]
     # a cam without a far dwell: no half-width for every angle holds it, and the message says what does
     with pytest.raises(SpecError, match=r"a far_dwell of 0 cannot move down, so no half-width for every angle holds "
                                         r"it: leave it out of the box, giving the others theirs one by one \(--tol NAME=V, "
@@ -862,3 +871,28 @@ def test_a_near_dwell_the_box_takes_below_zero_is_refused():
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.0}, box)
     with pytest.raises(SpecError, match=r"reaches -0.5 deg for far_dwell \(0.5 deg \+- 1\), which must be >= 0"):
         refuse_crossing_zero(loaded.model, lin.dmap, {**lin.design, "far_dwell": 0.5}, box)
+
+
+def test_a_robust_box_on_a_dwell_of_zero_is_refused_saying_to_leave_it_out(tmp_path):
+    """No half-width of 0 is taken, so a [tolerance] box can hold a 0 deg dwell only by leaving it -- or, for the near
+    dwell, the segments it follows -- out: the pre-solve refusal says so, whatever gave the width."""
+    from synthesis.errors import SpecError
+    from synthesis.tolerance.design import refuse_box_outside_bounds
+
+    robust = (LIBRARY / "clamp_cam" / "opening_cam_robust_redesign.toml").read_text()
+    follows = kinds.get("clamp_cam").follows
+    cases = [("far_dwell = 160.0", "far_dwell = 0.0", "near_dwell = 146.0", "near_dwell = 306.0",
+              "variables = { far_dwell = 0.5,",
+              "leave far_dwell out of the box (0 cannot move down), giving the others their half-widths one by one"),
+             ("far_dwell = 160.0", "far_dwell = 306.0", "near_dwell = 146.0", "near_dwell = 0.0",
+              "angle = 0.1\nvariables = {",
+              "leave rise, far_dwell, return (which near_dwell follows) out of the box, giving the others")]
+    for k, (a, b, c, d, table, said) in enumerate(cases):
+        path = tmp_path / f"zero{k}.toml"
+        path.write_text(robust.replace(a, b).replace(c, d).replace("variables = {", table)
+                        .replace("hold_far = [[186.0, 346.0]]", "hold_far = [[186.0, 186.0]]" if k == 0 else
+                                 "hold_far = [[186.0, 346.0]]").replace("hold_near = [[0.0, 146.0]]",
+                                                                      "hold_near = [[0.0, 0.0]]" if k == 1 else
+                                                                      "hold_near = [[0.0, 146.0]]"))
+        with pytest.raises(SpecError, match=re.escape(said)):
+            refuse_box_outside_bounds(load_spec(path).model, "", path, follows)

@@ -835,12 +835,18 @@ def test_a_hand_edited_tolerance_box_or_follows_never_breaks_the_page(follows, b
     from synthesis.report.tables import Candidate
 
     tolerance = {"box": box, "monte_carlo": {"samples": 10, "seed": 0, "distribution": "uniform", "pass_rate": 1.0,
-                                             "rules": {}}}
+                                             "rules": {"no_undercut": {"pass_rate": 0.5, "worst_margin": -1.0},
+                                                       "bad": 5, "worse": {"pass_rate": "x"}}}}
     if follows is not None:
         tolerance["follows"] = follows
     result = SimpleNamespace(extra={"tolerance": tolerance}, design_variables={})
     text = tolerance_section([Candidate("a", result)])
-    assert "pass every rule" in text
+    assert "pass every rule" in text and "<td>no_undercut</td><td class='num'>50.00 %</td>" in text
+    assert "<td>bad</td>" not in text and "<td>worse</td><td class='num'>&ndash;</td>" in text
+    # the rest of the check hand-edited too: a list of rules, a pass rate of text, unescaped counts
+    tolerance["monte_carlo"].update(rules=["no_undercut"], pass_rate="x", samples="<b>", unevaluable="<i>")
+    text = tolerance_section([Candidate("a", result)])
+    assert "<b>&ndash;</b> pass every rule" in text and "&lt;b&gt; samples" in text and "&lt;i&gt; sample(s)" in text
     if isinstance(box, dict) and box.get("base_radius") == 0.2:
         assert "base_radius ±0.2" in text and "near_dwell ±3" in text
     shown = isinstance(follows, dict) and isinstance(follows.get("near_dwell"), dict) and isinstance(box, dict)

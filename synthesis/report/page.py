@@ -280,22 +280,28 @@ def tolerance_section(cands: list[Candidate]) -> str:
                         + (f" (follows {', '.join(map(str, follows[k]))})" if isinstance(follows.get(k), dict) else "")
                         for k, v in widths.items() if isinstance(v, (int, float)) and not isinstance(v, bool) and v)
         rate = mc.get("pass_rate")
-        rows = "".join(f"<tr><td>{html.escape(n)}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"
+        rules = mc.get("rules") if isinstance(mc.get("rules"), dict) else {}
+        rows = "".join(f"<tr><td>{html.escape(str(n))}</td><td class='num'>{_rate(r.get('pass_rate'))}</td>"
                        f"<td class='num'>{_num(r.get('worst_margin'))}</td></tr>"
-                       for n, r in (mc.get("rules") or {}).items())
+                       for n, r in rules.items() if isinstance(r, dict))
         label = f"<b>{html.escape(c.label)}</b>: " if len(cands) > 1 else ""
+        unevaluable = mc.get("unevaluable")
         parts.append(
-            f"<p>{label}Monte-Carlo check of the answer: {mc.get('samples')} samples (seed {mc.get('seed')}, "
+            f"<p>{label}Monte-Carlo check of the answer: {html.escape(str(mc.get('samples')))} samples (seed "
+            f"{html.escape(str(mc.get('seed')))}, "
             f"{html.escape(str(mc.get('distribution', '')))}{'; box ' + html.escape(box) if box else ''}): "
             f"<b>{_rate(rate)}</b> pass every rule"
-            + (f"; {mc['unevaluable']} sample(s) could not be evaluated" if mc.get("unevaluable") else "") + ".</p>"
+            + (f"; {html.escape(str(unevaluable))} sample(s) could not be evaluated" if unevaluable else "") + ".</p>"
             f"<table class='tolerance'><tr><th>rule</th><th>MC pass rate</th><th>worst sampled margin</th></tr>"
             f"<tr><td><i>all rules</i></td><td class='num'>{_rate(rate)}</td><td></td></tr>{rows}</table>")
     return "<h2>Tolerance</h2>\n" + "\n".join(parts) if parts else ""
 
 
 def _rate(rate) -> str:
-    return "&ndash;" if rate is None else f"{100 * rate:.2f} %"
+    """A pass rate as a percentage; "-" for none, or for anything a hand-edited result put there that is no number."""
+    if not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate):
+        return "&ndash;"
+    return f"{100 * rate:.2f} %"
 
 
 def render(cands: list[Candidate], figures: list[tuple[str, str]], notes: list[str], title: str,

@@ -516,11 +516,12 @@ def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
 
 def tolerance_table(dmap: DesignMap, box: np.ndarray) -> dict:
     """result.json ``tolerance``: each variable's half-width and unit; a follower's is how far the box moves it, with
-    ``follows`` (other -> d follower / d other)."""
+    ``follows`` (other -> d follower / d other) where that is more than 0."""
     spread = dmap.spread(box)
     out: dict = {key: {"half_width": float(b), "unit": u} for key, b, u in zip(dmap.keys, spread, dmap.units)}
     for j, others in dmap.followers.items():
-        out[dmap.keys[j]]["follows"] = {dmap.keys[k]: c for k, c in others.items()}
+        if spread[j] > 0:           # as a robust solve's facts.tolerance.follows: only where the box moves it
+            out[dmap.keys[j]]["follows"] = {dmap.keys[k]: c for k, c in others.items()}
     return out
 
 

@@ -188,11 +188,15 @@ def refuse_crossing_zero(spec, dmap: DesignMap, design: dict, box: np.ndarray) -
         # the half-width both ends allow: an acute angle's nearer end of (0, 90), a positive or non-negative value's 0
         room = min(value, 90.0 - value) if is_acute else value
         low = value - width <= 0
+        every = "angle" if unit == "deg" else "length"
         if j in dmap.followers:
-            remedy = (f"it follows {', '.join(dmap.keys[k] for k in dmap.followers[j])}, which move it by up to "
-                      f"{width:g} {unit} in the box: give them smaller half-widths")
+            drivers = ", ".join(dmap.keys[k] for k in dmap.followers[j])
+            remedy = (f"it follows {drivers}, which move it by up to {width:g} {unit} in the box: give them smaller "
+                      f"half-widths" if room > 0 else
+                      # no half-width of 0 is taken, and any other moves it below 0: the box must leave them out
+                      f"it follows {drivers}, and a {key} of 0 cannot move down: leave them out of the box, giving "
+                      f"the others their half-widths one by one (--tol NAME=V, tolerance.variables)")
         elif zero_allowed and room == 0:     # no half-width of 0 is taken: the box must leave it out
-            every = "angle" if unit == "deg" else "length"
             remedy = (f"a {key} of 0 cannot move down, so no half-width for every {every} holds it: leave it out of "
                       f"the box, giving the others theirs one by one (--tol NAME=V, tolerance.variables)")
         else:
@@ -233,11 +237,17 @@ def refuse_box_outside_bounds(spec, design_unit: str, where, follows: dict[str, 
         inside = (f"between {width:g} and {90.0 - width:g}" if name in acute
                   else f"at or above {width:g}" if name in non_negative else f"above {width:g}")
         limit = "(0, 90)" if name in acute else ">= 0" if name in non_negative else "> 0"
-        remedy = (f"give {', '.join(follows[name])} (which {name} follows) smaller half-widths" if name in follows
-                  else f"give the other variables their half-widths one by one (tolerance.variables) instead of "
-                       f"one for every {'angle' if entry['unit'] == 'deg' else 'length'}, leaving {name} (0 cannot "
-                       f"move down) out" if name in non_negative and hi == 0
-                  else f"give {name} a smaller half-width (tolerance.variables)")
+        at_zero = name in non_negative and hi == 0        # 0 cannot move down: no half-width holds it
+        if name in follows:
+            drivers = ", ".join(follows[name])
+            remedy = (f"leave {drivers} (which {name} follows) out of the box, giving the others their half-widths "
+                      f"one by one (tolerance.variables)" if at_zero
+                      else f"give {drivers} (which {name} follows) smaller half-widths")
+        elif at_zero:
+            remedy = (f"leave {name} out of the box (0 cannot move down), giving the others their half-widths one by "
+                      f"one (tolerance.variables)")
+        else:
+            remedy = f"give {name} a smaller half-width (tolerance.variables)"
         raise SpecError(f"{where}: [tolerance] +-{width:g} {entry['unit']} on {name}: {which} the box inside "
                         f"{limit} (the value must lie {inside}): {remedy} or {'bounds' if entry['free'] else 'a value'} "
                         f"further from the limit")
