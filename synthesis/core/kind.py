@@ -252,6 +252,13 @@ class ResultTable:
     rows: tuple[tuple, ...]
 
 
+def own_half_width_refused(follower: str, others) -> str:
+    """Why a tolerance box takes no half-width of a variable others determine (:attr:`Kind.follows`), in every
+    command's words."""
+    return (f"{follower} follows {', '.join(others)} (the kind holds it to them): its half-width is theirs, so give "
+            f"theirs and not its own")
+
+
 @dataclass(frozen=True)
 class FixedBy:
     """What fixes a rule's value where no design variable moves it (:attr:`Kind.fixed_by`)."""

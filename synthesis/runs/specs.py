@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from synthesis import kinds
+from synthesis.core.kind import own_half_width_refused
 from synthesis.errors import AgrisynthError, AssemblyError, SpecError
 from synthesis.library import LIBRARY, library_spec
 from synthesis.runs.events import Note, SpecFromLibrary, Subscriber
@@ -33,9 +34,7 @@ def followers_named(kind_name: str, names: list[str], where: str) -> None:
     follows = kinds.get(kind_name).follows
     named = [n for n in names if n in follows]
     if named:
-        n = named[0]
-        raise SpecError(f"{where}: {n} follows {', '.join(follows[n])} (the kind holds it to them): its half-width is "
-                        f"theirs, so give theirs and not its own")
+        raise SpecError(f"{where}: {own_half_width_refused(named[0], follows[named[0]])}")
 
 
 def unknown_design_variables(model, names: list[str], where: str) -> None:

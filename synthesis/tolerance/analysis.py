@@ -107,14 +107,12 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
     # moves on their own, each rule's derivative in them the chain rule's (J T); its sensitivities stay J's own
     T = lin.dmap.moves if lin.dmap.followers else None
     for k, rule in enumerate(lin.rules):
-        values, J = lin.rule_jacobian(k)
+        values, own = lin.rule_jacobian(k)
+        J = own if T is None else own @ T
         lower, upper = rule.lower, rule.upper
-        i_nom = int(np.argmin(linear_worst(values, lower, upper, J, box)[0]))
-        gradient = J[i_nom]                                     # its derivative at its worst sample
-        if T is not None:
-            J = J @ T
         nominal, worst = linear_worst(values, lower, upper, J, box)
-        value = float(values[i_nom])                               # the value at its worst sample
+        i_nom = int(np.argmin(nominal))
+        value, gradient = float(values[i_nom]), own[i_nom]       # the value at its worst sample, its own derivative
         if lin.held is not None and rule.rows_are_the_rule:        # the worst case on the rows the NLP holds
             values, J = lin.held[0][lin.held[2][k]], lin.held[1][lin.held[2][k]]
             J = J if T is None else J @ T
@@ -379,10 +377,8 @@ def monte_carlo(kind: Kind, spec, design: dict, dmap: DesignMap, box: np.ndarray
         offsets = offsets @ dmap.moves.T
     t0 = time.perf_counter()
     checked = check_samples(solving, setting, design, dmap.keys, offsets, workers)
-    moved = dmap.spread(box)
     within = "uniform in the tolerance box" + "".join(
-        f" ({dmap.keys[j]} where {', '.join(dmap.keys[k] for k in others)} put it)"
-        for j, others in dmap.followers.items() if moved[j] > 0)
+        f" ({key} where {', '.join(others)} put it)" for key, others in dmap.moved_followers(box).items())
     out = {"samples": samples, "seed": seed, "distribution": within,
            **tally(checked, samples), "unevaluable_reasons": unevaluable_reasons(checked),
            "wall_s": time.perf_counter() - t0}
@@ -517,11 +513,9 @@ def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
 def tolerance_table(dmap: DesignMap, box: np.ndarray) -> dict:
     """result.json ``tolerance``: each variable's half-width and unit; a follower's is how far the box moves it, with
     ``follows`` (other -> d follower / d other) where that is more than 0."""
-    spread = dmap.spread(box)
-    out: dict = {key: {"half_width": float(b), "unit": u} for key, b, u in zip(dmap.keys, spread, dmap.units)}
-    for j, others in dmap.followers.items():
-        if spread[j] > 0:           # as a robust solve's facts.tolerance.follows: only where the box moves it
-            out[dmap.keys[j]]["follows"] = {dmap.keys[k]: c for k, c in others.items()}
+    out: dict = {key: {"half_width": float(b), "unit": u} for key, b, u in zip(dmap.keys, dmap.spread(box), dmap.units)}
+    for key, others in dmap.moved_followers(box).items():      # as a robust solve's facts.tolerance.follows
+        out[key]["follows"] = others
     return out
 
 

@@ -11,7 +11,7 @@ import numpy as np
 from pydantic import BaseModel
 
 from synthesis.core.ipopt import NLPOutcome, answered_by, compiled_in
-from synthesis.core.kind import Kind
+from synthesis.core.kind import Kind, own_half_width_refused
 from synthesis.core.verdict import FINE
 from synthesis.spec.design_info import acute_variables, describe, non_negative_variables, positive_variables
 from synthesis.errors import SpecError
@@ -99,16 +99,24 @@ class DesignMap:
             out[j] = sum(abs(c) * float(box[k]) for k, c in others.items())
         return out
 
+    def moved_followers(self, box: np.ndarray) -> dict[str, dict[str, float]]:
+        """The followers the box moves (:meth:`spread` above 0), by result key: follower -> {other: d follower /
+        d other} (result.json's ``follows``, the Monte-Carlo's note)."""
+        moved = self.spread(box)
+        return {self.keys[j]: {self.keys[k]: c for k, c in others.items()}
+                for j, others in self.followers.items() if moved[j] > 0}
+
     def coordinates(self, d: np.ndarray) -> np.ndarray:
         return np.linalg.solve(self.J, np.asarray(d, float) - self.d0)
 
 
-def followers_of(kind: Kind, keys: list[str]) -> dict[int, dict[int, float]]:
-    """:attr:`Kind.follows` by index into ``keys`` (result keys), for the followers whose variables are all there."""
+def followers_of(follows: dict[str, dict[str, float]], keys: list[str]) -> dict[int, dict[int, float]]:
+    """A kind's :attr:`~synthesis.core.kind.Kind.follows` by index into ``keys`` (result keys), for the followers whose
+    variables are all there."""
     out = {}
-    for follower, others in kind.follows.items():
-        if any(k in kind.follows for k in others):     # a kind's definition, never a user's input
-            raise ValueError(f"kind {kind.name}: {follower} follows a variable that follows others")
+    for follower, others in follows.items():
+        if any(k in follows for k in others):     # a kind's definition, never a user's input
+            raise ValueError(f"follows: {follower} follows a variable that follows others")
         if follower in keys and all(k in keys for k in others):
             out[keys.index(follower)] = {keys.index(k): float(c) for k, c in others.items()}
     return out
@@ -121,7 +129,7 @@ def design_map(kind: Kind, nlp, spec) -> DesignMap:
     keys = spec_keys(names, info)
     units = [info[k]["unit"] if k in info else kind.design_unit for k in keys]
     d0, J = kind.design_affine(spec, len(names))
-    return DesignMap(names, keys, units, d0, J, followers_of(kind, keys))
+    return DesignMap(names, keys, units, d0, J, followers_of(kind.follows, keys))
 
 
 def half_width(names, unit: str, length: float | None, angle: float | None,
@@ -148,8 +156,7 @@ def box_of(dmap: DesignMap, length: float | None, angle: float | None, per_varia
     for j, others in dmap.followers.items():
         given = [n for n in (dmap.keys[j], dmap.names[j]) if n in per_variable]
         if given:
-            raise SpecError(f"tolerance: {given[0]} follows {', '.join(dmap.keys[k] for k in others)} (the kind holds "
-                            f"it to them): its half-width is theirs, so give theirs and not its own")
+            raise SpecError(f"tolerance: {own_half_width_refused(given[0], [dmap.keys[k] for k in others])}")
     box = [0.0 if j in dmap.followers else half_width((key, name), unit, length, angle, per_variable)
            for j, (name, key, unit) in enumerate(zip(dmap.names, dmap.keys, dmap.units))]
     if not any(box) and (length or angle):
@@ -219,16 +226,16 @@ def refuse_box_outside_bounds(spec, design_unit: str, where, follows: dict[str, 
     info = describe(spec)
     positive, acute, non_negative = positive_variables(spec), acute_variables(spec), non_negative_variables(spec)
     values = spec.variables()
-    follows = {n: others for n, others in (follows or {}).items() if n in info and all(k in info for k in others)}
-
-    def width_of(name: str) -> float:
-        if name in follows:
-            return sum(abs(c) * width_of(k) for k, c in follows[name].items())
-        return half_width((name,), info[name]["unit"] or design_unit, tol.length, tol.angle, dict(tol.variables))
-
+    names = list(info)
+    units = [info[n]["unit"] or design_unit for n in names]
+    dmap = DesignMap(names, names, units, np.zeros(len(names)), np.eye(len(names)), followers_of(follows or {}, names))
+    followed = {names[j]: [names[k] for k in others] for j, others in dmap.followers.items()}
+    widths = dict(zip(names, dmap.spread(np.array([
+        0.0 if j in dmap.followers else half_width((n,), u, tol.length, tol.angle, dict(tol.variables))
+        for j, (n, u) in enumerate(zip(names, units))]))))
     for name in [n for n in info if n in positive or n in acute or n in non_negative]:
         entry = info[name]
-        width = width_of(name)
+        width = widths[name]
         lo, hi = entry["bounds"] if entry["free"] else (value_of(values[name]),) * 2
         if width <= 0 or box_fits(lo, hi, width, name in acute, name in non_negative):
             continue
@@ -238,8 +245,8 @@ def refuse_box_outside_bounds(spec, design_unit: str, where, follows: dict[str, 
                   else f"at or above {width:g}" if name in non_negative else f"above {width:g}")
         limit = "(0, 90)" if name in acute else ">= 0" if name in non_negative else "> 0"
         at_zero = name in non_negative and hi == 0        # 0 cannot move down: no half-width holds it
-        if name in follows:
-            drivers = ", ".join(follows[name])
+        if name in followed:
+            drivers = ", ".join(followed[name])
             remedy = (f"leave {drivers} (which {name} follows) out of the box, giving the others their half-widths "
                       f"one by one (tolerance.variables)" if at_zero
                       else f"give {drivers} (which {name} follows) smaller half-widths")

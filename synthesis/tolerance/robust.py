@@ -62,7 +62,7 @@ class _Resolver:
         except AttributeError:        # a map the kind cannot give from the spec alone
             raise unsupported from None
         dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names], d0, J,
-                         followers_of(self.kind, names))
+                         followers_of(self.kind.follows, names))
         tol = self.spec.tolerance
         box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
         # a design entry nothing in the NLP reads (an NLP may keep a fixed variable's entry but compute with its
@@ -115,9 +115,7 @@ class RobustBuild:
 def _follows(dmap: DesignMap, box) -> dict:
     """result.json ``facts.tolerance.follows`` where the box moves a variable only with others (its ``box`` entry is
     how far they move it): variable -> {other: d variable / d other}; nothing where the box moves no such variable."""
-    moved = dmap.spread(box)
-    follows = {dmap.keys[j]: {dmap.keys[k]: c for k, c in others.items()}
-               for j, others in dmap.followers.items() if moved[j] > 0}
+    follows = dmap.moved_followers(box)
     return {"follows": follows} if follows else {}
 
 
@@ -148,7 +146,7 @@ class RobustFinish:
             names = list(info)
             n = len(names)
             dmap = DesignMap(names, names, [info[k]["unit"] or self.kind.design_unit for k in names],
-                             np.zeros(n), np.eye(n), followers_of(self.kind, names))
+                             np.zeros(n), np.eye(n), followers_of(self.kind.follows, names))
             box = box_of(dmap, tol.length, tol.angle, dict(tol.variables))
             design = {k: float(best.outcome.design[k]) for k in names}
             # a signal noted since the starts finished (swallowed inside a CasADi call) stops the run here, before
