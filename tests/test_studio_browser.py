@@ -54,6 +54,17 @@ def wait_for_evaluations(page, more_than: int) -> None:
     page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {more_than}", timeout=30_000)
 
 
+def box_value(page, name: str) -> float:
+    """The exact value a variable's number box holds (data-value); the box itself shows 10 significant digits of
+    it, which this checks."""
+    exact = float(page.get_attribute(f"#number-{name}", "data-value"))
+    shown = page.input_value(f"#number-{name}")
+    digits = shown.lstrip("-").replace(".", "").lstrip("0")
+    assert len(digits.split("e")[0]) <= 10, (name, shown)
+    assert float(shown) == float(f"{exact:.10g}"), (name, shown, exact)
+    return exact
+
+
 def fmt4(v) -> str:
     """The page's number format for a table value: 4 significant digits as JavaScript writes them."""
     if v is None:
@@ -93,7 +104,7 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
                                "document.body.dataset.busy === '0' && document.body.dataset.grid === 'fine'",
                                timeout=30_000)
         grids = page.evaluate("window.__grids")
-        l4 = float(page.input_value("#number-l4"))
+        l4 = box_value(page, "l4")
         assert 64 <= l4 < 72, l4
         assert "coarse" in grids and grids[-1] == "fine", grids
         assert page.get_attribute("#panel-main path[data-line='path (machine frame)']", "d") != path_before
@@ -123,7 +134,7 @@ def test_drag_a_slider_and_the_table_follows_check(tmp_path, sync_playwright):
         count = int(page.get_attribute("body", "data-evaluations"))
         page.click("#reset")
         wait_for_evaluations(page, count)
-        assert float(page.input_value("#number-l4")) == 80.0
+        assert box_value(page, "l4") == 80.0
         assert [(r["name"], r["red"]) for r in page.evaluate(TABLE)] == [(r["name"], r["red"]) for r in baseline]
         # an evaluation the server refuses: no table or drawing of the earlier values beside the new ones
         page.route("**/api/evaluate*", lambda r: r.fulfill(status=500, content_type="application/json",
@@ -173,7 +184,10 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
         page.wait_for_function("() => document.body.dataset.solve === 'finished'", timeout=120_000)
         wait_for_evaluations(page, count)
         state = page.inner_text("#solve-state")
-        values = {v.name: float(page.input_value(f"#number-{v.name}")) for v in studio.session.free}
+        values = {v.name: box_value(page, v.name) for v in studio.session.free}
+        # a solved value has more digits than a box shows: the box rounds it, the page keeps it whole
+        shown = {v.name: page.input_value(f"#number-{v.name}") for v in studio.session.free}
+        assert any(float(shown[n]) != x for n, x in values.items()), (shown, values)
         table = page.evaluate(TABLE)
         page.click("#save")
         page.wait_for_function("() => document.body.dataset.saved", timeout=30_000)
@@ -181,7 +195,7 @@ def test_solve_from_here_ends_where_agrisynth_solve_does(tmp_path, sync_playwrig
         # reloaded, the page opens on the spec's values; the last run is only reported
         page.reload()
         page.wait_for_selector("body[data-ready='1'][data-solve='finished']", timeout=30_000)
-        reloaded = {v.name: float(page.input_value(f"#number-{v.name}")) for v in studio.session.free}
+        reloaded = {v.name: box_value(page, v.name) for v in studio.session.free}
         reload_state = page.inner_text("#solve-state")
         assert seen["left"] == [] and seen["errors"] == []
     assert reloaded == {v.name: v.value for v in studio.session.free} != values
@@ -253,7 +267,7 @@ def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright)
                                "document.body.dataset.busy === '0' && document.body.dataset.grid === 'fine'",
                                timeout=30_000)
         grids = page.evaluate("window.__grids")
-        moved = float(page.input_value("#number-P4_y"))
+        moved = box_value(page, "P4_y")
         given = {v.name: v.value for v in free}
         assert 15 < moved - given["P4_y"] < 25, moved - given["P4_y"]
         assert "coarse" in grids and grids[-1] == "fine", grids
@@ -271,7 +285,7 @@ def test_guide_way_control_points_drag_solve_and_save(tmp_path, sync_playwright)
         wait_for_evaluations(page, count)
         page.wait_for_function("() => document.body.dataset.busy === '0'", timeout=30_000)
         state = page.inner_text("#solve-state")
-        solved_values = {v.name: float(page.input_value(f"#number-{v.name}")) for v in free}
+        solved_values = {v.name: box_value(page, v.name) for v in free}
         solved_table = page.evaluate(TABLE)
         page.evaluate("() => { delete document.body.dataset.saved; }")
         page.click("#save")
@@ -438,7 +452,7 @@ def test_the_drawing_reads_at_a_glance(tmp_path, sync_playwright):
             page.keyboard.press(key)
             page.wait_for_function(f"() => Number(document.body.dataset.evaluations) > {count} && "
                                    "document.body.dataset.busy === '0'", timeout=30_000)
-            assert float(page.input_value("#number-l2")) == expected, key
+            assert box_value(page, "l2") == expected, key
             assert page.get_attribute("body", "data-grid") == "fine"
         # a wider window: the drawing follows (still one px per viewBox unit)
         page.set_viewport_size({"width": 1600, "height": 900})

@@ -130,6 +130,7 @@ function buildSliders() {
       }
       input.value = v.value;
     }
+    showInBox(number, v.value);
     if (!v.free) { range.min = v.value - 1; range.max = v.value + 1; range.value = v.value; }
     if (v.free) {
       range.step = String(step);            // a drag moves by whole steps too
@@ -147,7 +148,7 @@ function buildSliders() {
           ? `${number.value.trim()} lies outside its bounds [${fmt(v.bounds[0])}, ${fmt(v.bounds[1])}]`
           : null;
       if (why) {
-        number.value = state.values[v.name];
+        showInBox(number, state.values[v.name]);
         showError(`${v.name}: ${why}; kept ${fmt(state.values[v.name])}${v.unit ? " " + v.unit : ""}`);
         return;
       }
@@ -188,7 +189,16 @@ function setValue(name, x) {
   const range = document.getElementById(`range-${name}`);
   const number = document.getElementById(`number-${name}`);
   if (Number(range.value) !== x) range.value = x;
-  if (Number(number.value) !== x) number.value = x;
+  showInBox(number, x);
+}
+
+// a number box shows its value to 10 significant digits (28.50732638 mm, not a solve's 28.507326381426154: a
+// tenth of a nanometre is below any drawing); the page computes with the exact value, which the box keeps in
+// data-value (the shortest text that reads back as the same double, as Python's repr writes it)
+const BOX_DIGITS = 10;
+function showInBox(number, x) {
+  number.dataset.value = String(x);
+  number.value = Number.isFinite(x) ? String(Number(x.toPrecision(BOX_DIGITS))) : String(x);
 }
 
 function freeValues() {
