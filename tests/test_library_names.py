@@ -99,6 +99,8 @@ def test_problems_copy_of_a_spec_naming_other_spec_files_copies_them_beside_it_a
     (["--copy", "planting_arm/taiwan_exampel1.toml"], "no such library spec; did you mean planting_arm/taiwan_example1"),
     (["--copy", "../pyproject.toml"], "../pyproject.toml: no such library spec"),
     (["--copy", "taiwan_example1", "--out", "nowhere/x.toml"], "nowhere/x.toml: no folder nowhere to write it in"),
+    # a name ending in / is a folder (pathlib would drop the / and write a file named newd)
+    (["--copy", "taiwan_example1", "--out", "newd/"], "newd/: names a folder (it ends in /) and there is no folder newd"),
     (["--out", "x.toml"], "--out goes with --copy NAME"),
     (["--force"], "--force goes with --copy NAME"),
 ])

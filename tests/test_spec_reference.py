@@ -44,23 +44,57 @@ def test_template_validates_and_checks_like_its_example(kind_name, tmp_path):
     assert kind.example, f"{kind_name}: Kind.example names no library spec to start a template from"
     path = tmp_path / "sub" / "start.toml"
     path.parent.mkdir()
-    path.write_text(specref.template(kind_name, path.parent))
-    loaded = load_spec(path)                                  # validates
-    assert loaded.kind == kind_name and loaded.name == f"my_{kind_name}"
-    # nothing of the example is lost: the same data apart from name and source (spec files re-pointed)
+    result = CliRunner().invoke(cli, ["spec", kind_name, "--template", "--out", str(path)])
+    assert result.exit_code == 0, result.output
+    printed = tmp_path / "elsewhere" / "printed.toml"           # the printed text, saved anywhere
+    printed.parent.mkdir()
+    printed.write_text(specref.template(kind_name))
     example = specref.LIBRARY / kind.example
-    ours, theirs = tomllib.loads(path.read_text()), read_toml(example)[0]
-    for key in ("name", "source"):
-        ours.pop(key), theirs.pop(key, None)
-    for key, _ in specref._spec_file_fields(model):
-        if key in theirs:
-            assert (path.parent / ours.pop(key)).resolve() == (example.parent / theirs.pop(key)).resolve()
-    assert ours == theirs
-    # and `check` runs on it, with the example's rule table
-    rules = kinds.checker(kind_name)(loaded).rules
     expected = kinds.checker(kind_name)(load_spec(example)).rules
-    assert [(r["name"], r["value"], r["satisfied"]) for r in rules] == \
-        [(r["name"], r["value"], r["satisfied"]) for r in expected]
+    for written in (path, printed):
+        loaded = load_spec(written)                               # validates
+        assert loaded.kind == kind_name and loaded.name == f"my_{kind_name}"
+        # nothing of the example is lost: the same data apart from name and source (spec files: beside the file
+        # written, with the library's bytes; the printed text names the library's own)
+        ours, theirs = tomllib.loads(written.read_text()), read_toml(example)[0]
+        for key in ("name", "source"):
+            ours.pop(key), theirs.pop(key, None)
+        for key, _ in specref._spec_file_fields(model):
+            if key in theirs:
+                named, library_file = written.parent / ours.pop(key), example.parent / theirs.pop(key)
+                if written == path:
+                    assert named.parent == path.parent and named.read_bytes() == library_file.read_bytes()
+                else:
+                    assert named == library_file.resolve()
+        assert ours == theirs
+        # and `check` runs on it, with the example's rule table
+        rules = kinds.checker(kind_name)(loaded).rules
+        assert [(r["name"], r["value"], r["satisfied"]) for r in rules] == \
+            [(r["name"], r["value"], r["satisfied"]) for r in expected]
+
+
+def test_a_template_s_spec_files_go_beside_it_and_are_never_replaced(tmp_path):
+    """The picker's template names two linkage specs: written into a folder, they are copied beside it (moved with
+    it, it still checks); a file of one's name that is not the library's stops the template before anything is
+    written; one with the library's bytes is used as it is."""
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    result = CliRunner().invoke(cli, ["spec", "picker", "--template", "--out", str(folder / "p.toml")])
+    assert result.exit_code == 0, result.output
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["cai2020_crank_rocker.toml", "cai2020_double_crank.toml", "p.toml"], names
+    moved = tmp_path / "moved"
+    folder.rename(moved)
+    assert kinds.checker("picker")(load_spec(moved / "p.toml")).rules
+    # a second template beside the first: the linkages there are the library's, used as they are
+    result = CliRunner().invoke(cli, ["spec", "picker", "--template", "--out", str(moved / "q.toml")])
+    assert result.exit_code == 0, result.output
+    # an edited linkage is never replaced: refused, nothing written
+    (moved / "cai2020_crank_rocker.toml").write_text("# edited\n")
+    result = agrisynth("spec", "picker", "--template", "--out", str(moved / "r.toml"))
+    assert result.returncode == 2 and "is not the library's cai2020_crank_rocker.toml" in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (moved / "r.toml").exists()
 
 
 def test_template_comments_every_field(kind_name):
@@ -191,3 +225,9 @@ def test_a_documented_range_is_the_one_the_loader_enforces(kind_name):
             table_at(edited, section)[name] = {">": limit, ">=": limit - 1.0, "<=": limit + 1.0, "<": limit}[symbol]
             with pytest.raises(SpecError, match=re.escape(name)):
                 validate(model, edited, prefix=kind_name)
+
+
+def test_a_template_named_as_a_folder_that_is_not_there_is_refused(tmp_path):
+    proc = agrisynth("spec", "comb_finger", "--template", "--out", "tdir/", cwd=tmp_path, timeout=60)
+    assert proc.returncode == 2 and "tdir/: names a folder (it ends in /) and there is no folder tdir" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []

@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from synthesis import kinds
-from synthesis.cli.options import NamedPath
+from synthesis.cli.options import FileTarget
 from synthesis.cli import terminal
 from synthesis.cli.views import console
 from synthesis.library import LIBRARY
@@ -25,7 +25,7 @@ from synthesis.spec.common import usable_name
 @click.option("--copy", "name", metavar="NAME", default=None,
               help="copy the library spec NAME (its file as listed, e.g. planting_arm/taiwan_example1.toml, or its "
                    "file name alone) into the working folder to edit it, with the spec files it names")
-@click.option("--out", "target", type=NamedPath(path_type=Path), default=None,
+@click.option("--out", "target", type=FileTarget(path_type=Path), default=None,
               help="with --copy: the file (or folder) to write [default: the spec's file name, here]")
 @click.option("--force", is_flag=True, help="with --copy: replace a file of that name (without it an existing "
                                             "file is kept and the command exits 2)")
@@ -110,8 +110,9 @@ def _reference_piped(kind: str, summary: str, entries, width: int) -> None:
 @click.argument("kind")
 @click.option("--template", is_flag=True, help="write a commented starting spec of KIND (the library example's "
                                                "values, every field described) instead of the reference")
-@click.option("--out", "target", type=NamedPath(dir_okay=False, path_type=Path), default=None,
-              help="with --template: write it to this new file (default: print it)")
+@click.option("--out", "target", type=FileTarget(dir_okay=False, path_type=Path), default=None,
+              help="with --template: write it to this new file, the spec files it names (the picker's two "
+                   "linkages) copied beside it (default: print it, naming the library's own spec files)")
 def spec_command(kind: str, template: bool, target: Path | None) -> None:
     """The spec reference of KIND: every field with its TOML path, type, unit, default (or
     "required"), allowed range and meaning.  Every kind's in one file: docs/specs.md in the source tree.
@@ -134,6 +135,8 @@ def spec_command(kind: str, template: bool, target: Path | None) -> None:
     if target is None:
         click.echo(specref.template(kind), nl=False)
         return
-    library.write_template(kind, target)
-    console.print(f"wrote {escape(str(target))}: a {kind} spec to edit; check it with  agrisynth check "
+    written = library.write_template(kind, target)
+    beside = (f" (and the spec files it names beside it: {', '.join(escape(str(p)) for p in written[1:])})"
+              if written[1:] else "")
+    console.print(f"wrote {escape(str(target))}{beside}: a {kind} spec to edit; check it with  agrisynth check "
                   f"{escape(str(target))}", soft_wrap=True)

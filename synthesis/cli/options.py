@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+import os
 import re
+from pathlib import Path
 
 import click
 
@@ -79,6 +81,20 @@ class NamedPath(click.Path):
     def convert(self, value, param, ctx):
         if isinstance(value, str) and not value.strip():
             self.fail("an empty path: give a folder or file name (\".\" for the working folder)", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class FileTarget(NamedPath):
+    """A file the user names to write (--out of `problems --copy` and `spec --template`): a name ending in a path
+    separator names a folder, which must exist (``Path`` drops the separator: ``newd/`` would be written as a file
+    ``newd``)."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and value.rstrip() and value.endswith(tuple(s for s in (os.sep, os.altsep) if s)):
+            folder = value.rstrip("/" + os.sep + (os.altsep or ""))
+            if not Path(folder or value).is_dir():
+                self.fail(f"{value}: names a folder (it ends in {value[-1]}) and there is no folder {folder or value}; "
+                          f"give a file name (e.g. {value}my_spec.toml) in a folder that exists", param, ctx)
         return super().convert(value, param, ctx)
 
 

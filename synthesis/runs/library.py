@@ -3,13 +3,14 @@ edit, a kind's commented starting spec written."""
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from synthesis import kinds
 from synthesis.errors import OutputError, SpecError
 from synthesis.library import Copied, copy_out, library_spec, unknown_name_text
-from synthesis.result import atomic_write_text
+from synthesis.result import atomic_write_drawn, atomic_write_text
 from synthesis.spec import reference
 from synthesis.spec.common import read_toml
 
@@ -60,10 +61,27 @@ def copy_spec(name: str, library: Path, target: Path | None, force: bool) -> tup
                             rename=target is not None)
 
 
-def write_template(kind: str, target: Path) -> None:
-    """A commented starting spec of ``kind`` written to the new file ``target`` (a template never replaces one)."""
+def write_template(kind: str, target: Path) -> list[Path]:
+    """A commented starting spec of ``kind`` written to the new file ``target`` (a template never replaces one), the
+    spec files it names copied beside it (the library example's, to edit; one already there with the library's
+    bytes is used as it is, another file of its name is never replaced); returns the files written, the template
+    first.  Everything is checked before anything is written."""
     if target.exists():
         raise OutputError(f"{target}: already exists; give a new file name (a template never replaces a file)")
     if not target.parent.is_dir():
         raise OutputError(f"{target}: no folder {target.parent} to write it in")
+    companions = []
+    for source, name in reference.template_companions(kind):
+        copy = target.parent / name
+        if os.path.lexists(copy):
+            if not (copy.is_file() and copy.read_bytes() == source.read_bytes()):
+                raise OutputError(f"{copy}: already exists and is not the library's {source.name}, which the "
+                                  f"template names there; write the template into another folder")
+            continue
+        if not copy.parent.is_dir():
+            raise OutputError(f"{copy}: no folder {copy.parent} to copy the spec file the template names into")
+        companions.append((source, copy))
+    for source, copy in companions:
+        atomic_write_drawn(copy, lambda tmp, data=source.read_bytes(): tmp.write_bytes(data))
     atomic_write_text(target, reference.template(kind, target.parent))
+    return [target, *(copy for _, copy in companions)]

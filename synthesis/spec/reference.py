@@ -18,7 +18,6 @@ from __future__ import annotations
 import inspect
 import json
 import math
-import os
 import re
 import sys
 import textwrap
@@ -425,26 +424,47 @@ FREE_VARIABLE_NOTE = ("A design variable (type `number, or {init, bounds} (free)
 def template(kind_name: str, directory: Path | None = None) -> str:
     """A commented starting spec of the kind: its library example written through the model.
 
-    ``directory``: where the file will live (spec-file fields are made relative to it; default: the
-    current directory)."""
+    ``directory``: the folder the file will be written in, beside the spec files it names, which
+    :func:`template_companions` lists (the names the library example gives them, so the copies are the user's to
+    edit); None (the text printed): the spec files are named by their absolute paths in the library, so the text
+    checks wherever it is saved."""
     kind = kinds.get(kind_name)
     model = kind.spec_model()
-    if not kind.example:
-        raise ValueError(f"kind {kind_name!r} names no library example (Kind.example) to start a template from")
-    example = LIBRARY / kind.example
+    example = _example_of(kind)
     data, _ = read_toml(example)
     rewrite: dict[str, Any] = {"name": f"my_{kind_name}", "source": f"template from problems/{kind.example}"}
-    here = Path.cwd() if directory is None else Path(directory)
+    named = []
     for e, field in _spec_file_fields(model):
         if e in data:
-            target = (example.parent / data[e]).resolve()
-            rewrite[e] = os.path.relpath(target, here.resolve())
+            if directory is None:
+                rewrite[e] = str((example.parent / data[e]).resolve())
+            named.append(e)
+    beside = (["# The spec files it names (" + ", ".join(named) + ") are the library example's, copied beside this "
+               "file to edit."] if directory is not None else
+              ["# The spec files it names (" + ", ".join(named) + ") are the library's own files: to edit one, copy "
+               "it with `agrisynth problems --copy NAME` and name the copy here."]) if named else []
     head = [f"# A {kind_name} spec: {kind.summary}.",
             f"# Written by `agrisynth spec {kind_name} --template` from the library example problems/{kind.example};",
             "# fields left at their default are commented out.  The reference: `agrisynth spec "
             f"{kind_name}` (docs/specs.md in the source tree).",
-            *_comment(FREE_VARIABLE_NOTE), ""]
+            *_comment(FREE_VARIABLE_NOTE), *beside, ""]
     return "\n".join(head + write_toml(model, data, rewrite=rewrite)) + "\n"
+
+
+def _example_of(kind) -> Path:
+    if not kind.example:
+        raise ValueError(f"kind {kind.name!r} names no library example (Kind.example) to start a template from")
+    return LIBRARY / kind.example
+
+
+def template_companions(kind_name: str) -> list[tuple[Path, str]]:
+    """(library file, name relative to the template) of each spec file the kind's template written into a folder
+    names: the library example's own spec files, by the names the example gives them (inside its folder)."""
+    kind = kinds.get(kind_name)
+    example = _example_of(kind)
+    data, _ = read_toml(example)
+    return [((example.parent / data[e]).resolve(), str(data[e]))
+            for e, _ in _spec_file_fields(kind.spec_model()) if e in data]
 
 
 def _spec_file_fields(model):
