@@ -129,17 +129,35 @@ def test_a_box_reaching_zero_for_a_length_is_refused_in_one_line(tmp_path):
     assert run.returncode in (0, 1), run.stderr
 
 
-def test_samples_0_exits_on_the_design_and_its_linear_worst_cases(tmp_path):
-    """--samples 0 runs no Monte-Carlo: the exit is the nominal rules' and the linear worst cases' verdict (the
-    library design passes every rule with nothing toleranced: 0), and the report says no sample was drawn rather
-    than "0.00 % pass"."""
+def test_samples_0_without_a_box_gives_the_sensitivities_and_the_design_s_verdict(tmp_path):
+    """--samples 0 with no half-width is "the sensitivities alone": the exit is the design's rules' verdict (the
+    library design passes every rule: 0).  It said "every linear worst case in the box holds" of an empty box, its
+    report.md that no rule moved with the design and held no derivative w.r.t. the design variables (only
+    result.json did); now the verdict is the design's, no row claims a box, and report.md tables every derivative."""
     run = agrisynth("tolerance", str(STEERING), "--samples", "0", "--out", str(tmp_path), cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
-    facts = strict_json(tmp_path / "steering_redesign_27-tolerance" / "result.json")["facts"]["tolerance"]
+    folder = tmp_path / "steering_redesign_27-tolerance"
+    result = strict_json(folder / "result.json")
+    facts = result["facts"]["tolerance"]
     assert facts["monte_carlo"]["samples"] == 0 and facts["monte_carlo"]["pass_rate"] is None
     assert all(r["satisfied"] for r in facts["nominal_rules"])
-    assert all(row["linear_worst_margin"] >= 0 for row in facts["stack_up"])
-    assert "Monte-Carlo: none (--samples 0)" in run.stdout and "0.00 %" not in run.stdout
+    assert [r["name"] for r in result["rules"]] == [r["name"] for r in facts["nominal_rules"]]     # no @tolerance
+    assert run.stdout.startswith("Verdict: holds at the design: it passes every rule (no tolerance box")
+    assert "in the box" not in run.stdout and "0.00 %" not in run.stdout
+    report = (folder / "report.md").read_text()
+    assert "does not move with the design" not in report and "linear worst" not in report
+    # every derivative result.json holds is in report.md's table, to its 4 digits
+    lines = report.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("| rule | unit | d/d "))
+    header, table = lines[at], lines[at + 2:at + 2 + len(facts["stack_up"])]
+    rows = {line.split(" | ")[0].lstrip("| "): line for line in table}
+    keys = list(facts["tolerance"])
+    assert header.split(" | ")[2:] == [f"d/d {k} (per {facts['tolerance'][k]['unit']})" for k in keys[:-1]] + \
+        [f"d/d {keys[-1]} (per {facts['tolerance'][keys[-1]]['unit']}) |"]
+    for row in facts["stack_up"]:
+        cells = [c.strip() for c in rows[row["name"]].strip("| ").split(" | ")][2:]
+        assert cells == [f"{row['sensitivity'][k]:.4g}" for k in keys], row["name"]
+        assert any(row["sensitivity"].values())
 
 
 @pytest.mark.slow

@@ -63,8 +63,9 @@ def tolerance_command(target: Path, out: Path, length: float | None, angle: floa
     re-check grid and passes only if every rule holds at all of them.
     Exit 0 when the design and every Monte-Carlo sample pass every rule, 1 otherwise; with --samples 0
     (sensitivities and the linear stack-up only) exit 0 when the design passes every rule and every linear worst
-    case holds, 1 otherwise.  Either way each rule is re-checked at its linear worst corner, a design in the box:
-    missed there, it fails.
+    case holds, 1 otherwise; with --samples 0 and no half-width (the sensitivities alone: report.md tables each
+    rule's derivatives) exit 0 when the design passes every rule.  With a box each rule is re-checked at its linear
+    worst corner, a design in the box: missed there, it fails.
     result.json holds these verdicts as rule rows (<rule>@monte_carlo: the share of samples holding the rule;
     <rule>@tolerance: the linear worst margin; <rule>@linear_worst_corner: the rule missed at that corner), so
     `agrisynth compare` shows them; a failed run prints the rows that failed.

@@ -20,7 +20,9 @@ def verdict_rows(facts: dict) -> list[dict]:
     per rule (value its linearised worst-case margin, satisfied when >= 0 and the rule holds at that corner).  So a
     reader of result.json (``agrisynth compare``) sees what made the command exit 1."""
     mc = facts["monte_carlo"]
-    rows = []
+    rows: list[dict] = []
+    if no_box(facts):               # --samples 0 with every half-width 0: the design's own rows decide, nothing more
+        return rows
     if mc["samples"]:
         for name, r in mc["rules"].items():
             rate = r.get("pass_rate")
@@ -57,6 +59,15 @@ def verdict_rows(facts: dict) -> list[dict]:
     return rows
 
 
+def no_box(facts: dict) -> bool:
+    """Whether the analysis had no tolerance box (every half-width 0: ``--samples 0`` for the sensitivities alone)."""
+    return not any(t.get("half_width") for t in facts["tolerance"].values())
+
+
+#: what a run without a box is, said where a box's results would be
+NO_BOX = "no tolerance box, every half-width 0: the design's sensitivities alone, nothing stacked up"
+
+
 def _corner_breaks(row: dict) -> str | None:
     """Why the design at a rule's linear worst corner breaks it (missed there; or not evaluable there although the
     design itself is, as an unevaluable Monte-Carlo sample counts), else None."""
@@ -81,6 +92,8 @@ def full_table(facts: dict) -> str:
     conditions, the explanation of every linear-vs-sampled gap and every reason a sample could not be evaluated."""
     mc = facts["monte_carlo"]
 
+    if no_box(facts):
+        return _sensitivity_report(facts)
     box = _box_line(facts["tolerance"])
     lines = [*([box, ""] if box else []), (f"Monte-Carlo: {mc['samples']} samples (seed {mc['seed']}, {mc['distribution']}): "
               f"{100 * (mc['pass_rate'] or 0):.2f} % pass every rule"
@@ -107,20 +120,8 @@ def full_table(facts: dict) -> str:
                      f"| {f(r.get('corner_margin'))} | {f(r.get('linear_vs_sampled_gap'), '{:.1%}')} |")
         if r.get("gap_explanation"):
             notes.append(f"* {r['name']}: {r['gap_explanation']}")
-    if facts.get("operating"):
-        ops = facts["operating"]
-        lines += ["", "Derivatives w.r.t. the operating conditions (exact, each rule at its scenario's values; "
-                      "nominal " + ", ".join(f"{n} = {o['nominal']:g} {o['unit']}" for n, o in ops.items()) + "):", "",
-                  "| rule | unit | " + " | ".join(f"d/d {n} (per {o['unit']})" for n, o in ops.items()) + " |",
-                  "|---|---|" + "---|" * len(ops)]
-        for r in facts["stack_up"]:
-            sens = r.get("operating_sensitivity") or {}
-            cells = ("-" if (v := sens.get(n, 0.0)) is None else f"{v:.4g}" for n in ops)   # None: not evaluated
-            lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(cells) + " |")
-        unused = [n for n, rules in (facts.get("operating_dependence") or {}).items() if not rules]
-        if unused:
-            lines += ["", f"No rule's value depends on {', '.join(unused)}: the derivative is exactly 0 for every rule "
-                          "(the condition may still move a rule's limit or the objective)."]
+    lines += _design_derivative_lines(facts)
+    lines += _operating_lines(facts)
     if notes:
         lines += ["", "Linear vs sampled worst case (sampled: the Monte-Carlo and each rule's linear worst corner; "
                       "the gap is |linear loss - sampled loss| / sampled loss, 10 % expected) explained:"] + notes
@@ -130,6 +131,55 @@ def full_table(facts: dict) -> str:
                   "| samples | reason | rules without a margin |", "|---|---|---|"]
         lines += [f"| {r['samples']} | {r['reason']} | {', '.join(r['rules'])} |" for r in reasons]
     return "\n".join(lines) + "\n"
+
+
+def _sensitivity_report(facts: dict) -> str:
+    """report.md of a run without a box: the design's rules (margin, pass or fail) and each rule's derivatives."""
+    lines = [f"Verdict: {NO_BOX}", "", "| rule | unit | value | margin | at the design |", "|---|---|---|---|---|"]
+    for r in facts["nominal_rules"]:
+        def f(v):
+            return "-" if v is None else f"{v:.6g}"
+        lines.append(f"| {r['name']} | {r.get('unit') or ''} | {f(r.get('value'))} | {f(r.get('margin'))} "
+                     f"| {'holds' if r['satisfied'] else 'FAILS'} |")
+    return "\n".join(lines + _design_derivative_lines(facts) + _operating_lines(facts)) + "\n"
+
+
+def _design_derivative_lines(facts: dict) -> list[str]:
+    """The derivative of each rule's value (at its worst sample) w.r.t. each design variable, exact (CasADi AD)."""
+    units = {k: t.get("unit") or "" for k, t in facts["tolerance"].items()}
+    keys = list(units)
+    if not keys or not facts["stack_up"]:
+        return []
+    lines = ["", "Derivatives w.r.t. the design variables (exact, each rule's value at its worst sample on the "
+                 "analysis grid; per unit of the variable):", "",
+             "| rule | unit | " + " | ".join(f"d/d {k} (per {units[k] or '1'})" for k in keys) + " |",
+             "|---|---|" + "---|" * len(keys)]
+    for r in facts["stack_up"]:
+        sens = r.get("sensitivity") or {}
+        cells = ("-" if (v := sens.get(k)) is None else f"{v:.4g}" for k in keys)
+        lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _operating_lines(facts: dict) -> list[str]:
+    """The derivative of each rule w.r.t. each operating condition, and the conditions no rule reads."""
+    if not facts.get("operating"):
+        return []
+    ops = facts["operating"]
+    lines: list[str] = []
+    lines += ["", "Derivatives w.r.t. the operating conditions (exact, each rule at its scenario's values; "
+                  "nominal " + ", ".join(f"{n} = {o['nominal']:g} {o['unit']}" for n, o in ops.items()) + "):", "",
+              "| rule | unit | " + " | ".join(f"d/d {n} (per {o['unit']})" for n, o in ops.items()) + " |",
+              "|---|---|" + "---|" * len(ops)]
+    for r in facts["stack_up"]:
+        sens = r.get("operating_sensitivity") or {}
+        cells = ("-" if (v := sens.get(n, 0.0)) is None else f"{v:.4g}" for n in ops)   # None: not evaluated
+        lines.append(f"| {r['name']} | {r['unit']} | " + " | ".join(cells) + " |")
+    unused = [n for n, rules in (facts.get("operating_dependence") or {}).items() if not rules]
+    if unused:
+        lines += ["", f"No rule's value depends on {', '.join(unused)}: the derivative is exactly 0 for every rule "
+                      "(the condition may still move a rule's limit or the objective)."]
+    return lines
 
 
 #: the terminal summary: its width (columns), the failing rules it says how they fail, the rules its table shows and
@@ -145,6 +195,8 @@ def table(facts: dict) -> str:
     tighten first, the top reasons samples could not be evaluated, and where the full tables are (report.md)."""
     mc, rows = facts["monte_carlo"], facts["stack_up"]
     failing = failing_rules(facts)
+    if no_box(facts):
+        return _sensitivity_table(facts, failing)
     shown = _shown_rules(rows, failing)
     box = _box_line(facts["tolerance"])
     lines = [_verdict_line(facts, failing, [r["name"] for r in shown]), *([box] if box else []), _monte_carlo_line(mc), ""]
@@ -154,6 +206,22 @@ def table(facts: dict) -> str:
     lines += _tighten_line(shown, failing) + _reason_lines(mc)
     lines += ["Full tables (every rule, operating derivatives, gap notes, every reason): report.md"]
     return "\n".join(line for text in lines for part in text.split("\n") for line in _fit(part)) + "\n"
+
+
+def _sensitivity_table(facts: dict, failing: dict) -> str:
+    """The terminal summary of a run without a box: the verdict at the design and its rules, tightest first."""
+    rules = sorted(facts["nominal_rules"], key=lambda r: (r["satisfied"], math.inf if r.get("margin") is None
+                                                         else r["margin"] / (r.get("scale") or 1.0)))
+    head = (f"Verdict: FAILS at the design: {len(failing)} rule(s) break ({NO_BOX})" if failing else
+            f"Verdict: holds at the design: it passes every rule ({NO_BOX})")
+    width = max([len("rule")] + [len(r["name"]) for r in rules])
+    lines = [head, "", f"{'rule':<{width}}  {'':4} {'unit':<7}{'margin':>10}"]
+    lines += [f"{r['name']:<{width}}  {'ok' if r['satisfied'] else 'FAIL':4} {r.get('unit') or '-':<7}"
+              f"{_num(r.get('margin')):>10}" for r in rules[:SHOWN_RULES]]
+    if len(rules) > SHOWN_RULES:
+        lines.append(f"({len(rules) - SHOWN_RULES} more rule(s) in report.md)")
+    lines.append("Each rule's derivatives w.r.t. every design variable and operating condition: report.md")
+    return "\n".join(line for text in lines for line in _fit(text)) + "\n"
 
 
 def failing_rules(facts: dict) -> dict[str, list[str]]:
@@ -341,7 +409,9 @@ def tornado(facts: dict, path: Path) -> None:
     if not rows:
         fig, ax = plt.subplots(figsize=(7, 1.6))
         ax.axis("off")
-        ax.text(0.5, 0.5, "no rule's margin moves with the design in the tolerance box", ha="center", va="center")
+        ax.text(0.5, 0.5, "no tolerance box (every half-width 0): nothing to stack up;\nthe rules' derivatives are in "
+                "report.md" if no_box(facts) else "no rule's margin moves with the design in the tolerance box",
+                ha="center", va="center")
         fig.savefig(path, dpi=110)
         plt.close(fig)
         return
