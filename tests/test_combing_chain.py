@@ -351,6 +351,13 @@ def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp
     checked = json.loads((tmp_path / "one_gear_too_wide_elastic-check" / "result.json").read_text())
     free = [n for n, v in data["design_variables"].items() if v["free"]]
     assert free and all(checked["design"][n] == data["elastic"]["design"][n] for n in free)
+    # and what the message says of it is what its check finds: the rule given up on fails, the one holding against
+    # it (binding, on its limit) passes -- the elastic form held it 1e-6 of its scale inside, not on the limit, where
+    # IPOPT's tolerance left it 1.3e-11 deg over and its check failed it too
+    assert data["elastic"]["relaxed"] == ["window_bottom"] and "window_top" in data["elastic"]["binding"]
+    verdicts = {r["name"]: r for r in checked["rules"]}
+    assert [n for n, r in verdicts.items() if not r["satisfied"]] == ["window_bottom"]
+    assert 0 < verdicts["window_top"]["margin"] < 1e-6
 
 
 @pytest.mark.parametrize("source, old, new, command, message", [

@@ -171,6 +171,12 @@ class Transcription:
         return self.problem.x.numel()
 
 
+#: the elastic form's back-off, in rule scales: above the rows' violation IPOPT leaves at convergence (1e-9 and
+#: below), below the slack a diagnosis counts as relaxing a rule (synthesis.core.verdict.SLACK_TOL, 1e-6: at 1e-6 a
+#: rule touching a design held at its bound was named as relaxed), far below any miss it reports (3-4 digits)
+ELASTIC_BACKOFF = 1e-8
+
+
 def _rows_of(rule, robust: bool) -> tuple:
     """The rule's NLP rows; in a tolerance box its box form where it has one (an equality it pins, e.g. equal
     landing times, cannot hold at every corner of a box)."""
@@ -242,11 +248,18 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
     if elastic:
         slack = ca.SX.sym("slack", len(problem.rules))
         for k, rule in enumerate(problem.rules):
+            # a rule the answer holds sits on its limit there, to IPOPT's tolerance: the elastic rows hold each side
+            # ELASTIC_BACKOFF x the rule's scale inside, so the rules its diagnosis says hold do hold when the
+            # returned design is re-checked (combing_chain's window_top missed by 1.3e-11 deg, "binding")
+            inside = ELASTIC_BACKOFF * rule.scale
+            rows = [(expr, lb, ub) if lb is not None and ub is not None and lb == ub else
+                    (expr, None if lb is None else lb + inside, None if ub is None else ub - inside)
+                    for expr, lb, ub in _rows_of(rule, in_box)]
             if hard[k]:
-                g.add(hold(rule, _rows_of(rule, in_box)), k)
+                g.add(hold(rule, rows), k)
                 continue
             relax = rule.scale * slack[k]
-            for expr, lb, ub in hold(rule, _rows_of(rule, in_box)):
+            for expr, lb, ub in hold(rule, rows):
                 if lb is not None:
                     g.add([(expr + relax, lb, None)], k)
                 if ub is not None:

@@ -82,6 +82,15 @@ def write_template(kind: str, target: Path) -> list[Path]:
             raise OutputError(f"{copy}: no folder {copy.parent} to copy the spec file the template names into")
         companions.append((source, copy))
     for source, copy in companions:
-        atomic_write_drawn(copy, lambda tmp, data=source.read_bytes(): tmp.write_bytes(data))
+        _copy_bytes(source, copy)
     atomic_write_text(target, reference.template(kind, target.parent))
     return [target, *(copy for _, copy in companions)]
+
+
+def _copy_bytes(source: Path, copy: Path) -> None:
+    """``source`` written to ``copy`` byte for byte, atomically."""
+    data = source.read_bytes()
+
+    def write(tmp: Path) -> None:
+        tmp.write_bytes(data)
+    atomic_write_drawn(copy, write)
