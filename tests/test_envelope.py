@@ -390,3 +390,15 @@ def test_monte_carlo_of_an_envelope_design_checks_every_operating_point(example1
     assert rates["nominal"][2]["worst_margin"] == pytest.approx(-2.907, abs=2e-3)
     assert rates["envelope"][:2] == (0.5, 0.5) and rates["envelope"][2]["pass_rate"] == 10 / 12
     assert rates["envelope"][2]["worst_margin"] == pytest.approx(-0.1257, abs=2e-4)
+
+
+def test_the_given_design_of_a_spec_whose_variable_has_a_toml_alias_is_read():
+    """clamp_cam's return angle is written ``motion.return`` (attribute ``return_``): the envelope's baseline read the
+    given design by walking the TOML path, an AttributeError after every start of
+    opening_cam_redesign_spring_dynamics had finished (exit 1, a traceback, no result)."""
+    from synthesis.tolerance.envelope import given_design
+
+    loaded = load_spec(LIBRARY / "clamp_cam" / "opening_cam_redesign_spring_dynamics.toml")
+    design = given_design(loaded.model)
+    assert design["return"] == 14.0 == loaded.model.motion.return_
+    assert set(design) == set(loaded.model.variables())

@@ -16,7 +16,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import re
 
 import numpy as np
 
@@ -141,14 +140,11 @@ class EnvelopeFinish:
 
 
 def given_design(spec) -> dict[str, float]:
-    """The spec's given design by result.json key (each variable's number or start value, read at its path)."""
-    out = {}
-    for key, info in describe(spec).items():
-        node = spec
-        for name, index in re.findall(r"([^.\[\]]+)|\[(\d+)\]", info["path"]):
-            node = node[int(index)] if index else getattr(node, name)
-        out[key] = value_of(node)
-    return out
+    """The spec's given design by result.json key (each variable's number or start value, as the spec model lists
+    it; read by walking its TOML path, clamp_cam's ``motion.return`` -- attribute ``return_`` -- was an
+    AttributeError after every start had finished)."""
+    described = describe(spec)
+    return {key: value_of(v) for key, v in spec.variables().items() if key in described}
 
 
 @dataclasses.dataclass
