@@ -255,3 +255,20 @@ def test_a_fixed_length_given_back_through_the_grashof_slacks_is_the_specs_to_th
     assert off_by_rounding > 0          # the map does round: the case is exercised
     z = COORDINATES.coordinates(np.array([50.0, 120.0, 130.0, 140.0 + 1e-9, 0.0, 1.0]))
     assert nlp.design(z)["l10"] == pytest.approx(140.0 + 1e-9, abs=1e-12) and nlp.design(z)["l10"] != 140.0
+
+
+def test_the_solve_s_re_check_reads_a_sampled_peak_on_the_check_s_grid_at_least():
+    """The solve passed crank_rocker_torque_limited's answer at 0.29999997 N m (re-checked on 10 x 72 samples) and
+    `check` of its solved.toml failed it at 0.30000409 (3,600 samples): the two verdicts on one design differed.  The
+    re-check reads at least the check's grid: every rule's value is the check's, to the bit."""
+    from types import SimpleNamespace
+
+    from synthesis.core.kind import Setting
+    from synthesis.kinds.crank_rocker.solve import recheck
+
+    loaded = load_spec(LIBRARY / "picker" / "crank_rocker_torque_limited.toml")
+    design = {"l7": 50.99, "l8": 126.69, "l9": 129.72, "l10": 140.0}
+    rules = recheck(Setting(loaded.model), SimpleNamespace(design=design)).rules
+    checked = evaluate(loaded.model, mechanism(loaded.model, design))[0]
+    assert [(r.name, r.record().value) for r in rules] == [(r.name, r.record().value) for r in checked]
+    assert "peak_input_torque" in [r.name for r in rules]

@@ -43,7 +43,7 @@ EXPECTED: dict[str, dict] = {
     "picker/cai2020_picker.toml": {"check": 0},
     "picker/cai2020_picker_dynamics.toml": {"check": 0},
     "picker/crank_rocker_max_transmission.toml": {"check": 0, "solve": ("optimal", 40.67131217449928)},
-    "picker/crank_rocker_torque_limited.toml": {"check": 1, "solve": ("optimal", 447.39285225876324)},
+    "picker/crank_rocker_torque_limited.toml": {"check": 1, "solve": ("optimal", 448.72887920933306)},
     "rotary_planetary/key_pose_redesign.toml": {"check": 1, "solve": ("optimal", 148.80967492502646)},
     "rotary_planetary/single_idler_redesign.toml": {"check": 1, "solve": ("optimal", 128.51384489500933)},
     "rotary_planetary/smooth_loop_redesign.toml": {"check": 1, "solve": ("optimal", 93.71826484839778)},

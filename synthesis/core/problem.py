@@ -49,6 +49,10 @@ class MaxMinMargin:
 Backoff = Callable[[Rule, float], float]
 
 
+#: a problem's back-off where it gives none: each row this many of its rule's scales inside its limits
+DEFAULT_BACKOFF = 1e-7
+
+
 def scaled_backoff(fraction: float) -> Backoff:
     """Keep rows ``fraction`` x the rule's scale inside their limits: IPOPT meets a row only to its
     tolerance, so a returned design meets the exact limit when re-checked, not 1e-12 short of it."""
@@ -147,7 +151,7 @@ class Problem:
     rules: Sequence[Rule]
     objective: ObjectiveParts | MaxMinMargin
     parameters: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
-    backoff: Backoff = field(default_factory=lambda: scaled_backoff(1e-7))
+    backoff: Backoff = field(default_factory=lambda: scaled_backoff(DEFAULT_BACKOFF))
     hard_in_elastic: Sequence[str] = ()
     ipopt: str = "tight"
     ipopt_options: dict = field(default_factory=dict)

@@ -16,11 +16,11 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
-from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_epigraph, peak_of
+from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_backoff, peak_epigraph, peak_of
 from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, linkage_dynamics, rules_of
 from synthesis.core.declared import Declared
 from synthesis.core.kind import Setting
-from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.core.problem import DEFAULT_BACKOFF, ObjectiveParts, Problem, scaled_backoff
 from synthesis.core.starts import pull_inside
 from synthesis.kinematics import fourbar
 from synthesis.kinematics.rocker_drive import CrankRocker, quick_return, rocker_function, turn_grid
@@ -69,6 +69,9 @@ def problem(setting: Setting) -> Declared:
     # the crank must turn for the extremes to exist: Grashof stays hard in the elastic diagnosis
     declared = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, _objective(spec, p, mu),
                        hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
+                       # a sampled peak's limit held inside by its share, so the peak between samples holds too (the
+                       # transmission angle's extremes, at 0 and 180 deg, are on the grid: its rows are exact)
+                       backoff=peak_backoff(n, scaled_backoff(DEFAULT_BACKOFF)),
                        # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
                        # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
                        x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,

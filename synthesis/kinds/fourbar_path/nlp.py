@@ -7,7 +7,7 @@
                free timing); grashof = "any": closure and transmission along the motion between targets,
                exactly (two rows per gap at its extreme crank angles, rules.motion_extremes); with a
                [dynamics] table, its limits over a crank turn at [solver] dynamics_samples angles, held
-               rule_set.dynamics_backoff of the limit inside (dynamics.py)
+               synthesis.dynamics.linkage.dynamics_backoff of the limit inside (dynamics.py)
 
 The decision vector is in nominal units (nominal_scales): lengths and the coupler point in units of
 the targets' size D, the input pivot from the targets' centre in that unit, theta0 in rad; IPOPT sees

@@ -32,6 +32,7 @@ import numpy as np
 
 from constraints import Rule, not_evaluated
 from synthesis.core.problem import Backoff, relative_backoff
+from synthesis.dynamics.linkage import peak_backoff
 from synthesis.kinds.fourbar_path.dynamics import path_dynamics_rules
 from synthesis.kinds.fourbar_path.rules.assembly import assembly_extremes_rule, assembly_rule
 from synthesis.kinds.fourbar_path.rules.grashof_class import grashof_class_rule
@@ -152,37 +153,15 @@ def path_rules(spec: FourbarPathSpec, v: dict, thetas: list | None, sign, sample
     return rules
 
 
-#: the [dynamics.limits] rules, sampled at [solver] dynamics_samples crank angles in the NLP
-DYNAMICS_RULES = ("peak_input_torque", "peak_shaking_force", "peak_shaking_moment")
-#: the NLP holds each [dynamics.limits] peak this share of its limit inside it at 72 [solver] dynamics_samples, so
-#: that the peak between its samples holds too on the re-check's 10x finer grid; at N samples the share is this x
-#: (72 / N)^2, as the miss between samples of a smooth periodic peak falls with the square of their spacing.
-#: picking_arc_torque_limited's starts held only at the kind's relative 1e-9 came to rest up to 1.2 % over the limit
-#: between two of 72 samples (54 of its 64 starts: 0.4553 N m against 0.45 at worst)
-DYNAMICS_BACKOFF_AT_72 = 0.02
-
-
-def dynamics_backoff(samples: int) -> float:
-    """The share of its limit inside which the NLP holds a [dynamics.limits] peak at ``samples`` crank angles."""
-    return DYNAMICS_BACKOFF_AT_72 * (72.0 / samples) ** 2
-
-
 def path_backoff(spec: FourbarPathSpec, fraction: float) -> Backoff:
     """The NLP's back-off: every row ``fraction`` x max(1, |limit|) inside its limit (the core's relative back-off,
     the one rule for a spec without [dynamics.limits]); the rows of the [dynamics.limits] so that each peak is
-    :func:`dynamics_backoff` of its limit inside it (the shaking force's row is its square: 1 - (1 - b)^2 of the
+    :func:`synthesis.dynamics.linkage.dynamics_backoff` of its limit inside it (the shaking force's row is its square: 1 - (1 - b)^2 of the
     row's limit)."""
     general = relative_backoff(fraction)
     if spec.dynamics is None or not spec.dynamics.has_rules():
         return general
-    share = dynamics_backoff(spec.solver.dynamics_samples)
-    squared = 1.0 - (1.0 - share) ** 2
-
-    def backoff(rule: Rule, limit: float) -> float:
-        if rule.name not in DYNAMICS_RULES:
-            return general(rule, limit)
-        return (squared if rule.name == "peak_shaking_force" else share) * abs(limit)
-    return backoff
+    return peak_backoff(spec.solver.dynamics_samples, general)
 
 
 #: two targets whose crank angles differ by less than this (deg) share one coupler pose
