@@ -511,3 +511,14 @@ def test_a_kinds_default_set_is_its_first_problem_at_quick_settings_compiled_or_
         cases = library_cases(None, 0, default, settings)
         assert [c.loaded.model.name for c in cases] == names
         assert ("ipopt_compiled" in cases[0].methods) == (settings.compiled is not None)
+
+
+def test_a_named_spec_with_nothing_free_is_refused_naming_its_file(tmp_path):
+    """bench of a spec whose every variable is fixed said "planting_fourbar: solve needs ..." without the file."""
+    spec = tmp_path / "fixed.toml"
+    spec.write_text((LIBRARY / "planting_arm" / "taiwan_example1.toml").read_text())
+    proc = agrisynth("bench", str(spec), "--quick", "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().startswith(f"error: {spec}: planting_fourbar: solve needs at least one free design "
+                                          f"variable"), proc.stderr
+    assert not (tmp_path / "out" / "bench").exists()

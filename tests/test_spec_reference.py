@@ -231,3 +231,10 @@ def test_a_template_named_as_a_folder_that_is_not_there_is_refused(tmp_path):
     proc = agrisynth("spec", "comb_finger", "--template", "--out", "tdir/", cwd=tmp_path, timeout=60)
     assert proc.returncode == 2 and "tdir/: names a folder (it ends in /) and there is no folder tdir" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_a_type_s_alternatives_do_not_shift_the_piped_reference_s_columns():
+    """The piped reference separates its columns by " | ": a type written `integer | "auto"` made six of five."""
+    result = CliRunner().invoke(cli, ["spec", "crank_rocker"])
+    line = next(line for line in result.output.splitlines() if line.startswith("  solver.starts | "))
+    assert line.split(" | ") == ["  solver.starts", 'integer or "auto"', "", "8", ">= 1, <= 10000"], line

@@ -101,7 +101,9 @@ def _reference_piped(kind: str, summary: str, entries, width: int) -> None:
     for e in entries:
         default = "required" if e.required else e.default
         head = e.heading if e.section else e.path
-        fields = " | ".join(x for x in (head, "" if e.section else e.type, e.unit, default, e.range))
+        # a type's alternatives read "or" here: " | " separates the columns (integer | "auto" shifted them)
+        kind_of = "" if e.section else e.type.replace(" | ", " or ")
+        fields = " | ".join(x for x in (head, kind_of, e.unit, default, e.range))
         lines += [terminal.wrapped(fields, width, 2), terminal.wrapped(e.description, width, 6)]
     click.echo("\n".join(lines))
 

@@ -13,6 +13,7 @@ from synthesis.core.compiled_code import cache_folder
 from synthesis.runs.events import BenchStarted, BenchStep, Note, RunWarning, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import BadRequest, BenchRequest, BenchRows, Outcome
+from synthesis.errors import AssemblyError, SpecError
 from synthesis.library import library_spec
 from synthesis.runs.specs import spec_file
 from synthesis.spec import KINDS, load_spec
@@ -72,6 +73,17 @@ def _cases(request: BenchRequest, by_kind: dict, emit: Subscriber, compiled: str
     return cases
 
 
+def _run_case(case, repeats: int, emit: Subscriber):
+    """One case benched; a named spec the solve refuses (nothing free, a rule no variable moves) is said with its file
+    first, as solve says it."""
+    try:
+        return benchmod.run_case(case, repeats, lambda what: emit(BenchStep(what)))
+    except (SpecError, AssemblyError) as exc:
+        if case.loaded is None or str(case.loaded.path) in str(exc):
+            raise
+        raise type(exc)(f"{case.loaded.path}: {exc}") from None
+
+
 def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
     """Bench, write OUT/bench/; ``details``: :class:`BenchRows`.  Progress as
     ``BenchStarted`` then ``BenchStep`` (what is measured now, or a step done)."""
@@ -90,7 +102,7 @@ def bench(request: BenchRequest, emit: Subscriber) -> Outcome:
             emit(Note(f"the extreme-case matrix is left out: {why_not}"))
         emit(BenchStarted(sum(c.runs(repeats) for c in cases) + (1 if extreme_on else 0)))
         t0 = time.perf_counter()
-        results = [benchmod.run_case(case, repeats, lambda what: emit(BenchStep(what))) for case in cases]
+        results = [_run_case(case, repeats, emit) for case in cases]
         extreme = None
         if extreme_on:
             emit(BenchStep("extreme-case matrix (tests/extreme/)"))
