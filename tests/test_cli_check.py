@@ -212,3 +212,14 @@ def test_a_misspelt_command_is_told_the_nearest_one(tmp_path):
     assert proc.returncode == 2 and proc.stderr.startswith("error: No such command 'chek'; did you mean 'check'?")
     proc = agrisynth("xyzzy", cwd=tmp_path)
     assert proc.returncode == 2 and "did you mean" not in proc.stderr
+
+
+def test_agrisynth_alone_prints_its_help_not_an_error():
+    """`agrisynth` with no command printed its help as "error: Usage: ..." and exited 2 (click >= 8.2 raises the help
+    as a usage error); a mistyped command stays an error in one line."""
+    bare = agrisynth()
+    assert bare.returncode == 0 and bare.stdout.startswith("Usage: agrisynth [OPTIONS] COMMAND")
+    assert "error" not in bare.stderr and "solve" in bare.stdout
+    typo = agrisynth("solv")
+    assert typo.returncode == 2 and typo.stderr.strip() == ("error: No such command 'solv'; did you mean 'solve'? "
+                                                            "(see `agrisynth --help`)")

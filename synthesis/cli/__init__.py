@@ -13,6 +13,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import sys
+from typing import NoReturn
 
 import click
 
@@ -102,12 +103,14 @@ def main() -> None:
         cli.main(standalone_mode=False, prog_name="agrisynth", obj=PROGRAM)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
+    except click.UsageError as exc:
+        if type(exc).__name__ != "NoArgsIsHelpError":       # click >= 8.2: a bare command asks for its help
+            _usage_error(exc)
+        # `agrisynth` (or a group) alone: its help, as --help prints it, not "error: Usage: ..."
+        click.echo(exc.ctx.get_help() if exc.ctx is not None else exc.format_message())
+        sys.exit(0)
     except click.ClickException as exc:
-        # one line, like every other bad input (click's own form is three: Usage, Try, Error)
-        ctx = getattr(exc, "ctx", None)
-        hint = f" (see `{ctx.command_path} --help`)" if isinstance(exc, click.UsageError) and ctx is not None else ""
-        _say_error(f"{exc.format_message()}{hint}")
-        sys.exit(2)
+        _usage_error(exc)
     except (click.exceptions.Abort, KeyboardInterrupt) as exc:
         _interrupted(interrupt.signal_of(exc))
     except (SystemError, ImportError) as exc:
@@ -125,6 +128,14 @@ def main() -> None:
         if interrupt.pending() is None:
             raise
         _interrupted(interrupt.pending())
+
+
+def _usage_error(exc: click.ClickException) -> NoReturn:
+    # one line, like every other bad input (click's own form is three: Usage, Try, Error)
+    ctx = getattr(exc, "ctx", None)
+    hint = f" (see `{ctx.command_path} --help`)" if isinstance(exc, click.UsageError) and ctx is not None else ""
+    _say_error(f"{exc.format_message()}{hint}")
+    sys.exit(2)
 
 
 def _say_error(message: str) -> None:
