@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from conftest import LIBRARY
-from solving import agrisynth
+from solving import agrisynth, spec_with
 
 
 def _one_line_error(proc, code: int = 2) -> str:
@@ -733,3 +733,29 @@ def test_an_entry_angle_minimum_of_90_deg_is_refused_at_load(tmp_path, spec):
                     text.replace("[objective]", "[rules]\nentry_angle_min = 90\n\n[objective]", 1))
     line = _one_line_error(agrisynth("check", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path))
     assert line.endswith("rules.entry_angle_min: expected < 90, got 90"), line
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+@pytest.mark.parametrize("source, replacements, code, said", [
+    # the arm does not assemble at the design: nothing to linearise (LAPACK's SVD on NaN, a traceback)
+    ("planting_arm/taiwan_example1.toml", [("l2 = 35", "l2 = 200")], 2,
+     "tolerance: the design cannot be linearised: the structural rows of planting are not finite at this design"),
+    ("picker/cai2020_crank_rocker_synthesis.toml", [("l7 = { init = 50.0, bounds = [5.0, 200.0] }", "l7 = 300")], 2,
+     "the structural rows of crank_rocker are not finite at this design"),
+    # the tillage linkage's auxiliaries do not converge (an ArithmeticError's traceback)
+    ("tillage/tillage_redesign.toml", [("c = { init = 500.0, bounds = [250.0, 900.0] }", "c = 250.0"),
+                                       ("height_c = { init = 130.0, bounds = [100.0, 400.0] }", "height_c = 400")], 2,
+     "the auxiliary variables of tillage_linkage do not converge onto their structural rows"),
+    # corners of the box where the arm does not assemble: no claw path to cross the soil (an IndexError)
+    ("planting_arm/taiwan_example1.toml", [("l2 = 35", "l2 = 70")], 1, None),
+    # targets the coupler cannot reach: the check's crank angles are null (a TypeError comparing them)
+    ("fourbar_path/picking_arc.toml", [("r1 = {init = 110, bounds = [20, 200]}", "r1 = 1000")], 1, None),
+])
+def test_tolerance_of_a_design_that_does_not_assemble_says_so_in_one_line(tmp_path, source, replacements, code, said):
+    spec = spec_with(tmp_path, LIBRARY / source, replacements)
+    proc = agrisynth("tolerance", str(spec), "--length", "0.5", "--samples", "20", "--out", str(tmp_path / "out"),
+                     cwd=tmp_path)
+    assert "Traceback" not in proc.stderr and "DLASCL" not in proc.stdout, proc.stderr[-2000:]
+    assert proc.returncode in ((code,) if code == 2 else (0, 1)), proc.stdout + proc.stderr
+    if said is not None:
+        assert said in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr

@@ -119,6 +119,11 @@ class Sensitivity:
         for _ in range(iterations):
             h, H = (np.asarray(v, float) for v in self._h(x, p))
             h = h.ravel()
+            if not (np.all(np.isfinite(h)) and np.all(np.isfinite(H))):
+                # the kinematics are undefined here (a linkage that does not assemble): no Newton step exists
+                raise ArithmeticError(f"the structural rows of {self.problem.name} are not finite at this design "
+                                      f"(its mechanism does not assemble there), so its auxiliary variables cannot be "
+                                      f"pinned")
             if np.max(np.abs(h)) <= tol * max(1.0, np.max(np.abs(x[n:]))):
                 return x
             x[n:] -= np.linalg.lstsq(H[:, n:], h, rcond=None)[0]

@@ -98,8 +98,14 @@ def tolerance(request: ToleranceRequest, emit: Subscriber) -> Outcome:
     points = len(grid_of(spec))
     if points > 1:        # an envelope: every sample is re-checked at every point of the range's grid
         emit(MonteCarloPlan(samples, points))
-    facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
-                    seed=seed)
+    try:
+        facts = analyse(kind, spec, design, length=length, angle=angle, per_variable=per_variable, samples=samples,
+                        seed=seed)
+    except ArithmeticError as exc:
+        # a design the analysis cannot linearise (its mechanism does not assemble, its auxiliaries do not converge):
+        # nothing to stack up, said in one line with what shows why
+        raise SpecError(f"{loaded.path}: tolerance: the design cannot be linearised: {exc}; `agrisynth check` shows "
+                        f"its rules there") from None
     name = spec.name.removesuffix("_solved")
     with RunOutput(request.out, f"{name}-tolerance", force=request.force) as output:
         folder, _ = output.write_files(artifacts(kind.name, name, loaded.sha256, facts))

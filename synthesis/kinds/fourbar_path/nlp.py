@@ -322,11 +322,13 @@ class PathNLP(KindNLP):
         """With free timing, the crank angle of each target and the crank direction are the answer's (result.json
         ``design.crank_deg``, a start's ``direction``), not the start's guesses: its rules are read there."""
         crank, direction = design.get("crank_deg"), design.get("direction")
-        if isinstance(crank, list) and len(crank) == x0.size - n and all(
-                isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank):
+        # a check's crank angles are null where the coupler cannot reach a target: no angles to read then
+        numbers = isinstance(crank, list) and all(
+            isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank)
+        if numbers and len(crank) == x0.size - n:
             x0 = x0.copy()
             x0[n:] = np.radians(np.asarray(crank, float))
-        if direction not in ("ccw", "cw") and isinstance(crank, list) and len(crank) > 1:   # result.json: no direction
+        if direction not in ("ccw", "cw") and numbers and len(crank) > 1:   # result.json: no direction
             direction = "ccw" if crank[-1] >= crank[0] else "cw"      # the angles run in the crank's turning sense
         if direction in ("ccw", "cw") and p.size == 1:
             p = np.array([1.0 if direction == "ccw" else -1.0])

@@ -210,7 +210,12 @@ def find_precision_points(scene: PlantingScene, grid: int = 3600, scan: TurnScan
     cycle = th5 + np.linspace(0.0, TWO_PI, grid + 1)
     positions = tip_positions(d, cycle)
     ycyc = positions[1]
-    if soil <= y5:
+    if not np.all(np.isfinite(ycyc)):
+        # a linkage that does not assemble over the whole turn has no claw path to cross the soil (a tolerance
+        # box's corner of a design near its Grashof limit: an IndexError on the empty crossings)
+        why = "the claw path cannot be traced over a turn: the linkage does not assemble at every crank angle"
+        problems.update({"P4": why, "P6": why})
+    elif soil <= y5:
         why = f"the claw never reaches the soil: lowest point Y = {y5:.1f} mm is above the soil surface Y = {soil:.1f} mm"
         problems.update({"P4": why, "P6": why})
     elif soil >= ycyc.max():
