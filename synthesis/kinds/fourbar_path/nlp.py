@@ -321,9 +321,10 @@ class PathNLP(KindNLP):
     def answer_start(self, design: dict, x0: np.ndarray, p: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
         """With free timing, the crank angle of each target and the crank direction are the answer's (result.json
         ``design.crank_deg``, a start's ``direction``), not the start's guesses: its rules are read there."""
-        crank, direction = design.get("crank_deg"), design.get("direction")
+        given, direction = design.get("crank_deg"), design.get("direction")
+        crank: list = given if isinstance(given, list) else []
         # a check's crank angles are null where the coupler cannot reach a target: no angles to read then
-        numbers = isinstance(crank, list) and all(
+        numbers = isinstance(given, list) and all(
             isinstance(a, (int, float)) and not isinstance(a, bool) and np.isfinite(a) for a in crank)
         if numbers and len(crank) == x0.size - n:
             x0 = x0.copy()
