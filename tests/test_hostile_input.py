@@ -759,3 +759,33 @@ def test_tolerance_of_a_design_that_does_not_assemble_says_so_in_one_line(tmp_pa
     assert proc.returncode in ((code,) if code == 2 else (0, 1)), proc.stdout + proc.stderr
     if said is not None:
         assert said in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+@pytest.mark.parametrize("field, value", [
+    ("outcome", "x"), ("objective", None), ("objective", "x"), ("start", "0"), ("start", -1), ("start", True),
+    ("design", [1, 2]), ("wall_s", "x"), ("details", "x"), ("return_status", 5), ("iterations", "x"),
+    ("success", 1), ("log", None),
+])
+def test_a_damaged_starts_line_is_not_an_outcome(field, value):
+    """--resume read each line of starts.jsonl as an outcome: {"outcome": "x"} was an AttributeError, an objective
+    of null a TypeError deep in the verdict, a return status of 5 carried into result.json.  Such a line is now no
+    outcome (TypeError, which the reader takes as a line to skip: its start is solved again)."""
+    from synthesis.core.outcome import StartOutcome
+    from synthesis.core.startlog import decode, encode
+
+    good = encode(StartOutcome(3, {"l2": 35.0}, 1.5, "Solve_Succeeded", True, 12, 0.25, "log", None, {"a": 1}))
+    assert decode(json.loads(json.dumps(good))) == StartOutcome(3, {"l2": 35.0}, 1.5, "Solve_Succeeded", True, 12,
+                                                                0.25, "log", None, {"a": 1})
+    bad = {"outcome": value} if field == "outcome" else {"outcome": {**good["outcome"], field: value}}
+    with pytest.raises(TypeError):
+        decode(bad)
+
+
+def test_a_steering_table_giving_one_lock_twice_is_refused(tmp_path):
+    """[published] inside_lock = [10, 10, 10, 40]: the table's concavity divided by zero (a traceback)."""
+    spec = spec_with(tmp_path, LIBRARY / "steering" / "steering_redesign_40.toml",
+                     [("inside_lock = [10.0, 20.0, 30.0, 40.0]", "inside_lock = [10.0, 10.0, 10.0, 40.0]")])
+    proc = agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.strip() == (
+        f"error: {spec}: steering_linkage.published: inside_lock[1] = 10: the same lock as inside_lock[0]; give each "
+        f"printed row once")

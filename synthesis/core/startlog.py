@@ -99,8 +99,26 @@ def encode(outcome: Any) -> dict:
     return {"outcome": {k: _enc(getattr(outcome, k)) for k in fields}}
 
 
+#: what each field of a recorded outcome must be: a line that says otherwise was not written by agrisynth (or was
+#: damaged since), and its start is solved again rather than carried into the result
+_FIELD_TYPES: dict[str, tuple] = {"start": (int,), "design": (dict,), "objective": (int, float),
+                                  "return_status": (str,), "success": (bool,), "iterations": (int,),
+                                  "wall_s": (int, float), "log": (str,), "raw": (NLPOutcome, type(None)),
+                                  "details": (dict,)}
+
+
 def decode(line: dict) -> StartOutcome:
-    fields = {k: _dec(v) for k, v in line["outcome"].items()}
+    """The outcome a line records; TypeError (the line is skipped, its start solved again) when it is not one."""
+    recorded = line["outcome"]
+    if not isinstance(recorded, dict):
+        raise TypeError("an outcome that is not a table")
+    fields = {k: _dec(v) for k, v in recorded.items()}
+    for name, types in _FIELD_TYPES.items():
+        value = fields.get(name)
+        if name in fields and (not isinstance(value, types) or isinstance(value, bool) and bool not in types):
+            raise TypeError(f"field {name} is a {type(value).__name__}")
+    if fields.get("start", -1) < 0 or not all(isinstance(k, str) for k in fields.get("design", {})):
+        raise TypeError("a negative start or a design not keyed by name")
     out = StartOutcome(**fields)
     if out.raw is not None:
         out.raw.log = out.log
@@ -226,7 +244,7 @@ def read_resumed(folder: Path, print_: str) -> Resumed:
             if "outcome" in line:
                 try:
                     out = decode(line)
-                except (TypeError, ValueError, KeyError):
+                except (TypeError, ValueError, KeyError, AttributeError):
                     continue
                 finished[out.start] = out
     if header is None:

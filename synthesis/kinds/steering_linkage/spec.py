@@ -108,6 +108,14 @@ class Published(StrictModel):
             for i, v in enumerate(getattr(self, name)):
                 if not 0.0 < v < 90.0:
                     raise ValueError(f"{name}[{i}] = {v:g}: a lock must lie in (0, 90) deg")
+        # one row per lock: the table's concavity reads each row against the chord of its neighbours (a lock given
+        # twice divided by zero)
+        seen: dict[float, int] = {}
+        for i, v in enumerate(self.inside_lock):
+            if v in seen:
+                raise ValueError(f"inside_lock[{i}] = {v:g}: the same lock as inside_lock[{seen[v]}]; give each "
+                                 f"printed row once")
+            seen[v] = i
         for i, v in enumerate([*self.accurate_outside, self.max_lock.accurate]):   # Table 12 explained: alpha +- resolution
             if not 0.0 < v - self.resolution and v + self.resolution < 90.0:
                 raise ValueError(f"resolution = {self.resolution:g}: the 'accurate' lock {v:g} deg +- resolution "
