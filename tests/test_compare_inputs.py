@@ -327,3 +327,17 @@ def test_the_default_compare_folder_of_many_results_keeps_to_a_folder_name():
     assert default_out((Path("old/arm/result.json"), Path("new/arm"))) == default_out((Path("old/arm"),
                                                                                       Path("new/arm")))
     assert default_out((Path(os.fsdecode(b"arm\xff")), Path("b"))).name.startswith("arm__vs_b_")
+
+
+@pytest.mark.parametrize("value", [None, -1, {}, [], 1e300, "<b>x</b>"])
+def test_a_bench_row_s_text_fields_of_any_json_type_make_a_page(value):
+    """A bench.json whose method (or time-to-target text, or ratio text) was null, a number, a table or a list was an
+    AttributeError out of html.escape in `compare`; any JSON value is now its escaped text, none a dash (and the
+    missing ratio a dash, not the escaped entity "&amp;ndash;" it showed)."""
+    from synthesis.report.page import bench_table
+
+    row = {"problem": "p", "method": value, "objective": 1.0, "time_to_target_text": value, "time_ratio_text": value}
+    page = bench_table([{"rows": [row]}])
+    assert "&amp;ndash;" not in page and "<b>x</b>" not in page
+    cells = page.split("<td>p</td>")[1]
+    assert cells.startswith("<td>–</td>" if value in (None,) else "<td>")

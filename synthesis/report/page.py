@@ -7,6 +7,7 @@ Built from the tables of :mod:`synthesis.report.tables` alone.
 from __future__ import annotations
 
 import html
+import json
 import math
 
 from constraints.base import limit_text
@@ -244,20 +245,27 @@ def _verdicts(cands: list[Candidate], heads: list[Headline] | None = None) -> st
     return f"<div class='verdicts'>{''.join(out)}</div>"
 
 
+def _text(value) -> str:
+    """A cell's text, escaped: a bench.json a hand edited may hold any JSON value where text belongs (a method of null
+    or 1e300 was an AttributeError out of html.escape); none or empty is a dash."""
+    if value is None or value == "":
+        return "–"
+    return html.escape(value if isinstance(value, str) else json.dumps(value)[:80])
+
+
 def bench_table(bench: list[dict]) -> str:
     """Objective reached, median wall time and time to target of each method per problem, with the ratio of the
     times to target."""
     rows = []
     for res in bench:
         for row in res["rows"]:
-            ratio = row.get("time_ratio_text") or "&ndash;"
-            rows.append(f"<tr><td>{html.escape(row['problem'])}</td><td>{html.escape(row['method'])}</td>"
+            rows.append(f"<tr><td>{_text(row.get('problem'))}</td><td>{_text(row.get('method'))}</td>"
                         f"<td class='num'>{_num(row.get('objective'))}</td>"
                         f"<td class='num'>{_num(row.get('objective_gap'), 3)}</td>"
                         f"<td class='num'>{_num(row.get('worst_violation'), 3)}</td>"
                         f"<td class='num'>{_num(row.get('median_s'), 3)}</td>"
-                        f"<td class='num'>{html.escape(row.get('time_to_target_text') or '–')}</td>"
-                        f"<td class='num'>{html.escape(ratio)}</td></tr>")
+                        f"<td class='num'>{_text(row.get('time_to_target_text'))}</td>"
+                        f"<td class='num'>{_text(row.get('time_ratio_text'))}</td></tr>")
     return ("<table class='bench'><tr><th>problem</th><th>method</th><th>objective</th><th>gap to best</th>"
             "<th>worst violation</th><th>median s</th><th>time to target s</th><th>time-to-target ratio</th></tr>\n"
             + "\n".join(rows) + "</table>")
