@@ -160,8 +160,17 @@ def copy_out(source: Path, target: Path, *, force: bool = False, rename: bool = 
             renamed = with_name(data, copy.stem)
             name = copy.stem if renamed != data else name
             data = renamed
-        atomic_write_drawn(copy, lambda tmp, data=data: tmp.write_bytes(data))
+        write_new_file(copy, lambda tmp, data=data: tmp.write_bytes(data))
     return Copied([copy for _, copy in plan], name, names[0])
+
+
+def write_new_file(path: Path, draw) -> None:
+    """``atomic_write_drawn`` of a file the user named (a copy, a template): a folder the system will not let us write
+    in (/proc, a read-only disk) is an OutputError in one line (exit 2), not the temporary file's traceback."""
+    try:
+        atomic_write_drawn(path, draw)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot be written there ({exc.strerror or exc})") from None
 
 
 #: a spec's top-level ``name = "..."`` line (before any table)

@@ -173,3 +173,13 @@ def test_a_copy_named_as_a_file_it_names_is_refused_before_anything_is_written(t
         "error: cai2020_crank_rocker.toml: cai2020_picker.toml and the spec file it names, cai2020_crank_rocker.toml, "
         "would be copied to this one file; give --out another file name")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc (a folder no file can be made in)")
+@pytest.mark.parametrize("args", [("problems", "--copy", "taiwan_example1", "--out", "/proc/x.toml"),
+                                  ("spec", "planting_fourbar", "--template", "--out", "/proc/t.toml")])
+def test_a_copy_or_template_into_a_folder_that_takes_no_file_is_refused_in_one_line(tmp_path, args):
+    """problems --copy and spec --template into /proc were the temporary file's FileNotFoundError traceback."""
+    proc = agrisynth(*args, cwd=tmp_path, timeout=60)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == f"error: {args[-1]}: cannot be written there (No such file or directory)"

@@ -9,8 +9,7 @@ from pathlib import Path
 
 from synthesis import kinds
 from synthesis.errors import OutputError, SpecError
-from synthesis.library import Copied, copy_out, library_spec, unknown_name_text
-from synthesis.result import atomic_write_drawn, atomic_write_text
+from synthesis.library import Copied, copy_out, library_spec, unknown_name_text, write_new_file
 from synthesis.spec import reference
 from synthesis.spec.common import read_toml
 
@@ -83,7 +82,8 @@ def write_template(kind: str, target: Path) -> list[Path]:
         companions.append((source, copy))
     for source, copy in companions:
         _copy_bytes(source, copy)
-    atomic_write_text(target, reference.template(kind, target.parent))
+    text = reference.template(kind, target.parent)
+    write_new_file(target, lambda tmp: tmp.write_text(text))
     return [target, *(copy for _, copy in companions)]
 
 
@@ -93,4 +93,4 @@ def _copy_bytes(source: Path, copy: Path) -> None:
 
     def write(tmp: Path) -> None:
         tmp.write_bytes(data)
-    atomic_write_drawn(copy, write)
+    write_new_file(copy, write)
