@@ -156,3 +156,13 @@ def test_an_angle_a_bound_relaxation_left_a_hair_past_a_turn_still_loads(tmp_pat
         else:
             with pytest.raises(SpecError, match="got 360.001"):
                 load_spec(path)
+
+
+def test_a_solved_or_elastic_spec_s_name_keeps_to_the_length_a_spec_may_have():
+    """A 100-character spec name gave solved.toml the name <name>_solved, 107 characters, which check refused."""
+    from synthesis.spec.common import MAX_NAME_LENGTH, derived_name, usable_name
+
+    for suffix in ("_solved", "_elastic"):
+        long = derived_name("a" * MAX_NAME_LENGTH, suffix)
+        assert len(long) == MAX_NAME_LENGTH and long.endswith(suffix) and usable_name(long)
+        assert derived_name("arm", suffix) == f"arm{suffix}"

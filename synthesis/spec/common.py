@@ -135,6 +135,12 @@ RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 MAX_NAME_LENGTH = 100
 
 
+def derived_name(name: str, suffix: str) -> str:
+    """``name`` + ``suffix`` (a solved.toml's ``_solved``), the name cut so the whole keeps to MAX_NAME_LENGTH (a
+    100-character name's solved.toml was refused by check, its name 107 characters long)."""
+    return name[:MAX_NAME_LENGTH - len(suffix)] + suffix
+
+
 class ToleranceSpec(StrictModel):
     """[tolerance]: manufacturing tolerances of the design variables (half-widths of a box around the design).
     In a spec, ``solve`` holds every rule at its linearised worst case in the box and Monte-Carlo checks the

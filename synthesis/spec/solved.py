@@ -20,7 +20,7 @@ from pydantic import BaseModel
 
 from synthesis import kinds
 from synthesis.core.coordinates import BOUND_TOLERANCE
-from synthesis.spec.common import is_free, validate
+from synthesis.spec.common import derived_name, is_free, validate
 from synthesis.spec.design_info import describe
 from synthesis.spec.reference import write_toml
 from synthesis.errors import SpecError
@@ -65,7 +65,7 @@ def solved_data(loaded, result) -> dict[str, Any]:
             raise SpecError(f"kind {loaded.kind}: the free variable {name} has no "
                             f"{'place in the spec file' if var['path'] is None else 'solved value'}")
         set_at_path(data, var["path"], float(result.design[name]))
-    data["name"] = f"{loaded.name}_solved"
+    data["name"] = derived_name(loaded.name, "_solved")
     _given_design(loaded, result, data)
     return data
 
@@ -100,7 +100,7 @@ def elastic_toml(loaded, result) -> str | None:
             lo, hi = var["bounds"]
             # IPOPT ends within its bound relaxation (~1e-8 relative) of a bound: a start must lie inside
             entry["init"] = float(min(max(float(value), lo), hi))
-        data["name"] = f"{loaded.name}_elastic"
+        data["name"] = derived_name(loaded.name, "_elastic")
         validate(type(loaded.model), data, prefix=loaded.kind)
     except (SpecError, KeyError, IndexError, TypeError, ValueError):
         return None
