@@ -166,3 +166,22 @@ def test_a_solved_or_elastic_spec_s_name_keeps_to_the_length_a_spec_may_have():
         long = derived_name("a" * MAX_NAME_LENGTH, suffix)
         assert len(long) == MAX_NAME_LENGTH and long.endswith(suffix) and usable_name(long)
         assert derived_name("arm", suffix) == f"arm{suffix}"
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+def test_a_solved_toml_reads_back_whatever_the_spec_s_file_name_and_text_hold(tmp_path):
+    """A DEL character in `source` was written raw into solved.toml (a control character TOML refuses), a newline in
+    the spec's file name ended the header comment and made the rest of the name TOML: check refused the file."""
+    text = (LIBRARY / "steering" / "steering_redesign_40.toml").read_text()
+    text = re.sub(r'(?m)^source = "', 'source = "del\\\\u007f here, ', text, count=1)
+    spec = tmp_path / "ev\nil.toml"
+    spec.write_text(text)
+    assert "\x7f" in load_spec(spec).model.source
+    solve = agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path / "out"),
+                      cwd=tmp_path)
+    assert solve.returncode == 0, solve.stderr
+    solved = next((tmp_path / "out").glob("*/solved.toml"))
+    assert "\x7f" not in solved.read_text() and "# the spec ev?il.toml with" in solved.read_text()
+    check = agrisynth("check", str(solved), "--out", str(tmp_path / "check"), cwd=tmp_path)
+    assert check.returncode == 0, check.stderr
+    assert load_spec(solved).model.source == load_spec(spec).model.source

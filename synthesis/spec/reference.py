@@ -283,7 +283,8 @@ def toml_value(v: Any) -> str:
             return "inf" if v > 0 else "-inf"
         return repr(v)
     if isinstance(v, str):
-        return json.dumps(v, ensure_ascii=False)
+        # JSON's escapes are TOML's; DEL is a control character to TOML, not to JSON
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(v, BaseModel):
         v = v.model_dump(by_alias=True, exclude_none=True)
     if isinstance(v, (list, tuple)):

@@ -108,7 +108,7 @@ def elastic_toml(loaded, result) -> str | None:
     needed = elastic_said(elastic)
     head_lines = [f"# {result.name}: no start of `agrisynth solve` satisfied every rule (status {result.status}).",
                   f"# The elastic re-solve's design ({needed})",
-                  f"# as the start of every free design variable of {loaded.path.name}, bounds kept:",
+                  f"# as the start of every free design variable of {comment_text(loaded.path.name)}, bounds kept:",
                   f"#   agrisynth check {ELASTIC_FILENAME}   evaluates it on the 10x finer grid;",
                   f"#   agrisynth solve {ELASTIC_FILENAME}   solves from it (start 0).",
                   f"# spec sha256 {loaded.sha256}", ""]
@@ -163,6 +163,12 @@ def _fixed_values_moved(model, design: dict) -> str:
     return "; ".join(moved)
 
 
+def comment_text(text: str) -> str:
+    """``text`` fit for one TOML comment line: a control character (a newline in a file name) would end the comment
+    and make the rest of the name TOML -- written as "?"."""
+    return re.sub(r"[\x00-\x1f\x7f]", "?", text)
+
+
 def solved_toml(loaded, result) -> str:
     data = solved_data(loaded, result)
     objective = result.objective or {}
@@ -174,6 +180,6 @@ def solved_toml(loaded, result) -> str:
                     f"the solve's rule table.")
     head = [f"# {result.name} as solved by `agrisynth solve` (status {result.status}"
             + (f", {objective.get('name')} = {value:.6g}" if isinstance(value, (int, float)) else "") + "):",
-            f"# the spec {loaded.path.name} with every free design variable fixed at its solved value.",
+            f"# the spec {comment_text(loaded.path.name)} with every free design variable fixed at its solved value.",
             exactly, f"# spec sha256 {loaded.sha256}", ""]
     return "\n".join(head + write_toml(type(loaded.model), data, documented=False)) + "\n"
