@@ -206,3 +206,24 @@ def test_what_it_cannot_fit_is_refused_on_one_line_naming_the_field(tmp_path, ed
         load_spec(path)
     message = str(refused.value)
     assert field in message and "\n" not in message.strip()
+
+
+@pytest.mark.slow         # seconds: with the slow tests (the quick suite stays under 3 min)
+def test_check_of_a_spring_shaped_solve_s_solved_toml_reproduces_its_rule_table(tmp_path):
+    """The spring-shaped law is fitted from the spring's stiffness bound and preload range: solved.toml fixed both, so
+    check fitted another law (jump_speed_min 135.1291 against the solve's 135.1331 r/min, pressure angle 40.74
+    against 40.69 deg) while its header promised the solve's rule table.  It keeps their bounds, started at the solved
+    values: every rule the same to the bit."""
+    from solving import agrisynth, strict_json
+
+    spec = LIBRARY / "clamp_cam" / "opening_cam_redesign_jump_1p5_shaped.toml"
+    solve = agrisynth("solve", str(spec), "--starts", "2", "--workers", "1", "--out", str(tmp_path / "s"), cwd=tmp_path)
+    assert solve.returncode == 0, solve.stderr
+    run = tmp_path / "s" / "opening_cam_redesign_jump_1p5_shaped"
+    text = (run / "solved.toml").read_text()
+    assert "spring_preload = {init = " in text and "bounds = [0.0, 50.0]}" in text
+    check = agrisynth("check", str(run / "solved.toml"), "--out", str(tmp_path / "c"), cwd=tmp_path)
+    assert check.returncode == 0, check.stderr
+    solved, checked = strict_json(run / "result.json"), strict_json(
+        tmp_path / "c" / "opening_cam_redesign_jump_1p5_shaped_solved-check" / "result.json")
+    assert [(r["name"], r["value"]) for r in checked["rules"]] == [(r["name"], r["value"]) for r in solved["rules"]]

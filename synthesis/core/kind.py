@@ -131,6 +131,12 @@ class Kind(ABC):
         whole design."""
         return data
 
+    def bounds_read(self, spec: Any) -> list[str]:
+        """The free design variables whose bounds the kind reads besides their value (clamp_cam's spring-shaped law
+        is fitted from the spring's stiffness bound and preload range): solved.toml starts each at its solved value
+        with its bounds kept, so `check` of it evaluates the solve's design under the same law.  None by default."""
+        return []
+
     def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(d0, J): the design is d0 + J z for the NLP's first ``n`` decision entries z; the identity by default."""
         return np.zeros(n), np.eye(n)
@@ -217,6 +223,9 @@ class SolvingReplaced(Kind):
 
     def explicit_design(self, loaded: LoadedSpec, data: dict) -> dict:
         return self.base.explicit_design(loaded, data)
+
+    def bounds_read(self, spec: Any) -> list[str]:
+        return self.base.bounds_read(spec)
 
     def design_affine(self, spec: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         return self.base.design_affine(spec, n)

@@ -58,13 +58,16 @@ def solved_data(loaded, result) -> dict[str, Any]:
     if not info:
         raise SpecError(f"kind {loaded.kind}: its spec model lists no design variables (variables()), so the "
                         f"solved design cannot be written as a spec")
+    bounds_read = set(kinds.get(loaded.kind).bounds_read(loaded.model))
     for name, var in info.items():
         if not var["free"]:
             continue
         if var["path"] is None or name not in result.design:
             raise SpecError(f"kind {loaded.kind}: the free variable {name} has no "
                             f"{'place in the spec file' if var['path'] is None else 'solved value'}")
-        set_at_path(data, var["path"], float(result.design[name]))
+        value = float(result.design[name])
+        # a variable whose bounds the kind reads (a law fitted from them) keeps them, started at its solved value
+        set_at_path(data, var["path"], {"init": value, "bounds": list(var["bounds"])} if name in bounds_read else value)
     data["name"] = derived_name(loaded.name, "_solved")
     _given_design(loaded, result, data)
     return data
@@ -174,12 +177,14 @@ def solved_toml(loaded, result) -> str:
     objective = result.objective or {}
     value = objective.get("value")
     moved = _fixed_values_moved(loaded.model, result.design)
+    kept = [n for n in kinds.get(loaded.kind).bounds_read(loaded.model) if is_free(loaded.model.variables().get(n))]
     exactly = (f"#   agrisynth check {FILENAME}   evaluates exactly this design (the solve's rule table)." if not moved
                else f"#   NOTE: the solve's design is no design of this spec ({moved}: a start IPOPT stopped without "
                     f"meeting the rows that hold it); `agrisynth check {FILENAME}` evaluates the spec's values, not "
                     f"the solve's rule table.")
     head = [f"# {result.name} as solved by `agrisynth solve` (status {result.status}"
             + (f", {objective.get('name')} = {value:.6g}" if isinstance(value, (int, float)) else "") + "):",
-            f"# the spec {comment_text(loaded.path.name)} with every free design variable fixed at its solved value.",
+            f"# the spec {comment_text(loaded.path.name)} with every free design variable fixed at its solved value"
+            + (f" ({', '.join(kept)}: started there, bounds kept -- the kind reads them)." if kept else "."),
             exactly, f"# spec sha256 {loaded.sha256}", ""]
     return "\n".join(head + write_toml(type(loaded.model), data, documented=False)) + "\n"

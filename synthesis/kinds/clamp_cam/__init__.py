@@ -62,6 +62,14 @@ class ClampCam(Kind):
     def coarse_check(self) -> CoarseCheck:
         return _parts().COARSE
 
+    def bounds_read(self, spec) -> list[str]:
+        # the spring-shaped law is fitted from the stiffness's lower bound and the preload's range
+        # (synthesis.kinds.clamp_cam.scene.spring_shaping), whatever their values
+        if spec.motion.law != "optimised" or spec.bspline.minimise != "spring_force" or spec.dynamics is None:
+            return []
+        _, preload, stiffness = spec.dynamics.body_fields(spec.follower.type)
+        return [preload, stiffness]
+
     def poses(self) -> Poses:
         return _parts().POSES
 
