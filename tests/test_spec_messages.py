@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import PLANTING
+from conftest import LIBRARY, PLANTING
 from synthesis.errors import SpecError
 from synthesis.spec import load_spec
 from solving import agrisynth, spec_with
@@ -262,3 +262,18 @@ def test_numbers_that_look_like_the_wrong_unit_get_a_note_and_the_library_none(t
 def test_a_spec_name_that_is_another_commands_folder_is_refused(tmp_path, name, said):
     """A solve named "compare" wrote results/compare/, which `agrisynth compare --force` then replaced by its page."""
     assert message(tmp_path, 'name = "redesign_from_example1"', f'name = "{name}"') == said
+
+
+@pytest.mark.parametrize("given, said", [
+    ("crank = { mass = 1, com = [0, 0], inertia = -1 }", "planting_fourbar.dynamics.crank.inertia: expected >= 0, got -1"),
+    ("crank = { density = 0, area = 100 }", "planting_fourbar.dynamics.crank.density: expected > 0, got 0"),
+])
+def test_a_link_table_that_fits_no_form_is_told_what_is_wrong_with_the_form_it_was_given_in(tmp_path, given, said):
+    """A link is a bar {density, area} or lumped {mass, com, inertia}: a lumped link with a negative inertia was told
+    four lines of "BarLink.mass: unknown field" and "... and 2 more", never its inertia."""
+    text = (LIBRARY / "planting_arm" / "taiwan_example1_dynamics.toml").read_text()
+    assert "crank = { density = 7850, area = 100 }" in text
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text.replace("crank = { density = 7850, area = 100 }", given, 1))
+    proc = agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.strip() == f"error: {spec}: {said}", proc.stderr

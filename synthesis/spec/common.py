@@ -472,11 +472,47 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         return model.model_validate(data) if text is None else model.model_validate_json(text, strict=True)
     except ValidationError as exc:
         order = _file_order(data)
+        errors = _best_table_branches(exc.errors())
         # in file order, each line once (a dict keeps the first: a list's `in` made thousands of errors quadratic)
         seen = list(dict.fromkeys(f"{prefix}.{_describe(err, model)}"
-                                  for err in sorted(exc.errors(), key=lambda e: _position(order, e["loc"]))))
+                                  for err in sorted(errors, key=lambda e: _position(order, e["loc"]))))
         # a union of "number | table" yields one error per branch: keep the most specific ones
         raise SpecError("\n".join(capped(_prune_union_noise(_misspelt_only(seen))))) from None
+
+
+_BRANCH = re.compile(r"^[A-Z][A-Za-z0-9]*$")
+
+
+def _best_table_branches(errors: list) -> list:
+    """Where a field takes one of several tables (a link as a bar {density, area} or lumped {mass, com, inertia}) and
+    fits none, pydantic complains of every branch: only the branch the given keys fit best is kept (the fewest keys
+    it does not know, then the fewest complaints), its name dropped from the path -- a lumped link with a negative
+    inertia was told "BarLink.mass: unknown field" four times and never its inertia."""
+    branches: dict[tuple, dict[str, list]] = {}
+    for err in errors:
+        loc = err["loc"]
+        k = next((i for i, part in enumerate(loc) if isinstance(part, str) and _BRANCH.match(part)), None)
+        if k is not None:
+            branches.setdefault(tuple(loc[:k]), {}).setdefault(loc[k], []).append(err)
+    chosen, dropped = {}, set()
+    for where, by_branch in branches.items():
+        if len(by_branch) < 2:
+            continue
+        best = min(by_branch, key=lambda b: (sum(e["type"] == "extra_forbidden" for e in by_branch[b]),
+                                            len(by_branch[b])))
+        chosen[where] = best
+        dropped.update(id(e) for b, errs in by_branch.items() if b != best for e in errs)
+    out = []
+    for err in errors:
+        if id(err) in dropped:
+            continue
+        loc = err["loc"]
+        for where, best in chosen.items():
+            if tuple(loc[:len(where)]) == where and len(loc) > len(where) and loc[len(where)] == best:
+                err = {**err, "loc": (*where, *loc[len(where) + 1:])}
+                break
+        out.append(err)
+    return out
 
 
 def _misspelt_only(lines: list[str]) -> list[str]:
