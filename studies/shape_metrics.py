@@ -14,7 +14,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = [ROOT / "synthesis", ROOT / "constraints"]
+PACKAGES = [ROOT / "synthesis"]
 
 
 def python_files() -> list[Path]:

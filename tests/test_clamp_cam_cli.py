@@ -88,8 +88,8 @@ print("MODULES", " ".join(loaded))
 """
 
 FORBIDDEN = ("synthesis.kinds.planting", "synthesis.kinds.picker", "synthesis.kinds.guide_tube", "synthesis.kinematics.fourbar",
-             "synthesis.kinds.planting.kinematics", "synthesis.kinds.picker.kinematics.arc", "constraints.grashof",
-             "constraints.transmission", "synthesis.kinds.planting.rules.precision_points")
+             "synthesis.kinds.planting.kinematics", "synthesis.kinds.picker.kinematics.arc", "synthesis.constraints.grashof",
+             "synthesis.constraints.transmission", "synthesis.kinds.planting.rules.precision_points")
 
 
 def _modules(tmp_path, command: str, spec: Path, extra: list[str] = ()) -> set[str]:

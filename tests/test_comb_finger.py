@@ -287,7 +287,7 @@ for args in (["check", {str(BASELINE)!r}], ["solve", {str(REDESIGN)!r}, "--worke
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.comb_finger.rules"))]
+         or (m.startswith("synthesis.constraints.") and m not in ("synthesis.constraints.base", "synthesis.kinds.comb_finger.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)

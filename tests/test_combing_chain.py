@@ -414,7 +414,7 @@ for args in (["check", {str(HC500)!r}], ["solve", {str(ONE_GEAR)!r}, "--workers"
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.combing_chain.rules"))]
+         or (m.startswith("synthesis.constraints.") and m not in ("synthesis.constraints.base", "synthesis.kinds.combing_chain.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)

@@ -14,7 +14,7 @@ import pytest
 
 from conftest import LIBRARY
 from solving import agrisynth
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.core.compiled_code import CompilerMissing, compiler, library_name
 from synthesis.core.ipopt import CompiledNLP, SolveMethod
 from synthesis.core.problem import ObjectiveParts, Problem

@@ -158,8 +158,11 @@ def test_fastest_puts_tube_I_on_its_steepest_bound_with_equal_times():
     result, _, _ = run_solve(loaded, starts=2, workers=1)
     assert result.status == "optimal"
     assert result.design["delta_I"] == pytest.approx(loaded.model.tubes[0].angle.bounds[1], abs=1e-6)
+    assert result.design["delta_I"] <= loaded.model.tubes[0].angle.bounds[1]       # within its bounds, not 6e-7 over
     times = [t["ode"]["t_z"] for t in result.extra["tubes"]]
-    assert abs(times[0] - times[1]) < 1e-9
+    # equal to 1e-8 s: IPOPT met the row at 60.0000006 deg, 6e-7 deg past the bound its relaxation allows; the
+    # design projected onto the bound lands 1.2e-9 s earlier
+    assert abs(times[0] - times[1]) < 1e-8
     assert result.objective["value"] == pytest.approx(1000 * times[0], abs=1e-6)
     assert result.objective["unit"] == "ms"
 
@@ -278,7 +281,7 @@ for args in (["check", {str(BASELINE)!r}], ["solve", {str(DELTA2)!r}, "--workers
     except SystemExit:
         pass
 other = [m for m in sys.modules if m.startswith({FORBIDDEN!r})
-         or (m.startswith("constraints.") and m not in ("constraints.base", "synthesis.kinds.guide_tube.rules"))]
+         or (m.startswith("synthesis.constraints.") and m not in ("synthesis.constraints.base", "synthesis.kinds.guide_tube.rules"))]
 print("LOADED", sorted(other))
 """
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)

@@ -70,3 +70,17 @@ def test_every_kind_lives_in_one_folder_under_synthesis_kinds():
         assert module.startswith("synthesis.kinds.") and module.count(".") == 2, (name, module)
         seen.add(module.split(".")[2])
     assert seen == folders
+
+
+def test_the_shared_rules_import_no_other_part_of_agrisynth():
+    """The shared design rules live inside the package (synthesis.constraints: a wheel installing a top-level
+    package named `constraints` could shadow another's), so their contract forbids each other part of synthesis by
+    name: every one, also one added later."""
+    import tomllib
+
+    contracts = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+    rules = next(c for c in contracts if c["source_modules"] == ["synthesis.constraints"])
+    parts = {f"synthesis.{p.stem if p.suffix == '.py' else p.name}" for p in (ROOT / "synthesis").iterdir()
+             if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").is_file()}
+    assert parts - {"synthesis.constraints"} <= set(rules["forbidden_modules"]), parts - set(rules["forbidden_modules"])
+    assert not (ROOT / "constraints").exists()

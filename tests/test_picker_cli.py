@@ -129,7 +129,7 @@ for args in runs:
     except SystemExit:
         pass
 words = ("planting", "cam", "guide_tube", "guide_way", "tillage", "combing", "steering")
-bad = [m for m in sys.modules if m.startswith(("synthesis.", "constraints.")) and any(w in m for w in words)]
+bad = [m for m in sys.modules if m.startswith(("synthesis.", "synthesis.constraints.")) and any(w in m for w in words)]
 bad += [m for m in sys.modules if m.split(".")[0] == "cvxpy"]
 print(json.dumps(bad))
 """

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import LIBRARY
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from solving import agrisynth
 from synthesis import kinds
 from synthesis.core import pinned

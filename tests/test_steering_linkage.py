@@ -321,6 +321,6 @@ def test_a_steering_run_imports_no_other_kind(tmp_path):
                                             ["solve", str(REDESIGN_27), "--workers", "1", "--out", str(tmp_path)]])
     assert "synthesis.kinds.steering_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
-    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base"]
+    assert [m for m in modules if m.startswith("synthesis.constraints.")] == ["synthesis.constraints.base"]
     assert "synthesis.kinds.steering_linkage.rules" in modules
     assert (tmp_path / "steering_redesign_27" / "result.json").exists()

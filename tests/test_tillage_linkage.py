@@ -282,7 +282,7 @@ def test_a_tillage_run_imports_no_other_kind(tmp_path):
                                             ["solve", str(REDESIGN), "--workers", "1", "--starts", "2", "--out", out]])
     assert "synthesis.kinds.tillage_linkage.solve" in modules
     assert [m for m in modules if m.startswith(FORBIDDEN)] == []
-    assert [m for m in modules if m.startswith("constraints.")] == ["constraints.base"]
+    assert [m for m in modules if m.startswith("synthesis.constraints.")] == ["synthesis.constraints.base"]
     assert "synthesis.kinds.tillage_linkage.rules" in modules
     assert (tmp_path / "out" / "tillage_redesign" / "result.json").exists()
 

@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis import kinds
 from synthesis.core.ipopt import CompiledNLP
 from synthesis.core.kind import Setting

@@ -272,7 +272,7 @@ def test_a_rule_value_that_is_not_a_number_is_an_infinite_violation():
 
     import numpy as np
 
-    from constraints.base import Rule
+    from synthesis.constraints.base import Rule
     from synthesis.core.verdict import Recheck, report_of
 
     def recheck(outcome):
@@ -432,7 +432,7 @@ def test_at_bounds_names_the_free_variables_on_a_bound_by_their_result_names():
 
 def test_a_start_line_names_what_stands_in_the_way_of_an_infinite_violation():
     """The terminal printed "worst violation inf" for a start with a rule not evaluated and no reason at all."""
-    from constraints import not_evaluated
+    from synthesis.constraints import not_evaluated
     from synthesis.runs.events import violation_text as _violation_text
 
     outcome = SimpleNamespace(start=11, return_status="Solve_Succeeded", success=True)
@@ -475,7 +475,7 @@ def test_the_elastic_points_are_the_kinds_choice_then_the_other_then_the_least_v
 
 def test_a_limit_of_minus_zero_reads_as_zero():
     """tillage's rearward-motion limit is stored as -0.0 (a negated 0): the tables read "<= -0"."""
-    from constraints.base import limit_text
+    from synthesis.constraints.base import limit_text
 
     assert limit_text((None, -0.0)) == "<= 0"
     assert limit_text((-0.0, 1.5)) == "[0, 1.5]"

@@ -7,7 +7,7 @@ from typing import Literal
 import casadi as ca
 from pydantic import Field
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.core.declared import Declared, evaluated, named, rules_solving
 from synthesis.core.kind import Kind
 from synthesis.core.problem import ObjectiveParts, Problem

@@ -17,7 +17,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from constraints.base import limit_text
+from synthesis.constraints.base import limit_text
 from synthesis.cli.terminal import PIPED_WIDTH, add_columns, design_table, print_table
 from synthesis.core import interrupt
 from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, objective_text, said, solved_heading

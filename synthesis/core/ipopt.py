@@ -70,7 +70,7 @@ from typing import Any, Callable, Iterator, Sequence
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.core.compiled_code import compile_seconds, load as load_compiled
 from synthesis.core.problem import Problem
 from synthesis.core.transcribe import Transcription, refuse_empty_rows, transcribe

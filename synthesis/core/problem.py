@@ -2,7 +2,7 @@
 
 A :class:`Problem` is the decision vector with its bounds, the *structural* rows (definitions that
 must hold exactly, e.g. "phi_a is a stationary point of the rocker"), the design rules
-(:class:`constraints.base.Rule`, each with its rows), the objective and the NLP parameters.  How
+(:class:`synthesis.constraints.base.Rule`, each with its rows), the objective and the NLP parameters.  How
 it becomes an NLP (back-off of inequality limits, the elastic form, the max-min-margin epigraph)
 is :mod:`synthesis.core.transcribe`; which solver runs it is :mod:`synthesis.core.ipopt`.
 """
@@ -17,7 +17,7 @@ from typing import Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 Row = tuple  # (expr, lb | None, ub | None); a vector expr is one row per element
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from synthesis.constraints import Rule
+from synthesis.constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.dynamics.facts import link_facts, sampled_facts, turn
 from synthesis.dynamics.fluctuation import speed_fluctuation_facts

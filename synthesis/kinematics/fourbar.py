@@ -91,7 +91,7 @@ def crank_rotation_slacks(l1, l2, l3, l4) -> dict[str, object]:
 
     l2 + l1 <= l3 + l4,  l2 + l3 <= l1 + l4,  l2 + l4 <= l1 + l3.  All three >= 0 is equivalent to
     "l2 is the shortest link and s + l <= p + q": a crank-rocker (or its change-point limit) when
-    driven by l2 with l1 as frame. Linear in the lengths.  (constraints.grashof states the same
+    driven by l2 with l1 as frame. Linear in the lengths.  (synthesis.constraints.grashof states the same
     inequalities as its rule: the rule layer imports no kinematics.)
     """
     return {

@@ -10,7 +10,7 @@ import html
 import json
 import math
 
-from constraints.base import limit_text
+from synthesis.constraints.base import limit_text
 from synthesis.report.tables import (GIVEN_HEADING, Candidate, Headline, RuleCell, design_rows, headlines, is_single_solve,
                                      operating_conditions, rule_rows, run_facts, shows_given, shows_given_rules, worst_margin,
                                      solved_heading, worst_margins)

@@ -1,7 +1,7 @@
 """The optional ``[key_poses]`` table of a transplanting kind's spec: named poses the claw must pass through.
 
 Shared by the kinds that offer it (the rotary planetary transplanter, the four-bar planting arm; their rules:
-:mod:`constraints.poses`).  A pose asks the claw tip to be within ``tolerance`` of a point (x, y), and/or the claw's
+:mod:`synthesis.constraints.poses`).  A pose asks the claw tip to be within ``tolerance`` of a point (x, y), and/or the claw's
 attitude -- its direction, from +x counter-clockwise -- to be within ``attitude_tolerance`` of ``attitude``.  Each
 kind's pose model adds where the pose is read (a carrier or crank angle the solver finds, one the spec prescribes,
 or a named point of the kind) and says in its ``attitude`` field which line on its mechanism the claw is.

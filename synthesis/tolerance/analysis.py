@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from constraints import not_evaluated
-from constraints.base import RuleRecord
+from synthesis.constraints import not_evaluated
+from synthesis.constraints.base import RuleRecord
 from synthesis.core import interrupt
 from synthesis.core.executor import default_workers, run_starts
 from synthesis.core.kind import Kind, Setting

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.core.kind import Finished, Kind, Setting, Solving
 from synthesis.core.outcome import StartOutcome
 from synthesis.core.problem import scenario_label

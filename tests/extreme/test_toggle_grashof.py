@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from constraints.grashof import grashof_rule
+from synthesis.constraints.grashof import grashof_rule
 from synthesis import kinds
 from synthesis.kinematics.rocker_drive import CrankRocker, acute, rocker_curve, transmission_angles_deg
 from synthesis.spec import load_spec

@@ -18,7 +18,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.kinds.clamp_cam.motion import Timing
 from synthesis.kinds.clamp_cam.scene import (DynamicsTrace, body_of, decelerating, follower_of, generalised_unit,
                                              omega_of, rules_of, stroke_of)

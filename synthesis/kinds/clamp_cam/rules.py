@@ -11,7 +11,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 #: the dwells count with the rise: an offset follower leans on its guide there too (tan a = -e / s0)
 WHERE = {"rise": "over the rise and the dwells", "return": "over the return"}

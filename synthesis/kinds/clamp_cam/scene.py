@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis.kinds.clamp_cam.rules import (acceleration_rule, contact_force_rule, hertz_stress_rule, jump_speed_rule,
                                              pressure_angle_rule, timing_rule, undercut_rule)
 from synthesis.kinds.clamp_cam.motion import SEGMENT_NAMES, CamMotion, Samples, Timing

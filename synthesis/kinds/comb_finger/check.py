@@ -13,7 +13,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.kinds.comb_finger.rules import (drum_above_ground_rule, finger_clear_rule, finger_hides_rule, finger_protrudes_rule, root_clearance_rule,
                                      tip_reaches_ground_rule, tip_speed_rule, unit_within_row_rule, units_gap_rule)
 from synthesis.kinds.comb_finger import geometry as g

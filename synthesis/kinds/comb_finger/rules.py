@@ -3,7 +3,7 @@ finger against the other unit over its turn, the unit within its row, the finger
 out of its drum, the tip reaching the ground line, and an optional tip-speed limit.
 
 Each builder takes values on floats (check, re-check) or CasADi symbols (the NLP) and returns one
-:class:`constraints.base.Rule`.
+:class:`synthesis.constraints.base.Rule`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Sequence
 
 import casadi as ca
 
-from constraints.base import Rule, stack, symbolic
+from synthesis.constraints.base import Rule, stack, symbolic
 
 #: typical margin of a length rule, mm
 LENGTH_SCALE = 10.0

@@ -14,7 +14,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.kinds.combing_chain.rules import tine_reaches_plant_rule, window_bottom_rule, window_top_rule
 from synthesis.kinds.combing_chain import geometry as g
 from synthesis.core.kind import figure_text

@@ -2,14 +2,14 @@
 initial plant angles and machine speeds, and the tine sweeping up against the crop.
 
 Each builder takes the sampled values (floats for check and re-check, CasADi symbols for the NLP) and
-returns one :class:`constraints.base.Rule`; a sampled rule's record reports its worst sample.
+returns one :class:`synthesis.constraints.base.Rule`; a sampled rule's record reports its worst sample.
 """
 
 from __future__ import annotations
 
 from typing import Sequence
 
-from constraints.base import Rule, stack
+from synthesis.constraints.base import Rule, stack
 
 #: typical margin of an angle rule, deg (normalised margins, elastic slack units)
 ANGLE_SCALE = 1.0

@@ -11,10 +11,10 @@ from typing import cast
 
 import numpy as np
 
-from constraints import Rule
-from constraints.grashof import grashof_rule
+from synthesis.constraints import Rule
+from synthesis.constraints.grashof import grashof_rule
 from synthesis.kinds.crank_rocker.rules import rocker_swing_rule, time_ratio_rule
-from constraints.transmission import acute_transmission_rule
+from synthesis.constraints.transmission import acute_transmission_rule
 from synthesis.kinematics.rocker_drive import (CrankRocker, QuickReturn, acute, joints, quick_return, rocker_curve,
                                               transmission_angles_deg, turn_grid)
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules

@@ -11,7 +11,7 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def time_ratio_rule(stroke, required: float, tolerance: float, missing: str | None = None) -> Rule:

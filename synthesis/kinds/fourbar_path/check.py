@@ -25,7 +25,7 @@ from typing import cast
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.core.verdict import FINE
 from synthesis.kinds.fourbar_path.dynamics import dynamics_facts_of
 from synthesis.kinds.fourbar_path.rule_set import path_rules

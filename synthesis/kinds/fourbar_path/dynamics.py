@@ -18,7 +18,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules
 from synthesis.kinds.fourbar_path.spec import FourbarPathSpec
 

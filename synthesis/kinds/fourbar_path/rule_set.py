@@ -30,7 +30,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints import Rule, not_evaluated
+from synthesis.constraints import Rule, not_evaluated
 from synthesis.core.problem import Backoff, relative_backoff
 from synthesis.dynamics.linkage import peak_backoff
 from synthesis.kinds.fourbar_path.dynamics import path_dynamics_rules

@@ -14,7 +14,7 @@ import functools
 
 import numpy as np
 
-from constraints import not_evaluated
+from synthesis.constraints import not_evaluated
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.kinds.fourbar_path.check import evaluate, path_facts, result_design, trajectory

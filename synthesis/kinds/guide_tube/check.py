@@ -8,7 +8,7 @@ from typing import cast
 
 import numpy as np
 
-from constraints import Rule, not_evaluated
+from synthesis.constraints import Rule, not_evaluated
 from synthesis.kinds.guide_tube.rules import (free_fall_height_rule, landing_time_spread_rule, spacing_error_rule,
                                     wall_exit_speed_rule)
 from synthesis.kinds.guide_tube.drop import DropPhases, Physics, SeedlingSticks, landing, slide

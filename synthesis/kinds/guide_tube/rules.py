@@ -10,7 +10,7 @@ from typing import Sequence
 
 import casadi as ca
 
-from constraints.base import Rule, stack
+from synthesis.constraints.base import Rule, stack
 
 
 def _spread(times: Sequence):

@@ -3,7 +3,7 @@ row-spacing grid and the result facts."""
 
 from __future__ import annotations
 
-from constraints import not_evaluated
+from synthesis.constraints import not_evaluated
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport

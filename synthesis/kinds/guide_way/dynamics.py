@@ -41,7 +41,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import trapezoid       # numpy's own is numpy >= 2 only
 
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from synthesis.constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics import mass as mass_properties
 from synthesis.kinds.guide_way import kinematics as ra
 from synthesis.kinds.guide_way.scene import arm_of, controlled_keys, fold_stretches, nearest_turn, spline_path

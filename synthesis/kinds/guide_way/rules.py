@@ -13,7 +13,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 
 def _symbolic(*xs) -> bool:

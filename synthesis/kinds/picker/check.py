@@ -16,11 +16,11 @@ from typing import cast
 
 import numpy as np
 
-from constraints import Rule
-from constraints.grashof import grashof_double_crank_rule
+from synthesis.constraints import Rule
+from synthesis.constraints.grashof import grashof_double_crank_rule
 from synthesis.kinds.picker.dynamics import double_crank_dynamics, dynamics_facts, dynamics_rules
 from synthesis.kinds.picker.rules import arc_error_rule, frame_point_rule
-from constraints.transmission import acute_transmission_rule
+from synthesis.constraints.transmission import acute_transmission_rule
 from synthesis.errors import AssemblyError
 from synthesis.kinematics import fourbar
 from synthesis.kinds.picker.kinematics.arc import arc_through, points_on_arc

@@ -29,13 +29,13 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 from synthesis import kinds
 from synthesis.spec.design_info import describe_fixed, describe_part
 from synthesis.errors import AssemblyError, SpecError
 from synthesis.kinematics.rocker_drive import CrankRocker, quick_return, rocker_function
 from synthesis.kinematics.rocker_drive import joints as crank_rocker_joints
-from constraints.poses import nearest_row
+from synthesis.constraints.poses import nearest_row
 from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, attitude_function, clamp_point, joint_positions
 from synthesis.kinds.picker import check as double_crank_check
 from synthesis.kinds.picker.combined_dynamics import dynamics_facts, dynamics_rules, picker_dynamics
@@ -253,7 +253,7 @@ def dynamics_of(spec: PickerSpec, drive: Drive) -> dict:
 def pose_instant(drive: Drive, target: tuple[float, float], samples: int = POSE_SEARCH_SAMPLES) -> float:
     """The instant (s, in [0, period)) where the clamp point comes nearest ``target`` (mm) over a turn: the nearest
     of ``samples`` instants, then the root of (M - target) . dM/dt between its neighbours (the shared nearest-point
-    row, constraints.poses.nearest_row).  The clamp passes each point of its path twice a turn in the same pose
+    row, synthesis.constraints.poses.nearest_row).  The clamp passes each point of its path twice a turn in the same pose
     (AB swings there and back): the first nearest sample is taken."""
     grid = np.linspace(0.0, drive.period, samples, endpoint=False)
     m = states(drive, grid)["M"]

@@ -23,8 +23,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints import Rule
-from constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
+from synthesis.constraints import Rule
+from synthesis.constraints.dynamics import peak_input_torque_rule, peak_shaking_force_rule, peak_shaking_moment_rule
 from synthesis.dynamics.fourbar import JOINTS as ROLES
 from synthesis.dynamics.fourbar import LINKS as LINK_ROLES
 from synthesis.dynamics.facts import link_facts, sampled_facts

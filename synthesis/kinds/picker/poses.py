@@ -1,5 +1,5 @@
 """Key poses of the picker kinds (an optional ``[key_poses]`` table; the shared pose model and rules:
-:mod:`synthesis.spec.poses`, :mod:`constraints.poses`).
+:mod:`synthesis.spec.poses`, :mod:`synthesis.constraints.poses`).
 
 A pose asks the clamp's attitude -- the direction of the clamp arm C -> M (:func:`clamp_attitude`) -- and/or the
 clamp point M's position.  The double crank reads it at the picking point M1 (crank angle phi10), the drop point M2
@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints import Rule
-from constraints.poses import (
+from synthesis.constraints import Rule
+from synthesis.constraints.poses import (
     attitude_miss_deg,
     nearest_row,
     pose_attitude_rule,
@@ -103,7 +103,7 @@ def nearest_crank_angle(spec: PickerDoubleCrankSpec, dc: DoubleCrank, target: tu
                         samples: int = POSE_SEARCH_SAMPLES) -> float:
     """The crank angle AB (deg, within the working swing) where the clamp point comes nearest ``target`` (mm): the
     nearest of ``samples`` angles over the swing, then the root of (M - target) . dM/dphi1 between its neighbours
-    (the row the NLP pins a free pose's angle with, :func:`constraints.poses.nearest_row`); the nearest sample itself
+    (the row the NLP pins a free pose's angle with, :func:`synthesis.constraints.poses.nearest_row`); the nearest sample itself
     where the row does not change sign there (the nearest point is an end of the swing)."""
     grid = spec.drive.start + spec.drive.swing * np.linspace(0.0, 1.0, samples)
     m = clamp_states(dc, grid)["M"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 
 def frame_point_rule(x_a, minimum: float) -> Rule:

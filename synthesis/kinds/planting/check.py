@@ -8,8 +8,8 @@ from typing import cast
 
 import numpy as np
 
-from constraints import Rule
-from constraints.poses import attitude_miss_deg
+from synthesis.constraints import Rule
+from synthesis.constraints.poses import attitude_miss_deg
 from synthesis.kinds.planting.kinematics import claw_attitudes, tip_state
 from synthesis.dynamics.facts import peaks, turn
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts

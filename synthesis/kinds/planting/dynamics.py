@@ -19,7 +19,7 @@ from typing import Any
 
 import casadi as ca
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_rules
 
 #: the arm's joints and links by seed 000's names, in synthesis.dynamics.fourbar's order

@@ -30,7 +30,7 @@ from synthesis.errors import AssemblyError
 from synthesis.kinds.planting.check import CHECK_TURN_SAMPLES, soil_contact
 from synthesis.kinds.planting.dynamics import (SoilContact, arm_dynamics, arm_linkage, counterweight_of,
                                                rocker_counterweight_of)
-from constraints.poses import nearest_row
+from synthesis.constraints.poses import nearest_row
 from synthesis.kinds.planting.kinematics import (claw_attitude, link_function, path_positions,
                                                  rocker_counterweight_y_function, tip_derivatives)
 from synthesis.kinds.planting.rule_set import PHASES, POINTS, TWO_PI, PoseReading, Trace, phase_bounds, planting_rules

@@ -16,16 +16,16 @@ from typing import Any
 
 import casadi as ca
 
-from constraints import Rule
-from constraints.poses import attitude_miss_deg, pose_attitude_rule, pose_tip_rule
+from synthesis.constraints import Rule
+from synthesis.constraints.poses import attitude_miss_deg, pose_attitude_rule, pose_tip_rule
 from synthesis.kinds.planting.rules.acceleration import acceleration_sign_rule
 from synthesis.kinds.planting.rules.angles import entry_angle_rule
 from synthesis.kinds.planting.rules.counterweight import counterweight_clearance_rule
 from synthesis.kinds.planting.rules.depth import depth_rule
-from constraints.grashof import grashof_rule
+from synthesis.constraints.grashof import grashof_rule
 from synthesis.kinds.planting.rules.precision_points import p4p6_rule, seedbed_rules
 from synthesis.kinds.planting.rules.speed import p2_speed_rule
-from constraints.transmission import transmission_rules
+from synthesis.constraints.transmission import transmission_rules
 from synthesis.kinds.planting.dynamics import arm_dynamics_rules
 
 TWO_PI = 2.0 * math.pi

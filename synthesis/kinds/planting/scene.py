@@ -15,7 +15,7 @@ from typing import cast
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints.poses import nearest_row
+from synthesis.constraints.poses import nearest_row
 from synthesis.errors import AssemblyError
 from synthesis.kinds.planting.kinematics import (ArmDesign, Motion, attitude_function, lowest_rocker_counterweight_y,
                                                  path_positions, scalar_function, tip_accelerations_y, tip_derivatives,
@@ -284,7 +284,7 @@ def pose_key(name: str) -> str:
 def nearest_crank_angle(design: ArmDesign, target: tuple[float, float], samples: int) -> float:
     """The crank angle (rad, in [0, 2 pi)) where the claw tip comes nearest ``target`` (mm): the nearest of
     ``samples`` angles over a turn, then the root of (C - target) . dC/dtheta between its neighbours (the row the NLP
-    pins a free pose's angle with, :func:`constraints.poses.nearest_row`)."""
+    pins a free pose's angle with, :func:`synthesis.constraints.poses.nearest_row`)."""
     grid = np.linspace(0.0, TWO_PI, samples, endpoint=False)
     pos = path_positions(design, grid)
     k = int(np.argmin((pos[0] - target[0]) ** 2 + (pos[1] - target[1]) ** 2))

@@ -11,9 +11,9 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from constraints.base import Rule
-from constraints.poses import attitude_miss_deg
-from constraints.poses import pose_rules as shared_pose_rules
+from synthesis.constraints.base import Rule
+from synthesis.constraints.poses import attitude_miss_deg
+from synthesis.constraints.poses import pose_rules as shared_pose_rules
 from synthesis.core.verdict import FINE
 from synthesis.kinds.rotary_planetary import rules as R
 from synthesis.kinds.rotary_planetary.kinematics import (

@@ -17,7 +17,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints.poses import nearest_row
+from synthesis.constraints.poses import nearest_row
 from synthesis.core.declared import Declared, named
 from synthesis.core.kind import Setting
 from synthesis.core.problem import ObjectiveParts, Problem

@@ -6,7 +6,7 @@ A rule whose value is a maximum or a minimum over the turn is written for the op
 angles the NLP owns (the loop's top and bottom, soil entry and exit, each key pose's angle): "there is a bottom
 at least this deep" is one smooth row at the bottom's angle, "every point no deeper than that" is a row per
 sample.  On floats the caller passes the extremes it found on its grid.  The key poses' rules are the shared ones
-(:mod:`constraints.poses`).
+(:mod:`synthesis.constraints.poses`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 DEG = 180.0 / math.pi
 #: the fraction of its tolerance the NLP holds the single-idler gap to on its samples

@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.kinds.steering_linkage.rules import arm_length_rule, tie_rod_transmission_rule
 from synthesis.core.verdict import FINE
 from synthesis.kinds.steering_linkage.kinematics import (ackermann_outer, dead_centre_cosine, inner_tip, kingpins,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from constraints.base import Rule, not_evaluated, symbolic
+from synthesis.constraints.base import Rule, not_evaluated, symbolic
 
 WHERE_TRANSMISSION = "tie rod to both steering arms, inside lock 0-{:g} deg"
 

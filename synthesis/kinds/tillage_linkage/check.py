@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 from scipy.optimize import brentq
 
-from constraints import Rule
+from synthesis.constraints import Rule
 from synthesis.kinds.tillage_linkage.rules import (bar_engagement_rule, bar_slot_angle_rule, lift_height_rule, rearward_in_soil_rule,
                                  working_depth_rule)
 from synthesis.core.verdict import FINE

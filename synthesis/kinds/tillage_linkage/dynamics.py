@@ -44,8 +44,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from constraints import Rule
-from constraints.dynamics import (
+from synthesis.constraints import Rule
+from synthesis.constraints.dynamics import (
     peak_input_torque_rule,
     peak_shaking_force_rule,
     peak_shaking_moment_rule,

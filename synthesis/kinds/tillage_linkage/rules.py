@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def working_depth_rule(depth_mm, bounds: tuple) -> Rule:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule, stack
+from synthesis.constraints.base import Rule, stack
 
 
 def assembly_rule(d2, r3, r4, where: str) -> Rule:

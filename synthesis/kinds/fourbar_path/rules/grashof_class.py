@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 CLASSES = {"crank-rocker": "r2 shortest, s + l <= p + q", "double-crank": "r1 shortest, s + l <= p + q"}
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 
 def sequence_slacks(theta_deg: list, sign) -> list:

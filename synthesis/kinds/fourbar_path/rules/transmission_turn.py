@@ -17,7 +17,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from constraints.base import Rule, not_evaluated, stack
+from synthesis.constraints.base import Rule, not_evaluated, stack
 
 DEG = 180.0 / math.pi
 ROUNDING = 1e-12       # |cos mu| this far above 1 is the last digit of a closing loop, not an open one

@@ -1,1 +1,1 @@
-"""The kind's own rule families (each imports only casadi, numpy and constraints.base)."""
+"""The kind's own rule families (each imports only casadi, numpy and synthesis.constraints.base)."""

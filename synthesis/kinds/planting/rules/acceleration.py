@@ -8,7 +8,7 @@ Each requires sign * a_y >= 0 at every sample of its phase (semi-infinite, sampl
 
 from __future__ import annotations
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 PHASES = {"hold": "P3 to P4", "throw": "P4 to P5", "release": "P5 to P6"}
 

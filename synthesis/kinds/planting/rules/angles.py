@@ -12,7 +12,7 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def entry_angle_rule(vx_ground, vy, minimum_deg: float, missing: str | None = None) -> Rule:

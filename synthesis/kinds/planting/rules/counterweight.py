@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 #: the typical size of a clearance margin, mm (normalised margins; the NLP's back-off is a fraction of it)
 CLEARANCE_SCALE = 10.0

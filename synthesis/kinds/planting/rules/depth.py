@@ -7,7 +7,7 @@ ground is given apart from the path."""
 
 from __future__ import annotations
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def depth_rule(y4, y5, bounds: tuple[float, float], missing: str | None = None) -> Rule:

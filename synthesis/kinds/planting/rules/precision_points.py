@@ -10,7 +10,7 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def distance(p, q):

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def p2_speed_rule(vx, vy, minimum_m_s: float, missing: str | None = None) -> Rule:

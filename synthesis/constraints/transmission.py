@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def transmission_rules(mu_deg_samples, bounds: tuple, missing: str | None = None) -> list[Rule]:

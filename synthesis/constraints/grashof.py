@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule
+from synthesis.constraints.base import Rule
 
 
 def crank_rotation_slacks(l1, l2, l3, l4) -> dict[str, object]:

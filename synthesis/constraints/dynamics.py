@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 
 def peak_input_torque_rule(torque_samples, limit: float, where: str = "over a turn",

@@ -13,7 +13,7 @@ import math
 
 import casadi as ca
 
-from constraints.base import Rule, not_evaluated
+from synthesis.constraints.base import Rule, not_evaluated
 
 RAD = math.pi / 180.0
 DEG = 180.0 / math.pi
