@@ -10,7 +10,8 @@ from pathlib import Path
 from synthesis.errors import OutputError, ResultError
 from synthesis.report.compare import (bench_of_kind, different_versions, is_bench, load_bench, load_candidates, open_output_folder,
                                       write_comparison_files)
-from synthesis.result import is_run_folder
+from synthesis.core.library_log import captured_warnings
+from synthesis.result import atomic_write_text, is_run_folder
 from synthesis.runs.events import Note, Subscriber
 from synthesis.runs.output import RunOutput
 from synthesis.runs.requests import CompareRequest, Comparison, Outcome
@@ -80,6 +81,15 @@ def compare(request: CompareRequest, emit: Subscriber) -> Outcome:
             emit(Note(text))
         bench = [res for p in request.results if is_bench(p)
                  for res in bench_of_kind(p, load_bench(p), cands[0].result.kind)]
-        output.fill(lambda staging: write_comparison_files(cands, staging, bench))
+        output.fill(lambda staging: _write_page(cands, staging, bench))
     page = Path(out) / "compare.html"
     return Outcome(0, folder=page.parent, details=Comparison(cands, page))
+
+
+def _write_page(cands, staging: Path, bench) -> None:
+    """The page and its figures; a library's warnings while drawing them (matplotlib's "tight layout not applied" of
+    a legend of 60 candidates) go to warnings.log beside the page, not the terminal, as check's and solve's do."""
+    with captured_warnings() as said:
+        write_comparison_files(cands, staging, bench)
+    if said():
+        atomic_write_text(staging / "warnings.log", said())
