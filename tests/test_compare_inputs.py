@@ -341,3 +341,20 @@ def test_a_bench_row_s_text_fields_of_any_json_type_make_a_page(value):
     assert "&amp;ndash;" not in page and "<b>x</b>" not in page
     cells = page.split("<td>p</td>")[1]
     assert cells.startswith("<td>–</td>" if value in (None,) else "<td>")
+
+
+def test_a_library_warning_while_drawing_the_comparison_goes_to_its_log(tmp_path, monkeypatch, capsys):
+    """matplotlib's "Tight layout not applied" (a legend of 60 candidates) was printed on the terminal by compare;
+    check and solve keep library warnings in their logs."""
+    import warnings
+
+    from synthesis.runs import comparing
+
+    def draws(cands, folder, bench):
+        warnings.warn("Tight layout not applied. made up by the test", UserWarning)
+        (folder / "compare.html").write_text("<html></html>")
+
+    monkeypatch.setattr(comparing, "write_comparison_files", draws)
+    comparing._write_page([], tmp_path, [])
+    assert "Tight layout not applied. made up by the test" in (tmp_path / "warnings.log").read_text()
+    assert "Tight layout" not in capsys.readouterr().err
