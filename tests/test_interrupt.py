@@ -113,6 +113,10 @@ def test_sigint_with_one_worker_keeps_the_finished_starts_and_resume_is_the_unin
     out, err = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, err
     assert f"resumed: {kept} finished start(s)" in out
+    # the starts read back are said so, without the earlier run's seconds; the others as solved now
+    said = [line for line in out.splitlines() if line.startswith("start ")]
+    assert sum(" read back from the run resumed " in line for line in said) == kept
+    assert sum(" finished (" in line for line in said) == 24 - kept
     assert_given_design_kept(run)
     whole = cli("solve", SPEC, "--out", tmp_path / "b", "--starts", 24, "--workers", 1, cwd=tmp_path)
     assert whole.wait(timeout=300) == 0

@@ -61,9 +61,15 @@ class StartFinished:
     best_start: int
     best_objective: float
     best_verdict: str
+    #: read back from the interrupted run's starts.jsonl (--resume), not solved by this one
+    resumed: bool = False
 
     def line(self) -> str:
         """The line a piped solve prints for it (and the studio shows)."""
+        if self.resumed:        # its solve's seconds were the earlier run's: not said as this run's
+            return (f"start {self.start} read back from the run resumed ({self.done}/{self.total}): objective "
+                    f"{self.objective:.6g}, {self.verdict}, IPOPT {self.return_status} in {self.iterations} "
+                    f"iterations; best so far: start {self.best_start}")
         return (f"start {self.start} finished ({self.done}/{self.total}): objective {self.objective:.6g}, "
                 f"{self.verdict}, IPOPT {self.return_status} in {self.iterations} iterations, {self.wall_s:.2f} s; "
                 f"best so far: start {self.best_start}")
@@ -152,9 +158,10 @@ def violation_text(report) -> str:
     return "not evaluated"
 
 
-def start_finished(report, best, done: int, total: int) -> StartFinished:
-    """The event of a finished start from the solve core's reports of it and of the best so far."""
+def start_finished(report, best, done: int, total: int, resumed: bool = False) -> StartFinished:
+    """The event of a finished start from the solve core's reports of it and of the best so far (``resumed``: read
+    back from the run resumed)."""
     o = report.outcome
     return StartFinished(o.start, done, total, o.objective, "feasible" if report.satisfied else violation_text(report),
                          o.return_status, o.iterations, o.wall_s, best.outcome.start, best.outcome.objective,
-                         "feasible" if best.satisfied else violation_text(best))
+                         "feasible" if best.satisfied else violation_text(best), resumed)

@@ -204,7 +204,7 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
     def on_start(report, best) -> None:
         nonlocal done
         done += 1
-        emit(start_finished(report, best, done, total))
+        emit(start_finished(report, best, done, total, report.outcome.start in (plan.finished or {})))
 
     def on_batch(starts: int, nested: bool = False) -> None:
         """--starts auto: a batch begins (marked in starts.jsonl); the progress counts every start solved (a nested
