@@ -222,11 +222,15 @@ def test_tolerance_of_a_run_folder_analyses_the_solved_design(tmp_path):
     ("interrupted", "an interrupted run, with no solved design (solved.toml) yet: finish it with `agrisynth solve "
                     "SPEC --resume"),
     ("evaluated", "a check's folder, with no solved design: give the spec file it checked"),
+    # a tolerance analysis' own folder was called a check's
+    ("evaluated+tolerance", "a tolerance analysis' folder, with no solved design: give the run folder or the spec "
+                            "file it analysed"),
     ("failed", "no solved.toml in this folder (give a solve's run folder or a spec file)")])
 def test_a_folder_without_a_solved_design_says_why_in_one_line(tmp_path, status, said):
     run_dir = tmp_path / "run"
     run_dir.mkdir()
-    (run_dir / "result.json").write_text(json.dumps({"status": status}))
+    status, _, facts = status.partition("+")
+    (run_dir / "result.json").write_text(json.dumps({"status": status, **({"facts": {facts: {}}} if facts else {})}))
     for target in (run_dir, run_dir / "result.json"):
         run = agrisynth("tolerance", str(target), "--length", "0.2", "--out", str(tmp_path), cwd=tmp_path)
         assert run.returncode == 2 and "Traceback" not in run.stderr

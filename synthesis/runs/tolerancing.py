@@ -34,6 +34,10 @@ def no_solved_design(folder: Path) -> str:
         return (f"{folder}: an interrupted run, with no solved design (solved.toml) yet: finish it with "
                 f"`agrisynth solve SPEC --resume {folder}`, then give this folder again")
     if status == "evaluated":
+        # a check and a tolerance analysis both evaluate a design; the analysis' result carries facts.tolerance
+        if isinstance(data, dict) and isinstance(data.get("facts"), dict) and "tolerance" in data["facts"]:
+            return (f"{folder}: a tolerance analysis' folder, with no solved design: give the run folder or the "
+                    f"spec file it analysed")
         return f"{folder}: a check's folder, with no solved design: give the spec file it checked"
     return f"{folder}: no solved.toml in this folder (give a solve's run folder or a spec file)"
 
