@@ -79,7 +79,7 @@ def main() -> None:
     toy = ROOT / "tests" / "toy_kind.py"
     print(f"top-level modules in synthesis/: {len(modules)} ({', '.join(modules)})")
     print(f"imports: {top + nested}, inside functions: {nested} ({100 * nested / max(1, top + nested):.1f} %)")
-    print(f"lines of synthesis/ and constraints/: {lines}")
+    print(f"lines of synthesis/: {lines}")
     print(f"largest CLI module: {cli[0][1]} ({cli[0][0]} lines)" if cli else "no CLI package")
     if toy.exists():
         print(f"toy kind: {toy.read_text().count(chr(10))} lines")

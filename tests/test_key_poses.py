@@ -1,4 +1,4 @@
-"""Key poses of the planting arm ([key_poses], rules from constraints/poses.py, shared with rotary_planetary).
+"""Key poses of the planting arm ([key_poses], rules from synthesis/constraints/poses.py, shared with rotary_planetary).
 
 * The claw attitude on floats (synthesis.kinds.planting.kinematics.claw_attitudes) is the direction of C - A from the
   joint positions the figures draw the linkage with, computed here with numpy's arctan2.

@@ -1,4 +1,4 @@
-"""Key poses of the seed-001 picker ([key_poses] of picker_double_crank and picker; rules from constraints/poses.py,
+"""Key poses of the seed-001 picker ([key_poses] of picker_double_crank and picker; rules from synthesis/constraints/poses.py,
 shared with planting_fourbar and rotary_planetary).
 
 * The clamp attitude on floats (synthesis.kinds.picker.kinematics.linkage.clamp_attitudes) is the direction of M - C

@@ -277,3 +277,17 @@ def test_a_link_table_that_fits_no_form_is_told_what_is_wrong_with_the_form_it_w
     spec.write_text(text.replace("crank = { density = 7850, area = 100 }", given, 1))
     proc = agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 2 and proc.stderr.strip() == f"error: {spec}: {said}", proc.stderr
+
+
+def test_keys_the_user_names_with_a_capital_are_not_taken_for_a_union_s_forms(tmp_path):
+    """Poses named Pick and Drop were taken for a union's branches (class names): one of the two complaints was dropped
+    and the pose's name cut from the path."""
+    text = (LIBRARY / "picker" / "picker_double_crank_key_pose.toml").read_text()
+    text = text.replace("[key_poses.pick]", "[key_poses.Pick]").replace("[key_poses.drop]", "[key_poses.Drop]")
+    text = text.replace("attitude_tolerance = 1.0     # deg", "attitude_tolerance = -1", 1).replace('at = "M2"', 'at = "M9"')
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text)
+    proc = agrisynth("check", str(spec), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2 and proc.stderr.strip().splitlines() == [
+        f"error: {spec}: picker_double_crank.key_poses.Pick.attitude_tolerance: expected > 0, got -1",
+        "picker_double_crank.key_poses.Drop.at: expected 'M1' or 'M2', got 'M9'"], proc.stderr

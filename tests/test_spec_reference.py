@@ -238,3 +238,11 @@ def test_a_type_s_alternatives_do_not_shift_the_piped_reference_s_columns():
     result = CliRunner().invoke(cli, ["spec", "crank_rocker"])
     line = next(line for line in result.output.splitlines() if line.startswith("  solver.starts | "))
     assert line.split(" | ") == ["  solver.starts", 'integer or "auto"', "", "8", ">= 1, <= 10000"], line
+
+
+def test_a_template_named_as_a_spec_file_it_names_is_refused_and_nothing_is_written(tmp_path):
+    """`spec picker --template --out cai2020_crank_rocker.toml` copied the linkage there, then wrote the template over
+    it: a picker spec naming itself as its crank-rocker (check: "is a 'picker' spec, expected kind 'crank_rocker'")."""
+    proc = agrisynth("spec", "picker", "--template", "--out", "cai2020_crank_rocker.toml", cwd=tmp_path, timeout=60)
+    assert proc.returncode == 2 and "the template names a spec file of this name beside it" in proc.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -693,3 +693,20 @@ def test_an_evaluation_error_is_said_of_the_page_s_values_not_of_the_spec_file()
     assert out["error"].startswith("at the page's values: [spline] control: segment ED: the arm cannot reach"), \
         out["error"]
     assert str(STUDIO_SPECS["guide_way"]) not in out["error"]
+
+
+def test_a_spec_the_studio_saves_reads_back_whatever_its_file_name_holds(tmp_path):
+    """A spec file named with a newline: the saved spec's "# from <name>" comment ended at it and the rest of the name
+    became TOML, which load_spec refused."""
+    from conftest import LIBRARY
+    from synthesis.spec import load_spec
+    from synthesis.studio.session import Session
+
+    spec = tmp_path / "ev\nil.toml"
+    spec.write_text((LIBRARY / "planting_arm" / "redesign_from_example1.toml").read_text())
+    session = Session.open(spec)
+    text = session.spec_text(session.given(), "saved", "saved\nby the test", tmp_path)
+    assert "# from ev?il.toml" in text and "# saved?by the test" in text
+    out = tmp_path / "saved.toml"
+    out.write_text(text)
+    assert load_spec(out).name == "saved"

@@ -117,11 +117,11 @@ def dynamics_backoff(samples: int) -> float:
     return DYNAMICS_BACKOFF_AT_72 * (72.0 / samples) ** 2
 
 
-def peak_backoff(samples: int, otherwise):
+def peak_backoff(samples: int, otherwise, most: float | None = None):
     """A problem's back-off (synthesis.core.problem.Backoff): each [dynamics.limits] peak's row :func:`dynamics_backoff`
-    of its limit inside it (the shaking force's row is its square: 1 - (1 - b)^2 of the row's limit), every other
-    rule's ``otherwise``'s."""
-    share = dynamics_backoff(samples)
+    of its limit inside it, at most ``most`` of it (the shaking force's row is its square: 1 - (1 - b)^2 of the row's
+    limit), every other rule's ``otherwise``'s."""
+    share = dynamics_backoff(samples) if most is None else min(dynamics_backoff(samples), most)
     squared = 1.0 - (1.0 - share) ** 2
 
     def backoff(rule: Rule, limit: float) -> float:

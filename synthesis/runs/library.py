@@ -64,7 +64,7 @@ def write_template(kind: str, target: Path) -> list[Path]:
     """A commented starting spec of ``kind`` written to the new file ``target`` (a template never replaces one), the
     spec files it names copied beside it (the library example's, to edit; one already there with the library's
     bytes is used as it is, another file of its name is never replaced); returns the files written, the template
-    first.  Everything is checked before anything is written."""
+    first.  Everything is checked before anything is written, and a write that fails takes back the copies made."""
     if target.exists():
         raise OutputError(f"{target}: already exists; give a new file name (a template never replaces a file)")
     if not target.parent.is_dir():
@@ -72,6 +72,9 @@ def write_template(kind: str, target: Path) -> list[Path]:
     companions = []
     for source, name in reference.template_companions(kind):
         copy = target.parent / name
+        if os.path.normcase(os.path.abspath(copy)) == os.path.normcase(os.path.abspath(target)):
+            raise OutputError(f"{target}: the template names a spec file of this name beside it ({source.name}); "
+                              f"give the template another name")
         if os.path.lexists(copy):
             if not (copy.is_file() and copy.read_bytes() == source.read_bytes()):
                 raise OutputError(f"{copy}: already exists and is not the library's {source.name}, which the "
@@ -80,11 +83,18 @@ def write_template(kind: str, target: Path) -> list[Path]:
         if not copy.parent.is_dir():
             raise OutputError(f"{copy}: no folder {copy.parent} to copy the spec file the template names into")
         companions.append((source, copy))
-    for source, copy in companions:
-        _copy_bytes(source, copy)
     text = reference.template(kind, target.parent)
-    write_new_file(target, lambda tmp: tmp.write_text(text))
-    return [target, *(copy for _, copy in companions)]
+    written: list[Path] = []
+    try:
+        for source, copy in companions:
+            _copy_bytes(source, copy)
+            written.append(copy)
+        write_new_file(target, lambda tmp: tmp.write_text(text))
+    except BaseException:
+        for copy in written:          # the copies this call made, not left behind by a template never written
+            copy.unlink(missing_ok=True)
+        raise
+    return [target, *written]
 
 
 def _copy_bytes(source: Path, copy: Path) -> None:

@@ -13,7 +13,7 @@ import math
 import re
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal, Union, get_args
 
 import numpy as np
 from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
@@ -133,6 +133,12 @@ RESERVED_RUN_NAMES = ("compare", "bench", "studio")
 #: a spec's name is its result folder's name: letters, digits and _ . - only
 RUN_NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 MAX_NAME_LENGTH = 100
+
+
+def comment_text(text: str) -> str:
+    """``text`` fit for one TOML comment line: a control character (a newline in a file name) would end the comment
+    and make the rest of the name TOML -- written as "?"."""
+    return re.sub(r"[\x00-\x1f\x7f]", "?", text)
 
 
 def derived_name(name: str, suffix: str) -> str:
@@ -472,7 +478,7 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         return model.model_validate(data) if text is None else model.model_validate_json(text, strict=True)
     except ValidationError as exc:
         order = _file_order(data)
-        errors = _best_table_branches(exc.errors())
+        errors = _best_table_branches(exc.errors(), _model_names(model))
         # in file order, each line once (a dict keeps the first: a list's `in` made thousands of errors quadratic)
         seen = list(dict.fromkeys(f"{prefix}.{_describe(err, model)}"
                                   for err in sorted(errors, key=lambda e: _position(order, e["loc"]))))
@@ -480,10 +486,24 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
         raise SpecError("\n".join(capped(_prune_union_noise(_misspelt_only(seen))))) from None
 
 
-_BRANCH = re.compile(r"^[A-Z][A-Za-z0-9]*$")
+def _model_names(model: type[BaseModel]) -> set[str]:
+    """The class names of every model a spec model's fields may hold (its own and its tables', through unions, lists
+    and tables of them): what pydantic puts in an error's path for each branch of a union of tables."""
+    names: set[str] = set()
+    todo: list[Any] = [model]
+    while todo:
+        tp = todo.pop()
+        if isinstance(tp, type) and issubclass(tp, BaseModel):
+            if tp.__name__ in names:
+                continue
+            names.add(tp.__name__)
+            todo += [f.annotation for f in tp.model_fields.values()]
+        else:
+            todo += list(get_args(tp))
+    return names
 
 
-def _best_table_branches(errors: list) -> list:
+def _best_table_branches(errors: list, branches_named: set[str]) -> list:
     """Where a field takes one of several tables (a link as a bar {density, area} or lumped {mass, com, inertia}) and
     fits none, pydantic complains of every branch: only the branch the given keys fit best is kept (the fewest keys
     it does not know, then the fewest complaints), its name dropped from the path -- a lumped link with a negative
@@ -491,7 +511,8 @@ def _best_table_branches(errors: list) -> list:
     branches: dict[tuple, dict[str, list]] = {}
     for err in errors:
         loc = err["loc"]
-        k = next((i for i, part in enumerate(loc) if isinstance(part, str) and _BRANCH.match(part)), None)
+        # a union's branch is named by its model's class; a key the user named (a pose "Pick") is no branch
+        k = next((i for i, part in enumerate(loc) if isinstance(part, str) and part in branches_named), None)
         if k is not None:
             branches.setdefault(tuple(loc[:k]), {}).setdefault(loc[k], []).append(err)
     chosen, dropped = {}, set()

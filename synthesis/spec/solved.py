@@ -20,7 +20,7 @@ from pydantic import BaseModel
 
 from synthesis import kinds
 from synthesis.core.coordinates import BOUND_TOLERANCE
-from synthesis.spec.common import derived_name, is_free, validate
+from synthesis.spec.common import comment_text, derived_name, is_free, validate
 from synthesis.spec.design_info import describe
 from synthesis.spec.reference import write_toml
 from synthesis.errors import SpecError
@@ -164,12 +164,6 @@ def _fixed_values_moved(model, design: dict) -> str:
         if abs(value - v) > BOUND_TOLERANCE * max(1.0, abs(v)):
             moved.append(f"{name} = {value:.6g} where the spec fixes {v:g}")
     return "; ".join(moved)
-
-
-def comment_text(text: str) -> str:
-    """``text`` fit for one TOML comment line: a control character (a newline in a file name) would end the comment
-    and make the rest of the name TOML -- written as "?"."""
-    return re.sub(r"[\x00-\x1f\x7f]", "?", text)
 
 
 def solved_toml(loaded, result) -> str:

@@ -24,7 +24,7 @@ from synthesis.spec.design_info import describe, walk_fields
 from synthesis.errors import AgrisynthError, SpecError
 from synthesis.spec.solved import path_parts, set_at_path     # TOML paths as solved.toml writes them
 from synthesis.spec import LoadedSpec, load_spec
-from synthesis.spec.common import validate
+from synthesis.spec.common import comment_text, validate
 from synthesis.spec.docmeta import SpecFile
 from synthesis.spec.operating import ranges_of
 from synthesis.spec.reference import write_toml
@@ -195,7 +195,8 @@ class Session:
         """A spec file for ``folder`` holding ``values`` as the free variables' start values (bounds kept)."""
         data = self.spec_data(values, name, folder)
         validate(type(self.loaded.model), data, prefix=self.kind)       # never write a spec check refuses
-        head = [f"# {note}", f"# from {self.loaded.path.name} (sha256 {self.loaded.sha256})", ""]
+        head = [f"# {comment_text(note)}", f"# from {comment_text(self.loaded.path.name)} (sha256 {self.loaded.sha256})",
+                ""]
         return "\n".join(head + write_toml(type(self.loaded.model), data, documented=False)) + "\n"
 
     # -- evaluation -------------------------------------------------------------------------------------

@@ -135,7 +135,11 @@ def full_table(facts: dict) -> str:
 
 def _sensitivity_report(facts: dict) -> str:
     """report.md of a run without a box: the design's rules (margin, pass or fail) and each rule's derivatives."""
-    lines = [f"Verdict: {NO_BOX}", "", "| rule | unit | value | margin | at the design |", "|---|---|---|---|---|"]
+    failing = [r["name"] for r in facts["nominal_rules"] if not r["satisfied"]]
+    verdict = (f"FAILS at the design: {len(failing)} rule(s) break ({', '.join(failing)})" if failing else
+               "holds at the design: it passes every rule")
+    lines = [f"Verdict: {verdict}; {NO_BOX}", "", "| rule | unit | value | margin | at the design |",
+             "|---|---|---|---|---|"]
     for r in facts["nominal_rules"]:
         def f(v):
             return "-" if v is None else f"{v:.6g}"
@@ -479,7 +483,12 @@ TORNADO_LINK = ("\n![tolerance tornado: each of the worst rules' margin, one bar
                 "[tornado.png](tornado.png): the linear stack-up of the worst rules, the largest contribution at the top\n")
 
 
+NO_BOX_LINK = ("\n[tornado.png](tornado.png): empty -- with no tolerance box there is no stack-up to draw; the tables "
+               "above are the derivatives\n")
+
+
 def artifacts(kind: str, name: str, sha: str, facts: dict) -> dict:
     return {"result.json": lambda p: atomic_write_text(p, finite_json_text(result_json(kind, name, sha, facts))),
-            "report.md": lambda p: atomic_write_text(p, full_table(facts) + TORNADO_LINK),
+            "report.md": lambda p: atomic_write_text(p, full_table(facts) + (NO_BOX_LINK if no_box(facts) else
+                                                                             TORNADO_LINK)),
             "tornado.png": lambda p: tornado(facts, p)}

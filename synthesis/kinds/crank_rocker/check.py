@@ -19,12 +19,20 @@ from synthesis.kinematics.rocker_drive import (CrankRocker, QuickReturn, acute, 
                                               transmission_angles_deg, turn_grid)
 from synthesis.dynamics.linkage import FourbarDynamics, dynamics_facts, dynamics_rules
 from synthesis.core.kind import figure_text
+from synthesis.core.verdict import FINE
 from synthesis.result import Result
 from synthesis.spec import LoadedSpec
 from synthesis.kinds.crank_rocker.spec import CrankRockerSpec
 
 #: crank angles of the transmission-angle check in ``check`` (even, so 0 and 180 deg are included)
 CHECK_SAMPLES = 3600
+
+
+def check_samples(spec: CrankRockerSpec) -> int:
+    """The crank angles a design is checked on -- by `check` and by the solve's re-check alike, so both read one rule
+    table: 10x the solver's samples, at least :data:`CHECK_SAMPLES` (a peak the solve passed on 720 samples, check
+    failed on 3600)."""
+    return max(FINE * spec.solver.samples_per_turn, CHECK_SAMPLES)
 
 
 def mechanism(spec: CrankRockerSpec, values: dict[str, float] | None = None) -> CrankRocker:
@@ -156,7 +164,7 @@ def facts(spec: CrankRockerSpec, cr: CrankRocker, q: QuickReturn | None) -> dict
 def run_check(loaded: LoadedSpec) -> Result:
     spec = cast(CrankRockerSpec, loaded.model)      # load_spec validated it with this kind's model
     cr = mechanism(spec)
-    rules, q = evaluate(spec, cr)
+    rules, q = evaluate(spec, cr, check_samples(spec))
     return Result(kind=spec.kind, name=spec.name, spec_sha256=loaded.sha256, status="evaluated",
                   design=spec.design_values(), rules=[r.record().to_json() for r in rules],
                   extra=facts(spec, cr, q))

@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
-from synthesis.dynamics.linkage import PEAK_OBJECTIVES, peak_backoff, peak_epigraph, peak_of
+from synthesis.dynamics.linkage import DYNAMICS_BACKOFF_AT_72, PEAK_OBJECTIVES, peak_backoff, peak_epigraph, peak_of
 from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, linkage_dynamics, rules_of
 from synthesis.core.declared import Declared
 from synthesis.core.kind import Setting
@@ -70,8 +70,10 @@ def problem(setting: Setting) -> Declared:
     declared = Problem("crank_rocker", z, *COORDINATES.bounds(lbx, ubx), structural, rules, _objective(spec, p, mu),
                        hard_in_elastic=("grashof_crank_rocker",), ipopt="tight",
                        # a sampled peak's limit held inside by its share, so the peak between samples holds too (the
-                       # transmission angle's extremes, at 0 and 180 deg, are on the grid: its rows are exact)
-                       backoff=peak_backoff(n, scaled_backoff(DEFAULT_BACKOFF)),
+                       # transmission angle's extremes, at 0 and 180 deg, are on the grid: its rows are exact); at
+                       # most 2 %: the share grows as (72 / n)^2 and passes the limit itself at 10 samples (the kind
+                       # takes 8), where the check's grid tells a peak missed between samples and asks for more
+                       backoff=peak_backoff(n, scaled_backoff(DEFAULT_BACKOFF), most=DYNAMICS_BACKOFF_AT_72),
                        # z: l7 and three slacks (mm), the extremes' crank angles (rad); rows: the
                        # extremes' d beta / d phi (a plain number), the three lengths' bounds (mm)
                        x_units=["mm"] * 4 + ["rad"] * 2, structural_units=["", ""] + ["mm"] * 3,

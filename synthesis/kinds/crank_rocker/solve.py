@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from synthesis.core.declared import declared
 from synthesis.core.kind import Finished, Setting, Solving
-from synthesis.core.verdict import FINE, Recheck, StartReport
-from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, evaluate, facts, mechanism
+from synthesis.core.verdict import Recheck, StartReport
+from synthesis.kinds.crank_rocker.check import check_samples, evaluate, facts, mechanism
 from synthesis.kinds.crank_rocker.closed_form import solve_paper_equations
 from synthesis.core.coordinates import outside_bounds
 from synthesis.dynamics.linkage import PEAK_OBJECTIVES
@@ -23,7 +23,7 @@ def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     outside = outside_bounds(NAMES, design_box(spec.variables(), NAMES)[0], outcome.design)
     cr = mechanism(spec, outcome.design)
-    rules, q = evaluate(spec, cr, samples=max(FINE * spec.solver.samples_per_turn, CHECK_SAMPLES))
+    rules, q = evaluate(spec, cr, samples=check_samples(spec))
     return Recheck(rules, (cr, q), invalid=outside)
 
 
