@@ -6,7 +6,8 @@ from __future__ import annotations
 from synthesis.core.kind import Finished, Setting, Solving
 from synthesis.core.verdict import Recheck, StartReport
 from synthesis.errors import SpecError
-from synthesis.kinds.guide_way.check import FINE, control_design, describe, given_control, scene_for, whose_path
+from synthesis.kinds.guide_way.check import (FINE, control_design, describe, dynamics_samples, given_control, scene_for,
+                                             whose_path)
 from synthesis.kinds.guide_way.nlp import FixedGuide, GuideNLP, control_of, names_of
 
 
@@ -36,10 +37,8 @@ def _control(spec, design: dict):
 def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     scene = scene_for(spec, _control(spec, outcome.design), FINE * spec.solver.samples_per_segment)
-    # the dynamics rules on the re-check's grid too: as many samples per stretch as its other rules read, and never
-    # fewer than the table asks
-    fine = max(spec.dynamics.samples, FINE * spec.solver.samples_per_segment * len(scene.arms)) \
-        if spec.dynamics is not None else None
+    # the dynamics rules on the check's grid (check.dynamics_samples)
+    fine = dynamics_samples(spec, scene) if spec.dynamics is not None else None
     return Recheck(scene.rules + _dynamics_rules(scene, fine), scene)
 
 
