@@ -272,3 +272,25 @@ def test_the_solve_s_re_check_reads_a_sampled_peak_on_the_check_s_grid_at_least(
     checked = evaluate(loaded.model, mechanism(loaded.model, design))[0]
     assert [(r.name, r.record().value) for r in rules] == [(r.name, r.record().value) for r in checked]
     assert "peak_input_torque" in [r.name for r in rules]
+
+
+def test_the_peak_back_off_is_capped_and_check_reads_the_solve_s_grid():
+    """The (72 / n)^2 share of a peak's limit passed the limit itself at 10 samples (the kind takes 8): the solve was
+    refused ("limits closer together than the back-off allows").  crank_rocker caps it at 2 %; above 360 samples per
+    turn check reads the re-check's 10 x grid, not 3,600."""
+    from types import SimpleNamespace
+
+    from synthesis.dynamics.linkage import DYNAMICS_BACKOFF_AT_72, peak_backoff
+    from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, check_samples
+
+    rule = SimpleNamespace(name="peak_input_torque")
+    capped = peak_backoff(10, lambda r, limit: 0.0, most=DYNAMICS_BACKOFF_AT_72)
+    assert capped(rule, 0.3) == pytest.approx(0.02 * 0.3) and peak_backoff(10, lambda r, l: 0.0)(rule, 0.3) > 0.3
+    assert peak_backoff(144, lambda r, l: 0.0, most=0.02)(rule, 0.3) == pytest.approx(0.005 * 0.3)
+    loaded = load_spec(LIBRARY / "picker" / "crank_rocker_torque_limited.toml")
+    assert check_samples(loaded.model) == CHECK_SAMPLES
+    wide = loaded.model.model_copy(update={"solver": loaded.model.solver.model_copy(update={"samples_per_turn": 400})})
+    assert check_samples(wide) == 4000
+    run = run_check(loaded)
+    assert run.extra["motion"]["min_transmission_angle_deg"] == pytest.approx(
+        next(r["value"] for r in run.rules if r["name"] == "min_transmission_angle"), abs=1e-12)

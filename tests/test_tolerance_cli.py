@@ -145,6 +145,9 @@ def test_samples_0_without_a_box_gives_the_sensitivities_and_the_design_s_verdic
     assert run.stdout.startswith("Verdict: holds at the design: it passes every rule (no tolerance box")
     assert "in the box" not in run.stdout and "0.00 %" not in run.stdout
     report = (folder / "report.md").read_text()
+    assert report.startswith("Verdict: holds at the design: it passes every rule; no tolerance box, every half-width 0")
+    assert report.rstrip().endswith("with no tolerance box there is no stack-up to draw; the tables above are the "
+                                    "derivatives")
     assert "does not move with the design" not in report and "linear worst" not in report
     # every derivative result.json holds is in report.md's table, to its 4 digits
     lines = report.splitlines()

@@ -105,7 +105,8 @@ def dynamics_rules(dyn: FourbarDynamics | None, limits, samples: int, missing: s
 DYNAMICS_RULES = ("peak_input_torque", "peak_shaking_force", "peak_shaking_moment")
 #: the NLP holds each [dynamics.limits] peak this share of its limit inside it at 72 samples of a turn, so that the
 #: peak between its samples holds too on the re-check's finer grid; at N samples the share is this x (72 / N)^2, as
-#: the miss between samples of a smooth periodic peak falls with the square of their spacing.
+#: the miss between samples of a smooth periodic peak falls with the square of their spacing (a kind that takes
+#: fewer samples may cap it: :func:`peak_backoff`'s ``most``; crank_rocker's 2 %).
 #: picking_arc_torque_limited's starts held only at the kind's relative 1e-9 came to rest up to 1.2 % over the limit
 #: between two of 72 samples (54 of its 64 starts: 0.4553 N m against 0.45 at worst); crank_rocker_torque_limited's
 #: answer, held at 1e-7 of its scale, 1.4e-5 over it between two of 72

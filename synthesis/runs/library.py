@@ -72,7 +72,8 @@ def write_template(kind: str, target: Path) -> list[Path]:
     companions = []
     for source, name in reference.template_companions(kind):
         copy = target.parent / name
-        if os.path.normcase(os.path.abspath(copy)) == os.path.normcase(os.path.abspath(target)):
+        # one file however its name is cased (a case-blind disk: macOS, Windows)
+        if os.path.normcase(os.path.abspath(copy)).casefold() == os.path.normcase(os.path.abspath(target)).casefold():
             raise OutputError(f"{target}: the template names a spec file of this name beside it ({source.name}); "
                               f"give the template another name")
         if os.path.lexists(copy):

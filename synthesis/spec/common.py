@@ -11,9 +11,10 @@ import hashlib
 import json
 import math
 import re
+import types
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union, get_args
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import numpy as np
 from pydantic import (BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
@@ -487,19 +488,23 @@ def validate(model: type[BaseModel], data: dict[str, Any], prefix: str) -> BaseM
 
 
 def _model_names(model: type[BaseModel]) -> set[str]:
-    """The class names of every model a spec model's fields may hold (its own and its tables', through unions, lists
-    and tables of them): what pydantic puts in an error's path for each branch of a union of tables."""
+    """The class names of the tables a union among a spec model's fields offers (a link's BarLink | LumpedLink, through
+    lists and tables of them): what pydantic puts in an error's path for each branch of such a union."""
     names: set[str] = set()
+    seen: set[type] = set()
     todo: list[Any] = [model]
     while todo:
         tp = todo.pop()
         if isinstance(tp, type) and issubclass(tp, BaseModel):
-            if tp.__name__ in names:
-                continue
-            names.add(tp.__name__)
-            todo += [f.annotation for f in tp.model_fields.values()]
-        else:
-            todo += list(get_args(tp))
+            if tp not in seen:
+                seen.add(tp)
+                todo += [f.annotation for f in tp.model_fields.values()]
+            continue
+        args = get_args(tp)
+        tables = [a.__name__ for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
+        if get_origin(tp) in (Union, types.UnionType) and len(tables) > 1:       # not X | None: a choice of tables
+            names.update(tables)
+        todo += list(args)
     return names
 
 

@@ -113,16 +113,17 @@ def evaluate(spec: CrankRockerSpec, cr: CrankRocker, samples: int = CHECK_SAMPLE
                     transmission_angles_deg(cr, samples)), q
 
 
-def motion_facts(cr: CrankRocker, q: QuickReturn | None, samples: int = 361) -> dict:
-    """What the simulated mechanism does: extremes, strokes, K, swing, angles; curves for the figures."""
+def motion_facts(cr: CrankRocker, q: QuickReturn | None, samples: int = 361, checked: int = CHECK_SAMPLES) -> dict:
+    """What the simulated mechanism does: extremes, strokes, K, swing, angles (the smallest transmission angle on the
+    ``checked`` crank angles its rule reads); curves for the figures."""
     if q is None:
         return {"crank_turns": False}
     ex = q.extremes
     phi = np.linspace(0.0, 2 * math.pi, samples)
     curve = rocker_curve(cr, phi)
     mu = np.degrees(curve["mu"])
-    fine = turn_grid(CHECK_SAMPLES)
-    gam = acute(transmission_angles_deg(cr, CHECK_SAMPLES))
+    fine = turn_grid(checked)
+    gam = acute(transmission_angles_deg(cr, checked))
     k = int(np.argmin(gam))
     return {
         "crank_turns": True,
@@ -158,7 +159,7 @@ def facts(spec: CrankRockerSpec, cr: CrankRocker, q: QuickReturn | None) -> dict
             "requirements": {"time_ratio": req.time_ratio, "rocker_swing_deg": req.rocker_swing,
                              "min_transmission_angle_deg": req.min_transmission_angle},
             "frame": "crank pivot G at the origin, rocker pivot A on +x; crank angle from G -> A, counter-clockwise",
-            "motion": motion_facts(cr, q), **extra}
+            "motion": motion_facts(cr, q, checked=check_samples(spec)), **extra}
 
 
 def run_check(loaded: LoadedSpec) -> Result:

@@ -18,10 +18,10 @@ def evaluate(loaded) -> Result:
 
 
 def note(spec) -> str:
-    from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES
+    from synthesis.kinds.crank_rocker.check import check_samples
 
     return (f"the check with [solver] samples_per_turn {spec.solver.samples_per_turn} crank angles "
-            f"(fine: {CHECK_SAMPLES})")
+            f"(fine: {check_samples(spec)})")
 
 
 COARSE = CoarseCheck(evaluate=evaluate, note=note)

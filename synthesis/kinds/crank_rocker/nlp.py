@@ -17,7 +17,7 @@ import numpy as np
 
 from synthesis.kinematics.grashof import GrashofCoordinates
 from synthesis.dynamics.linkage import DYNAMICS_BACKOFF_AT_72, PEAK_OBJECTIVES, peak_backoff, peak_epigraph, peak_of
-from synthesis.kinds.crank_rocker.check import CHECK_SAMPLES, linkage_dynamics, rules_of
+from synthesis.kinds.crank_rocker.check import check_samples, linkage_dynamics, rules_of
 from synthesis.core.declared import Declared
 from synthesis.core.kind import Setting
 from synthesis.core.problem import DEFAULT_BACKOFF, ObjectiveParts, Problem, scaled_backoff
@@ -88,7 +88,7 @@ def problem(setting: Setting) -> Declared:
         variable reached, or the peak torque (N m), shaking force (N) or shaking moment (N m) of the design itself on
         the check's grid."""
         if peak:
-            return peak_of(linkage_dynamics(spec, [design[n] for n in NAMES]), spec.objective.name, CHECK_SAMPLES)
+            return peak_of(linkage_dynamics(spec, [design[n] for n in NAMES]), spec.objective.name, check_samples(spec))
         return sum(design.values()) if total_length else -out.objective * 10.0
 
     def extremes(out, compiled) -> dict:

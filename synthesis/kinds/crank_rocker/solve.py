@@ -60,7 +60,7 @@ def finish(setting: Setting, best: StartReport) -> Finished:
 
 def baseline_rules(setting: Setting) -> list[dict] | None:
     spec = setting.spec
-    rules, _ = evaluate(spec, mechanism(spec))
+    rules, _ = evaluate(spec, mechanism(spec), check_samples(spec))
     return [r.record().to_json() for r in rules]
 
 

@@ -80,7 +80,8 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
         return None
     given = given_control(setting.spec)
     scene = scene_for(setting.spec, setting.data.control if given is None else given)
-    return [r.record().to_json() for r in scene.rules + _dynamics_rules(scene)]
+    fine = dynamics_samples(setting.spec, scene) if setting.spec.dynamics is not None else None
+    return [r.record().to_json() for r in scene.rules + _dynamics_rules(scene, fine)]
 
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
