@@ -183,17 +183,23 @@ def _rows_of(rule, robust: bool) -> tuple:
     return rule.box_rows if robust and rule.box_rows else rule.rows()
 
 
-def _backed_off(problem: Problem, rule, robust: bool = False) -> list[Row]:
-    """The rule's rows, each inequality moved inside its limits by the problem's back-off (a range narrower than its
-    two back-offs comes out empty: :func:`refuse_empty_rows` says so before IPOPT is handed it)."""
+def _backed_off(problem: Problem, rule, robust: bool = False, backoff=None) -> list[Row]:
+    """The rule's rows, each inequality moved inside its limits by ``backoff(rule, limit)`` (default the problem's; a
+    range narrower than its two back-offs comes out empty: :func:`refuse_empty_rows` says so before IPOPT is handed
+    it)."""
+    backoff = problem.backoff if backoff is None else backoff
     rows = []
     for expr, lb, ub in _rows_of(rule, robust):
         if lb is not None and ub is not None and lb == ub:
             rows.append((expr, lb, ub))
         else:
-            rows.append((expr, None if lb is None else lb + problem.backoff(rule, lb),
-                         None if ub is None else ub - problem.backoff(rule, ub)))
+            rows.append((expr, None if lb is None else lb + backoff(rule, lb),
+                         None if ub is None else ub - backoff(rule, ub)))
     return rows
+
+
+def _elastic_backoff(rule, limit: float) -> float:
+    return ELASTIC_BACKOFF * rule.scale
 
 
 def refuse_empty_rows(problem: Problem, t: "Transcription") -> None:
@@ -251,10 +257,7 @@ def transcribe(problem: Problem, elastic: bool = False) -> Transcription:
             # a rule the answer holds sits on its limit there, to IPOPT's tolerance: the elastic rows hold each side
             # ELASTIC_BACKOFF x the rule's scale inside, so the rules its diagnosis says hold do hold when the
             # returned design is re-checked (combing_chain's window_top missed by 1.3e-11 deg, "binding")
-            inside = ELASTIC_BACKOFF * rule.scale
-            rows = [(expr, lb, ub) if lb is not None and ub is not None and lb == ub else
-                    (expr, None if lb is None else lb + inside, None if ub is None else ub - inside)
-                    for expr, lb, ub in _rows_of(rule, in_box)]
+            rows = _backed_off(problem, rule, in_box, _elastic_backoff)
             if hard[k]:
                 g.add(hold(rule, rows), k)
                 continue

@@ -229,10 +229,12 @@ def spline_facts(scene: sc.Scene) -> dict:
             "uncontrolled_claw": {"x": _r(closing[:, 0]), "y": _r(closing[:, 1])}}
 
 
-def dynamics_samples(spec, scene: sc.Scene) -> int:
+def dynamics_samples(spec, scene: sc.Scene) -> int | None:
     """The samples of the path the [dynamics.limits] rules are read on -- by `check` and by the solve's re-check
     alike, so both read one rule table: as many as the other rules read, never fewer than the table asks (check read
-    the table's alone: a peak torque 0.4964 N m where the solve had 0.4966)."""
+    the table's alone: a peak torque 0.4964 N m where the solve had 0.4966); None without a [dynamics] table."""
+    if spec.dynamics is None:
+        return None
     return max(spec.dynamics.samples, FINE * spec.solver.samples_per_segment * len(scene.arms))
 
 

@@ -38,8 +38,7 @@ def recheck(setting: Setting, outcome) -> Recheck:
     spec = setting.spec
     scene = scene_for(spec, _control(spec, outcome.design), FINE * spec.solver.samples_per_segment)
     # the dynamics rules on the check's grid (check.dynamics_samples)
-    fine = dynamics_samples(spec, scene) if spec.dynamics is not None else None
-    return Recheck(scene.rules + _dynamics_rules(scene, fine), scene)
+    return Recheck(scene.rules + _dynamics_rules(scene, dynamics_samples(spec, scene)), scene)
 
 
 def _dynamics_rules(scene, samples: int | None = None) -> list:
@@ -80,8 +79,7 @@ def baseline_rules(setting: Setting) -> list[dict] | None:
         return None
     given = given_control(setting.spec)
     scene = scene_for(setting.spec, setting.data.control if given is None else given)
-    fine = dynamics_samples(setting.spec, scene) if setting.spec.dynamics is not None else None
-    return [r.record().to_json() for r in scene.rules + _dynamics_rules(scene, fine)]
+    return [r.record().to_json() for r in scene.rules + _dynamics_rules(scene, dynamics_samples(setting.spec, scene))]
 
 
 SOLVING = Solving(build=build, recheck=recheck, finish=finish, baseline_rules=baseline_rules, prepare=prepare,
