@@ -179,3 +179,67 @@ def test_a_scheduler_without_workers_is_said_in_one_line_not_waited_on_for_ever(
             run_solve(loaded, starts=2, seed=0, workers=1, scheduler=c.scheduler_address)
     assert str(raised.value) == (f"--scheduler {c.scheduler_address}: no dask worker joined the scheduler within 1 s "
                                  f"(start one: `dask worker {c.scheduler_address}`)")
+
+
+def _local_cluster_processes() -> tuple[str, subprocess.Popen]:
+    """A dask scheduler in a process of its own on a free port: (its address, the process)."""
+    import socket
+    import time
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                                  "--port", str(port), "--no-dashboard"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(2)
+    return f"tcp://127.0.0.1:{port}", scheduler
+
+
+def _dask_worker(address: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                             "--no-nanny", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+@pytest.mark.slow         # about 20 s: dask gives up reconnecting after its own 10 s
+@pytest.mark.parametrize("lose, said", [
+    ("scheduler", "the connection to the scheduler was lost"),
+    ("worker", "no dask worker was left on the scheduler for 1 s"),
+])
+def test_a_cluster_lost_mid_run_leaves_its_pending_starts_to_local_workers(monkeypatch, lose, said):
+    """A scheduler that died mid-run turned every start still pending into a failed start (``Start_Raised:
+    FutureCancelledError``), each recorded as finished: a 60-start run answered from the 9 solved before, said
+    `optimal`, and no --resume would have solved the rest; a cluster whose last worker died held the run for good.
+    Now the finished starts are kept, the others solved here, and the answer is the local run's."""
+    from synthesis import kinds
+    from synthesis.core import cluster as cluster_module
+    from synthesis.core.solve import run_solve as core_run_solve
+
+    monkeypatch.setattr(cluster_module, "HEALTH_CHECK_S", 0.5)
+    monkeypatch.setattr(cluster_module, "WORKER_WAIT_S", 1.0)
+    address, scheduler = _local_cluster_processes()
+    worker = None
+    try:
+        worker = _dask_worker(address)
+        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+        kind = kinds.solving_kind_for(loaded)
+        finished, notes = [], []
+
+        def on_start(report, best) -> None:
+            finished.append(report.outcome.start)
+            if len(finished) == 2:
+                (scheduler if lose == "scheduler" else worker).kill()
+
+        remote, reports, _ = core_run_solve(kind, loaded, 24, 3, 1, on_start, address, on_note=notes.append)
+    finally:
+        for proc in (worker, scheduler):
+            if proc is not None:
+                proc.kill()
+                proc.wait()
+    local, local_reports, _ = run_solve(loaded, starts=24, seed=3, workers=1)
+    assert len(notes) == 1 and notes[0].startswith(f"--scheduler {address}: {said} after "), notes
+    assert notes[0].endswith("are solved here on 1 local worker (the same starts: the same answer)")
+    assert sorted(finished) == list(range(24))          # every start told once
+    assert [r.outcome.return_status for r in reports] == [r.outcome.return_status for r in local_reports]
+    assert not any(r.outcome.return_status.startswith("Start_Raised") for r in reports)
+    assert remote.design == local.design and remote.solver["best_start"] == local.solver["best_start"]

@@ -16,7 +16,7 @@ from typing import Any, Callable, cast
 import msgpack
 import numpy as np
 from distributed import Client, WorkerPlugin, get_worker
-from distributed import as_completed as dask_completed
+from distributed import wait as dask_wait
 
 from synthesis.core import interrupt
 from synthesis.core.executor import WORKER_CRASHED, _raised
@@ -26,6 +26,19 @@ CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving 
 #: how long a scheduler without workers is waited for one to join: its starts would wait for ever, and the run with
 #: them, without a word
 WORKER_WAIT_S = 60.0
+#: how often a run waiting for its starts looks whether the cluster still serves it (connected, a worker joined)
+HEALTH_CHECK_S = 5.0
+LOST = "the connection to the scheduler was lost"
+
+
+class SchedulerLost(Exception):
+    """The cluster stopped serving a run before every start had finished: ``why`` says how (one clause), ``done`` holds
+    the outcomes it did finish (start index -> outcome, each already handed to ``on_done``).  Not a failure of the
+    starts still pending: :mod:`synthesis.core.executor` solves them on local workers."""
+
+    def __init__(self, why: str, done: dict[int, Any]):
+        super().__init__(why)
+        self.why, self.done = why, done
 
 
 class _SolverPlugin(WorkerPlugin):
@@ -235,22 +248,69 @@ def run_starts_on_cluster(factory: Callable[[], Any], starts: np.ndarray, schedu
             futures = [client.submit(_solve_on_dask_worker, name, i, x0, pure=False) for i, x0 in zip(indices, starts)]
             index_of = {fut.key: i for fut, i in zip(futures, indices)}
             try:
-                for fut in dask_completed(futures):
-                    try:
-                        out = fut.result()
-                    except Exception as exc:
-                        if failure is None:
-                            raise _worker_failed(scheduler, exc) from None
-                        if type(exc).__name__ == "KilledWorker":
-                            out = failure(index_of[fut.key], WORKER_CRASHED, f"the dask worker died: {exc}")
-                        else:
-                            out = failure(index_of[fut.key], *_raised(exc))
-                    outcomes[out.start] = out
-                    on_done(out)
+                _collect(client, futures, index_of, scheduler, outcomes, on_done, failure)
             except BaseException:
-                client.cancel(futures)
+                with contextlib.suppress(Exception):        # a lost scheduler cannot be told
+                    client.cancel(futures)
                 raise
         finally:
             with contextlib.suppress(Exception):     # never hide the error that got us here
                 client.unregister_worker_plugin(name)
     return [outcomes[i] for i in indices]
+
+
+def _collect(client, futures: list, index_of: dict, scheduler: str, outcomes: dict[int, Any],
+             on_done: Callable[[Any], None], failure: Callable[[int, str, str], Any] | None) -> None:
+    """Each start's outcome into ``outcomes`` (and ``on_done``) as it finishes.  Every :data:`HEALTH_CHECK_S` seconds
+    without one, the cluster is looked at: a client that lost its scheduler (dask gives up reconnecting after its
+    own timeout and cancels every pending start with the reason ``scheduler-connection-lost``), or a scheduler left
+    without workers for :data:`WORKER_WAIT_S` seconds, raises :class:`SchedulerLost` -- never a failure of the
+    starts still pending, which would turn a cluster's trouble into a run of fewer starts (each recorded as
+    finished, so no ``--resume`` would solve them)."""
+    pending = list(futures)
+    alone_since: float | None = None
+    while pending:
+        try:
+            finished, not_done = dask_wait(pending, timeout=HEALTH_CHECK_S, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            finished, not_done = set(), set(pending)
+        except Exception as exc:       # noqa: BLE001 - a client that can no longer wait: its connection is gone
+            why = (LOST if client.status != "running" or "Cancelled" in type(exc).__name__
+                   else f"the client could no longer wait on it ({type(exc).__name__})")
+            raise SchedulerLost(why, outcomes) from None
+        pending = [f for f in pending if f in not_done]
+        for fut in sorted(finished, key=lambda f: index_of[f.key]):
+            try:
+                out = fut.result()
+            except Exception as exc:
+                if _connection_lost(client, exc):
+                    raise SchedulerLost(LOST, outcomes) from None
+                if failure is None:
+                    raise _worker_failed(scheduler, exc) from None
+                if type(exc).__name__ == "KilledWorker":
+                    out = failure(index_of[fut.key], WORKER_CRASHED, f"the dask worker died: {exc}")
+                else:
+                    out = failure(index_of[fut.key], *_raised(exc))
+            outcomes[out.start] = out
+            on_done(out)
+        if finished or not pending:
+            alone_since = None
+            continue
+        if client.status != "running":
+            raise SchedulerLost(LOST, outcomes)
+        try:
+            workers = client.scheduler_info().get("workers")
+        except Exception:         # noqa: BLE001 - the scheduler does not answer its client
+            raise SchedulerLost("the scheduler stopped answering", outcomes) from None
+        if workers:
+            alone_since = None
+        elif alone_since is None:
+            alone_since = time.monotonic()
+        elif time.monotonic() - alone_since >= WORKER_WAIT_S:
+            raise SchedulerLost(f"no dask worker was left on the scheduler for {WORKER_WAIT_S:g} s", outcomes)
+
+
+def _connection_lost(client, exc: Exception) -> bool:
+    """Whether a start's error is its client's lost connection rather than the start's own failure."""
+    return (getattr(exc, "reason", None) == "scheduler-connection-lost"
+            or (type(exc).__name__ in ("FutureCancelledError", "CancelledError") and client.status != "running"))

@@ -165,7 +165,8 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
                on_done: Callable[[Any], None] = lambda outcome: None,
                stop_when: Callable[[Any], bool] | None = None, scheduler: str | None = None,
                finished: dict[int, Any] | None = None,
-               failure: Callable[[int, str, str], Any] = failed_start) -> list:
+               failure: Callable[[int, str, str], Any] = failed_start,
+               on_note: Callable[[str], None] = lambda text: None) -> list:
     """Solve every start; returns the outcomes in start order. ``on_done`` sees each as it finishes.
 
     ``stop_when(outcome)`` ends the multistart early: when the start with the smallest index k for
@@ -178,7 +179,9 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
 
     ``scheduler`` (a dask.distributed address) sends the starts to that cluster instead of a local
     process pool of ``workers``; there every start runs, and ``stop_when`` only trims the outcomes
-    the same way, so the answer does not depend on where it ran.
+    the same way, so the answer does not depend on where it ran.  When the cluster stops serving the run
+    (the connection lost, no worker left), the starts it did not finish are solved on ``workers`` local
+    workers and ``on_note`` is told so in one line.
 
     A start that raises, or whose worker process dies (killed by the OS, a crash in native code), is that
     start's failure and the run goes on: ``failure(index, return_status, reason)`` makes its outcome
@@ -191,11 +194,11 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     signal came is discarded (IPOPT returns it as if finished).  Outcomes already passed to ``on_done``
     are the caller's to keep.
     """
-    run = _Multistart(factory, starts, on_done, stop_when, failure)
+    run = _Multistart(factory, starts, on_done, stop_when, failure, on_note)
     run.replay(finished or {})
     todo = [i for i in range(run.stop_at + 1) if i not in run.outcomes]
     if scheduler is not None:
-        return run.on_cluster(todo, scheduler)
+        return run.on_cluster(todo, scheduler, workers)
     if todo and workers <= 1:      # in this process: no pool start-up cost, the solver built once
         run.in_process(todo)
     elif todo:
@@ -208,9 +211,11 @@ class _Multistart:
     an early stop) and how a finished start is kept."""
 
     def __init__(self, factory: Callable[[], Any], starts: np.ndarray, on_done: Callable[[Any], None],
-                 stop_when: Callable[[Any], bool] | None, failure: Callable[[int, str, str], Any]):
+                 stop_when: Callable[[Any], bool] | None, failure: Callable[[int, str, str], Any],
+                 on_note: Callable[[str], None] = lambda text: None):
         self.factory, self.starts, self.on_done, self.stop_when, self.failure = (factory, starts, on_done, stop_when,
                                                                                  failure)
+        self.on_note = on_note
         self.outcomes: dict[int, Any] = {}
         self.stop_at = len(starts) - 1                  # the last start index that counts
 
@@ -240,16 +245,31 @@ class _Multistart:
         if self.stop_when is not None and out.start < self.stop_at and self.stop_when(out):
             self.stop_at = out.start
 
-    def on_cluster(self, todo: list[int], scheduler: str) -> list:
+    def on_cluster(self, todo: list[int], scheduler: str, workers: int) -> list:
         """Every start on the cluster; an early stop only trims the outcomes (the answer does not depend on where
-        it ran)."""
+        it ran).  A cluster that stops serving the run (:class:`~synthesis.core.cluster.SchedulerLost`) keeps the
+        starts it finished; the rest are solved here on ``workers`` local workers, said by ``on_note``."""
         try:
-            from synthesis.core.cluster import run_starts_on_cluster      # dask.distributed: an optional extra
+            from synthesis.core.cluster import SchedulerLost, run_starts_on_cluster   # dask.distributed: an extra
         except ImportError:
             raise AgrisynthError("--scheduler needs dask.distributed: pip install 'agrisynth[cluster]'") from None
-        solved = (run_starts_on_cluster(self.factory, self.starts[todo], scheduler, self.on_done, indices=todo,
-                                        failure=self.failure) if todo else [])
-        self.outcomes.update({out.start: out for out in solved})
+        try:
+            solved = (run_starts_on_cluster(self.factory, self.starts[todo], scheduler, self.on_done, indices=todo,
+                                            failure=self.failure) if todo else [])
+            self.outcomes.update({out.start: out for out in solved})
+        except SchedulerLost as lost:
+            self.outcomes.update(lost.done)                   # each already handed to on_done
+            for i in sorted(lost.done):                       # an early stop among them: fewer left to solve
+                if self.stop_when is not None and i < self.stop_at and self.stop_when(lost.done[i]):
+                    self.stop_at = i
+            rest = self.remaining(todo)
+            self.on_note(f"--scheduler {scheduler}: {lost.why} after {len(lost.done)} of {len(todo)} starts; the "
+                         f"other {len(rest)} are solved here on {max(workers, 1)} local "
+                         f"worker{'s' if workers > 1 else ''} (the same starts: the same answer)")
+            if rest and workers <= 1:
+                self.in_process(rest)
+            elif rest:
+                self.in_pools(rest, workers)
         everything = self.counted()
         first = next((i for i, out in enumerate(everything) if self.stop_when is not None and self.stop_when(out)),
                      None)

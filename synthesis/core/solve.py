@@ -84,13 +84,15 @@ def _written_at(spec, name: str) -> str:
 def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, scheduler: str | None = None,
                    on_start: Callable[[StartReport, StartReport], None] = lambda report, best: None,
                    record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
-                   rows_by_index: bool = False, carried: dict[int, StartReport] | None = None) -> Run:
+                   rows_by_index: bool = False, carried: dict[int, StartReport] | None = None,
+                   on_note: Callable[[str], None] = lambda text: None) -> Run:
     """The multistart of every kind.  ``record(outcome)`` sees each finished start first (the run's
     ``starts.jsonl``); ``finished``: starts already solved by an interrupted run (not solved again);
     ``rows_by_index``: each start's decision-variable row drawn for its index alone (:func:`rows_of_indices`,
     a kind's auto order) instead of a Latin hypercube of ``starts`` points; ``carried``: the reports of starts
     an earlier batch of a nested auto run finished (neither solved, recorded, re-checked nor told to ``on_start``
-    again: they count as they were).
+    again: they count as they were); ``on_note``: told in one line when a cluster stopped serving the run and its
+    other starts were solved on local workers (:func:`~synthesis.core.executor.run_starts`).
 
     A SIGINT/SIGTERM (:mod:`synthesis.core.interrupt`) raises :class:`Interrupted` whose ``partial`` is
     the :class:`Run` of the starts finished so far (None when none has)."""
@@ -140,7 +142,7 @@ def run_multistart(kind: Kind, setting: Setting, *, starts: int, workers: int, s
         outcomes = run_starts(factory, x_starts, workers, done, scheduler=scheduler,
                               finished={**(finished or {}), **{i: r.outcome for i, r in earlier.items()}},
                               stop_when=None if stop is None else (lambda out: stop(reports[out.start])),
-                              failure=failed)
+                              failure=failed, on_note=on_note)
     except (KeyboardInterrupt, SystemError) as exc:
         if not interrupt.caused_by_signal(exc):
             raise
@@ -220,7 +222,8 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
              record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
              on_batch: Callable[[int, bool], None] = lambda total, nested: None,
              resumed_batch: int | None = None, resumed_nested: bool | None = None,
-             previous: tuple[int, dict[int, Any]] | None = None) -> Run:
+             previous: tuple[int, dict[int, Any]] | None = None,
+             on_note: Callable[[str], None] = lambda text: None) -> Run:
     """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total, nested)`` is told as a batch
     begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``:
@@ -254,6 +257,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     pending = set(i for i in resumed if i < totals[first])
     in_batch = False                          # inside a batch's run_multistart (not the replay)
     k = first
+    lost: list[str] = []                      # what a cluster that stopped serving the run said
+
+    def noted(text: str) -> None:
+        lost.append(text)
+        on_note(text)
 
     def counting(report: StartReport, best: StartReport) -> None:
         """``on_start``, and the resumed batch's starts crossed off as they are counted (and logged) again."""
@@ -268,14 +276,14 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         if previous is not None and not nested and first > 0 and previous[0] == totals[first - 1]:
             on_batch(previous[0], nested)
             replayed = run_multistart(kind, setting, starts=previous[0], workers=workers, scheduler=scheduler,
-                                      record=record, finished=previous[1])
+                                      record=record, finished=previous[1], on_note=noted)
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
             began, compiled_before = time.perf_counter(), compile_seconds()
             in_batch = True
-            run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=scheduler,
-                                 on_start=counting, record=record, finished=resumed, rows_by_index=nested,
-                                 carried=carried)
+            run = run_multistart(kind, setting, starts=totals[k], workers=workers,
+                                 scheduler=None if lost else scheduler, on_start=counting, record=record,
+                                 finished=resumed, rows_by_index=nested, carried=carried, on_note=noted)
             in_batch = False
             pending.clear()
             last = run
@@ -634,7 +642,8 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
               on_batch: Callable[[int, bool], None] = lambda total, nested: None,
               resumed_batch: int | None = None,
               resumed_nested: bool | None = None,
-              previous: tuple[int, dict[int, Any]] | None = None) -> tuple[Result, list[StartReport], str]:
+              previous: tuple[int, dict[int, Any]] | None = None,
+              on_note: Callable[[str], None] = lambda text: None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 
     ``starts``/``seed`` default to the spec's ``[solver]``; ``scheduler``: a dask.distributed address
@@ -651,11 +660,11 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
     try:
         if auto is None:
             run = run_multistart(kind, setting, starts=starts, workers=workers, scheduler=scheduler,
-                                 on_start=on_start, record=record, finished=finished)
+                                 on_start=on_start, record=record, finished=finished, on_note=on_note)
         else:
             run = run_auto(kind, setting, auto, workers=workers, scheduler=scheduler, on_start=on_start,
                            record=record, finished=finished, on_batch=on_batch, resumed_batch=resumed_batch,
-                           resumed_nested=resumed_nested, previous=previous)
+                           resumed_nested=resumed_nested, previous=previous, on_note=on_note)
     except Interrupted as exc:
         if exc.partial is None:
             raise

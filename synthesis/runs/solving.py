@@ -225,7 +225,8 @@ def _multistart(kind, loaded, request: SolveRequest, plan: _Plan, workers: int, 
             solved = core.run_solve(kind, loaded, plan.asked, plan.seed, workers, on_start, request.scheduler,
                                     record=log_file.append, finished=plan.finished, auto=plan.auto,
                                     on_batch=on_batch, resumed_batch=plan.resumed_batch,
-                                    resumed_nested=plan.resumed_nested, previous=plan.previous)
+                                    resumed_nested=plan.resumed_nested, previous=plan.previous,
+                                    on_note=lambda text: emit(Note(text)))
     except (SpecError, AssemblyError) as exc:
         # a spec the run's set-up cannot use (e.g. a key point the arm cannot reach) is said as check says it:
         # the file first
