@@ -288,6 +288,47 @@ def test_a_plant_spacing_no_design_meets_is_refused_before_any_start(tmp_path):
     assert "plant_spacing = 120 mm" in str(err.value) and "[operation] forward_speed" in str(err.value)
 
 
+
+@pytest.mark.slow         # about 5 s: four starts
+def test_a_binding_sampled_rule_is_held_between_the_samples_too(tmp_path):
+    """A depth window of 15-20 mm binds the largest depth.  Held on its limit at the NLP's samples alone, its extreme
+    between them failed the 10x re-check (20.02 mm at 72 samples a turn; 20.00009 at 360), so the solve ended
+    `failed` whatever the samples; held [solver] backoff x its scale inside, it is `optimal`, and the check's
+    largest depth -- read at the refined bottom too -- is within the window."""
+    from synthesis.kinds import solve_spec
+
+    text = (LIBRARY / "rotary_planetary/smooth_loop_redesign.toml").read_text()
+    assert "planting_depth = [15.0, 45.0]" in text
+    (tmp_path / "spec.toml").write_text(text.replace("planting_depth = [15.0, 45.0]", "planting_depth = [15.0, 20.0]"))
+    loaded = load_spec(tmp_path / "spec.toml")
+    result, _, _ = solve_spec(loaded, workers=1)
+    assert result.status == "optimal"
+    rules = {r["name"]: r for r in result.rules}
+    # binding: 0.01 x its 5 mm scale inside (the re-check's grid finds no deeper point than the bottom)
+    assert rules["planting_depth_max"]["value"] == pytest.approx(20.0 - 0.05, abs=1e-6)
+    spec = loaded.model
+    fine, _, _ = evaluate(spec, result.design, n=20 * spec.solver.samples_per_turn, soil_samples=2000)
+    assert all(r.record().satisfied for r in fine)
+
+
+def test_the_largest_depth_is_read_at_the_refined_bottom(checked):
+    """The grid's lowest sample is the bottom only to the grid's step (23.7300 against 23.7685 mm at 12 samples a
+    turn): the largest depth is read at the bottom too, so both depth rules read the same lowest point."""
+    _, result, _ = checked
+    rules = {r["name"]: r for r in result.rules}
+    assert rules["planting_depth_max"]["value"] == rules["planting_depth"]["value"]
+
+
+def test_a_depth_window_above_the_soil_is_refused(tmp_path):
+    text = (LIBRARY / "rotary_planetary/smooth_loop_redesign.toml").read_text()
+    (tmp_path / "spec.toml").write_text(text.replace("planting_depth = [15.0, 45.0]", "planting_depth = [-45.0, -15.0]"))
+    from synthesis.errors import SpecError
+
+    with pytest.raises(SpecError) as err:
+        load_spec(tmp_path / "spec.toml")
+    assert "planting_depth [-45, -15]: the min must be above 0 mm" in str(err.value)
+
+
 def _integrated(rate: np.ndarray, harmonics: int) -> tuple[list, list]:
     """The Fourier coefficients (rad) of the zero-mean integral of a periodic rate sampled evenly over a turn:
     rate = sum A_k cos k phi + B_k sin k phi  ->  sum (A_k / k) sin k phi - (B_k / k) cos k phi."""

@@ -140,10 +140,17 @@ def rules_of(spec: RotaryPlanetarySpec, train: Train, angles: Angles, grid, soil
     lim = spec.rules
     return [*gear_rules(spec, train, grid), *single_idler_rules(spec, train, grid, angles.half_turn),
             R.trajectory_height_rule(y_top, y_bottom, lim.trajectory_height_min),
-            *R.planting_depth_rules(soil_y(spec), y_bottom, y_grid, lim.planting_depth),
+            *R.planting_depth_rules(soil_y(spec), y_bottom, _with(y_grid, y_bottom), lim.planting_depth),
             *soil_rules(spec, train, angles, soil_samples),
             R.plant_spacing_rule(plant_spacing(spec), lim.plant_spacing),
             *pose_rules(spec, train, angles)]
+
+
+def _with(samples, value):
+    """The samples and one more value (numbers or symbols): the largest depth read on the grid and at the bottom."""
+    if is_symbolic(samples) or is_symbolic(value):
+        return ca.vertcat(ca.vec(samples), value)
+    return np.append(np.ravel(samples), float(value))
 
 
 # --- the angles on floats ----------------------------------------------------------------------------------------

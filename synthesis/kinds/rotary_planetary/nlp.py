@@ -20,7 +20,7 @@ import numpy as np
 from synthesis.constraints.poses import nearest_row
 from synthesis.core.declared import Declared, named
 from synthesis.core.kind import Setting
-from synthesis.core.problem import ObjectiveParts, Problem
+from synthesis.core.problem import DEFAULT_BACKOFF, ObjectiveParts, Problem, per_rule_backoff
 from synthesis.kinds.rotary_planetary.check import (
     Angles, find_angles, rules_of, soil_y, train_of,
 )
@@ -29,6 +29,10 @@ from synthesis.kinds.rotary_planetary.spec import RotaryPlanetarySpec
 from synthesis.spec.common import design_box
 
 TWO_PI = 2.0 * math.pi
+#: the rules read on samples of the turn or the stroke: their extremes fall between samples, so the NLP holds them
+#: ``[solver] backoff`` x their scale inside (the others are rows at the NLP's own angles, exact)
+SAMPLED_RULES = ("pair_ratio", "pitch_curve_concavity", "pitch_normal_angle", "planting_depth_max",
+                 "in_soil_forward_speed")
 #: the auxiliary carrier angles are kept within this range, rad (a start's are in [-pi, 3 pi))
 ANGLE_RANGE = (-2.0 * TWO_PI, 3.0 * TWO_PI)
 
@@ -92,7 +96,9 @@ def problem(setting: Setting) -> Declared:
                        structural_units=["mm/rad", "mm/rad", "mm", "mm"] + ["mm^2/rad"] * len(free_poses)
                        + ["rad"] * bool(n_half) + ["mm/rad", "mm/rad", "rad", "rad", "rad", "mm"],
                        objective_unit="mm^2" if spec.objective.name == "key_pose_miss" else "deg^2",
-                       max_iter=spec.solver.max_iter)
+                       max_iter=spec.solver.max_iter,
+                       backoff=per_rule_backoff(lambda rule: spec.solver.backoff if rule.name in SAMPLED_RULES
+                                                else DEFAULT_BACKOFF))
 
     def start(x_design: np.ndarray, elastic: bool) -> tuple[np.ndarray, None]:
         x_design = np.clip(np.asarray(x_design, dtype=float), bounds[:, 0], bounds[:, 1])

@@ -49,7 +49,8 @@ def trajectory_height_rule(y_top, y_bottom, minimum: float, missing: str | None 
 
 def planting_depth_rules(soil_y, y_bottom, y_samples, depth: tuple[float, float]) -> list[Rule]:
     """The lowest tip point between depth[0] and depth[1] below the soil surface: deep enough at the bottom (one
-    row at its angle), not too deep anywhere (a row per sample; on floats y_samples is the bottom itself)."""
+    row at its angle), not too deep anywhere (a row per sample, ``y_samples`` the turn's samples and the bottom
+    itself: the grid's lowest sample is the bottom's height only to the grid's step)."""
     lo, hi = depth
     return [Rule("planting_depth", soil_y - y_bottom, lo, None, "mm", 5.0, "lowest tip point"),
             Rule("planting_depth_max", soil_y - y_samples, None, hi, "mm", 5.0, "over a turn")]

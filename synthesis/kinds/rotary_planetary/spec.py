@@ -122,6 +122,10 @@ class Rules(StrictModel):
             lo, hi = getattr(self, name)
             if lo > hi:
                 raise ValueError(f"{name} [{lo:g}, {hi:g}] has min > max")
+        if self.planting_depth[0] <= 0:
+            # the soil rules read a stroke below the surface: a lowest point at or above it has none
+            raise ValueError(f"planting_depth [{self.planting_depth[0]:g}, {self.planting_depth[1]:g}]: the min must "
+                             f"be above 0 mm (the tip's lowest point below the soil surface)")
         if self.ratio_min >= self.ratio_max:
             raise ValueError(f"ratio_min {self.ratio_min:g} must be below ratio_max {self.ratio_max:g}")
         return self
@@ -141,6 +145,10 @@ class SolverSection(MultistartSettings):
     samples_per_turn: int = Field(72, ge=12, le=3600, description="carrier angles sampled over a turn for the "
                                                                    "gear and trajectory rules")
     in_soil_samples: int = Field(12, ge=3, le=1000, description="samples of the in-soil stroke for its speed rule")
+    backoff: float = Field(0.01, ge=0, le=1, description="the NLP holds each rule it reads on samples (pair ratio, "
+                                                         "concavity, normal angle, largest depth, in-soil speed) "
+                                                         "backoff x the rule's scale inside its limits, so it holds "
+                                                         "between samples too (dimensionless)")
     max_iter: int = max_iter_field(1000)
 
 
