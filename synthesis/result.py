@@ -111,9 +111,11 @@ class Result:
         return cls(**args)
 
 
-#: the units of result.json's trajectory keys; a nested frame (``machine``) has the same
+#: the units of result.json's trajectory keys that hold numbers; a nested frame (``machine``) has the same (the
+#: text keys -- ``frame``, ``point``, ``note`` -- have none)
 TRAJECTORY_UNITS = {"t": "s", "crank_deg": "deg", "x": "mm", "y": "mm", "vx": "mm/s", "vy": "mm/s",
-                    "ax": "mm/s^2", "ay": "mm/s^2"}
+                    "ax": "mm/s^2", "ay": "mm/s^2", "crank_ab_deg": "deg", "speed_m_s": "m/s",
+                    "crank_speed_rpm": "r/min"}
 
 
 def with_units(trajectory: dict[str, Any]) -> dict[str, Any]:

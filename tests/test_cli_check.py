@@ -223,3 +223,22 @@ def test_agrisynth_alone_prints_its_help_not_an_error():
     typo = agrisynth("solv")
     assert typo.returncode == 2 and typo.stderr.strip() == ("error: No such command 'solv'; did you mean 'solve'? "
                                                             "(see `agrisynth --help`)")
+
+
+@pytest.mark.parametrize("relative", ["picker/cai2020_picker.toml", "fourbar_path/picking_arc.toml",
+                                      "planting_arm/taiwan_example1.toml", "comb_finger/peanut_baseline.toml",
+                                      "rotary_planetary/smooth_loop_redesign.toml", "clamp_cam/opening_cam_redesign.toml"])
+def test_every_number_of_a_trajectory_has_its_unit(relative):
+    """trajectory.units named the eight common keys only: the combined picker's crank_ab_deg and speed_m_s and
+    fourbar_path's crank_speed_rpm had none."""
+    from synthesis import kinds
+    from synthesis.result import with_units
+    from synthesis.spec import load_spec
+
+    loaded = load_spec(PLANTING.parent / relative)
+    trajectory = with_units(kinds.get(loaded.kind).check(loaded).trajectory)
+    units = trajectory["units"]
+    frames = [trajectory, *([trajectory["machine"]] if "machine" in trajectory else [])]
+    for frame in frames:
+        numeric = [k for k, v in frame.items() if k != "units" and isinstance(v, (int, float, list))]
+        assert numeric and all(k in units for k in numeric), [k for k in numeric if k not in units]
