@@ -165,6 +165,11 @@ def test_problems_refuses_a_missing_folder_and_lists_past_a_bad_file(tmp_path):
     proc = run("problems", "--dir", str(library), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "taiwan_example1" in proc.stdout and "bad.toml" in proc.stdout and "not read: not valid TOML" in proc.stdout
+    # a spec is found by its listed name in the built-in library only: another folder's are named by their path
+    said = " ".join(proc.stdout.split())
+    assert f"check or solve one by its path (agrisynth check {library / 'FILE'})" in said
+    assert f"agrisynth problems --dir {library} --copy FILE" in said
+    assert "check or solve one by its file as listed" in " ".join(run("problems", cwd=tmp_path).stdout.split())
 
 
 def test_help_teaches_every_command_and_every_kind_that_solves(tmp_path):

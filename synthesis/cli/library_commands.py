@@ -76,8 +76,17 @@ def list_library(library_dir: Path) -> None:
     for entry in library.library_entries(library_dir):
         table.add_row(escape(entry.kind), escape(entry.name), escape(entry.file), escape(entry.unread or entry.source))
     console.print(table)
-    console.print("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
-                  "copy one to edit: agrisynth problems --copy FILE", soft_wrap=True)
+    console.print(escape(_how_to_use(library_dir)), soft_wrap=True)
+
+
+def _how_to_use(library_dir: Path) -> str:
+    """The listing's last line: a spec named as listed is looked up in the built-in library only, so a listing of
+    another folder (``--dir``) names its specs by their path."""
+    if library_dir.resolve() == LIBRARY.resolve():
+        return ("check or solve one by its file as listed (agrisynth check planting_arm/taiwan_example1.toml); "
+                "copy one to edit: agrisynth problems --copy FILE")
+    return (f"check or solve one by its path (agrisynth check {library_dir / 'FILE'}); copy one to edit: "
+            f"agrisynth problems --dir {library_dir} --copy FILE")
 
 
 def _list_piped(library_dir: Path, width: int) -> None:
@@ -89,9 +98,7 @@ def _list_piped(library_dir: Path, width: int) -> None:
     for entry in library.library_entries(library_dir):
         lines += [terminal.wrapped(f"{entry.file}  [{entry.kind}] {entry.name}", width, 2),
                   terminal.wrapped(entry.unread or entry.source, width, 6)]
-    lines += ["", terminal.wrapped("check or solve one by its file as listed (agrisynth check "
-                                   "planting_arm/taiwan_example1.toml); copy one to edit: agrisynth problems --copy "
-                                   "FILE", width, 0)]
+    lines += ["", terminal.wrapped(_how_to_use(library_dir), width, 0)]
     click.echo("\n".join(lines))
 
 
