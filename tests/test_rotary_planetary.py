@@ -17,7 +17,7 @@ from conftest import LIBRARY
 from synthesis import kinds
 from synthesis.kinds.rotary_planetary.check import Angles, evaluate, find_angles, rules_of, train_of
 from synthesis.kinds.rotary_planetary.export import write_pitch_curves_csv, write_pitch_curves_dxf
-from synthesis.kinds.rotary_planetary.kinematics import turn_grid
+from synthesis.kinds.rotary_planetary.kinematics import tip, turn_grid
 from synthesis.spec import load_spec
 
 KIND = kinds.get("rotary_planetary")
@@ -327,6 +327,48 @@ def test_a_depth_window_above_the_soil_is_refused(tmp_path):
     with pytest.raises(SpecError) as err:
         load_spec(tmp_path / "spec.toml")
     assert "planting_depth [-45, -15]: the min must be above 0 mm" in str(err.value)
+
+
+
+TWO_DIPS = """kind = "rotary_planetary"
+name = "two_dips"
+[gears]
+centre_distance_1 = 28.4085047424019
+centre_distance_2 = 41.552382011123896
+planet_cos = [-1.42020979, 1.36674016, 2.50632029]
+planet_sin = [26.35661963, -7.69627547, 1.15895688]
+[arm]
+length = 163.2796346114941
+angle = -136.5394643550284
+[operation]
+carrier_speed = 150.0
+forward_speed = 0.6
+axis_height = 109.33163722383907
+[rules]
+planting_depth = [15.0, 45.0]
+hole_width_max = 40.0
+plant_spacing = [100.0, 220.0]
+"""
+
+
+def test_a_loop_that_dips_into_the_soil_twice_fails_soil_once(tmp_path):
+    """Entry and exit are the crossings nearest the lowest point, and the soil rules read that stroke: a second dip
+    (this loop's, between carrier angles of about 139 and 188 deg) had no rule.  soil_once reads the rest of the
+    turn; measured here without the tool: the tip's height on a fine grid of that arc."""
+    (tmp_path / "spec.toml").write_text(TWO_DIPS)
+    loaded = load_spec(tmp_path / "spec.toml")
+    result = KIND.check(loaded)
+    once = next(r for r in result.rules if r["name"] == "soil_once")
+    assert not once["satisfied"] and once["value"] < -5.0
+    spec = loaded.model
+    train = train_of(spec, result.design)
+    angles = find_angles(spec, train)
+    phi = np.linspace(angles.exit, angles.entry + 2 * math.pi, 20001)[1:-1]
+    height = np.asarray(tip(train, phi)[1]).ravel() + spec.operation.axis_height
+    assert height.min() < -7.0                      # the second dip, 7.6 mm deep
+    # a loop with one stroke: the library's, its least quotient positive and its arc above the surface
+    checked = KIND.check(load_spec(LIBRARY / "rotary_planetary/smooth_loop_redesign.toml"))
+    assert next(r for r in checked.rules if r["name"] == "soil_once")["satisfied"]
 
 
 def _integrated(rate: np.ndarray, harmonics: int) -> tuple[list, list]:

@@ -93,12 +93,21 @@ def gear_rules(spec: RotaryPlanetarySpec, train: Train, grid) -> list[Rule]:
             R.normal_angle_rule(normal, lim.max_normal_angle)]
 
 
-def soil_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles, soil_samples: int) -> list[Rule]:
+def soil_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles, soil_samples: int,
+               out_samples: int) -> list[Rule]:
     lim, w, v = spec.rules, omega(spec), forward_mm_s(spec)
     if angles.missing:
         return [R.entry_angle_rule(None, None, lim.entry_angle_min, angles.missing),
                 R.hole_width_rule(None, None, lim.hole_width_max, angles.missing),
-                R.in_soil_speed_rule(None, lim.in_soil_forward_speed_max, angles.missing)]
+                R.in_soil_speed_rule(None, lim.in_soil_forward_speed_max, angles.missing),
+                R.out_of_soil_rule(None, angles.missing)]
+    # from soil exit round to the next entry: s in (0, 1), the tip's height above the surface over 4 s (1 - s)
+    s_out = np.linspace(0.0, 1.0, out_samples + 2)[1:-1]
+    arc = angles.exit + (angles.entry + 2.0 * math.pi - angles.exit) * (ca.DM(s_out) if is_symbolic(angles.exit)
+                                                                        else s_out)
+    _, y_out = tip(train, arc)
+    weight = 4.0 * s_out * (1.0 - s_out)
+    above = (y_out - soil_y(spec)) / (ca.DM(weight) if is_symbolic(y_out) else weight)
     dx_in, dy_in = tip_rate(train, angles.entry)
     x_in, _ = tip(train, angles.entry)
     x_out, _ = tip(train, angles.exit)
@@ -108,7 +117,8 @@ def soil_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles, soil_sam
     dx, _ = tip_rate(train, stroke)
     return [R.entry_angle_rule(w * dx_in - v, w * dy_in, lim.entry_angle_min),
             R.hole_width_rule(x_in - v * angles.entry / w, x_out - v * angles.exit / w, lim.hole_width_max),
-            R.in_soil_speed_rule(v - w * dx, lim.in_soil_forward_speed_max)]
+            R.in_soil_speed_rule(v - w * dx, lim.in_soil_forward_speed_max),
+            R.out_of_soil_rule(above)]
 
 
 def pose_rules(spec: RotaryPlanetarySpec, train: Train, angles: Angles) -> list[Rule]:
@@ -140,17 +150,10 @@ def rules_of(spec: RotaryPlanetarySpec, train: Train, angles: Angles, grid, soil
     lim = spec.rules
     return [*gear_rules(spec, train, grid), *single_idler_rules(spec, train, grid, angles.half_turn),
             R.trajectory_height_rule(y_top, y_bottom, lim.trajectory_height_min),
-            *R.planting_depth_rules(soil_y(spec), y_bottom, _with(y_grid, y_bottom), lim.planting_depth),
-            *soil_rules(spec, train, angles, soil_samples),
+            *R.planting_depth_rules(soil_y(spec), y_bottom, _cat([y_grid, y_bottom]), lim.planting_depth),
+            *soil_rules(spec, train, angles, soil_samples, len(grid)),
             R.plant_spacing_rule(plant_spacing(spec), lim.plant_spacing),
             *pose_rules(spec, train, angles)]
-
-
-def _with(samples, value):
-    """The samples and one more value (numbers or symbols): the largest depth read on the grid and at the bottom."""
-    if is_symbolic(samples) or is_symbolic(value):
-        return ca.vertcat(ca.vec(samples), value)
-    return np.append(np.ravel(samples), float(value))
 
 
 # --- the angles on floats ----------------------------------------------------------------------------------------

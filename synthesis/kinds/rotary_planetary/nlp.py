@@ -32,7 +32,7 @@ TWO_PI = 2.0 * math.pi
 #: the rules read on samples of the turn or the stroke: their extremes fall between samples, so the NLP holds them
 #: ``[solver] backoff`` x their scale inside (the others are rows at the NLP's own angles, exact)
 SAMPLED_RULES = ("pair_ratio", "pitch_curve_concavity", "pitch_normal_angle", "planting_depth_max",
-                 "in_soil_forward_speed")
+                 "in_soil_forward_speed", "soil_once")
 #: the auxiliary carrier angles are kept within this range, rad (a start's are in [-pi, 3 pi))
 ANGLE_RANGE = (-2.0 * TWO_PI, 3.0 * TWO_PI)
 

@@ -85,6 +85,18 @@ def in_soil_speed_rule(forward_speeds, maximum: float, missing: str | None = Non
     return Rule("in_soil_forward_speed", forward_speeds, None, maximum, "mm/s", 50.0, where)
 
 
+def out_of_soil_rule(heights, missing: str | None = None) -> Rule:
+    """The tip goes into the soil once a turn: from soil exit round to the next entry it stays above the surface.
+    ``heights``: its height above the surface at s in (0, 1) of that arc (0 at exit, 1 at the next entry) over
+    4 s (1 - s) -- zero at the crossings themselves, where the tip crosses the surface, and so finite and positive
+    near them (the height grows like s), the height itself in the middle; negative only where the tip dips into the
+    soil again, where no hole, entry-angle or speed rule reads it."""
+    where = "soil exit round to the next entry"
+    if missing:
+        return not_evaluated("soil_once", 0.0, None, "mm", where, missing)
+    return Rule("soil_once", heights, 0.0, None, "mm", 10.0, where)
+
+
 def plant_spacing_rule(spacing, limits: tuple[float, float]) -> Rule:
     """Forward travel per plant: two arms plant twice per carrier turn."""
     return Rule("plant_spacing", spacing, limits[0], limits[1], "mm", 10.0, "forward speed, two plants per turn")

@@ -146,7 +146,8 @@ class SolverSection(MultistartSettings):
                                                                    "gear and trajectory rules")
     in_soil_samples: int = Field(12, ge=3, le=1000, description="samples of the in-soil stroke for its speed rule")
     backoff: float = Field(0.01, ge=0, le=1, description="the NLP holds each rule it reads on samples (pair ratio, "
-                                                         "concavity, normal angle, largest depth, in-soil speed) "
+                                                         "concavity, normal angle, largest depth, in-soil speed, "
+                                                         "out of the soil) "
                                                          "backoff x the rule's scale inside its limits, so it holds "
                                                          "between samples too (dimensionless)")
     max_iter: int = max_iter_field(1000)
