@@ -243,3 +243,39 @@ def test_a_cluster_lost_mid_run_leaves_its_pending_starts_to_local_workers(monke
     assert [r.outcome.return_status for r in reports] == [r.outcome.return_status for r in local_reports]
     assert not any(r.outcome.return_status.startswith("Start_Raised") for r in reports)
     assert remote.design == local.design and remote.solver["best_start"] == local.solver["best_start"]
+
+
+@pytest.mark.slow         # about 25 s
+def test_an_auto_run_whose_cluster_is_lost_solves_its_later_batches_locally(monkeypatch):
+    """--starts auto on a cluster lost in its first batch: that batch's pending starts and every later batch run on
+    the local workers (a later batch would otherwise probe the lost scheduler and end the run with exit 2, its
+    finished batches lost); the answer and the batches are the local auto run's."""
+    from synthesis import kinds
+    from synthesis.core import cluster as cluster_module
+    from synthesis.core.solve import AutoStarts, run_solve as core_run_solve
+
+    monkeypatch.setattr(cluster_module, "HEALTH_CHECK_S", 0.5)
+    address, scheduler = _local_cluster_processes()
+    worker = None
+    auto = AutoStarts(max_starts=32, first=8, min_converged=16)      # the first batch cannot stop the run
+    try:
+        worker = _dask_worker(address)
+        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+        kind = kinds.solving_kind_for(loaded)
+        finished, notes = [], []
+
+        def on_start(report, best) -> None:
+            finished.append(report.outcome.start)
+            if len(finished) == 2:
+                scheduler.kill()
+
+        remote, _, _ = core_run_solve(kind, loaded, None, 3, 1, on_start, address, auto=auto, on_note=notes.append)
+    finally:
+        for proc in (worker, scheduler):
+            if proc is not None:
+                proc.kill()
+                proc.wait()
+    local, _, _ = core_run_solve(kind, loaded, None, 3, 1, auto=auto)
+    assert len(notes) == 1 and "the connection to the scheduler was lost after " in notes[0]
+    assert remote.solver["auto"] == local.solver["auto"] and remote.design == local.design
+    assert len(remote.solver["auto"]["batches"]) >= 2

@@ -282,6 +282,40 @@ def test_auto_on_rules_no_start_meets_stops_after_one_batch(tmp_path, toy):
     assert result.solver["confidence"]["starts_counted"] == 0 and result.solver["confidence"]["optima"] == []
 
 
+
+@pytest.mark.slow         # about a minute: 48 starts of the torque-limited double crank
+def test_auto_never_returns_a_worse_design_than_an_earlier_batch_found():
+    """picker_double_crank_torque_limited, seed 12: the 16-start batch (the fixed --starts 16 run) reaches the best
+    known optimum, 6.23814 mm; the 32-start batch, a hypercube of its own, misses it.  The run stopped there by the
+    rule with the worse 6.23954 mm and "1 distinct optimum ... P ~ 0.97" -- its last batch's statement, ignorant of
+    the better design it had solved.  Now the rule may not stop on a batch an earlier one beats, and the answer is
+    that earlier batch's (auto.answer_batch), the same as --starts 16."""
+    loaded = load_spec(LIBRARY / "picker" / "picker_double_crank_torque_limited.toml")
+    fixed, _, _ = solve_spec(loaded, starts=16, seed=12, workers=1)
+    kind = kinds.solving_kind_for(loaded)
+    result, _, _ = run_solve(kind, loaded, None, 12, 1, auto=AutoStarts(max_starts=32))
+    auto = result.solver["auto"]
+    assert auto["batches"] == [16, 32] and auto["stopped_by"] == "max_starts" and auto["answer_batch"] == 16
+    assert result.design == fixed.design and result.objective["value"] == pytest.approx(6.23814, abs=5e-6)
+    assert result.solver["confidence"] == fixed.solver["confidence"]
+
+
+@pytest.mark.slow         # seconds
+def test_auto_goes_on_while_its_starts_meet_every_rule_short_of_full_tolerance(tmp_path):
+    """steering_redesign_27 with max_iter = 11: every start of the first batch meets every rule but stops at the
+    iteration limit, so none is counted by the statement; the run stopped there (none_converged, status feasible)
+    as if the rules conflicted, where a fixed 32-start run is optimal.  Now none_converged needs a batch with no
+    start meeting every rule."""
+    text = (LIBRARY / "steering" / "steering_redesign_27.toml").read_text()
+    assert "[solver]" in text
+    (tmp_path / "spec.toml").write_text(text.replace("[solver]", "[solver]\nmax_iter = 11", 1))
+    loaded = load_spec(tmp_path / "spec.toml")
+    kind = kinds.solving_kind_for(loaded)
+    result, reports, _ = run_solve(kind, loaded, None, 6, 1, auto=AutoStarts(max_starts=64))
+    assert result.solver["auto"]["stopped_by"] != "none_converged" and result.solver["auto"]["batches"][-1] > 16
+    assert result.status == "optimal"
+
+
 def test_auto_begins_no_batch_projected_past_its_time_limit(tmp_path, toy):
     """A time limit of a millisecond: the first batch always runs whole; the second (32 starts, projected at twice
     the first's time) would end past it, so the run stops there by time_limit with the first batch's answer."""
@@ -317,7 +351,7 @@ def test_an_interrupt_of_a_resumed_auto_run_keeps_the_batch_the_interrupted_run_
     try:
         with pytest.raises(Interrupted) as caught:
             run_solve(toy, loaded, workers=1, auto=AutoStarts(min_converged=20), finished=second, resumed_batch=32,
-                      previous=(16, first), on_start=on_start, record=lambda out: logged.append(out.start),
+                      previous=[(16, first)], on_start=on_start, record=lambda out: logged.append(out.start),
                       on_batch=lambda total, nested: logged.append(f"batch {total}"))
     finally:
         interrupt.uninstall()
@@ -360,7 +394,7 @@ def test_an_interrupt_of_a_resumed_auto_run_before_its_batch_is_counted_again_ke
         with pytest.raises(Interrupted) as caught:
             core.run_auto(toy, Setting(loaded.model, 0, toy.solving().prepare(loaded.model)),
                           AutoStarts(min_converged=20), workers=1, finished=second, resumed_batch=32,
-                          previous=(16, first), on_start=on_start, on_batch=on_batch)
+                          previous=[(16, first)], on_start=on_start, on_batch=on_batch)
     finally:
         interrupt.uninstall()
     assert batches == [16, 32] and caught.value.partial is None
@@ -379,7 +413,7 @@ def test_the_batch_before_the_one_an_auto_run_was_solving_is_read_back(tmp_path,
     for out in kept[16:19]:
         log.append(out)
     log.close()
-    total, previous = startlog.read_resumed(tmp_path, print_).previous
+    [(total, previous)] = startlog.read_resumed(tmp_path, print_).previous
     assert total == 16 and sorted(previous) == list(range(16))
     assert all(previous[i].objective == kept[i].objective for i in range(16))
     assert sorted(startlog.read(tmp_path, print_)) == sorted(out.start for out in kept[16:19])

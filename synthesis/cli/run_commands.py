@@ -71,8 +71,9 @@ class SolveCommand(click.Command):
                    f"gives the same answer and N for any workers; each batch solves its own starts (start 0 "
                    f"carried), about twice the last batch's in all -- except where the kind orders the starts itself "
                    f"(fourbar_path on 12 or more free-timing targets: its screened shapes first), whose batches "
-                   f"append, each start solved once.  Ctrl-C keeps the better of the batch in progress and the "
-                   f"last finished one; --resume goes on from the batch it was in")
+                   f"append, each start solved once.  Where an earlier batch found a better design than the last, "
+                   f"that batch is the answer (solver.auto.answer_batch).  Ctrl-C keeps the better of the batch in "
+                   f"progress and the best finished one; --resume goes on from the batch it was in")
 @click.option("--max-starts", type=WholeNumber(min=1, max=MAX_STARTS), default=None,
               help="--starts auto: the most starts (default 512)")
 @click.option("--time-limit", type=Seconds(min=0, min_open=True), default=None, metavar="SECONDS",
@@ -110,7 +111,7 @@ def solve_command(spec: Path, out: Path | None, force: bool, resume: Path | None
     {objectives}
     Starts are a fixed-seed Latin hypercube (start 0 = the given design). Every start is
     re-checked on a 10x finer grid, independently of the solver; the best is the feasible one
-    with the best objective (objectives within 1e-9 relative tie: a start IPOPT finished at its
+    with the best objective (objectives within 1e-9 of max(1, |f|) tie: a start IPOPT finished at its
     full tolerances wins, then the lower start). Status: optimal (every rule holds and
     IPOPT met its tolerances), feasible (every rule holds; IPOPT stopped otherwise: a note
     says how), infeasible (an elastic re-solve converged and names the rules that conflict),

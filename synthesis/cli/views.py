@@ -20,7 +20,7 @@ from rich.table import Table
 from synthesis.constraints.base import limit_text
 from synthesis.cli.terminal import PIPED_WIDTH, add_columns, design_table, print_table
 from synthesis.core import interrupt
-from synthesis.report.tables import GIVEN_HEADING, candidates, design_rows, objective_text, said, solved_heading
+from synthesis.report.tables import GIVEN_HEADING, auto_said, candidates, design_rows, objective_text, said, solved_heading
 from synthesis.runs import events
 from synthesis.runs.requests import CheckWritten, SolveWritten, Stopped
 from synthesis.tolerance.output import monte_carlo_lines
@@ -164,11 +164,6 @@ def _solver_line(result, details: SolveWritten) -> str:
             f"status {result.status}")
 
 
-def _auto_text(solver: dict) -> str:
-    """"; --starts auto: 32 starts, stopped by the rule" (empty for fixed starts)."""
-    auto = solver.get("auto")
-    return (f"; --starts auto: {solver.get('starts')} starts, stopped by {auto.get('stopped_by')}"
-            if isinstance(auto, dict) else "")
 
 
 def solve_summary(result, folder, replaced: bool, details: SolveWritten) -> None:
@@ -184,7 +179,7 @@ def solve_summary(result, folder, replaced: bool, details: SolveWritten) -> None
         print_table(console, design_table(rows, f"design: {GIVEN_HEADING} vs {answer}", answer))
     console.print(_solver_line(result, details))
     if isinstance(result.solver.get("confidence"), dict):
-        console.print(escape(f"confidence: {said(result.solver['confidence'], result.solver.get('starts_reaching_best'))}{_auto_text(result.solver)}"))
+        console.print(escape(f"confidence: {said(result.solver['confidence'], result.solver.get('starts_reaching_best'))}{auto_said(result.solver)}"))
     mc = ((result.extra or {}).get("tolerance") or {}).get("monte_carlo")
     if isinstance(mc, dict):        # a tolerance-robust solve: the Monte-Carlo check of the answer
         console.print(escape("\n".join(monte_carlo_lines(mc))))

@@ -222,16 +222,21 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
              record: Callable[[Any], None] | None = None, finished: dict[int, Any] | None = None,
              on_batch: Callable[[int, bool], None] = lambda total, nested: None,
              resumed_batch: int | None = None, resumed_nested: bool | None = None,
-             previous: tuple[int, dict[int, Any]] | None = None,
+             previous: list[tuple[int, dict[int, Any]]] | None = None,
              on_note: Callable[[str], None] = lambda text: None) -> Run:
     """The batches of :class:`AutoStarts`, each a :func:`run_multistart` of its total; the last one's Run, its
     ``wall_s`` the whole time and its ``auto`` why it stopped.  ``on_batch(total, nested)`` is told as a batch
     begins (the run's starts.jsonl marks it, nested when the kind orders the starts); ``resumed_batch``/``finished``:
     an interrupted auto run's batch and its finished starts (the earlier batches ended without stopping, so the run
     goes on from that one); ``resumed_nested``: whether that batch was marked nested (a run interrupted in the other
-    order is refused: its starts are not this order's); ``previous``: the interrupted run's last finished batch
-    before that one (total, its starts: :attr:`~synthesis.core.startlog.Resumed.previous`), counted again without
-    solving and logged, so an interrupt of the resumed run keeps it as the interrupted run did.
+    order is refused: its starts are not this order's); ``previous``: the interrupted run's finished batches
+    before that one, in order (each one's total and starts: :attr:`~synthesis.core.startlog.Resumed.previous`),
+    counted again without solving and logged, so the resumed run knows them as the interrupted run did.
+
+    The batches are not nested unless the kind orders the starts: each is a fixed run of its own, and the answer is
+    the last batch's -- unless an earlier batch found a better design (:func:`~synthesis.core.verdict.better`, not a
+    tie), whose batch is then the answer (``auto.answer_batch`` its total), and the rule may not stop the run on a
+    batch whose best it beats: the batch's own statement would call a worse optimum the global one.
 
     Interrupted (SIGINT/SIGTERM) anywhere, inside a batch or between two: raises :class:`Interrupted` whose
     ``partial`` is the better of the batch in progress (its finished starts; a nested one's include the earlier
@@ -258,6 +263,12 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
     in_batch = False                          # inside a batch's run_multistart (not the replay)
     k = first
     lost: list[str] = []                      # what a cluster that stopped serving the run said
+    best: Run | None = None                   # not nested: the finished batch with the best answer (the later on a tie)
+
+    def finished_batch(run: Run) -> None:
+        nonlocal best
+        if best is None or not better(best.best, run.best, maximise, by_index=False):
+            best = run
 
     def noted(text: str) -> None:
         lost.append(text)
@@ -273,10 +284,13 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         return {"stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
                 **({"order": "kind"} if nested else {})}
     try:
-        if previous is not None and not nested and first > 0 and previous[0] == totals[first - 1]:
-            on_batch(previous[0], nested)
-            replayed = run_multistart(kind, setting, starts=previous[0], workers=workers, scheduler=scheduler,
-                                      record=record, finished=previous[1], on_note=noted)
+        if previous and not nested and first > 0 and [t for t, _ in previous] == totals[:first]:
+            for total, starts_of in previous:
+                on_batch(total, nested)
+                replayed = run_multistart(kind, setting, starts=total, workers=workers,
+                                          scheduler=None if lost else scheduler, record=record, finished=starts_of,
+                                          on_note=noted)
+                finished_batch(replayed)
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
             began, compiled_before = time.perf_counter(), compile_seconds()
@@ -291,15 +305,22 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             took = time.perf_counter() - began - (compile_seconds() - compiled_before)
             # the starts this batch solved, and the next one would: all of them, or (nested) the new ones only
             solved_now = totals[k] - len(carried) - len(resumed)
-            stopped_by = _auto_stop(run, auto, totals, k, nested, maximise, stop)
+            # an earlier batch's better design: this batch's statement is not about the global optimum
+            earlier = best if best is not None and better(best.best, run.best, maximise, by_index=False) else None
+            stopped_by = _auto_stop(run, auto, totals, k, nested, maximise, stop, earlier is not None,
+                                    best is not None and best.best.satisfied)
             if (stopped_by is None and auto.time_limit_s is not None
                     and time.perf_counter() - t0 + took * (totals[k + 1] - totals[k] if nested else totals[k + 1])
                     / max(solved_now, 1) > auto.time_limit_s):
                 stopped_by = "time_limit"
             if stopped_by is not None:
-                return replace(run, wall_s=time.perf_counter() - t0,
+                answer = earlier or run
+                return replace(answer, wall_s=time.perf_counter() - t0,
                                auto={"stopped_by": stopped_by, "batches": totals[:k + 1], **auto.settings(),
-                                     **({"order": "kind"} if nested else {})})
+                                     **({"order": "kind"} if nested else {}),
+                                     **({"answer_batch": answer.starts} if earlier is not None else {})})
+            if not nested:
+                finished_batch(run)
             if nested:      # the next batch appends to this one: every start is kept (a failed one too: each
                 carried = {r.outcome.start: r for r in run.reports}      # start is solved once, whatever the budget)
                 resumed = {}
@@ -312,14 +333,15 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         partial = exc.partial if in_batch else None
         if pending:
             raise Interrupted(exc.signum, None) from None
-        raise Interrupted(exc.signum, _kept_so_far(partial, last or replayed, maximise, t0, interrupted(),
-                                                   nested)) from None
+        raise Interrupted(exc.signum, _kept_so_far(partial, (last if nested else best) or replayed, maximise, t0,
+                                                   interrupted(), nested)) from None
     except (Exception, KeyboardInterrupt) as exc:
         # between two batches, or building the next one's NLP: KeyboardInterrupt, or what a signal inside a CasADi
         # call comes out as (SystemError, NotImplementedError ...); any other error is the run's own
         if not isinstance(exc, KeyboardInterrupt) and interrupt.pending() is None:
             raise
-        kept = None if pending else _kept_so_far(None, last or replayed, maximise, t0, interrupted(), nested)
+        kept = None if pending else _kept_so_far(None, (last if nested else best) or replayed, maximise, t0,
+                                                 interrupted(), nested)
         raise Interrupted(interrupt.signal_of(exc), kept) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
@@ -341,8 +363,11 @@ def refuse_other_order(kind: Kind, resumed_nested: bool, nested: bool) -> None:
 
 
 def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bool, maximise: bool,
-               stop: Callable[[StartReport], bool] | None) -> str | None:
-    """Why an auto run stops after batch ``k`` (not for its time limit, which the caller projects), or None."""
+               stop: Callable[[StartReport], bool] | None, beaten: bool = False,
+               earlier_feasible: bool = False) -> str | None:
+    """Why an auto run stops after batch ``k`` (not for its time limit, which the caller projects), or None.
+    ``beaten``: an earlier batch found a better design than this batch's best (the rule then may not stop the run);
+    ``earlier_feasible``: an earlier batch had a design meeting every rule."""
     stated = confidence_statement(run.reports, run.nlp, maximise, run.best)
     assert stated is not None, "run_multistart builds the NLP in this process, so the statement has it"
     if len(run.reports) < totals[k] or (stop is not None and any(stop(r) for r in run.reports)):
@@ -352,14 +377,15 @@ def _auto_stop(run: Run, auto: AutoStarts, totals: list[int], k: int, nested: bo
     beyond = (not stated["answer_counted"] and run.best.satisfied
               and answer_beyond(run.best, [o["objective"] for o in stated["optima"]], maximise))
     if (stated["stopping_rule_met"] and stated["starts_counted"] >= auto.min_converged
-            and not (nested and k == 0) and not beyond):
+            and not (nested and k == 0) and not beyond and not beaten):
         # a kind's own first batch is its picks (fourbar_path: the best screened shapes), correlated by
         # construction; the rule assumes starts drawn over the box, so it may stop a nested run only once a
         # later batch has brought such starts in
         return "rule"
-    if stated["starts_counted"] == 0 and totals[k] >= auto.min_converged:
+    if not run.best.satisfied and not earlier_feasible and totals[k] >= auto.min_converged:
         # not one start met every rule: more starts of the same box rarely do (an infeasible spec ran 1008
-        # starts to max_starts for nothing); the elastic diagnosis says why
+        # starts to max_starts for nothing); the elastic diagnosis says why.  (Starts that met every rule short of
+        # IPOPT's full tolerance are not counted by the statement, but more starts may well converge: the run goes on)
         return "none_converged"
     if k == len(totals) - 1:
         return "max_starts"

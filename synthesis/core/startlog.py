@@ -191,10 +191,11 @@ class Resumed(NamedTuple):
     #: a ``--starts auto`` run's batch it was solving and whether it was nested (its last ``auto_batch`` line; None:
     #: none there)
     last_batch: tuple[int, bool] | None
-    #: its last *finished* batch before that one: (its total, its starts), when the batches are not nested (a nested
-    #: run's log keeps every batch's starts in the last one's); None otherwise.  A resumed run keeps it as the
-    #: interrupted run did: the result an interrupt leaves is the better of the two
-    previous: tuple[int, dict[int, StartOutcome]] | None
+    #: its *finished* batches before that one, in order: (each one's total, its starts), when the batches are not
+    #: nested (a nested run's log keeps every batch's starts in the last one's); empty otherwise.  A resumed run counts
+    #: them again as the interrupted run had: its answer is never worse than a finished batch's, and the result an
+    #: interrupt leaves is the best of them and the batch in progress
+    previous: list[tuple[int, dict[int, StartOutcome]]]
 
 
 def read(folder: Path, print_: str) -> dict[int, StartOutcome]:
@@ -211,7 +212,7 @@ def read_resumed(folder: Path, print_: str) -> Resumed:
         raise OutputError(f"--resume {folder}: no {FILENAME} there (not a solve run folder)")
     finished: dict[int, StartOutcome] = {}
     mark: tuple[int, bool] | None = None      # the batch being read (an auto run's), and the one before it
-    previous: tuple[int, dict[int, StartOutcome]] | None = None
+    previous: list[tuple[int, dict[int, StartOutcome]]] = []
     with open_regular(path, MAX_BYTES, FILENAME, OutputError) as fh:
         header = None
         for text in _lines(fh):
@@ -237,7 +238,8 @@ def read_resumed(folder: Path, print_: str) -> Resumed:
             if BATCH in line:             # an auto run's next batch: its starts are another run's ...
                 if not line.get("nested"):
                     # a batch is begun only when the one before has finished without stopping the run
-                    previous = (mark[0], dict(finished)) if mark is not None and finished else None
+                    if mark is not None and finished:
+                        previous.append((mark[0], dict(finished)))
                     finished.clear()
                 mark = (line[BATCH], line.get("nested") is True) if isinstance(line.get(BATCH), int) else None
                 continue                  # ... unless nested: start i is the same in every batch

@@ -320,10 +320,21 @@ def _confidence_text(solver: dict | None) -> str | None:
     stated = (solver or {}).get("confidence")
     if not isinstance(stated, dict):
         return None
-    auto = (solver or {}).get("auto")
-    stopped = (f"; --starts auto stopped by {auto.get('stopped_by')} after {solver.get('starts')} starts"
-               if isinstance(auto, dict) else "")
-    return said(stated, (solver or {}).get("starts_reaching_best")) + stopped
+    return said(stated, (solver or {}).get("starts_reaching_best")) + auto_said(solver or {})
+
+
+def auto_said(solver: dict) -> str:
+    """"; --starts auto: 32 starts, stopped by rule" (empty for fixed starts); where an earlier batch's design is the
+    answer, the batches run and whose answer it is."""
+    auto = solver.get("auto")
+    if not isinstance(auto, dict):
+        return ""
+    batches = auto.get("batches")
+    if auto.get("answer_batch") is not None and isinstance(batches, list) and batches:
+        return (f"; --starts auto: batches of {', '.join(str(b) for b in batches)} starts, stopped by "
+                f"{auto.get('stopped_by')}; the answer and this statement are the {auto['answer_batch']}-start "
+                f"batch's (no later batch found as good a design)")
+    return f"; --starts auto: {solver.get('starts')} starts, stopped by {auto.get('stopped_by')}"
 
 
 def _objectives(cands: list[Candidate]) -> list:

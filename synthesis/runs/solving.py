@@ -44,7 +44,7 @@ class _Plan:
     auto: core.AutoStarts | None = None     # --starts auto (``starts`` is then its most starts)
     resumed_batch: int | None = None        # --starts auto resumed: the batch the interrupted run was solving
     resumed_nested: bool | None = None      # ... and whether it was in the kind's own order
-    previous: tuple[int, dict] | None = None  # ... and the last batch it finished before that one (not nested)
+    previous: list[tuple[int, dict]] | None = None  # ... and the batches it finished before that one (not nested)
     batch: int | None = None                # --starts auto: the batch being solved (an interrupted run's total)
 
 
