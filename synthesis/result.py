@@ -97,6 +97,8 @@ class Result:
         known = {"kind", "name", "spec_sha256", "status", "design", "rules", "objective", "trajectory",
                  "solver", "versions", "design_variables"}
         args = {k: data[k] for k in (*known, *RUN_KEYS) if k in data}
+        # a file that records no versions says nothing of them: not this reader's own (the default of a new result)
+        args["versions"] = dict(data["versions"]) if isinstance(data.get("versions"), dict) else {}
         version = data.get("schema_version", 1)
         if version >= 2:
             args["extra"] = dict(data.get("facts") or {})
@@ -214,6 +216,9 @@ def _shape_problem(data: dict) -> str | None:
             return f"design_variables[{name[:60]!r}].bounds must be [lo, hi] (two numbers) or null, got {_shown(bounds)}"
         if not isinstance(info.get("free", False), bool) or not isinstance(info.get("unit", ""), (str, type(None))):
             return f"design_variables[{name[:60]!r}]: free must be true/false and unit a string"
+    problem = _solver_problem(data.get("solver"))
+    if problem:
+        return problem
     if not isinstance(data["rules"], list):
         return f"rules must be a list, got {type(data['rules']).__name__}"
     for i, rule in enumerate(data["rules"]):
@@ -238,6 +243,41 @@ def _shape_problem(data: dict) -> str | None:
 
 def _number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _whole(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+#: the solver's counts the reports read as whole numbers, and the confidence statement's counts and figures
+_SOLVER_COUNTS = ("starts", "starts_run", "best_start", "iterations", "seed", "starts_needed", "starts_reaching_best")
+_CONFIDENCE_COUNTS = ("starts_counted", "distinct_optima", "starts_at_best", "distinct_designs")
+_CONFIDENCE_FIGURES = ("expected_optima", "expected_unseen_optima", "unseen_basin_share",
+                       "probability_all_optima_found", "probability_best_is_global")
+
+
+def _solver_problem(solver: Any) -> str | None:
+    """What is wrong with the types of ``solver`` the reports read (counts whole numbers, figures numbers, each
+    or null), or None: a hand-edited ``"starts": "8"`` crashed compare."""
+    if not isinstance(solver, dict):
+        return None
+    for key in _SOLVER_COUNTS:
+        if solver.get(key) is not None and not _whole(solver[key]):
+            return f"solver.{key} must be a whole number or null, got {_shown(solver[key])}"
+    if solver.get("wall_s") is not None and not _number(solver["wall_s"]):
+        return f"solver.wall_s must be a number or null, got {_shown(solver['wall_s'])}"
+    stated = solver.get("confidence")
+    if stated is None:
+        return None
+    if not isinstance(stated, dict):
+        return f"solver.confidence must be an object or null, got {type(stated).__name__}"
+    for key in _CONFIDENCE_COUNTS:
+        if stated.get(key) is not None and not _whole(stated[key]):
+            return f"solver.confidence.{key} must be a whole number or null, got {_shown(stated[key])}"
+    for key in _CONFIDENCE_FIGURES:
+        if stated.get(key) is not None and not _number(stated[key]):
+            return f"solver.confidence.{key} must be a number or null, got {_shown(stated[key])}"
+    return None
 
 
 #: the file that proves a folder is an agrisynth run (written first, into every run folder)

@@ -668,7 +668,7 @@ def run_solve(kind: Kind, loaded, starts: int | None = None, seed: int | None = 
               on_batch: Callable[[int, bool], None] = lambda total, nested: None,
               resumed_batch: int | None = None,
               resumed_nested: bool | None = None,
-              previous: tuple[int, dict[int, Any]] | None = None,
+              previous: list[tuple[int, dict[int, Any]]] | None = None,
               on_note: Callable[[str], None] = lambda text: None) -> tuple[Result, list[StartReport], str]:
     """Multistart solve of a loaded spec of ``kind``; returns (result, every start's report, IPOPT log).
 

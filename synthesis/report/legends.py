@@ -7,6 +7,7 @@ makes room for it inside the figure, so it is called after the legend is placed.
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -21,11 +22,25 @@ import numpy as np
 GAP = 0.08
 
 
-def _entries(ax: Axes, handles, labels) -> tuple[list, list]:
+#: characters a legend entry's line holds below an axes (two columns fit an 8-inch figure) and right of one: a longer
+#: entry (a candidate's 100-character spec name) is wrapped rather than pushed off the figure -- two such names had
+#: clipped a legend on both sides, one of 195 characters left no room for the legend at all
+BELOW_WIDTH, RIGHT_WIDTH = 48, 32
+
+
+def _wrapped(label: str, width: int) -> str:
+    """``label`` folded into lines of at most ``width`` characters (a long name without spaces broken too)."""
+    if len(label) <= width:
+        return label
+    return "\n".join(textwrap.wrap(label, width, break_long_words=True, break_on_hyphens=False)) or label
+
+
+def _entries(ax: Axes, handles, labels, width: int) -> tuple[list, list]:
     if handles is not None:
-        return list(handles), list(labels if labels is not None else [h.get_label() for h in handles])
+        found = list(labels if labels is not None else [h.get_label() for h in handles])
+        return list(handles), [_wrapped(str(text), width) for text in found]
     found_handles, found_labels = ax.get_legend_handles_labels()
-    return found_handles, found_labels
+    return found_handles, [_wrapped(text, width) for text in found_labels]
 
 
 def _twins(ax: Axes) -> list[Axes]:
@@ -70,7 +85,7 @@ class _Beside(BboxBase):
 
 def legend_below(ax: Axes, *, ncol: int = 3, fontsize: float = 8, handles=None, labels=None) -> Legend | None:
     """The axes' legend centred under it, ``ncol`` entries a row; None when nothing is labelled."""
-    handles, labels = _entries(ax, handles, labels)
+    handles, labels = _entries(ax, handles, labels, BELOW_WIDTH)
     if not handles:
         return None
     return ax.legend(handles, labels, loc="upper center", bbox_to_anchor=_Beside(ax, below=True),
@@ -80,7 +95,7 @@ def legend_below(ax: Axes, *, ncol: int = 3, fontsize: float = 8, handles=None, 
 
 def legend_right(ax: Axes, *, fontsize: float = 8, handles=None, labels=None) -> Legend | None:
     """The axes' legend right of it, its top level with the axes' top; None when nothing is labelled."""
-    handles, labels = _entries(ax, handles, labels)
+    handles, labels = _entries(ax, handles, labels, RIGHT_WIDTH)
     if not handles:
         return None
     return ax.legend(handles, labels, loc="upper left", bbox_to_anchor=_Beside(ax, below=False),

@@ -168,7 +168,14 @@ def _rule_cell(cell: RuleCell | None, row_limit) -> str:
 def _worst_cell(w) -> str:
     if w.rule is None:
         return "<td>&ndash;</td>"
-    margin = "not evaluated" if w.normalised_margin is None else f"normalised margin {w.normalised_margin:.3g}"
+    if not w.evaluated:
+        margin = "not evaluated"
+    elif w.normalised_margin is not None:
+        margin = f"normalised margin {w.normalised_margin:.3g}"
+    elif w.margin is not None and math.isfinite(w.margin):
+        margin = f"margin {w.margin:.3g}{f' {w.unit}' if w.unit and w.unit not in ('-', '1') else ''}"
+    else:
+        margin = "violated"
     tally = f"{w.violated} violated" if w.violated else "all pass"
     return f"<td class='{'fail' if w.violated else 'pass'}'>{html.escape(w.rule)}: {margin}; {tally}</td>"
 
@@ -293,6 +300,10 @@ def tolerance_section(cands: list[Candidate]) -> str:
                        f"<td class='num'>{_num(r.get('worst_margin'))}</td></tr>"
                        for n, r in rules.items() if isinstance(r, dict))
         label = f"<b>{html.escape(c.label)}</b>: " if len(cands) > 1 else ""
+        if mc.get("samples") == 0:        # tolerance --samples 0: the linear stack-up alone is the verdict
+            parts.append(f"<p>{label}no Monte-Carlo check (0 samples): the verdict is the linear stack-up's, the "
+                         f"<code>@tolerance</code> rows of the rule table.</p>")
+            continue
         unevaluable = mc.get("unevaluable")
         parts.append(
             f"<p>{label}Monte-Carlo check of the answer: {html.escape(str(mc.get('samples')))} samples (seed "

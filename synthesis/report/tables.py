@@ -90,7 +90,7 @@ def design_rows(cands: list[Candidate]) -> list[DesignRow]:
         agree = all(x == said[0] for x in said)
         per = None if agree else [(i.get("free"), _as_list(i.get("bounds"))) if i else (None, None) for i in infos]
         rows.append(DesignRow(n, values, [i > 0 and _differs(values[0], v) for i, v in enumerate(values)],
-                              info.get("unit", ""), info.get("bounds") if agree else None,
+                              info.get("unit") or "", info.get("bounds") if agree else None,
                               info.get("free") if agree else None,
                               [at_bound(v, i) for v, i in zip(values, infos)], given, per))
     # the assembly a linkage is solved on is a setting of its spec, not a design value (result.json holds it in
@@ -169,7 +169,7 @@ def rule_rows(cands: list[Candidate]) -> list[RuleRow]:
     rows = []
     for n in names:
         first = next(b[n] for b in by_candidate if n in b)
-        rows.append(RuleRow(n, first.get("unit", ""), first.get("limit", [None, None]),
+        rows.append(RuleRow(n, first.get("unit") or "", first.get("limit", [None, None]),
                             [_cell(b[n]) if n in b else None for b in by_candidate],
                             _cell(given[n]) if n in given else None))
     return rows
@@ -245,6 +245,10 @@ class WorstMargin:
     rule: str | None                 # None when the candidate has no evaluated rule
     normalised_margin: float | None
     violated: int                    # how many rules it violates
+    #: the rule's margin in its own unit where it has no normalised one (a tolerance analysis' verdict rows)
+    margin: float | None = None
+    unit: str | None = None
+    evaluated: bool = True           # false: the rule could not be evaluated at the design
 
 
 def worst_margins(cands: list[Candidate]) -> list[WorstMargin]:
@@ -254,13 +258,25 @@ def worst_margins(cands: list[Candidate]) -> list[WorstMargin]:
 
 def worst_margin(rules: list[dict]) -> WorstMargin:
     """The tightest rule of a rule table (result.json ``rules`` records): a rule not evaluated first, else the one
-    of smallest normalised margin; and how many are violated."""
+    of smallest normalised margin -- unless that one holds while a rule without a normalised margin is violated (a
+    tolerance analysis' ``@monte_carlo`` and ``@linear_worst_corner`` rows), which is then named with its own margin;
+    and how many are violated."""
     bad = sum(1 for r in rules if not r.get("satisfied"))
     scored = [(r["normalised_margin"], r["name"]) for r in rules
               if isinstance(r.get("normalised_margin"), (int, float)) and math.isfinite(r["normalised_margin"])]
     unevaluated = [r["name"] for r in rules if r.get("value") is None]
     if unevaluated:
-        return WorstMargin(unevaluated[0], None, bad)
+        return WorstMargin(unevaluated[0], None, bad, evaluated=False)
+    if scored:
+        m, name = min(scored)
+        if m < 0 or not bad:
+            return WorstMargin(name, m, bad)
+    unscored = [r for r in rules if not r.get("satisfied") and not (
+        isinstance(r.get("normalised_margin"), (int, float)) and math.isfinite(r["normalised_margin"]))]
+    if unscored:
+        r = unscored[0]
+        margin = r.get("margin") if isinstance(r.get("margin"), (int, float)) else None
+        return WorstMargin(r["name"], None, bad, margin, r.get("unit") if isinstance(r.get("unit"), str) else None)
     if scored:
         m, name = min(scored)
         return WorstMargin(name, m, bad)
@@ -343,8 +359,16 @@ def _objectives(cands: list[Candidate]) -> list:
     texts = [objective_text(c.result.objective) for c in cands]
     if not any(texts):
         return texts
-    return [t if t is not None or c.result.status != "evaluated" else "none: a check evaluates the rules only"
+    return [t if t is not None or c.result.status != "evaluated"
+            else "none: a tolerance analysis evaluates the rules only" if is_tolerance_analysis(c.result)
+            else "none: a check evaluates the rules only"
             for t, c in zip(texts, cands)]
+
+
+def is_tolerance_analysis(result: Result) -> bool:
+    """An ``agrisynth tolerance`` result (its facts hold the stack-up), not a check's."""
+    facts = result.extra.get("tolerance") if isinstance(result.extra, dict) else None
+    return isinstance(facts, dict) and "stack_up" in facts
 
 
 def run_facts(cands: list[Candidate]) -> list[tuple[str, list]]:
