@@ -126,8 +126,13 @@ def design_columns(cands: list[Candidate]) -> str:
                         "disagree (a published design beside a redesign), each design's own is listed.")]
     if shows_given(cands):
         items.append(("given (start 0)", "the design written in the spec: the question; the next column is the answer."))
-    items.append(("at lower / upper bound", "the value sits on that bound: the optimiser was held there, and "
-                                           "widening the bound (if the machine allows) may improve the objective."))
+    if any(c.result.solver is not None for c in cands):
+        items.append(("at lower / upper bound", "the value sits on that bound: in a solved design the optimiser was "
+                                               "held there, and widening the bound (if the machine allows) may improve "
+                                               "the objective; in a checked one it is the spec's own value."))
+    else:         # checks only: no optimiser moved anything
+        items.append(("at lower / upper bound", "the spec's value sits on that bound: a solve from it could move it "
+                                               "no further that way."))
     if len(cands) > 1:
         items.append(("highlighted", "differs from the baseline (first candidate)."))
     return "<dl class='columns'>" + "".join(f"<dt>{k}</dt><dd>{v}</dd>" for k, v in items) + "</dl>"
