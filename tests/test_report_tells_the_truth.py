@@ -113,3 +113,17 @@ def test_a_long_candidate_name_is_wrapped_inside_the_figure():
     assert frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
     assert all(len(line) <= 48 for t in legend.get_texts() for line in t.get_text().splitlines())
     plt.close(fig)
+
+
+def test_the_auto_line_says_the_starts_that_ran_and_whose_batch_the_answer_is():
+    """The kind's early stop (stop_at_objective) after 1 of a 16-start batch read "16 starts"; an answer kept from an
+    earlier batch says so, with every batch run."""
+    from synthesis.report.tables import auto_said
+
+    early = {"starts": 16, "starts_run": 1, "auto": {"stopped_by": "stop_at_objective", "batches": [16]}}
+    assert auto_said(early) == "; --starts auto: 1 of 16 starts, stopped by stop_at_objective"
+    kept = {"starts": 16, "starts_run": 16,
+            "auto": {"stopped_by": "max_starts", "batches": [16, 32, 64], "answer_batch": 16}}
+    assert auto_said(kept) == ("; --starts auto: batches of 16, 32, 64 starts, stopped by max_starts; the answer and "
+                               "this statement are the 16-start batch's (no later batch found as good a design)")
+    assert auto_said({"starts": 8}) == ""

@@ -350,7 +350,10 @@ def auto_said(solver: dict) -> str:
         return (f"; --starts auto: batches of {', '.join(str(b) for b in batches)} starts, stopped by "
                 f"{auto.get('stopped_by')}; the answer and this statement are the {auto['answer_batch']}-start "
                 f"batch's (no later batch found as good a design)")
-    return f"; --starts auto: {solver.get('starts')} starts, stopped by {auto.get('stopped_by')}"
+    asked, ran = solver.get("starts"), solver.get("starts_run")
+    # the kind's early stop ends a batch at the start that reached its target: fewer ran than the batch had
+    count = f"{ran} of {asked}" if isinstance(ran, int) and isinstance(asked, int) and ran < asked else f"{asked}"
+    return f"; --starts auto: {count} starts, stopped by {auto.get('stopped_by')}"
 
 
 def _objectives(cands: list[Candidate]) -> list:
