@@ -352,8 +352,8 @@ def test_infeasible_window_exits_3_naming_the_window_rules_and_their_corners(tmp
     free = [n for n, v in data["design_variables"].items() if v["free"]]
     assert free and all(checked["design"][n] == data["elastic"]["design"][n] for n in free)
     # and what the message says of it is what its check finds: the rule given up on fails, the one holding against
-    # it (binding, on its limit) passes -- the elastic form held it 1e-8 of its scale inside, not on the limit, where
-    # IPOPT's tolerance left it 1.3e-11 deg over and its check failed it too
+    # it (binding, on its limit) passes -- the elastic form holds it ELASTIC_BACKOFF of its scale inside, not on the
+    # limit, where IPOPT's tolerance left it 1.3e-11 deg over and its check failed it too
     assert data["elastic"]["relaxed"] == ["window_bottom"] and "window_top" in data["elastic"]["binding"]
     verdicts = {r["name"]: r for r in checked["rules"]}
     assert [n for n, r in verdicts.items() if not r["satisfied"]] == ["window_bottom"]

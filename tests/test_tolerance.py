@@ -896,3 +896,42 @@ def test_a_robust_box_on_a_dwell_of_zero_is_refused_saying_to_leave_it_out(tmp_p
                                                                       "hold_near = [[0.0, 146.0]]"))
         with pytest.raises(SpecError, match=re.escape(said)):
             refuse_box_outside_bounds(load_spec(path).model, "", path, follows)
+
+
+def test_a_mirrored_rule_reports_the_derivative_of_its_reported_value():
+    """opening_cam's pressure_angle_return: the NLP holds the signed angle in [-45, 45], the check reports its
+    magnitude (56.19 > 45).  The stack-up said value -56.19 and d/d base_radius +0.4849 per mm -- a larger base
+    circle raising the return pressure angle -- where `check` at base_radius 50 +- 0.001 gives -0.4849 (an audit's
+    central differences: -0.4849, +0.3247 per mm of offset, -1.892 per deg of the return)."""
+    from synthesis.tolerance.analysis import analyse
+
+    loaded = load_spec(LIBRARY / "clamp_cam/opening_cam.toml")
+    kind = kinds.get("clamp_cam")
+    facts = analyse(kind, loaded.model, kind.check(loaded).design, length=0.2, angle=0.2, samples=0, seed=0)
+    row = next(r for r in facts["stack_up"] if r["name"] == "pressure_angle_return")
+    nominal = next(r for r in facts["nominal_rules"] if r["name"] == "pressure_angle_return")
+    assert row["value"] == pytest.approx(nominal["value"], rel=1e-9) and row["value"] > 45.0
+    assert row["sensitivity"]["base_radius"] == pytest.approx(-0.4849, abs=5e-4)
+    assert row["sensitivity"]["offset"] == pytest.approx(0.3247, abs=5e-4)
+    assert row["sensitivity"]["return"] == pytest.approx(-1.892, abs=2e-3)
+
+
+def test_a_two_sided_rules_margin_change_is_capped_by_its_other_limit():
+    """cai2020_crank_rocker's rocker_swing in [49.9, 50.1] at 49.9506 (0.0506 from its lower limit): l7 + 0.2 mm
+    raises it by 0.19 deg, past the upper limit -- `check` at l7 = 54.2 gives margin -0.0407 -- while the tornado drew
+    a gain to +0.24 (the margin to the lower limit alone).  Now each variable's change at +tol and -tol is read to the
+    nearer limit: -0.0913 and -0.19."""
+    from synthesis.tolerance.analysis import analyse
+
+    loaded = load_spec(LIBRARY / "picker/cai2020_crank_rocker.toml")
+    kind = kinds.get(loaded.kind)
+    facts = analyse(kind, loaded.model, kind.check(loaded).design, length=0.2, angle=None, samples=0, seed=0)
+    row = next(r for r in facts["stack_up"] if r["name"] == "rocker_swing")
+    assert row["worst_sample_margin"] == pytest.approx(0.0506, abs=1e-4)
+    plus, minus = row["margin_change"]["l7"]
+    assert row["worst_sample_margin"] + plus == pytest.approx(-0.0407, abs=2e-3)      # the audit's check: -0.0407
+    assert minus == pytest.approx(-0.19, abs=2e-3) and plus < 0
+    # a one-sided rule: the change at -tol mirrors the one at +tol, the contributions' signed shares
+    grashof = next(r for r in facts["stack_up"] if r["name"] == "grashof_crank_rocker")
+    for key, (up, down) in grashof["margin_change"].items():
+        assert up == pytest.approx(-down, abs=1e-12) and up == pytest.approx(grashof["contributions"][key], abs=1e-12)

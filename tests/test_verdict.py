@@ -16,7 +16,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from conftest import LIBRARY
+from conftest import LIBRARY, PLANTING
 from solving import agrisynth, diagnose_infeasible, run_solve
 from synthesis import kinds
 from synthesis.core.verdict import ElasticDiagnosis, StartReport, status_of, unsatisfied_error
@@ -502,3 +502,27 @@ def test_a_rule_the_spec_fixes_is_named_with_its_field_not_the_bounds():
     assert data["fixed_by"] == {"planting_depth": "[soil] analysis_depth"}
     assert ElasticDiagnosis.from_json(data).fixed == elastic.fixed
     assert "fixed_by" not in ElasticDiagnosis("Solve_Succeeded", True, {"gap": 2.0}, units, scales).to_json()
+
+
+@pytest.mark.slow         # about 20 s: four starts, the elastic re-solve and a check
+def test_check_of_the_elastic_design_fails_the_rules_the_diagnosis_gives_up_on_and_no_other(tmp_path):
+    """redesign_from_example1 asking 3 m/s at P2: the diagnosis gives up on p2_speed alone, while `check elastic.toml`
+    failed transmission_angle_min too, by 4.5e-7 deg (held 1e-8 of its scale inside its limit by the elastic form,
+    less than what separates IPOPT's rows from the check's reading).  Likewise p4p6_min 80 mm: entry_angle and
+    p1p2p3_collinearity failed by 8.4e-7 deg and 1.2e-7 deg beside the two rules given up on."""
+    from solving import agrisynth
+
+    text = (PLANTING / "redesign_from_example1.toml").read_text()
+    for name, rules, given_up in (("slow_p2", "p2_speed_min = 3.0", ["p2_speed"]),
+                                  ("long_hole", "p4p6_min = 80.0", ["p4p6_distance", "transmission_angle_min"])):
+        spec = tmp_path / f"{name}.toml"
+        spec.write_text(text.replace('name = "redesign_from_example1"', f'name = "{name}"').replace(
+            "[soil]", f"[rules]\n{rules}\n\n[soil]", 1))
+        solved = agrisynth("solve", str(spec), "--starts", "4", "--workers", "1", "--out", str(tmp_path))
+        assert solved.returncode == 3, solved.stderr
+        result = json.loads((tmp_path / name / "result.json").read_text())
+        assert result["elastic"]["relaxed"] == given_up
+        checked = agrisynth("check", str(tmp_path / name / "elastic.toml"), "--out", str(tmp_path))
+        assert checked.returncode == 1, checked.stderr
+        rules_at = json.loads((tmp_path / f"{name}_elastic-check" / "result.json").read_text())["rules"]
+        assert sorted(r["name"] for r in rules_at if not r["satisfied"]) == sorted(given_up)

@@ -132,10 +132,18 @@ def stack_up(lin: Linearised, box: np.ndarray, drivers: int = 3) -> list[dict]:
             # towards the nearer limit): the nonlinear re-check there is the sampled worst case to compare with
             "corner": [float(c) for c in (corner if T is None else T @ corner)],
             "drivers": [{"variable": lin.dmap.keys[j], "contribution": float(contrib[j])} for j in order],
-            # every variable's linear change of the margin at that worst sample when it moves by +tol (its share of
-            # the stack-up is the absolute value; the corner moves each variable the way that lowers the margin)
+            # every variable's share of the stack-up at that worst sample, |dg/dx| tol, signed as the margin to the
+            # nearer limit moves when the variable moves by +tol (the corner moves each the way that lowers it)
             "contributions": {lin.dmap.keys[j]: float(-np.sign(c) * contrib[j]) if c else 0.0
                               for j, c in enumerate(corner)},
+            # the margin at that worst sample -- to either limit, the nearer one -- and its linear change when each
+            # variable alone moves by +tol and by -tol: what the tornado draws (a two-sided rule's margin gained
+            # towards one limit is capped by the other: the contributions alone drew a rocker swing held 0.05 deg
+            # inside [49.9, 50.1] gaining 0.24 deg where the move breaks its upper limit)
+            "worst_sample_margin": _margin(values[i_lin], lower, upper),
+            "margin_change": {lin.dmap.keys[j]: [_margin(values[i_lin] + d, lower, upper)
+                                                 - _margin(values[i_lin], lower, upper) for d in (step, -step)]
+                              for j, step in enumerate(J[i_lin] * box)},
         })
         if lin.operating is not None:
             names, _, W, _ = lin.operating
@@ -151,6 +159,11 @@ def operating_dependence(lin: Linearised) -> dict[str, list[str]]:
     names, _, W, _ = lin.operating
     return {n: [rule.name for k, rule in enumerate(lin.rules) if np.any(W[lin.slices[k], i] != 0.0)]
             for i, n in enumerate(names)}
+
+
+def _margin(value: float, lower, upper) -> float:
+    """The margin of a value to the nearer of its limits (a missing limit is no limit)."""
+    return float(min(math.inf if lower is None else value - lower, math.inf if upper is None else upper - value))
 
 
 def _corner(value: float, lower, upper, grad: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -499,12 +512,28 @@ def _nominal_rules(solving, setting: Setting, lin: Linearised) -> list[RuleRecor
     return [not_evaluated(rule.name, rule.lower, rule.upper, rule.unit, "", why).record() for rule in lin.rules]
 
 
+def _as_reported(row: dict, recheck: RuleRecord) -> None:
+    """A rule the NLP writes mirrored (a cam's pressure angle: the signed angle within [-45, 45] where the re-check
+    reports its magnitude <= 45) has its value and derivatives said in the re-check's terms: the signed angle
+    -56.19 with d/d base_radius +0.48 is the magnitude 56.19 with -0.48 (a larger base circle lowers it)."""
+    value, reported = row.get("value"), recheck.value
+    if value is None or reported is None or value == 0.0 or not math.isfinite(value):
+        return
+    if abs(reported + value) > 1e-9 * max(1.0, abs(value)) or abs(reported - value) <= 1e-9 * max(1.0, abs(value)):
+        return
+    row["value"] = -value
+    row["sensitivity"] = {k: None if v is None else -v for k, v in row["sensitivity"].items()}
+    if "operating_sensitivity" in row:
+        row["operating_sensitivity"] = {k: None if v is None else -v for k, v in row["operating_sensitivity"].items()}
+
+
 def _not_evaluated_at_the_design(row: dict, note: str | None) -> None:
     """A rule the float re-check cannot evaluate at the design (a seedling that never reaches the wall end) has no
     stack-up: the NLP's smooth model has numbers there (or NaN), but they describe a motion the design does not make."""
     row.update(nominal_margin=None, linear_worst_margin=None, linear_loss=None, drivers=[], corner=None,
                corner_margin=None, sensitivity={k: None for k in row["sensitivity"]},
-               contributions={k: None for k in row["contributions"]})
+               contributions={k: None for k in row["contributions"]}, worst_sample_margin=None,
+               margin_change={k: None for k in row["margin_change"]})
     if "operating_sensitivity" in row:
         row["operating_sensitivity"] = {k: None for k in row["operating_sensitivity"]}
     row["gap_explanation"] = "not compared: the rule is not evaluated at the design" + (f" ({note})" if note else "")
@@ -541,6 +570,8 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
             r = next((q.record() for q in solving.recheck(setting, StartOutcome(0, dict(lin.design), 0.0, "", True, 0,
                                                                                   0.0, "")).rules if q.name == name),
                      None)
+        if r is not None:
+            _as_reported(row, r)
         row["recheck_margin"] = None if r is None else r.margin
         row["recheck_unit"] = row["unit"] if r is None else r.unit      # margin, MC and corner columns: the re-check's
         m = mc["rules"].get(row["name"], {})

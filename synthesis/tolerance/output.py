@@ -400,9 +400,10 @@ def tornado_rules(facts: dict) -> list[dict]:
 
 def tornado(facts: dict, path: Path) -> None:
     """tornado.png: for each of the worst rules (:func:`tornado_rules`) a tornado of its linear stack-up -- one
-    horizontal bar per driving variable from margin - |dg/dx_i| tol_i to margin + |dg/dx_i| tol_i, centred on the
-    rule's nominal margin at its worst sample, largest at the top; the red line is the limit (margin 0), the dashed
-    one the linear worst case (every bar's low end at once)."""
+    horizontal pair of bars per driving variable, its margin's linear change when it alone moves by +tol_i (blue)
+    and -tol_i (orange), to the nearer of the rule's limits (a two-sided rule's gain towards one limit capped by the
+    other), centred on the rule's nominal margin at its worst sample, largest at the top; the red line is the limit
+    (margin 0), the dashed one the linear worst case (every variable at its corner at once)."""
     # imported here: the terminal's Monte-Carlo lines (every solve's views) need this module, not matplotlib
     import matplotlib
     matplotlib.use("Agg")
@@ -429,29 +430,39 @@ def tornado(facts: dict, path: Path) -> None:
         contrib = sorted(((k, c) for k, c in r["contributions"].items() if c), key=lambda kc: -abs(kc[1]))
         shown = contrib[:TORNADO_BARS]
         loss = sum(abs(c) for _, c in contrib)
-        centre = r["linear_worst_margin"] + loss        # the nominal margin at the worst sample
+        # the nominal margin at the worst sample, and each variable's margin change at +tol and -tol with both limits
+        # (a result written before they were recorded: the one-sided linear change, mirrored)
+        centre = r.get("worst_sample_margin")
+        centre = r["linear_worst_margin"] + loss if centre is None else centre
+        changes = r.get("margin_change") or {}
         y = np.arange(len(shown))[::-1]                  # the largest at the top
-        plus = np.array([c for _, c in shown])           # margin change when the variable moves by +tol
-        ax.barh(y, plus, left=centre, color="tab:blue", label="+tol")
-        ax.barh(y, -plus, left=centre, color="tab:orange", label="-tol")
+        plus = np.array([(changes.get(k) or [c, -c])[0] for k, c in shown])
+        minus = np.array([(changes.get(k) or [c, -c])[1] for k, c in shown])
+        # the two moves side by side (both may lower a two-sided rule's margin: one bar would hide the other)
+        ax.barh(y + 0.2, plus, height=0.4, left=centre, color="tab:blue", label="+tol")
+        ax.barh(y - 0.2, minus, height=0.4, left=centre, color="tab:orange", label="-tol")
         ax.set_yticks(y, [f"{k} ±{tol[k]['half_width']:g} {tol[k]['unit']}".rstrip() for k, _ in shown], fontsize=7)
         ax.axvline(centre, color="black", linewidth=0.8)
         ax.axvline(r["linear_worst_margin"], color="black", linestyle="--", linewidth=0.8)
-        lo, hi = r["linear_worst_margin"], centre + max(abs(plus))
+        # the bars, the nominal and the linear worst margin in view (a bar's base is sticky: no autoscale margin there)
+        lo = min(r["linear_worst_margin"], centre + min(plus.min(), minus.min(), 0.0))
+        hi = centre + max(plus.max(), minus.max(), 0.0)
         width = max(hi - lo, 1e-12)
-        if lo - 3 * width <= 0.0 <= hi + 3 * width:      # the limit near the bars: drawn
+        if lo - 3 * width <= 0.0 <= hi + 3 * width:      # the limit near the bars: drawn, and in view
             ax.axvline(0.0, color="red", linewidth=1)
+            lo, hi = min(lo, 0.0), max(hi, 0.0)
+            width = max(hi - lo, 1e-12)
         else:                                             # far away: named, so the bars keep their size
-            ax.set_xlim(lo - 0.1 * width, hi + 0.1 * width)
             ax.set_xlabel(f"the limit (margin 0) is off the axis to the {'left' if 0.0 < lo else 'right'}", fontsize=7,
                           color="red")
+        ax.set_xlim(lo - 0.06 * width, hi + 0.06 * width)
         more = f" (+{len(contrib) - len(shown)} smaller)" if len(contrib) > len(shown) else ""
         ax.set_title(f"{r['name']}: margin ({r['unit']}), nominal {centre:.4g}, linear worst {r['linear_worst_margin']:.4g}"
                      f"{more}", fontsize=8)
         ax.tick_params(axis="x", labelsize=7)
     axes[0, 0].legend(fontsize=7, loc="best")
-    fig.suptitle("tolerance tornado: bars ±|dg/dx_i|·tol_i centred on the nominal margin (red: the limit, "
-                 "dashed: linear worst case)", fontsize=9)
+    fig.suptitle("tolerance tornado: the margin's linear change, one variable at +tol or -tol\n(black: nominal margin, "
+                 "red: the limit, dashed: linear worst case)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.98))
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -478,8 +489,8 @@ def _pct(rate) -> str:
     return "-" if rate is None else f"{100 * rate:.2f} %"
 
 
-TORNADO_LINK = ("\n![tolerance tornado: each of the worst rules' margin, one bar per driving variable "
-                "(±|dg/dx_i|·tol_i, centred on the nominal margin)](tornado.png)\n\n"
+TORNADO_LINK = ("\n![tolerance tornado: each of the worst rules' margin, two bars per driving variable (its "
+                "linear change at +tol and -tol, from the nominal margin)](tornado.png)\n\n"
                 "[tornado.png](tornado.png): the linear stack-up of the worst rules, the largest contribution at the top\n")
 
 
