@@ -74,16 +74,23 @@ def run_case(case: BenchCase, repeats: int, tick: Callable[[str | None], None] =
     if case.warmup is not None:
         case.warmup()
     runs = _timed_runs(case, repeats, target, tick)
-    feasible = [r.objective for rs in runs.values() for r in rs
-                if r.worst_violation == 0 and math.isfinite(r.objective)]
-    best = min([best] + feasible)
-    if not math.isfinite(target) and math.isfinite(best):     # no best known before: the best any run reached
+    feasible = {method: min([r.objective for r in rs if r.worst_violation == 0 and math.isfinite(r.objective)],
+                            default=math.inf) for method, rs in runs.items()}
+    before = best
+    best = min([best, *feasible.values()])
+    moved = None
+    if math.isfinite(best) and (not math.isfinite(target) or best + case.tolerance(best) < target):
+        # no best known before, or a timed run found a better design than it: the target is the new best's, every
+        # run measured against it (a run that stopped at the old one, short of it, has not reached it)
+        if math.isfinite(target):
+            moved = {"from": target, "best_known_before": before,
+                     "by": sorted(m for m, f in feasible.items() if f == best)}
         target = best + case.tolerance(best)
     rows = [_method_row(case, method, rs, best, target) for method, rs in runs.items()]
     ratios = [time_ratio(r, rows[0]) for r in rows[1:]]
     _ratio_texts(rows, ratios)
     out = {"problem": case.problem, "kind": case.kind, "note": case.note, "best_known": best,
-           "target": target, "rows": rows, "ratios": ratios}
+           "target": target, "rows": rows, "ratios": ratios, **({"target_moved": moved} if moved else {})}
     if case.sweep is not None:
         out["sweep"] = case.sweep(tick)
     if case.studies:

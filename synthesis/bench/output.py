@@ -159,6 +159,10 @@ def markdown(data: dict) -> str:
         parts.append(_budgets(study))
     parts += [_summary_table(data["summary"]), _methods_table(data["rows"])]
     parts += [f"- {p['problem']}: {p['note']}" for p in data["problems"] if p.get("note")]
+    parts += [f"- {p['problem']}: a timed run ({', '.join(p['target_moved']['by'])}) bettered the best known "
+              f"({_fmt(p['target_moved']['best_known_before'], '.7g')} -> {_fmt(p['best_known'], '.7g')}); every run is "
+              f"measured against the new target, {_fmt(p['target'], '.7g')} (was {_fmt(p['target_moved']['from'], '.7g')})"
+              for p in data["problems"] if isinstance(p.get("target_moved"), dict)]
     parts += _sweep_sections(data["problems"])
     for p in data["problems"]:
         for name, rows in (p.get("studies") or {}).items():
@@ -176,14 +180,16 @@ def markdown(data: dict) -> str:
 def _preamble(m: dict, settings) -> str:
     return (f"# agrisynth bench\n\nMachine: {m['cpu']}, {m['cores_usable']} usable cores, {m['system']}, "
             f"Python {m['python']}.  Settings: {_fmt(settings)}.\n\n"
-            "Times are medians of the repeats (wall clock, one worker; the machine may be shared, so read "
+            "Times are medians of a method's runs ('runs': the repeats for IPOPT, one for SLSQP and differential_evolution, "
+            "whose budgets bound them; wall clock, one worker; the machine may be shared, so read "
             "ratios within one run).  Objectives are minimised (a maximising kind's is negated).  "
             "**Time to target**: seconds from a method's start (its NLP build included) to the first moment its "
             "design met the target (objective at or below best known + tolerance, every rule holding on the fine "
             "re-check grid), or 'target not reached'; every time ratio is the ratio of two such times (medians "
             "of the repeats), so no ratio is taken between runs that ended at different objectives.  IPOPT "
-            "(AD and finite differences): the end of the first start whose re-checked design meets the target "
-            "(the time of a multistart stopping there; the run itself goes on, its whole time is 'median s').  "
+            "(AD and finite differences): the end of the first start whose re-checked design meets the target, its "
+            "re-check left out as a peer's checks are (the time of a multistart stopping there; the run itself goes "
+            "on, its whole time is 'median s').  "
             "SLSQP and differential_evolution: the first SLSQP iteration / DE generation whose iterate (DE: best "
             "member), mapped to the kind's design and objective and re-checked with the kind's own functions, "
             "meets the target; the peer stops there.  That check runs at most once per iteration / generation "
@@ -236,10 +242,12 @@ def _compiled_table(lines: list[dict]) -> str:
 def _methods_table(rows: list[dict]) -> str:
     rows = [r | {"iters": (r.get("details") or {}).get("median_iterations"),
                  "success": (f"{r['details']['successes']}/{r['details']['starts']}"
-                             if isinstance(r.get("details"), dict) and "successes" in r["details"] else None)}
+                             if isinstance(r.get("details"), dict) and "successes" in r["details"] else None),
+                 "unit": (r.get("details") or {}).get("objective_unit"), "runs": len(r.get("wall_s") or [])}
             for r in rows]
     return "## Methods\n\n" + _table(rows, [
-        ("problem", "problem"), ("method", "method"), ("objective", "objective"), ("objective_gap", "gap to best"),
+        ("problem", "problem"), ("method", "method"), ("runs", "runs"), ("objective", "objective"),
+        ("unit", "objective unit"), ("objective_gap", "gap to best"),
         ("worst_violation", "worst violation"), ("median_s", "median s"), ("time_to_target_text", "time to target (s)"),
         ("iters", "median iterations"), ("success", "solver success"), ("time_ratio_text", "time-to-target ratio")])
 

@@ -170,6 +170,11 @@ def bench_command(problems: tuple[str, ...], spec_files: tuple[Path, ...], out: 
             outcome = runs.bench(request, terminal)
     except BadRequest as exc:
         raise click.BadParameter(str(exc), param_hint=exc.field) from None
+    except KeyboardInterrupt:
+        # a bench is written whole or not at all: its finished problems are not kept (unlike a solve's starts)
+        sys.stderr.write("bench: nothing written (a bench keeps no partial result; bench fewer problems at a time "
+                         "with --problems SPEC)\n")
+        raise
     rows = outcome.details
     print_table(console, bench_table(rows.results, rows.repeats))
     console.print(f"wrote {escape(str(outcome.folder))}/bench.json, bench.md and plots ({rows.settings['wall_s']:.0f} s)")

@@ -144,8 +144,14 @@ def error_figure(results: list[dict]):
         for row in res["rows"]:
             k = methods.index(row["method"])
             m, fill = MARKERS[k % len(MARKERS)], (colour if k == 0 else "none")
-            ax_gap.plot(row["wall_s"], [on_log_axis(_gap(o, res), gap_floor) for o in row["objectives"]], m,
-                        color=colour, ms=6, mfc=fill, alpha=0.8)
+            gaps_of = [_gap(o, res) for o in row["objectives"]]
+            ax_gap.plot(row["wall_s"], [on_log_axis(g, gap_floor) if not _below(g, res) else math.nan for g in gaps_of],
+                        m, color=colour, ms=6, mfc=fill, alpha=0.8)
+            # a run below the best known missed a rule (the best known is the best design meeting them all): not a
+            # gap of 0, so marked apart at the floor
+            below = [t for t, g in zip(row["wall_s"], gaps_of) if _below(g, res)]
+            if below:
+                ax_gap.plot(below, [gap_floor] * len(below), "x", color="red", ms=8, mew=1.6)
             trace = best_so_far(row, res["best_known"])
             if trace:
                 ax_gap.plot([t for t, _ in trace], [on_log_axis(g, gap_floor) for _, g in trace],
@@ -157,7 +163,7 @@ def error_figure(results: list[dict]):
         for ax in (ax_gap, ax_vio):
             ax.plot([], [], MARKERS[k % len(MARKERS)], color="0.3", mfc="none" if k else "0.3", label=method)
     for ax, floor, values, what, title, ylabel in (
-            (ax_gap, gap_floor, gaps, "gap", "objective gap to the best known", "objective - best known"),
+            (ax_gap, gap_floor, gaps, "gap", "objective gap to the best known", _gap_label(results)),
             (ax_vio, vio_floor, violations, "no violation", "worst rule violation (fine re-check grid)",
              "normalised violation")):
         ax.set_xscale("log")
@@ -172,7 +178,12 @@ def error_figure(results: list[dict]):
         handles, labels = ax.get_legend_handles_labels()
         if handles:     # a bench with no result has nothing to name (matplotlib warns)
             handles.append(_floor_handle(what, values))
-            legend_below(ax, ncol=2, fontsize=7, handles=handles, labels=labels + [handles[-1].get_label()])
+            labels = labels + [handles[-1].get_label()]
+            if ax is ax_gap and any(_below(_gap(o, res), res) for res in results for row in res["rows"]
+                                    for o in row["objectives"]):
+                handles.append(Line2D([], [], marker="x", color="red", ls="none", ms=8, mew=1.6))
+                labels.append("below the best known: a rule missed (not a gap of 0)")
+            legend_below(ax, ncol=2, fontsize=7, handles=handles, labels=labels)
     fig.suptitle("error against run time (points: repeats; lines: best so far in the median run)", fontsize=10)
     fig.tight_layout()
     return fig
@@ -180,6 +191,23 @@ def error_figure(results: list[dict]):
 
 def _gap(objective, res: dict) -> float | None:
     return None if objective is None or not math.isfinite(objective) else objective - res["best_known"]
+
+
+def _below(gap: float | None, res: dict) -> bool:
+    """A gap below the best known by more than round-off: a run that missed a rule."""
+    best = res.get("best_known")
+    scale = max(1.0, abs(best)) if isinstance(best, (int, float)) and math.isfinite(best) else 1.0
+    return gap is not None and gap < -1e-9 * scale
+
+
+def _gap_label(results: list[dict]) -> str:
+    """The gap axis' label with the objectives' unit: one unit when the problems share it, else where to read them."""
+    units = {(row.get("details") or {}).get("objective_unit") for res in results for row in res["rows"]
+             if isinstance(row.get("details"), dict) and (row.get("details") or {}).get("objective_unit")}
+    units.discard("-")
+    if len(units) == 1:
+        return f"objective - best known, {units.pop()}"
+    return "objective - best known (each problem's unit: bench.md)" if units else "objective - best known"
 
 
 def _error_values(results: list[dict]) -> tuple[list, list, list]:
@@ -219,7 +247,7 @@ def sweep_figure(sweep: dict):
     top.xaxis.set_minor_locator(NullLocator())
     top.set_xlabel("samples", fontsize=8)
     ax.set_xlabel("median wall time, s")
-    ax.set_ylabel("error")
+    ax.set_ylabel("violation (normalised) or objective gap")
     ax.set_title(f"{sweep['problem']}: sample counts ({', '.join(rows[0]['samples'])})", fontsize=10)
     ax.grid(alpha=0.3)
     handles, labels = ax.get_legend_handles_labels()
