@@ -546,3 +546,26 @@ def test_a_named_spec_with_nothing_free_is_refused_naming_its_file(tmp_path):
     assert proc.stderr.strip().startswith(f"error: {spec}: planting_fourbar: solve needs at least one free design "
                                           f"variable"), proc.stderr
     assert not (tmp_path / "out" / "bench").exists()
+
+
+def test_a_run_below_the_best_known_is_marked_apart_not_drawn_as_exact():
+    """A run whose objective lies below the best known missed a rule (the best known is the best design meeting them
+    all): DE's 430 against a best of 435.13 with violation 1.33 sat on the '0 (gap)' line beside SLSQP's exact hit."""
+    import matplotlib.pyplot as plt
+
+    from synthesis.report.bench_plots import error_figure
+
+    res = _result({"ipopt_multistart": [0.0], "differential_evolution": [-5.13]},
+                  {"ipopt_multistart": [0.3], "differential_evolution": [2.0]},
+                  {"ipopt_multistart": 0.0, "differential_evolution": 1.33})
+    res["rows"][0]["details"] = {"objective_unit": "mm"}
+    fig = error_figure([res])
+    ax_gap = fig.axes[0]
+    crosses = [line for line in ax_gap.get_lines() if line.get_marker() == "x"]
+    assert len(crosses) == 1 and list(crosses[0].get_xdata()) == [2.0]
+    de_points = [line for line in ax_gap.get_lines() if line.get_marker() == "s" and list(line.get_xdata()) == [2.0]]
+    assert de_points and all(np.isnan(v) for v in de_points[0].get_ydata())       # not on the floor as a 0
+    labels = [" ".join(t.get_text().split()) for t in ax_gap.get_legend().get_texts()]
+    assert "below the best known: a rule missed (not a gap of 0)" in labels
+    assert ax_gap.get_ylabel() == "objective - best known, mm"
+    plt.close(fig)
