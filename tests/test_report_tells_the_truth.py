@@ -127,3 +127,22 @@ def test_the_auto_line_says_the_starts_that_ran_and_whose_batch_the_answer_is():
     assert auto_said(kept) == ("; --starts auto: batches of 16, 32, 64 starts, stopped by max_starts; the answer and "
                                "this statement are the 16-start batch's (no later batch found as good a design)")
     assert auto_said({"starts": 8}) == ""
+
+
+def test_objectives_that_do_not_compare_are_said_so(tmp_path):
+    """redesign_from_example1's nearest = 0.561 beside redesign_from_example2's 0.938, each its distance from its own
+    given design: set side by side without a word (the page warns of a path's different targets the same way)."""
+    def solved(name: str, given: dict, objective: dict) -> Result:
+        return Result.from_json({"kind": "planting_fourbar", "name": name, "spec_sha256": "0" * 64, "status": "optimal",
+                                 "design": {"l2": 35.0}, "rules": [], "objective": objective,
+                                 "baseline_design": given, "schema_version": 5})
+
+    nearest = {"name": "nearest", "value": 0.5, "unit": "-"}
+    one, two = solved("a", {"l2": 35.0}, nearest), solved("b", {"l2": 36.0}, {**nearest, "value": 0.9})
+    notes = compare_module._different_objectives(candidates([one, two]))
+    assert notes == ["each candidate's nearest objective is its design's distance from its own spec's given design "
+                     "(and bounds), and those differ: the values do not compare"]
+    assert compare_module._different_objectives(candidates([one, solved("c", {"l2": 35.0}, nearest)])) == []
+    smooth = solved("d", {"l2": 35.0}, {"name": "smooth", "value": 3.0, "unit": "mm/s^2"})
+    assert compare_module._different_objectives(candidates([one, smooth])) == [
+        "the candidates minimise different objectives (a: nearest, d: smooth): their values do not compare"]

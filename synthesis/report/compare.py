@@ -102,6 +102,30 @@ def _different_targets(cands: list[Candidate]) -> list[str]:
             f"its own targets, so they do not compare"]
 
 
+#: objectives measured from each spec's own given design: two of them from different given designs do not compare
+FROM_THE_GIVEN_DESIGN = ("nearest",)
+
+
+def _different_objectives(cands: list[Candidate]) -> list[str]:
+    """A note when the solved candidates' objectives do not compare: different objectives (or units), or one measured
+    from each spec's own given design (a redesign's "nearest") where those given designs differ."""
+    solved = [c for c in cands if isinstance(c.result.objective, dict)]
+    if len(solved) < 2:
+        return []
+    kinds_of = {(c.result.objective.get("name"), c.result.objective.get("unit")) for c in solved}
+    if len(kinds_of) > 1:
+        said = ", ".join(f"{c.label}: {c.result.objective.get('name')}" for c in solved)
+        return [f"the candidates minimise different objectives ({said}): their values do not compare"]
+    name = next(iter(kinds_of))[0]
+    # the given design and the bounds the distance is scaled by (planting's: relative to the bounds)
+    given = [(c.result.baseline_design, {k: (v or {}).get("bounds") for k, v in (c.result.design_variables or {}).items()
+                                         if isinstance(v, dict)}) for c in solved]
+    if name in FROM_THE_GIVEN_DESIGN and any(g != given[0] for g in given):
+        return [f"each candidate's {name} objective is its design's distance from its own spec's given design (and "
+                f"bounds), and those differ: the values do not compare"]
+    return []
+
+
 def different_versions(cands: list[Candidate]) -> list[str]:
     """A note when the candidates were written by different versions of agrisynth or CasADi (``versions``): a rule's
     model, a default or the solver may have changed between them, so a difference on the page may be the tool's."""
@@ -134,7 +158,7 @@ def write_comparison_files(cands: list[Candidate], staging: Path, bench: list[di
     """compare.html and its figures, written into ``staging`` (a run folder's staging folder: the writer of run
     folders, ``RunFolder.fill``, moves it into place)."""
     figures, notes = comparison_figures(cands, staging)
-    notes = different_versions(cands) + _different_targets(cands) + notes
+    notes = different_versions(cands) + _different_targets(cands) + _different_objectives(cands) + notes
     if bench:
         from synthesis.report.bench_plots import plot_error_vs_time
 
