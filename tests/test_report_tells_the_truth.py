@@ -146,3 +146,14 @@ def test_objectives_that_do_not_compare_are_said_so(tmp_path):
     smooth = solved("d", {"l2": 35.0}, {"name": "smooth", "value": 3.0, "unit": "mm/s^2"})
     assert compare_module._different_objectives(candidates([one, smooth])) == [
         "the candidates minimise different objectives (a: nearest, d: smooth): their values do not compare"]
+
+
+def test_a_probability_near_one_is_not_rounded_to_a_certainty():
+    """P(best is global) 0.998 printed as "~ 1.00"."""
+    from synthesis.report.tables import said
+
+    line = said({"starts_counted": 500, "distinct_optima": 1, "starts_at_best": 500,
+                 "probability_best_is_global": 0.99799})
+    assert "P(best is global) ~ 0.997 " in line and "1.00" not in line
+    assert "~ 0.95 " in said({"starts_counted": 20, "distinct_optima": 1, "starts_at_best": 20,
+                              "probability_best_is_global": 18 / 19})

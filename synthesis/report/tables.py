@@ -313,7 +313,9 @@ def said(stated: dict, reaching: int | None = None) -> str:
     if not n:
         return "no start converged with every rule held: no statement on the global optimum"
     p = stated.get("probability_best_is_global")
-    chance = (f"P(best is global) ~ {p:.2f}" if p is not None
+    # two decimals, but never rounded up to a certainty the estimate does not give (0.997 is not "1.00")
+    shown = (f"{p:.2f}" if p < 0.995 else f"{math.floor(p * 1000) / 1000:.3f}") if p is not None else None
+    chance = (f"P(best is global) ~ {shown}" if p is not None
               else "P(best is global) not defined (too few starts for the optima seen)")
     caveat = "; ".join(["assumes uniform starts", *(stated.get("assumptions_not_met") or [])])
     # an answer outside the counted starts: "best" is the best counted optimum, not the design returned
