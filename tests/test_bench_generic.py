@@ -569,3 +569,18 @@ def test_a_run_below_the_best_known_is_marked_apart_not_drawn_as_exact():
     assert "below the best known: a rule missed (not a gap of 0)" in labels
     assert ax_gap.get_ylabel() == "objective - best known, mm"
     plt.close(fig)
+
+
+def test_the_fd_ad_ipopt_ratio_is_of_the_medians_of_their_runs():
+    """It was the ratio of the single runs nearest each method's median wall time (with two repeats, the first)."""
+    from synthesis.bench.output import summary
+
+    def row(method, ipopt_runs, ratio_text="1.0x"):
+        return {"method": method, "median_s": 1.0, "objective_gap": 0.0, "time_ratio_text": ratio_text,
+                "time_to_target_text": "1", "ipopt_s_runs": ipopt_runs,
+                "details": {"median_iterations": 10, "successes": 1, "starts": 1, "build_s": 0.1,
+                            "ipopt_s": ipopt_runs[0], "recheck_s": 0.0}}
+
+    res = {"problem": "p", "kind": "k", "rows": [row("ipopt_multistart", [1.0, 3.0, 2.0]),
+                                                 row("ipopt_finite_differences", [8.0, 4.0, 6.0])]}
+    assert summary([res])[0]["fd_ipopt_ratio"] == "3.0x"          # 6 / 2, not 8 / 1

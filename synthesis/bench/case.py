@@ -148,6 +148,8 @@ def _method_row(case: BenchCase, method: str, rs: list[MethodRun], best: float, 
         "reached_target": reached(typical, target), "reached_target_runs": [reached(r, target) for r in rs],
         "worst_violation": typical.worst_violation,
         "wall_s": walls, "median_s": median, "trace": typical.trace, "details": typical.details,
+        # each run's solver seconds, where the method reports them (the IPOPT methods' details.ipopt_s)
+        "ipopt_s_runs": [(r.details or {}).get("ipopt_s") for r in rs],
         # median time to the target over the runs, when every run reached it
         "time_to_target_runs": to_target, "time_to_target_s": _median(to_target) if every else None,
         "time_to_target_text": f"{_median(to_target):.3g}" if every else TARGET_NOT_REACHED,
