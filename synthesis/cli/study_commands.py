@@ -56,8 +56,8 @@ def tolerance_command(target: Path, out: Path, length: float | None, angle: floa
     """Exact sensitivities, linear tolerance stack-up and a seeded Monte-Carlo of a design.
 
     RESULT: a run folder (its solved.toml is the design); SPEC: the spec's given design.  Tolerances
-    from --length/--angle (every length / angle) and --tol NAME=VALUE (one variable), else the spec's
-    [tolerance] table.  Writes OUT/<name>-tolerance/ (result.json, report.md, tornado.png).
+    from the spec's [tolerance] table, each value of which --length/--angle (every length / angle) and
+    --tol NAME=VALUE (one variable) replace.  Writes OUT/<name>-tolerance/ (result.json, report.md, tornado.png).
     Derivatives w.r.t. the operating conditions (forward speed, crank speed, friction, ...) are always
     listed; with an operating range each Monte-Carlo sample is re-checked at every point of the range's
     re-check grid and passes only if every rule holds at all of them.
