@@ -279,3 +279,37 @@ def test_an_auto_run_whose_cluster_is_lost_solves_its_later_batches_locally(monk
     assert len(notes) == 1 and "the connection to the scheduler was lost after " in notes[0]
     assert remote.solver["auto"] == local.solver["auto"] and remote.design == local.design
     assert len(remote.solver["auto"]["batches"]) >= 2
+
+
+@pytest.mark.slow         # about 20 s
+def test_an_auto_run_whose_cluster_is_gone_between_two_batches_solves_the_rest_locally():
+    """The scheduler killed as batch 2 begins: its connection refused, the run ended with exit 2 and no result, the
+    finished batch lost; now that batch and the later ones run locally, the answer the local auto run's."""
+    from synthesis import kinds
+    from synthesis.core.solve import AutoStarts, run_solve as core_run_solve
+
+    address, scheduler = _local_cluster_processes()
+    worker = None
+    auto = AutoStarts(max_starts=32, first=8, min_converged=16)      # the first batch cannot stop the run
+    try:
+        worker = _dask_worker(address)
+        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+        kind = kinds.solving_kind_for(loaded)
+        notes: list = []
+
+        def on_batch(total: int, nested: bool) -> None:
+            if total == 16:
+                scheduler.kill()
+                scheduler.wait()
+
+        remote, _, _ = core_run_solve(kind, loaded, None, 3, 1, scheduler=address, auto=auto, on_batch=on_batch,
+                                      on_note=notes.append)
+    finally:
+        for proc in (worker, scheduler):
+            if proc is not None:
+                proc.kill()
+                proc.wait()
+    local, _, _ = core_run_solve(kind, loaded, None, 3, 1, auto=auto)
+    assert len(notes) == 1 and notes[0].startswith(f"--scheduler {address}: the cluster could not be reached for "
+                                                   f"the batch of 16 starts (")
+    assert remote.solver["auto"] == local.solver["auto"] and remote.design == local.design

@@ -433,3 +433,35 @@ def test_starts_auto_in_a_spec_is_read_in_any_case_as_the_option_is_and_another_
     with pytest.raises(SpecError, match=r'planting_fourbar\.solver: starts: expected a whole number 1\.\.10000 or '
                                         r'"auto", got "all"'):
         load_spec(path)
+
+
+def test_an_interrupt_while_the_finished_batches_are_counted_again_keeps_nothing(tmp_path, toy):
+    """A resumed auto run (batch 64 begun, none of its starts finished) counts batches 16 and 32 again; a signal as
+    batch 32's count begins kept batch 16 alone and wrote it over the run resumed, which held both: now nothing is
+    kept until every finished batch is counted again (the run resumed stays as it was)."""
+    import signal
+
+    from synthesis.core import interrupt
+    from synthesis.core import solve as core
+    from synthesis.core.interrupt import Interrupted
+
+    loaded = _toy(tmp_path)
+    auto = AutoStarts(min_converged=10**6, max_starts=128)          # never stopped by the rule
+    kept: list = []
+    run_solve(toy, loaded, workers=1, auto=auto, record=kept.append)
+    b16 = {o.start: o for o in kept[:16]}
+    b32 = {o.start: o for o in kept[16:48]}
+    batches: list = []
+
+    def on_batch(total, nested):
+        batches.append(total)
+        if total == 32:
+            interrupt.simulate(signal.SIGINT)
+            raise KeyboardInterrupt
+    try:
+        with pytest.raises(Interrupted) as caught:
+            core.run_auto(toy, Setting(loaded.model, 0, toy.solving().prepare(loaded.model)), auto, workers=1,
+                          finished={}, resumed_batch=64, previous=[(16, b16), (32, b32)], on_batch=on_batch)
+    finally:
+        interrupt.uninstall()
+    assert batches == [16, 32] and caught.value.partial is None

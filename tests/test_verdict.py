@@ -526,3 +526,29 @@ def test_check_of_the_elastic_design_fails_the_rules_the_diagnosis_gives_up_on_a
         assert checked.returncode == 1, checked.stderr
         rules_at = json.loads((tmp_path / f"{name}_elastic-check" / "result.json").read_text())["rules"]
         assert sorted(r["name"] for r in rules_at if not r["satisfied"]) == sorted(given_up)
+
+
+@pytest.mark.slow         # about 15 s: four starts, the elastic re-solve and a check
+def test_the_rules_the_elastic_design_misses_between_the_samples_are_named(tmp_path):
+    """rotary_planetary's smooth loop asked a 700 mm loop (it reaches 462): the relaxation gives up on
+    trajectory_height, and holds pair_ratio, pitch_curve_concavity and pitch_normal_angle on their limits at the NLP's
+    72 samples a turn -- between them they miss, and `check elastic.toml` failed them while the message said they
+    hold.  Now the message and result.json (elastic.missed_between_samples) name them, with the check's misses."""
+    from solving import agrisynth
+
+    text = (LIBRARY / "rotary_planetary" / "smooth_loop_redesign.toml").read_text()
+    spec = tmp_path / "tall.toml"
+    spec.write_text(text.replace('name = "smooth_loop_redesign"', 'name = "tall"').replace(
+        "planting_depth = [15.0, 45.0]", "planting_depth = [15.0, 20.0]").replace(
+        "trajectory_height_min = 260.0", "trajectory_height_min = 700.0"))
+    solved = agrisynth("solve", str(spec), "--starts", "4", "--workers", "1", "--out", str(tmp_path))
+    assert solved.returncode == 3, solved.stderr
+    elastic = json.loads((tmp_path / "tall" / "result.json").read_text())["elastic"]
+    assert elastic["relaxed"] == ["trajectory_height"]
+    between = elastic.get("missed_between_samples") or {}
+    assert between and "On the check's finer grid its design also misses" in solved.stderr
+    checked = agrisynth("check", str(tmp_path / "tall" / "elastic.toml"), "--out", str(tmp_path))
+    rules = json.loads((tmp_path / "tall_elastic-check" / "result.json").read_text())["rules"]
+    failing = {r["name"]: -r["margin"] for r in rules if not r["satisfied"]}
+    assert set(failing) == {"trajectory_height", *between}
+    assert all(between[n] == pytest.approx(failing[n], rel=1e-9) for n in between)

@@ -19,7 +19,7 @@ from distributed import Client, WorkerPlugin, get_worker
 from distributed import wait as dask_wait
 
 from synthesis.core import interrupt
-from synthesis.core.executor import WORKER_CRASHED, _raised
+from synthesis.core.executor import WORKER_CRASHED, ClusterUnreachable, _raised
 from synthesis.errors import AgrisynthError
 
 CONNECT_TIMEOUT_S = 10       # how long to wait for the scheduler before giving up
@@ -29,6 +29,8 @@ WORKER_WAIT_S = 60.0
 #: how often a run waiting for its starts looks whether the cluster still serves it (connected, a worker joined)
 HEALTH_CHECK_S = 5.0
 LOST = "the connection to the scheduler was lost"
+#: a client's states once dask has given up its connection (it reconnects for a while first: "connecting")
+GAVE_UP = ("closing", "closed", "failed")
 
 
 class SchedulerLost(Exception):
@@ -92,21 +94,21 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
     if scheme == "inproc":          # a scheduler in this very process (tests): nothing to probe
         return
     if not sep or scheme != "tcp":
-        raise AgrisynthError(f"--scheduler {address[:80]}: only tcp://host:port addresses are supported")
+        raise ClusterUnreachable(f"--scheduler {address[:80]}: only tcp://host:port addresses are supported")
     host, _, port_text = rest.rpartition(":")
     host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
     try:
         port = int(port_text)
     except ValueError:
-        raise AgrisynthError(f"--scheduler {address[:80]}: no port number (give tcp://host:port)") from None
+        raise ClusterUnreachable(f"--scheduler {address[:80]}: no port number (give tcp://host:port)") from None
     deadline = time.monotonic() + timeout
     try:
         sock = socket.create_connection((host, port), timeout=timeout)
     except socket.timeout:
-        raise AgrisynthError(f"--scheduler {address}: no answer within {timeout:g} s (nothing accepts "
+        raise ClusterUnreachable(f"--scheduler {address}: no answer within {timeout:g} s (nothing accepts "
                              f"connections there, or a firewall drops them)") from None
     except OSError as exc:
-        raise AgrisynthError(f"--scheduler {address}: cannot reach a dask scheduler there "
+        raise ClusterUnreachable(f"--scheduler {address}: cannot reach a dask scheduler there "
                              f"({exc.strerror or exc})") from None
     def receive(count: int) -> bytes:
         """Up to ``count`` bytes (fewer: the peer closed), all by the deadline (socket.timeout otherwise)."""
@@ -126,17 +128,17 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         try:
             head = receive(8)
         except socket.timeout:
-            raise AgrisynthError(f"--scheduler {address}: the peer accepted the connection but sent nothing "
+            raise ClusterUnreachable(f"--scheduler {address}: the peer accepted the connection but sent nothing "
                                  f"within {timeout:g} s; a dask scheduler greets at once, so this is not one") from None
         except OSError as exc:
-            raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+            raise ClusterUnreachable(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
         if len(head) < 8:
-            raise AgrisynthError(f"--scheduler {address}: the peer closed the connection without a dask handshake; "
+            raise ClusterUnreachable(f"--scheduler {address}: the peer closed the connection without a dask handshake; "
                                  f"not a dask scheduler")
         (length,) = struct.unpack("<Q", head)
         if not 8 <= length <= MAX_HANDSHAKE_BYTES:
             what = " (it speaks HTTP: a web server or the dashboard port?)" if head.startswith(b"HTTP") else ""
-            raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol{what}; "
+            raise ClusterUnreachable(f"--scheduler {address}: the peer does not speak the dask protocol{what}; "
                                  f"it began with {head!r}")
         # the length alone proves little (8 bytes may read as a plausible one): read the whole first message by the
         # same deadline and check that it is dask's handshake -- dask reads it with no deadline and unpacks whatever
@@ -144,17 +146,17 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         try:
             body = receive(length)
         except socket.timeout:
-            raise AgrisynthError(f"--scheduler {address}: the peer announced a {length}-byte message and did not "
+            raise ClusterUnreachable(f"--scheduler {address}: the peer announced a {length}-byte message and did not "
                                  f"send it within {timeout:g} s; a dask scheduler sends its handshake at once, so "
                                  f"this is not one") from None
         except OSError as exc:
-            raise AgrisynthError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+            raise ClusterUnreachable(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
     if len(body) < length:
-        raise AgrisynthError(f"--scheduler {address}: the peer closed the connection within its first message; "
+        raise ClusterUnreachable(f"--scheduler {address}: the peer closed the connection within its first message; "
                              f"not a dask scheduler")
     problem = handshake_problem(body)
     if problem:
-        raise AgrisynthError(f"--scheduler {address}: the peer does not speak the dask protocol ({problem})")
+        raise ClusterUnreachable(f"--scheduler {address}: the peer does not speak the dask protocol ({problem})")
 
 
 def handshake_problem(message: bytes) -> str | None:
@@ -197,14 +199,14 @@ def _connected_client(scheduler: str, timeout: float = CONNECT_TIMEOUT_S):
     thread.start()
     thread.join(2 * timeout)
     if thread.is_alive():
-        raise AgrisynthError(f"--scheduler {scheduler}: no dask handshake within {2 * timeout:g} s (the peer "
+        raise ClusterUnreachable(f"--scheduler {scheduler}: no dask handshake within {2 * timeout:g} s (the peer "
                              f"accepted the connection and then stopped answering); not a usable dask scheduler")
     if "error" in made:
         exc = made["error"]
         if not isinstance(exc, Exception):
             raise exc
         said = f": {str(exc)[:160]}" if str(exc) else ""
-        raise AgrisynthError(f"--scheduler {scheduler}: cannot reach a dask scheduler there "
+        raise ClusterUnreachable(f"--scheduler {scheduler}: cannot reach a dask scheduler there "
                              f"({type(exc).__name__}{said})") from None
     return made["client"]
 
@@ -215,7 +217,7 @@ def _wait_for_a_worker(client, scheduler: str, timeout: float = WORKER_WAIT_S) -
     deadline = time.monotonic() + timeout
     while not client.scheduler_info().get("workers"):
         if time.monotonic() >= deadline:
-            raise AgrisynthError(f"--scheduler {scheduler}: no dask worker joined the scheduler within {timeout:g} s "
+            raise ClusterUnreachable(f"--scheduler {scheduler}: no dask worker joined the scheduler within {timeout:g} s "
                                  f"(start one: `dask worker {scheduler}`)")
         interrupt.check()
         time.sleep(0.5)
@@ -275,7 +277,7 @@ def _collect(client, futures: list, index_of: dict, scheduler: str, outcomes: di
         except TimeoutError:
             finished, not_done = set(), set(pending)
         except Exception as exc:       # noqa: BLE001 - a client that can no longer wait: its connection is gone
-            why = (LOST if client.status != "running" or "Cancelled" in type(exc).__name__
+            why = (LOST if client.status in GAVE_UP or "Cancelled" in type(exc).__name__
                    else f"the client could no longer wait on it ({type(exc).__name__})")
             raise SchedulerLost(why, outcomes) from None
         pending = [f for f in pending if f in not_done]
@@ -296,7 +298,7 @@ def _collect(client, futures: list, index_of: dict, scheduler: str, outcomes: di
         if finished or not pending:
             alone_since = None
             continue
-        if client.status != "running":
+        if client.status in GAVE_UP:            # "connecting": dask is still trying to reconnect
             raise SchedulerLost(LOST, outcomes)
         try:
             workers = client.scheduler_info().get("workers")
@@ -313,4 +315,4 @@ def _collect(client, futures: list, index_of: dict, scheduler: str, outcomes: di
 def _connection_lost(client, exc: Exception) -> bool:
     """Whether a start's error is its client's lost connection rather than the start's own failure."""
     return (getattr(exc, "reason", None) == "scheduler-connection-lost"
-            or (type(exc).__name__ in ("FutureCancelledError", "CancelledError") and client.status != "running"))
+            or (type(exc).__name__ in ("FutureCancelledError", "CancelledError") and client.status in GAVE_UP))

@@ -206,6 +206,11 @@ def run_starts(factory: Callable[[], Any], starts: np.ndarray, workers: int,
     return run.counted()
 
 
+class ClusterUnreachable(AgrisynthError):
+    """A dask scheduler that cannot be reached, or has no worker to give the run (exit 2 before a run has used it:
+    the address is the user's to fix; an auto run's later batch solves locally instead: core.solve.run_auto)."""
+
+
 class _Multistart:
     """One call of :func:`run_starts`: the outcomes kept so far, the last start that counts (``stop_at``, lowered by
     an early stop) and how a finished start is kept."""

@@ -21,7 +21,7 @@ import numpy as np
 from synthesis.core import interrupt
 from synthesis.core.compiled_code import compile_seconds
 from synthesis.core.confidence import OBJECTIVE_TOLERANCE, statement
-from synthesis.core.executor import failed_start, latin_hypercube_starts, run_starts, workers_inherit_memory
+from synthesis.core.executor import ClusterUnreachable, failed_start, latin_hypercube_starts, run_starts, workers_inherit_memory
 from synthesis.core.interrupt import Interrupted
 from synthesis.core.ipopt_log import reached_optimum
 from synthesis.core.kind import Kind, Setting, Solving
@@ -283,21 +283,40 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         """The kept result's ``solver.auto``: stopped by the signal, the batches begun."""
         return {"stopped_by": "interrupted", "batches": totals[:k + 1], **auto.settings(),
                 **({"order": "kind"} if nested else {})}
+    # the interrupted run's finished batches being counted again: a signal before they all are keeps nothing (a kept
+    # result of fewer batches would replace the run resumed, which had them all)
+    replaying = False
+    on_cluster = False                        # a batch has run on the cluster (a later one that cannot reach it: lost)
     try:
         if previous and not nested and first > 0 and [t for t, _ in previous] == totals[:first]:
+            replaying = True
             for total, starts_of in previous:
                 on_batch(total, nested)
                 replayed = run_multistart(kind, setting, starts=total, workers=workers,
                                           scheduler=None if lost else scheduler, record=record, finished=starts_of,
                                           on_note=noted)
                 finished_batch(replayed)
+            replaying = False
         for k in range(first, len(totals)):
             on_batch(totals[k], nested)
             began, compiled_before = time.perf_counter(), compile_seconds()
             in_batch = True
-            run = run_multistart(kind, setting, starts=totals[k], workers=workers,
-                                 scheduler=None if lost else scheduler, on_start=counting, record=record,
-                                 finished=resumed, rows_by_index=nested, carried=carried, on_note=noted)
+            try:
+                run = run_multistart(kind, setting, starts=totals[k], workers=workers,
+                                     scheduler=None if lost else scheduler, on_start=counting, record=record,
+                                     finished=resumed, rows_by_index=nested, carried=carried, on_note=noted)
+            except ClusterUnreachable as exc:
+                if not on_cluster or lost:      # the first batch: the address is the user's to fix (exit 2)
+                    raise
+                # the cluster served the batches before and cannot be reached now: lost between two batches
+                why = str(exc).split(": ", 1)[-1]          # without its own "--scheduler ADDR: "
+                noted(f"--scheduler {scheduler}: the cluster could not be reached for the batch of {totals[k]} "
+                      f"starts ({why}); it and the later batches are solved here on {max(workers, 1)} local "
+                      f"worker{'s' if workers > 1 else ''} (the same starts: the same answer)")
+                run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=None,
+                                     on_start=counting, record=record, finished=resumed, rows_by_index=nested,
+                                     carried=carried, on_note=noted)
+            on_cluster = scheduler is not None and not lost
             in_batch = False
             pending.clear()
             last = run
@@ -331,7 +350,7 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         # a batch's partial holds its recounted starts (None before they are all counted again); the replay's is
         # never kept on its own
         partial = exc.partial if in_batch else None
-        if pending:
+        if pending or replaying:
             raise Interrupted(exc.signum, None) from None
         raise Interrupted(exc.signum, _kept_so_far(partial, (last if nested else best) or replayed, maximise, t0,
                                                    interrupted(), nested)) from None
@@ -340,8 +359,8 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
         # call comes out as (SystemError, NotImplementedError ...); any other error is the run's own
         if not isinstance(exc, KeyboardInterrupt) and interrupt.pending() is None:
             raise
-        kept = None if pending else _kept_so_far(None, (last if nested else best) or replayed, maximise, t0,
-                                                 interrupted(), nested)
+        kept = None if pending or replaying else _kept_so_far(None, (last if nested else best) or replayed, maximise,
+                                                              t0, interrupted(), nested)
         raise Interrupted(interrupt.signal_of(exc), kept) from None
     raise AssertionError("unreachable: the last batch stops by max_starts")
 
@@ -481,11 +500,29 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
     design = {k: float(v) for k, v in (getattr(outcome, "design", None) or {}).items()
               if isinstance(v, (int, float)) and not isinstance(v, bool)}
     return replace(diagnosis, design=design or None,
+                   between_samples=missed_between_samples(solving, setting, outcome, diagnosis.relaxed),
                    alone=alone_slacks(nlp.compiled, outcome.raw, diagnosis.relaxed, diagnosis.slacks),
                    at_bounds=at_bounds(nlp.design_names, nlp.bounds, design)
                    if diagnosis.relaxed else [],
                    fixed=fixed_fields(kind, of_nlp(kind, setting.spec, nlp), diagnosis.relaxed)
                    if diagnosis.relaxed else {})
+
+
+def missed_between_samples(solving: Solving, setting: Setting, outcome, relaxed: list[str]) -> dict[str, float]:
+    """The rules the elastic design misses on the check's finer grid (the kind's re-check) that the relaxation does
+    not give up on, each with its miss in its unit: held (ELASTIC_BACKOFF inside) at the NLP's samples, a sampled rule
+    on its limit may miss between them (rotary_planetary's largest depth, 0.02 mm at 72 samples a turn), and the
+    diagnosis says so rather than a `check elastic.toml` failing a rule it said holds.  Empty where the design
+    cannot be re-checked."""
+    if not relaxed:
+        return {}
+    try:
+        records = [r.record() for r in solving.recheck(setting, outcome).rules]
+    except (AgrisynthError, ValueError, ArithmeticError):
+        return {}
+    return {r.name: float(-r.margin) for r in records
+            if not r.satisfied and r.name not in relaxed and isinstance(r.margin, (int, float))
+            and math.isfinite(r.margin)}
 
 
 def at_bounds(names, bounds, design: dict) -> list[dict]:

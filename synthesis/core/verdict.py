@@ -169,6 +169,9 @@ class ElasticDiagnosis:
     #: rule -> the spec field that fixes its value, no design variable moving it (core.pinned; result.json
     #: ``elastic.fixed_by``): what to change for such a rule, rather than the bounds
     fixed: dict[str, str] = field(default_factory=dict)
+    #: rule -> its miss (in its unit) at the elastic design on the check's finer grid, for a rule the relaxation does
+    #: not give up on: held at the NLP's samples, it misses between them (result.json ``elastic.missed_between_samples``)
+    between_samples: dict[str, float] = field(default_factory=dict)
 
     @property
     def relaxed(self) -> list[str]:
@@ -211,6 +214,8 @@ class ElasticDiagnosis:
                 "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
                 "out_of_reach": self.out_of_reach, "hard": self.hard, "at_bounds": self.at_bounds,
                 **({"fixed_by": self.fixed} if self.fixed else {}),
+                **({"missed_between_samples": {n: measured(v) for n, v in self.between_samples.items()}}
+                   if self.between_samples else {}),
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
     @classmethod
@@ -219,7 +224,9 @@ class ElasticDiagnosis:
         return cls(data["return_status"], data["converged"], slacks, data["units"], data["scales"],
                    data.get("binding", []), design=data.get("design"), alone=dict(data.get("alone", {})),
                    hard=list(data.get("hard", [])), at_bounds=list(data.get("at_bounds", [])),
-                   fixed=dict(data.get("fixed_by") or {}))
+                   fixed=dict(data.get("fixed_by") or {}),
+                   between_samples={n: v for n, v in (data.get("missed_between_samples") or {}).items()
+                                    if isinstance(v, (int, float))})
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -345,11 +352,16 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         else:
             which = "Rules that conflict"
             against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
+        missed = ", ".join(f"{name} by {miss:.2g}"
+                           + (f" {elastic.units[name]}" if elastic.units.get(name) not in (None, "", "-", "1") else "")
+                           for name, miss in elastic.between_samples.items())
+        between = (f" On the check's finer grid its design also misses {missed}, between the NLP's samples (more "
+                   f"samples: {samples_hint})." if missed else "")
         return SolverError(
             f"no start satisfies every rule ({n} starts; IPOPT said: {said(reports)}). {which} "
             f"(the smallest relaxation an elastic re-solve found ({elastic.return_status}), a local one, gives up on "
-            f"them, largest first): {', '.join(misses(name) for name in relaxed)}{against}.{_bounds_text(elastic.at_bounds)} "
-            f"{relax_hint}{cannot}")
+            f"them, largest first): {', '.join(misses(name) for name in relaxed)}{against}.{between}"
+            f"{_bounds_text(elastic.at_bounds)} {relax_hint}{cannot}")
     if elastic is None:
         why = "and no elastic re-solve could be run (no start gives a design the model can evaluate)"
     elif not elastic.converged:

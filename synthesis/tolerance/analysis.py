@@ -512,10 +512,15 @@ def _nominal_rules(solving, setting: Setting, lin: Linearised) -> list[RuleRecor
     return [not_evaluated(rule.name, rule.lower, rule.upper, rule.unit, "", why).record() for rule in lin.rules]
 
 
-def _as_reported(row: dict, recheck: RuleRecord) -> None:
-    """A rule the NLP writes mirrored (a cam's pressure angle: the signed angle within [-45, 45] where the re-check
-    reports its magnitude <= 45) has its value and derivatives said in the re-check's terms: the signed angle
-    -56.19 with d/d base_radius +0.48 is the magnitude 56.19 with -0.48 (a larger base circle lowers it)."""
+def _as_reported(row: dict, recheck: RuleRecord, rule) -> None:
+    """A rule the NLP writes as a signed value within [-L, L] where the re-check reports its magnitude <= L (a cam's
+    pressure angle) has its value and derivatives said in the re-check's terms: the signed angle -56.19 with
+    d/d base_radius +0.48 is the magnitude 56.19 with -0.48 (a larger base circle lowers it).  A rule signed in both
+    (a pitch curve's normal angle within [-L, L] on both sides) is left as it is, whichever extreme each grid found."""
+    limit = list(recheck.limit) if isinstance(recheck.limit, (list, tuple)) else None
+    if not (rule.lower is not None and rule.upper is not None and rule.lower == -rule.upper
+            and limit is not None and len(limit) == 2 and limit[0] is None and limit[1] == rule.upper):
+        return
     value, reported = row.get("value"), recheck.value
     if value is None or reported is None or value == 0.0 or not math.isfinite(value):
         return
@@ -563,7 +568,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
     corner_margins(kind, spec, lin.design, lin.dmap, rows, seed)
     recheck = {r.name: r for r in nominal}
     settings = _Settings(solving, spec, seed)
-    for row in rows:
+    for row, rule in zip(rows, lin.rules):
         r = recheck.get(row["name"])
         if r is None and "@" in row["name"]:         # a rule held at an envelope's scenario: re-checked there
             setting, name = settings(row)
@@ -571,7 +576,7 @@ def analyse(kind: Kind, spec, design: dict, *, length: float | None, angle: floa
                                                                                   0.0, "")).rules if q.name == name),
                      None)
         if r is not None:
-            _as_reported(row, r)
+            _as_reported(row, r, rule)
         row["recheck_margin"] = None if r is None else r.margin
         row["recheck_unit"] = row["unit"] if r is None else r.unit      # margin, MC and corner columns: the re-check's
         m = mc["rules"].get(row["name"], {})
