@@ -188,3 +188,25 @@ def test_a_given_double_crank_outside_the_grashof_region_still_solves(tmp_path):
     assert [r.outcome.return_status for r in reports] == ["Solve_Succeeded"] * 3
     assert result.status == "optimal" and result.all_satisfied
     assert result.objective["value"] < 1.0
+
+
+def test_a_crank_pin_landing_on_the_far_pivot_is_no_traceback(tmp_path):
+    """l4 = l1 (169.7 mm, within the redesign's bounds): at crank angle 0 the crank pin lands on the far pivot, the
+    closure's diagonal is 0 and its assembly test divided by it -- `check` printed a ZeroDivisionError traceback
+    (exit 1), the studio answered HTTP 500.  Now that angle does not assemble, and the rules say the rest."""
+    from synthesis import kinds
+    from synthesis.spec import load_spec
+
+    text = (LIBRARY / "picker/picker_double_crank_redesign.toml").read_text()
+    assert "l4 = { init = 45.9," in text
+    (tmp_path / "spec.toml").write_text(text.replace("l4 = { init = 45.9,", "l4 = { init = 169.7,"))
+    result = kinds.get("picker_double_crank").check(load_spec(tmp_path / "spec.toml"))
+    rules = {r["name"]: r for r in result.rules}
+    assert not rules["grashof_double_crank"]["satisfied"]          # l1 = l4 is no strict double crank
+
+
+def test_the_closure_at_a_crank_pin_on_the_far_pivot_does_not_assemble():
+    from synthesis.kinds.picker.kinematics.linkage import assembles, closure_height_sq
+
+    dc = DoubleCrank(x_a=0.0, y_a=0.0, l1=169.7, l2=120.0, l3=140.0, l4=169.7, l5=60.0, phi3=10.0, phi4=20.0)
+    assert closure_height_sq(dc, 0.0) == -math.inf and not assembles(dc, [0.0, 10.0])

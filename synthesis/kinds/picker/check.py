@@ -22,9 +22,9 @@ from synthesis.kinds.picker.dynamics import double_crank_dynamics, dynamics_fact
 from synthesis.kinds.picker.rules import arc_error_rule, frame_point_rule
 from synthesis.constraints.transmission import acute_transmission_rule
 from synthesis.errors import AssemblyError
-from synthesis.kinematics import fourbar
 from synthesis.kinds.picker.kinematics.arc import arc_through, points_on_arc
-from synthesis.kinds.picker.kinematics.linkage import DoubleCrank, assembles, clamp_states, joint_positions
+from synthesis.kinds.picker.kinematics.linkage import (DoubleCrank, assembles, clamp_states, closure_height_sq,
+                                                   joint_positions)
 from synthesis.kinds.picker.poses import float_poses, key_pose_facts, pose_headline, pose_rules
 from synthesis.core.kind import figure_text
 from synthesis.result import Result
@@ -60,7 +60,7 @@ def swing_angles(spec: PickerDoubleCrankSpec, samples: int) -> np.ndarray:
 def require_assembly(spec: PickerDoubleCrankSpec, dc: DoubleCrank) -> None:
     angles = swing_angles(spec, 721)
     if not assembles(dc, angles):
-        bad = [a for a in angles if fourbar.assembly_height_sq(math.radians(a), dc.l4, dc.l1, dc.l2, dc.l3) <= 0]
+        bad = [a for a in angles if closure_height_sq(dc, math.radians(a)) <= 0]
         raise AssemblyError(
             f"picker_double_crank.linkage: the double crank cannot assemble between crank angles {min(bad):.1f} "
             f"and {max(bad):.1f} deg of its working swing (triangle BCD does not close with l1 = {dc.l1:g}, "

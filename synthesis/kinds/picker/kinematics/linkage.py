@@ -131,5 +131,13 @@ def joint_positions(dc: DoubleCrank, phi1_deg: float) -> dict[str, list[float]]:
 def assembles(dc: DoubleCrank, phi1_deg) -> bool:
     """True when the loop closes at every given crank angle (triangle B-C-D exists)."""
     phi = np.radians(np.atleast_1d(np.asarray(phi1_deg, dtype=float)))
-    h2 = [float(fourbar.assembly_height_sq(t, dc.l4, dc.l1, dc.l2, dc.l3)) for t in phi]
-    return min(h2) > 0.0
+    return min(closure_height_sq(dc, t) for t in phi) > 0.0
+
+
+def closure_height_sq(dc: DoubleCrank, theta: float) -> float:
+    """The closure's height^2 at crank angle theta; -inf where the crank pin lands on the far pivot (l1 = l4 at
+    theta = 0: no triangle to close, the coupler's direction undefined -- a ZeroDivisionError took check down)."""
+    try:
+        return float(fourbar.assemblyclosure_height_sq(theta, dc.l4, dc.l1, dc.l2, dc.l3))
+    except ZeroDivisionError:
+        return -math.inf
