@@ -138,6 +138,6 @@ def closure_height_sq(dc: DoubleCrank, theta: float) -> float:
     """The closure's height^2 at crank angle theta; -inf where the crank pin lands on the far pivot (l1 = l4 at
     theta = 0: no triangle to close, the coupler's direction undefined -- a ZeroDivisionError took check down)."""
     try:
-        return float(fourbar.assemblyclosure_height_sq(theta, dc.l4, dc.l1, dc.l2, dc.l3))
+        return float(fourbar.assembly_height_sq(theta, dc.l4, dc.l1, dc.l2, dc.l3))
     except ZeroDivisionError:
         return -math.inf
