@@ -783,6 +783,25 @@ def atomic_write_text(path: Path, text: str) -> None:
     atomic_write_drawn(path, lambda tmp: tmp.write_text(text))
 
 
+def create_new_text(path: Path, text: str) -> None:
+    """Write ``text`` as the new file ``path``, whole or not at all, never over a file already there: written to a
+    temporary file, then hard-linked to its name (FileExistsError when another process -- a second studio writing
+    into the same folder -- took the name first).  Where the file system has no hard links, the name is claimed by
+    an exclusive create instead."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        Path(tmp).write_text(text)
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        try:
+            os.link(tmp, path)
+        except (AttributeError, NotImplementedError, PermissionError):       # no hard links here
+            with open(path, "x") as out:
+                out.write(text)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
 def atomic_write_drawn(path: Path, draw: Callable[[Path], None]) -> None:
     """A file ``draw(path)`` makes (a text, a plot) written via a temporary file and rename, with the usual mode."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)

@@ -103,6 +103,43 @@ def test_bad_values_get_one_line_naming_the_field(planting_studio):
     assert s.job is None                 # the refused solve did not start
 
 
+
+def test_a_name_another_studio_takes_between_the_look_and_the_write_is_left_to_it(planting_studio, monkeypatch):
+    """Two studios with one --out (the default results/studio): each looked for a free name, then wrote over
+    whatever was there -- of 100 concurrent saves 41 files held the other studio's values, and two solves shared a
+    run folder.  A name is now claimed by the write itself (a hard link, never over a file): here another process
+    writes saved_1 between this studio's look and its write, and this one takes saved_2."""
+    from synthesis.studio import server as server_module
+
+    s = planting_studio
+    values = moved_values(s.session)
+    real = server_module.create_new_text
+    taken: list = []
+
+    def other_studio_first(path, text):
+        if not taken:
+            taken.append(path)
+            real(path, "# the other studio's spec\n")       # it wins the race for this name
+        return real(path, text)
+
+    monkeypatch.setattr(server_module, "create_new_text", other_studio_first)
+    saved = api(s, "/api/save", {"values": values})
+    assert taken and taken[0].name == "redesign_from_example1_saved_1.toml"
+    assert saved["file"] == "redesign_from_example1_saved_2.toml"
+    assert (s.out / taken[0].name).read_text() == "# the other studio's spec\n"          # not written over
+    for name in (taken[0].name, saved["file"]):         # the studio is shared with the tests after this one
+        (s.out / name).unlink()
+
+
+def test_a_new_file_is_never_written_over(tmp_path):
+    from synthesis.result import create_new_text
+
+    create_new_text(tmp_path / "a.toml", "first\n")
+    with pytest.raises(FileExistsError):
+        create_new_text(tmp_path / "a.toml", "second\n")
+    assert (tmp_path / "a.toml").read_text() == "first\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.toml"]           # no temporary file left behind
+
 def test_saves_only_into_its_folder_with_names_it_picks(planting_studio, tmp_path):
     s = planting_studio
     values = moved_values(s.session)

@@ -33,7 +33,7 @@ from synthesis import kinds
 from synthesis.core import interrupt
 from synthesis.errors import AgrisynthError, OutputError
 from synthesis.files import loads
-from synthesis.result import atomic_write_text
+from synthesis.result import create_new_text
 from synthesis.studio.session import Session
 from synthesis.studio.solver import GRACE, SolveJob
 
@@ -227,11 +227,17 @@ class Studio:
         return f"{base}_{what}_{n}"
 
     def _write_spec(self, values: dict[str, float], what: str, note: str) -> tuple[str, Path]:
+        """The spec of ``values`` written under the first free name; a name another process (a second studio with
+        the same --out) takes between the look and the write is left to it, and the next one tried."""
         with self._writing:
-            name = self._free_name(what)
-            path = self.out / f"{name}.toml"
-            atomic_write_text(path, self.session.spec_text(values, name, note, self.out))
-        return name, path
+            while True:
+                name = self._free_name(what)
+                path = self.out / f"{name}.toml"
+                try:
+                    create_new_text(path, self.session.spec_text(values, name, note, self.out))
+                except FileExistsError:
+                    continue
+                return name, path
 
     async def save(self, request: Request) -> JSONResponse:
         def work(body):
