@@ -318,7 +318,8 @@ def test_one_solve_at_a_time_and_cancel_stops_it(planting_studio):
     assert cancelled["done"] < 256
     assert s.job.process.poll() is not None         # the worker process is gone
     status, _, raw = request(s, "POST", "/api/solve", {"values": values, "starts": 0})
-    assert status == 400 and json.loads(raw)["error"] == "starts: expected a whole number 1..256, got '0'"
+    assert status == 400 and json.loads(raw)["error"] == ("starts: expected a whole number 1..256 or auto (the page's "
+                                                          "cap; `agrisynth solve` takes more), got '0'")
 
 
 @pytest.mark.parametrize("kind", sorted(STUDIO_SPECS))
@@ -747,3 +748,23 @@ def test_a_spec_the_studio_saves_reads_back_whatever_its_file_name_holds(tmp_pat
     out = tmp_path / "saved.toml"
     out.write_text(text)
     assert load_spec(out).name == "saved"
+
+
+@pytest.mark.slow         # seconds: a --starts auto solve of the crank-rocker
+def test_a_spec_asking_starts_auto_is_solved_so_from_the_page(tmp_path):
+    """A spec's `starts = "auto"` showed in the page's number box as nothing and the page solved 8 fixed starts;
+    the box now holds "auto" and the solve is --starts auto's (its batches said as they begin)."""
+    text = STUDIO_SPECS["crank_rocker"].read_text()
+    assert "starts = " in text
+    import re
+
+    spec = tmp_path / "auto.toml"
+    spec.write_text(re.sub(r"(?m)^starts = \d+", 'starts = "auto"', text))
+    with running_studio(spec, tmp_path / "out") as s:
+        assert api(s, "/api/session")["starts"] == "auto"
+        started = api(s, "/api/solve", {"values": moved_values(s.session, 0.0), "starts": "AUTO"})
+        assert started["state"] == "running"
+        done = settled(s)
+        assert done["state"] == "finished", done
+        result = json.loads((s.out / done["run"] / "result.json").read_text())
+        assert result["solver"]["auto"]["stopped_by"] in ("rule", "max_starts") and done["total"] >= 16

@@ -254,8 +254,11 @@ class Studio:
             if not kinds.get(self.session.kind).solves:
                 raise AgrisynthError(f"kind {self.session.kind} has nothing to optimise (check-only)")
             starts = body.get("starts", 1)
-            if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= MAX_STARTS:
-                raise AgrisynthError(f"starts: expected a whole number 1..{MAX_STARTS}, got {str(starts)[:20]!r}")
+            if isinstance(starts, str) and starts.strip().lower() == "auto":
+                starts = "auto"             # --starts auto: batches until the confidence rule or its budget
+            elif not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= MAX_STARTS:
+                raise AgrisynthError(f"starts: expected a whole number 1..{MAX_STARTS} or auto (the page's cap; "
+                                     f"`agrisynth solve` takes more), got {str(starts)[:20]!r}")
             values = self.session.values_of(body.get("values", {}))
             with self._solving:
                 if self.job is not None and self.job.running:

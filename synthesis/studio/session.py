@@ -238,4 +238,11 @@ class Session:
                        "variables": [v.to_json() for v in self.variables],
                        "grids": {g: grids.note(self.kind, g, self.loaded.model) for g in grids.GRIDS},
                        "solves": kinds.get(self.kind).solves,
-                       "starts": getattr(getattr(self.loaded.model, "solver", None), "starts", 1)})
+                       "starts": _starts_of(getattr(self.loaded.model, "solver", None))})
+
+
+def _starts_of(solver) -> int | str:
+    """The spec's [solver] starts as the page's box shows them: a count, or "auto" where the spec asks for it."""
+    if solver is None:
+        return 1
+    return "auto" if getattr(solver, "starts_auto", False) else getattr(solver, "starts", 1)

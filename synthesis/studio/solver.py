@@ -51,7 +51,7 @@ class SolveJob:
     run_name: str
     spec_file: Path
     out: Path
-    starts: int
+    starts: int | str                   # a count, or "auto" (the run says its batches' totals as they begin)
     process: subprocess.Popen | None = None
     done: int = 0
     total: int = 0
@@ -66,7 +66,7 @@ class SolveJob:
 
     def start(self) -> None:
         cmd = [sys.executable, "-m", "synthesis.studio.worker", str(self.spec_file), str(self.out), str(self.starts)]
-        self.total = self.starts
+        self.total = self.starts if isinstance(self.starts, int) else 0
         # its own session (so its own process group): a Ctrl-C in the studio's terminal reaches the studio only,
         # which then cancels the worker, and the group can be killed as a whole
         self.process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

@@ -62,7 +62,7 @@ class Channel:
             self.send(payload)
 
 
-def solve(spec: Path, out: Path, starts: int, channel: Channel) -> int:
+def solve(spec: Path, out: Path, starts: int | str, channel: Channel) -> int:
     """The run, its end told on the channel; returns the exit code."""
     try:
         outcome: Outcome = runs.solve(SolveRequest(spec, out, starts=starts, workers=1), channel)
@@ -78,7 +78,8 @@ def solve(spec: Path, out: Path, starts: int, channel: Channel) -> int:
 
 def main(argv: list[str]) -> None:
     interrupt.install(keep_ignored=True)        # a cancel while the run's modules load ends as one during the run
-    spec, out, starts = Path(argv[0]), Path(argv[1]), int(argv[2])
+    spec, out = Path(argv[0]), Path(argv[1])
+    starts: int | str = "auto" if argv[2] == "auto" else int(argv[2])
     channel = Channel()
     try:
         code = solve(spec, out, starts, channel)
