@@ -81,6 +81,7 @@ def test_on_port_80_a_host_without_the_port_is_this_studio(tmp_path):
 def test_bad_values_get_one_line_naming_the_field(planting_studio):
     s = planting_studio
     cases = [({"values": {"l2": 999.0}}, "values.l2: 999 lies outside its bounds [28, 42]"),
+             ({"values": {"l2": 42.000000001}}, "values.l2: 42.000000001 lies outside its bounds [28, 42]"),
              ({"values": {"l1": 70.0}}, "values.l1: not a free design variable"),
              ({"values": {"l2": "35"}}, "values.l2: expected a finite number, got '35'"),
              ({"values": [1, 2]}, "values: expected an object of design values, got list"),

@@ -156,7 +156,9 @@ class Session:
                 raise SpecError(f"values.{name}: expected a finite number, got {str(value)[:40]!r}")
             lo, hi = free[name].bounds
             if not lo <= value <= hi:
-                raise SpecError(f"values.{name}: {value:g} lies outside its bounds [{lo:g}, {hi:g}]")
+                # every digit that puts it outside (300 + 1e-9 read "300 lies outside [50, 300]")
+                shown = f"{value:g}" if float(f"{value:g}") == value else repr(float(value))
+                raise SpecError(f"values.{name}: {shown} lies outside its bounds [{lo:g}, {hi:g}]")
             out[name] = float(value)
         return out
 
