@@ -795,9 +795,12 @@ def create_new_text(path: Path, text: str) -> None:
         os.chmod(tmp, 0o666 & ~_UMASK)
         try:
             os.link(tmp, path)
-        except (AttributeError, NotImplementedError, PermissionError):       # no hard links here
-            with open(path, "x") as out:
-                out.write(text)
+        except FileExistsError:
+            raise
+        except (AttributeError, NotImplementedError, OSError):      # no hard links here (EPERM, EOPNOTSUPP, ...)
+            # claim the name by an exclusive create (FileExistsError as above), then put the whole text in its place
+            os.close(os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+            os.replace(tmp, path)
     finally:
         Path(tmp).unlink(missing_ok=True)
 

@@ -465,3 +465,41 @@ def test_an_interrupt_while_the_finished_batches_are_counted_again_keeps_nothing
     finally:
         interrupt.uninstall()
     assert batches == [16, 32] and caught.value.partial is None
+
+
+def test_a_batch_solved_again_locally_tells_and_logs_its_carried_starts_once(tmp_path, toy, monkeypatch):
+    """A later batch whose cluster cannot be reached is solved locally; its carried start 0 had been told and logged
+    before the cluster was reached, and was told and logged again (57 of 56 starts, start 0 twice in starts.jsonl)."""
+    from synthesis.core import cluster
+    from synthesis.core.executor import ClusterUnreachable
+
+    loaded = _toy(tmp_path)
+    calls: list = []
+
+    def fake_cluster(factory, starts, scheduler, on_done, indices=None, failure=None):
+        calls.append(len(indices))
+        if len(calls) >= 2:                         # the cluster is gone for the second batch
+            raise ClusterUnreachable(f"--scheduler {scheduler}: cannot reach a dask scheduler there (refused)")
+        solver = factory()
+        outs = []
+        for i, x0 in zip(indices, starts):
+            out = solver.solve(i, x0)
+            on_done(out)
+            outs.append(out)
+        return outs
+
+    monkeypatch.setattr(cluster, "run_starts_on_cluster", fake_cluster)
+    recorded, told, notes = [], [], []
+    auto = AutoStarts(max_starts=32, first=8, min_converged=10**6)
+    run_solve(toy, loaded, None, 0, 1, lambda rep, best: told.append(rep.outcome.start), "tcp://127.0.0.1:1",
+              record=recorded.append, auto=auto, on_batch=lambda t, n: recorded.append(("batch", t)),
+              on_note=notes.append)
+    assert len(notes) == 1 and "could not be reached for the batch of 16 starts (cannot reach a dask" in notes[0]
+    batches: dict = {}
+    for item in recorded:
+        if isinstance(item, tuple):
+            batch = batches.setdefault(item[1], [])
+        else:
+            batch.append(item.start)
+    assert {b: sorted(s) for b, s in batches.items()} == {b: list(range(b)) for b in (8, 16, 32)}
+    assert len(told) == 8 + 16 + 32

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 
 import pytest
 
@@ -131,6 +132,38 @@ def test_a_name_another_studio_takes_between_the_look_and_the_write_is_left_to_i
     for name in (taken[0].name, saved["file"]):         # the studio is shared with the tests after this one
         (s.out / name).unlink()
 
+
+
+def test_a_dangling_link_holds_its_name(planting_studio):
+    """A broken link named like the next saved spec: the name looked free (exists() follows the link) and the write
+    found it taken, again and again -- the save, and every later one behind its lock, hung."""
+    s = planting_studio
+    link = s.out / "redesign_from_example1_saved_1.toml"
+    assert not os.path.lexists(link)
+    link.symlink_to(s.out / "nowhere.toml")
+    try:
+        saved = api(s, "/api/save", {"values": moved_values(s.session)})
+        assert saved["file"] == "redesign_from_example1_saved_2.toml" and link.is_symlink()
+    finally:
+        link.unlink()
+        (s.out / "redesign_from_example1_saved_2.toml").unlink(missing_ok=True)
+
+
+def test_a_new_file_where_hard_links_are_refused(tmp_path, monkeypatch):
+    """A file system answering a hard link with EOPNOTSUPP (not EPERM): the save ended in HTTP 500."""
+    import errno
+
+    from synthesis import result as result_module
+
+    def refused(src, dst):
+        raise OSError(errno.EOPNOTSUPP, "Operation not supported")
+
+    monkeypatch.setattr(result_module.os, "link", refused)
+    result_module.create_new_text(tmp_path / "a.toml", "first\n")
+    assert (tmp_path / "a.toml").read_text() == "first\n"
+    with pytest.raises(FileExistsError):
+        result_module.create_new_text(tmp_path / "a.toml", "second\n")
+    assert (tmp_path / "a.toml").read_text() == "first\n" and [p.name for p in tmp_path.iterdir()] == ["a.toml"]
 
 def test_a_new_file_is_never_written_over(tmp_path):
     from synthesis.result import create_new_text

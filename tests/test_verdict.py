@@ -551,4 +551,25 @@ def test_the_rules_the_elastic_design_misses_between_the_samples_are_named(tmp_p
     rules = json.loads((tmp_path / "tall_elastic-check" / "result.json").read_text())["rules"]
     failing = {r["name"]: -r["margin"] for r in rules if not r["satisfied"]}
     assert set(failing) == {"trajectory_height", *between}
-    assert all(between[n] == pytest.approx(failing[n], rel=1e-9) for n in between)
+    assert all(between[n]["miss"] == pytest.approx(failing[n], rel=1e-9) for n in between)
+    units = {r["name"]: r["unit"] for r in rules}
+    assert all(between[n]["unit"] == units[n] for n in between)
+
+
+@pytest.mark.slow         # about 5 s
+def test_a_rule_given_up_on_at_an_operating_point_is_not_said_missed_between_samples(tmp_path):
+    """The guide tube's mu envelope asking a 2 mm spacing error: the relaxation gives up on spacing_error@mu=...
+    (the NLP's names), and the check reads spacing_error and spacing_error@envelope -- which were named as rules the
+    elastic design 'also misses between the NLP's samples'.  A rule is matched by its base name."""
+    from solving import agrisynth
+
+    text = (LIBRARY / "guide_tube" / "uniform_spacing_mu_envelope.toml").read_text()
+    assert "\nmax_spacing_error = 6 " in text
+    spec = tmp_path / "tight.toml"
+    spec.write_text(text.replace("\nmax_spacing_error = 6 ", "\nmax_spacing_error = 2 "))
+    solved = agrisynth("solve", str(spec), "--workers", "1", "--out", str(tmp_path))
+    assert solved.returncode == 3, solved.stderr
+    name = json.loads((tmp_path / "uniform_spacing_mu_envelope" / "result.json").read_text())
+    elastic = name["elastic"]
+    assert any(r.startswith("spacing_error@mu=") for r in elastic["relaxed"])
+    assert "missed_between_samples" not in elastic and "between the NLP's samples" not in solved.stderr

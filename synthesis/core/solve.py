@@ -301,10 +301,23 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
             on_batch(totals[k], nested)
             began, compiled_before = time.perf_counter(), compile_seconds()
             in_batch = True
+            # the starts the batch counts again (its resumed ones) are told and logged before the cluster is reached:
+            # a batch solved again locally does not tell or log them twice
+            told: set[int] = set()
+
+            def first_told(report: StartReport, best: StartReport) -> None:
+                told.add(report.outcome.start)
+                counting(report, best)
+
+            def first_logged(out) -> None:
+                told.add(out.start)
+                if record is not None:
+                    record(out)
             try:
                 run = run_multistart(kind, setting, starts=totals[k], workers=workers,
-                                     scheduler=None if lost else scheduler, on_start=counting, record=record,
-                                     finished=resumed, rows_by_index=nested, carried=carried, on_note=noted)
+                                     scheduler=None if lost else scheduler, on_start=first_told,
+                                     record=first_logged if record is not None else None, finished=resumed,
+                                     rows_by_index=nested, carried=carried, on_note=noted)
             except ClusterUnreachable as exc:
                 if not on_cluster or lost:      # the first batch: the address is the user's to fix (exit 2)
                     raise
@@ -314,8 +327,11 @@ def run_auto(kind: Kind, setting: Setting, auto: AutoStarts, *, workers: int, sc
                       f"starts ({why}); it and the later batches are solved here on {max(workers, 1)} local "
                       f"worker{'s' if workers > 1 else ''} (the same starts: the same answer)")
                 run = run_multistart(kind, setting, starts=totals[k], workers=workers, scheduler=None,
-                                     on_start=counting, record=record, finished=resumed, rows_by_index=nested,
-                                     carried=carried, on_note=noted)
+                                     on_start=lambda report, best: None if report.outcome.start in told
+                                     else counting(report, best),
+                                     record=None if record is None else (lambda out: None if out.start in told
+                                                                         else record(out)),
+                                     finished=resumed, rows_by_index=nested, carried=carried, on_note=noted)
             on_cluster = scheduler is not None and not lost
             in_batch = False
             pending.clear()
@@ -508,20 +524,23 @@ def elastic_diagnosis(kind: Kind, setting: Setting, run: Run) -> ElasticDiagnosi
                    if diagnosis.relaxed else {})
 
 
-def missed_between_samples(solving: Solving, setting: Setting, outcome, relaxed: list[str]) -> dict[str, float]:
+def missed_between_samples(solving: Solving, setting: Setting, outcome, relaxed: list[str]) -> dict[str, dict]:
     """The rules the elastic design misses on the check's finer grid (the kind's re-check) that the relaxation does
-    not give up on, each with its miss in its unit: held (ELASTIC_BACKOFF inside) at the NLP's samples, a sampled rule
-    on its limit may miss between them (rotary_planetary's largest depth, 0.02 mm at 72 samples a turn), and the
-    diagnosis says so rather than a `check elastic.toml` failing a rule it said holds.  Empty where the design
-    cannot be re-checked."""
+    not give up on: rule -> {"miss", "unit"} in the check's own terms.  Held (ELASTIC_BACKOFF inside) at the NLP's
+    samples, a sampled rule on its limit may miss between them (rotary_planetary's largest depth, 0.02 mm at 72
+    samples a turn), and the diagnosis says so rather than a `check elastic.toml` failing a rule it said holds.  A
+    rule is named by its base name (an envelope's ``rule@mu=0.6`` in the NLP is ``rule`` and ``rule@envelope`` in
+    the check), so a rule given up on at any operating point is none of these.  Empty where the design cannot be
+    re-checked."""
     if not relaxed:
         return {}
     try:
         records = [r.record() for r in solving.recheck(setting, outcome).rules]
     except (AgrisynthError, ValueError, ArithmeticError):
         return {}
-    return {r.name: float(-r.margin) for r in records
-            if not r.satisfied and r.name not in relaxed and isinstance(r.margin, (int, float))
+    given_up = {name.split("@", 1)[0] for name in relaxed}
+    return {r.name: {"miss": float(-r.margin), "unit": r.unit} for r in records
+            if not r.satisfied and r.name.split("@", 1)[0] not in given_up and isinstance(r.margin, (int, float))
             and math.isfinite(r.margin)}
 
 

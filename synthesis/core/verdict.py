@@ -169,9 +169,10 @@ class ElasticDiagnosis:
     #: rule -> the spec field that fixes its value, no design variable moving it (core.pinned; result.json
     #: ``elastic.fixed_by``): what to change for such a rule, rather than the bounds
     fixed: dict[str, str] = field(default_factory=dict)
-    #: rule -> its miss (in its unit) at the elastic design on the check's finer grid, for a rule the relaxation does
-    #: not give up on: held at the NLP's samples, it misses between them (result.json ``elastic.missed_between_samples``)
-    between_samples: dict[str, float] = field(default_factory=dict)
+    #: rule -> {"miss", "unit"} (the check's) at the elastic design on the check's finer grid, for a rule the
+    #: relaxation does not give up on: held at the NLP's samples, it misses between them (result.json
+    #: ``elastic.missed_between_samples``)
+    between_samples: dict[str, dict] = field(default_factory=dict)
 
     @property
     def relaxed(self) -> list[str]:
@@ -214,7 +215,8 @@ class ElasticDiagnosis:
                 "conflicting": self.conflicting, "alone": {n: measured(s) for n, s in self.alone.items()},
                 "out_of_reach": self.out_of_reach, "hard": self.hard, "at_bounds": self.at_bounds,
                 **({"fixed_by": self.fixed} if self.fixed else {}),
-                **({"missed_between_samples": {n: measured(v) for n, v in self.between_samples.items()}}
+                **({"missed_between_samples": {n: {"miss": measured(v.get("miss")), "unit": v.get("unit")}
+                                               for n, v in self.between_samples.items()}}
                    if self.between_samples else {}),
                 **({} if self.design is None else {"design": {k: measured(v) for k, v in self.design.items()}})}
 
@@ -226,7 +228,7 @@ class ElasticDiagnosis:
                    hard=list(data.get("hard", [])), at_bounds=list(data.get("at_bounds", [])),
                    fixed=dict(data.get("fixed_by") or {}),
                    between_samples={n: v for n, v in (data.get("missed_between_samples") or {}).items()
-                                    if isinstance(v, (int, float))})
+                                    if isinstance(v, dict) and isinstance(v.get("miss"), (int, float))})
 
 
 def diagnosis_of(compiled, raw) -> ElasticDiagnosis:
@@ -352,9 +354,9 @@ def unsatisfied_error(status: str, violated: list[str], reports: list[StartRepor
         else:
             which = "Rules that conflict"
             against = f"; they conflict with {', '.join(holding)} (binding there)" if holding else ""
-        missed = ", ".join(f"{name} by {miss:.2g}"
-                           + (f" {elastic.units[name]}" if elastic.units.get(name) not in (None, "", "-", "1") else "")
-                           for name, miss in elastic.between_samples.items())
+        missed = ", ".join(f"{name} by {v['miss']:.2g}"
+                           + (f" {v.get('unit')}" if v.get("unit") not in (None, "", "-", "1") else "")
+                           for name, v in elastic.between_samples.items())
         between = (f" On the check's finer grid its design also misses {missed}, between the NLP's samples (more "
                    f"samples: {samples_hint})." if missed else "")
         return SolverError(

@@ -9,8 +9,9 @@ the server names every file it writes, inside the folder chosen at start-up.
 
 from __future__ import annotations
 
-import re
 import asyncio
+import os
+import re
 import secrets
 import signal
 import socket
@@ -35,7 +36,7 @@ from synthesis.errors import AgrisynthError, OutputError
 from synthesis.files import loads
 from synthesis.result import create_new_text
 from synthesis.studio.session import Session
-from synthesis.studio.solver import GRACE, SolveJob
+from synthesis.studio.solver import GRACE, PAGE_MAX_STARTS, SolveJob
 
 HOST = "127.0.0.1"
 TOKEN_HEADER = "x-studio-token"
@@ -49,8 +50,8 @@ SECURITY_HEADERS = {
     "x-frame-options": "DENY"}
 #: largest request body read, bytes (design values are a few hundred)
 MAX_BODY = 64 * 1024
-#: most starts a solve from the page may ask for
-MAX_STARTS = 256
+#: most starts a solve from the page may ask for (an auto solve's budget too)
+MAX_STARTS = PAGE_MAX_STARTS
 #: seconds a request's body may take to arrive (a few hundred bytes from this machine take a millisecond): a client
 #: that declares a body and never sends it is answered 408 and its connection closed, not held for ever
 BODY_SECONDS = 10.0
@@ -222,7 +223,9 @@ class Studio:
         """``<spec name>_<what>_<n>``: the first n with neither a spec file nor a folder of that name."""
         base = re.sub(r"[^A-Za-z0-9_.-]", "_", self.session.loaded.name)[:80]
         n = 1
-        while (self.out / f"{base}_{what}_{n}.toml").exists() or (self.out / f"{base}_{what}_{n}").exists():
+        # lexists: a dangling link holds its name too (exists() said it free, and the write found it taken for ever)
+        while (os.path.lexists(self.out / f"{base}_{what}_{n}.toml")
+               or os.path.lexists(self.out / f"{base}_{what}_{n}")):
             n += 1
         return f"{base}_{what}_{n}"
 

@@ -156,9 +156,9 @@ class Session:
                 raise SpecError(f"values.{name}: expected a finite number, got {str(value)[:40]!r}")
             lo, hi = free[name].bounds
             if not lo <= value <= hi:
-                # every digit that puts it outside (300 + 1e-9 read "300 lies outside [50, 300]")
-                shown = f"{value:g}" if float(f"{value:g}") == value else repr(float(value))
-                raise SpecError(f"values.{name}: {shown} lies outside its bounds [{lo:g}, {hi:g}]")
+                # every digit that puts it outside (300 + 1e-9 read "300 lies outside [50, 300]"), bounds too
+                raise SpecError(f"values.{name}: {_digits(value)} lies outside its bounds [{_digits(lo)}, "
+                                f"{_digits(hi)}]")
             out[name] = float(value)
         return out
 
@@ -248,3 +248,8 @@ def _starts_of(solver) -> int | str:
     if solver is None:
         return 1
     return "auto" if getattr(solver, "starts_auto", False) else getattr(solver, "starts", 1)
+
+
+def _digits(x: float) -> str:
+    """A number with the digits it has: 42 as "42", 42.000000001 whole (never rounded onto a bound it is not)."""
+    return f"{x:g}" if float(f"{x:g}") == x else repr(float(x))

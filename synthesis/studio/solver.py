@@ -32,6 +32,8 @@ EXITS = {0: "every rule satisfied", 1: "solved, some rule violated", 2: "bad inp
          130: "interrupted", 143: "cancelled (the finished starts are kept)"}
 #: last lines of the solve's output kept for the page
 TAIL = 12
+#: the most starts a solve from the page runs: its starts box's cap, and an auto solve's budget
+PAGE_MAX_STARTS = 256
 #: seconds a cancelled worker has to write its finished starts before it is killed
 GRACE = 10.0
 

@@ -17,6 +17,7 @@ from typing import Any, TextIO
 from synthesis import runs
 from synthesis.core import interrupt
 from synthesis.errors import AgrisynthError
+from synthesis.studio.solver import PAGE_MAX_STARTS
 from synthesis.runs import events
 from synthesis.runs.requests import Outcome, SolveRequest
 
@@ -62,10 +63,13 @@ class Channel:
             self.send(payload)
 
 
+
 def solve(spec: Path, out: Path, starts: int | str, channel: Channel) -> int:
     """The run, its end told on the channel; returns the exit code."""
     try:
-        outcome: Outcome = runs.solve(SolveRequest(spec, out, starts=starts, workers=1), channel)
+        # auto from the page: at most the page's cap of starts in all (the command line's default is 512)
+        outcome: Outcome = runs.solve(SolveRequest(spec, out, starts=starts, workers=1,
+                                                   max_starts=PAGE_MAX_STARTS if starts == "auto" else None), channel)
     except AgrisynthError as exc:
         channel.send({"error": str(exc), "line": f"error: {exc}"})
         return exc.exit_code
