@@ -175,8 +175,9 @@ class Transcription:
 #: of the same rule at the returned design (up to 8.4e-8 of the scale: planting's entry angle, transmission angle
 #: and collinearity, each held on its limit by an infeasible spec's elastic design and failed by `check elastic.toml`
 #: at 1e-8), below the slack a diagnosis counts as relaxing a rule (synthesis.core.verdict.SLACK_TOL, 1e-6: at 1e-6
-#: a rule touching a design held at its bound was named as relaxed), far below any miss it reports (3-4 digits)
-ELASTIC_BACKOFF = 3e-7
+#: a rule touching a design held at its bound was named as relaxed), far below any miss it reports (3-4 digits).
+#: 3e-7 cost the crank-rocker at a 179 deg swing its elastic re-solve (max_iter: "nothing known about conflicts")
+ELASTIC_BACKOFF = 1e-7
 
 
 def _rows_of(rule, robust: bool) -> tuple:
