@@ -798,9 +798,19 @@ def create_new_text(path: Path, text: str) -> None:
         except FileExistsError:
             raise
         except (AttributeError, NotImplementedError, OSError):      # no hard links here (EPERM, EOPNOTSUPP, ...)
-            # claim the name by an exclusive create (FileExistsError as above), then put the whole text in its place
-            os.close(os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
-            os.replace(tmp, path)
+            # claim the name by an exclusive create (FileExistsError as above), then put the whole text in its place;
+            # a failed put removes the empty claim (still ours: the same file), so nothing half-made keeps the name
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666)
+            claim = os.fstat(fd)
+            os.close(fd)
+            try:
+                os.replace(tmp, path)
+            except BaseException:
+                with contextlib.suppress(OSError):
+                    now = os.stat(path)
+                    if (now.st_dev, now.st_ino) == (claim.st_dev, claim.st_ino):
+                        os.unlink(path)
+                raise
     finally:
         Path(tmp).unlink(missing_ok=True)
 

@@ -164,6 +164,19 @@ def test_a_new_file_where_hard_links_are_refused(tmp_path, monkeypatch):
     with pytest.raises(FileExistsError):
         result_module.create_new_text(tmp_path / "a.toml", "second\n")
     assert (tmp_path / "a.toml").read_text() == "first\n" and [p.name for p in tmp_path.iterdir()] == ["a.toml"]
+    # the text could not be put in place (EIO): no empty claim is left holding the name
+    real_replace = result_module.os.replace
+
+    def failing(src, dst):
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(result_module.os, "replace", failing)
+    with pytest.raises(OSError):
+        result_module.create_new_text(tmp_path / "b.toml", "x\n")
+    monkeypatch.setattr(result_module.os, "replace", real_replace)
+    assert [p.name for p in tmp_path.iterdir()] == ["a.toml"]
+    result_module.create_new_text(tmp_path / "b.toml", "x\n")          # the name is free again
+    assert (tmp_path / "b.toml").read_text() == "x\n"
 
 def test_a_new_file_is_never_written_over(tmp_path):
     from synthesis.result import create_new_text
