@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
 import sys
 
@@ -181,24 +182,31 @@ def test_a_scheduler_without_workers_is_said_in_one_line_not_waited_on_for_ever(
                                  f"(start one: `dask worker {c.scheduler_address}`)")
 
 
-def _local_cluster_processes() -> tuple[str, subprocess.Popen]:
-    """A dask scheduler in a process of its own on a free port: (its address, the process)."""
+@contextlib.contextmanager
+def _cluster_processes():
+    """A dask scheduler and one worker, each in a process of its own, the scheduler on a free port: (its address, the
+    scheduler's process, the worker's), both killed on leaving (a test kills one of them mid-run)."""
     import socket
     import time
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
     scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
                                   "--port", str(port), "--no-dashboard"],
                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    time.sleep(2)
-    return f"tcp://127.0.0.1:{port}", scheduler
-
-
-def _dask_worker(address: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-                             "--no-nanny", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    worker = None
+    try:
+        time.sleep(2)
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                                   "--no-nanny", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        yield address, scheduler, worker
+    finally:
+        for proc in (worker, scheduler):
+            if proc is not None:
+                proc.kill()
+                proc.wait()
 
 
 @pytest.mark.slow         # about 20 s: dask gives up reconnecting after its own 10 s
@@ -217,25 +225,16 @@ def test_a_cluster_lost_mid_run_leaves_its_pending_starts_to_local_workers(monke
 
     monkeypatch.setattr(cluster_module, "HEALTH_CHECK_S", 0.5)
     monkeypatch.setattr(cluster_module, "WORKER_WAIT_S", 1.0)
-    address, scheduler = _local_cluster_processes()
-    worker = None
-    try:
-        worker = _dask_worker(address)
-        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
-        kind = kinds.solving_kind_for(loaded)
-        finished, notes = [], []
-
+    loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+    kind = kinds.solving_kind_for(loaded)
+    finished, notes = [], []
+    with _cluster_processes() as (address, scheduler, worker):
         def on_start(report, best) -> None:
             finished.append(report.outcome.start)
             if len(finished) == 2:
                 (scheduler if lose == "scheduler" else worker).kill()
 
         remote, reports, _ = core_run_solve(kind, loaded, 24, 3, 1, on_start, address, on_note=notes.append)
-    finally:
-        for proc in (worker, scheduler):
-            if proc is not None:
-                proc.kill()
-                proc.wait()
     local, local_reports, _ = run_solve(loaded, starts=24, seed=3, workers=1)
     assert len(notes) == 1 and notes[0].startswith(f"--scheduler {address}: {said} after "), notes
     assert notes[0].endswith("are solved here on 1 local worker (the same starts: the same answer)")
@@ -255,26 +254,17 @@ def test_an_auto_run_whose_cluster_is_lost_solves_its_later_batches_locally(monk
     from synthesis.core.solve import AutoStarts, run_solve as core_run_solve
 
     monkeypatch.setattr(cluster_module, "HEALTH_CHECK_S", 0.5)
-    address, scheduler = _local_cluster_processes()
-    worker = None
     auto = AutoStarts(max_starts=32, first=8, min_converged=16)      # the first batch cannot stop the run
-    try:
-        worker = _dask_worker(address)
-        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
-        kind = kinds.solving_kind_for(loaded)
-        finished, notes = [], []
-
+    loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+    kind = kinds.solving_kind_for(loaded)
+    finished, notes = [], []
+    with _cluster_processes() as (address, scheduler, _):
         def on_start(report, best) -> None:
             finished.append(report.outcome.start)
             if len(finished) == 2:
                 scheduler.kill()
 
         remote, _, _ = core_run_solve(kind, loaded, None, 3, 1, on_start, address, auto=auto, on_note=notes.append)
-    finally:
-        for proc in (worker, scheduler):
-            if proc is not None:
-                proc.kill()
-                proc.wait()
     local, _, _ = core_run_solve(kind, loaded, None, 3, 1, auto=auto)
     assert len(notes) == 1 and "the connection to the scheduler was lost after " in notes[0]
     assert remote.solver["auto"] == local.solver["auto"] and remote.design == local.design
@@ -288,15 +278,11 @@ def test_an_auto_run_whose_cluster_is_gone_between_two_batches_solves_the_rest_l
     from synthesis import kinds
     from synthesis.core.solve import AutoStarts, run_solve as core_run_solve
 
-    address, scheduler = _local_cluster_processes()
-    worker = None
     auto = AutoStarts(max_starts=32, first=8, min_converged=16)      # the first batch cannot stop the run
-    try:
-        worker = _dask_worker(address)
-        loaded = load_spec(PLANTING / "redesign_from_example1.toml")
-        kind = kinds.solving_kind_for(loaded)
-        notes: list = []
-
+    loaded = load_spec(PLANTING / "redesign_from_example1.toml")
+    kind = kinds.solving_kind_for(loaded)
+    notes: list = []
+    with _cluster_processes() as (address, scheduler, _):
         def on_batch(total: int, nested: bool) -> None:
             if total == 16:
                 scheduler.kill()
@@ -304,11 +290,6 @@ def test_an_auto_run_whose_cluster_is_gone_between_two_batches_solves_the_rest_l
 
         remote, _, _ = core_run_solve(kind, loaded, None, 3, 1, scheduler=address, auto=auto, on_batch=on_batch,
                                       on_note=notes.append)
-    finally:
-        for proc in (worker, scheduler):
-            if proc is not None:
-                proc.kill()
-                proc.wait()
     local, _, _ = core_run_solve(kind, loaded, None, 3, 1, auto=auto)
     assert len(notes) == 1 and notes[0].startswith(f"--scheduler {address}: the cluster could not be reached for "
                                                    f"the batch of 16 starts (")
